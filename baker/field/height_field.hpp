@@ -1,0 +1,50 @@
+// The height field: world-unit heights on a regular grid, the input of every method.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "core/vec.hpp"
+
+namespace hfbake {
+
+enum class Wrap { clamp, repeat };
+
+// Texel (i, j) has its center at world (i * texel_size, j * texel_size, z[j * width + i]).
+// Heights are world units (height_scale and height_offset already applied). i: column, j: row.
+struct HeightField {
+  int width = 0, height = 0;
+  double texel_size = 1.0;
+  Wrap wrap = Wrap::clamp;
+  std::vector<float> z;
+
+  std::size_t texel_count() const { return std::size_t(width) * std::size_t(height); }
+  std::size_t index(int i, int j) const { return std::size_t(j) * std::size_t(width) + std::size_t(i); }
+
+  // Wraps (repeat) or clamps (clamp) integer texel coordinates into the grid.
+  int wrap_i(int i) const { return wrap == Wrap::repeat ? ((i % width) + width) % width : clampi(i, width); }
+  int wrap_j(int j) const { return wrap == Wrap::repeat ? ((j % height) + height) % height : clampi(j, height); }
+  float at(int i, int j) const { return z[index(wrap_i(i), wrap_j(j))]; }
+
+  // Bilinear height at continuous texel coordinates (x, y) (x = i at texel centers).
+  // Outside the grid: clamp mode extends the border heights, repeat mode tiles.
+  float bilinear(double x, double y) const {
+    const double fx = std::floor(x), fy = std::floor(y);
+    const int i = int(fx), j = int(fy);
+    const float tx = float(x - fx), ty = float(y - fy);
+    const float h00 = at(i, j), h10 = at(i + 1, j), h01 = at(i, j + 1), h11 = at(i + 1, j + 1);
+    return (h00 * (1 - tx) + h10 * tx) * (1 - ty) + (h01 * (1 - tx) + h11 * tx) * ty;
+  }
+
+  Vec3 position(int i, int j) const { return {i * texel_size, j * texel_size, double(z[index(i, j)])}; }
+
+ private:
+  static int clampi(int v, int n) { return v < 0 ? 0 : (v >= n ? n - 1 : v); }
+};
+
+// Per-texel unit normals as P1 computes them: the sum of the unnormalised normals of the four quads
+// around the texel (honouring texel size and wrap), normalised. Row-major like HeightField::z.
+std::vector<Vec3f> compute_normals(const HeightField& field);
+
+}  // namespace hfbake
