@@ -19,9 +19,15 @@ struct Layer {
 };
 
 // Layer channel suffix sets used across hfbake (see the contract and README).
-inline std::vector<std::string> mono_channels() { return {"Y"}; }
-inline std::vector<std::string> rgb_channels() { return {"R", "G", "B"}; }
-inline std::vector<std::string> xyz_channels() { return {"X", "Y", "Z"}; }
+inline std::vector<std::string> mono_channels() {
+  return {"Y"};
+}
+inline std::vector<std::string> rgb_channels() {
+  return {"R", "G", "B"};
+}
+inline std::vector<std::string> xyz_channels() {
+  return {"X", "Y", "Z"};
+}
 std::vector<std::string> indexed_channels(int count);  // "000", "001", ... (zero-padded to 3 digits)
 
 struct LayerSet {

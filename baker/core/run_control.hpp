@@ -9,7 +9,7 @@
 namespace hfbake {
 
 struct RunControl {
-  const std::atomic<bool>* cancel = nullptr;       // set by the SIGINT handler; may be null
+  const std::atomic<bool>* cancel = nullptr;      // set by the SIGINT handler; may be null
   std::function<void(double fraction)> progress;  // 0..1 for the current method; may be empty; thread-safe
 
   bool cancelled() const { return cancel && cancel->load(std::memory_order_relaxed); }

@@ -24,7 +24,9 @@ struct HeightField {
 
   // Wraps (repeat) or clamps (clamp) integer texel coordinates into the grid.
   int wrap_i(int i) const { return wrap == Wrap::repeat ? ((i % width) + width) % width : clampi(i, width); }
-  int wrap_j(int j) const { return wrap == Wrap::repeat ? ((j % height) + height) % height : clampi(j, height); }
+  int wrap_j(int j) const {
+    return wrap == Wrap::repeat ? ((j % height) + height) % height : clampi(j, height);
+  }
   float at(int i, int j) const { return z[index(wrap_i(i), wrap_j(j))]; }
 
   // Bilinear height at continuous texel coordinates (x, y) (x = i at texel centers).

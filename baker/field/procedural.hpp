@@ -16,12 +16,12 @@ struct ProceduralSpec {
   std::uint64_t seed = 1;
   // Shape parameters in world units / degrees; which ones a kind uses is documented in procedural.cpp
   // and in schemas/job.schema.json. Heights are world units for texel_size 1 (scaled with texel_size).
-  double amplitude = 0;      // vertical scale (0 = the kind's default)
-  double feature_size = 0;   // horizontal feature scale in texels (0 = the kind's default)
-  double angle_deg = 30;     // slope: plane angle; trench: wall angle; cone: flank angle
-  double aspect_deg = 0;     // slope: downhill azimuth (direction the plane faces)
-  double radius = 0;         // pit: radius in texels (0 = width / 4)
-  double depth = 0;          // pit: depth in texels (0 = radius)
+  double amplitude = 0;     // vertical scale (0 = the kind's default)
+  double feature_size = 0;  // horizontal feature scale in texels (0 = the kind's default)
+  double angle_deg = 30;    // slope: plane angle; trench: wall angle; cone: flank angle
+  double aspect_deg = 0;    // slope: downhill azimuth (direction the plane faces)
+  double radius = 0;        // pit: radius in texels (0 = width / 4)
+  double depth = 0;         // pit: depth in texels (0 = radius)
 };
 
 bool parse_procedural_kind(const std::string& name, ProceduralKind& kind);

@@ -16,7 +16,7 @@ struct Surface {
 };
 
 struct Scene {
-  std::string name;          // the job's name
+  std::string name;  // the job's name
   HeightField field;
   std::vector<Vec3f> normals;  // compute_normals(field)
   Surface surface;
