@@ -1,0 +1,146 @@
+#include "job/manifest.hpp"
+
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "job/schema_validation.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string line_column(const std::string& text, std::size_t byte) {
+  std::size_t line = 1, column = 1;
+  for (std::size_t i = 0; i < text.size() && i + 1 < byte; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(column);
+}
+
+// Files the job names, as (JSON pointer, relative path), for the existence check.
+void collect_files(const nlohmann::json& doc, std::vector<std::pair<std::string, std::string>>& files) {
+  auto add = [&](const std::string& ptr) {
+    const nlohmann::json::json_pointer p(ptr);
+    if (doc.contains(p) && doc.at(p).is_string()) files.emplace_back(ptr, doc.at(p).get<std::string>());
+  };
+  add("/height/image");
+  add("/surface/albedo/image");
+  add("/surface/emission/image");
+  add("/environment/cross");
+  add("/environment/latlong");
+  if (doc.contains("environment") && doc["environment"].contains("cubemap"))
+    for (std::size_t i = 0; i < doc["environment"]["cubemap"].size(); ++i)
+      add("/environment/cubemap/" + std::to_string(i));
+}
+
+}  // namespace
+
+nlohmann::json parse_json_text(const std::string& text, const std::string& file) {
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    std::string what = e.what();
+    // nlohmann: "[json.exception.parse_error.101] parse error at line 3, column 5: syntax error while ..."
+    const auto colon = what.find(": ");
+    if (colon != std::string::npos) what = what.substr(colon + 2);
+    throw InputError(file, line_column(text, e.byte), "malformed JSON: " + what);
+  }
+}
+
+JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_override) {
+  JobLoad result;
+  const std::string fname = file.string();
+  auto fail = [&](const std::string& where, const std::string& what) {
+    result.errors.push_back(fname + ": " + (where.empty() ? "" : where + ": ") + what);
+  };
+
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    fail("", std::error_code(errno, std::generic_category()).message());
+    return result;
+  }
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  nlohmann::json doc;
+  try {
+    doc = parse_json_text(buffer.str(), fname);
+  } catch (const InputError& e) {
+    result.errors.push_back(e.line());
+    return result;
+  }
+
+  for (const SchemaViolation& v : validate_against_schema(doc, "job.schema.json"))
+    fail(v.pointer.empty() ? "/" : v.pointer, v.message);
+  if (!result.errors.empty()) return result;
+
+  Job job;
+  job.file = file;
+  job.base_dir = fs::absolute(file).parent_path();
+  job.doc = doc;
+  job.name = doc["name"].get<std::string>();
+
+  // Checks the schema cannot express.
+  if (doc.contains("environment")) {
+    int kinds = 0;
+    for (const char* k : {"uniform", "cubemap", "cross", "latlong", "sky"})
+      kinds += doc["environment"].contains(k);
+    if (kinds != 1)
+      fail("/environment", "needs exactly one of uniform, cubemap, cross, latlong, sky (found " +
+                               std::to_string(kinds) + ")");
+  }
+  if (doc.contains("lights")) {
+    for (std::size_t i = 0; i < doc["lights"].size(); ++i) {
+      const auto& d = doc["lights"][i]["directional"]["direction"];
+      if (d[0].get<double>() == 0 && d[1].get<double>() == 0 && d[2].get<double>() == 0)
+        fail("/lights/" + std::to_string(i) + "/directional/direction", "must not be the zero vector");
+    }
+  }
+  std::vector<std::pair<std::string, std::string>> files;
+  collect_files(doc, files);
+  for (const auto& [ptr, rel] : files) {
+    const fs::path p = job.resolve(rel);
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec)) fail(ptr, "no such file: " + p.string());
+  }
+
+  const auto& bake = doc["bake"];
+  std::map<std::string, int> count;
+  for (const auto& e : bake) ++count[e["method"].get<std::string>()];
+  for (std::size_t i = 0; i < bake.size(); ++i) {
+    BakeEntry entry;
+    entry.method = bake[i]["method"].get<std::string>();
+    entry.stem = count[entry.method] > 1 ? entry.method + "-" + std::to_string(i) : entry.method;
+    entry.pointer = "/bake/" + std::to_string(i);
+    entry.params = bake[i];
+    job.bakes.push_back(std::move(entry));
+  }
+  job.has_reference = doc.contains("reference");
+  if (job.bakes.empty() && !job.has_reference) fail("/bake", "nothing to bake: no method and no reference");
+
+  const nlohmann::json output = doc.value("output", nlohmann::json::object());
+  if (out_override)
+    job.output.dir = fs::absolute(*out_override);
+  else if (output.contains("dir"))
+    job.output.dir = job.resolve(output["dir"].get<std::string>());
+  else
+    job.output.dir = job.base_dir / "out" / job.name;
+  job.output.dir = job.output.dir.lexically_normal();
+  job.output.float_pixels = output.value("pixel_type", "half") == "float";
+  job.output.compression = output.value("compression", "zip");
+  job.output.previews = output.value("previews", false);
+  job.output.preview_display = output.value("preview_display", "");
+  job.output.preview_view = output.value("preview_view", "");
+
+  if (result.errors.empty()) result.job = std::move(job);
+  return result;
+}
+
+}  // namespace hfbake

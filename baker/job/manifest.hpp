@@ -1,0 +1,57 @@
+// A job file: parsed, validated against schemas/job.schema.json, with paths resolved and defaults applied.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace hfbake {
+
+struct BakeEntry {
+  std::string method;     // "p1", "lsao", ...
+  std::string stem;       // output stem: "p1", or "p1-2" when the method appears more than once
+  std::string pointer;    // "/bake/<i>", for error messages
+  nlohmann::json params;  // the bake[i] object as written (schema-validated)
+};
+
+struct OutputOptions {
+  std::filesystem::path dir;  // absolute
+  bool float_pixels = false;  // half by default
+  std::string compression = "zip";
+  bool previews = false;
+  std::string preview_display, preview_view;  // empty: the OCIO config's defaults
+};
+
+struct Job {
+  std::filesystem::path file;      // as given (used in messages)
+  std::filesystem::path base_dir;  // absolute folder of the job file: relative paths resolve against it
+  nlohmann::json doc;              // the whole document
+  std::string name;
+  std::vector<BakeEntry> bakes;
+  bool has_reference = false;
+  OutputOptions output;
+
+  std::filesystem::path resolve(const std::string& relative) const { return base_dir / relative; }
+  std::filesystem::path output_path(const std::string& stem, const std::string& ext) const {
+    return output.dir / (name + "." + stem + ext);
+  }
+};
+
+// The outcome of loading a job: the job, or every problem found, each as one line
+// "<file>: <JSON pointer>: <what is wrong>".
+struct JobLoad {
+  std::optional<Job> job;
+  std::vector<std::string> errors;
+};
+
+// Reads, parses and validates `file` (schema + checks the schema cannot express, e.g. that input files
+// exist). `out_override` replaces output.dir (--out DIR; the job's name is appended when several jobs
+// share one --out so they cannot overwrite each other: see the CLI).
+JobLoad load_job(const std::filesystem::path& file, const std::optional<std::filesystem::path>& out_override);
+
+// Parses JSON text with errors as "line L, column C: <what>" (for messages).
+nlohmann::json parse_json_text(const std::string& text, const std::string& file);
+
+}  // namespace hfbake

@@ -1,0 +1,178 @@
+#include "job/schema_validation.hpp"
+
+// GCC 12 reports a false -Wrestrict inside valijson's json_pointer string handling (inlined
+// std::string::replace); it is not in hfbake's code and the TU is otherwise warning-free.
+#pragma GCC diagnostic ignored "-Wrestrict"
+
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <regex>
+#include <stdexcept>
+#include <valijson/adapters/nlohmann_json_adapter.hpp>
+#include <valijson/schema.hpp>
+#include <valijson/schema_parser.hpp>
+#include <valijson/validator.hpp>
+
+#include "job/embedded_schemas.hpp"
+
+namespace hfbake {
+namespace {
+
+const nlohmann::json& schema_document(const std::string& path) {
+  // Parsed once per process; the schemas are immutable, so the cache only grows (thread-safe via a
+  // function-local static built from all files at once).
+  static const std::map<std::string, nlohmann::json> docs = [] {
+    std::map<std::string, nlohmann::json> m;
+    for (const EmbeddedSchema& s : embedded_schemas())
+      m.emplace(std::string(s.path), nlohmann::json::parse(s.text.begin(), s.text.end()));
+    return m;
+  }();
+  auto it = docs.find(path);
+  if (it == docs.end()) throw std::logic_error("hfbake: no embedded schema " + path);
+  return it->second;
+}
+
+// valijson asks for referenced documents by the URI written in "$ref" (relative to the referring
+// document's folder for nested files): map it onto the embedded file set.
+std::string resolve_schema_uri(const std::string& uri) {
+  std::string p = uri;
+  const auto hash = p.find('#');
+  if (hash != std::string::npos) p.resize(hash);
+  for (const EmbeddedSchema& s : embedded_schemas()) {
+    const std::string known(s.path);
+    if (p == known) return known;
+    if (p.size() > known.size() && p.compare(p.size() - known.size(), known.size(), known) == 0 &&
+        p[p.size() - known.size() - 1] == '/')
+      return known;
+  }
+  // "environment.schema.json" referenced from inside methods/ resolves to the top folder.
+  const auto slash = p.rfind('/');
+  if (slash != std::string::npos) return resolve_schema_uri(p.substr(slash + 1));
+  throw std::logic_error("hfbake: schema reference to unknown document " + uri);
+}
+
+// Turns valijson's context ["<root>", "[bake]", "[0]", "[directions]"] into "/bake/0/directions".
+std::string pointer_of(const std::vector<std::string>& context) {
+  std::string ptr;
+  for (const std::string& c : context) {
+    if (c == "<root>") continue;
+    std::string token = c;
+    if (token.size() >= 2 && token.front() == '[' && token.back() == ']')
+      token = token.substr(1, token.size() - 2);
+    // JSON pointer escaping (RFC 6901).
+    std::string escaped;
+    for (char ch : token) {
+      if (ch == '~')
+        escaped += "~0";
+      else if (ch == '/')
+        escaped += "~1";
+      else
+        escaped += ch;
+    }
+    ptr += "/" + escaped;
+  }
+  return ptr;
+}
+
+// Rewrites valijson's sentences into short rules ("must be >= 1"). Unrecognised sentences pass through.
+SchemaViolation rewrite(std::string pointer, std::string text) {
+  std::smatch m;
+  auto num = [](std::string s) {
+    // valijson prints numbers with std::to_string: "1.000000" -> "1".
+    if (s.find('.') != std::string::npos) {
+      while (!s.empty() && s.back() == '0') s.pop_back();
+      if (!s.empty() && s.back() == '.') s.pop_back();
+    }
+    return s;
+  };
+  static const std::regex min_re(R"(Expected number greater than or equal to ([-0-9.e+]+))");
+  static const std::regex xmin_re(R"(Expected number greater than ([-0-9.e+]+))");
+  static const std::regex max_re(R"(Expected number less than or equal to ([-0-9.e+]+))");
+  static const std::regex xmax_re(R"(Expected number less than ([-0-9.e+]+))");
+  static const std::regex unknown_re(
+      R"(Object contains a property that could not be validated using 'properties' or 'additionalProperties' constraints: '(.*)'\.?)");
+  static const std::regex missing_re(R"(Missing required property '(.*)'\.?)");
+  static const std::regex type_re(R"(Value type not permitted by 'type' constraint\.?)");
+  static const std::regex enum_re(R"(Failed to match against any enum values\.?)");
+  static const std::regex min_items_re(R"(Array should contain no fewer than (\d+) elements\.?)");
+  static const std::regex max_items_re(R"(Array should contain no more than (\d+) elements\.?)");
+  if (std::regex_search(text, m, min_re)) return {pointer, "must be >= " + num(m[1])};
+  if (std::regex_search(text, m, xmin_re)) return {pointer, "must be > " + num(m[1])};
+  if (std::regex_search(text, m, max_re)) return {pointer, "must be <= " + num(m[1])};
+  if (std::regex_search(text, m, xmax_re)) return {pointer, "must be < " + num(m[1])};
+  if (std::regex_search(text, m, unknown_re)) {
+    pointer.append("/").append(m[1].str());
+    return {std::move(pointer), "unknown key"};
+  }
+  if (std::regex_search(text, m, missing_re)) return {pointer, "missing required key \"" + m[1].str() + "\""};
+  if (std::regex_search(text, m, type_re)) return {pointer, "wrong type"};
+  if (std::regex_search(text, m, enum_re)) return {pointer, "not one of the allowed values"};
+  if (std::regex_search(text, m, min_items_re))
+    return {pointer, "must have at least " + m[1].str() + " items"};
+  if (std::regex_search(text, m, max_items_re))
+    return {pointer, "must have at most " + m[1].str() + " items"};
+  if (!text.empty() && text.back() == '.') text.pop_back();
+  if (!text.empty()) text[0] = char(std::tolower(static_cast<unsigned char>(text[0])));
+  return {pointer, text};
+}
+
+// Messages valijson emits for an enclosing value when something inside it failed: not leaf causes.
+bool is_wrapper(const std::string& text) {
+  static const char* wrappers[] = {"Failed to validate item #",
+                                   "Failed to validate against schema associated with property name",
+                                   "Failed to validate against child schema",
+                                   "Failed to validate against any child schemas",
+                                   "Failed to validate against any schemas allowed by anyOf",
+                                   "Failed to validate against schema referenced by",
+                                   "Failed to validate against 'then' subschema",
+                                   "Failed to validate against 'else' subschema",
+                                   "Failed to validate additional properties",
+                                   "Failed to validate against additional properties",
+                                   "Failed to validate value against additionalProperties",
+                                   "Failed to validate against a conditional schema"};
+  for (const char* w : wrappers)
+    if (text.rfind(w, 0) == 0) return true;
+  return false;
+}
+
+}  // namespace
+
+std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
+                                                     const std::string& schema_path) {
+  using Adapter = valijson::adapters::NlohmannJsonAdapter;
+  // Parsing the schema is cheap (a few KB); keep it per call so there is no shared mutable state.
+  valijson::Schema schema;
+  valijson::SchemaParser parser;
+  const Adapter schema_adapter(schema_document(schema_path));
+  parser.populateSchema(
+      schema_adapter, schema,
+      [](const std::string& uri) -> const nlohmann::json* {
+        return &schema_document(resolve_schema_uri(uri));
+      },
+      [](const nlohmann::json*) {});
+
+  valijson::Validator validator;
+  valijson::ValidationResults results;
+  const Adapter target(doc);
+  validator.validate(schema, target, &results);
+
+  std::vector<SchemaViolation> out;
+  valijson::ValidationResults::Error error;
+  std::vector<std::pair<std::string, std::string>> raw;
+  while (results.popError(error)) raw.emplace_back(pointer_of(error.context), error.description);
+  for (const auto& [pointer, text] : raw) {
+    if (is_wrapper(text)) continue;
+    SchemaViolation v = rewrite(pointer, text);
+    const bool duplicate = std::any_of(out.begin(), out.end(), [&](const SchemaViolation& o) {
+      return o.pointer == v.pointer && o.message == v.message;
+    });
+    if (!duplicate) out.push_back(std::move(v));
+  }
+  // An alternative (oneOf/anyOf) that failed produces messages for every branch; when a value failed
+  // only through alternatives, keep the summarising message instead of the branches' contradictions.
+  if (out.empty() && !raw.empty()) out.push_back(rewrite(raw.front().first, raw.front().second));
+  return out;
+}
+
+}  // namespace hfbake
