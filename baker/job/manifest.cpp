@@ -25,8 +25,10 @@ std::string line_column(const std::string& text, std::size_t byte) {
   return "line " + std::to_string(line) + ", column " + std::to_string(column);
 }
 
-// Files the job names, as (JSON pointer, relative path), for the existence check.
-void collect_files(const nlohmann::json& doc, std::vector<std::pair<std::string, std::string>>& files) {
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> job_input_files(const nlohmann::json& doc) {
+  std::vector<std::pair<std::string, std::string>> files;
   auto add = [&](const std::string& ptr) {
     const nlohmann::json::json_pointer p(ptr);
     if (doc.contains(p) && doc.at(p).is_string()) files.emplace_back(ptr, doc.at(p).get<std::string>());
@@ -39,9 +41,8 @@ void collect_files(const nlohmann::json& doc, std::vector<std::pair<std::string,
   if (doc.contains("environment") && doc["environment"].contains("cubemap"))
     for (std::size_t i = 0; i < doc["environment"]["cubemap"].size(); ++i)
       add("/environment/cubemap/" + std::to_string(i));
+  return files;
 }
-
-}  // namespace
 
 nlohmann::json parse_json_text(const std::string& text, const std::string& file) {
   try {
@@ -103,9 +104,7 @@ JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_overri
         fail("/lights/" + std::to_string(i) + "/directional/direction", "must not be the zero vector");
     }
   }
-  std::vector<std::pair<std::string, std::string>> files;
-  collect_files(doc, files);
-  for (const auto& [ptr, rel] : files) {
+  for (const auto& [ptr, rel] : job_input_files(doc)) {
     const fs::path p = job.resolve(rel);
     std::error_code ec;
     if (!fs::is_regular_file(p, ec)) fail(ptr, "no such file: " + p.string());

@@ -51,6 +51,9 @@ struct JobLoad {
 // share one --out so they cannot overwrite each other: see the CLI).
 JobLoad load_job(const std::filesystem::path& file, const std::optional<std::filesystem::path>& out_override);
 
+// Every input file a job document names, as (JSON pointer, path as written).
+std::vector<std::pair<std::string, std::string>> job_input_files(const nlohmann::json& doc);
+
 // Parses JSON text with errors as "line L, column C: <what>" (for messages).
 nlohmann::json parse_json_text(const std::string& text, const std::string& file);
 

@@ -1,0 +1,279 @@
+#include "cli/bake_command.hpp"
+
+#include <tbb/task_group.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <nlohmann/json.hpp>
+
+#include "cli/method_dispatch.hpp"
+#include "cli/outputs.hpp"
+#include "cli/progress.hpp"
+#include "cli/report_writer.hpp"
+#include "cli/scene_loader.hpp"
+#include "cli/version.hpp"
+#include "core/error.hpp"
+#include "job/content_hash.hpp"
+#include "job/manifest.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+enum class Status { ok, threshold_failed, failed, invalid, cancelled };
+
+const char* status_name(Status s) {
+  switch (s) {
+    case Status::ok: return "ok";
+    case Status::threshold_failed: return "threshold failed";
+    case Status::failed: return "failed";
+    case Status::invalid: return "invalid";
+    case Status::cancelled: return "interrupted";
+  }
+  return "?";
+}
+
+struct JobOutcome {
+  std::string file, name;
+  Status status = Status::ok;
+  std::vector<std::string> errors;
+  std::vector<fs::path> outputs;
+  nlohmann::json methods = nlohmann::json::object();  // stem -> {seconds, metrics...}
+  double seconds = 0;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::size_t available_memory_bytes() {
+  const long pages = sysconf(_SC_AVPHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  const long total = sysconf(_SC_PHYS_PAGES);
+  // Use the larger of free and half the total: page cache counts as free enough for a bake.
+  const double avail = std::max(double(pages), 0.5 * double(total)) * double(page);
+  return std::size_t(avail);
+}
+
+std::string gib(std::size_t bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f GiB", double(bytes) / double(1ull << 30));
+  return buf;
+}
+
+void add_common_attributes(LayerSet& layers, const Job& job, const std::string& job_hash, const std::string& method,
+                           const nlohmann::json& params, double seconds) {
+  layers.attributes.emplace_back("hfbake:version", hfbake_version());
+  layers.attributes.emplace_back("hfbake:job", job.name);
+  layers.attributes.emplace_back("hfbake:job_hash", job_hash);
+  layers.attributes.emplace_back("hfbake:method", method);
+  layers.attributes.emplace_back("hfbake:parameters", params.dump());
+  layers.attributes.emplace_back("hfbake:wall_seconds", std::to_string(seconds));
+}
+
+// Bakes one valid job. Throws InputError (bad input), Cancelled, or anything else (a failed job).
+void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome) {
+  const auto t_job = std::chrono::steady_clock::now();
+  const FieldSize size = probe_field_size(job);
+  const std::size_t need = estimate_peak_bytes(job, size), have = available_memory_bytes();
+  if (need > have)
+    throw InputError(job.file.string(), "/height",
+                     "a " + std::to_string(size.width) + "x" + std::to_string(size.height) + " field needs about " +
+                         gib(need) + " to bake, more than the " + gib(have) + " available");
+
+  OutputStage stage(job);
+  progress.begin(job.name, "load");
+  const auto t_load = std::chrono::steady_clock::now();
+  const Scene scene = load_scene(job);
+  const std::string job_hash = job_content_hash(job);
+  progress.end(job.name, "load", seconds_since(t_load));
+
+  ReportInputs report;
+  for (const BakeEntry& entry : job.bakes) {
+    if (cancel.load()) throw Cancelled();
+    RunControl rc;
+    rc.cancel = &cancel;
+    rc.progress = [&](double f) { progress.update(job.name, entry.stem, f); };
+    progress.begin(job.name, entry.stem);
+    const auto t0 = std::chrono::steady_clock::now();
+    LayerSet layers = run_method(entry, scene, rc);
+    const double seconds = seconds_since(t0);
+    progress.end(job.name, entry.stem, seconds);
+    add_common_attributes(layers, job, job_hash, entry.method, entry.params, seconds);
+    stage.write_layers(entry.stem, layers);
+    outcome.methods[entry.stem] = {{"method", entry.method}, {"seconds", seconds}};
+    if (job.has_reference) report.methods.push_back({entry.stem, entry.method, seconds, std::move(layers)});
+  }
+
+  if (job.has_reference) {
+    if (cancel.load()) throw Cancelled();
+    RunControl rc;
+    rc.cancel = &cancel;
+    rc.progress = [&](double f) { progress.update(job.name, "reference", f); };
+    progress.begin(job.name, "reference");
+    const auto t0 = std::chrono::steady_clock::now();
+    LayerSet reference = run_reference(job, scene, rc);
+    const double seconds = seconds_since(t0);
+    progress.end(job.name, "reference", seconds);
+    add_common_attributes(reference, job, job_hash, "reference", job.doc["reference"], seconds);
+    stage.write_layers("reference", reference);
+    outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};
+    report.reference_seconds = seconds;
+    report.reference = std::move(reference);
+    const ReportResult r = write_report(job, job_hash, report, stage);
+    for (auto& [stem, metrics] : r.metrics_by_method.items())
+      if (outcome.methods.contains(stem)) outcome.methods[stem]["metrics"] = metrics;
+    for (const std::string& failure : r.threshold_failures) {
+      outcome.errors.push_back(job.file.string() + ": /report/thresholds: " + failure);
+      outcome.status = Status::threshold_failed;
+    }
+  }
+  if (cancel.load()) throw Cancelled();
+  outcome.outputs = stage.commit();
+  for (const fs::path& p : outcome.outputs) progress.message(job.name + ": wrote " + p.string());
+  outcome.seconds = seconds_since(t_job);
+}
+
+void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
+  if (quiet) return;
+  std::fprintf(stderr, "\nhfbake summary\n");
+  for (const JobOutcome& o : outcomes) {
+    std::fprintf(stderr, "  %-24s %-16s %8.2f s  %s\n", o.name.empty() ? o.file.c_str() : o.name.c_str(),
+                 status_name(o.status), o.seconds, o.file.c_str());
+    for (auto& [stem, m] : o.methods.items()) {
+      std::fprintf(stderr, "      %-20s %8.2f s", stem.c_str(), m.value("seconds", 0.0));
+      if (m.contains("metrics"))
+        for (auto& [layer, metrics] : m["metrics"].items())
+          if (metrics.contains("rmse"))
+            std::fprintf(stderr, "  %s rmse %.4g", layer.c_str(), metrics["rmse"].get<double>());
+      std::fprintf(stderr, "\n");
+    }
+    if (!o.outputs.empty()) std::fprintf(stderr, "      outputs in %s\n", o.outputs.front().parent_path().c_str());
+  }
+}
+
+void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& outcomes, int exit_code) {
+  nlohmann::json doc = {{"hfbake_version", hfbake_version()}, {"exit_code", exit_code}};
+  doc["jobs"] = nlohmann::json::array();
+  for (const JobOutcome& o : outcomes) {
+    nlohmann::json j = {{"file", fs::absolute(o.file).string()},
+                        {"name", o.name},
+                        {"status", status_name(o.status)},
+                        {"seconds", o.seconds},
+                        {"errors", o.errors},
+                        {"methods", o.methods}};
+    j["outputs"] = nlohmann::json::array();
+    for (const fs::path& p : o.outputs) j["outputs"].push_back(fs::absolute(p).string());
+    doc["jobs"].push_back(std::move(j));
+  }
+  // Atomic like every other output: a temporary beside the file, then rename.
+  const fs::path tmp = file.string() + ".tmp-" + std::to_string(getpid());
+  {
+    std::ofstream out(tmp);
+    if (!out) throw InputError(file.string(), "--summary", "cannot write file");
+    out << doc.dump(2) << "\n";
+    if (!out) throw InputError(file.string(), "--summary", "cannot write file");
+  }
+  fs::rename(tmp, file);
+}
+
+}  // namespace
+
+int run_validate(const std::vector<fs::path>& jobs, bool quiet) {
+  int exit_code = 0;
+  for (const fs::path& file : jobs) {
+    const JobLoad load = load_job(file, std::nullopt);
+    for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+    if (!load.job) {
+      exit_code = 2;
+      continue;
+    }
+    try {
+      const FieldSize size = probe_field_size(*load.job);
+      const std::size_t need = estimate_peak_bytes(*load.job, size);
+      if (!quiet)
+        std::fprintf(stderr, "hfbake: %s: valid (%dx%d, about %s to bake)\n", file.c_str(), size.width, size.height,
+                     gib(need).c_str());
+    } catch (const InputError& e) {
+      std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
+      exit_code = 2;
+    }
+  }
+  return exit_code;
+}
+
+int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
+  const Progress::Mode mode = Progress::detect(options.quiet);
+  Progress progress(mode);
+  std::vector<JobOutcome> outcomes(options.jobs.size());
+  std::vector<std::optional<Job>> jobs(options.jobs.size());
+
+  // Validate everything first: a typo in the last job is reported before hours of baking.
+  for (std::size_t i = 0; i < options.jobs.size(); ++i) {
+    // With --out and several jobs, each job gets its own folder under DIR.
+    std::optional<fs::path> out = options.out;
+    if (out && options.jobs.size() > 1) out = *out / options.jobs[i].stem();
+    JobLoad load = load_job(options.jobs[i], out);
+    outcomes[i].file = options.jobs[i].string();
+    for (const std::string& e : load.errors) {
+      std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+      outcomes[i].errors.push_back(e);
+    }
+    if (load.job) {
+      outcomes[i].name = load.job->name;
+      jobs[i] = std::move(load.job);
+    } else {
+      outcomes[i].status = Status::invalid;
+    }
+  }
+
+  std::mutex error_mutex;
+  auto fail = [&](JobOutcome& o, Status s, const std::string& line) {
+    std::lock_guard lock(error_mutex);
+    o.status = s;
+    o.errors.push_back(line);
+    progress.error(line);
+  };
+  tbb::task_group group;  // jobs run concurrently and share the cores with their own parallel loops
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    if (!jobs[i]) continue;
+    group.run([&, i] {
+      JobOutcome& o = outcomes[i];
+      try {
+        bake_job(*jobs[i], progress, cancel, o);
+      } catch (const Cancelled&) {
+        o.status = Status::cancelled;
+      } catch (const InputError& e) {
+        fail(o, Status::invalid, e.line());
+      } catch (const std::exception& e) {
+        fail(o, Status::failed, jobs[i]->file.string() + ": " + e.what());
+      }
+    });
+  }
+  group.wait();
+
+  int exit_code = 0;
+  for (const JobOutcome& o : outcomes) {
+    if (o.status == Status::threshold_failed) exit_code = std::max(exit_code, 1);
+    if (o.status == Status::invalid || o.status == Status::failed) exit_code = std::max(exit_code, 2);
+  }
+  if (cancel.load()) exit_code = 130;
+  print_summary(outcomes, options.quiet);
+  for (const JobOutcome& o : outcomes)
+    for (const std::string& e : o.errors)
+      if (o.status == Status::threshold_failed) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+  if (options.summary) {
+    try {
+      write_summary_file(*options.summary, outcomes, exit_code);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "hfbake: error: %s: cannot write summary: %s\n", options.summary->c_str(), e.what());
+      exit_code = std::max(exit_code, 2);
+    }
+  }
+  return exit_code;
+}
+
+}  // namespace hfbake

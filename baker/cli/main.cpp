@@ -1,0 +1,70 @@
+// hfbake: bakes ambient occlusion and lighting for height fields. See README.md and the contract.
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <thread>
+
+#include "cli/bake_command.hpp"
+#include "cli/version.hpp"
+
+namespace {
+
+std::atomic<bool> g_interrupted{false};  // the one process-wide flag a signal handler may touch
+
+extern "C" void on_sigint(int) {
+  if (g_interrupted.exchange(true)) std::_Exit(130);  // a second Ctrl-C: stop now (staging is in the output dir)
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"hfbake: offline baker of ambient occlusion and lighting for height fields"};
+  app.require_subcommand(0, 1);
+  app.set_version_flag("--version", std::string("hfbake ") + hfbake::hfbake_version());
+
+  hfbake::BakeOptions bake;
+  int threads = 0;
+  std::vector<std::string> bake_jobs, validate_jobs;
+  std::string out, summary;
+  bool validate_quiet = false;
+
+  CLI::App* bake_cmd = app.add_subcommand("bake", "Bake every job (continues past a failed job)");
+  bake_cmd->add_option("jobs", bake_jobs, "Job files (JSON)")->required()->check(CLI::ExistingFile);
+  bake_cmd->add_option("--threads", threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  bake_cmd->add_option("--out", out, "Output folder, replacing each job's output.dir");
+  bake_cmd->add_flag("--quiet", bake.quiet, "No progress output (errors are still printed)");
+  bake_cmd->add_option("--summary", summary, "Write a machine-readable JSON summary to FILE");
+
+  CLI::App* validate_cmd = app.add_subcommand("validate", "Check jobs against the schema and their files");
+  validate_cmd->add_option("jobs", validate_jobs, "Job files (JSON)")->required();
+  validate_cmd->add_flag("--quiet", validate_quiet, "Print only problems");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::fprintf(stderr, "hfbake: error: command line: %s\n", e.what());
+    return 2;
+  }
+  if (app.got_subcommand(validate_cmd)) {
+    std::vector<std::filesystem::path> files(validate_jobs.begin(), validate_jobs.end());
+    return hfbake::run_validate(files, validate_quiet);
+  }
+  if (!app.got_subcommand(bake_cmd)) {
+    std::fputs(app.help().c_str(), stdout);
+    return 2;
+  }
+
+  bake.jobs.assign(bake_jobs.begin(), bake_jobs.end());
+  if (!out.empty()) bake.out = out;
+  if (!summary.empty()) bake.summary = summary;
+  std::unique_ptr<tbb::global_control> limit;
+  if (threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  std::signal(SIGINT, on_sigint);
+  return hfbake::run_bake(bake, g_interrupted);
+}

@@ -1,0 +1,121 @@
+#include "cli/scene_loader.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "field/procedural.hpp"
+
+namespace hfbake {
+
+namespace {
+
+Rgb rgb_of(const nlohmann::json& v) {
+  if (v.is_number()) {
+    const float x = v.get<float>();
+    return {x, x, x};
+  }
+  return {v[0].get<float>(), v[1].get<float>(), v[2].get<float>()};
+}
+
+ProceduralSpec procedural_spec(const nlohmann::json& p) {
+  ProceduralSpec s;
+  parse_procedural_kind(p["kind"].get<std::string>(), s.kind);  // the schema guarantees a known kind
+  if (p.contains("size")) {
+    s.width = p["size"][0].get<int>();
+    s.height = p["size"][1].get<int>();
+  }
+  s.seed = p.value("seed", std::uint64_t(1));
+  s.amplitude = p.value("amplitude", 0.0);
+  s.feature_size = p.value("feature_size", 0.0);
+  s.angle_deg = p.value("angle_deg", 30.0);
+  s.aspect_deg = p.value("aspect_deg", 0.0);
+  s.radius = p.value("radius", 0.0);
+  s.depth = p.value("depth", 0.0);
+  return s;
+}
+
+int method_channels(const BakeEntry& e) {
+  int channels = 16;  // the scalar and RGB layers a method can write
+  const std::string& m = e.method;
+  if (m == "nlp") channels += 16 + 48;  // SH visibility and irradiance
+  const int k = e.params.value("directions", 64);
+  if (e.params.contains("layers"))
+    for (const auto& l : e.params["layers"])
+      if (l == "horizon" || l == "horizon_distance") channels += k;
+  return channels;
+}
+
+}  // namespace
+
+FieldSize probe_field_size(const Job& job) {
+  const nlohmann::json& h = job.doc["height"];
+  if (h.contains("procedural")) {
+    const ProceduralSpec s = procedural_spec(h["procedural"]);
+    return {s.width, s.height};
+  }
+  return probe_image_field_size(job);
+}
+
+std::size_t estimate_peak_bytes(const Job& job, FieldSize size) {
+  const double texels = double(size.width) * double(size.height);
+  // Field (4), normals (12), albedo (12), emission (12), and the scene's copy during loading (8).
+  double per_texel = 48;
+  // Methods: results are kept until the report when there is a reference, else one at a time.
+  double methods = 0, largest = 0;
+  for (const BakeEntry& e : job.bakes) {
+    const double bytes = 4.0 * method_channels(e) * 1.5;  // float layers + the half copy written to EXR
+    methods += bytes;
+    largest = std::max(largest, bytes);
+  }
+  per_texel += job.has_reference ? methods + 2 * 4.0 * 24 * 1.5 : largest;
+  return std::size_t(texels * per_texel) + (std::size_t(64) << 20);  // + fixed overhead
+}
+
+Scene load_scene(const Job& job) {
+  Scene scene;
+  scene.name = job.name;
+  const nlohmann::json& doc = job.doc;
+  const nlohmann::json& h = doc["height"];
+  const double texel = h.value("texel_size", 1.0);
+  const Wrap wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
+  if (h.contains("procedural")) {
+    scene.field = make_procedural(procedural_spec(h["procedural"]), texel, wrap);
+  } else {
+    scene.field = load_image_field(job, texel, wrap);
+  }
+  const double scale = h.value("height_scale", 1.0), offset = h.value("height_offset", 0.0);
+  if (scale != 1.0 || offset != 0.0)
+    for (float& z : scene.field.z) z = float(z * scale + offset);
+  if (scene.field.width < 2 || scene.field.height < 2)
+    throw InputError(job.file.string(), "/height",
+                     "the field is " + std::to_string(scene.field.width) + "x" + std::to_string(scene.field.height) +
+                         "; at least 2x2 texels are needed");
+  scene.normals = compute_normals(scene.field);
+
+  const std::size_t n = scene.field.texel_count();
+  const nlohmann::json surface = doc.value("surface", nlohmann::json::object());
+  scene.surface.albedo.assign(n, Rgb{0.5f, 0.5f, 0.5f});
+  if (surface.contains("albedo")) load_surface_map(job, "/surface/albedo", scene.field, scene.surface.albedo);
+  if (surface.contains("emission")) {
+    scene.surface.emission.assign(n, Rgb{});
+    load_surface_map(job, "/surface/emission", scene.field, scene.surface.emission);
+  }
+
+  load_lighting(job, scene);
+  if (doc.contains("lights")) {
+    for (const auto& l : doc["lights"]) {
+      const auto& d = l["directional"];
+      DirectionalLight light;
+      light.direction = normalize({d["direction"][0].get<double>(), d["direction"][1].get<double>(),
+                                   d["direction"][2].get<double>()});
+      light.angular_diameter = d.value("angular_diameter_deg", 0.0) * kPi / 180.0;
+      light.irradiance = rgb_of(d["irradiance"]);
+      scene.lights.push_back(light);
+    }
+  }
+  scene.bounces = doc.value("bounces", 1);
+  return scene;
+}
+
+}  // namespace hfbake

@@ -1,0 +1,25 @@
+// Builds a job's Scene: the height field (image or procedural) with nodata handling, scale and normals,
+// the surface maps, the environment and the lights. All file reading of a bake happens here.
+#pragma once
+
+#include <cstddef>
+
+#include "field/scene.hpp"
+#include "job/manifest.hpp"
+
+namespace hfbake {
+
+struct FieldSize {
+  int width = 0, height = 0;
+};
+
+// The height field's size, from the procedural spec or the image header (no pixels are read).
+FieldSize probe_field_size(const Job& job);
+
+// Bytes a bake of `job` needs at peak (field, normals, surface maps, the largest method's layers and
+// scratch), estimated from the size alone so an absurd job is refused before anything is allocated.
+std::size_t estimate_peak_bytes(const Job& job, FieldSize size);
+
+Scene load_scene(const Job& job);
+
+}  // namespace hfbake

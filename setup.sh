@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# hfbake setup on Debian bookworm: installs what is missing (apt-get, idempotent), builds, then
+#   ./setup.sh demo   bakes jobs/demo.json and prints where the outputs went
+#   ./setup.sh test   runs the whole test suite through CTest
+#   ./setup.sh build  only installs and builds
+# Environment: BUILD_DIR (default build), JOBS (parallel build jobs, default: cores).
+set -euo pipefail
+cd "$(dirname "$0")"
+mode=${1:-build}
+build_dir=${BUILD_DIR:-build}
+jobs=${JOBS:-$(nproc)}
+
+packages=(build-essential cmake pkg-config git
+  libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev openimageio-tools libopencolorio-dev
+  nlohmann-json3-dev libvalijson-dev libcli11-dev libgtest-dev libbenchmark-dev)
+if [ "$mode" = test ]; then
+  packages+=(chromium)  # the HTML report test renders the page in headless Chromium
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "setup: all ${#packages[@]} packages present"
+fi
+
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build_dir" -j "$jobs"
+
+case "$mode" in
+  build) ;;
+  demo)
+    "$build_dir/baker/cli/hfbake" bake jobs/demo.json --out out/demo --summary out/demo-summary.json
+    echo
+    echo "demo outputs:"
+    ls -l out/demo
+    echo "summary: $(pwd)/out/demo-summary.json"
+    ;;
+  test)
+    ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
+    ;;
+  *)
+    echo "usage: $0 [build|demo|test]" >&2
+    exit 2
+    ;;
+esac
