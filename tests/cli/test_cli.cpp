@@ -1,0 +1,251 @@
+// The hfbake binary as users and scripts see it: every bad input gives exit 2 and one line naming the file
+// and the field; nothing is left half-written; SIGINT exits 130 with no outputs.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <thread>
+
+namespace {
+namespace fs = std::filesystem;
+
+struct Run {
+  int exit_code = -1;
+  std::string err;  // stderr
+  std::vector<std::string> error_lines() const {
+    std::vector<std::string> lines;
+    std::istringstream in(err);
+    for (std::string l; std::getline(in, l);)
+      if (l.rfind("hfbake: error: ", 0) == 0) lines.push_back(l);
+    return lines;
+  }
+};
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("hfbake_test_cli_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::permissions(dir_ / "locked", fs::perms::owner_all, ec);
+    fs::remove_all(dir_);
+  }
+
+  Run hfbake(const std::string& args) {
+    const fs::path err = dir_ / "stderr.txt";
+    const std::string cmd = std::string(HFBAKE_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
+    const int status = std::system(cmd.c_str());
+    Run r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(err);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    r.err = ss.str();
+    return r;
+  }
+
+  fs::path write_job(const std::string& name, const nlohmann::json& job) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << job.dump(2);
+    return p;
+  }
+
+  static nlohmann::json job(const nlohmann::json& height, const nlohmann::json& bake = {{{"method", "p1"}, {"directions", 8}}}) {
+    return {{"version", 1}, {"name", "t"}, {"height", height}, {"bake", bake}, {"output", {{"dir", "out"}}}};
+  }
+
+  void write_float_image(const fs::path& p, int w, int h, int channels, const std::vector<float>& pixels) {
+    auto out = OIIO::ImageOutput::create(p.string());
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, channels, OIIO::TypeDesc::FLOAT);
+    ASSERT_TRUE(out->open(p.string(), spec));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()));
+    out->close();
+  }
+
+  bool output_dir_is_empty() {
+    const fs::path out = dir_ / "out";
+    return !fs::exists(out) || fs::is_empty(out);
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(Cli, VersionAndHelp) {
+  Run r = hfbake("--version");
+  EXPECT_EQ(r.exit_code, 0);
+  r = hfbake("--help");
+  EXPECT_EQ(r.exit_code, 0);
+}
+
+TEST_F(Cli, MalformedJson) {
+  const fs::path p = dir_ / "bad.json";
+  std::ofstream(p) << "{\"version\": 1,,}";
+  const Run r = hfbake("bake " + p.string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("bad.json: line 1, column 15: malformed JSON"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, SchemaViolationOneLinePerProblem) {
+  nlohmann::json j = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}, {{{"method", "p1"}, {"directions", 0}}});
+  j["colour"] = "red";
+  const fs::path p = write_job("x.json", j);
+  for (const char* cmd : {"validate ", "bake "}) {
+    const Run r = hfbake(cmd + p.string());
+    EXPECT_EQ(r.exit_code, 2) << cmd;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 2u) << r.err;
+    EXPECT_EQ(lines[0], "hfbake: error: " + p.string() + ": /bake/0/directions: must be >= 1");
+    EXPECT_EQ(lines[1], "hfbake: error: " + p.string() + ": /colour: unknown key");
+  }
+  EXPECT_TRUE(output_dir_is_empty());
+}
+
+TEST_F(Cli, MissingHeightImage) {
+  const fs::path p = write_job("x.json", job({{"image", "nope.exr"}}));
+  const Run r = hfbake("bake " + p.string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("x.json: /height/image: no such file: "), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, CorruptAndTruncatedImages) {
+  std::ofstream(dir_ / "garbage.exr") << "this is not an image at all";
+  std::vector<float> px(64 * 64, 1.0f);
+  write_float_image(dir_ / "good.exr", 64, 64, 1, px);
+  {
+    // Truncate a valid EXR to half its size.
+    const auto size = fs::file_size(dir_ / "good.exr");
+    fs::copy_file(dir_ / "good.exr", dir_ / "truncated.exr");
+    fs::resize_file(dir_ / "truncated.exr", size / 2);
+  }
+  for (const char* name : {"garbage.exr", "truncated.exr"}) {
+    const fs::path p = write_job("x.json", job({{"image", name}}));
+    const Run r = hfbake("bake " + p.string());
+    EXPECT_EQ(r.exit_code, 2) << name;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(name), std::string::npos) << r.err;
+    EXPECT_TRUE(output_dir_is_empty());
+  }
+}
+
+TEST_F(Cli, WrongChannel) {
+  write_float_image(dir_ / "rgb.exr", 16, 16, 3, std::vector<float>(16 * 16 * 3, 0.5f));
+  const fs::path p = write_job("x.json", job({{"image", "rgb.exr"}, {"channel", 5}}));
+  Run r = hfbake("bake " + p.string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("/height/channel"), std::string::npos) << r.err;
+  const fs::path q = write_job("y.json", job({{"image", "rgb.exr"}, {"channel", "Q"}}));
+  r = hfbake("bake " + q.string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("/height/channel"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, NanHeightsAreAnErrorUnlessFilled) {
+  std::vector<float> px(32 * 32, 1.0f);
+  px[5 * 32 + 7] = NAN;
+  write_float_image(dir_ / "nan.exr", 32, 32, 1, px);
+  Run r = hfbake("bake " + write_job("x.json", job({{"image", "nan.exr"}})).string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("/height/image: texel (7, 5) is NaN"), std::string::npos) << r.err;
+  EXPECT_TRUE(output_dir_is_empty());
+}
+
+TEST_F(Cli, TinyFields) {
+  write_float_image(dir_ / "one.exr", 1, 1, 1, {1.0f});
+  const Run r = hfbake("bake " + write_job("x.json", job({{"image", "one.exr"}})).string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("/height: the field is 1x1"), std::string::npos) << r.err;
+  // 0-size procedural: the schema refuses it.
+  const Run z = hfbake("bake " + write_job("z.json", job({{"procedural", {{"kind", "flat"}, {"size", {0, 8}}}}})).string());
+  EXPECT_EQ(z.exit_code, 2);
+  ASSERT_EQ(z.error_lines().size(), 1u) << z.err;
+  EXPECT_NE(z.error_lines()[0].find("/height/procedural/size/0: must be >= 2"), std::string::npos) << z.err;
+}
+
+TEST_F(Cli, FieldTooLargeIsRefusedBeforeAllocating) {
+  const fs::path p = write_job("x.json", job({{"procedural", {{"kind", "flat"}, {"size", {1000000, 1000000}}}}}));
+  const Run r = hfbake("bake " + p.string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("/height: a 1000000x1000000 field needs about"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, UnwritableOutputFolder) {
+  if (geteuid() == 0) {
+    // root ignores permissions: use a path below a regular file instead.
+    std::ofstream(dir_ / "locked") << "a file, not a folder";
+  } else {
+    fs::create_directories(dir_ / "locked");
+    fs::permissions(dir_ / "locked", fs::perms::owner_read | fs::perms::owner_exec);
+  }
+  nlohmann::json j = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}});
+  j["output"]["dir"] = "locked/out";
+  const Run r = hfbake("bake " + write_job("x.json", j).string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("/output/dir: cannot create"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, ContinuesPastAFailedJob) {
+  const fs::path bad = write_job("bad.json", job({{"image", "nope.exr"}}));
+  nlohmann::json g = job({{"procedural", {{"kind", "flat"}, {"size", {16, 16}}}}});
+  g["name"] = "good";
+  const fs::path good = write_job("good.json", g);
+  const Run r = hfbake("bake " + bad.string() + " " + good.string() + " --quiet --summary " + (dir_ / "s.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  std::ifstream in(dir_ / "s.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  ASSERT_EQ(s["jobs"].size(), 2u);
+  EXPECT_EQ(s["jobs"][0]["status"], "invalid");
+  EXPECT_EQ(s["jobs"][1]["status"], "ok");
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "good.p1.exr"));
+  EXPECT_EQ(s["jobs"][1]["outputs"][0], (dir_ / "out" / "good.p1.exr").string());
+}
+
+TEST_F(Cli, InterruptExits130AndLeavesNoOutputs) {
+  // A reference bake long enough to be interrupted mid-way.
+  nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {256, 256}}}}});
+  j["reference"] = {{"samples", 100000}};
+  const fs::path p = write_job("x.json", j);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string devnull = "/dev/null";
+    freopen(devnull.c_str(), "w", stderr);
+    execl(HFBAKE_BINARY, "hfbake", "bake", p.c_str(), "--quiet", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait until the bake has begun writing into its staging folder, then interrupt.
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(20)) {
+    if (fs::exists(dir_ / "out")) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_TRUE(output_dir_is_empty());
+}
+
+}  // namespace
