@@ -9,11 +9,13 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 
+#include "cli/job_outcome.hpp"
 #include "cli/method_dispatch.hpp"
 #include "cli/outputs.hpp"
 #include "cli/progress.hpp"
 #include "cli/report_writer.hpp"
 #include "cli/scene_loader.hpp"
+#include "cli/suite.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
@@ -23,28 +25,6 @@ namespace hfbake {
 namespace fs = std::filesystem;
 
 namespace {
-
-enum class Status { ok, threshold_failed, failed, invalid, cancelled };
-
-const char* status_name(Status s) {
-  switch (s) {
-    case Status::ok: return "ok";
-    case Status::threshold_failed: return "threshold failed";
-    case Status::failed: return "failed";
-    case Status::invalid: return "invalid";
-    case Status::cancelled: return "interrupted";
-  }
-  return "?";
-}
-
-struct JobOutcome {
-  std::string file, name;
-  Status status = Status::ok;
-  std::vector<std::string> errors;
-  std::vector<fs::path> outputs;
-  nlohmann::json methods = nlohmann::json::object();  // stem -> {seconds, metrics...}
-  double seconds = 0;
-};
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -64,8 +44,8 @@ std::string gib(std::size_t bytes) {
   return buf;
 }
 
-void add_common_attributes(LayerSet& layers, const Job& job, const std::string& job_hash, const std::string& method,
-                           const nlohmann::json& params, double seconds) {
+void add_common_attributes(LayerSet& layers, const Job& job, const std::string& job_hash,
+                           const std::string& method, const nlohmann::json& params, double seconds) {
   layers.attributes.emplace_back("hfbake:version", hfbake_version());
   layers.attributes.emplace_back("hfbake:job", job.name);
   layers.attributes.emplace_back("hfbake:job_hash", job_hash);
@@ -81,8 +61,9 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   const std::size_t need = estimate_peak_bytes(job, size), have = available_memory_bytes();
   if (need > have)
     throw InputError(job.file.string(), "/height",
-                     "a " + std::to_string(size.width) + "x" + std::to_string(size.height) + " field needs about " +
-                         gib(need) + " to bake, more than the " + gib(have) + " available");
+                     "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                         " field needs about " + gib(need) + " to bake, more than the " + gib(have) +
+                         " available");
 
   OutputStage stage(job);
   progress.begin(job.name, "load");
@@ -128,7 +109,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
       if (outcome.methods.contains(stem)) outcome.methods[stem]["metrics"] = metrics;
     for (const std::string& failure : r.threshold_failures) {
       outcome.errors.push_back(job.file.string() + ": /report/thresholds: " + failure);
-      outcome.status = Status::threshold_failed;
+      outcome.status = JobStatus::threshold_failed;
     }
   }
   if (cancel.load()) throw Cancelled();
@@ -142,7 +123,7 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
   std::fprintf(stderr, "\nhfbake summary\n");
   for (const JobOutcome& o : outcomes) {
     std::fprintf(stderr, "  %-24s %-16s %8.2f s  %s\n", o.name.empty() ? o.file.c_str() : o.name.c_str(),
-                 status_name(o.status), o.seconds, o.file.c_str());
+                 job_status_name(o.status), o.seconds, o.file.c_str());
     for (auto& [stem, m] : o.methods.items()) {
       std::fprintf(stderr, "      %-20s %8.2f s", stem.c_str(), m.value("seconds", 0.0));
       if (m.contains("metrics"))
@@ -151,7 +132,8 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
             std::fprintf(stderr, "  %s rmse %.4g", layer.c_str(), metrics["rmse"].get<double>());
       std::fprintf(stderr, "\n");
     }
-    if (!o.outputs.empty()) std::fprintf(stderr, "      outputs in %s\n", o.outputs.front().parent_path().c_str());
+    if (!o.outputs.empty())
+      std::fprintf(stderr, "      outputs in %s\n", o.outputs.front().parent_path().c_str());
   }
 }
 
@@ -161,7 +143,7 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
   for (const JobOutcome& o : outcomes) {
     nlohmann::json j = {{"file", fs::absolute(o.file).string()},
                         {"name", o.name},
-                        {"status", status_name(o.status)},
+                        {"status", job_status_name(o.status)},
                         {"seconds", o.seconds},
                         {"errors", o.errors},
                         {"methods", o.methods}};
@@ -195,8 +177,8 @@ int run_validate(const std::vector<fs::path>& jobs, bool quiet) {
       const FieldSize size = probe_field_size(*load.job);
       const std::size_t need = estimate_peak_bytes(*load.job, size);
       if (!quiet)
-        std::fprintf(stderr, "hfbake: %s: valid (%dx%d, about %s to bake)\n", file.c_str(), size.width, size.height,
-                     gib(need).c_str());
+        std::fprintf(stderr, "hfbake: %s: valid (%dx%d, about %s to bake)\n", file.c_str(), size.width,
+                     size.height, gib(need).c_str());
     } catch (const InputError& e) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
       exit_code = 2;
@@ -206,18 +188,47 @@ int run_validate(const std::vector<fs::path>& jobs, bool quiet) {
 }
 
 int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
+  const auto t_start = std::chrono::steady_clock::now();
   const Progress::Mode mode = Progress::detect(options.quiet);
   Progress progress(mode);
-  std::vector<JobOutcome> outcomes(options.jobs.size());
-  std::vector<std::optional<Job>> jobs(options.jobs.size());
 
-  // Validate everything first: a typo in the last job is reported before hours of baking.
-  for (std::size_t i = 0; i < options.jobs.size(); ++i) {
+  // Expand suites into their jobs. Each input is (job file, output override).
+  struct Input {
+    fs::path file;
+    std::optional<fs::path> out;
+    int suite = -1;  // index into suites
+  };
+  std::vector<Input> inputs;
+  std::vector<Suite> suites;
+  std::vector<std::string> suite_errors;
+  int exit_code = 0;
+  for (const fs::path& file : options.jobs) {
+    if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
+      if (options.out) suite->output_dir = fs::absolute(*options.out / suite->name);
+      for (const fs::path& job : suite->jobs)
+        inputs.push_back({job, suite->output_dir / job.stem(), int(suites.size())});
+      suites.push_back(std::move(*suite));
+    } else {
+      inputs.push_back({file, std::nullopt, -1});
+    }
+  }
+  for (const std::string& e : suite_errors) {
+    std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+    exit_code = 2;
+  }
+  const std::size_t plain_jobs =
+      std::count_if(inputs.begin(), inputs.end(), [](const Input& i) { return i.suite < 0; });
+  for (Input& in : inputs) {
     // With --out and several jobs, each job gets its own folder under DIR.
-    std::optional<fs::path> out = options.out;
-    if (out && options.jobs.size() > 1) out = *out / options.jobs[i].stem();
-    JobLoad load = load_job(options.jobs[i], out);
-    outcomes[i].file = options.jobs[i].string();
+    if (in.suite < 0 && options.out) in.out = plain_jobs > 1 ? *options.out / in.file.stem() : *options.out;
+  }
+
+  std::vector<JobOutcome> outcomes(inputs.size());
+  std::vector<std::optional<Job>> jobs(inputs.size());
+  // Validate everything first: a typo in the last job is reported before hours of baking.
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    JobLoad load = load_job(inputs[i].file, inputs[i].out);
+    outcomes[i].file = inputs[i].file.string();
     for (const std::string& e : load.errors) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
       outcomes[i].errors.push_back(e);
@@ -226,12 +237,12 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
       outcomes[i].name = load.job->name;
       jobs[i] = std::move(load.job);
     } else {
-      outcomes[i].status = Status::invalid;
+      outcomes[i].status = JobStatus::invalid;
     }
   }
 
   std::mutex error_mutex;
-  auto fail = [&](JobOutcome& o, Status s, const std::string& line) {
+  auto fail = [&](JobOutcome& o, JobStatus s, const std::string& line) {
     std::lock_guard lock(error_mutex);
     o.status = s;
     o.errors.push_back(line);
@@ -245,31 +256,44 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
       try {
         bake_job(*jobs[i], progress, cancel, o);
       } catch (const Cancelled&) {
-        o.status = Status::cancelled;
+        o.status = JobStatus::cancelled;
       } catch (const InputError& e) {
-        fail(o, Status::invalid, e.line());
+        fail(o, JobStatus::invalid, e.line());
       } catch (const std::exception& e) {
-        fail(o, Status::failed, jobs[i]->file.string() + ": " + e.what());
+        fail(o, JobStatus::failed, jobs[i]->file.string() + ": " + e.what());
       }
     });
   }
   group.wait();
 
-  int exit_code = 0;
   for (const JobOutcome& o : outcomes) {
-    if (o.status == Status::threshold_failed) exit_code = std::max(exit_code, 1);
-    if (o.status == Status::invalid || o.status == Status::failed) exit_code = std::max(exit_code, 2);
+    if (o.status == JobStatus::threshold_failed) exit_code = std::max(exit_code, 1);
+    if (o.status == JobStatus::invalid || o.status == JobStatus::failed) exit_code = std::max(exit_code, 2);
   }
   if (cancel.load()) exit_code = 130;
   print_summary(outcomes, options.quiet);
+  const double total_seconds = seconds_since(t_start);
+  for (std::size_t s = 0; s < suites.size() && !cancel.load(); ++s) {
+    std::vector<JobOutcome> members;
+    for (std::size_t i = 0; i < inputs.size(); ++i)
+      if (inputs[i].suite == int(s)) members.push_back(outcomes[i]);
+    try {
+      for (const fs::path& p : write_suite_reports(suites[s], members, total_seconds))
+        progress.message("suite " + suites[s].name + ": wrote " + p.string());
+    } catch (const std::exception& e) {
+      progress.error(suites[s].file.string() + ": cannot write the suite reports: " + e.what());
+      exit_code = std::max(exit_code, 2);
+    }
+  }
   for (const JobOutcome& o : outcomes)
     for (const std::string& e : o.errors)
-      if (o.status == Status::threshold_failed) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+      if (o.status == JobStatus::threshold_failed) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
   if (options.summary) {
     try {
       write_summary_file(*options.summary, outcomes, exit_code);
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "hfbake: error: %s: cannot write summary: %s\n", options.summary->c_str(), e.what());
+      std::fprintf(stderr, "hfbake: error: %s: cannot write summary: %s\n", options.summary->c_str(),
+                   e.what());
       exit_code = std::max(exit_code, 2);
     }
   }

@@ -1,6 +1,6 @@
 // hfbake: bakes ambient occlusion and lighting for height fields. See README.md and the contract.
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
 
 #include <atomic>
 #include <csignal>
@@ -16,7 +16,8 @@ namespace {
 std::atomic<bool> g_interrupted{false};  // the one process-wide flag a signal handler may touch
 
 extern "C" void on_sigint(int) {
-  if (g_interrupted.exchange(true)) std::_Exit(130);  // a second Ctrl-C: stop now (staging is in the output dir)
+  if (g_interrupted.exchange(true))
+    std::_Exit(130);  // a second Ctrl-C: stop now (staging is in the output dir)
 }
 
 }  // namespace
@@ -34,7 +35,8 @@ int main(int argc, char** argv) {
 
   CLI::App* bake_cmd = app.add_subcommand("bake", "Bake every job (continues past a failed job)");
   bake_cmd->add_option("jobs", bake_jobs, "Job files (JSON)")->required()->check(CLI::ExistingFile);
-  bake_cmd->add_option("--threads", threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  bake_cmd->add_option("--threads", threads, "Worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
   bake_cmd->add_option("--out", out, "Output folder, replacing each job's output.dir");
   bake_cmd->add_flag("--quiet", bake.quiet, "No progress output (errors are still printed)");
   bake_cmd->add_option("--summary", summary, "Write a machine-readable JSON summary to FILE");
@@ -64,7 +66,8 @@ int main(int argc, char** argv) {
   if (!summary.empty()) bake.summary = summary;
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0)
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                  std::size_t(threads));
   std::signal(SIGINT, on_sigint);
   return hfbake::run_bake(bake, g_interrupted);
 }

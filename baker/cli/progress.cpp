@@ -49,7 +49,8 @@ void Progress::update(const std::string& job, const std::string& step, double fr
   const int filled = int(fraction * width + 0.5);
   std::string bar(std::size_t(filled), '#');
   bar.append(std::size_t(width - filled), '-');
-  std::fprintf(stderr, "\r\033[2K%s: %s [%s] %3d%%", job.c_str(), step.c_str(), bar.c_str(), int(fraction * 100));
+  std::fprintf(stderr, "\r\033[2K%s: %s [%s] %3d%%", job.c_str(), step.c_str(), bar.c_str(),
+               int(fraction * 100));
   std::fflush(stderr);
   bar_visible_ = true;
 }

@@ -25,7 +25,7 @@ struct ReportInputs {
 
 struct ReportResult {
   nlohmann::json metrics_by_method = nlohmann::json::object();  // stem -> layer -> metrics
-  std::vector<std::string> threshold_failures;                   // "p1.direct.rel_mae = 0.02 > 0.01"
+  std::vector<std::string> threshold_failures;                  // "p1.direct.rel_mae = 0.02 > 0.01"
 };
 
 // Compares, writes report.json into the stage, and evaluates the job's thresholds.

@@ -89,8 +89,8 @@ Scene load_scene(const Job& job) {
     for (float& z : scene.field.z) z = float(z * scale + offset);
   if (scene.field.width < 2 || scene.field.height < 2)
     throw InputError(job.file.string(), "/height",
-                     "the field is " + std::to_string(scene.field.width) + "x" + std::to_string(scene.field.height) +
-                         "; at least 2x2 texels are needed");
+                     "the field is " + std::to_string(scene.field.width) + "x" +
+                         std::to_string(scene.field.height) + "; at least 2x2 texels are needed");
   scene.normals = compute_normals(scene.field);
 
   const std::size_t n = scene.field.texel_count();
