@@ -2,6 +2,8 @@
 // directional lights with an angular size. Loading (files, color spaces) lives in env/load_environment.
 #pragma once
 
+#include <array>
+#include <optional>
 #include <vector>
 
 #include "core/vec.hpp"
@@ -21,7 +23,10 @@ struct DirectionalLight {
 //   row r covers polar angle theta in [pi r / height, pi (r + 1) / height) measured from +z,
 //   column c covers azimuth phi in [2 pi c / width, 2 pi (c + 1) / width) measured from +x towards +y,
 //   width == 2 * height. (How the EXR lat-long / cube / cross conventions map into this: README.)
-// levels[0] is full resolution; levels[m] is a 2x box reduction of levels[m - 1] (for filtered lookups).
+// levels[0] is full resolution; levels[m] is a 2x box reduction of levels[m - 1] (for filtered lookups),
+// solid-angle weighted. A uniform environment also carries a small constant lat-long (16 x 8), so code that
+// integrates texel by texel works for both kinds; `uniform` lets methods take a fast path.
+// Texel areas tile the sphere edge to edge: texel_direction(c, r) is the texel's center.
 struct Environment {
   struct Level {
     int width = 0, height = 0;
@@ -44,5 +49,77 @@ struct Environment {
 };
 
 Environment make_uniform_environment(Rgb radiance);
+
+// --- building and integrating -----------------------------------------------------------------------
+
+// A world-frame lat-long environment from level-0 texels (width == 2 * height, row-major, rows from the
+// zenith down); builds the mip levels.
+Environment make_latlong_environment(int width, int height, std::vector<Rgb> texels);
+
+// Rebuilds env.levels[1..] from env.levels[0]: each coarser texel is the solid-angle-weighted mean of its
+// 2x2 children, so the integral of radiance over the sphere is the same at every level. Reduction stops
+// at 2x1 or when a dimension is odd.
+void build_mip_levels(Environment& env);
+
+// Solid angle of texel row r of a width x height world-frame lat-long (any level).
+double latlong_texel_solid_angle(int width, int height, int r);
+
+// Integral of radiance over the whole sphere (W/m^2 sr * sr) at mip level `level`; for a uniform
+// environment 4 pi times its radiance.
+Rgb integrate_sphere(const Environment& env, int level = 0);
+
+// --- the built-in procedural sky --------------------------------------------------------------------
+
+// A clear-sky gradient plus a sun. Radiance at elevation e above the horizon (z = sin e):
+//   L(e) = horizon + (zenith - horizon) * sin(e)       (linear in z, so every lat-long texel stores its
+//                                                         exact mean and closed forms exist for tests)
+// and `ground` everywhere below the horizon (the terrain beyond the height field's border, lit grey).
+// The sun is not rasterised: it is returned as a DirectionalLight (direction from elevation and azimuth,
+// azimuth from +x towards +y, angular size, irradiance). A sun at or below the horizon (elevation <= 0)
+// is behind the ground and gives no light; zero irradiance means no sun.
+struct SkySpec {
+  Rgb zenith{0.25f, 0.45f, 0.9f};
+  Rgb horizon{0.8f, 0.85f, 0.95f};
+  Rgb ground{0.2f, 0.18f, 0.15f};
+  double sun_elevation_deg = 35;
+  double sun_azimuth_deg = 135;
+  double sun_angular_diameter_deg = 0.53;
+  Rgb sun_irradiance{3.0f, 2.9f, 2.7f};
+  float intensity = 1;      // multiplies sky and sun
+  double rotation_deg = 0;  // turns sky and sun about +z (adds to the sun's azimuth)
+  int height = 64;          // lat-long rows (width = 2 * height); the gradient is smooth
+};
+
+// An environment with the lights that belong to it (the sky's sun).
+struct EnvironmentLighting {
+  Environment environment;
+  std::vector<DirectionalLight> lights;
+};
+
+EnvironmentLighting make_sky_environment(const SkySpec& spec);
+
+// Unit direction towards a light at elevation / azimuth (degrees; azimuth from +x towards +y).
+Vec3 direction_from_elevation_azimuth(double elevation_deg, double azimuth_deg);
+
+// --- the cube-map view (P1's lighting tables) -------------------------------------------------------
+
+// Six square faces in the world frame, in the order +x, -x, +y, -y, +z, -z. Face f maps texel (i, j)
+// (i = column, j = row, both 0..size-1) to the direction
+//   normalize(axis_f + a * u_f + b * v_f),  a = 2 (i + 0.5) / size - 1,  b = 2 (j + 0.5) / size - 1
+// with (axis, u, v) = (+x, +y, +z), (-x, -y, +z), (+y, -x, +z), (-y, +x, +z), (+z, +x, +y), (-z, +x, -y)
+// (u x v = axis for every face). Each texel stores the mean radiance over its solid angle.
+struct CubeView {
+  int size = 0;
+  std::array<std::vector<Rgb>, 6> faces;  // size * size texels each, row-major (j * size + i)
+
+  static Vec3 face_axis(int face);
+  static Vec3 face_u(int face);
+  static Vec3 face_v(int face);
+  Vec3 texel_direction(int face, int i, int j) const;
+  double texel_solid_angle(int i, int j) const;  // the same on every face; sums to 4 pi over all texels
+  const Rgb& at(int face, int i, int j) const { return faces[face][std::size_t(j) * size + i]; }
+};
+
+CubeView make_cube_view(const Environment& env, int size);
 
 }  // namespace hfbake
