@@ -1,5 +1,6 @@
 // Distant lighting in the world frame (+z up): an environment of radiance by direction, and
-// directional lights with an angular size. Loading (files, color spaces) lives in env/load_environment.
+// directional lights with an angular size. Loading (files, color spaces) lives in io/load_environment.hpp;
+// how images map to directions: env/env_mapping.hpp.
 #pragma once
 
 #include <array>

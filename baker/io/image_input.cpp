@@ -1,0 +1,152 @@
+#include "io/image_input.hpp"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cctype>
+#include <memory>
+
+#include "core/error.hpp"
+#include "io/color.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+[[noreturn]] void fail(const InputSite& site, const fs::path& file, const std::string& what) {
+  throw InputError(site.job_file, site.pointer, file.string() + ": " + what);
+}
+
+// OpenImageIO's messages can span lines; keep the first non-empty one.
+std::string first_line(std::string s) {
+  while (!s.empty() && (s.front() == '\n' || s.front() == ' ')) s.erase(s.begin());
+  const auto nl = s.find('\n');
+  if (nl != std::string::npos) s.resize(nl);
+  return s.empty() ? std::string("unknown error") : s;
+}
+
+std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& file, const InputSite& site) {
+  std::error_code ec;
+  if (!fs::exists(file, ec)) fail(site, file, "no such file");
+  if (fs::is_directory(file, ec)) fail(site, file, "is a folder, not an image");
+  auto in = OIIO::ImageInput::open(file.string());
+  if (!in) fail(site, file, "cannot read the image: " + first_line(OIIO::geterror()));
+  return in;
+}
+
+ImageInfo info_of(const OIIO::ImageSpec& spec, const OIIO::ImageInput& in) {
+  ImageInfo info;
+  info.width = spec.width;
+  info.height = spec.height;
+  info.channels = spec.nchannels;
+  info.channel_names = spec.channelnames;
+  for (int c = int(info.channel_names.size()); c < info.channels; ++c)
+    info.channel_names.push_back(std::to_string(c));
+  const auto base = spec.format.basetype;
+  info.float_data =
+      base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::DOUBLE;
+  info.format = in.format_name();
+  return info;
+}
+
+void check_spec(const OIIO::ImageSpec& spec, const fs::path& file, const InputSite& site) {
+  if (spec.deep) fail(site, file, "deep images are not supported");
+  if (spec.depth > 1) fail(site, file, "volume images are not supported");
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+    fail(site, file,
+         "the image is empty (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) + ")");
+}
+
+std::string lower(std::string s) {
+  for (char& ch : s) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  return s;
+}
+
+}  // namespace
+
+ImageInfo probe_image(const fs::path& file, const InputSite& site) {
+  auto in = open_input(file, site);
+  const OIIO::ImageSpec& spec = in->spec();
+  check_spec(spec, file, site);
+  return info_of(spec, *in);
+}
+
+Image read_image(const fs::path& file, const InputSite& site) {
+  auto in = open_input(file, site);
+  const OIIO::ImageSpec spec = in->spec();
+  check_spec(spec, file, site);
+  Image image;
+  image.info = info_of(spec, *in);
+  image.pixels.resize(std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(spec.nchannels));
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+    std::string err = in->geterror();
+    if (err.empty()) err = OIIO::geterror();
+    fail(site, file, "cannot decode the image (corrupt or truncated?): " + first_line(err));
+  }
+  // Some readers report a short file only through the error state.
+  if (in->has_error())
+    fail(site, file, "cannot decode the image (corrupt or truncated?): " + first_line(in->geterror()));
+  in->close();
+  return image;
+}
+
+int find_channel(const ImageInfo& info, const ChannelSelector& channel, const fs::path& file,
+                 const InputSite& channel_site) {
+  std::string names;
+  for (const std::string& n : info.channel_names) names += (names.empty() ? "" : ", ") + n;
+  if (const int* index = std::get_if<int>(&channel)) {
+    if (*index >= 0 && *index < info.channels) return *index;
+    fail(channel_site, file,
+         "has no channel " + std::to_string(*index) + " (it has " + std::to_string(info.channels) + ": " +
+             names + ")");
+  }
+  const std::string& name = std::get<std::string>(channel);
+  for (int c = 0; c < info.channels; ++c)
+    if (info.channel_names[c] == name) return c;
+  for (int c = 0; c < info.channels; ++c)
+    if (lower(info.channel_names[c]) == lower(name)) return c;
+  fail(channel_site, file, "has no channel \"" + name + "\" (it has: " + names + ")");
+}
+
+Plane read_image_channel(const fs::path& file, const ChannelSelector& channel, const InputSite& site,
+                         const InputSite& channel_site) {
+  // Check the channel on the header before decoding anything.
+  const int c = find_channel(probe_image(file, site), channel, file, channel_site);
+  Image image = read_image(file, site);
+  Plane plane;
+  plane.width = image.info.width;
+  plane.height = image.info.height;
+  const std::size_t n = std::size_t(plane.width) * plane.height;
+  plane.values.resize(n);
+  const int stride = image.info.channels;
+  for (std::size_t i = 0; i < n; ++i) plane.values[i] = image.pixels[i * stride + c];
+  return plane;
+}
+
+RgbImage read_rgb_image(const fs::path& file, const std::string& colorspace, const InputSite& site,
+                        const InputSite& colorspace_site) {
+  Image image = read_image(file, site);
+  const int w = image.info.width, h = image.info.height, nc = image.info.channels;
+  const std::size_t n = std::size_t(w) * h;
+  std::vector<float> rgb(n * 3);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* p = &image.pixels[i * nc];
+    const bool grey = nc < 3;
+    rgb[3 * i + 0] = p[0];
+    rgb[3 * i + 1] = grey ? p[0] : p[1];
+    rgb[3 * i + 2] = grey ? p[0] : p[2];
+  }
+  image.pixels.clear();
+  image.pixels.shrink_to_fit();
+  const std::string space = colorspace.empty() ? default_colorspace(image.info.float_data) : colorspace;
+  convert_to_linear(rgb, 3, space, colorspace_site);
+  RgbImage out;
+  out.width = w;
+  out.height = h;
+  out.pixels.resize(n);
+  for (std::size_t i = 0; i < n; ++i) out.pixels[i] = {rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]};
+  return out;
+}
+
+}  // namespace hfbake

@@ -1,0 +1,68 @@
+// Reading images (any format OpenImageIO reads) into float planes, with one-line errors that name the
+// job file, the JSON pointer of the key that named the image, and the image.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "core/vec.hpp"
+
+namespace hfbake {
+
+// Where an image was named, for messages: InputError(job_file, pointer, "<image>: <what>").
+struct InputSite {
+  std::string job_file;  // the job file as the user gave it (may be empty)
+  std::string pointer;   // JSON pointer of the key that names the image, e.g. "/height/image"
+};
+
+// What the header says (nothing is decoded): enough to refuse absurd sizes before allocating.
+struct ImageInfo {
+  int width = 0, height = 0, channels = 0;
+  std::vector<std::string> channel_names;
+  bool float_data = false;  // half/float/double samples (EXR, HDR, float TIFF); else integer (8/16-bit)
+  std::string format;       // OpenImageIO's format name ("openexr", "png", "tiff", ...)
+};
+ImageInfo probe_image(const std::filesystem::path& file, const InputSite& site);
+
+// All channels of the first subimage, as floats, interleaved: pixels[(y * width + x) * channels + c].
+// Integer images are normalised to [0, 1] (OpenImageIO's convention); values are as stored (no colour
+// conversion). Missing, unreadable, corrupt or truncated files throw InputError.
+struct Image {
+  ImageInfo info;
+  std::vector<float> pixels;
+  float at(int x, int y, int c) const {
+    return pixels[(std::size_t(y) * info.width + x) * info.channels + c];
+  }
+};
+Image read_image(const std::filesystem::path& file, const InputSite& site);
+
+// A channel chosen by index (0-based) or by name ("R", "Y", "height.Z"; exact match first, then
+// case-insensitive).
+using ChannelSelector = std::variant<int, std::string>;
+
+// The channel's index in `info`, or InputError at `channel_site` naming the file and listing its channels.
+int find_channel(const ImageInfo& info, const ChannelSelector& channel, const std::filesystem::path& file,
+                 const InputSite& channel_site);
+
+// One channel as a width x height plane (row-major, row 0 = first stored row).
+struct Plane {
+  int width = 0, height = 0;
+  std::vector<float> values;
+};
+Plane read_image_channel(const std::filesystem::path& file, const ChannelSelector& channel,
+                         const InputSite& site, const InputSite& channel_site);
+
+// A colour image converted to linear RGB through OpenColorIO: 1 channel -> grey, 2 channels -> grey
+// (the second is taken as alpha), 3+ channels -> the first three. `colorspace` empty = the default for
+// the data: linear for float images, sRGB for integer (8/16-bit) images. Unknown colour space ->
+// InputError at `colorspace_site`.
+struct RgbImage {
+  int width = 0, height = 0;
+  std::vector<Rgb> pixels;  // row-major
+};
+RgbImage read_rgb_image(const std::filesystem::path& file, const std::string& colorspace,
+                        const InputSite& site, const InputSite& colorspace_site);
+
+}  // namespace hfbake

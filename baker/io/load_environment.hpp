@@ -1,0 +1,29 @@
+// Builds the job's distant lighting from its `environment` object (see the contract and
+// schemas/environment.schema.json): uniform, cubemap (6 files), cross, latlong or the built-in sky, with
+// colorspace, intensity and rotation_deg. Image conventions: env/env_mapping.hpp.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "env/environment.hpp"
+
+namespace hfbake {
+
+struct EnvironmentLoadOptions {
+  std::string job_file;                  // for messages
+  std::string pointer = "/environment";  // JSON pointer of the object, for messages
+  int max_height = 1024;                 // rows of the world lat-long images are resampled into (power of 2)
+};
+
+// Images are resampled into a world-frame lat-long of height min(max_height, the next power of two of
+// the input's latitude resolution: lat-long height, or twice the cube face size), each texel the
+// solid-angle-weighted mean of up to 4 x 4 bilinear samples. Relative paths resolve against `base_dir`.
+// Problems (missing file, corrupt image, wrong aspect, unequal cube faces, unknown colour space, an
+// image over 2^27 pixels) -> InputError at the key's JSON pointer. No key at all -> a uniform white
+// environment.
+EnvironmentLighting load_environment(const nlohmann::json& environment, const std::filesystem::path& base_dir,
+                                     const EnvironmentLoadOptions& options = {});
+
+}  // namespace hfbake
