@@ -8,6 +8,7 @@
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 #include <stdexcept>
@@ -56,16 +57,19 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
   header.compression() = compression_of(options.compression, file);
   const Imf::PixelType type = options.float_pixels ? Imf::FLOAT : Imf::HALF;
 
-  Imf::FrameBuffer frame;
+  struct Channel {
+    std::string name;
+    const float* data;   // first value of this channel in the layer's interleaved data
+    std::size_t stride;  // values between texels
+  };
+  std::vector<Channel> channels;
   for (const Layer& l : layers.layers) {
-    const int nc = l.channel_count();
-    const std::size_t xstride = sizeof(float) * std::size_t(nc), ystride = xstride * std::size_t(w);
-    for (int c = 0; c < nc; ++c) {
-      const std::string name = l.name + "." + l.channels[c];
-      if (header.channels().findChannel(name)) throw std::logic_error("write_exr: duplicate channel " + name);
-      header.channels().insert(name, Imf::Channel(type));
-      // OpenEXR converts the float frame buffer to the file's half channels itself.
-      frame.insert(name, Imf::Slice(Imf::FLOAT, (char*)(l.data.data() + c), xstride, ystride));
+    for (int c = 0; c < l.channel_count(); ++c) {
+      Channel ch{l.name + "." + l.channels[c], l.data.data() + c, std::size_t(l.channel_count())};
+      if (header.channels().findChannel(ch.name))
+        throw std::logic_error("write_exr: duplicate channel " + ch.name);
+      header.channels().insert(ch.name, Imf::Channel(type));
+      channels.push_back(std::move(ch));
     }
   }
   const auto put = [&](const std::string& key, const std::string& value) {
@@ -84,8 +88,37 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
   const fs::path tmp = temporary_sibling(file);
   try {
     Imf::OutputFile out(tmp.string().c_str(), header);
-    out.setFrameBuffer(frame);
-    out.writePixels(h);
+    if (options.float_pixels) {
+      // Float files read straight from the layers.
+      Imf::FrameBuffer frame;
+      for (const Channel& ch : channels)
+        frame.insert(ch.name, Imf::Slice(Imf::FLOAT, (char*)ch.data, sizeof(float) * ch.stride,
+                                         sizeof(float) * ch.stride * std::size_t(w)));
+      out.setFrameBuffer(frame);
+      out.writePixels(h);
+    } else {
+      // Half files (OpenEXR does not convert on output): a band of rows at a time, so the extra memory is
+      // bounded (channels x width x kBand halves) whatever the field size.
+      constexpr int kBand = 64;
+      const std::size_t band_values = std::size_t(w) * kBand;
+      std::vector<half> band(band_values * channels.size());
+      for (int y0 = 0; y0 < h; y0 += kBand) {
+        const int rows = std::min(kBand, h - y0);
+        Imf::FrameBuffer frame;
+        for (std::size_t k = 0; k < channels.size(); ++k) {
+          half* dst = band.data() + k * band_values;
+          const Channel& ch = channels[k];
+          const std::size_t first = std::size_t(y0) * w;
+          for (std::size_t i = 0; i < std::size_t(rows) * w; ++i)
+            dst[i] = half(ch.data[(first + i) * ch.stride]);
+          // The slice's base is where row 0 would be, so row y0 lands at the band's start.
+          char* base = (char*)dst - std::ptrdiff_t(sizeof(half)) * std::ptrdiff_t(first);
+          frame.insert(ch.name, Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(w)));
+        }
+        out.setFrameBuffer(frame);
+        out.writePixels(rows);
+      }
+    }
   } catch (const std::exception& e) {
     fs::remove(tmp, ec);
     std::string what = e.what();

@@ -1,0 +1,151 @@
+// Reading images: formats, channels, and the one-line errors for missing, corrupt, truncated files and
+// missing channels.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/error.hpp"
+#include "image_fixtures.hpp"
+#include "io/image_input.hpp"
+#include "temp_folder.hpp"
+
+namespace hfbake {
+namespace {
+namespace fs = std::filesystem;
+using test::TempFolder;
+using test::write_test_image;
+
+const InputSite kSite{"jobs/x.json", "/height/image"};
+const InputSite kChannelSite{"jobs/x.json", "/height/channel"};
+
+// The message the user sees, as the CLI prints it after "hfbake: error: ".
+template <class F>
+std::string error_line(F&& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.line();
+  }
+  return "(no InputError)";
+}
+
+std::vector<float> ramp(int w, int h, int nc) {
+  std::vector<float> v(std::size_t(w) * h * nc);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = float(i) * 0.25f;
+  return v;
+}
+
+TEST(ImageInput, ReadsFloatExrAndTiffExactly) {
+  TempFolder dir;
+  const auto px = ramp(5, 3, 2);
+  for (const char* name : {"a.exr", "a.tif"}) {
+    write_test_image(dir / name, 5, 3, 2, px, OIIO::TypeDesc::FLOAT, {"height", "mask"});
+    const ImageInfo info = probe_image(dir / name, kSite);
+    EXPECT_EQ(info.width, 5);
+    EXPECT_EQ(info.height, 3);
+    EXPECT_EQ(info.channels, 2);
+    EXPECT_TRUE(info.float_data);
+    const Image img = read_image(dir / name, kSite);
+    EXPECT_EQ(img.pixels, px) << name;
+    EXPECT_FLOAT_EQ(img.at(4, 2, 1), px[(2 * 5 + 4) * 2 + 1]);
+    // By index and by name (case-insensitive fallback), row 0 first.
+    // TIFF keeps no channel names: select by name in the EXR, by index in both.
+    const Plane p = std::string(name) == "a.exr"
+                        ? read_image_channel(dir / name, std::string("MASK"), kSite, kChannelSite)
+                        : read_image_channel(dir / name, 1, kSite, kChannelSite);
+    ASSERT_EQ(p.values.size(), 15u);
+    EXPECT_FLOAT_EQ(p.values[0], px[1]);
+    EXPECT_FLOAT_EQ(p.values[14], px[29]);
+    const Plane q = read_image_channel(dir / name, 0, kSite, kChannelSite);
+    EXPECT_FLOAT_EQ(q.values[7], px[14]);
+  }
+}
+
+TEST(ImageInput, IntegerImagesAreNormalised) {
+  TempFolder dir;
+  // 8-bit 255 -> 1.0, 51 -> 0.2; 16-bit 65535 -> 1.0.
+  write_test_image(dir / "a.png", 2, 1, 1, {1.0f, 0.2f}, OIIO::TypeDesc::UINT8);
+  const Image a = read_image(dir / "a.png", kSite);
+  EXPECT_FALSE(a.info.float_data);
+  EXPECT_FLOAT_EQ(a.pixels[0], 1.0f);
+  EXPECT_FLOAT_EQ(a.pixels[1], 51.0f / 255.0f);
+  write_test_image(dir / "b.png", 2, 1, 1, {1.0f, 0.5f}, OIIO::TypeDesc::UINT16);
+  const Image b = read_image(dir / "b.png", kSite);
+  EXPECT_FLOAT_EQ(b.pixels[0], 1.0f);
+  EXPECT_NEAR(b.pixels[1], 0.5f, 1.0f / 65535);
+}
+
+TEST(ImageInput, MissingFile) {
+  TempFolder dir;
+  const fs::path f = dir / "nope.exr";
+  EXPECT_EQ(error_line([&] { read_image(f, kSite); }),
+            "jobs/x.json: /height/image: " + f.string() + ": no such file");
+  EXPECT_EQ(error_line([&] { probe_image(f, kSite); }),
+            "jobs/x.json: /height/image: " + f.string() + ": no such file");
+  EXPECT_EQ(error_line([&] { read_image(dir.path(), kSite); }),
+            "jobs/x.json: /height/image: " + dir.path().string() + ": is a folder, not an image");
+}
+
+TEST(ImageInput, CorruptFile) {
+  TempFolder dir;
+  for (const char* name : {"bad.exr", "bad.png", "bad.tif"}) {
+    {
+      std::ofstream out(dir / name, std::ios::binary);
+      for (int i = 0; i < 1000; ++i) out.put(char((i * 7919) % 251));
+    }
+    const std::string line = error_line([&] { read_image(dir / name, kSite); });
+    const std::string prefix =
+        "jobs/x.json: /height/image: " + (dir / name).string() + ": cannot read the image: ";
+    EXPECT_EQ(line.substr(0, prefix.size()), prefix) << line;
+    EXPECT_EQ(line.find('\n'), std::string::npos) << line;
+  }
+}
+
+TEST(ImageInput, TruncatedFile) {
+  TempFolder dir;
+  std::vector<float> px(64 * 64 * 3);
+  for (std::size_t i = 0; i < px.size(); ++i) px[i] = float((i * 37) % 101) / 100;
+  for (const char* name : {"t.exr", "t.png", "t.tif"}) {
+    write_test_image(dir / name, 64, 64, 3, px,
+                     std::string(name) == "t.png" ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
+    fs::resize_file(dir / name, fs::file_size(dir / name) / 2);
+    const std::string line = error_line([&] { read_image(dir / name, kSite); });
+    const std::string prefix = "jobs/x.json: /height/image: " + (dir / name).string() + ": cannot ";
+    EXPECT_EQ(line.substr(0, prefix.size()), prefix) << name << ": " << line;
+    EXPECT_EQ(line.find('\n'), std::string::npos) << line;
+  }
+}
+
+TEST(ImageInput, WrongChannel) {
+  TempFolder dir;
+  write_test_image(dir / "rgb.exr", 2, 2, 3, ramp(2, 2, 3));
+  const fs::path f = dir / "rgb.exr";
+  EXPECT_EQ(error_line([&] { read_image_channel(f, 3, kSite, kChannelSite); }),
+            "jobs/x.json: /height/channel: " + f.string() + ": has no channel 3 (it has 3: R, G, B)");
+  EXPECT_EQ(error_line([&] { read_image_channel(f, std::string("Z"), kSite, kChannelSite); }),
+            "jobs/x.json: /height/channel: " + f.string() + ": has no channel \"Z\" (it has: R, G, B)");
+  EXPECT_EQ(read_image_channel(f, std::string("G"), kSite, kChannelSite).values[0], 0.25f);
+}
+
+TEST(ImageInput, RgbImagesConvertFromTheirDefaultColourSpace) {
+  TempFolder dir;
+  // 8-bit defaults to sRGB: 128/255 -> ((128/255 + 0.055) / 1.055)^2.4.
+  write_test_image(dir / "a.png", 1, 1, 3, {128 / 255.f, 1.0f, 0.0f}, OIIO::TypeDesc::UINT8);
+  const RgbImage a = read_rgb_image(dir / "a.png", "", kSite, {"jobs/x.json", "/surface/albedo/colorspace"});
+  EXPECT_NEAR(a.pixels[0].r, std::pow((128 / 255.0 + 0.055) / 1.055, 2.4), 1e-5);
+  EXPECT_NEAR(a.pixels[0].g, 1.0, 1e-5);
+  EXPECT_NEAR(a.pixels[0].b, 0.0, 1e-6);
+  // Float defaults to linear; a grey image is replicated.
+  write_test_image(dir / "b.exr", 1, 1, 1, {0.5f});
+  const RgbImage b = read_rgb_image(dir / "b.exr", "", kSite, {});
+  EXPECT_FLOAT_EQ(b.pixels[0].r, 0.5f);
+  EXPECT_FLOAT_EQ(b.pixels[0].b, 0.5f);
+  // Unknown colour space: an error at the colour space's pointer.
+  const std::string line = error_line([&] {
+    read_rgb_image(dir / "b.exr", "srgbb", kSite, {"j.json", "/x/colorspace"});
+  });
+  EXPECT_EQ(line.rfind("j.json: /x/colorspace: unknown OpenColorIO colour space \"srgbb\"", 0), 0u) << line;
+}
+
+}  // namespace
+}  // namespace hfbake
