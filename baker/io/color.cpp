@@ -13,103 +13,10 @@ namespace hfbake {
 
 namespace {
 
-// The reference space is linear Rec.709. Curves use OCIO's ExponentWithLinearTransform (forward =
-// decode to linear): sRGB is gamma 2.4 with offset 0.055 (IEC 61966-2-1); the ACES spaces use OCIO's
-// built-in transforms (Bradford-adapted matrices).
-const char* const kBuiltinConfig = R"yaml(ocio_profile_version: 2.1
-
-description: hfbake built-in config (scene-linear Rec.709 reference; sRGB display)
-
-roles:
-  default: Raw
-  data: Raw
-  reference: Linear Rec.709 (sRGB)
-  scene_linear: Linear Rec.709 (sRGB)
-  rendering: Linear Rec.709 (sRGB)
-  compositing_linear: Linear Rec.709 (sRGB)
-  color_picking: sRGB - Texture
-  texture_paint: sRGB - Texture
-  matte_paint: sRGB - Texture
-
-file_rules:
-  - !<Rule> {name: Default, colorspace: default}
-
-displays:
-  sRGB:
-    - !<View> {name: Standard, colorspace: sRGB - Display}
-    - !<View> {name: Raw, colorspace: Raw}
-
-active_displays: [sRGB]
-active_views: [Standard, Raw]
-
-colorspaces:
-  - !<ColorSpace>
-    name: Linear Rec.709 (sRGB)
-    aliases: [linear, lin_srgb, lin_rec709, Utility - Linear - sRGB]
-    family: Scene-linear
-    equalitygroup: ""
-    bitdepth: 32f
-    description: Scene-linear, Rec.709 primaries, D65 white (hfbake's working space)
-    isdata: false
-    allocation: lg2
-    allocationvars: [-15, 6]
-
-  - !<ColorSpace>
-    name: sRGB - Texture
-    aliases: [sRGB, srgb, srgb_texture, srgb_tx, Utility - sRGB - Texture]
-    family: Texture
-    bitdepth: 8ui
-    description: The sRGB curve (IEC 61966-2-1) on Rec.709 primaries
-    isdata: false
-    to_scene_reference: !<ExponentWithLinearTransform> {gamma: 2.4, offset: 0.055}
-
-  - !<ColorSpace>
-    name: Gamma 2.2 Rec.709
-    aliases: [gamma22, g22_rec709]
-    family: Texture
-    bitdepth: 8ui
-    description: A pure 2.2 power curve on Rec.709 primaries
-    isdata: false
-    to_scene_reference: !<ExponentTransform> {value: 2.2, style: pass_thru}
-
-  - !<ColorSpace>
-    name: ACEScg
-    aliases: [acescg, lin_ap1]
-    family: Scene-linear
-    bitdepth: 32f
-    description: Scene-linear AP1 primaries (ACEScg)
-    isdata: false
-    to_scene_reference: !<BuiltinTransform> {style: UTILITY - ACES-AP1_to_LINEAR-REC709_BFD}
-
-  - !<ColorSpace>
-    name: ACES2065-1
-    aliases: [aces, aces2065-1, lin_ap0]
-    family: Scene-linear
-    bitdepth: 32f
-    description: Scene-linear AP0 primaries (ACES2065-1)
-    isdata: false
-    to_scene_reference: !<GroupTransform>
-      children:
-        - !<BuiltinTransform> {style: ACEScg_to_ACES2065-1, direction: inverse}
-        - !<BuiltinTransform> {style: UTILITY - ACES-AP1_to_LINEAR-REC709_BFD}
-
-  - !<ColorSpace>
-    name: Raw
-    aliases: [raw, none]
-    family: Data
-    bitdepth: 32f
-    description: Non-colour data, never converted
-    isdata: true
-
-  - !<ColorSpace>
-    name: sRGB - Display
-    aliases: [srgb_display]
-    family: Display
-    bitdepth: 8ui
-    description: sRGB display (the sRGB curve, values clamped to [0, 1] by the 8-bit output)
-    isdata: false
-    from_scene_reference: !<ExponentWithLinearTransform> {gamma: 2.4, offset: 0.055, direction: inverse}
-)yaml";
+// baker/io/ocio/hfbake.ocio, embedded at build time (see CMakeLists.txt).
+const char* const kBuiltinConfig =
+#include "ocio_builtin_config.inc"
+    ;
 
 struct ActiveConfig {
   OCIO::ConstConfigRcPtr config;

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 
 #include "core/error.hpp"
 #include "io/color.hpp"
@@ -95,8 +97,12 @@ TEST(Color, UnknownNamesAreInputErrors) {
 }
 
 TEST(Color, BuiltInConfigTextIsAValidConfig) {
-  // The text is what ships; it names the documented spaces and display.
+  // The compiled-in text is the shipped file, byte for byte; it names the documented spaces and display.
   const std::string& text = builtin_ocio_config();
+  std::ifstream in(HFBAKE_SOURCE_DIR "/baker/io/ocio/hfbake.ocio", std::ios::binary);
+  ASSERT_TRUE(in);
+  const std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, file);
   EXPECT_NE(text.find("name: sRGB - Texture"), std::string::npos);
   EXPECT_NE(text.find("sRGB:"), std::string::npos);
 }
