@@ -111,23 +111,21 @@ int find_channel(const ImageInfo& info, const ChannelSelector& channel, const fs
 
 Plane read_image_channel(const fs::path& file, const ChannelSelector& channel, const InputSite& site,
                          const InputSite& channel_site) {
-  // Check the channel on the header before decoding anything.
+  // Check the channel on the header before decoding anything, then decode that channel alone.
   const int c = find_channel(probe_image(file, site), channel, file, channel_site);
-  Image image = read_image(file, site);
+  Image image = read_channels(file, site, c, c + 1);
   Plane plane;
   plane.width = image.info.width;
   plane.height = image.info.height;
-  const std::size_t n = std::size_t(plane.width) * plane.height;
-  plane.values.resize(n);
-  const int stride = image.info.channels;
-  for (std::size_t i = 0; i < n; ++i) plane.values[i] = image.pixels[i * stride + c];
+  plane.values = std::move(image.pixels);
   return plane;
 }
 
 RgbImage read_rgb_image(const fs::path& file, const std::string& colorspace, const InputSite& site,
                         const InputSite& colorspace_site) {
-  Image image = read_image(file, site);
-  const int w = image.info.width, h = image.info.height, nc = image.info.channels;
+  Image image = read_channels(file, site, 0, 3);  // at most the first three channels
+  const int w = image.info.width, h = image.info.height;
+  const int nc = std::min(image.info.channels, 3);
   const std::size_t n = std::size_t(w) * h;
   std::vector<float> rgb(n * 3);
   for (std::size_t i = 0; i < n; ++i) {

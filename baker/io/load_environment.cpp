@@ -128,6 +128,14 @@ class Loader {
            "the image is " + std::to_string(info.width) + "x" + std::to_string(info.height) +
                "; environments are limited to 2^27 pixels");
     RgbImage img = read_rgb_image(file, colorspace_, site(key), site("colorspace"));
+    for (std::size_t i = 0; i < img.pixels.size(); ++i) {
+      const Rgb& p = img.pixels[i];
+      if (!std::isfinite(p.r) || !std::isfinite(p.g) || !std::isfinite(p.b))
+        fail(key, file,
+             "pixel (" + std::to_string(i % std::size_t(img.width)) + ", " +
+                 std::to_string(i / std::size_t(img.width)) +
+                 ") is not finite (NaN or Inf); an environment must be finite everywhere");
+    }
     for (Rgb& p : img.pixels) p = p * intensity_;
     return {img.width, img.height, std::move(img.pixels)};
   }

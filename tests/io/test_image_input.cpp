@@ -140,6 +140,11 @@ TEST(ImageInput, RgbImagesConvertFromTheirDefaultColourSpace) {
   const RgbImage b = read_rgb_image(dir / "b.exr", "", kSite, {});
   EXPECT_FLOAT_EQ(b.pixels[0].r, 0.5f);
   EXPECT_FLOAT_EQ(b.pixels[0].b, 0.5f);
+  // RGBA: alpha is ignored; 4 channels in, 3 out.
+  write_test_image(dir / "c.exr", 1, 1, 4, {0.1f, 0.2f, 0.3f, 0.0f});
+  const RgbImage c = read_rgb_image(dir / "c.exr", "linear", kSite, {});
+  EXPECT_FLOAT_EQ(c.pixels[0].r, 0.1f);
+  EXPECT_FLOAT_EQ(c.pixels[0].b, 0.3f);
   // Unknown colour space: an error at the colour space's pointer.
   const std::string line = error_line([&] {
     read_rgb_image(dir / "b.exr", "srgbb", kSite, {"j.json", "/x/colorspace"});

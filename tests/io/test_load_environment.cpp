@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "core/error.hpp"
 #include "image_fixtures.hpp"
@@ -250,6 +251,16 @@ TEST(LoadEnvironment, BadInputIsOneLineAtTheRightPointer) {
       corrupt.rfind("job.json: /environment/latlong: " + (dir / "corrupt.exr").string() + ": cannot read", 0),
       0u)
       << corrupt;
+}
+
+TEST(LoadEnvironment, NonFinitePixelsAreRejected) {
+  TempFolder dir;
+  std::vector<float> px(16 * 8 * 3, 1.0f);
+  px[(3 * 16 + 5) * 3 + 1] = std::numeric_limits<float>::infinity();
+  write_test_image(dir / "inf.exr", 16, 8, 3, px);
+  EXPECT_EQ(error_line(json{{"latlong", "inf.exr"}}, dir.path()),
+            "job.json: /environment/latlong: " + (dir / "inf.exr").string() +
+                ": pixel (5, 3) is not finite (NaN or Inf); an environment must be finite everywhere");
 }
 
 TEST(LoadEnvironment, LargeInputsAreResampledToTheCap) {
