@@ -72,14 +72,19 @@ ImageInfo probe_image(const fs::path& file, const InputSite& site) {
   return info_of(spec, *in);
 }
 
-Image read_image(const fs::path& file, const InputSite& site) {
+namespace {
+
+// Decodes channels [chbegin, chend) (clamped to the image's) as floats; info describes the whole file.
+Image read_channels(const fs::path& file, const InputSite& site, int chbegin, int chend) {
   auto in = open_input(file, site);
   const OIIO::ImageSpec spec = in->spec();
   check_spec(spec, file, site);
+  chbegin = std::clamp(chbegin, 0, spec.nchannels - 1);
+  chend = std::clamp(chend, chbegin + 1, spec.nchannels);
   Image image;
   image.info = info_of(spec, *in);
-  image.pixels.resize(std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(spec.nchannels));
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+  image.pixels.resize(std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(chend - chbegin));
+  if (!in->read_image(0, 0, chbegin, chend, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
     std::string err = in->geterror();
     if (err.empty()) err = OIIO::geterror();
     fail(site, file, "cannot decode the image (corrupt or truncated?): " + first_line(err));
@@ -89,6 +94,12 @@ Image read_image(const fs::path& file, const InputSite& site) {
     fail(site, file, "cannot decode the image (corrupt or truncated?): " + first_line(in->geterror()));
   in->close();
   return image;
+}
+
+}  // namespace
+
+Image read_image(const fs::path& file, const InputSite& site) {
+  return read_channels(file, site, 0, 1 << 30);
 }
 
 int find_channel(const ImageInfo& info, const ChannelSelector& channel, const fs::path& file,
