@@ -148,6 +148,39 @@ Rgb integrate_sphere(const Environment& env, int level) {
   return {float(r), float(g), float(b)};
 }
 
+std::vector<Rgb> azimuth_wedge_profile(const Environment& env, double phi0, double phi1) {
+  if (env.levels.empty()) return {};
+  const Environment::Level& l = env.levels[0];
+  if (env.uniform) return std::vector<Rgb>(std::size_t(l.height), env.uniform_radiance);
+  if (!(phi1 > phi0)) throw std::invalid_argument("azimuth_wedge_profile: need phi1 > phi0");
+  // In column units; a wedge of a full turn or more is the whole row (weighted by whole turns + rest).
+  const double scale = l.width / kTwoPi;
+  const double a = phi0 * scale, b = phi1 * scale;
+  // Weight of each column: its overlap with [a, b] summed over all wraps.
+  std::vector<double> weight(std::size_t(l.width), 0.0);
+  const double first = std::floor(a);
+  for (double c = first; c < b; c += 1) {
+    const double overlap = std::min(c + 1, b) - std::max(c, a);
+    if (overlap <= 0) continue;
+    long col = long(c) % l.width;
+    if (col < 0) col += l.width;
+    weight[std::size_t(col)] += overlap;
+  }
+  const double total = b - a;
+  std::vector<Rgb> out(std::size_t(l.height));
+  for (int r = 0; r < l.height; ++r) {
+    double R = 0, G = 0, B = 0;
+    const Rgb* row = &l.texels[std::size_t(r) * l.width];
+    for (int c = 0; c < l.width; ++c) {
+      if (weight[std::size_t(c)] == 0) continue;
+      R += row[c].r * weight[std::size_t(c)], G += row[c].g * weight[std::size_t(c)],
+          B += row[c].b * weight[std::size_t(c)];
+    }
+    out[std::size_t(r)] = Rgb{float(R / total), float(G / total), float(B / total)};
+  }
+  return out;
+}
+
 // --- sky ------------------------------------------------------------------------------------------
 
 Vec3 direction_from_elevation_azimuth(double elevation_deg, double azimuth_deg) {

@@ -35,7 +35,7 @@ struct Environment {
   };
 
   bool uniform = true;
-  Rgb uniform_radiance{1, 1, 1};
+  Rgb uniform_radiance{1, 1, 1};  // uniform: the radiance; lat-long: its mean over the sphere
   std::vector<Level> levels;
 
   // Radiance arriving from direction `dir` (unit, pointing away from the receiver), bilinear.
@@ -61,6 +61,12 @@ Environment make_latlong_environment(int width, int height, std::vector<Rgb> tex
 // 2x2 children, so the integral of radiance over the sphere is the same at every level. Reduction stops
 // at 2x1 or when a dimension is odd.
 void build_mip_levels(Environment& env);
+
+// Mean radiance over an azimuth wedge, per level-0 row: entry r is the solid-angle mean of row r over
+// phi in [phi0, phi1] (radians, from +x towards +y; phi1 > phi0, any range, wrapping around 2 pi; partial
+// columns weighted by their overlap). For integrating over azimuthal swaths (P1's lighting tables, Eq. 7)
+// without point-sampling one azimuth. A uniform environment gives its radiance for every row.
+std::vector<Rgb> azimuth_wedge_profile(const Environment& env, double phi0, double phi1);
 
 // Solid angle of texel row r of a width x height world-frame lat-long (any level).
 double latlong_texel_solid_angle(int width, int height, int r);

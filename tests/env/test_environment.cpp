@@ -103,6 +103,33 @@ TEST(Environment, MipLevelsConserveTheIntegral) {
   EXPECT_FLOAT_EQ(env.radiance_filtered({0.3, 0.4, 0.5}, 0).g, env.radiance({0.3, 0.4, 0.5}).g);
 }
 
+TEST(Environment, AzimuthWedgeProfile) {
+  const Environment env = random_env(8, 11);  // 16 x 8, columns 2 pi / 16 wide
+  const auto& l = env.levels[0];
+  const auto at = [&](int c, int r) { return l.texels[std::size_t(r) * l.width + c]; };
+  const double col = 2 * kPi / 16;
+  // Exactly column 3: its texels.
+  auto p = azimuth_wedge_profile(env, 3 * col, 4 * col);
+  ASSERT_EQ(p.size(), 8u);
+  for (int r = 0; r < 8; ++r) EXPECT_NEAR(p[r].g, at(3, r).g, 1e-5);
+  // Half of column 5 and all of column 6: (0.5 c5 + c6) / 1.5.
+  p = azimuth_wedge_profile(env, 5.5 * col, 7 * col);
+  for (int r = 0; r < 8; ++r) EXPECT_NEAR(p[r].r, (0.5 * at(5, r).r + at(6, r).r) / 1.5, 1e-5);
+  // Across the seam: half of column 15 and half of column 0, written as [-0.5, 0.5] columns.
+  p = azimuth_wedge_profile(env, -0.5 * col, 0.5 * col);
+  for (int r = 0; r < 8; ++r) EXPECT_NEAR(p[r].b, 0.5 * (at(15, r).b + at(0, r).b), 1e-5);
+  // A full turn: the row mean.
+  p = azimuth_wedge_profile(env, 1.0, 1.0 + 2 * kPi);
+  for (int r = 0; r < 8; ++r) {
+    double mean = 0;
+    for (int c = 0; c < 16; ++c) mean += at(c, r).r / 16.0;
+    EXPECT_NEAR(p[r].r, mean, 1e-5);
+  }
+  // Uniform: its radiance everywhere.
+  const auto u = azimuth_wedge_profile(make_uniform_environment({2, 2, 2}), 0.1, 0.2);
+  for (const Rgb& x : u) EXPECT_EQ(x.g, 2.0f);
+}
+
 TEST(Environment, SkyMatchesItsClosedForms) {
   SkySpec spec;
   spec.zenith = {0.2f, 0.4f, 1.0f};
