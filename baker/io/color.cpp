@@ -94,6 +94,50 @@ std::string default_colorspace(bool float_data) {
   return float_data ? "scene_linear" : "sRGB";
 }
 
+void check_colorspace(const std::string& colorspace, const InputSite& site) {
+  const OCIO::ConstConfigRcPtr config = config_or_throw(site);
+  if (!config->getColorSpace(colorspace.c_str()))
+    throw InputError(site.job_file, site.pointer,
+                     "unknown OpenColorIO colour space \"" + colorspace + "\" (config " +
+                         active_config().description + "; it has: " + known_spaces(config) + ")");
+}
+
+namespace {
+// The display/view actually used (defaults filled in), or InputError.
+std::pair<std::string, std::string> resolve_display_view(const std::string& display, const std::string& view,
+                                                         const InputSite& display_site,
+                                                         const InputSite& view_site) {
+  const OCIO::ConstConfigRcPtr config = config_or_throw(display_site);
+  const std::string d = display.empty() ? config->getDefaultDisplay() : display;
+  bool known = false;
+  std::string displays;
+  for (int i = 0; i < config->getNumDisplays(); ++i) {
+    known = known || d == config->getDisplay(i);
+    displays += (displays.empty() ? "" : ", ") + std::string(config->getDisplay(i));
+  }
+  if (!known)
+    throw InputError(display_site.job_file, display_site.pointer,
+                     "unknown OpenColorIO display \"" + d + "\" (it has: " + displays + ")");
+  const std::string v = view.empty() ? config->getDefaultView(d.c_str()) : view;
+  known = false;
+  std::string views;
+  for (int i = 0; i < config->getNumViews(d.c_str()); ++i) {
+    known = known || v == config->getView(d.c_str(), i);
+    views += (views.empty() ? "" : ", ") + std::string(config->getView(d.c_str(), i));
+  }
+  if (!known)
+    throw InputError(
+        view_site.job_file, view_site.pointer,
+        "unknown OpenColorIO view \"" + v + "\" of display \"" + d + "\" (it has: " + views + ")");
+  return {d, v};
+}
+}  // namespace
+
+void check_display_view(const std::string& display, const std::string& view, const InputSite& display_site,
+                        const InputSite& view_site) {
+  resolve_display_view(display, view, display_site, view_site);
+}
+
 void convert_to_linear(std::vector<float>& pixels, int channels, const std::string& colorspace,
                        const InputSite& site) {
   const OCIO::ConstConfigRcPtr config = config_or_throw(site);
@@ -112,17 +156,7 @@ void convert_to_linear(std::vector<float>& pixels, int channels, const std::stri
 void convert_to_display(std::vector<float>& rgb, const std::string& display, const std::string& view,
                         const InputSite& site) {
   const OCIO::ConstConfigRcPtr config = config_or_throw(site);
-  const std::string d = display.empty() ? config->getDefaultDisplay() : display;
-  bool known = false;
-  for (int i = 0; i < config->getNumDisplays(); ++i) known = known || d == config->getDisplay(i);
-  if (!known) throw InputError(site.job_file, site.pointer, "unknown OpenColorIO display \"" + d + "\"");
-  const std::string v = view.empty() ? config->getDefaultView(d.c_str()) : view;
-  known = false;
-  for (int i = 0; i < config->getNumViews(d.c_str()); ++i)
-    known = known || v == config->getView(d.c_str(), i);
-  if (!known)
-    throw InputError(site.job_file, site.pointer,
-                     "unknown OpenColorIO view \"" + v + "\" of display \"" + d + "\"");
+  const auto [d, v] = resolve_display_view(display, view, site, site);
   try {
     OCIO::DisplayViewTransformRcPtr t = OCIO::DisplayViewTransform::Create();
     t->setSrc(OCIO::ROLE_SCENE_LINEAR);

@@ -26,6 +26,12 @@ std::string ocio_config_description();
 // The default input colour space for float (linear) or integer (sRGB) images.
 std::string default_colorspace(bool float_data);
 
+// For `hfbake validate`: InputError at the site if the active config has no such colour space, display
+// or view (empty display/view = the defaults, always valid when the config loads).
+void check_colorspace(const std::string& colorspace, const InputSite& site);
+void check_display_view(const std::string& display, const std::string& view, const InputSite& display_site,
+                        const InputSite& view_site);
+
 // Converts interleaved pixels with `channels` channels (1: grey, 3: RGB, 4: RGBA with alpha untouched)
 // from `colorspace` to scene-linear in place. Unknown colour space -> InputError at `site`.
 void convert_to_linear(std::vector<float>& pixels, int channels, const std::string& colorspace,
