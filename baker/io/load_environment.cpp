@@ -88,6 +88,13 @@ class Loader {
   }
 
   EnvironmentLighting load() {
+    std::string given;
+    int count = 0;
+    for (const char* key : {"uniform", "cubemap", "cross", "latlong", "sky"})
+      if (env_.contains(key)) given += (count++ ? ", " : "") + std::string(key);
+    if (count > 1)
+      throw InputError(o_.job_file, o_.pointer,
+                       "give one of uniform, cubemap, cross, latlong, sky (this gives " + given + ")");
     if (env_.contains("uniform")) return {make_uniform_environment(rgb_of(env_["uniform"]) * intensity_), {}};
     if (env_.contains("sky")) return make_sky_environment(sky_spec(env_["sky"]));
     if (env_.contains("latlong")) return {latlong(), {}};

@@ -240,6 +240,9 @@ TEST(LoadEnvironment, BadInputIsOneLineAtTheRightPointer) {
   cube["cubemap"][3] = "wide.exr";
   EXPECT_EQ(error_line(cube, dir.path()), "job.json: /environment/cubemap/3: " + (dir / "wide.exr").string() +
                                               ": a cube face must be square, this one is 30x20");
+  EXPECT_EQ(
+      error_line(json{{"uniform", 1}, {"sky", json::object()}}, dir.path()),
+      "job.json: /environment: give one of uniform, cubemap, cross, latlong, sky (this gives uniform, sky)");
   write_latlong_patch(dir / "ok.exr");
   const std::string line = error_line(json{{"latlong", "ok.exr"}, {"colorspace", "sRGB2"}}, dir.path());
   EXPECT_EQ(line.rfind("job.json: /environment/colorspace: unknown OpenColorIO colour space \"sRGB2\"", 0),
