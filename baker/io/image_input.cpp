@@ -102,6 +102,12 @@ Image read_image(const fs::path& file, const InputSite& site) {
   return read_channels(file, site, 0, 1 << 30);
 }
 
+ChannelSelector channel_selector(const nlohmann::json& value) {
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_number_integer()) return value.get<int>();
+  return 0;
+}
+
 int find_channel(const ImageInfo& info, const ChannelSelector& channel, const fs::path& file,
                  const InputSite& channel_site) {
   std::string names;

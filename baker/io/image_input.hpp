@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <variant>
 #include <vector>
@@ -41,6 +42,9 @@ Image read_image(const std::filesystem::path& file, const InputSite& site);
 // A channel chosen by index (0-based) or by name ("R", "Y", "height.Z"; exact match first, then
 // case-insensitive).
 using ChannelSelector = std::variant<int, std::string>;
+
+// A job's "channel" value (integer index or string name; null / absent = channel 0).
+ChannelSelector channel_selector(const nlohmann::json& value);
 
 // The channel's index in `info`, or InputError at `channel_site` naming the file and listing its channels.
 int find_channel(const ImageInfo& info, const ChannelSelector& channel, const std::filesystem::path& file,

@@ -125,6 +125,11 @@ TEST(ImageInput, WrongChannel) {
   EXPECT_EQ(error_line([&] { read_image_channel(f, std::string("Z"), kSite, kChannelSite); }),
             "jobs/x.json: /height/channel: " + f.string() + ": has no channel \"Z\" (it has: R, G, B)");
   EXPECT_EQ(read_image_channel(f, std::string("G"), kSite, kChannelSite).values[0], 0.25f);
+  // From the job's JSON value.
+  EXPECT_EQ(read_image_channel(f, channel_selector(nlohmann::json("B")), kSite, kChannelSite).values[0],
+            0.5f);
+  EXPECT_EQ(read_image_channel(f, channel_selector(nlohmann::json(1)), kSite, kChannelSite).values[0], 0.25f);
+  EXPECT_EQ(read_image_channel(f, channel_selector(nlohmann::json()), kSite, kChannelSite).values[0], 0.0f);
 }
 
 TEST(ImageInput, RgbImagesConvertFromTheirDefaultColourSpace) {
