@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -61,14 +62,26 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     std::string name;
     const float* data;   // first value of this channel in the layer's interleaved data
     std::size_t stride;  // values between texels
+    bool as_float;       // written as float (float files, or a channel half cannot hold)
   };
+  const std::size_t texels = std::size_t(w) * std::size_t(h);
   std::vector<Channel> channels;
   for (const Layer& l : layers.layers) {
     for (int c = 0; c < l.channel_count(); ++c) {
-      Channel ch{l.name + "." + l.channels[c], l.data.data() + c, std::size_t(l.channel_count())};
+      Channel ch{l.name + "." + l.channels[c], l.data.data() + c, std::size_t(l.channel_count()), true};
       if (header.channels().findChannel(ch.name))
         throw std::logic_error("write_exr: duplicate channel " + ch.name);
-      header.channels().insert(ch.name, Imf::Channel(type));
+      if (type == Imf::HALF) {
+        // A finite value beyond half's range (65504, e.g. horizon distances on a large DEM) would become
+        // infinite: such a channel is stored as float instead.
+        float largest = 0;
+        for (std::size_t i = 0; i < texels; ++i) {
+          const float v = std::abs(ch.data[i * ch.stride]);
+          if (std::isfinite(v)) largest = std::max(largest, v);
+        }
+        ch.as_float = largest > float(HALF_MAX);
+      }
+      header.channels().insert(ch.name, Imf::Channel(ch.as_float ? Imf::FLOAT : Imf::HALF));
       channels.push_back(std::move(ch));
     }
   }
@@ -88,26 +101,35 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
   const fs::path tmp = temporary_sibling(file);
   try {
     Imf::OutputFile out(tmp.string().c_str(), header);
-    if (options.float_pixels) {
-      // Float files read straight from the layers.
+    // Float channels are read straight from the layers.
+    const auto float_slice = [&](const Channel& ch) {
+      return Imf::Slice(Imf::FLOAT, (char*)ch.data, sizeof(float) * ch.stride,
+                        sizeof(float) * ch.stride * std::size_t(w));
+    };
+    std::size_t half_channels = 0;
+    for (const Channel& ch : channels) half_channels += ch.as_float ? 0 : 1;
+    if (half_channels == 0) {
       Imf::FrameBuffer frame;
-      for (const Channel& ch : channels)
-        frame.insert(ch.name, Imf::Slice(Imf::FLOAT, (char*)ch.data, sizeof(float) * ch.stride,
-                                         sizeof(float) * ch.stride * std::size_t(w)));
+      for (const Channel& ch : channels) frame.insert(ch.name, float_slice(ch));
       out.setFrameBuffer(frame);
       out.writePixels(h);
     } else {
-      // Half files (OpenEXR does not convert on output): a band of rows at a time, so the extra memory is
-      // bounded (channels x width x kBand halves) whatever the field size.
+      // Half channels (OpenEXR does not convert on output): a band of rows at a time, so the extra memory
+      // is bounded (channels x width x kBand halves) whatever the field size.
       constexpr int kBand = 64;
       const std::size_t band_values = std::size_t(w) * kBand;
-      std::vector<half> band(band_values * channels.size());
+      std::vector<half> band(band_values * half_channels);
       for (int y0 = 0; y0 < h; y0 += kBand) {
         const int rows = std::min(kBand, h - y0);
         Imf::FrameBuffer frame;
+        std::size_t slot = 0;
         for (std::size_t k = 0; k < channels.size(); ++k) {
-          half* dst = band.data() + k * band_values;
           const Channel& ch = channels[k];
+          if (ch.as_float) {
+            frame.insert(ch.name, float_slice(ch));
+            continue;
+          }
+          half* dst = band.data() + (slot++) * band_values;
           const std::size_t first = std::size_t(y0) * w;
           for (std::size_t i = 0; i < std::size_t(rows) * w; ++i)
             dst[i] = half(ch.data[(first + i) * ch.stride]);

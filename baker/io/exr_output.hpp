@@ -18,10 +18,11 @@ struct ExrOptions {
 };
 
 // Writes every layer as channels "<layer>.<suffix>" (scanline, increasing y, data window = the field),
-// plus the string attributes. An attribute whose name OpenEXR reserves ("compression", "channels", ...)
-// is stored as "hfbake.<name>". The file is written under a temporary name in the same folder and renamed
-// into place, so a crash never leaves a partial file. Unwritable folder or disk error -> InputError naming
-// the file; inconsistent layers (wrong data size) -> std::logic_error.
+// plus the string attributes. In a half file, a channel holding a finite value beyond half's range
+// (|v| > 65504) is stored as float rather than turned into infinity. An attribute whose name OpenEXR reserves
+// ("compression", "channels", ...) is stored as "hfbake.<name>". The file is written under a temporary name
+// in the same folder and renamed into place, so a crash never leaves a partial file. Unwritable folder or
+// disk error -> InputError naming the file; inconsistent layers (wrong data size) -> std::logic_error.
 void write_exr(const std::filesystem::path& file, const LayerSet& layers, const ExrOptions& options = {});
 
 // A temporary name beside `file`, unique in this process: ".<name>.tmp-<pid>-<n>".

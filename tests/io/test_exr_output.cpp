@@ -118,6 +118,24 @@ TEST(ExrOutput, HalfFilesSpanningSeveralBandsOfRows) {
   }
 }
 
+TEST(ExrOutput, ChannelsBeyondHalfRangeAreStoredAsFloat) {
+  TempFolder dir;
+  LayerSet set = sample_layers(4, 70);
+  Layer& dist = set.add("horizon_distance", indexed_channels(2));
+  for (std::size_t i = 0; i < dist.data.size(); ++i) dist.data[i] = i % 2 ? 1.5f : 1.0e6f + float(i);
+  write_exr(dir / "d.exr", set);
+  Imf::InputFile in((dir / "d.exr").c_str());
+  EXPECT_EQ(in.header().channels().findChannel("horizon_distance.000")->type, Imf::FLOAT);
+  EXPECT_EQ(in.header().channels().findChannel("horizon_distance.001")->type, Imf::HALF);
+  EXPECT_EQ(in.header().channels().findChannel("ao.Y")->type, Imf::HALF);
+  const std::vector<float> d0 = read_channel(dir / "d.exr", "horizon_distance.000", 4, 70);
+  for (int i = 0; i < 4 * 70; ++i) ASSERT_EQ(d0[i], 1.0e6f + float(2 * i)) << i;
+  const std::vector<float> d1 = read_channel(dir / "d.exr", "horizon_distance.001", 4, 70);
+  EXPECT_EQ(d1[279], 1.5f);
+  const std::vector<float> ao = read_channel(dir / "d.exr", "ao.Y", 4, 70);
+  EXPECT_EQ(ao[279], float(half(set.find("ao")->data[279])));
+}
+
 TEST(ExrOutput, NoCompressionAndReservedAttributeNames) {
   TempFolder dir;
   LayerSet set = sample_layers(3, 2);
