@@ -40,7 +40,8 @@ Imf::Compression compression_of(const std::string& name, const fs::path& file) {
 }
 
 void check_layers(const LayerSet& layers) {
-  if (layers.width <= 0 || layers.height <= 0) throw std::logic_error("write_exr: empty LayerSet");
+  if (layers.width <= 0 || layers.height <= 0 || layers.layers.empty())
+    throw std::logic_error("write_exr: empty LayerSet");
   const std::size_t texels = std::size_t(layers.width) * layers.height;
   for (const Layer& l : layers.layers)
     if (l.channels.empty() || l.data.size() != texels * l.channels.size())
