@@ -28,6 +28,9 @@ struct DirectionalLight {
 // solid-angle weighted. A uniform environment also carries a small constant lat-long (16 x 8), so code that
 // integrates texel by texel works for both kinds; `uniform` lets methods take a fast path.
 // Texel areas tile the sphere edge to edge: texel_direction(c, r) is the texel's center.
+// Build environments with the make_* functions below (or io's load_environment): a default-constructed
+// Environment is uniform white with no levels, and setting uniform_radiance by hand does not update the
+// stand-in texels.
 struct Environment {
   struct Level {
     int width = 0, height = 0;
