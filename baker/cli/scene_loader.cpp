@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cli/scene_inputs.hpp"
 #include "core/error.hpp"
 #include "field/procedural.hpp"
 
