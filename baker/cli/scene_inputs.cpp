@@ -46,14 +46,15 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap) {
   const std::optional<float> nodata = nodata_value(h);
   const NodataScan scan = scan_nodata(field, nodata);
   if (scan.count == 0) return field;
-  const bool fill = h.value("nodata", "error") == "fill";
-  const std::string where = std::to_string(scan.count) + " of " + std::to_string(field.texel_count()) +
-                            " texels have no valid height (NaN/Inf" +
-                            (nodata ? " or nodata_value" : std::string()) + "), the first at (" +
-                            std::to_string(scan.first_i) + ", " + std::to_string(scan.first_j) + ")";
-  if (!fill)
+  if (h.value("nodata", "error") != "fill") {
+    const float first = field.z[field.index(scan.first_i, scan.first_j)];
+    const std::string what = std::isnan(first) ? "NaN" : std::isinf(first) ? "infinite" : "nodata_value";
     throw InputError(job.file.string(), "/height/image",
-                     image + ": " + where + "; set \"nodata\": \"fill\" to fill them");
+                     image + ": texel (" + std::to_string(scan.first_i) + ", " +
+                         std::to_string(scan.first_j) + ") is " + what + " (" + std::to_string(scan.count) +
+                         " of " + std::to_string(field.texel_count()) +
+                         " texels have no valid height); set \"nodata\": \"fill\" to fill the holes");
+  }
   if (!fill_nodata(field, nodata))
     throw InputError(job.file.string(), "/height/image", image + ": no texel has a valid height");
   return field;
