@@ -165,6 +165,10 @@ TEST_F(Cli, NanHeightsAreAnErrorUnlessFilled) {
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("/height/image: nan.exr: texel (7, 5) is NaN (1 of 1024 texels"), std::string::npos) << r.err;
   EXPECT_TRUE(output_dir_is_empty());
+  // With "nodata": "fill" the hole is filled from its neighbours and the bake succeeds.
+  r = hfbake("bake --quiet " + write_job("y.json", job({{"image", "nan.exr"}, {"nodata", "fill"}})).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "t.p1.exr"));
 }
 
 TEST_F(Cli, TinyFields) {
