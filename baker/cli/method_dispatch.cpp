@@ -33,12 +33,22 @@ LayerSet run_method(const BakeEntry& entry, const Scene& scene, const RunControl
 #if HFBAKE_HAVE_NLP
   if (m == "nlp") return bake_nlp(scene, entry.params, rc);
 #endif
-#if HFBAKE_HAVE_AO
+#if HFBAKE_HAVE_AO  // each obscurance method lands on its own (baker/methods/ao/CMakeLists.txt)
+#if HFBAKE_HAVE_HBAO
   if (m == "hbao") return bake_hbao(scene, entry.params, rc);
+#endif
+#if HFBAKE_HAVE_LSAO
   if (m == "lsao") return bake_lsao(scene, entry.params, rc);
+#endif
+#if HFBAKE_HAVE_FARFIELD
   if (m == "farfield") return bake_farfield(scene, entry.params, rc);
+#endif
+#if HFBAKE_HAVE_HSAO
   if (m == "hsao") return bake_hsao(scene, entry.params, rc);
+#endif
+#if HFBAKE_HAVE_VO
   if (m == "vo") return bake_vo(scene, entry.params, rc);
+#endif
 #endif
   (void)scene;
   (void)rc;

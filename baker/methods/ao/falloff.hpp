@@ -19,24 +19,34 @@ struct Falloff {
   double operator()(double d) const {
     const double t = radius > 0 ? d / radius : 0.0;
     switch (kind) {
-      case FalloffKind::none: return 1.0;
-      case FalloffKind::step: return t < 1.0 ? 1.0 : 0.0;
-      case FalloffKind::linear: return t < 1.0 ? 1.0 - t : 0.0;
-      case FalloffKind::smooth: return t < 1.0 ? (1.0 - t) * (1.0 - t) : 0.0;
-      case FalloffKind::exponential: return std::exp(-t);
-      case FalloffKind::rational: return 1.0 / (1.0 + t * t);
+      case FalloffKind::none:
+        return 1.0;
+      case FalloffKind::step:
+        return t < 1.0 ? 1.0 : 0.0;
+      case FalloffKind::linear:
+        return t < 1.0 ? 1.0 - t : 0.0;
+      case FalloffKind::smooth:
+        return t < 1.0 ? (1.0 - t) * (1.0 - t) : 0.0;
+      case FalloffKind::exponential:
+        return std::exp(-t);
+      case FalloffKind::rational:
+        return 1.0 / (1.0 + t * t);
     }
     return 0.0;
   }
   // Distance beyond which rho is below `eps` (infinite for none): how far a method must look.
   double support(double eps = 1e-4) const {
     switch (kind) {
-      case FalloffKind::none: return INFINITY;
+      case FalloffKind::none:
+        return INFINITY;
       case FalloffKind::step:
       case FalloffKind::linear:
-      case FalloffKind::smooth: return radius;
-      case FalloffKind::exponential: return radius * -std::log(eps);
-      case FalloffKind::rational: return radius * std::sqrt(1.0 / eps - 1.0);
+      case FalloffKind::smooth:
+        return radius;
+      case FalloffKind::exponential:
+        return radius * -std::log(eps);
+      case FalloffKind::rational:
+        return radius * std::sqrt(1.0 / eps - 1.0);
     }
     return INFINITY;
   }

@@ -1,0 +1,27 @@
+// Entry points of the obscurance family (issue 7). Each returns a LayerSet of the field's size with the
+// contract's layer names ("obscurance", "ao", "bent_normal", ...); params is the schema-validated bake entry
+// (schemas/methods/<method>.schema.json). A method is compiled in when its <method>.cpp exists; the CLI
+// dispatcher tests HFBAKE_HAVE_<METHOD> (defined by CMakeLists.txt) before calling it.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "core/layers.hpp"
+#include "core/run_control.hpp"
+#include "field/scene.hpp"
+
+namespace hfbake {
+
+// Brute-force horizon march: K directions x M steps, the exact slab integral of rho between successive
+// horizon maxima (cosine or uniform weighting); the truth LSAO is tested against. hbao.cpp
+LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+// Line-sweep ambient obscurance (P3). lsao.cpp
+LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+// Screen-space far-field ambient obscurance mapped to height fields (P4). farfield.cpp
+LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+// Horizon-split ambient occlusion (Dimitrov et al. 2008). hsao.cpp
+LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+// Adaptively layered statistical volumetric obscurance (Hendrickx 2015). vo.cpp
+LayerSet bake_vo(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+
+}  // namespace hfbake
