@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "job/parameter_sweep.hpp"
 #include "job/schema_validation.hpp"
 
 namespace hfbake {
@@ -78,8 +79,12 @@ JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_overri
     return result;
   }
 
+  // A numeric parameter given as a list expands into one bake entry per value (a sweep).
+  SweepExpansion sweep = expand_parameter_sweeps(doc);
+  for (const std::string& e : sweep.errors) result.errors.push_back(fname + ": " + e);
+  doc = std::move(sweep.doc);
   for (const SchemaViolation& v : validate_against_schema(doc, "job.schema.json"))
-    fail(v.pointer.empty() ? "/" : v.pointer, v.message);
+    fail(v.pointer.empty() ? "/" : original_pointer(v.pointer, sweep.origins), v.message);
   if (!result.errors.empty()) return result;
 
   Job job;
@@ -111,14 +116,23 @@ JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_overri
   }
 
   const auto& bake = doc["bake"];
-  std::map<std::string, int> count;
-  for (const auto& e : bake) ++count[e["method"].get<std::string>()];
+  std::map<std::string, int> count;  // entries per method in the file (a sweep counts once)
+  for (std::size_t i = 0; i < bake.size(); ++i)
+    if (i == 0 || sweep.origins[i].entry != sweep.origins[i - 1].entry)
+      ++count[bake[i]["method"].get<std::string>()];
   for (std::size_t i = 0; i < bake.size(); ++i) {
+    const SweepOrigin& origin = sweep.origins[i];
     BakeEntry entry;
     entry.method = bake[i]["method"].get<std::string>();
-    entry.stem = count[entry.method] > 1 ? entry.method + "-" + std::to_string(i) : entry.method;
-    entry.pointer = "/bake/" + std::to_string(i);
+    entry.stem = count[entry.method] > 1 ? entry.method + "-" + std::to_string(origin.entry) : entry.method;
+    entry.pointer = "/bake/" + std::to_string(origin.entry);
     entry.params = bake[i];
+    if (!origin.parameter.empty()) {
+      entry.stem += "-" + sweep_stem_suffix(origin.parameter, origin.value);
+      entry.sweep_parameter = origin.parameter;
+      entry.sweep_value = origin.value;
+      entry.sweep_group = int(origin.entry);
+    }
     job.bakes.push_back(std::move(entry));
   }
   job.has_reference = doc.contains("reference");

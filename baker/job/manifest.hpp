@@ -14,6 +14,11 @@ struct BakeEntry {
   std::string stem;       // output stem: "p1", or "p1-2" when the method appears more than once
   std::string pointer;    // "/bake/<i>", for error messages
   nlohmann::json params;  // the bake[i] object as written (schema-validated)
+  // Parameter sweeps (job/parameter_sweep.hpp): "directions": [16, 32] is two entries sharing sweep_group
+  // (the index of the entry in the file), sweep_parameter "directions" and sweep_value 16, then 32.
+  std::string sweep_parameter;  // "" when the entry is not part of a sweep
+  nlohmann::json sweep_value;
+  int sweep_group = -1;
 };
 
 struct OutputOptions {
