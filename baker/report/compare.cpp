@@ -1,0 +1,102 @@
+#include "report/compare.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+namespace hfbake {
+
+CompareRegion crop_region(int width, int height, int crop) {
+  crop = std::max(crop, 0);
+  return {crop, crop, std::max(crop, width - crop), std::max(crop, height - crop)};
+}
+
+LayerMetrics compare_layer(const Layer& method, const Layer& reference, const Layer* stderr_layer, int width,
+                           int height, const CompareRegion& region) {
+  const int channels = method.channel_count();
+  const std::size_t texels = std::size_t(width) * std::size_t(height);
+  if (channels == 0 || reference.channel_count() != channels)
+    throw std::invalid_argument("layer " + method.name + ": the method has " + std::to_string(channels) +
+                                " channels, the reference " + std::to_string(reference.channel_count()));
+  if (method.data.size() != texels * channels || reference.data.size() != texels * channels)
+    throw std::invalid_argument("layer " + method.name + ": method and reference differ in size");
+  int se_channels = 0;
+  if (stderr_layer) {
+    se_channels = stderr_layer->channel_count();
+    if ((se_channels != channels && se_channels != 1) || stderr_layer->data.size() != texels * se_channels)
+      throw std::invalid_argument("layer " + method.name + ": the stderr layer does not match");
+  }
+  if (region.x1 <= region.x0 || region.y1 <= region.y0 || region.x0 < 0 || region.y0 < 0 ||
+      region.x1 > width || region.y1 > height)
+    throw std::invalid_argument("the compared region is empty: the crop leaves no texel");
+
+  // Sums in double, in a fixed order (row by row): the same bits whatever the caller's threading.
+  double sum_abs = 0, sum_sq = 0, sum_diff = 0, sum_ref_abs = 0, sum_se_sq = 0, max_abs = 0, peak = 0;
+  std::vector<float> abs_diff;
+  abs_diff.reserve(region.texels() * channels);
+  for (int y = region.y0; y < region.y1; ++y) {
+    for (int x = region.x0; x < region.x1; ++x) {
+      const std::size_t t = std::size_t(y) * width + x;
+      for (int c = 0; c < channels; ++c) {
+        const double m = method.data[t * channels + c], r = reference.data[t * channels + c];
+        const double d = m - r, a = std::abs(d);
+        sum_abs += a;
+        sum_sq += d * d;
+        sum_diff += d;
+        sum_ref_abs += std::abs(r);
+        max_abs = std::max(max_abs, a);
+        peak = std::max(peak, std::abs(r));
+        abs_diff.push_back(float(a));
+        if (stderr_layer) {
+          const double se = stderr_layer->data[t * se_channels + (se_channels == 1 ? 0 : c)];
+          sum_se_sq += se * se;
+        }
+      }
+    }
+  }
+  const double n = double(abs_diff.size());
+  LayerMetrics out;
+  out.values = abs_diff.size();
+  out.mae = sum_abs / n;
+  out.rmse = std::sqrt(sum_sq / n);
+  out.bias = sum_diff / n;
+  out.max = max_abs;
+  out.reference_mean = sum_ref_abs / n;
+  // Nearest-rank percentile: the smallest value with at least 99 % of the values at or below it.
+  const std::size_t rank = std::size_t(std::ceil(0.99 * n));
+  const std::size_t k = std::min(abs_diff.size() - 1, rank > 0 ? rank - 1 : 0);
+  std::nth_element(abs_diff.begin(), abs_diff.begin() + std::ptrdiff_t(k), abs_diff.end());
+  out.p99 = abs_diff[k];
+  if (out.reference_mean > 0) out.rel_mae = out.mae / out.reference_mean;
+  if (sum_sq > 0 && peak > 0) out.psnr = 10.0 * std::log10(peak * peak / (sum_sq / n));
+  out.noise_rmse = std::sqrt(sum_se_sq / n);
+  out.excess_rmse = std::sqrt(std::max(out.rmse * out.rmse - out.noise_rmse * out.noise_rmse, 0.0));
+  return out;
+}
+
+const char* const* metric_names(int& count) {
+  static const char* const names[] = {"mae",  "rmse", "rel_mae",    "max",        "p99",
+                                      "psnr", "bias", "noise_rmse", "excess_rmse"};
+  count = int(sizeof names / sizeof names[0]);
+  return names;
+}
+
+std::optional<double> metric_value(const LayerMetrics& m, const std::string& name) {
+  if (name == "mae") return m.mae;
+  if (name == "rmse") return m.rmse;
+  if (name == "rel_mae") return m.rel_mae;
+  if (name == "max") return m.max;
+  if (name == "p99") return m.p99;
+  if (name == "psnr") return m.psnr;
+  if (name == "bias") return m.bias;
+  if (name == "noise_rmse") return m.noise_rmse;
+  if (name == "excess_rmse") return m.excess_rmse;
+  return std::nullopt;
+}
+
+bool metric_is_higher_better(const std::string& name) {
+  return name == "psnr";
+}
+
+}  // namespace hfbake

@@ -1,0 +1,54 @@
+// report.json: every method layer against the reference layer of the same name, timings, parameters, and
+// the job's thresholds and baseline turned into pass / fail. Pure data in, JSON out (no file I/O here).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/layers.hpp"
+#include "report/compare.hpp"
+
+namespace hfbake {
+
+struct ReportMethodInput {
+  std::string stem, method;  // output stem ("p1", "p1-2") and method name
+  double seconds = 0;
+  nlohmann::json parameters;         // the bake entry as written
+  const LayerSet* layers = nullptr;  // not owned
+};
+
+struct ReportSpec {
+  std::string hfbake_version, job_name, job_file, job_hash;
+  nlohmann::json reference_parameters = nlohmann::json::object();
+  double reference_seconds = 0;
+  int crop = 0;
+  nlohmann::json thresholds = nlohmann::json::object();  // "<stem>.<layer>.<metric>": limit
+  std::optional<nlohmann::json> baseline;                // a previous report.json, when the job names one
+  std::string baseline_file;                             // for messages
+};
+
+// Baseline regression rule: a metric in kBaselineMetrics regresses when
+//   new > old * (1 + kBaselineRelTolerance) + kBaselineAbsTolerance.
+inline constexpr double kBaselineRelTolerance = 0.05;
+inline constexpr double kBaselineAbsTolerance = 1e-5;
+inline const char* const kBaselineMetrics[] = {"mae", "rmse", "excess_rmse"};
+
+struct ReportOutcome {
+  nlohmann::json doc;                                           // report.json
+  nlohmann::json metrics_by_method = nlohmann::json::object();  // stem -> layer -> metrics
+  std::vector<std::string> failures;                            // one line each
+};
+
+// Compares every method layer that has a reference layer (same name, same channel count; "<x>_stderr"
+// layers are the reference's noise, never compared), evaluates thresholds (a maximum for every metric but
+// psnr, which is a minimum; bias is compared by its magnitude; a threshold naming a method, layer or
+// metric the report does not have fails, so a typo cannot pass silently) and the baseline.
+ReportOutcome build_report(const ReportSpec& spec, const std::vector<ReportMethodInput>& methods,
+                           const LayerSet& reference);
+
+// Metrics as JSON (absent optional metrics are left out).
+nlohmann::json metrics_json(const LayerMetrics& m);
+
+}  // namespace hfbake

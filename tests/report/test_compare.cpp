@@ -1,0 +1,178 @@
+// The comparison metrics on images whose differences are known by construction, the noise-floor
+// subtraction, thresholds, baselines, and report.json against its schema.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "job/schema_validation.hpp"
+#include "report/compare.hpp"
+#include "report/report_document.hpp"
+
+namespace hfbake {
+namespace {
+
+Layer mono(const std::string& name, int w, int h, float v) {
+  return {name, mono_channels(), std::vector<float>(std::size_t(w) * h, v)};
+}
+
+TEST(Compare, ConstantOffset) {
+  const int w = 16, h = 8;
+  Layer ref = mono("ao", w, h, 0.5f), m = mono("ao", w, h, 0.6f);
+  ref.data[3] = 0.8f;  // peak of the reference
+  m.data[3] = 0.9f;
+  const LayerMetrics r = compare_layer(m, ref, nullptr, w, h, crop_region(w, h, 0));
+  EXPECT_NEAR(r.mae, 0.1, 1e-6);
+  EXPECT_NEAR(r.rmse, 0.1, 1e-6);
+  EXPECT_NEAR(r.bias, 0.1, 1e-6);
+  EXPECT_NEAR(r.max, 0.1, 1e-6);
+  EXPECT_NEAR(r.p99, 0.1, 1e-6);
+  const double ref_mean = (0.5 * (w * h - 1) + 0.8) / (w * h);
+  ASSERT_TRUE(r.rel_mae);
+  EXPECT_NEAR(*r.rel_mae, 0.1 / ref_mean, 1e-6);
+  ASSERT_TRUE(r.psnr);
+  EXPECT_NEAR(*r.psnr, 20 * std::log10(0.8 / 0.1), 1e-4);
+  EXPECT_EQ(r.noise_rmse, 0);
+  EXPECT_NEAR(r.excess_rmse, 0.1, 1e-6);
+  EXPECT_EQ(r.values, std::size_t(w * h));
+}
+
+TEST(Compare, OutliersMaxAndPercentile) {
+  const int w = 10, h = 10;  // 100 values
+  Layer ref = mono("ao", w, h, 1.0f), m = mono("ao", w, h, 1.0f);
+  m.data[17] = 0.0f;  // one outlier: |diff| = 1
+  LayerMetrics r = compare_layer(m, ref, nullptr, w, h, crop_region(w, h, 0));
+  EXPECT_NEAR(r.mae, 0.01, 1e-9);
+  EXPECT_NEAR(r.rmse, 0.1, 1e-9);
+  EXPECT_NEAR(r.bias, -0.01, 1e-9);
+  EXPECT_EQ(r.max, 1.0);
+  EXPECT_EQ(r.p99, 0.0);  // 99 of 100 values are exact
+  m.data[18] = 0.5f;      // a second outlier moves the 99th percentile onto it
+  r = compare_layer(m, ref, nullptr, w, h, crop_region(w, h, 0));
+  EXPECT_EQ(r.p99, 0.5);
+  EXPECT_EQ(r.max, 1.0);
+}
+
+TEST(Compare, IdenticalImagesHaveNoPsnrAndZeroReferenceNoRelMae) {
+  const int w = 4, h = 4;
+  Layer a = mono("ao", w, h, 0.3f);
+  LayerMetrics r = compare_layer(a, a, nullptr, w, h, crop_region(w, h, 0));
+  EXPECT_EQ(r.rmse, 0);
+  EXPECT_FALSE(r.psnr);
+  Layer zero = mono("indirect", w, h, 0.0f);
+  r = compare_layer(a, zero, nullptr, w, h, crop_region(w, h, 0));
+  EXPECT_FALSE(r.rel_mae);
+}
+
+TEST(Compare, CropLeavesOutTheBorder) {
+  const int w = 12, h = 9;
+  Layer ref = mono("ao", w, h, 0.5f), m = mono("ao", w, h, 0.5f);
+  for (int x = 0; x < w; ++x) m.data[x] = 0.0f, m.data[(h - 1) * w + x] = 1.0f;
+  for (int y = 0; y < h; ++y) m.data[y * w] = 0.2f, m.data[y * w + w - 1] = 0.9f;
+  EXPECT_GT(compare_layer(m, ref, nullptr, w, h, crop_region(w, h, 0)).max, 0.4);
+  const LayerMetrics r = compare_layer(m, ref, nullptr, w, h, crop_region(w, h, 1));
+  EXPECT_EQ(r.max, 0);
+  EXPECT_EQ(r.values, std::size_t((w - 2) * (h - 2)));
+  EXPECT_THROW(compare_layer(m, ref, nullptr, w, h, crop_region(w, h, 5)), std::invalid_argument);
+}
+
+// The reference is truth + Gaussian noise of known standard deviation sigma (and reports sigma as its
+// stderr); the method is truth + delta. rmse then holds both errors, and excess_rmse recovers delta.
+TEST(Compare, NoiseFloorSubtraction) {
+  const int w = 256, h = 256;
+  const double sigma = 0.05, delta = 0.02;
+  std::mt19937_64 rng(12345);
+  std::normal_distribution<double> noise(0.0, sigma);
+  Layer truth{"direct", rgb_channels(), {}}, ref = truth, m = truth, se{"direct_stderr", rgb_channels(), {}};
+  for (int t = 0; t < w * h * 3; ++t) {
+    const double v = 0.3 + 0.4 * double(t % 97) / 97.0;
+    ref.data.push_back(float(v + noise(rng)));
+    m.data.push_back(float(v + delta));
+    se.data.push_back(float(sigma));
+  }
+  const LayerMetrics r = compare_layer(m, ref, &se, w, h, crop_region(w, h, 0));
+  EXPECT_NEAR(r.noise_rmse, sigma, 1e-7);
+  EXPECT_NEAR(r.rmse, std::sqrt(delta * delta + sigma * sigma), 5e-4);
+  EXPECT_NEAR(r.excess_rmse, delta, 0.03 * delta);  // the sampling error of mean noise^2 is ~0.3 % of sigma^2
+  EXPECT_NEAR(r.excess_rmse, std::sqrt(r.rmse * r.rmse - r.noise_rmse * r.noise_rmse), 1e-12);
+  // The reference against itself: no error at all, whatever its noise.
+  const LayerMetrics exact = compare_layer(ref, ref, &se, w, h, crop_region(w, h, 0));
+  EXPECT_EQ(exact.excess_rmse, 0);
+
+  // A single-channel stderr applies to every channel.
+  Layer se1{"direct_stderr", mono_channels(), std::vector<float>(std::size_t(w) * h, float(sigma))};
+  EXPECT_NEAR(compare_layer(m, ref, &se1, w, h, crop_region(w, h, 0)).noise_rmse, sigma, 1e-7);
+}
+
+TEST(Compare, ExcessClampsAtZeroWhenNoiseExceedsError) {
+  const int w = 4, h = 4;
+  Layer ref = mono("ao", w, h, 0.5f), m = mono("ao", w, h, 0.51f), se = mono("ao_stderr", w, h, 0.1f);
+  const LayerMetrics r = compare_layer(m, ref, &se, w, h, crop_region(w, h, 0));
+  EXPECT_NEAR(r.rmse, 0.01, 1e-6);
+  EXPECT_NEAR(r.noise_rmse, 0.1, 1e-7);
+  EXPECT_EQ(r.excess_rmse, 0);
+}
+
+TEST(Compare, MismatchedChannelsThrow) {
+  Layer a = mono("ao", 2, 2, 1), b{"ao", rgb_channels(), std::vector<float>(12, 1.0f)};
+  EXPECT_THROW(compare_layer(a, b, nullptr, 2, 2, crop_region(2, 2, 0)), std::invalid_argument);
+}
+
+struct Fixture {
+  LayerSet reference, method;
+  Fixture() {
+    reference.width = method.width = 8;
+    reference.height = method.height = 8;
+    reference.add("ao", mono_channels()).data.assign(64, 0.5f);
+    reference.add("ao_stderr", mono_channels()).data.assign(64, 0.01f);
+    reference.add("direct", rgb_channels()).data.assign(192, 1.0f);
+    method.add("ao", mono_channels()).data.assign(64, 0.55f);
+    method.add("horizon", indexed_channels(4));
+    method.add("direct", rgb_channels()).data.assign(192, 1.0f);
+  }
+};
+
+TEST(Report, ThresholdsPassFailAndTypos) {
+  Fixture f;
+  ReportSpec spec;
+  spec.hfbake_version = "test";
+  spec.job_name = "t";
+  spec.thresholds = {{"p1.ao.mae", 0.06}, {"p1.ao.rmse", 0.04},  {"p1.ao.bias", 0.04},
+                     {"p1.ao.psnr", 30},  {"p1.aoo.mae", 1.0},   {"p2.ao.mae", 1.0},
+                     {"p1.ao.nope", 1.0}, {"p1.direct.psnr", 1}, {"p1.direct.mae", 0}};
+  const ReportOutcome out =
+      build_report(spec, {{"p1", "p1", 1.5, {{"method", "p1"}}, &f.method}}, f.reference);
+  // Held: ao.mae (0.05 <= 0.06), direct.mae (0 <= 0). Failed: rmse (0.05 > 0.04), |bias| (0.05 > 0.04),
+  // psnr (20 log10(0.5/0.05) = 20 dB < 30), three typos, direct.psnr (undefined: identical images).
+  EXPECT_EQ(out.failures.size(), 7u);
+  EXPECT_FALSE(out.doc["passed"].get<bool>());
+  for (const auto& t : out.doc["thresholds"]) {
+    const std::string key = t["key"];
+    EXPECT_EQ(t["passed"].get<bool>(), key == "p1.ao.mae" || key == "p1.direct.mae") << key;
+  }
+  EXPECT_NEAR(out.metrics_by_method["p1"]["ao"]["psnr"].get<double>(), 20.0, 1e-4);
+  EXPECT_NEAR(out.metrics_by_method["p1"]["ao"]["noise_rmse"].get<double>(), 0.01, 1e-7);
+  EXPECT_EQ(out.doc["methods"]["p1"]["not_compared"], nlohmann::json::array({"horizon"}));
+  EXPECT_TRUE(validate_against_schema(out.doc, "report.schema.json").empty()) << out.doc.dump(2);
+}
+
+TEST(Report, BaselineRegression) {
+  Fixture f;
+  ReportSpec spec;
+  spec.hfbake_version = "test";
+  spec.crop = 1;
+  const ReportOutcome first = build_report(spec, {{"p1", "p1", 1.0, {}, &f.method}}, f.reference);
+  EXPECT_TRUE(first.failures.empty());
+  EXPECT_EQ(first.doc["region"]["x1"], 7);
+  spec.baseline = first.doc;
+  spec.baseline_file = "base.json";
+  EXPECT_TRUE(build_report(spec, {{"p1", "p1", 1.0, {}, &f.method}}, f.reference).failures.empty());
+  for (float& v : f.method.find("ao")->data) v = 0.6f;  // error doubles
+  const ReportOutcome worse = build_report(spec, {{"p1", "p1", 1.0, {}, &f.method}}, f.reference);
+  EXPECT_EQ(worse.failures.size(), 3u);  // mae, rmse, excess_rmse
+  EXPECT_EQ(worse.doc["baseline"]["regressions"].size(), 3u);
+  EXPECT_TRUE(validate_against_schema(worse.doc, "report.schema.json").empty()) << worse.doc.dump(2);
+}
+
+}  // namespace
+}  // namespace hfbake
