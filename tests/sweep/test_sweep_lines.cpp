@@ -45,26 +45,26 @@ TEST(SweepLines, GatheredPositionsAreTexelCenters) {
       spec.channels = 3;
       spec.batch = 3;
       std::vector<int> visits(f.texel_count() * K, 0);
-      sweep_lines(f, spec, RunControl{}, [] { return PositionWorker{}; },
-                  [&](int k, int i, int j, const TexelTaps& t) {
-                    ++visits[f.index(i, j) * K + k];
-                    float x = t.value(0), y = t.value(1);
-                    if (wrap == Wrap::repeat) {  // repeat: a line may be the periodic copy of the neighbour
-                      const float py = std::round((y - j) / f.height) * f.height;
-                      const float px = std::round((x - i) / f.width) * f.width;
-                      // lo and hi can come from copies one period apart: compare each tap separately.
-                      (void)px, (void)py;
-                      for (const float* p : {t.lo, t.hi}) {
-                        const float dxp = p[0] - i - std::round((p[0] - i) / f.width) * f.width;
-                        const float dyp = p[1] - j - std::round((p[1] - j) / f.height) * f.height;
-                        EXPECT_LE(std::hypot(dxp, dyp), 1.5f);
-                      }
-                      return;
-                    }
-                    EXPECT_NEAR(x, i, 2e-5) << "K " << K << " k " << k << " texel " << i << "," << j;
-                    EXPECT_NEAR(y, j, 2e-5) << "K " << K << " k " << k << " texel " << i << "," << j;
-                    if (t.w_hi == 0) EXPECT_EQ(t.value(2), f.z[f.index(i, j)]);
-                  });
+      sweep_lines(
+          f, spec, RunControl{}, [] { return PositionWorker{}; },
+          [&](int k, int i, int j, const TexelTaps& t) {
+            ++visits[f.index(i, j) * K + k];
+            const float x = t.value(0), y = t.value(1);
+            if (wrap == Wrap::repeat) {
+              // lo and hi can be periodic copies one period apart: compare each tap modulo the period.
+              for (const float* p : {t.lo, t.hi}) {
+                const float dxp = p[0] - i - std::round((p[0] - i) / f.width) * f.width;
+                const float dyp = p[1] - j - std::round((p[1] - j) / f.height) * f.height;
+                EXPECT_LE(std::hypot(dxp, dyp), 1.5f);
+              }
+              return;
+            }
+            EXPECT_NEAR(x, i, 2e-5) << "K " << K << " k " << k << " texel " << i << "," << j;
+            EXPECT_NEAR(y, j, 2e-5) << "K " << K << " k " << k << " texel " << i << "," << j;
+            if (t.w_hi == 0) {
+              EXPECT_EQ(t.value(2), f.z[f.index(i, j)]);
+            }
+          });
       for (int v : visits) ASSERT_EQ(v, 1);
     }
   }
@@ -90,9 +90,11 @@ TEST(SweepLines, WalkOrderHeightsAndInsideRun) {
         for (int n = 0; n < d.count; ++n) {
           // Heights are the field's own bilinear surface, bit for bit.
           ASSERT_EQ(z[n], f.bilinear(line.x(n), line.y(n))) << k << " " << l << " " << n;
-          const bool on_field = line.x(n) >= 0 && line.x(n) <= f.width - 1 && line.y(n) >= 0 &&
-                                line.y(n) <= f.height - 1;
-          if (wrap == Wrap::clamp) ASSERT_EQ(line.is_terrain(n), on_field) << k << " " << l << " " << n;
+          const bool on_field =
+              line.x(n) >= 0 && line.x(n) <= f.width - 1 && line.y(n) >= 0 && line.y(n) <= f.height - 1;
+          if (wrap == Wrap::clamp) {
+            ASSERT_EQ(line.is_terrain(n), on_field) << k << " " << l << " " << n;
+          }
           if (n > 0) {  // sample n - 1 lies towards phi_k from sample n, one step away
             const double ex = (line.x(n - 1) - line.x(n)) * f.texel_size;
             const double ey = (line.y(n - 1) - line.y(n)) * f.texel_size;
@@ -140,7 +142,8 @@ TEST(SweepLines, ReceiverTexelsCoverEveryTexelOnce) {
             if (p.texel[e] >= 0) wsum[p.texel[e]] += p.weight[e];
         }
       }
-      for (std::size_t t = 0; t < wsum.size(); ++t) ASSERT_NEAR(wsum[t], 1.0, 1e-6) << "k " << k << " texel " << t;
+      for (std::size_t t = 0; t < wsum.size(); ++t)
+        ASSERT_NEAR(wsum[t], 1.0, 1e-6) << "k " << k << " texel " << t;
     }
   }
 }
@@ -150,13 +153,14 @@ TEST(SweepLines, AxisAndDiagonalDirectionsHitTexelsExactly) {
   SweepSpec spec;
   spec.directions = 8;
   spec.channels = 3;
-  sweep_lines(f, spec, RunControl{}, [] { return PositionWorker{}; },
-              [&](int, int i, int j, const TexelTaps& t) {
-                ASSERT_EQ(t.w_hi, 0.0f);
-                ASSERT_EQ(t.lo[0], float(i));
-                ASSERT_EQ(t.lo[1], float(j));
-                ASSERT_EQ(t.lo[2], f.z[f.index(i, j)]);
-              });
+  sweep_lines(
+      f, spec, RunControl{}, [] { return PositionWorker{}; },
+      [&](int, int i, int j, const TexelTaps& t) {
+        ASSERT_EQ(t.w_hi, 0.0f);
+        ASSERT_EQ(t.lo[0], float(i));
+        ASSERT_EQ(t.lo[1], float(j));
+        ASSERT_EQ(t.lo[2], f.z[f.index(i, j)]);
+      });
 }
 
 // A line-order-dependent worker (a running max along the walk) gives the same bits for 1 and 2 threads.
@@ -179,8 +183,9 @@ TEST(SweepLines, DeterministicForAnyThreadCount) {
       std::vector<float> acc(f.texel_count(), 0.0f);
       tbb::task_arena arena(threads);
       arena.execute([&] {
-        sweep_lines(f, spec, RunControl{}, [] { return RunningMax{}; },
-                    [&](int, int i, int j, const TexelTaps& t) { acc[f.index(i, j)] += t.value(0); });
+        sweep_lines(
+            f, spec, RunControl{}, [] { return RunningMax{}; },
+            [&](int, int i, int j, const TexelTaps& t) { acc[f.index(i, j)] += t.value(0); });
       });
       return acc;
     };
@@ -194,7 +199,8 @@ TEST(SweepLines, CancelThrows) {
   RunControl rc;
   rc.cancel = &cancel;
   SweepSpec spec;
-  EXPECT_THROW(sweep_lines(f, spec, rc, [] { return RunningMax{}; }, [](int, int, int, const TexelTaps&) {}),
+  EXPECT_THROW(sweep_lines(
+                   f, spec, rc, [] { return RunningMax{}; }, [](int, int, int, const TexelTaps&) {}),
                Cancelled);
 }
 
@@ -210,7 +216,8 @@ TEST(SweepLines, ProgressReachesOne) {
   SweepSpec spec;
   spec.directions = 10;
   spec.batch = 4;
-  sweep_lines(f, spec, rc, [] { return RunningMax{}; }, [](int, int, int, const TexelTaps&) {});
+  sweep_lines(
+      f, spec, rc, [] { return RunningMax{}; }, [](int, int, int, const TexelTaps&) {});
   EXPECT_EQ(calls.load(), 3);
   EXPECT_DOUBLE_EQ(last, 1.0);
 }

@@ -1,0 +1,260 @@
+// The line-sweep driver shared by the horizon methods (P1 hull stack, P2 hull tree, LSAO obscurance hull):
+// for each azimuth phi_k = 2 pi k / K, parallel straight lines cover the whole field; each line's samples
+// are handed, in order, to a per-line visitor, which writes one result (C floats) per receiver sample; the
+// results are then brought back to the texel centers by a documented two-tap rule and handed to a per-texel
+// visitor. Lines run in parallel (oneTBB); results are bit-identical for any thread count.
+//
+// ---- Geometry (texel coordinates: texel (i, j) is at (x, y) = (i, j); world = texel * texel_size) -----
+// Direction k looks towards d_k = (cos phi_k, sin phi_k). Its "major axis" is x when |cos| >= |sin|, else y;
+// u denotes the major coordinate and v the minor one (x-major: u = x, v = y; y-major: u = y, v = x).
+// * Lines: line l is the set of points v = l + u * slope with slope = d_minor / d_major (|slope| <= 1),
+//   i.e. lines one texel apart along the minor axis (|cos| texel apart perpendicular to themselves).
+// * Samples: one per integer u (one per texel column for x-major directions), so consecutive samples are
+//   step = texel_size * sqrt(1 + slope^2) apart (1 .. sqrt(2) texels; exactly 1 on the axes).
+//   Every sample lies on a texel column (row), so its height is the bilinear height of the field there,
+//   which reduces to a 1D linear interpolation between the two texels (u, floor v) and (u, floor v + 1)
+//   (exactly HeightField::bilinear at that point; in clamp mode rows outside the field are clamped).
+// * Walk order: a line is walked towards phi_k + pi: sample n - 1 lies in direction phi_k from sample n.
+//   So the samples a visitor has already seen when it reaches sample n are exactly the terrain that sample
+//   n sees when it looks towards azimuth phi_k (the horizon direction k of the contract).
+// * Receivers, and how results reach texel centers (exact rule): a sample at (u, v) with
+//   f = v - floor(v) sends its result to texel (u, floor v) with weight 1 - f and to texel (u, floor v + 1)
+//   with weight f -- the transpose of its height interpolation. Equivalently, texel (u, v0) receives
+//     value = (1 - g) * result(line l0, column u) + g * result(line l0 + 1, column u),
+//     g = (v0 - u * slope) - l0,  l0 = floor(v0 - u * slope),
+//   the linear interpolation between the two lines that pass on either side of the texel center, along
+//   the texel's own column. Weights sum to 1. When u * slope is an integer (axis directions for every
+//   texel, diagonals too: slope = +-1 is snapped exactly) g = 0 and the texel IS a sample: no interpolation.
+//   Otherwise the texel center lies at most one minor step (1 texel) from the samples it blends; the error
+//   this adds is measured in tests/sweep and tests/p1 (a march from the texel centers themselves).
+// * clamp: the field ends at its border. A line's samples inside the field, v in [0, n_minor - 1], form
+//   one contiguous run [inside_begin, inside_end); only those are terrain (occluders). Samples before or
+//   after it (v within 1 texel outside the field) are receivers only: their results feed border texels
+//   with the weights above (their heights are the clamped border heights). Visitors must not treat them
+//   as occluders. All n_major columns are receivers (first_receiver = 0, no warm-up).
+// * repeat: the field tiles. Lines l in [0, n_minor) suffice (line l + n_minor has the same heights); each
+//   line first walks a warm-up of wrap_periods * n_major samples (terrain only, no receivers), then the
+//   n_major receiver samples. Bound: a receiver sees at least wrap_periods * n_major * step of tiled
+//   terrain behind it (whole periods along the major axis), so an occluder that the infinite tiling has
+//   beyond that would change the horizon's tangent by at most (z_max - z_min) / (wrap_periods * n_major *
+//   texel_size); with wrap_periods = 1 the result equals the center tile of a 3 x 3 clamp tiling up to
+//   occluders more than one period away. The last receiver of a line and the first of the next period are
+//   neighbours on the torus, so the two edges of a repeat bake match when tiled.
+//
+// ---- Usage -----------------------------------------------------------------------------------------
+//   SweepSpec spec;  spec.directions = 64;  spec.channels = 1;
+//   std::vector<float> sum(field.texel_count());
+//   sweep_lines(field, spec, rc,
+//     [&] { return MyLineWorker{};  },                     // one worker per thread: owns its scratch
+//     [&](int k, int i, int j, const TexelTaps& t) {       // per texel and direction, k ascending
+//       sum[field.index(i, j)] += t.value(0);               //   (texels of a tile are visited by one task)
+//     });
+//   struct MyLineWorker {                                     // called concurrently on different lines
+//     std::vector<int> stack;                                 // scratch: reserve once, never in the loop
+//     void operator()(const SweepLine& line, float* out) {    // out: line.receivers() * channels floats
+//       for (int n = 0; n < line.count; ++n) {
+//         const float z = line.z[n];                          // height (world) of sample n
+//         double s = line.s(n);                               // world distance along the walk
+//         if (n >= line.first_receiver) out[(n - line.first_receiver) * C + c] = ...;
+//         if (line.is_terrain(n)) ... push as occluder ...
+//       }
+//     }
+//   };
+// The per-texel visitor is called once per (texel, direction), tiles in parallel, and for one texel in
+// ascending k: per-texel accumulation in its own storage is deterministic.
+#pragma once
+
+#include <tbb/blocked_range.h>
+#include <tbb/blocked_range2d.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+#include "core/run_control.hpp"
+#include "field/height_field.hpp"
+
+namespace hfbake {
+
+struct SweepSpec {
+  int directions = 64;   // K; direction k has azimuth 2 pi k / K
+  int channels = 1;      // floats each line visitor writes per receiver sample
+  int wrap_periods = 1;  // repeat mode: warm-up length in whole periods of the major axis (>= 1)
+  int batch = 4;         // directions swept before each gather pass (more = fewer passes, more memory)
+  std::size_t max_buffer_bytes = std::size_t(512) << 20;  // caps batch so result buffers stay below this
+};
+
+// The lines of one direction (plain data; see the header comment for the geometry).
+struct SweepDirection {
+  int k = 0;
+  double phi = 0;         // radians
+  double dx = 1, dy = 0;  // unit vector towards phi (the direction the horizon looks)
+  bool x_major = true;
+  int su = -1;       // walk sign along the major axis (walk goes towards phi + pi)
+  double slope = 0;  // v = line + u * slope
+  int n_major = 0, n_minor = 0;
+  bool repeat = false;
+  int line_begin = 0, line_end = 0;  // line indices [line_begin, line_end)
+  int u_start = 0;                   // major coordinate of sample 0
+  int count = 0;                     // samples per line (warm-up + receivers)
+  int first_receiver = 0;            // samples [first_receiver, count) are receivers: one per column u
+  double step = 1;                   // world distance between consecutive samples
+  double texel_size = 1;
+
+  int lines() const { return line_end - line_begin; }
+  int receivers() const { return count - first_receiver; }
+  // Major coordinate of sample n, and the minor coordinate of line l there.
+  int u(int n) const { return u_start + n * su; }
+  double v(int line, int n) const { return line + double(u(n)) * slope; }
+  // Index among the receivers of the sample at major coordinate u (0 <= u < n_major).
+  int receiver_index(int u) const { return su > 0 ? u : n_major - 1 - u; }
+};
+
+// Builds direction k of spec for field (exposed for tests and for visitors that precompute per direction).
+SweepDirection plan_direction(const HeightField& field, const SweepSpec& spec, int k);
+
+// Two texels and their weights (texel index into the row-major field, or -1 for a texel outside a clamp
+// field; weights sum to 1).
+struct TexelPair {
+  std::ptrdiff_t texel[2] = {-1, -1};
+  float weight[2] = {0, 0};
+};
+
+// One line as its visitor sees it. Arrays are valid only during the visitor call.
+struct SweepLine {
+  const SweepDirection* dir = nullptr;
+  int line = 0;            // line index l (v = l + u * slope)
+  int count = 0;           // samples, in walk order
+  int first_receiver = 0;  // samples [first_receiver, count) are receivers (out[n - first_receiver])
+  int inside_begin = 0, inside_end = 0;  // terrain samples (clamp: on the field; repeat: all)
+  const float* z = nullptr;              // world height of every sample, count entries
+  double step = 1;                       // world distance between consecutive samples
+
+  int receivers() const { return count - first_receiver; }
+  bool is_terrain(int n) const { return n >= inside_begin && n < inside_end; }
+  double s(int n) const { return n * step; }  // world distance of sample n from sample 0 along the walk
+  // Texel coordinates of sample n (x = column, y = row; repeat mode: not wrapped).
+  double x(int n) const { return dir->x_major ? double(dir->u(n)) : dir->v(line, n); }
+  double y(int n) const { return dir->x_major ? dir->v(line, n) : double(dir->u(n)); }
+  Vec3 position(int n) const { return {x(n) * dir->texel_size, y(n) * dir->texel_size, double(z[n])}; }
+  // The texels sample n's height was interpolated from (clamped / wrapped into the field), with their
+  // weights: use them to interpolate any per-texel attribute (normal, albedo, emission) at the sample.
+  TexelPair height_taps(int n, const HeightField& field) const;
+  // The texels receiver sample n's result reaches, with their weights (-1: outside a clamp field). Every
+  // texel's weights over all samples of its direction sum to 1 (two samples on two adjacent lines).
+  TexelPair receiver_texels(int n, const HeightField& field) const;
+};
+
+// What the per-texel visitor gets for one (texel, direction): the two samples it blends.
+struct TexelTaps {
+  const float* lo = nullptr;  // result of line l0 at the texel's column (channels floats)
+  const float* hi = nullptr;  // result of line l0 + 1
+  float w_hi = 0;             // weight of hi (0 <= w_hi < 1); lo has 1 - w_hi
+  float value(int c) const { return w_hi == 0 ? lo[c] : lo[c] * (1 - w_hi) + hi[c] * w_hi; }
+  const float* nearest() const { return w_hi > 0.5f ? hi : lo; }
+};
+
+// Fills z[0..dir.count) with the heights of line `line`; returns the inside run in *inside_begin/end.
+void sample_line(const HeightField& field, const SweepDirection& dir, int line, float* z, int* inside_begin,
+                 int* inside_end);
+
+// The texel taps of texel (i, j) for direction dir in a result buffer laid out as
+// buffer[((l - line_begin) * n_major + receiver_index(u)) * channels + c].
+inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int channels, int i, int j) {
+  const int u = dir.x_major ? i : j, v0 = dir.x_major ? j : i;
+  const double g = double(v0) - double(u) * dir.slope;
+  const double fl = std::floor(g);
+  int la = int(fl) - dir.line_begin, lb;
+  TexelTaps t;
+  t.w_hi = float(g - fl);
+  if (dir.repeat) {
+    la %= dir.n_minor;
+    if (la < 0) la += dir.n_minor;
+    lb = la + 1 == dir.n_minor ? 0 : la + 1;
+  } else {
+    la = std::clamp(la, 0, dir.lines() - 2);
+    lb = la + 1;
+  }
+  const std::size_t r = std::size_t(dir.receiver_index(u));
+  t.lo = buffer + (std::size_t(la) * std::size_t(dir.n_major) + r) * std::size_t(channels);
+  t.hi = buffer + (std::size_t(lb) * std::size_t(dir.n_major) + r) * std::size_t(channels);
+  return t;
+}
+
+// Runs the sweep. make_worker() -> a callable worker(const SweepLine&, float* out) (one per thread,
+// created lazily; keep its scratch inside it). texel_visitor(k, i, j, const TexelTaps&) is called for
+// every texel and direction. Calls rc.check() per line chunk and rc.report() per batch of directions.
+template <class MakeWorker, class TexelVisitor>
+void sweep_lines(const HeightField& field, const SweepSpec& spec, const RunControl& rc,
+                 MakeWorker&& make_worker, TexelVisitor&& texel_visitor) {
+  const int K = spec.directions, C = spec.channels;
+  if (K <= 0 || C <= 0 || field.width <= 0 || field.height <= 0) return;
+  std::vector<SweepDirection> dirs(K);
+  std::size_t max_lines_x_major = 0;
+  int max_count = 0;
+  for (int k = 0; k < K; ++k) {
+    dirs[k] = plan_direction(field, spec, k);
+    max_lines_x_major = std::max(max_lines_x_major, std::size_t(dirs[k].lines()) * dirs[k].n_major);
+    max_count = std::max(max_count, dirs[k].count);
+  }
+  const std::size_t per_dir = max_lines_x_major * std::size_t(C);
+  int batch = std::max(1, std::min(spec.batch, K));
+  while (batch > 1 && per_dir * sizeof(float) * batch > spec.max_buffer_bytes) --batch;
+  std::vector<float> buffers(per_dir * batch);
+
+  using Worker = decltype(make_worker());
+  tbb::enumerable_thread_specific<Worker> workers(make_worker);
+  tbb::enumerable_thread_specific<std::vector<float>> heights([&] { return std::vector<float>(max_count); });
+
+  for (int k0 = 0; k0 < K; k0 += batch) {
+    const int nb = std::min(batch, K - k0);
+    // Lines of all directions of the batch, as one flat index range.
+    std::vector<int> first_line(nb + 1, 0);
+    for (int b = 0; b < nb; ++b) first_line[b + 1] = first_line[b] + dirs[k0 + b].lines();
+    tbb::parallel_for(tbb::blocked_range<int>(0, first_line[nb], 4), [&](const tbb::blocked_range<int>& r) {
+      rc.check();
+      Worker& worker = workers.local();
+      std::vector<float>& z = heights.local();
+      int b = int(std::upper_bound(first_line.begin(), first_line.end(), r.begin()) - first_line.begin()) - 1;
+      for (int flat = r.begin(); flat < r.end(); ++flat) {
+        while (flat >= first_line[b + 1]) ++b;
+        const SweepDirection& dir = dirs[k0 + b];
+        SweepLine line;
+        line.dir = &dir;
+        line.line = dir.line_begin + (flat - first_line[b]);
+        line.count = dir.count;
+        line.first_receiver = dir.first_receiver;
+        line.z = z.data();
+        line.step = dir.step;
+        sample_line(field, dir, line.line, z.data(), &line.inside_begin, &line.inside_end);
+        float* out = buffers.data() + per_dir * b +
+                     std::size_t(flat - first_line[b]) * std::size_t(dir.n_major) * std::size_t(C);
+        worker(static_cast<const SweepLine&>(line), out);
+      }
+    });
+    rc.check();
+    // Gather: tiles of texels in parallel; within a texel, directions in ascending k.
+    constexpr int kTile = 32;
+    tbb::parallel_for(tbb::blocked_range2d<int>(0, (field.height + kTile - 1) / kTile, 1, 0,
+                                                (field.width + kTile - 1) / kTile, 1),
+                      [&](const tbb::blocked_range2d<int>& r) {
+                        for (int tj = r.rows().begin(); tj < r.rows().end(); ++tj)
+                          for (int ti = r.cols().begin(); ti < r.cols().end(); ++ti) {
+                            const int j1 = std::min(field.height, (tj + 1) * kTile),
+                                      i1 = std::min(field.width, (ti + 1) * kTile);
+                            for (int j = tj * kTile; j < j1; ++j)
+                              for (int i = ti * kTile; i < i1; ++i)
+                                for (int b = 0; b < nb; ++b)
+                                  texel_visitor(
+                                      k0 + b, i, j,
+                                      texel_taps(dirs[k0 + b], buffers.data() + per_dir * b, C, i, j));
+                          }
+                      });
+    rc.report(double(k0 + nb) / K);
+  }
+}
+
+}  // namespace hfbake
