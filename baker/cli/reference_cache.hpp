@@ -1,0 +1,53 @@
+// The reference cache: path-traced references are the expensive part of a nightly run, and they depend only
+// on the scene and the reference parameters, so they are kept between runs under a content hash of
+// everything that determines them. An entry is checked (size and checksum) when it is read; a damaged
+// entry is removed and the reference is computed again. Entries are written atomically (temporary file,
+// then rename), so concurrent jobs and interrupted runs never leave a half-written entry behind.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "core/layers.hpp"
+#include "job/manifest.hpp"
+
+namespace hfbake {
+
+// Bump whenever baker/reference (or the procedural fields it sees) changes what it computes for the
+// same inputs: every cached reference then misses once and is recomputed.
+inline constexpr int kReferenceCodeVersion = 1;
+
+// 16 hex digits: a hash of kReferenceCodeVersion, the job's height, surface (albedo, emission),
+// environment, lights, bounces, reference parameters and bake list (which layers the reference computes,
+// with their radii and falloffs), and the bytes of every input file the job names. The job's name,
+// output and report settings do not enter it.
+std::string reference_cache_key(const Job& job);
+
+// $XDG_CACHE_HOME/hfbake/references, else $HOME/.cache/hfbake/references; nullopt when neither is set.
+std::optional<std::filesystem::path> default_reference_cache_dir();
+
+enum class CacheLookup { hit, miss, corrupt };
+const char* cache_lookup_name(CacheLookup l);  // "hit", "miss", "corrupt"
+
+class ReferenceCache {
+ public:
+  explicit ReferenceCache(std::filesystem::path dir) : dir_(std::move(dir)) {}
+  const std::filesystem::path& dir() const { return dir_; }
+  std::filesystem::path entry_path(const std::string& key) const { return dir_ / (key + ".hfref"); }
+
+  struct Entry {
+    LayerSet layers;
+    double seconds = 0;  // what computing the reference took: the time a hit saves
+  };
+  // hit: `out` holds the entry. corrupt: the entry was unreadable or failed its checksum and was removed.
+  CacheLookup load(const std::string& key, Entry& out) const;
+  // Writes the entry atomically (creating the folder). Returns "" or a one-line reason it could not;
+  // a cache that cannot be written never fails a bake.
+  std::string store(const std::string& key, const LayerSet& layers, double seconds) const;
+
+ private:
+  std::filesystem::path dir_;
+};
+
+}  // namespace hfbake

@@ -1,0 +1,196 @@
+// The reference cache: an entry comes back bit for bit; any damage (a flipped byte, a truncated file, a
+// wrong header) is detected and the entry removed; the key follows exactly what determines a reference.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "cli/reference_cache.hpp"
+
+namespace hfbake {
+namespace {
+namespace fs = std::filesystem;
+
+class Cache : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("hfbake_test_refcache_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  static LayerSet sample(int w, int h) {
+    LayerSet s;
+    s.width = w;
+    s.height = h;
+    Layer& ao = s.add("ao", mono_channels());
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (float& v : ao.data) v = u(rng);
+    Layer& direct = s.add("direct", rgb_channels());
+    for (float& v : direct.data) v = u(rng) * 3.0f;
+    direct.data[5] = -0.0f;
+    direct.data[7] = 1e-40f;  // a denormal survives too
+    s.attributes.emplace_back("hfbake:reference_samples", "64");
+    return s;
+  }
+
+  Job job(const nlohmann::json& doc) {
+    Job j;
+    j.file = dir_ / "j.json";
+    j.base_dir = dir_;
+    j.doc = doc;
+    j.name = doc.value("name", "t");
+    return j;
+  }
+
+  static nlohmann::json base_doc() {
+    return {{"version", 1},
+            {"name", "t"},
+            {"height", {{"procedural", {{"kind", "fractal"}, {"size", {64, 64}}, {"seed", 3}}}}},
+            {"environment", {{"sky", nlohmann::json::object()}}},
+            {"bake", {{{"method", "p1"}, {"directions", 16}}}},
+            {"reference", {{"samples", 64}, {"seed", 1}}}};
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(Cache, RoundTripIsBitExact) {
+  const ReferenceCache cache(dir_ / "c");
+  const LayerSet s = sample(7, 5);
+  EXPECT_EQ(cache.store("0123456789abcdef", s, 12.5), "");
+  ReferenceCache::Entry e;
+  ASSERT_EQ(cache.load("0123456789abcdef", e), CacheLookup::hit);
+  EXPECT_EQ(e.seconds, 12.5);
+  ASSERT_EQ(e.layers.width, 7);
+  ASSERT_EQ(e.layers.height, 5);
+  ASSERT_EQ(e.layers.layers.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(e.layers.layers[i].name, s.layers[i].name);
+    EXPECT_EQ(e.layers.layers[i].channels, s.layers[i].channels);
+    ASSERT_EQ(e.layers.layers[i].data.size(), s.layers[i].data.size());
+    EXPECT_EQ(std::memcmp(e.layers.layers[i].data.data(), s.layers[i].data.data(),
+                          s.layers[i].data.size() * sizeof(float)),
+              0);
+  }
+  EXPECT_EQ(e.layers.attributes, s.attributes);
+  // Nothing but the entry is left in the folder (the temporary was renamed).
+  int files = 0;
+  for (const auto& f : fs::directory_iterator(dir_ / "c")) {
+    ++files;
+    EXPECT_EQ(f.path().extension(), ".hfref");
+  }
+  EXPECT_EQ(files, 1);
+}
+
+TEST_F(Cache, UnknownKeyMisses) {
+  const ReferenceCache cache(dir_ / "nowhere");
+  ReferenceCache::Entry e;
+  EXPECT_EQ(cache.load("0000000000000000", e), CacheLookup::miss);
+}
+
+TEST_F(Cache, FlippedPayloadByteIsDetectedAndRemoved) {
+  const ReferenceCache cache(dir_);
+  ASSERT_EQ(cache.store("k", sample(16, 16), 1.0), "");
+  const fs::path f = cache.entry_path("k");
+  {
+    std::fstream io(f, std::ios::in | std::ios::out | std::ios::binary);
+    io.seekp(-100, std::ios::end);
+    char c = 0;
+    io.read(&c, 1);
+    io.seekp(-100, std::ios::end);
+    c ^= 0x10;
+    io.write(&c, 1);
+  }
+  ReferenceCache::Entry e;
+  EXPECT_EQ(cache.load("k", e), CacheLookup::corrupt);
+  EXPECT_FALSE(fs::exists(f));
+  EXPECT_EQ(cache.load("k", e), CacheLookup::miss);
+  // Rebuilt: a new store is read back.
+  ASSERT_EQ(cache.store("k", sample(16, 16), 1.0), "");
+  EXPECT_EQ(cache.load("k", e), CacheLookup::hit);
+}
+
+TEST_F(Cache, TruncatedExtendedOrForeignEntriesAreCorrupt) {
+  const ReferenceCache cache(dir_);
+  ReferenceCache::Entry e;
+  ASSERT_EQ(cache.store("a", sample(16, 16), 1.0), "");
+  fs::resize_file(cache.entry_path("a"), fs::file_size(cache.entry_path("a")) - 4);
+  EXPECT_EQ(cache.load("a", e), CacheLookup::corrupt);
+
+  ASSERT_EQ(cache.store("b", sample(16, 16), 1.0), "");
+  std::ofstream(cache.entry_path("b"), std::ios::app | std::ios::binary) << "xx";
+  EXPECT_EQ(cache.load("b", e), CacheLookup::corrupt);
+
+  // An entry stored under another key (a renamed file) is not trusted.
+  ASSERT_EQ(cache.store("c", sample(16, 16), 1.0), "");
+  fs::rename(cache.entry_path("c"), cache.entry_path("d"));
+  EXPECT_EQ(cache.load("d", e), CacheLookup::corrupt);
+
+  std::ofstream(cache.entry_path("g")) << "hfbake reference cache 1\n{not json\n";
+  EXPECT_EQ(cache.load("g", e), CacheLookup::corrupt);
+  std::ofstream(cache.entry_path("h")) << "";
+  EXPECT_EQ(cache.load("h", e), CacheLookup::corrupt);
+}
+
+TEST_F(Cache, KeyFollowsWhatDeterminesTheReference) {
+  const std::string k0 = reference_cache_key(job(base_doc()));
+  EXPECT_EQ(k0.size(), 16u);
+  EXPECT_EQ(reference_cache_key(job(base_doc())), k0);
+
+  auto changed = [&](const std::string& pointer, const nlohmann::json& value) {
+    nlohmann::json d = base_doc();
+    d[nlohmann::json::json_pointer(pointer)] = value;
+    return reference_cache_key(job(d));
+  };
+  // Not part of the reference: name, output, report, description.
+  EXPECT_EQ(changed("/name", "other"), k0);
+  EXPECT_EQ(changed("/output", {{"dir", "elsewhere"}}), k0);
+  EXPECT_EQ(changed("/report", {{"thresholds", {{"p1.ao.rmse", 0.1}}}}), k0);
+  EXPECT_EQ(changed("/description", "x"), k0);
+  // Part of it.
+  EXPECT_NE(changed("/reference/samples", 65), k0);
+  EXPECT_NE(changed("/reference/seed", 2), k0);
+  EXPECT_NE(changed("/height/procedural/seed", 4), k0);
+  EXPECT_NE(changed("/height/texel_size", 2.0), k0);
+  EXPECT_NE(changed("/surface", {{"albedo", 0.3}}), k0);
+  EXPECT_NE(changed("/environment", {{"uniform", 1.0}}), k0);
+  EXPECT_NE(changed("/bounces", 2), k0);
+  EXPECT_NE(changed("/lights", nlohmann::json::array()), k0);
+}
+
+TEST_F(Cache, KeyFollowsInputFileBytes) {
+  std::ofstream(dir_ / "h.pgm") << "P2 2 2 255 0 1 2 3\n";
+  std::ofstream(dir_ / "glow.pgm") << "P2 2 2 255 0 0 0 0\n";
+  nlohmann::json d = base_doc();
+  d["height"] = {{"image", "h.pgm"}};
+  d["surface"] = {{"emission", {{"image", "glow.pgm"}}}};
+  const std::string k0 = reference_cache_key(job(d));
+  std::ofstream(dir_ / "glow.pgm") << "P2 2 2 255 0 0 0 1\n";
+  const std::string k1 = reference_cache_key(job(d));
+  EXPECT_NE(k1, k0);
+  std::ofstream(dir_ / "h.pgm") << "P2 2 2 255 0 1 2 4\n";
+  EXPECT_NE(reference_cache_key(job(d)), k1);
+}
+
+TEST(CacheDir, FollowsXdgCacheHomeThenHome) {
+  const char* old_xdg = std::getenv("XDG_CACHE_HOME");
+  const char* old_home = std::getenv("HOME");
+  const std::string saved = old_xdg ? old_xdg : "", saved_home = old_home ? old_home : "";
+  setenv("XDG_CACHE_HOME", "/tmp/xdg", 1);
+  EXPECT_EQ(default_reference_cache_dir(), fs::path("/tmp/xdg/hfbake/references"));
+  setenv("XDG_CACHE_HOME", "relative/ignored", 1);  // the XDG spec: relative paths are invalid
+  setenv("HOME", "/home/someone", 1);
+  EXPECT_EQ(default_reference_cache_dir(), fs::path("/home/someone/.cache/hfbake/references"));
+  if (old_xdg)
+    setenv("XDG_CACHE_HOME", saved.c_str(), 1);
+  else
+    unsetenv("XDG_CACHE_HOME");
+  if (old_home) setenv("HOME", saved_home.c_str(), 1);
+}
+
+}  // namespace
+}  // namespace hfbake
