@@ -1,0 +1,169 @@
+#include "methods/ao/hbao.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+#include "methods/ao/bake_ao.hpp"
+#include "methods/ao/slice_integral.hpp"
+
+namespace hfbake {
+
+std::vector<MarchDirection> uniform_directions(int count) {
+  std::vector<MarchDirection> d(count);
+  for (int k = 0; k < count; ++k) {
+    const double phi = 2 * kPi * k / count;
+    d[k] = {std::cos(phi), std::sin(phi), 1.0};
+  }
+  return d;
+}
+
+double default_reach(const HeightField& field, const Falloff& f) {
+  const double whole = field.wrap == Wrap::repeat
+                           ? std::max(field.width, field.height) * field.texel_size
+                           : std::hypot(field.width - 1, field.height - 1) * field.texel_size;
+  const double support = f.support(1e-4);
+  return std::isfinite(support) ? support : whole;
+}
+
+HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s) {
+  const double z0 = field.z[field.index(i, j)];
+  const double ts = field.texel_size;
+  const double step_t = s.step / ts;  // texels per step
+  const int steps = std::max(1, int(std::floor(s.reach / s.step + 1e-9)));
+  const bool clamp = field.wrap == Wrap::clamp;
+  const double xmax = field.width - 1, ymax = field.height - 1;
+
+  double wsum = 0, occluded = 0;
+  Vec3 bent{0, 0, 0};
+  for (const MarchDirection& d : s.directions) {
+    const SliceFrame frame = slice_frame(n.x * d.dx + n.y * d.dy, n.z);
+    double max_slope = -std::numeric_limits<double>::infinity();
+    double max_elev = -kPi / 2;
+    double occl = 0;
+    SliceVec dir = open_direction(frame, frame.tangent, kPi / 2);
+    const double sin_t = s.real_tangent ? std::sin(frame.tangent) : s.sin_tangent;
+    double largest = sin_t;  // P3: "no occluder"
+    for (int m = 1; m <= steps; ++m) {
+      const double px = i + m * step_t * d.dx, py = j + m * step_t * d.dy;
+      if (clamp && (px < -1e-9 || py < -1e-9 || px > xmax + 1e-9 || py > ymax + 1e-9)) break;
+      const double x = m * s.step;
+      const double dz = double(field.bilinear(px, py)) - z0;
+      const double slope = dz / x;
+      if (s.estimator == HorizonEstimator::largest_occluder && (!s.visible_only || slope >= max_slope)) {
+        const double len = std::hypot(x, dz), sin_h = dz / len;
+        largest = std::max(largest, sin_t + std::max(0.0, sin_h - sin_t) * s.falloff(len));
+      }
+      if (slope > max_slope) {
+        const double e = std::atan(slope);
+        occl += band_occlusion(s.falloff, s.weighting, frame, max_elev, e, x);
+        const SliceVec b = band_direction(s.falloff, frame, max_elev, e, x);
+        dir.h -= b.h, dir.v -= b.v;
+        max_slope = slope, max_elev = e;
+      }
+    }
+    wsum += d.weight;
+    if (s.estimator == HorizonEstimator::largest_occluder)
+      occluded += d.weight * largest;
+    else
+      occluded += d.weight * (s.weighting == Weighting::cosine ? 2 * occl : occl);
+    bent += d.weight * Vec3{dir.h * d.dx, dir.h * d.dy, dir.v};
+  }
+  HorizonTexel t;
+  t.occluded = occluded / wsum;
+  if (s.estimator == HorizonEstimator::largest_occluder) t.occluded = std::clamp(t.occluded, 0.0, 1.0);
+  t.bent_normal = length(bent) > 1e-12 ? normalize(bent) : n;
+  return t;
+}
+
+void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HbaoSettings& s,
+                const RunControl& rc, float* obscurance, Vec3f* bent) {
+  std::atomic<int> rows_done{0};
+  tbb::parallel_for(0, field.height, [&](int j) {
+    rc.check();
+    for (int i = 0; i < field.width; ++i) {
+      const std::size_t idx = field.index(i, j);
+      const HorizonTexel t = hbao_texel(field, normals[idx].d(), i, j, s);
+      if (obscurance) obscurance[idx] = float(1.0 - t.occluded);
+      if (bent) bent[idx] = Vec3f::from(t.bent_normal);
+    }
+    rc.report(double(++rows_done) / field.height);
+  });
+}
+
+LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  const HeightField& field = scene.field;
+  HbaoSettings s;
+  s.falloff = parse_falloff(params);
+  s.weighting = parse_weighting(params, true);
+  s.directions = uniform_directions(int_param(params, "directions", 16, 1, 4096));
+  if (params.contains("estimator")) {
+    const auto& e = params.at("estimator");
+    if (e == "slab")
+      s.estimator = HorizonEstimator::slab;
+    else if (e == "largest_occluder")
+      s.estimator = HorizonEstimator::largest_occluder;
+    else
+      throw InputError("", "estimator", "must be \"slab\" or \"largest_occluder\"");
+  }
+  if (params.contains("tangent")) {
+    const auto& t = params.at("tangent");
+    if (t == "normal")
+      s.real_tangent = true;
+    else if (t.is_number() && t.get<double>() >= -1 && t.get<double>() <= 0)
+      s.sin_tangent = t.get<double>();
+    else
+      throw InputError("", "tangent", "must be \"normal\" or a number in [-1, 0] (sin of the fixed tangent)");
+    if (s.estimator != HorizonEstimator::largest_occluder)
+      throw InputError("", "tangent", "applies only to estimator \"largest_occluder\"");
+  }
+  if (params.contains("occluders")) {
+    const auto& o = params.at("occluders");
+    if (o != "visible" && o != "all") throw InputError("", "occluders", "must be \"visible\" or \"all\"");
+    s.visible_only = o == "visible";
+    if (s.estimator != HorizonEstimator::largest_occluder)
+      throw InputError("", "occluders", "applies only to estimator \"largest_occluder\"");
+  }
+  s.reach = number_param(params, "max_distance", default_reach(field, s.falloff), 1e-9, 1e12);
+  s.step = number_param(params, "step", 1.0, 1e-3, 1e6) * field.texel_size;
+  if (params.contains("steps")) {
+    if (params.contains("step")) throw InputError("", "steps", "give \"step\" or \"steps\", not both");
+    s.step = s.reach / int_param(params, "steps", 1, 1, 1 << 20);
+  }
+  if (s.reach / s.step > 1e7) throw InputError("", "max_distance", "more than 1e7 steps per direction");
+
+  const bool ao_ok = s.falloff.kind == FalloffKind::none && s.weighting == Weighting::cosine &&
+                     s.estimator == HorizonEstimator::slab;
+  std::vector<std::string> known = {"obscurance", "bent_normal"};
+  if (ao_ok) known.push_back("ao");
+  const std::vector<std::string> layers = select_layers(params, {"obscurance", "bent_normal", "ao"}, known);
+  if (wants(layers, "ao") && !ao_ok)
+    throw InputError(
+        "", "layers",
+        "\"ao\" needs falloff \"none\", weighting \"cosine\" and estimator \"slab\" (use \"obscurance\")");
+
+  LayerSet out;
+  out.width = field.width;
+  out.height = field.height;
+  std::vector<float> obsc(field.texel_count());
+  std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
+  hbao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
+  for (const std::string& name : layers) {
+    if (name == "bent_normal") {
+      Layer& l = out.add(name, xyz_channels());
+      for (std::size_t t = 0; t < bent.size(); ++t) {
+        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
+      }
+    } else {
+      out.add(name, mono_channels()).data = obsc;
+    }
+  }
+  out.attributes.emplace_back("hfbake:hbao:steps_per_direction", std::to_string(int(s.reach / s.step)));
+  return out;
+}
+
+}  // namespace hfbake

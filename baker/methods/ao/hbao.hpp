@@ -1,0 +1,63 @@
+// hbao: the brute-force horizon march, the obscurance family's baseline and LSAO's truth.
+//
+// Per receiver and per azimuthal direction, march outward in equal steps (bilinear heights) up to a reach.
+// Estimator "slab" (default): every sample that rises above the running horizon is a visible vertical slab
+// (P4's slab model, digest 2.7); the elevations between the previous horizon maximum and the new one are
+// occluded by it, weighted by rho(x / cos e) (exact distance of each ray to the slab) and by the cosine
+// (contract obscurance) or uniform (HBAO) weighting. With falloff none and cosine weighting this is P1's
+// Eq. 5 AO of the sampled horizons; it converges to the exact integral as K grows and the step shrinks.
+// Estimator "largest_occluder": P3's Eq. 1 with one occluder per direction, the visible sample that casts the
+// largest sinT + max(0, sin h - sinT) rho(|h|) (the brute-force reference of P3 Fig. 7).
+#pragma once
+
+#include <vector>
+
+#include "core/run_control.hpp"
+#include "core/vec.hpp"
+#include "field/height_field.hpp"
+#include "methods/ao/falloff.hpp"
+#include "methods/ao/obscurance_params.hpp"
+
+namespace hfbake {
+
+// One march direction: unit xy vector (texel axes = world axes) towards the occluders, and a relative
+// azimuthal weight (its coverage; the weights are normalised by their sum).
+struct MarchDirection {
+  double dx = 1, dy = 0;
+  double weight = 1;
+};
+// phi_k = 2 pi k / K from +x towards +y, equal weights (the contract's direction set).
+std::vector<MarchDirection> uniform_directions(int count);
+
+enum class HorizonEstimator { slab, largest_occluder };
+
+struct HbaoSettings {
+  Falloff falloff;
+  Weighting weighting = Weighting::cosine;
+  HorizonEstimator estimator = HorizonEstimator::slab;
+  std::vector<MarchDirection> directions = uniform_directions(16);
+  double reach = 0;  // world units marched per direction (clamp fields also stop at their border)
+  double step = 1;   // world units between samples
+  // largest_occluder only: the fixed tangent sinT (P3 chose -0.85), or the receiver's real tangent per
+  // direction (P3's strategy 1); and whether only visible samples (elevation >= running maximum) compete.
+  double sin_tangent = -0.85;
+  bool real_tangent = false;
+  bool visible_only = true;
+};
+
+struct HorizonTexel {
+  double occluded = 0;        // occluded measure: obscurance = 1 - occluded (largest_occluder: clamped)
+  Vec3 bent_normal{0, 0, 1};  // unit, cosine weighted by (1 - rho) (slab model whatever the estimator)
+};
+
+HorizonTexel hbao_texel(const HeightField& field, Vec3 normal, int i, int j, const HbaoSettings& s);
+
+// Whole field, rows in parallel (deterministic). obscurance / bent may be null.
+void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HbaoSettings& s,
+                const RunControl& rc, float* obscurance, Vec3f* bent);
+
+// The reach used when the job gives none: the falloff's support (rho < 1e-4), or for falloff none the whole
+// field (its diagonal when clamped, one period when it repeats).
+double default_reach(const HeightField& field, const Falloff& f);
+
+}  // namespace hfbake

@@ -1,0 +1,136 @@
+#include "methods/ao/slice_integral.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/vec.hpp"
+
+namespace hfbake {
+namespace {
+
+constexpr double kHalfPi = kPi / 2;
+
+// 8-point Gauss-Legendre on [-1, 1].
+constexpr double kNodes[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
+constexpr double kWeights[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
+                                0.1012285362903763};
+
+// Integral of g over [a, b], split into pieces of at most pi/8 with 8 nodes each.
+template <class G>
+double gauss(const G& g, double a, double b) {
+  if (!(b > a)) return 0.0;
+  const int pieces = std::max(1, int(std::ceil((b - a) / (kPi / 8))));
+  const double len = (b - a) / pieces;
+  double sum = 0;
+  for (int p = 0; p < pieces; ++p) {
+    const double mid = a + (p + 0.5) * len, half = 0.5 * len;
+    double s = 0;
+    for (int q = 0; q < 4; ++q) s += kWeights[q] * (g(mid - half * kNodes[q]) + g(mid + half * kNodes[q]));
+    sum += s * half;
+  }
+  return sum;
+}
+
+// Antiderivatives of the cosine weight w(e) = (nt cos e + nz sin e) cos e divided by cos^k e.
+double cos_p0(const SliceFrame& s, double e) {
+  const double sn = std::sin(e);
+  return s.nt * (e / 2 + std::sin(2 * e) / 4) + s.nz * sn * sn / 2;
+}
+double cos_p1(const SliceFrame& s, double e) {
+  return s.nt * std::sin(e) - s.nz * std::cos(e);
+}
+double cos_p2(const SliceFrame& s, double e) {
+  return s.nt * e - s.nz * std::log(std::cos(e));
+}
+// Uniform weight cos e divided by cos^k e.
+double uni_p0(double e) {
+  return std::sin(e);
+}
+double uni_p1(double e) {
+  return e;
+}
+double uni_p2(double e) {
+  return std::log((1 + std::sin(e)) / std::cos(e));
+}
+
+}  // namespace
+
+SliceFrame slice_frame(double nt, double nz) {
+  SliceFrame s;
+  s.nt = nt;
+  s.nz = nz;
+  s.tangent = std::atan2(-nt, nz);
+  return s;
+}
+
+double band_occlusion(const Falloff& f, Weighting w, const SliceFrame& s, double a, double b, double x) {
+  double lo = std::max(a, s.tangent), hi = std::min(b, kHalfPi);
+  if (!(hi > lo)) return 0.0;
+  const bool cosine = w == Weighting::cosine;
+  switch (f.kind) {
+    case FalloffKind::none:
+      return cosine ? cos_p0(s, hi) - cos_p0(s, lo) : uni_p0(hi) - uni_p0(lo);
+    case FalloffKind::step:
+    case FalloffKind::linear:
+    case FalloffKind::smooth: {
+      // rho(x / cos e) > 0 only where cos e > x / R.
+      if (x >= f.radius) return 0.0;
+      const double q = x / f.radius, ec = std::acos(q);
+      lo = std::max(lo, -ec), hi = std::min(hi, ec);
+      if (!(hi > lo)) return 0.0;
+      auto p0 = [&](double e) { return cosine ? cos_p0(s, e) : uni_p0(e); };
+      auto p1 = [&](double e) { return cosine ? cos_p1(s, e) : uni_p1(e); };
+      auto p2 = [&](double e) { return cosine ? cos_p2(s, e) : uni_p2(e); };
+      const double i0 = p0(hi) - p0(lo);
+      if (f.kind == FalloffKind::step) return i0;
+      const double i1 = p1(hi) - p1(lo);
+      if (f.kind == FalloffKind::linear) return i0 - q * i1;  // (1 - q / cos e)
+      return i0 - 2 * q * i1 + q * q * (p2(hi) - p2(lo));     // (1 - q / cos e)^2
+    }
+    case FalloffKind::exponential:
+    case FalloffKind::rational:
+      break;
+  }
+  return gauss(
+      [&](double e) {
+        const double c = std::cos(e);
+        const double wt = cosine ? std::max(0.0, s.nt * c + s.nz * std::sin(e)) * c : c;
+        return c > 0 ? f(x / c) * wt : 0.0;
+      },
+      lo, hi);
+}
+
+SliceVec open_direction(const SliceFrame& s, double a, double b) {
+  const double lo = std::max(a, s.tangent), hi = std::min(b, kHalfPi);
+  if (!(hi > lo)) return {};
+  auto ph = [&](double e) {  // integral of (nt c + nz s) c^2
+    const double sn = std::sin(e), c = std::cos(e);
+    return s.nt * (sn - sn * sn * sn / 3) - s.nz * c * c * c / 3;
+  };
+  auto pv = [&](double e) {  // integral of (nt c + nz s) c s
+    const double sn = std::sin(e), c = std::cos(e);
+    return -s.nt * c * c * c / 3 + s.nz * sn * sn * sn / 3;
+  };
+  return {ph(hi) - ph(lo), pv(hi) - pv(lo)};
+}
+
+SliceVec band_direction(const Falloff& f, const SliceFrame& s, double a, double b, double x) {
+  double lo = std::max(a, s.tangent), hi = std::min(b, kHalfPi);
+  if (!(hi > lo)) return {};
+  if (f.kind == FalloffKind::none) return open_direction(s, lo, hi);
+  if (f.kind == FalloffKind::step || f.kind == FalloffKind::linear || f.kind == FalloffKind::smooth) {
+    if (x >= f.radius) return {};
+    const double ec = std::acos(x / f.radius);
+    lo = std::max(lo, -ec), hi = std::min(hi, ec);
+    if (!(hi > lo)) return {};
+    if (f.kind == FalloffKind::step) return open_direction(s, lo, hi);
+  }
+  auto weight = [&](double e) {
+    const double c = std::cos(e);
+    return c > 0 ? f(x / c) * std::max(0.0, s.nt * c + s.nz * std::sin(e)) * c : 0.0;
+  };
+  return {gauss([&](double e) { return weight(e) * std::cos(e); }, lo, hi),
+          gauss([&](double e) { return weight(e) * std::sin(e); }, lo, hi)};
+}
+
+}  // namespace hfbake

@@ -1,0 +1,35 @@
+// Integrals over elevation in one vertical azimuthal slice, the building block of the horizon-based methods.
+//
+// In the slice of azimuth direction D (towards the occluders), a direction at elevation e is
+// w(e) = (cos e * D, sin e); the receiver normal projects to (nt, nz) = (n.D, n.z). With the solid angle
+// dw = cos e de dphi, the contract's cosine-weighted occluded measure of a band [a, b] of elevations whose
+// rays all hit a vertical slab at horizontal distance x (P4's slab model, digest 2.7) is
+//     C = integral_a^b rho(x / cos e) max(0, nt cos e + nz sin e) cos e de
+// and the obscurance of K equally weighted slices is 1 - (2/K) sum_k sum_bands C. The uniform (solid-angle,
+// HBAO) measure is U = integral over [max(a, t), b] of rho(x / cos e) cos e de with t the tangent elevation,
+// and the occluded fraction is (1/K) sum_k sum_bands U (HBAO's mean_k (sin h_k - sin t_k) when rho = 1).
+#pragma once
+
+#include "methods/ao/falloff.hpp"
+#include "methods/ao/obscurance_params.hpp"
+
+namespace hfbake {
+
+struct SliceFrame {
+  double nt = 0, nz = 1;  // normal components along D and up
+  double tangent = 0;     // elevation of the tangent plane towards D: atan2(-nt, nz), in (-pi/2, pi/2)
+};
+SliceFrame slice_frame(double nt, double nz);
+
+struct SliceVec {
+  double h = 0, v = 0;  // along D, up
+};
+
+// Occluded measure of the band [a, b] (radians) hidden by a slab at horizontal distance x (world units).
+double band_occlusion(const Falloff& f, Weighting w, const SliceFrame& s, double a, double b, double x);
+// rho-weighted cosine-weighted direction integral of the band: integral rho max(0, n.w) w cos e de.
+SliceVec band_direction(const Falloff& f, const SliceFrame& s, double a, double b, double x);
+// The same with rho = 1 (closed form): the cosine-weighted direction integral of a band of open sky.
+SliceVec open_direction(const SliceFrame& s, double a, double b);
+
+}  // namespace hfbake
