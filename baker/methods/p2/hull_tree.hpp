@@ -1,0 +1,84 @@
+// The convex hull tree of P2 (Timonen 2012, "Low-Complexity Intervisibility in Height Fields", §4-5):
+// for every sample R of a line, the local visibility horizons of R, i.e. the samples behind R that start
+// each visible stretch of the line, in time linear in the number of horizons (t <= 2m + n, P2 §6).
+//
+// A line is a sequence of samples p_0, p_1, ... at unit spacing (distance d_i = i, in steps) with heights
+// h_i (any unit; visibility depends only on the order of slopes). Seen from the receiver R = p_r, the
+// slope of an earlier sample p_j is
+//     s_r(j) = (h_j - h_r) / (r - j)          (computed in double exactly like this, see visibility_slope)
+// and p_j is VISIBLE from R when it strictly exceeds the slope of every sample between it and R:
+//     s_r(j) > max_{j < l < r} s_r(l)         (p_{r-1} is always visible).
+// A sample collinear with a nearer sample and R grazes it and is hidden (ties hide). Both this tree and
+// the naive march (naive_visibility.hpp) compare the same computed slopes, so the visible sets are
+// identical (tests/p2/test_hull_tree.cpp).
+//
+// The tree (P2 §4): the union of the upper convex hulls from the first sample of every convex section
+// (Eq. 1 with collinear triples counted as convex, see hull_tree.cpp; segment starts are permanent
+// leaves) to R; R is the root, children are ordered farthest first;
+// the root's direct children are the local horizons. Hulls keep collinear points (the tie rule above):
+// a child is detached from its parent only when it is strictly above the line of sight root -> parent.
+// Adding a sample makes it the new root with the old root as only child and repairs convexity
+// recursively (Algorithm 1: "deeper" and "wider"); instead of duplicating a segment's first sample as a
+// separate leaf (Algorithm 1 / ProcessLineP2) the node itself is marked permanent and never deleted when
+// orphaned, which is the same tree without the duplicate horizon.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace hfbake {
+
+// The slope of sample j seen from receiver r > j: the one number both methods compare.
+inline double visibility_slope(const double* h, int j, int r) {
+  return (h[j] - h[r]) / double(r - j);
+}
+
+class HullTree {
+ public:
+  // Starts a new line of at most `capacity` samples (allocates only when capacity grows).
+  void reset(int capacity);
+
+  // Appends the next sample (its height) and updates the tree; afterwards horizons() are those of it.
+  void push(double height);
+
+  int size() const { return n_; }
+  const double* heights() const { return h_.data(); }
+
+  // The local horizons of the last pushed sample: sample indices, farthest first (strictly increasing).
+  // Empty for the first sample of a line. The first one casts the global horizon (the largest slope).
+  std::span<const int> horizons() const { return {horizons_.data(), horizons_.size()}; }
+
+  // Convexity checks performed (P2's iterations t), summed over the line so far.
+  std::uint64_t iterations() const { return iterations_; }
+
+ private:
+  struct Frame {
+    int parent;    // the node whose children are being scanned
+    int child;     // the next child to test (-1: none left)
+    double slope;  // the parent's slope seen from the root
+  };
+  std::vector<double> h_;
+  std::vector<int> first_child_, next_sibling_;
+  std::vector<std::uint8_t> permanent_;
+  std::vector<Frame> stack_;
+  std::vector<int> horizons_;
+  int n_ = 0;
+  int prev_class_ = 1;  // class of the last classified sample: 1 convex, 0 concave
+  std::uint64_t iterations_ = 0;
+};
+
+// A visible stretch of the line seen from a receiver r: samples first..last (first <= last < r) are
+// visible, and the segment from `last` to `last + 1` is visible down to the slope `end_slope` (the next
+// horizon's slope), or, for the stretch nearest to R, it ends at R (end_slope = -infinity, last = r - 1).
+struct VisibleStretch {
+  int first = 0, last = 0;
+  double end_slope = 0;
+};
+
+// Walks from each horizon towards R while the samples stay above the next horizon (P2 §10.1, method 3).
+// `out` is cleared and filled nearest-last. Cost: the number of visible samples.
+void visible_stretches(const double* h, int r, std::span<const int> horizons,
+                       std::vector<VisibleStretch>& out);
+
+}  // namespace hfbake
