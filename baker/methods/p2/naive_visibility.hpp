@@ -3,6 +3,7 @@
 // Same slopes and tie rule as the convex hull tree (hull_tree.hpp): the two give identical visible sets.
 #pragma once
 
+#include <algorithm>
 #include <limits>
 #include <vector>
 
@@ -11,10 +12,11 @@
 namespace hfbake {
 
 // Indices of the samples visible from receiver r (0 <= r), increasing. `visible` is cleared first.
-inline void naive_visible(const double* h, int r, std::vector<int>& visible) {
+// Only samples 0..terrain_end-1 are terrain (default: all samples before r).
+inline void naive_visible(const double* h, int r, std::vector<int>& visible, int terrain_end = -1) {
   visible.clear();
   double running = -std::numeric_limits<double>::infinity();
-  for (int j = r - 1; j >= 0; --j) {
+  for (int j = (terrain_end < 0 ? r : std::min(r, terrain_end)) - 1; j >= 0; --j) {
     const double s = visibility_slope(h, j, r);
     if (s > running) {
       running = s;

@@ -1,0 +1,70 @@
+// Indirect light from the visible stretches of one line (P2 §10.1, method 3: exact per-point gathering).
+//
+// A receiver R looks along the line towards the azimuth phi_k (unit horizontal vector a). The terrain it
+// sees in that direction covers the elevations between its nearest sample and its global horizon; each
+// elevation e belongs to the first sample stretch the ray hits. The wedge of azimuths
+// [phi_k - D/2, phi_k + D/2], D = 2 pi / K, integrated with the constant-azimuth elevation profile (the
+// same approximation as P1's Eq. 5), weighs an elevation interval [e0, e1] by
+//     W(e0, e1) = F(e1) - F(e0),
+//     F(e) = 2 sin(D/2) n_p (e + sin e cos e) / 2 + D n_z sin^2(e) / 2,   n_p = n . a,
+// which is the integral of (n . w) over the wedge's solid angle. With t = tan e (a world slope):
+//     F = 2 sin(D/2) n_p (atan t + t / (1 + t^2)) / 2 + D n_z t^2 / (2 (1 + t^2)).
+// Directions below the receiver's tangent plane (t < t_n = -n_p / n_z) are clipped. The contribution of
+// direction k to E / pi at R is (1/pi) * sum over visible segments of L_segment * W(segment), where
+//   * a fully visible segment between samples j and j+1 has the mean of their exit radiances,
+//   * the partially visible segment at the end of a stretch (down to the next horizon's line of sight)
+//     has the radiance at the middle of its visible part (linear along the segment),
+//   * below the nearest sample, down to the tangent plane, the ray meets the receiver's own surface
+//     (a crease): radiance L(R).
+// These intervals tile [t_n, global horizon] exactly, so a uniform L gives L * (1 - sky part): the
+// white-furnace identity direct + indirect = 1 holds up to P1's own integration of the sky part.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <span>
+#include <vector>
+
+#include "core/vec.hpp"
+#include "methods/p2/hull_tree.hpp"
+
+namespace hfbake {
+
+// Per receiver and direction.
+struct WedgeWeights {
+  double a_p = 0;  // 2 sin(D/2) n_p
+  double a_z = 0;  // D n_z
+  double t_n = 0;  // tangent-plane slope in the look direction, -n_p / n_z
+
+  // n: the receiver's unit normal (n_z > 0); look: unit horizontal look direction; wedge: D.
+  static WedgeWeights make(Vec3 n, double look_x, double look_y, double wedge) {
+    WedgeWeights w;
+    const double np = n.x * look_x + n.y * look_y, nz = std::max(n.z, 1e-9);
+    w.a_p = 2 * std::sin(wedge / 2) * np;
+    w.a_z = wedge * nz;
+    w.t_n = -np / nz;
+    return w;
+  }
+  // F at world slope t (see the header comment).
+  double F(double t) const {
+    const double q = 1 / (1 + t * t);
+    return 0.5 * (a_p * (std::atan(t) + t * q) + a_z * t * t * q);
+  }
+};
+
+// (1/pi) * the sum over the visible segments of L_segment * W(segment) for receiver r of a line: its E/pi
+// from direction k. h: sample heights (world units), L: exit radiance per sample, r: the receiver (an
+// index into h and L), terrain_end: samples 0..terrain_end-1 are the terrain behind it (terrain_end <= r;
+// equal to r except for receivers beyond a clamp field's border), horizons: the starts of the visible
+// runs (run_starts), inv_step: 1 / (world distance between samples).
+Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std::span<const int> horizons,
+                     double inv_step, const WedgeWeights& w);
+
+// The horizons that start a visible run: the tree's root children minus a permanent leaf whose farther
+// neighbour is visible too (the only kind of redundant root child). Filters `horizons` into `out`.
+void run_starts(const double* h, int r, std::span<const int> horizons, std::vector<int>& out);
+
+// The same from the naive visible set (increasing indices).
+void run_starts_of_visible(std::span<const int> visible, std::vector<int>& out);
+
+}  // namespace hfbake

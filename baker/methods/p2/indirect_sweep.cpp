@@ -1,0 +1,140 @@
+#include "methods/p2/indirect_sweep.hpp"
+
+#include <mutex>
+
+#include "methods/p2/hull_tree.hpp"
+#include "methods/p2/indirect_gather.hpp"
+#include "methods/p2/naive_visibility.hpp"
+#include "sweep/sweep_lines.hpp"
+
+namespace hfbake {
+namespace {
+
+struct LineWorker {
+  const HeightField* field = nullptr;
+  const std::vector<Vec3f>* normals = nullptr;
+  const std::vector<Rgb>* exit = nullptr;
+  const IndirectSweepSpec* spec = nullptr;
+  double wedge = 0;
+  // Scratch, grown once per thread.
+  HullTree tree;
+  std::vector<double> h;
+  std::vector<Rgb> L;
+  std::vector<int> visible, starts;
+  P2SweepStats stats;
+  // Each worker adds its counts to the caller's totals when the driver destroys it (integer sums: the
+  // totals do not depend on which thread did which line).
+  P2SweepStats* sink = nullptr;
+  std::mutex* sink_mutex = nullptr;
+
+  LineWorker() = default;
+  LineWorker(const LineWorker&) = default;
+  LineWorker& operator=(const LineWorker&) = default;
+  ~LineWorker() {
+    if (!sink) return;
+    std::lock_guard<std::mutex> lock(*sink_mutex);
+    sink->receivers += stats.receivers;
+    sink->iterations += stats.iterations;
+    sink->naive_iterations += stats.naive_iterations;
+    sink->horizons += stats.horizons;
+    sink->run_starts += stats.run_starts;
+    sink->visible += stats.visible;
+  }
+
+  void operator()(const SweepLine& line, float* out) {
+    const int n = line.count, ib = line.inside_begin, ie = line.inside_end;
+    if (int(h.size()) < n) {
+      h.resize(n);
+      L.resize(n);
+    }
+    const bool gather = spec->gather;
+    for (int s = 0; s < n; ++s) {
+      h[s] = line.z[s];
+      if (gather) {
+        const TexelPair t = line.height_taps(s, *field);
+        L[s] = (*exit)[t.texel[0]] * t.weight[0] + (*exit)[t.texel[1]] * t.weight[1];
+      }
+    }
+    const bool naive = spec->visibility == P2Visibility::naive;
+    const double* hh = h.data() + ib;  // terrain-relative indexing: sample s is index s - ib
+    const Rgb* LL = L.data() + ib;
+    const int T = ie - ib;
+    const double inv_step = 1 / line.step;
+    if (!naive) tree.reset(T);
+    const std::uint64_t it0 = tree.iterations();
+    for (int s = 0; s < n; ++s) {
+      const bool terrain = s >= ib && s < ie;
+      if (terrain && !naive) tree.push(h[s]);
+      if (s < line.first_receiver) continue;
+      float* o = out + std::size_t(s - line.first_receiver) * 3;
+      o[0] = o[1] = o[2] = 0;
+      const int r = s - ib;
+      if (r <= 0 || T <= 0) continue;  // no terrain behind this receiver
+      const int terrain_end = std::min(r, T);
+      if (terrain) {
+        stats.receivers += 1;
+        stats.naive_iterations += std::uint64_t(r);
+      }
+      if (naive || !terrain) {
+        naive_visible(hh, r, visible, terrain_end);
+        run_starts_of_visible(visible, starts);
+        if (terrain) stats.iterations += std::uint64_t(r);
+      } else {
+        run_starts(hh, r, tree.horizons(), starts);
+        stats.horizons += tree.horizons().size();
+      }
+      if (terrain) stats.run_starts += starts.size();
+      if (!gather) continue;
+      const TexelPair t = line.height_taps(s, *field);
+      const Vec3 nrm =
+          normalize((*normals)[t.texel[0]].d() * t.weight[0] + (*normals)[t.texel[1]].d() * t.weight[1]);
+      const WedgeWeights w = WedgeWeights::make(nrm, line.dir->dx, line.dir->dy, wedge);
+      const Rgb e = gather_stretches(hh, LL, r, terrain_end, starts, inv_step, w);
+      o[0] = e.r;
+      o[1] = e.g;
+      o[2] = e.b;
+    }
+    if (!naive) stats.iterations += tree.iterations() - it0;
+  }
+};
+
+}  // namespace
+
+std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3f>& normals,
+                                const std::vector<Rgb>& exit, const IndirectSweepSpec& spec,
+                                const RunControl& rc, P2SweepStats* stats) {
+  const std::size_t texels = field.texel_count();
+  std::vector<double> acc(texels * 3, 0.0);
+  SweepSpec ss;
+  ss.directions = spec.directions;
+  ss.channels = 3;
+  const double wedge = 2 * kPi / spec.directions;
+  P2SweepStats totals;
+  std::mutex totals_mutex;
+  sweep_lines(
+      field, ss, rc,
+      [&] {
+        LineWorker w;
+        w.field = &field;
+        w.normals = &normals;
+        w.exit = &exit;
+        w.spec = &spec;
+        w.wedge = wedge;
+        w.sink = &totals;
+        w.sink_mutex = &totals_mutex;
+        return w;
+      },
+      [&](int, int i, int j, const TexelTaps& t) {
+        double* a = acc.data() + field.index(i, j) * 3;
+        a[0] += t.value(0);
+        a[1] += t.value(1);
+        a[2] += t.value(2);
+      });
+  std::vector<Rgb> result(texels);
+  for (std::size_t p = 0; p < texels; ++p)
+    result[p] = {float(acc[3 * p]), float(acc[3 * p + 1]), float(acc[3 * p + 2])};
+  if (stats) *stats = totals;
+  return result;
+}
+
+}  // namespace hfbake

@@ -1,0 +1,39 @@
+// One indirect bounce over the whole field on the shared line-sweep driver (sweep/sweep_lines.hpp):
+// for every direction, every line runs the convex hull tree (or the naive march) and gathers, per
+// receiver sample, the exit radiance of its visible stretches (indirect_gather.hpp); the driver brings
+// the per-sample results to the texels and they are summed over the K directions.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/run_control.hpp"
+#include "core/vec.hpp"
+#include "field/height_field.hpp"
+
+namespace hfbake {
+
+enum class P2Visibility { tree, naive };
+
+struct P2SweepStats {
+  std::uint64_t receivers = 0;         // terrain receiver samples x directions (the paper's points)
+  std::uint64_t iterations = 0;        // convexity checks (tree) or samples marched (naive)
+  std::uint64_t naive_iterations = 0;  // what the naive march would have done: sum of samples behind
+  std::uint64_t horizons = 0;          // root children of the tree summed over receivers (P2's m)
+  std::uint64_t run_starts = 0;        // starts of visible runs (horizons minus redundant leaves)
+  std::uint64_t visible = 0;           // visible samples (gather only; P2 Table 1)
+};
+
+struct IndirectSweepSpec {
+  int directions = 64;
+  P2Visibility visibility = P2Visibility::tree;
+  bool gather = true;  // false: visibility only (benchmarks, statistics); the result is all zero
+};
+
+// E_indirect / pi per texel (row-major) from the exit radiance `exit` per texel, for one bounce.
+// normals: compute_normals(field). stats (optional) is filled with the totals of the sweep.
+std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3f>& normals,
+                                const std::vector<Rgb>& exit, const IndirectSweepSpec& spec,
+                                const RunControl& rc, P2SweepStats* stats = nullptr);
+
+}  // namespace hfbake
