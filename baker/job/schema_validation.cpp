@@ -49,6 +49,18 @@ std::string resolve_schema_uri(const std::string& uri) {
   // "environment.schema.json" referenced from inside methods/ resolves to the top folder.
   const auto slash = p.rfind('/');
   if (slash != std::string::npos) return resolve_schema_uri(p.substr(slash + 1));
+  // A bare name not in the top folder: a sibling inside a subfolder ("obscurance_common.schema.json" from
+  // methods/hbao.schema.json), when exactly one subfolder has it.
+  std::string sibling;
+  for (const EmbeddedSchema& s : embedded_schemas()) {
+    const std::string known(s.path);
+    if (known.size() > p.size() + 1 && known.compare(known.size() - p.size(), p.size(), p) == 0 &&
+        known[known.size() - p.size() - 1] == '/') {
+      if (!sibling.empty()) throw std::logic_error("hfbake: ambiguous schema reference " + uri);
+      sibling = known;
+    }
+  }
+  if (!sibling.empty()) return sibling;
   throw std::logic_error("hfbake: schema reference to unknown document " + uri);
 }
 
