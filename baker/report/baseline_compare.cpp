@@ -1,0 +1,226 @@
+#include "report/baseline_compare.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <stdexcept>
+
+#include "report/compare.hpp"
+#include "report/report_document.hpp"
+
+namespace hfbake {
+namespace {
+
+const nlohmann::json& methods_of(const nlohmann::json& doc, const char* which) {
+  if (!doc.is_object() || !doc.contains("methods") || !doc["methods"].is_object())
+    throw std::invalid_argument(std::string(which) + " is not a report.json (no \"methods\" object)");
+  for (auto& [stem, m] : doc["methods"].items())
+    if (!m.is_object() || !m.contains("layers") || !m["layers"].is_object())
+      throw std::invalid_argument(std::string(which) + ": /methods/" + stem + " has no \"layers\" object");
+  return doc["methods"];
+}
+
+std::optional<double> number_at(const nlohmann::json& obj, const std::string& key) {
+  if (obj.is_object() && obj.contains(key) && obj[key].is_number()) return obj[key].get<double>();
+  return std::nullopt;
+}
+
+bool known_metric(const std::string& name) {
+  int count = 0;
+  const char* const* names = metric_names(count);
+  for (int i = 0; i < count; ++i)
+    if (name == names[i]) return true;
+  return name == "seconds";
+}
+
+std::string fmt(std::optional<double> v) {
+  if (!v) return "-";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.5g", *v);
+  return buf;
+}
+
+}  // namespace
+
+BaselineOptions BaselineOptions::defaults() {
+  BaselineOptions o;
+  for (const char* m : kBaselineMetrics) o.checked[m] = {kBaselineRelTolerance, kBaselineAbsTolerance};
+  return o;
+}
+
+std::string parse_tolerance(const std::string& text, BaselineOptions& options) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0)
+    return "expected METRIC=REL or METRIC=REL,ABS, got \"" + text + "\"";
+  const std::string metric = text.substr(0, eq), values = text.substr(eq + 1);
+  if (!known_metric(metric)) return "unknown metric \"" + metric + "\"";
+  MetricTolerance t;
+  const auto comma = values.find(',');
+  try {
+    std::size_t used = 0;
+    const std::string rel = values.substr(0, comma);
+    t.rel = std::stod(rel, &used);
+    if (used != rel.size()) throw std::invalid_argument(rel);
+    if (comma != std::string::npos) {
+      const std::string abs = values.substr(comma + 1);
+      t.abs = std::stod(abs, &used);
+      if (used != abs.size()) throw std::invalid_argument(abs);
+    }
+  } catch (const std::exception&) {
+    return "\"" + text + "\": tolerances must be numbers";
+  }
+  if (!(t.rel >= 0) || !(t.abs >= 0) || !std::isfinite(t.rel) || !std::isfinite(t.abs))
+    return "\"" + text + "\": tolerances must be finite and >= 0";
+  options.checked[metric] = t;
+  return "";
+}
+
+const char* metric_change_name(MetricChange c) {
+  switch (c) {
+    case MetricChange::same:
+      return "same";
+    case MetricChange::improved:
+      return "improved";
+    case MetricChange::regressed:
+      return "REGRESSED";
+    case MetricChange::missing:
+      return "MISSING";
+    case MetricChange::added:
+      return "new";
+    case MetricChange::info:
+      return "info";
+  }
+  return "?";
+}
+
+BaselineComparison compare_to_baseline(const nlohmann::json& now, const nlohmann::json& baseline,
+                                       const BaselineOptions& options) {
+  const nlohmann::json& new_methods = methods_of(now, "the new report");
+  const nlohmann::json& old_methods = methods_of(baseline, "the baseline");
+  BaselineComparison c;
+
+  auto classify = [&](MetricRow& r) {
+    const auto it = options.checked.find(r.metric);
+    r.checked = it != options.checked.end();
+    if (r.checked) r.tolerance = it->second;
+    if (!r.was) {
+      r.change = MetricChange::added;
+    } else if (!r.now) {
+      r.change = r.checked ? MetricChange::missing : MetricChange::info;
+    } else if (!r.checked) {
+      r.change = MetricChange::info;
+    } else {
+      const double margin = std::max(r.tolerance.abs, r.tolerance.rel * std::abs(*r.was));
+      const double worse = metric_is_higher_better(r.metric) ? *r.was - *r.now : *r.now - *r.was;
+      r.change = worse > margin ? MetricChange::regressed
+                                : (-worse > margin ? MetricChange::improved : MetricChange::same);
+    }
+    switch (r.change) {
+      case MetricChange::regressed:
+        ++c.regressed;
+        break;
+      case MetricChange::improved:
+        ++c.improved;
+        break;
+      case MetricChange::missing:
+        ++c.missing;
+        break;
+      case MetricChange::added:
+        c.added += r.checked;
+        break;
+      default:
+        break;
+    }
+    c.rows.push_back(std::move(r));
+  };
+
+  // Every (stem, layer) of either document, in sorted order (nlohmann objects are key-sorted).
+  std::set<std::string> stems;
+  for (auto& [stem, m] : new_methods.items()) stems.insert(stem);
+  for (auto& [stem, m] : old_methods.items()) stems.insert(stem);
+  const nlohmann::json none = nlohmann::json::object();
+  int count = 0;
+  const char* const* names = metric_names(count);
+  for (const std::string& stem : stems) {
+    const nlohmann::json& nm = new_methods.contains(stem) ? new_methods[stem] : none;
+    const nlohmann::json& om = old_methods.contains(stem) ? old_methods[stem] : none;
+    {
+      MetricRow r;
+      r.stem = stem, r.metric = "seconds", r.now = number_at(nm, "seconds"), r.was = number_at(om, "seconds");
+      if (r.now || r.was) classify(r);
+    }
+    std::set<std::string> layers;
+    const nlohmann::json new_layers = nm.value("layers", none), old_layers = om.value("layers", none);
+    for (auto& [layer, v] : new_layers.items()) layers.insert(layer);
+    for (auto& [layer, v] : old_layers.items()) layers.insert(layer);
+    for (const std::string& layer : layers) {
+      const nlohmann::json& nl =
+          nm.contains("layers") && nm["layers"].contains(layer) ? nm["layers"][layer] : none;
+      const nlohmann::json& ol =
+          om.contains("layers") && om["layers"].contains(layer) ? om["layers"][layer] : none;
+      for (int i = 0; i < count; ++i) {
+        MetricRow r;
+        r.stem = stem, r.layer = layer, r.metric = names[i];
+        r.now = number_at(nl, names[i]), r.was = number_at(ol, names[i]);
+        // psnr is absent when the images are identical: a new zero error is not a lost metric.
+        if (!r.now && r.was && r.metric == "psnr" && number_at(nl, "rmse") == 0.0) r.now = INFINITY;
+        if (r.now || r.was) classify(r);
+      }
+    }
+  }
+  return c;
+}
+
+std::string comparison_table(const BaselineComparison& c, bool all) {
+  std::string out;
+  char line[512];
+  std::snprintf(line, sizeof line, "  %-44s %12s %12s %9s  %s\n", "metric", "baseline", "new", "change", "");
+  out += line;
+  int shown = 0;
+  for (const MetricRow& r : c.rows) {
+    const bool notable = r.change == MetricChange::regressed || r.change == MetricChange::missing ||
+                         r.change == MetricChange::improved || r.change == MetricChange::added;
+    if (!notable && !(all && r.checked)) continue;
+    if (r.change == MetricChange::added && r.metric != "seconds" && !r.checked && !all) continue;
+    std::string change = "-";
+    if (r.now && r.was && *r.was != 0 && std::isfinite(*r.now)) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%+.1f%%", 100.0 * (*r.now - *r.was) / std::abs(*r.was));
+      change = buf;
+    }
+    std::snprintf(line, sizeof line, "  %-44s %12s %12s %9s  %s\n",
+                  (r.layer.empty() ? r.stem + "." + r.metric : r.key()).c_str(), fmt(r.was).c_str(),
+                  fmt(r.now).c_str(), change.c_str(), metric_change_name(r.change));
+    out += line;
+    ++shown;
+  }
+  if (shown == 0) out += "  (no checked metric changed beyond its tolerance)\n";
+  std::snprintf(line, sizeof line, "%s%s: %d regressed, %d missing, %d improved, %d new\n",
+                c.label.empty() ? "" : (c.label + ": ").c_str(), c.regression() ? "REGRESSION" : "ok",
+                c.regressed, c.missing, c.improved, c.added);
+  out += line;
+  return out;
+}
+
+nlohmann::json comparison_json(const BaselineComparison& c) {
+  nlohmann::json j = {{"regressed", c.regressed},
+                      {"missing", c.missing},
+                      {"improved", c.improved},
+                      {"new", c.added},
+                      {"regression", c.regression()}};
+  if (!c.label.empty()) j["label"] = c.label;
+  j["rows"] = nlohmann::json::array();
+  for (const MetricRow& r : c.rows) {
+    nlohmann::json row = {{"key", r.layer.empty() ? r.stem + "." + r.metric : r.key()},
+                          {"change", metric_change_name(r.change)},
+                          {"checked", r.checked}};
+    if (r.now && std::isfinite(*r.now)) row["value"] = *r.now;
+    if (r.was) row["baseline"] = *r.was;
+    if (r.checked) row["tolerance"] = {{"rel", r.tolerance.rel}, {"abs", r.tolerance.abs}};
+    j["rows"].push_back(std::move(row));
+  }
+  return j;
+}
+
+}  // namespace hfbake

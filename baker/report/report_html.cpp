@@ -1,0 +1,566 @@
+#include "report/report_html.hpp"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace hfbake {
+namespace {
+
+std::string esc(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::string num(double v, int digits = 4) {
+  if (!std::isfinite(v)) return v > 0 ? "inf" : (v < 0 ? "-inf" : "nan");
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+std::string json_num(const nlohmann::json& obj, const char* key, int digits = 4) {
+  if (!obj.is_object() || !obj.contains(key) || !obj[key].is_number()) return "&ndash;";
+  return num(obj[key].get<double>(), digits);
+}
+
+void put_u32(std::string& s, std::uint32_t v) {
+  for (int k = 3; k >= 0; --k) s.push_back(char((v >> (8 * k)) & 0xff));
+}
+
+void png_chunk(std::string& png, const char* type, const std::string& data) {
+  put_u32(png, std::uint32_t(data.size()));
+  const std::string body = std::string(type, 4) + data;
+  png += body;
+  put_u32(png, std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(body.data()), uInt(body.size()))));
+}
+
+double srgb_encode(double v) {
+  v = std::clamp(v, 0.0, 1.0);
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+}
+
+// Box-filtered down-sampling factor so that neither side exceeds max_size.
+int shrink_factor(int w, int h, int max_size) {
+  const int m = std::max(w, h);
+  return std::max(1, (m + max_size - 1) / std::max(1, max_size));
+}
+
+// Per output pixel, the mean over its f x f box and over `channels` of value(texel, channel).
+template <class F>
+std::vector<double> box_filter(int w, int h, int f, int out_channels, F value) {
+  const int ow = (w + f - 1) / f, oh = (h + f - 1) / f;
+  std::vector<double> out(std::size_t(ow) * oh * out_channels, 0.0);
+  for (int oy = 0; oy < oh; ++oy)
+    for (int ox = 0; ox < ow; ++ox)
+      for (int c = 0; c < out_channels; ++c) {
+        double sum = 0;
+        int n = 0;
+        for (int y = oy * f; y < std::min(h, oy * f + f); ++y)
+          for (int x = ox * f; x < std::min(w, ox * f + f); ++x, ++n) sum += value(x, y, c);
+        out[(std::size_t(oy) * ow + ox) * out_channels + c] = n ? sum / n : 0.0;
+      }
+  return out;
+}
+
+double percentile_abs(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  for (double& x : v) x = std::abs(x);
+  const std::size_t k = std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
+  return v[k];
+}
+
+struct Img {
+  std::string data_uri;
+  int width = 0, height = 0, factor = 1;
+};
+
+Img to_image(const std::vector<double>& values, int ow, int oh, int channels, int factor,
+             const std::function<void(const double*, std::uint8_t*)>& colour) {
+  const int out_channels = channels == 1 ? 1 : 3;
+  std::vector<std::uint8_t> px(std::size_t(ow) * oh * out_channels);
+  for (std::size_t i = 0; i < std::size_t(ow) * oh; ++i) colour(&values[i * channels], &px[i * out_channels]);
+  return {"data:image/png;base64," + base64(encode_png(ow, oh, out_channels, px)), ow, oh, factor};
+}
+
+// A layer shown as an image: 1 channel grey, 3 channels RGB, both scaled by `display_max` and sRGB-encoded.
+Img layer_image(const Layer& l, int w, int h, int max_size, double display_max) {
+  const int f = shrink_factor(w, h, max_size), nc = l.channel_count();
+  const auto v = box_filter(
+      w, h, f, nc, [&](int x, int y, int c) { return double(l.data[(std::size_t(y) * w + x) * nc + c]); });
+  return to_image(v, (w + f - 1) / f, (h + f - 1) / f, nc, f, [&](const double* in, std::uint8_t* out) {
+    for (int c = 0; c < (nc == 1 ? 1 : 3); ++c)
+      out[c] = std::uint8_t(std::lround(255.0 * srgb_encode(in[c] / display_max)));
+  });
+}
+
+std::string legend(const std::string& left, const std::string& mid, const std::string& right,
+                   const std::string& gradient, const std::string& caption) {
+  std::ostringstream h;
+  h << "<div class=\"legend\"><div class=\"bar\" style=\"background:linear-gradient(to right," << gradient
+    << ")\"></div><div class=\"ticks\"><span>" << esc(left) << "</span><span>" << esc(mid) << "</span><span>"
+    << esc(right) << "</span></div><div class=\"cap\">" << esc(caption) << "</div></div>";
+  return h.str();
+}
+
+std::string figure(const Img& img, const std::string& caption, const std::string& legend_html) {
+  std::ostringstream h;
+  h << "<figure><img src=\"" << img.data_uri << "\" width=\""
+    << img.width * std::max(1, 256 / std::max(img.width, img.height)) << "\" alt=\"" << esc(caption)
+    << "\"><figcaption>" << esc(caption);
+  if (img.factor > 1) h << " (" << img.factor << "&times;" << img.factor << " box-filtered)";
+  h << "</figcaption>" << legend_html << "</figure>";
+  return h.str();
+}
+
+const char* const kMetricColumns[][2] = {
+    {"mae", "mae"},         {"rmse", "rmse"}, {"rel_mae", "rel_mae"}, {"excess_rmse", "excess_rmse"},
+    {"p99", "p99"},         {"max", "max"},   {"psnr", "psnr (dB)"},  {"bias", "bias"},
+    {"noise_rmse", "noise"}};
+
+std::string metrics_table(const std::string& stem, const nlohmann::json& layers,
+                          const std::set<std::string>& failed) {
+  std::ostringstream h;
+  h << "<table class=\"metrics\"><tr><th>layer</th>";
+  for (const auto& c : kMetricColumns) h << "<th>" << c[1] << "</th>";
+  h << "</tr>\n";
+  for (auto& [layer, m] : layers.items()) {
+    h << "<tr><td>" << esc(layer) << "</td>";
+    for (const auto& c : kMetricColumns) {
+      const bool bad = failed.count(stem + "." + layer + "." + c[0]) > 0;
+      h << "<td" << (bad ? " class=\"bad\" title=\"threshold or baseline failed\"" : "") << ">"
+        << json_num(m, c[0]) << "</td>";
+    }
+    h << "</tr>\n";
+  }
+  h << "</table>\n";
+  return h.str();
+}
+
+// obj[key] when it is an object, else an empty object (a reference that outlives the call).
+const nlohmann::json& sub(const nlohmann::json& obj, const std::string& key) {
+  static const nlohmann::json empty = nlohmann::json::object();
+  if (obj.is_object()) {
+    const auto it = obj.find(key);
+    if (it != obj.end() && it->is_object()) return *it;
+  }
+  return empty;
+}
+
+const char* const kPalette[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"};
+
+}  // namespace
+
+void diverging_colour(double t, std::uint8_t rgb[3]) {
+  // Blue (59, 76, 192) - light grey (221, 221, 221) - red (180, 4, 38): the ends of Moreland's cool-warm map.
+  static const double lo[3] = {59, 76, 192}, mid[3] = {221, 221, 221}, hi[3] = {180, 4, 38};
+  t = std::clamp(std::isfinite(t) ? t : 0.0, -1.0, 1.0);
+  const double* end = t < 0 ? lo : hi;
+  const double a = std::abs(t);
+  for (int c = 0; c < 3; ++c) rgb[c] = std::uint8_t(std::lround(mid[c] + a * (end[c] - mid[c])));
+}
+
+std::string encode_png(int width, int height, int channels, const std::vector<std::uint8_t>& pixels) {
+  if (width <= 0 || height <= 0 || (channels != 1 && channels != 3) ||
+      pixels.size() != std::size_t(width) * height * channels)
+    throw std::invalid_argument("encode_png: bad image size");
+  std::string raw;
+  raw.reserve((std::size_t(width) * channels + 1) * height);
+  for (int y = 0; y < height; ++y) {
+    raw.push_back('\0');  // filter: none
+    raw.append(reinterpret_cast<const char*>(&pixels[std::size_t(y) * width * channels]),
+               std::size_t(width) * channels);
+  }
+  uLongf size = compressBound(uLong(raw.size()));
+  std::string z(size, '\0');
+  if (compress2(reinterpret_cast<Bytef*>(z.data()), &size, reinterpret_cast<const Bytef*>(raw.data()),
+                uLong(raw.size()), 6) != Z_OK)
+    throw std::runtime_error("encode_png: zlib failed");
+  z.resize(size);
+  std::string png("\x89PNG\r\n\x1a\n", 8);
+  std::string ihdr;
+  put_u32(ihdr, std::uint32_t(width));
+  put_u32(ihdr, std::uint32_t(height));
+  ihdr +=
+      std::string{char(8), char(channels == 1 ? 0 : 2), 0, 0, 0};  // 8 bit, grey/RGB, deflate, no interlace
+  png_chunk(png, "IHDR", ihdr);
+  png_chunk(png, "IDAT", z);
+  png_chunk(png, "IEND", "");
+  return png;
+}
+
+std::string base64(const std::string& bytes) {
+  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const std::uint32_t v =
+        (std::uint8_t(bytes[i]) << 16) | (std::uint8_t(bytes[i + 1]) << 8) | std::uint8_t(bytes[i + 2]);
+    out += {t[v >> 18], t[(v >> 12) & 63], t[(v >> 6) & 63], t[v & 63]};
+  }
+  if (i + 1 == bytes.size()) {
+    const std::uint32_t v = std::uint8_t(bytes[i]) << 16;
+    out += {t[v >> 18], t[(v >> 12) & 63], '=', '='};
+  } else if (i + 2 == bytes.size()) {
+    const std::uint32_t v = (std::uint8_t(bytes[i]) << 16) | (std::uint8_t(bytes[i + 1]) << 8);
+    out += {t[v >> 18], t[(v >> 12) & 63], t[(v >> 6) & 63], '='};
+  }
+  return out;
+}
+
+std::string svg_line_plot(const std::string& title, const std::string& x_label, const std::string& y_label,
+                          const std::vector<PlotSeries>& series, bool log_x, bool log_y) {
+  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+  std::set<double> xs;
+  for (const PlotSeries& s : series)
+    for (auto [x, y] : s.points) {
+      if (!std::isfinite(x) || !std::isfinite(y)) continue;
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+      xs.insert(x);
+      if (x <= 0) log_x = false;
+      if (y <= 0) log_y = false;
+    }
+  if (!(x0 <= x1) || !(y0 <= y1)) return "<p>(nothing to plot)</p>";
+  auto tx = [&](double v) { return log_x ? std::log10(v) : v; };
+  auto ty = [&](double v) { return log_y ? std::log10(v) : v; };
+  double ax0 = tx(x0), ax1 = tx(x1), ay0 = ty(y0), ay1 = ty(y1);
+  if (ax1 - ax0 < 1e-12) ax0 -= 0.5, ax1 += 0.5;
+  if (ay1 - ay0 < 1e-12)
+    ay0 -= log_y ? 0.5 : std::max(1e-12, std::abs(ay0) * 0.5),
+        ay1 += log_y ? 0.5 : std::max(1e-12, std::abs(ay1) * 0.5);
+  const double pad_y = 0.06 * (ay1 - ay0);
+  ay0 -= pad_y, ay1 += pad_y;
+  if (!log_y && y0 >= 0) ay0 = std::max(ay0, 0.0);
+  const int W = 440, H = 280, L = 64, R = 130, T = 28, B = 44;
+  auto px = [&](double x) { return L + (tx(x) - ax0) / (ax1 - ax0) * (W - L - R); };
+  auto py = [&](double y) { return H - B - (ty(y) - ay0) / (ay1 - ay0) * (H - T - B); };
+  std::ostringstream s;
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"plot\" width=\"" << W << "\" height=\"" << H
+    << "\" viewBox=\"0 0 " << W << " " << H << "\" font-family=\"sans-serif\" font-size=\"11\">";
+  s << "<title>" << esc(title) << "</title><rect x=\"0\" y=\"0\" width=\"" << W << "\" height=\"" << H
+    << "\" fill=\"white\"/>";
+  s << "<text x=\"" << (L + (W - L - R) / 2) << "\" y=\"16\" text-anchor=\"middle\" font-size=\"12\">"
+    << esc(title) << "</text>";
+  // Axes, x ticks at the swept values, y ticks at decades (log) or 5 even steps.
+  s << "<rect x=\"" << L << "\" y=\"" << T << "\" width=\"" << (W - L - R) << "\" height=\"" << (H - T - B)
+    << "\" fill=\"none\" stroke=\"#888\"/>";
+  for (double x : xs) {
+    const double p = px(x);
+    s << "<line x1=\"" << p << "\" x2=\"" << p << "\" y1=\"" << T << "\" y2=\"" << (H - B)
+      << "\" stroke=\"#eee\"/><text x=\"" << p << "\" y=\"" << (H - B + 14) << "\" text-anchor=\"middle\">"
+      << num(x) << "</text>";
+  }
+  std::vector<double> yt;
+  if (log_y) {
+    for (double e = std::floor(ay0); e <= std::ceil(ay1); e += 1)
+      if (e >= ay0 && e <= ay1) yt.push_back(std::pow(10.0, e));
+    if (yt.size() < 2)
+      for (double m : {2.0, 5.0})
+        for (double e = std::floor(ay0); e <= std::ceil(ay1); e += 1) {
+          const double v = m * std::pow(10.0, e);
+          if (std::log10(v) >= ay0 && std::log10(v) <= ay1) yt.push_back(v);
+        }
+  } else {
+    for (int k = 0; k <= 4; ++k) yt.push_back(ay0 + (ay1 - ay0) * k / 4);
+  }
+  for (double y : yt) {
+    const double p = py(y);
+    s << "<line x1=\"" << L << "\" x2=\"" << (W - R) << "\" y1=\"" << p << "\" y2=\"" << p
+      << "\" stroke=\"#eee\"/><text x=\"" << (L - 4) << "\" y=\"" << (p + 4) << "\" text-anchor=\"end\">"
+      << num(y, 3) << "</text>";
+  }
+  s << "<text x=\"" << (L + (W - L - R) / 2) << "\" y=\"" << (H - 8) << "\" text-anchor=\"middle\">"
+    << esc(x_label) << (log_x ? " (log)" : "") << "</text>";
+  s << "<text transform=\"translate(14," << (T + (H - T - B) / 2) << ") rotate(-90)\" text-anchor=\"middle\">"
+    << esc(y_label) << (log_y ? " (log)" : "") << "</text>";
+  int row = 0;
+  for (const PlotSeries& sr : series) {
+    std::string pts;
+    for (auto [x, y] : sr.points)
+      if (std::isfinite(x) && std::isfinite(y)) pts += num(px(x), 6) + "," + num(py(y), 6) + " ";
+    if (pts.empty()) continue;
+    s << "<polyline fill=\"none\" stroke=\"" << sr.color << "\" stroke-width=\"2\""
+      << (sr.dashed ? " stroke-dasharray=\"5,4\"" : "") << " points=\"" << pts << "\"/>";
+    if (!sr.dashed)
+      for (auto [x, y] : sr.points)
+        if (std::isfinite(x) && std::isfinite(y))
+          s << "<circle cx=\"" << num(px(x), 6) << "\" cy=\"" << num(py(y), 6) << "\" r=\"3\" fill=\""
+            << sr.color << "\"/>";
+    const int ly = T + 8 + 16 * row++;
+    s << "<line x1=\"" << (W - R + 10) << "\" x2=\"" << (W - R + 28) << "\" y1=\"" << ly << "\" y2=\"" << ly
+      << "\" stroke=\"" << sr.color << "\" stroke-width=\"2\""
+      << (sr.dashed ? " stroke-dasharray=\"5,4\"" : "") << "/><text x=\"" << (W - R + 32) << "\" y=\""
+      << (ly + 4) << "\">" << esc(sr.name) << "</text>";
+  }
+  s << "</svg>";
+  return s.str();
+}
+
+std::string report_html(const HtmlInputs& in) {
+  const nlohmann::json& r = in.report;
+  const nlohmann::json none = nlohmann::json::object();
+  const nlohmann::json job = r.value("job", none), methods = r.value("methods", none);
+  const nlohmann::json ref_doc = r.value("reference", none);
+  const bool passed = r.value("passed", true);
+  const std::string name = job.value("name", std::string("job"));
+
+  // Keys that failed a threshold or the baseline: their cells are marked.
+  std::set<std::string> failed;
+  for (const auto& t : r.value("thresholds", nlohmann::json::array()))
+    if (!t.value("passed", true)) failed.insert(t.value("key", std::string()));
+  if (r.contains("baseline"))
+    for (const auto& reg : r["baseline"].value("regressions", nlohmann::json::array()))
+      failed.insert(reg.value("key", std::string()));
+
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+    << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+    << "<title>hfbake report: " << esc(name) << "</title>\n<style>\n"
+    << "body{font-family:system-ui,sans-serif;margin:1.5em 2em;color:#222;background:#fff}\n"
+    << "h1{margin-bottom:0.2em}h2{border-bottom:1px solid #ccc;margin-top:1.6em}h3{margin-bottom:0.3em}\n"
+    << "table{border-collapse:collapse;margin:0.4em 0 0.8em}td,th{border:1px solid #ccc;padding:3px 8px;"
+    << "text-align:right;font-variant-numeric:tabular-nums}th{background:#f3f3f3}td:first-child,th:first-"
+       "child"
+    << "{text-align:left}\n.bad{color:#b00;font-weight:bold;background:#fdecea}.ok{color:#070;font-weight:"
+       "bold}\n"
+    << ".meta td{text-align:left}.figs{display:flex;flex-wrap:wrap;gap:14px;align-items:flex-start}\n"
+    << "figure{margin:0}figure img{image-rendering:pixelated;border:1px solid #999;display:block}\n"
+    << "figcaption{font-size:90%;margin-top:3px}.legend{width:256px;font-size:80%}\n"
+    << ".legend .bar{height:10px;border:1px solid #999}.legend "
+       ".ticks{display:flex;justify-content:space-between}\n"
+    << "pre{background:#f6f6f6;padding:6px;display:inline-block;margin:0}.plots{display:flex;flex-wrap:wrap;"
+       "gap:12px}\n"
+    << "</style></head>\n<body>\n";
+  h << "<h1>hfbake report: " << esc(name) << "</h1>\n";
+  h << "<p class=\"" << (passed ? "ok" : "bad") << "\" id=\"verdict\">"
+    << (passed ? "PASSED: every threshold held" : "FAILED: a threshold or the baseline regressed")
+    << "</p>\n";
+  h << "<table class=\"meta\">";
+  h << "<tr><th>job file</th><td>" << esc(job.value("file", std::string())) << "</td></tr>";
+  h << "<tr><th>job hash</th><td><code>" << esc(job.value("hash", std::string())) << "</code></td></tr>";
+  h << "<tr><th>hfbake version</th><td>" << esc(r.value("hfbake_version", std::string())) << "</td></tr>";
+  if (r.contains("size") && r["size"].is_array() && r["size"].size() == 2)
+    h << "<tr><th>field</th><td>" << r["size"][0].get<int>() << " &times; " << r["size"][1].get<int>()
+      << " texels</td></tr>";
+  if (r.contains("region")) {
+    const auto& g = r["region"];
+    h << "<tr><th>compared region</th><td>columns [" << g.value("x0", 0) << ", " << g.value("x1", 0)
+      << "), rows [" << g.value("y0", 0) << ", " << g.value("y1", 0) << ") (crop " << r.value("crop", 0)
+      << ")</td></tr>";
+  }
+  h << "<tr><th>reference</th><td>" << json_num(ref_doc, "seconds") << " s, parameters <code>"
+    << esc(ref_doc.value("parameters", none).dump()) << "</code></td></tr>";
+  h << "</table>\n";
+
+  // Summary: one row per method and layer.
+  h << "<h2>Summary</h2>\n<table class=\"summary\"><tr><th>method</th><th>time "
+       "(s)</th><th>layer</th><th>rmse</th>"
+    << "<th>rel_mae</th><th>excess_rmse</th><th>p99</th><th>psnr (dB)</th></tr>\n";
+  for (auto& [stem, m] : methods.items()) {
+    const nlohmann::json layers = m.value("layers", none);
+    if (layers.empty())
+      h << "<tr><td>" << esc(stem) << "</td><td>" << json_num(m, "seconds", 3)
+        << "</td><td colspan=\"6\">no layer "
+        << "compared</td></tr>\n";
+    for (auto& [layer, mm] : layers.items()) {
+      h << "<tr><td>" << esc(stem) << "</td><td>" << json_num(m, "seconds", 3) << "</td><td>" << esc(layer)
+        << "</td>";
+      for (const char* k : {"rmse", "rel_mae", "excess_rmse", "p99", "psnr"})
+        h << "<td" << (failed.count(stem + "." + layer + "." + k) ? " class=\"bad\"" : "") << ">"
+          << json_num(mm, k) << "</td>";
+      h << "</tr>\n";
+    }
+  }
+  h << "</table>\n";
+
+  // Thresholds and baseline.
+  const nlohmann::json thresholds = r.value("thresholds", nlohmann::json::array());
+  if (!thresholds.empty()) {
+    h << "<h2>Thresholds</h2>\n<table class=\"thresholds\"><tr><th>key</th><th>limit</th><th>value</th><th>"
+      << "</th></tr>\n";
+    for (const auto& t : thresholds) {
+      const bool ok = t.value("passed", false);
+      h << "<tr><td>" << esc(t.value("key", std::string())) << "</td><td>"
+        << (t.value("kind", std::string("max")) == "min" ? "&ge; " : "&le; ") << json_num(t, "limit")
+        << "</td><td>" << json_num(t, "value") << "</td><td class=\"" << (ok ? "ok" : "bad") << "\">"
+        << (ok ? "held" : esc("FAILED " + t.value("error", std::string()))) << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  }
+  if (r.contains("baseline")) {
+    const auto& b = r["baseline"];
+    const auto regs = b.value("regressions", nlohmann::json::array());
+    h << "<h2>Baseline</h2>\n<p>Against <code>" << esc(b.value("file", std::string()))
+      << "</code> (regression: new &gt; "
+      << "old &times; (1 + " << json_num(b, "rel_tolerance") << ") + " << json_num(b, "abs_tolerance")
+      << "): "
+      << (regs.empty() ? "<span class=\"ok\">nothing regressed</span>"
+                       : "<span class=\"bad\">regressed</span>")
+      << "</p>\n";
+    if (!regs.empty()) {
+      h << "<table class=\"baseline\"><tr><th>key</th><th>baseline</th><th>new</th></tr>\n";
+      for (const auto& g : regs)
+        h << "<tr><td>" << esc(g.value("key", std::string())) << "</td><td>" << json_num(g, "baseline")
+          << "</td><td class=\"bad\">" << json_num(g, "value") << "</td></tr>\n";
+      h << "</table>\n";
+    }
+  }
+
+  // Convergence: every sweep group, each layer, error metrics against the swept parameter.
+  std::map<int, std::vector<const HtmlMethod*>> groups;
+  for (const HtmlMethod& m : in.methods)
+    if (m.sweep_group >= 0 && methods.contains(m.stem)) groups[m.sweep_group].push_back(&m);
+  if (!groups.empty()) {
+    h << "<h2>Convergence</h2>\n";
+    for (auto& [group, runs] : groups) {
+      std::sort(runs.begin(), runs.end(), [](auto* a, auto* b) { return a->sweep_value < b->sweep_value; });
+      const std::string param = runs.front()->sweep_parameter, method = runs.front()->method;
+      std::set<std::string> layers;
+      for (const HtmlMethod* m : runs)
+        for (auto& [layer, mm] : sub(methods[m->stem], "layers").items()) layers.insert(layer);
+      h << "<h3>" << esc(method) << ": error against " << esc(param) << "</h3>\n<div class=\"plots\">";
+      for (const std::string& layer : layers) {
+        std::vector<PlotSeries> series;
+        int colour = 0;
+        for (const char* metric : {"rmse", "mae", "excess_rmse", "p99"}) {
+          PlotSeries s{metric, kPalette[colour++ % 6], {}, false};
+          for (const HtmlMethod* m : runs) {
+            const nlohmann::json& mm = sub(sub(methods[m->stem], "layers"), layer);
+            if (mm.contains(metric) && mm[metric].is_number())
+              s.points.emplace_back(m->sweep_value, mm[metric].get<double>());
+          }
+          if (!s.points.empty()) series.push_back(std::move(s));
+        }
+        // The reference's noise floor: below it the method's error cannot be resolved.
+        const nlohmann::json& rl = sub(sub(ref_doc, "layers"), layer);
+        if (rl.contains("noise_rmse") && rl["noise_rmse"].is_number() && rl["noise_rmse"].get<double>() > 0)
+          series.push_back({"reference noise",
+                            "#777",
+                            {{runs.front()->sweep_value, rl["noise_rmse"].get<double>()},
+                             {runs.back()->sweep_value, rl["noise_rmse"].get<double>()}},
+                            true});
+        h << svg_line_plot(method + " " + layer, param, "error", series, true, true);
+      }
+      PlotSeries time{"seconds", kPalette[0], {}, false};
+      for (const HtmlMethod* m : runs)
+        time.points.emplace_back(m->sweep_value, methods[m->stem].value("seconds", 0.0));
+      h << svg_line_plot(method + " time", param, "seconds", {time}, true, true);
+      h << "</div>\n";
+    }
+  }
+
+  // Per method: parameters, metrics, images.
+  for (const HtmlMethod& hm : in.methods) {
+    if (!methods.contains(hm.stem)) continue;
+    const nlohmann::json& m = methods[hm.stem];
+    h << "<h2 id=\"m-" << esc(hm.stem) << "\">" << esc(hm.stem) << "</h2>\n";
+    h << "<p>method <b>" << esc(m.value("method", hm.method)) << "</b>, " << json_num(m, "seconds", 3)
+      << " s, parameters <pre>" << esc(m.value("parameters", none).dump()) << "</pre></p>\n";
+    h << metrics_table(hm.stem, m.value("layers", none), failed);
+    const auto not_compared = m.value("not_compared", nlohmann::json::array());
+    if (!not_compared.empty()) {
+      h << "<p>Not compared (no reference layer of the same name):";
+      for (const auto& n : not_compared) h << " <code>" << esc(n.get<std::string>()) << "</code>";
+      h << "</p>\n";
+    }
+    if (!hm.layers || !in.reference) continue;
+    const int w = hm.layers->width, ht = hm.layers->height;
+    if (w != in.reference->width || ht != in.reference->height) continue;
+    const nlohmann::json compared = m.value("layers", none);
+    for (auto& [layer_name, mm] : compared.items()) {
+      const Layer* ml = hm.layers->find(layer_name);
+      const Layer* rl = in.reference->find(layer_name);
+      if (!ml || !rl || ml->channel_count() != rl->channel_count()) continue;
+      const int nc = ml->channel_count();
+      if (nc != 1 && nc != 3) {
+        h << "<p><code>" << esc(layer_name) << "</code>: " << nc << " channels, metrics only.</p>\n";
+        continue;
+      }
+      // One display scale for the method and the reference: the 99.5th percentile of the reference.
+      std::vector<double> ref_values(rl->data.begin(), rl->data.end());
+      double display_max = percentile_abs(ref_values, 0.995);
+      if (!(display_max > 0)) display_max = 1;
+      // Signed error, mean over the channels, box-filtered like the images.
+      const int f = shrink_factor(w, ht, in.max_image_size);
+      const auto err = box_filter(w, ht, f, 1, [&](int x, int y, int) {
+        double s = 0;
+        for (int c = 0; c < nc; ++c) {
+          const std::size_t i = (std::size_t(y) * w + x) * nc + c;
+          s += double(ml->data[i]) - double(rl->data[i]);
+        }
+        return s / nc;
+      });
+      double scale = percentile_abs(err, 0.99);
+      if (!(scale > 0)) scale = percentile_abs(err, 1.0);
+      if (!(scale > 0)) scale = 1e-6;
+      Img err_img;
+      err_img.width = (w + f - 1) / f, err_img.height = (ht + f - 1) / f, err_img.factor = f;
+      std::vector<std::uint8_t> px(std::size_t(err_img.width) * err_img.height * 3);
+      for (std::size_t i = 0; i < err.size(); ++i) diverging_colour(err[i] / scale, &px[3 * i]);
+      err_img.data_uri = "data:image/png;base64," + base64(encode_png(err_img.width, err_img.height, 3, px));
+
+      std::uint8_t lo[3], mid[3], hi[3];
+      diverging_colour(-1, lo), diverging_colour(0, mid), diverging_colour(1, hi);
+      char grad[160];
+      std::snprintf(grad, sizeof grad, "rgb(%d,%d,%d),rgb(%d,%d,%d),rgb(%d,%d,%d)", lo[0], lo[1], lo[2],
+                    mid[0], mid[1], mid[2], hi[0], hi[1], hi[2]);
+      const std::string value_legend =
+          legend("0", num(display_max / 2, 3), num(display_max, 3), "#000,#bcbcbc,#fff",
+                 "value (sRGB-encoded, clipped at " + num(display_max, 3) + ")");
+      h << "<h3>" << esc(hm.stem) << " &middot; " << esc(layer_name) << "</h3>\n<div class=\"figs\">"
+        << figure(layer_image(*ml, w, ht, in.max_image_size, display_max), hm.stem + " " + layer_name,
+                  value_legend)
+        << figure(layer_image(*rl, w, ht, in.max_image_size, display_max), "reference " + layer_name,
+                  value_legend)
+        << figure(err_img, "error: " + hm.stem + " - reference" + (nc > 1 ? " (mean of channels)" : ""),
+                  legend("-" + num(scale, 3), "0", "+" + num(scale, 3), grad,
+                         "signed error; blue: method too dark, red: too bright; clipped at p99 |error|"))
+        << "</div>\n";
+    }
+  }
+
+  // A check a browser runs on load: every image decoded (the headless browser test reads the result).
+  h << "<script>\nwindow.addEventListener('load', function () {\n"
+    << "  var imgs = document.images, ok = 0;\n"
+    << "  for (var i = 0; i < imgs.length; ++i) if (imgs[i].complete && imgs[i].naturalWidth > 0) ++ok;\n"
+    << "  document.body.setAttribute('data-images', imgs.length);\n"
+    << "  document.body.setAttribute('data-images-decoded', ok);\n"
+    << "  document.body.setAttribute('data-tables', document.querySelectorAll('table').length);\n"
+    << "  if (ok !== imgs.length) console.error('hfbake report: ' + (imgs.length - ok) + ' images did not "
+       "decode');\n"
+    << "});\n</script>\n";
+  h << "<p style=\"color:#777;font-size:85%\">Written by hfbake "
+    << esc(r.value("hfbake_version", std::string()))
+    << ". Self-contained: no file or network access is needed to view it.</p>\n</body></html>\n";
+  return h.str();
+}
+
+}  // namespace hfbake
