@@ -1,0 +1,631 @@
+#include "reference/bake_reference.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <set>
+
+#if defined(__SSE__) || defined(__x86_64__)
+#include <xmmintrin.h>
+#define HFBAKE_HAVE_MXCSR 1
+#endif
+
+#include "core/error.hpp"
+#include "reference/env_sampler.hpp"
+#include "reference/sampling.hpp"
+#include "reference/sh_environment.hpp"
+
+namespace hfbake {
+namespace {
+
+using reference::EmbreeField;
+using reference::EnvSampler;
+using reference::Point2;
+using reference::Sequence2;
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr int kChunk = 64;  // rays per stream call (per texel, per replicate)
+
+// Flush-to-zero / denormals-are-zero while tracing (Embree's advice), restored afterwards so other work
+// sharing the worker threads is unaffected.
+struct FlushDenormals {
+#if HFBAKE_HAVE_MXCSR
+  unsigned csr = _mm_getcsr();
+  FlushDenormals() {
+    _mm_setcsr(csr | 0x8040u);
+  }
+  ~FlushDenormals() {
+    _mm_setcsr(csr);
+  }
+#endif
+};
+
+const char* falloff_name(FalloffKind k) {
+  static const char* const names[] = {"none", "step", "linear", "smooth", "exponential", "rational"};
+  return names[int(k)];
+}
+
+const char* const kObscuranceMethods[] = {"hbao", "lsao", "farfield", "hsao", "vo"};
+
+// The AO family's rule (methods/ao/obscurance_params): falloff defaults to "step" with a radius, "none"
+// without; every falloff but none needs a radius.
+bool read_falloff(const nlohmann::json& o, const std::string& where, Falloff& f) {
+  if (!o.contains("falloff") && !o.contains("radius")) return false;
+  f = Falloff{};
+  const bool has_radius = o.contains("radius");
+  f.kind = has_radius ? FalloffKind::step : FalloffKind::none;
+  if (o.contains("falloff")) {
+    const auto& v = o["falloff"];
+    if (!v.is_string() || !parse_falloff_kind(v.get<std::string>(), f.kind))
+      throw InputError(
+          "", where + "/falloff",
+          "must be one of \"none\", \"step\", \"linear\", \"smooth\", \"exponential\", \"rational\"");
+  }
+  if (has_radius) {
+    if (!o["radius"].is_number() || o["radius"].get<double>() <= 0)
+      throw InputError("", where + "/radius", "must be a positive number (world units)");
+    f.radius = o["radius"].get<double>();
+  }
+  if (f.kind != FalloffKind::none && !has_radius)
+    throw InputError("", where + "/radius", "is required with a falloff other than \"none\" (world units)");
+  return true;
+}
+
+// --- channels ------------------------------------------------------------------------------------
+
+struct Channels {
+  int ao = 0, vsky = 1, obscurance = 2, direct = 3, indirect = 6;
+  int bounce0 = 9;  // indirect_b1 at bounce0, b2 at bounce0 + 3, ...
+  int total = 0;
+  int count = 0;
+  explicit Channels(int bounces) {
+    total = bounce0 + 3 * bounces;
+    count = total + 3;
+  }
+  int bounce(int k) const { return bounce0 + 3 * (k - 1); }  // k = 1..bounces
+};
+
+struct Needs {
+  bool ao = false, vsky = false, obscurance = false, direct = false, indirect = false;
+};
+
+void add_rgb(double* a, Rgb c) {
+  a[0] += c.r, a[1] += c.g, a[2] += c.b;
+}
+
+Vec3 vec(const float* p) {
+  return {p[0], p[1], p[2]};
+}
+
+RTCRay make_ray(Vec3 org, Vec3 dir, float tfar = kInf) {
+  RTCRay r;
+  r.org_x = float(org.x), r.org_y = float(org.y), r.org_z = float(org.z);
+  r.tnear = 0.0f;
+  r.dir_x = float(dir.x), r.dir_y = float(dir.y), r.dir_z = float(dir.z);
+  r.time = 0.0f;
+  r.tfar = tfar;
+  r.mask = 0xffffffffu;
+  r.id = 0;
+  r.flags = 0;
+  return r;
+}
+
+RTCRayHit make_rayhit(Vec3 org, Vec3 dir, float tfar = kInf) {
+  RTCRayHit rh;
+  rh.ray = make_ray(org, dir, tfar);
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
+// A shadow ray and what it contributes when unoccluded.
+struct ShadowSample {
+  Rgb value;
+};
+
+// Everything the per-texel estimators read.
+struct Context {
+  const Scene& scene;
+  const HeightField& field;
+  const Environment& env;
+  const EnvSampler& env_sampler;
+  const EmbreeField& geometry;
+  const ReferenceOptions& options;
+  Channels ch;
+  Needs needs;
+  int bounces = 0;
+  int lights = 0;
+  // Dimension pairs: primary (ao / obscurance / first path direction), vsky, the receiver's
+  // next-event estimation, then per path vertex: next-event estimation and the continuation direction.
+  int pair_primary = 0, pair_vsky = 1, pair_direct = 2, nee_pairs = 0, pair_path = 0, path_stride = 0;
+  float obscurance_tfar = kInf;
+
+  Context(const Scene& s, const Environment& e, const EnvSampler& es, const EmbreeField& g,
+          const ReferenceOptions& o, int b)
+      : scene(s), field(s.field), env(e), env_sampler(es), geometry(g), options(o), ch(b), bounces(b) {
+    lights = int(s.lights.size());
+    nee_pairs = 2 + lights;
+    pair_path = pair_direct + nee_pairs;
+    path_stride = nee_pairs + 1;
+  }
+
+  Sequence2 sequence(std::uint64_t texel_seed, int replicate, int pair) const {
+    return Sequence2::make(
+        reference::hash_combine(texel_seed, (std::uint64_t(replicate) << 32) | unsigned(pair)));
+  }
+
+  // Next-event estimation of E_direct / pi at (origin, n): appends shadow rays (origin already offset)
+  // and their contributions. Returns the number appended.
+  int nee(Vec3 origin, Vec3 n, std::uint64_t texel_seed, int replicate, int pair0, std::uint32_t s,
+          RTCRay* rays, ShadowSample* out) const {
+    int k = 0;
+    const Point2 pc = sequence(texel_seed, replicate, pair0 + 1)(s);
+    const Vec3 wc = reference::cosine_hemisphere(n, pc);
+    if (env.uniform || !env_sampler.valid()) {
+      // f / p = L V (n.w / pi) / (n.w / pi) = L V: cosine sampling is optimal for a uniform sky.
+      const Rgb L = env.radiance(wc);
+      if (L.r != 0 || L.g != 0 || L.b != 0) {
+        rays[k] = make_ray(origin, wc);
+        out[k++].value = L;
+      }
+    } else {
+      double pe = 0;
+      const Vec3 we = env_sampler.sample(sequence(texel_seed, replicate, pair0)(s), pe);
+      const double ce = dot(n, we);
+      if (ce > 0 && pe > 0) {
+        const double w = (ce / kPi) / (pe + ce / kPi);
+        rays[k] = make_ray(origin, we);
+        out[k++].value = env.radiance(we) * float(w);
+      }
+      const double cc = dot(n, wc);
+      if (cc > 0) {
+        const double w = (cc / kPi) / (env_sampler.pdf(wc) + cc / kPi);
+        rays[k] = make_ray(origin, wc);
+        out[k++].value = env.radiance(wc) * float(w);
+      }
+    }
+    for (int l = 0; l < lights; ++l) {
+      const DirectionalLight& light = scene.lights[l];
+      const double alpha = 0.5 * light.angular_diameter;
+      Vec3 w = light.direction;
+      double scale = 0;  // E_light * max(n.w, 0) / pi, averaged over the disk
+      if (alpha > 0) {
+        const double s2 = std::sin(alpha / 2);
+        const double one_minus_cos = 2 * s2 * s2;
+        w = reference::uniform_cone(light.direction, one_minus_cos,
+                                    sequence(texel_seed, replicate, pair0 + 2 + l)(s));
+        // Radiance E / (pi sin^2 alpha), times the cone's solid angle 2 pi (1 - cos alpha), times cos / pi.
+        const double sin2 = one_minus_cos * (2 - one_minus_cos);
+        scale = 2 * one_minus_cos / sin2 * std::max(0.0, dot(n, w)) / kPi;
+      } else {
+        scale = std::max(0.0, dot(n, w)) / kPi;
+      }
+      if (scale > 0) {
+        rays[k] = make_ray(origin, w);
+        out[k++].value = light.irradiance * float(scale);
+      }
+    }
+    return k;
+  }
+
+  void occluded(RTCRay* rays, int n) const {
+    if (n <= 0) return;
+    RTCIntersectContext c;
+    rtcInitIntersectContext(&c);
+    if (options.ray_streams && n > 1) {
+      rtcOccluded1M(geometry.scene(), &c, rays, unsigned(n), sizeof(RTCRay));
+    } else {
+      for (int i = 0; i < n; ++i) rtcOccluded1(geometry.scene(), &c, &rays[i]);
+    }
+  }
+  void intersect(RTCRayHit* rays, int n) const {
+    if (n <= 0) return;
+    RTCIntersectContext c;
+    rtcInitIntersectContext(&c);
+    if (options.ray_streams && n > 1) {
+      rtcIntersect1M(geometry.scene(), &c, rays, unsigned(n), sizeof(RTCRayHit));
+    } else {
+      for (int i = 0; i < n; ++i) rtcIntersect1(geometry.scene(), &c, &rays[i]);
+    }
+  }
+
+  // Albedo and emission at a world point on the surface: barycentric weights of the texel triangle the
+  // point lies over (the same split as the geometry); outside the field (the skirt) the nearest texel.
+  void surface_at(Vec3 p, Rgb& albedo, Rgb& emission) const {
+    const double x = p.x / field.texel_size, y = p.y / field.texel_size;
+    double fi = std::floor(x), fj = std::floor(y);
+    double fx = x - fi, fy = y - fj;
+    int i = int(fi), j = int(fj);
+    if (field.wrap == Wrap::clamp) {
+      if (i < 0) i = 0, fx = 0;
+      if (j < 0) j = 0, fy = 0;
+      if (i > field.width - 2) i = field.width - 2, fx = 1;
+      if (j > field.height - 2) j = field.height - 2, fy = 1;
+      if (field.width < 2) i = 0, fx = 0;
+      if (field.height < 2) j = 0, fy = 0;
+    }
+    fx = std::clamp(fx, 0.0, 1.0), fy = std::clamp(fy, 0.0, 1.0);
+    int ia, ja, ib, jb, ic, jc;
+    double wa, wb, wc;
+    if (fx + fy <= 1) {  // triangle (i, j), (i+1, j), (i, j+1)
+      ia = i, ja = j, wa = 1 - fx - fy;
+      ib = i + 1, jb = j, wb = fx;
+      ic = i, jc = j + 1, wc = fy;
+    } else {  // triangle (i+1, j), (i+1, j+1), (i, j+1)
+      ia = i + 1, ja = j, wa = 1 - fy;
+      ib = i + 1, jb = j + 1, wb = fx + fy - 1;
+      ic = i, jc = j + 1, wc = 1 - fx;
+    }
+    auto idx = [&](int ii, int jj) { return field.index(field.wrap_i(ii), field.wrap_j(jj)); };
+    const std::size_t a = idx(ia, ja), b = idx(ib, jb), c = idx(ic, jc);
+    const auto& al = scene.surface.albedo;
+    albedo = al[a] * float(wa) + al[b] * float(wb) + al[c] * float(wc);
+    const auto& em = scene.surface.emission;
+    emission = em.empty() ? Rgb{} : em[a] * float(wa) + em[b] * float(wb) + em[c] * float(wc);
+  }
+};
+
+// Scratch for one texel's batches (allocated once per tile).
+struct Scratch {
+  std::vector<RTCRay> rays;
+  std::vector<RTCRayHit> hits;
+  std::vector<ShadowSample> shadow;
+  std::vector<int> shadow_sample;  // which sample each shadow ray belongs to
+  std::vector<Vec3> dirs;
+  explicit Scratch(int lights) {
+    const std::size_t per_sample = std::size_t(2 + lights);
+    rays.resize(kChunk * per_sample);
+    hits.resize(kChunk);
+    shadow.resize(kChunk * per_sample);
+    shadow_sample.resize(kChunk * per_sample);
+    dirs.resize(kChunk);
+  }
+};
+
+// Adds samples [s0, s1) of replicate r of texel (i, j) to sums (ch.count doubles).
+void run_samples(const Context& cx, int i, int j, std::uint64_t texel_seed, int r, std::uint32_t s0,
+                 std::uint32_t s1, double* sums, Scratch& sc) {
+  const HeightField& f = cx.field;
+  const std::size_t t = f.index(i, j);
+  const Vec3 n = cx.scene.normals[t].d();
+  const Vec3 origin = f.position(i, j) + n * cx.geometry.epsilon();
+  const Channels& ch = cx.ch;
+  const bool primary_hit = cx.needs.obscurance || (cx.needs.indirect && cx.bounces > 0);
+  const double eps = cx.geometry.epsilon();
+
+  for (std::uint32_t c0 = s0; c0 < s1; c0 += kChunk) {
+    const int m = int(std::min<std::uint32_t>(kChunk, s1 - c0));
+    // Primary cosine rays: ao, obscurance, first path segment.
+    if (cx.needs.ao || primary_hit) {
+      const Sequence2 seq = cx.sequence(texel_seed, r, cx.pair_primary);
+      for (int k = 0; k < m; ++k) sc.dirs[k] = reference::cosine_hemisphere(n, seq(c0 + k));
+      if (primary_hit) {
+        const float tfar = cx.needs.indirect && cx.bounces > 0 ? kInf : cx.obscurance_tfar;
+        for (int k = 0; k < m; ++k) sc.hits[k] = make_rayhit(origin, sc.dirs[k], tfar);
+        cx.intersect(sc.hits.data(), m);
+        for (int k = 0; k < m; ++k) {
+          const RTCRayHit& h = sc.hits[k];
+          const bool hit = h.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+          if (cx.needs.ao) sums[ch.ao] += hit ? 0.0 : 1.0;
+          if (cx.needs.obscurance) sums[ch.obscurance] += 1.0 - (hit ? cx.options.falloff(h.ray.tfar) : 0.0);
+        }
+      } else {
+        for (int k = 0; k < m; ++k) sc.rays[k] = make_ray(origin, sc.dirs[k]);
+        cx.occluded(sc.rays.data(), m);
+        for (int k = 0; k < m; ++k) sums[ch.ao] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
+      }
+    }
+    // Sky view: uniform over the upper hemisphere.
+    if (cx.needs.vsky) {
+      const Sequence2 seq = cx.sequence(texel_seed, r, cx.pair_vsky);
+      for (int k = 0; k < m; ++k)
+        sc.rays[k] = make_ray(origin, reference::uniform_upper_hemisphere(seq(c0 + k)));
+      cx.occluded(sc.rays.data(), m);
+      for (int k = 0; k < m; ++k) sums[ch.vsky] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
+    }
+    // Direct light at the receiver.
+    if (cx.needs.direct) {
+      int count = 0;
+      for (int k = 0; k < m; ++k) {
+        const int added =
+            cx.nee(origin, n, texel_seed, r, cx.pair_direct, c0 + k, &sc.rays[count], &sc.shadow[count]);
+        for (int q = 0; q < added; ++q) sc.shadow_sample[count + q] = k;
+        count += added;
+      }
+      cx.occluded(sc.rays.data(), count);
+      for (int q = 0; q < count; ++q)
+        if (sc.rays[q].tfar >= 0) {
+          add_rgb(&sums[ch.direct], sc.shadow[q].value);
+          add_rgb(&sums[ch.total], sc.shadow[q].value);
+        }
+    }
+    // Indirect: one path per primary ray that hit the surface.
+    if (cx.needs.indirect && cx.bounces > 0) {
+      RTCRay nee_rays[64];
+      ShadowSample nee_values[64];
+      const int max_nee = 2 + cx.lights;
+      std::vector<RTCRay> big_rays;
+      std::vector<ShadowSample> big_values;
+      RTCRay* nr = nee_rays;
+      ShadowSample* nv = nee_values;
+      if (max_nee > 64) {
+        big_rays.resize(max_nee);
+        big_values.resize(max_nee);
+        nr = big_rays.data();
+        nv = big_values.data();
+      }
+      for (int k = 0; k < m; ++k) {
+        RTCRayHit h = sc.hits[k];
+        if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        const std::uint32_t s = c0 + k;
+        Rgb throughput{1, 1, 1};
+        Vec3 dir = sc.dirs[k];
+        Vec3 pos = vec(&h.ray.org_x) + dir * double(h.ray.tfar);
+        for (int b = 1; b <= cx.bounces; ++b) {
+          Vec3 ng = normalize(Vec3{h.hit.Ng_x, h.hit.Ng_y, h.hit.Ng_z});
+          if (dot(ng, dir) > 0) ng = -ng;
+          Rgb albedo, emission;
+          cx.surface_at(pos, albedo, emission);
+          const Vec3 o = pos + ng * eps;
+          const int pair0 = cx.pair_path + (b - 1) * cx.path_stride;
+          const int count = cx.nee(o, ng, texel_seed, r, pair0, s, nr, nv);
+          cx.occluded(nr, count);
+          Rgb direct{};
+          for (int q = 0; q < count; ++q)
+            if (nr[q].tfar >= 0) direct += nv[q].value;
+          const Rgb contribution = throughput * (emission + albedo * direct);
+          add_rgb(&sums[ch.bounce(b)], contribution);
+          add_rgb(&sums[ch.indirect], contribution);
+          add_rgb(&sums[ch.total], contribution);
+          if (b == cx.bounces) break;
+          throughput = throughput * albedo;
+          if (throughput.r <= 0 && throughput.g <= 0 && throughput.b <= 0) break;
+          dir = reference::cosine_hemisphere(ng, cx.sequence(texel_seed, r, pair0 + cx.nee_pairs)(s));
+          h = make_rayhit(o, dir);
+          cx.intersect(&h, 1);
+          if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+          pos = o + dir * double(h.ray.tfar);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> reference_layer_names(int bounces) {
+  std::vector<std::string> names = {"ao", "vsky", "obscurance", "direct", "indirect", "total"};
+  for (int b = 1; b <= bounces; ++b) names.push_back("indirect_b" + std::to_string(b));
+  return names;
+}
+
+ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc) {
+  ReferenceOptions o;
+  const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
+  auto int_key = [&](const char* key, int fallback, int lo, int hi) {
+    if (!ref.contains(key)) return fallback;
+    const auto& v = ref[key];
+    if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi)
+      throw InputError("", std::string("/reference/") + key,
+                       "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return v.get<int>();
+  };
+  o.samples = int_key("samples", 256, 1, 1 << 24);
+  o.replicates = int_key("replicates", 8, 2, 64);
+  o.repeat_tiles = int_key("repeat_tiles", 1, 1, 16);
+  if (ref.contains("seed")) {
+    if (!ref["seed"].is_number_integer() || ref["seed"].get<long long>() < 0)
+      throw InputError("", "/reference/seed", "must be a non-negative integer");
+    o.seed = ref["seed"].get<std::uint64_t>();
+  }
+  if (ref.contains("target_stderr")) {
+    if (!ref["target_stderr"].is_number() || ref["target_stderr"].get<double>() <= 0)
+      throw InputError("", "/reference/target_stderr", "must be a positive number");
+    o.target_stderr = ref["target_stderr"].get<double>();
+  }
+  if (ref.contains("geometry")) {
+    const std::string g = ref["geometry"].is_string() ? ref["geometry"].get<std::string>() : "";
+    if (g == "grid")
+      o.geometry = reference::GeometryKind::grid;
+    else if (g == "triangles")
+      o.geometry = reference::GeometryKind::triangles;
+    else
+      throw InputError("", "/reference/geometry", "must be \"grid\" or \"triangles\"");
+  }
+  if (ref.contains("environment")) {
+    const std::string e = ref["environment"].is_string() ? ref["environment"].get<std::string>() : "";
+    if (e == "sh4")
+      o.sh_environment = true;
+    else if (e != "full")
+      throw InputError("", "/reference/environment", "must be \"full\" or \"sh4\"");
+  }
+
+  // Falloff: the reference's own, else the first obscurance-family bake entry's.
+  bool have_falloff = read_falloff(ref, "/reference", o.falloff);
+  if (!have_falloff && job_doc.contains("bake") && job_doc["bake"].is_array()) {
+    const auto& bake = job_doc["bake"];
+    for (std::size_t b = 0; b < bake.size() && !have_falloff; ++b) {
+      const std::string m = bake[b].value("method", "");
+      for (const char* name : kObscuranceMethods)
+        if (m == name) have_falloff = read_falloff(bake[b], "/bake/" + std::to_string(b), o.falloff);
+    }
+  }
+
+  const std::vector<std::string> known = reference_layer_names(scene.bounces);
+  if (ref.contains("layers")) {
+    if (!ref["layers"].is_array())
+      throw InputError("", "/reference/layers", "must be an array of layer names");
+    std::set<std::string> seen;
+    for (std::size_t k = 0; k < ref["layers"].size(); ++k) {
+      const auto& v = ref["layers"][k];
+      const std::string name = v.is_string() ? v.get<std::string>() : "";
+      if (std::find(known.begin(), known.end(), name) == known.end()) {
+        std::string list;
+        for (const auto& n : known) list += (list.empty() ? "" : ", ") + n;
+        throw InputError("", "/reference/layers/" + std::to_string(k),
+                         "unknown reference layer \"" + name + "\" (known: " + list + ")");
+      }
+      if (seen.insert(name).second) o.layers.push_back(name);
+    }
+  } else {
+    o.layers = {"ao", "vsky"};
+    if (have_falloff) o.layers.push_back("obscurance");
+    for (const char* l : {"direct", "indirect", "total"}) o.layers.push_back(l);
+  }
+  return o;
+}
+
+LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const RunControl& rc) {
+  return bake_reference(scene, parse_reference_options(scene, job_doc), rc);
+}
+
+LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc) {
+  const HeightField& f = scene.field;
+  if (scene.normals.size() != f.texel_count() || scene.surface.albedo.size() != f.texel_count())
+    throw std::invalid_argument("bake_reference: the scene's normals and albedo must cover the field");
+  const int bounces = std::max(0, scene.bounces);
+  const std::vector<std::string> known = reference_layer_names(bounces);
+  for (const std::string& l : options.layers)
+    if (std::find(known.begin(), known.end(), l) == known.end())
+      throw InputError("", "/reference/layers", "unknown reference layer \"" + l + "\"");
+  auto wants = [&](const std::string& l) {
+    return std::find(options.layers.begin(), options.layers.end(), l) != options.layers.end();
+  };
+
+  const Environment env =
+      options.sh_environment ? reference::band_limited_environment(scene.environment) : scene.environment;
+  const EnvSampler sampler = env.uniform ? EnvSampler() : EnvSampler(env);
+  const EmbreeField geometry(f, options.geometry, options.repeat_tiles);
+
+  Context cx(scene, env, sampler, geometry, options, bounces);
+  cx.needs.ao = wants("ao");
+  cx.needs.vsky = wants("vsky");
+  cx.needs.obscurance = wants("obscurance");
+  bool any_bounce = false;
+  for (int b = 1; b <= bounces; ++b) any_bounce |= wants("indirect_b" + std::to_string(b));
+  cx.needs.indirect = wants("indirect") || wants("total") || any_bounce;
+  cx.needs.direct = wants("direct") || wants("total");
+  if (options.falloff.kind != FalloffKind::none)
+    cx.obscurance_tfar = float(std::min<double>(options.falloff.support(1e-6), 3.0e38));
+
+  const int B = std::max(2, options.replicates);
+  const int per_replicate_cap = std::max(1, (options.samples + B - 1) / B);
+  const bool adaptive = options.target_stderr > 0;
+  const int first_round = adaptive ? std::min(per_replicate_cap, std::max(1, 32 / B)) : per_replicate_cap;
+
+  // Output channels, in the order of options.layers.
+  struct Out {
+    std::string name;
+    int first = 0, channels = 1;
+  };
+  std::vector<Out> outs;
+  for (const std::string& l : options.layers) {
+    if (l == "ao") outs.push_back({l, cx.ch.ao, 1});
+    if (l == "vsky") outs.push_back({l, cx.ch.vsky, 1});
+    if (l == "obscurance") outs.push_back({l, cx.ch.obscurance, 1});
+    if (l == "direct") outs.push_back({l, cx.ch.direct, 3});
+    if (l == "indirect") outs.push_back({l, cx.ch.indirect, 3});
+    if (l == "total") outs.push_back({l, cx.ch.total, 3});
+    if (l.rfind("indirect_b", 0) == 0) outs.push_back({l, cx.ch.bounce(std::stoi(l.substr(10))), 3});
+  }
+
+  LayerSet result;
+  result.width = f.width;
+  result.height = f.height;
+  std::vector<float*> value_data, stderr_data;
+  for (const Out& o : outs) {
+    value_data.push_back(result.add(o.name, o.channels == 1 ? mono_channels() : rgb_channels()).data.data());
+  }
+  for (const Out& o : outs)
+    stderr_data.push_back(
+        result.add(o.name + "_stderr", o.channels == 1 ? mono_channels() : rgb_channels()).data.data());
+  float* samples_data = adaptive ? result.add("samples", mono_channels()).data.data() : nullptr;
+  // LayerSet::add may reallocate: take the pointers again now that every layer exists.
+  for (std::size_t k = 0; k < outs.size(); ++k) {
+    value_data[k] = result.find(outs[k].name)->data.data();
+    stderr_data[k] = result.find(outs[k].name + "_stderr")->data.data();
+  }
+  if (adaptive) samples_data = result.find("samples")->data.data();
+
+  const int ts = std::max(1, options.tile_size);
+  const int tiles_x = (f.width + ts - 1) / ts, tiles_y = (f.height + ts - 1) / ts;
+  const int tiles = tiles_x * tiles_y;
+  std::atomic<int> done{0};
+  const int C = cx.ch.count;
+
+  tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
+    FlushDenormals ftz;
+    Scratch scratch(cx.lights);
+    std::vector<double> sums(std::size_t(B) * C);
+    std::vector<double> mean(C), se(C);
+    for (int tile = range.begin(); tile != range.end(); ++tile) {
+      rc.check();
+      const int tx = tile % tiles_x, ty = tile / tiles_x;
+      for (int j = ty * ts; j < std::min(f.height, (ty + 1) * ts); ++j) {
+        for (int i = tx * ts; i < std::min(f.width, (tx + 1) * ts); ++i) {
+          const std::uint64_t texel_seed =
+              reference::hash_combine(reference::mix64(options.seed), std::uint64_t(f.index(i, j)));
+          std::fill(sums.begin(), sums.end(), 0.0);
+          int n = 0;  // samples per replicate so far
+          int next = first_round;
+          for (;;) {
+            for (int r = 0; r < B; ++r)
+              run_samples(cx, i, j, texel_seed, r, std::uint32_t(n), std::uint32_t(next),
+                          &sums[std::size_t(r) * C], scratch);
+            n = next;
+            // Mean of the replicate means and its standard error.
+            double worst = 0;
+            for (int c = 0; c < C; ++c) {
+              double m = 0;
+              for (int r = 0; r < B; ++r) m += sums[std::size_t(r) * C + c];
+              m /= double(B) * n;
+              double var = 0;
+              for (int r = 0; r < B; ++r) {
+                const double d = sums[std::size_t(r) * C + c] / n - m;
+                var += d * d;
+              }
+              mean[c] = m;
+              se[c] = std::sqrt(var / (double(B) * (B - 1)));
+            }
+            if (!adaptive || n >= per_replicate_cap) break;
+            for (const Out& o : outs)
+              for (int c = 0; c < o.channels; ++c) worst = std::max(worst, se[o.first + c]);
+            if (worst <= options.target_stderr) break;
+            next = std::min(per_replicate_cap, 2 * n);
+          }
+          const std::size_t t = f.index(i, j);
+          for (std::size_t k = 0; k < outs.size(); ++k)
+            for (int c = 0; c < outs[k].channels; ++c) {
+              value_data[k][t * outs[k].channels + c] = float(mean[outs[k].first + c]);
+              stderr_data[k][t * outs[k].channels + c] = float(se[outs[k].first + c]);
+            }
+          if (samples_data) samples_data[t] = float(n * B);
+        }
+      }
+      rc.report(double(done.fetch_add(1) + 1) / tiles);
+    }
+  });
+
+  nlohmann::json setup = {
+      {"geometry", options.geometry == reference::GeometryKind::grid ? "grid" : "triangles"},
+      {"epsilon", geometry.epsilon()},
+      {"replicates", B},
+      {"samples_per_texel", adaptive ? nlohmann::json("adaptive") : nlohmann::json(B * per_replicate_cap)},
+      {"bounces", bounces},
+      {"environment", options.sh_environment ? "sh4" : "full"},
+      {"falloff", falloff_name(options.falloff.kind)},
+      {"radius", options.falloff.radius}};
+  if (f.wrap == Wrap::repeat) {
+    setup["repeat_tiles"] = options.repeat_tiles;
+    setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width, f.height) * f.texel_size;
+  }
+  result.attributes.emplace_back("hfbake:reference_setup", setup.dump());
+  return result;
+}
+
+}  // namespace hfbake

@@ -1,0 +1,68 @@
+// The Embree path-traced reference: hfbake's ground truth for every layer a method bakes.
+//
+// Receivers are the texel centers with the P1 normal (Scene::normals), ray origins offset along that
+// normal by EmbreeField::epsilon() (1e-3 texel, more for huge coordinates). Geometry and the solid: see
+// reference/embree_field.hpp. Estimators (each layer also gets "<layer>_stderr"):
+//   ao          cosine-weighted directions about the normal, unlimited distance: mean of V.
+//   vsky        directions uniform in solid angle over the upper (+z) hemisphere: mean of V, which is
+//               1 - mean over azimuth of sin(max(h, 0)) (solid angle above elevation h is (1 - sin h) per
+//               unit azimuth).
+//   obscurance  cosine-weighted: 1 - mean of rho(d), d the hit distance (rho = 0 for a miss), the falloff
+//               functions of methods/ao/falloff.hpp; rays end at the falloff's support (rho < 1e-6).
+//   direct      E_direct / pi: the environment by multiple importance sampling (balance heuristic, one
+//               luminance-CDF sample and one cosine sample; cosine only for a uniform environment) and every
+//               directional light sampled uniformly over its disk (radiance E / (pi sin^2 alpha)), all with
+//               shadow rays.
+//   indirect    E_indirect / pi by Lambertian path tracing: the cosine-sampled primary ray's hit x1 gives
+//               emission(x1) + albedo(x1) * direct(x1), continued with cosine sampling up to exactly
+//               `bounces` surface vertices. indirect_b<k> is the light whose path touched the surface k
+//               times (emitted at, or reflected by, the k-th vertex). Albedo and emission are interpolated
+//               with the triangle's barycentric weights; hits on the skirt use the nearest border texel.
+//   total       direct + indirect.
+// Sampling: `replicates` (default 8) independently Owen-scrambled Sobol sequences per texel, each with
+// ceil(samples / replicates) points; the value is the mean of the replicate means and the standard error
+// is their standard deviation / sqrt(replicates) -- an honest estimate of the randomised-QMC error (the
+// per-sample variance formula would overstate it). Streams derive from (seed, texel, replicate,
+// dimension pair) only: the bits do not depend on the thread count. With target_stderr, a texel stops
+// doubling its sample count once every channel's standard error is at or below the target (the
+// "samples" cap still holds) and the "samples" layer records what each texel used.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/layers.hpp"
+#include "core/run_control.hpp"
+#include "field/scene.hpp"
+#include "methods/ao/falloff.hpp"
+#include "reference/embree_field.hpp"
+
+namespace hfbake {
+
+struct ReferenceOptions {
+  std::vector<std::string> layers;  // output layers (their _stderr layers are added)
+  int samples = 256;                // per texel (rounded up to a multiple of replicates)
+  std::uint64_t seed = 1;
+  double target_stderr = 0;  // 0: off
+  int replicates = 8;
+  Falloff falloff;  // obscurance
+  reference::GeometryKind geometry = reference::GeometryKind::grid;
+  int repeat_tiles = 1;         // wrap repeat: tiles instanced on each side
+  bool sh_environment = false;  // light with the environment band-limited to SH order 4
+  bool ray_streams = true;      // trace each texel's batches with rtcOccluded1M / rtcIntersect1M
+  int tile_size = 16;
+};
+
+// The reference layers this scene can produce ("indirect_b1".."indirect_b<bounces>" included).
+std::vector<std::string> reference_layer_names(int bounces);
+
+// Reads job_doc["reference"] (and the job's obscurance-family entries for the falloff, when the
+// reference gives none). InputError with a "/reference/..." pointer on bad values.
+ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc);
+
+LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc);
+LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const RunControl& rc);
+
+}  // namespace hfbake

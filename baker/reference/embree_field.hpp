@@ -1,0 +1,45 @@
+// The height field as an Embree 3 scene: the contract's surface, closed into a solid.
+//
+// Surface: a vertex at every texel center, two triangles per quad split along the diagonal from texel
+// (i+1, j) to (i, j+1) (Embree's grid and quad split), as RTC_GEOMETRY_TYPE_GRID (default) or as a triangle
+// mesh with the same split (for the speed comparison; both give the same surface).
+//
+// Solid: rays may never pass under the sheet. The sheet is watertight (robust scene), and a "skirt" closes
+// it: vertical walls hang from every border edge down to z_bottom = min height - (height range + 1 texel),
+// plus a bottom cap, so a ray that leaves a border texel going outwards and downwards hits the wall instead
+// of sliding under the field. Above the border edge nothing is in the way: rays escape (wrap clamp).
+//
+// wrap repeat: the field tiles. The base tile (with its seam row and column: (W+1) x (H+1) vertices) is
+// instanced (2T+1)^2 times, T = repeat_tiles, and the skirt surrounds the whole block. Every receiver of the
+// central tile therefore sees occluders at least T field sizes away in every direction (distance bound
+// T * min(W, H) * texel_size); beyond the block rays escape.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include "field/height_field.hpp"
+
+namespace hfbake::reference {
+
+enum class GeometryKind { grid, triangles };
+
+class EmbreeField {
+ public:
+  EmbreeField(const HeightField& field, GeometryKind kind, int repeat_tiles);
+  ~EmbreeField();
+  EmbreeField(const EmbreeField&) = delete;
+  EmbreeField& operator=(const EmbreeField&) = delete;
+
+  RTCScene scene() const { return scene_; }
+  // Ray origins are offset by this much along the normal (world units): 1e-3 texel, or 16 float ulps of
+  // the largest coordinate when that is larger.
+  double epsilon() const { return epsilon_; }
+  double z_bottom() const { return z_bottom_; }
+
+ private:
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr, tile_ = nullptr;
+  double epsilon_ = 0, z_bottom_ = 0;
+};
+
+}  // namespace hfbake::reference

@@ -1,0 +1,105 @@
+// Reference throughput: ao occlusion rays per second on a 1024^2 fractal field with 2 threads (grid vs
+// triangle mesh, ray streams vs single rays), and the time to a per-texel ao standard error of 0.005 at
+// 512^2. Run: build/tests/reference/bench_reference [--benchmark_filter=...]
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+
+#include <chrono>
+
+#include "field/procedural.hpp"
+#include "reference/bake_reference.hpp"
+
+namespace hfbake {
+namespace {
+
+Scene fractal_scene(int size) {
+  ProceduralSpec p;
+  p.kind = ProceduralKind::fractal;
+  p.width = p.height = size;
+  p.seed = 7;
+  Scene s;
+  s.field = make_procedural(p, 1.0, Wrap::clamp);
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), Rgb{0.5f, 0.5f, 0.5f});
+  s.environment = make_uniform_environment({1, 1, 1});
+  s.bounces = 0;
+  return s;
+}
+
+const Scene& scene1024() {
+  static const Scene s = fractal_scene(1024);
+  return s;
+}
+
+// ao only: one occlusion ray per sample. Rays = texels x samples (rounded to replicates).
+void BM_AoRays1024(benchmark::State& state) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  const Scene& s = scene1024();
+  ReferenceOptions o;
+  o.layers = {"ao"};
+  o.samples = 16;
+  o.geometry = state.range(0) ? reference::GeometryKind::triangles : reference::GeometryKind::grid;
+  o.ray_streams = state.range(1) != 0;
+  double rays = 0;
+  for (auto _ : state) {
+    const LayerSet r = bake_reference(s, o, {});
+    benchmark::DoNotOptimize(r.layers[0].data.data());
+    rays += double(s.field.texel_count()) * o.samples;
+  }
+  state.counters["rays_per_second"] = benchmark::Counter(rays, benchmark::Counter::kIsRate);
+  state.SetLabel(std::string(state.range(0) ? "triangles" : "grid") +
+                 (state.range(1) ? ", 1M streams" : ", single rays"));
+}
+BENCHMARK(BM_AoRays1024)
+    ->Args({0, 1})
+    ->Args({0, 0})
+    ->Args({1, 1})
+    ->Args({1, 0})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime();
+
+// Time to a per-texel ao standard error of 0.005 at 512^2 (target_stderr, samples capped at 16384).
+void BM_AoToStderr512(benchmark::State& state) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  const Scene s = fractal_scene(512);
+  ReferenceOptions o;
+  o.layers = {"ao"};
+  o.samples = 16384;
+  o.target_stderr = 0.005;
+  double mean_samples = 0, max_se = 0;
+  for (auto _ : state) {
+    const LayerSet r = bake_reference(s, o, {});
+    const Layer& n = *r.find("samples");
+    const Layer& se = *r.find("ao_stderr");
+    mean_samples = 0, max_se = 0;
+    for (float v : n.data) mean_samples += v / double(n.data.size());
+    for (float v : se.data) max_se = std::max(max_se, double(v));
+  }
+  state.counters["mean_samples_per_texel"] = mean_samples;
+  state.counters["max_stderr"] = max_se;
+}
+BENCHMARK(BM_AoToStderr512)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+
+// Everything at once on a 256^2 field (ao, vsky, direct, indirect with 2 bounces under the built-in sky).
+void BM_AllLayers256(benchmark::State& state) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  Scene s = fractal_scene(256);
+  SkySpec spec;
+  const EnvironmentLighting sky = make_sky_environment(spec);
+  s.environment = sky.environment;
+  s.lights = sky.lights;
+  s.bounces = 2;
+  ReferenceOptions o;
+  o.layers = {"ao", "vsky", "direct", "indirect", "total"};
+  o.samples = 64;
+  o.ray_streams = state.range(0) != 0;
+  for (auto _ : state) benchmark::DoNotOptimize(bake_reference(s, o, {}).layers[0].data.data());
+  state.SetLabel(state.range(0) ? "1M streams" : "single rays");
+}
+BENCHMARK(BM_AllLayers256)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+
+}  // namespace
+}  // namespace hfbake
+
+BENCHMARK_MAIN();

@@ -1,0 +1,393 @@
+// The reference against closed forms and brute force: flat ground, planes, a V-trench floor, a pit, a sun
+// with angular size, a lat-long sky, the white furnace; the surface split, the skirt; determinism.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "env/environment.hpp"
+#include "field/procedural.hpp"
+#include "reference/bake_reference.hpp"
+#include "reference/embree_field.hpp"
+#include "reference/env_sampler.hpp"
+#include "reference/sampling.hpp"
+#include "reference/sh_environment.hpp"
+
+namespace hfbake {
+namespace {
+
+constexpr double kDeg = kPi / 180.0;
+
+Scene make_scene(const ProceduralSpec& spec, Wrap wrap = Wrap::clamp, Rgb albedo = {0.5f, 0.5f, 0.5f},
+                 Rgb sky = {1, 1, 1}) {
+  Scene s;
+  s.name = "t";
+  s.field = make_procedural(spec, 1.0, wrap);
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), albedo);
+  s.environment = make_uniform_environment(sky);
+  s.bounces = 0;
+  return s;
+}
+
+ProceduralSpec spec_of(ProceduralKind kind, int size) {
+  ProceduralSpec p;
+  p.kind = kind;
+  p.width = p.height = size;
+  return p;
+}
+
+ReferenceOptions options(std::vector<std::string> layers, int samples) {
+  ReferenceOptions o;
+  o.layers = std::move(layers);
+  o.samples = samples;
+  return o;
+}
+
+struct Value {
+  double v = 0, se = 0;
+};
+Value at(const LayerSet& l, const std::string& name, int i, int j, int c = 0) {
+  const Layer* a = l.find(name);
+  const Layer* s = l.find(name + "_stderr");
+  EXPECT_TRUE(a && s) << name;
+  const std::size_t t = std::size_t(j) * l.width + i;
+  return {a->data[t * a->channel_count() + c], s->data[t * s->channel_count() + c]};
+}
+
+// |estimate - truth| <= 3 standard errors (+ a float-rounding allowance).
+#define EXPECT_WITHIN_3SE(value, truth, extra)                              \
+  do {                                                                      \
+    const Value v_ = (value);                                               \
+    EXPECT_LE(std::abs(v_.v - (truth)), 3 * v_.se + (extra))                \
+        << "estimate " << v_.v << " +- " << v_.se << ", truth " << (truth); \
+  } while (0)
+
+// Height on the contract's triangulation (split from (i+1, j) to (i, j+1)), an independent evaluation.
+double triangulated_height(const HeightField& f, double x, double y) {
+  const int i = std::clamp(int(std::floor(x)), 0, f.width - 2),
+            j = std::clamp(int(std::floor(y)), 0, f.height - 2);
+  const double fx = x - i, fy = y - j;
+  const double h00 = f.at(i, j), h10 = f.at(i + 1, j), h01 = f.at(i, j + 1), h11 = f.at(i + 1, j + 1);
+  if (fx + fy <= 1) return h00 + (h10 - h00) * fx + (h01 - h00) * fy;
+  return h11 + (h01 - h11) * (1 - fx) + (h10 - h11) * (1 - fy);
+}
+
+// Brute-force horizon elevation (radians) from texel (i, j) in azimuth phi by marching the triangulation.
+double horizon(const HeightField& f, int i, int j, double phi) {
+  const double h0 = f.at(i, j);
+  double best = -kPi / 2;
+  for (double s = 0.01;; s += 0.01) {
+    const double x = i + s * std::cos(phi), y = j + s * std::sin(phi);
+    if (x < 0 || y < 0 || x > f.width - 1 || y > f.height - 1) break;
+    best = std::max(best, std::atan2(triangulated_height(f, x, y) - h0, s));
+  }
+  return best;
+}
+
+TEST(Sampling, PrefixesAreNets) {
+  // The first 2^m points of a scrambled sequence: one point in every elementary interval of area 2^-m.
+  for (std::uint64_t stream : {1ull, 77ull, 123456789ull}) {
+    const auto seq = reference::Sequence2::make(stream);
+    const int m = 6, n = 1 << m;
+    for (int a = 0; a <= m; ++a) {
+      std::vector<int> count(n, 0);
+      for (int k = 0; k < n; ++k) {
+        const auto p = seq(std::uint32_t(k));
+        const int cx = int(p.u * (1 << a)), cy = int(p.v * (1 << (m - a)));
+        ++count[cx * (1 << (m - a)) + cy];
+      }
+      for (int c : count) ASSERT_EQ(c, 1) << "stream " << stream << " split " << a;
+    }
+  }
+}
+
+TEST(Geometry, SurfaceSplitAndSkirt) {
+  HeightField f;
+  f.width = f.height = 2;
+  f.z = {0, 0, 0, 1};  // h(1,1) = 1: the split decides the height at (0.7, 0.7)
+  for (auto kind : {reference::GeometryKind::grid, reference::GeometryKind::triangles}) {
+    reference::EmbreeField g(f, kind, 1);
+    auto down = [&](double x, double y) {
+      RTCRayHit rh{};
+      rh.ray.org_x = float(x), rh.ray.org_y = float(y), rh.ray.org_z = 5;
+      rh.ray.dir_z = -1;
+      rh.ray.tfar = 100;
+      rh.ray.mask = ~0u;
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      RTCIntersectContext c;
+      rtcInitIntersectContext(&c);
+      rtcIntersect1(g.scene(), &c, &rh);
+      return 5.0 - rh.ray.tfar;
+    };
+    EXPECT_NEAR(down(0.3, 0.3), 0.0, 1e-6);
+    EXPECT_NEAR(down(0.7, 0.7), 0.4, 1e-6);  // on the triangle (1,0) (1,1) (0,1)
+    EXPECT_NEAR(down(0.9, 0.2), 0.1, 1e-6);
+    // A ray from outside, below the border edge, heading in: the skirt stops it.
+    RTCRay r{};
+    r.org_x = -1, r.org_y = 0.5f, r.org_z = -0.2f, r.dir_x = 1, r.tfar = 100, r.mask = ~0u;
+    RTCIntersectContext c;
+    rtcInitIntersectContext(&c);
+    rtcOccluded1(g.scene(), &c, &r);
+    EXPECT_LT(r.tfar, 0) << "a ray passed under the border";
+    // Above the border it passes.
+    RTCRay above{};
+    above.org_x = -1, above.org_y = 0.5f, above.org_z = 1.2f, above.dir_x = 1, above.tfar = 100,
+    above.mask = ~0u;
+    rtcOccluded1(g.scene(), &c, &above);
+    EXPECT_GT(above.tfar, 0);
+  }
+}
+
+TEST(Reference, FlatGroundUnderUniformSky) {
+  const Rgb L{0.5f, 1.0f, 2.0f};
+  Scene s = make_scene(spec_of(ProceduralKind::flat, 33), Wrap::clamp, {0.5f, 0.5f, 0.5f}, L);
+  const LayerSet r = bake_reference(s, options({"ao", "vsky", "direct"}, 64), {});
+  for (int j = 0; j < 33; j += 8)
+    for (int i = 0; i < 33; i += 8) {  // the border too: the skirt must not occlude
+      EXPECT_WITHIN_3SE(at(r, "ao", i, j), 1.0, 1e-6);
+      EXPECT_WITHIN_3SE(at(r, "vsky", i, j), 1.0, 1e-6);
+      for (int c = 0; c < 3; ++c) EXPECT_WITHIN_3SE(at(r, "direct", i, j, c), (&L.r)[c], 1e-5);
+    }
+}
+
+TEST(Reference, TiltedPlane) {
+  ProceduralSpec p = spec_of(ProceduralKind::slope, 41);
+  p.angle_deg = 35;
+  p.aspect_deg = 40;  // faces 40 degrees: rises towards 220 degrees
+  Scene s = make_scene(p);
+  const LayerSet r = bake_reference(s, options({"ao", "vsky"}, 256), {});
+  // vsky closed form: tan h = tan S cos(phi - uphill), vsky = 1 - mean sin(max(h, 0)).
+  const double S = p.angle_deg * kDeg, uphill = (p.aspect_deg + 180) * kDeg;
+  double mean_sin = 0;
+  const int K = 100000;
+  for (int k = 0; k < K; ++k) {
+    const double phi = 2 * kPi * (k + 0.5) / K;
+    mean_sin += std::sin(std::max(0.0, std::atan(std::tan(S) * std::cos(phi - uphill)))) / K;
+  }
+  for (auto [i, j] : {std::pair{20, 20}, std::pair{0, 0}, std::pair{40, 20}, std::pair{10, 33}}) {
+    EXPECT_WITHIN_3SE(at(r, "ao", i, j), 1.0, 1e-6);  // a plane does not occlude its own hemisphere
+    EXPECT_WITHIN_3SE(at(r, "vsky", i, j), 1.0 - mean_sin, 1e-4);
+  }
+}
+
+TEST(Reference, TrenchFloor) {
+  ProceduralSpec p = spec_of(ProceduralKind::trench, 33);
+  p.angle_deg = 40;
+  Scene s = make_scene(p);
+  const LayerSet r = bake_reference(s, options({"ao"}, 1024), {});
+  for (int j : {8, 16, 24}) EXPECT_WITHIN_3SE(at(r, "ao", 16, j), std::cos(p.angle_deg * kDeg), 1e-4);
+}
+
+TEST(Reference, PitCenter) {
+  ProceduralSpec p = spec_of(ProceduralKind::pit, 49);
+  p.radius = 16;
+  p.depth = 10;
+  Scene s = make_scene(p);
+  const LayerSet r = bake_reference(s, options({"ao", "vsky"}, 2048), {});
+  // Brute-force horizons of the triangulated pit (its rim is a one-texel ramp, not a circle).
+  double sin2 = 0, sin1 = 0;
+  const int K = 720;
+  for (int k = 0; k < K; ++k) {
+    const double e = std::max(0.0, horizon(s.field, 24, 24, 2 * kPi * (k + 0.5) / K));
+    sin2 += std::sin(e) * std::sin(e) / K, sin1 += std::sin(e) / K;
+  }
+  EXPECT_WITHIN_3SE(at(r, "ao", 24, 24), 1 - sin2, 2e-3);
+  EXPECT_WITHIN_3SE(at(r, "vsky", 24, 24), 1 - sin1, 2e-3);
+  // The closed form of the ideal cylinder, 1 - D^2 / (D^2 + R^2), within the rim's discretisation.
+  const double D = p.depth, R = p.radius;
+  EXPECT_NEAR(at(r, "ao", 24, 24).v, 1 - D * D / (D * D + R * R), 0.03);
+}
+
+TEST(Reference, SunWithAngularSizeOnFlatGround) {
+  Scene s = make_scene(spec_of(ProceduralKind::flat, 17), Wrap::clamp, {0.5f, 0.5f, 0.5f}, {0, 0, 0});
+  const double zenith = 50 * kDeg;
+  DirectionalLight sun;
+  sun.direction = {std::sin(zenith) * std::cos(0.3), std::sin(zenith) * std::sin(0.3), std::cos(zenith)};
+  sun.angular_diameter = 12 * kDeg;
+  sun.irradiance = {2, 3, 4};
+  s.lights = {sun};
+  DirectionalLight point = sun;
+  point.angular_diameter = 0;
+  point.irradiance = {1, 1, 1};
+  const LayerSet r = bake_reference(s, options({"direct"}, 64), {});
+  s.lights = {point};
+  const LayerSet rp = bake_reference(s, options({"direct"}, 8), {});
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_WITHIN_3SE(at(r, "direct", 8, 8, c), (&sun.irradiance.r)[c] * std::cos(zenith) / kPi, 1e-5);
+    EXPECT_WITHIN_3SE(at(rp, "direct", 8, 8, c), std::cos(zenith) / kPi, 1e-6);
+  }
+  EXPECT_GT(at(r, "direct_stderr", 8, 8).v, 0);  // the disk is sampled: there is noise, and it is reported
+}
+
+// A lat-long sky (importance sampled with MIS): on flat ground, direct = (1/pi) int L cos over the upper
+// hemisphere = horizon + 2 (zenith - horizon) / 3 for the built-in sky's gradient L = horizon + (zenith -
+// horizon) sin e.
+TEST(Reference, LatLongSkyWithMis) {
+  SkySpec spec;
+  spec.sun_irradiance = {0, 0, 0};
+  spec.height = 128;
+  const EnvironmentLighting sky = make_sky_environment(spec);
+  Scene s = make_scene(spec_of(ProceduralKind::flat, 9));
+  s.environment = sky.environment;
+  const LayerSet r = bake_reference(s, options({"direct"}, 256), {});
+  for (int c = 0; c < 3; ++c) {
+    const double h = (&spec.horizon.r)[c], z = (&spec.zenith.r)[c];
+    // 2e-3: the bilinear lookup blends the ground into the lowest half-row of sky.
+    EXPECT_WITHIN_3SE(at(r, "direct", 4, 4, c), h + 2 * (z - h) / 3, 2e-3);
+  }
+}
+
+TEST(EnvSampler, PdfIsNormalisedAndMatchesSampling) {
+  SkySpec spec;
+  spec.height = 32;
+  const Environment env = make_sky_environment(spec).environment;
+  const reference::EnvSampler sampler(env);
+  double total = 0;
+  for (int r = 0; r < 32; ++r)
+    for (int c = 0; c < 64; ++c) total += sampler.pdf(env.texel_direction(c, r)) * env.texel_solid_angle(r);
+  EXPECT_NEAR(total, 1.0, 1e-9);
+  const auto seq = reference::Sequence2::make(5);
+  for (std::uint32_t k = 0; k < 100; ++k) {
+    double pdf = 0;
+    const Vec3 d = sampler.sample(seq(k), pdf);
+    EXPECT_NEAR(length(d), 1.0, 1e-9);
+    EXPECT_NEAR(sampler.pdf(d), pdf, 1e-9 * pdf);
+  }
+}
+
+TEST(ShEnvironment, BandLimitedKeepsLowOrderFunctions) {
+  // L = 1 + 0.5 z + 0.25 x y lies in bands 0..2: the band-limited environment reproduces it.
+  const int H = 64, W = 128;
+  std::vector<Rgb> texels(W * H);
+  Environment probe = make_uniform_environment({1, 1, 1});
+  probe = make_latlong_environment(W, H, std::vector<Rgb>(W * H, Rgb{1, 1, 1}));
+  for (int r = 0; r < H; ++r)
+    for (int c = 0; c < W; ++c) {
+      const Vec3 d = probe.texel_direction(c, r);
+      const float v = float(1 + 0.5 * d.z + 0.25 * d.x * d.y);
+      texels[r * W + c] = {v, 2 * v, 0.5f};
+    }
+  const Environment env = make_latlong_environment(W, H, texels);
+  const Environment bl = reference::band_limited_environment(env);
+  double worst = 0;
+  for (int k = 0; k < W * H; ++k)
+    worst = std::max(worst, double(std::abs(bl.levels[0].texels[k].g - texels[k].g)));
+  EXPECT_LT(worst, 2e-3);
+}
+
+// White furnace: albedo 1 under a uniform sky L on a rough, tiling field. Light is never lost, so
+// total -> L as bounces grow; the part still missing after N bounces is the light that would need more.
+TEST(Reference, WhiteFurnace) {
+  ProceduralSpec p = spec_of(ProceduralKind::fractal, 24);
+  p.amplitude = 8;
+  p.feature_size = 12;
+  Scene s = make_scene(p, Wrap::repeat, {1, 1, 1}, {1, 1, 1});
+  s.bounces = 12;
+  std::vector<std::string> layers = {"total", "direct"};
+  for (int b = 1; b <= s.bounces; ++b) layers.push_back("indirect_b" + std::to_string(b));
+  const LayerSet r = bake_reference(s, options(layers, 64), {});
+  double mean = 0, var = 0, direct = 0;
+  std::vector<double> bounce(s.bounces + 1, 0.0);
+  const int n = 24 * 24;
+  for (int j = 0; j < 24; ++j)
+    for (int i = 0; i < 24; ++i) {
+      const Value v = at(r, "total", i, j);
+      mean += v.v / n, var += v.se * v.se / (double(n) * n);
+      direct += at(r, "direct", i, j).v / n;
+      for (int b = 1; b <= s.bounces; ++b) bounce[b] += at(r, "indirect_b" + std::to_string(b), i, j).v / n;
+      EXPECT_LE(std::abs(v.v - 1.0), 5 * v.se + 2e-3) << i << "," << j;
+    }
+  // Geometric convergence: each bounce carries a fraction of the previous one.
+  EXPECT_LT(direct, 0.99);
+  EXPECT_GT(bounce[1], 0.005);
+  for (int b = 2; b <= s.bounces; ++b) EXPECT_LT(bounce[b], bounce[b - 1] * 0.8 + 1e-6) << b;
+  EXPECT_LE(std::abs(mean - 1.0), 3 * std::sqrt(var) + 2e-4) << "mean total " << mean;
+  std::printf(
+      "white furnace: direct %.5f, b1 %.5f, b2 %.5f, b3 %.5f, ..., b%d %.2e; mean total %.6f +- %.6f\n",
+      direct, bounce[1], bounce[2], bounce[3], s.bounces, bounce[s.bounces], mean, std::sqrt(var));
+}
+
+TEST(Reference, DeterministicForAnyThreadCount) {
+  ProceduralSpec p = spec_of(ProceduralKind::fractal, 32);
+  Scene s = make_scene(p, Wrap::clamp, {0.6f, 0.5f, 0.4f});
+  s.bounces = 2;
+  SkySpec spec;
+  spec.height = 16;
+  const EnvironmentLighting sky = make_sky_environment(spec);
+  s.environment = sky.environment;
+  s.lights = sky.lights;
+  ReferenceOptions o =
+      options({"ao", "vsky", "obscurance", "direct", "indirect", "total", "indirect_b2"}, 16);
+  o.falloff.kind = FalloffKind::smooth;
+  o.falloff.radius = 6;
+  o.tile_size = 8;
+  LayerSet one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = bake_reference(s, o, {});
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = bake_reference(s, o, {});
+  }
+  ASSERT_EQ(one.layers.size(), two.layers.size());
+  for (std::size_t k = 0; k < one.layers.size(); ++k) {
+    ASSERT_EQ(one.layers[k].data.size(), two.layers[k].data.size());
+    EXPECT_EQ(
+        0, std::memcmp(one.layers[k].data.data(), two.layers[k].data.data(), one.layers[k].data.size() * 4))
+        << one.layers[k].name;
+  }
+}
+
+TEST(Reference, TargetStderrStopsEarly) {
+  ProceduralSpec p = spec_of(ProceduralKind::pit, 17);
+  p.radius = 5;
+  p.depth = 4;
+  Scene s = make_scene(p);
+  ReferenceOptions o = options({"ao"}, 4096);
+  o.target_stderr = 0.01;
+  const LayerSet r = bake_reference(s, o, {});
+  const Layer* n = r.find("samples");
+  ASSERT_TRUE(n);
+  EXPECT_EQ(at(r, "ao", 0, 0).se, 0);  // flat outside the pit: exact after the first round
+  EXPECT_EQ(n->data[0], 32);
+  const Value c = at(r, "ao", 8, 8);
+  EXPECT_LE(c.se, 0.01);
+  EXPECT_LT(n->data[8 * 17 + 8], 4096);
+}
+
+TEST(Reference, ObscuranceStepIsAoLimitedToRadius) {
+  // Pit center with a step falloff beyond the pit's reach equals ao; well inside, it sees less occlusion.
+  ProceduralSpec p = spec_of(ProceduralKind::pit, 33);
+  p.radius = 8;
+  p.depth = 8;
+  Scene s = make_scene(p);
+  ReferenceOptions o = options({"ao", "obscurance"}, 512);
+  o.falloff = {FalloffKind::step, 100};
+  LayerSet r = bake_reference(s, o, {});
+  EXPECT_EQ(at(r, "ao", 16, 16).v, at(r, "obscurance", 16, 16).v);  // same rays, same hits
+  o.falloff = {FalloffKind::step, 4};                               // the wall is 8+ away: nothing within 4
+  r = bake_reference(s, o, {});
+  EXPECT_WITHIN_3SE(at(r, "obscurance", 16, 16), 1.0, 1e-6);
+}
+
+TEST(Reference, OptionsFromTheJob) {
+  Scene s = make_scene(spec_of(ProceduralKind::flat, 8));
+  s.bounces = 2;
+  nlohmann::json job = {
+      {"bake", {{{"method", "p1"}}, {{"method", "lsao"}, {"radius", 12}, {"falloff", "smooth"}}}},
+      {"reference", {{"samples", 64}, {"seed", 3}}}};
+  ReferenceOptions o = parse_reference_options(s, job);
+  EXPECT_EQ(o.falloff.kind, FalloffKind::smooth);
+  EXPECT_EQ(o.falloff.radius, 12);
+  EXPECT_EQ(o.layers, (std::vector<std::string>{"ao", "vsky", "obscurance", "direct", "indirect", "total"}));
+  job["reference"]["layers"] = {"ao", "indirect_b3"};
+  EXPECT_THROW(parse_reference_options(s, job), InputError);
+  job["reference"]["layers"] = {"ao", "indirect_b2"};
+  EXPECT_NO_THROW(parse_reference_options(s, job));
+}
+
+}  // namespace
+}  // namespace hfbake
