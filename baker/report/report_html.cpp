@@ -384,8 +384,15 @@ std::string report_html(const HtmlInputs& in) {
   h << "<h2>Summary</h2>\n<table class=\"summary\"><tr><th>method</th><th>time "
        "(s)</th><th>layer</th><th>rmse</th>"
     << "<th>rel_mae</th><th>excess_rmse</th><th>p99</th><th>psnr (dB)</th></tr>\n";
-  for (auto& [stem, m] : methods.items()) {
-    const nlohmann::json layers = m.value("layers", none);
+  // In bake order (the inputs), then anything the report has that the inputs do not name.
+  std::vector<std::string> order;
+  for (const HtmlMethod& hm : in.methods)
+    if (methods.contains(hm.stem)) order.push_back(hm.stem);
+  for (auto& [stem, m] : methods.items())
+    if (std::find(order.begin(), order.end(), stem) == order.end()) order.push_back(stem);
+  for (const std::string& stem : order) {
+    const nlohmann::json& m = methods[stem];
+    const nlohmann::json& layers = sub(m, "layers");
     if (layers.empty())
       h << "<tr><td>" << esc(stem) << "</td><td>" << json_num(m, "seconds", 3)
         << "</td><td colspan=\"6\">no layer "

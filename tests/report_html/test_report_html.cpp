@@ -1,0 +1,254 @@
+// report.html: the PNG encoder is checked by OpenImageIO's decoder, base64 by RFC 4648's vectors, and the
+// page by a real browser: headless Chromium loads it from disk with the network disabled, must log no
+// console message, must decode every image and render the tables, and leaves a screenshot behind.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <OpenImageIO/imageio.h>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include "report/report_document.hpp"
+#include "report/report_html.hpp"
+
+namespace hfbake {
+namespace {
+namespace fs = std::filesystem;
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class TempDir {
+ public:
+  TempDir()
+      : dir_(fs::temp_directory_path() / ("hfbake_test_html_" + std::to_string(std::random_device{}()))) {
+    fs::create_directories(dir_);
+  }
+  ~TempDir() { fs::remove_all(dir_); }
+  const fs::path& path() const { return dir_; }
+
+ private:
+  fs::path dir_;
+};
+
+TEST(ReportHtml, Base64MatchesRfc4648) {
+  EXPECT_EQ(base64(""), "");
+  EXPECT_EQ(base64("f"), "Zg==");
+  EXPECT_EQ(base64("fo"), "Zm8=");
+  EXPECT_EQ(base64("foo"), "Zm9v");
+  EXPECT_EQ(base64("foob"), "Zm9vYg==");
+  EXPECT_EQ(base64("fooba"), "Zm9vYmE=");
+  EXPECT_EQ(base64("foobar"), "Zm9vYmFy");
+  EXPECT_EQ(base64(std::string("\xff\xfe\x00", 3)), "//4A");
+}
+
+TEST(ReportHtml, PngDecodesToTheSamePixels) {
+  TempDir tmp;
+  for (int channels : {1, 3}) {
+    const int w = 13, h = 7;
+    std::vector<std::uint8_t> px(std::size_t(w) * h * channels);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = std::uint8_t((i * 37 + 11) % 256);
+    const fs::path p = tmp.path() / ("img" + std::to_string(channels) + ".png");
+    std::ofstream(p, std::ios::binary) << encode_png(w, h, channels, px);
+    auto in = OIIO::ImageInput::open(p.string());
+    ASSERT_TRUE(in) << OIIO::geterror();
+    const OIIO::ImageSpec& spec = in->spec();
+    EXPECT_EQ(spec.width, w);
+    EXPECT_EQ(spec.height, h);
+    EXPECT_EQ(spec.nchannels, channels);
+    std::vector<std::uint8_t> back(px.size());
+    ASSERT_TRUE(in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, back.data()));
+    EXPECT_EQ(back, px);
+  }
+  EXPECT_THROW(encode_png(2, 2, 4, std::vector<std::uint8_t>(16)), std::invalid_argument);
+}
+
+TEST(ReportHtml, DivergingScaleEndsAndMiddle) {
+  std::uint8_t c[3];
+  diverging_colour(0, c);
+  EXPECT_EQ(c[0], c[1]);  // neutral grey at zero
+  EXPECT_EQ(c[1], c[2]);
+  diverging_colour(-1, c);
+  EXPECT_GT(c[2], c[0]);  // blue below
+  diverging_colour(1, c);
+  EXPECT_GT(c[0], c[2]);  // red above
+  std::uint8_t d[3];
+  diverging_colour(5, d);  // clamped
+  EXPECT_EQ(std::vector<int>(c, c + 3), std::vector<int>(d, d + 3));
+}
+
+TEST(ReportHtml, PlotHasOnePolylinePerSeriesAndLogTicks) {
+  const std::string svg = svg_line_plot("p1 ao", "directions", "error",
+                                        {{"rmse", "#f00", {{4, 0.1}, {8, 0.05}, {16, 0.025}}, false},
+                                         {"noise", "#777", {{4, 0.001}, {16, 0.001}}, true}},
+                                        true, true);
+  EXPECT_EQ(std::count(svg.begin(), svg.end(), '\n'), 0);
+  std::size_t polylines = 0;
+  for (std::size_t p = svg.find("<polyline"); p != std::string::npos; p = svg.find("<polyline", p + 1))
+    ++polylines;
+  EXPECT_EQ(polylines, 2u);
+  EXPECT_NE(svg.find("(log)"), std::string::npos);
+  EXPECT_NE(svg.find(">16<"), std::string::npos);    // x ticks at the swept values
+  EXPECT_NE(svg.find(">0.01<"), std::string::npos);  // a decade tick on y
+  // A non-positive value makes the axis linear.
+  const std::string lin = svg_line_plot("t", "x", "y", {{"a", "#000", {{1, 0}, {2, 1}}, false}}, true, true);
+  EXPECT_EQ(lin.find("y (log)"), std::string::npos);
+}
+
+// A small job's worth of data: a reference (ao, direct, their stderr) and a three-run sweep of "p1".
+struct Fixture {
+  int w = 48, h = 40;
+  LayerSet reference;
+  std::vector<LayerSet> runs;
+  nlohmann::json report;
+  std::vector<HtmlMethod> methods;
+
+  Fixture() {
+    reference.width = w, reference.height = h;
+    Layer& ao = reference.add("ao", mono_channels());
+    Layer& direct = reference.add("direct", rgb_channels());
+    Layer& ao_err = reference.add("ao_stderr", mono_channels());
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const std::size_t i = std::size_t(y) * w + x;
+        ao.data[i] = float(0.6 + 0.3 * std::sin(x * 0.2) * std::cos(y * 0.15));
+        for (int c = 0; c < 3; ++c) direct.data[3 * i + c] = float((0.5 + 0.1 * c) * ao.data[i]);
+        ao_err.data[i] = 0.002f;
+      }
+    const int ks[] = {4, 8, 16};
+    std::vector<ReportMethodInput> inputs;
+    runs.resize(3);
+    for (int r = 0; r < 3; ++r) {
+      LayerSet& s = runs[r];
+      s.width = w, s.height = h;
+      Layer& a = s.add("ao", mono_channels());
+      Layer& d = s.add("direct", rgb_channels());
+      s.add("horizon", indexed_channels(ks[r]));  // no reference layer: listed as not compared
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const std::size_t i = std::size_t(y) * w + x;
+          const float e = float(0.08 / ks[r] * std::sin(0.5 * x + y));  // error halves with K
+          a.data[i] = reference.layers[0].data[i] + e;
+          for (int c = 0; c < 3; ++c) d.data[3 * i + c] = reference.layers[1].data[3 * i + c] - e;
+        }
+    }
+    for (int r = 0; r < 3; ++r) {
+      const std::string stem = "p1-directions" + std::to_string(ks[r]);
+      inputs.push_back({stem, "p1", 0.1 * (r + 1), {{"method", "p1"}, {"directions", ks[r]}}, &runs[r]});
+      methods.push_back({stem, "p1", &runs[r], "directions", double(ks[r]), 0});
+    }
+    ReportSpec spec;
+    spec.hfbake_version = "0.1.0-test";
+    spec.job_name = "html_fixture";
+    spec.job_file = "jobs/html_fixture.json";
+    spec.job_hash = "0123456789abcdef";
+    spec.reference_parameters = {{"samples", 64}, {"seed", 1}};
+    spec.reference_seconds = 3.5;
+    spec.thresholds = {{"p1-directions16.ao.rmse", 0.01}, {"p1-directions4.ao.rmse", 0.001}};  // one fails
+    report = build_report(spec, inputs, reference).doc;
+  }
+
+  std::string html() const {
+    HtmlInputs in;
+    in.report = report;
+    in.methods = methods;
+    in.reference = &reference;
+    return report_html(in);
+  }
+};
+
+TEST(ReportHtml, PageIsSelfContainedAndComplete) {
+  const Fixture f;
+  const std::string html = f.html();
+  // Nothing is fetched: no external src/href/url(); the only "http" is the SVG namespace name.
+  const std::regex external(R"((src|href)\s*=\s*"(https?:|//)|url\(\s*['"]?(https?:|//)|@import)");
+  EXPECT_FALSE(std::regex_search(html, external));
+  // 3 runs x 2 layers x (method, reference, error) images.
+  std::size_t images = 0;
+  for (std::size_t p = html.find("<img src=\"data:image/png;base64,"); p != std::string::npos;
+       p = html.find("<img src=\"data:image/png;base64,", p + 1))
+    ++images;
+  EXPECT_EQ(images, 18u);
+  for (const char* s : {"html_fixture", "0123456789abcdef", "0.1.0-test", "excess_rmse", "p99", "psnr",
+                        "noise", "Convergence", "<svg", "&quot;directions&quot;:16", "horizon", "FAILED"})
+    EXPECT_NE(html.find(s), std::string::npos) << s;
+}
+
+// Runs `command`, returns its exit status; stdout and stderr go to files.
+int run(const std::string& command) {
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string find_chromium() {
+  for (const char* name : {"chromium", "chromium-browser"}) {
+    if (run(std::string("command -v ") + name + " >/dev/null 2>&1") == 0) return name;
+  }
+  return "";
+}
+
+TEST(ReportHtml, RendersInHeadlessChromium) {
+  const std::string chromium = find_chromium();
+  if (chromium.empty()) GTEST_SKIP() << "chromium is not installed (./setup.sh test installs it)";
+  TempDir tmp;
+  const fs::path page = tmp.path() / "report.html";
+  std::ofstream(page) << Fixture().html();
+  const std::string flags =
+      " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking"
+      " --disable-component-update --disable-sync --disable-extensions --hide-scrollbars"
+      " --virtual-time-budget=5000 --enable-logging=stderr --v=0 --user-data-dir=";
+
+  // 1. The DOM after load: the page's own check records how many images decoded.
+  const fs::path dom = tmp.path() / "dom.html", log = tmp.path() / "chromium.log";
+  ASSERT_EQ(run("timeout 120 " + chromium + flags + (tmp.path() / "profile1").string() +
+                " --dump-dom file://" + page.string() + " >" + dom.string() + " 2>" + log.string()),
+            0)
+      << read_file(log);
+  const std::string dom_text = read_file(dom), log_text = read_file(log);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(dom_text, m, std::regex(R"re(data-images="(\d+)")re")))
+      << dom_text.substr(0, 400);
+  const int images = std::stoi(m[1]);
+  ASSERT_TRUE(std::regex_search(dom_text, m, std::regex(R"re(data-images-decoded="(\d+)")re")));
+  EXPECT_EQ(std::stoi(m[1]), images);
+  EXPECT_EQ(images, 18);
+  ASSERT_TRUE(std::regex_search(dom_text, m, std::regex(R"re(data-tables="(\d+)")re")));
+  EXPECT_GE(std::stoi(m[1]), 5);  // meta, summary, thresholds, one metrics table per run
+  // No console message at all (errors, uncaught exceptions, failed loads log as CONSOLE lines).
+  std::istringstream lines(log_text);
+  for (std::string line; std::getline(lines, line);)
+    EXPECT_EQ(line.find(":CONSOLE"), std::string::npos) << line;
+
+  // 2. A screenshot, kept in the build folder: it must show more than a blank page.
+  const fs::path shot = fs::path(HFBAKE_TEST_BINARY_DIR) / "report_html_screenshot.png";
+  fs::remove(shot);
+  ASSERT_EQ(run("timeout 120 " + chromium + flags + (tmp.path() / "profile2").string() +
+                " --window-size=1200,1800 --screenshot=" + shot.string() + " file://" + page.string() +
+                " >/dev/null 2>" + log.string()),
+            0)
+      << read_file(log);
+  auto in = OIIO::ImageInput::open(shot.string());
+  ASSERT_TRUE(in) << "no screenshot at " << shot;
+  const int w = in->spec().width, h = in->spec().height, nc = in->spec().nchannels;
+  EXPECT_EQ(w, 1200);
+  std::vector<std::uint8_t> px(std::size_t(w) * h * nc);
+  ASSERT_TRUE(in->read_image(0, 0, 0, nc, OIIO::TypeDesc::UINT8, px.data()));
+  // Count distinct colours: text, tables and images give many; a blank or error page gives a few.
+  std::set<std::uint32_t> colours;
+  for (std::size_t i = 0; i + 2 < px.size(); i += nc)
+    colours.insert(px[i] << 16 | px[i + 1] << 8 | px[i + 2]);
+  EXPECT_GT(colours.size(), 200u);
+  std::printf("screenshot: %s (%dx%d, %zu colours)\n", shot.c_str(), w, h, colours.size());
+}
+
+}  // namespace
+}  // namespace hfbake
