@@ -1,0 +1,141 @@
+#include "methods/ao/hsao.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "methods/ao/bake_ao.hpp"
+#include "methods/ao/obscurance_params.hpp"
+#include "methods/ao/slice_integral.hpp"
+
+namespace hfbake {
+namespace {
+
+// The height-field surface seen as a depth buffer: is the world point below it, and the surface height there.
+// Clamp fields end at their border (nothing beyond: `inside` false); repeat fields tile.
+struct DepthSurface {
+  const HeightField& f;
+  double inv_ts;
+  bool inside(double x, double y) const {
+    if (f.wrap == Wrap::repeat) return true;
+    const double tx = x * inv_ts, ty = y * inv_ts;
+    return tx >= -1e-9 && ty >= -1e-9 && tx <= f.width - 1 + 1e-9 && ty <= f.height - 1 + 1e-9;
+  }
+  double height(double x, double y) const { return f.bilinear(x * inv_ts, y * inv_ts); }
+};
+
+}  // namespace
+
+HsaoTexel hsao_texel(const HeightField& field, Vec3 n, int i, int j, const HsaoSettings& s) {
+  const DepthSurface surf{field, 1.0 / field.texel_size};
+  const double R = s.falloff.radius, step = R / s.steps;
+  // Lift the receiver by a tiny offset along n so the flat ground around it does not count as "below"
+  // (the offline replacement of the paper's staircase offset, digest 4.7).
+  const Vec3 p = field.position(i, j) + n * (1e-4 * field.texel_size);
+  // Tangent frame: t1 = +x projected onto the tangent plane (n = up: t1 = +x, t2 = +y).
+  Vec3 t1 = Vec3{1, 0, 0} - n * n.x;
+  if (length(t1) < 1e-6) t1 = Vec3{0, 1, 0} - n * n.y;
+  t1 = normalize(t1);
+  const Vec3 t2 = cross(n, t1);
+  const SliceFrame up = slice_frame(0, 1);  // the (n, T) plane with n as "up"
+
+  HsaoTexel out;
+  Vec3 bent{0, 0, 0};
+  for (int d = 0; d < s.directions; ++d) {
+    const double theta = 2 * kPi * d / s.directions;
+    const Vec3 T = t1 * std::cos(theta) + t2 * std::sin(theta);
+    // Horizon ray.
+    Vec3 h = T;
+    double elev = 0, occl = 0;  // current horizon elevation above the tangent plane; 2 * band integrals
+    SliceVec dir = open_direction(up, 0, kPi / 2);
+    for (int k = 1; k <= s.steps; ++k) {
+      const Vec3 q = p + h * (k * step);
+      if (!surf.inside(q.x, q.y)) break;
+      const double hq = surf.height(q.x, q.y);
+      if (!(q.z < hq)) continue;
+      const Vec3 v = Vec3{q.x, q.y, hq} - p;
+      const double along = dot(v, T), up_n = dot(v, n);
+      if (!(length(v) < R) || !(along > 0)) continue;
+      const double e = std::atan2(up_n, along);
+      if (!(e > elev)) continue;
+      occl += 2 * band_occlusion(s.falloff, Weighting::cosine, up, elev, e, along);
+      const SliceVec b = band_direction(s.falloff, up, elev, e, along);
+      dir.h -= b.h, dir.v -= b.v;
+      elev = e;
+      h = normalize(T * along + n * up_n);
+    }
+    out.horizon_occlusion += occl / s.directions;
+    bent += T * dir.h + n * dir.v;
+    // Normal rays above the horizon, equal cosine measure (1 - H^2) / N_n each.
+    const double H2 = std::sin(elev) * std::sin(elev);
+    for (int r = 0; r < s.normal_rays; ++r) {
+      const double z2 = H2 + (r + 0.5) * (1 - H2) / s.normal_rays;
+      const Vec3 ray = T * std::sqrt(std::max(0.0, 1 - z2)) + n * std::sqrt(z2);
+      for (int k = 1; k <= s.steps; ++k) {
+        const Vec3 q = p + ray * (k * step);
+        if (!surf.inside(q.x, q.y)) break;
+        if (q.z < surf.height(q.x, q.y)) {
+          out.normal_occlusion += (1 - H2) * s.falloff(k * step) / (s.normal_rays * s.directions);
+          break;
+        }
+      }
+    }
+  }
+  out.bent_normal = length(bent) > 1e-12 ? normalize(bent) : n;
+  return out;
+}
+
+void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HsaoSettings& s,
+                const RunControl& rc, float* obscurance, Vec3f* bent) {
+  std::atomic<int> rows_done{0};
+  tbb::parallel_for(0, field.height, [&](int j) {
+    rc.check();
+    for (int i = 0; i < field.width; ++i) {
+      const std::size_t idx = field.index(i, j);
+      const HsaoTexel t = hsao_texel(field, normals[idx].d(), i, j, s);
+      if (obscurance) obscurance[idx] = float(std::clamp(1.0 - t.occluded(), 0.0, 1.0));
+      if (bent) bent[idx] = Vec3f::from(t.bent_normal);
+    }
+    rc.report(double(++rows_done) / field.height);
+  });
+}
+
+LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  const HeightField& field = scene.field;
+  if (!params.contains("radius"))
+    throw InputError("", "radius", "hsao needs a radius of influence (world units)");
+  HsaoSettings s;
+  s.falloff = parse_falloff(params);
+  if (s.falloff.kind != FalloffKind::step && s.falloff.kind != FalloffKind::linear &&
+      s.falloff.kind != FalloffKind::smooth)
+    throw InputError("", "falloff",
+                     "hsao searches within the radius: use \"step\", \"linear\" or \"smooth\"");
+  s.directions = int_param(params, "directions", 16, 1, 4096);
+  s.steps =
+      int_param(params, "steps", std::max(1, int(std::ceil(s.falloff.radius / field.texel_size))), 1, 65536);
+  s.normal_rays = int_param(params, "normal_rays", 2, 0, 64);
+  const std::vector<std::string> layers =
+      select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
+
+  LayerSet out;
+  out.width = field.width;
+  out.height = field.height;
+  std::vector<float> obsc(field.texel_count());
+  std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
+  hsao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
+  for (const std::string& name : layers) {
+    if (name == "bent_normal") {
+      Layer& l = out.add(name, xyz_channels());
+      for (std::size_t t = 0; t < bent.size(); ++t)
+        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
+    } else {
+      out.add(name, mono_channels()).data = obsc;
+    }
+  }
+  return out;
+}
+
+}  // namespace hfbake

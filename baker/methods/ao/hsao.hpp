@@ -1,0 +1,46 @@
+// hsao: horizon-split ambient occlusion (Dimitrov, Bavoil, Sainz, I3D 2008; digest section 4) on a height
+// field.
+//
+// Around the receiver's normal n, N_d directions T_i in the tangent plane (T_0 = the projection of +x, so
+// with n = up the directions are the contract's phi_k). Per direction a horizon ray starts along T_i and
+// marches N_s steps of R / N_s; whenever the march point Q is below the surface, the ray is deflected towards
+// the surface point I above Q (if |I - P| < R and I lies ahead), projected into the (n, T_i) plane (paper
+// Fig. 4). Below the horizon: analytic. Each deflection raises the horizon from elevation a to b (measured
+// from the tangent plane); that band is occluded by a slab through I parallel to -n, at tangential distance
+// x, and adds 2 * integral_a^b rho(x / cos e) sin e cos e de (= H_b^2 - H_a^2 with rho = 1: the paper's Eq.
+// 6, T = H^2). Above the horizon: N_n normal rays per direction, stratified in cosine measure over [H_i^2, 1]
+// (the corrected distribution, digest 4.1 / errata 7), each marched N_s steps to R and weighing (1 - H_i^2)
+// rho(d) / N_n. On a height field with n = up the (n, T) planes are vertical slices without overhangs: every
+// ray above the exact slice horizon is open, so the sampled term is zero up to the horizon search's sampling.
+#pragma once
+
+#include <vector>
+
+#include "core/run_control.hpp"
+#include "core/vec.hpp"
+#include "field/height_field.hpp"
+#include "methods/ao/falloff.hpp"
+
+namespace hfbake {
+
+struct HsaoSettings {
+  Falloff falloff;  // step (binary R), linear or smooth; falloff.radius = R (world units)
+  int directions = 16;
+  int steps = 32;
+  int normal_rays = 2;
+};
+
+struct HsaoTexel {
+  double horizon_occlusion = 0;  // O_T
+  double normal_occlusion = 0;   // O_N
+  Vec3 bent_normal{0, 0, 1};     // unit, cosine weighted by (1 - rho) below the horizons, rays ignored
+  double occluded() const { return horizon_occlusion + normal_occlusion; }
+};
+
+HsaoTexel hsao_texel(const HeightField& field, Vec3 normal, int i, int j, const HsaoSettings& s);
+
+// Whole field, rows in parallel (deterministic). obscurance = 1 - (O_T + O_N); either output may be null.
+void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HsaoSettings& s,
+                const RunControl& rc, float* obscurance, Vec3f* bent);
+
+}  // namespace hfbake
