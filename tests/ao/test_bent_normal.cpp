@@ -1,0 +1,98 @@
+// Bent normals of the horizon-based methods against an independent quadrature of the cosine-weighted mean
+// open direction next to a wall, and the entry points' layer handling.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "ao_scenes.hpp"
+#include "core/error.hpp"
+#include "methods/ao/bake_ao.hpp"
+#include "methods/ao/hbao.hpp"
+#include "methods/ao/hsao.hpp"
+
+namespace hfbake {
+namespace {
+
+// Cosine-weighted mean open direction at distance x0 from a wall of height h (wall towards +x), n = up,
+// K azimuths phi_k = 2 pi k / K: per azimuth the directions above the wall's elevation (or above 0) are open.
+Vec3 wall_bent(double x0, double h, int K) {
+  Vec3 sum{0, 0, 0};
+  for (int k = 0; k < K; ++k) {
+    const double phi = 2 * kPi * k / K;
+    const double lo = std::cos(phi) > 1e-12 ? std::atan2(h, x0 / std::cos(phi)) : 0.0;
+    const double bh =
+        test::simpson([](double e) { return std::sin(e) * std::cos(e) * std::cos(e); }, lo, kPi / 2);
+    const double bv =
+        test::simpson([](double e) { return std::sin(e) * std::sin(e) * std::cos(e); }, lo, kPi / 2);
+    sum += Vec3{bh * std::cos(phi), bh * std::sin(phi), bv};
+  }
+  return normalize(sum);
+}
+
+double angle_deg(Vec3 a, Vec3 b) {
+  return std::acos(std::min(1.0, dot(normalize(a), normalize(b)))) * 180 / kPi;
+}
+
+TEST(BentNormal, WallHbaoAndHsao) {
+  const HeightField f = test::make_wall(96, 257, 64, 32);  // x0 = 32, a = 1
+  const Vec3 expect = wall_bent(32, 32, 16);
+  EXPECT_LT(expect.x, -0.1);  // leans away from the wall
+  HbaoSettings h;
+  h.directions = uniform_directions(16);
+  h.reach = 1e6;
+  h.step = 0.5;
+  EXPECT_LT(angle_deg(hbao_texel(f, {0, 0, 1}, 32, 128, h).bent_normal, expect), 0.5);
+  HsaoSettings s;
+  s.falloff.kind = FalloffKind::step;
+  s.falloff.radius = 128;
+  s.directions = 16;
+  s.steps = 256;
+  EXPECT_LT(angle_deg(hsao_texel(f, {0, 0, 1}, 32, 128, s).bent_normal, expect), 0.5);
+}
+
+Scene scene_of(HeightField f) {
+  Scene s;
+  s.field = std::move(f);
+  s.normals = compute_normals(s.field);
+  return s;
+}
+
+TEST(BakeAo, LayersAndErrors) {
+  const Scene scene = scene_of(test::make_pit(21, 5, 4));
+  const RunControl rc;
+  const LayerSet a = bake_hbao(scene, {{"method", "hbao"}, {"directions", 8}}, rc);
+  ASSERT_NE(a.find("ao"), nullptr);
+  ASSERT_NE(a.find("obscurance"), nullptr);
+  ASSERT_NE(a.find("bent_normal"), nullptr);
+  EXPECT_EQ(a.find("ao")->data, a.find("obscurance")->data);
+  EXPECT_EQ(a.find("bent_normal")->channels.size(), 3u);
+  for (float v : a.find("ao")->data) EXPECT_TRUE(v >= 0 && v <= 1);
+  // The centre of the pit is darker than the ground.
+  EXPECT_LT(a.find("ao")->data[scene.field.index(10, 10)], a.find("ao")->data[scene.field.index(0, 0)]);
+  // With a falloff there is no "ao" layer (it is unlimited AO by definition).
+  const LayerSet b = bake_hbao(scene, {{"method", "hbao"}, {"radius", 4}, {"falloff", "smooth"}}, rc);
+  EXPECT_EQ(b.find("ao"), nullptr);
+  EXPECT_THROW(bake_hbao(scene, {{"method", "hbao"}, {"radius", 4}, {"layers", {"ao"}}}, rc), InputError);
+  EXPECT_THROW(bake_hbao(scene, {{"method", "hbao"}, {"tangent", -0.5}}, rc), InputError);
+  const LayerSet c = bake_hsao(scene, {{"method", "hsao"}, {"radius", 6}, {"layers", {"obscurance"}}}, rc);
+  ASSERT_EQ(c.layers.size(), 1u);
+  EXPECT_THROW(bake_hsao(scene, {{"method", "hsao"}}, rc), InputError);
+  const LayerSet d = bake_vo(scene, {{"method", "vo"}, {"radius", 3}}, rc);
+  ASSERT_NE(d.find("obscurance"), nullptr);
+  EXPECT_THROW(bake_vo(scene, {{"method", "vo"}, {"radius", 3}, {"depth_layers", 3}}, rc), InputError);
+}
+
+TEST(BakeAo, DeterministicAndCancellable) {
+  const Scene scene = scene_of(test::make_pit(31, 8, 6));
+  const nlohmann::json p = {{"method", "hbao"}, {"directions", 8}, {"radius", 6}, {"falloff", "rational"}};
+  EXPECT_EQ(bake_hbao(scene, p, {}).layers[0].data, bake_hbao(scene, p, {}).layers[0].data);
+  std::atomic<bool> cancel{true};
+  RunControl rc;
+  rc.cancel = &cancel;
+  EXPECT_THROW(bake_hbao(scene, p, rc), Cancelled);
+  EXPECT_THROW(bake_hsao(scene, {{"method", "hsao"}, {"radius", 6}}, rc), Cancelled);
+  EXPECT_THROW(bake_vo(scene, {{"method", "vo"}, {"radius", 6}}, rc), Cancelled);
+}
+
+}  // namespace
+}  // namespace hfbake
