@@ -15,15 +15,24 @@ int clamp_index(int a, int n) {
 
 SweepDirection plan_direction(const HeightField& field, const SweepSpec& spec, int k) {
   SweepDirection d;
-  const int K = spec.directions;
   d.k = k;
-  d.phi = 2 * kPi * k / K;
+  bool on_octant;
+  int octant = -1;
+  if (spec.azimuths.empty()) {
+    const int K = spec.directions;
+    d.phi = 2 * kPi * k / K;
+    // Exact axes and diagonals (8k/K integral): no rounding noise in the slope or the major axis choice.
+    const long long e8 = 8LL * k;
+    on_octant = e8 % K == 0;
+    if (on_octant) octant = int((e8 / K) % 8);
+  } else {
+    d.phi = spec.azimuths[k];
+    const double o = d.phi / (kPi / 4), r = std::round(o);
+    on_octant = std::fabs(o - r) < 1e-12;
+    if (on_octant) octant = int(((long long)r % 8 + 8) % 8);
+  }
   d.dx = std::cos(d.phi);
   d.dy = std::sin(d.phi);
-  // Exact axes and diagonals (8k/K integral): no rounding noise in the slope or the major axis choice.
-  const long long e8 = 8LL * k;
-  const bool on_octant = e8 % K == 0;
-  const int octant = on_octant ? int((e8 / K) % 8) : -1;
   if (on_octant && octant % 2 == 0) {
     static const int ax[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
     d.dx = ax[octant / 2][0];
@@ -125,6 +134,7 @@ TexelPair SweepLine::receiver_texels(int n, const HeightField& f) const {
   const int j0 = int(fv);
   const float t = float(v - fv);
   TexelPair p;
+  if (!d.repeat && (v < 0 || v > d.n_minor - 1)) return p;  // off the field: no receiver
   for (int e = 0; e < 2; ++e) {
     int a = j0 + e;
     if (d.repeat)
@@ -133,6 +143,8 @@ TexelPair SweepLine::receiver_texels(int n, const HeightField& f) const {
       continue;
     p.texel[e] = std::ptrdiff_t(d.x_major ? f.index(u, a) : f.index(a, u));
     p.weight[e] = e == 0 ? 1 - t : t;
+    // A border texel whose other line runs off the field takes this sample alone (see texel_taps).
+    if (!d.repeat && t > 0 && d.n_minor > 1 && (a == 0 || a == d.n_minor - 1)) p.weight[e] = 1;
   }
   return p;
 }

@@ -25,13 +25,16 @@
 //   the linear interpolation between the two lines that pass on either side of the texel center, along
 //   the texel's own column. Weights sum to 1. When u * slope is an integer (axis directions for every
 //   texel, diagonals too: slope = +-1 is snapped exactly) g = 0 and the texel IS a sample: no interpolation.
-//   Otherwise the texel center lies at most one minor step (1 texel) from the samples it blends; the error
+//   Otherwise the texel center lies at most one minor step (1 texel) from the samples it blends (see
+//   clamp below for the border rows); the error
 //   this adds is measured in tests/sweep and tests/p1 (a march from the texel centers themselves).
 // * clamp: the field ends at its border. A line's samples inside the field, v in [0, n_minor - 1], form
-//   one contiguous run [inside_begin, inside_end); only those are terrain (occluders). Samples before or
-//   after it (v within 1 texel outside the field) are receivers only: their results feed border texels
-//   with the weights above (their heights are the clamped border heights). Visitors must not treat them
-//   as occluders. All n_major columns are receivers (first_receiver = 0, no warm-up).
+//   one contiguous run [inside_begin, inside_end); only those are terrain (occluders) and receivers. A texel
+//   on the first or last row (column) of the minor axis whose other line runs off the field takes its
+//   inside tap alone (weight 1, a sample less than one texel away): no result of a point off the field
+//   ever reaches a texel. Samples off the field are still handed to the visitor (their heights are the
+//   clamped border heights); their results are unused. All n_major columns are samples of every line
+//   (first_receiver = 0, no warm-up).
 // * repeat: the field tiles. Lines l in [0, n_minor) suffice (line l + n_minor has the same heights); each
 //   line first walks a warm-up of wrap_periods * n_major samples (terrain only, no receivers), then the
 //   n_major receiver samples. Bound: a receiver sees at least wrap_periods * n_major * step of tiled
@@ -80,10 +83,11 @@
 namespace hfbake {
 
 struct SweepSpec {
-  int directions = 64;   // K; direction k has azimuth 2 pi k / K
-  int channels = 1;      // floats each line visitor writes per receiver sample
-  int wrap_periods = 1;  // repeat mode: warm-up length in whole periods of the major axis (>= 1)
-  int batch = 4;         // directions swept before each gather pass (more = fewer passes, more memory)
+  int directions = 64;           // K; direction k has azimuth 2 pi k / K
+  std::vector<double> azimuths;  // if not empty: explicit azimuths (radians) instead; directions is ignored
+  int channels = 1;              // floats each line visitor writes per receiver sample
+  int wrap_periods = 1;          // repeat mode: warm-up length in whole periods of the major axis (>= 1)
+  int batch = 4;  // directions swept before each gather pass (more = fewer passes, more memory)
   std::size_t max_buffer_bytes = std::size_t(512) << 20;  // caps batch so result buffers stay below this
 };
 
@@ -113,7 +117,8 @@ struct SweepDirection {
   int receiver_index(int u) const { return su > 0 ? u : n_major - 1 - u; }
 };
 
-// Builds direction k of spec for field (exposed for tests and for visitors that precompute per direction).
+// Builds direction k of spec (azimuth 2 pi k / K, or spec.azimuths[k]) for field (exposed for tests and for
+// visitors that precompute per direction).
 SweepDirection plan_direction(const HeightField& field, const SweepSpec& spec, int k);
 
 // Two texels and their weights (texel index into the row-major field, or -1 for a texel outside a clamp
@@ -181,6 +186,15 @@ inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int 
   const std::size_t r = std::size_t(dir.receiver_index(u));
   t.lo = buffer + (std::size_t(la) * std::size_t(dir.n_major) + r) * std::size_t(channels);
   t.hi = buffer + (std::size_t(lb) * std::size_t(dir.n_major) + r) * std::size_t(channels);
+  // clamp: a tap off the field is no receiver; the border texel takes its other (inside) tap alone.
+  if (!dir.repeat && t.w_hi > 0 && dir.n_minor > 1) {
+    if (v0 == 0) {
+      t.lo = t.hi;
+      t.w_hi = 0;
+    } else if (v0 == dir.n_minor - 1) {
+      t.w_hi = 0;
+    }
+  }
   return t;
 }
 
@@ -190,7 +204,7 @@ inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int 
 template <class MakeWorker, class TexelVisitor>
 void sweep_lines(const HeightField& field, const SweepSpec& spec, const RunControl& rc,
                  MakeWorker&& make_worker, TexelVisitor&& texel_visitor) {
-  const int K = spec.directions, C = spec.channels;
+  const int K = spec.azimuths.empty() ? spec.directions : int(spec.azimuths.size()), C = spec.channels;
   if (K <= 0 || C <= 0 || field.width <= 0 || field.height <= 0) return;
   std::vector<SweepDirection> dirs(K);
   std::size_t max_lines_x_major = 0;

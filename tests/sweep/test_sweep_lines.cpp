@@ -59,6 +59,20 @@ TEST(SweepLines, GatheredPositionsAreTexelCenters) {
               }
               return;
             }
+            // Every tap lies on the field (clamp: points off the field are never receivers).
+            for (const float* p : {t.lo, t.hi}) {
+              if (p == t.hi && t.w_hi == 0) continue;  // a tap with no weight
+              EXPECT_GE(p[0], -1e-5f);
+              EXPECT_GE(p[1], -1e-5f);
+              EXPECT_LE(p[0], f.width - 1 + 1e-5f);
+              EXPECT_LE(p[1], f.height - 1 + 1e-5f);
+            }
+            const SweepDirection d = plan_direction(f, spec, k);
+            const int v0 = d.x_major ? j : i;
+            if (t.w_hi == 0 && (v0 == 0 || v0 == d.n_minor - 1)) {  // border rows: the inside tap alone
+              EXPECT_LT(std::hypot(x - i, y - j), 1.0f);
+              return;
+            }
             EXPECT_NEAR(x, i, 2e-5) << "K " << K << " k " << k << " texel " << i << "," << j;
             EXPECT_NEAR(y, j, 2e-5) << "K " << K << " k " << k << " texel " << i << "," << j;
             if (t.w_hi == 0) {
@@ -146,6 +160,65 @@ TEST(SweepLines, ReceiverTexelsCoverEveryTexelOnce) {
         ASSERT_NEAR(wsum[t], 1.0, 1e-6) << "k " << k << " texel " << t;
     }
   }
+}
+
+// The scatter rule (receiver_texels) and the gather rule (texel_taps) are the same weights.
+TEST(SweepLines, ScatterEqualsGather) {
+  for (Wrap wrap : {Wrap::clamp, Wrap::repeat}) {
+    const HeightField f = test_field(21, 14, wrap);
+    SweepSpec spec;
+    spec.directions = 11;
+    spec.channels = 3;
+    std::vector<double> gathered(f.texel_count() * spec.directions, 0.0);
+    sweep_lines(
+        f, spec, RunControl{}, [] { return PositionWorker{}; },
+        [&](int k, int i, int j, const TexelTaps& t) {
+          gathered[f.index(i, j) * spec.directions + k] = t.value(2);
+        });
+    for (int k = 0; k < spec.directions; ++k) {
+      const SweepDirection d = plan_direction(f, spec, k);
+      std::vector<double> scattered(f.texel_count(), 0.0);
+      std::vector<float> z(d.count);
+      for (int l = d.line_begin; l < d.line_end; ++l) {
+        SweepLine line;
+        line.dir = &d;
+        line.line = l;
+        line.count = d.count;
+        line.first_receiver = d.first_receiver;
+        line.z = z.data();
+        sample_line(f, d, l, z.data(), &line.inside_begin, &line.inside_end);
+        for (int n = d.first_receiver; n < d.count; ++n) {
+          const TexelPair p = line.receiver_texels(n, f);
+          for (int e = 0; e < 2; ++e)
+            if (p.texel[e] >= 0) scattered[p.texel[e]] += double(p.weight[e]) * z[n];
+        }
+      }
+      for (std::size_t t = 0; t < scattered.size(); ++t)
+        ASSERT_NEAR(scattered[t], gathered[t * spec.directions + k], 1e-4) << "k " << k << " texel " << t;
+    }
+  }
+}
+
+TEST(SweepLines, ExplicitAzimuths) {
+  const HeightField f = test_field(20, 20, Wrap::clamp);
+  SweepSpec spec;
+  spec.azimuths = {0.3, kPi / 4, 2.0, -kPi / 2};
+  spec.channels = 3;
+  std::vector<int> seen(4, 0);
+  sweep_lines(
+      f, spec, RunControl{}, [] { return PositionWorker{}; },
+      [&](int k, int i, int j, const TexelTaps& t) {
+        ++seen[k];
+        if (k == 1 || k == 3) {  // a diagonal and an axis: exact
+          EXPECT_EQ(t.w_hi, 0.0f);
+          EXPECT_EQ(t.lo[0], float(i));
+          EXPECT_EQ(t.lo[1], float(j));
+        }
+      });
+  for (int c : seen) EXPECT_EQ(c, 400);
+  const SweepDirection d = plan_direction(f, spec, 2);
+  EXPECT_NEAR(d.dx, std::cos(2.0), 1e-15);
+  EXPECT_NEAR(d.dy, std::sin(2.0), 1e-15);
 }
 
 TEST(SweepLines, AxisAndDiagonalDirectionsHitTexelsExactly) {
