@@ -166,10 +166,19 @@ TEST(Reference, TiltedPlane) {
     const double phi = 2 * kPi * (k + 0.5) / K;
     mean_sin += std::sin(std::max(0.0, std::atan(std::tan(S) * std::cos(phi - uphill)))) / K;
   }
-  for (auto [i, j] : {std::pair{20, 20}, std::pair{0, 0}, std::pair{40, 20}, std::pair{10, 33}}) {
+  for (auto [i, j] : {std::pair{20, 20}, std::pair{0, 0}, std::pair{40, 20}, std::pair{10, 33}})
     EXPECT_WITHIN_3SE(at(r, "ao", i, j), 1.0, 1e-6);  // a plane does not occlude its own hemisphere
-    EXPECT_WITHIN_3SE(at(r, "vsky", i, j), 1.0 - mean_sin, 1e-4);
-  }
+  // vsky where the plane extends uphill in every direction: the mean over a block of texels (independent
+  // estimates, so its standard error is sqrt(sum se^2) / n; single texels carry a noisy 7-dof stderr).
+  Value block;
+  int n = 0;
+  for (int j = 12; j <= 28; ++j)
+    for (int i = 12; i <= 28; ++i, ++n) {
+      const Value v = at(r, "vsky", i, j);
+      block.v += v.v, block.se += v.se * v.se;
+    }
+  block.v /= n, block.se = std::sqrt(block.se) / n;
+  EXPECT_WITHIN_3SE(block, 1.0 - mean_sin, 1e-4);
 }
 
 TEST(Reference, TrenchFloor) {
@@ -185,7 +194,7 @@ TEST(Reference, PitCenter) {
   p.radius = 16;
   p.depth = 10;
   Scene s = make_scene(p);
-  const LayerSet r = bake_reference(s, options({"ao", "vsky"}, 2048), {});
+  const LayerSet r = bake_reference(s, options({"ao", "vsky"}, 1024), {});
   // Brute-force horizons of the triangulated pit (its rim is a one-texel ramp, not a circle).
   double sin2 = 0, sin1 = 0;
   const int K = 720;
@@ -218,7 +227,7 @@ TEST(Reference, SunWithAngularSizeOnFlatGround) {
     EXPECT_WITHIN_3SE(at(r, "direct", 8, 8, c), (&sun.irradiance.r)[c] * std::cos(zenith) / kPi, 1e-5);
     EXPECT_WITHIN_3SE(at(rp, "direct", 8, 8, c), std::cos(zenith) / kPi, 1e-6);
   }
-  EXPECT_GT(at(r, "direct_stderr", 8, 8).v, 0);  // the disk is sampled: there is noise, and it is reported
+  EXPECT_GT(at(r, "direct", 8, 8).se, 0);  // the disk is sampled: there is noise, and it is reported
 }
 
 // A lat-long sky (importance sampled with MIS): on flat ground, direct = (1/pi) int L cos over the upper
@@ -287,8 +296,13 @@ TEST(Reference, WhiteFurnace) {
   s.bounces = 12;
   std::vector<std::string> layers = {"total", "direct"};
   for (int b = 1; b <= s.bounces; ++b) layers.push_back("indirect_b" + std::to_string(b));
-  const LayerSet r = bake_reference(s, options(layers, 64), {});
+  // 32 replicates: (estimate - truth) / stderr follows Student's t with 31 degrees of freedom, so a
+  // per-texel check at 4.5 stderr is meaningful even for the heavy-tailed path contributions.
+  ReferenceOptions o = options(layers, 512);
+  o.replicates = 32;
+  const LayerSet r = bake_reference(s, o, {});
   double mean = 0, var = 0, direct = 0;
+  int beyond3 = 0;
   std::vector<double> bounce(s.bounces + 1, 0.0);
   const int n = 24 * 24;
   for (int j = 0; j < 24; ++j)
@@ -297,12 +311,14 @@ TEST(Reference, WhiteFurnace) {
       mean += v.v / n, var += v.se * v.se / (double(n) * n);
       direct += at(r, "direct", i, j).v / n;
       for (int b = 1; b <= s.bounces; ++b) bounce[b] += at(r, "indirect_b" + std::to_string(b), i, j).v / n;
-      EXPECT_LE(std::abs(v.v - 1.0), 5 * v.se + 2e-3) << i << "," << j;
+      EXPECT_LE(std::abs(v.v - 1.0), 4.5 * v.se + 1e-3) << i << "," << j << " se " << v.se;
+      beyond3 += std::abs(v.v - 1.0) > 3 * v.se + 1e-3;
     }
+  EXPECT_LE(beyond3, n / 50);
   // Geometric convergence: each bounce carries a fraction of the previous one.
   EXPECT_LT(direct, 0.99);
   EXPECT_GT(bounce[1], 0.005);
-  for (int b = 2; b <= s.bounces; ++b) EXPECT_LT(bounce[b], bounce[b - 1] * 0.8 + 1e-6) << b;
+  for (int b = 2; b <= 5; ++b) EXPECT_LT(bounce[b], bounce[b - 1] * 0.7) << b;  // later ones are noise-sized
   EXPECT_LE(std::abs(mean - 1.0), 3 * std::sqrt(var) + 2e-4) << "mean total " << mean;
   std::printf(
       "white furnace: direct %.5f, b1 %.5f, b2 %.5f, b3 %.5f, ..., b%d %.2e; mean total %.6f +- %.6f\n",
