@@ -1,0 +1,222 @@
+#include "methods/p1/p1.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "core/error.hpp"
+#include "methods/p1/horizon_sweep.hpp"
+#include "methods/p1/lighting_table.hpp"
+
+namespace hfbake {
+
+using p1::fast_atan;
+using p1::fast_sincos;
+using p1::kHalfPiF;
+
+namespace {
+
+int get_int(const nlohmann::json& e, const char* key, int fallback) {
+  if (!e.contains(key)) return fallback;
+  const auto& v = e.at(key);
+  if (!v.is_number_integer()) throw InputError("", key, "must be an integer");
+  return v.get<int>();
+}
+
+// A RunControl reporting into [begin, begin + span) of the caller's progress.
+RunControl sub_progress(const RunControl& rc, double begin, double span) {
+  RunControl sub;
+  sub.cancel = rc.cancel;
+  if (rc.progress) sub.progress = [&rc, begin, span](double x) { rc.report(begin + span * x); };
+  return sub;
+}
+
+}  // namespace
+
+P1Params parse_p1_params(const nlohmann::json& e) {
+  P1Params p;
+  p.directions = get_int(e, "directions", p.directions);
+  p.normal_bins = get_int(e, "normal_bins", p.normal_bins);
+  p.horizon_bins = get_int(e, "horizon_bins", p.horizon_bins);
+  p.wrap_periods = get_int(e, "wrap_periods", p.wrap_periods);
+  if (p.directions < 1) throw InputError("", "directions", "must be >= 1");
+  if (p.normal_bins != 0 && (p.normal_bins < 3 || p.normal_bins % 2 == 0))
+    throw InputError(
+        "", "normal_bins",
+        "must be 0 (exact) or odd and >= 3 (7, 15, 31, ...: odd counts make up-facing normals exact)");
+  if (p.horizon_bins < 2) throw InputError("", "horizon_bins", "must be >= 2");
+  if (p.wrap_periods < 1) throw InputError("", "wrap_periods", "must be >= 1");
+  if (e.contains("lights")) {
+    if (!e.at("lights").is_boolean()) throw InputError("", "lights", "must be true or false");
+    p.lights = e.at("lights").get<bool>();
+  }
+  if (e.contains("layers")) {
+    p.ao = p.vsky = p.direct = p.horizon = p.horizon_distance = p.bent_normal = false;
+    for (const auto& l : e.at("layers")) {
+      const std::string name = l.is_string() ? l.get<std::string>() : l.dump();
+      if (name == "ao")
+        p.ao = true;
+      else if (name == "vsky")
+        p.vsky = true;
+      else if (name == "direct")
+        p.direct = true;
+      else if (name == "horizon")
+        p.horizon = true;
+      else if (name == "horizon_distance")
+        p.horizon_distance = true;
+      else if (name == "bent_normal")
+        p.bent_normal = true;
+      else
+        throw InputError("", "layers",
+                         "\"" + name +
+                             "\" is not a layer of method p1 (ao, vsky, direct, horizon, "
+                             "horizon_distance, bent_normal)");
+    }
+  }
+  return p;
+}
+
+double disk_fraction_above(double elevation, double horizon, double radius) {
+  if (radius <= 0) return elevation > horizon ? 1.0 : 0.0;
+  const double x = (elevation - horizon) / radius;
+  if (x >= 1) return 1.0;
+  if (x <= -1) return 0.0;
+  return (std::acos(-x) + x * std::sqrt(1 - x * x)) / kPi;
+}
+
+P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc) {
+  const HeightField& f = scene.field;
+  const std::size_t N = f.texel_count();
+  const int K = p.directions;
+  P1Result r;
+  r.width = f.width;
+  r.height = f.height;
+  r.directions = K;
+  const std::vector<Vec3f>& normals = scene.normals;
+
+  const Environment& env = scene.environment;
+  const bool uniform_env = env.uniform || env.levels.empty();
+  const bool need_ao = p.ao || (p.direct && uniform_env);
+  std::optional<p1::LightingTables> tables;
+  std::optional<p1::SwathProfiles> profiles;
+  if (p.direct && !uniform_env) {
+    if (p.normal_bins > 0)
+      tables = p1::build_lighting_tables(env, K, p.normal_bins, p.horizon_bins);
+    else
+      profiles = p1::build_swath_profiles(env, K);
+  }
+  const bool need_theta = need_ao || p.bent_normal || profiles;
+
+  std::vector<float> ao_sum(need_ao ? N : 0, 0.0f), vsky_sum(p.vsky ? N : 0, 0.0f);
+  std::vector<Rgb> direct(p.direct ? N : 0);
+  std::vector<Vec3f> bent(p.bent_normal ? N : 0, Vec3f{0, 0, 0});
+  if (p.horizon) r.horizon.assign(N * K, 0.0f);
+  if (p.horizon_distance) r.horizon_distance.assign(N * K, 0.0f);
+  std::vector<float> cs(K), sn(K);
+  for (int k = 0; k < K; ++k) {
+    cs[k] = float(std::cos(2 * kPi * k / K));
+    sn[k] = float(std::sin(2 * kPi * k / K));
+  }
+
+  std::vector<const DirectionalLight*> lights;
+  if (p.direct && p.lights)
+    for (const DirectionalLight& l : scene.lights)
+      if (l.irradiance.r > 0 || l.irradiance.g > 0 || l.irradiance.b > 0) lights.push_back(&l);
+  const double main_share = double(K) / double(K + lights.size());
+
+  SweepSpec spec;
+  spec.directions = K;
+  spec.channels = p.horizon_distance ? 2 : 1;
+  spec.wrap_periods = p.wrap_periods;
+  const bool want_distance = p.horizon_distance;
+  const RunControl main_rc = sub_progress(rc, 0.0, main_share);
+  sweep_lines(
+      f, spec, main_rc,
+      [&] {
+        return p1::HorizonLineWorker{want_distance, {}};
+      },
+      [&](int k, int i, int j, const TexelTaps& t) {
+        const std::size_t idx = f.index(i, j);
+        const float e = t.value(0);
+        const Vec3f n = normals[idx];
+        const float np = n.x * cs[k] + n.y * sn[k], nz = n.z;
+        float se, ce;
+        fast_sincos(e, se, ce);
+        if (p.horizon) r.horizon[idx * K + k] = se;
+        if (want_distance) r.horizon_distance[idx * K + k] = t.nearest()[1];
+        if (p.vsky) vsky_sum[idx] += se > 0 ? se : 0.0f;
+        if (need_theta) {
+          float st, ct, th;
+          if (se * nz + ce * np >= 0) {  // the horizon is above the tangent plane: it bounds the sky
+            st = ce, ct = se, th = kHalfPiF - e;
+          } else {  // the tangent plane does: theta = pi/2 + atan(N_p / N_z)
+            const float len = std::sqrt(np * np + nz * nz);
+            st = nz / len, ct = -np / len, th = kHalfPiF + fast_atan(np / nz);
+          }
+          if (need_ao) ao_sum[idx] += nz * st * st + np * (th - st * ct);
+          if (profiles) direct[idx] += profiles->eval(k, th, st, ct, nz, np);
+          if (p.bent_normal) {
+            const float s3 = st * st * st, c3 = ct * ct * ct;
+            const float horiz = nz * s3 / 3 + np * (2.0f / 3 - ct + c3 / 3);
+            const float vert = nz * (1 - c3) / 3 + np * s3 / 3;
+            Vec3f& b = bent[idx];
+            b.x += horiz * cs[k], b.y += horiz * sn[k], b.z += vert;
+          }
+        }
+        if (tables) {
+          const float len = std::sqrt(np * np + nz * nz);
+          direct[idx] += tables->lookup(k, fast_atan(np / nz), kHalfPiF - e) * len;
+        }
+      });
+
+  const float inv_k = 1.0f / float(K);
+  if (p.ao) r.ao.resize(N);
+  if (p.vsky) r.vsky.resize(N);
+  if (p.bent_normal) r.bent_normal.resize(N);
+  tbb::parallel_for(std::size_t(0), N, [&](std::size_t idx) {
+    if (p.ao) r.ao[idx] = ao_sum[idx] * inv_k;
+    if (p.vsky) r.vsky[idx] = 1.0f - vsky_sum[idx] * inv_k;
+    if (p.direct && uniform_env) direct[idx] = env.uniform_radiance * (ao_sum[idx] * inv_k);
+    if (p.bent_normal) {
+      const Vec3 b = bent[idx].d();
+      r.bent_normal[idx] = length(b) > 1e-12 ? Vec3f::from(normalize(b)) : normals[idx];
+    }
+  });
+
+  // Directional lights: one extra sweep direction per light, at its own azimuth.
+  if (!lights.empty()) {
+    SweepSpec ls;
+    ls.channels = 1;
+    ls.wrap_periods = p.wrap_periods;
+    std::vector<double> elevation, radius;
+    std::vector<Vec3> dir;
+    for (const DirectionalLight* l : lights) {
+      const Vec3 d = normalize(l->direction);
+      dir.push_back(d);
+      elevation.push_back(std::asin(std::clamp(d.z, -1.0, 1.0)));
+      radius.push_back(l->angular_diameter / 2);
+      ls.azimuths.push_back(std::hypot(d.x, d.y) > 1e-12 ? std::atan2(d.y, d.x) : 0.0);
+    }
+    const RunControl light_rc = sub_progress(rc, main_share, 1 - main_share);
+    sweep_lines(
+        f, ls, light_rc,
+        [&] {
+          return p1::HorizonLineWorker{false, {}};
+        },
+        [&](int li, int i, int j, const TexelTaps& t) {
+          const std::size_t idx = f.index(i, j);
+          const double ndl = dot(normals[idx].d(), dir[li]);
+          if (ndl <= 0) return;
+          const double frac = disk_fraction_above(elevation[li], t.value(0), radius[li]);
+          if (frac <= 0) return;
+          direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
+        });
+  }
+  if (p.direct) r.direct = std::move(direct);
+  rc.report(1.0);
+  return r;
+}
+
+}  // namespace hfbake

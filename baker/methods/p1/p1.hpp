@@ -1,0 +1,64 @@
+// P1 (Timonen & Westerholm 2010, "Scalable Height Field Self-Shadowing") as reusable library functions:
+// exact horizons by the convex-hull stack on the shared line sweep, and the lighting computed from them
+// at every texel's normal. bake_p1 (bake_p1.hpp) is the CLI entry; P2 calls compute_p1 for direct light
+// and horizons from the same sweep.
+//
+// Per texel and direction k (phi_k = 2 pi k / K), with horizon elevation e_k (gathered to the texel
+// center, see sweep_lines.hpp), normal N, N_p = N.d_k, theta_k = min(pi/2 - e_k, pi/2 + atan(N_p / N_z))
+// (P1 Eq. 4 with the pi/2 the extracted text drops: the horizon or where the normal's hemisphere ends):
+//   ao    = (1/K) sum_k [ N_z sin^2 theta_k + N_p (theta_k - sin theta_k cos theta_k) ]
+//           P1 Eq. 5, except that the azimuthal integral of N_p over each swath uses the midpoint rule
+//           (2 pi / K) instead of Eq. 5's exact 2 sin(pi / K): the same limit, but spectrally accurate for
+//           smooth horizons, so a plane of any slope gives 1 to float rounding (Eq. 5 leaves O(1/K^2)).
+//   vsky  = 1 - (1/K) sum_k sin(max(e_k, 0))
+//   direct (E/pi, RGB) = sum_k |N_p| L_p^k(theta_n, pi/2 - e_k)  (lighting_table.hpp). Default
+//           (normal_bins = 0): evaluated exactly as N_z A_k(theta_k) + N_p B_k(theta_k) (SwathProfiles), so
+//           a uniform environment gives exactly L * ao; normal_bins = 7, 15, ...: P1's binned tables. Plus
+//           each directional light: irradiance * max(N.l, 0) / pi times the fraction of its disk above the
+//           horizon in the light's own azimuth (an extra sweep direction per light, so sun shadows are as
+//           sharp as the field).
+//   bent_normal = normalize(sum_k integral over the visible part of the swath of w (N.w) dw)
+//   horizon = sin e_k per direction; horizon_distance = world distance to the caster (+inf: none).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+#include "core/layers.hpp"
+#include "core/run_control.hpp"
+#include "field/scene.hpp"
+
+namespace hfbake {
+
+struct P1Params {
+  int directions = 64;     // K
+  int normal_bins = 0;     // 0: exact factorised tables; odd >= 3: P1's theta_n bins (odd: up is exact)
+  int horizon_bins = 256;  // theta_h resolution of the lighting tables over [0, pi]
+  int wrap_periods = 1;    // repeat mode warm-up (see SweepSpec)
+  bool ao = true, vsky = true, direct = true;
+  bool horizon = false, horizon_distance = false, bent_normal = false;
+  bool lights = true;  // add the scene's directional lights to direct
+};
+
+struct P1Result {
+  int width = 0, height = 0, directions = 0;
+  std::vector<float> ao, vsky;          // per texel (empty when not requested)
+  std::vector<Rgb> direct;              // E_direct / pi per texel
+  std::vector<float> horizon;           // sin(elevation), [texel * K + k]
+  std::vector<float> horizon_distance;  // world units, [texel * K + k]
+  std::vector<Vec3f> bent_normal;       // unit, world frame
+};
+
+// Reads the bake entry (schemas/methods/p1.schema.json); throws InputError("", "<key>", ...) on values the
+// schema cannot express (even normal_bins, unknown layers).
+P1Params parse_p1_params(const nlohmann::json& entry);
+
+P1Result compute_p1(const Scene& scene, const P1Params& params, const RunControl& rc);
+
+// Fraction of a light disk of angular radius `radius` (radians) centred at elevation `elevation` that lies
+// above a horizon at elevation `horizon` (a straight horizon across the disk). radius 0: a step.
+double disk_fraction_above(double elevation, double horizon, double radius);
+
+}  // namespace hfbake

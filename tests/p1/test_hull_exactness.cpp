@@ -1,0 +1,132 @@
+// The hull stack is exact: on every line of every direction, the horizon it returns equals a brute-force
+// march over the same sample points (double atan2), on incoherent random heights and on the four P2 test
+// surfaces, clamp and repeat. Also the float approximations used in the hot loops.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "methods/p1/fast_math.hpp"
+#include "methods/p1/horizon_sweep.hpp"
+#include "methods/p1/hull_stack.hpp"
+#include "p1_truth.hpp"
+
+namespace hfbake {
+namespace {
+
+struct Exactness {
+  double hull_max = 0;    // |hull (double) - march|, radians
+  double worker_max = 0;  // |worker output (float, fast atan) - march|
+  long receivers = 0, none_mismatch = 0;
+};
+
+Exactness check_field(const HeightField& f, int K) {
+  Exactness ex;
+  SweepSpec spec;
+  spec.directions = K;
+  p1::HorizonLineWorker worker;
+  std::vector<float> z, out;
+  for (int k = 0; k < K; ++k) {
+    const SweepDirection d = plan_direction(f, spec, k);
+    for (int l = d.line_begin; l < d.line_end; ++l) {
+      const SweepLine line = truth::make_line(f, d, l, z);
+      // The hull stack itself, with exact double elevations.
+      p1::HullStack hull;
+      hull.reset(line.count);
+      out.assign(std::size_t(line.receivers()), 0.0f);
+      worker(line, out.data());
+      for (int n = 0; n < line.count; ++n) {
+        p1::HorizonCaster c;
+        if (line.is_terrain(n))
+          c = hull.add(n, line.z[n]);
+        else if (line.inside_end > line.inside_begin && n >= line.inside_end)
+          c = hull.query(n, line.z[n]);
+        if (n < line.first_receiver) continue;
+        const double truth = truth::march_same_points(line, n);
+        const double got = c.n < 0 ? truth::kNone : std::atan2(c.dz, c.dn * line.step);
+        if ((c.n < 0) != (truth == truth::kNone)) ++ex.none_mismatch;
+        ex.hull_max = std::max(ex.hull_max, std::fabs(got - truth));
+        ex.worker_max = std::max(ex.worker_max, std::fabs(double(out[n - line.first_receiver]) - truth));
+        ++ex.receivers;
+      }
+    }
+  }
+  return ex;
+}
+
+TEST(HullStack, ExactAgainstSamePointsMarch) {
+  struct Case {
+    const char* name;
+    HeightField field;
+  };
+  std::vector<Case> cases;
+  for (Wrap w : {Wrap::clamp, Wrap::repeat}) {
+    cases.push_back(
+        {w == Wrap::clamp ? "random/clamp" : "random/repeat", truth::random_field(37, 29, 20.0, 9, w)});
+    cases.push_back({w == Wrap::clamp ? "fractal/clamp" : "fractal/repeat",
+                     truth::procedural(ProceduralKind::fractal, 40, 32, w)});
+    cases.push_back({w == Wrap::clamp ? "bricks/clamp" : "bricks/repeat",
+                     truth::procedural(ProceduralKind::bricks, 40, 32, w)});
+    cases.push_back({w == Wrap::clamp ? "sines/clamp" : "sines/repeat",
+                     truth::procedural(ProceduralKind::sines, 40, 32, w)});
+    cases.push_back({w == Wrap::clamp ? "blocks/clamp" : "blocks/repeat",
+                     truth::procedural(ProceduralKind::blocks, 48, 48, w)});
+  }
+  for (const Case& c : cases) {
+    for (int K : {16, 13}) {
+      const Exactness ex = check_field(c.field, K);
+      std::printf(
+          "[exactness] %-15s K=%2d receivers=%7ld  max|hull-march|=%.3g rad  max|layer-march|=%.3g rad\n",
+          c.name, K, ex.receivers, ex.hull_max, ex.worker_max);
+      EXPECT_EQ(ex.none_mismatch, 0) << c.name;
+      EXPECT_LE(ex.hull_max, 1e-12) << c.name;   // the same caster up to double rounding
+      EXPECT_LE(ex.worker_max, 1e-6) << c.name;  // plus the float fast atan of the stored layer
+    }
+  }
+}
+
+TEST(HullStack, QueryMatchesMarchForPointsBeyondTheHull) {
+  // Random hulls queried from random heights: binary search == linear scan over every point.
+  std::uint64_t x = 12345;
+  auto rnd = [&] {
+    x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+    return double(x >> 11) / 9007199254740992.0;
+  };
+  for (int trial = 0; trial < 200; ++trial) {
+    p1::HullStack hull;
+    const int n = 1 + int(rnd() * 60);
+    hull.reset(n);
+    std::vector<float> z(n);
+    for (int m = 0; m < n; ++m) {
+      z[m] = float(rnd() * 10);
+      hull.add(m, z[m]);
+    }
+    for (int q = 0; q < 5; ++q) {
+      const int at = n + int(rnd() * 5);
+      const float zq = float(rnd() * 14 - 2);
+      double best = -10;
+      for (int m = 0; m < n; ++m) best = std::max(best, (double(z[m]) - zq) / (at - m));
+      const p1::HorizonCaster c = hull.query(at, zq);
+      ASSERT_NEAR(c.dz / c.dn, best, 1e-12);
+    }
+  }
+}
+
+TEST(FastMath, AtanAndSincosAccuracy) {
+  double e_atan = 0, e_sin = 0, e_cos = 0;
+  for (int i = -200000; i <= 200000; ++i) {
+    const double x = std::sinh(i * 1e-4);  // covers +-5e8 densely near 0
+    e_atan = std::max(e_atan, std::fabs(double(p1::fast_atan(float(x))) - std::atan(double(float(x)))));
+    const double e = i * (kPi / 2) / 200000;
+    float s, c;
+    p1::fast_sincos(float(e), s, c);
+    e_sin = std::max(e_sin, std::fabs(s - std::sin(double(float(e)))));
+    e_cos = std::max(e_cos, std::fabs(c - std::cos(double(float(e)))));
+  }
+  std::printf("[fast_math] max error: atan %.3g, sin %.3g, cos %.3g\n", e_atan, e_sin, e_cos);
+  EXPECT_LE(e_atan, 4e-7);
+  EXPECT_LE(e_sin, 2e-7);
+  EXPECT_LE(e_cos, 2e-7);
+}
+
+}  // namespace
+}  // namespace hfbake
