@@ -143,7 +143,8 @@ TEST(IndirectGather, NaiveRunStartsGiveTheSameBits) {
 
 TEST(IndirectGather, WedgeWeightsSumToTheCosineLobe) {
   // Uniform L = 1 over the whole hemisphere above the tangent plane: sum over K wedges of
-  // (F(+inf) - F(t_n)) / pi = 1 for an upward normal; for a tilted normal, 1 up to O(1/K^2).
+  // (F(+inf) - F(t_n)) / pi = 1: exactly for an upward normal, and spectrally fast in K for a tilted one
+  // (the midpoint rule in azimuth on a smooth periodic integrand): 2e-2 at K = 4, 1e-7 at K = 16.
   for (int K : {4, 16, 64}) {
     for (double tilt : {0.0, 0.3, 0.8}) {
       const Vec3 n{std::sin(tilt), 0, std::cos(tilt)};
@@ -153,7 +154,7 @@ TEST(IndirectGather, WedgeWeightsSumToTheCosineLobe) {
         const WedgeWeights w = WedgeWeights::make(n, std::cos(phi), std::sin(phi), 2 * kPi / K);
         sum += (w.F(1e12) - w.F(w.t_n)) / kPi;
       }
-      EXPECT_NEAR(sum, 1.0, tilt == 0 ? 1e-9 : 2.0 / (K * K)) << "K " << K << " tilt " << tilt;
+      EXPECT_NEAR(sum, 1.0, tilt == 0 ? 1e-12 : (K == 4 ? 2e-2 : 1e-6)) << "K " << K << " tilt " << tilt;
     }
   }
 }

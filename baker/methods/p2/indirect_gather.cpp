@@ -6,7 +6,7 @@
 namespace hfbake {
 
 Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std::span<const int> horizons,
-                     double inv_step, const WedgeWeights& w) {
+                     double inv_step, const WedgeWeights& w, double* weight) {
   double acc_r = 0, acc_g = 0, acc_b = 0;
   auto add = [&](Rgb l, double weight) {
     acc_r += l.r * weight;
@@ -17,6 +17,13 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
   const double t_n = w.t_n;
   const double F_n = w.F(t_n);
   const double hr = h[r];
+  if (weight) {
+    *weight = 0;
+    if (m > 0) {
+      const double top = visibility_slope(h, horizons[0], r) * inv_step;
+      if (top > t_n) *weight = (w.F(top) - F_n) / kPi;
+    }
+  }
   for (int k = 0; k < m; ++k) {
     int j = horizons[k];
     const double sj = (h[j] - hr) / double(r - j);

@@ -3,12 +3,14 @@
 // A receiver R looks along the line towards the azimuth phi_k (unit horizontal vector a). The terrain it
 // sees in that direction covers the elevations between its nearest sample and its global horizon; each
 // elevation e belongs to the first sample stretch the ray hits. The wedge of azimuths
-// [phi_k - D/2, phi_k + D/2], D = 2 pi / K, integrated with the constant-azimuth elevation profile (the
-// same approximation as P1's Eq. 5), weighs an elevation interval [e0, e1] by
+// [phi_k - D/2, phi_k + D/2], D = 2 pi / K, with the constant-azimuth elevation profile, weighs an
+// elevation interval [e0, e1] by
 //     W(e0, e1) = F(e1) - F(e0),
-//     F(e) = 2 sin(D/2) n_p (e + sin e cos e) / 2 + D n_z sin^2(e) / 2,   n_p = n . a,
-// which is the integral of (n . w) over the wedge's solid angle. With t = tan e (a world slope):
-//     F = 2 sin(D/2) n_p (atan t + t / (1 + t^2)) / 2 + D n_z t^2 / (2 (1 + t^2)).
+//     F(e) = D n_p (e + sin e cos e) / 2 + D n_z sin^2(e) / 2,   n_p = n . a,
+// the integral of (n . w) over the wedge's solid angle, with the azimuthal integral of n_p by the
+// midpoint rule (D instead of 2 sin(D/2)) exactly like P1 (p1.hpp), so that P1's sky part and this
+// terrain part add up to the same cosine lobe (a plane of any slope gives 1). With t = tan e (a slope):
+//     F = D n_p (atan t + t / (1 + t^2)) / 2 + D n_z t^2 / (2 (1 + t^2)).
 // Directions below the receiver's tangent plane (t < t_n = -n_p / n_z) are clipped. The contribution of
 // direction k to E / pi at R is (1/pi) * sum over visible segments of L_segment * W(segment), where
 //   * a fully visible segment between samples j and j+1 has the mean of their exit radiances,
@@ -32,7 +34,7 @@ namespace hfbake {
 
 // Per receiver and direction.
 struct WedgeWeights {
-  double a_p = 0;  // 2 sin(D/2) n_p
+  double a_p = 0;  // D n_p
   double a_z = 0;  // D n_z
   double t_n = 0;  // tangent-plane slope in the look direction, -n_p / n_z
 
@@ -40,7 +42,7 @@ struct WedgeWeights {
   static WedgeWeights make(Vec3 n, double look_x, double look_y, double wedge) {
     WedgeWeights w;
     const double np = n.x * look_x + n.y * look_y, nz = std::max(n.z, 1e-9);
-    w.a_p = 2 * std::sin(wedge / 2) * np;
+    w.a_p = wedge * np;
     w.a_z = wedge * nz;
     w.t_n = -np / nz;
     return w;
@@ -57,8 +59,21 @@ struct WedgeWeights {
 // index into h and L), terrain_end: samples 0..terrain_end-1 are the terrain behind it (terrain_end <= r;
 // equal to r except for receivers beyond a clamp field's border), horizons: the starts of the visible
 // runs (run_starts), inv_step: 1 / (world distance between samples).
+// weight (optional) receives (1/pi) * the sum of the W(segment): the terrain part of the wedge's cosine
+// lobe, (F(global horizon) - F(t_n)) / pi when the horizon is above the tangent plane, else 0.
 Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std::span<const int> horizons,
-                     double inv_step, const WedgeWeights& w);
+                     double inv_step, const WedgeWeights& w, double* weight = nullptr);
+
+// (F(e) - F(e_t)) / pi for the wedge of direction phi (cos_phi, sin_phi) of K, normal n, horizon elevation e
+// (radians): the part of the cosine lobe between the tangent plane and the horizon, in the form of P1's
+// per-direction sky term, so that the two add up to P1's lobe (p1.hpp).
+inline double terrain_weight(Vec3 n, double cos_phi, double sin_phi, int K, double e) {
+  const double np = n.x * cos_phi + n.y * sin_phi, nz = n.z;
+  const double et = std::atan2(-np, nz);
+  if (!(e > et)) return 0;
+  const double ce = std::cos(e), se = std::sin(e), ct = std::cos(et), st = std::sin(et);
+  return (np * (e - et + se * ce - st * ct) + nz * (ct * ct - ce * ce)) / K;
+}
 
 // The horizons that start a visible run: the tree's root children minus a permanent leaf whose farther
 // neighbour is visible too (the only kind of redundant root child). Filters `horizons` into `out`.

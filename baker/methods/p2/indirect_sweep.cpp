@@ -2,6 +2,7 @@
 
 #include <mutex>
 
+#include "methods/p1/fast_math.hpp"
 #include "methods/p2/hull_tree.hpp"
 #include "methods/p2/indirect_gather.hpp"
 #include "methods/p2/naive_visibility.hpp"
@@ -9,6 +10,14 @@
 
 namespace hfbake {
 namespace {
+
+// Per receiver sample: E/pi gathered with the sample's normal (RGB), the terrain weight it was gathered
+// over, and the global horizon's elevation. The texel visitor turns them into
+//   indirect_k(texel) = (blended E/pi / blended weight) * terrain_weight(texel normal, blended elevation):
+// the mean terrain radiance seen from the samples, over exactly the part of the texel's cosine lobe that
+// P1 does not give to the sky (P1 blends the same elevations to the texel the same way). So P1's direct
+// and this indirect tile the texel's lobe: a uniform emitting furnace gives direct + indirect = 1.
+constexpr int kChannels = 5;
 
 struct LineWorker {
   const HeightField* field = nullptr;
@@ -38,7 +47,8 @@ struct LineWorker {
     sink->naive_iterations += stats.naive_iterations;
     sink->horizons += stats.horizons;
     sink->run_starts += stats.run_starts;
-    sink->visible += stats.visible;
+    sink->pushed += stats.pushed;
+    sink->horizons_pushed += stats.horizons_pushed;
   }
 
   void operator()(const SweepLine& line, float* out) {
@@ -64,10 +74,15 @@ struct LineWorker {
     const std::uint64_t it0 = tree.iterations();
     for (int s = 0; s < n; ++s) {
       const bool terrain = s >= ib && s < ie;
-      if (terrain && !naive) tree.push(h[s]);
+      if (terrain && !naive) {
+        tree.push(h[s]);
+        stats.pushed += 1;
+        stats.horizons_pushed += tree.horizons().size();
+      }
       if (s < line.first_receiver) continue;
-      float* o = out + std::size_t(s - line.first_receiver) * 3;
-      o[0] = o[1] = o[2] = 0;
+      float* o = out + std::size_t(s - line.first_receiver) * kChannels;
+      o[0] = o[1] = o[2] = o[3] = 0;
+      o[4] = -p1::kHalfPiF;  // nothing behind: P1's convention
       const int r = s - ib;
       if (r <= 0 || T <= 0) continue;  // no terrain behind this receiver
       const int terrain_end = std::min(r, T);
@@ -89,10 +104,17 @@ struct LineWorker {
       const Vec3 nrm =
           normalize((*normals)[t.texel[0]].d() * t.weight[0] + (*normals)[t.texel[1]].d() * t.weight[1]);
       const WedgeWeights w = WedgeWeights::make(nrm, line.dir->dx, line.dir->dy, wedge);
-      const Rgb e = gather_stretches(hh, LL, r, terrain_end, starts, inv_step, w);
+      double weight = 0;
+      const Rgb e = gather_stretches(hh, LL, r, terrain_end, starts, inv_step, w, &weight);
       o[0] = e.r;
       o[1] = e.g;
       o[2] = e.b;
+      o[3] = float(weight);
+      // The global horizon's elevation exactly as P1's HorizonLineWorker computes it.
+      if (!starts.empty()) {
+        const int c = starts.front();
+        o[4] = p1::fast_elevation(float(hh[c] - hh[r]), float(r - c) * float(line.step));
+      }
     }
     if (!naive) stats.iterations += tree.iterations() - it0;
   }
@@ -107,8 +129,15 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
   std::vector<double> acc(texels * 3, 0.0);
   SweepSpec ss;
   ss.directions = spec.directions;
-  ss.channels = 3;
-  const double wedge = 2 * kPi / spec.directions;
+  ss.channels = kChannels;
+  ss.wrap_periods = spec.wrap_periods;
+  const int K = spec.directions;
+  const double wedge = 2 * kPi / K;
+  std::vector<double> cs(K), sn(K);
+  for (int k = 0; k < K; ++k) {
+    cs[k] = std::cos(2 * kPi * k / K);
+    sn[k] = std::sin(2 * kPi * k / K);
+  }
   P2SweepStats totals;
   std::mutex totals_mutex;
   sweep_lines(
@@ -124,11 +153,23 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
         w.sink_mutex = &totals_mutex;
         return w;
       },
-      [&](int, int i, int j, const TexelTaps& t) {
-        double* a = acc.data() + field.index(i, j) * 3;
-        a[0] += t.value(0);
-        a[1] += t.value(1);
-        a[2] += t.value(2);
+      [&](int k, int i, int j, const TexelTaps& t) {
+        if (!spec.gather) return;
+        const std::size_t idx = field.index(i, j);
+        const double tw = terrain_weight(normals[idx].d(), cs[k], sn[k], K, t.value(4));
+        if (!(tw > 0)) return;
+        const double wb = t.value(3);
+        double* a = acc.data() + idx * 3;
+        if (wb > 0) {
+          const double f = tw / wb;
+          a[0] += t.value(0) * f;
+          a[1] += t.value(1) * f;
+          a[2] += t.value(2) * f;
+        } else {  // the samples see no terrain above their tangent planes, the texel does: its own surface
+          a[0] += exit[idx].r * tw;
+          a[1] += exit[idx].g * tw;
+          a[2] += exit[idx].b * tw;
+        }
       });
   std::vector<Rgb> result(texels);
   for (std::size_t p = 0; p < texels; ++p)

@@ -21,13 +21,15 @@ struct P2SweepStats {
   std::uint64_t naive_iterations = 0;  // what the naive march would have done: sum of samples behind
   std::uint64_t horizons = 0;          // root children of the tree summed over receivers (P2's m)
   std::uint64_t run_starts = 0;        // starts of visible runs (horizons minus redundant leaves)
-  std::uint64_t visible = 0;           // visible samples (gather only; P2 Table 1)
+  std::uint64_t pushed = 0;            // samples pushed into trees (receivers and repeat warm-up)
+  std::uint64_t horizons_pushed = 0;   // root children after every push (P2 §6: iterations <= 2 m + n)
 };
 
 struct IndirectSweepSpec {
   int directions = 64;
   P2Visibility visibility = P2Visibility::tree;
-  bool gather = true;  // false: visibility only (benchmarks, statistics); the result is all zero
+  bool gather = true;    // false: visibility only (benchmarks, statistics); the result is all zero
+  int wrap_periods = 1;  // repeat mode warm-up (SweepSpec::wrap_periods)
 };
 
 // E_indirect / pi per texel (row-major) from the exit radiance `exit` per texel, for one bounce.

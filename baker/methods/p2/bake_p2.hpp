@@ -1,0 +1,48 @@
+// The CLI entry of method "p2": direct light from P1 (compute_p1, the shared sweep), then `bounces`
+// indirect bounces by the convex hull tree intervisibility of P2 (Timonen 2012) with exact per-point
+// gathering (P2 §10.1 method 3), emitting surfaces included (P2 Figure 12).
+//
+//   L_0 = albedo * direct + emission           (exit radiance of a Lambertian surface; direct = E/pi)
+//   indirect_b = gather(L_{b-1}),  L_b = albedo * indirect_b   (b = 1..bounces)
+//   indirect = sum_b indirect_b,   total = direct + indirect
+//
+// Parameters (schemas/methods/p2.schema.json): directions (K, default 64), bounces (default: the job's
+// "bounces"), visibility ("tree" or "naive": the same output, the naive march is for benchmarks and
+// checks), layers: indirect, total, direct (default: all three), indirect_b1 .. indirect_b<bounces>.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <vector>
+
+#include "core/layers.hpp"
+#include "core/run_control.hpp"
+#include "field/scene.hpp"
+#include "methods/p2/indirect_sweep.hpp"
+
+namespace hfbake {
+
+struct P2Params {
+  int directions = 64;
+  int bounces = -1;  // -1: the scene's
+  P2Visibility visibility = P2Visibility::tree;
+  int wrap_periods = 1;
+  std::vector<std::string> layers;  // empty: indirect, total, direct
+};
+
+// Reads a bake entry; throws InputError("", "<key>", ...) for what the schema cannot express.
+P2Params parse_p2_params(const nlohmann::json& entry);
+
+struct P2Result {
+  int width = 0, height = 0;
+  std::vector<Rgb> direct;                   // E_direct / pi (from P1)
+  std::vector<std::vector<Rgb>> indirect_b;  // E / pi of bounce b = 1..bounces (index b - 1)
+  std::vector<Rgb> indirect;                 // sum over the bounces
+  P2SweepStats stats;                        // summed over the bounces' sweeps
+};
+
+P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc);
+
+LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+
+}  // namespace hfbake

@@ -1,0 +1,268 @@
+// Method p2 on whole fields: white furnace (identity and convergence), flat ground, closed forms for an
+// emitting ramp and a V-trench, tree == naive bits, thread-count determinism, layers and parameters.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "core/error.hpp"
+#include "env/environment.hpp"
+#include "field/procedural.hpp"
+#include "field/scene.hpp"
+#include "methods/p2/bake_p2.hpp"
+
+namespace hfbake {
+namespace {
+
+Scene make_scene(HeightField f, Rgb sky, float albedo, float emission, int bounces) {
+  Scene s;
+  s.name = "test";
+  s.field = std::move(f);
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), Rgb{albedo, albedo, albedo});
+  if (emission > 0) s.surface.emission.assign(s.field.texel_count(), Rgb{emission, emission, emission});
+  s.environment = make_uniform_environment(sky);
+  s.bounces = bounces;
+  return s;
+}
+
+HeightField procedural(ProceduralKind kind, int n, Wrap wrap, std::uint64_t seed = 2) {
+  ProceduralSpec spec;
+  spec.kind = kind;
+  spec.width = n;
+  spec.height = n;
+  spec.seed = seed;
+  return make_procedural(spec, 1.0, wrap);
+}
+
+P2Params params(int K, int bounces) {
+  P2Params p;
+  p.directions = K;
+  p.bounces = bounces;
+  return p;
+}
+
+// The cosine lobe as the K wedges integrate it (midpoint rule in azimuth, like P1): 1 for an upward
+// normal, 1 - O(spectral) for a tilted one (2e-2 at K = 4 and 50 degrees).
+double lobe(Vec3 n, int K) {
+  double sum = 0;
+  for (int k = 0; k < K; ++k) {
+    const double phi = 2 * kPi * k / K;
+    const double np = n.x * std::cos(phi) + n.y * std::sin(phi);
+    const double et = std::atan(-np / n.z);  // tangent plane elevation
+    sum += n.z * std::cos(et) * std::cos(et) + np * (kPi / 2 - et - std::sin(et) * std::cos(et));
+  }
+  return sum / K;
+}
+
+// max over texels of |direct + indirect - lobe|
+double max_abs_dev(const Scene& s, const P2Result& r, int K) {
+  double m = 0;
+  for (std::size_t i = 0; i < r.direct.size(); ++i)
+    m = std::max(m, std::fabs(double(r.direct[i].g + r.indirect[i].g) - lobe(s.normals[i].d(), K)));
+  return m;
+}
+
+// Emission 1 everywhere, albedo 0, sky 1: every direction above the tangent plane brings radiance 1,
+// from the sky (P1's direct) or from the terrain (one bounce), so direct + indirect = the cosine lobe
+// (1 up to the azimuthal quadrature, lobe() above) at every texel: the two methods split each texel's
+// lobe at the same horizon (indirect_sweep.cpp), so this holds to float rounding for every K.
+TEST(P2Bake, EmittingFurnaceDirectPlusIndirectIsTheLobe) {
+  for (auto kind : {ProceduralKind::fractal, ProceduralKind::blocks}) {
+    for (Wrap wrap : {Wrap::repeat, Wrap::clamp}) {
+      const Scene s = make_scene(procedural(kind, 48, wrap), {1, 1, 1}, 0, 1, 1);
+      for (int K : {4, 16}) {
+        const P2Result r = compute_p2(s, params(K, 1), RunControl{});
+        EXPECT_LT(max_abs_dev(s, r, K), 1e-5) << procedural_kind_name(kind) << " K " << K;
+        double terrain = 0;
+        for (const Rgb& v : r.indirect) terrain += v.g;
+        EXPECT_GT(terrain / double(r.indirect.size()), 0.02);  // the test is not vacuous
+      }
+    }
+  }
+}
+
+// White furnace: albedo 1, sky 1, no emission. Bounce b + 1 gathers bounce b; the gather is linear and
+// positive and brings at most tau = max_x (lobe(x) - direct(x)) of a uniform radiance, so
+// max indirect_{b+1} <= tau * max indirect_b (geometric convergence), and total -> 1 (the fixed point of
+// total = direct + gather(total) when direct + gather(1) = 1, the identity tested above): after B
+// bounces 1 - total <= tau^(B+1) / (1 - tau).
+TEST(P2Bake, WhiteFurnaceConverges) {
+  const int K = 32, B = 8;
+  const Scene s = make_scene(procedural(ProceduralKind::fractal, 48, Wrap::repeat), {1, 1, 1}, 1, 0, 1);
+  const P2Result r = compute_p2(s, params(K, B), RunControl{});
+  double tau = 0;
+  for (std::size_t i = 0; i < r.direct.size(); ++i)
+    tau = std::max(tau, lobe(s.normals[i].d(), K) - r.direct[i].g);
+  ASSERT_GT(tau, 0.05);
+  ASSERT_LT(tau, 0.9);
+  std::vector<double> total(r.direct.size());
+  for (std::size_t i = 0; i < total.size(); ++i) total[i] = r.direct[i].g;
+  double prev_max = 1;  // max of the exit radiance that bounce 1 gathers (direct <= 1)
+  double dev = 0, mean_dev = 0;
+  for (int b = 0; b < B; ++b) {
+    double m = 0;
+    for (std::size_t i = 0; i < total.size(); ++i) {
+      total[i] += r.indirect_b[b][i].g;
+      m = std::max(m, double(r.indirect_b[b][i].g));
+    }
+    EXPECT_LE(m, prev_max * tau * 1.001 + 1e-6) << "bounce " << b + 1;
+    prev_max = m;
+  }
+  for (double t : total) {
+    dev = std::max(dev, std::fabs(1 - t));
+    mean_dev += (t - 1) / double(total.size());
+  }
+  std::printf("white furnace K %d, %d bounces: tau %.3f, max |1 - total| %.2e, mean(total - 1) %.2e\n", K, B,
+              tau, dev, mean_dev);
+  EXPECT_LT(dev, std::pow(tau, B + 1) / (1 - tau) + 1e-5);
+  EXPECT_LT(std::fabs(mean_dev), 1e-5);
+}
+
+TEST(P2Bake, FlatGroundHasNoIndirectLight) {
+  ProceduralSpec spec;
+  spec.kind = ProceduralKind::flat;
+  spec.width = spec.height = 32;
+  const Scene s = make_scene(make_procedural(spec, 1.0, Wrap::clamp), {1, 1, 1}, 0.5f, 2, 1);
+  const P2Result r = compute_p2(s, params(16, 2), RunControl{});
+  for (const Rgb& v : r.indirect) ASSERT_EQ(v.g, 0.0f);
+  for (const Rgb& v : r.direct) ASSERT_NEAR(v.g, 1.0f, 1e-5);
+}
+
+// An emitting ramp (plane rising at angle a from a crease at x0, emission 1, floor 0, black sky,
+// albedo 0), seen from the floor with an upward normal: along azimuth phi (towards +x) the ramp points'
+// elevations increase with the distance, so the terrain fills elevations from 0 to that of the point
+// where the line leaves the field, e(phi) = atan((x + rho cos phi - x0) tan a / rho) with rho the
+// distance to the border; the wedge integral is (1/K) sum_k sin^2 e(phi_k).
+TEST(P2Bake, EmittingRampClosedForm) {
+  const int W = 96, Hgt = 128, x0 = 40;
+  const double tan_a = std::tan(40 * kPi / 180);
+  HeightField f;
+  f.width = W;
+  f.height = Hgt;
+  f.z.resize(f.texel_count());
+  for (int j = 0; j < Hgt; ++j)
+    for (int i = 0; i < W; ++i) f.z[f.index(i, j)] = float(std::max(0, i - x0) * tan_a);
+  Scene s = make_scene(f, {0, 0, 0}, 0, 0, 1);
+  s.surface.emission.assign(f.texel_count(), Rgb{});
+  for (int j = 0; j < Hgt; ++j)
+    for (int i = x0 + 1; i < W; ++i) s.surface.emission[f.index(i, j)] = {1, 1, 1};
+  const int y = Hgt / 2;
+  for (int K : {8, 32, 128}) {
+    const P2Result r = compute_p2(s, params(K, 1), RunControl{});
+    for (int x : {x0 - 24, x0 - 12}) {
+      double expect = 0;
+      for (int k = 0; k < K; ++k) {
+        const double phi = 2 * kPi * k / K, c = std::cos(phi), sn = std::sin(phi);
+        if (c <= 1e-12) continue;
+        double rho = (W - 1 - x) / c;
+        if (std::fabs(sn) > 1e-12) rho = std::min(rho, (sn > 0 ? Hgt - 1 - y : y) / std::fabs(sn));
+        const double rise = (x + rho * c - x0) * tan_a;
+        if (rise <= 0) continue;
+        const double e = std::atan(rise / rho);
+        expect += std::sin(e) * std::sin(e) / K;
+      }
+      const double got = r.indirect[f.index(x, y)].g;
+      // The crease segment (emission 0 -> 1 over one texel) accounts for the tolerance.
+      EXPECT_NEAR(got, expect, 1e-3 + 0.005 * expect) << "K " << K << " x " << x;
+      EXPECT_GT(got, 0.05);
+    }
+  }
+}
+
+// V-trench along y with walls at angle a, repeat mode (ridges on the walls' planes): from the floor,
+// terrain fills elevations up to atan(tan a |cos phi|). With emission 1 everywhere and a black sky the
+// floor gets (1/K) sum_k sin^2(atan(tan a |cos phi_k|)) -> 1 - cos a as K -> infinity.
+TEST(P2Bake, EmittingVTrenchFloor) {
+  ProceduralSpec spec;
+  spec.kind = ProceduralKind::trench;
+  spec.width = 65;
+  spec.height = 64;
+  spec.angle_deg = 30;
+  const Scene s = make_scene(make_procedural(spec, 1.0, Wrap::repeat), {0, 0, 0}, 0, 1, 1);
+  const double a = 30 * kPi / 180;
+  for (int K : {4, 16, 64}) {
+    const P2Result r = compute_p2(s, params(K, 1), RunControl{});
+    double expect = 0;
+    for (int k = 0; k < K; ++k) {
+      const double e = std::atan(std::tan(a) * std::fabs(std::cos(2 * kPi * k / K)));
+      expect += std::sin(e) * std::sin(e) / K;
+    }
+    const double got = r.indirect[s.field.index(32, 20)].g;
+    // K = 4: axis samples are texels: exact. Oblique lines pass beside the apex and blend two samples on
+    // the walls (see sweep_lines.hpp).
+    EXPECT_NEAR(got, expect, K == 4 ? 1e-5 : 0.02) << "K " << K;
+    if (K == 64) {
+      EXPECT_NEAR(got, 1 - std::cos(a), 0.02);
+    }
+  }
+}
+
+TEST(P2Bake, TreeAndNaiveGiveIdenticalBits) {
+  for (auto kind :
+       {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::sines, ProceduralKind::blocks}) {
+    for (Wrap wrap : {Wrap::clamp, Wrap::repeat}) {
+      const Scene s = make_scene(procedural(kind, 40, wrap), {0.3f, 0.5f, 0.9f}, 0.6f, 0, 2);
+      P2Params p = params(12, 2);
+      const P2Result a = compute_p2(s, p, RunControl{});
+      p.visibility = P2Visibility::naive;
+      const P2Result b = compute_p2(s, p, RunControl{});
+      for (std::size_t i = 0; i < a.indirect.size(); ++i) {
+        ASSERT_EQ(a.indirect[i].r, b.indirect[i].r) << procedural_kind_name(kind) << " texel " << i;
+        ASSERT_EQ(a.indirect[i].b, b.indirect[i].b) << procedural_kind_name(kind) << " texel " << i;
+      }
+      EXPECT_EQ(a.stats.run_starts, b.stats.run_starts);
+      EXPECT_LT(a.stats.iterations, b.stats.iterations);
+      EXPECT_LE(a.stats.iterations, 2 * a.stats.horizons_pushed + a.stats.pushed);  // P2: t <= 2m + n
+    }
+  }
+}
+
+TEST(P2Bake, SameBitsForAnyThreadCount) {
+  const Scene s =
+      make_scene(procedural(ProceduralKind::fractal, 48, Wrap::clamp), {1, 0.8f, 0.6f}, 0.7f, 0, 2);
+  P2Result one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = compute_p2(s, params(8, 2), RunControl{});
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = compute_p2(s, params(8, 2), RunControl{});
+  }
+  for (std::size_t i = 0; i < one.indirect.size(); ++i) ASSERT_EQ(one.indirect[i].g, two.indirect[i].g);
+}
+
+TEST(P2Bake, LayersAndParameters) {
+  const Scene s = make_scene(procedural(ProceduralKind::sines, 24, Wrap::clamp), {1, 1, 1}, 0.5f, 0, 2);
+  const LayerSet def = bake_p2(s, {{"method", "p2"}, {"directions", 4}}, RunControl{});
+  ASSERT_EQ(def.layers.size(), 3u);
+  EXPECT_EQ(def.layers[0].name, "indirect");
+  EXPECT_EQ(def.layers[1].name, "total");
+  EXPECT_EQ(def.layers[2].name, "direct");
+  const LayerSet b = bake_p2(
+      s, {{"method", "p2"}, {"directions", 4}, {"layers", {"indirect_b1", "indirect_b2", "indirect"}}},
+      RunControl{});
+  ASSERT_EQ(b.layers.size(), 3u);
+  for (std::size_t i = 0; i < b.layers[2].data.size(); ++i)
+    ASSERT_NEAR(b.layers[2].data[i], b.layers[0].data[i] + b.layers[1].data[i], 1e-6);
+  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"layers", {"indirect_b3"}}}, RunControl{}), InputError);
+  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"layers", {"ao"}}}, RunControl{}), InputError);
+  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"visibility", "fast"}}, RunControl{}), InputError);
+  const LayerSet none = bake_p2(s, {{"method", "p2"}, {"directions", 4}, {"bounces", 0}}, RunControl{});
+  for (float v : none.layers[0].data) ASSERT_EQ(v, 0.0f);
+}
+
+TEST(P2Bake, CancelStopsTheBake) {
+  const Scene s = make_scene(procedural(ProceduralKind::fractal, 32, Wrap::clamp), {1, 1, 1}, 0.5f, 0, 1);
+  std::atomic<bool> cancel{true};
+  RunControl rc;
+  rc.cancel = &cancel;
+  EXPECT_THROW(compute_p2(s, params(8, 1), rc), Cancelled);
+}
+
+}  // namespace
+}  // namespace hfbake
