@@ -45,12 +45,23 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
     double max_slope = -std::numeric_limits<double>::infinity();
     double max_elev = -kPi / 2;
     double occl = 0;
-    SliceVec dir = open_direction(frame, frame.tangent, kPi / 2);
+    SliceVec dir = s.bent ? open_direction(frame, frame.tangent, kPi / 2) : SliceVec{};
     const double sin_t = s.real_tangent ? std::sin(frame.tangent) : s.sin_tangent;
     double largest = sin_t;  // P3: "no occluder"
-    for (int m = 1; m <= steps; ++m) {
+    // Clamp fields end at their border: the last step inside (so the loop needs no bounds test).
+    int last = steps;
+    if (clamp) {
+      auto limit = [&](double start, double dv, double hi) {
+        if (std::abs(dv) < 1e-12) return steps;
+        const double t = dv > 0 ? (hi - start) / (dv * step_t) : -start / (dv * step_t);
+        return int(std::min<double>(steps, std::floor(t + 1e-9)));
+      };
+      last = std::min(limit(i, d.dx, xmax), limit(j, d.dy, ymax));
+    }
+    // With falloff none the bands telescope: only the final horizon matters.
+    const bool telescopes = s.falloff.kind == FalloffKind::none;
+    for (int m = 1; m <= last; ++m) {
       const double px = i + m * step_t * d.dx, py = j + m * step_t * d.dy;
-      if (clamp && (px < -1e-9 || py < -1e-9 || px > xmax + 1e-9 || py > ymax + 1e-9)) break;
       const double x = m * s.step;
       const double dz = double(field.bilinear(px, py)) - z0;
       const double slope = dz / x;
@@ -59,11 +70,23 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
         largest = std::max(largest, sin_t + std::max(0.0, sin_h - sin_t) * s.falloff(len));
       }
       if (slope > max_slope) {
+        max_slope = slope;
+        if (telescopes) continue;
         const double e = std::atan(slope);
         occl += band_occlusion(s.falloff, s.weighting, frame, max_elev, e, x);
-        const SliceVec b = band_direction(s.falloff, frame, max_elev, e, x);
+        if (s.bent) {
+          const SliceVec b = band_direction(s.falloff, frame, max_elev, e, x);
+          dir.h -= b.h, dir.v -= b.v;
+        }
+        max_elev = e;
+      }
+    }
+    if (telescopes && max_slope > -std::numeric_limits<double>::infinity()) {
+      const double e = std::atan(max_slope);
+      occl = band_occlusion(s.falloff, s.weighting, frame, -kPi / 2, e, 1.0);
+      if (s.bent) {
+        const SliceVec b = band_direction(s.falloff, frame, -kPi / 2, e, 1.0);
         dir.h -= b.h, dir.v -= b.v;
-        max_slope = slope, max_elev = e;
       }
     }
     wsum += d.weight;
@@ -83,11 +106,13 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
 void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HbaoSettings& s,
                 const RunControl& rc, float* obscurance, Vec3f* bent) {
   std::atomic<int> rows_done{0};
+  HbaoSettings st = s;
+  st.bent = bent != nullptr;
   tbb::parallel_for(0, field.height, [&](int j) {
     rc.check();
     for (int i = 0; i < field.width; ++i) {
       const std::size_t idx = field.index(i, j);
-      const HorizonTexel t = hbao_texel(field, normals[idx].d(), i, j, s);
+      const HorizonTexel t = hbao_texel(field, normals[idx].d(), i, j, st);
       if (obscurance) obscurance[idx] = float(1.0 - t.occluded);
       if (bent) bent[idx] = Vec3f::from(t.bent_normal);
     }

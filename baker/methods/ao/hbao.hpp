@@ -43,11 +43,13 @@ struct HbaoSettings {
   double sin_tangent = -0.85;
   bool real_tangent = false;
   bool visible_only = true;
+  bool bent = true;  // compute the bent normal (hbao_field sets it from its output)
 };
 
 struct HorizonTexel {
   double occluded = 0;        // occluded measure: obscurance = 1 - occluded (largest_occluder: clamped)
-  Vec3 bent_normal{0, 0, 1};  // unit, cosine weighted by (1 - rho) (slab model whatever the estimator)
+  Vec3 bent_normal{0, 0, 1};  // unit, cosine weighted by (1 - rho) (slab model whatever the estimator);
+                              // the normal when HbaoSettings::bent is false
 };
 
 HorizonTexel hbao_texel(const HeightField& field, Vec3 normal, int i, int j, const HbaoSettings& s);
