@@ -178,3 +178,31 @@ TEST(Hbao, LargestOccluderIsTheGlobalHorizonWithoutFalloff) {
 
 }  // namespace
 }  // namespace hfbake
+
+namespace hfbake {
+namespace {
+
+// A box-pattern direction (2, 1) with its own step |(2, 1)| samples texel centres only: the horizon equals
+// the brute-force maximum over the texels (i + 2m, j + m).
+TEST(Hbao, BoxPatternDirectionSamplesTexelCentres) {
+  HeightField f;
+  f.width = f.height = 40;
+  f.z.resize(f.texel_count());
+  for (std::size_t t = 0; t < f.z.size(); ++t) f.z[t] = float((t * 7919) % 13);
+  const double L = std::hypot(2.0, 1.0);
+  HbaoSettings s;
+  s.weighting = Weighting::uniform;
+  s.estimator = HorizonEstimator::largest_occluder;
+  s.sin_tangent = -1;
+  s.directions = {MarchDirection{2 / L, 1 / L, 1, L}};
+  s.reach = 1e6;
+  double best = -1;
+  for (int m = 1; 5 + 2 * m < 40; ++m) {
+    const double dz = f.z[f.index(5 + 2 * m, 7 + m)] - f.z[f.index(5, 7)], x = m * L;
+    best = std::max(best, dz / std::hypot(x, dz));
+  }
+  EXPECT_NEAR(hbao_texel(f, {0, 0, 1}, 5, 7, s).occluded, std::max(0.0, best), 1e-6);
+}
+
+}  // namespace
+}  // namespace hfbake

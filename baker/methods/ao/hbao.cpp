@@ -33,8 +33,6 @@ double default_reach(const HeightField& field, const Falloff& f) {
 HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s) {
   const double z0 = field.z[field.index(i, j)];
   const double ts = field.texel_size;
-  const double step_t = s.step / ts;  // texels per step
-  const int steps = std::max(1, int(std::floor(s.reach / s.step + 1e-9)));
   const bool clamp = field.wrap == Wrap::clamp;
   const double xmax = field.width - 1, ymax = field.height - 1;
 
@@ -42,6 +40,9 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
   Vec3 bent{0, 0, 0};
   for (const MarchDirection& d : s.directions) {
     const SliceFrame frame = slice_frame(n.x * d.dx + n.y * d.dy, n.z);
+    const double step_w = d.step > 0 ? d.step * ts : s.step;  // world units per step
+    const double step_t = step_w / ts;                        // texels per step
+    const int steps = std::max(1, int(std::floor(s.reach / step_w + 1e-9)));
     double max_slope = -std::numeric_limits<double>::infinity();
     double max_elev = -kPi / 2;
     double occl = 0;
@@ -62,7 +63,7 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
     const bool telescopes = s.falloff.kind == FalloffKind::none;
     for (int m = 1; m <= last; ++m) {
       const double px = i + m * step_t * d.dx, py = j + m * step_t * d.dy;
-      const double x = m * s.step;
+      const double x = m * step_w;
       const double dz = double(field.bilinear(px, py)) - z0;
       const double slope = dz / x;
       if (s.estimator == HorizonEstimator::largest_occluder && (!s.visible_only || slope >= max_slope)) {

@@ -22,9 +22,12 @@ namespace hfbake {
 
 // One march direction: unit xy vector (texel axes = world axes) towards the occluders, and a relative
 // azimuthal weight (its coverage; the weights are normalised by their sum).
+// A direction may carry its own step (in texels; 0 = HbaoSettings::step): with LSAO's box pattern, direction
+// (a, b) / |(a, b)| and step |(a, b)| put every sample on a texel centre (no interpolation, as P3 5.2).
 struct MarchDirection {
   double dx = 1, dy = 0;
   double weight = 1;
+  double step = 0;
 };
 // phi_k = 2 pi k / K from +x towards +y, equal weights (the contract's direction set).
 std::vector<MarchDirection> uniform_directions(int count);
