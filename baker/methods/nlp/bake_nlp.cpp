@@ -1,0 +1,350 @@
+#include "methods/nlp/bake_nlp.hpp"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "methods/nlp/horizon_march.hpp"
+#include "methods/nlp/nlp_basis.hpp"
+#include "methods/nlp/pyramid.hpp"
+#include "methods/nlp/sh.hpp"
+#include "methods/nlp/sh_lighting.hpp"
+
+namespace hfbake {
+
+const char* sh_convention_text() {
+  return "real spherical harmonics, order 4 (bands l = 0..3), 16 coefficients per channel; index i = "
+         "l*(l+1)+m "
+         "(m = -l..l): 000 = (0,0), 001..003 = (1,-1),(1,0),(1,1), 004..008 = (2,-2)..(2,2), 009..015 = "
+         "(3,-3)..(3,3); orthonormal on the sphere (integral of Y_i Y_j = delta_ij); no Condon-Shortley "
+         "phase "
+         "(m > 0: cos(m phi), m < 0: sin(|m| phi)); world frame, +z up, direction (sin t cos p, sin t sin p, "
+         "cos t), "
+         "phi from +x towards +y. Y000 = 0.282095; Y001..003 = 0.488603 (y, z, x); Y004 = 1.092548 xy, "
+         "Y005 = 1.092548 yz, Y006 = 0.315392 (3z^2-1), Y007 = 1.092548 xz, Y008 = 0.546274 (x^2-y^2); "
+         "Y009 = 0.590044 y(3x^2-y^2), Y010 = 2.890611 xyz, Y011 = 0.457046 y(5z^2-1), Y012 = 0.373176 "
+         "z(5z^2-3), Y013 = 0.457046 x(5z^2-1), Y014 = 1.445306 z(x^2-y^2), Y015 = 0.590044 x(x^2-3y^2). "
+         "sh_visibility: SH of the binary visibility V(w) over the whole sphere (1 = the ray escapes). "
+         "sh_irradiance: SH of E(n)/pi as a function of the normal n (channels <coefficient>.R/G/B): "
+         "sum_i c_i Y_i(n) is the diffuse total (direct + indirect) / pi for a surface of normal n at that "
+         "texel; band 3 is zero (the clamped cosine has no l = 3 part). Incident radiance L_in = c_i / A_l "
+         "with A_l = {1, 2/3, 1/4} for l = 0, 1, 2.";
+}
+
+const std::vector<std::string>& nlp_layer_names() {
+  static const std::vector<std::string> names = {"direct", "indirect", "total", "sh_visibility",
+                                                 "sh_irradiance"};
+  return names;
+}
+
+NlpOptions parse_nlp_options(const nlohmann::json& p) {
+  NlpOptions o;
+  o.directions = p.value("directions", o.directions);
+  o.levels_per_octave = p.value("levels_per_octave", o.levels_per_octave);
+  o.level_offset = p.value("level_offset", o.level_offset);
+  o.radiance_level_offset = p.value("radiance_level_offset", o.radiance_level_offset);
+  o.light_directions = p.value("light_directions", o.light_directions);
+  o.subsample = p.value("subsample", o.subsample);
+  if (p.contains("azimuth_interpolation")) {
+    const std::string s = p["azimuth_interpolation"].get<std::string>();
+    if (!nlp::parse_azimuth_interpolation(s, o.interpolation))
+      throw InputError("", "azimuth_interpolation", "must be \"linear\" or \"bspline\", not \"" + s + "\"");
+  }
+  if (o.directions < 3) throw InputError("", "directions", "nlp needs at least 3 directions");
+  if (o.levels_per_octave < 1) throw InputError("", "levels_per_octave", "must be >= 1");
+  if (o.level_offset < 0 || o.radiance_level_offset < 0) throw InputError("", "level_offset", "must be >= 0");
+  if (o.light_directions < 1) throw InputError("", "light_directions", "must be >= 1");
+  if (o.subsample != 1 && o.subsample != 2) throw InputError("", "subsample", "must be 1 or 2");
+  if (p.contains("layers")) {
+    o.layers.clear();
+    for (const auto& l : p["layers"]) {
+      const std::string name = l.get<std::string>();
+      const auto& known = nlp_layer_names();
+      if (std::find(known.begin(), known.end(), name) == known.end()) {
+        std::string list;
+        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+        throw InputError("", "layers", "nlp has no layer \"" + name + "\" (it writes " + list + ")");
+      }
+      o.layers.push_back(name);
+    }
+  }
+  return o;
+}
+
+namespace {
+
+constexpr int kSh = sh::kCount;
+constexpr float kInvPi = float(1 / kPi);
+// Clamped-cosine convolution per coefficient (l <= 2; band 3 is zero).
+constexpr float kConv[9] = {3.14159265f, 2.09439510f, 2.09439510f, 2.09439510f, 0.78539816f,
+                            0.78539816f, 0.78539816f, 0.78539816f, 0.78539816f};
+
+struct LightSetup {
+  Vec3 dir;
+  Rgb irradiance;
+  float elevation = 0, radius = 0;
+  std::vector<float> cx, cy;  // sub-azimuths across the disk
+  float sh[9];                // a_l Y_k(dir) / pi: the light's contribution to sh_irradiance per unit
+};
+
+struct Scratch {
+  std::vector<float> recv, omega, dist, curve;
+  std::vector<int> lev;
+  explicit Scratch(int levels, int steps)
+      : recv(levels), omega(steps + 1), dist(steps + 1), curve(2 * steps + 2), lev(steps + 1) {}
+};
+
+bool wants(const NlpOptions& o, const char* name) {
+  return std::find(o.layers.begin(), o.layers.end(), name) != o.layers.end();
+}
+
+}  // namespace
+
+LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc) {
+  const HeightField& f = scene.field;
+  const int W = f.width, H = f.height, m = o.directions;
+  const std::size_t N = f.texel_count();
+  const std::vector<Vec3f> normals_own =
+      scene.normals.size() == N ? std::vector<Vec3f>{} : compute_normals(f);
+  const std::vector<Vec3f>& normals = scene.normals.size() == N ? scene.normals : normals_own;
+
+  const nlp::MarchSetup ms = nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
+                                                   o.level_offset, o.radiance_level_offset);
+  const nlp::Pyramid hp =
+      nlp::build_pyramid(f.z.data(), 1, W, H, f.wrap, o.levels_per_octave, nlp::height_levels(ms));
+  const std::vector<std::array<float, 64>> A = nlp::sample_matrices(o.interpolation, m);
+  std::vector<float> cphi(m), sphi(m);
+  for (int a = 0; a < m; ++a) {
+    cphi[a] = float(std::cos(2 * kPi * a / m));
+    sphi[a] = float(std::sin(2 * kPi * a / m));
+  }
+
+  // Environment in SH and its product matrices (rows k < 9 suffice: the cosine has no band 3).
+  const std::array<sh::Coeffs, 3> env = nlp::project_environment(scene.environment);
+  float T[3][9][kSh];
+  for (int c = 0; c < 3; ++c) {
+    const auto pm = sh::product_matrix(env[c]);
+    for (int k = 0; k < 9; ++k)
+      for (int j = 0; j < kSh; ++j) T[c][k][j] = float(pm[k][j]);
+  }
+
+  std::vector<LightSetup> lights;
+  for (const DirectionalLight& dl : scene.lights) {
+    LightSetup L;
+    L.dir = normalize(dl.direction);
+    L.irradiance = dl.irradiance;
+    L.elevation = float(std::asin(std::clamp(L.dir.z, -1.0, 1.0)));
+    L.radius = float(dl.angular_diameter / 2);
+    const double az = std::atan2(L.dir.y, L.dir.x);
+    const int q = L.radius > 0 ? o.light_directions : 1;
+    const double half = L.radius / std::max(std::cos(double(L.elevation)), 1e-3);
+    for (int s = 0; s < q; ++s) {
+      const double phi = az + (q == 1 ? 0.0 : half * ((2.0 * s + 1) / q - 1));
+      L.cx.push_back(float(std::cos(phi)));
+      L.cy.push_back(float(std::sin(phi)));
+    }
+    const sh::Coeffs y = sh::eval(L.dir);
+    for (int k = 0; k < 9; ++k) L.sh[k] = kConv[k] * float(y[k]) * kInvPi;
+    lights.push_back(std::move(L));
+  }
+
+  const bool want_vis = wants(o, "sh_visibility"), want_irr = wants(o, "sh_irradiance");
+  std::vector<Rgb> direct(N), indirect(N);
+  std::vector<float> vis(want_vis ? N * kSh : 0), irr(want_irr ? N * 27 : 0);
+
+  const int lv = nlp::height_levels(ms), steps = ms.steps;
+  tbb::enumerable_thread_specific<Scratch> scratch([&] { return Scratch(lv, steps); });
+  const double units = double(H) * (1 + std::max(0, scene.bounces));
+  std::atomic<int> rows_done{0};
+
+  // Receiver heights in every height level (Eq. 15's f_i(x, y)).
+  auto receiver = [&](Scratch& s, int i, int j) {
+    for (int l = 0; l < lv; ++l) s.recv[l] = nlp::sample_level1(hp, hp.levels[l], float(i), float(j));
+  };
+  auto omega_max = [&](Scratch& s, int i, int j, float cx, float cy, const Vec3f& n) {
+    const int cnt =
+        nlp::march(ms, hp, i, j, cx, cy, s.recv.data(), s.omega.data(), s.dist.data(), s.lev.data());
+    if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
+    const int c = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
+    return *std::max_element(s.curve.begin(), s.curve.begin() + c);
+  };
+
+  // --- pass 1: visibility V (Eq. 11, 20-21), direct light
+  // ---------------------------------------------------
+  tbb::parallel_for(0, H, [&](int j) {
+    rc.check();
+    Scratch& s = scratch.local();
+    for (int i = 0; i < W; ++i) {
+      const std::size_t idx = f.index(i, j);
+      const Vec3f n = normals[idx];
+      receiver(s, i, j);
+      float V[kSh] = {};
+      for (int a = 0; a < m; ++a) {
+        const float wmax = omega_max(s, i, j, cphi[a], sphi[a], n);
+        float v[4];
+        nlp::band4(std::sin(wmax), 1.0f, v);
+        const float* Aj = A[a].data();
+        for (int r = 0; r < kSh; ++r)
+          V[r] += Aj[r * 4] * v[0] + Aj[r * 4 + 1] * v[1] + Aj[r * 4 + 2] * v[2] + Aj[r * 4 + 3] * v[3];
+      }
+      // Direct from the environment: F(n) . (L * V).
+      float y[kSh];
+      sh::eval(n.x, n.y, n.z, y);
+      float e[3] = {}, lin[3][9];
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 9; ++k) {
+          float acc = 0;
+          for (int q = 0; q < kSh; ++q) acc += T[c][k][q] * V[q];
+          lin[c][k] = acc;
+          e[c] += kConv[k] * y[k] * acc;
+        }
+      Rgb d{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+      float irr_local[27];
+      for (int k = 0; k < 9; ++k)
+        for (int c = 0; c < 3; ++c) irr_local[k * 3 + c] = kConv[k] * lin[c][k] * kInvPi;
+      // Directional lights: exact cosine, visibility over the light's restricted extent (NS09 §6).
+      for (const LightSetup& L : lights) {
+        const float cosn = float(n.x * L.dir.x + n.y * L.dir.y + n.z * L.dir.z);
+        if (cosn <= 0) continue;
+        float frac = 0;
+        for (std::size_t q = 0; q < L.cx.size(); ++q) {
+          const float wmax = omega_max(s, i, j, L.cx[q], L.cy[q], n);
+          if (L.radius > 0) {
+            const float lo = std::max(L.elevation - L.radius, -1.5707963f);
+            const float hi = std::min(L.elevation + L.radius, 1.5707963f);
+            const float slo = std::sin(std::max(wmax, lo)), shi = std::sin(hi);
+            frac += std::clamp((shi - slo) / (shi - std::sin(lo)), 0.0f, 1.0f);
+          } else {
+            frac += wmax < L.elevation ? 1.0f : 0.0f;
+          }
+        }
+        frac /= float(L.cx.size());
+        if (frac <= 0) continue;
+        d += L.irradiance * (cosn * frac * kInvPi);
+        for (int k = 0; k < 9; ++k) {
+          irr_local[k * 3 + 0] += L.sh[k] * frac * L.irradiance.r;
+          irr_local[k * 3 + 1] += L.sh[k] * frac * L.irradiance.g;
+          irr_local[k * 3 + 2] += L.sh[k] * frac * L.irradiance.b;
+        }
+      }
+      direct[idx] = d;
+      if (want_vis) std::copy(V, V + kSh, vis.begin() + idx * kSh);
+      if (want_irr) std::copy(irr_local, irr_local + 27, irr.begin() + idx * 27);
+    }
+    rc.report(++rows_done / units);
+  });
+
+  // --- bounces: indirect radiance U (Eq. 12, 20-21) through the radiance pyramid
+  // ----------------------------
+  std::vector<float> exitant(N * 3);
+  for (std::size_t t = 0; t < N; ++t) {
+    Rgb b = scene.surface.albedo.empty() ? Rgb{} : scene.surface.albedo[t] * direct[t];
+    if (!scene.surface.emission.empty()) b += scene.surface.emission[t];
+    exitant[t * 3] = b.r, exitant[t * 3 + 1] = b.g, exitant[t * 3 + 2] = b.b;
+  }
+  const int lu = nlp::radiance_levels(ms);
+  for (int bounce = 1; bounce <= scene.bounces; ++bounce) {
+    const nlp::Pyramid rp = nlp::build_pyramid(exitant.data(), 3, W, H, f.wrap, o.levels_per_octave, lu);
+    std::vector<Rgb> this_bounce(N);
+    tbb::parallel_for(0, H, [&](int j) {
+      rc.check();
+      Scratch& s = scratch.local();
+      for (int i = 0; i < W; ++i) {
+        const std::size_t idx = f.index(i, j);
+        const Vec3f n = normals[idx];
+        receiver(s, i, j);
+        float U[3][kSh] = {};
+        for (int a = 0; a < m; ++a) {
+          const float cx = cphi[a], cy = sphi[a];
+          const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
+          const int cnt =
+              nlp::march(ms, hp, i, j, cx, cy, s.recv.data(), s.omega.data(), s.dist.data(), s.lev.data());
+          const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
+          float u[3][4] = {}, prev[4];
+          nlp::occlusion4(std::sin(wmin), prev);
+          float run = wmin;
+          bool any = false;
+          for (int p = 0; p < nc; ++p) {
+            if (!(s.curve[p] > run)) continue;
+            run = s.curve[p];
+            const int k = p >> 1;
+            const float dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
+            float rad[3];
+            const nlp::PyramidLevel& L = rp.levels[ms.rlevel[s.lev[k]]];
+            nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
+            float nu[4];
+            nlp::occlusion4(std::sin(run), nu);
+            for (int l = 0; l < 4; ++l) {
+              const float dl = nu[l] - prev[l];
+              u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
+              prev[l] = nu[l];
+            }
+            any = true;
+          }
+          if (!any) continue;
+          const float* Aj = A[a].data();
+          for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < kSh; ++r)
+              U[c][r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
+                         Aj[r * 4 + 3] * u[c][3];
+        }
+        float y[kSh];
+        sh::eval(n.x, n.y, n.z, y);
+        float e[3] = {};
+        for (int c = 0; c < 3; ++c)
+          for (int k = 0; k < 9; ++k) e[c] += kConv[k] * y[k] * U[c][k];
+        this_bounce[idx] = Rgb{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+        if (want_irr)
+          for (int k = 0; k < 9; ++k)
+            for (int c = 0; c < 3; ++c) irr[idx * 27 + k * 3 + c] += kConv[k] * U[c][k] * kInvPi;
+      }
+      rc.report(++rows_done / units);
+    });
+    for (std::size_t t = 0; t < N; ++t) {
+      indirect[t] += this_bounce[t];
+      const Rgb b = scene.surface.albedo.empty() ? Rgb{} : scene.surface.albedo[t] * this_bounce[t];
+      exitant[t * 3] = b.r, exitant[t * 3 + 1] = b.g, exitant[t * 3 + 2] = b.b;
+    }
+  }
+
+  // --- layers --------------------------------------------------------------------------------------------
+  LayerSet out;
+  out.width = W;
+  out.height = H;
+  for (const std::string& name : o.layers) {
+    if (name == "direct" || name == "indirect" || name == "total") {
+      Layer& L = out.add(name, rgb_channels());
+      for (std::size_t t = 0; t < N; ++t) {
+        const Rgb v =
+            name == "direct" ? direct[t] : (name == "indirect" ? indirect[t] : direct[t] + indirect[t]);
+        L.data[t * 3] = v.r, L.data[t * 3 + 1] = v.g, L.data[t * 3 + 2] = v.b;
+      }
+    } else if (name == "sh_visibility") {
+      Layer& L = out.add(name, indexed_channels(kSh));
+      L.data = vis;
+    } else if (name == "sh_irradiance") {
+      std::vector<std::string> ch;
+      for (const std::string& c : indexed_channels(kSh))
+        for (const char* col : {"R", "G", "B"}) ch.push_back(c + "." + col);
+      Layer& L = out.add(name, ch);
+      for (std::size_t t = 0; t < N; ++t)
+        for (int q = 0; q < 27; ++q) L.data[t * 48 + q] = irr[t * 27 + q];
+    }
+  }
+  out.attributes.emplace_back("hfbake:sh_convention", sh_convention_text());
+  out.attributes.emplace_back("hfbake:nlp_pyramid", "height levels " + std::to_string(hp.levels.size()) +
+                                                        " (" + std::to_string(hp.bytes()) +
+                                                        " bytes), steps " + std::to_string(ms.steps) +
+                                                        ", radiance levels " + std::to_string(lu));
+  return out;
+}
+
+LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  return bake_nlp(scene, parse_nlp_options(params), rc);
+}
+
+}  // namespace hfbake

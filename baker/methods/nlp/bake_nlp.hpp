@@ -1,0 +1,44 @@
+// NLP/SH multiresolution global illumination (issue 6): Nowrouzezahrai & Snyder, "Fast Global Illumination
+// on Dynamic Height Fields" (EGSR 2009, NS09), offline. Per texel and azimuth a horizon march over a B-spline
+// height pyramid gives the visibility and indirect radiance along that azimuth in the normalized Legendre
+// basis; wedge matrices turn the m azimuths into order-4 SH visibility V and indirect radiance U; shading is
+// the SH product of the environment with V (direct) and U (indirect), dotted with the clamped cosine about
+// the texel normal. Directional lights use the restricted-extent visibility of NS09 §6.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/layers.hpp"
+#include "core/run_control.hpp"
+#include "field/scene.hpp"
+#include "methods/nlp/wedge_matrices.hpp"
+
+namespace hfbake {
+
+struct NlpOptions {
+  int directions = 32;            // m azimuths (NS09 default 32)
+  int levels_per_octave = 4;      // k_v = k_u
+  int level_offset = 2;           // o_v (visibility)
+  int radiance_level_offset = 2;  // o_u (indirect radiance)
+  nlp::AzimuthInterpolation interpolation = nlp::AzimuthInterpolation::linear;
+  int light_directions = 3;  // azimuths across a directional light's disk (NS09 §9: 3)
+  int subsample = 1;         // 1, or 2: V and U on a 2x2-subsampled grid, shading at full resolution
+  std::vector<std::string> layers = {"direct", "indirect", "total", "sh_visibility", "sh_irradiance"};
+};
+
+// Every layer nlp can write.
+const std::vector<std::string>& nlp_layer_names();
+
+// params: the schema-validated bake entry (schemas/methods/nlp.schema.json). Throws InputError for an
+// unknown layer name.
+NlpOptions parse_nlp_options(const nlohmann::json& params);
+
+LayerSet bake_nlp(const Scene& scene, const NlpOptions& options, const RunControl& rc);
+LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+
+// The SH convention written into the EXR header (attribute "hfbake:sh_convention").
+const char* sh_convention_text();
+
+}  // namespace hfbake

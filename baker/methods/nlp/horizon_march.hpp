@@ -1,0 +1,74 @@
+// One receiver, one azimuth: NS09 §5.2's exponential steps over the height pyramid (Eq. 14-15), the
+// B-spline interpolant of the blocking angles (Eq. 16) and the casting set (Eq. 17).
+//
+// Steps: knot k (k = 0..n-1) lies d_k = 2^(k / k_v) texels from the receiver (Eq. 14 in texel units; the
+// paper's tau_i is d_k over the field size), n covers the field: d_(n-1) >= its diagonal (clamp) or its
+// larger side (repeat). Knot k reads pyramid level l(k) = clamp(k - k_v o_v, 0, levels - 1): the filter grows
+// with distance, its width about d_k / 2^(o_v) (the level offset o_v sharpens: NS09 "increasing o_v reduces
+// the blurring"). Eq. 15 compares the sample with the receiver's height in the same level. In clamp mode the
+// march ends at the border with a last knot on the border (the field is a solid that ends there: a ray
+// below the border height is blocked, one above escapes).
+//
+// The blocking-angle curve: the uniform cubic B-spline with the knot angles as control points (end points
+// repeated), evaluated at the knots and midpoints (2n - 1 points, Eq. 16); omega_max is its maximum, and the
+// casting set (Eq. 17) are the points whose angle exceeds every earlier one, starting from omega_min.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include "methods/nlp/pyramid.hpp"
+
+namespace hfbake::nlp {
+
+// |error| <= 1.2e-5 rad (Abramowitz & Stegun 4.4.49 with octant reduction), plain arithmetic.
+inline float fast_atan(float x) {
+  const float ax = std::abs(x);
+  const bool inv = ax > 1;
+  const float t = inv ? 1 / ax : ax, t2 = t * t;
+  float r = t * (0.9998660f + t2 * (-0.3302995f + t2 * (0.1801410f + t2 * (-0.0851330f + t2 * 0.0208351f))));
+  if (inv) r = 1.57079632679f - r;
+  return x < 0 ? -r : r;
+}
+
+struct MarchSetup {
+  int steps = 0;            // n knots
+  std::vector<float> dist;  // d_k, texels
+  std::vector<int> level;   // height level per knot
+  std::vector<int> rlevel;  // radiance level per knot (o_u)
+  float texel_size = 1;
+  bool repeat = false;
+  int width = 0, height = 0;
+};
+
+// levels: the height pyramid's level count is steps - k_v * o_v (at least 1); likewise radiance.
+MarchSetup make_march_setup(int width, int height, double texel_size, Wrap wrap, int levels_per_octave,
+                            int level_offset, int radiance_level_offset);
+int height_levels(const MarchSetup& s);
+int radiance_levels(const MarchSetup& s);
+
+// One ray. Fills omega[0..n) (knot blocking angles, radians), dist[0..n) (knot distances, texels), lev[0..n)
+// (knot index into MarchSetup::level / rlevel) and returns n (0: the receiver is on the border and the ray
+// leaves the field at once). recv[l]: the receiver's height in level l.
+int march(const MarchSetup& s, const Pyramid& heights, int i, int j, float cx, float cy, const float* recv,
+          float* omega, float* dist, int* lev);
+
+// B-spline curve of the knots at knots and midpoints: out[2k] at knot k, out[2k + 1] between k and k + 1.
+// Returns 2n - 1 (0 when n == 0).
+inline int bspline_curve(const float* w, int n, float* out) {
+  if (n <= 0) return 0;
+  auto at = [&](int k) { return w[k < 0 ? 0 : (k >= n ? n - 1 : k)]; };
+  for (int k = 0; k < n; ++k) {
+    out[2 * k] = (at(k - 1) + 4 * at(k) + at(k + 1)) * (1.0f / 6);
+    if (k + 1 < n) out[2 * k + 1] = (at(k - 1) + 23 * at(k) + 23 * at(k + 1) + at(k + 2)) * (1.0f / 48);
+  }
+  return 2 * n - 1;
+}
+
+// omega_min along azimuth (cx, cy) for normal n: the elevation of the tangent plane in that vertical plane,
+// atan2(-(n . d), n_z). (NS09 writes -asin(n . d), equal only along and across the slope.)
+inline float omega_min(float nx, float ny, float nz, float cx, float cy) {
+  return std::atan2(-(nx * cx + ny * cy), nz);
+}
+
+}  // namespace hfbake::nlp

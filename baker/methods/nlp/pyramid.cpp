@@ -1,0 +1,132 @@
+#include "methods/nlp/pyramid.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+namespace hfbake::nlp {
+
+namespace {
+
+double bspline3(double u) {
+  u = std::abs(u);
+  if (u < 1) return 2.0 / 3.0 - u * u + 0.5 * u * u * u;
+  if (u < 2) return (2 - u) * (2 - u) * (2 - u) / 6;
+  return 0;
+}
+
+// Grid for one axis: node count and texels per node.
+void axis_grid(int n, bool repeat, double g, int& nodes, double& spacing) {
+  if (repeat) {
+    nodes = std::max(1, int(std::lround(n / g)));
+    spacing = double(n) / nodes;
+  } else {
+    nodes = n <= 1 ? 1 : int(std::ceil((n - 1) / g)) + 1;
+    spacing = nodes <= 1 ? 1.0 : double(n - 1) / (nodes - 1);
+  }
+}
+
+// Filter weights for node positions X = a * spacing: taps[a] lists (texel, weight), weights sum to 1.
+struct Taps {
+  std::vector<int> start;  // offset into idx/w per node (size nodes + 1)
+  std::vector<int> idx;
+  std::vector<float> w;
+};
+
+Taps make_taps(int n, bool repeat, int nodes, double spacing, double s) {
+  Taps t;
+  t.start.push_back(0);
+  for (int a = 0; a < nodes; ++a) {
+    const double x = a * spacing;
+    if (s <= 0) {
+      int i = int(std::lround(x));
+      if (repeat) i = ((i % n) + n) % n;
+      t.idx.push_back(std::clamp(i, 0, n - 1));
+      t.w.push_back(1);
+    } else {
+      const int lo = int(std::ceil(x - 2 * s)), hi = int(std::floor(x + 2 * s));
+      double sum = 0;
+      const std::size_t first = t.w.size();
+      for (int i = lo; i <= hi; ++i) {
+        if (!repeat && (i < 0 || i >= n)) continue;
+        const double w = bspline3((x - i) / s);
+        if (w <= 0) continue;
+        t.idx.push_back(repeat ? ((i % n) + n) % n : i);
+        t.w.push_back(float(w));
+        sum += w;
+      }
+      if (sum <= 0) {  // kernel narrower than the texel spacing: nearest texel
+        int i = int(std::lround(x));
+        if (repeat) i = ((i % n) + n) % n;
+        t.idx.push_back(std::clamp(i, 0, n - 1));
+        t.w.push_back(1);
+        sum = 1;
+      }
+      for (std::size_t k = first; k < t.w.size(); ++k) t.w[k] = float(t.w[k] / sum);
+    }
+    t.start.push_back(int(t.w.size()));
+  }
+  return t;
+}
+
+}  // namespace
+
+double pyramid_blur(int level, int k) {
+  return std::sqrt(std::max(0.0, std::pow(4.0, double(level) / k) - 1));
+}
+
+std::size_t Pyramid::bytes() const {
+  std::size_t b = 0;
+  for (const PyramidLevel& l : levels) b += l.data.size() * sizeof(float);
+  return b;
+}
+
+Pyramid build_pyramid(const float* data, int channels, int W, int H, Wrap wrap, int k, int level_count) {
+  Pyramid p;
+  p.channels = channels;
+  p.field_w = W;
+  p.field_h = H;
+  p.repeat = wrap == Wrap::repeat;
+  p.levels_per_octave = k;
+  p.levels.resize(std::max(1, level_count));
+  const int c = channels;
+  for (int l = 0; l < int(p.levels.size()); ++l) {
+    PyramidLevel& lv = p.levels[l];
+    const double s = l == 0 ? 0.0 : pyramid_blur(l, k);
+    double g = 1;
+    while (g * 2 <= s / 2) g *= 2;
+    double sx, sy;
+    axis_grid(W, p.repeat, g, lv.w, sx);
+    axis_grid(H, p.repeat, g, lv.h, sy);
+    lv.inv_sx = float(1 / sx);
+    lv.inv_sy = float(1 / sy);
+    lv.blur = s;
+    lv.data.assign(std::size_t(lv.w) * lv.h * c, 0.0f);
+    if (s <= 0 && lv.w == W && lv.h == H) {
+      std::copy(data, data + std::size_t(W) * H * c, lv.data.begin());
+      continue;
+    }
+    const Taps tx = make_taps(W, p.repeat, lv.w, sx, s), ty = make_taps(H, p.repeat, lv.h, sy, s);
+    // Horizontal pass: every field row to lv.w nodes.
+    std::vector<float> tmp(std::size_t(lv.w) * H * c, 0.0f);
+    tbb::parallel_for(0, H, [&](int j) {
+      const float* row = data + std::size_t(j) * W * c;
+      float* out = tmp.data() + std::size_t(j) * lv.w * c;
+      for (int a = 0; a < lv.w; ++a)
+        for (int t = tx.start[a]; t < tx.start[a + 1]; ++t)
+          for (int ch = 0; ch < c; ++ch) out[a * c + ch] += tx.w[t] * row[std::size_t(tx.idx[t]) * c + ch];
+    });
+    // Vertical pass.
+    tbb::parallel_for(0, lv.h, [&](int b) {
+      float* out = lv.data.data() + std::size_t(b) * lv.w * c;
+      for (int t = ty.start[b]; t < ty.start[b + 1]; ++t) {
+        const float* in = tmp.data() + std::size_t(ty.idx[t]) * lv.w * c;
+        const float w = ty.w[t];
+        for (int a = 0; a < lv.w * c; ++a) out[a] += w * in[a];
+      }
+    });
+  }
+  return p;
+}
+
+}  // namespace hfbake::nlp

@@ -1,0 +1,175 @@
+// Measurement (not a test): nlp against an independent brute-force horizon integration on the four P2
+// fields, as the parameters vary (NS09 Figure 10's convergence study). Brute force: K azimuths, a march of
+// the bilinear surface in 1/4-texel steps to the border, the exact casting set (every running maximum above
+// the tangent plane) and exact cosine integrals per elevation band; one diffuse bounce from the brute-force
+// direct light. Uniform white environment (so SH order 4 represents the lighting exactly), albedo 0.5.
+//   measure_nlp [size=128] [brute_azimuths=256]
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include "field/procedural.hpp"
+#include "methods/nlp/bake_nlp.hpp"
+
+using namespace hfbake;
+
+namespace {
+
+// integral over e in [a, b] of (nh cos e + nz sin e) cos e de
+double band_cos(double nh, double nz, double a, double b) {
+  auto F = [&](double e) {
+    return nh * (e / 2 + std::sin(2 * e) / 4) + nz * (std::sin(e) * std::sin(e) / 2);
+  };
+  return F(b) - F(a);
+}
+
+struct Brute {
+  std::vector<float> direct, indirect;
+};
+
+// E/pi for a uniform unit environment and one bounce of albedo rho.
+Brute brute_force(const Scene& s, int K, float rho) {
+  const HeightField& f = s.field;
+  const int W = f.width, H = f.height;
+  const double step = 0.25;
+  Brute out;
+  out.direct.assign(f.texel_count(), 0);
+  out.indirect.assign(f.texel_count(), 0);
+  // Per texel, per azimuth: casting set (distance, e) for the indirect pass.
+  struct Hit {
+    float x, y, e0, e1;  // point and its elevation band
+    int az;
+  };
+  std::vector<std::vector<Hit>> hits(f.texel_count());
+  tbb::parallel_for(0, H, [&](int j) {
+    for (int i = 0; i < W; ++i) {
+      const Vec3 n = s.normals[f.index(i, j)].d();
+      const double h0 = f.at(i, j);
+      double acc = 0;
+      std::vector<Hit>& hv = hits[f.index(i, j)];
+      for (int a = 0; a < K; ++a) {
+        const double phi = 2 * kPi * (a + 0.5) / K, cx = std::cos(phi), cy = std::sin(phi);
+        const double nh = n.x * cx + n.y * cy, nz = n.z;
+        const double emin = std::atan2(-nh, nz);
+        double run = emin;
+        double t_exit = 1e30;
+        if (f.wrap == Wrap::clamp) {
+          if (cx > 1e-9) t_exit = std::min(t_exit, (W - 1 - i) / cx);
+          if (cx < -1e-9) t_exit = std::min(t_exit, -i / cx);
+          if (cy > 1e-9) t_exit = std::min(t_exit, (H - 1 - j) / cy);
+          if (cy < -1e-9) t_exit = std::min(t_exit, -j / cy);
+        } else {
+          t_exit = std::max(W, H);
+        }
+        for (double t = step; t_exit > 0; t += step) {
+          const bool last = t >= t_exit;
+          if (last) t = t_exit;
+          const double x = i + t * cx, y = j + t * cy;
+          const double e = std::atan2(f.bilinear(x, y) - h0, t * f.texel_size);
+          if (e > run) {
+            hv.push_back({float(x), float(y), float(run), float(e), a});
+            run = e;
+          }
+          if (last) break;
+        }
+        acc += band_cos(nh, nz, std::max(run, emin), kPi / 2);
+      }
+      out.direct[f.index(i, j)] = float(acc * (2 * kPi / K) / kPi);
+    }
+  });
+  std::vector<float> B(f.texel_count());
+  for (std::size_t t = 0; t < B.size(); ++t) B[t] = rho * out.direct[t];
+  HeightField bf = f;
+  bf.z = B;
+  tbb::parallel_for(0, H, [&](int j) {
+    for (int i = 0; i < W; ++i) {
+      const Vec3 n = s.normals[f.index(i, j)].d();
+      double acc = 0;
+      for (const Hit& h : hits[f.index(i, j)]) {
+        const double phi = 2 * kPi * (h.az + 0.5) / K;
+        const double nh = n.x * std::cos(phi) + n.y * std::sin(phi);
+        acc += bf.bilinear(h.x, h.y) * band_cos(nh, n.z, h.e0, h.e1);
+      }
+      out.indirect[f.index(i, j)] = float(acc * (2 * kPi / K) / kPi);
+    }
+  });
+  return out;
+}
+
+struct Err {
+  double rmse = 0, bias = 0, mean = 0;
+};
+Err error(const std::vector<float>& got, int ch, const std::vector<float>& truth, int W, int H, int margin) {
+  Err e;
+  int n = 0;
+  for (int j = margin; j < H - margin; ++j)
+    for (int i = margin; i < W - margin; ++i) {
+      const std::size_t t = std::size_t(j) * W + i;
+      const double d = got[t * 3 + ch] - truth[t];
+      e.rmse += d * d;
+      e.bias += d;
+      e.mean += truth[t];
+      ++n;
+    }
+  e.rmse = std::sqrt(e.rmse / n);
+  e.bias /= n;
+  e.mean /= n;
+  return e;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int size = argc > 1 ? std::atoi(argv[1]) : 128;
+  const int K = argc > 2 ? std::atoi(argv[2]) : 256;
+  const float rho = 0.5f;
+  std::printf("field   | m   | k | o_v o_u | interp  | direct rmse  bias   | indirect rmse  bias  | ms\n");
+  for (ProceduralKind kind :
+       {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::sines, ProceduralKind::blocks}) {
+    ProceduralSpec spec;
+    spec.kind = kind;
+    spec.width = spec.height = size;
+    spec.seed = 7;
+    Scene s;
+    s.field = make_procedural(spec, 1.0, Wrap::clamp);
+    s.normals = compute_normals(s.field);
+    s.surface.albedo.assign(s.field.texel_count(), Rgb{rho, rho, rho});
+    s.environment = make_uniform_environment(Rgb{1, 1, 1});
+    s.bounces = 1;
+    const Brute bf = brute_force(s, K, rho);
+    double md = 0, mi = 0;
+    for (std::size_t t = 0; t < bf.direct.size(); ++t) md += bf.direct[t], mi += bf.indirect[t];
+    std::printf("%-7s | brute force K=%d: mean direct %.4f, mean indirect %.4f\n", procedural_kind_name(kind),
+                K, md / bf.direct.size(), mi / bf.direct.size());
+    struct Cfg {
+      int m, k, ov, ou;
+      nlp::AzimuthInterpolation in;
+    };
+    const auto lin = nlp::AzimuthInterpolation::linear, bsp = nlp::AzimuthInterpolation::bspline;
+    for (Cfg c : {Cfg{8, 4, 2, 2, lin}, Cfg{16, 4, 2, 2, lin}, Cfg{32, 4, 2, 2, lin}, Cfg{64, 4, 2, 2, lin},
+                  Cfg{100, 4, 2, 2, lin}, Cfg{32, 4, 2, 2, bsp}, Cfg{100, 2, 1, 1, lin},
+                  Cfg{100, 8, 2, 2, lin}, Cfg{100, 8, 4, 4, lin}, Cfg{100, 16, 6, 6, lin}}) {
+      NlpOptions o;
+      o.directions = c.m;
+      o.levels_per_octave = c.k;
+      o.level_offset = c.ov;
+      o.radiance_level_offset = c.ou;
+      o.interpolation = c.in;
+      o.layers = {"direct", "indirect"};
+      const auto t0 = std::chrono::steady_clock::now();
+      const LayerSet ls = bake_nlp(s, o, RunControl{});
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      const Err d = error(ls.find("direct")->data, 0, bf.direct, size, size, 2);
+      const Err ind = error(ls.find("indirect")->data, 0, bf.indirect, size, size, 2);
+      std::printf("%-7s | %3d | %d | %d   %d   | %-7s | %.4f  %+.4f | %.4f  %+.4f | %.0f\n",
+                  procedural_kind_name(kind), c.m, c.k, c.ov, c.ou, c.in == lin ? "linear" : "bspline",
+                  d.rmse, d.bias, ind.rmse, ind.bias, ms);
+    }
+  }
+  return 0;
+}
