@@ -56,9 +56,18 @@ HsaoTexel hsao_texel(const HeightField& field, Vec3 n, int i, int j, const HsaoS
       if (!surf.inside(q.x, q.y)) break;
       const double hq = surf.height(q.x, q.y);
       if (!(q.z < hq)) continue;
-      const Vec3 v = Vec3{q.x, q.y, hq} - p;
+      Vec3 v = Vec3{q.x, q.y, hq} - p;
+      if (!(length(v) < R)) {
+        // The surface point I is beyond R, but the terrain is a solid: the column between Q and I is
+        // occluder too, and its highest point within R lies on the sphere of radius R (refinement of the
+        // paper's rule "deflect only if |I - P| < R", which stalls on a wall taller than R allows).
+        const Vec3 qv = q - p;
+        const double z2 = R * R - qv.x * qv.x - qv.y * qv.y;
+        if (!(dot(qv, qv) < R * R) || !(z2 > 0)) continue;
+        v = Vec3{qv.x, qv.y, std::sqrt(z2) * (1 - 1e-12)};
+      }
       const double along = dot(v, T), up_n = dot(v, n);
-      if (!(length(v) < R) || !(along > 0)) continue;
+      if (!(along > 0)) continue;
       const double e = std::atan2(up_n, along);
       if (!(e > elev)) continue;
       occl += 2 * band_occlusion(s.falloff, Weighting::cosine, up, elev, e, along);
