@@ -188,6 +188,45 @@ TEST(HullTree, AdversarialLinesMatchNaive) {
   for (int m = 1; m <= 4; ++m) check_line(std::vector<double>(m, 1.0), "tiny flat");
 }
 
+// Receivers beyond the terrain (clamp lines after the border): query() against the naive march over
+// the terrain samples only.
+TEST(HullTree, QueryBeyondTheTerrainMatchesNaive) {
+  std::uint64_t s = 77;
+  std::vector<int> hz, naive, a, b;
+  for (int t = 0; t < 200; ++t) {
+    const int T = 1 + int(lcg(s) % 120);
+    std::vector<double> h(T + 40);
+    for (auto& x : h) x = (t % 2) ? double(lcg(s) % 5) : double(lcg(s) % 10000) / 100.0;
+    HullTree tree;
+    tree.reset(T);
+    for (int i = 0; i < T; ++i) tree.push(h[i]);
+    for (int q = T; q < T + 40; q += 1 + int(lcg(s) % 7)) {
+      tree.query(q, h[q], hz);
+      naive_visible(h.data(), q, naive, T);
+      for (std::size_t k = 1; k < hz.size(); ++k) ASSERT_LT(hz[k - 1], hz[k]);
+      // run starts of both
+      a.clear();
+      for (int c : hz)
+        if (c == 0 || !(visibility_slope(h.data(), c - 1, q) > visibility_slope(h.data(), c, q)))
+          a.push_back(c);
+      b.clear();
+      for (std::size_t k = 0; k < naive.size(); ++k)
+        if (k == 0 || naive[k - 1] != naive[k] - 1) b.push_back(naive[k]);
+      ASSERT_EQ(a, b) << "case " << t << " T " << T << " q " << q;
+    }
+    // Queries leave the tree as it was: the next push behaves as without them.
+    HullTree fresh;
+    fresh.reset(T + 1);
+    for (int i = 0; i <= T; ++i) fresh.push(h[i]);
+    tree.reset(T + 1);
+    for (int i = 0; i < T; ++i) tree.push(h[i]);
+    tree.query(T + 3, 1.0, hz);
+    tree.push(h[T]);
+    ASSERT_TRUE(std::equal(tree.horizons().begin(), tree.horizons().end(), fresh.horizons().begin(),
+                           fresh.horizons().end()));
+  }
+}
+
 TEST(HullTree, ReusedTreeGivesTheSameResult) {
   std::uint64_t s = 7;
   std::vector<double> a(200), b(120);

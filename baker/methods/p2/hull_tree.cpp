@@ -83,6 +83,34 @@ void HullTree::push(double height) {
   }
 }
 
+std::uint64_t HullTree::query(int index, double height, std::vector<int>& horizons) {
+  horizons.clear();
+  if (n_ == 0) return 0;
+  const double* h = h_.data();
+  auto slope = [&](int j) { return (h[j] - height) / double(index - j); };  // == visibility_slope
+  std::uint64_t checks = 0;
+  stack_.clear();
+  stack_.push_back({n_ - 1, first_child_[n_ - 1], slope(n_ - 1)});
+  while (!stack_.empty()) {
+    Frame& f = stack_.back();
+    if (f.child >= 0) {
+      ++checks;
+      const double s = slope(f.child);
+      if (s > f.slope) {
+        const int c = f.child;
+        f.child = next_sibling_[c];
+        stack_.push_back({c, first_child_[c], s});
+        continue;
+      }
+    }
+    const int p = f.parent;
+    const bool keep = f.child >= 0 || permanent_[p] || p == n_ - 1;
+    stack_.pop_back();
+    if (keep) horizons.push_back(p);
+  }
+  return checks;
+}
+
 void visible_stretches(const double* h, int r, std::span<const int> horizons,
                        std::vector<VisibleStretch>& out) {
   out.clear();

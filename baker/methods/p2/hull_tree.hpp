@@ -49,7 +49,13 @@ class HullTree {
   // Empty for the first sample of a line. The first one casts the global horizon (the largest slope).
   std::span<const int> horizons() const { return {horizons_.data(), horizons_.size()}; }
 
-  // Convexity checks performed (P2's iterations t), summed over the line so far.
+  // The local horizons of a receiver that is not terrain: at index `index` >= size() (a gap of non-terrain
+  // samples may lie between it and the last pushed sample) with height `height`, seeing the pushed samples
+  // only. The same traversal as push() without changing the tree; the last pushed sample is always
+  // listed (it is visible; run_starts drops it when it does not start a run). Returns the checks made.
+  std::uint64_t query(int index, double height, std::vector<int>& horizons);
+
+  // Convexity checks performed (P2's iterations t), summed over the line so far (push only).
   std::uint64_t iterations() const { return iterations_; }
 
  private:

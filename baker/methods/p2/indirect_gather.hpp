@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "core/vec.hpp"
+#include "methods/p1/fast_math.hpp"
 #include "methods/p2/hull_tree.hpp"
 
 namespace hfbake {
@@ -47,10 +48,11 @@ struct WedgeWeights {
     w.t_n = -np / nz;
     return w;
   }
-  // F at world slope t (see the header comment).
+  // F at world slope t (see the header comment). atan by P1's fast_atan (error < 4e-8 rad, far below the
+  // method's error; the weights of adjacent intervals share their F values, so they still tile exactly).
   double F(double t) const {
     const double q = 1 / (1 + t * t);
-    return 0.5 * (a_p * (std::atan(t) + t * q) + a_z * t * t * q);
+    return 0.5 * (a_p * (double(p1::fast_atan(float(t))) + t * q) + a_z * t * t * q);
   }
 };
 
@@ -69,10 +71,14 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
 // per-direction sky term, so that the two add up to P1's lobe (p1.hpp).
 inline double terrain_weight(Vec3 n, double cos_phi, double sin_phi, int K, double e) {
   const double np = n.x * cos_phi + n.y * sin_phi, nz = n.z;
-  const double et = std::atan2(-np, nz);
+  const double inv = 1 / (np * np + nz * nz);
+  const double et = -double(p1::fast_atan(float(np / nz)));  // tangent plane elevation (n_z > 0)
   if (!(e > et)) return 0;
-  const double ce = std::cos(e), se = std::sin(e), ct = std::cos(et), st = std::sin(et);
-  return (np * (e - et + se * ce - st * ct) + nz * (ct * ct - ce * ce)) / K;
+  float sf, cf;
+  p1::fast_sincos(float(e), sf, cf);
+  const double se = sf, ce = cf;
+  // cos^2 e_t = nz^2 / (np^2 + nz^2), sin e_t cos e_t = -np nz / (np^2 + nz^2)
+  return (np * (e - et + se * ce + np * nz * inv) + nz * (nz * nz * inv - ce * ce)) / K;
 }
 
 // The horizons that start a visible run: the tree's root children minus a permanent leaf whose farther

@@ -90,13 +90,16 @@ struct LineWorker {
         stats.receivers += 1;
         stats.naive_iterations += std::uint64_t(r);
       }
-      if (naive || !terrain) {
+      if (naive) {
         naive_visible(hh, r, visible, terrain_end);
         run_starts_of_visible(visible, starts);
         if (terrain) stats.iterations += std::uint64_t(r);
-      } else {
+      } else if (terrain) {
         run_starts(hh, r, tree.horizons(), starts);
         stats.horizons += tree.horizons().size();
+      } else {  // beyond a clamp field's border: sees the terrain, is not terrain itself
+        tree.query(r, hh[r], visible);
+        run_starts(hh, r, visible, starts);
       }
       if (terrain) stats.run_starts += starts.size();
       if (!gather) continue;
