@@ -1,0 +1,308 @@
+#include "methods/ao/farfield.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+#include "methods/ao/bake_ao.hpp"
+#include "methods/ao/farfield_slab_table.hpp"
+#include "methods/ao/obscurance_params.hpp"
+
+namespace hfbake {
+namespace {
+
+constexpr double kHalfPi = 0.5 * kPi;
+constexpr float kNone = -std::numeric_limits<float>::infinity();
+
+// One direction's lines and interval pyramid with prefix sums across lines.
+struct DirectionScan {
+  double dx = 1, dy = 0;  // D (occluders lie towards D)
+  double s0 = 0, t0 = 0;  // along / across coordinate (texels) of sample 0 of line 0
+  int lines = 0, samples = 0, b0 = 8, levels = 1;
+  std::vector<int> level_count;       // intervals per level
+  std::vector<std::size_t> level_at;  // offset of level n's first interval column
+  std::size_t columns = 0;            // total intervals over all levels
+  // Per line: m0, m1 of every interval column (raw maxima, kNone where the line has no terrain there).
+  std::vector<float> raw0, raw1;
+  // Prefix sums over lines: entry (l, c) = sum over lines < l, (lines + 1) x columns.
+  std::vector<double> sum0, sum1;
+  std::vector<int> count;
+};
+
+bool inside(const HeightField& f, double x, double y) {
+  constexpr double eps = 1e-7;
+  return x >= -eps && y >= -eps && x <= f.width - 1 + eps && y <= f.height - 1 + eps;
+}
+
+void plan(const HeightField& f, const FarfieldOptions& o, int k, DirectionScan& d) {
+  const double phi = 2.0 * kPi * k / o.directions;
+  d.dx = std::cos(phi), d.dy = std::sin(phi);
+  // Snap the axis and diagonal directions exactly.
+  for (double* c : {&d.dx, &d.dy})
+    if (std::fabs(*c) < 1e-12) *c = 0;
+  double smin = 1e300, smax = -1e300, tmin = 1e300, tmax = -1e300;
+  for (int c = 0; c < 4; ++c) {
+    const double x = (c & 1) ? f.width - 1 : 0, y = (c & 2) ? f.height - 1 : 0;
+    const double s = x * d.dx + y * d.dy, t = -x * d.dy + y * d.dx;
+    smin = std::min(smin, s), smax = std::max(smax, s), tmin = std::min(tmin, t), tmax = std::max(tmax, t);
+  }
+  double s_extra = 0, t_extra = 0;
+  if (f.wrap == Wrap::repeat) {
+    // Tiled terrain in front of every receiver, out to where rho is negligible (at most one period).
+    const double support = o.rho.support(1e-5) / f.texel_size;
+    s_extra = std::ceil(std::min(support, double(std::max(f.width, f.height))));
+    if (o.sector_average) t_extra = std::ceil(s_extra * std::tan(kPi / o.directions)) + 1;
+  }
+  d.b0 = o.interval;
+  d.s0 = std::floor(smin);
+  d.t0 = std::floor(tmin) - t_extra;
+  d.samples = int(std::ceil(smax) - d.s0 + 1 + s_extra);
+  d.lines = int(std::ceil(tmax) + t_extra - d.t0 + 1);
+  d.level_count.clear();
+  d.level_at.clear();
+  d.columns = 0;
+  for (int n = (d.samples + d.b0 - 1) / d.b0;; n = (n + 1) / 2) {
+    d.level_at.push_back(d.columns);
+    d.level_count.push_back(n);
+    d.columns += std::size_t(n);
+    if (n == 1) break;
+  }
+  d.levels = int(d.level_count.size());
+}
+
+float height_at(const HeightField& f, double x, double y) {
+  if (f.wrap == Wrap::clamp && !inside(f, x, y)) return kNone;
+  return f.bilinear(x, y);
+}
+
+// Scan, pyramid and prefix sums of one direction.
+void scan(const HeightField& f, DirectionScan& d, const RunControl& rc) {
+  const std::size_t cols = d.columns;
+  d.raw0.assign(std::size_t(d.lines) * cols, kNone);
+  d.raw1.assign(std::size_t(d.lines) * cols, kNone);
+  const double ts = f.texel_size;
+  tbb::parallel_for(tbb::blocked_range<int>(0, d.lines, 8), [&](const tbb::blocked_range<int>& r) {
+    rc.check();
+    for (int l = r.begin(); l < r.end(); ++l) {
+      float* m0 = &d.raw0[std::size_t(l) * cols];
+      float* m1 = &d.raw1[std::size_t(l) * cols];
+      const double t = d.t0 + l;
+      for (int m = 0; m < d.samples; ++m) {
+        const double s = d.s0 + m;
+        const float z = height_at(f, s * d.dx - t * d.dy, s * d.dy + t * d.dx);
+        if (z == kNone) continue;
+        const int j = m / d.b0;
+        m0[j] = std::max(m0[j], z);
+        m1[j] = std::max(m1[j], float(double(z) - m * ts));
+      }
+      for (int n = 1; n < d.levels; ++n) {
+        const std::size_t child = d.level_at[n - 1], parent = d.level_at[n];
+        const int nc = d.level_count[n - 1];
+        for (int j = 0; j < d.level_count[n]; ++j) {
+          const std::size_t a = child + 2 * j, b = 2 * j + 1 < nc ? a + 1 : a;
+          m0[parent + j] = std::max(m0[a], m0[b]);
+          m1[parent + j] = std::max(m1[a], m1[b]);
+        }
+      }
+    }
+  });
+  d.sum0.assign(std::size_t(d.lines + 1) * cols, 0.0);
+  d.sum1.assign(std::size_t(d.lines + 1) * cols, 0.0);
+  d.count.assign(std::size_t(d.lines + 1) * cols, 0);
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, cols, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t c = r.begin(); c < r.end(); ++c) {
+          double a = 0, b = 0;
+          int n = 0;
+          for (int l = 0; l < d.lines; ++l) {
+            const float v0 = d.raw0[std::size_t(l) * cols + c], v1 = d.raw1[std::size_t(l) * cols + c];
+            if (v0 != kNone) a += v0, b += v1, ++n;
+            const std::size_t o = std::size_t(l + 1) * cols + c;
+            d.sum0[o] = a, d.sum1[o] = b, d.count[o] = n;
+          }
+        }
+      });
+}
+
+// Horizon and accumulated occluded band of one (half) sector.
+struct SectorState {
+  double horizon = -kHalfPi;
+  double occluded = 0;
+};
+
+inline void add_slab(const SlabTable& table, SectorState& st, double x, double dz, double nt, double nz,
+                     double tangent) {
+  const double e = std::atan2(dz, x);
+  if (e <= st.horizon) return;
+  st.occluded += table.band(st.horizon, e, x, nt, nz, tangent);
+  st.horizon = e;
+}
+
+}  // namespace
+
+namespace {
+
+// The occluded measure sum_k sum_slabs band per texel; only the texels in `only` when it is not null.
+std::vector<double> farfield_occluded(const HeightField& field, const std::vector<Vec3f>& normals,
+                                      const FarfieldOptions& options, const RunControl& rc,
+                                      const std::vector<std::size_t>* only, FarfieldStats* stats) {
+  FarfieldOptions o = options;
+  o.directions = std::max(o.directions, 1);
+  o.interval = std::max(o.interval, 1);
+  if (o.near_field < 0) o.near_field = 1.5 * o.interval;
+  if (!o.sector_average) o.split = false;
+  const int W = field.width, H = field.height, K = o.directions;
+  const double ts = field.texel_size;
+  std::vector<double> occluded(field.texel_count(), 0.0);
+  const SlabTable table(o.rho);
+  const double support = o.rho.support(1e-5) / ts;  // texels beyond which rho < 1e-5
+  std::atomic<std::uint64_t> near_count{0}, far_count{0};
+  DirectionScan d;
+  for (int k = 0; k < K; ++k) {
+    plan(field, o, k, d);
+    scan(field, d, rc);
+    const double sector_tan = std::tan(kPi / K);
+    const std::size_t cols = d.columns;
+    const std::size_t items = only ? only->size() : std::size_t(H);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, items, only ? 1 : 4),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+          rc.check();
+          std::uint64_t nn = 0, nf = 0;
+          for (std::size_t item = r.begin(); item < r.end(); ++item) {
+            const int i_begin = only ? int((*only)[item] % W) : 0, i_end = only ? i_begin + 1 : W;
+            const int j = only ? int((*only)[item] / W) : int(item);
+            for (int i = i_begin; i < i_end; ++i) {
+              const std::size_t idx = field.index(i, j);
+              const Vec3f n = normals[idx];
+              const double nt = n.x * d.dx + n.y * d.dy, nz = n.z;
+              const double tangent = std::atan2(-nt, nz);
+              const double zr = field.z[idx];
+              const double sr = i * d.dx + j * d.dy - d.s0;  // receiver along / across, texels from sample 0
+              const double tr = -i * d.dy + j * d.dx - d.t0;
+              // Near field: exact march from the receiver, every sample its own slab.
+              SectorState near;
+              // The first aligned interval at least near_field texels away (the exact march stops at the
+              // scan's end and where rho has vanished, like the far field).
+              const double near_end = std::min({sr + o.near_field, double(d.samples), sr + support + 1});
+              const int m_far = int(std::ceil(near_end / d.b0)) * d.b0;
+              bool open_end = false;  // clamp: the ray left the field
+              for (int q = 1; sr + q < m_far; ++q) {
+                const double x = i + q * d.dx, y = j + q * d.dy;
+                if (field.wrap == Wrap::clamp && !inside(field, x, y)) {
+                  open_end = true;
+                  break;
+                }
+                add_slab(table, near, q * ts, field.bilinear(x, y) - zr, nt, nz, tangent);
+                ++nn;
+              }
+              const int halves = o.split ? 2 : 1;
+              double sum = 0;
+              for (int h = 0; h < halves && !open_end; ++h) {
+                SectorState st = near;
+                for (int m = m_far; m < d.samples;) {
+                  const double dist = m - sr;  // texels from the receiver to the interval's start
+                  if (dist >= support) break;
+                  int n = 0;
+                  while (n + 1 < d.levels && m % (d.b0 << (n + 1)) == 0 &&
+                         double(d.b0 << (n + 1)) <= o.growth * dist)
+                    ++n;
+                  const int len = d.b0 << n, jj = m / len;
+                  if (jj >= d.level_count[n]) break;
+                  const std::size_t c = d.level_at[n] + std::size_t(jj);
+                  int la, lb;
+                  if (!o.sector_average) {
+                    la = lb = int(std::lround(tr));
+                  } else {
+                    const double w = (dist + 0.5 * len) * sector_tan;
+                    const double lo = o.split ? (h == 0 ? tr - w : tr) : tr - w;
+                    const double hi = o.split ? (h == 0 ? tr : tr + w) : tr + w;
+                    la = int(std::ceil(lo)), lb = int(std::floor(hi));
+                    if (la > lb) la = lb = int(std::lround(0.5 * (lo + hi)));
+                  }
+                  la = std::max(la, 0), lb = std::min(lb, d.lines - 1);
+                  m += len;
+                  if (la > lb) continue;
+                  const std::size_t a = std::size_t(la) * cols + c, b = std::size_t(lb + 1) * cols + c;
+                  const int cnt = d.count[b] - d.count[a];
+                  if (cnt == 0) continue;
+                  const double m0 = (d.sum0[b] - d.sum0[a]) / cnt, m1 = (d.sum1[b] - d.sum1[a]) / cnt;
+                  double x = (m0 - m1) - sr * ts;  // the virtual point (s*, z*) = (m0 - m1, m0)
+                  ++nf;
+                  if (x <= 0) continue;
+                  if (lb > la) {
+                    // Lines beside the receiver's own line meet an occluder at along-distance x but radial
+                    // distance sqrt(x^2 + dt^2): use the sector's mean square offset (a circle stays a
+                    // circle).
+                    const double u0 = la - tr, nl = lb - la + 1;
+                    const double mean_sq =
+                        (nl * u0 * u0 + u0 * (nl - 1) * nl + (nl - 1) * nl * (2 * nl - 1) / 6) / nl;
+                    x = std::sqrt(x * x + mean_sq * ts * ts);
+                  }
+                  add_slab(table, st, x, m0 - zr, nt, nz, tangent);
+                }
+                sum += st.occluded;
+              }
+              occluded[idx] += open_end ? near.occluded : sum / halves;
+            }
+          }
+          near_count += nn;
+          far_count += nf;
+        });
+    rc.report(double(k + 1) / K);
+  }
+  for (double& v : occluded) v *= 2.0 / K;
+  if (stats) {
+    stats->near_samples = near_count;
+    stats->virtual_points = far_count;
+    stats->texel_directions = std::uint64_t(only ? only->size() : field.texel_count()) * K;
+  }
+  return occluded;
+}
+
+}  // namespace
+
+std::vector<float> farfield_obscurance(const HeightField& field, const std::vector<Vec3f>& normals,
+                                       const FarfieldOptions& options, const RunControl& rc,
+                                       FarfieldStats* stats) {
+  const std::vector<double> occluded = farfield_occluded(field, normals, options, rc, nullptr, stats);
+  std::vector<float> out(field.texel_count());
+  for (std::size_t t = 0; t < out.size(); ++t) out[t] = float(std::clamp(1.0 - occluded[t], 0.0, 1.0));
+  return out;
+}
+
+std::vector<double> farfield_occlusion_at(const HeightField& field, const std::vector<Vec3f>& normals,
+                                          const FarfieldOptions& options,
+                                          const std::vector<std::size_t>& texels, FarfieldStats* stats) {
+  const std::vector<double> occluded =
+      farfield_occluded(field, normals, options, RunControl{}, &texels, stats);
+  std::vector<double> out(texels.size());
+  for (std::size_t t = 0; t < texels.size(); ++t) out[t] = occluded[texels[t]];
+  return out;
+}
+
+LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  FarfieldOptions o;
+  o.rho = parse_falloff(params);
+  parse_weighting(params, false);
+  o.directions = int_param(params, "directions", 16, 1, 4096);
+  o.interval = int_param(params, "interval", 8, 1, 256);
+  o.near_field = number_param(params, "near_field", -1, -1, 1e6);
+  o.sector_average = params.value("sector_average", true);
+  o.split = params.value("split", true);
+  o.growth = number_param(params, "growth", 1.0, 0.125, 8.0);
+  const auto layers = select_layers(params, {"obscurance"}, {"obscurance"});
+  LayerSet out;
+  out.width = scene.field.width;
+  out.height = scene.field.height;
+  const std::vector<float> light = farfield_obscurance(scene.field, scene.normals, o, rc);
+  if (wants(layers, "obscurance")) out.add("obscurance", mono_channels()).data = light;
+  return out;
+}
+
+}  // namespace hfbake
