@@ -1,0 +1,48 @@
+// Line-sweep ambient obscurance (P3, Timonen 2013) on the shared line sweep (baker/sweep): per azimuth
+// phi_k = 2 pi k / K one sweep whose lines carry the obscurance hull (obscurance_hull.hpp); every line
+// sample is a receiver of P3 Eq. 1 with the fixed tangent sin t (strategy 3), and the sweep brings the
+// per-sample values back to the texel centres by its documented two-tap rule. O(K) per texel whatever the
+// radius and falloff. Sampling: the sweep's lines step one texel column (row) at a time and interpolate
+// heights along that column only, so axis and diagonal directions sample texel centres exactly (P3 §5.2's
+// box pattern for K = 8, n = 1) and other directions interpolate between two texels of one column.
+//
+// Output: obscurance = 1 - clamp(mean_k value_k, 0, 1) (P3 leaves the mapping open, digest §9.1). With
+// cosine weighting and rho = 1 this converges to the contract's cosine-weighted AO of an upward normal
+// (sin^2 of the horizon elevation); with uniform weighting to HBAO's solid-angle estimator (sin e).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/run_control.hpp"
+#include "field/height_field.hpp"
+#include "methods/ao/obscurance_hull.hpp"
+
+namespace hfbake {
+
+enum class LsaoEstimator {
+  hull,           // P3: the obscurance hull, O(1) amortised per sample
+  brute_visible,  // per sample, the largest occlusion over the earlier visible samples (O(M^2) per line)
+  brute_all,      // per sample, the largest occlusion over all earlier samples ("the only occluder")
+};
+
+struct LsaoOptions {
+  int directions = 16;          // K
+  OcclusionFunction occlusion;  // falloff, fixed tangent, weighting
+  LsaoEstimator estimator = LsaoEstimator::hull;
+  int wrap_periods = 1;  // repeat fields: warm-up periods of the sweep
+};
+
+struct LsaoStats {
+  std::uint64_t samples = 0;     // line samples swept (receivers and warm-up, over all directions)
+  std::uint64_t iterations = 0;  // hull loop tests (P3: between samples and 2 x samples)
+};
+
+// Mean over the K directions of the per-direction value (P3 Eq. 1, before clamping), per texel.
+std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOptions& options,
+                                        const RunControl& rc, LsaoStats* stats = nullptr);
+// The obscurance layer: 1 - clamp(mean occlusion, 0, 1).
+std::vector<float> lsao_obscurance(const HeightField& field, const LsaoOptions& options, const RunControl& rc,
+                                   LsaoStats* stats = nullptr);
+
+}  // namespace hfbake
