@@ -1,3 +1,72 @@
-int main() {
-  return 0;
+// nlp throughput: texels per second for a whole bake (pyramids, visibility, direct, one bounce) on the
+// fractal field, 512^2 and 1024^2, m = 16, 32, 64; counters give the height pyramid's memory.
+//   bench_nlp [--benchmark_filter=...]
+#include <benchmark/benchmark.h>
+
+#include <string>
+
+#include "field/procedural.hpp"
+#include "methods/nlp/bake_nlp.hpp"
+#include "methods/nlp/horizon_march.hpp"
+#include "methods/nlp/pyramid.hpp"
+
+using namespace hfbake;
+
+namespace {
+
+Scene fractal_scene(int size) {
+  ProceduralSpec spec;
+  spec.kind = ProceduralKind::fractal;
+  spec.width = spec.height = size;
+  spec.seed = 7;
+  Scene s;
+  s.field = make_procedural(spec, 1.0, Wrap::clamp);
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), Rgb{0.5f, 0.5f, 0.5f});
+  const EnvironmentLighting sky = make_sky_environment(SkySpec{});
+  s.environment = sky.environment;
+  s.lights = sky.lights;
+  s.bounces = 1;
+  return s;
 }
+
+void BM_Bake(benchmark::State& state) {
+  const int size = int(state.range(0)), m = int(state.range(1)), bounces = int(state.range(2)),
+            sub = int(state.range(3));
+  Scene s = fractal_scene(size);
+  s.bounces = bounces;
+  NlpOptions o;
+  o.directions = m;
+  o.subsample = sub;
+  o.layers = {"direct", "indirect", "total"};
+  for (auto _ : state) {
+    LayerSet ls = bake_nlp(s, o, RunControl{});
+    benchmark::DoNotOptimize(ls.layers.data());
+  }
+  state.counters["texels/s"] =
+      benchmark::Counter(double(s.field.texel_count()) * state.iterations(), benchmark::Counter::kIsRate);
+  const nlp::MarchSetup ms = nlp::make_march_setup(size, size, 1.0, Wrap::clamp, 4, 2, 2);
+  const nlp::Pyramid hp =
+      nlp::build_pyramid(s.field.z.data(), 1, size, size, Wrap::clamp, 4, nlp::height_levels(ms));
+  state.counters["height_pyramid_MB"] = double(hp.bytes()) / 1e6;
+  state.counters["height_levels"] = double(hp.levels.size());
+  state.counters["full_res_stack_MB"] = double(hp.levels.size()) * size * size * 4 / 1e6;
+}
+
+}  // namespace
+
+BENCHMARK(BM_Bake)
+    ->ArgNames({"size", "m", "bounces", "sub"})
+    ->Args({512, 16, 1, 1})
+    ->Args({512, 32, 1, 1})
+    ->Args({512, 64, 1, 1})
+    ->Args({512, 32, 3, 1})
+    ->Args({512, 32, 1, 2})
+    ->Args({1024, 16, 1, 1})
+    ->Args({1024, 32, 1, 1})
+    ->Args({1024, 64, 1, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+BENCHMARK_MAIN();

@@ -173,70 +173,130 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
     return *std::max_element(s.curve.begin(), s.curve.begin() + c);
   };
 
-  // --- pass 1: visibility V (Eq. 11, 20-21), direct light
-  // ---------------------------------------------------
-  tbb::parallel_for(0, H, [&](int j) {
-    rc.check();
-    Scratch& s = scratch.local();
-    for (int i = 0; i < W; ++i) {
-      const std::size_t idx = f.index(i, j);
-      const Vec3f n = normals[idx];
-      receiver(s, i, j);
-      float V[kSh] = {};
-      for (int a = 0; a < m; ++a) {
-        const float wmax = omega_max(s, i, j, cphi[a], sphi[a], n);
-        float v[4];
-        nlp::band4(std::sin(wmax), 1.0f, v);
-        const float* Aj = A[a].data();
-        for (int r = 0; r < kSh; ++r)
-          V[r] += Aj[r * 4] * v[0] + Aj[r * 4 + 1] * v[1] + Aj[r * 4 + 2] * v[2] + Aj[r * 4 + 3] * v[3];
-      }
-      // Direct from the environment: F(n) . (L * V).
-      float y[kSh];
-      sh::eval(n.x, n.y, n.z, y);
-      float e[3] = {}, lin[3][9];
-      for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 9; ++k) {
-          float acc = 0;
-          for (int q = 0; q < kSh; ++q) acc += T[c][k][q] * V[q];
-          lin[c][k] = acc;
-          e[c] += kConv[k] * y[k] * acc;
-        }
-      Rgb d{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
-      float irr_local[27];
-      for (int k = 0; k < 9; ++k)
-        for (int c = 0; c < 3; ++c) irr_local[k * 3 + c] = kConv[k] * lin[c][k] * kInvPi;
-      // Directional lights: exact cosine, visibility over the light's restricted extent (NS09 §6).
-      for (const LightSetup& L : lights) {
-        const float cosn = float(n.x * L.dir.x + n.y * L.dir.y + n.z * L.dir.z);
-        if (cosn <= 0) continue;
-        float frac = 0;
-        for (std::size_t q = 0; q < L.cx.size(); ++q) {
-          const float wmax = omega_max(s, i, j, L.cx[q], L.cy[q], n);
-          if (L.radius > 0) {
-            const float lo = std::max(L.elevation - L.radius, -1.5707963f);
-            const float hi = std::min(L.elevation + L.radius, 1.5707963f);
-            const float slo = std::sin(std::max(wmax, lo)), shi = std::sin(hi);
-            frac += std::clamp((shi - slo) / (shi - std::sin(lo)), 0.0f, 1.0f);
-          } else {
-            frac += wmax < L.elevation ? 1.0f : 0.0f;
-          }
-        }
-        frac /= float(L.cx.size());
-        if (frac <= 0) continue;
-        d += L.irradiance * (cosn * frac * kInvPi);
-        for (int k = 0; k < 9; ++k) {
-          irr_local[k * 3 + 0] += L.sh[k] * frac * L.irradiance.r;
-          irr_local[k * 3 + 1] += L.sh[k] * frac * L.irradiance.g;
-          irr_local[k * 3 + 2] += L.sh[k] * frac * L.irradiance.b;
-        }
-      }
-      direct[idx] = d;
-      if (want_vis) std::copy(V, V + kSh, vis.begin() + idx * kSh);
-      if (want_irr) std::copy(irr_local, irr_local + 27, irr.begin() + idx * 27);
+  // Receivers of V and U: every texel, or (subsample 2) every other texel in x and y, whose V, U and light
+  // visibility are bilinearly interpolated to the texels in between and shaded with their own normals.
+  const int sub = o.subsample, cw = (W + sub - 1) / sub + (sub > 1 && (W - 1) % sub ? 1 : 0),
+            ch = (H + sub - 1) / sub + (sub > 1 && (H - 1) % sub ? 1 : 0);
+  auto coarse_i = [&](int ci) { return std::min(ci * sub, W - 1); };
+  auto coarse_j = [&](int cj) { return std::min(cj * sub, H - 1); };
+  const std::size_t nl = lights.size();
+
+  // Kernel: V (Eq. 11, 20-21) and the restricted-extent visibility of each light at receiver (i, j).
+  auto visibility = [&](Scratch& s, int i, int j, float* V, float* frac) {
+    const Vec3f n = normals[f.index(i, j)];
+    receiver(s, i, j);
+    std::fill(V, V + kSh, 0.0f);
+    for (int a = 0; a < m; ++a) {
+      const float wmax = omega_max(s, i, j, cphi[a], sphi[a], n);
+      float v[4];
+      nlp::band4(std::sin(wmax), 1.0f, v);
+      const float* Aj = A[a].data();
+      for (int r = 0; r < kSh; ++r)
+        V[r] += Aj[r * 4] * v[0] + Aj[r * 4 + 1] * v[1] + Aj[r * 4 + 2] * v[2] + Aj[r * 4 + 3] * v[3];
     }
-    rc.report(++rows_done / units);
-  });
+    for (std::size_t q = 0; q < nl; ++q) {
+      const LightSetup& L = lights[q];
+      float fr = 0;
+      for (std::size_t k = 0; k < L.cx.size(); ++k) {
+        const float wmax = omega_max(s, i, j, L.cx[k], L.cy[k], n);
+        if (L.radius > 0) {
+          const float lo = std::max(L.elevation - L.radius, -1.5707963f);
+          const float hi = std::min(L.elevation + L.radius, 1.5707963f);
+          const float slo = std::sin(std::max(wmax, lo)), shi = std::sin(hi);
+          fr += std::clamp((shi - slo) / (shi - std::sin(lo)), 0.0f, 1.0f);
+        } else {
+          fr += wmax < L.elevation ? 1.0f : 0.0f;
+        }
+      }
+      frac[q] = fr / float(L.cx.size());
+    }
+  };
+
+  // Shading of direct light at texel idx from V and the lights' visibility.
+  auto shade_direct = [&](std::size_t idx, const float* V, const float* frac) {
+    const Vec3f n = normals[idx];
+    float y[kSh];
+    sh::eval(n.x, n.y, n.z, y);
+    float e[3] = {}, lin[3][9];
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 9; ++k) {
+        float acc = 0;
+        for (int q = 0; q < kSh; ++q) acc += T[c][k][q] * V[q];
+        lin[c][k] = acc;
+        e[c] += kConv[k] * y[k] * acc;
+      }
+    Rgb d{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+    float irr_local[27];
+    for (int k = 0; k < 9; ++k)
+      for (int c = 0; c < 3; ++c) irr_local[k * 3 + c] = kConv[k] * lin[c][k] * kInvPi;
+    // Directional lights: exact cosine, visibility over the light's restricted extent (NS09 §6).
+    for (std::size_t q = 0; q < nl; ++q) {
+      const LightSetup& L = lights[q];
+      const float cosn = float(n.x * L.dir.x + n.y * L.dir.y + n.z * L.dir.z);
+      if (cosn <= 0 || frac[q] <= 0) continue;
+      d += L.irradiance * (cosn * frac[q] * kInvPi);
+      for (int k = 0; k < 9; ++k) {
+        irr_local[k * 3 + 0] += L.sh[k] * frac[q] * L.irradiance.r;
+        irr_local[k * 3 + 1] += L.sh[k] * frac[q] * L.irradiance.g;
+        irr_local[k * 3 + 2] += L.sh[k] * frac[q] * L.irradiance.b;
+      }
+    }
+    direct[idx] = d;
+    if (want_vis) std::copy(V, V + kSh, vis.begin() + idx * kSh);
+    if (want_irr) std::copy(irr_local, irr_local + 27, irr.begin() + idx * 27);
+  };
+
+  // Bilinear interpolation of per-receiver vectors (cnt floats each) from the coarse grid to texel (i, j).
+  auto upsample = [&](const std::vector<float>& buf, int cnt, int i, int j, float* out) {
+    const float u = float(i) / sub, v = float(j) / sub;
+    const int i0 = std::min(int(u), cw - 1), j0 = std::min(int(v), ch - 1);
+    const int i1 = std::min(i0 + 1, cw - 1), j1 = std::min(j0 + 1, ch - 1);
+    // Exact positions of the coarse receivers (the last one may sit on the border, closer than sub).
+    const float x0 = float(coarse_i(i0)), x1 = float(coarse_i(i1)), y0 = float(coarse_j(j0)),
+                y1 = float(coarse_j(j1));
+    const float fu = x1 > x0 ? (float(i) - x0) / (x1 - x0) : 0.0f,
+                fv = y1 > y0 ? (float(j) - y0) / (y1 - y0) : 0.0f;
+    const float* a = buf.data() + (std::size_t(j0) * cw + i0) * cnt;
+    const float* b = buf.data() + (std::size_t(j0) * cw + i1) * cnt;
+    const float* c = buf.data() + (std::size_t(j1) * cw + i0) * cnt;
+    const float* d = buf.data() + (std::size_t(j1) * cw + i1) * cnt;
+    for (int k = 0; k < cnt; ++k)
+      out[k] = (a[k] * (1 - fu) + b[k] * fu) * (1 - fv) + (c[k] * (1 - fu) + d[k] * fu) * fv;
+  };
+
+  // --- pass 1: visibility V, direct light ----------------------------------------------------------------
+  if (sub == 1) {
+    tbb::parallel_for(0, H, [&](int j) {
+      rc.check();
+      Scratch& s = scratch.local();
+      float V[kSh];
+      std::vector<float> frac(nl);
+      for (int i = 0; i < W; ++i) {
+        visibility(s, i, j, V, frac.data());
+        shade_direct(f.index(i, j), V, frac.data());
+      }
+      rc.report(std::min(1.0, (rows_done += 1) / units));
+    });
+  } else {
+    const int stride = kSh + int(nl);
+    std::vector<float> coarse(std::size_t(cw) * ch * stride);
+    tbb::parallel_for(0, ch, [&](int cj) {
+      rc.check();
+      Scratch& s = scratch.local();
+      for (int ci = 0; ci < cw; ++ci) {
+        float* out = coarse.data() + (std::size_t(cj) * cw + ci) * stride;
+        visibility(s, coarse_i(ci), coarse_j(cj), out, out + kSh);
+      }
+      rc.report(std::min(1.0, (rows_done += sub) / units));
+    });
+    tbb::parallel_for(0, H, [&](int j) {
+      std::vector<float> buf(stride);
+      for (int i = 0; i < W; ++i) {
+        upsample(coarse, stride, i, j, buf.data());
+        shade_direct(f.index(i, j), buf.data(), buf.data() + kSh);
+      }
+    });
+  }
 
   // --- bounces: indirect radiance U (Eq. 12, 20-21) through the radiance pyramid
   // ----------------------------
@@ -250,60 +310,86 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
   for (int bounce = 1; bounce <= scene.bounces; ++bounce) {
     const nlp::Pyramid rp = nlp::build_pyramid(exitant.data(), 3, W, H, f.wrap, o.levels_per_octave, lu);
     std::vector<Rgb> this_bounce(N);
-    tbb::parallel_for(0, H, [&](int j) {
-      rc.check();
-      Scratch& s = scratch.local();
-      for (int i = 0; i < W; ++i) {
-        const std::size_t idx = f.index(i, j);
-        const Vec3f n = normals[idx];
-        receiver(s, i, j);
-        float U[3][kSh] = {};
-        for (int a = 0; a < m; ++a) {
-          const float cx = cphi[a], cy = sphi[a];
-          const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
-          const int cnt =
-              nlp::march(ms, hp, i, j, cx, cy, s.recv.data(), s.omega.data(), s.dist.data(), s.lev.data());
-          const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
-          float u[3][4] = {}, prev[4];
-          nlp::occlusion4(std::sin(wmin), prev);
-          float run = wmin;
-          bool any = false;
-          for (int p = 0; p < nc; ++p) {
-            if (!(s.curve[p] > run)) continue;
-            run = s.curve[p];
-            const int k = p >> 1;
-            const float dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
-            float rad[3];
-            const nlp::PyramidLevel& L = rp.levels[ms.rlevel[s.lev[k]]];
-            nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
-            float nu[4];
-            nlp::occlusion4(std::sin(run), nu);
-            for (int l = 0; l < 4; ++l) {
-              const float dl = nu[l] - prev[l];
-              u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
-              prev[l] = nu[l];
-            }
-            any = true;
+    // Kernel: U (3 x 16, colour-major) at receiver (i, j).
+    auto radiance = [&](Scratch& s, int i, int j, float* U) {
+      const Vec3f n = normals[f.index(i, j)];
+      receiver(s, i, j);
+      std::fill(U, U + 3 * kSh, 0.0f);
+      for (int a = 0; a < m; ++a) {
+        const float cx = cphi[a], cy = sphi[a];
+        const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
+        const int cnt =
+            nlp::march(ms, hp, i, j, cx, cy, s.recv.data(), s.omega.data(), s.dist.data(), s.lev.data());
+        const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
+        float u[3][4] = {}, prev[4];
+        nlp::occlusion4(std::sin(wmin), prev);
+        float run = wmin;
+        bool any = false;
+        for (int p = 0; p < nc; ++p) {
+          if (!(s.curve[p] > run)) continue;
+          run = s.curve[p];
+          const int k = p >> 1;
+          const float dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
+          float rad[3];
+          const nlp::PyramidLevel& L = rp.levels[ms.rlevel[s.lev[k]]];
+          nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
+          float nu[4];
+          nlp::occlusion4(std::sin(run), nu);
+          for (int l = 0; l < 4; ++l) {
+            const float dl = nu[l] - prev[l];
+            u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
+            prev[l] = nu[l];
           }
-          if (!any) continue;
-          const float* Aj = A[a].data();
-          for (int c = 0; c < 3; ++c)
-            for (int r = 0; r < kSh; ++r)
-              U[c][r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
-                         Aj[r * 4 + 3] * u[c][3];
+          any = true;
         }
-        float y[kSh];
-        sh::eval(n.x, n.y, n.z, y);
-        float e[3] = {};
+        if (!any) continue;
+        const float* Aj = A[a].data();
         for (int c = 0; c < 3; ++c)
-          for (int k = 0; k < 9; ++k) e[c] += kConv[k] * y[k] * U[c][k];
-        this_bounce[idx] = Rgb{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
-        if (want_irr)
-          for (int k = 0; k < 9; ++k)
-            for (int c = 0; c < 3; ++c) irr[idx * 27 + k * 3 + c] += kConv[k] * U[c][k] * kInvPi;
+          for (int r = 0; r < kSh; ++r)
+            U[c * kSh + r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
+                              Aj[r * 4 + 3] * u[c][3];
       }
-      rc.report(++rows_done / units);
-    });
+    };
+    auto shade_indirect = [&](std::size_t idx, const float* U) {
+      const Vec3f n = normals[idx];
+      float y[kSh];
+      sh::eval(n.x, n.y, n.z, y);
+      float e[3] = {};
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 9; ++k) e[c] += kConv[k] * y[k] * U[c * kSh + k];
+      this_bounce[idx] = Rgb{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+      if (want_irr)
+        for (int k = 0; k < 9; ++k)
+          for (int c = 0; c < 3; ++c) irr[idx * 27 + k * 3 + c] += kConv[k] * U[c * kSh + k] * kInvPi;
+    };
+    if (sub == 1) {
+      tbb::parallel_for(0, H, [&](int j) {
+        rc.check();
+        Scratch& s = scratch.local();
+        float U[3 * kSh];
+        for (int i = 0; i < W; ++i) {
+          radiance(s, i, j, U);
+          shade_indirect(f.index(i, j), U);
+        }
+        rc.report(std::min(1.0, (rows_done += 1) / units));
+      });
+    } else {
+      std::vector<float> coarse(std::size_t(cw) * ch * 3 * kSh);
+      tbb::parallel_for(0, ch, [&](int cj) {
+        rc.check();
+        Scratch& s = scratch.local();
+        for (int ci = 0; ci < cw; ++ci)
+          radiance(s, coarse_i(ci), coarse_j(cj), coarse.data() + (std::size_t(cj) * cw + ci) * 3 * kSh);
+        rc.report(std::min(1.0, (rows_done += sub) / units));
+      });
+      tbb::parallel_for(0, H, [&](int j) {
+        float U[3 * kSh];
+        for (int i = 0; i < W; ++i) {
+          upsample(coarse, 3 * kSh, i, j, U);
+          shade_indirect(f.index(i, j), U);
+        }
+      });
+    }
     for (std::size_t t = 0; t < N; ++t) {
       indirect[t] += this_bounce[t];
       const Rgb b = scene.surface.albedo.empty() ? Rgb{} : scene.surface.albedo[t] * this_bounce[t];

@@ -30,6 +30,27 @@ int radiance_levels(const MarchSetup& s) {
   return s.rlevel.empty() ? 1 : s.rlevel.back() + 1;
 }
 
+namespace {
+
+// Bilinear read of a clamp-mode level with at least 2 x 2 nodes (coordinates clamped; no floor needed).
+inline float sample_clamped(const PyramidLevel& lv, float x, float y) {
+  float u = x * lv.inv_sx, v = y * lv.inv_sy;
+  const float umax = float(lv.w - 1), vmax = float(lv.h - 1);
+  u = u < 0 ? 0 : (u > umax ? umax : u);
+  v = v < 0 ? 0 : (v > vmax ? vmax : v);
+  int i0 = int(u), j0 = int(v);
+  if (i0 > lv.w - 2) i0 = lv.w - 2;
+  if (j0 > lv.h - 2) j0 = lv.h - 2;
+  const float fu = u - float(i0), fv = v - float(j0);
+  const float* r0 = lv.data.data() + std::size_t(j0) * lv.w + i0;
+  const float* r1 = r0 + lv.w;
+  const float a = r0[0] + (r0[1] - r0[0]) * fu;
+  const float b = r1[0] + (r1[1] - r1[0]) * fu;
+  return a + (b - a) * fv;
+}
+
+}  // namespace
+
 int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float cy, const float* recv,
           float* omega, float* dist, int* lev) {
   float t_exit = std::numeric_limits<float>::infinity();
@@ -41,14 +62,17 @@ int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float 
     if (cy < -eps) t_exit = std::min(t_exit, -j / cy);
     if (t_exit < 1e-4f) return 0;
   }
-  const float inv_ts = 1 / s.texel_size;
+  const float inv_ts = 1 / s.texel_size, fi = float(i), fj = float(j);
+  const bool fast = !s.repeat && s.width >= 2 && s.height >= 2;
   int n = 0;
   for (int k = 0; k < s.steps; ++k) {
     float d = s.dist[k];
     const bool last = d >= t_exit;
     if (last) d = t_exit;
     const int l = s.level[k];
-    const float h = sample_level1(hp, hp.levels[l], i + d * cx, j + d * cy);
+    const PyramidLevel& lv = hp.levels[l];
+    const float x = fi + d * cx, y = fj + d * cy;
+    const float h = fast && lv.w >= 2 && lv.h >= 2 ? sample_clamped(lv, x, y) : sample_level1(hp, lv, x, y);
     omega[n] = fast_atan((h - recv[l]) * inv_ts / d);
     dist[n] = d;
     lev[n] = k;
