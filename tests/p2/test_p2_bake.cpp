@@ -201,6 +201,32 @@ TEST(P2Bake, EmittingVTrenchFloor) {
   }
 }
 
+// An emission map (P2 Figure 12): a glowing raised strip (height 3) on flat ground and a wall (height 12,
+// full length along y) between it and the receivers on the far side. Exact intervisibility: those
+// receivers get exactly nothing (black sky, albedo 0, wall not emitting), while the ground between the
+// strip and the wall sees the strip's top and edge.
+TEST(P2Bake, EmitterBehindAWallIsInvisible) {
+  const int W = 80, Hgt = 64, xw = 50;
+  HeightField f;
+  f.width = W;
+  f.height = Hgt;
+  f.z.assign(f.texel_count(), 0.0f);
+  Scene s = make_scene(f, {0, 0, 0}, 0, 0, 1);
+  s.surface.emission.assign(f.texel_count(), Rgb{});
+  for (int j = 0; j < Hgt; ++j) {
+    s.field.z[f.index(xw, j)] = 12;
+    for (int i = 10; i < 30; ++i) {
+      s.field.z[f.index(i, j)] = 3;
+      s.surface.emission[f.index(i, j)] = {2, 2, 2};
+    }
+  }
+  s.normals = compute_normals(s.field);
+  const P2Result r = compute_p2(s, params(32, 1), RunControl{});
+  for (int j = 0; j < Hgt; ++j)
+    for (int i = xw + 1; i < W; ++i) ASSERT_EQ(r.indirect[f.index(i, j)].g, 0.0f) << i << " " << j;
+  for (int i = 32; i < xw - 2; ++i) EXPECT_GT(r.indirect[f.index(i, Hgt / 2)].g, 0.005f) << i;
+}
+
 TEST(P2Bake, TreeAndNaiveGiveIdenticalBits) {
   for (auto kind :
        {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::sines, ProceduralKind::blocks}) {
