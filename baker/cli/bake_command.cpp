@@ -13,9 +13,12 @@
 #include "cli/method_dispatch.hpp"
 #include "cli/outputs.hpp"
 #include "cli/progress.hpp"
+#include "cli/reference_cache.hpp"
+#include "cli/report_page.hpp"
 #include "cli/report_writer.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/suite.hpp"
+#include "cli/test_break.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
@@ -55,7 +58,8 @@ void add_common_attributes(LayerSet& layers, const Job& job, const std::string& 
 }
 
 // Bakes one valid job. Throws InputError (bad input), Cancelled, or anything else (a failed job).
-void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome) {
+void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
+              const ReferenceCache* cache) {
   const auto t_job = std::chrono::steady_clock::now();
   const FieldSize size = probe_field_size(job);
   const std::size_t need = estimate_peak_bytes(job, size), have = available_memory_bytes();
@@ -82,6 +86,9 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     const auto t0 = std::chrono::steady_clock::now();
     LayerSet layers = run_method(entry, scene, rc);
     const double seconds = seconds_since(t0);
+    if (apply_test_break(entry.method, entry.stem, layers))
+      progress.message(job.name + ": " + entry.stem +
+                       ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
     progress.end(job.name, entry.stem, seconds);
     add_common_attributes(layers, job, job_hash, entry.method, entry.params, seconds);
     stage.write_layers(entry.stem, layers);
@@ -96,15 +103,38 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     rc.progress = [&](double f) { progress.update(job.name, "reference", f); };
     progress.begin(job.name, "reference");
     const auto t0 = std::chrono::steady_clock::now();
-    LayerSet reference = run_reference(job, scene, rc);
+    // The reference cache: a hit skips the path tracing; a damaged entry is recomputed and replaced.
+    std::string cache_key;
+    ReferenceCache::Entry cached;
+    CacheLookup lookup = CacheLookup::miss;
+    if (cache) {
+      cache_key = reference_cache_key(job);
+      lookup = cache->load(cache_key, cached);
+      if (lookup == CacheLookup::corrupt)
+        progress.message(job.name + ": reference cache entry " + cache->entry_path(cache_key).string() +
+                         " was damaged: removed, computing the reference again");
+    }
+    LayerSet reference =
+        lookup == CacheLookup::hit ? std::move(cached.layers) : run_reference(job, scene, rc);
     const double seconds = seconds_since(t0);
+    if (cache && lookup != CacheLookup::hit) {
+      const std::string problem = cache->store(cache_key, reference, seconds);
+      if (!problem.empty()) progress.message(job.name + ": reference cache: " + problem);
+    }
     progress.end(job.name, "reference", seconds);
     add_common_attributes(reference, job, job_hash, "reference", job.doc["reference"], seconds);
     stage.write_layers("reference", reference);
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};
+    if (cache) {
+      outcome.methods["reference"]["cache"] =
+          lookup == CacheLookup::corrupt ? "rebuilt" : cache_lookup_name(lookup);
+      outcome.methods["reference"]["cache_key"] = cache_key;
+      if (lookup == CacheLookup::hit) outcome.methods["reference"]["cache_saved_seconds"] = cached.seconds;
+    }
     report.reference_seconds = seconds;
     report.reference = std::move(reference);
     const ReportResult r = write_report(job, job_hash, report, stage);
+    write_report_page(job, report, r.report, stage);
     for (auto& [stem, metrics] : r.metrics_by_method.items())
       if (outcome.methods.contains(stem)) outcome.methods[stem]["metrics"] = metrics;
     for (const std::string& failure : r.threshold_failures) {
@@ -126,6 +156,13 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
                  job_status_name(o.status), o.seconds, o.file.c_str());
     for (auto& [stem, m] : o.methods.items()) {
       std::fprintf(stderr, "      %-20s %8.2f s", stem.c_str(), m.value("seconds", 0.0));
+      if (m.contains("cache")) {
+        const std::string c = m["cache"].get<std::string>();
+        if (c == "hit")
+          std::fprintf(stderr, "  (reference cache hit: saved %.2f s)", m.value("cache_saved_seconds", 0.0));
+        else
+          std::fprintf(stderr, "  (reference cache %s)", c.c_str());
+      }
       if (m.contains("metrics"))
         for (auto& [layer, metrics] : m["metrics"].items())
           if (metrics.contains("rmse"))
@@ -135,6 +172,17 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
     if (!o.outputs.empty())
       std::fprintf(stderr, "      outputs in %s\n", o.outputs.front().parent_path().c_str());
   }
+  int hits = 0, computed = 0;
+  double saved = 0;
+  for (const JobOutcome& o : outcomes)
+    if (o.methods.contains("reference") && o.methods["reference"].contains("cache")) {
+      const bool hit = o.methods["reference"]["cache"] == "hit";
+      hits += hit, computed += !hit;
+      saved += o.methods["reference"].value("cache_saved_seconds", 0.0);
+    }
+  if (hits + computed > 0)
+    std::fprintf(stderr, "  reference cache: %d hit%s (%.2f s of path tracing saved), %d computed\n", hits,
+                 hits == 1 ? "" : "s", saved, computed);
 }
 
 void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& outcomes, int exit_code) {
@@ -241,6 +289,14 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     }
   }
 
+  std::optional<ReferenceCache> cache;
+  if (!options.no_cache) {
+    if (options.cache)
+      cache.emplace(fs::absolute(*options.cache));
+    else if (const auto dir = default_reference_cache_dir())
+      cache.emplace(*dir);
+  }
+
   std::mutex error_mutex;
   auto fail = [&](JobOutcome& o, JobStatus s, const std::string& line) {
     std::lock_guard lock(error_mutex);
@@ -254,7 +310,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     group.run([&, i] {
       JobOutcome& o = outcomes[i];
       try {
-        bake_job(*jobs[i], progress, cancel, o);
+        bake_job(*jobs[i], progress, cancel, o, cache ? &*cache : nullptr);
       } catch (const Cancelled&) {
         o.status = JobStatus::cancelled;
       } catch (const InputError& e) {

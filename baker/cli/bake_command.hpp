@@ -13,6 +13,10 @@ struct BakeOptions {
   std::optional<std::filesystem::path> out;      // --out: replaces every job's output.dir
   std::optional<std::filesystem::path> summary;  // --summary: machine-readable JSON summary
   bool quiet = false;
+  // The reference cache (cli/reference_cache.hpp): --cache DIR, default under the user's cache home;
+  // --no-cache turns it off.
+  std::optional<std::filesystem::path> cache;
+  bool no_cache = false;
 };
 
 // Exit status per the contract: 0 all baked and thresholds held, 1 a threshold or baseline regressed,

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "cli/bake_command.hpp"
+#include "cli/compare_command.hpp"
 #include "cli/version.hpp"
 
 namespace {
@@ -40,6 +41,31 @@ int main(int argc, char** argv) {
   bake_cmd->add_option("--out", out, "Output folder, replacing each job's output.dir");
   bake_cmd->add_flag("--quiet", bake.quiet, "No progress output (errors are still printed)");
   bake_cmd->add_option("--summary", summary, "Write a machine-readable JSON summary to FILE");
+  std::string cache_dir;
+  bake_cmd->add_option("--cache", cache_dir,
+                       "Reference cache folder (default: $XDG_CACHE_HOME/hfbake/references or "
+                       "~/.cache/hfbake/references)");
+  bake_cmd->add_flag("--no-cache", bake.no_cache,
+                     "Always compute references; do not read or write the cache");
+
+  hfbake::CompareOptions compare;
+  std::string compare_json;
+  CLI::App* compare_cmd = app.add_subcommand(
+      "compare",
+      "Compare a report.json (or every report.json under a folder) with a baseline; exit 1 on regression");
+  compare_cmd
+      ->add_option("new", compare.now, "The new report.json (or a folder of them, e.g. a suite's output)")
+      ->required();
+  compare_cmd->add_option("baseline", compare.baseline, "The baseline report.json (or folder)")->required();
+  compare_cmd->add_option("--tolerance", compare.tolerances,
+                          "METRIC=REL[,ABS]: check METRIC (mae, rmse, rel_mae, excess_rmse, p99, max, psnr, "
+                          "bias, noise_rmse, seconds) with these tolerances (default: mae, rmse, excess_rmse "
+                          "at 0.05,1e-5)");
+  compare_cmd->add_flag("--all", compare.all, "List every checked metric, not only the changes");
+  compare_cmd->add_flag("--update-baseline", compare.update_baseline,
+                        "After comparing, write NEW over BASELINE (the only way a baseline changes)");
+  compare_cmd->add_option("--json", compare_json, "Also write the comparison as JSON to FILE");
+  compare_cmd->add_flag("--quiet", compare.quiet, "Print only errors");
 
   CLI::App* validate_cmd = app.add_subcommand("validate", "Check jobs against the schema and their files");
   validate_cmd->add_option("jobs", validate_jobs, "Job files (JSON)")->required();
@@ -56,6 +82,10 @@ int main(int argc, char** argv) {
     std::vector<std::filesystem::path> files(validate_jobs.begin(), validate_jobs.end());
     return hfbake::run_validate(files, validate_quiet);
   }
+  if (app.got_subcommand(compare_cmd)) {
+    if (!compare_json.empty()) compare.json = compare_json;
+    return hfbake::run_compare(compare);
+  }
   if (!app.got_subcommand(bake_cmd)) {
     std::fputs(app.help().c_str(), stdout);
     return 2;
@@ -64,6 +94,7 @@ int main(int argc, char** argv) {
   bake.jobs.assign(bake_jobs.begin(), bake_jobs.end());
   if (!out.empty()) bake.out = out;
   if (!summary.empty()) bake.summary = summary;
+  if (!cache_dir.empty()) bake.cache = cache_dir;
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

@@ -57,6 +57,7 @@ ReportResult write_report(const Job& job, const std::string& job_hash, const Rep
   ReportResult result;
   result.metrics_by_method = std::move(outcome.metrics_by_method);
   result.threshold_failures = std::move(outcome.failures);
+  result.report = std::move(outcome.doc);
   return result;
 }
 

@@ -26,6 +26,7 @@ struct ReportInputs {
 struct ReportResult {
   nlohmann::json metrics_by_method = nlohmann::json::object();  // stem -> layer -> metrics
   std::vector<std::string> threshold_failures;                  // "p1.direct.rel_mae = 0.02 > 0.01"
+  nlohmann::json report;                                        // the report.json document (for report.html)
 };
 
 // Compares, writes report.json into the stage, and evaluates the job's thresholds.

@@ -1,5 +1,6 @@
 #include "job/parameter_sweep.hpp"
 
+#include <algorithm>
 #include <map>
 #include <set>
 
@@ -8,42 +9,74 @@
 namespace hfbake {
 namespace {
 
-// The parsed method schemas, keyed by method name ("p1" for methods/p1.schema.json).
-const std::map<std::string, nlohmann::json>& method_schemas() {
-  static const std::map<std::string, nlohmann::json> schemas = [] {
+// Every embedded schema, parsed, by its path relative to schemas/ ("methods/p1.schema.json").
+const std::map<std::string, nlohmann::json>& schema_documents() {
+  static const std::map<std::string, nlohmann::json> docs = [] {
     std::map<std::string, nlohmann::json> m;
-    const std::string prefix = "methods/", suffix = ".schema.json";
-    for (const EmbeddedSchema& s : embedded_schemas()) {
-      const std::string path(s.path);
-      if (path.rfind(prefix, 0) != 0 || path.size() <= prefix.size() + suffix.size() ||
-          path.compare(path.size() - suffix.size(), suffix.size(), suffix) != 0)
-        continue;
-      const std::string method = path.substr(prefix.size(), path.size() - prefix.size() - suffix.size());
-      m.emplace(method, nlohmann::json::parse(s.text.begin(), s.text.end(), nullptr, false));
-    }
+    for (const EmbeddedSchema& s : embedded_schemas())
+      m.emplace(std::string(s.path), nlohmann::json::parse(s.text.begin(), s.text.end(), nullptr, false));
     return m;
   }();
-  return schemas;
+  return docs;
 }
 
-bool is_numeric_type(const nlohmann::json& type) {
-  if (type.is_string()) return type == "integer" || type == "number";
-  if (type.is_array()) {
-    for (const auto& t : type)
-      if (t == "array") return false;
-    for (const auto& t : type)
-      if (t == "integer" || t == "number") return true;
+// Follows "$ref" ("file#/pointer" relative to `file`'s folder, or "#/pointer" in `file`) to the schema it
+// names; null when it cannot be resolved.
+const nlohmann::json* resolve(const nlohmann::json* schema, std::string file, int depth = 0) {
+  while (schema && schema->is_object() && schema->contains("$ref") && (*schema)["$ref"].is_string()) {
+    if (++depth > 8) return nullptr;
+    const std::string ref = (*schema)["$ref"].get<std::string>();
+    const auto hash = ref.find('#');
+    const std::string target = ref.substr(0, hash),
+                      pointer = hash == std::string::npos ? "" : ref.substr(hash + 1);
+    if (!target.empty()) {
+      const auto slash = file.rfind('/');
+      file = (slash == std::string::npos ? "" : file.substr(0, slash + 1)) + target;
+    }
+    const auto& docs = schema_documents();
+    const auto it = docs.find(file);
+    if (it == docs.end()) return nullptr;
+    try {
+      schema = &it->second.at(nlohmann::json::json_pointer(pointer));
+    } catch (const std::exception&) {
+      return nullptr;
+    }
   }
-  return false;
+  return schema;
 }
 
-// True when `method`'s schema declares `property` a scalar number.
+// 1: the schema accepts numbers only; 0: not a number; -1: it also accepts arrays (never a sweep).
+int numeric_kind(const nlohmann::json* schema, const std::string& file, int depth = 0) {
+  schema = resolve(schema, file);
+  if (!schema || !schema->is_object() || depth > 8) return 0;
+  int kind = 0;
+  if (schema->contains("type")) {
+    const nlohmann::json& type = (*schema)["type"];
+    const nlohmann::json types = type.is_array() ? type : nlohmann::json::array({type});
+    for (const auto& t : types) {
+      if (t == "array") return -1;
+      if (t == "integer" || t == "number") kind = 1;
+    }
+  }
+  for (const char* combinator : {"oneOf", "anyOf"})
+    if (schema->contains(combinator) && (*schema)[combinator].is_array())
+      for (const auto& alternative : (*schema)[combinator]) {
+        const int k = numeric_kind(&alternative, file, depth + 1);
+        if (k < 0) return -1;
+        kind = std::max(kind, k);
+      }
+  return kind;
+}
+
+// True when `method`'s schema declares `property` a number (and never an array).
 bool sweepable(const std::string& method, const std::string& property) {
-  const auto& schemas = method_schemas();
-  const auto it = schemas.find(method);
-  if (it == schemas.end() || !it->second.is_object()) return false;
-  const nlohmann::json::json_pointer p("/properties/" + property + "/type");
-  return it->second.contains(p) && is_numeric_type(it->second.at(p));
+  const std::string file = "methods/" + method + ".schema.json";
+  if (property.find_first_of("/~") != std::string::npos) return false;
+  const auto& docs = schema_documents();
+  const auto it = docs.find(file);
+  if (it == docs.end() || !it->second.is_object()) return false;
+  const nlohmann::json::json_pointer p("/properties/" + property);
+  return it->second.contains(p) && numeric_kind(&it->second.at(p), file) == 1;
 }
 
 bool all_numbers(const nlohmann::json& a) {

@@ -93,6 +93,21 @@ TEST_F(Sweep, DuplicateValueIsAnErrorAndArrayPropertiesNeverSweep) {
   EXPECT_NE(r.errors.at(0).find("/bake/0/layers/0"), std::string::npos) << r.errors[0];
 }
 
+TEST_F(Sweep, PropertiesDeclaredThroughRefsSweepAndTwoListsAreAnError) {
+  // hbao's directions and radius are "$ref"s into obscurance_common.schema.json.
+  JobLoad r = load(R"([{"method": "hbao", "radius": [2, 4.5], "falloff": "step"}])");
+  ASSERT_TRUE(r.job) << r.errors.front();
+  ASSERT_EQ(r.job->bakes.size(), 2u);
+  EXPECT_EQ(r.job->bakes[1].stem, "hbao-radius4.5");
+  EXPECT_EQ(r.job->bakes[1].params["radius"], 4.5);
+  r = load(R"([{"method": "hbao", "radius": [2, 4], "directions": [8, 16]}])");
+  ASSERT_FALSE(r.job);
+  EXPECT_NE(
+      r.errors.at(0).find("/bake/0: sweep one parameter per bake entry (lists given for directions, radius)"),
+      std::string::npos)
+      << r.errors[0];
+}
+
 TEST_F(Sweep, UnknownPropertyListIsNotExpanded) {
   const JobLoad r = load(R"([{"method": "p1", "no_such_key": [1, 2]}])");
   ASSERT_FALSE(r.job);

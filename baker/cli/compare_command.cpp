@@ -1,0 +1,135 @@
+#include "cli/compare_command.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "report/baseline_compare.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+nlohmann::json read_json(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), "", "cannot read file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  try {
+    return nlohmann::json::parse(ss.str());
+  } catch (const nlohmann::json::exception&) {
+    throw InputError(file.string(), "", "not valid JSON");
+  }
+}
+
+void copy_atomically(const fs::path& from, const fs::path& to) {
+  if (to.has_parent_path()) fs::create_directories(to.parent_path());
+  const fs::path tmp = to.string() + ".tmp-" + std::to_string(getpid());
+  fs::copy_file(from, tmp, fs::copy_options::overwrite_existing);
+  fs::rename(tmp, to);
+}
+
+// Every report.json under `dir`, by path relative to it.
+std::map<std::string, fs::path> reports_under(const fs::path& dir) {
+  std::map<std::string, fs::path> found;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file() && e.path().filename() == "report.json")
+      found[fs::relative(e.path(), dir).string()] = e.path();
+  return found;
+}
+
+}  // namespace
+
+int run_compare(const CompareOptions& o) {
+  BaselineOptions rule = BaselineOptions::defaults();
+  for (const std::string& t : o.tolerances) {
+    const std::string problem = parse_tolerance(t, rule);
+    if (!problem.empty()) {
+      std::fprintf(stderr, "hfbake: error: command line: --tolerance: %s\n", problem.c_str());
+      return 2;
+    }
+  }
+  try {
+    std::error_code ec;
+    if (!fs::exists(o.now, ec)) throw InputError(o.now.string(), "", "no such file or folder");
+    const bool folders = fs::is_directory(o.now);
+    if (!fs::exists(o.baseline, ec) && !o.update_baseline)
+      throw InputError(
+          o.baseline.string(), "",
+          "no such baseline (create it deliberately with hfbake compare NEW BASELINE --update-baseline)");
+    if (fs::exists(o.baseline, ec) && fs::is_directory(o.baseline) != folders)
+      throw InputError(o.baseline.string(), "",
+                       folders ? "is not a folder (NEW is one)" : "is a folder (NEW is a file)");
+
+    // Pairs (label, new file, baseline file); a missing side is an empty path.
+    std::vector<std::tuple<std::string, fs::path, fs::path>> pairs;
+    if (folders) {
+      const auto now = reports_under(o.now);
+      const auto old = fs::exists(o.baseline) ? reports_under(o.baseline) : std::map<std::string, fs::path>{};
+      if (now.empty()) throw InputError(o.now.string(), "", "no report.json under this folder");
+      for (const auto& [rel, p] : now) pairs.emplace_back(rel, p, old.count(rel) ? old.at(rel) : fs::path());
+      for (const auto& [rel, p] : old)
+        if (!now.count(rel)) pairs.emplace_back(rel, fs::path(), p);
+    } else {
+      pairs.emplace_back("", o.now, fs::exists(o.baseline) ? o.baseline : fs::path());
+    }
+
+    bool regression = false;
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& [label, now_file, old_file] : pairs) {
+      if (now_file.empty()) {  // a whole report went missing
+        regression = true;
+        if (!o.quiet) std::printf("%s: MISSING (in the baseline, not in %s)\n", label.c_str(), o.now.c_str());
+        out.push_back({{"label", label}, {"regression", true}, {"missing_report", true}});
+        continue;
+      }
+      if (old_file.empty()) {
+        if (!o.quiet)
+          std::printf("%s%snew report (no baseline yet)\n", label.c_str(), label.empty() ? "" : ": ");
+        out.push_back({{"label", label}, {"regression", false}, {"new_report", true}});
+        continue;
+      }
+      BaselineComparison c;
+      try {
+        c = compare_to_baseline(read_json(now_file), read_json(old_file), rule);
+      } catch (const std::invalid_argument& e) {
+        throw InputError(now_file.string() + " vs " + old_file.string(), "", e.what());
+      }
+      c.label = label;
+      regression = regression || c.regression();
+      if (!o.quiet) std::printf("%s", comparison_table(c, o.all).c_str());
+      out.push_back(comparison_json(c));
+    }
+    if (o.json) {
+      std::ofstream j(*o.json);
+      j << nlohmann::json{{"regression", regression}, {"comparisons", out}}.dump(2) << "\n";
+      if (!j) throw InputError(o.json->string(), "--json", "cannot write file");
+    }
+    if (o.update_baseline) {
+      for (const auto& [label, now_file, old_file] : pairs) {
+        if (now_file.empty()) {
+          fs::remove(old_file);
+        } else {
+          copy_atomically(now_file, folders ? o.baseline / label : o.baseline);
+        }
+      }
+      if (!o.quiet) std::printf("baseline updated: %s\n", o.baseline.c_str());
+      return 0;
+    }
+    return regression ? 1 : 0;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
+    return 2;
+  } catch (const fs::filesystem_error& e) {
+    std::fprintf(stderr, "hfbake: error: %s\n", e.what());
+    return 2;
+  }
+}
+
+}  // namespace hfbake

@@ -1,0 +1,24 @@
+// `hfbake compare NEW BASELINE`: a new report.json against a baseline (or every report.json under a
+// folder, e.g. a suite's output, against the same relative paths under a baseline folder).
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace hfbake {
+
+struct CompareOptions {
+  std::filesystem::path now, baseline;
+  std::vector<std::string> tolerances;  // "METRIC=REL[,ABS]", added to / replacing the default checked set
+  bool all = false;                     // list every checked metric, not only changes
+  bool update_baseline = false;         // after comparing, copy NEW over BASELINE (deliberately)
+  std::optional<std::filesystem::path> json;  // write the comparison as JSON
+  bool quiet = false;
+};
+
+// 0 nothing regressed (or the baseline was updated), 1 a regression, 2 bad input.
+int run_compare(const CompareOptions& options);
+
+}  // namespace hfbake

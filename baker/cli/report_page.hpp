@@ -1,0 +1,16 @@
+// report.html beside report.json: the job's runs, their layers and the reference, handed to report_html.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "cli/outputs.hpp"
+#include "cli/report_writer.hpp"
+#include "job/manifest.hpp"
+
+namespace hfbake {
+
+// Stages report.html for `report` (the report.json document write_report produced).
+void write_report_page(const Job& job, const ReportInputs& inputs, const nlohmann::json& report,
+                       OutputStage& stage);
+
+}  // namespace hfbake
