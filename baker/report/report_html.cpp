@@ -110,14 +110,16 @@ Img to_image(const std::vector<double>& values, int ow, int oh, int channels, in
   return {"data:image/png;base64," + base64(encode_png(ow, oh, out_channels, px)), ow, oh, factor};
 }
 
-// A layer shown as an image: 1 channel grey, 3 channels RGB, both scaled by `display_max` and sRGB-encoded.
+// A layer shown as an image, scaled by `display_max`: 1 channel as grey with the value as the pixel value
+// (how texture tools show an AO map), 3 channels (light) as RGB, sRGB-encoded.
 Img layer_image(const Layer& l, int w, int h, int max_size, double display_max) {
   const int f = shrink_factor(w, h, max_size), nc = l.channel_count();
   const auto v = box_filter(
       w, h, f, nc, [&](int x, int y, int c) { return double(l.data[(std::size_t(y) * w + x) * nc + c]); });
   return to_image(v, (w + f - 1) / f, (h + f - 1) / f, nc, f, [&](const double* in, std::uint8_t* out) {
     for (int c = 0; c < (nc == 1 ? 1 : 3); ++c)
-      out[c] = std::uint8_t(std::lround(255.0 * srgb_encode(in[c] / display_max)));
+      out[c] = std::uint8_t(std::lround(
+          255.0 * (nc == 1 ? std::clamp(in[c] / display_max, 0.0, 1.0) : srgb_encode(in[c] / display_max))));
   });
 }
 
@@ -541,7 +543,8 @@ std::string report_html(const HtmlInputs& in) {
                     mid[0], mid[1], mid[2], hi[0], hi[1], hi[2]);
       const std::string value_legend =
           legend("0", num(display_max / 2, 3), num(display_max, 3), "#000,#bcbcbc,#fff",
-                 "value (sRGB-encoded, clipped at " + num(display_max, 3) + ")");
+                 nc == 1 ? "value (linear grey, clipped at " + num(display_max, 3) + ")"
+                         : "light (sRGB-encoded, clipped at " + num(display_max, 3) + ")");
       h << "<h3>" << esc(hm.stem) << " &middot; " << esc(layer_name) << "</h3>\n<div class=\"figs\">"
         << figure(layer_image(*ml, w, ht, in.max_image_size, display_max), hm.stem + " " + layer_name,
                   value_legend)
