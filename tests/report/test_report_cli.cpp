@@ -1,0 +1,110 @@
+// `hfbake bake` of a job with a reference and a method writes report.json, valid against
+// schemas/report.schema.json; thresholds turn into exit 1; a reference-only job reports too.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+
+#include "job/schema_validation.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+
+class ReportCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("hfbake_test_report_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  int bake(const nlohmann::json& job, std::string& err) {
+    const fs::path p = dir_ / "job.json";
+    std::ofstream(p) << job.dump(2);
+    // A private reference cache, so the test neither reads nor fills the user's.
+    const std::string cmd = "XDG_CACHE_HOME=" + (dir_ / "cache").string() + " " + HFBAKE_BINARY + " bake " +
+                            p.string() + " --quiet 2>" + (dir_ / "err.txt").string() + " >/dev/null";
+    const int status = std::system(cmd.c_str());
+    std::ifstream in(dir_ / "err.txt");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    err = ss.str();
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+
+  nlohmann::json report() {
+    std::ifstream in(dir_ / "out" / "report.json");
+    EXPECT_TRUE(in.good());
+    return nlohmann::json::parse(in);
+  }
+
+  static nlohmann::json job(nlohmann::json bake, nlohmann::json thresholds = nlohmann::json::object()) {
+    return {{"version", 1},
+            {"name", "r"},
+            {"height", {{"procedural", {{"kind", "pit"}, {"size", {17, 17}}, {"radius", 5}, {"depth", 4}}}}},
+            {"environment", {{"uniform", 1}}},
+            {"bounces", 0},
+            {"bake", bake},
+            {"reference", {{"samples", 16}, {"layers", {"ao", "vsky"}}}},
+            {"output", {{"dir", "out"}}},
+            {"report", {{"crop", 1}, {"thresholds", thresholds}}}};
+  }
+
+  fs::path dir_;
+};
+
+void expect_valid(const nlohmann::json& doc) {
+  const auto violations = hfbake::validate_against_schema(doc, "report.schema.json");
+  for (const auto& v : violations) ADD_FAILURE() << v.pointer << ": " << v.message;
+}
+
+TEST_F(ReportCli, MethodAndReferenceWriteAValidReport) {
+  std::string err;
+  const nlohmann::json entries = {
+      {{"method", "p1"}, {"directions", 16}, {"layers", {"ao", "vsky", "horizon"}}}};
+  ASSERT_EQ(bake(job(entries, {{"p1.ao.rmse", 0.5}}), err), 0) << err;
+  const nlohmann::json r = report();
+  expect_valid(r);
+  EXPECT_TRUE(r["passed"].get<bool>());
+  EXPECT_EQ(r["crop"], 1);
+  const auto& ao = r["methods"]["p1"]["layers"]["ao"];
+  for (const char* m : {"mae", "rmse", "max", "p99", "bias", "noise_rmse", "excess_rmse"})
+    EXPECT_TRUE(ao.contains(m)) << m;
+  EXPECT_GT(ao["noise_rmse"].get<double>(), 0);  // the pit's walls make the reference noisy
+  EXPECT_EQ(r["methods"]["p1"]["not_compared"], nlohmann::json::array({"horizon"}));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "r.reference.exr"));
+}
+
+TEST_F(ReportCli, FailedThresholdExitsOne) {
+  std::string err;
+  const nlohmann::json entries = {{{"method", "p1"}, {"directions", 16}, {"layers", {"ao"}}}};
+  EXPECT_EQ(bake(job(entries, {{"p1.ao.max", 1e-9}, {"p1.ao.rmse", 1.0}, {"p1.ao.psnr", 1000}}), err), 1)
+      << err;
+  EXPECT_NE(err.find("p1.ao.max = "), std::string::npos) << err;
+  EXPECT_NE(err.find("p1.ao.psnr = "), std::string::npos) << err;
+  const nlohmann::json r = report();  // the outputs are still written: the bake itself succeeded
+  expect_valid(r);
+  EXPECT_FALSE(r["passed"].get<bool>());
+}
+
+TEST_F(ReportCli, ThresholdTypoIsAFailureNotASilentPass) {
+  std::string err;
+  const nlohmann::json entries = {{{"method", "p1"}, {"directions", 16}, {"layers", {"ao"}}}};
+  EXPECT_EQ(bake(job(entries, {{"p1.occlusion.rmse", 1.0}}), err), 1) << err;
+  EXPECT_NE(err.find("p1.occlusion.rmse: \"p1\" has no layer \"occlusion\""), std::string::npos) << err;
+}
+
+TEST_F(ReportCli, ReferenceOnlyJob) {
+  std::string err;
+  ASSERT_EQ(bake(job(nlohmann::json::array()), err), 0) << err;
+  const nlohmann::json r = report();
+  expect_valid(r);
+  EXPECT_TRUE(r["methods"].empty());
+  EXPECT_TRUE(r["reference"]["layers"].contains("vsky"));
+}
+
+}  // namespace
