@@ -90,7 +90,9 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
     << ".ok{color:#070}.bad{color:#b00;font-weight:bold}</style></head><body>\n";
   h << "<h1>Suite " << xml_escape(suite.name) << "</h1>\n<p>hfbake " << hfbake_version() << ", "
     << outcomes.size() << " jobs, " << seconds << " s</p>\n";
-  h << "<table><tr><th>job</th><th>status</th><th>time (s)</th><th>report</th><th>errors</th></tr>\n";
+  h << "<table><tr><th>job</th><th>status</th><th>time "
+       "(s)</th><th>reference</th><th>report</th><th>errors</th>"
+    << "</tr>\n";
   for (const JobOutcome& o : outcomes) {
     const bool ok = o.status == JobStatus::ok;
     std::string report;
@@ -99,6 +101,13 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
         report = fs::relative(p, suite.output_dir).string();
     h << "<tr><td>" << xml_escape(o.name.empty() ? o.file : o.name) << "</td><td class=\""
       << (ok ? "ok" : "bad") << "\">" << job_status_name(o.status) << "</td><td>" << o.seconds << "</td><td>";
+    if (o.methods.contains("reference")) {  // computed, or from the reference cache (cli/reference_cache.hpp)
+      const nlohmann::json& r = o.methods["reference"];
+      h << r.value("seconds", 0.0) << " s";
+      if (r.value("cache", "") == "hit")
+        h << " (cache hit, " << r.value("cache_saved_seconds", 0.0) << " s saved)";
+    }
+    h << "</td><td>";
     if (!report.empty()) h << "<a href=\"" << xml_escape(report) << "\">" << xml_escape(report) << "</a>";
     h << "</td><td>";
     for (const std::string& e : o.errors) h << xml_escape(e) << "<br>";
