@@ -131,13 +131,16 @@ void scan(const HeightField& f, DirectionScan& d, const RunControl& rc) {
 
 // Horizon and accumulated occluded band of one (half) sector.
 struct SectorState {
-  double horizon = -kHalfPi;
+  double horizon = -kHalfPi;  // elevation of the highest slab so far
+  double slope = -INFINITY;   // its tan: the cull test needs no atan2 (x > 0)
   double occluded = 0;
 };
 
 inline void add_slab(const SlabTable& table, SectorState& st, double x, double dz, double nt, double nz,
                      double tangent) {
+  if (dz <= st.slope * x) return;  // not above the horizon so far: hidden
   const double e = std::atan2(dz, x);
+  st.slope = dz / x;
   if (e <= st.horizon) return;
   st.occluded += table.band(st.horizon, e, x, nt, nz, tangent);
   st.horizon = e;
