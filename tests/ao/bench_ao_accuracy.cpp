@@ -77,12 +77,21 @@ void BM_Hbao(benchmark::State& state) {
   const Fixture& f = fixture();
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   std::vector<float> got(f.field.texel_count());
-  const HbaoSettings s = hbao_settings(int(state.range(0)), 1.0);
+  const HbaoSettings s = hbao_settings(int(state.range(0)), 1.0 / state.range(1));
   const double t0 = cpu_seconds();
   for (auto _ : state) hbao_field(f.field, f.normals, s, RunControl{}, got.data(), nullptr);
   report(state, got, f.truth, cpu_seconds() - t0);
 }
-BENCHMARK(BM_Hbao)->Arg(8)->Arg(16)->Arg(32)->Iterations(1)->Unit(benchmark::kMillisecond);
+// Args: K, samples per texel of distance.
+BENCHMARK(BM_Hbao)
+    ->Args({8, 1})
+    ->Args({16, 1})
+    ->Args({32, 1})
+    ->Args({16, 2})
+    ->Args({16, 4})
+    ->Args({64, 4})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 void BM_Hsao(benchmark::State& state) {
   const Fixture& f = fixture();
