@@ -194,4 +194,14 @@ TEST_F(Nightly, SuiteWithABrokenMethodExitsOneAndFoldersCompare) {
   EXPECT_NE(r.out.find("a/report.json: REGRESSION"), std::string::npos) << r.out;
 }
 
+TEST_F(Nightly, NightlyJobsAreValid) {
+  // jobs/nightly must keep validating as the method schemas evolve (it is what CI runs every night).
+  std::string files;
+  for (const auto& e : fs::directory_iterator(fs::path(HFBAKE_SOURCE_DIR) / "jobs" / "nightly" / "fields"))
+    if (e.path().extension() == ".json") files += " " + e.path().string();
+  ASSERT_FALSE(files.empty());
+  const Result r = hfbake("validate" + files + " --quiet");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 }  // namespace
