@@ -52,10 +52,15 @@ struct ReferenceOptions {
   double target_stderr = 0;  // 0: off
   int replicates = 8;
   Falloff falloff;  // obscurance
+  // grid (default) or triangles: the same surface. Measured at 1024^2: triangles trace ~12 % faster but
+  // build 2x slower and take 4.6x the memory (250 MB vs 54 MB; 960 MB vs 155 MB at 2048^2).
   reference::GeometryKind geometry = reference::GeometryKind::grid;
   int repeat_tiles = 1;         // wrap repeat: tiles instanced on each side
   bool sh_environment = false;  // light with the environment band-limited to SH order 4
-  bool ray_streams = true;      // trace each texel's batches with rtcOccluded1M / rtcIntersect1M
+  // Trace each texel's batches with rtcOccluded1M / rtcIntersect1M instead of one rtcOccluded1 /
+  // rtcIntersect1 per ray. Measured (1024^2 fractal, ao, Embree 3.13.5 without ISPC): streams are ~15 %
+  // slower than single rays (and 45 % slower with the coherent flag), so single rays are the default.
+  bool ray_streams = false;
   int tile_size = 16;
 };
 
