@@ -150,9 +150,11 @@ int main(int argc, char** argv) {
       nlp::AzimuthInterpolation in;
     };
     const auto lin = nlp::AzimuthInterpolation::linear, bsp = nlp::AzimuthInterpolation::bspline;
-    for (Cfg c : {Cfg{8, 4, 2, 2, lin}, Cfg{16, 4, 2, 2, lin}, Cfg{32, 4, 2, 2, lin}, Cfg{64, 4, 2, 2, lin},
-                  Cfg{100, 4, 2, 2, lin}, Cfg{32, 4, 2, 2, bsp}, Cfg{100, 2, 1, 1, lin},
-                  Cfg{100, 8, 2, 2, lin}, Cfg{100, 8, 4, 4, lin}, Cfg{100, 16, 6, 6, lin}}) {
+    for (Cfg c :
+         {Cfg{8, 4, 2, 2, lin}, Cfg{16, 4, 2, 2, lin}, Cfg{32, 4, 2, 2, lin}, Cfg{64, 4, 2, 2, lin},
+          Cfg{100, 4, 2, 2, lin}, Cfg{32, 4, 2, 2, bsp}, Cfg{100, 2, 1, 1, lin}, Cfg{100, 8, 2, 2, lin},
+          Cfg{100, 8, 4, 4, lin}, Cfg{100, 16, 6, 6, lin}, Cfg{32, 4, 3, 3, lin}, Cfg{32, 4, 4, 4, lin},
+          Cfg{32, 8, 4, 4, lin}, Cfg{32, 4, 8, 8, lin}}) {
       NlpOptions o;
       o.directions = c.m;
       o.levels_per_octave = c.k;

@@ -9,6 +9,7 @@
 #include "methods/nlp/bake_nlp.hpp"
 #include "methods/nlp/horizon_march.hpp"
 #include "methods/nlp/pyramid.hpp"
+#include "methods/nlp/sh.hpp"
 
 namespace hfbake {
 namespace {
@@ -152,6 +153,34 @@ TEST(NlpBake, SubsampleTwo) {
     for (int r = 0; r < 16; ++r)
       EXPECT_FLOAT_EQ(texel(full, "sh_visibility", i, j)[r], texel(half, "sh_visibility", i, j)[r])
           << i << " " << r;
+}
+
+// sh_irradiance is the SH of E(n)/pi over normals: evaluated at each texel's normal it gives total (no
+// lights).
+TEST(NlpBake, ShIrradianceAtTheNormalIsTotal) {
+  ProceduralSpec spec;
+  spec.kind = ProceduralKind::fractal;
+  spec.width = spec.height = 40;
+  Scene s = make_scene(spec, Wrap::repeat, Rgb{1, 1, 1});
+  SkySpec sky;
+  sky.sun_irradiance = Rgb{0, 0, 0};
+  s.environment = make_sky_environment(sky).environment;
+  NlpOptions o;
+  o.directions = 12;
+  const LayerSet ls = bake_nlp(s, o, RunControl{});
+  for (auto [i, j] : {std::pair{3, 4}, std::pair{20, 31}, std::pair{39, 0}}) {
+    const Vec3f n = s.normals[s.field.index(i, j)];
+    double y[16];
+    sh::eval<double>(n.x, n.y, n.z, y);
+    const float* c = texel(ls, "sh_irradiance", i, j);
+    const float* t = texel(ls, "total", i, j);
+    for (int ch = 0; ch < 3; ++ch) {
+      double e = 0;
+      for (int k = 0; k < 16; ++k) e += c[k * 3 + ch] * y[k];
+      EXPECT_NEAR(e, t[ch], 1e-4 * (1 + t[ch])) << i << " " << j << " " << ch;
+    }
+    for (int k = 9; k < 16; ++k) EXPECT_EQ(c[k * 3], 0.0f);
+  }
 }
 
 TEST(NlpBake, UnknownLayerIsAnInputError) {
