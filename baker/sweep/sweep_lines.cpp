@@ -69,21 +69,41 @@ SweepDirection plan_direction(const HeightField& field, const SweepSpec& spec, i
 }
 
 void sample_line(const HeightField& f, const SweepDirection& d, int line, float* z, int* inside_begin,
-                 int* inside_end) {
+                 int* inside_end, const float* transposed) {
   const int nmin = d.n_minor, nmaj = d.n_major;
-  const float* data = f.z.data();
-  const std::ptrdiff_t major_stride = d.x_major ? 1 : f.width, minor_stride = d.x_major ? f.width : 1;
+  const bool use_t = !d.x_major && transposed;
+  const float* data = use_t ? transposed : f.z.data();
+  // x-major: z[v * width + u]; y-major: z[u * width + v], or transposed[v * height + u].
+  const std::ptrdiff_t major_stride = d.x_major ? 1 : (use_t ? 1 : f.width);
+  const std::ptrdiff_t minor_stride = d.x_major ? f.width : (use_t ? f.height : 1);
   int ib = -1, ie = -1;
+  // repeat: wrapped indices followed incrementally (u moves by one, floor(v) by at most one per step).
+  int um_w = wrap_index(d.u_start, nmaj), j0_prev = 0, a_prev = 0;
+  bool have_prev = false;
   for (int n = 0; n < d.count; ++n) {
     const int u = d.u_start + n * d.su;
     const double v = line + double(u) * d.slope;
-    const double fv = std::floor(v);
+    const double fv = double(floor_int(v));
     const int j0 = int(fv);
     const float t = float(v - fv);
     int um, a, b;
     if (d.repeat) {
-      um = wrap_index(u, nmaj);
-      a = wrap_index(j0, nmin);
+      if (n > 0) {
+        um_w += d.su;
+        if (um_w == nmaj) um_w = 0;
+        if (um_w < 0) um_w = nmaj - 1;
+      }
+      um = um_w;
+      if (have_prev && j0 == j0_prev) {
+        a = a_prev;
+      } else if (have_prev && j0 == j0_prev + 1) {
+        a = a_prev + 1 == nmin ? 0 : a_prev + 1;
+      } else if (have_prev && j0 == j0_prev - 1) {
+        a = a_prev == 0 ? nmin - 1 : a_prev - 1;
+      } else {
+        a = wrap_index(j0, nmin);
+      }
+      j0_prev = j0, a_prev = a, have_prev = true;
       b = a + 1 == nmin ? 0 : a + 1;
     } else {
       um = u;
@@ -110,7 +130,7 @@ void sample_line(const HeightField& f, const SweepDirection& d, int line, float*
 TexelPair SweepLine::height_taps(int n, const HeightField& f) const {
   const SweepDirection& d = *dir;
   const int u = d.u(n);
-  const double v = d.v(line, n), fv = std::floor(v);
+  const double v = d.v(line, n), fv = double(floor_int(v));
   const int j0 = int(fv);
   const float t = float(v - fv);
   int um, a, b;
@@ -130,7 +150,7 @@ TexelPair SweepLine::height_taps(int n, const HeightField& f) const {
 TexelPair SweepLine::receiver_texels(int n, const HeightField& f) const {
   const SweepDirection& d = *dir;
   const int u = d.repeat ? wrap_index(d.u(n), d.n_major) : d.u(n);
-  const double v = d.v(line, n), fv = std::floor(v);
+  const double v = d.v(line, n), fv = double(floor_int(v));
   const int j0 = int(fv);
   const float t = float(v - fv);
   TexelPair p;

@@ -89,6 +89,7 @@ struct SweepSpec {
   int wrap_periods = 1;          // repeat mode: warm-up length in whole periods of the major axis (>= 1)
   int batch = 4;  // directions swept before each gather pass (more = fewer passes, more memory)
   std::size_t max_buffer_bytes = std::size_t(512) << 20;  // caps batch so result buffers stay below this
+  bool tile_nearest = true;  // sweep_lines_tiled: also fill SweepTile::nearest (off: nearest is null)
 };
 
 // The lines of one direction (plain data; see the header comment for the geometry).
@@ -163,15 +164,23 @@ struct TexelTaps {
 };
 
 // Fills z[0..dir.count) with the heights of line `line`; returns the inside run in *inside_begin/end.
+// `transposed` (optional): the field's heights transposed (width rows of height floats), read instead of
+// the field for y-major directions so consecutive samples are adjacent in memory. Same values either way.
 void sample_line(const HeightField& field, const SweepDirection& dir, int line, float* z, int* inside_begin,
-                 int* inside_end);
+                 int* inside_end, const float* transposed = nullptr);
+
+// floor(x) as an int for |x| < 2^31 without a libm call (baseline x86-64 has no rounding instruction).
+inline int floor_int(double x) {
+  const int i = int(x);
+  return x < double(i) ? i - 1 : i;
+}
 
 // The texel taps of texel (i, j) for direction dir in a result buffer laid out as
 // buffer[((l - line_begin) * n_major + receiver_index(u)) * channels + c].
 inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int channels, int i, int j) {
   const int u = dir.x_major ? i : j, v0 = dir.x_major ? j : i;
   const double g = double(v0) - double(u) * dir.slope;
-  const double fl = std::floor(g);
+  const double fl = double(floor_int(g));
   int la = int(fl) - dir.line_begin, lb;
   TexelTaps t;
   t.w_hi = float(g - fl);
@@ -198,12 +207,25 @@ inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int 
   return t;
 }
 
-// Runs the sweep. make_worker() -> a callable worker(const SweepLine&, float* out) (one per thread,
-// created lazily; keep its scratch inside it). texel_visitor(k, i, j, const TexelTaps&) is called for
-// every texel and direction. Calls rc.check() per line chunk and rc.report() per batch of directions.
-template <class MakeWorker, class TexelVisitor>
-void sweep_lines(const HeightField& field, const SweepSpec& spec, const RunControl& rc,
-                 MakeWorker&& make_worker, TexelVisitor&& texel_visitor) {
+// One tile of gathered results for the tiled gather (sweep_lines_tiled): texels [i0, i0 + width) x
+// [j0, j0 + height) for direction k, structure-of-arrays per channel so per-texel loops vectorise:
+//   value[(c * height + y) * width + x]    the interpolated result (TexelTaps::value) of texel (i0+x, j0+y)
+//   nearest[(c * height + y) * width + x]  the result of its larger-weight tap (TexelTaps::nearest)
+struct SweepTile {
+  int k = 0;
+  int i0 = 0, j0 = 0, width = 0, height = 0;
+  int channels = 1;
+  const float* value = nullptr;
+  const float* nearest = nullptr;
+};
+
+namespace detail {
+
+// The line phase of every batch, then tile_fn(k0, nb, dirs, buffers, per_dir, i0, i1, j0, j1) for every
+// 32 x 32 tile (tiles in parallel).
+template <class MakeWorker, class TileFn>
+void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const RunControl& rc,
+                      MakeWorker&& make_worker, TileFn&& tile_fn) {
   const int K = spec.azimuths.empty() ? spec.directions : int(spec.azimuths.size()), C = spec.channels;
   if (K <= 0 || C <= 0 || field.width <= 0 || field.height <= 0) return;
   std::vector<SweepDirection> dirs(K);
@@ -218,6 +240,18 @@ void sweep_lines(const HeightField& field, const SweepSpec& spec, const RunContr
   int batch = std::max(1, std::min(spec.batch, K));
   while (batch > 1 && per_dir * sizeof(float) * batch > spec.max_buffer_bytes) --batch;
   std::vector<float> buffers(per_dir * batch);
+
+  // y-major lines read a transposed copy: consecutive samples are then adjacent in memory.
+  std::vector<float> transposed;
+  bool any_y_major = false;
+  for (const SweepDirection& d : dirs) any_y_major = any_y_major || !d.x_major;
+  if (any_y_major) {
+    transposed.resize(field.texel_count());
+    tbb::parallel_for(0, field.width, [&](int i) {
+      for (int j = 0; j < field.height; ++j)
+        transposed[std::size_t(i) * field.height + j] = field.z[field.index(i, j)];
+    });
+  }
 
   using Worker = decltype(make_worker());
   tbb::enumerable_thread_specific<Worker> workers(make_worker);
@@ -243,7 +277,8 @@ void sweep_lines(const HeightField& field, const SweepSpec& spec, const RunContr
         line.first_receiver = dir.first_receiver;
         line.z = z.data();
         line.step = dir.step;
-        sample_line(field, dir, line.line, z.data(), &line.inside_begin, &line.inside_end);
+        sample_line(field, dir, line.line, z.data(), &line.inside_begin, &line.inside_end,
+                    transposed.empty() ? nullptr : transposed.data());
         float* out = buffers.data() + per_dir * b +
                      std::size_t(flat - first_line[b]) * std::size_t(dir.n_major) * std::size_t(C);
         worker(static_cast<const SweepLine&>(line), out);
@@ -256,19 +291,70 @@ void sweep_lines(const HeightField& field, const SweepSpec& spec, const RunContr
                                                 (field.width + kTile - 1) / kTile, 1),
                       [&](const tbb::blocked_range2d<int>& r) {
                         for (int tj = r.rows().begin(); tj < r.rows().end(); ++tj)
-                          for (int ti = r.cols().begin(); ti < r.cols().end(); ++ti) {
-                            const int j1 = std::min(field.height, (tj + 1) * kTile),
-                                      i1 = std::min(field.width, (ti + 1) * kTile);
-                            for (int j = tj * kTile; j < j1; ++j)
-                              for (int i = ti * kTile; i < i1; ++i)
-                                for (int b = 0; b < nb; ++b)
-                                  texel_visitor(
-                                      k0 + b, i, j,
-                                      texel_taps(dirs[k0 + b], buffers.data() + per_dir * b, C, i, j));
-                          }
+                          for (int ti = r.cols().begin(); ti < r.cols().end(); ++ti)
+                            tile_fn(k0, nb, dirs.data() + k0, buffers.data(), per_dir, ti * kTile,
+                                    std::min(field.width, (ti + 1) * kTile), tj * kTile,
+                                    std::min(field.height, (tj + 1) * kTile));
                       });
     rc.report(double(k0 + nb) / K);
   }
+}
+
+}  // namespace detail
+
+// Runs the sweep. make_worker() -> a callable worker(const SweepLine&, float* out) (one per thread,
+// created lazily; keep its scratch inside it). texel_visitor(k, i, j, const TexelTaps&) is called for
+// every texel and direction. Calls rc.check() per line chunk and rc.report() per batch of directions.
+template <class MakeWorker, class TexelVisitor>
+void sweep_lines(const HeightField& field, const SweepSpec& spec, const RunControl& rc,
+                 MakeWorker&& make_worker, TexelVisitor&& texel_visitor) {
+  const int C = spec.channels;
+  detail::sweep_lines_core(field, spec, rc, make_worker,
+                           [&](int k0, int nb, const SweepDirection* dirs, const float* buffers,
+                               std::size_t per_dir, int i0, int i1, int j0, int j1) {
+                             for (int j = j0; j < j1; ++j)
+                               for (int i = i0; i < i1; ++i)
+                                 for (int b = 0; b < nb; ++b)
+                                   texel_visitor(k0 + b, i, j,
+                                                 texel_taps(dirs[b], buffers + per_dir * b, C, i, j));
+                           });
+}
+
+// The same sweep with a tiled gather: tile_visitor(const SweepTile&) gets each 32 x 32 tile's gathered
+// results as arrays, once per direction of the batch in ascending k (tiles in parallel). For visitors
+// whose per-texel work vectorises; same results as sweep_lines.
+template <class MakeWorker, class TileVisitor>
+void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const RunControl& rc,
+                       MakeWorker&& make_worker, TileVisitor&& tile_visitor) {
+  const int C = spec.channels;
+  tbb::enumerable_thread_specific<std::vector<float>> scratch(
+      [&] { return std::vector<float>(std::size_t(2) * 32 * 32 * C); });
+  auto gather_tile = [&](int k0, int nb, const SweepDirection* dirs, const float* buffers,
+                         std::size_t per_dir, int i0, int i1, int j0, int j1) {
+    std::vector<float>& tmp = scratch.local();
+    SweepTile tile;
+    tile.i0 = i0, tile.j0 = j0, tile.width = i1 - i0, tile.height = j1 - j0, tile.channels = C;
+    const std::size_t plane = std::size_t(tile.width) * tile.height;
+    float* value = tmp.data();
+    float* nearest = spec.tile_nearest ? tmp.data() + plane * C : nullptr;
+    tile.value = value;
+    tile.nearest = nearest;
+    for (int b = 0; b < nb; ++b) {
+      for (int j = j0; j < j1; ++j)
+        for (int i = i0; i < i1; ++i) {
+          const TexelTaps t = texel_taps(dirs[b], buffers + per_dir * b, C, i, j);
+          const std::size_t at = std::size_t(j - j0) * tile.width + (i - i0);
+          for (int c = 0; c < C; ++c) value[c * plane + at] = t.value(c);
+          if (nearest) {
+            const float* n = t.nearest();
+            for (int c = 0; c < C; ++c) nearest[c * plane + at] = n[c];
+          }
+        }
+      tile.k = k0 + b;
+      tile_visitor(static_cast<const SweepTile&>(tile));
+    }
+  };
+  detail::sweep_lines_core(field, spec, rc, make_worker, gather_tile);
 }
 
 }  // namespace hfbake

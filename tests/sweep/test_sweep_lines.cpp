@@ -101,6 +101,15 @@ TEST(SweepLines, WalkOrderHeightsAndInsideRun) {
         line.z = z.data();
         line.step = d.step;
         sample_line(f, d, l, z.data(), &line.inside_begin, &line.inside_end);
+        // Reading a transposed copy (what the driver does for y-major lines) gives the same bits.
+        std::vector<float> zt(d.count), transposed(f.texel_count());
+        for (int j = 0; j < f.height; ++j)
+          for (int i = 0; i < f.width; ++i) transposed[std::size_t(i) * f.height + j] = f.z[f.index(i, j)];
+        int tb, te;
+        sample_line(f, d, l, zt.data(), &tb, &te, transposed.data());
+        ASSERT_EQ(zt, z);
+        ASSERT_EQ(tb, line.inside_begin);
+        ASSERT_EQ(te, line.inside_end);
         for (int n = 0; n < d.count; ++n) {
           // Heights are the field's own bilinear surface, bit for bit.
           ASSERT_EQ(z[n], f.bilinear(line.x(n), line.y(n))) << k << " " << l << " " << n;

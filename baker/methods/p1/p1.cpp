@@ -13,6 +13,7 @@
 namespace hfbake {
 
 using p1::fast_atan;
+using p1::fast_atan2_pos;
 using p1::fast_sincos;
 using p1::kHalfPiF;
 
@@ -109,9 +110,13 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   }
   const bool need_theta = need_ao || p.bent_normal || profiles;
 
+  // Per-texel inputs and accumulators as separate arrays, so the per-tile loops below vectorise.
+  std::vector<float> nx(N), ny(N), nz(N);
+  for (std::size_t i = 0; i < N; ++i) nx[i] = normals[i].x, ny[i] = normals[i].y, nz[i] = normals[i].z;
   std::vector<float> ao_sum(need_ao ? N : 0, 0.0f), vsky_sum(p.vsky ? N : 0, 0.0f);
-  std::vector<Rgb> direct(p.direct ? N : 0);
-  std::vector<Vec3f> bent(p.bent_normal ? N : 0, Vec3f{0, 0, 0});
+  std::vector<float> dr(p.direct ? N : 0, 0.0f), dg(p.direct ? N : 0, 0.0f), db(p.direct ? N : 0, 0.0f);
+  std::vector<float> bx(p.bent_normal ? N : 0, 0.0f), by(p.bent_normal ? N : 0, 0.0f),
+      bz(p.bent_normal ? N : 0, 0.0f);
   if (p.horizon) r.horizon.assign(N * K, 0.0f);
   if (p.horizon_distance) r.horizon_distance.assign(N * K, 0.0f);
   std::vector<float> cs(K), sn(K);
@@ -130,44 +135,81 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   spec.directions = K;
   spec.channels = p.horizon_distance ? 2 : 1;
   spec.wrap_periods = p.wrap_periods;
+  spec.tile_nearest = p.horizon_distance;
+  spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
   const bool want_distance = p.horizon_distance;
   const RunControl main_rc = sub_progress(rc, 0.0, main_share);
-  sweep_lines(
+  sweep_lines_tiled(
       f, spec, main_rc,
       [&] {
         return p1::HorizonLineWorker{want_distance, {}};
       },
-      [&](int k, int i, int j, const TexelTaps& t) {
-        const std::size_t idx = f.index(i, j);
-        const float e = t.value(0);
-        const Vec3f n = normals[idx];
-        const float np = n.x * cs[k] + n.y * sn[k], nz = n.z;
-        float se, ce;
-        fast_sincos(e, se, ce);
-        if (p.horizon) r.horizon[idx * K + k] = se;
-        if (want_distance) r.horizon_distance[idx * K + k] = t.nearest()[1];
-        if (p.vsky) vsky_sum[idx] += se > 0 ? se : 0.0f;
-        if (need_theta) {
-          float st, ct, th;
-          if (se * nz + ce * np >= 0) {  // the horizon is above the tangent plane: it bounds the sky
-            st = ce, ct = se, th = kHalfPiF - e;
-          } else {  // the tangent plane does: theta = pi/2 + atan(N_p / N_z)
-            const float len = std::sqrt(np * np + nz * nz);
-            st = nz / len, ct = -np / len, th = kHalfPiF + fast_atan(np / nz);
+      [&](const SweepTile& t) {
+        constexpr int kMax = 32;
+        const int k = t.k, w = t.width;
+        const float c = cs[k], s = sn[k];
+        alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax];
+        for (int y = 0; y < t.height; ++y) {
+          const std::size_t base = f.index(t.i0, t.j0 + y);
+          const float* e = t.value + std::size_t(y) * w;
+          const float* NX = nx.data() + base;
+          const float* NY = ny.data() + base;
+          const float* NZ = nz.data() + base;
+          for (int x = 0; x < w; ++x) {
+            fast_sincos(e[x], se[x], ce[x]);
+            np_[x] = NX[x] * c + NY[x] * s;
           }
-          if (need_ao) ao_sum[idx] += nz * st * st + np * (th - st * ct);
-          if (profiles) direct[idx] += profiles->eval(k, th, st, ct, nz, np);
-          if (p.bent_normal) {
-            const float s3 = st * st * st, c3 = ct * ct * ct;
-            const float horiz = nz * s3 / 3 + np * (2.0f / 3 - ct + c3 / 3);
-            const float vert = nz * (1 - c3) / 3 + np * s3 / 3;
-            Vec3f& b = bent[idx];
-            b.x += horiz * cs[k], b.y += horiz * sn[k], b.z += vert;
+          if (p.vsky) {
+            float* v = vsky_sum.data() + base;
+            for (int x = 0; x < w; ++x) v[x] += se[x] > 0 ? se[x] : 0.0f;
           }
-        }
-        if (tables) {
-          const float len = std::sqrt(np * np + nz * nz);
-          direct[idx] += tables->lookup(k, fast_atan(np / nz), kHalfPiF - e) * len;
+          if (need_theta) {
+            // theta = the horizon's zenith angle, or where the normal's hemisphere ends if that is higher.
+            for (int x = 0; x < w; ++x) {
+              const float n_p = np_[x], n_z = NZ[x];
+              // Everything computed unconditionally, then selected: the loop stays branch-free (vectorises).
+              const bool open = se[x] * n_z + ce[x] * n_p >= 0;
+              const float inv_len = 1.0f / std::sqrt(n_p * n_p + n_z * n_z);
+              const float th_plane = kHalfPiF + fast_atan2_pos(n_p, n_z);
+              st[x] = open ? ce[x] : n_z * inv_len;
+              ct[x] = open ? se[x] : -n_p * inv_len;
+              th[x] = open ? kHalfPiF - e[x] : th_plane;
+            }
+            if (need_ao) {
+              float* a = ao_sum.data() + base;
+              for (int x = 0; x < w; ++x) a[x] += NZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
+            }
+            if (profiles) {
+              float *R = dr.data() + base, *G = dg.data() + base, *B = db.data() + base;
+              for (int x = 0; x < w; ++x) {
+                const Rgb l = profiles->eval(k, th[x], st[x], ct[x], NZ[x], np_[x]);
+                R[x] += l.r, G[x] += l.g, B[x] += l.b;
+              }
+            }
+            if (p.bent_normal) {
+              float *X = bx.data() + base, *Y = by.data() + base, *Z = bz.data() + base;
+              for (int x = 0; x < w; ++x) {
+                const float s3 = st[x] * st[x] * st[x], c3 = ct[x] * ct[x] * ct[x];
+                const float horiz = NZ[x] * s3 / 3 + np_[x] * (2.0f / 3 - ct[x] + c3 / 3);
+                const float vert = NZ[x] * (1 - c3) / 3 + np_[x] * s3 / 3;
+                X[x] += horiz * c, Y[x] += horiz * s, Z[x] += vert;
+              }
+            }
+          }
+          if (tables) {
+            float *R = dr.data() + base, *G = dg.data() + base, *B = db.data() + base;
+            for (int x = 0; x < w; ++x) {
+              const float len = std::sqrt(np_[x] * np_[x] + NZ[x] * NZ[x]);
+              const Rgb l = tables->lookup(k, fast_atan(np_[x] / NZ[x]), kHalfPiF - e[x]) * len;
+              R[x] += l.r, G[x] += l.g, B[x] += l.b;
+            }
+          }
+          if (p.horizon)
+            for (int x = 0; x < w; ++x) r.horizon[(base + x) * K + k] = se[x];
+          if (want_distance) {
+            const float* d = t.nearest + (std::size_t(t.height) + y) * w;  // channel 1
+            for (int x = 0; x < w; ++x) r.horizon_distance[(base + x) * K + k] = d[x];
+          }
         }
       });
 
@@ -175,12 +217,15 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   if (p.ao) r.ao.resize(N);
   if (p.vsky) r.vsky.resize(N);
   if (p.bent_normal) r.bent_normal.resize(N);
+  std::vector<Rgb> direct(p.direct ? N : 0);
   tbb::parallel_for(std::size_t(0), N, [&](std::size_t idx) {
     if (p.ao) r.ao[idx] = ao_sum[idx] * inv_k;
     if (p.vsky) r.vsky[idx] = 1.0f - vsky_sum[idx] * inv_k;
-    if (p.direct && uniform_env) direct[idx] = env.uniform_radiance * (ao_sum[idx] * inv_k);
+    if (p.direct)
+      direct[idx] =
+          uniform_env ? env.uniform_radiance * (ao_sum[idx] * inv_k) : Rgb{dr[idx], dg[idx], db[idx]};
     if (p.bent_normal) {
-      const Vec3 b = bent[idx].d();
+      const Vec3 b{bx[idx], by[idx], bz[idx]};
       r.bent_normal[idx] = length(b) > 1e-12 ? Vec3f::from(normalize(b)) : normals[idx];
     }
   });
