@@ -411,7 +411,7 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       }
     } else if (name == "sh_visibility") {
       Layer& L = out.add(name, indexed_channels(kSh));
-      L.data = vis;
+      L.data = std::move(vis);
     } else if (name == "sh_irradiance") {
       std::vector<std::string> ch;
       for (const std::string& c : indexed_channels(kSh))
@@ -419,6 +419,7 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       Layer& L = out.add(name, ch);
       for (std::size_t t = 0; t < N; ++t)
         for (int q = 0; q < 27; ++q) L.data[t * 48 + q] = irr[t * 27 + q];
+      std::vector<float>().swap(irr);
     }
   }
   out.attributes.emplace_back("hfbake:sh_convention", sh_convention_text());

@@ -17,6 +17,7 @@ MarchSetup make_march_setup(int W, int H, double texel_size, Wrap wrap, int k, i
   const int lv = std::max(1, s.steps - k * ov), lu = std::max(1, s.steps - k * ou);
   for (int i = 0; i < s.steps; ++i) {
     s.dist.push_back(float(std::exp2(double(i) / k)));
+    s.inv_dist.push_back(float(1 / (std::exp2(double(i) / k) * texel_size)));
     s.level.push_back(std::clamp(i - k * ov, 0, lv - 1));
     s.rlevel.push_back(std::clamp(i - k * ou, 0, lu - 1));
   }
@@ -66,14 +67,14 @@ int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float 
   const bool fast = !s.repeat && s.width >= 2 && s.height >= 2;
   int n = 0;
   for (int k = 0; k < s.steps; ++k) {
-    float d = s.dist[k];
+    float d = s.dist[k], inv = s.inv_dist[k];
     const bool last = d >= t_exit;
-    if (last) d = t_exit;
+    if (last) d = t_exit, inv = inv_ts / t_exit;
     const int l = s.level[k];
     const PyramidLevel& lv = hp.levels[l];
     const float x = fi + d * cx, y = fj + d * cy;
     const float h = fast && lv.w >= 2 && lv.h >= 2 ? sample_clamped(lv, x, y) : sample_level1(hp, lv, x, y);
-    omega[n] = fast_atan((h - recv[l]) * inv_ts / d);
+    omega[n] = fast_atan((h - recv[l]) * inv);
     dist[n] = d;
     lev[n] = k;
     ++n;

@@ -32,10 +32,11 @@ inline float fast_atan(float x) {
 }
 
 struct MarchSetup {
-  int steps = 0;            // n knots
-  std::vector<float> dist;  // d_k, texels
-  std::vector<int> level;   // height level per knot
-  std::vector<int> rlevel;  // radiance level per knot (o_u)
+  int steps = 0;                // n knots
+  std::vector<float> dist;      // d_k, texels
+  std::vector<float> inv_dist;  // 1 / (d_k * texel_size)
+  std::vector<int> level;       // height level per knot
+  std::vector<int> rlevel;      // radiance level per knot (o_u)
   float texel_size = 1;
   bool repeat = false;
   int width = 0, height = 0;
