@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <OpenImageIO/imageio.h>
+
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -22,12 +25,13 @@ class ReportCli : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  int bake(const nlohmann::json& job, std::string& err) {
+  int bake(const nlohmann::json& job, std::string& err, const std::string& extra = "") {
     const fs::path p = dir_ / "job.json";
     std::ofstream(p) << job.dump(2);
     // A private reference cache, so the test neither reads nor fills the user's.
     const std::string cmd = "XDG_CACHE_HOME=" + (dir_ / "cache").string() + " " + HFBAKE_BINARY + " bake " +
-                            p.string() + " --quiet 2>" + (dir_ / "err.txt").string() + " >/dev/null";
+                            p.string() + " --quiet " + extra + " 2>" + (dir_ / "err.txt").string() +
+                            " >/dev/null";
     const int status = std::system(cmd.c_str());
     std::ifstream in(dir_ / "err.txt");
     std::stringstream ss;
@@ -105,6 +109,39 @@ TEST_F(ReportCli, ReferenceOnlyJob) {
   expect_valid(r);
   EXPECT_TRUE(r["methods"].empty());
   EXPECT_TRUE(r["reference"]["layers"].contains("vsky"));
+}
+
+}  // namespace
+
+namespace {
+
+std::vector<float> read_pixels(const fs::path& p) {
+  auto in = OIIO::ImageInput::open(p.string());
+  EXPECT_TRUE(in);
+  if (!in) return {};
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<float> pixels(std::size_t(spec.width) * spec.height * spec.nchannels);
+  EXPECT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()));
+  return pixels;
+}
+
+TEST_F(ReportCli, ReferenceBitsDoNotDependOnTheThreadCount) {
+  nlohmann::json j = job(nlohmann::json::array());
+  j["bounces"] = 1;
+  j["height"]["procedural"] = {{"kind", "fractal"}, {"size", {24, 24}}};
+  j["environment"] = {{"sky", nlohmann::json::object()}};
+  j["reference"] = {{"samples", 16}};
+  j["output"]["pixel_type"] = "float";
+  std::string err;
+  ASSERT_EQ(bake(j, err, "--threads 1"), 0) << err;
+  const std::vector<float> one = read_pixels(dir_ / "out" / "r.reference.exr");
+  fs::remove_all(dir_ / "out");
+  fs::remove_all(dir_ / "cache");
+  ASSERT_EQ(bake(j, err, "--threads 2"), 0) << err;
+  const std::vector<float> two = read_pixels(dir_ / "out" / "r.reference.exr");
+  ASSERT_EQ(one.size(), two.size());
+  ASSERT_FALSE(one.empty());
+  EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float)));
 }
 
 }  // namespace
