@@ -15,13 +15,15 @@
 namespace hfbake {
 
 // Bump whenever baker/reference (or the procedural fields it sees) changes what it computes for the
-// same inputs: every cached reference then misses once and is recomputed.
+// same inputs, or starts reading more of the job than reference_cache_key hashes: every cached reference
+// then misses once and is recomputed.
 inline constexpr int kReferenceCodeVersion = 1;
 
 // 16 hex digits: a hash of kReferenceCodeVersion, the job's height, surface (albedo, emission),
-// environment, lights, bounces, reference parameters and bake list (which layers the reference computes,
-// with their radii and falloffs), and the bytes of every input file the job names. The job's name,
-// output and report settings do not enter it.
+// environment, lights, bounces and reference parameters, the falloff and radius of every bake entry that
+// has them (the reference's obscurance follows the first obscurance-family entry's), and the bytes of
+// every input file the job names. The job's name, output and report settings, and the other method
+// parameters (directions, layers, ...) do not enter it.
 std::string reference_cache_key(const Job& job);
 
 // $XDG_CACHE_HOME/hfbake/references, else $HOME/.cache/hfbake/references; nullopt when neither is set.

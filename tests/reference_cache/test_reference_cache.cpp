@@ -151,6 +151,20 @@ TEST_F(Cache, KeyFollowsWhatDeterminesTheReference) {
   EXPECT_EQ(changed("/output", {{"dir", "elsewhere"}}), k0);
   EXPECT_EQ(changed("/report", {{"thresholds", {{"p1.ao.rmse", 0.1}}}}), k0);
   EXPECT_EQ(changed("/description", "x"), k0);
+  EXPECT_EQ(changed("/bake/0/directions", 64), k0);  // the reference does not read method parameters
+  EXPECT_EQ(changed("/bake/1", {{"method", "p2"}}), k0);
+  // ... except an obscurance falloff and radius.
+  EXPECT_NE(changed("/bake/1", {{"method", "hbao"}, {"radius", 8}, {"falloff", "step"}}), k0);
+  {
+    nlohmann::json d = base_doc();
+    d["bake"][1] = {{"method", "hbao"}, {"radius", 8}, {"falloff", "step"}};
+    const std::string k8 = reference_cache_key(job(d));
+    d["bake"][1]["radius"] = 9;
+    EXPECT_NE(reference_cache_key(job(d)), k8);
+    d["bake"][1]["radius"] = 8;
+    d["bake"][1]["directions"] = 32;
+    EXPECT_EQ(reference_cache_key(job(d)), k8);
+  }
   // Part of it.
   EXPECT_NE(changed("/reference/samples", 65), k0);
   EXPECT_NE(changed("/reference/seed", 2), k0);
