@@ -134,7 +134,10 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     report.reference_seconds = seconds;
     report.reference = std::move(reference);
     const ReportResult r = write_report(job, job_hash, report, stage);
-    write_report_page(job, report, r.report, stage);
+    write_report_page(job, report, r.report, stage,
+                      lookup == CacheLookup::hit ? "read from the reference cache (computing it took " +
+                                                       std::to_string(cached.seconds) + " s)"
+                                                 : "");
     for (auto& [stem, metrics] : r.metrics_by_method.items())
       if (outcome.methods.contains(stem)) outcome.methods[stem]["metrics"] = metrics;
     for (const std::string& failure : r.threshold_failures) {

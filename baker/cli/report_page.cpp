@@ -5,8 +5,9 @@
 namespace hfbake {
 
 void write_report_page(const Job& job, const ReportInputs& inputs, const nlohmann::json& report,
-                       OutputStage& stage) {
+                       OutputStage& stage, const std::string& reference_note) {
   HtmlInputs html;
+  html.reference_note = reference_note;
   html.report = report;
   html.reference = &inputs.reference;
   for (const MethodLayers& m : inputs.methods) {

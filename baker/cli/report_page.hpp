@@ -10,7 +10,8 @@
 namespace hfbake {
 
 // Stages report.html for `report` (the report.json document write_report produced).
+// `reference_note` is shown beside the reference's time (e.g. that it came from the reference cache).
 void write_report_page(const Job& job, const ReportInputs& inputs, const nlohmann::json& report,
-                       OutputStage& stage);
+                       OutputStage& stage, const std::string& reference_note = "");
 
 }  // namespace hfbake

@@ -379,7 +379,8 @@ std::string report_html(const HtmlInputs& in) {
       << ")</td></tr>";
   }
   h << "<tr><th>reference</th><td>" << json_num(ref_doc, "seconds") << " s, parameters <code>"
-    << esc(ref_doc.value("parameters", none).dump()) << "</code></td></tr>";
+    << esc(ref_doc.value("parameters", none).dump()) << "</code>"
+    << (in.reference_note.empty() ? "" : "<br>" + esc(in.reference_note)) << "</td></tr>";
   h << "</table>\n";
 
   // Summary: one row per method and layer.

@@ -28,6 +28,7 @@ struct HtmlInputs {
   std::vector<HtmlMethod> methods;      // in bake order
   const LayerSet* reference = nullptr;  // may be null (metrics only)
   int max_image_size = 320;             // larger fields are box-filtered down to this many texels a side
+  std::string reference_note;           // e.g. where the reference came from (the reference cache)
 };
 
 std::string report_html(const HtmlInputs& inputs);
