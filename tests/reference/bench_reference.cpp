@@ -117,7 +117,13 @@ void BM_AllLayers256(benchmark::State& state) {
   o.layers = {"ao", "vsky", "direct", "indirect", "total"};
   o.samples = 64;
   o.ray_streams = state.range(0) != 0;
-  for (auto _ : state) benchmark::DoNotOptimize(bake_reference(s, o, {}).layers[0].data.data());
+  double cpu = 0;
+  for (auto _ : state) {
+    const double c0 = cpu_seconds();
+    benchmark::DoNotOptimize(bake_reference(s, o, {}).layers[0].data.data());
+    cpu += cpu_seconds() - c0;
+  }
+  state.counters["cpu_seconds"] = cpu / double(state.iterations());
   state.SetLabel(state.range(0) ? "1M streams" : "single rays");
 }
 BENCHMARK(BM_AllLayers256)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();

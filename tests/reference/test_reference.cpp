@@ -248,6 +248,48 @@ TEST(Reference, LatLongSkyWithMis) {
   }
 }
 
+// Emission: a V-trench whose walls glow with radiance E, black sky, albedo 0. The floor sees the walls in
+// the cosine-weighted fraction 1 - cos(beta), so indirect = indirect_b1 = E (1 - cos beta), b2 = 0.
+TEST(Reference, EmittingTrenchWalls) {
+  ProceduralSpec p = spec_of(ProceduralKind::trench, 33);
+  p.angle_deg = 50;
+  Scene s = make_scene(p, Wrap::clamp, {0, 0, 0}, {0, 0, 0});
+  const Rgb E{2, 1, 0.5f};
+  s.surface.emission.assign(s.field.texel_count(), E);
+  s.bounces = 2;
+  const LayerSet r =
+      bake_reference(s, options({"indirect", "indirect_b1", "indirect_b2", "direct"}, 512), {});
+  const double open = std::cos(p.angle_deg * kDeg);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_WITHIN_3SE(at(r, "indirect", 16, 16, c), (&E.r)[c] * (1 - open), 1e-4);
+    EXPECT_WITHIN_3SE(at(r, "indirect_b1", 16, 16, c), (&E.r)[c] * (1 - open), 1e-4);
+    EXPECT_EQ(at(r, "indirect_b2", 16, 16, c).v, 0);
+    EXPECT_EQ(at(r, "direct", 16, 16, c).v, 0);
+  }
+}
+
+// The SH-band-limited sky on flat ground: E / pi = sum_l (A_l / pi) L_l0 Y_l0(+z) with the clamped-cosine
+// coefficients A_0 = pi, A_1 = 2 pi / 3, A_2 = pi / 4, A_3 = 0 (Ramamoorthi & Hanrahan 2001).
+TEST(Reference, ShBandLimitedSkyOnFlatGround) {
+  SkySpec spec;
+  spec.sun_irradiance = {0, 0, 0};
+  spec.height = 64;
+  const EnvironmentLighting sky = make_sky_environment(spec);
+  Scene s = make_scene(spec_of(ProceduralKind::flat, 9));
+  s.environment = sky.environment;
+  ReferenceOptions o = options({"direct"}, 256);
+  o.sh_environment = true;
+  const LayerSet r = bake_reference(s, o, {});
+  const auto c = reference::project_sh(sky.environment);
+  const auto y = reference::sh_basis({0, 0, 1});
+  const double a[4] = {1.0, 2.0 / 3.0, 0.25, 0.0};
+  for (int ch = 0; ch < 3; ++ch) {
+    double expected = 0;
+    for (int l = 0; l < 4; ++l) expected += a[l] * (&c[l * (l + 1)].r)[ch] * y[l * (l + 1)];
+    EXPECT_WITHIN_3SE(at(r, "direct", 4, 4, ch), expected, 2e-3);
+  }
+}
+
 TEST(EnvSampler, PdfIsNormalisedAndMatchesSampling) {
   SkySpec spec;
   spec.height = 32;
