@@ -3,7 +3,7 @@
 //   build/tests/ao/ao_bench_lsao [google-benchmark flags]   throughput: texel-directions per second
 //       (items_per_second = texels x K / wall time, both cores) at 512^2, 1024^2, 2048^2 and K = 8..64, and
 //       cost against the radius (1024^2, K = 16): LSAO, farfield and hbao in one run.
-//   build/tests/ao/ao_bench_lsao --measure                   accuracy tables (printed):
+//   build/tests/ao/ao_bench_lsao --measure [fractal|bricks|sines|blocks|dem]   accuracy tables (printed):
 //       LSAO's hull against the brute-force largest visible occluder over the same line samples (P3's
 //       reference; and against hbao's largest_occluder march, which samples its own rays), and farfield
 //       against its exact march and hbao's slab march, on the four P2 surfaces and on the real DEM
@@ -191,9 +191,14 @@ void measure_field(const char* name, const HeightField& f) {
         std::vector<double> occ(light.size());
         for (std::size_t t = 0; t < occ.size(); ++t) occ[t] = 1.0 - light[t];
         const Errors h = compare(hull, occ, true);
+        LsaoOptions os = o;
+        os.estimator = LsaoEstimator::hull;
+        os.texel_receivers = false;
+        const Errors hs = compare(lsao_mean_occlusion(f, os, RunControl{}), occ, true);
         std::printf(
-            "%-9s lsao %-7s %-17s K=%d  vs hbao largest_occluder (own rays): mean %.4f %%  worst %.4f\n",
-            name, "uniform", c.label, K, 100 * h.mean, h.worst);
+            "%-9s lsao %-7s %-17s K=%d  vs hbao largest_occluder (texel-centred rays): mean %.4f %%  worst "
+            "%.4f   (line-sample receivers: mean %.4f %%  worst %.4f)\n",
+            name, "uniform", c.label, K, 100 * h.mean, h.worst, 100 * hs.mean, hs.worst);
       }
 #endif
     }
@@ -237,16 +242,18 @@ void measure_field(const char* name, const HeightField& f) {
   }
 }
 
-int measure() {
+int measure(const char* only) {
   for (ProceduralKind kind :
        {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::sines, ProceduralKind::blocks}) {
     ProceduralSpec s;
     s.kind = kind;
     s.width = s.height = 256;
     s.seed = 5;
+    if (only && std::strcmp(only, procedural_kind_name(kind)) != 0) continue;
     measure_field(procedural_kind_name(kind), make_procedural(s, 1.0, Wrap::clamp));
   }
 #if HFBAKE_HAVE_IO
+  if (only && std::strcmp(only, "dem") != 0) return 0;
   const std::filesystem::path dem = std::filesystem::path(HFBAKE_SHARED_DATA_DIR) / "TM1_564_146.tif";
   if (!std::filesystem::exists(dem)) {
     std::printf("DEM %s absent: skipped\n", dem.string().c_str());
@@ -272,7 +279,7 @@ int measure() {
 
 int main(int argc, char** argv) {
   for (int a = 1; a < argc; ++a)
-    if (std::strcmp(argv[a], "--measure") == 0) return hfbake::measure();
+    if (std::strcmp(argv[a], "--measure") == 0) return hfbake::measure(a + 1 < argc ? argv[a + 1] : nullptr);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

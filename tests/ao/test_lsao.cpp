@@ -117,7 +117,7 @@ TEST(Lsao, PlanesAreOpen) {
       const auto mean = lsao_mean_occlusion(f, o, RunControl{});
       for (int j = 4; j < 60; ++j)
         for (int i = 4; i < 60; ++i)
-          ASSERT_NEAR(mean[f.index(i, j)], 0.0, 0.02) << angle << " " << i << " " << j;
+          ASSERT_NEAR(mean[f.index(i, j)], 0.0, 1e-5) << angle << " " << i << " " << j;
       o = options(16, FalloffKind::smooth, 20, -0.85, w);
       const auto light = lsao_obscurance(f, o, RunControl{});
       for (int j = 1; j < 63; ++j)

@@ -31,6 +31,10 @@ struct LsaoOptions {
   OcclusionFunction occlusion;  // falloff, fixed tangent, weighting
   LsaoEstimator estimator = LsaoEstimator::hull;
   int wrap_periods = 1;  // repeat fields: warm-up periods of the sweep
+  // true: each texel is a receiver at its own height (the line's hull queried at the texel's height and the
+  // sample's along-distance); false: P3 as written, the line samples are the receivers (interpolated
+  // heights) and the sweep blends their results.
+  bool texel_receivers = true;
 };
 
 struct LsaoStats {

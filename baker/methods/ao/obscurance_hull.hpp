@@ -85,6 +85,23 @@ class ObscuranceHull {
     ++iterations_;  // the one loop test that ends without popping
     return o1;
   }
+  // The value receive() would return for p, without popping (for receivers beside the line, e.g. the
+  // texel centres a sample between two texels feeds; P3's pop rule walked on a copy of the stack top).
+  double query(SlicePoint p, const OcclusionFunction& f) const {
+    std::size_t n = stack_.size();
+    if (n == 0) return f.none();
+    double h1s = p.s - stack_[n - 1].s, h1z = stack_[n - 1].z - p.z;
+    double o1 = f(h1s, h1z);
+    while (n >= 2) {
+      const SlicePoint b = stack_[n - 2];
+      const double h2s = p.s - b.s, h2z = b.z - p.z;
+      const double o2 = f(h2s, h2z);
+      if (!(o1 < o2 && sine_elevation(h1s, h1z) < sine_elevation(h2s, h2z))) break;
+      --n;
+      h1s = h2s, h1z = h2z, o1 = o2;
+    }
+    return o1;
+  }
   void push(SlicePoint p) { stack_.push_back(p); }
   std::size_t size() const { return stack_.size(); }
   // Loop tests since clear(): between M and 2M for a line of M receivers (P3 §3).
