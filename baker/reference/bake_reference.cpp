@@ -516,7 +516,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   const int B = std::max(2, options.replicates);
   const int per_replicate_cap = std::max(1, (options.samples + B - 1) / B);
   const bool adaptive = options.target_stderr > 0;
-  const int first_round = adaptive ? std::min(per_replicate_cap, std::max(1, 32 / B)) : per_replicate_cap;
+  const int pilot = std::max(1, 64 / B);  // per replicate, target_stderr only
 
   // Output channels, in the order of options.layers.
   struct Out {
@@ -570,16 +570,13 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
         for (int i = tx * ts; i < std::min(f.width, (tx + 1) * ts); ++i) {
           const std::uint64_t texel_seed =
               reference::hash_combine(reference::mix64(options.seed), std::uint64_t(f.index(i, j)));
-          std::fill(sums.begin(), sums.end(), 0.0);
-          int n = 0;  // samples per replicate so far
-          int next = first_round;
-          for (;;) {
+          // Runs n samples in each of replicates [r0, r0 + B) and leaves the mean of the replicate means
+          // and its standard error in mean / se.
+          auto estimate = [&](int r0, int n) {
+            std::fill(sums.begin(), sums.end(), 0.0);
             for (int r = 0; r < B; ++r)
-              run_samples(cx, i, j, texel_seed, r, std::uint32_t(n), std::uint32_t(next),
-                          &sums[std::size_t(r) * C], scratch);
-            n = next;
-            // Mean of the replicate means and its standard error.
-            double worst = 0;
+              run_samples(cx, i, j, texel_seed, r0 + r, 0, std::uint32_t(n), &sums[std::size_t(r) * C],
+                          scratch);
             for (int c = 0; c < C; ++c) {
               double m = 0;
               for (int r = 0; r < B; ++r) m += sums[std::size_t(r) * C + c];
@@ -592,12 +589,27 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
               mean[c] = m;
               se[c] = std::sqrt(var / (double(B) * (B - 1)));
             }
-            if (!adaptive || n >= per_replicate_cap) break;
+          };
+          int n = per_replicate_cap;
+          if (adaptive) {
+            // Pilot on independent replicates (ids B..2B-1): predicts the count that reaches the target at
+            // the Monte Carlo rate (QMC usually does better), with a floor of |value| / N for samples that
+            // all agreed (zero spread proves nothing), rounded up to a power of two. The reported estimate
+            // comes from fresh samples only, so stopping early does not bias it or its stderr.
+            estimate(B, pilot);
+            const double n_pilot = double(B) * pilot;
+            double ratio = 0;
             for (const Out& o : outs)
-              for (int c = 0; c < o.channels; ++c) worst = std::max(worst, se[o.first + c]);
-            if (worst <= options.target_stderr) break;
-            next = std::min(per_replicate_cap, 2 * n);
+              for (int c = 0; c < o.channels; ++c) {
+                const double floor = std::max(1.0, std::abs(mean[o.first + c])) / n_pilot;
+                ratio = std::max(ratio, std::max(se[o.first + c], floor) / options.target_stderr);
+              }
+            const double need = n_pilot * ratio * ratio / B;
+            n = 1;
+            while (n < need && n < per_replicate_cap) n *= 2;  // powers of two keep the sequences' nets
+            n = std::min(n, per_replicate_cap);
           }
+          estimate(0, n);
           const std::size_t t = f.index(i, j);
           for (std::size_t k = 0; k < outs.size(); ++k)
             for (int c = 0; c < outs[k].channels; ++c) {

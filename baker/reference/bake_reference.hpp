@@ -26,10 +26,14 @@
 // truth, rms(stderr) matches the rms error within a few percent for ao, vsky and indirect; per texel,
 // (estimate - truth) / stderr follows Student's t with replicates - 1 degrees of freedom (8 replicates:
 // about 2 % of texels lie beyond 3 stderr; 32: 0.5 %). Fewer replicates keep more of the QMC gain
-// (rms error at 1024 samples: 0.0036 with 4, 0.0041 with 8, 0.0058 with 32 replicates). Streams derive from (seed, texel, replicate,
-// dimension pair) only: the bits do not depend on the thread count. With target_stderr, a texel stops
-// doubling its sample count once every channel's standard error is at or below the target (the
-// "samples" cap still holds) and the "samples" layer records what each texel used.
+// (rms error at 1024 samples: 0.0036 with 4, 0.0041 with 8, 0.0058 with 32 replicates). Streams derive from
+// (seed, texel, replicate, dimension pair) only: the bits do not depend on the thread count. With
+// target_stderr, a pilot of 64 samples (on independent replicates) estimates each texel's spread; the texel
+// is then sampled afresh with the power-of-two count predicted to reach the target (Monte Carlo rate, 1.5x
+// margin, floor |value| / N when every pilot sample agreed, capped by `samples`), and only the fresh samples
+// make the value and its stderr. (Stopping on the running stderr instead would be biased: replicates that
+// happen to agree give stderr 0 -- measured, that doubled the true error.) The "samples" layer records each
+// texel's count.
 #pragma once
 
 #include <cstdint>

@@ -399,21 +399,24 @@ TEST(Reference, DeterministicForAnyThreadCount) {
   }
 }
 
-TEST(Reference, TargetStderrStopsEarly) {
+TEST(Reference, TargetStderrSpendsSamplesWhereTheNoiseIs) {
   ProceduralSpec p = spec_of(ProceduralKind::pit, 17);
   p.radius = 5;
   p.depth = 4;
   Scene s = make_scene(p);
-  ReferenceOptions o = options({"ao"}, 4096);
+  ReferenceOptions o = options({"ao"}, 8192);
   o.target_stderr = 0.01;
   const LayerSet r = bake_reference(s, o, {});
   const Layer* n = r.find("samples");
   ASSERT_TRUE(n);
-  EXPECT_EQ(at(r, "ao", 0, 0).se, 0);  // flat outside the pit: exact after the first round
-  EXPECT_EQ(n->data[0], 32);
-  const Value c = at(r, "ao", 8, 8);
-  EXPECT_LE(c.se, 0.01);
-  EXPECT_LT(n->data[8 * 17 + 8], 4096);
+  // Open flat ground: every pilot sample escapes; the floor 1 / 64 still asks for a few hundred samples.
+  EXPECT_EQ(at(r, "ao", 0, 0).v, 1.0);
+  EXPECT_LE(n->data[0], 512);
+  // Inside the pit the estimate is noisy: more samples, and a stderr near the target.
+  const float inside = n->data[8 * 17 + 8];
+  EXPECT_GT(inside, n->data[0]);
+  EXPECT_LT(inside, 8192);
+  EXPECT_LE(at(r, "ao", 8, 8).se, 0.02);
 }
 
 TEST(Reference, ObscuranceStepIsAoLimitedToRadius) {
