@@ -44,6 +44,7 @@ P2Params parse_p2_params(const nlohmann::json& e) {
   p.directions = int_param(e, "directions", 64, 1, 4096);
   p.bounces = int_param(e, "bounces", -1, 0, 64);
   p.wrap_periods = int_param(e, "wrap_periods", 1, 1, 16);
+  p.supersampling = int_param(e, "supersampling", 1, 1, 16);
   if (e.contains("visibility")) {
     const auto& v = e.at("visibility");
     if (v == "tree")
@@ -91,6 +92,7 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   spec.directions = params.directions;
   spec.visibility = params.visibility;
   spec.wrap_periods = params.wrap_periods;
+  spec.supersampling = params.supersampling;
   r.indirect.assign(N, Rgb{});
   for (int b = 1; b <= B; ++b) {
     P2SweepStats st;

@@ -8,7 +8,8 @@
 //
 // Parameters (schemas/methods/p2.schema.json): directions (K, default 64), bounces (default: the job's
 // "bounces"), visibility ("tree" or "naive": the same output, the naive march is for benchmarks and
-// checks), layers: indirect, total, direct (default: all three), indirect_b1 .. indirect_b<bounces>.
+// checks), supersampling (S, default 1), wrap_periods, layers: indirect, total, direct (default: all
+// three), indirect_b1 .. indirect_b<bounces>.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -27,6 +28,7 @@ struct P2Params {
   int bounces = -1;  // -1: the scene's
   P2Visibility visibility = P2Visibility::tree;
   int wrap_periods = 1;
+  int supersampling = 1;            // S: terrain samples per line step (indirect_sweep.hpp)
   std::vector<std::string> layers;  // empty: indirect, total, direct
 };
 

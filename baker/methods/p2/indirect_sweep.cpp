@@ -1,5 +1,7 @@
 #include "methods/p2/indirect_sweep.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <mutex>
 
 #include "methods/p1/fast_math.hpp"
@@ -51,39 +53,64 @@ struct LineWorker {
     sink->horizons_pushed += stats.horizons_pushed;
   }
 
+  // Bilinear exit radiance at continuous texel coordinates (like HeightField::bilinear).
+  Rgb exit_bilinear(double x, double y) const {
+    const double fx = std::floor(x), fy = std::floor(y);
+    const int i = int(fx), j = int(fy);
+    const float tx = float(x - fx), ty = float(y - fy);
+    const HeightField& f = *field;
+    auto at = [&](int a, int b) { return (*exit)[f.index(f.wrap_i(a), f.wrap_j(b))]; };
+    return (at(i, j) * (1 - tx) + at(i + 1, j) * tx) * (1 - ty) +
+           (at(i, j + 1) * (1 - tx) + at(i + 1, j + 1) * tx) * ty;
+  }
+
   void operator()(const SweepLine& line, float* out) {
-    const int n = line.count, ib = line.inside_begin, ie = line.inside_end;
+    const int S = std::max(1, spec->supersampling);
+    const int n0 = line.count, n = (n0 - 1) * S + 1;  // fine samples: sample q is driver sample q / S
+    const int ib = line.inside_begin * S;
+    const int ie = line.inside_end > line.inside_begin ? (line.inside_end - 1) * S + 1 : ib;
     if (int(h.size()) < n) {
       h.resize(n);
       L.resize(n);
     }
     const bool gather = spec->gather;
-    for (int s = 0; s < n; ++s) {
-      h[s] = line.z[s];
-      if (gather) {
-        const TexelPair t = line.height_taps(s, *field);
-        L[s] = (*exit)[t.texel[0]] * t.weight[0] + (*exit)[t.texel[1]] * t.weight[1];
+    for (int q = 0; q < n; ++q) {
+      const int s = q / S, sub = q % S;
+      if (sub == 0) {
+        h[q] = line.z[s];
+        if (gather) {
+          const TexelPair t = line.height_taps(s, *field);
+          L[q] = (*exit)[t.texel[0]] * t.weight[0] + (*exit)[t.texel[1]] * t.weight[1];
+        }
+      } else {
+        const double f = double(sub) / S;
+        const double x = line.x(s) + f * (line.x(s + 1) - line.x(s)),
+                     y = line.y(s) + f * (line.y(s + 1) - line.y(s));
+        h[q] = field->bilinear(x, y);
+        if (gather) L[q] = exit_bilinear(x, y);
       }
     }
     const bool naive = spec->visibility == P2Visibility::naive;
     const double* hh = h.data() + ib;  // terrain-relative indexing: sample s is index s - ib
     const Rgb* LL = L.data() + ib;
     const int T = ie - ib;
-    const double inv_step = 1 / line.step;
+    const double inv_step = S / line.step;
     if (!naive) tree.reset(T);
     const std::uint64_t it0 = tree.iterations();
-    for (int s = 0; s < n; ++s) {
-      const bool terrain = s >= ib && s < ie;
+    for (int q = 0; q < n; ++q) {
+      const bool terrain = q >= ib && q < ie;
       if (terrain && !naive) {
-        tree.push(h[s]);
+        tree.push(h[q]);
         stats.pushed += 1;
         stats.horizons_pushed += tree.horizons().size();
       }
+      if (q % S != 0) continue;
+      const int s = q / S;  // the driver's sample
       if (s < line.first_receiver) continue;
       float* o = out + std::size_t(s - line.first_receiver) * kChannels;
       o[0] = o[1] = o[2] = o[3] = 0;
       o[4] = -p1::kHalfPiF;  // nothing behind: P1's convention
-      const int r = s - ib;
+      const int r = q - ib;
       if (r <= 0 || T <= 0) continue;  // no terrain behind this receiver
       const int terrain_end = std::min(r, T);
       if (terrain) {
@@ -116,7 +143,7 @@ struct LineWorker {
       // The global horizon's elevation exactly as P1's HorizonLineWorker computes it.
       if (!starts.empty()) {
         const int c = starts.front();
-        o[4] = p1::fast_elevation(float(hh[c] - hh[r]), float(r - c) * float(line.step));
+        o[4] = p1::fast_elevation(float(hh[c] - hh[r]), float(r - c) * float(line.step / S));
       }
     }
     if (!naive) stats.iterations += tree.iterations() - it0;
