@@ -6,7 +6,7 @@
 namespace hfbake {
 
 Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std::span<const int> horizons,
-                     double inv_step, const WedgeWeights& w, double* weight) {
+                     double inv_step, const WedgeWeights& w, double* weight, const double* inv_dist) {
   double acc_r = 0, acc_g = 0, acc_b = 0;
   auto add = [&](Rgb l, double weight) {
     acc_r += l.r * weight;
@@ -33,11 +33,13 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
     const bool last = k + 1 == m;
     const int end = last ? terrain_end : horizons[k + 1];
     const double limit = last ? -std::numeric_limits<double>::infinity() : visibility_slope(h, end, r);
-    // Fully visible segments j -> j+1.
+    // Fully visible segments j -> j+1. (The test s_next > limit by multiplication: the same as the
+    // division up to rounding at exact ties, where the segment's weight is zero anyway.)
     while (j + 1 < end) {
-      const double s_next = visibility_slope(h, j + 1, r);
-      if (!(s_next > limit)) break;
-      const double t_next = s_next * inv_step;
+      const int d = r - j - 1;
+      const double dz = h[j + 1] - hr;
+      if (!(dz > limit * double(d))) break;
+      const double t_next = dz * (inv_dist ? inv_dist[d] : inv_step / double(d));
       if (!(t_next > t_n)) {  // the segment crosses the tangent plane: nothing below it counts
         add(0.5f * (L[j] + L[j + 1]), Fj - F_n);
         return {float(acc_r / kPi), float(acc_g / kPi), float(acc_b / kPi)};

@@ -63,8 +63,11 @@ struct WedgeWeights {
 // runs (run_starts), inv_step: 1 / (world distance between samples).
 // weight (optional) receives (1/pi) * the sum of the W(segment): the terrain part of the wedge's cosine
 // lobe, (F(global horizon) - F(t_n)) / pi when the horizon is above the tangent plane, else 0.
+// inv_dist (optional): inv_dist[d] = inv_step / d for d >= 1 (a per-line table that saves a division per
+// visible sample).
 Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std::span<const int> horizons,
-                     double inv_step, const WedgeWeights& w, double* weight = nullptr);
+                     double inv_step, const WedgeWeights& w, double* weight = nullptr,
+                     const double* inv_dist = nullptr);
 
 // (F(e) - F(e_t)) / pi for the wedge of direction phi (cos_phi, sin_phi) of K, normal n, horizon elevation e
 // (radians): the part of the cosine lobe between the tangent plane and the horizon, in the form of P1's

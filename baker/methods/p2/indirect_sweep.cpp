@@ -31,6 +31,8 @@ struct LineWorker {
   HullTree tree;
   std::vector<double> h;
   std::vector<Rgb> L;
+  std::vector<double> inv_dist;  // inv_step / d
+  double inv_dist_step = 0;
   std::vector<int> visible, starts;
   P2SweepStats stats;
   // Each worker adds its counts to the caller's totals when the driver destroys it (integer sums: the
@@ -95,6 +97,12 @@ struct LineWorker {
     const Rgb* LL = L.data() + ib;
     const int T = ie - ib;
     const double inv_step = S / line.step;
+    if (gather && (int(inv_dist.size()) < n || inv_dist_step != inv_step)) {
+      inv_dist.resize(std::max<std::size_t>(inv_dist.size(), std::size_t(n)));
+      inv_dist[0] = 0;
+      for (std::size_t d = 1; d < inv_dist.size(); ++d) inv_dist[d] = inv_step / double(d);
+      inv_dist_step = inv_step;
+    }
     if (!naive) tree.reset(T);
     const std::uint64_t it0 = tree.iterations();
     for (int q = 0; q < n; ++q) {
@@ -135,7 +143,7 @@ struct LineWorker {
           normalize((*normals)[t.texel[0]].d() * t.weight[0] + (*normals)[t.texel[1]].d() * t.weight[1]);
       const WedgeWeights w = WedgeWeights::make(nrm, line.dir->dx, line.dir->dy, wedge);
       double weight = 0;
-      const Rgb e = gather_stretches(hh, LL, r, terrain_end, starts, inv_step, w, &weight);
+      const Rgb e = gather_stretches(hh, LL, r, terrain_end, starts, inv_step, w, &weight, inv_dist.data());
       o[0] = e.r;
       o[1] = e.g;
       o[2] = e.b;
