@@ -19,7 +19,7 @@
 namespace {
 namespace fs = std::filesystem;
 
-struct Run {
+struct Result {
   int exit_code = -1;
   std::string err;  // stderr
   std::vector<std::string> error_lines() const {
@@ -43,11 +43,11 @@ class Cli : public ::testing::Test {
     fs::remove_all(dir_);
   }
 
-  Run hfbake(const std::string& args) {
+  Result hfbake(const std::string& args) {
     const fs::path err = dir_ / "stderr.txt";
     const std::string cmd = std::string(HFBAKE_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
     const int status = std::system(cmd.c_str());
-    Run r;
+    Result r;
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     std::ifstream in(err);
     std::stringstream ss;
@@ -84,7 +84,7 @@ class Cli : public ::testing::Test {
 };
 
 TEST_F(Cli, VersionAndHelp) {
-  Run r = hfbake("--version");
+  Result r = hfbake("--version");
   EXPECT_EQ(r.exit_code, 0);
   r = hfbake("--help");
   EXPECT_EQ(r.exit_code, 0);
@@ -93,7 +93,7 @@ TEST_F(Cli, VersionAndHelp) {
 TEST_F(Cli, MalformedJson) {
   const fs::path p = dir_ / "bad.json";
   std::ofstream(p) << "{\"version\": 1,,}";
-  const Run r = hfbake("bake " + p.string());
+  const Result r = hfbake("bake " + p.string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("bad.json: line 1, column 15: malformed JSON"), std::string::npos) << r.err;
@@ -104,7 +104,7 @@ TEST_F(Cli, SchemaViolationOneLinePerProblem) {
   j["colour"] = "red";
   const fs::path p = write_job("x.json", j);
   for (const char* cmd : {"validate ", "bake "}) {
-    const Run r = hfbake(cmd + p.string());
+    const Result r = hfbake(cmd + p.string());
     EXPECT_EQ(r.exit_code, 2) << cmd;
     const auto lines = r.error_lines();
     ASSERT_EQ(lines.size(), 2u) << r.err;
@@ -116,7 +116,7 @@ TEST_F(Cli, SchemaViolationOneLinePerProblem) {
 
 TEST_F(Cli, MissingHeightImage) {
   const fs::path p = write_job("x.json", job({{"image", "nope.exr"}}));
-  const Run r = hfbake("bake " + p.string());
+  const Result r = hfbake("bake " + p.string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("x.json: /height/image: no such file: "), std::string::npos) << r.err;
@@ -134,7 +134,7 @@ TEST_F(Cli, CorruptAndTruncatedImages) {
   }
   for (const char* name : {"garbage.exr", "truncated.exr"}) {
     const fs::path p = write_job("x.json", job({{"image", name}}));
-    const Run r = hfbake("bake " + p.string());
+    const Result r = hfbake("bake " + p.string());
     EXPECT_EQ(r.exit_code, 2) << name;
     ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
     EXPECT_NE(r.error_lines()[0].find(name), std::string::npos) << r.err;
@@ -145,7 +145,7 @@ TEST_F(Cli, CorruptAndTruncatedImages) {
 TEST_F(Cli, WrongChannel) {
   write_float_image(dir_ / "rgb.exr", 16, 16, 3, std::vector<float>(16 * 16 * 3, 0.5f));
   const fs::path p = write_job("x.json", job({{"image", "rgb.exr"}, {"channel", 5}}));
-  Run r = hfbake("bake " + p.string());
+  Result r = hfbake("bake " + p.string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("/height/channel"), std::string::npos) << r.err;
@@ -160,7 +160,7 @@ TEST_F(Cli, NanHeightsAreAnErrorUnlessFilled) {
   std::vector<float> px(32 * 32, 1.0f);
   px[5 * 32 + 7] = NAN;
   write_float_image(dir_ / "nan.exr", 32, 32, 1, px);
-  Run r = hfbake("bake " + write_job("x.json", job({{"image", "nan.exr"}})).string());
+  Result r = hfbake("bake " + write_job("x.json", job({{"image", "nan.exr"}})).string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("/height/image: nan.exr: texel (7, 5) is NaN (1 of 1024 texels"), std::string::npos) << r.err;
@@ -173,12 +173,12 @@ TEST_F(Cli, NanHeightsAreAnErrorUnlessFilled) {
 
 TEST_F(Cli, TinyFields) {
   write_float_image(dir_ / "one.exr", 1, 1, 1, {1.0f});
-  const Run r = hfbake("bake " + write_job("x.json", job({{"image", "one.exr"}})).string());
+  const Result r = hfbake("bake " + write_job("x.json", job({{"image", "one.exr"}})).string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("/height: the field is 1x1"), std::string::npos) << r.err;
   // 0-size procedural: the schema refuses it.
-  const Run z = hfbake("bake " + write_job("z.json", job({{"procedural", {{"kind", "flat"}, {"size", {0, 8}}}}})).string());
+  const Result z = hfbake("bake " + write_job("z.json", job({{"procedural", {{"kind", "flat"}, {"size", {0, 8}}}}})).string());
   EXPECT_EQ(z.exit_code, 2);
   ASSERT_EQ(z.error_lines().size(), 1u) << z.err;
   EXPECT_NE(z.error_lines()[0].find("/height/procedural/size/0: must be >= 2"), std::string::npos) << z.err;
@@ -186,7 +186,7 @@ TEST_F(Cli, TinyFields) {
 
 TEST_F(Cli, FieldTooLargeIsRefusedBeforeAllocating) {
   const fs::path p = write_job("x.json", job({{"procedural", {{"kind", "flat"}, {"size", {1000000, 1000000}}}}}));
-  const Run r = hfbake("bake " + p.string());
+  const Result r = hfbake("bake " + p.string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("/height: a 1000000x1000000 field needs about"), std::string::npos) << r.err;
@@ -202,7 +202,7 @@ TEST_F(Cli, UnwritableOutputFolder) {
   }
   nlohmann::json j = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}});
   j["output"]["dir"] = "locked/out";
-  const Run r = hfbake("bake " + write_job("x.json", j).string());
+  const Result r = hfbake("bake " + write_job("x.json", j).string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("/output/dir: cannot create"), std::string::npos) << r.err;
@@ -213,7 +213,7 @@ TEST_F(Cli, ContinuesPastAFailedJob) {
   nlohmann::json g = job({{"procedural", {{"kind", "flat"}, {"size", {16, 16}}}}});
   g["name"] = "good";
   const fs::path good = write_job("good.json", g);
-  const Run r = hfbake("bake " + bad.string() + " " + good.string() + " --quiet --summary " + (dir_ / "s.json").string());
+  const Result r = hfbake("bake " + bad.string() + " " + good.string() + " --quiet --summary " + (dir_ / "s.json").string());
   EXPECT_EQ(r.exit_code, 2);
   std::ifstream in(dir_ / "s.json");
   const nlohmann::json s = nlohmann::json::parse(in);
