@@ -568,6 +568,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
       const int tx = tile % tiles_x, ty = tile / tiles_x;
       for (int j = ty * ts; j < std::min(f.height, (ty + 1) * ts); ++j) {
         for (int i = tx * ts; i < std::min(f.width, (tx + 1) * ts); ++i) {
+          rc.check();  // per texel: a texel of a many-sample reference can take seconds
           const std::uint64_t texel_seed =
               reference::hash_combine(reference::mix64(options.seed), std::uint64_t(f.index(i, j)));
           // Runs n samples in each of replicates [r0, r0 + B) and leaves the mean of the replicate means
