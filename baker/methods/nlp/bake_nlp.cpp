@@ -48,6 +48,8 @@ NlpOptions parse_nlp_options(const nlohmann::json& p) {
   o.level_offset = p.value("level_offset", o.level_offset);
   o.radiance_level_offset = p.value("radiance_level_offset", o.radiance_level_offset);
   o.light_directions = p.value("light_directions", o.light_directions);
+  o.light_level_offset = p.value("light_level_offset", o.light_level_offset);
+  o.light_horizon_knots = p.value("light_horizon", std::string("knots")) == "knots";
   o.subsample = p.value("subsample", o.subsample);
   if (p.contains("azimuth_interpolation")) {
     const std::string s = p["azimuth_interpolation"].get<std::string>();
@@ -165,10 +167,15 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
   auto receiver = [&](Scratch& s, int i, int j) {
     for (int l = 0; l < lv; ++l) s.recv[l] = nlp::sample_level1(hp, hp.levels[l], float(i), float(j));
   };
-  auto omega_max = [&](Scratch& s, int i, int j, float cx, float cy, const Vec3f& n) {
-    const int cnt =
-        nlp::march(ms, hp, i, j, cx, cy, s.recv.data(), s.omega.data(), s.dist.data(), s.lev.data());
+  // Directional lights march with their own (sharper) level offset; the pyramid has enough levels.
+  const nlp::MarchSetup ms_light =
+      nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
+                            std::max(o.level_offset, o.light_level_offset), o.radiance_level_offset);
+  auto omega_max = [&](Scratch& s, int i, int j, float cx, float cy, const Vec3f& n, bool light = false) {
+    const int cnt = nlp::march(light ? ms_light : ms, hp, i, j, cx, cy, s.recv.data(), s.omega.data(),
+                               s.dist.data(), s.lev.data());
     if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
+    if (light && o.light_horizon_knots) return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
     const int c = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
     return *std::max_element(s.curve.begin(), s.curve.begin() + c);
   };
@@ -198,7 +205,7 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       const LightSetup& L = lights[q];
       float fr = 0;
       for (std::size_t k = 0; k < L.cx.size(); ++k) {
-        const float wmax = omega_max(s, i, j, L.cx[k], L.cy[k], n);
+        const float wmax = omega_max(s, i, j, L.cx[k], L.cy[k], n, true);
         if (L.radius > 0) {
           const float lo = std::max(L.elevation - L.radius, -1.5707963f);
           const float hi = std::min(L.elevation + L.radius, 1.5707963f);

@@ -23,8 +23,10 @@ struct NlpOptions {
   int level_offset = 2;           // o_v (visibility)
   int radiance_level_offset = 2;  // o_u (indirect radiance)
   nlp::AzimuthInterpolation interpolation = nlp::AzimuthInterpolation::linear;
-  int light_directions = 3;  // azimuths across a directional light's disk (NS09 §9: 3)
-  int subsample = 1;         // 1, or 2: V and U on a 2x2-subsampled grid, shading at full resolution
+  int light_level_offset = 4;       // o_v for directional lights' visibility (>= level_offset)
+  bool light_horizon_knots = true;  // lights: max over the knot angles instead of the B-spline curve
+  int light_directions = 3;         // azimuths across a directional light's disk (NS09 §9: 3)
+  int subsample = 1;                // 1, or 2: V and U on a 2x2-subsampled grid, shading at full resolution
   std::vector<std::string> layers = {"direct", "indirect", "total", "sh_visibility", "sh_irradiance"};
 };
 
