@@ -1,8 +1,11 @@
-// 8-bit PNG previews of layers through an OpenColorIO display/view.
+// 8-bit PNG previews of layers through an OpenColorIO display/view, and the in-memory image building
+// blocks of report.html (PNG encoding and down-sampling, both by OpenImageIO).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "core/layers.hpp"
 
@@ -17,5 +20,16 @@ struct PreviewOptions {
 // 0.5 + 0.5 * xyz without a colour transform. Atomic like write_exr. Errors -> InputError naming the file.
 void write_preview(const std::filesystem::path& file, const LayerSet& layers, const Layer& layer,
                    const PreviewOptions& options = {});
+
+// An 8-bit PNG file's bytes (channels 1 = grey, 3 = RGB; rows top first), encoded in memory by
+// OpenImageIO's PNG writer. A bad size or channel count -> std::invalid_argument; a writer failure ->
+// std::runtime_error.
+std::string encode_png(int width, int height, int channels, const std::vector<std::uint8_t>& pixels);
+
+// Interleaved float pixels (`channels` per texel, rows top first) resized to out_width x out_height by
+// OpenImageIO's ImageBufAlgo::resize with the named filter ("box": each output texel is the mean of the
+// input texels under it when the sizes divide). Bad sizes -> std::invalid_argument.
+std::vector<float> resize_pixels(const std::vector<float>& pixels, int width, int height, int channels,
+                                 int out_width, int out_height, const std::string& filter = "box");
 
 }  // namespace hfbake

@@ -1,15 +1,15 @@
 #include "report/report_html.hpp"
 
-#include <zlib.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+
+#include "io/color.hpp"
+#include "io/preview.hpp"
 
 namespace hfbake {
 namespace {
@@ -50,43 +50,26 @@ std::string json_num(const nlohmann::json& obj, const char* key, int digits = 4)
   return num(obj[key].get<double>(), digits);
 }
 
-void put_u32(std::string& s, std::uint32_t v) {
-  for (int k = 3; k >= 0; --k) s.push_back(char((v >> (8 * k)) & 0xff));
-}
-
-void png_chunk(std::string& png, const char* type, const std::string& data) {
-  put_u32(png, std::uint32_t(data.size()));
-  const std::string body = std::string(type, 4) + data;
-  png += body;
-  put_u32(png, std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(body.data()), uInt(body.size()))));
-}
-
-double srgb_encode(double v) {
-  v = std::clamp(v, 0.0, 1.0);
-  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
-}
-
-// Box-filtered down-sampling factor so that neither side exceeds max_size.
-int shrink_factor(int w, int h, int max_size) {
+// The shown size of a w x h field: the same aspect, neither side above max_size (never enlarged).
+struct Shown {
+  int width, height;
+};
+Shown shown_size(int w, int h, int max_size) {
+  max_size = std::max(1, max_size);
   const int m = std::max(w, h);
-  return std::max(1, (m + max_size - 1) / std::max(1, max_size));
+  if (m <= max_size) return {w, h};
+  const double s = double(max_size) / m;
+  return {std::clamp(int(std::lround(w * s)), 1, max_size), std::clamp(int(std::lround(h * s)), 1, max_size)};
 }
 
-// Per output pixel, the mean over its f x f box and over `channels` of value(texel, channel).
-template <class F>
-std::vector<double> box_filter(int w, int h, int f, int out_channels, F value) {
-  const int ow = (w + f - 1) / f, oh = (h + f - 1) / f;
-  std::vector<double> out(std::size_t(ow) * oh * out_channels, 0.0);
-  for (int oy = 0; oy < oh; ++oy)
-    for (int ox = 0; ox < ow; ++ox)
-      for (int c = 0; c < out_channels; ++c) {
-        double sum = 0;
-        int n = 0;
-        for (int y = oy * f; y < std::min(h, oy * f + f); ++y)
-          for (int x = ox * f; x < std::min(w, ox * f + f); ++x, ++n) sum += value(x, y, c);
-        out[(std::size_t(oy) * ow + ox) * out_channels + c] = n ? sum / n : 0.0;
-      }
-  return out;
+// Down-samples interleaved linear values to the shown size with OpenImageIO's box filter (averaging in
+// linear, before any display transform).
+std::vector<float> down_sample(const std::vector<float>& values, int w, int h, int channels, const Shown& s) {
+  return resize_pixels(values, w, h, channels, s.width, s.height, "box");
+}
+
+std::uint8_t to_byte(double v) {
+  return std::uint8_t(std::lround(255.0 * (std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 0.0)));
 }
 
 double percentile_abs(std::vector<double> v, double q) {
@@ -99,28 +82,27 @@ double percentile_abs(std::vector<double> v, double q) {
 
 struct Img {
   std::string data_uri;
-  int width = 0, height = 0, factor = 1;
+  int width = 0, height = 0;                // as shown
+  int source_width = 0, source_height = 0;  // the field's texels
 };
 
-Img to_image(const std::vector<double>& values, int ow, int oh, int channels, int factor,
-             const std::function<void(const double*, std::uint8_t*)>& colour) {
-  const int out_channels = channels == 1 ? 1 : 3;
-  std::vector<std::uint8_t> px(std::size_t(ow) * oh * out_channels);
-  for (std::size_t i = 0; i < std::size_t(ow) * oh; ++i) colour(&values[i * channels], &px[i * out_channels]);
-  return {"data:image/png;base64," + base64(encode_png(ow, oh, out_channels, px)), ow, oh, factor};
+Img png_image(const std::vector<std::uint8_t>& px, int channels, const Shown& s, int w, int h) {
+  return {"data:image/png;base64," + base64(encode_png(s.width, s.height, channels, px)), s.width, s.height,
+          w, h};
 }
 
 // A layer shown as an image, scaled by `display_max`: 1 channel as grey with the value as the pixel value
-// (how texture tools show an AO map), 3 channels (light) as RGB, sRGB-encoded.
+// (how texture tools show an AO map), 3 channels (light) as RGB through the OpenColorIO config's default
+// display/view (as the PNG previews). Down-sampled in linear first.
 Img layer_image(const Layer& l, int w, int h, int max_size, double display_max) {
-  const int f = shrink_factor(w, h, max_size), nc = l.channel_count();
-  const auto v = box_filter(
-      w, h, f, nc, [&](int x, int y, int c) { return double(l.data[(std::size_t(y) * w + x) * nc + c]); });
-  return to_image(v, (w + f - 1) / f, (h + f - 1) / f, nc, f, [&](const double* in, std::uint8_t* out) {
-    for (int c = 0; c < (nc == 1 ? 1 : 3); ++c)
-      out[c] = std::uint8_t(std::lround(
-          255.0 * (nc == 1 ? std::clamp(in[c] / display_max, 0.0, 1.0) : srgb_encode(in[c] / display_max))));
-  });
+  const int nc = l.channel_count();
+  const Shown s = shown_size(w, h, max_size);
+  std::vector<float> v = down_sample(l.data, w, h, nc, s);
+  for (float& x : v) x = float(x / display_max);
+  if (nc == 3) convert_to_display(v, "", "", InputSite{"report.html", ""});
+  std::vector<std::uint8_t> px(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) px[i] = to_byte(v[i]);
+  return png_image(px, nc, s, w, h);
 }
 
 std::string legend(const std::string& left, const std::string& mid, const std::string& right,
@@ -137,7 +119,9 @@ std::string figure(const Img& img, const std::string& caption, const std::string
   h << "<figure><img src=\"" << img.data_uri << "\" width=\""
     << img.width * std::max(1, 256 / std::max(img.width, img.height)) << "\" alt=\"" << esc(caption)
     << "\"><figcaption>" << esc(caption);
-  if (img.factor > 1) h << " (" << img.factor << "&times;" << img.factor << " box-filtered)";
+  if (img.width != img.source_width || img.height != img.source_height)
+    h << " (" << img.source_width << "&times;" << img.source_height << " box-filtered to " << img.width
+      << "&times;" << img.height << ")";
   h << "</figcaption>" << legend_html << "</figure>";
   return h.str();
 }
@@ -187,35 +171,6 @@ void diverging_colour(double t, std::uint8_t rgb[3]) {
   const double* end = t < 0 ? lo : hi;
   const double a = std::abs(t);
   for (int c = 0; c < 3; ++c) rgb[c] = std::uint8_t(std::lround(mid[c] + a * (end[c] - mid[c])));
-}
-
-std::string encode_png(int width, int height, int channels, const std::vector<std::uint8_t>& pixels) {
-  if (width <= 0 || height <= 0 || (channels != 1 && channels != 3) ||
-      pixels.size() != std::size_t(width) * height * channels)
-    throw std::invalid_argument("encode_png: bad image size");
-  std::string raw;
-  raw.reserve((std::size_t(width) * channels + 1) * height);
-  for (int y = 0; y < height; ++y) {
-    raw.push_back('\0');  // filter: none
-    raw.append(reinterpret_cast<const char*>(&pixels[std::size_t(y) * width * channels]),
-               std::size_t(width) * channels);
-  }
-  uLongf size = compressBound(uLong(raw.size()));
-  std::string z(size, '\0');
-  if (compress2(reinterpret_cast<Bytef*>(z.data()), &size, reinterpret_cast<const Bytef*>(raw.data()),
-                uLong(raw.size()), 6) != Z_OK)
-    throw std::runtime_error("encode_png: zlib failed");
-  z.resize(size);
-  std::string png("\x89PNG\r\n\x1a\n", 8);
-  std::string ihdr;
-  put_u32(ihdr, std::uint32_t(width));
-  put_u32(ihdr, std::uint32_t(height));
-  ihdr +=
-      std::string{char(8), char(channels == 1 ? 0 : 2), 0, 0, 0};  // 8 bit, grey/RGB, deflate, no interlace
-  png_chunk(png, "IHDR", ihdr);
-  png_chunk(png, "IDAT", z);
-  png_chunk(png, "IEND", "");
-  return png;
 }
 
 std::string base64(const std::string& bytes) {
@@ -519,33 +474,31 @@ std::string report_html(const HtmlInputs& in) {
       double display_max = percentile_abs(ref_values, 0.995);
       if (!(display_max > 0)) display_max = 1;
       // Signed error, mean over the channels, box-filtered like the images.
-      const int f = shrink_factor(w, ht, in.max_image_size);
-      const auto err = box_filter(w, ht, f, 1, [&](int x, int y, int) {
+      const Shown shown = shown_size(w, ht, in.max_image_size);
+      std::vector<float> full_err(std::size_t(w) * ht);
+      for (std::size_t t = 0; t < full_err.size(); ++t) {
         double s = 0;
-        for (int c = 0; c < nc; ++c) {
-          const std::size_t i = (std::size_t(y) * w + x) * nc + c;
-          s += double(ml->data[i]) - double(rl->data[i]);
-        }
-        return s / nc;
-      });
+        for (int c = 0; c < nc; ++c) s += double(ml->data[t * nc + c]) - double(rl->data[t * nc + c]);
+        full_err[t] = float(s / nc);
+      }
+      const std::vector<float> err_f = down_sample(full_err, w, ht, 1, shown);
+      const std::vector<double> err(err_f.begin(), err_f.end());
       double scale = percentile_abs(err, 0.99);
       if (!(scale > 0)) scale = percentile_abs(err, 1.0);
       if (!(scale > 0)) scale = 1e-6;
-      Img err_img;
-      err_img.width = (w + f - 1) / f, err_img.height = (ht + f - 1) / f, err_img.factor = f;
-      std::vector<std::uint8_t> px(std::size_t(err_img.width) * err_img.height * 3);
+      std::vector<std::uint8_t> px(err.size() * 3);
       for (std::size_t i = 0; i < err.size(); ++i) diverging_colour(err[i] / scale, &px[3 * i]);
-      err_img.data_uri = "data:image/png;base64," + base64(encode_png(err_img.width, err_img.height, 3, px));
+      const Img err_img = png_image(px, 3, shown, w, ht);
 
       std::uint8_t lo[3], mid[3], hi[3];
       diverging_colour(-1, lo), diverging_colour(0, mid), diverging_colour(1, hi);
       char grad[160];
       std::snprintf(grad, sizeof grad, "rgb(%d,%d,%d),rgb(%d,%d,%d),rgb(%d,%d,%d)", lo[0], lo[1], lo[2],
                     mid[0], mid[1], mid[2], hi[0], hi[1], hi[2]);
-      const std::string value_legend =
-          legend("0", num(display_max / 2, 3), num(display_max, 3), "#000,#bcbcbc,#fff",
-                 nc == 1 ? "value (linear grey, clipped at " + num(display_max, 3) + ")"
-                         : "light (sRGB-encoded, clipped at " + num(display_max, 3) + ")");
+      const std::string value_legend = legend(
+          "0", num(display_max / 2, 3), num(display_max, 3), "#000,#bcbcbc,#fff",
+          nc == 1 ? "value (linear grey, clipped at " + num(display_max, 3) + ")"
+                  : "light (the OpenColorIO default display/view, clipped at " + num(display_max, 3) + ")");
       h << "<h3>" << esc(hm.stem) << " &middot; " << esc(layer_name) << "</h3>\n<div class=\"figs\">"
         << figure(layer_image(*ml, w, ht, in.max_image_size, display_max), hm.stem + " " + layer_name,
                   value_legend)

@@ -2,7 +2,8 @@
 // PNG data URIs, plots drawn as inline SVG, no script or style from a network): per method the baked
 // layers, the reference, the signed error image with its colour scale, the metrics table, timings and
 // parameters; the hfbake version and the job hash; convergence plots where a job sweeps a parameter.
-// Pure data in, text out (no file I/O).
+// Pure data in, text out (no file I/O; PNGs are encoded in memory by OpenImageIO, light goes through
+// the OpenColorIO config's default display/view like the PNG previews).
 #pragma once
 
 #include <cstdint>
@@ -27,15 +28,13 @@ struct HtmlInputs {
   nlohmann::json report;                // the report.json document (schemas/report.schema.json)
   std::vector<HtmlMethod> methods;      // in bake order
   const LayerSet* reference = nullptr;  // may be null (metrics only)
-  int max_image_size = 320;             // larger fields are box-filtered down to this many texels a side
+  int max_image_size = 320;             // larger fields are box-filtered (OpenImageIO) down to this size
   std::string reference_note;           // e.g. where the reference came from (the reference cache)
 };
 
 std::string report_html(const HtmlInputs& inputs);
 
-// Building blocks, exposed for tests.
-// An 8-bit PNG (channels 1 = grey, 3 = RGB, rows top first), zlib-compressed.
-std::string encode_png(int width, int height, int channels, const std::vector<std::uint8_t>& pixels);
+// Building blocks, exposed for tests. (The images are PNGs from encode_png in io/preview.hpp.)
 std::string base64(const std::string& bytes);
 
 struct PlotSeries {

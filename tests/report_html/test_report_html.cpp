@@ -1,10 +1,12 @@
-// report.html: the PNG encoder is checked by OpenImageIO's decoder, base64 by RFC 4648's vectors, and the
+// report.html: the PNG encoder (io/preview.hpp, OpenImageIO in memory) is checked by decoding its bytes
+// from a file, the down-sampling against brute-force box means, base64 by RFC 4648's vectors, and the
 // page by a real browser: headless Chromium loads it from disk with the network disabled, must log no
 // console message, must decode every image and render the tables, and leaves a screenshot behind.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <OpenImageIO/imageio.h>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -13,6 +15,7 @@
 #include <regex>
 #include <sstream>
 
+#include "io/preview.hpp"
 #include "report/report_document.hpp"
 #include "report/report_html.hpp"
 
@@ -70,6 +73,33 @@ TEST(ReportHtml, PngDecodesToTheSamePixels) {
     EXPECT_EQ(back, px);
   }
   EXPECT_THROW(encode_png(2, 2, 4, std::vector<std::uint8_t>(16)), std::invalid_argument);
+  EXPECT_THROW(encode_png(2, 2, 1, std::vector<std::uint8_t>(3)), std::invalid_argument);
+}
+
+// When the sizes divide, the box filter gives each output texel the mean of its f x f block of input.
+TEST(ReportHtml, BoxResizeIsTheBlockMean) {
+  for (const auto& [w, h, f, nc] :
+       {std::array<int, 4>{12, 8, 4, 1}, std::array<int, 4>{9, 6, 3, 3}, std::array<int, 4>{10, 10, 2, 3}}) {
+    std::vector<float> px(std::size_t(w) * h * nc);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = float((i * 7919 + 13) % 101) / 100.0f;
+    const int ow = w / f, oh = h / f;
+    const std::vector<float> out = resize_pixels(px, w, h, nc, ow, oh, "box");
+    ASSERT_EQ(out.size(), std::size_t(ow) * oh * nc);
+    for (int oy = 0; oy < oh; ++oy)
+      for (int ox = 0; ox < ow; ++ox)
+        for (int c = 0; c < nc; ++c) {
+          double sum = 0;
+          for (int y = oy * f; y < oy * f + f; ++y)
+            for (int x = ox * f; x < ox * f + f; ++x) sum += px[(std::size_t(y) * w + x) * nc + c];
+          EXPECT_NEAR(out[(std::size_t(oy) * ow + ox) * nc + c], sum / (f * f), 1e-5)
+              << w << "x" << h << " f " << f << " at " << ox << "," << oy << "," << c;
+        }
+  }
+  // A constant stays constant at any ratio; the same size is returned unchanged.
+  const std::vector<float> flat(37 * 23, 0.25f);
+  for (float v : resize_pixels(flat, 37, 23, 1, 11, 7, "box")) EXPECT_NEAR(v, 0.25f, 1e-6);
+  EXPECT_EQ(resize_pixels(flat, 37, 23, 1, 37, 23), flat);
+  EXPECT_THROW(resize_pixels(flat, 37, 22, 1, 11, 7), std::invalid_argument);
 }
 
 TEST(ReportHtml, DivergingScaleEndsAndMiddle) {
