@@ -215,8 +215,22 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
 
 }  // namespace
 
-int run_validate(const std::vector<fs::path>& jobs, bool quiet) {
+int run_validate(const std::vector<fs::path>& files, bool quiet) {
   int exit_code = 0;
+  // A suite validates as the jobs it lists (as `bake` would run them).
+  std::vector<fs::path> jobs;
+  std::vector<std::string> suite_errors;
+  for (const fs::path& file : files) {
+    const std::size_t errors_before = suite_errors.size();
+    if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
+      jobs.insert(jobs.end(), suite->jobs.begin(), suite->jobs.end());
+      if (!quiet) std::fprintf(stderr, "hfbake: %s: suite of %zu jobs\n", file.c_str(), suite->jobs.size());
+    } else if (suite_errors.size() == errors_before) {
+      jobs.push_back(file);  // not a suite: a job
+    }
+  }
+  for (const std::string& e : suite_errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+  if (!suite_errors.empty()) exit_code = 2;
   for (const fs::path& file : jobs) {
     const JobLoad load = load_job(file, std::nullopt);
     for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());

@@ -62,7 +62,8 @@ class Cli : public ::testing::Test {
     return p;
   }
 
-  static nlohmann::json job(const nlohmann::json& height, const nlohmann::json& bake = {{{"method", "p1"}, {"directions", 8}}}) {
+  static nlohmann::json job(const nlohmann::json& height,
+                            const nlohmann::json& bake = {{{"method", "p1"}, {"directions", 8}}}) {
     return {{"version", 1}, {"name", "t"}, {"height", height}, {"bake", bake}, {"output", {{"dir", "out"}}}};
   }
 
@@ -96,11 +97,13 @@ TEST_F(Cli, MalformedJson) {
   const Result r = hfbake("bake " + p.string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
-  EXPECT_NE(r.error_lines()[0].find("bad.json: line 1, column 15: malformed JSON"), std::string::npos) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("bad.json: line 1, column 15: malformed JSON"), std::string::npos)
+      << r.err;
 }
 
 TEST_F(Cli, SchemaViolationOneLinePerProblem) {
-  nlohmann::json j = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}, {{{"method", "p1"}, {"directions", 0}}});
+  nlohmann::json j =
+      job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}, {{{"method", "p1"}, {"directions", 0}}});
   j["colour"] = "red";
   const fs::path p = write_job("x.json", j);
   for (const char* cmd : {"validate ", "bake "}) {
@@ -163,7 +166,9 @@ TEST_F(Cli, NanHeightsAreAnErrorUnlessFilled) {
   Result r = hfbake("bake " + write_job("x.json", job({{"image", "nan.exr"}})).string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
-  EXPECT_NE(r.error_lines()[0].find("/height/image: nan.exr: texel (7, 5) is NaN (1 of 1024 texels"), std::string::npos) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("/height/image: nan.exr: texel (7, 5) is NaN (1 of 1024 texels"),
+            std::string::npos)
+      << r.err;
   EXPECT_TRUE(output_dir_is_empty());
   // With "nodata": "fill" the hole is filled from its neighbours and the bake succeeds.
   r = hfbake("bake --quiet " + write_job("y.json", job({{"image", "nan.exr"}, {"nodata", "fill"}})).string());
@@ -178,18 +183,21 @@ TEST_F(Cli, TinyFields) {
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("/height: the field is 1x1"), std::string::npos) << r.err;
   // 0-size procedural: the schema refuses it.
-  const Result z = hfbake("bake " + write_job("z.json", job({{"procedural", {{"kind", "flat"}, {"size", {0, 8}}}}})).string());
+  const Result z = hfbake(
+      "bake " + write_job("z.json", job({{"procedural", {{"kind", "flat"}, {"size", {0, 8}}}}})).string());
   EXPECT_EQ(z.exit_code, 2);
   ASSERT_EQ(z.error_lines().size(), 1u) << z.err;
   EXPECT_NE(z.error_lines()[0].find("/height/procedural/size/0: must be >= 2"), std::string::npos) << z.err;
 }
 
 TEST_F(Cli, FieldTooLargeIsRefusedBeforeAllocating) {
-  const fs::path p = write_job("x.json", job({{"procedural", {{"kind", "flat"}, {"size", {1000000, 1000000}}}}}));
+  const fs::path p =
+      write_job("x.json", job({{"procedural", {{"kind", "flat"}, {"size", {1000000, 1000000}}}}}));
   const Result r = hfbake("bake " + p.string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
-  EXPECT_NE(r.error_lines()[0].find("/height: a 1000000x1000000 field needs about"), std::string::npos) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("/height: a 1000000x1000000 field needs about"), std::string::npos)
+      << r.err;
 }
 
 TEST_F(Cli, UnwritableOutputFolder) {
@@ -213,7 +221,8 @@ TEST_F(Cli, ContinuesPastAFailedJob) {
   nlohmann::json g = job({{"procedural", {{"kind", "flat"}, {"size", {16, 16}}}}});
   g["name"] = "good";
   const fs::path good = write_job("good.json", g);
-  const Result r = hfbake("bake " + bad.string() + " " + good.string() + " --quiet --summary " + (dir_ / "s.json").string());
+  const Result r = hfbake("bake " + bad.string() + " " + good.string() + " --quiet --summary " +
+                          (dir_ / "s.json").string());
   EXPECT_EQ(r.exit_code, 2);
   std::ifstream in(dir_ / "s.json");
   const nlohmann::json s = nlohmann::json::parse(in);
@@ -250,6 +259,33 @@ TEST_F(Cli, InterruptExits130AndLeavesNoOutputs) {
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 130);
   EXPECT_TRUE(output_dir_is_empty());
+}
+
+TEST_F(Cli, ValidateSuiteChecksEveryJobItLists) {
+  nlohmann::json good = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}});
+  write_job("good.json", good);
+  const fs::path suite = dir_ / "suite.json";
+  std::ofstream(suite) << nlohmann::json{{"version", 1}, {"suite", "s"}, {"jobs", {"good.json"}}}.dump();
+  Result r = hfbake("validate " + suite.string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.error_lines().empty()) << r.err;
+  // A listed job with a schema violation fails the suite's validation with that job's one-line error.
+  good["bake"][0]["directions"] = 0;
+  const fs::path bad = write_job("bad.json", good);
+  std::ofstream(suite)
+      << nlohmann::json{{"version", 1}, {"suite", "s"}, {"jobs", {"good.json", "bad.json"}}}.dump();
+  r = hfbake("validate " + suite.string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("bad.json: /bake/0/directions: must be >= 1"), std::string::npos)
+      << r.err;
+  // A suite that breaks its own schema is reported once, at the suite file.
+  std::ofstream(suite)
+      << nlohmann::json{{"version", 1}, {"suite", "s"}, {"jobs", nlohmann::json::array()}}.dump();
+  r = hfbake("validate " + suite.string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("suite.json: /jobs"), std::string::npos) << r.err;
 }
 
 }  // namespace
