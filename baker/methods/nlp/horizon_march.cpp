@@ -74,12 +74,13 @@ int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float 
     const PyramidLevel& lv = hp.levels[l];
     const float x = fi + d * cx, y = fj + d * cy;
     const float h = fast && lv.w >= 2 && lv.h >= 2 ? sample_clamped(lv, x, y) : sample_level1(hp, lv, x, y);
-    omega[n] = fast_atan((h - recv[l]) * inv);
+    omega[n] = (h - recv[l]) * inv;  // slope; angles below
     dist[n] = d;
     lev[n] = k;
     ++n;
     if (last) break;
   }
+  for (int k = 0; k < n; ++k) omega[k] = fast_atan(omega[k]);
   return n;
 }
 

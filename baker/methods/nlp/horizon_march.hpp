@@ -23,12 +23,14 @@ namespace hfbake::nlp {
 
 // |error| <= 1.2e-5 rad (Abramowitz & Stegun 4.4.49 with octant reduction), plain arithmetic.
 inline float fast_atan(float x) {
+  // Branch-free (selects), so loops over arrays of slopes vectorise.
   const float ax = std::abs(x);
   const bool inv = ax > 1;
   const float t = inv ? 1 / ax : ax, t2 = t * t;
-  float r = t * (0.9998660f + t2 * (-0.3302995f + t2 * (0.1801410f + t2 * (-0.0851330f + t2 * 0.0208351f))));
-  if (inv) r = 1.57079632679f - r;
-  return x < 0 ? -r : r;
+  const float p =
+      t * (0.9998660f + t2 * (-0.3302995f + t2 * (0.1801410f + t2 * (-0.0851330f + t2 * 0.0208351f))));
+  const float r = inv ? 1.57079632679f - p : p;
+  return std::copysign(r, x);
 }
 
 struct MarchSetup {
