@@ -25,9 +25,9 @@
 //   the linear interpolation between the two lines that pass on either side of the texel center, along
 //   the texel's own column. Weights sum to 1. When u * slope is an integer (axis directions for every
 //   texel, diagonals too: slope = +-1 is snapped exactly) g = 0 and the texel IS a sample: no interpolation.
-//   Otherwise the texel center lies at most one minor step (1 texel) from the samples it blends (see
-//   clamp below for the border rows); the error
-//   this adds is measured in tests/sweep and tests/p1 (a march from the texel centers themselves).
+//   Otherwise the texel center lies less than one minor step (1 texel) from the samples it blends (see
+//   clamp below for the border rows); the error this adds is measured in tests/p1 (a march from the
+//   texel centers themselves: P1Measure.MappingErrorAgainstTexelCenterMarch).
 // * clamp: the field ends at its border. A line's samples inside the field, v in [0, n_minor - 1], form
 //   one contiguous run [inside_begin, inside_end); only those are terrain (occluders) and receivers. A texel
 //   on the first or last row (column) of the minor axis whose other line runs off the field takes its
@@ -41,8 +41,9 @@
 //   terrain behind it (whole periods along the major axis), so an occluder that the infinite tiling has
 //   beyond that would change the horizon's tangent by at most (z_max - z_min) / (wrap_periods * n_major *
 //   texel_size); with wrap_periods = 1 the result equals the center tile of a 3 x 3 clamp tiling up to
-//   occluders more than one period away. The last receiver of a line and the first of the next period are
-//   neighbours on the torus, so the two edges of a repeat bake match when tiled.
+//   occluders more than one period away and the mapping error (the line lattice is anchored at texel
+//   (0, 0) of each field, so texels blend different sample pairs). The last receiver of a line and the first
+//   of the next period are neighbours on the torus, so the two edges of a repeat bake match when tiled.
 //
 // ---- Usage -----------------------------------------------------------------------------------------
 //   SweepSpec spec;  spec.directions = 64;  spec.channels = 1;
@@ -64,7 +65,8 @@
 //     }
 //   };
 // The per-texel visitor is called once per (texel, direction), tiles in parallel, and for one texel in
-// ascending k: per-texel accumulation in its own storage is deterministic.
+// ascending k: per-texel accumulation in its own storage is deterministic. sweep_lines_tiled gives the same
+// results per 32 x 32 tile as arrays (SweepTile), for per-texel work that should vectorise (P1 lighting).
 #pragma once
 
 #include <tbb/blocked_range.h>
@@ -90,6 +92,7 @@ struct SweepSpec {
   int batch = 4;  // directions swept before each gather pass (more = fewer passes, more memory)
   std::size_t max_buffer_bytes = std::size_t(512) << 20;  // caps batch so result buffers stay below this
   bool tile_nearest = true;  // sweep_lines_tiled: also fill SweepTile::nearest (off: nearest is null)
+  bool tile_taps = false;    // sweep_lines_tiled: also fill SweepTile::lo, hi, w_hi (both taps apart)
 };
 
 // The lines of one direction (plain data; see the header comment for the geometry).
@@ -217,6 +220,14 @@ struct SweepTile {
   int channels = 1;
   const float* value = nullptr;
   const float* nearest = nullptr;
+  // With SweepSpec::tile_taps: the two taps apart (same layout) and the weight of hi per texel
+  // (w_hi[y * width + x]); value = lo * (1 - w_hi) + hi * w_hi. For visitors that correct each tap
+  // before blending (P1 evaluates each tap's horizon caster from the texel's own height).
+  const float* lo = nullptr;
+  const float* hi = nullptr;
+  const float* w_hi = nullptr;
+  const float* off_lo = nullptr;  // signed offset (texels) along the minor axis from the texel to lo's sample
+  const float* off_hi = nullptr;  // ... and to hi's sample (each [y * width + x])
 };
 
 namespace detail {
@@ -328,7 +339,7 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
                        MakeWorker&& make_worker, TileVisitor&& tile_visitor) {
   const int C = spec.channels;
   tbb::enumerable_thread_specific<std::vector<float>> scratch(
-      [&] { return std::vector<float>(std::size_t(2) * 32 * 32 * C); });
+      [&] { return std::vector<float>(std::size_t(4 * C + 3) * 32 * 32); });
   auto gather_tile = [&](int k0, int nb, const SweepDirection* dirs, const float* buffers,
                          std::size_t per_dir, int i0, int i1, int j0, int j1) {
     std::vector<float>& tmp = scratch.local();
@@ -337,8 +348,15 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
     const std::size_t plane = std::size_t(tile.width) * tile.height;
     float* value = tmp.data();
     float* nearest = spec.tile_nearest ? tmp.data() + plane * C : nullptr;
+    float* lo = spec.tile_taps ? tmp.data() + 2 * plane * C : nullptr;
+    float* hi = spec.tile_taps ? tmp.data() + 3 * plane * C : nullptr;
+    float* w_hi = spec.tile_taps ? tmp.data() + 4 * plane * C : nullptr;
+    float* off_lo = spec.tile_taps ? w_hi + plane : nullptr;
+    float* off_hi = spec.tile_taps ? w_hi + 2 * plane : nullptr;
+    tile.off_lo = off_lo, tile.off_hi = off_hi;
     tile.value = value;
     tile.nearest = nearest;
+    tile.lo = lo, tile.hi = hi, tile.w_hi = w_hi;
     for (int b = 0; b < nb; ++b) {
       for (int j = j0; j < j1; ++j)
         for (int i = i0; i < i1; ++i) {
@@ -348,6 +366,19 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
           if (nearest) {
             const float* n = t.nearest();
             for (int c = 0; c < C; ++c) nearest[c * plane + at] = n[c];
+          }
+          if (lo) {
+            for (int c = 0; c < C; ++c) lo[c * plane + at] = t.lo[c], hi[c * plane + at] = t.hi[c];
+            w_hi[at] = t.w_hi;
+            const SweepDirection& d = dirs[b];
+            const int u = d.x_major ? i : j, v0 = d.x_major ? j : i;
+            const double g = double(v0) - double(u) * d.slope;
+            const float frac = float(g - double(floor_int(g)));
+            // lo's sample lies frac below the texel on the minor axis, hi's 1 - frac above; a clamp border
+            // texel whose lo ran off the field uses hi in both taps (texel_taps).
+            const bool lo_is_hi = !d.repeat && frac > 0 && d.n_minor > 1 && v0 == 0;
+            off_lo[at] = lo_is_hi ? 1 - frac : -frac;
+            off_hi[at] = 1 - frac;
           }
         }
       tile.k = k0 + b;

@@ -55,6 +55,7 @@ void BM_Horizons(benchmark::State& state) {
   std::vector<float> acc(s.field.texel_count());
   SweepSpec spec;
   spec.directions = K;
+  spec.channels = p1::HorizonLineWorker::channels();
   for (auto _ : state) {
     sweep_lines(
         s.field, spec, RunControl{}, [] { return p1::HorizonLineWorker{}; },

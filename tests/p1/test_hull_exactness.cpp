@@ -32,7 +32,7 @@ Exactness check_field(const HeightField& f, int K) {
       // The hull stack itself, with exact double elevations.
       p1::HullStack hull;
       hull.reset(line.count);
-      out.assign(std::size_t(line.receivers()), 0.0f);
+      out.assign(std::size_t(line.receivers()) * 3, 0.0f);
       worker(line, out.data());
       for (int n = 0; n < line.count; ++n) {
         p1::HorizonCaster c;
@@ -45,8 +45,11 @@ Exactness check_field(const HeightField& f, int K) {
         const double got = c.n < 0 ? truth::kNone : std::atan2(c.dz, c.dn * line.step);
         if ((c.n < 0) != (truth == truth::kNone)) ++ex.none_mismatch;
         ex.hull_max = std::max(ex.hull_max, std::fabs(got - truth));
-        if (line.is_terrain(n))  // the worker skips points off a clamp field (never receivers)
-          ex.worker_max = std::max(ex.worker_max, std::fabs(double(out[n - line.first_receiver]) - truth));
+        if (line.is_terrain(n)) {  // the worker skips points off a clamp field (never receivers)
+          const float* o = out.data() + std::size_t(n - line.first_receiver) * 3;
+          const double layer = p1::tap_elevation(o[0], o[1], 0.0f, float(line.step));
+          ex.worker_max = std::max(ex.worker_max, std::fabs(layer - truth));
+        }
         ++ex.receivers;
       }
     }

@@ -119,10 +119,26 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       bz(p.bent_normal ? N : 0, 0.0f);
   if (p.horizon) r.horizon.assign(N * K, 0.0f);
   if (p.horizon_distance) r.horizon_distance.assign(N * K, 0.0f);
-  std::vector<float> cs(K), sn(K);
+  std::vector<float> cs(K), sn(K), steps(K);
+  std::vector<char> x_major(K);
   for (int k = 0; k < K; ++k) {
     cs[k] = float(std::cos(2 * kPi * k / K));
     sn[k] = float(std::sin(2 * kPi * k / K));
+  }
+  {
+    SweepSpec probe;
+    probe.directions = K;
+    for (int k = 0; k < K; ++k) {
+      const SweepDirection d = plan_direction(f, probe, k);
+      steps[k] = float(d.step);
+      x_major[k] = d.x_major;
+    }
+  }
+  // dh/dx and dh/dy per texel, times the texel size (height change per texel), from the normals.
+  std::vector<float> gx(N), gy(N);
+  for (std::size_t i = 0; i < N; ++i) {
+    gx[i] = float(-normals[i].x / normals[i].z * f.texel_size);
+    gy[i] = float(-normals[i].y / normals[i].z * f.texel_size);
   }
 
   std::vector<const DirectionalLight*> lights;
@@ -133,25 +149,40 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
 
   SweepSpec spec;
   spec.directions = K;
-  spec.channels = p.horizon_distance ? 2 : 1;
+  spec.channels = p1::HorizonLineWorker::channels();
   spec.wrap_periods = p.wrap_periods;
   spec.tile_nearest = p.horizon_distance;
+  spec.tile_taps = true;
   spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
   const bool want_distance = p.horizon_distance;
   const RunControl main_rc = sub_progress(rc, 0.0, main_share);
   sweep_lines_tiled(
-      f, spec, main_rc,
-      [&] {
-        return p1::HorizonLineWorker{want_distance, {}};
-      },
+      f, spec, main_rc, [&] { return p1::HorizonLineWorker{}; },
       [&](const SweepTile& t) {
         constexpr int kMax = 32;
         const int k = t.k, w = t.width;
         const float c = cs[k], s = sn[k];
-        alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax];
+        alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax], e[kMax];
+        const std::size_t plane = std::size_t(t.width) * t.height;
         for (int y = 0; y < t.height; ++y) {
           const std::size_t base = f.index(t.i0, t.j0 + y);
-          const float* e = t.value + std::size_t(y) * w;
+          {
+            // Each tap's caster seen from the texel's own height, then blended (horizon_sweep.hpp).
+            const std::size_t row = std::size_t(y) * w;
+            const float *ld = t.lo + row, *lr = t.lo + plane + row, *lz = t.lo + 2 * plane + row;
+            const float *hd = t.hi + row, *hr = t.hi + plane + row, *hz = t.hi + 2 * plane + row;
+            const float* wh = t.w_hi + row;
+            const float* Z = f.z.data() + base;
+            const float stp = steps[k];
+            // Height gradient along the minor axis at the texel (from its normal) times the texel size.
+            const float* G = (x_major[k] ? gy : gx).data() + base;
+            const float *ol = t.off_lo + row, *oh = t.off_hi + row;
+            for (int x = 0; x < w; ++x) {
+              const float a = p1::tap_elevation(ld[x], lr[x], lz[x] - Z[x] - G[x] * ol[x], stp);
+              const float b = p1::tap_elevation(hd[x], hr[x], hz[x] - Z[x] - G[x] * oh[x], stp);
+              e[x] = a + (b - a) * wh[x];
+            }
+          }
           const float* NX = nx.data() + base;
           const float* NY = ny.data() + base;
           const float* NZ = nz.data() + base;
@@ -173,7 +204,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
               const float th_plane = kHalfPiF + fast_atan2_pos(n_p, n_z);
               st[x] = open ? ce[x] : n_z * inv_len;
               ct[x] = open ? se[x] : -n_p * inv_len;
-              th[x] = open ? kHalfPiF - e[x] : th_plane;
+              th[x] = std::min(kHalfPiF - e[x], th_plane);  // (open <=> the horizon's angle is the smaller)
             }
             if (need_ao) {
               float* a = ao_sum.data() + base;
@@ -206,9 +237,13 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           }
           if (p.horizon)
             for (int x = 0; x < w; ++x) r.horizon[(base + x) * K + k] = se[x];
-          if (want_distance) {
-            const float* d = t.nearest + (std::size_t(t.height) + y) * w;  // channel 1
-            for (int x = 0; x < w; ++x) r.horizon_distance[(base + x) * K + k] = d[x];
+          if (want_distance) {  // from the larger-weight tap, seen from the texel
+            const std::size_t row = std::size_t(y) * w;
+            const float *dz = t.nearest + row, *run = t.nearest + plane + row,
+                        *zs = t.nearest + 2 * plane + row;
+            const float* Z = f.z.data() + base;
+            for (int x = 0; x < w; ++x)
+              r.horizon_distance[(base + x) * K + k] = p1::tap_distance(dz[x], run[x], zs[x], Z[x]);
           }
         }
       });
@@ -233,9 +268,10 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   // Directional lights: one extra sweep direction per light, at its own azimuth.
   if (!lights.empty()) {
     SweepSpec ls;
-    ls.channels = 1;
+    ls.channels = p1::HorizonLineWorker::channels();
     ls.wrap_periods = p.wrap_periods;
     std::vector<double> elevation, radius;
+    std::vector<float> steps_l;
     std::vector<Vec3> dir;
     for (const DirectionalLight* l : lights) {
       const Vec3 d = normalize(l->direction);
@@ -243,18 +279,22 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       elevation.push_back(std::asin(std::clamp(d.z, -1.0, 1.0)));
       radius.push_back(l->angular_diameter / 2);
       ls.azimuths.push_back(std::hypot(d.x, d.y) > 1e-12 ? std::atan2(d.y, d.x) : 0.0);
+      steps_l.push_back(float(f.texel_size / std::max(std::fabs(std::cos(ls.azimuths.back())),
+                                                      std::fabs(std::sin(ls.azimuths.back())))));
     }
     const RunControl light_rc = sub_progress(rc, main_share, 1 - main_share);
     sweep_lines(
-        f, ls, light_rc,
-        [&] {
-          return p1::HorizonLineWorker{false, {}};
-        },
+        f, ls, light_rc, [&] { return p1::HorizonLineWorker{}; },
         [&](int li, int i, int j, const TexelTaps& t) {
           const std::size_t idx = f.index(i, j);
           const double ndl = dot(normals[idx].d(), dir[li]);
           if (ndl <= 0) return;
-          const double frac = disk_fraction_above(elevation[li], t.value(0), radius[li]);
+          const float z = f.z[idx];
+          // The samples' own angles (no lift): a light's shadow edge is sharp, the blend is only 2 taps.
+          (void)z;
+          const float a = p1::tap_elevation(t.lo[0], t.lo[1], 0.0f, steps_l[li]);
+          const float b = p1::tap_elevation(t.hi[0], t.hi[1], 0.0f, steps_l[li]);
+          const double frac = disk_fraction_above(elevation[li], a + (b - a) * t.w_hi, radius[li]);
           if (frac <= 0) return;
           direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
         });
