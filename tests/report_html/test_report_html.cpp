@@ -213,6 +213,98 @@ TEST(ReportHtml, PageIsSelfContainedAndComplete) {
     EXPECT_NE(html.find(s), std::string::npos) << s;
 }
 
+// Decodes standard base64 (RFC 4648, with padding), independently of the code under test.
+std::string unbase64(const std::string& text) {
+  const std::string t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  std::uint32_t acc = 0;
+  int bits = 0;
+  for (char ch : text) {
+    const auto k = t.find(ch);
+    if (k == std::string::npos) break;  // '=' padding
+    acc = (acc << 6) | std::uint32_t(k), bits += 6;
+    if (bits >= 8) bits -= 8, out.push_back(char((acc >> bits) & 0xff));
+  }
+  return out;
+}
+
+// The images of a page, decoded by OpenImageIO from their data URIs: (width, height, channels, pixels).
+struct Decoded {
+  int w = 0, h = 0, nc = 0;
+  std::vector<std::uint8_t> px;
+};
+std::vector<Decoded> page_images(const std::string& html, const fs::path& dir) {
+  std::vector<Decoded> out;
+  const std::string tag = "<img src=\"data:image/png;base64,";
+  for (std::size_t p = html.find(tag); p != std::string::npos; p = html.find(tag, p + 1)) {
+    const std::size_t b = p + tag.size(), e = html.find('"', b);
+    const fs::path file = dir / ("page" + std::to_string(out.size()) + ".png");
+    std::ofstream(file, std::ios::binary) << unbase64(html.substr(b, e - b));
+    auto in = OIIO::ImageInput::open(file.string());
+    if (!in) return {};
+    Decoded d{in->spec().width, in->spec().height, in->spec().nchannels, {}};
+    d.px.resize(std::size_t(d.w) * d.h * d.nc);
+    if (!in->read_image(0, 0, 0, d.nc, OIIO::TypeDesc::UINT8, d.px.data())) return {};
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
+// Light goes through the built-in config's default display/view (sRGB, "Standard" = the sRGB curve, the
+// closed form below); a scalar layer stays linear grey; a field larger than max_image_size is shown
+// box-filtered to that size.
+TEST(ReportHtml, LightThroughTheDisplayScalarsLinearAndDownSampled) {
+  if (std::getenv("OCIO")) GTEST_SKIP() << "$OCIO is set: the expected view is the built-in config's";
+  const int w = 64, h = 32;
+  LayerSet ref;
+  ref.width = w, ref.height = h;
+  Layer& ao = ref.add("ao", mono_channels());
+  Layer& direct = ref.add("direct", rgb_channels());
+  // Left half a, right half b; the top-right texel of the light sets the display scale (p99.5 = max).
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = std::size_t(y) * w + x;
+      ao.data[i] = x < w / 2 ? 0.2f : 0.6f;
+      for (int c = 0; c < 3; ++c) direct.data[3 * i + c] = x < w / 2 ? 0.05f * (c + 1) : 0.25f * (c + 1);
+    }
+  LayerSet run = ref;
+  ReportSpec spec;
+  spec.hfbake_version = "t";
+  spec.job_name = "light";
+  const std::vector<ReportMethodInput> inputs{{"m", "m", 0.1, {{"method", "m"}}, &run}};
+  HtmlInputs in;
+  in.report = build_report(spec, inputs, ref).doc;
+  HtmlMethod hm;
+  hm.stem = hm.method = "m";
+  hm.layers = &run;
+  in.methods = {hm};
+  in.reference = &ref;
+  in.max_image_size = 16;  // 64 x 32 -> 16 x 8: 4 x 4 boxes
+  const std::string html = report_html(in);
+  EXPECT_NE(html.find("64&times;32 box-filtered to 16&times;8"), std::string::npos);
+  TempDir tmp;
+  const auto imgs = page_images(html, tmp.path());
+  ASSERT_EQ(imgs.size(), 6u);  // ao: method, reference, error; direct: the same
+  auto srgb = [](double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; };
+  for (int k : {0, 1}) {  // ao, scaled by its max 0.6: linear grey
+    const Decoded& d = imgs[k];
+    ASSERT_EQ(d.w, 16);
+    ASSERT_EQ(d.h, 8);
+    ASSERT_EQ(d.nc, 1);
+    EXPECT_NEAR(d.px[2 * 16 + 1], 255.0 * 0.2 / 0.6, 0.6);
+    EXPECT_EQ(d.px[2 * 16 + 12], 255);
+  }
+  for (int k : {3, 4}) {  // direct, scaled by its max 0.75: the sRGB curve per channel
+    const Decoded& d = imgs[k];
+    ASSERT_EQ(d.w, 16);
+    ASSERT_EQ(d.nc, 3);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(d.px[3 * (2 * 16 + 1) + c], 255.0 * srgb(0.05 * (c + 1) / 0.75), 1.0) << c;
+      EXPECT_NEAR(d.px[3 * (2 * 16 + 12) + c], 255.0 * srgb(0.25 * (c + 1) / 0.75), 1.0) << c;
+    }
+  }
+}
+
 // Runs `command`, returns its exit status; stdout and stderr go to files.
 int run(const std::string& command) {
   const int status = std::system(command.c_str());
