@@ -1,5 +1,6 @@
 #include "report/report_document.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -42,6 +43,26 @@ nlohmann::json reference_layer_summary(const Layer& layer, const Layer* se, int 
     j["max_stderr"] = max_se;
   }
   return j;
+}
+
+// The reference computes one obscurance (one falloff and radius, cosine-weighted; it records them in its
+// "hfbake:reference_setup" attribute). A method's obscurance is a different quantity when it was baked
+// with another falloff, radius or weighting, and comparing the two would report a false error.
+// Defaults follow the AO family: falloff "step" with a radius, "none" without; weighting "cosine".
+bool obscurance_comparable(const nlohmann::json& params, const LayerSet& reference) {
+  nlohmann::json setup;
+  for (const auto& [key, value] : reference.attributes)
+    if (key == "hfbake:reference_setup") setup = nlohmann::json::parse(value, nullptr, false);
+  if (!setup.is_object() || !setup.contains("falloff")) return true;  // nothing recorded to check against
+  if (!params.is_object()) return false;
+  if (params.value("weighting", std::string("cosine")) != "cosine") return false;
+  const bool has_radius = params.contains("radius") && params["radius"].is_number();
+  const std::string falloff = params.value("falloff", std::string(has_radius ? "step" : "none"));
+  if (falloff != setup["falloff"].get<std::string>()) return false;
+  if (falloff == "none") return true;
+  const double r = has_radius ? params["radius"].get<double>() : 0.0;
+  const double rr = setup.value("radius", 0.0);
+  return std::abs(r - rr) <= 1e-9 * std::max(1.0, std::abs(rr));
 }
 
 }  // namespace
@@ -97,7 +118,8 @@ ReportOutcome build_report(const ReportSpec& spec, const std::vector<ReportMetho
                                     std::to_string(width) + "x" + std::to_string(height));
       for (const Layer& l : m.layers->layers) {
         const Layer* r = reference.find(l.name);
-        if (!r || ends_with(l.name, "_stderr") || r->channel_count() != l.channel_count()) {
+        if (!r || ends_with(l.name, "_stderr") || r->channel_count() != l.channel_count() ||
+            (l.name == "obscurance" && !obscurance_comparable(m.parameters, reference))) {
           jm["not_compared"].push_back(l.name);
           continue;
         }

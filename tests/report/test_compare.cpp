@@ -174,5 +174,33 @@ TEST(Report, BaselineRegression) {
   EXPECT_TRUE(validate_against_schema(worse.doc, "report.schema.json").empty()) << worse.doc.dump(2);
 }
 
+TEST(Report, ObscurancesBakedWithOtherSettingsThanTheReferenceAreNotCompared) {
+  // The reference computed one obscurance: step falloff, radius 16, cosine-weighted.
+  LayerSet reference;
+  reference.width = reference.height = 4;
+  reference.add("obscurance", mono_channels()).data.assign(16, 0.8f);
+  reference.attributes.emplace_back("hfbake:reference_setup", R"({"falloff": "step", "radius": 16})");
+  LayerSet method = reference;
+  method.attributes.clear();
+  method.find("obscurance")->data.assign(16, 0.5f);
+  const std::vector<std::pair<nlohmann::json, bool>> cases = {
+      {{{"method", "hbao"}, {"radius", 16}}, true},  // step is the default with a radius
+      {{{"method", "hbao"}, {"radius", 16}, {"falloff", "step"}, {"weighting", "cosine"}}, true},
+      {{{"method", "hbao"}, {"radius", 32}}, false},
+      {{{"method", "hbao"}, {"radius", 16}, {"falloff", "smooth"}}, false},
+      {{{"method", "hbao"}, {"radius", 16}, {"weighting", "uniform"}}, false},
+      {{{"method", "hbao"}}, false},  // no radius: falloff none, plain AO
+  };
+  for (const auto& [params, comparable] : cases) {
+    const ReportOutcome out = build_report(ReportSpec{}, {{"hbao", "hbao", 1.0, params, &method}}, reference);
+    const nlohmann::json& m = out.doc["methods"]["hbao"];
+    EXPECT_EQ(m["layers"].contains("obscurance"), comparable) << params.dump();
+    EXPECT_EQ(m["not_compared"].size(), comparable ? 0u : 1u) << params.dump();
+    if (comparable) {
+      EXPECT_NEAR(m["layers"]["obscurance"]["mae"].get<double>(), 0.3, 1e-6);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace hfbake
