@@ -12,34 +12,12 @@
 #include "core/error.hpp"
 #include "job/manifest.hpp"
 #include "job/schema_validation.hpp"
+#include "report/report_html.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string xml_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 void write_atomically(const fs::path& file, const std::string& text) {
   const fs::path tmp = file.string() + ".tmp-" + std::to_string(getpid());
@@ -63,18 +41,18 @@ std::string junit_xml(const Suite& suite, const std::vector<JobOutcome>& outcome
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   x << "<testsuites name=\"hfbake\" tests=\"" << outcomes.size() << "\" failures=\"" << failures
     << "\" errors=\"" << errors << "\" time=\"" << seconds << "\">\n";
-  x << "  <testsuite name=\"" << xml_escape(suite.name) << "\" tests=\"" << outcomes.size()
+  x << "  <testsuite name=\"" << html_escape(suite.name) << "\" tests=\"" << outcomes.size()
     << "\" failures=\"" << failures << "\" errors=\"" << errors << "\" time=\"" << seconds << "\">\n";
   for (const JobOutcome& o : outcomes) {
     const std::string name = o.name.empty() ? fs::path(o.file).stem().string() : o.name;
-    x << "    <testcase classname=\"" << xml_escape(suite.name) << "\" name=\"" << xml_escape(name)
+    x << "    <testcase classname=\"" << html_escape(suite.name) << "\" name=\"" << html_escape(name)
       << "\" time=\"" << o.seconds << "\">\n";
     std::string text;
     for (const std::string& e : o.errors) text += e + "\n";
     if (o.status == JobStatus::threshold_failed)
-      x << "      <failure message=\"accuracy regressed\">" << xml_escape(text) << "</failure>\n";
+      x << "      <failure message=\"accuracy regressed\">" << html_escape(text) << "</failure>\n";
     else if (o.status != JobStatus::ok)
-      x << "      <error message=\"" << job_status_name(o.status) << "\">" << xml_escape(text)
+      x << "      <error message=\"" << job_status_name(o.status) << "\">" << html_escape(text)
         << "</error>\n";
     x << "    </testcase>\n";
   }
@@ -85,10 +63,10 @@ std::string junit_xml(const Suite& suite, const std::vector<JobOutcome>& outcome
 std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds) {
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>hfbake suite "
-    << xml_escape(suite.name) << "</title>\n<style>body{font-family:sans-serif;margin:2em}"
+    << html_escape(suite.name) << "</title>\n<style>body{font-family:sans-serif;margin:2em}"
     << "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:4px 8px;text-align:left}"
     << ".ok{color:#070}.bad{color:#b00;font-weight:bold}</style></head><body>\n";
-  h << "<h1>Suite " << xml_escape(suite.name) << "</h1>\n<p>hfbake " << hfbake_version() << ", "
+  h << "<h1>Suite " << html_escape(suite.name) << "</h1>\n<p>hfbake " << hfbake_version() << ", "
     << outcomes.size() << " jobs, " << seconds << " s</p>\n";
   h << "<table><tr><th>job</th><th>status</th><th>time "
        "(s)</th><th>reference</th><th>report</th><th>errors</th>"
@@ -99,7 +77,7 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
     for (const fs::path& p : o.outputs)
       if (p.filename() == "report.html" || (report.empty() && p.filename() == "report.json"))
         report = fs::relative(p, suite.output_dir).string();
-    h << "<tr><td>" << xml_escape(o.name.empty() ? o.file : o.name) << "</td><td class=\""
+    h << "<tr><td>" << html_escape(o.name.empty() ? o.file : o.name) << "</td><td class=\""
       << (ok ? "ok" : "bad") << "\">" << job_status_name(o.status) << "</td><td>" << o.seconds << "</td><td>";
     if (o.methods.contains("reference")) {  // computed, or from the reference cache (cli/reference_cache.hpp)
       const nlohmann::json& r = o.methods["reference"];
@@ -108,9 +86,9 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
         h << " (cache hit, " << r.value("cache_saved_seconds", 0.0) << " s saved)";
     }
     h << "</td><td>";
-    if (!report.empty()) h << "<a href=\"" << xml_escape(report) << "\">" << xml_escape(report) << "</a>";
+    if (!report.empty()) h << "<a href=\"" << html_escape(report) << "\">" << html_escape(report) << "</a>";
     h << "</td><td>";
-    for (const std::string& e : o.errors) h << xml_escape(e) << "<br>";
+    for (const std::string& e : o.errors) h << html_escape(e) << "<br>";
     h << "</td></tr>\n";
   }
   h << "</table>\n</body></html>\n";

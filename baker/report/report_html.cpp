@@ -14,30 +14,6 @@
 namespace hfbake {
 namespace {
 
-std::string esc(const std::string& s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 std::string num(double v, int digits = 4) {
   if (!std::isfinite(v)) return v > 0 ? "inf" : (v < 0 ? "-inf" : "nan");
   char buf[40];
@@ -109,16 +85,17 @@ std::string legend(const std::string& left, const std::string& mid, const std::s
                    const std::string& gradient, const std::string& caption) {
   std::ostringstream h;
   h << "<div class=\"legend\"><div class=\"bar\" style=\"background:linear-gradient(to right," << gradient
-    << ")\"></div><div class=\"ticks\"><span>" << esc(left) << "</span><span>" << esc(mid) << "</span><span>"
-    << esc(right) << "</span></div><div class=\"cap\">" << esc(caption) << "</div></div>";
+    << ")\"></div><div class=\"ticks\"><span>" << html_escape(left) << "</span><span>" << html_escape(mid)
+    << "</span><span>" << html_escape(right) << "</span></div><div class=\"cap\">" << html_escape(caption)
+    << "</div></div>";
   return h.str();
 }
 
 std::string figure(const Img& img, const std::string& caption, const std::string& legend_html) {
   std::ostringstream h;
   h << "<figure><img src=\"" << img.data_uri << "\" width=\""
-    << img.width * std::max(1, 256 / std::max(img.width, img.height)) << "\" alt=\"" << esc(caption)
-    << "\"><figcaption>" << esc(caption);
+    << img.width * std::max(1, 256 / std::max(img.width, img.height)) << "\" alt=\"" << html_escape(caption)
+    << "\"><figcaption>" << html_escape(caption);
   if (img.width != img.source_width || img.height != img.source_height)
     h << " (" << img.source_width << "&times;" << img.source_height << " box-filtered to " << img.width
       << "&times;" << img.height << ")";
@@ -138,7 +115,7 @@ std::string metrics_table(const std::string& stem, const nlohmann::json& layers,
   for (const auto& c : kMetricColumns) h << "<th>" << c[1] << "</th>";
   h << "</tr>\n";
   for (auto& [layer, m] : layers.items()) {
-    h << "<tr><td>" << esc(layer) << "</td>";
+    h << "<tr><td>" << html_escape(layer) << "</td>";
     for (const auto& c : kMetricColumns) {
       const bool bad = failed.count(stem + "." + layer + "." + c[0]) > 0;
       h << "<td" << (bad ? " class=\"bad\" title=\"threshold or baseline failed\"" : "") << ">"
@@ -171,6 +148,30 @@ void diverging_colour(double t, std::uint8_t rgb[3]) {
   const double* end = t < 0 ? lo : hi;
   const double a = std::abs(t);
   for (int c = 0; c < 3; ++c) rgb[c] = std::uint8_t(std::lround(mid[c] + a * (end[c] - mid[c])));
+}
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
 }
 
 std::string base64(const std::string& bytes) {
@@ -222,10 +223,10 @@ std::string svg_line_plot(const std::string& title, const std::string& x_label, 
   std::ostringstream s;
   s << "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"plot\" width=\"" << W << "\" height=\"" << H
     << "\" viewBox=\"0 0 " << W << " " << H << "\" font-family=\"sans-serif\" font-size=\"11\">";
-  s << "<title>" << esc(title) << "</title><rect x=\"0\" y=\"0\" width=\"" << W << "\" height=\"" << H
+  s << "<title>" << html_escape(title) << "</title><rect x=\"0\" y=\"0\" width=\"" << W << "\" height=\"" << H
     << "\" fill=\"white\"/>";
   s << "<text x=\"" << (L + (W - L - R) / 2) << "\" y=\"16\" text-anchor=\"middle\" font-size=\"12\">"
-    << esc(title) << "</text>";
+    << html_escape(title) << "</text>";
   // Axes, x ticks at the swept values, y ticks at decades (log) or 5 even steps.
   s << "<rect x=\"" << L << "\" y=\"" << T << "\" width=\"" << (W - L - R) << "\" height=\"" << (H - T - B)
     << "\" fill=\"none\" stroke=\"#888\"/>";
@@ -255,9 +256,9 @@ std::string svg_line_plot(const std::string& title, const std::string& x_label, 
       << num(y, 3) << "</text>";
   }
   s << "<text x=\"" << (L + (W - L - R) / 2) << "\" y=\"" << (H - 8) << "\" text-anchor=\"middle\">"
-    << esc(x_label) << (log_x ? " (log)" : "") << "</text>";
+    << html_escape(x_label) << (log_x ? " (log)" : "") << "</text>";
   s << "<text transform=\"translate(14," << (T + (H - T - B) / 2) << ") rotate(-90)\" text-anchor=\"middle\">"
-    << esc(y_label) << (log_y ? " (log)" : "") << "</text>";
+    << html_escape(y_label) << (log_y ? " (log)" : "") << "</text>";
   int row = 0;
   for (const PlotSeries& sr : series) {
     std::string pts;
@@ -275,7 +276,7 @@ std::string svg_line_plot(const std::string& title, const std::string& x_label, 
     s << "<line x1=\"" << (W - R + 10) << "\" x2=\"" << (W - R + 28) << "\" y1=\"" << ly << "\" y2=\"" << ly
       << "\" stroke=\"" << sr.color << "\" stroke-width=\"2\""
       << (sr.dashed ? " stroke-dasharray=\"5,4\"" : "") << "/><text x=\"" << (W - R + 32) << "\" y=\""
-      << (ly + 4) << "\">" << esc(sr.name) << "</text>";
+      << (ly + 4) << "\">" << html_escape(sr.name) << "</text>";
   }
   s << "</svg>";
   return s.str();
@@ -300,7 +301,7 @@ std::string report_html(const HtmlInputs& in) {
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
     << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-    << "<title>hfbake report: " << esc(name) << "</title>\n<style>\n"
+    << "<title>hfbake report: " << html_escape(name) << "</title>\n<style>\n"
     << "body{font-family:system-ui,sans-serif;margin:1.5em 2em;color:#222;background:#fff}\n"
     << "h1{margin-bottom:0.2em}h2{border-bottom:1px solid #ccc;margin-top:1.6em}h3{margin-bottom:0.3em}\n"
     << "table{border-collapse:collapse;margin:0.4em 0 0.8em}td,th{border:1px solid #ccc;padding:3px 8px;"
@@ -316,14 +317,16 @@ std::string report_html(const HtmlInputs& in) {
     << "pre{background:#f6f6f6;padding:6px;display:inline-block;margin:0}.plots{display:flex;flex-wrap:wrap;"
        "gap:12px}\n"
     << "</style></head>\n<body>\n";
-  h << "<h1>hfbake report: " << esc(name) << "</h1>\n";
+  h << "<h1>hfbake report: " << html_escape(name) << "</h1>\n";
   h << "<p class=\"" << (passed ? "ok" : "bad") << "\" id=\"verdict\">"
     << (passed ? "PASSED: every threshold held" : "FAILED: a threshold or the baseline regressed")
     << "</p>\n";
   h << "<table class=\"meta\">";
-  h << "<tr><th>job file</th><td>" << esc(job.value("file", std::string())) << "</td></tr>";
-  h << "<tr><th>job hash</th><td><code>" << esc(job.value("hash", std::string())) << "</code></td></tr>";
-  h << "<tr><th>hfbake version</th><td>" << esc(r.value("hfbake_version", std::string())) << "</td></tr>";
+  h << "<tr><th>job file</th><td>" << html_escape(job.value("file", std::string())) << "</td></tr>";
+  h << "<tr><th>job hash</th><td><code>" << html_escape(job.value("hash", std::string()))
+    << "</code></td></tr>";
+  h << "<tr><th>hfbake version</th><td>" << html_escape(r.value("hfbake_version", std::string()))
+    << "</td></tr>";
   if (r.contains("size") && r["size"].is_array() && r["size"].size() == 2)
     h << "<tr><th>field</th><td>" << r["size"][0].get<int>() << " &times; " << r["size"][1].get<int>()
       << " texels</td></tr>";
@@ -334,8 +337,8 @@ std::string report_html(const HtmlInputs& in) {
       << ")</td></tr>";
   }
   h << "<tr><th>reference</th><td>" << json_num(ref_doc, "seconds") << " s, parameters <code>"
-    << esc(ref_doc.value("parameters", none).dump()) << "</code>"
-    << (in.reference_note.empty() ? "" : "<br>" + esc(in.reference_note)) << "</td></tr>";
+    << html_escape(ref_doc.value("parameters", none).dump()) << "</code>"
+    << (in.reference_note.empty() ? "" : "<br>" + html_escape(in.reference_note)) << "</td></tr>";
   h << "</table>\n";
 
   // Summary: one row per method and layer.
@@ -352,12 +355,12 @@ std::string report_html(const HtmlInputs& in) {
     const nlohmann::json& m = methods[stem];
     const nlohmann::json& layers = sub(m, "layers");
     if (layers.empty())
-      h << "<tr><td>" << esc(stem) << "</td><td>" << json_num(m, "seconds", 3)
+      h << "<tr><td>" << html_escape(stem) << "</td><td>" << json_num(m, "seconds", 3)
         << "</td><td colspan=\"6\">no layer "
         << "compared</td></tr>\n";
     for (auto& [layer, mm] : layers.items()) {
-      h << "<tr><td>" << esc(stem) << "</td><td>" << json_num(m, "seconds", 3) << "</td><td>" << esc(layer)
-        << "</td>";
+      h << "<tr><td>" << html_escape(stem) << "</td><td>" << json_num(m, "seconds", 3) << "</td><td>"
+        << html_escape(layer) << "</td>";
       for (const char* k : {"rmse", "rel_mae", "excess_rmse", "p99", "psnr"})
         h << "<td" << (failed.count(stem + "." + layer + "." + k) ? " class=\"bad\"" : "") << ">"
           << json_num(mm, k) << "</td>";
@@ -373,17 +376,17 @@ std::string report_html(const HtmlInputs& in) {
       << "</th></tr>\n";
     for (const auto& t : thresholds) {
       const bool ok = t.value("passed", false);
-      h << "<tr><td>" << esc(t.value("key", std::string())) << "</td><td>"
+      h << "<tr><td>" << html_escape(t.value("key", std::string())) << "</td><td>"
         << (t.value("kind", std::string("max")) == "min" ? "&ge; " : "&le; ") << json_num(t, "limit")
         << "</td><td>" << json_num(t, "value") << "</td><td class=\"" << (ok ? "ok" : "bad") << "\">"
-        << (ok ? "held" : esc("FAILED " + t.value("error", std::string()))) << "</td></tr>\n";
+        << (ok ? "held" : html_escape("FAILED " + t.value("error", std::string()))) << "</td></tr>\n";
     }
     h << "</table>\n";
   }
   if (r.contains("baseline")) {
     const auto& b = r["baseline"];
     const auto regs = b.value("regressions", nlohmann::json::array());
-    h << "<h2>Baseline</h2>\n<p>Against <code>" << esc(b.value("file", std::string()))
+    h << "<h2>Baseline</h2>\n<p>Against <code>" << html_escape(b.value("file", std::string()))
       << "</code> (regression: new &gt; "
       << "old &times; (1 + " << json_num(b, "rel_tolerance") << ") + " << json_num(b, "abs_tolerance")
       << "): "
@@ -393,8 +396,8 @@ std::string report_html(const HtmlInputs& in) {
     if (!regs.empty()) {
       h << "<table class=\"baseline\"><tr><th>key</th><th>baseline</th><th>new</th></tr>\n";
       for (const auto& g : regs)
-        h << "<tr><td>" << esc(g.value("key", std::string())) << "</td><td>" << json_num(g, "baseline")
-          << "</td><td class=\"bad\">" << json_num(g, "value") << "</td></tr>\n";
+        h << "<tr><td>" << html_escape(g.value("key", std::string())) << "</td><td>"
+          << json_num(g, "baseline") << "</td><td class=\"bad\">" << json_num(g, "value") << "</td></tr>\n";
       h << "</table>\n";
     }
   }
@@ -411,7 +414,8 @@ std::string report_html(const HtmlInputs& in) {
       std::set<std::string> layers;
       for (const HtmlMethod* m : runs)
         for (auto& [layer, mm] : sub(methods[m->stem], "layers").items()) layers.insert(layer);
-      h << "<h3>" << esc(method) << ": error against " << esc(param) << "</h3>\n<div class=\"plots\">";
+      h << "<h3>" << html_escape(method) << ": error against " << html_escape(param)
+        << "</h3>\n<div class=\"plots\">";
       for (const std::string& layer : layers) {
         std::vector<PlotSeries> series;
         int colour = 0;
@@ -446,14 +450,14 @@ std::string report_html(const HtmlInputs& in) {
   for (const HtmlMethod& hm : in.methods) {
     if (!methods.contains(hm.stem)) continue;
     const nlohmann::json& m = methods[hm.stem];
-    h << "<h2 id=\"m-" << esc(hm.stem) << "\">" << esc(hm.stem) << "</h2>\n";
-    h << "<p>method <b>" << esc(m.value("method", hm.method)) << "</b>, " << json_num(m, "seconds", 3)
-      << " s, parameters <pre>" << esc(m.value("parameters", none).dump()) << "</pre></p>\n";
+    h << "<h2 id=\"m-" << html_escape(hm.stem) << "\">" << html_escape(hm.stem) << "</h2>\n";
+    h << "<p>method <b>" << html_escape(m.value("method", hm.method)) << "</b>, " << json_num(m, "seconds", 3)
+      << " s, parameters <pre>" << html_escape(m.value("parameters", none).dump()) << "</pre></p>\n";
     h << metrics_table(hm.stem, m.value("layers", none), failed);
     const auto not_compared = m.value("not_compared", nlohmann::json::array());
     if (!not_compared.empty()) {
       h << "<p>Not compared (no reference layer of the same name):";
-      for (const auto& n : not_compared) h << " <code>" << esc(n.get<std::string>()) << "</code>";
+      for (const auto& n : not_compared) h << " <code>" << html_escape(n.get<std::string>()) << "</code>";
       h << "</p>\n";
     }
     if (!hm.layers || !in.reference) continue;
@@ -466,7 +470,7 @@ std::string report_html(const HtmlInputs& in) {
       if (!ml || !rl || ml->channel_count() != rl->channel_count()) continue;
       const int nc = ml->channel_count();
       if (nc != 1 && nc != 3) {
-        h << "<p><code>" << esc(layer_name) << "</code>: " << nc << " channels, metrics only.</p>\n";
+        h << "<p><code>" << html_escape(layer_name) << "</code>: " << nc << " channels, metrics only.</p>\n";
         continue;
       }
       // One display scale for the method and the reference: the 99.5th percentile of the reference.
@@ -499,7 +503,8 @@ std::string report_html(const HtmlInputs& in) {
           "0", num(display_max / 2, 3), num(display_max, 3), "#000,#bcbcbc,#fff",
           nc == 1 ? "value (linear grey, clipped at " + num(display_max, 3) + ")"
                   : "light (the OpenColorIO default display/view, clipped at " + num(display_max, 3) + ")");
-      h << "<h3>" << esc(hm.stem) << " &middot; " << esc(layer_name) << "</h3>\n<div class=\"figs\">"
+      h << "<h3>" << html_escape(hm.stem) << " &middot; " << html_escape(layer_name)
+        << "</h3>\n<div class=\"figs\">"
         << figure(layer_image(*ml, w, ht, in.max_image_size, display_max), hm.stem + " " + layer_name,
                   value_legend)
         << figure(layer_image(*rl, w, ht, in.max_image_size, display_max), "reference " + layer_name,
@@ -522,7 +527,7 @@ std::string report_html(const HtmlInputs& in) {
        "decode');\n"
     << "});\n</script>\n";
   h << "<p style=\"color:#777;font-size:85%\">Written by hfbake "
-    << esc(r.value("hfbake_version", std::string()))
+    << html_escape(r.value("hfbake_version", std::string()))
     << ". Self-contained: no file or network access is needed to view it.</p>\n</body></html>\n";
   return h.str();
 }

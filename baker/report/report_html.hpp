@@ -36,6 +36,8 @@ std::string report_html(const HtmlInputs& inputs);
 
 // Building blocks, exposed for tests. (The images are PNGs from encode_png in io/preview.hpp.)
 std::string base64(const std::string& bytes);
+// Escapes & < > " for HTML and XML text and double-quoted attribute values.
+std::string html_escape(const std::string& s);
 
 struct PlotSeries {
   std::string name, color;
