@@ -93,6 +93,7 @@ struct SweepSpec {
   std::size_t max_buffer_bytes = std::size_t(512) << 20;  // caps batch so result buffers stay below this
   bool tile_nearest = true;  // sweep_lines_tiled: also fill SweepTile::nearest (off: nearest is null)
   bool tile_taps = false;    // sweep_lines_tiled: also fill SweepTile::lo, hi, w_hi (both taps apart)
+  bool tile_values = true;   // sweep_lines_tiled: fill SweepTile::value (off: value is null)
 };
 
 // The lines of one direction (plain data; see the header comment for the geometry).
@@ -354,7 +355,7 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
     float* off_lo = spec.tile_taps ? w_hi + plane : nullptr;
     float* off_hi = spec.tile_taps ? w_hi + 2 * plane : nullptr;
     tile.off_lo = off_lo, tile.off_hi = off_hi;
-    tile.value = value;
+    tile.value = spec.tile_values ? value : nullptr;
     tile.nearest = nearest;
     tile.lo = lo, tile.hi = hi, tile.w_hi = w_hi;
     for (int b = 0; b < nb; ++b) {
@@ -362,7 +363,8 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
         for (int i = i0; i < i1; ++i) {
           const TexelTaps t = texel_taps(dirs[b], buffers + per_dir * b, C, i, j);
           const std::size_t at = std::size_t(j - j0) * tile.width + (i - i0);
-          for (int c = 0; c < C; ++c) value[c * plane + at] = t.value(c);
+          if (spec.tile_values)
+            for (int c = 0; c < C; ++c) value[c * plane + at] = t.value(c);
           if (nearest) {
             const float* n = t.nearest();
             for (int c = 0; c < C; ++c) nearest[c * plane + at] = n[c];
