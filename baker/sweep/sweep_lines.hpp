@@ -77,6 +77,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "core/run_control.hpp"
@@ -94,6 +95,8 @@ struct SweepSpec {
   bool tile_nearest = true;  // sweep_lines_tiled: also fill SweepTile::nearest (off: nearest is null)
   bool tile_taps = false;    // sweep_lines_tiled: also fill SweepTile::lo, hi, w_hi (both taps apart)
   bool tile_values = true;   // sweep_lines_tiled: fill SweepTile::value (off: value is null)
+  bool zero_buffers =
+      true;  // zero the result buffers first (off: the worker writes every receiver's C floats)
 };
 
 // The lines of one direction (plain data; see the header comment for the geometry).
@@ -251,7 +254,13 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
   const std::size_t per_dir = max_lines_x_major * std::size_t(C);
   int batch = std::max(1, std::min(spec.batch, K));
   while (batch > 1 && per_dir * sizeof(float) * batch > spec.max_buffer_bytes) --batch;
-  std::vector<float> buffers(per_dir * batch);
+  // Result buffers; zero-filled unless the caller's worker writes every receiver (spec.zero_buffers).
+  std::unique_ptr<float[]> buffer_storage(spec.zero_buffers ? new float[per_dir * batch]()
+                                                            : new float[per_dir * batch]);
+  struct {
+    float* p;
+    float* data() const { return p; }
+  } buffers{buffer_storage.get()};
 
   // y-major lines read a transposed copy: consecutive samples are then adjacent in memory.
   std::vector<float> transposed;

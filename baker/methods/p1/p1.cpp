@@ -154,6 +154,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   spec.tile_nearest = p.horizon_distance;
   spec.tile_taps = true;
   spec.tile_values = false;
+  spec.zero_buffers = false;  // HorizonLineWorker writes every receiver
   spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
   const bool want_distance = p.horizon_distance;
   const RunControl main_rc = sub_progress(rc, 0.0, main_share);
