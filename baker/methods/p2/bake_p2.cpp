@@ -79,7 +79,10 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   p1.wrap_periods = params.wrap_periods;
   p1.ao = p1.vsky = false;
   p1.direct = true;
-  r.direct = compute_p1(scene, p1, sub_range(rc, 0, phase)).direct;
+  p1.horizon = true;  // the lobe split below uses P1's own horizons (K floats per texel while P2 runs)
+  P1Result direct = compute_p1(scene, p1, sub_range(rc, 0, phase));
+  r.direct = std::move(direct.direct);
+  const std::vector<float> p1_sin_horizon = std::move(direct.horizon);
   rc.check();
 
   // Exit radiance of bounce 0: reflected direct light plus emission.
@@ -93,6 +96,7 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   spec.visibility = params.visibility;
   spec.wrap_periods = params.wrap_periods;
   spec.supersampling = params.supersampling;
+  spec.p1_sin_horizon = &p1_sin_horizon;
   r.indirect.assign(N, Rgb{});
   for (int b = 1; b <= B; ++b) {
     P2SweepStats st;

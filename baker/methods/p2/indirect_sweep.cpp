@@ -194,7 +194,10 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
       [&](int k, int i, int j, const TexelTaps& t) {
         if (!spec.gather) return;
         const std::size_t idx = field.index(i, j);
-        const double tw = terrain_weight(normals[idx].d(), cs[k], sn[k], K, t.value(4));
+        const double e = spec.p1_sin_horizon
+                             ? std::asin(std::clamp(double((*spec.p1_sin_horizon)[idx * K + k]), -1.0, 1.0))
+                             : t.value(4);
+        const double tw = terrain_weight(normals[idx].d(), cs[k], sn[k], K, e);
         if (!(tw > 0)) return;
         const double wb = t.value(3);
         double* a = acc.data() + idx * 3;
