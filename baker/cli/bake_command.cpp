@@ -18,6 +18,7 @@
 #include "cli/report_writer.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/suite.hpp"
+#include "cli/test_break.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
@@ -85,6 +86,9 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     const auto t0 = std::chrono::steady_clock::now();
     LayerSet layers = run_method(entry, scene, rc);
     const double seconds = seconds_since(t0);
+    if (apply_test_break(entry.method, entry.stem, layers))
+      progress.message(job.name + ": " + entry.stem +
+                       ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
     progress.end(job.name, entry.stem, seconds);
     add_common_attributes(layers, job, job_hash, entry.method, entry.params, seconds);
     stage.write_layers(entry.stem, layers);
