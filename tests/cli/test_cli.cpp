@@ -288,4 +288,19 @@ TEST_F(Cli, ValidateSuiteChecksEveryJobItLists) {
   EXPECT_NE(r.error_lines()[0].find("suite.json: /jobs"), std::string::npos) << r.err;
 }
 
+TEST_F(Cli, EveryExampleJobValidates) {
+  // The jobs in jobs/ are what users copy from: they must keep validating as the schemas evolve.
+  std::string files;
+  int count = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(HFBAKE_SOURCE_DIR) / "jobs"))
+    if (e.path().extension() == ".json") {
+      files += " " + e.path().string();
+      ++count;
+    }
+  ASSERT_GE(count, 5);
+  const Result r = hfbake("validate --quiet" + files);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.error_lines().empty()) << r.err;
+}
+
 }  // namespace
