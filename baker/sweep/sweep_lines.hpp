@@ -176,6 +176,21 @@ struct TexelTaps {
 void sample_line(const HeightField& field, const SweepDirection& dir, int line, float* z, int* inside_begin,
                  int* inside_end, const float* transposed = nullptr);
 
+// Line `line` of direction `dir`, sampled into z[0..dir.count) (z must hold dir.count floats and outlive the
+// returned line): what the driver hands each line visitor, and what tests use to walk one line by hand.
+inline SweepLine sampled_line(const HeightField& field, const SweepDirection& dir, int line, float* z,
+                              const float* transposed = nullptr) {
+  SweepLine l;
+  l.dir = &dir;
+  l.line = line;
+  l.count = dir.count;
+  l.first_receiver = dir.first_receiver;
+  l.z = z;
+  l.step = dir.step;
+  sample_line(field, dir, line, z, &l.inside_begin, &l.inside_end, transposed);
+  return l;
+}
+
 // floor(x) as an int for |x| < 2^31 without a libm call (baseline x86-64 has no rounding instruction).
 inline int floor_int(double x) {
   const int i = int(x);
@@ -291,15 +306,8 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
       for (int flat = r.begin(); flat < r.end(); ++flat) {
         while (flat >= first_line[b + 1]) ++b;
         const SweepDirection& dir = dirs[k0 + b];
-        SweepLine line;
-        line.dir = &dir;
-        line.line = dir.line_begin + (flat - first_line[b]);
-        line.count = dir.count;
-        line.first_receiver = dir.first_receiver;
-        line.z = z.data();
-        line.step = dir.step;
-        sample_line(field, dir, line.line, z.data(), &line.inside_begin, &line.inside_end,
-                    transposed.empty() ? nullptr : transposed.data());
+        const SweepLine line = sampled_line(field, dir, dir.line_begin + (flat - first_line[b]), z.data(),
+                                            transposed.empty() ? nullptr : transposed.data());
         float* out = buffers.data() + per_dir * b +
                      std::size_t(flat - first_line[b]) * std::size_t(dir.n_major) * std::size_t(C);
         worker(static_cast<const SweepLine&>(line), out);

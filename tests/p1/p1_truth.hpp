@@ -35,15 +35,7 @@ inline HeightField procedural(ProceduralKind kind, int w, int h, Wrap wrap, doub
 
 inline SweepLine make_line(const HeightField& f, const SweepDirection& d, int l, std::vector<float>& z) {
   z.resize(d.count);
-  SweepLine line;
-  line.dir = &d;
-  line.line = l;
-  line.count = d.count;
-  line.first_receiver = d.first_receiver;
-  line.z = z.data();
-  line.step = d.step;
-  sample_line(f, d, l, z.data(), &line.inside_begin, &line.inside_end);
-  return line;
+  return sampled_line(f, d, l, z.data());
 }
 
 // The same-points march: the steepest elevation (double atan2) from sample n to every terrain sample before

@@ -93,14 +93,7 @@ TEST(SweepLines, WalkOrderHeightsAndInsideRun) {
       const SweepDirection d = plan_direction(f, spec, k);
       std::vector<float> z(d.count);
       for (int l = d.line_begin; l < d.line_end; ++l) {
-        SweepLine line;
-        line.dir = &d;
-        line.line = l;
-        line.count = d.count;
-        line.first_receiver = d.first_receiver;
-        line.z = z.data();
-        line.step = d.step;
-        sample_line(f, d, l, z.data(), &line.inside_begin, &line.inside_end);
+        const SweepLine line = sampled_line(f, d, l, z.data());
         // Reading a transposed copy (what the driver does for y-major lines) gives the same bits.
         std::vector<float> zt(d.count), transposed(f.texel_count());
         for (int j = 0; j < f.height; ++j)
@@ -153,12 +146,7 @@ TEST(SweepLines, ReceiverTexelsCoverEveryTexelOnce) {
       std::vector<double> wsum(f.texel_count(), 0.0);
       std::vector<float> z(d.count);
       for (int l = d.line_begin; l < d.line_end; ++l) {
-        SweepLine line;
-        line.dir = &d;
-        line.line = l;
-        line.count = d.count;
-        line.first_receiver = d.first_receiver;
-        line.z = z.data();
+        const SweepLine line = sampled_line(f, d, l, z.data());
         for (int n = d.first_receiver; n < d.count; ++n) {
           const TexelPair p = line.receiver_texels(n, f);
           for (int e = 0; e < 2; ++e)
@@ -189,13 +177,7 @@ TEST(SweepLines, ScatterEqualsGather) {
       std::vector<double> scattered(f.texel_count(), 0.0);
       std::vector<float> z(d.count);
       for (int l = d.line_begin; l < d.line_end; ++l) {
-        SweepLine line;
-        line.dir = &d;
-        line.line = l;
-        line.count = d.count;
-        line.first_receiver = d.first_receiver;
-        line.z = z.data();
-        sample_line(f, d, l, z.data(), &line.inside_begin, &line.inside_end);
+        const SweepLine line = sampled_line(f, d, l, z.data());
         for (int n = d.first_receiver; n < d.count; ++n) {
           const TexelPair p = line.receiver_texels(n, f);
           for (int e = 0; e < 2; ++e)
