@@ -10,6 +10,8 @@ void write_report_page(const Job& job, const ReportInputs& inputs, const nlohman
   html.reference_note = reference_note;
   html.report = report;
   html.reference = &inputs.reference;
+  html.display = job.output.preview_display;
+  html.view = job.output.preview_view;
   for (const MethodLayers& m : inputs.methods) {
     HtmlMethod hm;
     hm.stem = m.stem;

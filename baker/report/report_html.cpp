@@ -68,14 +68,14 @@ Img png_image(const std::vector<std::uint8_t>& px, int channels, const Shown& s,
 }
 
 // A layer shown as an image, scaled by `display_max`: 1 channel as grey with the value as the pixel value
-// (how texture tools show an AO map), 3 channels (light) as RGB through the OpenColorIO config's default
-// display/view (as the PNG previews). Down-sampled in linear first.
-Img layer_image(const Layer& l, int w, int h, int max_size, double display_max) {
+// (how texture tools show an AO map), 3 channels (light) as RGB through the page's OpenColorIO
+// display/view (the job's, as the PNG previews). Down-sampled in linear first.
+Img layer_image(const Layer& l, int w, int h, int max_size, double display_max, const HtmlInputs& in) {
   const int nc = l.channel_count();
   const Shown s = shown_size(w, h, max_size);
   std::vector<float> v = down_sample(l.data, w, h, nc, s);
   for (float& x : v) x = float(x / display_max);
-  if (nc == 3) convert_to_display(v, "", "", InputSite{"report.html", ""});
+  if (nc == 3) convert_to_display(v, in.display, in.view, InputSite{"report.html", "output/preview_display"});
   std::vector<std::uint8_t> px(v.size());
   for (std::size_t i = 0; i < v.size(); ++i) px[i] = to_byte(v[i]);
   return png_image(px, nc, s, w, h);
@@ -499,15 +499,17 @@ std::string report_html(const HtmlInputs& in) {
       char grad[160];
       std::snprintf(grad, sizeof grad, "rgb(%d,%d,%d),rgb(%d,%d,%d),rgb(%d,%d,%d)", lo[0], lo[1], lo[2],
                     mid[0], mid[1], mid[2], hi[0], hi[1], hi[2]);
-      const std::string value_legend = legend(
-          "0", num(display_max / 2, 3), num(display_max, 3), "#000,#bcbcbc,#fff",
-          nc == 1 ? "value (linear grey, clipped at " + num(display_max, 3) + ")"
-                  : "light (the OpenColorIO default display/view, clipped at " + num(display_max, 3) + ")");
+      const std::string value_legend =
+          legend("0", num(display_max / 2, 3), num(display_max, 3), "#000,#bcbcbc,#fff",
+                 nc == 1 ? "value (linear grey, clipped at " + num(display_max, 3) + ")"
+                         : "light (OpenColorIO display " + (in.display.empty() ? "default" : in.display) +
+                               ", view " + (in.view.empty() ? "default" : in.view) + ", clipped at " +
+                               num(display_max, 3) + ")");
       h << "<h3>" << html_escape(hm.stem) << " &middot; " << html_escape(layer_name)
         << "</h3>\n<div class=\"figs\">"
-        << figure(layer_image(*ml, w, ht, in.max_image_size, display_max), hm.stem + " " + layer_name,
+        << figure(layer_image(*ml, w, ht, in.max_image_size, display_max, in), hm.stem + " " + layer_name,
                   value_legend)
-        << figure(layer_image(*rl, w, ht, in.max_image_size, display_max), "reference " + layer_name,
+        << figure(layer_image(*rl, w, ht, in.max_image_size, display_max, in), "reference " + layer_name,
                   value_legend)
         << figure(err_img, "error: " + hm.stem + " - reference" + (nc > 1 ? " (mean of channels)" : ""),
                   legend("-" + num(scale, 3), "0", "+" + num(scale, 3), grad,

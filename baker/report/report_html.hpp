@@ -3,7 +3,7 @@
 // layers, the reference, the signed error image with its colour scale, the metrics table, timings and
 // parameters; the hfbake version and the job hash; convergence plots where a job sweeps a parameter.
 // Pure data in, text out (no file I/O; PNGs are encoded in memory by OpenImageIO, light goes through
-// the OpenColorIO config's default display/view like the PNG previews).
+// the job's OpenColorIO display/view like the PNG previews).
 #pragma once
 
 #include <cstdint>
@@ -30,6 +30,9 @@ struct HtmlInputs {
   const LayerSet* reference = nullptr;  // may be null (metrics only)
   int max_image_size = 320;             // larger fields are box-filtered (OpenImageIO) down to this size
   std::string reference_note;           // e.g. where the reference came from (the reference cache)
+  // OpenColorIO display/view for light (RGB) images, as the job's PNG previews (output.preview_display,
+  // output.preview_view); empty = the config's default display / that display's default view.
+  std::string display, view;
 };
 
 std::string report_html(const HtmlInputs& inputs);

@@ -15,6 +15,7 @@
 #include <regex>
 #include <sstream>
 
+#include "core/error.hpp"
 #include "io/preview.hpp"
 #include "report/report_document.hpp"
 #include "report/report_html.hpp"
@@ -303,6 +304,21 @@ TEST(ReportHtml, LightThroughTheDisplayScalarsLinearAndDownSampled) {
       EXPECT_NEAR(d.px[3 * (2 * 16 + 12) + c], 255.0 * srgb(0.25 * (c + 1) / 0.75), 1.0) << c;
     }
   }
+  // The job's display/view (output.preview_display/_view) is used, as for the PNG previews: "Raw" is linear.
+  in.display = "sRGB";
+  in.view = "Raw";
+  const std::string raw_html = report_html(in);
+  EXPECT_NE(raw_html.find("view Raw"), std::string::npos);
+  const auto raw = page_images(raw_html, tmp.path());
+  ASSERT_EQ(raw.size(), 6u);
+  for (int k : {3, 4})
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(raw[k].px[3 * (2 * 16 + 1) + c], 255.0 * 0.05 * (c + 1) / 0.75, 1.0) << c;
+      EXPECT_NEAR(raw[k].px[3 * (2 * 16 + 12) + c], 255.0 * 0.25 * (c + 1) / 0.75, 1.0) << c;
+    }
+  // A view the config does not have is an error naming the job field, not a silent default.
+  in.view = "NoSuchView";
+  EXPECT_THROW(report_html(in), InputError);
 }
 
 // Runs `command`, returns its exit status; stdout and stderr go to files.
