@@ -114,6 +114,17 @@ JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_overri
     std::error_code ec;
     if (!fs::is_regular_file(p, ec)) fail(ptr, "no such file: " + p.string());
   }
+  // The baseline is read after the bake; a missing one must not cost the bake. (Not an input of the
+  // content hash: the baseline changes what is compared, not what is baked.)
+  if (doc.contains("report") && doc["report"].contains("baseline")) {
+    const fs::path p = job.resolve(doc["report"]["baseline"].get<std::string>());
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec))
+      fail("/report/baseline",
+           "no such file: " + p.string() +
+               " (to make the first one, bake without report.baseline, then: hfbake compare OUT_DIR " +
+               p.string() + " --update-baseline)");
+  }
 
   const auto& bake = doc["bake"];
   std::map<std::string, int> count;  // entries per method in the file (a sweep counts once)

@@ -97,6 +97,17 @@ TEST_F(Manifest, UnknownMethod) {
   EXPECT_EQ(e[0], (dir_ / "x.json").string() + ": /bake/0/method: not one of the allowed values");
 }
 
+// A missing baseline is found before the bake (it used to fail after hours of baking), and the message says
+// how to make the first one.
+TEST_F(Manifest, MissingBaselineIsFoundBeforeBaking) {
+  const auto e = errors(
+      R"({"version": 1, "name": "t", "height": {"procedural": {"kind": "fractal", "size": [8, 8]}},
+          "bake": [{"method": "p1"}], "reference": {"samples": 4}, "report": {"baseline": "base/report.json"}})");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_NE(e[0].find(": /report/baseline: no such file: "), std::string::npos) << e[0];
+  EXPECT_NE(e[0].find("--update-baseline"), std::string::npos) << e[0];
+}
+
 TEST_F(Manifest, MissingInputFile) {
   const auto e =
       errors(R"({"version": 1, "name": "t", "height": {"image": "nope.exr"}, "bake": [{"method": "p1"}]})");
