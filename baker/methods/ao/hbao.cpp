@@ -30,11 +30,64 @@ double default_reach(const HeightField& field, const Falloff& f) {
   return std::isfinite(support) ? support : whole;
 }
 
+namespace {
+
+// The profile of the triangulated surface (two triangles per quad, split along (i+1, j)-(i, j+1)) along the
+// ray from texel (i, j) towards (dx, dy) (unit, texel units): visits every column, row and diagonal crossing
+// with t in (0, t_end] in increasing t (ties in any order), then the point at t_end, as visit(t, height).
+// Heights are linear along the triangle edge each crossing lies on.
+template <class Visit>
+void triangle_profile(const HeightField& f, int i, int j, double dx, double dy, double t_end, Visit&& visit) {
+  struct Progression {
+    double inv = 0;  // t between crossings (infinite: never)
+    int k = 1;       // next crossing number
+    double next() const { return k * inv; }
+  };
+  const double ds = dx + dy;
+  Progression col{std::abs(dx) > 1e-12 ? 1 / std::abs(dx) : INFINITY};
+  Progression row{std::abs(dy) > 1e-12 ? 1 / std::abs(dy) : INFINITY};
+  Progression dia{std::abs(ds) > 1e-12 ? 1 / std::abs(ds) : INFINITY};
+  const int sx = dx > 0 ? 1 : -1, sy = dy > 0 ? 1 : -1, sd = ds > 0 ? 1 : -1;
+  auto lerp = [](double a, double b, double w) { return a + (b - a) * w; };
+  for (;;) {
+    const double tc = col.next(), tr = row.next(), td = dia.next();
+    const double t = std::min({tc, tr, td});
+    if (!(t < t_end - 1e-9)) break;
+    if (t == tc) {  // x = i + sx k: on the edge between (c, floor y) and (c, floor y + 1)
+      const int c = i + sx * col.k++;
+      const double y = j + t * dy, fy = std::floor(y);
+      const int jj = int(fy);
+      visit(t, lerp(f.at(c, jj), f.at(c, jj + 1), y - fy));
+    } else if (t == tr) {  // y = j + sy k
+      const int r = j + sy * row.k++;
+      const double x = i + t * dx, fx = std::floor(x);
+      const int ii = int(fx);
+      visit(t, lerp(f.at(ii, r), f.at(ii + 1, r), x - fx));
+    } else {  // x + y = i + j + sd k: on the edge from (s - jj, jj) to (s - jj - 1, jj + 1)
+      const int sum = i + j + sd * dia.k++;
+      const double y = j + t * dy, fy = std::floor(y);
+      const int jj = int(fy);
+      visit(t, lerp(f.at(sum - jj, jj), f.at(sum - jj - 1, jj + 1), y - fy));
+    }
+  }
+  // The end of the reach, inside its triangle.
+  const double x = i + t_end * dx, y = j + t_end * dy;
+  const double fx = std::floor(x), fy = std::floor(y);
+  const int ii = int(fx), jj = int(fy);
+  const double u = x - fx, v = y - fy;
+  const double z00 = f.at(ii, jj), z10 = f.at(ii + 1, jj), z01 = f.at(ii, jj + 1), z11 = f.at(ii + 1, jj + 1);
+  visit(t_end, u + v <= 1 ? z00 + u * (z10 - z00) + v * (z01 - z00)
+                          : z11 + (1 - u) * (z01 - z11) + (1 - v) * (z10 - z11));
+}
+
+}  // namespace
+
 HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s) {
   const double z0 = field.z[field.index(i, j)];
   const double ts = field.texel_size;
   const bool clamp = field.wrap == Wrap::clamp;
   const double xmax = field.width - 1, ymax = field.height - 1;
+  const bool segment = s.estimator == HorizonEstimator::segment;
 
   double wsum = 0, occluded = 0;
   Vec3 bent{0, 0, 0};
@@ -49,22 +102,11 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
     SliceVec dir = s.bent ? open_direction(frame, frame.tangent, kPi / 2) : SliceVec{};
     const double sin_t = s.real_tangent ? std::sin(frame.tangent) : s.sin_tangent;
     double largest = sin_t;  // P3: "no occluder"
-    // Clamp fields end at their border: the last step inside (so the loop needs no bounds test).
-    int last = steps;
-    if (clamp) {
-      auto limit = [&](double start, double dv, double hi) {
-        if (std::abs(dv) < 1e-12) return steps;
-        const double t = dv > 0 ? (hi - start) / (dv * step_t) : -start / (dv * step_t);
-        return int(std::min<double>(steps, std::floor(t + 1e-9)));
-      };
-      last = std::min(limit(i, d.dx, xmax), limit(j, d.dy, ymax));
-    }
     // With falloff none the bands telescope: only the final horizon matters.
     const bool telescopes = s.falloff.kind == FalloffKind::none;
-    for (int m = 1; m <= last; ++m) {
-      const double px = i + m * step_t * d.dx, py = j + m * step_t * d.dy;
-      const double x = m * step_w;
-      const double dz = double(field.bilinear(px, py)) - z0;
+    SliceVec prev{0, 0};  // the previous sample (segment estimator), the receiver first
+    // One sample at world distance x, height dz above the receiver.
+    auto sample = [&](double x, double dz) {
       const double slope = dz / x;
       if (s.estimator == HorizonEstimator::largest_occluder && (!s.visible_only || slope >= max_slope)) {
         const double len = std::hypot(x, dz), sin_h = dz / len;
@@ -72,14 +114,51 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
       }
       if (slope > max_slope) {
         max_slope = slope;
-        if (telescopes) continue;
-        const double e = std::atan(slope);
-        occl += band_occlusion(s.falloff, s.weighting, frame, max_elev, e, x);
-        if (s.bent) {
-          const SliceVec b = band_direction(s.falloff, frame, max_elev, e, x);
-          dir.h -= b.h, dir.v -= b.v;
+        if (!telescopes) {
+          const double e = std::atan(slope);
+          if (segment) {
+            occl += segment_band_occlusion(s.falloff, s.weighting, frame, max_elev, e, prev, {x, dz});
+            if (s.bent) {
+              const SliceVec b = segment_band_direction(s.falloff, frame, max_elev, e, prev, {x, dz});
+              dir.h -= b.h, dir.v -= b.v;
+            }
+          } else {
+            occl += band_occlusion(s.falloff, s.weighting, frame, max_elev, e, x);
+            if (s.bent) {
+              const SliceVec b = band_direction(s.falloff, frame, max_elev, e, x);
+              dir.h -= b.h, dir.v -= b.v;
+            }
+          }
+          max_elev = e;
         }
-        max_elev = e;
+      }
+      prev = {x, dz};
+    };
+    if (s.surface == MarchSurface::triangles) {
+      // Clamp fields end at their border.
+      double t_end = s.reach / ts;
+      if (clamp) {
+        if (d.dx > 1e-12) t_end = std::min(t_end, (xmax - i) / d.dx);
+        if (d.dx < -1e-12) t_end = std::min(t_end, -i / d.dx);
+        if (d.dy > 1e-12) t_end = std::min(t_end, (ymax - j) / d.dy);
+        if (d.dy < -1e-12) t_end = std::min(t_end, -j / d.dy);
+      }
+      if (t_end > 1e-9)
+        triangle_profile(field, i, j, d.dx, d.dy, t_end, [&](double t, double z) { sample(t * ts, z - z0); });
+    } else {
+      // Clamp fields end at their border: the last step inside (so the loop needs no bounds test).
+      int last = steps;
+      if (clamp) {
+        auto limit = [&](double start, double dv, double hi) {
+          if (std::abs(dv) < 1e-12) return steps;
+          const double t = dv > 0 ? (hi - start) / (dv * step_t) : -start / (dv * step_t);
+          return int(std::min<double>(steps, std::floor(t + 1e-9)));
+        };
+        last = std::min(limit(i, d.dx, xmax), limit(j, d.dy, ymax));
+      }
+      for (int m = 1; m <= last; ++m) {
+        const double px = i + m * step_t * d.dx, py = j + m * step_t * d.dy;
+        sample(m * step_w, double(field.bilinear(px, py)) - z0);
       }
     }
     if (telescopes && max_slope > -std::numeric_limits<double>::infinity()) {
@@ -131,10 +210,22 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
     const auto& e = params.at("estimator");
     if (e == "slab")
       s.estimator = HorizonEstimator::slab;
+    else if (e == "segment")
+      s.estimator = HorizonEstimator::segment;
     else if (e == "largest_occluder")
       s.estimator = HorizonEstimator::largest_occluder;
     else
-      throw InputError("", "estimator", "must be \"slab\" or \"largest_occluder\"");
+      throw InputError("", "estimator", "must be \"slab\", \"segment\" or \"largest_occluder\"");
+  }
+  if (params.contains("surface")) {
+    const auto& v = params.at("surface");
+    if (v == "triangles")
+      s.surface = MarchSurface::triangles;
+    else if (v != "bilinear")
+      throw InputError("", "surface", "must be \"bilinear\" or \"triangles\"");
+    // The triangulated surface's exact slice integral needs the segment estimator: its default there.
+    if (s.surface == MarchSurface::triangles && !params.contains("estimator"))
+      s.estimator = HorizonEstimator::segment;
   }
   if (params.contains("tangent")) {
     const auto& t = params.at("tangent");
@@ -162,15 +253,19 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
   }
   if (s.reach / s.step > 1e7) throw InputError("", "max_distance", "more than 1e7 steps per direction");
 
+  if (s.surface == MarchSurface::triangles && (params.contains("step") || params.contains("steps")))
+    throw InputError("", "surface",
+                     "\"triangles\" visits every vertex of the profile: no \"step\" or \"steps\"");
   const bool ao_ok = s.falloff.kind == FalloffKind::none && s.weighting == Weighting::cosine &&
-                     s.estimator == HorizonEstimator::slab;
+                     s.estimator != HorizonEstimator::largest_occluder;
   std::vector<std::string> known = {"obscurance", "bent_normal"};
   if (ao_ok) known.push_back("ao");
   const std::vector<std::string> layers = select_layers(params, {"obscurance", "bent_normal", "ao"}, known);
   if (wants(layers, "ao") && !ao_ok)
     throw InputError(
         "", "layers",
-        "\"ao\" needs falloff \"none\", weighting \"cosine\" and estimator \"slab\" (use \"obscurance\")");
+        "\"ao\" needs falloff \"none\", weighting \"cosine\" and estimator \"slab\" or \"segment\" (use "
+        "\"obscurance\")");
 
   LayerSet out;
   out.width = field.width;
@@ -188,7 +283,10 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
       out.add(name, mono_channels()).data = obsc;
     }
   }
-  out.attributes.emplace_back("hfbake:hbao:steps_per_direction", std::to_string(int(s.reach / s.step)));
+  if (s.surface == MarchSurface::triangles)
+    out.attributes.emplace_back("hfbake:hbao:surface", "triangles");
+  else
+    out.attributes.emplace_back("hfbake:hbao:steps_per_direction", std::to_string(int(s.reach / s.step)));
   return out;
 }
 

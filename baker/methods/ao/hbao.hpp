@@ -8,6 +8,15 @@
 // Eq. 5 AO of the sampled horizons; it converges to the exact integral as K grows and the step shrinks.
 // Estimator "largest_occluder": P3's Eq. 1 with one occluder per direction, the visible sample that casts the
 // largest sinT + max(0, sin h - sinT) rho(|h|) (the brute-force reference of P3 Fig. 7).
+// Estimator "segment": like slab, but a band's rays meet the straight piece of profile between the previous
+// sample and the new horizon sample (slice_integral.hpp), not a vertical slab at the new one.
+// Surface "triangles": instead of equal steps on the bilinear surface, the march visits every vertex of the
+// profile of the reference's triangulated surface (two triangles per quad split along (i+1, j)-(i, j+1)):
+// every column, row and diagonal crossing, plus the end of the reach. With the segment estimator the slice
+// integral is then exact for that surface, and hbao converges to the reference's obscurance as K grows
+// (measured on the frontier crop, tests/ao/bench_obscurance_bias.cpp: bias -0.0002 at K = 32 against +0.0072
+// for one-texel steps on the bilinear surface, whose peaks between samples are missed). About 2.5 samples
+// per texel of distance instead of 1.
 #pragma once
 
 #include <vector>
@@ -32,12 +41,14 @@ struct MarchDirection {
 // phi_k = 2 pi k / K from +x towards +y, equal weights (the contract's direction set).
 std::vector<MarchDirection> uniform_directions(int count);
 
-enum class HorizonEstimator { slab, largest_occluder };
+enum class HorizonEstimator { slab, segment, largest_occluder };
+enum class MarchSurface { bilinear, triangles };
 
 struct HbaoSettings {
   Falloff falloff;
   Weighting weighting = Weighting::cosine;
   HorizonEstimator estimator = HorizonEstimator::slab;
+  MarchSurface surface = MarchSurface::bilinear;  // triangles: `step` is unused (every profile vertex)
   std::vector<MarchDirection> directions = uniform_directions(16);
   double reach = 0;  // world units marched per direction (clamp fields also stop at their border)
   double step = 1;   // world units between samples

@@ -133,4 +133,64 @@ SliceVec band_direction(const Falloff& f, const SliceFrame& s, double a, double 
           gauss([&](double e) { return weight(e) * std::sin(e); }, lo, hi)};
 }
 
+namespace {
+
+// The elevations of [a, b] (clipped to the tangent and the zenith) whose rays can meet the segment within
+// the falloff's radius (step, linear, smooth: the segment's part inside the circle of radius R is one
+// interval of u, and the elevation of A + u (B - A) is monotone in u); false when none can.
+bool segment_support(const Falloff& f, const SliceFrame& s, double& lo, double& hi, SliceVec A, SliceVec B) {
+  lo = std::max(lo, s.tangent), hi = std::min(hi, kHalfPi);
+  if (!(hi > lo)) return false;
+  if (f.kind != FalloffKind::step && f.kind != FalloffKind::linear && f.kind != FalloffKind::smooth)
+    return true;
+  const double R = f.radius, dh = B.h - A.h, dv = B.v - A.v;
+  const double dd = dh * dh + dv * dv, ad = A.h * dh + A.v * dv, aa = A.h * A.h + A.v * A.v;
+  const double disc = ad * ad - dd * (aa - R * R);
+  if (!(disc > 0) || !(dd > 0)) return false;
+  const double root = std::sqrt(disc), u1 = (-ad - root) / dd, u2 = (-ad + root) / dd;
+  if (!(u2 > 0) || !(u1 < 1)) return false;
+  if (u1 > 0) lo = std::max(lo, std::atan2(A.v + u1 * dv, A.h + u1 * dh));
+  if (u2 < 1) hi = std::min(hi, std::atan2(A.v + u2 * dv, A.h + u2 * dh));
+  return hi > lo;
+}
+
+// Distance from the receiver along elevation e to the segment's line.
+double segment_distance(SliceVec A, SliceVec B, double e) {
+  const double dh = B.h - A.h, dv = B.v - A.v;
+  const double den = std::cos(e) * dv - std::sin(e) * dh;
+  const double num = A.h * dv - A.v * dh;
+  return den != 0 ? std::max(0.0, num / den) : 0.0;
+}
+
+}  // namespace
+
+double segment_band_occlusion(const Falloff& f, Weighting w, const SliceFrame& s, double a, double b,
+                              SliceVec A, SliceVec B) {
+  double lo = a, hi = b;
+  if (!segment_support(f, s, lo, hi, A, B)) return 0.0;
+  const bool cosine = w == Weighting::cosine;
+  if (f.kind == FalloffKind::none || f.kind == FalloffKind::step)
+    return cosine ? cos_p0(s, hi) - cos_p0(s, lo) : uni_p0(hi) - uni_p0(lo);
+  return gauss(
+      [&](double e) {
+        const double c = std::cos(e);
+        const double wt = cosine ? std::max(0.0, s.nt * c + s.nz * std::sin(e)) * c : c;
+        return f(segment_distance(A, B, e)) * wt;
+      },
+      lo, hi);
+}
+
+SliceVec segment_band_direction(const Falloff& f, const SliceFrame& s, double a, double b, SliceVec A,
+                                SliceVec B) {
+  double lo = a, hi = b;
+  if (!segment_support(f, s, lo, hi, A, B)) return {};
+  if (f.kind == FalloffKind::none || f.kind == FalloffKind::step) return open_direction(s, lo, hi);
+  auto weight = [&](double e) {
+    const double c = std::cos(e);
+    return f(segment_distance(A, B, e)) * std::max(0.0, s.nt * c + s.nz * std::sin(e)) * c;
+  };
+  return {gauss([&](double e) { return weight(e) * std::cos(e); }, lo, hi),
+          gauss([&](double e) { return weight(e) * std::sin(e); }, lo, hi)};
+}
+
 }  // namespace hfbake

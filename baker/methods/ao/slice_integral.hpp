@@ -32,4 +32,16 @@ SliceVec band_direction(const Falloff& f, const SliceFrame& s, double a, double 
 // The same with rho = 1 (closed form): the cosine-weighted direction integral of a band of open sky.
 SliceVec open_direction(const SliceFrame& s, double a, double b);
 
+// The band [a, b] when its rays meet the straight segment from A to B (slice points relative to the
+// receiver: h = horizontal distance, v = height; 0 <= A.h < B.h) instead of a vertical slab at B: each ray of
+// elevation e hits the segment's line at distance cross(A, B - A) / cross(w(e), B - A). Exact for a polyline
+// profile (the triangulated surface along a slice, or straight lines between samples) when b is the new
+// horizon at B and a the highest elevation of the vertices before B: every ray of the band then passes
+// above the profile up to A and meets it first on this segment. Step falloff: closed form (the segment's
+// part inside the radius is an elevation interval); other falloffs: Gauss-Legendre in elevation.
+double segment_band_occlusion(const Falloff& f, Weighting w, const SliceFrame& s, double a, double b,
+                              SliceVec A, SliceVec B);
+SliceVec segment_band_direction(const Falloff& f, const SliceFrame& s, double a, double b, SliceVec A,
+                                SliceVec B);
+
 }  // namespace hfbake
