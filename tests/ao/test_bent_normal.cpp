@@ -6,9 +6,12 @@
 
 #include "ao_scenes.hpp"
 #include "core/error.hpp"
+#include "field/procedural.hpp"
 #include "methods/ao/bake_ao.hpp"
+#include "methods/ao/farfield.hpp"
 #include "methods/ao/hbao.hpp"
 #include "methods/ao/hsao.hpp"
+#include "methods/ao/lsao.hpp"
 
 namespace hfbake {
 namespace {
@@ -48,6 +51,74 @@ TEST(BentNormal, WallHbaoAndHsao) {
   s.directions = 16;
   s.steps = 256;
   EXPECT_LT(angle_deg(hsao_texel(f, {0, 0, 1}, 32, 128, s).bent_normal, expect), 0.5);
+}
+
+// LSAO's largest occluder with rho = 1 and cosine weighting is the highest horizon, so its bent normal is the
+// same closed form; farfield's slabs are exact on a vertical wall.
+TEST(BentNormal, WallLsaoAndFarfield) {
+  const HeightField f = test::make_wall(96, 257, 64, 32);  // x0 = 32, a = 1
+  const Vec3 expect = wall_bent(32, 32, 16);
+  const std::size_t idx = f.index(32, 128);
+  LsaoOptions l;
+  l.directions = 16;
+  l.occlusion.rho.kind = FalloffKind::none;
+  std::vector<Vec3f> lb;
+  lsao_obscurance(f, l, {}, nullptr, &lb);
+  EXPECT_LT(angle_deg(lb[idx].d(), expect), 0.5);
+  FarfieldOptions o;
+  o.directions = 16;
+  std::vector<Vec3f> fb;
+  farfield_obscurance(f, compute_normals(f), o, {}, nullptr, &fb);
+  EXPECT_LT(angle_deg(fb[idx].d(), expect), 0.5);
+  // With a radius the bent normal straightens: the wall at 32 is beyond R = 16.
+  l.occlusion.rho = {FalloffKind::step, 16};
+  o.rho = {FalloffKind::step, 16};
+  lsao_obscurance(f, l, {}, nullptr, &lb);
+  farfield_obscurance(f, compute_normals(f), o, {}, nullptr, &fb);
+  EXPECT_LT(angle_deg(lb[idx].d(), {0, 0, 1}), 1e-3);
+  EXPECT_LT(angle_deg(fb[idx].d(), {0, 0, 1}), 1e-3);
+}
+
+// On rough terrain the three horizon methods agree on the bent normal (same K, falloff, radius): lsao keeps
+// one occluder per direction, farfield averages far intervals over its sector, hbao marches every sample.
+TEST(BentNormal, FractalAgainstHbao) {
+  ProceduralSpec spec;
+  spec.kind = ProceduralKind::fractal;
+  spec.width = spec.height = 96;
+  spec.seed = 5;
+  const HeightField f = make_procedural(spec, 1.0, Wrap::clamp);
+  const std::vector<Vec3f> normals = compute_normals(f);
+  const Falloff rho{FalloffKind::step, 16};
+  HbaoSettings h;
+  h.falloff = rho;
+  h.reach = 16;
+  h.directions = uniform_directions(16);
+  std::vector<Vec3f> hb(f.texel_count());
+  hbao_field(f, normals, h, {}, nullptr, hb.data());
+  LsaoOptions l;
+  l.directions = 16;
+  l.occlusion.rho = rho;
+  std::vector<Vec3f> lb, fb;
+  lsao_obscurance(f, l, {}, nullptr, &lb);
+  FarfieldOptions o;
+  o.directions = 16;
+  o.rho = rho;
+  farfield_obscurance(f, normals, o, {}, nullptr, &fb);
+  double lsum = 0, fsum = 0, nsum = 0;
+  int count = 0;
+  for (int j = 16; j < 80; ++j)
+    for (int i = 16; i < 80; ++i) {
+      const std::size_t t = f.index(i, j);
+      lsum += angle_deg(lb[t].d(), hb[t].d());
+      fsum += angle_deg(fb[t].d(), hb[t].d());
+      nsum += angle_deg(normals[t].d(), hb[t].d());
+      ++count;
+    }
+  std::printf("mean angle to hbao's bent normal: lsao %.2f deg, farfield %.2f deg, the normal %.2f deg\n",
+              lsum / count, fsum / count, nsum / count);
+  EXPECT_GT(nsum / count, 3.0);                 // the bent normals do bend
+  EXPECT_LT(fsum / count, 0.2 * nsum / count);  // farfield: the same slabs within R (near field 12 texels)
+  EXPECT_LT(lsum / count, 0.5 * nsum / count);  // lsao: one occluder per direction
 }
 
 Scene scene_of(HeightField f) {

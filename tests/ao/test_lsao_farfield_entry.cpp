@@ -47,7 +47,8 @@ TEST(LsaoFarfieldSchemas, InvalidEntries) {
   for (const Case& c : {
            Case{R"({"method": "lsao", "tangent": 0.5})", "/bake/0/tangent"},
            Case{R"({"method": "lsao", "tangent": "normal"})", "/bake/0/tangent"},
-           Case{R"({"method": "lsao", "layers": ["bent_normal"]})", "/bake/0/layers/0"},
+           Case{R"({"method": "lsao", "layers": ["ao"]})", "/bake/0/layers/0"},
+           Case{R"({"method": "farfield", "layers": ["bent"]})", "/bake/0/layers/0"},
            Case{R"({"method": "lsao", "radus": 3})", "/bake/0"},
            Case{R"({"method": "farfield", "weighting": "uniform"})", "/bake/0/weighting"},
            Case{R"({"method": "farfield", "interval": 0})", "/bake/0/interval"},
@@ -88,7 +89,22 @@ TEST(LsaoFarfieldEntry, LayersSizesAndErrors) {
       EXPECT_GE(v, 0.0f);
       EXPECT_LE(v, 1.0f);
     }
-    EXPECT_EQ(bake(sc, params, RunControl{}).find("obscurance")->data, o->data);  // deterministic
+    const Layer* b = a.find("bent_normal");  // a default layer: unit vectors in the upper hemisphere
+    ASSERT_NE(b, nullptr);
+    ASSERT_EQ(b->data.size(), 3u * 48u * 40u);
+    for (std::size_t t = 0; t < 48u * 40u; ++t) {
+      const double x = b->data[3 * t], y = b->data[3 * t + 1], z = b->data[3 * t + 2];
+      EXPECT_NEAR(x * x + y * y + z * z, 1.0, 1e-5);
+      EXPECT_GT(z, 0.0);
+    }
+    const LayerSet again = bake(sc, params, RunControl{});  // deterministic
+    EXPECT_EQ(again.find("obscurance")->data, o->data);
+    EXPECT_EQ(again.find("bent_normal")->data, b->data);
+    nlohmann::json only = params;
+    only["layers"] = {"obscurance"};
+    const LayerSet c = bake(sc, only, RunControl{});
+    EXPECT_EQ(c.layers.size(), 1u);
+    EXPECT_EQ(c.find("obscurance")->data, o->data);
     try {
       bake(sc, {{"layers", {"ao"}}}, RunControl{});
       ADD_FAILURE() << "unknown layer accepted";

@@ -12,6 +12,7 @@
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/farfield_slab_table.hpp"
 #include "methods/ao/obscurance_params.hpp"
+#include "methods/ao/slice_integral.hpp"
 
 namespace hfbake {
 namespace {
@@ -134,15 +135,21 @@ struct SectorState {
   double horizon = -kHalfPi;  // elevation of the highest slab so far
   double slope = -INFINITY;   // its tan: the cull test needs no atan2 (x > 0)
   double occluded = 0;
+  SliceVec dir;  // bent normal: minus the rho- and cosine-weighted direction integral of the occluded bands
 };
 
+// frame: the slice frame when the bent normal is wanted, else null.
 inline void add_slab(const SlabTable& table, SectorState& st, double x, double dz, double nt, double nz,
-                     double tangent) {
+                     double tangent, const Falloff& rho, const SliceFrame* frame) {
   if (dz <= st.slope * x) return;  // not above the horizon so far: hidden
   const double e = std::atan2(dz, x);
   st.slope = dz / x;
   if (e <= st.horizon) return;
   st.occluded += table.band(st.horizon, e, x, nt, nz, tangent);
+  if (frame) {
+    const SliceVec b = band_direction(rho, *frame, st.horizon, e, x);
+    st.dir.h -= b.h, st.dir.v -= b.v;
+  }
   st.horizon = e;
 }
 
@@ -151,9 +158,11 @@ inline void add_slab(const SlabTable& table, SectorState& st, double x, double d
 namespace {
 
 // The occluded measure sum_k sum_slabs band per texel; only the texels in `only` when it is not null.
+// bent (optional): per texel, the sum over directions of the cosine-weighted open direction (unnormalised).
 std::vector<double> farfield_occluded(const HeightField& field, const std::vector<Vec3f>& normals,
                                       const FarfieldOptions& options, const RunControl& rc,
-                                      const std::vector<std::size_t>* only, FarfieldStats* stats) {
+                                      const std::vector<std::size_t>* only, FarfieldStats* stats,
+                                      std::vector<Vec3>* bent = nullptr) {
   FarfieldOptions o = options;
   o.directions = std::max(o.directions, 1);
   o.interval = std::max(o.interval, 1);
@@ -162,6 +171,7 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
   const int W = field.width, H = field.height, K = o.directions;
   const double ts = field.texel_size;
   std::vector<double> occluded(field.texel_count(), 0.0);
+  if (bent) bent->assign(field.texel_count(), Vec3{0, 0, 0});
   const SlabTable table(o.rho);
   const double support = o.rho.support(1e-5) / ts;  // texels beyond which rho < 1e-5
   std::atomic<std::uint64_t> near_count{0}, far_count{0};
@@ -185,6 +195,8 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
               const Vec3f n = normals[idx];
               const double nt = n.x * d.dx + n.y * d.dy, nz = n.z;
               const double tangent = std::atan2(-nt, nz);
+              const SliceFrame frame_value = slice_frame(nt, nz);
+              const SliceFrame* frame = bent ? &frame_value : nullptr;
               const double zr = field.z[idx];
               const double sr = i * d.dx + j * d.dy - d.s0;  // receiver along / across, texels from sample 0
               const double tr = -i * d.dy + j * d.dx - d.t0;
@@ -201,11 +213,12 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
                   open_end = true;
                   break;
                 }
-                add_slab(table, near, q * ts, field.bilinear(x, y) - zr, nt, nz, tangent);
+                add_slab(table, near, q * ts, field.bilinear(x, y) - zr, nt, nz, tangent, o.rho, frame);
                 ++nn;
               }
               const int halves = o.split ? 2 : 1;
               double sum = 0;
+              SliceVec dir_sum;
               for (int h = 0; h < halves && !open_end; ++h) {
                 SectorState st = near;
                 for (int m = m_far; m < d.samples;) {
@@ -247,11 +260,18 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
                         (nl * u0 * u0 + u0 * (nl - 1) * nl + (nl - 1) * nl * (2 * nl - 1) / 6) / nl;
                     x = std::sqrt(x * x + mean_sq * ts * ts);
                   }
-                  add_slab(table, st, x, m0 - zr, nt, nz, tangent);
+                  add_slab(table, st, x, m0 - zr, nt, nz, tangent, o.rho, frame);
                 }
                 sum += st.occluded;
+                dir_sum.h += st.dir.h, dir_sum.v += st.dir.v;
               }
               occluded[idx] += open_end ? near.occluded : sum / halves;
+              if (bent) {
+                const SliceVec open = open_direction(frame_value, tangent, kHalfPi);
+                const SliceVec occ = open_end ? near.dir : SliceVec{dir_sum.h / halves, dir_sum.v / halves};
+                const double h = open.h + occ.h, v = open.v + occ.v;
+                (*bent)[idx] += Vec3{h * d.dx, h * d.dy, v};
+              }
             }
           }
           near_count += nn;
@@ -272,10 +292,17 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
 
 std::vector<float> farfield_obscurance(const HeightField& field, const std::vector<Vec3f>& normals,
                                        const FarfieldOptions& options, const RunControl& rc,
-                                       FarfieldStats* stats) {
-  const std::vector<double> occluded = farfield_occluded(field, normals, options, rc, nullptr, stats);
+                                       FarfieldStats* stats, std::vector<Vec3f>* bent_normal) {
+  std::vector<Vec3> bent;
+  const std::vector<double> occluded =
+      farfield_occluded(field, normals, options, rc, nullptr, stats, bent_normal ? &bent : nullptr);
   std::vector<float> out(field.texel_count());
   for (std::size_t t = 0; t < out.size(); ++t) out[t] = float(std::clamp(1.0 - occluded[t], 0.0, 1.0));
+  if (bent_normal) {
+    bent_normal->resize(field.texel_count());
+    for (std::size_t t = 0; t < bent.size(); ++t)
+      (*bent_normal)[t] = length(bent[t]) > 1e-12 ? Vec3f::from(normalize(bent[t])) : normals[t];
+  }
   return out;
 }
 
@@ -299,12 +326,22 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
   o.sector_average = params.value("sector_average", true);
   o.split = params.value("split", true);
   o.growth = number_param(params, "growth", 1.0, 0.125, 8.0);
-  const auto layers = select_layers(params, {"obscurance"}, {"obscurance"});
+  const auto layers = select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
   LayerSet out;
   out.width = scene.field.width;
   out.height = scene.field.height;
-  const std::vector<float> light = farfield_obscurance(scene.field, scene.normals, o, rc);
-  if (wants(layers, "obscurance")) out.add("obscurance", mono_channels()).data = light;
+  std::vector<Vec3f> bent;
+  const std::vector<float> light = farfield_obscurance(scene.field, scene.normals, o, rc, nullptr,
+                                                       wants(layers, "bent_normal") ? &bent : nullptr);
+  for (const std::string& name : layers) {
+    if (name == "bent_normal") {
+      Layer& l = out.add(name, xyz_channels());
+      for (std::size_t t = 0; t < bent.size(); ++t)
+        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
+    } else {
+      out.add(name, mono_channels()).data = light;
+    }
+  }
   return out;
 }
 

@@ -45,9 +45,12 @@ struct FarfieldStats {
 };
 
 // The obscurance (light-like, in [0, 1]) per texel, row-major like field.z. normals: compute_normals(field).
+// bent_normal (optional): the bent normal per texel, the normalised cosine-weighted mean open direction of
+// the same slabs (each band's directions weighted by 1 - rho, as hbao's), the normal where nothing is open.
 std::vector<float> farfield_obscurance(const HeightField& field, const std::vector<Vec3f>& normals,
                                        const FarfieldOptions& options, const RunControl& rc,
-                                       FarfieldStats* stats = nullptr);
+                                       FarfieldStats* stats = nullptr,
+                                       std::vector<Vec3f>* bent_normal = nullptr);
 
 // The occluded measure (1 - obscurance, before clamping) at the given texels only (row-major indices):
 // for tests and measurements that need a few receivers of a large field.

@@ -6,6 +6,7 @@
 
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/obscurance_params.hpp"
+#include "methods/ao/slice_integral.hpp"
 #include "sweep/sweep_lines.hpp"
 
 namespace hfbake {
@@ -16,6 +17,10 @@ namespace {
 // at the sample's along-distance. The gather then takes for each texel the channel that is that texel, so
 // a receiver is never an interpolated height (on rough terrain that is worth about 1 % of AO against a
 // march from the texel centres); axis and diagonal directions sample texel centres exactly.
+// With the bent normal (hull estimator, texel receivers), four more channels: per texel (c = 0, 1) the slice
+// components (along the direction, up) of the cosine-weighted open direction about the texel's normal, with
+// the band from its tangent plane up to the largest occluder weighted by 1 - rho(|h|), as P3's Eq. 1 counts
+// it.
 struct LsaoWorker {
   const LsaoOptions* options = nullptr;
   const HeightField* field = nullptr;
@@ -41,8 +46,11 @@ struct LsaoWorker {
     return v;
   }
 
+  bool bent = false;
+
   void operator()(const SweepLine& line, float* out) {
     const OcclusionFunction& f = options->occlusion;
+    const int C = bent ? 6 : 2;
     hull.clear();
     hull.reserve(std::size_t(line.count));
     terrain.clear();
@@ -51,7 +59,7 @@ struct LsaoWorker {
     for (int n = 0; n < line.count; ++n) {
       const SlicePoint p{line.s(n), double(line.z[n])};
       if (n >= line.first_receiver) {
-        float* o = out + 2 * (n - line.first_receiver);
+        float* o = out + C * (n - line.first_receiver);
         if (options->texel_receivers) {
           const TexelPair taps = line.height_taps(n, *field);
           const double v = line.dir->v(line.line, n), frac = v - std::floor(v);
@@ -62,7 +70,18 @@ struct LsaoWorker {
             const Vec3f nv = (*normals)[ti];
             const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
             const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
-            o[c] = float(use_brute ? brute(t) : hull.query(t, f));
+            SlicePoint occ{-1, 0};
+            o[c] = float(use_brute ? brute(t) : hull.query(t, f, bent ? &occ : nullptr));
+            if (bent) {
+              const SliceFrame frame = slice_frame(nv.x * line.dir->dx + nv.y * line.dir->dy, nv.z);
+              SliceVec v = open_direction(frame, frame.tangent, 0.5 * kPi);
+              if (occ.s > 0) {
+                const double r = f.rho(std::hypot(occ.s, occ.z));
+                const SliceVec b = open_direction(frame, frame.tangent, std::atan2(occ.z, occ.s));
+                v.h -= r * b.h, v.v -= r * b.v;
+              }
+              o[2 + 2 * c] = float(v.h), o[3 + 2 * c] = float(v.v);
+            }
           }
           if (!use_brute) hull.receive(p, f);  // the sample's own receive maintains the hull (P3 Alg. 1)
         } else {
@@ -86,10 +105,12 @@ struct LsaoWorker {
 }  // namespace
 
 std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOptions& options,
-                                        const RunControl& rc, LsaoStats* stats) {
+                                        const RunControl& rc, LsaoStats* stats, std::vector<Vec3>* bent) {
+  const bool want_bent = bent && options.texel_receivers && options.estimator == LsaoEstimator::hull;
+  if (bent) bent->assign(field.texel_count(), Vec3{0, 0, 0});
   SweepSpec spec;
   spec.directions = std::max(options.directions, 1);
-  spec.channels = 2;
+  spec.channels = want_bent ? 6 : 2;
   spec.wrap_periods = std::max(options.wrap_periods, 1);
   std::vector<SweepDirection> dirs(std::size_t(spec.directions));
   for (int k = 0; k < spec.directions; ++k) dirs[std::size_t(k)] = plan_direction(field, spec, k);
@@ -105,6 +126,7 @@ std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOpti
         w.normals = &normals;
         w.samples = &samples;
         w.iterations = &iterations;
+        w.bent = want_bent;
         return w;
       },
       [&](int k, int i, int j, const TexelTaps& t) {
@@ -113,16 +135,19 @@ std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOpti
         const SweepDirection& d = dirs[std::size_t(k)];
         const double g = double(d.x_major ? j : i) - double(d.x_major ? i : j) * d.slope;
         const double f = g - std::floor(g);
-        double v;
-        if (f == 0)
-          v = t.lo[0];
-        else if (t.lo == t.hi)
-          v = t.hi[0];
-        else if (t.w_hi == 0)
-          v = t.lo[1];
-        else
-          v = (1 - f) * t.lo[1] + f * t.hi[0];
-        sum[field.index(i, j)] += v;
+        // ch0: the channel of the sample's lower texel, ch1: of its upper texel.
+        auto blend = [&](int ch0, int ch1) -> double {
+          if (f == 0) return t.lo[ch0];
+          if (t.lo == t.hi) return t.hi[ch0];
+          if (t.w_hi == 0) return t.lo[ch1];
+          return (1 - f) * t.lo[ch1] + f * t.hi[ch0];
+        };
+        const std::size_t idx = field.index(i, j);
+        sum[idx] += blend(0, 1);
+        if (want_bent) {
+          const double h = blend(2, 4), v = blend(3, 5);
+          (*bent)[idx] += Vec3{h * d.dx, h * d.dy, v};
+        }
       });
   const double inv = 1.0 / spec.directions;
   for (double& v : sum) v *= inv;
@@ -134,10 +159,18 @@ std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOpti
 }
 
 std::vector<float> lsao_obscurance(const HeightField& field, const LsaoOptions& options, const RunControl& rc,
-                                   LsaoStats* stats) {
-  const std::vector<double> mean = lsao_mean_occlusion(field, options, rc, stats);
+                                   LsaoStats* stats, std::vector<Vec3f>* bent_normal) {
+  std::vector<Vec3> bent;
+  const std::vector<double> mean =
+      lsao_mean_occlusion(field, options, rc, stats, bent_normal ? &bent : nullptr);
   std::vector<float> out(mean.size());
   for (std::size_t t = 0; t < mean.size(); ++t) out[t] = float(1.0 - std::clamp(mean[t], 0.0, 1.0));
+  if (bent_normal) {
+    const std::vector<Vec3f> normals = compute_normals(field);
+    bent_normal->resize(field.texel_count());
+    for (std::size_t t = 0; t < bent.size(); ++t)
+      (*bent_normal)[t] = length(bent[t]) > 1e-12 ? Vec3f::from(normalize(bent[t])) : normals[t];
+  }
   return out;
 }
 
@@ -148,12 +181,22 @@ LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunCo
                                                                               : ObscuranceWeighting::cosine;
   o.occlusion.sin_t = number_param(params, "tangent", -0.85, -1.0, 0.0);
   o.directions = int_param(params, "directions", 16, 1, 4096);
-  const auto layers = select_layers(params, {"obscurance"}, {"obscurance"});
+  const auto layers = select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
   LayerSet out;
   out.width = scene.field.width;
   out.height = scene.field.height;
-  std::vector<float> light = lsao_obscurance(scene.field, o, rc);
-  if (wants(layers, "obscurance")) out.add("obscurance", mono_channels()).data = std::move(light);
+  std::vector<Vec3f> bent;
+  std::vector<float> light =
+      lsao_obscurance(scene.field, o, rc, nullptr, wants(layers, "bent_normal") ? &bent : nullptr);
+  for (const std::string& name : layers) {
+    if (name == "bent_normal") {
+      Layer& l = out.add(name, xyz_channels());
+      for (std::size_t t = 0; t < bent.size(); ++t)
+        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
+    } else {
+      out.add(name, mono_channels()).data = light;
+    }
+  }
   return out;
 }
 

@@ -43,10 +43,15 @@ struct LsaoStats {
 };
 
 // Mean over the K directions of the per-direction value (P3 Eq. 1, before clamping), per texel.
+// bent (optional; hull estimator with texel receivers, else zeros): per texel the sum over directions of the
+// cosine-weighted open direction about the texel's normal, each direction's band from the tangent plane up
+// to its largest occluder weighted by 1 - rho(|h|) (the occlusion P3's Eq. 1 counts), unnormalised.
 std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOptions& options,
-                                        const RunControl& rc, LsaoStats* stats = nullptr);
-// The obscurance layer: 1 - clamp(mean occlusion, 0, 1).
+                                        const RunControl& rc, LsaoStats* stats = nullptr,
+                                        std::vector<Vec3>* bent = nullptr);
+// The obscurance layer: 1 - clamp(mean occlusion, 0, 1); bent_normal (optional): the normalised bent
+// (the texel's normal where nothing is open).
 std::vector<float> lsao_obscurance(const HeightField& field, const LsaoOptions& options, const RunControl& rc,
-                                   LsaoStats* stats = nullptr);
+                                   LsaoStats* stats = nullptr, std::vector<Vec3f>* bent_normal = nullptr);
 
 }  // namespace hfbake

@@ -87,7 +87,9 @@ class ObscuranceHull {
   }
   // The value receive() would return for p, without popping (for receivers beside the line, e.g. the
   // texel centres a sample between two texels feeds; P3's pop rule walked on a copy of the stack top).
-  double query(SlicePoint p, const OcclusionFunction& f) const {
+  // occluder (optional): the vector receiver -> the chosen occluder (s: distance back along the line, z:
+  // height above the receiver); left untouched when the stack is empty (no occluder).
+  double query(SlicePoint p, const OcclusionFunction& f, SlicePoint* occluder = nullptr) const {
     std::size_t n = stack_.size();
     if (n == 0) return f.none();
     double h1s = p.s - stack_[n - 1].s, h1z = stack_[n - 1].z - p.z;
@@ -100,6 +102,7 @@ class ObscuranceHull {
       --n;
       h1s = h2s, h1z = h2z, o1 = o2;
     }
+    if (occluder) *occluder = {h1s, h1z};
     return o1;
   }
   void push(SlicePoint p) { stack_.push_back(p); }
