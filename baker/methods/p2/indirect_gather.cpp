@@ -6,52 +6,54 @@
 namespace hfbake {
 
 Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std::span<const int> horizons,
-                     double inv_step, const WedgeWeights& w, double* weight, const double* inv_dist) {
-  double acc_r = 0, acc_g = 0, acc_b = 0;
-  auto add = [&](Rgb l, double weight) {
-    acc_r += l.r * weight;
-    acc_g += l.g * weight;
-    acc_b += l.b * weight;
-  };
+                     double inv_step, const WedgeWeights& w, double* weight, const double* inv_dist,
+                     GatherScratch* scratch) {
+  GatherScratch local;
+  GatherScratch& sc = scratch ? *scratch : local;
   const int m = int(horizons.size());
   const double t_n = w.t_n;
-  const double F_n = w.F(t_n);
   const double hr = h[r];
-  if (weight) {
-    *weight = 0;
-    if (m > 0) {
-      const double top = visibility_slope(h, horizons[0], r) * inv_step;
-      if (top > t_n) *weight = (w.F(top) - F_n) / kPi;
-    }
+  if (weight) *weight = 0;
+  if (m == 0) return {};
+  // The visible stretches tile the elevations from the global horizon down to the tangent plane: each
+  // stretch ends (its last, partly visible segment) at the line of sight to the next horizon, which is
+  // where the next stretch starts (the same slope, computed the same way). Collect the boundaries
+  // t_0 > t_1 > ... > t_M >= t_n and the radiance of each interval; M <= r + 1 intervals.
+  sc.reserve(std::size_t(r) + 3);
+  float* T = sc.t.data();
+  Rgb* LI = sc.L.data();
+  int M = 0;  // intervals so far; T[M] is the current upper boundary
+  {
+    const double t0 = visibility_slope(h, horizons[0], r) * inv_step;
+    if (!(t0 > t_n)) return {};  // everything lies below the tangent plane
+    T[0] = float(t0);
   }
   for (int k = 0; k < m; ++k) {
     int j = horizons[k];
-    const double sj = (h[j] - hr) / double(r - j);
-    const double tj = sj * inv_step;
-    if (!(tj > t_n)) break;  // this stretch and all nearer ones lie below the tangent plane
-    double Fj = w.F(tj);
     const bool last = k + 1 == m;
     const int end = last ? terrain_end : horizons[k + 1];
     const double limit = last ? -std::numeric_limits<double>::infinity() : visibility_slope(h, end, r);
     // Fully visible segments j -> j+1. (The test s_next > limit by multiplication: the same as the
     // division up to rounding at exact ties, where the segment's weight is zero anyway.)
+    bool done = false;
     while (j + 1 < end) {
       const int d = r - j - 1;
       const double dz = h[j + 1] - hr;
       if (!(dz > limit * double(d))) break;
       const double t_next = dz * (inv_dist ? inv_dist[d] : inv_step / double(d));
+      LI[M] = 0.5f * (L[j] + L[j + 1]);
       if (!(t_next > t_n)) {  // the segment crosses the tangent plane: nothing below it counts
-        add(0.5f * (L[j] + L[j + 1]), Fj - F_n);
-        return {float(acc_r / kPi), float(acc_g / kPi), float(acc_b / kPi)};
+        T[++M] = float(t_n);
+        done = true;
+        break;
       }
-      const double F_next = w.F(t_next);
-      add(0.5f * (L[j] + L[j + 1]), Fj - F_next);
-      Fj = F_next;
+      T[++M] = float(t_next);
       ++j;
     }
-    if (last) {
-      // j == terrain_end - 1: below it the ray meets the receiver's own surface.
-      add(L[r], Fj - F_n);
+    if (done) break;
+    if (last) {  // j == terrain_end - 1: below it the ray meets the receiver's own surface
+      LI[M] = L[r];
+      T[++M] = float(t_n);
       break;
     }
     // The segment j -> j+1 is visible down to the next horizon's line of sight (slope `limit`):
@@ -60,14 +62,25 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
     const double den = dh + limit;
     double u = den < 0 ? (limit * double(r - j) - (h[j] - hr)) / den : 1.0;
     u = std::clamp(u, 0.0, 1.0);
-    const Rgb Lm = L[j] + (L[j + 1] - L[j]) * float(0.5 * u);
+    LI[M] = L[j] + (L[j + 1] - L[j]) * float(0.5 * u);
     const double t_lim = limit * inv_step;
     if (!(t_lim > t_n)) {
-      add(Lm, Fj - F_n);
+      T[++M] = float(t_n);
       break;
     }
-    add(Lm, Fj - w.F(t_lim));
+    T[++M] = float(t_lim);  // == the next stretch's first slope
   }
+  // Weights: branch-free over the boundaries.
+  float* F = sc.F.data();
+  w.F_many(T, F, M + 1);
+  double acc_r = 0, acc_g = 0, acc_b = 0;
+  for (int i = 0; i < M; ++i) {
+    const double wi = double(F[i]) - double(F[i + 1]);
+    acc_r += LI[i].r * wi;
+    acc_g += LI[i].g * wi;
+    acc_b += LI[i].b * wi;
+  }
+  if (weight) *weight = (double(F[0]) - double(F[M])) / kPi;  // T[M] == t_n
   return {float(acc_r / kPi), float(acc_g / kPi), float(acc_b / kPi)};
 }
 

@@ -54,6 +54,16 @@ struct WedgeWeights {
     const double q = 1 / (1 + t * t);
     return 0.5 * (a_p * (double(p1::fast_atan(float(t))) + t * q) + a_z * t * t * q);
   }
+  // F at n slopes in single precision (a branch-free loop the compiler vectorises; gather_stretches).
+  // Relative error about 1e-7 of the wedge's lobe: far below the method's error, and the intervals
+  // still tile exactly since adjacent ones share their boundary values.
+  void F_many(const float* t, float* out, int n) const {
+    const float hp = float(0.5 * a_p), hz = float(0.5 * a_z);
+    for (int i = 0; i < n; ++i) {
+      const float x = t[i], x2 = x * x, q = 1.0f / (1.0f + x2);
+      out[i] = hp * (p1::fast_atan(x) + x * q) + hz * x2 * q;
+    }
+  }
 };
 
 // (1/pi) * the sum over the visible segments of L_segment * W(segment) for receiver r of a line: its E/pi
@@ -65,9 +75,21 @@ struct WedgeWeights {
 // lobe, (F(global horizon) - F(t_n)) / pi when the horizon is above the tangent plane, else 0.
 // inv_dist (optional): inv_dist[d] = inv_step / d for d >= 1 (a per-line table that saves a division per
 // visible sample).
+// Scratch of gather_stretches (grown on demand; keep one per thread and line to avoid allocation): the
+// visible elevation intervals are collected first (their boundary slopes and radiances, a branchy walk)
+// and their weights evaluated afterwards in a branch-free loop.
+struct GatherScratch {
+  std::vector<float> t;  // interval boundaries (world slopes), descending
+  std::vector<float> F;  // F at the boundaries
+  std::vector<Rgb> L;    // radiance per interval
+  void reserve(std::size_t points) {
+    if (t.size() < points) t.resize(points), F.resize(points), L.resize(points);
+  }
+};
+
 Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std::span<const int> horizons,
                      double inv_step, const WedgeWeights& w, double* weight = nullptr,
-                     const double* inv_dist = nullptr);
+                     const double* inv_dist = nullptr, GatherScratch* scratch = nullptr);
 
 // (F(e) - F(e_t)) / pi for the wedge of direction phi (cos_phi, sin_phi) of K, normal n, horizon elevation e
 // (radians): the part of the cosine lobe between the tangent plane and the horizon, in the form of P1's

@@ -34,6 +34,7 @@ struct LineWorker {
   std::vector<double> inv_dist;  // inv_step / d
   double inv_dist_step = 0;
   std::vector<int> visible, starts;
+  GatherScratch gather_scratch;
   P2SweepStats stats;
   // Each worker adds its counts to the caller's totals when the driver destroys it (integer sums: the
   // totals do not depend on which thread did which line).
@@ -143,13 +144,14 @@ struct LineWorker {
           normalize((*normals)[t.texel[0]].d() * t.weight[0] + (*normals)[t.texel[1]].d() * t.weight[1]);
       const WedgeWeights w = WedgeWeights::make(nrm, line.dir->dx, line.dir->dy, wedge);
       double weight = 0;
-      const Rgb e = gather_stretches(hh, LL, r, terrain_end, starts, inv_step, w, &weight, inv_dist.data());
+      const Rgb e = gather_stretches(hh, LL, r, terrain_end, starts, inv_step, w, &weight, inv_dist.data(),
+                                     &gather_scratch);
       o[0] = e.r;
       o[1] = e.g;
       o[2] = e.b;
       o[3] = float(weight);
       // The global horizon's elevation exactly as P1's HorizonLineWorker computes it.
-      if (!starts.empty()) {
+      if (!spec->p1_sin_horizon && !starts.empty()) {  // (unused when P1's horizons split the lobe)
         const int c = starts.front();
         o[4] = p1::fast_elevation(float(hh[c] - hh[r]), float(r - c) * float(line.step / S));
       }
