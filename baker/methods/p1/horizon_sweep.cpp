@@ -1,0 +1,56 @@
+#include "methods/p1/horizon_sweep.hpp"
+
+namespace hfbake::p1 {
+
+std::vector<NearCrossing> near_field_stencil(double dx, double dy, double radius, double texel_size) {
+  std::vector<NearCrossing> out;
+  auto add = [&](double s) {
+    double x = s * dx, y = s * dy;
+    // Snap coordinates that are integers up to rounding, so the cell below is chosen consistently.
+    if (std::fabs(x - std::round(x)) < 1e-9) x = std::round(x);
+    if (std::fabs(y - std::round(y)) < 1e-9) y = std::round(y);
+    const double fx0 = std::floor(x), fy0 = std::floor(y), fx = x - fx0, fy = y - fy0;
+    const int i = int(fx0), j = int(fy0);
+    // Barycentric weights of the point in its triangle of cell (i, j), as four corner weights.
+    double w[4];  // (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)
+    if (fx + fy <= 1)
+      w[0] = 1 - fx - fy, w[1] = fx, w[2] = fy, w[3] = 0;
+    else
+      w[0] = 0, w[1] = 1 - fy, w[2] = 1 - fx, w[3] = fx + fy - 1;
+    static const int ci[4] = {0, 1, 0, 1}, cj[4] = {0, 0, 1, 1};
+    // A crossing lies on an edge: at most two corners weigh (the rest are zero up to rounding).
+    int first = -1, second = -1;
+    for (int c = 0; c < 4; ++c) {
+      if (w[c] <= 1e-9) continue;
+      if (first < 0 || w[c] > w[first]) {
+        second = first;
+        first = c;
+      } else if (second < 0 || w[c] > w[second]) {
+        second = c;
+      }
+    }
+    if (second < 0) second = first;
+    NearCrossing n;
+    n.ai = i + ci[first], n.aj = j + cj[first], n.bi = i + ci[second], n.bj = j + cj[second];
+    n.w = second == first ? 0.0f : float(w[second] / (w[first] + w[second]));
+    n.x = float(x), n.y = float(y);
+    n.inv_s = float(1.0 / (s * texel_size));
+    out.push_back(n);
+  };
+  auto family = [&](double d) {  // crossings of s * d = integer, 0 < s <= radius
+    if (std::fabs(d) < 1e-12) return;
+    for (int m = 1;; ++m) {
+      const double s = m / std::fabs(d);
+      if (s > radius + 1e-9) break;
+      add(s);
+    }
+  };
+  family(dx);
+  family(dy);
+  family(dx + dy);
+  std::sort(out.begin(), out.end(),
+            [](const NearCrossing& a, const NearCrossing& b) { return a.inv_s > b.inv_s; });
+  return out;
+}
+
+}  // namespace hfbake::p1
