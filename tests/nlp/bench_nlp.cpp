@@ -1,7 +1,10 @@
-// nlp throughput: texels per second for a whole bake (pyramids, visibility, direct, one bounce) on the
-// fractal field, 512^2 and 1024^2, m = 16, 32, 64; counters give the height pyramid's memory.
+// nlp throughput: seconds and texels per second for a whole bake (pyramids, visibility, direct, bounces)
+// on the fractal field under the sky and sun, 512^2 and 1024^2, m = 32, 1-3 bounces, 1 and 2 threads
+// (tbb::global_control), 2x2 subsampling; m = 16, 64 at one bounce. Counters give the height pyramid's
+// memory. Iterations(1) and real time: a bake is seconds long.
 //   bench_nlp [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 
 #include <string>
 
@@ -32,7 +35,8 @@ Scene fractal_scene(int size) {
 
 void BM_Bake(benchmark::State& state) {
   const int size = int(state.range(0)), m = int(state.range(1)), bounces = int(state.range(2)),
-            sub = int(state.range(3));
+            sub = int(state.range(3)), threads = int(state.range(4));
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   Scene s = fractal_scene(size);
   s.bounces = bounces;
   NlpOptions o;
@@ -55,16 +59,20 @@ void BM_Bake(benchmark::State& state) {
 
 }  // namespace
 
+void bake_args(benchmark::internal::Benchmark* b) {
+  for (int size : {512, 1024})
+    for (int threads : {1, 2})
+      for (int bounces : {1, 2, 3}) b->Args({size, 32, bounces, 1, threads});
+  for (int size : {512, 1024}) {
+    b->Args({size, 32, 1, 2, 2});
+    b->Args({size, 16, 1, 1, 2});
+    b->Args({size, 64, 1, 1, 2});
+  }
+}
+
 BENCHMARK(BM_Bake)
-    ->ArgNames({"size", "m", "bounces", "sub"})
-    ->Args({512, 16, 1, 1})
-    ->Args({512, 32, 1, 1})
-    ->Args({512, 64, 1, 1})
-    ->Args({512, 32, 3, 1})
-    ->Args({512, 32, 1, 2})
-    ->Args({1024, 16, 1, 1})
-    ->Args({1024, 32, 1, 1})
-    ->Args({1024, 64, 1, 1})
+    ->ArgNames({"size", "m", "bounces", "sub", "threads"})
+    ->Apply(bake_args)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1);

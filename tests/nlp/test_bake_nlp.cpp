@@ -1,8 +1,11 @@
 // The nlp method end to end on analytic fields: flat, trench, slope; against closed forms.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <vector>
 
 #include "core/error.hpp"
 #include "field/procedural.hpp"
@@ -217,6 +220,34 @@ TEST(NlpMarch, BsplineCurveOfAConstantIsConstant) {
   for (float v : c) EXPECT_NEAR(v, 0.3f, 1e-6);
   EXPECT_NEAR(nlp::fast_atan(1.0f), kPi / 4, 2e-5);
   for (float x = -20; x < 20; x += 0.37f) EXPECT_NEAR(nlp::fast_atan(x), std::atan(x), 2e-5);
+}
+
+// The curve against the uniform cubic B-spline evaluated from its definition (end control points repeated),
+// and bspline_max against the maximum of the whole curve, bit for bit, on random knot angles (plateaus,
+// spikes, ties and short arrays included).
+TEST(NlpMarch, BsplineCurveAndItsMaximum) {
+  std::uint32_t state = 12345;
+  auto rnd = [&] {
+    state = state * 1664525u + 1013904223u;
+    return float(state >> 8) / float(1 << 24);
+  };
+  for (int trial = 0; trial < 4000; ++trial) {
+    const int n = 1 + trial % 45;
+    std::vector<float> w(n), c(2 * n);
+    for (float& v : w) {
+      const float r = rnd();
+      v = trial % 3 == 0 ? std::round(r * 4) * 0.25f : (r - 0.4f) * 3.0f;  // ties, or a spread of angles
+    }
+    ASSERT_EQ(nlp::bspline_curve(w.data(), n, c.data()), 2 * n - 1);
+    auto at = [&](int k) { return double(w[std::clamp(k, 0, n - 1)]); };
+    for (int k = 0; k < n; ++k) {
+      EXPECT_NEAR(c[2 * k], (at(k - 1) + 4 * at(k) + at(k + 1)) / 6, 1e-5);
+      if (k + 1 < n) {
+        EXPECT_NEAR(c[2 * k + 1], (at(k - 1) + 23 * at(k) + 23 * at(k + 1) + at(k + 2)) / 48, 1e-5);
+      }
+    }
+    EXPECT_EQ(nlp::bspline_max(w.data(), n), *std::max_element(c.begin(), c.begin() + 2 * n - 1)) << trial;
+  }
 }
 
 }  // namespace

@@ -176,8 +176,7 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
                                s.dist.data(), s.lev.data());
     if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
     if (light && o.light_horizon_knots) return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
-    const int c = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
-    return *std::max_element(s.curve.begin(), s.curve.begin() + c);
+    return nlp::bspline_max(s.omega.data(), cnt);
   };
 
   // Receivers of V and U: every texel, or (subsample 2) every other texel in x and y, whose V, U and light

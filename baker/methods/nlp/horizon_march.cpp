@@ -64,21 +64,39 @@ int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float 
     if (t_exit < 1e-4f) return 0;
   }
   const float inv_ts = 1 / s.texel_size, fi = float(i), fj = float(j);
+  // Knots 0..inner-1 lie inside the field; knot `inner` (if any) is the last, moved onto the border.
+  int inner = 0;
+  while (inner < s.steps && !(s.dist[inner] >= t_exit)) ++inner;
   const bool fast = !s.repeat && s.width >= 2 && s.height >= 2;
-  int n = 0;
-  for (int k = 0; k < s.steps; ++k) {
-    float d = s.dist[k], inv = s.inv_dist[k];
-    const bool last = d >= t_exit;
-    if (last) d = t_exit, inv = inv_ts / t_exit;
-    const int l = s.level[k];
+  if (fast) {
+    const PyramidLevel* levels = hp.levels.data();
+    for (int k = 0; k < inner; ++k) {
+      const int l = s.level[k];
+      const float d = s.dist[k];
+      omega[k] = (sample_clamped(levels[l], fi + d * cx, fj + d * cy) - recv[l]) * s.inv_dist[k];
+      dist[k] = d;
+      lev[k] = k;
+    }
+  } else {
+    for (int k = 0; k < inner; ++k) {
+      const int l = s.level[k];
+      const float d = s.dist[k];
+      omega[k] = (sample_level1(hp, hp.levels[l], fi + d * cx, fj + d * cy) - recv[l]) * s.inv_dist[k];
+      dist[k] = d;
+      lev[k] = k;
+    }
+  }
+  int n = inner;
+  if (inner < s.steps) {  // the border knot (clamp only: t_exit is infinite in repeat mode)
+    const int l = s.level[inner];
+    const float d = t_exit, inv = inv_ts / t_exit;
     const PyramidLevel& lv = hp.levels[l];
     const float x = fi + d * cx, y = fj + d * cy;
-    const float h = fast && lv.w >= 2 && lv.h >= 2 ? sample_clamped(lv, x, y) : sample_level1(hp, lv, x, y);
-    omega[n] = (h - recv[l]) * inv;  // slope; angles below
+    const float h = fast ? sample_clamped(lv, x, y) : sample_level1(hp, lv, x, y);
+    omega[n] = (h - recv[l]) * inv;
     dist[n] = d;
-    lev[n] = k;
+    lev[n] = inner;
     ++n;
-    if (last) break;
   }
   for (int k = 0; k < n; ++k) omega[k] = fast_atan(omega[k]);
   return n;

@@ -14,6 +14,7 @@
 // casting set (Eq. 17) are the points whose angle exceeds every earlier one, starting from omega_min.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -58,14 +59,54 @@ int march(const MarchSetup& s, const Pyramid& heights, int i, int j, float cx, f
 
 // B-spline curve of the knots at knots and midpoints: out[2k] at knot k, out[2k + 1] between k and k + 1.
 // Returns 2n - 1 (0 when n == 0).
+inline float bspline_knot(const float* w, int n, int k) {
+  const float a = w[k > 0 ? k - 1 : 0], b = w[k], c = w[k + 1 < n ? k + 1 : n - 1];
+  return (a + 4 * b + c) * (1.0f / 6);
+}
+inline float bspline_mid(const float* w, int n, int k) {  // between k and k + 1 (k + 1 < n)
+  const float a = w[k > 0 ? k - 1 : 0], b = w[k], c = w[k + 1], d = w[k + 2 < n ? k + 2 : n - 1];
+  return (a + 23 * b + 23 * c + d) * (1.0f / 48);
+}
 inline int bspline_curve(const float* w, int n, float* out) {
   if (n <= 0) return 0;
-  auto at = [&](int k) { return w[k < 0 ? 0 : (k >= n ? n - 1 : k)]; };
-  for (int k = 0; k < n; ++k) {
-    out[2 * k] = (at(k - 1) + 4 * at(k) + at(k + 1)) * (1.0f / 6);
-    if (k + 1 < n) out[2 * k + 1] = (at(k - 1) + 23 * at(k) + 23 * at(k + 1) + at(k + 2)) * (1.0f / 48);
+  if (n < 4) {
+    for (int k = 0; k < n; ++k) {
+      out[2 * k] = bspline_knot(w, n, k);
+      if (k + 1 < n) out[2 * k + 1] = bspline_mid(w, n, k);
+    }
+    return 2 * n - 1;
   }
+  out[0] = bspline_knot(w, n, 0);
+  out[1] = bspline_mid(w, n, 0);
+  for (int k = 1; k + 2 < n; ++k) {  // interior: no clamping
+    out[2 * k] = (w[k - 1] + 4 * w[k] + w[k + 1]) * (1.0f / 6);
+    out[2 * k + 1] = (w[k - 1] + 23 * w[k] + 23 * w[k + 1] + w[k + 2]) * (1.0f / 48);
+  }
+  out[2 * n - 4] = bspline_knot(w, n, n - 2);
+  out[2 * n - 3] = bspline_mid(w, n, n - 2);
+  out[2 * n - 2] = bspline_knot(w, n, n - 1);
   return 2 * n - 1;
+}
+
+// The maximum of bspline_curve(w, n) (n >= 1), bit for bit, evaluating only the curve points near the
+// largest knots: every curve point is a convex combination of at most 4 consecutive knots, so (up to a few
+// ulps of rounding, covered by the margin) it cannot exceed the largest of them; points whose knots all lie
+// below the curve's value at the largest knot, minus the margin, cannot be the maximum.
+inline float bspline_max(const float* w, int n) {
+  int km = 0;
+  for (int k = 1; k < n; ++k)
+    if (w[k] > w[km]) km = k;
+  float best = bspline_knot(w, n, km);
+  const float thr = best - 4e-6f;
+  for (int k = 0; k < n; ++k) {
+    if (!(w[k] >= thr)) continue;
+    // Curve points whose support contains knot k: knots k-1..k+1, midpoints k-2..k+1.
+    for (int q = k - 1; q <= k + 1; ++q)
+      if (q >= 0 && q < n) best = std::max(best, bspline_knot(w, n, q));
+    for (int q = k - 2; q <= k + 1; ++q)
+      if (q >= 0 && q + 1 < n) best = std::max(best, bspline_mid(w, n, q));
+  }
+  return best;
 }
 
 // omega_min along azimuth (cx, cy) for normal n: the elevation of the tangent plane in that vertical plane,
