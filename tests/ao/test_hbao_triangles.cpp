@@ -13,6 +13,7 @@
 
 #include "ao_scenes.hpp"
 #include "field/procedural.hpp"
+#include "methods/ao/farfield.hpp"
 #include "methods/ao/hbao.hpp"
 
 namespace hfbake {
@@ -197,6 +198,28 @@ TEST(HbaoTriangles, PlanesAreOpenAndTheStepOptionMoves) {
       coarse += hbao_texel(c.field, n, i, j, bil).occluded;
     }
   EXPECT_LT(coarse, exact);
+}
+
+// farfield's near field on the triangles: with R = 8 inside the near field (1.5 B0 = 12 texels) it is the
+// same exact slice integral as hbao's.
+TEST(HbaoTriangles, FarfieldNearFieldIsTheSameIntegral) {
+  const Case c = fractal_case();
+  Falloff rho;
+  rho.kind = FalloffKind::step;
+  rho.radius = 8;
+  FarfieldOptions o;
+  o.directions = 16;
+  o.rho = rho;
+  o.triangles = true;
+  std::vector<std::size_t> texels;
+  for (int j = 10; j < 30; j += 4)
+    for (int i = 10; i < 30; i += 4) texels.push_back(c.field.index(i, j));
+  const std::vector<double> ff = farfield_occlusion_at(c.field, c.normals, o, texels);
+  const HbaoSettings s = triangles(16, rho, 8);
+  for (std::size_t t = 0; t < texels.size(); ++t) {
+    const int i = int(texels[t] % 40), j = int(texels[t] / 40);
+    EXPECT_NEAR(ff[t], hbao_texel(c.field, c.normals[texels[t]].d(), i, j, s).occluded, 1e-9);
+  }
 }
 
 }  // namespace

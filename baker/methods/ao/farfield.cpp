@@ -13,6 +13,7 @@
 #include "methods/ao/farfield_slab_table.hpp"
 #include "methods/ao/obscurance_params.hpp"
 #include "methods/ao/slice_integral.hpp"
+#include "methods/ao/triangle_profile.hpp"
 
 namespace hfbake {
 namespace {
@@ -207,14 +208,41 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
               const double near_end = std::min({sr + o.near_field, double(d.samples), sr + support + 1});
               const int m_far = int(std::ceil(near_end / d.b0)) * d.b0;
               bool open_end = false;  // clamp: the ray left the field
-              for (int q = 1; sr + q < m_far; ++q) {
-                const double x = i + q * d.dx, y = j + q * d.dy;
-                if (field.wrap == Wrap::clamp && !inside(field, x, y)) {
-                  open_end = true;
-                  break;
+              if (o.triangles) {
+                // Every vertex of the triangulated surface's profile, each band hit on its segment.
+                const double want = m_far - sr - 1e-9, t_end = profile_end(field, i, j, d.dx, d.dy, want);
+                open_end = t_end < want;
+                SliceVec prev{0, 0};
+                if (t_end > 1e-9)
+                  triangle_profile(field, i, j, d.dx, d.dy, t_end, [&](double t, double z) {
+                    const SliceVec p{t * ts, z - zr};
+                    ++nn;
+                    if (p.v > near.slope * p.h) {
+                      const double e = std::atan2(p.v, p.h);
+                      near.slope = p.v / p.h;
+                      if (e > near.horizon) {
+                        near.occluded += segment_band_occlusion(o.rho, Weighting::cosine, frame_value,
+                                                                near.horizon, e, prev, p);
+                        if (frame) {
+                          const SliceVec b =
+                              segment_band_direction(o.rho, frame_value, near.horizon, e, prev, p);
+                          near.dir.h -= b.h, near.dir.v -= b.v;
+                        }
+                        near.horizon = e;
+                      }
+                    }
+                    prev = p;
+                  });
+              } else {
+                for (int q = 1; sr + q < m_far; ++q) {
+                  const double x = i + q * d.dx, y = j + q * d.dy;
+                  if (field.wrap == Wrap::clamp && !inside(field, x, y)) {
+                    open_end = true;
+                    break;
+                  }
+                  add_slab(table, near, q * ts, field.bilinear(x, y) - zr, nt, nz, tangent, o.rho, frame);
+                  ++nn;
                 }
-                add_slab(table, near, q * ts, field.bilinear(x, y) - zr, nt, nz, tangent, o.rho, frame);
-                ++nn;
               }
               const int halves = o.split ? 2 : 1;
               double sum = 0;
@@ -326,6 +354,12 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
   o.sector_average = params.value("sector_average", true);
   o.split = params.value("split", true);
   o.growth = number_param(params, "growth", 1.0, 0.125, 8.0);
+  if (params.contains("surface")) {
+    const auto& v = params.at("surface");
+    if (v != "bilinear" && v != "triangles")
+      throw InputError("", "surface", "must be \"bilinear\" or \"triangles\"");
+    o.triangles = v == "triangles";
+  }
   const auto layers = select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
   LayerSet out;
   out.width = scene.field.width;

@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/slice_integral.hpp"
+#include "methods/ao/triangle_profile.hpp"
 
 namespace hfbake {
 
@@ -29,58 +30,6 @@ double default_reach(const HeightField& field, const Falloff& f) {
   const double support = f.support(1e-4);
   return std::isfinite(support) ? support : whole;
 }
-
-namespace {
-
-// The profile of the triangulated surface (two triangles per quad, split along (i+1, j)-(i, j+1)) along the
-// ray from texel (i, j) towards (dx, dy) (unit, texel units): visits every column, row and diagonal crossing
-// with t in (0, t_end] in increasing t (ties in any order), then the point at t_end, as visit(t, height).
-// Heights are linear along the triangle edge each crossing lies on.
-template <class Visit>
-void triangle_profile(const HeightField& f, int i, int j, double dx, double dy, double t_end, Visit&& visit) {
-  struct Progression {
-    double inv = 0;  // t between crossings (infinite: never)
-    int k = 1;       // next crossing number
-    double next() const { return k * inv; }
-  };
-  const double ds = dx + dy;
-  Progression col{std::abs(dx) > 1e-12 ? 1 / std::abs(dx) : INFINITY};
-  Progression row{std::abs(dy) > 1e-12 ? 1 / std::abs(dy) : INFINITY};
-  Progression dia{std::abs(ds) > 1e-12 ? 1 / std::abs(ds) : INFINITY};
-  const int sx = dx > 0 ? 1 : -1, sy = dy > 0 ? 1 : -1, sd = ds > 0 ? 1 : -1;
-  auto lerp = [](double a, double b, double w) { return a + (b - a) * w; };
-  for (;;) {
-    const double tc = col.next(), tr = row.next(), td = dia.next();
-    const double t = std::min({tc, tr, td});
-    if (!(t < t_end - 1e-9)) break;
-    if (t == tc) {  // x = i + sx k: on the edge between (c, floor y) and (c, floor y + 1)
-      const int c = i + sx * col.k++;
-      const double y = j + t * dy, fy = std::floor(y);
-      const int jj = int(fy);
-      visit(t, lerp(f.at(c, jj), f.at(c, jj + 1), y - fy));
-    } else if (t == tr) {  // y = j + sy k
-      const int r = j + sy * row.k++;
-      const double x = i + t * dx, fx = std::floor(x);
-      const int ii = int(fx);
-      visit(t, lerp(f.at(ii, r), f.at(ii + 1, r), x - fx));
-    } else {  // x + y = i + j + sd k: on the edge from (s - jj, jj) to (s - jj - 1, jj + 1)
-      const int sum = i + j + sd * dia.k++;
-      const double y = j + t * dy, fy = std::floor(y);
-      const int jj = int(fy);
-      visit(t, lerp(f.at(sum - jj, jj), f.at(sum - jj - 1, jj + 1), y - fy));
-    }
-  }
-  // The end of the reach, inside its triangle.
-  const double x = i + t_end * dx, y = j + t_end * dy;
-  const double fx = std::floor(x), fy = std::floor(y);
-  const int ii = int(fx), jj = int(fy);
-  const double u = x - fx, v = y - fy;
-  const double z00 = f.at(ii, jj), z10 = f.at(ii + 1, jj), z01 = f.at(ii, jj + 1), z11 = f.at(ii + 1, jj + 1);
-  visit(t_end, u + v <= 1 ? z00 + u * (z10 - z00) + v * (z01 - z00)
-                          : z11 + (1 - u) * (z01 - z11) + (1 - v) * (z10 - z11));
-}
-
-}  // namespace
 
 HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s) {
   const double z0 = field.z[field.index(i, j)];
@@ -135,14 +84,7 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
       prev = {x, dz};
     };
     if (s.surface == MarchSurface::triangles) {
-      // Clamp fields end at their border.
-      double t_end = s.reach / ts;
-      if (clamp) {
-        if (d.dx > 1e-12) t_end = std::min(t_end, (xmax - i) / d.dx);
-        if (d.dx < -1e-12) t_end = std::min(t_end, -i / d.dx);
-        if (d.dy > 1e-12) t_end = std::min(t_end, (ymax - j) / d.dy);
-        if (d.dy < -1e-12) t_end = std::min(t_end, -j / d.dy);
-      }
+      const double t_end = profile_end(field, i, j, d.dx, d.dy, s.reach / ts);  // clamp: the border
       if (t_end > 1e-9)
         triangle_profile(field, i, j, d.dx, d.dy, t_end, [&](double t, double z) { sample(t * ts, z - z0); });
     } else {
