@@ -75,6 +75,25 @@ TEST(ClosedFormTable, EveryMethod) {
   check(
       {"hbao uni K16", "tilted plane (0.3, -0.2), none", 0, hbao(tilted, tilted_n, 16, 16, none, uni), 1e-6});
 
+  // hbao on the reference's triangulated surface (every profile vertex, segment bands).
+  auto hbao_tri = [&](const HeightField& f, Vec3 n, int i, int j, Falloff fo) {
+    HbaoSettings s;
+    s.falloff = fo, s.directions = uniform_directions(16), s.reach = 1e6;
+    s.surface = MarchSurface::triangles, s.estimator = HorizonEstimator::segment;
+    return hbao_texel(f, n, i, j, s).occluded;
+  };
+  check({"hbao triangles K16", "pit rw=D=32 none (sin^2 e)", 0.5, hbao_tri(pit, up, 40, 40, none), 0.01});
+  check({"hbao triangles K16", "pit step R=40", test::pit_occlusion(32, 32, rho(step40)),
+         hbao_tri(pit, up, 40, 40, step40), 0.02});
+  check({"hbao triangles K16", "pit rational R=32 (r=R^2)", test::pit_occlusion(32, 32, rho(rat32)),
+         hbao_tri(pit, up, 40, 40, rat32), 0.006});
+  check({"hbao triangles K16", "wall a=1 none (discrete K)", test::wall_occlusion(32, 32, 16, true, one),
+         hbao_tri(wall, up, 32, 128, none), 0.004});
+  check({"hbao triangles K16", "wall a=1 rational R=32", test::wall_occlusion(32, 32, 16, true, rho(rat32)),
+         hbao_tri(wall, up, 32, 128, rat32), 0.003});
+  check({"hbao triangles K16", "tilted plane (0.3, -0.2), none", 0, hbao_tri(tilted, tilted_n, 16, 16, none),
+         1e-6});
+
   // hsao: N_d = 16, N_s = R / 0.5, N_n = 4 (cosine weighting; radius-bounded falloffs).
   auto hsao = [&](const HeightField& f, Vec3 n, int i, int j, Falloff fo) {
     HsaoSettings s;
