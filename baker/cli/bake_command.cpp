@@ -1,6 +1,7 @@
 #include "cli/bake_command.hpp"
 
 #include <tbb/task_group.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -31,6 +32,14 @@ namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// CPU seconds of the whole process (all worker threads): the cost of a method on a shared, loaded machine,
+// where wall time measures the other users too.
+double process_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
 std::size_t available_memory_bytes() {
@@ -84,15 +93,17 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     rc.progress = [&](double f) { progress.update(job.name, entry.stem, f); };
     progress.begin(job.name, entry.stem);
     const auto t0 = std::chrono::steady_clock::now();
+    const double cpu0 = process_cpu_seconds();
     LayerSet layers = run_method(entry, scene, rc);
-    const double seconds = seconds_since(t0);
+    const double seconds = seconds_since(t0), cpu_seconds = process_cpu_seconds() - cpu0;
     if (apply_test_break(entry.method, entry.stem, layers))
       progress.message(job.name + ": " + entry.stem +
                        ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
     progress.end(job.name, entry.stem, seconds);
     add_common_attributes(layers, job, job_hash, entry.method, entry.params, seconds);
     stage.write_layers(entry.stem, layers);
-    outcome.methods[entry.stem] = {{"method", entry.method}, {"seconds", seconds}};
+    outcome.methods[entry.stem] = {
+        {"method", entry.method}, {"seconds", seconds}, {"cpu_seconds", cpu_seconds}};
     if (job.has_reference) report.methods.push_back({entry.stem, entry.method, seconds, std::move(layers)});
   }
 
