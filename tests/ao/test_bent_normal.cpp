@@ -45,6 +45,11 @@ TEST(BentNormal, WallHbaoAndHsao) {
   h.reach = 1e6;
   h.step = 0.5;
   EXPECT_LT(angle_deg(hbao_texel(f, {0, 0, 1}, 32, 128, h).bent_normal, expect), 0.5);
+  HbaoSettings tri = h;  // on the triangulated surface, segment bands (rational falloff: the Gauss path)
+  tri.surface = MarchSurface::triangles, tri.estimator = HorizonEstimator::segment;
+  EXPECT_LT(angle_deg(hbao_texel(f, {0, 0, 1}, 32, 128, tri).bent_normal, expect), 0.5);
+  tri.falloff = {FalloffKind::rational, 1e5};
+  EXPECT_LT(angle_deg(hbao_texel(f, {0, 0, 1}, 32, 128, tri).bent_normal, expect), 0.5);
   HsaoSettings s;
   s.falloff.kind = FalloffKind::step;
   s.falloff.radius = 128;
