@@ -26,54 +26,9 @@
 namespace hfbake {
 namespace {
 
-// Height of the reference's triangulated surface at (x, y) (texel coordinates, inside the field).
-double tri_height(const HeightField& f, double x, double y) {
-  const double fx0 = std::floor(x), fy0 = std::floor(y);
-  const int i = int(fx0), j = int(fy0);
-  const double fx = x - fx0, fy = y - fy0;
-  const double z00 = f.at(i, j), z10 = f.at(i + 1, j), z01 = f.at(i, j + 1), z11 = f.at(i + 1, j + 1);
-  if (fx + fy <= 1) return z00 + fx * (z10 - z00) + fy * (z01 - z00);
-  return z11 + (1 - fx) * (z01 - z11) + (1 - fy) * (z10 - z11);
-}
-
-// Steepest caster seen from the point (x0, y0) on the surface towards (dx, dy) over the crossings of the
-// chosen families (1: columns x = int, 2: rows y = int, 4: diagonals x + y = int) at distance >= smin
-// (texels along the ray), clamp field: *dz above the point, *run horizontal world distance; false: none.
-bool march_from(const HeightField& f, double x0, double y0, double dx, double dy, int families, double smin,
-                double* dz_out, double* run_out, double smax = 1e300) {
-  const double z0 = tri_height(f, x0, y0);
-  double best_num = 0, best_den = 0;  // best slope = num / den
-  bool any = false;
-  auto consider = [&](double s) {
-    const double x = x0 + s * dx, y = y0 + s * dy;
-    if (s > smax || x < -1e-9 || y < -1e-9 || x > f.width - 1 + 1e-9 || y > f.height - 1 + 1e-9) return false;
-    if (s < smin) return true;
-    const double z =
-        tri_height(f, std::clamp(x, 0.0, double(f.width - 1)), std::clamp(y, 0.0, double(f.height - 1)));
-    const double num = z - z0, den = s * f.texel_size;
-    if (!any || num * best_den > best_num * den) best_num = num, best_den = den, any = true;
-    return true;
-  };
-  auto family = [&](double origin, double d) {  // crossings of origin + s * d = integer, s > 0
-    if (std::fabs(d) < 1e-12) return;
-    const double first = d > 0 ? std::floor(origin + 1e-9) + 1 : std::ceil(origin - 1e-9) - 1;
-    for (long m = 0;; ++m) {
-      const double c = first + (d > 0 ? 1.0 : -1.0) * double(m);
-      if (!consider((c - origin) / d)) break;
-    }
-  };
-  if (families & 1) family(x0, dx);
-  if (families & 2) family(y0, dy);
-  if (families & 4) family(x0 + y0, dx + dy);
-  *dz_out = best_num, *run_out = best_den;
-  return any;
-}
-
-// Steepest elevation from texel (i, j) (see march_from).
-double march_tri(const HeightField& f, int i, int j, double dx, double dy, int families) {
-  double dz, run;
-  return march_from(f, i, j, dx, dy, families, 0, &dz, &run) ? std::atan2(dz, run) : truth::kNone;
-}
+using truth::march_from;
+using truth::march_tri;
+using truth::tri_height;
 
 double ao_term(double e, double np, double nz) {
   const double th = std::min(kPi / 2 - e, kPi / 2 + std::atan2(np, nz));
@@ -94,12 +49,18 @@ struct Stats {
 void simulate(const Scene& scene, const std::vector<std::pair<int, int>>& texels, int K) {
   const HeightField& f = scene.field;
   constexpr int V = 13;
-  const char* names[V] = {"current lift (normal G, near weight)",        "own angles",
-                          "seen from texel height, run+off*dmin",        "actual lift, near weight",
-                          "near exact R=2 + far taps seen from texel",   "near exact R=4 + far taps",
-                          "near R=2 + overall tap caster if run>=R",     "near R=2 + far taps (columns only)",
-                          "near R=4 + far taps (columns only)",          "R=2 cols, q-lift (parallel shift)",
-                          "R=2 cols, tangent-plane lift, run unshifted", "R=2 cols, own far angle",
+  const char* names[V] = {"current lift (normal G, near weight)",
+                          "own angles",
+                          "seen from texel height, run+off*dmin",
+                          "actual lift, near weight",
+                          "near exact R=2 + far taps seen from texel",
+                          "near exact R=4 + far taps",
+                          "near R=2 + overall tap caster if run>=R",
+                          "near R=2 + far taps (columns only)",
+                          "near R=4 + far taps (columns only)",
+                          "R=2 cols, q-lift (parallel shift)",
+                          "R=2 cols, tangent-plane lift, run unshifted",
+                          "R=2 cols, own far angle",
                           "R=2 cols, minmod-gradient lift"};
   std::vector<std::array<double, V + 1>> res(texels.size());
   SweepSpec spec;
@@ -167,7 +128,8 @@ void simulate(const Scene& scene, const std::vector<std::pair<int, int>>& texels
               near[0], cany ? std::atan2(fdz + zq - Z, std::max(frun + sq * f.texel_size, 1e-3)) : none);
           e[10][tp] = std::max(near[0], cany ? std::atan2(fdz + lift_n, frun) : none);
           e[11][tp] = std::max(near[0], cany ? std::atan2(fdz, frun) : none);
-          const double zm = d.x_major ? f.at(i, j - 1) : f.at(i - 1, j), zp = d.x_major ? f.at(i, j + 1) : f.at(i + 1, j);
+          const double zm = d.x_major ? f.at(i, j - 1) : f.at(i - 1, j),
+                       zp = d.x_major ? f.at(i, j + 1) : f.at(i + 1, j);
           const double gl = Z - zm, gr = zp - Z;
           const double gmm = gl * gr <= 0 ? 0.0 : (std::fabs(gl) < std::fabs(gr) ? gl : gr);
           e[12][tp] = std::max(near[0], cany ? std::atan2(fdz + zt - Z - gmm * off[tp], frun) : none);
@@ -219,8 +181,8 @@ int main(int argc, char** argv) {
       std::printf("k %3d  p1 %8.4f  tri %8.4f  diff %+8.4f deg\n", k, ep * 180 / kPi, et * 180 / kPi,
                   (ep - et) * 180 / kPi);
     }
-    std::printf("ao %.6f vsky %.6f (exact triangle-surface horizons: vsky %.6f)\n", r.ao[sc.field.index(i, j)],
-                r.vsky[sc.field.index(i, j)], vsky_tri);
+    std::printf("ao %.6f vsky %.6f (exact triangle-surface horizons: vsky %.6f)\n",
+                r.ao[sc.field.index(i, j)], r.vsky[sc.field.index(i, j)], vsky_tri);
     return 0;
   }
   const int size = std::atoi(argv[2]), stride = std::atoi(argv[4]);

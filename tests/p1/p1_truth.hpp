@@ -71,4 +71,56 @@ inline double march_from_texel(const HeightField& f, int i, int j, double phi, d
   return best;
 }
 
+// The exact surface of the reference (baker/reference/embree_field.hpp): two triangles per quad, split
+// along (i+1, j)-(i, j+1). Along a ray its profile is piecewise linear with kinks only at the crossings of
+// columns, rows and diagonals, so the steepest crossing is the exact horizon.
+// Height of the reference's triangulated surface at (x, y) (texel coordinates, inside the field).
+inline double tri_height(const HeightField& f, double x, double y) {
+  const double fx0 = std::floor(x), fy0 = std::floor(y);
+  const int i = int(fx0), j = int(fy0);
+  const double fx = x - fx0, fy = y - fy0;
+  const double z00 = f.at(i, j), z10 = f.at(i + 1, j), z01 = f.at(i, j + 1), z11 = f.at(i + 1, j + 1);
+  if (fx + fy <= 1) return z00 + fx * (z10 - z00) + fy * (z01 - z00);
+  return z11 + (1 - fx) * (z01 - z11) + (1 - fy) * (z10 - z11);
+}
+
+// Steepest caster seen from the point (x0, y0) on the surface towards (dx, dy) over the crossings of the
+// chosen families (1: columns x = int, 2: rows y = int, 4: diagonals x + y = int) at distance >= smin
+// (texels along the ray), clamp field: *dz above the point, *run horizontal world distance; false: none.
+inline bool march_from(const HeightField& f, double x0, double y0, double dx, double dy, int families,
+                       double smin, double* dz_out, double* run_out, double smax = 1e300) {
+  const double z0 = tri_height(f, x0, y0);
+  double best_num = 0, best_den = 0;  // best slope = num / den
+  bool any = false;
+  auto consider = [&](double s) {
+    const double x = x0 + s * dx, y = y0 + s * dy;
+    if (s > smax || x < -1e-9 || y < -1e-9 || x > f.width - 1 + 1e-9 || y > f.height - 1 + 1e-9) return false;
+    if (s < smin) return true;
+    const double z =
+        tri_height(f, std::clamp(x, 0.0, double(f.width - 1)), std::clamp(y, 0.0, double(f.height - 1)));
+    const double num = z - z0, den = s * f.texel_size;
+    if (!any || num * best_den > best_num * den) best_num = num, best_den = den, any = true;
+    return true;
+  };
+  auto family = [&](double origin, double d) {  // crossings of origin + s * d = integer, s > 0
+    if (std::fabs(d) < 1e-12) return;
+    const double first = d > 0 ? std::floor(origin + 1e-9) + 1 : std::ceil(origin - 1e-9) - 1;
+    for (long m = 0;; ++m) {
+      const double c = first + (d > 0 ? 1.0 : -1.0) * double(m);
+      if (!consider((c - origin) / d)) break;
+    }
+  };
+  if (families & 1) family(x0, dx);
+  if (families & 2) family(y0, dy);
+  if (families & 4) family(x0 + y0, dx + dy);
+  *dz_out = best_num, *run_out = best_den;
+  return any;
+}
+
+// Steepest elevation from texel (i, j) (see march_from).
+inline double march_tri(const HeightField& f, int i, int j, double dx, double dy, int families) {
+  double dz, run;
+  return march_from(f, i, j, dx, dy, families, 0, &dz, &run) ? std::atan2(dz, run) : truth::kNone;
+}
+
 }  // namespace hfbake::truth

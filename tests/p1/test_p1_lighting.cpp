@@ -139,6 +139,43 @@ TEST(P1Analytic, PitCenter) {
   }
 }
 
+TEST(P1Analytic, PitRimSeesTheOpenSky) {
+  // A cylindrical pit (radius 16, depth 10) in a flat plateau: a plateau texel at the rim has nothing above
+  // its horizontal (the only depression is the pit), so vsky = 1 exactly, whatever its normal (tilted by
+  // the drop). Its ao against the exact triangle-surface march from the texel center (brute force). The
+  // earlier tangent-plane lift gave vsky 0.888 at (48, 32) (the normal's gradient straddles the drop).
+  const Scene s = make_scene(shape(ProceduralKind::pit, 65, 30, 16, 10));
+  const int K = 64;
+  const P1Result r = compute_p1(s, params(K, true), RunControl{});
+  double max_vsky = 0, max_ao = 0;
+  int rim = 0;
+  for (int j = 0; j < 65; ++j)
+    for (int i = 0; i < 65; ++i) {
+      const double d = std::hypot(i - 32.0, j - 32.0);
+      const std::size_t t = s.field.index(i, j);
+      if (d < 16 || d > 18 || s.field.z[t] != 0.0f) continue;  // plateau texels on the rim ring
+      ++rim;
+      max_vsky = std::max(max_vsky, std::fabs(r.vsky[t] - 1.0));
+      const Vec3f n = s.normals[t];
+      double ao = 0;
+      for (int k = 0; k < K; ++k) {
+        const double phi = 2 * kPi * k / K, dx = std::cos(phi), dy = std::sin(phi);
+        const double e = truth::march_tri(s.field, i, j, dx, dy, 7);
+        const double np = n.x * dx + n.y * dy, nz = n.z;
+        const double th = std::min(kPi / 2 - e, kPi / 2 + std::atan(np / nz));
+        ao += (nz * std::sin(th) * std::sin(th) + np * (th - std::sin(th) * std::cos(th))) / K;
+      }
+      max_ao = std::max(max_ao, std::fabs(ao - r.ao[t]));
+    }
+  std::printf(
+      "[pit rim] %d plateau rim texels: max |vsky - 1| %.2e, max |ao - exact march| %.2e; (48,32) vsky "
+      "%.4f\n",
+      rim, max_vsky, max_ao, r.vsky[s.field.index(48, 32)]);
+  EXPECT_GT(rim, 50);
+  EXPECT_LE(max_vsky, 1e-3);
+  EXPECT_LE(max_ao, 0.02);
+}
+
 TEST(P1Analytic, ConeApexHasNegativeHorizonsAndFullAo) {
   const double A = 30 * kDeg;
   for (int K : {8, 64}) {
@@ -299,9 +336,10 @@ TEST(P1Measure, NormalBinError) {
 }
 
 TEST(P1Measure, MappingErrorAgainstTexelCenterMarch) {
-  // The gathered horizon of each texel against a march from the texel center itself (same step, bilinear
-  // surface), in the interior (>= 2 texels from the border) and on the border ring, and the ao difference
-  // that results (ao from the marched horizons with the same formula).
+  // The gathered horizon of each texel against the exact horizon marched from the texel center itself on
+  // the reference's triangulated surface (every column, row and diagonal crossing), in the interior
+  // (>= 2 texels from the border) and on the border ring, and the ao difference that results (ao from the
+  // marched horizons with the same formula): the whole error of bringing line results to texel centers.
   const int K = 16;
   for (ProceduralKind kind : {ProceduralKind::fractal, ProceduralKind::sines, ProceduralKind::blocks}) {
     const HeightField f = truth::procedural(kind, 64, 64, Wrap::clamp);
@@ -321,7 +359,7 @@ TEST(P1Measure, MappingErrorAgainstTexelCenterMarch) {
         double ao = 0;
         for (int k = 0; k < K; ++k) {
           const SweepDirection d = plan_direction(f, spec, k);
-          const double e = truth::march_from_texel(f, i, j, d.phi, d.step, 0);
+          const double e = truth::march_tri(f, i, j, d.dx, d.dy, 7);
           const double err = std::fabs(std::asin(double(r.horizon[t * K + k])) - e);
           st.sum += err, st.sq += err * err, st.mx = std::max(st.mx, err), ++st.n;
           const double np = n.x * std::cos(d.phi) + n.y * std::sin(d.phi), nz = n.z;
@@ -338,8 +376,10 @@ TEST(P1Measure, MappingErrorAgainstTexelCenterMarch) {
           "|d ao| mean %.2e, max %.2e\n",
           procedural_kind_name(kind), K, st == &in ? "interior" : "border", st->sum / st->n / kDeg,
           std::sqrt(st->sq / st->n) / kDeg, st->mx / kDeg, st->ao_sum / st->texels, st->ao_max);
-    EXPECT_LE(in.sum / in.n / kDeg, 2.0);
-    EXPECT_LE(in.ao_sum / in.texels, 1e-2);
+    // (before the exact near field: fractal 0.77 deg / 3.3e-3, sines 1.39 / 4.1e-3, blocks 0.85 / 4.9e-3)
+    EXPECT_LE(in.sum / in.n / kDeg, 0.7);
+    EXPECT_LE(in.ao_sum / in.texels, 5e-3);
+    EXPECT_LE(border.ao_sum / border.texels, 6e-3);
   }
 }
 

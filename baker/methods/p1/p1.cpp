@@ -171,12 +171,12 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   const bool clamp = f.wrap == Wrap::clamp;
   // Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
   // with the border rules (clamp: crossings off the field are not terrain; repeat: wrapped).
-  auto near_slope_border = [&](int k, int i, int j, int* which) {
+  auto near_slope_at = [&](const std::vector<p1::NearCrossing>& stencil, int i, int j, int* which) {
     const float Z = f.z[f.index(i, j)];
     float best = -1e30f;
     *which = -1;
-    for (std::size_t c = 0; c < near[k].size(); ++c) {
-      const p1::NearCrossing& x = near[k][c];
+    for (std::size_t c = 0; c < stencil.size(); ++c) {
+      const p1::NearCrossing& x = stencil[c];
       const float px = float(i) + x.x, py = float(j) + x.y;
       if (clamp &&
           (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
@@ -186,6 +186,9 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       if (m > best) best = m, *which = int(c);
     }
     return best;
+  };
+  auto near_slope_border = [&](int k, int i, int j, int* which) {
+    return near_slope_at(near[k], i, j, which);
   };
 
   std::vector<const DirectionalLight*> lights;
@@ -366,6 +369,8 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     ls.wrap_periods = p.wrap_periods;
     std::vector<double> elevation, radius;
     std::vector<Vec3> dir;
+    std::vector<SweepDirection> light_dirs;
+    std::vector<std::vector<p1::NearCrossing>> light_near;
     for (const DirectionalLight* l : lights) {
       const Vec3 d = normalize(l->direction);
       dir.push_back(d);
@@ -373,16 +378,36 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       radius.push_back(l->angular_diameter / 2);
       ls.azimuths.push_back(std::hypot(d.x, d.y) > 1e-12 ? std::atan2(d.y, d.x) : 0.0);
     }
+    for (std::size_t li = 0; li < lights.size(); ++li) {
+      light_dirs.push_back(plan_direction(f, ls, int(li)));
+      light_near.push_back(
+          p1::near_field_stencil(light_dirs.back().dx, light_dirs.back().dy, p.near_radius, f.texel_size));
+    }
     const RunControl light_rc = sub_progress(rc, main_share, 1 - main_share);
     sweep_lines(
-        f, ls, light_rc, [&] { return p1::HorizonLineWorker{}; },
+        f, ls, light_rc,
+        [&] {
+          p1::HorizonLineWorker w;
+          w.far_radius = far_radius;
+          return w;
+        },
         [&](int li, int i, int j, const TexelTaps& t) {
           const std::size_t idx = f.index(i, j);
           const double ndl = dot(normals[idx].d(), dir[li]);
           if (ndl <= 0) return;
-          // The samples' own angles: a light's shadow edge is sharp, the blend is only 2 taps.
-          const float a = p1::caster_elevation(t.lo[0], t.lo[1]);
-          const float b = p1::caster_elevation(t.hi[0], t.hi[1]);
+          // The horizon in the light's azimuth as for the K directions: the exact near field from the texel
+          // center, the far casters of both taps lifted by the minmod gradient, blended.
+          const SweepDirection& d = light_dirs[li];
+          const int u = d.x_major ? i : j, v0 = d.x_major ? j : i;
+          const double g = double(v0) - double(u) * d.slope;
+          const float fr = float(g - std::floor(g));
+          const bool lo_is_hi = !d.repeat && fr > 0 && d.n_minor > 1 && v0 == 0;  // as texel_taps
+          const float off_lo = lo_is_hi ? 1 - fr : -fr, off_hi = 1 - fr;
+          const float Z = f.z[idx], G = (d.x_major ? gy : gx)[idx];
+          int which;
+          const float en = fast_atan(near_slope_at(light_near[li], i, j, &which));
+          const float a = std::max(en, p1::far_elevation(t.lo[0], t.lo[1], t.lo[2] - Z - G * off_lo));
+          const float b = std::max(en, p1::far_elevation(t.hi[0], t.hi[1], t.hi[2] - Z - G * off_hi));
           const double frac = disk_fraction_above(elevation[li], a + (b - a) * t.w_hi, radius[li]);
           if (frac <= 0) return;
           direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
