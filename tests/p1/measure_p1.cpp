@@ -7,8 +7,16 @@
 //   T_col(K): the same march from the texel center, but sampling only the major-axis crossings (the points
 //             the sweep used to sample): T_col - T_tri is the surface-model part, P1 - T_col the mapping;
 //   the reference (an hfbake reference EXR with ao.Y and ao_stderr.Y): T_tri(K) - ref tells whether
-//             anything else (normals, reference) is left once the horizons are exact.
-// Usage: measure_p1 <fractal|bricks|sines|blocks> <size> <reference.exr|-> <stride> K...
+//             anything else (normals, reference) is left once the horizons are exact (excess = rms minus
+//             the reference's own per-texel standard errors, in quadrature).
+// Usage:
+//   measure_p1 <kind> <size> <reference.exr|-> <stride> K...      the table above (texels every `stride`)
+//   measure_p1 <kind> <size> - <stride> sim K...                   transfer candidates: taps marched exactly
+//   on
+//       the triangulation (or on columns only), each transfer to the texel center, ao - T_tri(K); the
+//       experiment that chose P1's near/far split (the first row is the transfer P1 had before it)
+//   measure_p1 <kind> <size> debug i j K angle_deg [depth radius]  per-direction horizons of one texel of an
+//       analytic field against T_tri (e.g. `pit 65 debug 48 32 64 30 10 16`: the pit rim)
 #include <tbb/parallel_for.h>
 
 #include <array>
@@ -49,7 +57,7 @@ struct Stats {
 void simulate(const Scene& scene, const std::vector<std::pair<int, int>>& texels, int K) {
   const HeightField& f = scene.field;
   constexpr int V = 13;
-  const char* names[V] = {"current lift (normal G, near weight)",
+  const char* names[V] = {"before: two taps, normal-gradient lift",
                           "own angles",
                           "seen from texel height, run+off*dmin",
                           "actual lift, near weight",
