@@ -3,9 +3,10 @@
 // at every texel's normal. bake_p1 (bake_p1.hpp) is the CLI entry; P2 calls compute_p1 for direct light
 // and horizons from the same sweep.
 //
-// Per texel and direction k (phi_k = 2 pi k / K), with horizon elevation e_k (gathered to the texel
-// center, see sweep_lines.hpp), normal N, N_p = N.d_k, theta_k = min(pi/2 - e_k, pi/2 + atan(N_p / N_z))
-// (P1 Eq. 4 with the pi/2 the extracted text drops: the horizon or where the normal's hemisphere ends):
+// Per texel and direction k (phi_k = 2 pi k / K), with horizon elevation e_k (the larger of the exact
+// near-field march from the texel center and the two sweep taps' far casters, see horizon_sweep.hpp), normal
+// N, N_p = N.d_k, theta_k = min(pi/2 - e_k, pi/2 + atan(N_p / N_z)) (P1 Eq. 4 with the pi/2 the extracted
+// text drops: the horizon or where the normal's hemisphere ends):
 //   ao    = (1/K) sum_k [ N_z sin^2 theta_k + N_p (theta_k - sin theta_k cos theta_k) ]
 //           P1 Eq. 5, except that the azimuthal integral of N_p over each swath uses the midpoint rule
 //           (2 pi / K) instead of Eq. 5's exact 2 sin(pi / K): the same limit, but spectrally accurate for
