@@ -259,7 +259,7 @@ int main(int argc, char** argv) {
     for (std::size_t t = 0; t < bf.direct.size(); ++t) md += bf.direct[t], mi += bf.indirect[t];
     std::printf("%-7s | brute force K=%d: mean direct %.4f, mean indirect %.4f\n", procedural_kind_name(kind),
                 K, md / bf.direct.size(), mi / bf.direct.size());
-    for (int m : {8, 16, 32, 64, 100, 256}) {
+    for (int m : {8, 16, 32, 64, 100}) {
       const Brute orc = oracle(s, m, rho, bf.direct);
       const Err d = error(orc.direct, 1, bf.direct, size, size, 2);
       const Err ind = error(orc.indirect, 1, bf.indirect, size, size, 2);

@@ -84,6 +84,32 @@ TEST(NlpBake, TrenchFloorMatchesViewFactor) {
   }
 }
 
+// Emitting V-trench walls (radiance 1, albedo 0, black sky): the floor's first bounce is the cosine-weighted
+// view factor of the walls, 1 - cos A. With indirect_cosine exact the casting-set segments carry the exact
+// cosine and the result is close; the order-3 SH lobe (NS09 section 7) over-weights grazing light.
+TEST(NlpBake, EmittingTrenchWallsExactCosine) {
+  for (double angle : {20.0, 45.0}) {
+    ProceduralSpec spec;
+    spec.kind = ProceduralKind::trench;
+    spec.width = spec.height = 65;
+    spec.angle_deg = angle;
+    Scene s = make_scene(spec, Wrap::clamp, Rgb{0, 0, 0}, 0.0f);
+    s.surface.emission.assign(s.field.texel_count(), Rgb{1, 1, 1});
+    NlpOptions o;
+    o.directions = 64;
+    o.layers = {"indirect"};
+    o.exact_indirect_cosine = true;
+    const float exact = texel(bake_nlp(s, o, RunControl{}), "indirect", 32, 32)[0];
+    o.exact_indirect_cosine = false;
+    const float lobe = texel(bake_nlp(s, o, RunControl{}), "indirect", 32, 32)[0];
+    const double want = 1 - std::cos(angle * kPi / 180);
+    EXPECT_NEAR(exact, want, 2e-3) << angle;
+    EXPECT_LT(std::abs(exact - want), std::abs(lobe - want)) << angle;
+    std::printf("emitting trench %.0f: exact cosine %.5f, SH lobe %.5f, view factor %.5f\n", angle, exact,
+                lobe, want);
+  }
+}
+
 // A tilted plane under a uniform environment (whole sphere): the plane never occludes its own hemisphere,
 // E/pi = L.
 TEST(NlpBake, SlopeUnderUniformEnvironment) {

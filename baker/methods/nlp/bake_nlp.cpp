@@ -51,6 +51,7 @@ NlpOptions parse_nlp_options(const nlohmann::json& p) {
   o.light_level_offset = p.value("light_level_offset", o.light_level_offset);
   o.light_horizon_knots = p.value("light_horizon", std::string("knots")) == "knots";
   o.subsample = p.value("subsample", o.subsample);
+  o.exact_indirect_cosine = p.value("indirect_cosine", std::string("sh")) == "exact";
   if (p.contains("azimuth_interpolation")) {
     const std::string s = p["azimuth_interpolation"].get<std::string>();
     if (!nlp::parse_azimuth_interpolation(s, o.interpolation))
@@ -317,13 +318,23 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
     const nlp::Pyramid rp = nlp::build_pyramid(exitant.data(), 3, W, H, f.wrap, o.levels_per_octave, lu);
     std::vector<Rgb> this_bounce(N);
     // Kernel: U (3 x 16, colour-major) at receiver (i, j).
-    auto radiance = [&](Scratch& s, int i, int j, float* U) {
+    // E (optional, 3 floats): the irradiance / (2 pi / m) of the same casting-set segments with the exact
+    // cosine: segment (e0, e1] of radiance r adds r * (F(e1) - F(e0)), F(e) = n_h (e + sin e cos e) / 2 +
+    // n_z sin^2 e / 2, the integral of (n_h cos e + n_z sin e) cos e (n_h = n . azimuth).
+    auto radiance = [&](Scratch& s, int i, int j, float* U, float* E) {
       const Vec3f n = normals[f.index(i, j)];
       receiver(s, i, j);
       std::fill(U, U + 3 * kSh, 0.0f);
+      if (E) E[0] = E[1] = E[2] = 0;
       for (int a = 0; a < m; ++a) {
         const float cx = cphi[a], cy = sphi[a];
         const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
+        const float nh = n.x * cx + n.y * cy, nz = n.z;
+        auto F = [&](float e, float se) {
+          const float ce = std::sqrt(std::max(0.0f, 1 - se * se));
+          return 0.5f * (nh * (e + se * ce) + nz * se * se);
+        };
+        float prevF = E ? F(wmin, std::sin(wmin)) : 0.0f;
         const int cnt =
             nlp::march(ms, hp, i, j, cx, cy, s.recv.data(), s.omega.data(), s.dist.data(), s.lev.data());
         const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
@@ -340,11 +351,17 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
           const nlp::PyramidLevel& L = rp.levels[ms.rlevel[s.lev[k]]];
           nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
           float nu[4];
-          nlp::occlusion4(std::sin(run), nu);
+          const float srun = std::sin(run);
+          nlp::occlusion4(srun, nu);
           for (int l = 0; l < 4; ++l) {
             const float dl = nu[l] - prev[l];
             u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
             prev[l] = nu[l];
+          }
+          if (E) {
+            const float Fr = F(run, srun), dF = Fr - prevF;
+            E[0] += rad[0] * dF, E[1] += rad[1] * dF, E[2] += rad[2] * dF;
+            prevF = Fr;
           }
           any = true;
         }
@@ -356,14 +373,19 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
                               Aj[r * 4 + 3] * u[c][3];
       }
     };
-    auto shade_indirect = [&](std::size_t idx, const float* U) {
-      const Vec3f n = normals[idx];
-      float y[kSh];
-      sh::eval(n.x, n.y, n.z, y);
-      float e[3] = {};
-      for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 9; ++k) e[c] += kConv[k] * y[k] * U[c * kSh + k];
-      this_bounce[idx] = Rgb{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+    auto shade_indirect = [&](std::size_t idx, const float* U, const float* E) {
+      if (E) {
+        const float w = float(2 / double(m));  // (2 pi / m) / pi
+        this_bounce[idx] = Rgb{E[0] * w, E[1] * w, E[2] * w};
+      } else {
+        const Vec3f n = normals[idx];
+        float y[kSh];
+        sh::eval(n.x, n.y, n.z, y);
+        float e[3] = {};
+        for (int c = 0; c < 3; ++c)
+          for (int k = 0; k < 9; ++k) e[c] += kConv[k] * y[k] * U[c * kSh + k];
+        this_bounce[idx] = Rgb{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+      }
       if (want_irr)
         for (int k = 0; k < 9; ++k)
           for (int c = 0; c < 3; ++c) irr[idx * 27 + k * 3 + c] += kConv[k] * U[c * kSh + k] * kInvPi;
@@ -372,10 +394,11 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       tbb::parallel_for(0, H, [&](int j) {
         rc.check();
         Scratch& s = scratch.local();
-        float U[3 * kSh];
+        float U[3 * kSh], E[3];
+        float* Ep = o.exact_indirect_cosine ? E : nullptr;
         for (int i = 0; i < W; ++i) {
-          radiance(s, i, j, U);
-          shade_indirect(f.index(i, j), U);
+          radiance(s, i, j, U, Ep);
+          shade_indirect(f.index(i, j), U, Ep);
         }
         rc.report(std::min(1.0, (rows_done += 1) / units));
       });
@@ -385,14 +408,15 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
         rc.check();
         Scratch& s = scratch.local();
         for (int ci = 0; ci < cw; ++ci)
-          radiance(s, coarse_i(ci), coarse_j(cj), coarse.data() + (std::size_t(cj) * cw + ci) * 3 * kSh);
+          radiance(s, coarse_i(ci), coarse_j(cj), coarse.data() + (std::size_t(cj) * cw + ci) * 3 * kSh,
+                   nullptr);
         rc.report(std::min(1.0, (rows_done += sub) / units));
       });
       tbb::parallel_for(0, H, [&](int j) {
         float U[3 * kSh];
         for (int i = 0; i < W; ++i) {
           upsample(coarse, 3 * kSh, i, j, U);
-          shade_indirect(f.index(i, j), U);
+          shade_indirect(f.index(i, j), U, nullptr);
         }
       });
     }

@@ -27,6 +27,10 @@ struct NlpOptions {
   bool light_horizon_knots = true;  // lights: max over the knot angles instead of the B-spline curve
   int light_directions = 3;         // azimuths across a directional light's disk (NS09 §9: 3)
   int subsample = 1;                // 1, or 2: V and U on a 2x2-subsampled grid, shading at full resolution
+  // The indirect layer: true = the casting-set segments integrated per azimuth with the exact cosine about
+  // the texel normal; false = NS09 §7, U dotted with the order-3 clamped-cosine lobe (it over-weights grazing
+  // radiance). subsample 2 always uses U. sh_irradiance is U's either way.
+  bool exact_indirect_cosine = false;
   std::vector<std::string> layers = {"direct", "indirect", "total", "sh_visibility", "sh_irradiance"};
 };
 
