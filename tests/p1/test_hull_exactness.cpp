@@ -34,7 +34,7 @@ Exactness check_field(const HeightField& f, int K) {
       // The hull stack itself, with exact double elevations.
       p1::HullStack hull;
       hull.reset(line.count);
-      out.assign(std::size_t(line.receivers()) * 3, 0.0f);
+      out.assign(std::size_t(line.receivers()) * p1::HorizonLineWorker::channels(), 0.0f);
       worker(line, out.data());
       out_far.assign(out.size(), 0.0f);
       far_worker(line, out_far.data());
@@ -51,10 +51,12 @@ Exactness check_field(const HeightField& f, int K) {
         if ((c.n < 0) != (truth == truth::kNone)) ++ex.none_mismatch;
         ex.hull_max = std::max(ex.hull_max, std::fabs(got - truth));
         if (line.is_terrain(n)) {  // the worker skips points off a clamp field (never receivers)
-          const float* o = out.data() + std::size_t(n - line.first_receiver) * 3;
+          const float* o =
+              out.data() + std::size_t(n - line.first_receiver) * p1::HorizonLineWorker::channels();
           const double layer = p1::caster_elevation(o[0], o[1]);
           ex.worker_max = std::max(ex.worker_max, std::fabs(layer - truth));
-          const float* of = out_far.data() + std::size_t(n - line.first_receiver) * 3;
+          const float* of =
+              out_far.data() + std::size_t(n - line.first_receiver) * p1::HorizonLineWorker::channels();
           const double far_truth = truth::march_same_points(line, n, n - lag + 1);
           ex.far_max =
               std::max(ex.far_max, std::fabs(double(p1::caster_elevation(of[0], of[1])) - far_truth));

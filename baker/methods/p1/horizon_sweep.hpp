@@ -10,11 +10,11 @@
 //   triangulated surface, which agrees with the bilinear one on cell edges). The crossings are the same
 //   for every texel of a direction (near_field_stencil), so this is a fixed stencil per direction.
 // * far field (distance >= R): the line worker's hull stack lags R behind each receiver, so a receiver
-//   gets the steepest caster among the samples at least R away ([dz above the sample, run, the sample's
-//   height]); the texel visitor sees that caster from the texel (far_elevation: the tap's height above
-//   the texel's tangent plane is added to the caster's) and blends the two taps; the horizon of each tap
+//   gets the steepest caster among the samples at least R away ([dz above the sample, run]); the texel
+//   visitor sees that caster from the texel (far_elevation: the tap's height above the texel's plane,
+//   with a minmod gradient, is added to the caster's) and blends the two taps; the horizon of each tap
 //   is the larger of the near and the far elevation.
-// With lag = 0 (lights) the worker gives each receiver its overall caster, as Algorithm 1.
+// With far_radius = 0 the worker gives each receiver its overall caster, as Algorithm 1.
 #pragma once
 
 #include <algorithm>
@@ -50,7 +50,7 @@ struct HorizonLineWorker {
   HullStack stack;
   double far_radius = 0;  // world units; 0: every sample casts (Algorithm 1), else only those >= it behind
 
-  static constexpr int channels() { return 3; }
+  static constexpr int channels() { return 2; }
 
   void operator()(const SweepLine& line, float* out) {
     stack.reset(line.count);
@@ -58,10 +58,9 @@ struct HorizonLineWorker {
     const bool has_terrain = line.inside_end > line.inside_begin;
     auto mark = [&](int n0, int n1) {
       for (int n = std::max(n0, line.first_receiver); n < n1; ++n) {
-        float* o = out + std::size_t(n - line.first_receiver) * 3;
+        float* o = out + std::size_t(n - line.first_receiver) * 2;
         o[0] = 0.0f;
         o[1] = std::numeric_limits<float>::infinity();
-        o[2] = line.z[n];
       }
     };
     mark(0, has_terrain ? line.inside_begin : line.count);
@@ -72,7 +71,7 @@ struct HorizonLineWorker {
       for (int n = line.inside_begin; n < line.inside_end; ++n) {
         const HorizonCaster c = stack.add(n, line.z[n]);
         if (n < line.first_receiver) continue;
-        write(out + std::size_t(n - line.first_receiver) * 3, c, line.z[n], step);
+        write(out + std::size_t(n - line.first_receiver) * 2, c, step);
       }
       return;
     }
@@ -80,15 +79,14 @@ struct HorizonLineWorker {
     int fed = line.inside_begin;
     for (int n = std::max(line.inside_begin, line.first_receiver); n < line.inside_end; ++n) {
       for (; fed <= n - lag; ++fed) stack.add(fed, line.z[fed]);
-      write(out + std::size_t(n - line.first_receiver) * 3, stack.query(n, line.z[n]), line.z[n], step);
+      write(out + std::size_t(n - line.first_receiver) * 2, stack.query(n, line.z[n]), step);
     }
   }
 
  private:
-  static void write(float* o, const HorizonCaster& c, float z, float step) {
+  static void write(float* o, const HorizonCaster& c, float step) {
     o[0] = float(c.dz);
     o[1] = c.n < 0 ? std::numeric_limits<float>::infinity() : float(c.dn) * step;
-    o[2] = z;
   }
 };
 

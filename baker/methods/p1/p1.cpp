@@ -150,23 +150,32 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       x_major[k] = d.x_major;
     }
   }
-  // Height change per texel along x and y at every texel for the far-field lift: the minmod of the two
-  // one-sided differences (the smaller one when they agree in sign, else 0). On a plane it is the plane's
-  // gradient (the lift vanishes); at a cliff rim or a crease it does not tilt the texel's plane by the
-  // drop beside it (the normal's gradient, an average over both sides, does: issue 4's rim defect).
-  std::vector<float> gx(N), gy(N);
+  // The far-field lift of a tap `off` texels from its texel along the minor axis: its height above the
+  // texel's plane, z(tap) - z - g * off, where g is the minmod of the two one-sided differences (the
+  // smaller one when they agree in sign, else 0). On a plane it is the plane's gradient (the lift
+  // vanishes); at a cliff rim or a crease it does not tilt the texel's plane by the drop beside it (the
+  // normal's gradient, an average over both sides, does: issue 4's rim defect). The tap lies on the
+  // texel's column (row), which is straight between texels, so z(tap) - z = off * (one-sided difference)
+  // and lift = off * c with c = right difference - g (off >= 0) or left difference - g (off < 0): the sweep
+  // lines need not carry their samples' heights.
+  std::vector<float> cxl(N), cxr(N), cyl(N), cyr(N);
   tbb::parallel_for(0, f.height, [&](int j) {
     auto minmod = [](float a, float b) { return a * b <= 0 ? 0.0f : (std::fabs(a) < std::fabs(b) ? a : b); };
     const bool rep = f.wrap == Wrap::repeat;
     for (int i = 0; i < f.width; ++i) {
-      const float z = f.z[f.index(i, j)];
+      const std::size_t t = f.index(i, j);
+      const float z = f.z[t];
       const float xl = z - f.at(i - 1, j), xr = f.at(i + 1, j) - z;
       const float yl = z - f.at(i, j - 1), yr = f.at(i, j + 1) - z;
       // clamp: a border texel has one difference (the other would be 0 against the clamped copy).
-      gx[f.index(i, j)] = rep ? minmod(xl, xr) : (i == 0 ? xr : (i == f.width - 1 ? xl : minmod(xl, xr)));
-      gy[f.index(i, j)] = rep ? minmod(yl, yr) : (j == 0 ? yr : (j == f.height - 1 ? yl : minmod(yl, yr)));
+      const float gxv = rep ? minmod(xl, xr) : (i == 0 ? xr : (i == f.width - 1 ? xl : minmod(xl, xr)));
+      const float gyv = rep ? minmod(yl, yr) : (j == 0 ? yr : (j == f.height - 1 ? yl : minmod(yl, yr)));
+      cxl[t] = xl - gxv, cxr[t] = xr - gxv, cyl[t] = yl - gyv, cyr[t] = yr - gyv;
     }
   });
+  auto lift_of = [&](int k_is_x_major, std::size_t t, float off) {
+    return off * (k_is_x_major ? (off >= 0 ? cyr[t] : cyl[t]) : (off >= 0 ? cxr[t] : cxl[t]));
+  };
   const int margin = int(std::ceil(p.near_radius)) + 2;  // texels this far inside have every crossing inside
   const bool clamp = f.wrap == Wrap::clamp;
   // Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
@@ -250,19 +259,21 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
             for (int x = xb; x < w; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
             for (int x = 0; x < w; ++x) en[x] = fast_atan(en[x]);
             // Far field: each tap's caster (>= near_radius behind it) seen from the texel: the tap sample
-            // lies `lift` = z_sample - z_texel - g * offset above the texel's plane (g: the minmod gradient
-            // along the minor axis; zero lift on any plane), and the caster is taken that much higher
-            // relative to the texel (transfers compared in tests/p1/measure_p1.cpp: this one is exact on
-            // planes, best on the fractal field, and right at cliff rims).
+            // lies `lift` above the texel's plane (see lift_of; zero on any plane), and the caster is taken
+            // that much higher relative to the texel (transfers compared in tests/p1/measure_p1.cpp: this
+            // one is exact on planes, best on the fractal field, and right at cliff rims).
             const std::size_t row = std::size_t(y) * w;
-            const float *ld = t.lo + row, *lr = t.lo + plane + row, *lz = t.lo + 2 * plane + row;
-            const float *hd = t.hi + row, *hr = t.hi + plane + row, *hz = t.hi + 2 * plane + row;
+            const float *ld = t.lo + row, *lr = t.lo + plane + row;
+            const float *hd = t.hi + row, *hr = t.hi + plane + row;
             const float* wh = t.w_hi + row;
             const float *ol = t.off_lo + row, *oh = t.off_hi + row;
-            const float* G = (x_major[k] ? gy : gx).data() + base;
+            const float *cl = (x_major[k] ? cyl : cxl).data() + base,
+                        *cr = (x_major[k] ? cyr : cxr).data() + base;
             for (int x = 0; x < w; ++x) {
-              const float a = std::max(en[x], p1::far_elevation(ld[x], lr[x], lz[x] - Z[x] - G[x] * ol[x]));
-              const float b = std::max(en[x], p1::far_elevation(hd[x], hr[x], hz[x] - Z[x] - G[x] * oh[x]));
+              const float lift_l = ol[x] * (ol[x] >= 0 ? cr[x] : cl[x]);
+              const float lift_h = oh[x] * (oh[x] >= 0 ? cr[x] : cl[x]);
+              const float a = std::max(en[x], p1::far_elevation(ld[x], lr[x], lift_l));
+              const float b = std::max(en[x], p1::far_elevation(hd[x], hr[x], lift_h));
               e[x] = a + (b - a) * wh[x];
             }
           }
@@ -323,15 +334,12 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           if (want_distance) {  // the near crossing, or the larger-weight tap's far caster, seen from the
                                 // texel
             const std::size_t row = std::size_t(y) * w;
-            const float *dz = t.nearest + row, *run = t.nearest + plane + row,
-                        *zs = t.nearest + 2 * plane + row;
-            const float* Z = f.z.data() + base;
-            const float* G = (x_major[k] ? gy : gx).data() + base;
+            const float *dz = t.nearest + row, *run = t.nearest + plane + row;
             for (int x = 0; x < w; ++x) {
               int which;
               const float near_m = near_slope_border(k, t.i0 + x, t.j0 + y, &which);
               const float off = t.w_hi[row + x] > 0.5f ? t.off_hi[row + x] : t.off_lo[row + x];
-              const float lift = zs[x] - Z[x] - G[x] * off;
+              const float lift = lift_of(x_major[k], base + x, off);
               const float far_e = p1::far_elevation(dz[x], run[x], lift);
               float d;
               if (which >= 0 && fast_atan(near_m) >= far_e)
@@ -403,11 +411,10 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           const float fr = float(g - std::floor(g));
           const bool lo_is_hi = !d.repeat && fr > 0 && d.n_minor > 1 && v0 == 0;  // as texel_taps
           const float off_lo = lo_is_hi ? 1 - fr : -fr, off_hi = 1 - fr;
-          const float Z = f.z[idx], G = (d.x_major ? gy : gx)[idx];
           int which;
           const float en = fast_atan(near_slope_at(light_near[li], i, j, &which));
-          const float a = std::max(en, p1::far_elevation(t.lo[0], t.lo[1], t.lo[2] - Z - G * off_lo));
-          const float b = std::max(en, p1::far_elevation(t.hi[0], t.hi[1], t.hi[2] - Z - G * off_hi));
+          const float a = std::max(en, p1::far_elevation(t.lo[0], t.lo[1], lift_of(d.x_major, idx, off_lo)));
+          const float b = std::max(en, p1::far_elevation(t.hi[0], t.hi[1], lift_of(d.x_major, idx, off_hi)));
           const double frac = disk_fraction_above(elevation[li], a + (b - a) * t.w_hi, radius[li]);
           if (frac <= 0) return;
           direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
