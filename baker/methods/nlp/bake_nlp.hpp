@@ -20,8 +20,8 @@ namespace hfbake {
 struct NlpOptions {
   int directions = 32;            // m azimuths (NS09 default 32)
   int levels_per_octave = 4;      // k_v = k_u
-  int level_offset = 2;           // o_v (visibility)
-  int radiance_level_offset = 2;  // o_u (indirect radiance)
+  int level_offset = 4;           // o_v (visibility; NS09: 2)
+  int radiance_level_offset = 4;  // o_u (indirect radiance; NS09: 2)
   nlp::AzimuthInterpolation interpolation = nlp::AzimuthInterpolation::linear;
   int light_level_offset = 4;       // o_v for directional lights' visibility (>= level_offset)
   bool light_horizon_knots = true;  // lights: max over the knot angles instead of the B-spline curve
