@@ -14,9 +14,11 @@ namespace hfbake {
 namespace {
 
 struct Exactness {
-  double hull_max = 0;    // |hull (double) - march|, radians
-  double worker_max = 0;  // |worker output (float, fast atan) - march|
-  double far_max = 0;     // |far worker (lagging near radius) - march over the samples that far behind|
+  double hull_max = 0;     // |hull (double) - march|, radians
+  double worker_max = 0;   // |worker output (float, fast atan) - march|
+  double far_max = 0;      // |far worker (lagging near radius) - march over the samples that far behind|
+  double cross_max = 0;    // the same with the row and diagonal crossings as extra points
+  double surface_max = 0;  // |crossing height - triangulated surface there|
   long receivers = 0, none_mismatch = 0;
 };
 
@@ -24,9 +26,12 @@ Exactness check_field(const HeightField& f, int K) {
   Exactness ex;
   SweepSpec spec;
   spec.directions = K;
-  p1::HorizonLineWorker worker, far_worker;
+  p1::HorizonLineWorker worker, far_worker, cross_worker;
   far_worker.far_radius = 2.0;  // texel size 1: samples >= 2 texels behind (the default near radius)
-  std::vector<float> z, out, out_far;
+  cross_worker.far_radius = 2.0;
+  cross_worker.crossings = &f;
+  std::vector<float> z, out, out_far, out_cross, pz;
+  std::vector<double> pos;
   for (int k = 0; k < K; ++k) {
     const SweepDirection d = plan_direction(f, spec, k);
     for (int l = d.line_begin; l < d.line_end; ++l) {
@@ -39,6 +44,18 @@ Exactness check_field(const HeightField& f, int K) {
       out_far.assign(out.size(), 0.0f);
       far_worker(line, out_far.data());
       const int lag = p1::far_lag(far_worker.far_radius, line.step);
+      out_cross.assign(out.size(), 0.0f);
+      cross_worker(line, out_cross.data());
+      cross_worker.terrain_points(line, pos, pz);
+      for (std::size_t q = 0; q < pos.size(); ++q) {  // every point lies on the triangulated surface
+        const int n0 = int(std::floor(pos[q]));
+        const double t = pos[q] - n0;
+        const double x = line.x(n0) + (n0 + 1 < line.count ? line.x(n0 + 1) - line.x(n0) : 0) * t;
+        const double y = line.y(n0) + (n0 + 1 < line.count ? line.y(n0 + 1) - line.y(n0) : 0) * t;
+        const double xw = f.wrap == Wrap::repeat ? x - f.width * std::floor(x / f.width) : x;
+        const double yw = f.wrap == Wrap::repeat ? y - f.height * std::floor(y / f.height) : y;
+        ex.surface_max = std::max(ex.surface_max, std::fabs(pz[q] - truth::tri_height(f, xw, yw)));
+      }
       for (int n = 0; n < line.count; ++n) {
         p1::HorizonCaster c;
         if (line.is_terrain(n))
@@ -60,6 +77,18 @@ Exactness check_field(const HeightField& f, int K) {
           const double far_truth = truth::march_same_points(line, n, n - lag + 1);
           ex.far_max =
               std::max(ex.far_max, std::fabs(double(p1::caster_elevation(of[0], of[1])) - far_truth));
+          // Crossings: the column samples plus the row and diagonal crossings (their heights checked
+          // against the triangulated surface below); brute force over those at least 2 texels behind.
+          double cross_truth = truth::kNone;
+          for (std::size_t q = 0; q < pos.size(); ++q) {
+            if (pos[q] > n - 2.0 / line.step + 1e-9) break;
+            cross_truth =
+                std::max(cross_truth, std::atan2(double(pz[q]) - line.z[n], (n - pos[q]) * line.step));
+          }
+          const float* oc =
+              out_cross.data() + std::size_t(n - line.first_receiver) * p1::HorizonLineWorker::channels();
+          ex.cross_max =
+              std::max(ex.cross_max, std::fabs(double(p1::caster_elevation(oc[0], oc[1])) - cross_truth));
         }
         ++ex.receivers;
       }
@@ -91,12 +120,14 @@ TEST(HullStack, ExactAgainstSamePointsMarch) {
       const Exactness ex = check_field(c.field, K);
       std::printf(
           "[exactness] %-15s K=%2d receivers=%7ld  max|hull-march|=%.3g rad  max|layer-march|=%.3g rad  "
-          "max|far-march|=%.3g rad\n",
-          c.name, K, ex.receivers, ex.hull_max, ex.worker_max, ex.far_max);
+          "max|far-march|=%.3g rad  max|crossings-march|=%.3g rad (heights %.2g)\n",
+          c.name, K, ex.receivers, ex.hull_max, ex.worker_max, ex.far_max, ex.cross_max, ex.surface_max);
       EXPECT_EQ(ex.none_mismatch, 0) << c.name;
       EXPECT_LE(ex.hull_max, 1e-12) << c.name;   // the same caster up to double rounding
       EXPECT_LE(ex.worker_max, 1e-6) << c.name;  // plus the float fast atan of the stored layer
       EXPECT_LE(ex.far_max, 1e-6) << c.name;     // the lagging hull (far field) is exact too
+      EXPECT_LE(ex.cross_max, 1e-6) << c.name;   // and with the triangulation's crossings
+      EXPECT_LE(ex.surface_max, 1e-4) << c.name;
     }
   }
 }

@@ -49,6 +49,9 @@ inline int far_lag(double radius, double step) {
 struct HorizonLineWorker {
   HullStack stack;
   double far_radius = 0;  // world units; 0: every sample casts (Algorithm 1), else only those >= it behind
+  // With far_radius > 0: also the points where the line crosses rows and the quads' diagonals (the kinks
+  // of the reference's triangulated surface between columns; heights from this field) are occluders.
+  const HeightField* crossings = nullptr;
 
   static constexpr int channels() { return 2; }
 
@@ -75,6 +78,10 @@ struct HorizonLineWorker {
       }
       return;
     }
+    if (crossings) {
+      with_crossings(line, out);
+      return;
+    }
     // The stack holds the terrain samples at least `lag` behind the receiver (the hull of a prefix).
     int fed = line.inside_begin;
     for (int n = std::max(line.inside_begin, line.first_receiver); n < line.inside_end; ++n) {
@@ -83,7 +90,80 @@ struct HorizonLineWorker {
     }
   }
 
+  // The terrain points of a line with its row and diagonal crossings: positions in steps from sample 0
+  // (column samples at integers), heights; exposed for the exactness test.
+  void terrain_points(const SweepLine& line, std::vector<double>& pos, std::vector<float>& z) const {
+    pos.clear(), z.clear();
+    const SweepDirection& d = *line.dir;
+    const HeightField& f = *crossings;
+    const bool wrap = f.wrap == Wrap::repeat;
+    // Heights at (major, minor) texel coordinates; a clamp line's crossings between two samples on the
+    // field have every corner on the field (no clamping needed).
+    const float* Z = f.z.data();
+    const std::ptrdiff_t su_stride = d.x_major ? 1 : f.width, sv_stride = d.x_major ? f.width : 1;
+    auto at = [&](int uu, int vv) {
+      if (wrap) return d.x_major ? f.at(uu, vv) : f.at(vv, uu);
+      return Z[uu * su_stride + vv * sv_stride];
+    };
+    for (int n = line.inside_begin; n < line.inside_end; ++n) {
+      pos.push_back(n), z.push_back(line.z[n]);
+      if (n + 1 >= line.inside_end) break;
+      const double u0 = d.u(n), v0 = d.v(line.line, n), v1 = d.v(line.line, n + 1);
+      const double w0 = u0 + v0, w1 = double(d.u(n + 1)) + v1;
+      double cs[3];
+      float cz[3];
+      int m = 0;
+      // Row crossings: v integer strictly between v0 and v1 (at most one: |slope| <= 1).
+      for (double k = std::floor(std::min(v0, v1)) + 1; k < std::max(v0, v1); k += 1) {
+        const double t = (k - v0) / (v1 - v0);  // fraction of the step
+        const double u = u0 + d.su * t, fu = std::floor(u);
+        const float a = at(int(fu), int(k)), b = at(int(fu) + 1, int(k));
+        cs[m] = n + t, cz[m] = float(a + (b - a) * (u - fu)), ++m;
+      }
+      // Diagonal crossings: u + v integer strictly between w0 and w1 (at most two).
+      for (double k = std::floor(std::min(w0, w1)) + 1; k < std::max(w0, w1); k += 1) {
+        const double t = (k - w0) / (w1 - w0);
+        const double u = u0 + d.su * t, v = k - u, fv = std::floor(v);
+        const int cu = int(k) - int(fv) - 1;  // the cell (cu, fv): its diagonal runs (cu+1, fv)-(cu, fv+1)
+        const float a = at(cu + 1, int(fv)), b = at(cu, int(fv) + 1);
+        cs[m] = n + t, cz[m] = float(a + (b - a) * (v - fv)), ++m;
+      }
+      if (m > 1 && cs[1] < cs[0]) std::swap(cs[0], cs[1]), std::swap(cz[0], cz[1]);
+      if (m > 2) {
+        if (cs[2] < cs[1]) std::swap(cs[1], cs[2]), std::swap(cz[1], cz[2]);
+        if (cs[1] < cs[0]) std::swap(cs[0], cs[1]), std::swap(cz[0], cz[1]);
+      }
+      // A crossing on or below the chord of its neighbours (a valley kink) is never on the upper hull:
+      // left out (it is inside the hull of the points kept, so no horizon changes).
+      for (int c = 0; c < m; ++c) {
+        if (!(cs[c] > n && cs[c] < n + 1)) continue;
+        const double ps = pos.back(), pzv = z.back();
+        const double ns = c + 1 < m ? cs[c + 1] : n + 1, nzv = c + 1 < m ? cz[c + 1] : line.z[n + 1];
+        if ((double(cz[c]) - pzv) * (ns - ps) <= (nzv - pzv) * (cs[c] - ps)) continue;
+        pos.push_back(cs[c]), z.push_back(cz[c]);
+      }
+    }
+  }
+
  private:
+  HullStackF fstack;
+  std::vector<double> pos_;
+  std::vector<float> pz_;
+
+  void with_crossings(const SweepLine& line, float* out) {
+    terrain_points(line, pos_, pz_);
+    fstack.reset(int(pos_.size()));
+    const double reach = far_radius / line.step;  // in steps
+    std::size_t fed = 0;
+    for (int n = std::max(line.inside_begin, line.first_receiver); n < line.inside_end; ++n) {
+      for (; fed < pos_.size() && pos_[fed] <= n - reach + 1e-9; ++fed) fstack.add(pos_[fed], pz_[fed]);
+      const HorizonCasterF c = fstack.query(n, line.z[n]);
+      float* o = out + std::size_t(n - line.first_receiver) * 2;
+      o[0] = float(c.dz);
+      o[1] = c.any ? float(c.ds * line.step) : std::numeric_limits<float>::infinity();
+    }
+  }
+
   static void write(float* o, const HorizonCaster& c, float step) {
     o[0] = float(c.dz);
     o[1] = c.n < 0 ? std::numeric_limits<float>::infinity() : float(c.dn) * step;

@@ -88,4 +88,66 @@ class HullStack {
   int size_ = 0;
 };
 
+// The same hull over points at arbitrary increasing positions (double), for lines sampled between columns
+// too (HorizonLineWorker with triangle crossings). ds: distance to the caster in position units (0: none).
+struct HorizonCasterF {
+  bool any = false;
+  double dz = 0, ds = 0;
+};
+
+class HullStackF {
+ public:
+  void reset(int capacity) {
+    if (int(s_.size()) < capacity) {
+      s_.resize(capacity);
+      z_.resize(capacity);
+    }
+    size_ = 0;
+  }
+  int size() const { return size_; }
+  void add(double s, float z) {  // s greater than every earlier s; pops the points the new one hides
+    int top = size_ - 1;
+    if (top >= 1) {
+      double dz1 = double(z_[top]) - z, ds1 = s - s_[top];
+      while (top >= 1) {
+        const double dz2 = double(z_[top - 1]) - z, ds2 = s - s_[top - 1];
+        if (dz2 * ds1 >= dz1 * ds2) {
+          dz1 = dz2, ds1 = ds2;
+          --top;
+        } else {
+          break;
+        }
+      }
+    }
+    size_ = top + 1;
+    s_[size_] = s;
+    z_[size_] = z;
+    ++size_;
+  }
+  // The steepest point seen from (s, z), s beyond every point on the stack (binary search, as HullStack).
+  HorizonCasterF query(double s, float z) const {
+    HorizonCasterF c;
+    if (size_ == 0) return c;
+    int lo = 0, hi = size_ - 1;
+    while (lo < hi) {
+      const int m = (lo + hi) / 2;
+      const double dza = double(z_[m]) - z, dsa = s - s_[m];
+      const double dzb = double(z_[m + 1]) - z, dsb = s - s_[m + 1];
+      if (dza * dsb >= dzb * dsa)
+        hi = m;
+      else
+        lo = m + 1;
+    }
+    c.any = true;
+    c.dz = double(z_[lo]) - z;
+    c.ds = s - s_[lo];
+    return c;
+  }
+
+ private:
+  std::vector<double> s_;
+  std::vector<float> z_;
+  int size_ = 0;
+};
+
 }  // namespace hfbake::p1

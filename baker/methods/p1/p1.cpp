@@ -57,6 +57,10 @@ P1Params parse_p1_params(const nlohmann::json& e) {
     if (!(p.near_radius >= 1 && p.near_radius <= 64))
       throw InputError("", "near_radius", "must be in [1, 64]");
   }
+  if (e.contains("far_crossings")) {
+    if (!e.at("far_crossings").is_boolean()) throw InputError("", "far_crossings", "must be true or false");
+    p.far_crossings = e.at("far_crossings").get<bool>();
+  }
   if (e.contains("lights")) {
     if (!e.at("lights").is_boolean()) throw InputError("", "lights", "must be true or false");
     p.lights = e.at("lights").get<bool>();
@@ -223,6 +227,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       [&] {
         p1::HorizonLineWorker w;
         w.far_radius = far_radius;
+        w.crossings = p.far_crossings ? &f : nullptr;
         return w;
       },
       [&](const SweepTile& t) {
@@ -397,6 +402,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
         [&] {
           p1::HorizonLineWorker w;
           w.far_radius = far_radius;
+          w.crossings = p.far_crossings ? &f : nullptr;
           return w;
         },
         [&](int li, int i, int j, const TexelTaps& t) {

@@ -38,8 +38,9 @@ struct P1Params {
   int normal_bins = 0;     // 0: exact factorised tables; odd >= 3: P1's theta_n bins (odd: up is exact)
   int horizon_bins = 256;  // theta_h resolution of the lighting tables over [0, pi]
   int wrap_periods = 1;    // repeat mode warm-up (see SweepSpec)
-  double near_radius =
-      2;  // texels: horizons marched exactly from each texel center this far (horizon_sweep.hpp)
+  // Texels: horizons marched exactly from each texel center this far (horizon_sweep.hpp).
+  double near_radius = 2;
+  bool far_crossings = true;  // far field: also the lines' row and diagonal crossings (triangle kinks)
   bool ao = true, vsky = true, direct = true;
   bool horizon = false, horizon_distance = false, bent_normal = false;
   bool lights = true;  // add the scene's directional lights to direct
