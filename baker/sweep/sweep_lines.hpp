@@ -17,7 +17,8 @@
 //   Such a point lies on a cell edge, where the reference's triangulated surface (two triangles per quad,
 //   split along (i+1, j)-(i, j+1)) has the same height; the surface's kinks between columns (where a line
 //   crosses a row or a quad's diagonal) are not samples, so a hull over the samples can miss a caster there
-//   (P1 marches those crossings itself near each texel: methods/p1/horizon_sweep.hpp).
+//   (P1's line worker adds them from the field, and its texels march them nearby:
+//   methods/p1/horizon_sweep.hpp).
 // * Walk order: a line is walked towards phi_k + pi: sample n - 1 lies in direction phi_k from sample n.
 //   So the samples a visitor has already seen when it reaches sample n are exactly the terrain that sample
 //   n sees when it looks towards azimuth phi_k (the horizon direction k of the contract).
