@@ -94,11 +94,17 @@ struct LightSetup {
   float sh[9];                // a_l Y_k(dir) / pi: the light's contribution to sh_irradiance per unit
 };
 
+// Per-thread buffers: one row of receivers (heights per level, per-receiver outputs) and one march.
 struct Scratch {
-  std::vector<float> recv, omega, dist, curve;
+  std::vector<float> recv, omega, dist, curve, row;
   std::vector<int> lev;
-  explicit Scratch(int levels, int steps)
-      : recv(levels), omega(steps + 1), dist(steps + 1), curve(2 * steps + 2), lev(steps + 1) {}
+  explicit Scratch(int levels, int steps, int width, int row_floats)
+      : recv(std::size_t(levels) * width),
+        omega(steps + 1),
+        dist(steps + 1),
+        curve(2 * steps + 2),
+        row(std::size_t(row_floats) * width),
+        lev(steps + 1) {}
 };
 
 bool wants(const NlpOptions& o, const char* name) {
@@ -160,21 +166,26 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
   std::vector<float> vis(want_vis ? N * kSh : 0), irr(want_irr ? N * 27 : 0);
 
   const int lv = nlp::height_levels(ms), steps = ms.steps;
-  tbb::enumerable_thread_specific<Scratch> scratch([&] { return Scratch(lv, steps); });
+  // Row buffers: V and the lights' visibility (kSh + lights), or U and the exact-cosine E (3 kSh + 3).
+  const int row_floats = std::max(kSh + int(scene.lights.size()), 3 * kSh + 3);
+  tbb::enumerable_thread_specific<Scratch> scratch([&] { return Scratch(lv, steps, W, row_floats); });
   const double units = double(H) * (1 + std::max(0, scene.bounces));
   std::atomic<int> rows_done{0};
 
-  // Receiver heights in every height level (Eq. 15's f_i(x, y)).
-  auto receiver = [&](Scratch& s, int i, int j) {
-    for (int l = 0; l < lv; ++l) s.recv[l] = nlp::sample_level1(hp, hp.levels[l], float(i), float(j));
+  // Receiver heights in every height level (Eq. 15's f_i(x, y)) for a row of receivers (xs[t], j).
+  auto receivers = [&](Scratch& s, const int* xs, int cnt, int j) {
+    for (int t = 0; t < cnt; ++t)
+      for (int l = 0; l < lv; ++l)
+        s.recv[std::size_t(t) * lv + l] = nlp::sample_level1(hp, hp.levels[l], float(xs[t]), float(j));
   };
   // Directional lights march with their own (sharper) level offset; the pyramid has enough levels.
   const nlp::MarchSetup ms_light =
       nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
                             std::max(o.level_offset, o.light_level_offset), o.radiance_level_offset);
-  auto omega_max = [&](Scratch& s, int i, int j, float cx, float cy, const Vec3f& n, bool light = false) {
-    const int cnt = nlp::march(light ? ms_light : ms, hp, i, j, cx, cy, s.recv.data(), s.omega.data(),
-                               s.dist.data(), s.lev.data());
+  auto omega_max = [&](Scratch& s, const float* recv, int i, int j, float cx, float cy, const Vec3f& n,
+                       bool light = false) {
+    const int cnt = nlp::march(light ? ms_light : ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(),
+                               s.lev.data());
     if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
     if (light && o.light_horizon_knots) return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
     return nlp::bspline_max(s.omega.data(), cnt);
@@ -187,25 +198,17 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
   auto coarse_i = [&](int ci) { return std::min(ci * sub, W - 1); };
   auto coarse_j = [&](int cj) { return std::min(cj * sub, H - 1); };
   const std::size_t nl = lights.size();
+  std::vector<int> xs_full(W), xs_coarse(cw);
+  for (int i = 0; i < W; ++i) xs_full[i] = i;
+  for (int ci = 0; ci < cw; ++ci) xs_coarse[ci] = coarse_i(ci);
 
-  // Kernel: V (Eq. 11, 20-21) and the restricted-extent visibility of each light at receiver (i, j).
-  auto visibility = [&](Scratch& s, int i, int j, float* V, float* frac) {
-    const Vec3f n = normals[f.index(i, j)];
-    receiver(s, i, j);
-    std::fill(V, V + kSh, 0.0f);
-    for (int a = 0; a < m; ++a) {
-      const float wmax = omega_max(s, i, j, cphi[a], sphi[a], n);
-      float v[4];
-      nlp::band4(std::sin(wmax), 1.0f, v);
-      const float* Aj = A[a].data();
-      for (int r = 0; r < kSh; ++r)
-        V[r] += Aj[r * 4] * v[0] + Aj[r * 4 + 1] * v[1] + Aj[r * 4 + 2] * v[2] + Aj[r * 4 + 3] * v[3];
-    }
+  // The restricted-extent visibility of each light at receiver (i, j) (NS09 §6).
+  auto light_visibility = [&](Scratch& s, const float* recv, int i, int j, const Vec3f& n, float* frac) {
     for (std::size_t q = 0; q < nl; ++q) {
       const LightSetup& L = lights[q];
       float fr = 0;
       for (std::size_t k = 0; k < L.cx.size(); ++k) {
-        const float wmax = omega_max(s, i, j, L.cx[k], L.cy[k], n, true);
+        const float wmax = omega_max(s, recv, i, j, L.cx[k], L.cy[k], n, true);
         if (L.radius > 0) {
           const float lo = std::max(L.elevation - L.radius, -1.5707963f);
           const float hi = std::min(L.elevation + L.radius, 1.5707963f);
@@ -216,6 +219,34 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
         }
       }
       frac[q] = fr / float(L.cx.size());
+    }
+  };
+
+  // Kernel: V (Eq. 11, 20-21) and the lights' visibility for the row of receivers (xs[t], j), t < cnt:
+  // out[t * stride] = V (kSh floats), then the lights' fractions. Azimuth-major over the row (neighbouring
+  // receivers march the same direction through the same cache lines); each receiver still sums its azimuths
+  // in order, so the bits do not depend on the loop order.
+  auto visibility = [&](Scratch& s, const int* xs, int cnt, int j, float* out, int stride) {
+    receivers(s, xs, cnt, j);
+    for (int t = 0; t < cnt; ++t)
+      std::fill(out + std::size_t(t) * stride, out + std::size_t(t) * stride + kSh, 0.0f);
+    for (int a = 0; a < m; ++a) {
+      const float* Aj = A[a].data();
+      for (int t = 0; t < cnt; ++t) {
+        const int i = xs[t];
+        const float wmax =
+            omega_max(s, s.recv.data() + std::size_t(t) * lv, i, j, cphi[a], sphi[a], normals[f.index(i, j)]);
+        float v[4];
+        nlp::band4(std::sin(wmax), 1.0f, v);
+        float* V = out + std::size_t(t) * stride;
+        for (int r = 0; r < kSh; ++r)
+          V[r] += Aj[r * 4] * v[0] + Aj[r * 4 + 1] * v[1] + Aj[r * 4 + 2] * v[2] + Aj[r * 4 + 3] * v[3];
+      }
+    }
+    for (int t = 0; t < cnt; ++t) {
+      const int i = xs[t];
+      light_visibility(s, s.recv.data() + std::size_t(t) * lv, i, j, normals[f.index(i, j)],
+                       out + std::size_t(t) * stride + kSh);
     }
   };
 
@@ -276,11 +307,11 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
     tbb::parallel_for(0, H, [&](int j) {
       rc.check();
       Scratch& s = scratch.local();
-      float V[kSh];
-      std::vector<float> frac(nl);
+      const int stride = kSh + int(nl);
+      visibility(s, xs_full.data(), W, j, s.row.data(), stride);
       for (int i = 0; i < W; ++i) {
-        visibility(s, i, j, V, frac.data());
-        shade_direct(f.index(i, j), V, frac.data());
+        const float* V = s.row.data() + std::size_t(i) * stride;
+        shade_direct(f.index(i, j), V, V + kSh);
       }
       rc.report(std::min(1.0, (rows_done += 1) / units));
     });
@@ -290,10 +321,8 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
     tbb::parallel_for(0, ch, [&](int cj) {
       rc.check();
       Scratch& s = scratch.local();
-      for (int ci = 0; ci < cw; ++ci) {
-        float* out = coarse.data() + (std::size_t(cj) * cw + ci) * stride;
-        visibility(s, coarse_i(ci), coarse_j(cj), out, out + kSh);
-      }
+      visibility(s, xs_coarse.data(), cw, coarse_j(cj), coarse.data() + std::size_t(cj) * cw * stride,
+                 stride);
       rc.report(std::min(1.0, (rows_done += sub) / units));
     });
     tbb::parallel_for(0, H, [&](int j) {
@@ -321,57 +350,62 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
     // E (optional, 3 floats): the irradiance / (2 pi / m) of the same casting-set segments with the exact
     // cosine: segment (e0, e1] of radiance r adds r * (F(e1) - F(e0)), F(e) = n_h (e + sin e cos e) / 2 +
     // n_z sin^2 e / 2, the integral of (n_h cos e + n_z sin e) cos e (n_h = n . azimuth).
-    auto radiance = [&](Scratch& s, int i, int j, float* U, float* E) {
-      const Vec3f n = normals[f.index(i, j)];
-      receiver(s, i, j);
-      std::fill(U, U + 3 * kSh, 0.0f);
-      if (E) E[0] = E[1] = E[2] = 0;
-      for (int a = 0; a < m; ++a) {
-        const float cx = cphi[a], cy = sphi[a];
-        const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
-        const float nh = n.x * cx + n.y * cy, nz = n.z;
-        auto F = [&](float e, float se) {
-          const float ce = std::sqrt(std::max(0.0f, 1 - se * se));
-          return 0.5f * (nh * (e + se * ce) + nz * se * se);
-        };
-        float prevF = E ? F(wmin, std::sin(wmin)) : 0.0f;
-        const int cnt =
-            nlp::march(ms, hp, i, j, cx, cy, s.recv.data(), s.omega.data(), s.dist.data(), s.lev.data());
-        const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
-        float u[3][4] = {}, prev[4];
-        nlp::occlusion4(std::sin(wmin), prev);
-        float run = wmin;
-        bool any = false;
-        for (int p = 0; p < nc; ++p) {
-          if (!(s.curve[p] > run)) continue;
-          run = s.curve[p];
-          const int k = p >> 1;
-          const float dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
-          float rad[3];
-          const nlp::PyramidLevel& L = rp.levels[ms.rlevel[s.lev[k]]];
-          nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
-          float nu[4];
-          const float srun = std::sin(run);
-          nlp::occlusion4(srun, nu);
-          for (int l = 0; l < 4; ++l) {
-            const float dl = nu[l] - prev[l];
-            u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
-            prev[l] = nu[l];
+    // Row form as visibility: receivers (xs[t], j), U at out[t * 3 kSh], E (if exact) at Eout[t * 3].
+    auto radiance = [&](Scratch& s, const int* xs, int cnt_row, int j, float* Uout, float* Eout) {
+      receivers(s, xs, cnt_row, j);
+      std::fill(Uout, Uout + std::size_t(cnt_row) * 3 * kSh, 0.0f);
+      if (Eout) std::fill(Eout, Eout + std::size_t(cnt_row) * 3, 0.0f);
+      for (int a = 0; a < m; ++a)
+        for (int t = 0; t < cnt_row; ++t) {
+          const int i = xs[t];
+          const Vec3f n = normals[f.index(i, j)];
+          const float* recv = s.recv.data() + std::size_t(t) * lv;
+          float* U = Uout + std::size_t(t) * 3 * kSh;
+          float* E = Eout ? Eout + std::size_t(t) * 3 : nullptr;
+          const float cx = cphi[a], cy = sphi[a];
+          const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
+          const float nh = n.x * cx + n.y * cy, nz = n.z;
+          auto F = [&](float e, float se) {
+            const float ce = std::sqrt(std::max(0.0f, 1 - se * se));
+            return 0.5f * (nh * (e + se * ce) + nz * se * se);
+          };
+          float prevF = E ? F(wmin, std::sin(wmin)) : 0.0f;
+          const int cnt = nlp::march(ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
+          const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
+          float u[3][4] = {}, prev[4];
+          nlp::occlusion4(std::sin(wmin), prev);
+          float run = wmin;
+          bool any = false;
+          for (int p = 0; p < nc; ++p) {
+            if (!(s.curve[p] > run)) continue;
+            run = s.curve[p];
+            const int k = p >> 1;
+            const float dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
+            float rad[3];
+            const nlp::PyramidLevel& L = rp.levels[ms.rlevel[s.lev[k]]];
+            nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
+            float nu[4];
+            const float srun = std::sin(run);
+            nlp::occlusion4(srun, nu);
+            for (int l = 0; l < 4; ++l) {
+              const float dl = nu[l] - prev[l];
+              u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
+              prev[l] = nu[l];
+            }
+            if (E) {
+              const float Fr = F(run, srun), dF = Fr - prevF;
+              E[0] += rad[0] * dF, E[1] += rad[1] * dF, E[2] += rad[2] * dF;
+              prevF = Fr;
+            }
+            any = true;
           }
-          if (E) {
-            const float Fr = F(run, srun), dF = Fr - prevF;
-            E[0] += rad[0] * dF, E[1] += rad[1] * dF, E[2] += rad[2] * dF;
-            prevF = Fr;
-          }
-          any = true;
+          if (!any) continue;
+          const float* Aj = A[a].data();
+          for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < kSh; ++r)
+              U[c * kSh + r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
+                                Aj[r * 4 + 3] * u[c][3];
         }
-        if (!any) continue;
-        const float* Aj = A[a].data();
-        for (int c = 0; c < 3; ++c)
-          for (int r = 0; r < kSh; ++r)
-            U[c * kSh + r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
-                              Aj[r * 4 + 3] * u[c][3];
-      }
     };
     auto shade_indirect = [&](std::size_t idx, const float* U, const float* E) {
       if (E) {
@@ -394,12 +428,11 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       tbb::parallel_for(0, H, [&](int j) {
         rc.check();
         Scratch& s = scratch.local();
-        float U[3 * kSh], E[3];
-        float* Ep = o.exact_indirect_cosine ? E : nullptr;
-        for (int i = 0; i < W; ++i) {
-          radiance(s, i, j, U, Ep);
-          shade_indirect(f.index(i, j), U, Ep);
-        }
+        float* U = s.row.data();
+        float* E = o.exact_indirect_cosine ? U + std::size_t(W) * 3 * kSh : nullptr;
+        radiance(s, xs_full.data(), W, j, U, E);
+        for (int i = 0; i < W; ++i)
+          shade_indirect(f.index(i, j), U + std::size_t(i) * 3 * kSh, E ? E + std::size_t(i) * 3 : nullptr);
         rc.report(std::min(1.0, (rows_done += 1) / units));
       });
     } else {
@@ -407,9 +440,8 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       tbb::parallel_for(0, ch, [&](int cj) {
         rc.check();
         Scratch& s = scratch.local();
-        for (int ci = 0; ci < cw; ++ci)
-          radiance(s, coarse_i(ci), coarse_j(cj), coarse.data() + (std::size_t(cj) * cw + ci) * 3 * kSh,
-                   nullptr);
+        radiance(s, xs_coarse.data(), cw, coarse_j(cj), coarse.data() + std::size_t(cj) * cw * 3 * kSh,
+                 nullptr);
         rc.report(std::min(1.0, (rows_done += sub) / units));
       });
       tbb::parallel_for(0, H, [&](int j) {
