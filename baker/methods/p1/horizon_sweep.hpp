@@ -105,28 +105,39 @@ struct HorizonLineWorker {
       if (wrap) return d.x_major ? f.at(uu, vv) : f.at(vv, uu);
       return Z[uu * su_stride + vv * sv_stride];
     };
+    // Per step the minor coordinate v moves by dv = su * slope and w = u + v by dw = su * (1 + slope).
+    const double dv = d.su * d.slope, dw = d.su * (1 + d.slope);
+    const double inv_dv = dv != 0 ? 1 / dv : 0, inv_dw = dw != 0 ? 1 / dw : 0;
     for (int n = line.inside_begin; n < line.inside_end; ++n) {
       pos.push_back(n), z.push_back(line.z[n]);
       if (n + 1 >= line.inside_end) break;
-      const double u0 = d.u(n), v0 = d.v(line.line, n), v1 = d.v(line.line, n + 1);
-      const double w0 = u0 + v0, w1 = double(d.u(n + 1)) + v1;
+      const int u0 = d.u(n);
+      const double v0 = d.v(line.line, n), v1 = v0 + dv, w0 = u0 + v0, w1 = w0 + dw;
       double cs[3];
       float cz[3];
       int m = 0;
       // Row crossings: v integer strictly between v0 and v1 (at most one: |slope| <= 1).
-      for (double k = std::floor(std::min(v0, v1)) + 1; k < std::max(v0, v1); k += 1) {
-        const double t = (k - v0) / (v1 - v0);  // fraction of the step
-        const double u = u0 + d.su * t, fu = std::floor(u);
-        const float a = at(int(fu), int(k)), b = at(int(fu) + 1, int(k));
-        cs[m] = n + t, cz[m] = float(a + (b - a) * (u - fu)), ++m;
+      if (dv != 0) {
+        const int k = dv > 0 ? floor_int(v0) + 1 : -floor_int(-v0) - 1;  // the next integer beyond v0
+        if (dv > 0 ? k < v1 : k > v1) {
+          const double t = (k - v0) * inv_dv;  // fraction of the step
+          const double u = u0 + d.su * t;
+          const int fu = floor_int(u);
+          const float a = at(fu, k), b = at(fu + 1, k);
+          cs[m] = n + t, cz[m] = float(a + (b - a) * (u - fu)), ++m;
+        }
       }
       // Diagonal crossings: u + v integer strictly between w0 and w1 (at most two).
-      for (double k = std::floor(std::min(w0, w1)) + 1; k < std::max(w0, w1); k += 1) {
-        const double t = (k - w0) / (w1 - w0);
-        const double u = u0 + d.su * t, v = k - u, fv = std::floor(v);
-        const int cu = int(k) - int(fv) - 1;  // the cell (cu, fv): its diagonal runs (cu+1, fv)-(cu, fv+1)
-        const float a = at(cu + 1, int(fv)), b = at(cu, int(fv) + 1);
-        cs[m] = n + t, cz[m] = float(a + (b - a) * (v - fv)), ++m;
+      if (dw != 0) {
+        for (int k = dw > 0 ? floor_int(w0) + 1 : -floor_int(-w0) - 1; dw > 0 ? k < w1 : k > w1;
+             k += dw > 0 ? 1 : -1) {
+          const double t = (k - w0) * inv_dw;
+          const double u = u0 + d.su * t, v = k - u;
+          const int fv = floor_int(v);
+          const int cu = k - fv - 1;  // the cell (cu, fv): its diagonal runs (cu+1, fv)-(cu, fv+1)
+          const float a = at(cu + 1, fv), b = at(cu, fv + 1);
+          cs[m] = n + t, cz[m] = float(a + (b - a) * (v - fv)), ++m;
+        }
       }
       if (m > 1 && cs[1] < cs[0]) std::swap(cs[0], cs[1]), std::swap(cz[0], cz[1]);
       if (m > 2) {
