@@ -49,9 +49,10 @@ void BM_Bake(benchmark::State& state) {
   }
   state.counters["texels/s"] =
       benchmark::Counter(double(s.field.texel_count()) * state.iterations(), benchmark::Counter::kIsRate);
-  const nlp::MarchSetup ms = nlp::make_march_setup(size, size, 1.0, Wrap::clamp, 4, 2, 2);
-  const nlp::Pyramid hp =
-      nlp::build_pyramid(s.field.z.data(), 1, size, size, Wrap::clamp, 4, nlp::height_levels(ms));
+  const nlp::MarchSetup ms = nlp::make_march_setup(size, size, 1.0, Wrap::clamp, o.levels_per_octave,
+                                                   o.level_offset, o.radiance_level_offset);
+  const nlp::Pyramid hp = nlp::build_pyramid(s.field.z.data(), 1, size, size, Wrap::clamp,
+                                             o.levels_per_octave, nlp::height_levels(ms));
   state.counters["height_pyramid_MB"] = double(hp.bytes()) / 1e6;
   state.counters["height_levels"] = double(hp.levels.size());
   state.counters["full_res_stack_MB"] = double(hp.levels.size()) * size * size * 4 / 1e6;
