@@ -64,8 +64,8 @@ Exactness check_field(const HeightField& f, int K) {
           c = hull.query(n, line.z[n]);
         if (n < line.first_receiver) continue;
         const double truth = truth::march_same_points(line, n);
-        const double got = c.n < 0 ? truth::kNone : std::atan2(c.dz, c.dn * line.step);
-        if ((c.n < 0) != (truth == truth::kNone)) ++ex.none_mismatch;
+        const double got = !c.any ? truth::kNone : std::atan2(c.dz, c.dist * line.step);
+        if (!c.any != (truth == truth::kNone)) ++ex.none_mismatch;
         ex.hull_max = std::max(ex.hull_max, std::fabs(got - truth));
         if (line.is_terrain(n)) {  // the worker skips points off a clamp field (never receivers)
           const float* o =
@@ -154,7 +154,7 @@ TEST(HullStack, QueryMatchesMarchForPointsBeyondTheHull) {
       double best = -10;
       for (int m = 0; m < n; ++m) best = std::max(best, (double(z[m]) - zq) / (at - m));
       const p1::HorizonCaster c = hull.query(at, zq);
-      ASSERT_NEAR(c.dz / c.dn, best, 1e-12);
+      ASSERT_NEAR(c.dz / c.dist, best, 1e-12);
     }
   }
 }

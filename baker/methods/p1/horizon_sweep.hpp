@@ -171,13 +171,13 @@ struct HorizonLineWorker {
       const HorizonCasterF c = fstack.query(n, line.z[n]);
       float* o = out + std::size_t(n - line.first_receiver) * 2;
       o[0] = float(c.dz);
-      o[1] = c.any ? float(c.ds * line.step) : std::numeric_limits<float>::infinity();
+      o[1] = c.any ? float(c.dist * line.step) : std::numeric_limits<float>::infinity();
     }
   }
 
   static void write(float* o, const HorizonCaster& c, float step) {
     o[0] = float(c.dz);
-    o[1] = c.n < 0 ? std::numeric_limits<float>::infinity() : float(c.dn) * step;
+    o[1] = c.any ? float(c.dist) * step : std::numeric_limits<float>::infinity();
   }
 };
 
