@@ -222,141 +222,139 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   const bool want_distance = p.horizon_distance;
   const RunControl main_rc = sub_progress(rc, 0.0, main_share);
   const double far_radius = p.near_radius * f.texel_size;
-  sweep_lines_tiled(
-      f, spec, main_rc,
-      [&] {
-        p1::HorizonLineWorker w;
-        w.far_radius = far_radius;
-        w.crossings = p.far_crossings ? &f : nullptr;
-        return w;
-      },
-      [&](const SweepTile& t) {
-        constexpr int kMax = 32;
-        const int k = t.k, w = t.width;
-        const float c = cs[k], s = sn[k];
-        alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax], e[kMax], en[kMax];
-        const std::size_t plane = std::size_t(t.width) * t.height;
-        for (int y = 0; y < t.height; ++y) {
-          const std::size_t base = f.index(t.i0, t.j0 + y);
-          {
-            // Near field: the steepest crossing within near_radius, marched from the texel center itself
-            // (interior texels by the direction's fixed stencil, vectorised; border texels one by one).
-            const int j = t.j0 + y;
-            const float* Z = f.z.data() + base;
-            for (int x = 0; x < w; ++x) en[x] = -1e30f;
-            int xa = w, xb = w;  // interior run [xa, xb) of this row
-            if (j >= margin && j < f.height - margin) {
-              xa = std::clamp(margin - t.i0, 0, w);
-              xb = std::clamp(f.width - margin - t.i0, xa, w);
-            }
-            const std::vector<p1::NearCrossing>& nc = near[k];
-            for (std::size_t c = 0; c < nc.size(); ++c) {
-              const float* za = Z + near_a[k][c];
-              const float* zb = Z + near_b[k][c];
-              const float wc = nc[c].w, inv_s = nc[c].inv_s;
-              for (int x = xa; x < xb; ++x) {
-                const float m = (za[x] + (zb[x] - za[x]) * wc - Z[x]) * inv_s;
-                en[x] = m > en[x] ? m : en[x];
-              }
-            }
-            int which;
-            for (int x = 0; x < xa; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
-            for (int x = xb; x < w; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
-            for (int x = 0; x < w; ++x) en[x] = fast_atan(en[x]);
-            // Far field: each tap's caster (>= near_radius behind it) seen from the texel: the tap sample
-            // lies `lift` above the texel's plane (see lift_of; zero on any plane), and the caster is taken
-            // that much higher relative to the texel (transfers compared in tests/p1/measure_p1.cpp: this
-            // one is exact on planes, best on the fractal field, and right at cliff rims).
-            const std::size_t row = std::size_t(y) * w;
-            const float *ld = t.lo + row, *lr = t.lo + plane + row;
-            const float *hd = t.hi + row, *hr = t.hi + plane + row;
-            const float* wh = t.w_hi + row;
-            const float *ol = t.off_lo + row, *oh = t.off_hi + row;
-            const float *cl = (x_major[k] ? cyl : cxl).data() + base,
-                        *cr = (x_major[k] ? cyr : cxr).data() + base;
-            for (int x = 0; x < w; ++x) {
-              const float lift_l = ol[x] * (ol[x] >= 0 ? cr[x] : cl[x]);
-              const float lift_h = oh[x] * (oh[x] >= 0 ? cr[x] : cl[x]);
-              const float a = std::max(en[x], p1::far_elevation(ld[x], lr[x], lift_l));
-              const float b = std::max(en[x], p1::far_elevation(hd[x], hr[x], lift_h));
-              e[x] = a + (b - a) * wh[x];
-            }
-          }
-          const float* NX = nx.data() + base;
-          const float* NY = ny.data() + base;
-          const float* NZ = nz.data() + base;
-          for (int x = 0; x < w; ++x) {
-            fast_sincos(e[x], se[x], ce[x]);
-            np_[x] = NX[x] * c + NY[x] * s;
-          }
-          if (p.vsky) {
-            float* v = vsky_sum.data() + base;
-            for (int x = 0; x < w; ++x) v[x] += se[x] > 0 ? se[x] : 0.0f;
-          }
-          if (need_theta) {
-            // theta = the horizon's zenith angle, or where the normal's hemisphere ends if that is higher.
-            for (int x = 0; x < w; ++x) {
-              const float n_p = np_[x], n_z = NZ[x];
-              // Everything computed unconditionally, then selected: the loop stays branch-free (vectorises).
-              const bool open = se[x] * n_z + ce[x] * n_p >= 0;
-              const float inv_len = 1.0f / std::sqrt(n_p * n_p + n_z * n_z);
-              const float th_plane = kHalfPiF + fast_atan2_pos(n_p, n_z);
-              st[x] = open ? ce[x] : n_z * inv_len;
-              ct[x] = open ? se[x] : -n_p * inv_len;
-              th[x] = std::min(kHalfPiF - e[x], th_plane);  // (open <=> the horizon's angle is the smaller)
-            }
-            if (need_ao) {
-              float* a = ao_sum.data() + base;
-              for (int x = 0; x < w; ++x) a[x] += NZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
-            }
-            if (profiles) {
-              float *R = dr.data() + base, *G = dg.data() + base, *B = db.data() + base;
-              for (int x = 0; x < w; ++x) {
-                const Rgb l = profiles->eval(k, th[x], st[x], ct[x], NZ[x], np_[x]);
-                R[x] += l.r, G[x] += l.g, B[x] += l.b;
-              }
-            }
-            if (p.bent_normal) {
-              float *X = bx.data() + base, *Y = by.data() + base, *Z = bz.data() + base;
-              for (int x = 0; x < w; ++x) {
-                const float s3 = st[x] * st[x] * st[x], c3 = ct[x] * ct[x] * ct[x];
-                const float horiz = NZ[x] * s3 / 3 + np_[x] * (2.0f / 3 - ct[x] + c3 / 3);
-                const float vert = NZ[x] * (1 - c3) / 3 + np_[x] * s3 / 3;
-                X[x] += horiz * c, Y[x] += horiz * s, Z[x] += vert;
-              }
-            }
-          }
-          if (tables) {
-            float *R = dr.data() + base, *G = dg.data() + base, *B = db.data() + base;
-            for (int x = 0; x < w; ++x) {
-              const float len = std::sqrt(np_[x] * np_[x] + NZ[x] * NZ[x]);
-              const Rgb l = tables->lookup(k, fast_atan(np_[x] / NZ[x]), kHalfPiF - e[x]) * len;
-              R[x] += l.r, G[x] += l.g, B[x] += l.b;
-            }
-          }
-          if (p.horizon)
-            for (int x = 0; x < w; ++x) r.horizon[(base + x) * K + k] = se[x];
-          if (want_distance) {  // the near crossing, or the larger-weight tap's far caster, seen from the
-                                // texel
-            const std::size_t row = std::size_t(y) * w;
-            const float *dz = t.nearest + row, *run = t.nearest + plane + row;
-            for (int x = 0; x < w; ++x) {
-              int which;
-              const float near_m = near_slope_border(k, t.i0 + x, t.j0 + y, &which);
-              const float off = t.w_hi[row + x] > 0.5f ? t.off_hi[row + x] : t.off_lo[row + x];
-              const float lift = lift_of(x_major[k], base + x, off);
-              const float far_e = p1::far_elevation(dz[x], run[x], lift);
-              float d;
-              if (which >= 0 && fast_atan(near_m) >= far_e)
-                d = std::sqrt(1 + near_m * near_m) / near[k][which].inv_s;  // run 1 / inv_s, rise m * run
-              else
-                d = run[x] == std::numeric_limits<float>::infinity() ? run[x]
-                                                                     : std::hypot(run[x], dz[x] + lift);
-              r.horizon_distance[(base + x) * K + k] = d;
-            }
+  // One line worker per thread, for the K directions and for the lights' own directions.
+  auto make_worker = [&] {
+    p1::HorizonLineWorker w;
+    w.far_radius = far_radius;
+    w.crossings = p.far_crossings ? &f : nullptr;
+    return w;
+  };
+  sweep_lines_tiled(f, spec, main_rc, make_worker, [&](const SweepTile& t) {
+    constexpr int kMax = 32;
+    const int k = t.k, w = t.width;
+    const float c = cs[k], s = sn[k];
+    alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax], e[kMax], en[kMax];
+    const std::size_t plane = std::size_t(t.width) * t.height;
+    for (int y = 0; y < t.height; ++y) {
+      const std::size_t base = f.index(t.i0, t.j0 + y);
+      {
+        // Near field: the steepest crossing within near_radius, marched from the texel center itself
+        // (interior texels by the direction's fixed stencil, vectorised; border texels one by one).
+        const int j = t.j0 + y;
+        const float* Z = f.z.data() + base;
+        for (int x = 0; x < w; ++x) en[x] = -1e30f;
+        int xa = w, xb = w;  // interior run [xa, xb) of this row
+        if (j >= margin && j < f.height - margin) {
+          xa = std::clamp(margin - t.i0, 0, w);
+          xb = std::clamp(f.width - margin - t.i0, xa, w);
+        }
+        const std::vector<p1::NearCrossing>& nc = near[k];
+        for (std::size_t c = 0; c < nc.size(); ++c) {
+          const float* za = Z + near_a[k][c];
+          const float* zb = Z + near_b[k][c];
+          const float wc = nc[c].w, inv_s = nc[c].inv_s;
+          for (int x = xa; x < xb; ++x) {
+            const float m = (za[x] + (zb[x] - za[x]) * wc - Z[x]) * inv_s;
+            en[x] = m > en[x] ? m : en[x];
           }
         }
-      });
+        int which;
+        for (int x = 0; x < xa; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
+        for (int x = xb; x < w; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
+        for (int x = 0; x < w; ++x) en[x] = fast_atan(en[x]);
+        // Far field: each tap's caster (>= near_radius behind it) seen from the texel: the tap sample
+        // lies `lift` above the texel's plane (see lift_of; zero on any plane), and the caster is taken
+        // that much higher relative to the texel (transfers compared in tests/p1/measure_p1.cpp: this
+        // one is exact on planes, best on the fractal field, and right at cliff rims).
+        const std::size_t row = std::size_t(y) * w;
+        const float *ld = t.lo + row, *lr = t.lo + plane + row;
+        const float *hd = t.hi + row, *hr = t.hi + plane + row;
+        const float* wh = t.w_hi + row;
+        const float *ol = t.off_lo + row, *oh = t.off_hi + row;
+        const float *cl = (x_major[k] ? cyl : cxl).data() + base,
+                    *cr = (x_major[k] ? cyr : cxr).data() + base;
+        for (int x = 0; x < w; ++x) {
+          const float lift_l = ol[x] * (ol[x] >= 0 ? cr[x] : cl[x]);
+          const float lift_h = oh[x] * (oh[x] >= 0 ? cr[x] : cl[x]);
+          const float a = std::max(en[x], p1::far_elevation(ld[x], lr[x], lift_l));
+          const float b = std::max(en[x], p1::far_elevation(hd[x], hr[x], lift_h));
+          e[x] = a + (b - a) * wh[x];
+        }
+      }
+      const float* NX = nx.data() + base;
+      const float* NY = ny.data() + base;
+      const float* NZ = nz.data() + base;
+      for (int x = 0; x < w; ++x) {
+        fast_sincos(e[x], se[x], ce[x]);
+        np_[x] = NX[x] * c + NY[x] * s;
+      }
+      if (p.vsky) {
+        float* v = vsky_sum.data() + base;
+        for (int x = 0; x < w; ++x) v[x] += se[x] > 0 ? se[x] : 0.0f;
+      }
+      if (need_theta) {
+        // theta = the horizon's zenith angle, or where the normal's hemisphere ends if that is higher.
+        for (int x = 0; x < w; ++x) {
+          const float n_p = np_[x], n_z = NZ[x];
+          // Everything computed unconditionally, then selected: the loop stays branch-free (vectorises).
+          const bool open = se[x] * n_z + ce[x] * n_p >= 0;
+          const float inv_len = 1.0f / std::sqrt(n_p * n_p + n_z * n_z);
+          const float th_plane = kHalfPiF + fast_atan2_pos(n_p, n_z);
+          st[x] = open ? ce[x] : n_z * inv_len;
+          ct[x] = open ? se[x] : -n_p * inv_len;
+          th[x] = std::min(kHalfPiF - e[x], th_plane);  // (open <=> the horizon's angle is the smaller)
+        }
+        if (need_ao) {
+          float* a = ao_sum.data() + base;
+          for (int x = 0; x < w; ++x) a[x] += NZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
+        }
+        if (profiles) {
+          float *R = dr.data() + base, *G = dg.data() + base, *B = db.data() + base;
+          for (int x = 0; x < w; ++x) {
+            const Rgb l = profiles->eval(k, th[x], st[x], ct[x], NZ[x], np_[x]);
+            R[x] += l.r, G[x] += l.g, B[x] += l.b;
+          }
+        }
+        if (p.bent_normal) {
+          float *X = bx.data() + base, *Y = by.data() + base, *Z = bz.data() + base;
+          for (int x = 0; x < w; ++x) {
+            const float s3 = st[x] * st[x] * st[x], c3 = ct[x] * ct[x] * ct[x];
+            const float horiz = NZ[x] * s3 / 3 + np_[x] * (2.0f / 3 - ct[x] + c3 / 3);
+            const float vert = NZ[x] * (1 - c3) / 3 + np_[x] * s3 / 3;
+            X[x] += horiz * c, Y[x] += horiz * s, Z[x] += vert;
+          }
+        }
+      }
+      if (tables) {
+        float *R = dr.data() + base, *G = dg.data() + base, *B = db.data() + base;
+        for (int x = 0; x < w; ++x) {
+          const float len = std::sqrt(np_[x] * np_[x] + NZ[x] * NZ[x]);
+          const Rgb l = tables->lookup(k, fast_atan(np_[x] / NZ[x]), kHalfPiF - e[x]) * len;
+          R[x] += l.r, G[x] += l.g, B[x] += l.b;
+        }
+      }
+      if (p.horizon)
+        for (int x = 0; x < w; ++x) r.horizon[(base + x) * K + k] = se[x];
+      if (want_distance) {  // the near crossing, or the larger-weight tap's far caster, seen from the
+                            // texel
+        const std::size_t row = std::size_t(y) * w;
+        const float *dz = t.nearest + row, *run = t.nearest + plane + row;
+        for (int x = 0; x < w; ++x) {
+          int which;
+          const float near_m = near_slope_border(k, t.i0 + x, t.j0 + y, &which);
+          const float off = t.w_hi[row + x] > 0.5f ? t.off_hi[row + x] : t.off_lo[row + x];
+          const float lift = lift_of(x_major[k], base + x, off);
+          const float far_e = p1::far_elevation(dz[x], run[x], lift);
+          float d;
+          if (which >= 0 && fast_atan(near_m) >= far_e)
+            d = std::sqrt(1 + near_m * near_m) / near[k][which].inv_s;  // run 1 / inv_s, rise m * run
+          else
+            d = run[x] == std::numeric_limits<float>::infinity() ? run[x] : std::hypot(run[x], dz[x] + lift);
+          r.horizon_distance[(base + x) * K + k] = d;
+        }
+      }
+    }
+  });
 
   const float inv_k = 1.0f / float(K);
   if (p.ao) r.ao.resize(N);
@@ -397,34 +395,26 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           p1::near_field_stencil(light_dirs.back().dx, light_dirs.back().dy, p.near_radius, f.texel_size));
     }
     const RunControl light_rc = sub_progress(rc, main_share, 1 - main_share);
-    sweep_lines(
-        f, ls, light_rc,
-        [&] {
-          p1::HorizonLineWorker w;
-          w.far_radius = far_radius;
-          w.crossings = p.far_crossings ? &f : nullptr;
-          return w;
-        },
-        [&](int li, int i, int j, const TexelTaps& t) {
-          const std::size_t idx = f.index(i, j);
-          const double ndl = dot(normals[idx].d(), dir[li]);
-          if (ndl <= 0) return;
-          // The horizon in the light's azimuth as for the K directions: the exact near field from the texel
-          // center, the far casters of both taps lifted by the minmod gradient, blended.
-          const SweepDirection& d = light_dirs[li];
-          const int u = d.x_major ? i : j, v0 = d.x_major ? j : i;
-          const double g = double(v0) - double(u) * d.slope;
-          const float fr = float(g - std::floor(g));
-          const bool lo_is_hi = !d.repeat && fr > 0 && d.n_minor > 1 && v0 == 0;  // as texel_taps
-          const float off_lo = lo_is_hi ? 1 - fr : -fr, off_hi = 1 - fr;
-          int which;
-          const float en = fast_atan(near_slope_at(light_near[li], i, j, &which));
-          const float a = std::max(en, p1::far_elevation(t.lo[0], t.lo[1], lift_of(d.x_major, idx, off_lo)));
-          const float b = std::max(en, p1::far_elevation(t.hi[0], t.hi[1], lift_of(d.x_major, idx, off_hi)));
-          const double frac = disk_fraction_above(elevation[li], a + (b - a) * t.w_hi, radius[li]);
-          if (frac <= 0) return;
-          direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
-        });
+    sweep_lines(f, ls, light_rc, make_worker, [&](int li, int i, int j, const TexelTaps& t) {
+      const std::size_t idx = f.index(i, j);
+      const double ndl = dot(normals[idx].d(), dir[li]);
+      if (ndl <= 0) return;
+      // The horizon in the light's azimuth as for the K directions: the exact near field from the texel
+      // center, the far casters of both taps lifted by the minmod gradient, blended.
+      const SweepDirection& d = light_dirs[li];
+      const int u = d.x_major ? i : j, v0 = d.x_major ? j : i;
+      const double g = double(v0) - double(u) * d.slope;
+      const float fr = float(g - std::floor(g));
+      const bool lo_is_hi = !d.repeat && fr > 0 && d.n_minor > 1 && v0 == 0;  // as texel_taps
+      const float off_lo = lo_is_hi ? 1 - fr : -fr, off_hi = 1 - fr;
+      int which;
+      const float en = fast_atan(near_slope_at(light_near[li], i, j, &which));
+      const float a = std::max(en, p1::far_elevation(t.lo[0], t.lo[1], lift_of(d.x_major, idx, off_lo)));
+      const float b = std::max(en, p1::far_elevation(t.hi[0], t.hi[1], lift_of(d.x_major, idx, off_hi)));
+      const double frac = disk_fraction_above(elevation[li], a + (b - a) * t.w_hi, radius[li]);
+      if (frac <= 0) return;
+      direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
+    });
   }
   if (p.direct) r.direct = std::move(direct);
   rc.report(1.0);
