@@ -10,6 +10,7 @@
 #include <system_error>
 
 #include "job/content_hash.hpp"
+#include "reference/bake_reference.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -47,16 +48,17 @@ std::string reference_cache_key(const Job& job) {
   nlohmann::json determining = nlohmann::json::object();
   for (const char* key : {"height", "surface", "environment", "lights", "bounces", "reference"})
     if (job.doc.contains(key)) determining[key] = job.doc[key];
-  // From the bake list the reference reads only the obscurance falloff and radius (of the first
-  // obscurance-family entry that has one): adding a method or sweeping its directions keeps the key.
+  // From the bake list the reference reads only the falloff and radius of one obscurance-family entry
+  // (reference_falloff_entry): adding a method, another obscurance entry or sweeping directions keeps the
+  // key.
   nlohmann::json falloffs = nlohmann::json::array();
-  if (job.doc.contains("bake") && job.doc["bake"].is_array())
-    for (const auto& e : job.doc["bake"]) {
-      nlohmann::json f = nlohmann::json::object();
-      for (const char* key : {"falloff", "radius"})
-        if (e.is_object() && e.contains(key)) f[key] = e[key];
-      if (!f.empty()) falloffs.push_back({{"method", e.value("method", "")}, {"falloff", f}});
-    }
+  if (const int b = reference_falloff_entry(job.doc); b >= 0) {
+    const auto& e = job.doc["bake"][b];
+    nlohmann::json f = nlohmann::json::object();
+    for (const char* key : {"falloff", "radius"})
+      if (e.contains(key)) f[key] = e[key];
+    falloffs.push_back({{"method", e.value("method", "")}, {"falloff", f}});
+  }
   determining["bake_falloffs"] = std::move(falloffs);
   h.add(determining.dump());  // objects are key-sorted: a canonical form
   for (const auto& [pointer, path] : job_input_files(job.doc)) {

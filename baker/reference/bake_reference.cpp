@@ -404,6 +404,20 @@ std::vector<std::string> reference_layer_names(int bounces) {
   return names;
 }
 
+int reference_falloff_entry(const nlohmann::json& job_doc) {
+  const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
+  if (ref.contains("falloff") || ref.contains("radius")) return -1;
+  if (!job_doc.contains("bake") || !job_doc["bake"].is_array()) return -1;
+  const auto& bake = job_doc["bake"];
+  for (std::size_t b = 0; b < bake.size(); ++b) {
+    if (!bake[b].is_object() || !(bake[b].contains("falloff") || bake[b].contains("radius"))) continue;
+    const std::string m = bake[b].value("method", "");
+    for (const char* name : kObscuranceMethods)
+      if (m == name) return int(b);
+  }
+  return -1;
+}
+
 ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc) {
   ReferenceOptions o;
   const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
@@ -447,14 +461,8 @@ ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::jso
 
   // Falloff: the reference's own, else the first obscurance-family bake entry's.
   bool have_falloff = read_falloff(ref, "/reference", o.falloff);
-  if (!have_falloff && job_doc.contains("bake") && job_doc["bake"].is_array()) {
-    const auto& bake = job_doc["bake"];
-    for (std::size_t b = 0; b < bake.size() && !have_falloff; ++b) {
-      const std::string m = bake[b].value("method", "");
-      for (const char* name : kObscuranceMethods)
-        if (m == name) have_falloff = read_falloff(bake[b], "/bake/" + std::to_string(b), o.falloff);
-    }
-  }
+  if (const int b = have_falloff ? -1 : reference_falloff_entry(job_doc); b >= 0)
+    have_falloff = read_falloff(job_doc["bake"][b], "/bake/" + std::to_string(b), o.falloff);
 
   const std::vector<std::string> known = reference_layer_names(scene.bounces);
   if (ref.contains("layers")) {

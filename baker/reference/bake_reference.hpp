@@ -75,6 +75,11 @@ std::vector<std::string> reference_layer_names(int bounces);
 // reference gives none). InputError with a "/reference/..." pointer on bad values.
 ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc);
 
+// The bake entry whose falloff and radius the reference's obscurance uses: the first obscurance-family
+// entry (hbao, lsao, farfield, hsao, vo) with a falloff or radius, when the reference has none of its own;
+// else -1. Nothing else of the bake list reaches the reference (the reference cache keys on exactly this).
+int reference_falloff_entry(const nlohmann::json& job_doc);
+
 LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc);
 LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const RunControl& rc);
 

@@ -164,6 +164,17 @@ TEST_F(Cache, KeyFollowsWhatDeterminesTheReference) {
     d["bake"][1]["radius"] = 8;
     d["bake"][1]["directions"] = 32;
     EXPECT_EQ(reference_cache_key(job(d)), k8);
+    // Only the first obscurance entry's falloff reaches the reference: more obscurance entries (other
+    // methods, other radii, as a frontier or budget job adds them) do not re-trace it.
+    d["bake"].push_back({{"method", "farfield"}, {"radius", 32}, {"falloff", "linear"}});
+    d["bake"].push_back({{"method", "lsao"}, {"radius", 4}});
+    EXPECT_EQ(reference_cache_key(job(d)), k8);
+    // The reference's own falloff wins over every entry's.
+    d["reference"]["radius"] = 8;
+    d["reference"]["falloff"] = "step";
+    const std::string kr = reference_cache_key(job(d));
+    d["bake"][1]["radius"] = 12;
+    EXPECT_EQ(reference_cache_key(job(d)), kr);
   }
   // Part of it.
   EXPECT_NE(changed("/reference/samples", 65), k0);
