@@ -361,22 +361,10 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
     o.triangles = v == "triangles";
   }
   const auto layers = select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
-  LayerSet out;
-  out.width = scene.field.width;
-  out.height = scene.field.height;
   std::vector<Vec3f> bent;
   const std::vector<float> light = farfield_obscurance(scene.field, scene.normals, o, rc, nullptr,
                                                        wants(layers, "bent_normal") ? &bent : nullptr);
-  for (const std::string& name : layers) {
-    if (name == "bent_normal") {
-      Layer& l = out.add(name, xyz_channels());
-      for (std::size_t t = 0; t < bent.size(); ++t)
-        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
-    } else {
-      out.add(name, mono_channels()).data = light;
-    }
-  }
-  return out;
+  return obscurance_layers(scene.field.width, scene.field.height, layers, light, bent);
 }
 
 }  // namespace hfbake

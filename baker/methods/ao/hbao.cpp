@@ -209,22 +209,10 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
         "\"ao\" needs falloff \"none\", weighting \"cosine\" and estimator \"slab\" or \"segment\" (use "
         "\"obscurance\")");
 
-  LayerSet out;
-  out.width = field.width;
-  out.height = field.height;
   std::vector<float> obsc(field.texel_count());
   std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
   hbao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
-  for (const std::string& name : layers) {
-    if (name == "bent_normal") {
-      Layer& l = out.add(name, xyz_channels());
-      for (std::size_t t = 0; t < bent.size(); ++t) {
-        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
-      }
-    } else {
-      out.add(name, mono_channels()).data = obsc;
-    }
-  }
+  LayerSet out = obscurance_layers(field.width, field.height, layers, obsc, bent);
   if (s.surface == MarchSurface::triangles)
     out.attributes.emplace_back("hfbake:hbao:surface", "triangles");
   else

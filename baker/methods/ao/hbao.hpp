@@ -14,11 +14,11 @@
 // profile of the reference's triangulated surface (two triangles per quad split along (i+1, j)-(i, j+1)):
 // every column, row and diagonal crossing, plus the end of the reach. With the segment estimator the slice
 // integral is then exact for that surface, and hbao converges to the reference's obscurance as K grows
-// (tests/ao/bench_obscurance_bias.cpp, 128^2 receivers of the frontier field, R = 16 step, K = 32, 1024-sample
-// reference: bias -0.0002, rmse 0.0034 = the reference's noise, against +0.0060 / 0.0093 for one-texel
-// steps on the bilinear surface, whose peaks between samples are missed; 1/8-texel bilinear steps: -0.0011
-// / 0.0063, the bilinear surface itself differs). About 2.5 samples per texel of distance instead of 1;
-// measured 1.5x hbao's CPU time at 1024^2, K = 16.
+// (tests/ao/bench_obscurance_bias.cpp, 128^2 receivers of the frontier field, R = 16 step, K = 32,
+// 1024-sample reference: bias -0.0002, rmse 0.0034 = the reference's noise, against +0.0060 / 0.0093 for
+// one-texel steps on the bilinear surface, whose peaks between samples are missed; 1/8-texel bilinear steps:
+// -0.0011 / 0.0063, the bilinear surface itself differs). About 2.5 samples per texel of distance instead of
+// 1; measured 1.5x hbao's CPU time at 1024^2, K = 16.
 #pragma once
 
 #include <vector>

@@ -129,22 +129,10 @@ LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunCo
   const std::vector<std::string> layers =
       select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
 
-  LayerSet out;
-  out.width = field.width;
-  out.height = field.height;
   std::vector<float> obsc(field.texel_count());
   std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
   hsao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
-  for (const std::string& name : layers) {
-    if (name == "bent_normal") {
-      Layer& l = out.add(name, xyz_channels());
-      for (std::size_t t = 0; t < bent.size(); ++t)
-        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
-    } else {
-      out.add(name, mono_channels()).data = obsc;
-    }
-  }
-  return out;
+  return obscurance_layers(field.width, field.height, layers, obsc, bent);
 }
 
 }  // namespace hfbake

@@ -182,22 +182,10 @@ LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunCo
   o.occlusion.sin_t = number_param(params, "tangent", -0.85, -1.0, 0.0);
   o.directions = int_param(params, "directions", 16, 1, 4096);
   const auto layers = select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
-  LayerSet out;
-  out.width = scene.field.width;
-  out.height = scene.field.height;
   std::vector<Vec3f> bent;
   std::vector<float> light =
       lsao_obscurance(scene.field, o, rc, nullptr, wants(layers, "bent_normal") ? &bent : nullptr);
-  for (const std::string& name : layers) {
-    if (name == "bent_normal") {
-      Layer& l = out.add(name, xyz_channels());
-      for (std::size_t t = 0; t < bent.size(); ++t)
-        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
-    } else {
-      out.add(name, mono_channels()).data = light;
-    }
-  }
-  return out;
+  return obscurance_layers(scene.field.width, scene.field.height, layers, light, bent);
 }
 
 }  // namespace hfbake

@@ -85,4 +85,21 @@ bool wants(const std::vector<std::string>& layers, const char* name) {
   return std::find(layers.begin(), layers.end(), name) != layers.end();
 }
 
+LayerSet obscurance_layers(int width, int height, const std::vector<std::string>& layers,
+                           const std::vector<float>& light, const std::vector<Vec3f>& bent) {
+  LayerSet out;
+  out.width = width;
+  out.height = height;
+  for (const std::string& name : layers) {
+    if (name == "bent_normal") {
+      Layer& l = out.add(name, xyz_channels());
+      for (std::size_t t = 0; t < bent.size(); ++t)
+        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
+    } else {
+      out.add(name, mono_channels()).data = light;
+    }
+  }
+  return out;
+}
+
 }  // namespace hfbake

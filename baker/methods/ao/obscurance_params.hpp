@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/layers.hpp"
+#include "core/vec.hpp"
 #include "methods/ao/falloff.hpp"
 
 namespace hfbake {
@@ -30,5 +32,10 @@ double number_param(const nlohmann::json& params, const char* key, double fallba
 std::vector<std::string> select_layers(const nlohmann::json& params, const std::vector<std::string>& known,
                                        const std::vector<std::string>& defaults);
 bool wants(const std::vector<std::string>& layers, const char* name);
+
+// A method's output, in `layers` order: "bent_normal" from `bent` (one unit vector per texel), every other
+// name ("obscurance", "ao") the scalar `light`. width x height texels.
+LayerSet obscurance_layers(int width, int height, const std::vector<std::string>& layers,
+                           const std::vector<float>& light, const std::vector<Vec3f>& bent);
 
 }  // namespace hfbake
