@@ -10,7 +10,7 @@
 namespace hfbake {
 
 struct NodataScan {
-  std::size_t count = 0;    // texels without a valid height
+  std::size_t count = 0;           // texels without a valid height
   int first_i = -1, first_j = -1;  // the first one in row-major order
 };
 
