@@ -27,6 +27,19 @@ using namespace hfbake;
 namespace {
 
 // integral over e in [a, b] of (nh cos e + nz sin e) cos e de
+// How far (texels) a march from texel (i, j) along (cx, cy) runs: to the clamp border, or one field size
+// on a repeating field.
+double exit_distance(const HeightField& f, int i, int j, double cx, double cy) {
+  const int W = f.width, H = f.height;
+  if (f.wrap != Wrap::clamp) return std::max(W, H);
+  double t = 1e30;
+  if (cx > 1e-9) t = std::min(t, (W - 1 - i) / cx);
+  if (cx < -1e-9) t = std::min(t, -i / cx);
+  if (cy > 1e-9) t = std::min(t, (H - 1 - j) / cy);
+  if (cy < -1e-9) t = std::min(t, -j / cy);
+  return t;
+}
+
 double band_cos(double nh, double nz, double a, double b) {
   auto F = [&](double e) {
     return nh * (e / 2 + std::sin(2 * e) / 4) + nz * (std::sin(e) * std::sin(e) / 2);
@@ -63,15 +76,7 @@ Brute brute_force(const Scene& s, int K, float rho) {
         const double nh = n.x * cx + n.y * cy, nz = n.z;
         const double emin = std::atan2(-nh, nz);
         double run = emin;
-        double t_exit = 1e30;
-        if (f.wrap == Wrap::clamp) {
-          if (cx > 1e-9) t_exit = std::min(t_exit, (W - 1 - i) / cx);
-          if (cx < -1e-9) t_exit = std::min(t_exit, -i / cx);
-          if (cy > 1e-9) t_exit = std::min(t_exit, (H - 1 - j) / cy);
-          if (cy < -1e-9) t_exit = std::min(t_exit, -j / cy);
-        } else {
-          t_exit = std::max(W, H);
-        }
+        const double t_exit = exit_distance(f, i, j, cx, cy);
         for (double t = step; t_exit > 0; t += step) {
           const bool last = t >= t_exit;
           if (last) t = t_exit;
@@ -133,15 +138,7 @@ Brute oracle(const Scene& s, int m, float rho, const std::vector<float>& radianc
       for (int a = 0; a < m; ++a) {
         const double phi = 2 * kPi * a / m, cx = std::cos(phi), cy = std::sin(phi);
         const float emin = float(std::atan2(-(n.x * cx + n.y * cy), n.z));
-        double t_exit = 1e30;
-        if (f.wrap == Wrap::clamp) {
-          if (cx > 1e-9) t_exit = std::min(t_exit, (W - 1 - i) / cx);
-          if (cx < -1e-9) t_exit = std::min(t_exit, -i / cx);
-          if (cy > 1e-9) t_exit = std::min(t_exit, (H - 1 - j) / cy);
-          if (cy < -1e-9) t_exit = std::min(t_exit, -j / cy);
-        } else {
-          t_exit = std::max(W, H);
-        }
+        const double t_exit = exit_distance(f, i, j, cx, cy);
         float wmax = -1.5707963f, run = emin, u[4] = {}, prev[4];
         nlp::occlusion4(std::sin(emin), prev);
         for (double t = step; t_exit > 0; t += step) {
