@@ -91,6 +91,14 @@ P1Params parse_p1_params(const nlohmann::json& e) {
   return p;
 }
 
+void facet_normals(const HeightField& f, int i, int j, Vec3f out[2]) {
+  const double z = f.at(i, j), inv = 1 / f.texel_size;
+  const double fx = (f.at(i + 1, j) - z) * inv, fy = (f.at(i, j + 1) - z) * inv;  // forward
+  const double bx = (z - f.at(i - 1, j)) * inv, by = (z - f.at(i, j - 1)) * inv;  // backward
+  out[0] = Vec3f::from(normalize(Vec3{-fx, -fy, 1}));
+  out[1] = Vec3f::from(normalize(Vec3{-bx, -by, 1}));
+}
+
 double disk_fraction_above(double elevation, double horizon, double radius) {
   if (radius <= 0) return elevation > horizon ? 1.0 : 0.0;
   const double x = (elevation - horizon) / radius;
@@ -129,6 +137,23 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   std::vector<float> dr(p.direct ? N : 0, 0.0f), dg(p.direct ? N : 0, 0.0f), db(p.direct ? N : 0, 0.0f);
   std::vector<float> bx(p.bent_normal ? N : 0, 0.0f), by(p.bent_normal ? N : 0, 0.0f),
       bz(p.bent_normal ? N : 0, 0.0f);
+  // The facets' normals and direct-light sums, [q * N + texel] (facet q of P1Result::direct_facets).
+  const bool facets = p.direct && p.facet_direct;
+  const std::size_t NF = facets ? 2 * N : 0;
+  std::vector<float> fnx(NF), fny(NF), fnz(NF);
+  std::vector<float> fao(facets && uniform_env ? NF : 0, 0.0f);
+  std::vector<float> fdr(facets && !uniform_env ? NF : 0, 0.0f), fdg(fdr.size(), 0.0f), fdb(fdr.size(), 0.0f);
+  if (facets)
+    tbb::parallel_for(0, f.height, [&](int j) {
+      for (int i = 0; i < f.width; ++i) {
+        Vec3f fn[2];
+        facet_normals(f, i, j, fn);
+        for (int q = 0; q < 2; ++q) {
+          const std::size_t t = q * N + f.index(i, j);
+          fnx[t] = fn[q].x, fny[t] = fn[q].y, fnz[t] = fn[q].z;
+        }
+      }
+    });
   if (p.horizon) r.horizon.assign(N * K, 0.0f);
   if (p.horizon_distance) r.horizon_distance.assign(N * K, 0.0f);
   std::vector<float> cs(K), sn(K);
@@ -292,8 +317,8 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
         float* v = vsky_sum.data() + base;
         for (int x = 0; x < w; ++x) v[x] += se[x] > 0 ? se[x] : 0.0f;
       }
-      if (need_theta) {
-        // theta = the horizon's zenith angle, or where the normal's hemisphere ends if that is higher.
+      // theta = the horizon's zenith angle, or where the normal's hemisphere ends if that is higher.
+      auto lobe = [&](const float* NZ) {
         for (int x = 0; x < w; ++x) {
           const float n_p = np_[x], n_z = NZ[x];
           // Everything computed unconditionally, then selected: the loop stays branch-free (vectorises).
@@ -304,6 +329,9 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           ct[x] = open ? se[x] : -n_p * inv_len;
           th[x] = std::min(kHalfPiF - e[x], th_plane);  // (open <=> the horizon's angle is the smaller)
         }
+      };
+      if (need_theta) {
+        lobe(NZ);
         if (need_ao) {
           float* a = ao_sum.data() + base;
           for (int x = 0; x < w; ++x) a[x] += NZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
@@ -333,6 +361,29 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           R[x] += l.r, G[x] += l.g, B[x] += l.b;
         }
       }
+      if (facets)  // the same horizons at the facets' normals (np_ and the lobe arrays are reused)
+        for (std::size_t q = 0; q < 2; ++q) {
+          const std::size_t fb = q * N + base;
+          const float *FX = fnx.data() + fb, *FY = fny.data() + fb, *FZ = fnz.data() + fb;
+          for (int x = 0; x < w; ++x) np_[x] = FX[x] * c + FY[x] * s;
+          if (uniform_env || profiles) lobe(FZ);
+          if (uniform_env) {
+            float* a = fao.data() + fb;
+            for (int x = 0; x < w; ++x) a[x] += FZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
+          } else {
+            float *R = fdr.data() + fb, *G = fdg.data() + fb, *B = fdb.data() + fb;
+            for (int x = 0; x < w; ++x) {
+              Rgb l;
+              if (profiles) {
+                l = profiles->eval(k, th[x], st[x], ct[x], FZ[x], np_[x]);
+              } else {
+                const float len = std::sqrt(np_[x] * np_[x] + FZ[x] * FZ[x]);
+                l = tables->lookup(k, fast_atan(np_[x] / FZ[x]), kHalfPiF - e[x]) * len;
+              }
+              R[x] += l.r, G[x] += l.g, B[x] += l.b;
+            }
+          }
+        }
       if (p.horizon)
         for (int x = 0; x < w; ++x) r.horizon[(base + x) * K + k] = se[x];
       if (want_distance) {  // the near crossing, or the larger-weight tap's far caster, seen from the
@@ -373,6 +424,16 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     }
   });
 
+  std::vector<Rgb> direct_facets(NF);
+  if (facets)
+    tbb::parallel_for(std::size_t(0), N, [&](std::size_t idx) {
+      for (std::size_t q = 0; q < 2; ++q) {
+        const std::size_t t = q * N + idx;
+        direct_facets[2 * idx + q] =
+            uniform_env ? env.uniform_radiance * (fao[t] * inv_k) : Rgb{fdr[t], fdg[t], fdb[t]};
+      }
+    });
+
   // Directional lights: one extra sweep direction per light, at its own azimuth.
   if (!lights.empty()) {
     SweepSpec ls;
@@ -398,7 +459,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     sweep_lines(f, ls, light_rc, make_worker, [&](int li, int i, int j, const TexelTaps& t) {
       const std::size_t idx = f.index(i, j);
       const double ndl = dot(normals[idx].d(), dir[li]);
-      if (ndl <= 0) return;
+      if (ndl <= 0 && !facets) return;
       // The horizon in the light's azimuth as for the K directions: the exact near field from the texel
       // center, the far casters of both taps lifted by the minmod gradient, blended.
       const SweepDirection& d = light_dirs[li];
@@ -413,10 +474,17 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       const float b = std::max(en, p1::far_elevation(t.hi[0], t.hi[1], lift_of(d.x_major, idx, off_hi)));
       const double frac = disk_fraction_above(elevation[li], a + (b - a) * t.w_hi, radius[li]);
       if (frac <= 0) return;
-      direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
+      if (ndl > 0) direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
+      if (facets)
+        for (std::size_t q = 0; q < 2; ++q) {
+          const std::size_t ft = q * N + idx;
+          const double fdl = fnx[ft] * dir[li].x + fny[ft] * dir[li].y + fnz[ft] * dir[li].z;
+          if (fdl > 0) direct_facets[2 * idx + q] += lights[li]->irradiance * float(fdl * frac / kPi);
+        }
     });
   }
   if (p.direct) r.direct = std::move(direct);
+  r.direct_facets = std::move(direct_facets);
   rc.report(1.0);
   return r;
 }

@@ -44,6 +44,9 @@ struct P1Params {
   bool ao = true, vsky = true, direct = true;
   bool horizon = false, horizon_distance = false, bent_normal = false;
   bool lights = true;  // add the scene's directional lights to direct
+  // Also the direct light of each texel's two facets (P1Result::direct_facets): the same horizons, the
+  // facets' own normals. P2's senders radiate with them (the reference shades every hit with its facet).
+  bool facet_direct = false;
 };
 
 struct P1Result {
@@ -53,7 +56,15 @@ struct P1Result {
   std::vector<float> horizon;           // sin(elevation), [texel * K + k]
   std::vector<float> horizon_distance;  // world units, [texel * K + k]
   std::vector<Vec3f> bent_normal;       // unit, world frame
+  // E_direct / pi at the normals of the two triangles of the reference's surface that have their right
+  // angle at the texel (facet_normals): [2 * texel + 0] the triangle (i, j), (i+1, j), (i, j+1),
+  // [2 * texel + 1] the triangle (i, j), (i-1, j), (i, j-1). Empty unless P1Params::facet_direct.
+  std::vector<Rgb> direct_facets;
 };
+
+// The unit normals of the two triangles of texel (i, j) described at P1Result::direct_facets (forward and
+// backward differences; at a clamp border the missing neighbour is the texel itself).
+void facet_normals(const HeightField& field, int i, int j, Vec3f out[2]);
 
 // Reads the bake entry (schemas/methods/p1.schema.json); throws InputError("", "<key>", ...) on values the
 // schema cannot express (even normal_bins, unknown layers).

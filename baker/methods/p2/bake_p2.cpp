@@ -54,6 +54,15 @@ P2Params parse_p2_params(const nlohmann::json& e) {
     else
       throw InputError("", "visibility", "must be \"tree\" or \"naive\"");
   }
+  if (e.contains("senders")) {
+    const auto& v = e.at("senders");
+    if (v == "facets")
+      p.facet_senders = true;
+    else if (v == "texels")
+      p.facet_senders = false;
+    else
+      throw InputError("", "senders", "must be \"facets\" or \"texels\"");
+  }
   if (e.contains("layers")) {
     if (!e.at("layers").is_array()) throw InputError("", "layers", "must be an array of layer names");
     for (const auto& l : e.at("layers")) {
@@ -80,6 +89,7 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   p1.ao = p1.vsky = false;
   p1.direct = true;
   p1.horizon = true;  // the lobe split below uses P1's own horizons (K floats per texel while P2 runs)
+  p1.facet_direct = params.facet_senders;
   P1Result direct = compute_p1(scene, p1, sub_range(rc, 0, phase));
   r.direct = std::move(direct.direct);
   const std::vector<float> p1_sin_horizon = std::move(direct.horizon);
@@ -90,6 +100,31 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   const bool emits = scene.surface.emission.size() == N;
   for (std::size_t i = 0; i < N; ++i)
     exit[i] = scene.surface.albedo[i] * r.direct[i] + (emits ? scene.surface.emission[i] : Rgb{});
+  // Facet senders: each texel's two facets (P1Result::direct_facets), lit with their own normals, with
+  // the mean albedo and emission of their three corners (the reference interpolates them over the facet).
+  std::vector<Vec3f> facet_normal;
+  std::vector<Rgb> facet_albedo, facet_exit;
+  if (params.facet_senders) {
+    facet_normal.resize(2 * N);
+    facet_albedo.resize(2 * N);
+    facet_exit.resize(2 * N);
+    for (int j = 0; j < f.height; ++j)
+      for (int i = 0; i < f.width; ++i) {
+        const std::size_t t = f.index(i, j);
+        facet_normals(f, i, j, &facet_normal[2 * t]);
+        for (int q = 0; q < 2; ++q) {
+          const int d = q == 0 ? 1 : -1;  // the corners (i, j), (i + d, j), (i, j + d)
+          const std::size_t a = f.index(f.wrap_i(i + d), j), b = f.index(i, f.wrap_j(j + d));
+          const auto& al = scene.surface.albedo;
+          facet_albedo[2 * t + q] = (al[t] + al[a] + al[b]) * (1.0f / 3);
+          Rgb em{};
+          if (emits)
+            em = (scene.surface.emission[t] + scene.surface.emission[a] + scene.surface.emission[b]) *
+                 (1.0f / 3);
+          facet_exit[2 * t + q] = facet_albedo[2 * t + q] * direct.direct_facets[2 * t + q] + em;
+        }
+      }
+  }
 
   IndirectSweepSpec spec;
   spec.directions = params.directions;
@@ -97,10 +132,18 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   spec.wrap_periods = params.wrap_periods;
   spec.supersampling = params.supersampling;
   spec.p1_sin_horizon = &p1_sin_horizon;
+  if (params.facet_senders) {
+    spec.exit_facets = &facet_exit;
+    spec.facet_normals = &facet_normal;
+  }
   r.indirect.assign(N, Rgb{});
+  std::vector<Rgb> facet_e;
   for (int b = 1; b <= B; ++b) {
     P2SweepStats st;
-    std::vector<Rgb> e = sweep_indirect(f, scene.normals, exit, spec, sub_range(rc, b * phase, phase), &st);
+    std::vector<Rgb> e = sweep_indirect(f, scene.normals, exit, spec, sub_range(rc, b * phase, phase), &st,
+                                        params.facet_senders && b < B ? &facet_e : nullptr);
+    if (params.facet_senders && b < B)
+      for (std::size_t q = 0; q < 2 * N; ++q) facet_exit[q] = facet_albedo[q] * facet_e[q];
     r.stats.receivers += st.receivers;
     r.stats.iterations += st.iterations;
     r.stats.naive_iterations += st.naive_iterations;

@@ -39,7 +39,10 @@ struct P2Params {
   int bounces = -1;  // -1: the scene's
   P2Visibility visibility = P2Visibility::tree;
   int wrap_periods = 1;
-  int supersampling = 1;            // S: terrain samples per line step (indirect_sweep.hpp)
+  int supersampling = 1;  // S: terrain samples per line step (indirect_sweep.hpp)
+  // Senders radiate per facet of the triangulated surface (true, default) or per texel with its smoothed
+  // normal (false, the method as published).
+  bool facet_senders = true;
   std::vector<std::string> layers;  // empty: indirect, total, direct
 };
 

@@ -8,6 +8,21 @@ namespace hfbake {
 Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std::span<const int> horizons,
                      double inv_step, const WedgeWeights& w, double* weight, const double* inv_dist,
                      GatherScratch* scratch) {
+  std::vector<Rgb> mean(std::size_t(std::max(r, 0))), slope(mean.size());
+  for (int j = 0; j < r; ++j) {
+    mean[j] = 0.5f * (L[j] + L[j + 1]);
+    slope[j] = L[j + 1] - L[j];
+  }
+  SegmentRadiance seg;
+  seg.mean = mean.data();
+  seg.slope = slope.data();
+  seg.crease = L[r];
+  return gather_segments(h, seg, r, terrain_end, horizons, inv_step, w, weight, inv_dist, scratch);
+}
+
+Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrain_end,
+                    std::span<const int> horizons, double inv_step, const WedgeWeights& w, double* weight,
+                    const double* inv_dist, GatherScratch* scratch) {
   GatherScratch local;
   GatherScratch& sc = scratch ? *scratch : local;
   const int m = int(horizons.size());
@@ -41,7 +56,7 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
       const double dz = h[j + 1] - hr;
       if (!(dz > limit * double(d))) break;
       const double t_next = dz * (inv_dist ? inv_dist[d] : inv_step / double(d));
-      LI[M] = 0.5f * (L[j] + L[j + 1]);
+      LI[M] = L.mean[j];
       if (!(t_next > t_n)) {  // the segment crosses the tangent plane: nothing below it counts
         T[++M] = float(t_n);
         done = true;
@@ -52,7 +67,7 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
     }
     if (done) break;
     if (last) {  // j == terrain_end - 1: below it the ray meets the receiver's own surface
-      LI[M] = L[r];
+      LI[M] = L.crease;
       T[++M] = float(t_n);
       break;
     }
@@ -62,7 +77,7 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
     const double den = dh + limit;
     double u = den < 0 ? (limit * double(r - j) - (h[j] - hr)) / den : 1.0;
     u = std::clamp(u, 0.0, 1.0);
-    LI[M] = L[j] + (L[j + 1] - L[j]) * float(0.5 * u);
+    LI[M] = L.mean[j] + L.slope[j] * float(0.5 * (u - 1));
     const double t_lim = limit * inv_step;
     if (!(t_lim > t_n)) {
       T[++M] = float(t_n);

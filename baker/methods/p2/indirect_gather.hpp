@@ -112,6 +112,22 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
                      double inv_step, const WedgeWeights& w, double* weight = nullptr,
                      const double* inv_dist = nullptr, GatherScratch* scratch = nullptr);
 
+// The exit radiance of a line given per segment instead of per sample: segment j runs from sample j to
+// sample j+1 and radiates mean[j] + slope[j] * (u - 1/2) at its parameter u in [0, 1] (u = 0 at sample j),
+// so that its visible part [0, u] has the mean radiance mean[j] + slope[j] * (u - 1) / 2. crease: the
+// radiance the receiver sees below its nearest sample (its own surface). Per-sample radiance L is the
+// special case mean = (L_j + L_j+1) / 2, slope = L_j+1 - L_j, crease = L_r (gather_stretches above).
+struct SegmentRadiance {
+  const Rgb* mean = nullptr;
+  const Rgb* slope = nullptr;
+  Rgb crease;
+};
+
+Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrain_end,
+                    std::span<const int> horizons, double inv_step, const WedgeWeights& w,
+                    double* weight = nullptr, const double* inv_dist = nullptr,
+                    GatherScratch* scratch = nullptr);
+
 // (F(e) - F(e_t)) / pi for the wedge of direction phi (cos_phi, sin_phi) of K, normal n, horizon elevation e
 // (radians): the part of the cosine lobe between the tangent plane and the horizon, in the form of P1's
 // per-direction sky term, so that the two add up to P1's lobe (p1.hpp).

@@ -31,7 +31,8 @@ struct LineWorker {
   HullTree tree;
   std::vector<double> h;
   std::vector<Rgb> L;
-  std::vector<double> inv_dist;  // inv_step / d
+  std::vector<Rgb> seg_mean, seg_slope;  // per segment q -> q+1 (SegmentRadiance)
+  std::vector<double> inv_dist;          // inv_step / d
   double inv_dist_step = 0;
   std::vector<int> visible, starts;
   GatherScratch gather_scratch;
@@ -75,27 +76,56 @@ struct LineWorker {
     if (int(h.size()) < n) {
       h.resize(n);
       L.resize(n);
+      seg_mean.resize(n);
+      seg_slope.resize(n);
     }
     const bool gather = spec->gather;
+    const bool facets = spec->exit_facets != nullptr;
+    auto fine_xy = [&](int q, double* x, double* y) {
+      const int s = q / S, sub = q % S;
+      *x = line.x(s), *y = line.y(s);
+      if (sub == 0) return;
+      const double f = double(sub) / S;
+      *x += f * (line.x(s + 1) - line.x(s));
+      *y += f * (line.y(s + 1) - line.y(s));
+    };
     for (int q = 0; q < n; ++q) {
       const int s = q / S, sub = q % S;
       if (sub == 0) {
         h[q] = line.z[s];
-        if (gather) {
+        if (gather && !facets) {
           const TexelPair t = line.height_taps(s, *field);
           L[q] = (*exit)[t.texel[0]] * t.weight[0] + (*exit)[t.texel[1]] * t.weight[1];
         }
       } else {
-        const double f = double(sub) / S;
-        const double x = line.x(s) + f * (line.x(s + 1) - line.x(s)),
-                     y = line.y(s) + f * (line.y(s + 1) - line.y(s));
+        double x, y;
+        fine_xy(q, &x, &y);
         h[q] = field->bilinear(x, y);
-        if (gather) L[q] = exit_bilinear(x, y);
+        if (gather && !facets) L[q] = exit_bilinear(x, y);
+      }
+    }
+    if (gather) {  // the radiance of every segment, once per line
+      if (facets) {
+        double x0, y0, x1, y1;
+        fine_xy(0, &x0, &y0);
+        for (int q = 0; q + 1 < n; ++q) {
+          fine_xy(q + 1, &x1, &y1);
+          facet_segment_radiance(*field, spec->exit_facets->data(), x0, y0, x1, y1, &seg_mean[q],
+                                 &seg_slope[q]);
+          x0 = x1, y0 = y1;
+        }
+      } else {
+        for (int q = 0; q + 1 < n; ++q) {
+          seg_mean[q] = 0.5f * (L[q] + L[q + 1]);
+          seg_slope[q] = L[q + 1] - L[q];
+        }
       }
     }
     const bool naive = spec->visibility == P2Visibility::naive;
     const double* hh = h.data() + ib;  // terrain-relative indexing: sample s is index s - ib
-    const Rgb* LL = L.data() + ib;
+    SegmentRadiance seg;               // terrain-relative like hh
+    seg.mean = seg_mean.data() + ib;
+    seg.slope = seg_slope.data() + ib;
     const int T = ie - ib;
     const double inv_step = S / line.step;
     if (gather && (int(inv_dist.size()) < n || inv_dist_step != inv_step)) {
@@ -144,8 +174,11 @@ struct LineWorker {
           normalize((*normals)[t.texel[0]].d() * t.weight[0] + (*normals)[t.texel[1]].d() * t.weight[1]);
       const WedgeWeights w = WedgeWeights::make(nrm, line.dir->dx, line.dir->dy, wedge);
       double weight = 0;
-      const Rgb e = gather_stretches(hh, LL, r, terrain_end, starts, inv_step, w, &weight, inv_dist.data(),
-                                     &gather_scratch);
+      // Below the nearest sample the receiver sees its own surface: its radiance, or with facet senders
+      // the segment it stands at the end of.
+      seg.crease = facets ? seg_mean[ib + r - 1] : L[ib + r];
+      const Rgb e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, w, &weight, inv_dist.data(),
+                                    &gather_scratch);
       o[0] = e.r;
       o[1] = e.g;
       o[2] = e.b;
@@ -162,11 +195,51 @@ struct LineWorker {
 
 }  // namespace
 
+void facet_segment_radiance(const HeightField& f, const Rgb* facet_exit, double x0, double y0, double x1,
+                            double y1, Rgb* mean, Rgb* slope) {
+  // Parameters where x, y or x + y (the quads' diagonals) pass an integer: at most 1 + 1 + 2 on a segment
+  // no longer than a texel along its major axis.
+  double t[12];
+  int n = 0;
+  t[n++] = 0;
+  auto cross = [&](double a0, double a1) {
+    if (!(a1 != a0)) return;
+    const double lo = std::min(a0, a1), hi = std::max(a0, a1);
+    for (double c = std::floor(lo) + 1; c < hi && n < 11; c += 1) t[n++] = (c - a0) / (a1 - a0);
+  };
+  cross(x0, x1);
+  cross(y0, y1);
+  cross(x0 + y0, x1 + y1);
+  t[n++] = 1;
+  for (int a = 1; a < n; ++a)  // insertion sort of a handful of values
+    for (int b = a; b > 0 && t[b] < t[b - 1]; --b) std::swap(t[b], t[b - 1]);
+  Rgb m{}, m1{};
+  for (int p = 0; p + 1 < n; ++p) {
+    const double a = t[p], b = t[p + 1];
+    if (!(b > a)) continue;
+    const double u = 0.5 * (a + b), x = x0 + u * (x1 - x0), y = y0 + u * (y1 - y0);
+    const double fx = std::floor(x), fy = std::floor(y);
+    const int i = int(fx), j = int(fy);
+    // The facet under the piece: the triangle (i, j), (i+1, j), (i, j+1) is facet 0 of texel (i, j), the
+    // triangle (i+1, j+1), (i, j+1), (i+1, j) facet 1 of texel (i+1, j+1).
+    const bool lower = (x - fx) + (y - fy) <= 1;
+    const int ti = lower ? i : i + 1, tj = lower ? j : j + 1;
+    const Rgb v = facet_exit[2 * f.index(f.wrap_i(ti), f.wrap_j(tj)) + (lower ? 0 : 1)];
+    m += v * float(b - a);
+    // first moment about the middle, for the least-squares linear trend: integral of (u - 1/2) du
+    m1 += v * float(0.5 * ((b - 0.5) * (b - 0.5) - (a - 0.5) * (a - 0.5)));
+  }
+  *mean = m;
+  *slope = m1 * 12.0f;  // / integral of (u - 1/2)^2 over [0, 1]
+}
+
 std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3f>& normals,
                                 const std::vector<Rgb>& exit, const IndirectSweepSpec& spec,
-                                const RunControl& rc, P2SweepStats* stats) {
+                                const RunControl& rc, P2SweepStats* stats, std::vector<Rgb>* facet_result) {
   const std::size_t texels = field.texel_count();
   std::vector<double> acc(texels * 3, 0.0);
+  const bool facets = spec.exit_facets && spec.facet_normals && facet_result;
+  std::vector<double> acc_f(facets ? texels * 6 : 0, 0.0);  // [(2 * texel + q) * 3 + channel]
   SweepSpec ss;
   ss.directions = spec.directions;
   ss.channels = kChannels;
@@ -199,9 +272,22 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
         const double e = spec.p1_sin_horizon
                              ? std::asin(std::clamp(double((*spec.p1_sin_horizon)[idx * K + k]), -1.0, 1.0))
                              : t.value(4);
+        const double wb = t.value(3);
+        if (facets)  // the same mean terrain radiance over the facets' lobes
+          for (int q = 0; q < 2; ++q) {
+            const std::size_t fi = 2 * idx + q;
+            const double tf = terrain_weight((*spec.facet_normals)[fi].d(), cs[k], sn[k], K, e);
+            if (!(tf > 0)) continue;
+            double* a = acc_f.data() + fi * 3;
+            if (wb > 0) {
+              a[0] += t.value(0) * tf / wb, a[1] += t.value(1) * tf / wb, a[2] += t.value(2) * tf / wb;
+            } else {
+              const Rgb x = (*spec.exit_facets)[fi];
+              a[0] += x.r * tf, a[1] += x.g * tf, a[2] += x.b * tf;
+            }
+          }
         const double tw = terrain_weight(normals[idx].d(), cs[k], sn[k], K, e);
         if (!(tw > 0)) return;
-        const double wb = t.value(3);
         double* a = acc.data() + idx * 3;
         if (wb > 0) {
           const double f = tw / wb;
@@ -217,6 +303,11 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
   std::vector<Rgb> result(texels);
   for (std::size_t p = 0; p < texels; ++p)
     result[p] = {float(acc[3 * p]), float(acc[3 * p + 1]), float(acc[3 * p + 2])};
+  if (facets) {
+    facet_result->resize(2 * texels);
+    for (std::size_t p = 0; p < 2 * texels; ++p)
+      (*facet_result)[p] = {float(acc_f[3 * p]), float(acc_f[3 * p + 1]), float(acc_f[3 * p + 2])};
+  }
   if (stats) *stats = totals;
   return result;
 }

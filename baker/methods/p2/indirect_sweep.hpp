@@ -40,12 +40,29 @@ struct IndirectSweepSpec {
   // split each texel's lobe between P1's sky and this terrain, so the two halves meet exactly whatever
   // way P1 brings its horizons to the texels; when null, the line samples' blended elevation is used.
   const std::vector<float>* p1_sin_horizon = nullptr;
+  // Facet senders: the exit radiance of every texel's two facets (P1Result::direct_facets' layout,
+  // [2 * texel + q]) and their unit normals (facet_normals). When given, the terrain a receiver sees
+  // radiates per facet of the reference's triangulated surface, as the reference shades its hits, instead
+  // of per texel with the smoothed normal: each line segment's radiance is its length-weighted mean over
+  // the facets it crosses (with a linear trend for partly visible segments). Both or neither.
+  const std::vector<Rgb>* exit_facets = nullptr;
+  const std::vector<Vec3f>* facet_normals = nullptr;
 };
 
 // E_indirect / pi per texel (row-major) from the exit radiance `exit` per texel, for one bounce.
 // normals: compute_normals(field). stats (optional) is filled with the totals of the sweep.
+// facet_result (optional, facet senders only): E_indirect / pi at the facets' normals, [2 * texel + q]
+// (each texel's gathered terrain radiance over the part of the facet's lobe below P1's horizons): the
+// facets' exit radiance of the next bounce.
 std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3f>& normals,
                                 const std::vector<Rgb>& exit, const IndirectSweepSpec& spec,
-                                const RunControl& rc, P2SweepStats* stats = nullptr);
+                                const RunControl& rc, P2SweepStats* stats = nullptr,
+                                std::vector<Rgb>* facet_result = nullptr);
+
+// The mean and linear trend (SegmentRadiance) of facet radiance `facet_exit` ([2 * texel + q]) along the
+// straight segment from (x0, y0) to (x1, y1) in texel coordinates: split where it crosses a column, a row
+// or a quad diagonal (the reference's split, (i+1, j)-(i, j+1)), each piece weighted by its length.
+void facet_segment_radiance(const HeightField& field, const Rgb* facet_exit, double x0, double y0, double x1,
+                            double y1, Rgb* mean, Rgb* slope);
 
 }  // namespace hfbake
