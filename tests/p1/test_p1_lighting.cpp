@@ -121,6 +121,56 @@ TEST(P1Analytic, TrenchFloor) {
   }
 }
 
+// The two facets at the trench floor (P1Params::facet_direct): each is a wall's plane, tilted by A away
+// from its own wall. Under a uniform sky the trench's cross-section gives the closed form: the opening
+// spans the in-plane angles (-(90 - A), 90 - A) from the zenith, i.e. (-(90 - 2A), 90) from the facet's
+// normal, so E/pi = (1 + cos 2A) / 2 = cos^2 A (the smoothed, upward normal gets cos A). The same horizons
+// in P1's K-direction sum (Eq. 5 with the facet's normal) give the finite-K value; and a sun across the
+// trench lights each facet with its own cosine.
+TEST(P1Analytic, TrenchFloorFacets) {
+  const double A = 35 * kDeg;
+  const int K = 64;
+  P1Params p = params(K);
+  p.facet_direct = true;
+  const Scene s = make_scene(shape(ProceduralKind::trench, 65, 35));
+  const P1Result r = compute_p1(s, p, RunControl{});
+  ASSERT_EQ(r.direct_facets.size(), 2 * s.field.texel_count());
+  double sum[2] = {0, 0};
+  for (int q = 0; q < 2; ++q) {
+    const double nx = q == 0 ? -std::sin(A) : std::sin(A), nz = std::cos(A);
+    for (int k = 0; k < K; ++k) {
+      const double c = std::cos(2 * kPi * k / K);
+      const double e = std::atan(std::tan(A) * std::fabs(c)), np = nx * c;
+      const double th = std::min(kPi / 2 - e, kPi / 2 + std::atan(np / nz));
+      sum[q] += (nz * std::sin(th) * std::sin(th) + np * (th - std::sin(th) * std::cos(th))) / K;
+    }
+  }
+  const double limit = std::cos(A) * std::cos(A);
+  std::printf("[trench facets] K=%d Eq.5 sums %.6f %.6f, limit cos^2 A %.6f\n", K, sum[0], sum[1], limit);
+  EXPECT_NEAR(sum[0], limit, 2e-3);  // the quadrature itself
+  double worst = 0;
+  for (int j = 16; j <= 48; ++j) {
+    const std::size_t t = s.field.index(32, j);
+    for (int q = 0; q < 2; ++q) worst = std::max(worst, std::fabs(r.direct_facets[2 * t + q].g - sum[q]));
+    // On the walls both facets are the wall's plane: the texel's own direct light.
+    const std::size_t w = s.field.index(40, j);
+    EXPECT_NEAR(r.direct_facets[2 * w].g, r.direct[w].g, 1e-4);
+    EXPECT_NEAR(r.direct_facets[2 * w + 1].g, r.direct[w].g, 1e-4);
+  }
+  EXPECT_LE(worst, 5e-3);                                      // the floor's crease residual of TrenchFloor
+  EXPECT_GT(r.direct[s.field.index(32, 32)].g - limit, 0.05);  // the smoothed normal is far off
+
+  DirectionalLight sun;
+  sun.direction = direction_from_elevation_azimuth(50, 0);  // across the trench, above its walls
+  sun.irradiance = {3, 3, 3};
+  const Scene lit =
+      make_scene(shape(ProceduralKind::trench, 65, 35), make_uniform_environment({0, 0, 0}), {sun});
+  const P1Result rl = compute_p1(lit, p, RunControl{});
+  const std::size_t t = lit.field.index(32, 32);
+  EXPECT_NEAR(rl.direct_facets[2 * t].r, 3 * std::sin(15 * kDeg) / kPi, 1e-5);      // faces away from it
+  EXPECT_NEAR(rl.direct_facets[2 * t + 1].r, 3 * std::sin(85 * kDeg) / kPi, 1e-5);  // faces it
+}
+
 TEST(P1Analytic, PitCenter) {
   const double R = 20, D = 20;
   const Scene s = make_scene(shape(ProceduralKind::pit, 81, 30, R, D));

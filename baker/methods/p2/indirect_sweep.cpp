@@ -100,7 +100,7 @@ struct LineWorker {
       } else {
         double x, y;
         fine_xy(q, &x, &y);
-        h[q] = field->bilinear(x, y);
+        h[q] = facets ? field->triangle_height(x, y) : field->bilinear(x, y);
         if (gather && !facets) L[q] = exit_bilinear(x, y);
       }
     }

@@ -31,10 +31,11 @@ struct IndirectSweepSpec {
   bool gather = true;    // false: visibility only (benchmarks, statistics); the result is all zero
   int wrap_periods = 1;  // repeat mode warm-up (SweepSpec::wrap_periods)
   // Supersampling along lines (P2 §10.2, Figure 15's S): S - 1 extra terrain samples between consecutive
-  // line samples, at the field's bilinear heights and the exit radiance's bilinear values; receivers stay
-  // the driver's samples. S = 1: the driver's samples only (then the horizon that splits each texel's
-  // lobe between P1's sky and this terrain is exactly P1's; with S > 1 it is the finer line's, so the
-  // split can differ from P1's by the sub-sample horizon change).
+  // line samples, at the field's bilinear heights and the exit radiance's bilinear values (facet senders:
+  // the triangulated surface's heights and the facets' radiance); receivers stay the driver's samples. S = 1:
+  // the driver's samples only (then the horizon that splits each texel's lobe between P1's sky and this
+  // terrain is exactly P1's; with S > 1 it is the finer line's, so the split can differ from P1's by the
+  // sub-sample horizon change).
   int supersampling = 1;
   // P1's horizons at the texels (P1Result::horizon: sin e, [texel * directions + k]). When given, they
   // split each texel's lobe between P1's sky and this terrain, so the two halves meet exactly whatever
