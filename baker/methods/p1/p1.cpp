@@ -385,7 +385,8 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           }
         }
       if (p.horizon)
-        for (int x = 0; x < w; ++x) r.horizon[(base + x) * K + k] = se[x];
+        for (int x = 0; x < w; ++x)
+          r.horizon[p.horizon_by_direction ? k * N + base + x : (base + x) * K + k] = se[x];
       if (want_distance) {  // the near crossing, or the larger-weight tap's far caster, seen from the
                             // texel
         const std::size_t row = std::size_t(y) * w;

@@ -47,13 +47,16 @@ struct P1Params {
   // Also the direct light of each texel's two facets (P1Result::direct_facets): the same horizons, the
   // facets' own normals. P2's senders radiate with them (the reference shades every hit with its facet).
   bool facet_direct = false;
+  // P1Result::horizon by direction, [k * texels + texel], instead of by texel: what a per-direction
+  // consumer (P2's lobe split) reads without striding across K floats per texel.
+  bool horizon_by_direction = false;
 };
 
 struct P1Result {
   int width = 0, height = 0, directions = 0;
-  std::vector<float> ao, vsky;          // per texel (empty when not requested)
-  std::vector<Rgb> direct;              // E_direct / pi per texel
-  std::vector<float> horizon;           // sin(elevation), [texel * K + k]
+  std::vector<float> ao, vsky;  // per texel (empty when not requested)
+  std::vector<Rgb> direct;      // E_direct / pi per texel
+  std::vector<float> horizon;   // sin(elevation), [texel * K + k] (horizon_by_direction: [k * N + texel])
   std::vector<float> horizon_distance;  // world units, [texel * K + k]
   std::vector<Vec3f> bent_normal;       // unit, world frame
   // E_direct / pi at the normals of the two triangles of the reference's surface that have their right

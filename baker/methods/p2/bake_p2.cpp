@@ -90,6 +90,7 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   p1.direct = true;
   p1.horizon = true;  // the lobe split below uses P1's own horizons (K floats per texel while P2 runs)
   p1.facet_direct = params.facet_senders;
+  p1.horizon_by_direction = true;
   P1Result direct = compute_p1(scene, p1, sub_range(rc, 0, phase));
   r.direct = std::move(direct.direct);
   const std::vector<float> p1_sin_horizon = std::move(direct.horizon);

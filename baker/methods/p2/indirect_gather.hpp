@@ -131,16 +131,20 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
 // (F(e) - F(e_t)) / pi for the wedge of direction phi (cos_phi, sin_phi) of K, normal n, horizon elevation e
 // (radians): the part of the cosine lobe between the tangent plane and the horizon, in the form of P1's
 // per-direction sky term, so that the two add up to P1's lobe (p1.hpp).
-inline double terrain_weight(Vec3 n, double cos_phi, double sin_phi, int K, double e) {
+// The same with the horizon's sine and cosine given (se = sin e, ce = cos e).
+inline double terrain_weight(Vec3 n, double cos_phi, double sin_phi, int K, double e, double se, double ce) {
   const double np = n.x * cos_phi + n.y * sin_phi, nz = n.z;
   const double inv = 1 / (np * np + nz * nz);
   const double et = -double(p1::fast_atan(float(np / nz)));  // tangent plane elevation (n_z > 0)
   if (!(e > et)) return 0;
-  float sf, cf;
-  p1::fast_sincos(float(e), sf, cf);
-  const double se = sf, ce = cf;
   // cos^2 e_t = nz^2 / (np^2 + nz^2), sin e_t cos e_t = -np nz / (np^2 + nz^2)
   return (np * (e - et + se * ce + np * nz * inv) + nz * (nz * nz * inv - ce * ce)) / K;
+}
+
+inline double terrain_weight(Vec3 n, double cos_phi, double sin_phi, int K, double e) {
+  float sf, cf;
+  p1::fast_sincos(float(e), sf, cf);
+  return terrain_weight(n, cos_phi, sin_phi, K, e, sf, cf);
 }
 
 // The horizons that start a visible run: the tree's root children minus a permanent leaf whose farther

@@ -197,37 +197,40 @@ struct LineWorker {
 
 void facet_segment_radiance(const HeightField& f, const Rgb* facet_exit, double x0, double y0, double x1,
                             double y1, Rgb* mean, Rgb* slope) {
-  // Parameters where x, y or x + y (the quads' diagonals) pass an integer: at most 1 + 1 + 2 on a segment
-  // no longer than a texel along its major axis.
-  double t[12];
+  // Parameters where x, y or x + y (the quads' diagonals) pass an integer: on a segment no longer than a
+  // texel along its major axis at most 1 + 1 + 2 (the bound guards longer ones).
+  double t[8];
   int n = 0;
-  t[n++] = 0;
   auto cross = [&](double a0, double a1) {
-    if (!(a1 != a0)) return;
-    const double lo = std::min(a0, a1), hi = std::max(a0, a1);
-    for (double c = std::floor(lo) + 1; c < hi && n < 11; c += 1) t[n++] = (c - a0) / (a1 - a0);
+    const double d = a1 - a0;
+    if (!(d != 0)) return;
+    const double lo = d > 0 ? a0 : a1, hi = d > 0 ? a1 : a0;
+    for (int c = floor_int(lo) + 1; c < hi && n < 6; ++c) t[n++] = (c - a0) / d;
   };
   cross(x0, x1);
   cross(y0, y1);
   cross(x0 + y0, x1 + y1);
-  t[n++] = 1;
   for (int a = 1; a < n; ++a)  // insertion sort of a handful of values
     for (int b = a; b > 0 && t[b] < t[b - 1]; --b) std::swap(t[b], t[b - 1]);
+  t[n++] = 1;
   Rgb m{}, m1{};
-  for (int p = 0; p + 1 < n; ++p) {
-    const double a = t[p], b = t[p + 1];
+  double a = 0;
+  for (int p = 0; p < n; ++p) {
+    const double b = t[p];
     if (!(b > a)) continue;
     const double u = 0.5 * (a + b), x = x0 + u * (x1 - x0), y = y0 + u * (y1 - y0);
-    const double fx = std::floor(x), fy = std::floor(y);
-    const int i = int(fx), j = int(fy);
+    const int i = floor_int(x), j = floor_int(y);
     // The facet under the piece: the triangle (i, j), (i+1, j), (i, j+1) is facet 0 of texel (i, j), the
     // triangle (i+1, j+1), (i, j+1), (i+1, j) facet 1 of texel (i+1, j+1).
-    const bool lower = (x - fx) + (y - fy) <= 1;
-    const int ti = lower ? i : i + 1, tj = lower ? j : j + 1;
-    const Rgb v = facet_exit[2 * f.index(f.wrap_i(ti), f.wrap_j(tj)) + (lower ? 0 : 1)];
+    const int q = (x - i) + (y - j) <= 1 ? 0 : 1;
+    const int ti = i + q, tj = j + q;
+    const int wi = ti >= 0 && ti < f.width ? ti : f.wrap_i(ti),
+              wj = tj >= 0 && tj < f.height ? tj : f.wrap_j(tj);
+    const Rgb v = facet_exit[2 * f.index(wi, wj) + q];
     m += v * float(b - a);
     // first moment about the middle, for the least-squares linear trend: integral of (u - 1/2) du
-    m1 += v * float(0.5 * ((b - 0.5) * (b - 0.5) - (a - 0.5) * (a - 0.5)));
+    m1 += v * float(0.5 * (b - a) * (a + b - 1));
+    a = b;
   }
   *mean = m;
   *slope = m1 * 12.0f;  // / integral of (u - 1/2)^2 over [0, 1]
@@ -269,14 +272,25 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
       [&](int k, int i, int j, const TexelTaps& t) {
         if (!spec.gather) return;
         const std::size_t idx = field.index(i, j);
-        const double e = spec.p1_sin_horizon
-                             ? std::asin(std::clamp(double((*spec.p1_sin_horizon)[idx * K + k]), -1.0, 1.0))
-                             : t.value(4);
+        // The horizon's elevation, sine and cosine: from P1's sines (asin by the fast atan: both within
+        // 1e-7 of P1's own), or the line samples' blended elevation.
+        double e, se, ce;
+        if (spec.p1_sin_horizon) {
+          const float sf = std::clamp((*spec.p1_sin_horizon)[std::size_t(k) * texels + idx], -1.0f, 1.0f);
+          const float cf = std::sqrt(std::max(0.0f, 1 - sf * sf));
+          se = sf, ce = cf;
+          e = cf > 0 ? double(p1::fast_atan(sf / cf)) : std::copysign(kPi / 2, double(sf));
+        } else {
+          e = t.value(4);
+          float sf, cf;
+          p1::fast_sincos(float(e), sf, cf);
+          se = sf, ce = cf;
+        }
         const double wb = t.value(3);
         if (facets)  // the same mean terrain radiance over the facets' lobes
           for (int q = 0; q < 2; ++q) {
             const std::size_t fi = 2 * idx + q;
-            const double tf = terrain_weight((*spec.facet_normals)[fi].d(), cs[k], sn[k], K, e);
+            const double tf = terrain_weight((*spec.facet_normals)[fi].d(), cs[k], sn[k], K, e, se, ce);
             if (!(tf > 0)) continue;
             double* a = acc_f.data() + fi * 3;
             if (wb > 0) {
@@ -286,7 +300,7 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
               a[0] += x.r * tf, a[1] += x.g * tf, a[2] += x.b * tf;
             }
           }
-        const double tw = terrain_weight(normals[idx].d(), cs[k], sn[k], K, e);
+        const double tw = terrain_weight(normals[idx].d(), cs[k], sn[k], K, e, se, ce);
         if (!(tw > 0)) return;
         double* a = acc.data() + idx * 3;
         if (wb > 0) {

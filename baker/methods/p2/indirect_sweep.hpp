@@ -37,9 +37,10 @@ struct IndirectSweepSpec {
   // terrain is exactly P1's; with S > 1 it is the finer line's, so the split can differ from P1's by the
   // sub-sample horizon change).
   int supersampling = 1;
-  // P1's horizons at the texels (P1Result::horizon: sin e, [texel * directions + k]). When given, they
-  // split each texel's lobe between P1's sky and this terrain, so the two halves meet exactly whatever
-  // way P1 brings its horizons to the texels; when null, the line samples' blended elevation is used.
+  // P1's horizons at the texels (P1Result::horizon with horizon_by_direction: sin e, [k * texels + texel]).
+  // When given, they split each texel's lobe between P1's sky and this terrain, so the two halves meet
+  // exactly whatever way P1 brings its horizons to the texels; when null, the line samples' blended elevation
+  // is used.
   const std::vector<float>* p1_sin_horizon = nullptr;
   // Facet senders: the exit radiance of every texel's two facets (P1Result::direct_facets' layout,
   // [2 * texel + q]) and their unit normals (facet_normals). When given, the terrain a receiver sees
