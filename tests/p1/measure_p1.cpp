@@ -44,13 +44,7 @@ double ao_term(double e, double np, double nz) {
   return nz * st * st + np * (th - st * ct);
 }
 
-struct Stats {
-  double n = 0, sum = 0, sum2 = 0, var_ref = 0;
-  void add(double d, double v = 0) { n += 1, sum += d, sum2 += d * d, var_ref += v; }
-  double mean() const { return sum / n; }
-  double rms() const { return std::sqrt(sum2 / n); }
-  double excess() const { return std::sqrt(std::max(0.0, (sum2 - var_ref) / n)); }
-};
+using Stats = truth::ErrorStats;
 
 // Simulates the sweep's two-tap transfer with exact triangle-surface taps (what a sweep that samples every
 // column, row and diagonal crossing computes) and candidate transfers to the texel center, against T_tri.

@@ -13,6 +13,16 @@ namespace hfbake::truth {
 
 inline constexpr double kNone = -kPi / 2;  // elevation when nothing lies behind a point
 
+// Differences against a truth: mean (bias), rms, and with the reference's own per-texel variances the
+// excess rms (the part that is the method's, as report.json's excess_rmse).
+struct ErrorStats {
+  double n = 0, sum = 0, sum2 = 0, var_ref = 0;
+  void add(double d, double v = 0) { n += 1, sum += d, sum2 += d * d, var_ref += v; }
+  double mean() const { return sum / n; }
+  double rms() const { return std::sqrt(sum2 / n); }
+  double excess() const { return std::sqrt(std::max(0.0, (sum2 - var_ref) / n)); }
+};
+
 // Uniform random heights in [0, amplitude) (a field with no spatial coherence: the hardest hull input).
 inline HeightField random_field(int w, int h, double amplitude, std::uint64_t seed, Wrap wrap) {
   HeightField f;

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "../p1/p1_truth.hpp"
 #include "cli/scene_loader.hpp"
 #include "io/image_input.hpp"
 #include "methods/p1/p1.hpp"
@@ -81,13 +82,7 @@ double centre_gather(const HeightField& f, const std::vector<Vec3f>& normals, co
   return sum / kPi;
 }
 
-struct Stats {
-  double n = 0, sum = 0, sum2 = 0, var_ref = 0;
-  void add(double d, double v = 0) { n += 1, sum += d, sum2 += d * d, var_ref += v; }
-  double mean() const { return sum / n; }
-  double rms() const { return std::sqrt(sum2 / n); }
-  double excess() const { return std::sqrt(std::max(0.0, (sum2 - var_ref) / n)); }
-};
+using Stats = truth::ErrorStats;
 
 }  // namespace
 

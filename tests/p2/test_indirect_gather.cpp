@@ -18,11 +18,12 @@
 namespace hfbake {
 namespace {
 
-// Brute force: E/pi from direction k for receiver r (samples 0..r-1 terrain), radiance of sample j is
-// L(j) (a smooth function of the position along the line), step = world distance between samples.
-double brute_force(const std::vector<double>& h, const std::vector<double>& L, int r, double step,
-                   const WedgeWeights& w) {
-  // Global horizon slope (world), the top of the terrain part.
+// Brute force: E/pi from direction k for receiver r (samples 0..r-1 terrain; step = world distance
+// between samples): for each of many elevations, march away from R to the first segment the ray meets and
+// take its radiance there. Segment j (samples j -> j+1) radiates mean[j] + slope[j] * (u - 1/2) at its
+// parameter u (0 at sample j).
+double brute_force_segments(const std::vector<double>& h, const std::vector<double>& mean,
+                            const std::vector<double>& slope, int r, double step, const WedgeWeights& w) {
   double top = -1e300;
   for (int j = 0; j < r; ++j) top = std::max(top, (h[j] - h[r]) / ((r - j) * step));
   const double e0 = std::atan(w.t_n), e1 = std::atan(top);
@@ -31,25 +32,28 @@ double brute_force(const std::vector<double>& h, const std::vector<double>& L, i
   double sum = 0;
   for (int q = 0; q < steps; ++q) {
     const double ea = e0 + (e1 - e0) * q / steps, eb = e0 + (e1 - e0) * (q + 1) / steps;
-    const double sigma = std::tan(0.5 * (ea + eb)) * step;  // per-step slope of the ray
-    // March away from R: g(j) = terrain height minus ray height at sample j; first j with g > 0 is hit.
-    double g_prev = 0;  // at R itself
-    double Lhit = 0;
-    bool hit = false;
+    const double sigma = std::tan(0.5 * (ea + eb)) * step;
+    double g_prev = 0;
     for (int j = r - 1; j >= 0; --j) {
       const double g = h[j] - (h[r] + sigma * (r - j));
       if (g > 0) {
-        const double f = -g_prev / (g - g_prev);  // from sample j+1 towards j
-        const double Lj1 = L[j + 1];
-        Lhit = Lj1 + f * (L[j] - Lj1);
-        hit = true;
+        const double u = 1 + g_prev / (g - g_prev);  // the crossing on segment j, from sample j
+        sum += (mean[j] + slope[j] * (u - 0.5)) * (w.F(std::tan(eb)) - w.F(std::tan(ea)));
         break;
       }
       g_prev = g;
     }
-    if (hit) sum += Lhit * (w.F(std::tan(eb)) - w.F(std::tan(ea)));
   }
   return sum / kPi;
+}
+
+// The same with the radiance given per sample, linear along each segment.
+double brute_force(const std::vector<double>& h, const std::vector<double>& L, int r, double step,
+                   const WedgeWeights& w) {
+  std::vector<double> mean(L.size()), slope(L.size());
+  for (std::size_t j = 0; j + 1 < L.size(); ++j)
+    mean[j] = 0.5 * (L[j] + L[j + 1]), slope[j] = L[j + 1] - L[j];
+  return brute_force_segments(h, mean, slope, r, step, w);
 }
 
 std::uint64_t lcg(std::uint64_t& s) {
@@ -113,33 +117,6 @@ TEST(IndirectGather, MatchesBruteForceRayMarch) {
     }
   }
   EXPECT_GT(cases, 200);
-}
-
-// The same brute force with the radiance given per segment: segment j (samples j -> j+1) radiates
-// mean[j] + slope[j] * (u - 1/2) at its parameter u (0 at sample j).
-double brute_force_segments(const std::vector<double>& h, const std::vector<double>& mean,
-                            const std::vector<double>& slope, int r, double step, const WedgeWeights& w) {
-  double top = -1e300;
-  for (int j = 0; j < r; ++j) top = std::max(top, (h[j] - h[r]) / ((r - j) * step));
-  const double e0 = std::atan(w.t_n), e1 = std::atan(top);
-  if (!(e1 > e0)) return 0;
-  const int steps = 12000;
-  double sum = 0;
-  for (int q = 0; q < steps; ++q) {
-    const double ea = e0 + (e1 - e0) * q / steps, eb = e0 + (e1 - e0) * (q + 1) / steps;
-    const double sigma = std::tan(0.5 * (ea + eb)) * step;
-    double g_prev = 0;
-    for (int j = r - 1; j >= 0; --j) {
-      const double g = h[j] - (h[r] + sigma * (r - j));
-      if (g > 0) {
-        const double u = 1 + g_prev / (g - g_prev);  // the crossing on segment j, from sample j
-        sum += (mean[j] + slope[j] * (u - 0.5)) * (w.F(std::tan(eb)) - w.F(std::tan(ea)));
-        break;
-      }
-      g_prev = g;
-    }
-  }
-  return sum / kPi;
 }
 
 // Radiance given per segment (facet senders), constant per segment (the segment lies on one facet):

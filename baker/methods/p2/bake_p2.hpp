@@ -9,18 +9,24 @@
 // Each texel's cosine lobe is split once, at the horizon P1 computes: above it P1's sky (direct), below it
 // the terrain, whose mean exit radiance P2 gathers from the exactly visible stretches (indirect_sweep.hpp).
 // So a uniform furnace closes exactly: direct + indirect -> 1 at every texel as bounces grow.
-// Accuracy (closing note of issue 5): the azimuthal error of a bounce falls about as 1/K; against the
-// Embree reference a floor remains from the line sampling (raise `supersampling`) and from the surface
-// model (bilinear sweeps, triangulated reference). Senders radiate with their texel's smoothed normal:
-// on smooth fields every bounce matches the reference within 1-2 % (tests/p2 V-trench against a 2D
-// radiosity integral, jobs/p2_furnace_smooth.json), but where the field is rough at the texel scale the
-// reference's facets that a receiver sees lean towards it (less sky, more bounce light than the smoothed
-// normal says): on jobs/p2_furnace.json bounce 1 is +8 %, bounces 3-4 -17..-25 %, their sum exact.
+// Senders (the terrain a receiver sees) radiate per facet of the reference's triangulated surface by
+// default: P1 lights each texel's two facets with their own normals at the texel's horizons
+// (P1Result::direct_facets), a line segment radiates the length-weighted mean of the facets it crosses
+// (indirect_sweep.hpp), and later bounces re-light the facets from each texel's gathered terrain radiance.
+// `senders: "texels"` is the method as published: each sender radiates with its texel's smoothed normal.
+// On smooth fields the two agree; where the field is rough at the texel scale the facets a receiver sees
+// lean towards it (less sky, more bounce light than the smoothed normal says), and texel senders put
+// bounce 1 about 10 % high and bounces 3-4 13-22 % low (tests/p2: per-bounce means against the Embree
+// reference on the rough furnace field; facet senders within 2/0.4/1.6/5.3 %).
+// Accuracy (closing notes of issue 5): the azimuthal error of a bounce falls about as 1/K; against the
+// reference a floor remains from the line sampling (column crossings only: raise `supersampling`, whose
+// sub-samples lie on the triangulated surface with facet senders) and from receivers sitting on the
+// lines rather than at the texel centres (tests/p2/measure_p2_centre splits the two).
 //
 // Parameters (schemas/methods/p2.schema.json): directions (K, default 64), bounces (default: the job's
 // "bounces"), visibility ("tree" or "naive": the same output, the naive march is for benchmarks and
-// checks), supersampling (S, default 1), wrap_periods, layers: indirect, total, direct (default: all
-// three), indirect_b1 .. indirect_b<bounces>.
+// checks), supersampling (S, default 1), senders ("facets", default, or "texels"), wrap_periods, layers:
+// indirect, total, direct (default: all three), indirect_b1 .. indirect_b<bounces>.
 #pragma once
 
 #include <nlohmann/json.hpp>
