@@ -47,6 +47,21 @@ int method_channels(const BakeEntry& e) {
   return channels;
 }
 
+// Per-texel bytes a method holds besides its layers while it runs (the largest of its phases).
+double method_scratch_bytes(const BakeEntry& e, int job_bounces) {
+  const double k = e.params.value("directions", 64);
+  if (e.method == "p1") return 60;  // normals, accumulators, minmod lifts
+  if (e.method == "p2") {
+    const int b = std::max(0, e.params.value("bounces", job_bounces));
+    const bool facets = e.params.value("senders", std::string("facets")) == "facets";
+    // P1's horizons (K floats) and scratch; direct, exit, indirect and every bounce (RGB floats); the
+    // sweep's double accumulators; facet senders: normals, albedo, exit, next-bounce light and direct
+    // light of two facets (RGB floats each) and their double accumulators.
+    return 4 * k + 60 + 12 * (3 + b) + 24 + (facets ? 5 * 24 + 48 + 48 : 0);
+  }
+  return 0;
+}
+
 }  // namespace
 
 FieldSize probe_field_size(const Job& job) {
@@ -64,12 +79,15 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size) {
   double per_texel = 48;
   // Methods: results are kept until the report when there is a reference, else one at a time.
   double methods = 0, largest = 0;
+  double scratch = 0;  // the largest method's working memory (methods run one at a time)
+  const int bounces = job.doc.value("bounces", 0);
   for (const BakeEntry& e : job.bakes) {
     const double bytes = 4.0 * method_channels(e) * 1.5;  // float layers + the half copy written to EXR
     methods += bytes;
     largest = std::max(largest, bytes);
+    scratch = std::max(scratch, method_scratch_bytes(e, bounces));
   }
-  per_texel += job.has_reference ? methods + 2 * 4.0 * 24 * 1.5 : largest;
+  per_texel += (job.has_reference ? methods + 2 * 4.0 * 24 * 1.5 : largest) + scratch;
   return std::size_t(texels * per_texel) + (std::size_t(64) << 20);  // + fixed overhead
 }
 
