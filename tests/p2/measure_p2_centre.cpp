@@ -10,7 +10,7 @@
 // P2 - T_c is the sweep's part (line samples at column crossings, receivers blended to the texel);
 // T_c - reference is what the sender model and K leave (excess = rms minus the reference's own standard
 // errors, in quadrature).
-// Usage: measure_p2_centre <job.json> <reference.exr|-> <stride> K [S]
+// Usage: measure_p2_centre <job.json> <reference.exr|-> <stride> K [S] [near_radius]
 #include <tbb/parallel_for.h>
 
 #include <cmath>
@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
   scene.bounces = 1;
   const HeightField& f = scene.field;
   const int stride = std::atoi(argv[3]), K = std::atoi(argv[4]), S = argc > 5 ? std::atoi(argv[5]) : 1;
+  const double near_radius = argc > 6 ? std::atof(argv[6]) : P2Params{}.near_radius;
 
   // The senders' exit radiance exactly as compute_p2 makes it.
   P1Params p1;
@@ -123,6 +124,7 @@ int main(int argc, char** argv) {
   p.directions = K;
   p.bounces = 1;
   p.supersampling = S;
+  p.near_radius = near_radius;
   const P2Result r = compute_p2(scene, p, RunControl{});
 
   std::vector<float> ref, se;
@@ -155,8 +157,8 @@ int main(int argc, char** argv) {
       t_ref.add(tc[t] - ref[idx], v), p_ref.add(pv - ref[idx], v);
     }
   }
-  std::printf("%s K=%d S=%d, %zu texels: mean T_c %.5f | P2-T_c mean %+.5f rms %.5f", argv[1], K, S,
-              texels.size(), mean, p_t.mean(), p_t.rms());
+  std::printf("%s K=%d S=%d near %g, %zu texels: mean T_c %.5f | P2-T_c mean %+.5f rms %.5f", argv[1], K, S,
+              near_radius, texels.size(), mean, p_t.mean(), p_t.rms());
   if (!ref.empty())
     std::printf(" | vs ref excess (bias): T_c %.5f (%+.5f) P2 %.5f (%+.5f)", t_ref.excess(), t_ref.mean(),
                 p_ref.excess(), p_ref.mean());

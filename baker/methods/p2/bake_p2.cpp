@@ -54,6 +54,12 @@ P2Params parse_p2_params(const nlohmann::json& e) {
     else
       throw InputError("", "visibility", "must be \"tree\" or \"naive\"");
   }
+  if (e.contains("near_radius")) {
+    const auto& v = e.at("near_radius");
+    if (!v.is_number() || !(v.get<double>() == 0 || (v.get<double>() >= 1 && v.get<double>() <= 16)))
+      throw InputError("", "near_radius", "must be 0 (off) or a number in [1, 16]");
+    p.near_radius = v.get<double>();
+  }
   if (e.contains("senders")) {
     const auto& v = e.at("senders");
     if (v == "facets")
@@ -136,6 +142,7 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   if (params.facet_senders) {
     spec.exit_facets = &facet_exit;
     spec.facet_normals = &facet_normal;
+    spec.near_radius = params.near_radius;
   }
   r.indirect.assign(N, Rgb{});
   std::vector<Rgb> facet_e;

@@ -49,6 +49,9 @@ struct P2Params {
   // Senders radiate per facet of the triangulated surface (true, default) or per texel with its smoothed
   // normal (false, the method as published).
   bool facet_senders = true;
+  // Texels gather their first near_radius texels exactly from their centres (facet senders only;
+  // IndirectSweepSpec::near_radius); 0: every receiver gathers on its line (the method as published).
+  double near_radius = 2;
   std::vector<std::string> layers;  // empty: indirect, total, direct
 };
 

@@ -67,6 +67,7 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
     }
     if (done) break;
     if (last) {  // j == terrain_end - 1: below it the ray meets the receiver's own surface
+      if (!L.has_crease) break;
       LI[M] = L.crease;
       T[++M] = float(t_n);
       break;
@@ -95,7 +96,7 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
     acc_g += LI[i].g * wi;
     acc_b += LI[i].b * wi;
   }
-  if (weight) *weight = (double(F[0]) - double(F[M])) / kPi;  // T[M] == t_n
+  if (weight) *weight = (double(F[0]) - double(F[M])) / kPi;  // T[M]: t_n (no crease: the lowest far slope)
   return {float(acc_r / kPi), float(acc_g / kPi), float(acc_b / kPi)};
 }
 

@@ -117,10 +117,13 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
 // so that its visible part [0, u] has the mean radiance mean[j] + slope[j] * (u - 1) / 2. crease: the
 // radiance the receiver sees below its nearest sample (its own surface). Per-sample radiance L is the
 // special case mean = (L_j + L_j+1) / 2, slope = L_j+1 - L_j, crease = L_r (gather_stretches above).
+// has_crease = false: the elevations below the nearest terrain sample are not gathered at all (a far-field
+// gather over the samples 0..terrain_end-1 only; the texel's exact near field covers the rest).
 struct SegmentRadiance {
   const Rgb* mean = nullptr;
   const Rgb* slope = nullptr;
   Rgb crease;
+  bool has_crease = true;
 };
 
 Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrain_end,

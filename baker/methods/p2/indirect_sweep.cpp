@@ -1,10 +1,14 @@
 #include "methods/p2/indirect_sweep.hpp"
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 
 #include "methods/p1/fast_math.hpp"
+#include "methods/p1/horizon_sweep.hpp"
 #include "methods/p2/hull_tree.hpp"
 #include "methods/p2/indirect_gather.hpp"
 #include "methods/p2/naive_visibility.hpp"
@@ -27,6 +31,8 @@ struct LineWorker {
   const std::vector<Rgb>* exit = nullptr;
   const IndirectSweepSpec* spec = nullptr;
   double wedge = 0;
+  bool near_field = false;  // IndirectSweepSpec::near_radius in effect
+  int lag = 0;  // near field: the receivers gather the samples this many fine samples behind and farther
   // Scratch, grown once per thread.
   HullTree tree;
   std::vector<double> h;
@@ -71,6 +77,9 @@ struct LineWorker {
   void operator()(const SweepLine& line, float* out) {
     const int S = std::max(1, spec->supersampling);
     const int n0 = line.count, n = (n0 - 1) * S + 1;  // fine samples: sample q is driver sample q / S
+    lag = 0;
+    if (near_field)  // the samples at least near_radius texels away
+      lag = int(std::ceil(spec->near_radius * S / (line.step / field->texel_size) - 1e-9));
     const int ib = line.inside_begin * S;
     const int ie = line.inside_end > line.inside_begin ? (line.inside_end - 1) * S + 1 : ib;
     if (int(h.size()) < n) {
@@ -136,10 +145,14 @@ struct LineWorker {
     }
     if (!naive) tree.reset(T);
     const std::uint64_t it0 = tree.iterations();
+    // Exact near field at the texels: the receivers gather only the samples at least `lag` fine samples
+    // behind them (near_radius texels), from a tree that lags that far.
+    const bool near = lag > 0;
     for (int q = 0; q < n; ++q) {
       const bool terrain = q >= ib && q < ie;
-      if (terrain && !naive) {
-        tree.push(h[q]);
+      const int pq = q - lag;  // the sample pushed now
+      if (!naive && pq >= ib && pq < ie) {
+        tree.push(h[pq]);
         stats.pushed += 1;
         stats.horizons_pushed += tree.horizons().size();
       }
@@ -150,8 +163,10 @@ struct LineWorker {
       o[0] = o[1] = o[2] = o[3] = 0;
       o[4] = -p1::kHalfPiF;  // nothing behind: P1's convention
       const int r = q - ib;
-      if (r <= 0 || T <= 0) continue;  // no terrain behind this receiver
-      const int terrain_end = std::min(r, T);
+      // The terrain samples gathered here, 0..terrain_end-1: all before the receiver, or with the near
+      // field those at least `lag` behind it (what the lagging tree holds).
+      const int terrain_end = std::min(near ? r - lag + 1 : r, T);
+      if (terrain_end <= 0) continue;  // no (far) terrain behind this receiver
       if (terrain) {
         stats.receivers += 1;
         stats.naive_iterations += std::uint64_t(r);
@@ -160,6 +175,9 @@ struct LineWorker {
         naive_visible(hh, r, visible, terrain_end);
         run_starts_of_visible(visible, starts);
         if (terrain) stats.iterations += std::uint64_t(r);
+      } else if (near) {  // the tree holds the samples 0..terrain_end-1: what the receiver sees of them
+        tree.query(r, hh[r], visible);
+        run_starts(hh, r, visible, starts);
       } else if (terrain) {
         run_starts(hh, r, tree.horizons(), starts);
         stats.horizons += tree.horizons().size();
@@ -177,6 +195,7 @@ struct LineWorker {
       // Below the nearest sample the receiver sees its own surface: its radiance, or with facet senders
       // the segment it stands at the end of.
       seg.crease = facets ? seg_mean[ib + r - 1] : L[ib + r];
+      seg.has_crease = !near;
       const Rgb e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, w, &weight, inv_dist.data(),
                                     &gather_scratch);
       o[0] = e.r;
@@ -192,6 +211,60 @@ struct LineWorker {
     if (!naive) stats.iterations += tree.iterations() - it0;
   }
 };
+
+// One crossing of P1's near-field stencil (p1::NearCrossing) with the facet of the piece of the ray that
+// ends at it (from the previous crossing, or from the texel centre): facet q of the texel at (fi, fj).
+struct NearPiece {
+  p1::NearCrossing c;
+  int fi = 0, fj = 0, q = 0;
+};
+
+std::vector<NearPiece> near_pieces(double dx, double dy, double radius, double texel_size) {
+  std::vector<NearPiece> out;
+  float px = 0, py = 0;
+  for (const p1::NearCrossing& c : p1::near_field_stencil(dx, dy, radius, texel_size)) {
+    NearPiece p;
+    p.c = c;
+    const double mx = 0.5 * (px + c.x), my = 0.5 * (py + c.y);
+    const int i = floor_int(mx), j = floor_int(my);
+    p.q = (mx - i) + (my - j) <= 1 ? 0 : 1;  // the reference's split, as facet_segment_radiance
+    p.fi = i + p.q, p.fj = j + p.q;
+    out.push_back(p);
+    px = c.x, py = c.y;
+  }
+  return out;
+}
+
+// The visible near field of texel (i, j) along one direction: elevation intervals (world slopes, the
+// lowest from -infinity: the crease down to any tangent plane) and the facet radiance of each; returns
+// the steepest near slope (the top of the last interval), -infinity when the stencil leaves the field at
+// once. Marched outward: a piece is visible above everything nearer.
+struct NearInterval {
+  double lo, hi;
+  Rgb L;
+};
+double march_near(const HeightField& f, const std::vector<NearPiece>& pieces, const Rgb* exit_facets, int i,
+                  int j, std::vector<NearInterval>& out) {
+  out.clear();
+  const bool clamp = f.wrap == Wrap::clamp;
+  const double z0 = f.z[f.index(i, j)];
+  double m = -std::numeric_limits<double>::infinity();
+  for (const NearPiece& p : pieces) {
+    const p1::NearCrossing& c = p.c;
+    const float px = float(i) + c.x, py = float(j) + c.y;
+    if (clamp &&
+        (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
+      break;  // the terrain ends at the border
+    const float za = f.at(i + c.ai, j + c.aj), zb = f.at(i + c.bi, j + c.bj);
+    const double slope = (double(za + (zb - za) * c.w) - z0) * c.inv_s;
+    if (slope > m) {
+      const int ti = f.wrap_i(i + p.fi), tj = f.wrap_j(j + p.fj);
+      out.push_back({m, slope, exit_facets[2 * f.index(ti, tj) + p.q]});
+      m = slope;
+    }
+  }
+  return m;
+}
 
 }  // namespace
 
@@ -256,6 +329,52 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
   }
   P2SweepStats totals;
   std::mutex totals_mutex;
+  // Exact near field (IndirectSweepSpec::near_radius): P1's near stencil per direction, with facets.
+  const bool near =
+      spec.near_radius > 0 && spec.exit_facets && spec.facet_normals && spec.p1_sin_horizon && spec.gather;
+  std::vector<std::vector<NearPiece>> pieces(near ? K : 0);
+  for (int k = 0; k < int(pieces.size()); ++k) {
+    const SweepDirection d = plan_direction(field, ss, k);
+    pieces[k] = near_pieces(d.dx, d.dy, spec.near_radius, field.texel_size);
+  }
+  // The visitor runs for one direction at a time on each thread (its scratch is per thread).
+  tbb::enumerable_thread_specific<std::vector<NearInterval>> near_scratch;
+  // A texel's terrain part of direction k with the exact near field: the near intervals exactly (clipped to
+  // each normal's tangent plane and to P1's horizon e), and above the near field up to e the mean radiance
+  // the lines' receivers gathered from the far samples (terrain_weight minus the near intervals' weight:
+  // the parts tile the lobe below P1's horizon exactly). For the texel's normal and, when the next bounce
+  // needs them, its two facets'.
+  auto texel_near_far = [&](int k, int i, int j, std::size_t idx, const TexelTaps& t, double e, double se,
+                            double ce) {
+    std::vector<NearInterval>& iv = near_scratch.local();
+    march_near(field, pieces[k], spec.exit_facets->data(), i, j, iv);
+    const double top = ce > 0 ? se / ce : std::numeric_limits<double>::infinity();  // tan e
+    const double wb = t.value(3);
+    const bool has_far = wb > 0;  // else the samples saw no far terrain: the near field's mean fills in
+    const Rgb far_mean =
+        has_far ? Rgb{float(t.value(0) / wb), float(t.value(1) / wb), float(t.value(2) / wb)} : Rgb{};
+    auto part = [&](Vec3 n, double* a) {
+      const double tw = terrain_weight(n, cs[k], sn[k], K, e, se, ce);
+      if (!(tw > 0)) return;
+      const WedgeWeights w = WedgeWeights::make(n, cs[k], sn[k], wedge);
+      double er = 0, eg = 0, eb = 0, wn = 0;
+      for (const NearInterval& v : iv) {
+        const double lo = std::max(v.lo, w.t_n), hi = std::min(v.hi, top);
+        if (!(hi > lo)) continue;
+        const double d = w.F(hi) - w.F(lo);
+        er += v.L.r * d, eg += v.L.g * d, eb += v.L.b * d, wn += d;
+      }
+      er /= kPi, eg /= kPi, eb /= kPi, wn /= kPi;
+      const double wf = std::max(0.0, tw - wn);
+      Rgb fm = far_mean;
+      if (!has_far) fm = wn > 0 ? Rgb{float(er / wn), float(eg / wn), float(eb / wn)} : exit[idx];
+      a[0] += er + fm.r * wf, a[1] += eg + fm.g * wf, a[2] += eb + fm.b * wf;
+    };
+    part(normals[idx].d(), acc.data() + idx * 3);
+    if (facets)
+      for (int q = 0; q < 2; ++q)
+        part((*spec.facet_normals)[2 * idx + q].d(), acc_f.data() + (2 * idx + q) * 3);
+  };
   sweep_lines(
       field, ss, rc,
       [&] {
@@ -265,6 +384,7 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
         w.exit = &exit;
         w.spec = &spec;
         w.wedge = wedge;
+        w.near_field = near;
         w.sink = &totals;
         w.sink_mutex = &totals_mutex;
         return w;
@@ -287,6 +407,10 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
           se = sf, ce = cf;
         }
         const double wb = t.value(3);
+        if (near) {
+          texel_near_far(k, i, j, idx, t, e, se, ce);
+          return;
+        }
         if (facets)  // the same mean terrain radiance over the facets' lobes
           for (int q = 0; q < 2; ++q) {
             const std::size_t fi = 2 * idx + q;

@@ -49,6 +49,15 @@ struct IndirectSweepSpec {
   // the facets it crosses (with a linear trend for partly visible segments). Both or neither.
   const std::vector<Rgb>* exit_facets = nullptr;
   const std::vector<Vec3f>* facet_normals = nullptr;
+  // Exact near field (facet senders and P1's horizons only; 0: off, the method as published): every
+  // texel gathers the terrain within near_radius texels itself, from its centre over the triangulated
+  // surface (every column, row and diagonal crossing of P1's near-field stencil, each piece radiating
+  // its facet's light), up to the steepest of those crossings; the lines' receivers gather only the
+  // samples at least that far behind them (the hull tree lags), and their mean radiance fills the texel's
+  // lobe from there up to P1's horizon. Receivers sit on the lines, up to half a texel from the texel
+  // centres, and the nearest terrain subtends the largest angles: this removes that mapping error
+  // where it is largest (tests/p2/measure_p2_centre).
+  double near_radius = 0;
 };
 
 // E_indirect / pi per texel (row-major) from the exit radiance `exit` per texel, for one bounce.
