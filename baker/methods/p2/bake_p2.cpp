@@ -1,5 +1,6 @@
 #include "methods/p2/bake_p2.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "core/error.hpp"
@@ -96,6 +97,8 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   p1.direct = true;
   p1.horizon = true;  // the lobe split below uses P1's own horizons (K floats per texel while P2 runs)
   p1.facet_direct = params.facet_senders;
+  // P1's exact near field reaches at least as far as the texels' own near-field gather (below).
+  if (params.facet_senders) p1.near_radius = std::max(p1.near_radius, params.near_radius);
   p1.horizon_by_direction = true;
   P1Result direct = compute_p1(scene, p1, sub_range(rc, 0, phase));
   r.direct = std::move(direct.direct);

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <tuple>
+#include <utility>
 
 #include "methods/p1/fast_math.hpp"
 #include "methods/p1/horizon_sweep.hpp"
@@ -24,6 +26,39 @@ namespace {
 // P1 does not give to the sky (P1 blends the same elevations to the texel the same way). So P1's direct
 // and this indirect tile the texel's lobe: a uniform emitting furnace gives direct + indirect = 1.
 constexpr int kChannels = 5;
+
+// The facet under the point (x, y) (texel coordinates, not wrapped): the triangle (i, j), (i+1, j),
+// (i, j+1) is facet 0 of texel (i, j), the triangle (i+1, j+1), (i, j+1), (i+1, j) facet 1 of texel
+// (i+1, j+1) (the reference's split).
+struct FacetRef {
+  int i = 0, j = 0, q = 0;
+  bool operator==(const FacetRef&) const = default;
+};
+FacetRef facet_under(double x, double y) {
+  const int i = floor_int(x), j = floor_int(y);
+  const int q = (x - i) + (y - j) <= 1 ? 0 : 1;
+  return {i + q, j + q, q};
+}
+
+// The two facets on either side of a piece of a ray with midpoint (x, y) and direction (ux, uy): the same
+// facet twice, or, when the piece runs along a column, a row or a diagonal (an edge), the two facets the
+// edge separates (a wedge of azimuths around the ray sees both halves).
+std::pair<FacetRef, FacetRef> facets_beside(double x, double y, double ux, double uy) {
+  const double len = std::hypot(ux, uy), px = -uy / len * 1e-6, py = ux / len * 1e-6;
+  return {facet_under(x + px, y + py), facet_under(x - px, y - py)};
+}
+
+Rgb facet_value(const HeightField& f, const Rgb* facet_exit, FacetRef r) {
+  const int wi = r.i >= 0 && r.i < f.width ? r.i : f.wrap_i(r.i);
+  const int wj = r.j >= 0 && r.j < f.height ? r.j : f.wrap_j(r.j);
+  return facet_exit[2 * f.index(wi, wj) + r.q];
+}
+
+Rgb piece_radiance(const HeightField& f, const Rgb* facet_exit, double x, double y, double ux, double uy) {
+  const auto [a, b] = facets_beside(x, y, ux, uy);
+  const Rgb va = facet_value(f, facet_exit, a);
+  return a == b ? va : (va + facet_value(f, facet_exit, b)) * 0.5f;
+}
 
 struct LineWorker {
   const HeightField* field = nullptr;
@@ -196,8 +231,18 @@ struct LineWorker {
       // the segment it stands at the end of.
       seg.crease = facets ? seg_mean[ib + r - 1] : L[ib + r];
       seg.has_crease = !near;
-      const Rgb e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, w, &weight, inv_dist.data(),
-                                    &gather_scratch);
+      // With the near field the texel uses this far terrain only above its near field's horizon: gather
+      // it above this sample's own near horizon (its samples within the lag), so that far terrain hidden
+      // behind the near field does not enter the mean (when nothing is left, all of it).
+      WedgeWeights wf = w;
+      if (near)
+        for (int j = std::max(0, terrain_end); j < std::min(r, T); ++j)
+          wf.t_n = std::max(wf.t_n, (hh[j] - hh[r]) * inv_dist[r - j]);
+      Rgb e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, wf, &weight, inv_dist.data(),
+                              &gather_scratch);
+      if (near && !(weight > 0))
+        e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, w, &weight, inv_dist.data(),
+                            &gather_scratch);
       o[0] = e.r;
       o[1] = e.g;
       o[2] = e.b;
@@ -216,7 +261,7 @@ struct LineWorker {
 // ends at it (from the previous crossing, or from the texel centre): facet q of the texel at (fi, fj).
 struct NearPiece {
   p1::NearCrossing c;
-  int fi = 0, fj = 0, q = 0;
+  FacetRef a, b;  // the facets beside the piece (facets_beside), relative to the texel
 };
 
 std::vector<NearPiece> near_pieces(double dx, double dy, double radius, double texel_size) {
@@ -225,10 +270,7 @@ std::vector<NearPiece> near_pieces(double dx, double dy, double radius, double t
   for (const p1::NearCrossing& c : p1::near_field_stencil(dx, dy, radius, texel_size)) {
     NearPiece p;
     p.c = c;
-    const double mx = 0.5 * (px + c.x), my = 0.5 * (py + c.y);
-    const int i = floor_int(mx), j = floor_int(my);
-    p.q = (mx - i) + (my - j) <= 1 ? 0 : 1;  // the reference's split, as facet_segment_radiance
-    p.fi = i + p.q, p.fj = j + p.q;
+    std::tie(p.a, p.b) = facets_beside(0.5 * (px + c.x), 0.5 * (py + c.y), dx, dy);
     out.push_back(p);
     px = c.x, py = c.y;
   }
@@ -258,8 +300,10 @@ double march_near(const HeightField& f, const std::vector<NearPiece>& pieces, co
     const float za = f.at(i + c.ai, j + c.aj), zb = f.at(i + c.bi, j + c.bj);
     const double slope = (double(za + (zb - za) * c.w) - z0) * c.inv_s;
     if (slope > m) {
-      const int ti = f.wrap_i(i + p.fi), tj = f.wrap_j(j + p.fj);
-      out.push_back({m, slope, exit_facets[2 * f.index(ti, tj) + p.q]});
+      const Rgb La = facet_value(f, exit_facets, {i + p.a.i, j + p.a.j, p.a.q});
+      const Rgb L =
+          p.a == p.b ? La : (La + facet_value(f, exit_facets, {i + p.b.i, j + p.b.j, p.b.q})) * 0.5f;
+      out.push_back({m, slope, L});
       m = slope;
     }
   }
@@ -292,14 +336,7 @@ void facet_segment_radiance(const HeightField& f, const Rgb* facet_exit, double 
     const double b = t[p];
     if (!(b > a)) continue;
     const double u = 0.5 * (a + b), x = x0 + u * (x1 - x0), y = y0 + u * (y1 - y0);
-    const int i = floor_int(x), j = floor_int(y);
-    // The facet under the piece: the triangle (i, j), (i+1, j), (i, j+1) is facet 0 of texel (i, j), the
-    // triangle (i+1, j+1), (i, j+1), (i+1, j) facet 1 of texel (i+1, j+1).
-    const int q = (x - i) + (y - j) <= 1 ? 0 : 1;
-    const int ti = i + q, tj = j + q;
-    const int wi = ti >= 0 && ti < f.width ? ti : f.wrap_i(ti),
-              wj = tj >= 0 && tj < f.height ? tj : f.wrap_j(tj);
-    const Rgb v = facet_exit[2 * f.index(wi, wj) + q];
+    const Rgb v = piece_radiance(f, facet_exit, x, y, x1 - x0, y1 - y0);
     m += v * float(b - a);
     // first moment about the middle, for the least-squares linear trend: integral of (u - 1/2) du
     m1 += v * float(0.5 * (b - a) * (a + b - 1));
