@@ -18,15 +18,22 @@
 // lean towards it (less sky, more bounce light than the smoothed normal says), and texel senders put
 // bounce 1 about 10 % high and bounces 3-4 13-22 % low (tests/p2: per-bounce means against the Embree
 // reference on the rough furnace field; facet senders within 2/0.4/1.6/5.3 %).
+// The receivers of the sweep sit on its lines, up to half a texel from the texel centres, and see the
+// terrain only at the lines' column crossings; the nearest terrain subtends the largest angles. So each
+// texel gathers its first `near_radius` texels (default 2) itself, from its centre over every column, row
+// and diagonal crossing of P1's near stencil (each piece radiating its facet's light, both facets for a
+// piece along an edge), and the lines' receivers, through a hull tree that lags that far, gather only the
+// terrain beyond: their mean radiance fills the texel's lobe from the near field's horizon up to P1's.
 // Accuracy (closing notes of issue 5): the azimuthal error of a bounce falls about as 1/K; against the
-// reference a floor remains from the line sampling (column crossings only: raise `supersampling`, whose
-// sub-samples lie on the triangulated surface with facet senders) and from receivers sitting on the
-// lines rather than at the texel centres (tests/p2/measure_p2_centre splits the two).
+// reference what remains is the line sampling beyond the near field (raise `supersampling` or
+// `near_radius`) and the facets' light, evaluated at their right-angle corner (tests/p2/measure_p2_centre
+// splits the parts).
 //
 // Parameters (schemas/methods/p2.schema.json): directions (K, default 64), bounces (default: the job's
 // "bounces"), visibility ("tree" or "naive": the same output, the naive march is for benchmarks and
-// checks), supersampling (S, default 1), senders ("facets", default, or "texels"), wrap_periods, layers:
-// indirect, total, direct (default: all three), indirect_b1 .. indirect_b<bounces>.
+// checks), supersampling (S, default 1), senders ("facets", default, or "texels"), near_radius (texels,
+// default 2; 0 = off; facet senders only), wrap_periods, layers: indirect, total, direct (default: all
+// three), indirect_b1 .. indirect_b<bounces>.
 #pragma once
 
 #include <nlohmann/json.hpp>
