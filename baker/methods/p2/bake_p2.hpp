@@ -15,9 +15,9 @@
 // (indirect_sweep.hpp), and later bounces re-light the facets from each texel's gathered terrain radiance.
 // `senders: "texels"` is the method as published: each sender radiates with its texel's smoothed normal.
 // On smooth fields the two agree; where the field is rough at the texel scale the facets a receiver sees
-// lean towards it (less sky, more bounce light than the smoothed normal says), and texel senders put
-// bounce 1 about 10 % high and bounces 3-4 13-22 % low (tests/p2: per-bounce means against the Embree
-// reference on the rough furnace field; facet senders within 2/0.4/1.6/5.3 %).
+// lean towards it (less sky, more bounce light than the smoothed normal says): per-bounce field means
+// against the Embree reference on the rough furnace field (tests/p2), bounces 1-4: texel senders
+// +9.6/-4.2/-13.5/-21.8 %, facet senders with the near field +1.3/-0.1/-1.5/-3.7 %.
 // The receivers of the sweep sit on its lines, up to half a texel from the texel centres, and see the
 // terrain only at the lines' column crossings; the nearest terrain subtends the largest angles. So each
 // texel gathers its first `near_radius` texels (default 2) itself, from its centre over every column, row
