@@ -13,6 +13,7 @@
 // Usage: measure_p2_centre <job.json> <reference.exr|-> <stride> K [S] [near_radius]
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -107,6 +108,7 @@ int main(int argc, char** argv) {
   p1.directions = K;
   p1.ao = p1.vsky = false;
   p1.facet_direct = true;
+  p1.near_radius = std::max(p1.near_radius, near_radius);  // as compute_p2
   const P1Result d = compute_p1(scene, p1, RunControl{});
   const std::size_t N = f.texel_count();
   std::vector<Rgb> exit_f(2 * N);
