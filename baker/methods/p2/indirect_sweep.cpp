@@ -257,8 +257,8 @@ struct LineWorker {
   }
 };
 
-// One crossing of P1's near-field stencil (p1::NearCrossing) with the facet of the piece of the ray that
-// ends at it (from the previous crossing, or from the texel centre): facet q of the texel at (fi, fj).
+// One crossing of P1's near-field stencil (p1::NearCrossing) with the facets beside the piece of the ray
+// that ends at it (from the previous crossing, or from the texel centre).
 struct NearPiece {
   p1::NearCrossing c;
   FacetRef a, b;  // the facets beside the piece (facets_beside), relative to the texel
@@ -278,15 +278,15 @@ std::vector<NearPiece> near_pieces(double dx, double dy, double radius, double t
 }
 
 // The visible near field of texel (i, j) along one direction: elevation intervals (world slopes, the
-// lowest from -infinity: the crease down to any tangent plane) and the facet radiance of each; returns
-// the steepest near slope (the top of the last interval), -infinity when the stencil leaves the field at
-// once. Marched outward: a piece is visible above everything nearer.
+// lowest from -infinity: the crease down to any tangent plane) and the facet radiance of each, in `out`
+// (empty when the stencil leaves a clamp field at once). Marched outward: a piece is visible above
+// everything nearer, so the intervals tile the elevations up to the steepest near crossing.
 struct NearInterval {
   double lo, hi;
   Rgb L;
 };
-double march_near(const HeightField& f, const std::vector<NearPiece>& pieces, const Rgb* exit_facets, int i,
-                  int j, std::vector<NearInterval>& out) {
+void march_near(const HeightField& f, const std::vector<NearPiece>& pieces, const Rgb* exit_facets, int i,
+                int j, std::vector<NearInterval>& out) {
   out.clear();
   const bool clamp = f.wrap == Wrap::clamp;
   const double z0 = f.z[f.index(i, j)];
@@ -307,7 +307,6 @@ double march_near(const HeightField& f, const std::vector<NearPiece>& pieces, co
       m = slope;
     }
   }
-  return m;
 }
 
 }  // namespace
