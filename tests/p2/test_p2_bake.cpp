@@ -507,6 +507,12 @@ TEST(P2Bake, LayersAndParameters) {
   EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"layers", {"indirect_b3"}}}, RunControl{}), InputError);
   EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"layers", {"ao"}}}, RunControl{}), InputError);
   EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"visibility", "fast"}}, RunControl{}), InputError);
+  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"senders", "vertices"}}, RunControl{}), InputError);
+  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"near_radius", 0.5}}, RunControl{}), InputError);
+  EXPECT_EQ(parse_p2_params({{"method", "p2"}}).near_radius, 2.0);
+  EXPECT_TRUE(parse_p2_params({{"method", "p2"}}).facet_senders);
+  EXPECT_FALSE(parse_p2_params({{"method", "p2"}, {"senders", "texels"}}).facet_senders);
+  EXPECT_EQ(parse_p2_params({{"method", "p2"}, {"near_radius", 0}}).near_radius, 0.0);
   const LayerSet none = bake_p2(s, {{"method", "p2"}, {"directions", 4}, {"bounces", 0}}, RunControl{});
   for (float v : none.layers[0].data) ASSERT_EQ(v, 0.0f);
 }
