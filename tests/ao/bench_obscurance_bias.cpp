@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "../p1/p1_truth.hpp"
 #include "env/environment.hpp"
 #include "field/procedural.hpp"
 #include "field/scene.hpp"
@@ -43,14 +44,8 @@ struct Profile {
   std::vector<double> t, z;  // horizontal distance (t[0] = 0: the receiver) and height
 };
 
-// The reference's surface: triangles (v00 v10 v01) and (v11 v01 v10) per quad.
-double triangle_height(const HeightField& f, double x, double y) {
-  const int i = int(std::floor(x)), j = int(std::floor(y));
-  const double fx = x - i, fy = y - j;
-  const double z00 = f.at(i, j), z10 = f.at(i + 1, j), z01 = f.at(i, j + 1), z11 = f.at(i + 1, j + 1);
-  if (fx + fy <= 1) return z00 + fx * (z10 - z00) + fy * (z01 - z00);
-  return z11 + (1 - fx) * (z01 - z11) + (1 - fy) * (z10 - z11);
-}
+// The reference's surface (two triangles per quad): truth::tri_height (tests/p1/p1_truth.hpp).
+using truth::tri_height;
 
 void triangle_profile(const HeightField& f, int i, int j, double dx, double dy, double reach, Profile& p) {
   std::vector<double>& t = p.t;
@@ -71,7 +66,7 @@ void triangle_profile(const HeightField& f, int i, int j, double dx, double dy, 
   std::sort(t.begin(), t.end());
   t.erase(std::unique(t.begin(), t.end(), [](double a, double b) { return b - a < 1e-9; }), t.end());
   p.z.resize(t.size());
-  for (std::size_t k = 0; k < t.size(); ++k) p.z[k] = triangle_height(f, i + t[k] * dx, j + t[k] * dy);
+  for (std::size_t k = 0; k < t.size(); ++k) p.z[k] = tri_height(f, i + t[k] * dx, j + t[k] * dy);
   p.z[0] = f.z[f.index(i, j)];
 }
 

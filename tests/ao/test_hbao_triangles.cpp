@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "../p1/p1_truth.hpp"
 #include "ao_scenes.hpp"
 #include "field/procedural.hpp"
 #include "methods/ao/farfield.hpp"
@@ -23,13 +24,8 @@ struct Profile {
   std::vector<double> t, z;  // horizontal distance (texels; t[0] = 0 the receiver) and height
 };
 
-double triangle_height(const HeightField& f, double x, double y) {
-  const int i = int(std::floor(x)), j = int(std::floor(y));
-  const double fx = x - i, fy = y - j;
-  const double z00 = f.at(i, j), z10 = f.at(i + 1, j), z01 = f.at(i, j + 1), z11 = f.at(i + 1, j + 1);
-  if (fx + fy <= 1) return z00 + fx * (z10 - z00) + fy * (z01 - z00);
-  return z11 + (1 - fx) * (z01 - z11) + (1 - fy) * (z10 - z11);
-}
+// The reference's surface (two triangles per quad): truth::tri_height (tests/p1/p1_truth.hpp).
+using truth::tri_height;
 
 Profile profile(const HeightField& f, int i, int j, double dx, double dy, double reach) {
   Profile p;
@@ -48,7 +44,7 @@ Profile profile(const HeightField& f, int i, int j, double dx, double dy, double
   p.t.push_back(reach);
   std::sort(p.t.begin(), p.t.end());
   p.t.erase(std::unique(p.t.begin(), p.t.end(), [](double a, double b) { return b - a < 1e-9; }), p.t.end());
-  for (double t : p.t) p.z.push_back(triangle_height(f, i + t * dx, j + t * dy));
+  for (double t : p.t) p.z.push_back(tri_height(f, i + t * dx, j + t * dy));
   p.z[0] = f.z[f.index(i, j)];
   return p;
 }
