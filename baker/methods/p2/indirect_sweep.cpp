@@ -114,7 +114,7 @@ struct LineWorker {
     const int n0 = line.count, n = (n0 - 1) * S + 1;  // fine samples: sample q is driver sample q / S
     lag = 0;
     if (near_field)  // the samples at least near_radius texels away
-      lag = int(std::ceil(spec->near_radius * S / (line.step / field->texel_size) - 1e-9));
+      lag = std::max(1, int(std::floor(spec->near_radius * S / (line.step / field->texel_size) + 1e-9)));
     const int ib = line.inside_begin * S;
     const int ie = line.inside_end > line.inside_begin ? (line.inside_end - 1) * S + 1 : ib;
     if (int(h.size()) < n) {
