@@ -520,7 +520,7 @@ TEST(P2Bake, LayersAndParameters) {
   EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"visibility", "fast"}}, RunControl{}), InputError);
   EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"senders", "vertices"}}, RunControl{}), InputError);
   EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"near_radius", 0.5}}, RunControl{}), InputError);
-  EXPECT_EQ(parse_p2_params({{"method", "p2"}}).near_radius, 2.0);
+  EXPECT_EQ(parse_p2_params({{"method", "p2"}}).near_radius, 4.0);
   EXPECT_TRUE(parse_p2_params({{"method", "p2"}}).facet_senders);
   EXPECT_FALSE(parse_p2_params({{"method", "p2"}, {"senders", "texels"}}).facet_senders);
   EXPECT_EQ(parse_p2_params({{"method", "p2"}, {"near_radius", 0}}).near_radius, 0.0);

@@ -20,7 +20,7 @@
 // +9.6/-4.2/-13.5/-21.8 %, facet senders with the near field +1.3/-0.1/-1.5/-3.7 %.
 // The receivers of the sweep sit on its lines, up to half a texel from the texel centres, and see the
 // terrain only at the lines' column crossings; the nearest terrain subtends the largest angles. So each
-// texel gathers its first `near_radius` texels (default 2) itself, from its centre over every column, row
+// texel gathers its first `near_radius` texels (default 4) itself, from its centre over every column, row
 // and diagonal crossing of P1's near stencil (each piece radiating its facet's light, both facets for a
 // piece along an edge), and the lines' receivers, through a hull tree that lags that far, gather only the
 // terrain beyond: their mean radiance fills the texel's lobe from the near field's horizon up to P1's.
@@ -32,7 +32,7 @@
 // Parameters (schemas/methods/p2.schema.json): directions (K, default 64), bounces (default: the job's
 // "bounces"), visibility ("tree" or "naive": the same output, the naive march is for benchmarks and
 // checks), supersampling (S, default 1), senders ("facets", default, or "texels"), near_radius (texels,
-// default 2; 0 = off; facet senders only), wrap_periods, layers: indirect, total, direct (default: all
+// default 4; 0 = off; facet senders only), wrap_periods, layers: indirect, total, direct (default: all
 // three), indirect_b1 .. indirect_b<bounces>.
 #pragma once
 
@@ -58,7 +58,7 @@ struct P2Params {
   bool facet_senders = true;
   // Texels gather their first near_radius texels exactly from their centres (facet senders only;
   // IndirectSweepSpec::near_radius); 0: every receiver gathers on its line (the method as published).
-  double near_radius = 2;
+  double near_radius = 4;           // (P1's exact near field then reaches as far: compute_p2)
   std::vector<std::string> layers;  // empty: indirect, total, direct
 };
 

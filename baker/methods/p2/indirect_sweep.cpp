@@ -233,16 +233,14 @@ struct LineWorker {
       seg.has_crease = !near;
       // With the near field the texel uses this far terrain only above its near field's horizon: gather
       // it above this sample's own near horizon (its samples within the lag), so that far terrain hidden
-      // behind the near field does not enter the mean (when nothing is left, all of it).
+      // behind the near field does not enter the mean (when nothing is left, the texel's near field's
+      // mean fills in).
       WedgeWeights wf = w;
       if (near)
         for (int j = std::max(0, terrain_end); j < std::min(r, T); ++j)
           wf.t_n = std::max(wf.t_n, (hh[j] - hh[r]) * inv_dist[r - j]);
-      Rgb e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, wf, &weight, inv_dist.data(),
-                              &gather_scratch);
-      if (near && !(weight > 0))
-        e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, w, &weight, inv_dist.data(),
-                            &gather_scratch);
+      const Rgb e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, wf, &weight, inv_dist.data(),
+                                    &gather_scratch);
       o[0] = e.r;
       o[1] = e.g;
       o[2] = e.b;
