@@ -97,12 +97,17 @@ struct HorizonLineWorker {
     const SweepDirection& d = *line.dir;
     const HeightField& f = *crossings;
     const bool wrap = f.wrap == Wrap::repeat;
-    // Heights at (major, minor) texel coordinates; a clamp line's crossings between two samples on the
-    // field have every corner on the field (no clamping needed).
+    // Heights at (major, minor) texel coordinates. A clamp line's crossings between two samples on the
+    // field lie on the field, but an edge's far corner can be one texel off it (a crossing on the border
+    // row or column, weight 0 on that corner): clamped like HeightField::at (AddressSanitizer found the
+    // read one row before the field).
     const float* Z = f.z.data();
     const std::ptrdiff_t su_stride = d.x_major ? 1 : f.width, sv_stride = d.x_major ? f.width : 1;
+    const int nu = d.x_major ? f.width : f.height, nv = d.x_major ? f.height : f.width;
     auto at = [&](int uu, int vv) {
       if (wrap) return d.x_major ? f.at(uu, vv) : f.at(vv, uu);
+      uu = uu < 0 ? 0 : (uu >= nu ? nu - 1 : uu);
+      vv = vv < 0 ? 0 : (vv >= nv ? nv - 1 : vv);
       return Z[uu * su_stride + vv * sv_stride];
     };
     // Per step the minor coordinate v moves by dv = su * slope and w = u + v by dw = su * (1 + slope).

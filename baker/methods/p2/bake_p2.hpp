@@ -17,7 +17,7 @@
 // On smooth fields the two agree; where the field is rough at the texel scale the facets a receiver sees
 // lean towards it (less sky, more bounce light than the smoothed normal says): per-bounce field means
 // against the Embree reference on the rough furnace field (tests/p2), bounces 1-4: texel senders
-// +9.6/-4.2/-13.5/-21.8 %, facet senders with the near field +1.3/-0.1/-1.5/-3.7 %.
+// +9.6/-4.2/-13.5/-21.8 %, facet senders with the near field +0.4/-0.5/-0.7/-1.3 %.
 // The receivers of the sweep sit on its lines, up to half a texel from the texel centres, and see the
 // terrain only at the lines' column crossings; the nearest terrain subtends the largest angles. So each
 // texel gathers its first `near_radius` texels (default 4) itself, from its centre over every column, row
