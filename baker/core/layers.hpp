@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <deque>
 #include <string>
 #include <utility>
 #include <vector>
@@ -32,11 +33,12 @@ std::vector<std::string> indexed_channels(int count);  // "000", "001", ... (zer
 
 struct LayerSet {
   int width = 0, height = 0;
-  std::vector<Layer> layers;
+  std::deque<Layer> layers;  // a deque: add() never moves the layers already there
   // Metadata written into the EXR header as string attributes (method, parameters, ...).
   std::vector<std::pair<std::string, std::string>> attributes;
 
-  // Adds a zero-filled layer and returns it. The reference is valid until the next add().
+  // Adds a zero-filled layer and returns it. The reference stays valid as more layers are added (several
+  // tests and bakes fill layers they added earlier: AddressSanitizer found one reading a moved layer).
   Layer& add(std::string name, std::vector<std::string> channels);
   const Layer* find(const std::string& name) const;
   Layer* find(const std::string& name);
