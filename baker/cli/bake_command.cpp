@@ -56,6 +56,20 @@ std::string gib(std::size_t bytes) {
   return buf;
 }
 
+// Refuses a job that cannot fit in memory, before anything is allocated (validate and bake alike). Returns
+// the estimate.
+std::size_t check_memory(const Job& job) {
+  const FieldSize size = probe_field_size(job);
+  const std::size_t need = estimate_peak_bytes(job, size), have = available_memory_bytes();
+  if (need > have)
+    throw InputError(job.file.string(), "/height",
+                     "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                         " field needs about " + gib(need) + " to bake, more than the " + gib(have) +
+                         " available");
+  return need;
+}
+
+// `params`: the resolved parameters (every default filled in), what the bake used.
 void add_common_attributes(LayerSet& layers, const Job& job, const std::string& job_hash,
                            const std::string& method, const nlohmann::json& params, double seconds) {
   layers.attributes.emplace_back("hfbake:version", hfbake_version());
@@ -70,13 +84,7 @@ void add_common_attributes(LayerSet& layers, const Job& job, const std::string& 
 void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
               const ReferenceCache* cache) {
   const auto t_job = std::chrono::steady_clock::now();
-  const FieldSize size = probe_field_size(job);
-  const std::size_t need = estimate_peak_bytes(job, size), have = available_memory_bytes();
-  if (need > have)
-    throw InputError(job.file.string(), "/height",
-                     "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
-                         " field needs about " + gib(need) + " to bake, more than the " + gib(have) +
-                         " available");
+  check_memory(job);
 
   OutputStage stage(job);
   progress.begin(job.name, "load");
@@ -100,7 +108,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
       progress.message(job.name + ": " + entry.stem +
                        ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
     progress.end(job.name, entry.stem, seconds);
-    add_common_attributes(layers, job, job_hash, entry.method, entry.params, seconds);
+    add_common_attributes(layers, job, job_hash, entry.method, entry.resolved, seconds);
     stage.write_layers(entry.stem, layers);
     outcome.methods[entry.stem] = {
         {"method", entry.method}, {"seconds", seconds}, {"cpu_seconds", cpu_seconds}};
@@ -125,15 +133,16 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
         progress.message(job.name + ": reference cache entry " + cache->entry_path(cache_key).string() +
                          " was damaged: removed, computing the reference again");
     }
-    LayerSet reference =
-        lookup == CacheLookup::hit ? std::move(cached.layers) : run_reference(job, scene, rc);
+    LayerSet reference = lookup == CacheLookup::hit
+                             ? std::move(cached.layers)
+                             : bake_reference(scene, job_reference_options(job, scene), rc);
     const double seconds = seconds_since(t0);
     if (cache && lookup != CacheLookup::hit) {
       const std::string problem = cache->store(cache_key, reference, seconds);
       if (!problem.empty()) progress.message(job.name + ": reference cache: " + problem);
     }
     progress.end(job.name, "reference", seconds);
-    add_common_attributes(reference, job, job_hash, "reference", job.doc["reference"], seconds);
+    add_common_attributes(reference, job, job_hash, "reference", job.reference_resolved, seconds);
     stage.write_layers("reference", reference);
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};
     if (cache) {
@@ -243,15 +252,19 @@ int run_validate(const std::vector<fs::path>& files, bool quiet) {
   for (const std::string& e : suite_errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
   if (!suite_errors.empty()) exit_code = 2;
   for (const fs::path& file : jobs) {
-    const JobLoad load = load_job(file, std::nullopt);
+    JobLoad load = load_job(file, std::nullopt);
+    if (load.job) load.errors = resolve_job(*load.job);
     for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
-    if (!load.job) {
+    if (!load.job || !load.errors.empty()) {
       exit_code = 2;
       continue;
     }
     try {
       const FieldSize size = probe_field_size(*load.job);
-      const std::size_t need = estimate_peak_bytes(*load.job, size);
+      const std::size_t need = check_memory(*load.job);
+      // Everything bake refuses about the inputs, refused here first: the same loader reads every image
+      // (NaN heights without nodata, environment aspect ratios, channel names, map sizes).
+      load_scene(*load.job);
       if (!quiet)
         std::fprintf(stderr, "hfbake: %s: valid (%dx%d, about %s to bake)\n", file.c_str(), size.width,
                      size.height, gib(need).c_str());
@@ -304,6 +317,10 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   // Validate everything first: a typo in the last job is reported before hours of baking.
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     JobLoad load = load_job(inputs[i].file, inputs[i].out);
+    if (load.job) {
+      load.errors = resolve_job(*load.job);
+      if (!load.errors.empty()) load.job.reset();
+    }
     outcomes[i].file = inputs[i].file.string();
     for (const std::string& e : load.errors) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());

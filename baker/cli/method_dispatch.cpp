@@ -1,68 +1,60 @@
 #include "cli/method_dispatch.hpp"
 
-#include <string>
-
+#include "cli/scene_loader.hpp"
 #include "core/error.hpp"
-
-#if HFBAKE_HAVE_P1
-#include "methods/p1/bake_p1.hpp"
-#endif
-#if HFBAKE_HAVE_P2
-#include "methods/p2/bake_p2.hpp"
-#endif
-#if HFBAKE_HAVE_NLP
-#include "methods/nlp/bake_nlp.hpp"
-#endif
-#if HFBAKE_HAVE_AO
-#include "methods/ao/bake_ao.hpp"
-#endif
-#if HFBAKE_HAVE_REFERENCE
-#include "reference/bake_reference.hpp"
-#endif
 
 namespace hfbake {
 
-LayerSet run_method(const BakeEntry& entry, const Scene& scene, const RunControl& rc) {
-  const std::string& m = entry.method;
-#if HFBAKE_HAVE_P1
-  if (m == "p1") return bake_p1(scene, entry.params, rc);
-#endif
-#if HFBAKE_HAVE_P2
-  if (m == "p2") return bake_p2(scene, entry.params, rc);
-#endif
-#if HFBAKE_HAVE_NLP
-  if (m == "nlp") return bake_nlp(scene, entry.params, rc);
-#endif
-#if HFBAKE_HAVE_AO  // each obscurance method lands on its own (baker/methods/ao/CMakeLists.txt)
-#if HFBAKE_HAVE_HBAO
-  if (m == "hbao") return bake_hbao(scene, entry.params, rc);
-#endif
-#if HFBAKE_HAVE_LSAO
-  if (m == "lsao") return bake_lsao(scene, entry.params, rc);
-#endif
-#if HFBAKE_HAVE_FARFIELD
-  if (m == "farfield") return bake_farfield(scene, entry.params, rc);
-#endif
-#if HFBAKE_HAVE_HSAO
-  if (m == "hsao") return bake_hsao(scene, entry.params, rc);
-#endif
-#if HFBAKE_HAVE_VO
-  if (m == "vo") return bake_vo(scene, entry.params, rc);
-#endif
-#endif
-  (void)scene;
-  (void)rc;
-  throw InputError("", entry.pointer + "/method", "method \"" + m + "\" is not available in this build");
+MethodContext job_method_context(const Job& job) {
+  MethodContext c;
+  const FieldSize size = probe_field_size(job);
+  const nlohmann::json& h = job.doc["height"];
+  c.field.width = size.width;
+  c.field.height = size.height;
+  c.field.texel_size = h.value("texel_size", 1.0);
+  c.field.wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
+  c.bounces = job_bounces(job);
+  return c;
 }
 
-LayerSet run_reference(const Job& job, const Scene& scene, const RunControl& rc) {
-#if HFBAKE_HAVE_REFERENCE
-  return bake_reference(scene, job.doc, rc);
-#else
-  (void)scene;
-  (void)rc;
-  throw InputError(job.file.string(), "/reference", "the reference is not available in this build");
-#endif
+std::vector<std::string> resolve_job(Job& job) {
+  std::vector<std::string> errors;
+  const std::string file = job.file.string();
+  MethodContext context;
+  try {
+    context = job_method_context(job);
+  } catch (const InputError& e) {
+    errors.push_back(e.line());
+    return errors;
+  }
+  for (BakeEntry& entry : job.bakes) {
+    try {
+      entry.resolved = resolve_method_params(entry.params, context, file, entry.pointer);
+    } catch (const InputError& e) {
+      errors.push_back(e.line());
+    }
+  }
+  if (job.has_reference && errors.empty()) {
+    try {
+      job.reference_resolved = read_reference_options(job.doc, context, file).resolved;
+    } catch (const InputError& e) {
+      errors.push_back(e.line());
+    }
+  }
+  return errors;
+}
+
+LayerSet run_method(const BakeEntry& entry, const Scene& scene, const RunControl& rc) {
+  const MethodInfo* m = find_method(entry.method);
+  if (!m) throw InputError("", entry.pointer + "/method", "unknown method \"" + entry.method + "\"");
+  return m->bake(scene, entry.params, rc);
+}
+
+ReferenceOptions job_reference_options(const Job& job, const Scene& scene) {
+  MethodContext c;
+  c.field = scene.field;
+  c.bounces = scene.bounces;
+  return read_reference_options(job.doc, c, job.file.string());
 }
 
 }  // namespace hfbake

@@ -60,6 +60,9 @@ std::string reference_cache_key(const Job& job) {
     falloffs.push_back({{"method", e.value("method", "")}, {"falloff", f}});
   }
   determining["bake_falloffs"] = std::move(falloffs);
+  // Which layers it traces (without "layers", the ones the job's methods are scored against).
+  if (job.reference_resolved.is_object() && job.reference_resolved.contains("layers"))
+    determining["reference_layers"] = job.reference_resolved["layers"];
   h.add(determining.dump());  // objects are key-sorted: a canonical form
   for (const auto& [pointer, path] : job_input_files(job.doc)) {
     h.add("\n" + pointer + "\n");

@@ -20,7 +20,10 @@ ReportResult write_report(const Job& job, const std::string& job_hash, const Rep
   spec.job_name = job.name;
   spec.job_file = job.file.string();
   spec.job_hash = job_hash;
-  spec.reference_parameters = job.doc.value("reference", nlohmann::json::object());
+  // Resolved: every default filled in (what the reference used).
+  spec.reference_parameters = job.reference_resolved.is_object()
+                                  ? job.reference_resolved
+                                  : job.doc.value("reference", nlohmann::json::object());
   spec.reference_seconds = inputs.reference_seconds;
   spec.crop = options.value("crop", 0);
   spec.thresholds = options.value("thresholds", nlohmann::json::object());
@@ -43,7 +46,7 @@ ReportResult write_report(const Job& job, const std::string& job_hash, const Rep
   for (const MethodLayers& m : inputs.methods) {
     nlohmann::json params = nlohmann::json::object();
     for (const BakeEntry& e : job.bakes)
-      if (e.stem == m.stem) params = e.params;
+      if (e.stem == m.stem) params = e.resolved.is_object() ? e.resolved : e.params;
     methods.push_back({m.stem, m.method, m.seconds, params, &m.layers});
   }
 

@@ -6,6 +6,7 @@
 #include "cli/scene_inputs.hpp"
 #include "core/error.hpp"
 #include "field/procedural.hpp"
+#include "methods/method_table.hpp"
 
 namespace hfbake {
 
@@ -36,32 +37,6 @@ ProceduralSpec procedural_spec(const nlohmann::json& p) {
   return s;
 }
 
-int method_channels(const BakeEntry& e) {
-  int channels = 16;  // the scalar and RGB layers a method can write
-  const std::string& m = e.method;
-  if (m == "nlp") channels += 16 + 48;  // SH visibility and irradiance
-  const int k = e.params.value("directions", 64);
-  if (e.params.contains("layers"))
-    for (const auto& l : e.params["layers"])
-      if (l == "horizon" || l == "horizon_distance") channels += k;
-  return channels;
-}
-
-// Per-texel bytes a method holds besides its layers while it runs (the largest of its phases).
-double method_scratch_bytes(const BakeEntry& e, int job_bounces) {
-  const double k = e.params.value("directions", 64);
-  if (e.method == "p1") return 60;  // normals, accumulators, minmod lifts
-  if (e.method == "p2") {
-    const int b = std::max(0, e.params.value("bounces", job_bounces));
-    const bool facets = e.params.value("senders", std::string("facets")) == "facets";
-    // P1's horizons (K floats) and scratch; direct, exit, indirect and every bounce (RGB floats); the
-    // sweep's double accumulators; facet senders: normals, albedo, exit, next-bounce light and direct
-    // light of two facets (RGB floats each) and their double accumulators.
-    return 4 * k + 60 + 12 * (3 + b) + 24 + (facets ? 5 * 24 + 48 + 48 : 0);
-  }
-  return 0;
-}
-
 }  // namespace
 
 FieldSize probe_field_size(const Job& job) {
@@ -73,6 +48,10 @@ FieldSize probe_field_size(const Job& job) {
   return probe_image_field_size(job);
 }
 
+int job_bounces(const Job& job) {
+  return job.doc.value("bounces", 1);
+}
+
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size) {
   const double texels = double(size.width) * double(size.height);
   // Field (4), normals (12), albedo (12), emission (12), and the scene's copy during loading (8).
@@ -80,12 +59,23 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size) {
   // Methods: results are kept until the report when there is a reference, else one at a time.
   double methods = 0, largest = 0;
   double scratch = 0;  // the largest method's working memory (methods run one at a time)
-  const int bounces = job.doc.value("bounces", 0);
+  MethodContext context;
+  context.field.width = size.width;
+  context.field.height = size.height;
+  context.bounces = job_bounces(job);
   for (const BakeEntry& e : job.bakes) {
-    const double bytes = 4.0 * method_channels(e) * 1.5;  // float layers + the half copy written to EXR
+    // The method table's reader (resolve_job has usually run it already).
+    const nlohmann::json r = e.resolved.is_object()
+                                 ? e.resolved
+                                 : resolve_method_params(e.params, context, job.file.string(), e.pointer);
+    const MethodInfo* m = find_method(e.method);
+    int channels = 0;
+    for (const auto& l : r.value("layers", nlohmann::json::array()))
+      channels += layer_channel_count(l.get<std::string>(), r);
+    const double bytes = 4.0 * channels * 1.5;  // float layers + the half copy written to EXR
     methods += bytes;
     largest = std::max(largest, bytes);
-    scratch = std::max(scratch, method_scratch_bytes(e, bounces));
+    scratch = std::max(scratch, m ? m->working_bytes_per_texel(r, context) : 0.0);
   }
   per_texel += (job.has_reference ? methods + 2 * 4.0 * 24 * 1.5 : largest) + scratch;
   return std::size_t(texels * per_texel) + (std::size_t(64) << 20);  // + fixed overhead
@@ -133,7 +123,7 @@ Scene load_scene(const Job& job) {
       scene.lights.push_back(light);
     }
   }
-  scene.bounces = doc.value("bounces", 1);
+  scene.bounces = job_bounces(job);
   return scene;
 }
 

@@ -20,6 +20,9 @@ FieldSize probe_field_size(const Job& job);
 // scratch), estimated from the size alone so an absurd job is refused before anything is allocated.
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size);
 
+// The job's "bounces" (default 1).
+int job_bounces(const Job& job);
+
 Scene load_scene(const Job& job);
 
 }  // namespace hfbake

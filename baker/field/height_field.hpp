@@ -11,12 +11,17 @@ namespace hfbake {
 
 enum class Wrap { clamp, repeat };
 
-// Texel (i, j) has its center at world (i * texel_size, j * texel_size, z[j * width + i]).
-// Heights are world units (height_scale and height_offset already applied). i: column, j: row.
-struct HeightField {
+// What a field is without its heights: enough to check a method's parameters before anything is loaded
+// (methods/method_table.hpp).
+struct FieldShape {
   int width = 0, height = 0;
   double texel_size = 1.0;
   Wrap wrap = Wrap::clamp;
+};
+
+// Texel (i, j) has its center at world (i * texel_size, j * texel_size, z[j * width + i]).
+// Heights are world units (height_scale and height_offset already applied). i: column, j: row.
+struct HeightField : FieldShape {
   std::vector<float> z;
 
   std::size_t texel_count() const { return std::size_t(width) * std::size_t(height); }

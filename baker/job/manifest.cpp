@@ -1,10 +1,12 @@
 #include "job/manifest.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <sstream>
 
 #include "core/error.hpp"
+#include "job/embedded_schemas.hpp"
 #include "job/parameter_sweep.hpp"
 #include "job/schema_validation.hpp"
 
@@ -26,7 +28,38 @@ std::string line_column(const std::string& text, std::size_t byte) {
   return "line " + std::to_string(line) + ", column " + std::to_string(column);
 }
 
+// JSON pointers in document order: token by token, array indices as numbers.
+bool pointer_less(const std::string& a, const std::string& b) {
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    const std::size_t ie = std::min(a.find('/', i + 1), a.size()),
+                      je = std::min(b.find('/', j + 1), b.size());
+    const std::string ta = a.substr(i, ie - i), tb = b.substr(j, je - j);
+    if (ta != tb) {
+      const bool na = ta.size() > 1 && std::all_of(ta.begin() + 1, ta.end(), ::isdigit);
+      const bool nb = tb.size() > 1 && std::all_of(tb.begin() + 1, tb.end(), ::isdigit);
+      if (na && nb) return std::stoull(ta.substr(1)) < std::stoull(tb.substr(1));
+      return ta < tb;
+    }
+    i = ie, j = je;
+  }
+  return a.size() - i < b.size() - j;
+}
+
 }  // namespace
+
+std::vector<std::string> method_schema_names() {
+  std::vector<std::string> names;
+  const std::string prefix = "methods/", suffix = ".schema.json";
+  for (const EmbeddedSchema& s : embedded_schemas()) {
+    const std::string path(s.path);
+    if (path.rfind(prefix, 0) != 0 || path.size() <= prefix.size() + suffix.size()) continue;
+    const std::string name = path.substr(prefix.size(), path.size() - prefix.size() - suffix.size());
+    if (name.find('/') == std::string::npos && name.find('_') == std::string::npos) names.push_back(name);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
 
 std::vector<std::pair<std::string, std::string>> job_input_files(const nlohmann::json& doc) {
   std::vector<std::pair<std::string, std::string>> files;
@@ -83,7 +116,29 @@ JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_overri
   SweepExpansion sweep = expand_parameter_sweeps(doc);
   for (const std::string& e : sweep.errors) result.errors.push_back(fname + ": " + e);
   doc = std::move(sweep.doc);
-  for (const SchemaViolation& v : validate_against_schema(doc, "job.schema.json"))
+  // The document against job.schema.json, and each bake entry against its method's own schema
+  // (schemas/methods/<method>.schema.json: adding a method adds a schema file, not a line here or in
+  // job.schema.json); all violations in document order.
+  std::vector<SchemaViolation> violations = validate_against_schema(doc, "job.schema.json");
+  const std::vector<std::string> methods = method_schema_names();
+  for (std::size_t i = 0; doc.contains("bake") && doc["bake"].is_array() && i < doc["bake"].size(); ++i) {
+    const nlohmann::json& entry = doc["bake"][i];
+    if (!entry.is_object() || !entry.contains("method") || !entry["method"].is_string()) continue;
+    const std::string method = entry["method"].get<std::string>();
+    const std::string at = "/bake/" + std::to_string(i);
+    if (std::find(methods.begin(), methods.end(), method) == methods.end()) {
+      std::string list;
+      for (std::size_t k = 0; k < methods.size(); ++k) list += (k ? ", \"" : "\"") + methods[k] + "\"";
+      violations.push_back({at + "/method", "unknown method \"" + method + "\" (one of " + list + ")"});
+      continue;
+    }
+    for (SchemaViolation& v : validate_against_schema(entry, "methods/" + method + ".schema.json"))
+      violations.push_back({at + v.pointer, std::move(v.message)});
+  }
+  std::stable_sort(
+      violations.begin(), violations.end(),
+      [](const SchemaViolation& a, const SchemaViolation& b) { return pointer_less(a.pointer, b.pointer); });
+  for (const SchemaViolation& v : violations)
     fail(v.pointer.empty() ? "/" : original_pointer(v.pointer, sweep.origins), v.message);
   if (!result.errors.empty()) return result;
 

@@ -14,6 +14,9 @@ struct BakeEntry {
   std::string stem;       // output stem: "p1", or "p1-2" when the method appears more than once
   std::string pointer;    // "/bake/<i>", for error messages
   nlohmann::json params;  // the bake[i] object as written (schema-validated)
+  // Every parameter the bake uses, defaults included, "method" and "layers" too: filled by the method
+  // table's reader after loading (cli/method_dispatch.hpp resolve_job); empty before.
+  nlohmann::json resolved;
   // Parameter sweeps (job/parameter_sweep.hpp): "directions": [16, 32] is two entries sharing sweep_group
   // (the index of the entry in the file), sweep_parameter "directions" and sweep_value 16, then 32.
   std::string sweep_parameter;  // "" when the entry is not part of a sweep
@@ -36,6 +39,8 @@ struct Job {
   std::string name;
   std::vector<BakeEntry> bakes;
   bool has_reference = false;
+  // The reference's options with every default filled in (resolve_job), "layers" included.
+  nlohmann::json reference_resolved;
   OutputOptions output;
 
   std::filesystem::path resolve(const std::string& relative) const { return base_dir / relative; }
@@ -55,6 +60,10 @@ struct JobLoad {
 // exist). `out_override` replaces output.dir (--out DIR; the job's name is appended when several jobs
 // share one --out so they cannot overwrite each other: see the CLI).
 JobLoad load_job(const std::filesystem::path& file, const std::optional<std::filesystem::path>& out_override);
+
+// The methods that have a schema, schemas/methods/<name>.schema.json (files with "_" in the name, such as
+// obscurance_common, hold shared definitions), sorted. The method table must list the same names.
+std::vector<std::string> method_schema_names();
 
 // Every input file a job document names, as (JSON pointer, path as written).
 std::vector<std::pair<std::string, std::string>> job_input_files(const nlohmann::json& doc);

@@ -148,6 +148,57 @@ bool is_wrapper(const std::string& text) {
   return false;
 }
 
+// Follows "$ref" (local "#/..." or another embedded file, optionally with a fragment) from `doc`'s node.
+const nlohmann::json* follow_ref(const nlohmann::json* node, std::string& doc_path) {
+  for (int guard = 0; node && node->is_object() && node->contains("$ref") && guard < 16; ++guard) {
+    const std::string ref = (*node)["$ref"].get<std::string>();
+    const auto hash = ref.find('#');
+    if (hash != 0) doc_path = resolve_schema_uri(ref.substr(0, hash));
+    const nlohmann::json& doc = schema_document(doc_path);
+    const std::string fragment = hash == std::string::npos ? "" : ref.substr(hash + 1);
+    const nlohmann::json::json_pointer ptr(fragment);
+    node = doc.contains(ptr) ? &doc.at(ptr) : nullptr;
+  }
+  return node;
+}
+
+// The "enum" the schema gives the value at `pointer`, walking properties and items (and $ref); the
+// branches of allOf/if-then are searched too. nullptr when none is found.
+const nlohmann::json* enum_at(const nlohmann::json* node, std::string doc_path,
+                              const std::vector<std::string>& tokens, std::size_t k) {
+  node = follow_ref(node, doc_path);
+  if (!node || !node->is_object()) return nullptr;
+  if (k == tokens.size()) return node->contains("enum") ? &(*node)["enum"] : nullptr;
+  const std::string& t = tokens[k];
+  if (node->contains("properties") && (*node)["properties"].contains(t))
+    if (const auto* e = enum_at(&(*node)["properties"][t], doc_path, tokens, k + 1)) return e;
+  if (node->contains("items") && !t.empty() && std::all_of(t.begin(), t.end(), ::isdigit))
+    if (const auto* e = enum_at(&(*node)["items"], doc_path, tokens, k + 1)) return e;
+  for (const char* branch : {"allOf", "anyOf", "oneOf"})
+    if (node->contains(branch))
+      for (const auto& b : (*node)[branch]) {
+        if (const auto* e = enum_at(&b, doc_path, tokens, k)) return e;
+        if (b.contains("then"))
+          if (const auto* e = enum_at(&b["then"], doc_path, tokens, k)) return e;
+      }
+  return nullptr;
+}
+
+std::string allowed_values(const std::string& schema_path, const std::string& pointer) {
+  std::vector<std::string> tokens;
+  for (std::size_t a = 1; a <= pointer.size() && !pointer.empty();) {
+    const std::size_t b = pointer.find('/', a);
+    tokens.push_back(pointer.substr(a, b == std::string::npos ? std::string::npos : b - a));
+    if (b == std::string::npos) break;
+    a = b + 1;
+  }
+  const nlohmann::json* e = enum_at(&schema_document(schema_path), schema_path, tokens, 0);
+  if (!e || !e->is_array()) return "";
+  std::string list;
+  for (std::size_t i = 0; i < e->size(); ++i) list += (i ? ", " : "") + (*e)[i].dump();
+  return list;
+}
+
 }  // namespace
 
 std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
@@ -176,6 +227,9 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
   for (const auto& [pointer, text] : raw) {
     if (is_wrapper(text)) continue;
     SchemaViolation v = rewrite(pointer, text);
+    if (v.message == "not one of the allowed values")
+      if (const std::string list = allowed_values(schema_path, v.pointer); !list.empty())
+        v.message = "must be one of " + list;
     const bool duplicate = std::any_of(out.begin(), out.end(), [&](const SchemaViolation& o) {
       return o.pointer == v.pointer && o.message == v.message;
     });

@@ -15,6 +15,8 @@
 #endif
 
 #include "core/error.hpp"
+#include "job/params.hpp"
+#include "methods/method_table.hpp"
 #include "reference/env_sampler.hpp"
 #include "reference/sampling.hpp"
 #include "reference/sh_environment.hpp"
@@ -43,37 +45,6 @@ struct FlushDenormals {
   }
 #endif
 };
-
-const char* falloff_name(FalloffKind k) {
-  static const char* const names[] = {"none", "step", "linear", "smooth", "exponential", "rational"};
-  return names[int(k)];
-}
-
-const char* const kObscuranceMethods[] = {"hbao", "lsao", "farfield", "hsao", "vo"};
-
-// The AO family's rule (methods/ao/obscurance_params): falloff defaults to "step" with a radius, "none"
-// without; every falloff but none needs a radius.
-bool read_falloff(const nlohmann::json& o, const std::string& where, Falloff& f) {
-  if (!o.contains("falloff") && !o.contains("radius")) return false;
-  f = Falloff{};
-  const bool has_radius = o.contains("radius");
-  f.kind = has_radius ? FalloffKind::step : FalloffKind::none;
-  if (o.contains("falloff")) {
-    const auto& v = o["falloff"];
-    if (!v.is_string() || !parse_falloff_kind(v.get<std::string>(), f.kind))
-      throw InputError(
-          "", where + "/falloff",
-          "must be one of \"none\", \"step\", \"linear\", \"smooth\", \"exponential\", \"rational\"");
-  }
-  if (has_radius) {
-    if (!o["radius"].is_number() || o["radius"].get<double>() <= 0)
-      throw InputError("", where + "/radius", "must be a positive number (world units)");
-    f.radius = o["radius"].get<double>();
-  }
-  if (f.kind != FalloffKind::none && !has_radius)
-    throw InputError("", where + "/radius", "is required with a falloff other than \"none\" (world units)");
-  return true;
-}
 
 // --- channels ------------------------------------------------------------------------------------
 
@@ -305,14 +276,21 @@ void run_samples(const Context& cx, int i, int j, std::uint64_t texel_seed, int 
       const Sequence2 seq = cx.sequence(texel_seed, r, cx.pair_primary);
       for (int k = 0; k < m; ++k) sc.dirs[k] = reference::cosine_hemisphere(n, seq(c0 + k));
       if (primary_hit) {
-        const float tfar = cx.needs.indirect && cx.bounces > 0 ? kInf : cx.obscurance_tfar;
+        // ao and the path need the whole ray; obscurance alone only reaches the falloff's support. Each
+        // quantity reads the hit its own way: ao any hit, obscurance a hit within the support only, so
+        // neither depends on which other layers the job traces.
+        const bool whole_ray = cx.needs.ao || (cx.needs.indirect && cx.bounces > 0);
+        const float tfar = whole_ray ? kInf : cx.obscurance_tfar;
         for (int k = 0; k < m; ++k) sc.hits[k] = make_rayhit(origin, sc.dirs[k], tfar);
         cx.intersect(sc.hits.data(), m);
         for (int k = 0; k < m; ++k) {
           const RTCRayHit& h = sc.hits[k];
           const bool hit = h.hit.geomID != RTC_INVALID_GEOMETRY_ID;
           if (cx.needs.ao) sums[ch.ao] += hit ? 0.0 : 1.0;
-          if (cx.needs.obscurance) sums[ch.obscurance] += 1.0 - (hit ? cx.options.falloff(h.ray.tfar) : 0.0);
+          if (cx.needs.obscurance) {
+            const bool within = hit && h.ray.tfar <= cx.obscurance_tfar;
+            sums[ch.obscurance] += 1.0 - (within ? cx.options.falloff(h.ray.tfar) : 0.0);
+          }
         }
       } else {
         for (int k = 0; k < m; ++k) sc.rays[k] = make_ray(origin, sc.dirs[k]);
@@ -411,81 +389,75 @@ int reference_falloff_entry(const nlohmann::json& job_doc) {
   const auto& bake = job_doc["bake"];
   for (std::size_t b = 0; b < bake.size(); ++b) {
     if (!bake[b].is_object() || !(bake[b].contains("falloff") || bake[b].contains("radius"))) continue;
-    const std::string m = bake[b].value("method", "");
-    for (const char* name : kObscuranceMethods)
-      if (m == name) return int(b);
+    const MethodInfo* m = find_method(bake[b].value("method", ""));
+    if (m && m->falloff_defines_obscurance) return int(b);
   }
   return -1;
 }
 
-ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc) {
+ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const MethodContext& context,
+                                        const std::string& file) {
   ReferenceOptions o;
   const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
-  auto int_key = [&](const char* key, int fallback, int lo, int hi) {
-    if (!ref.contains(key)) return fallback;
-    const auto& v = ref[key];
-    if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi)
-      throw InputError("", std::string("/reference/") + key,
-                       "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return v.get<int>();
-  };
-  o.samples = int_key("samples", 256, 1, 1 << 24);
-  o.replicates = int_key("replicates", 8, 2, 64);
-  o.repeat_tiles = int_key("repeat_tiles", 1, 1, 16);
-  if (ref.contains("seed")) {
-    if (!ref["seed"].is_number_integer() || ref["seed"].get<long long>() < 0)
-      throw InputError("", "/reference/seed", "must be a non-negative integer");
-    o.seed = ref["seed"].get<std::uint64_t>();
+  Params in(ref, file, "/reference");
+  o.samples = in.integer("samples", 256, 1, 1 << 24);
+  o.replicates = in.integer("replicates", 8, 2, 64);
+  o.repeat_tiles = in.integer("repeat_tiles", 1, 1, 16);
+  if (in.has("seed")) {
+    if (!in.raw("seed").is_number_integer() || in.raw("seed").get<long long>() < 0)
+      in.fail("seed", "must be a non-negative integer");
+    o.seed = in.raw("seed").get<std::uint64_t>();
   }
-  if (ref.contains("target_stderr")) {
-    if (!ref["target_stderr"].is_number() || ref["target_stderr"].get<double>() <= 0)
-      throw InputError("", "/reference/target_stderr", "must be a positive number");
-    o.target_stderr = ref["target_stderr"].get<double>();
-  }
-  if (ref.contains("geometry")) {
-    const std::string g = ref["geometry"].is_string() ? ref["geometry"].get<std::string>() : "";
-    if (g == "grid")
-      o.geometry = reference::GeometryKind::grid;
-    else if (g == "triangles")
-      o.geometry = reference::GeometryKind::triangles;
-    else
-      throw InputError("", "/reference/geometry", "must be \"grid\" or \"triangles\"");
-  }
-  if (ref.contains("environment")) {
-    const std::string e = ref["environment"].is_string() ? ref["environment"].get<std::string>() : "";
-    if (e == "sh4")
-      o.sh_environment = true;
-    else if (e != "full")
-      throw InputError("", "/reference/environment", "must be \"full\" or \"sh4\"");
+  in.resolve("seed", o.seed);
+  o.target_stderr = in.number("target_stderr", 0, 0, 1e9);
+  if (in.has("target_stderr") && !(o.target_stderr > 0))
+    in.fail("target_stderr", "must be a positive number");
+  o.geometry = in.choice("geometry", "grid", {"grid", "triangles"}) == "grid"
+                   ? reference::GeometryKind::grid
+                   : reference::GeometryKind::triangles;
+  o.sh_environment = in.choice("environment", "full", {"full", "sh4"}) == "sh4";
+
+  // Falloff: the reference's own, else the first obscurance-family bake entry's (the same rule).
+  bool have_falloff = false;
+  if (in.has("falloff") || in.has("radius")) {
+    o.falloff = read_falloff(in);
+    have_falloff = true;
+  } else if (const int b = reference_falloff_entry(job_doc); b >= 0) {
+    Params entry(job_doc["bake"][b], file, "/bake/" + std::to_string(b));
+    o.falloff = read_falloff(entry);
+    have_falloff = true;
   }
 
-  // Falloff: the reference's own, else the first obscurance-family bake entry's.
-  bool have_falloff = read_falloff(ref, "/reference", o.falloff);
-  if (const int b = have_falloff ? -1 : reference_falloff_entry(job_doc); b >= 0)
-    have_falloff = read_falloff(job_doc["bake"][b], "/bake/" + std::to_string(b), o.falloff);
-
-  const std::vector<std::string> known = reference_layer_names(scene.bounces);
-  if (ref.contains("layers")) {
-    if (!ref["layers"].is_array())
-      throw InputError("", "/reference/layers", "must be an array of layer names");
-    std::set<std::string> seen;
-    for (std::size_t k = 0; k < ref["layers"].size(); ++k) {
-      const auto& v = ref["layers"][k];
-      const std::string name = v.is_string() ? v.get<std::string>() : "";
-      if (std::find(known.begin(), known.end(), name) == known.end()) {
-        std::string list;
-        for (const auto& n : known) list += (list.empty() ? "" : ", ") + n;
-        throw InputError("", "/reference/layers/" + std::to_string(k),
-                         "unknown reference layer \"" + name + "\" (known: " + list + ")");
-      }
-      if (seen.insert(name).second) o.layers.push_back(name);
+  const std::vector<std::string> known = reference_layer_names(context.bounces);
+  if (in.has("layers")) {
+    o.layers = in.layers(known, {});
+  } else if (job_doc.contains("bake") && job_doc["bake"].is_array() && !job_doc["bake"].empty()) {
+    // Only what some method of the job is scored against: the reference layers its resolved layers name.
+    std::set<std::string> scored;
+    const auto& bake = job_doc["bake"];
+    for (std::size_t b = 0; b < bake.size(); ++b) {
+      const nlohmann::json r = resolve_method_params(bake[b], context, file, "/bake/" + std::to_string(b));
+      for (const auto& l : r.value("layers", nlohmann::json::array())) scored.insert(l.get<std::string>());
     }
+    for (const std::string& l : known)
+      if (scored.count(l) && (l != "obscurance" || have_falloff)) o.layers.push_back(l);
+    if (o.layers.empty()) o.layers = {"ao"};  // nothing comparable: the cheapest layer, for the report's page
+    in.resolve("layers", o.layers);
   } else {
     o.layers = {"ao", "vsky"};
     if (have_falloff) o.layers.push_back("obscurance");
     for (const char* l : {"direct", "indirect", "total"}) o.layers.push_back(l);
+    in.resolve("layers", o.layers);
   }
+  o.resolved = in.resolved();
   return o;
+}
+
+ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc) {
+  MethodContext c;
+  c.field = scene.field;
+  c.bounces = scene.bounces;
+  return read_reference_options(job_doc, c, "");
 }
 
 LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const RunControl& rc) {
@@ -639,7 +611,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
       {"samples_per_texel", adaptive ? nlohmann::json("adaptive") : nlohmann::json(B * per_replicate_cap)},
       {"bounces", bounces},
       {"environment", options.sh_environment ? "sh4" : "full"},
-      {"falloff", falloff_name(options.falloff.kind)},
+      {"falloff", falloff_kind_name(options.falloff.kind)},
       {"radius", options.falloff.radius}};
   if (f.wrap == Wrap::repeat) {
     setup["repeat_tiles"] = options.repeat_tiles;

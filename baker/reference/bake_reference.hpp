@@ -8,7 +8,8 @@
 //               1 - mean over azimuth of sin(max(h, 0)) (solid angle above elevation h is (1 - sin h) per
 //               unit azimuth).
 //   obscurance  cosine-weighted: 1 - mean of rho(d), d the hit distance (rho = 0 for a miss), the falloff
-//               functions of methods/ao/falloff.hpp; rays end at the falloff's support (rho < 1e-6).
+//               functions of methods/ao/falloff.hpp; only hits within the falloff's support (rho >= 1e-6)
+//               count, whatever else is traced (alone, its rays end there).
 //   direct      E_direct / pi: the environment by multiple importance sampling (balance heuristic, one
 //               luminance-CDF sample and one cosine sample; cosine only for a uniform environment) and every
 //               directional light sampled uniformly over its disk (radiance E / (pi sin^2 alpha)), all with
@@ -45,6 +46,7 @@
 #include "core/run_control.hpp"
 #include "field/scene.hpp"
 #include "methods/ao/falloff.hpp"
+#include "methods/method_table.hpp"
 #include "reference/embree_field.hpp"
 
 namespace hfbake {
@@ -66,13 +68,20 @@ struct ReferenceOptions {
   // slower than single rays (and 45 % slower with the coherent flag), so single rays are the default.
   bool ray_streams = false;
   int tile_size = 16;
+  // The job's "reference" object with every default filled in (what the bake used; read_reference_options).
+  nlohmann::json resolved = nlohmann::json::object();
 };
 
 // The reference layers this scene can produce ("indirect_b1".."indirect_b<bounces>" included).
 std::vector<std::string> reference_layer_names(int bounces);
 
 // Reads job_doc["reference"] (and the job's obscurance-family entries for the falloff, when the
-// reference gives none). InputError with a "/reference/..." pointer on bad values.
+// reference gives none), with every check: InputError naming `file` and a "/reference/..." pointer. Without
+// "layers", the reference traces only the layers some bake entry is scored against (its resolved layers
+// that the reference can produce); a reference-only job traces ao, vsky, [obscurance,] direct, indirect,
+// total. parse_reference_options: the same for a loaded scene (its shape and bounces), without a file name.
+ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const MethodContext& context,
+                                        const std::string& file);
 ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc);
 
 // The bake entry whose falloff and radius the reference's obscurance uses: the first obscurance-family

@@ -49,7 +49,6 @@ void Args(benchmark::internal::Benchmark* b) {
   b->Unit(benchmark::kMillisecond)->Iterations(1);
 }
 
-#if HFBAKE_HAVE_HBAO
 void BM_HbaoStepR16(benchmark::State& st) {
   run(st, bake_hbao, {{"method", "hbao"}, {"radius", 16}, {"layers", {"obscurance"}}}, true);
 }
@@ -59,32 +58,23 @@ void BM_HbaoRationalR16(benchmark::State& st) {  // marches out to 100 R (rho < 
       {{"method", "hbao"}, {"radius", 16}, {"falloff", "rational"}, {"layers", {"obscurance"}}}, true);
 }
 BENCHMARK(BM_HbaoRationalR16)->Args({512, 8})->Unit(benchmark::kMillisecond)->Iterations(1);
-#endif
-#if HFBAKE_HAVE_HSAO
 void BM_HsaoStepR16(benchmark::State& st) {
   run(st, bake_hsao, {{"method", "hsao"}, {"radius", 16}, {"normal_rays", 2}, {"layers", {"obscurance"}}},
       true);
 }
 BENCHMARK(BM_HsaoStepR16)->Apply(Args);
-#endif
-#if HFBAKE_HAVE_VO
 void BM_VoR16(benchmark::State& st) {
   run(st, bake_vo, {{"method", "vo"}, {"radius", 16}}, false);
 }
 BENCHMARK(BM_VoR16)->Args({512, 0})->Args({1024, 0})->Unit(benchmark::kMillisecond)->Iterations(1);
-#endif
-#if HFBAKE_HAVE_LSAO
 void BM_LsaoRationalR16(benchmark::State& st) {
   run(st, bake_lsao, {{"method", "lsao"}, {"radius", 16}, {"falloff", "rational"}}, true);
 }
 BENCHMARK(BM_LsaoRationalR16)->Apply(Args);
-#endif
-#if HFBAKE_HAVE_FARFIELD
 void BM_FarfieldRationalR16(benchmark::State& st) {
   run(st, bake_farfield, {{"method", "farfield"}, {"radius", 16}, {"falloff", "rational"}}, true);
 }
 BENCHMARK(BM_FarfieldRationalR16)->Apply(Args);
-#endif
 
 }  // namespace
 }  // namespace hfbake

@@ -23,14 +23,10 @@
 #include <string>
 
 #include "field/procedural.hpp"
-#include "methods/ao/farfield.hpp"
-#include "methods/ao/lsao.hpp"
-#if HFBAKE_HAVE_HBAO
-#include "methods/ao/hbao.hpp"
-#endif
-#if HFBAKE_HAVE_IO
 #include "io/image_input.hpp"
-#endif
+#include "methods/ao/farfield.hpp"
+#include "methods/ao/hbao.hpp"
+#include "methods/ao/lsao.hpp"
 
 namespace hfbake {
 namespace {
@@ -96,7 +92,6 @@ void BM_FarfieldStepRadius(benchmark::State& state) {
     benchmark::DoNotOptimize(farfield_obscurance(fractal(n), fractal_normals(n), o, RunControl{}));
   state.SetItemsProcessed(state.iterations() * std::int64_t(n) * n * K);
 }
-#if HFBAKE_HAVE_HBAO
 void BM_HbaoStepRadius(benchmark::State& state) {
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   const int n = int(state.range(0)), K = int(state.range(1));
@@ -109,7 +104,6 @@ void BM_HbaoStepRadius(benchmark::State& state) {
   for (auto _ : state) hbao_field(fractal(n), fractal_normals(n), s, RunControl{}, out.data(), nullptr);
   state.SetItemsProcessed(state.iterations() * std::int64_t(n) * n * K);
 }
-#endif
 
 void LsaoSizes(benchmark::internal::Benchmark* b) {
   for (int n : {512, 1024, 2048})
@@ -130,13 +124,11 @@ BENCHMARK(BM_Lsao)->Apply(LsaoSizes);
 BENCHMARK(BM_Farfield)->Apply(FarfieldSizes);
 BENCHMARK(BM_LsaoStepRadius)->Apply(Radii);
 BENCHMARK(BM_FarfieldStepRadius)->Apply(Radii);
-#if HFBAKE_HAVE_HBAO
 void HbaoRadii(benchmark::internal::Benchmark* b) {  // R texels of march per direction: stop at 64
   for (int r : {4, 16, 64}) b->Args({1024, 16, r});
   b->Unit(benchmark::kMillisecond)->Iterations(1);
 }
 BENCHMARK(BM_HbaoStepRadius)->Apply(HbaoRadii);
-#endif
 
 // ---- accuracy measurements -------------------------------------------------------------------------------
 
@@ -190,7 +182,6 @@ void measure_field(const char* name, const HeightField& f) {
           name, w == ObscuranceWeighting::uniform ? "uniform" : "cosine", c.label, K, 100 * e.mean, e.worst,
           100 * e.differ, std::chrono::duration<double>(t1 - t0).count(),
           std::chrono::duration<double>(t2 - t1).count());
-#if HFBAKE_HAVE_HBAO
       if (w == ObscuranceWeighting::uniform) {
         HbaoSettings s;
         s.falloff = {c.kind, c.radius};
@@ -213,7 +204,6 @@ void measure_field(const char* name, const HeightField& f) {
             "%.4f   (line-sample receivers: mean %.4f %%  worst %.4f)\n",
             name, "uniform", c.label, K, 100 * h.mean, h.worst, 100 * hs.mean, hs.worst);
       }
-#endif
     }
     FarfieldOptions fo;
     fo.directions = K;
@@ -234,7 +224,6 @@ void measure_field(const char* name, const HeightField& f) {
           name, c.label, K, average ? "x2 (averaged)" : " (centre line)", 100 * e.mean, e.worst,
           double(st.virtual_points) / double(st.texel_directions) / (average ? 2.0 : 1.0),
           std::chrono::duration<double>(t1 - t0).count());
-#if HFBAKE_HAVE_HBAO
       if (!average) {
         HbaoSettings s;
         s.falloff = {c.kind, c.radius};
@@ -250,7 +239,6 @@ void measure_field(const char* name, const HeightField& f) {
             "mean %.4f %%)\n",
             name, c.label, K, 100 * h.mean, h.worst, 100 * x.mean);
       }
-#endif
     }
   }
 }
@@ -265,7 +253,6 @@ int measure(const char* only) {
     if (only && std::strcmp(only, procedural_kind_name(kind)) != 0) continue;
     measure_field(procedural_kind_name(kind), make_procedural(s, 1.0, Wrap::clamp));
   }
-#if HFBAKE_HAVE_IO
   if (only && std::strcmp(only, "dem") != 0) return 0;
   const std::filesystem::path dem = std::filesystem::path(HFBAKE_SHARED_DATA_DIR) / "TM1_564_146.tif";
   if (!std::filesystem::exists(dem)) {
@@ -281,9 +268,6 @@ int measure(const char* only) {
   for (int j = 0; j < 500; ++j)
     for (int i = 0; i < 500; ++i) f.z[f.index(i, j)] = p.values[std::size_t(j + 250) * p.width + (i + 250)];
   measure_field("DEM500", f);
-#else
-  std::printf("hfbake_io not linked: DEM measurement skipped\n");
-#endif
   return 0;
 }
 

@@ -11,15 +11,12 @@
 namespace hfbake {
 namespace {
 
-nlohmann::json job_with(const nlohmann::json& entry) {
-  return {{"version", 1},
-          {"name", "t"},
-          {"height", {{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}},
-          {"bake", nlohmann::json::array({entry})}};
-}
-
+// An entry as the job loader checks it: against its method's schema, pointers as in a job's first entry.
 std::vector<SchemaViolation> check(const nlohmann::json& entry) {
-  return validate_against_schema(job_with(entry), "job.schema.json");
+  std::vector<SchemaViolation> v =
+      validate_against_schema(entry, "methods/" + entry["method"].get<std::string>() + ".schema.json");
+  for (SchemaViolation& x : v) x.pointer = "/bake/0" + x.pointer;
+  return v;
 }
 
 TEST(AoSchemas, ValidEntries) {
@@ -67,8 +64,12 @@ TEST(AoParams, FalloffAndRadiusRules) {
   EXPECT_EQ(parse_falloff({{"radius", 3}}).radius, 3);
   EXPECT_THROW(parse_falloff({{"falloff", "smooth"}}), InputError);               // no radius
   EXPECT_THROW(parse_falloff({{"falloff", "none"}, {"radius", 2}}), InputError);  // radius ignored
-  EXPECT_THROW(parse_weighting({{"weighting", "uniform"}}, false), InputError);
-  EXPECT_THROW(select_layers({{"layers", {"horizon"}}}, {"obscurance"}, {"obscurance"}), InputError);
+  const nlohmann::json uniform = {{"weighting", "uniform"}};
+  Params w(uniform);
+  EXPECT_THROW(read_weighting(w, false), InputError);
+  const nlohmann::json horizon = {{"layers", {"horizon"}}};
+  Params l(horizon);
+  EXPECT_THROW(l.layers({"obscurance"}, {"obscurance"}), InputError);
 }
 
 }  // namespace

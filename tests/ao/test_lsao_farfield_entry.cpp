@@ -13,15 +13,13 @@
 namespace hfbake {
 namespace {
 
-nlohmann::json job_with(const nlohmann::json& entry) {
-  return {{"version", 1},
-          {"name", "t"},
-          {"height", {{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}},
-          {"bake", nlohmann::json::array({entry})}};
-}
-
 std::vector<SchemaViolation> check(const char* text) {
-  return validate_against_schema(job_with(nlohmann::json::parse(text)), "job.schema.json");
+  // As the job loader checks an entry: against its method's schema, pointers as in a job's first entry.
+  const nlohmann::json entry = nlohmann::json::parse(text);
+  std::vector<SchemaViolation> v =
+      validate_against_schema(entry, "methods/" + entry["method"].get<std::string>() + ".schema.json");
+  for (SchemaViolation& x : v) x.pointer = "/bake/0" + x.pointer;
+  return v;
 }
 
 TEST(LsaoFarfieldSchemas, ValidEntries) {
@@ -109,13 +107,13 @@ TEST(LsaoFarfieldEntry, LayersSizesAndErrors) {
       bake(sc, {{"layers", {"ao"}}}, RunControl{});
       ADD_FAILURE() << "unknown layer accepted";
     } catch (const InputError& e) {
-      EXPECT_EQ(e.where(), "layers");
+      EXPECT_EQ(e.where(), "/layers/0");
     }
     try {
       bake(sc, {{"falloff", "smooth"}}, RunControl{});  // a falloff needs a radius
       ADD_FAILURE() << "falloff without radius accepted";
     } catch (const InputError& e) {
-      EXPECT_EQ(e.where(), "radius");
+      EXPECT_EQ(e.where(), "/radius");
     }
     std::atomic<bool> cancel{true};
     RunControl rc;

@@ -94,7 +94,21 @@ TEST_F(Manifest, UnknownKeysAreErrorsAtEveryLevel) {
 TEST_F(Manifest, UnknownMethod) {
   const auto e = errors(minimal("", R"([{"method": "magic"}])"));
   ASSERT_EQ(e.size(), 1u);
-  EXPECT_EQ(e[0], (dir_ / "x.json").string() + ": /bake/0/method: not one of the allowed values");
+  EXPECT_EQ(e[0], (dir_ / "x.json").string() +
+                      ": /bake/0/method: unknown method \"magic\" (one of \"farfield\", \"hbao\", \"hsao\", "
+                      "\"lsao\", \"nlp\", \"p1\", \"p2\", \"vo\")");
+}
+
+// Enum errors list the allowed values (issue 14), in the job schema and in a method's own schema.
+TEST_F(Manifest, EnumErrorsListTheAllowedValues) {
+  auto e = errors(minimal("", R"([{"method": "hbao", "falloff": "gauss"}])"));
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], (dir_ / "x.json").string() +
+                      ": /bake/0/falloff: must be one of \"none\", \"step\", \"linear\", \"smooth\", "
+                      "\"exponential\", \"rational\"");
+  e = errors(minimal("", R"([{"method": "p1", "layers": ["ao", "horizn"]}])"));
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_NE(e[0].find("/bake/0/layers/1: must be one of \"ao\", \"vsky\""), std::string::npos) << e[0];
 }
 
 // A missing baseline is found before the bake (it used to fail after hours of baking), and the message says

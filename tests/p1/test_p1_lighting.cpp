@@ -526,7 +526,7 @@ TEST(BakeP1, LayersAndErrors) {
     bake_p1(s, e, RunControl{});
     FAIL();
   } catch (const InputError& err) {
-    EXPECT_EQ(err.where(), "layers");
+    EXPECT_EQ(err.where(), "/layers/1");
   }
   e.erase("layers");
   e["normal_bins"] = 16;

@@ -434,6 +434,57 @@ TEST(Reference, ObscuranceStepIsAoLimitedToRadius) {
   EXPECT_WITHIN_3SE(at(r, "obscurance", 16, 16), 1.0, 1e-6);
 }
 
+// Issue 14: the reference's ao must not depend on what else the job asks of it. With an obscurance method
+// and no path tracing, ao used to be counted from rays shortened to the falloff radius (it equalled the
+// obscurance). Every combination of bounces 0/1, with/without an obscurance method and default/explicit
+// reference layers must give the ao of an ao-only reference.
+TEST(Reference, AoIsTheSameWhateverElseTheJobTraces) {
+  ProceduralSpec p = spec_of(ProceduralKind::fractal, 24);
+  p.amplitude = 6;
+  Scene s = make_scene(p);
+  const LayerSet ao_only = bake_reference(s, options({"ao"}, 64), {});
+  const Layer* truth = ao_only.find("ao");
+  const Layer* truth_se = ao_only.find("ao_stderr");
+  ASSERT_TRUE(truth && truth_se);
+  double mean_truth = 0;
+  for (float v : truth->data) mean_truth += v;
+  mean_truth /= double(truth->data.size());
+  ASSERT_LT(mean_truth, 0.97);  // rough enough that a radius of 2 leaves much of the occlusion out
+  for (int bounces : {0, 1})
+    for (bool obscurance_method : {false, true})
+      for (bool explicit_layers : {false, true}) {
+        SCOPED_TRACE("bounces " + std::to_string(bounces) + (obscurance_method ? ", hbao" : "") +
+                     (explicit_layers ? ", explicit layers" : ", default layers"));
+        s.bounces = bounces;
+        nlohmann::json job = {{"bake", {{{"method", "p1"}}}}, {"reference", {{"samples", 64}}}};
+        if (obscurance_method)
+          job["bake"].push_back({{"method", "hbao"}, {"radius", 2}, {"falloff", "step"}});
+        if (explicit_layers) {
+          job["reference"]["layers"] = {"ao"};
+          if (obscurance_method) job["reference"]["layers"].push_back("obscurance");
+        }
+        const LayerSet r = bake_reference(s, parse_reference_options(s, job), {});
+        const Layer* ao = r.find("ao");
+        ASSERT_TRUE(ao);
+        double mean = 0;
+        int off = 0;
+        for (std::size_t t = 0; t < ao->data.size(); ++t) {
+          mean += ao->data[t];
+          off += std::abs(ao->data[t] - truth->data[t]) > 3 * truth_se->data[t] + 1e-6;
+        }
+        mean /= double(ao->data.size());
+        EXPECT_NEAR(mean, mean_truth, 1e-4);
+        EXPECT_EQ(off, 0);
+        if (obscurance_method) {  // and obscurance is still limited to the radius: more open than ao
+          const Layer* ob = r.find("obscurance");
+          ASSERT_TRUE(ob);
+          double mean_ob = 0;
+          for (float v : ob->data) mean_ob += v;
+          EXPECT_GT(mean_ob / double(ob->data.size()), mean_truth + 0.01);
+        }
+      }
+}
+
 TEST(Reference, OptionsFromTheJob) {
   Scene s = make_scene(spec_of(ProceduralKind::flat, 8));
   s.bounces = 2;
@@ -443,7 +494,18 @@ TEST(Reference, OptionsFromTheJob) {
   ReferenceOptions o = parse_reference_options(s, job);
   EXPECT_EQ(o.falloff.kind, FalloffKind::smooth);
   EXPECT_EQ(o.falloff.radius, 12);
-  EXPECT_EQ(o.layers, (std::vector<std::string>{"ao", "vsky", "obscurance", "direct", "indirect", "total"}));
+  // Only what the methods are scored against: p1's ao, vsky, direct and lsao's obscurance.
+  EXPECT_EQ(o.layers, (std::vector<std::string>{"ao", "vsky", "obscurance", "direct"}));
+  EXPECT_EQ(o.resolved["layers"], nlohmann::json(o.layers));
+  EXPECT_EQ(o.resolved["samples"], 64);
+  EXPECT_EQ(o.resolved["replicates"], 8);     // a default, recorded
+  job["bake"].push_back({{"method", "p2"}});  // p2 adds indirect and total
+  EXPECT_EQ(parse_reference_options(s, job).layers,
+            (std::vector<std::string>{"ao", "vsky", "obscurance", "direct", "indirect", "total"}));
+  job["bake"] = nlohmann::json::array();  // a reference-only job traces everything
+  EXPECT_EQ(parse_reference_options(s, job).layers,
+            (std::vector<std::string>{"ao", "vsky", "direct", "indirect", "total"}));
+  job["bake"] = {{{"method", "p1"}}};
   job["reference"]["layers"] = {"ao", "indirect_b3"};
   EXPECT_THROW(parse_reference_options(s, job), InputError);
   job["reference"]["layers"] = {"ao", "indirect_b2"};

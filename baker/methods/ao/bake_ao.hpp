@@ -1,7 +1,6 @@
 // Entry points of the obscurance family (issue 7). Each returns a LayerSet of the field's size with the
 // contract's layer names ("obscurance", "ao", "bent_normal", ...); params is the schema-validated bake entry
-// (schemas/methods/<method>.schema.json). A method is compiled in when its <method>.cpp exists; the CLI
-// dispatcher tests HFBAKE_HAVE_<METHOD> (defined by CMakeLists.txt) before calling it.
+// (schemas/methods/<method>.schema.json). Their lines of the method table (methods/method_table.hpp) below.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -9,6 +8,7 @@
 #include "core/layers.hpp"
 #include "core/run_control.hpp"
 #include "field/scene.hpp"
+#include "methods/method_table.hpp"
 
 namespace hfbake {
 
@@ -23,5 +23,12 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
 LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
 // Adaptively layered statistical volumetric obscurance (Hendrickx 2015). vo.cpp
 LayerSet bake_vo(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+
+// Their lines of the method table.
+MethodInfo hbao_method();
+MethodInfo lsao_method();
+MethodInfo farfield_method();
+MethodInfo hsao_method();
+MethodInfo vo_method();
 
 }  // namespace hfbake

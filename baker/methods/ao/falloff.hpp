@@ -5,6 +5,8 @@
 #include <cmath>
 #include <string>
 
+#include "job/params.hpp"
+
 namespace hfbake {
 
 enum class FalloffKind { none, step, linear, smooth, exponential, rational };
@@ -60,6 +62,34 @@ inline bool parse_falloff_kind(const std::string& s, FalloffKind& k) {
       return true;
     }
   return false;
+}
+
+inline const char* falloff_kind_name(FalloffKind k) {
+  static const char* const names[] = {"none", "step", "linear", "smooth", "exponential", "rational"};
+  return names[int(k)];
+}
+
+// The one rule for "falloff" and "radius", for the obscurance family and the reference alike: falloff
+// defaults to "step" when a radius is given, else "none"; every falloff but none needs a radius (world
+// units, positive and finite), and none refuses one (it has no effect). Recorded resolved.
+inline Falloff read_falloff(Params& in) {
+  Falloff f;
+  const bool has_radius = in.has("radius");
+  const std::string kind = in.choice("falloff", has_radius ? "step" : "none",
+                                     {"none", "step", "linear", "smooth", "exponential", "rational"});
+  parse_falloff_kind(kind, f.kind);
+  if (has_radius) {
+    const auto& r = in.raw("radius");
+    if (!r.is_number() || !(r.get<double>() > 0) || !(r.get<double>() <= 1e9))
+      in.fail("radius", "must be a positive number up to 1e9 (world units)");
+    f.radius = r.get<double>();
+    in.resolve("radius", f.radius);
+  }
+  if (f.kind == FalloffKind::none && has_radius)
+    in.fail("radius", "has no effect with falloff \"none\" (use \"step\" for AO limited to a radius)");
+  if (f.kind != FalloffKind::none && !has_radius)
+    in.fail("radius", "is required with a falloff other than \"none\" (world units)");
+  return f;
 }
 
 }  // namespace hfbake

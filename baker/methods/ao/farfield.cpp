@@ -344,27 +344,42 @@ std::vector<double> farfield_occlusion_at(const HeightField& field, const std::v
   return out;
 }
 
-LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+FarfieldOptions read_farfield_options(Params& in) {
   FarfieldOptions o;
-  o.rho = parse_falloff(params);
-  parse_weighting(params, false);
-  o.directions = int_param(params, "directions", 16, 1, 4096);
-  o.interval = int_param(params, "interval", 8, 1, 256);
-  o.near_field = number_param(params, "near_field", -1, -1, 1e6);
-  o.sector_average = params.value("sector_average", true);
-  o.split = params.value("split", true);
-  o.growth = number_param(params, "growth", 1.0, 0.125, 8.0);
-  if (params.contains("surface")) {
-    const auto& v = params.at("surface");
-    if (v != "bilinear" && v != "triangles")
-      throw InputError("", "surface", "must be \"bilinear\" or \"triangles\"");
-    o.triangles = v == "triangles";
-  }
-  const auto layers = select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
+  o.rho = read_falloff(in);
+  read_weighting(in, false);
+  o.directions = in.integer("directions", 16, 1, 4096);
+  o.interval = in.integer("interval", 8, 1, 256);
+  o.near_field = in.number("near_field", -1, 0, 1e6);  // -1: the default (FarfieldOptions)
+  o.sector_average = in.boolean("sector_average", true);
+  o.split = in.boolean("split", true);
+  o.growth = in.number("growth", 1.0, 0.125, 8.0);
+  o.triangles = in.choice("surface", "bilinear", {"bilinear", "triangles"}) == "triangles";
+  in.layers({"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
+  return o;
+}
+
+LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  Params in(params);
+  const FarfieldOptions o = read_farfield_options(in);
+  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<Vec3f> bent;
   const std::vector<float> light = farfield_obscurance(scene.field, scene.normals, o, rc, nullptr,
                                                        wants(layers, "bent_normal") ? &bent : nullptr);
   return obscurance_layers(scene.field.width, scene.field.height, layers, light, bent);
+}
+
+MethodInfo farfield_method() {
+  MethodInfo m;
+  m.name = "farfield";
+  m.summary = "P4's far-field obscurance: an exact near field, prefiltered far-field slabs beyond it";
+  m.read = [](Params& in, const MethodContext&) { read_farfield_options(in); };
+  m.bake = bake_farfield;
+  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 24.0; };
+  m.division = WorkDivision::directions;
+  m.division_note = "partial sums over disjoint direction sets";
+  m.falloff_defines_obscurance = true;
+  return m;
 }
 
 }  // namespace hfbake

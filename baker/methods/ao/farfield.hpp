@@ -24,6 +24,7 @@
 #include "core/run_control.hpp"
 #include "core/vec.hpp"
 #include "field/height_field.hpp"
+#include "job/params.hpp"
 #include "methods/ao/falloff.hpp"
 
 namespace hfbake {
@@ -62,5 +63,8 @@ std::vector<double> farfield_occlusion_at(const HeightField& field, const std::v
                                           const FarfieldOptions& options,
                                           const std::vector<std::size_t>& texels,
                                           FarfieldStats* stats = nullptr);
+
+// Reads and checks a farfield bake entry (schemas/methods/farfield.schema.json).
+FarfieldOptions read_farfield_options(Params& in);
 
 }  // namespace hfbake

@@ -23,7 +23,7 @@ std::vector<MarchDirection> uniform_directions(int count) {
   return d;
 }
 
-double default_reach(const HeightField& field, const Falloff& f) {
+double default_reach(const FieldShape& field, const Falloff& f) {
   const double whole = field.wrap == Wrap::repeat
                            ? std::max(field.width, field.height) * field.texel_size
                            : std::hypot(field.width - 1, field.height - 1) * field.texel_size;
@@ -142,73 +142,60 @@ void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
   });
 }
 
-LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  const HeightField& field = scene.field;
+HbaoSettings read_hbao_settings(Params& in, const FieldShape& field) {
   HbaoSettings s;
-  s.falloff = parse_falloff(params);
-  s.weighting = parse_weighting(params, true);
-  s.directions = uniform_directions(int_param(params, "directions", 16, 1, 4096));
-  if (params.contains("estimator")) {
-    const auto& e = params.at("estimator");
-    if (e == "slab")
-      s.estimator = HorizonEstimator::slab;
-    else if (e == "segment")
-      s.estimator = HorizonEstimator::segment;
-    else if (e == "largest_occluder")
-      s.estimator = HorizonEstimator::largest_occluder;
-    else
-      throw InputError("", "estimator", "must be \"slab\", \"segment\" or \"largest_occluder\"");
-  }
-  if (params.contains("surface")) {
-    const auto& v = params.at("surface");
-    if (v == "triangles")
-      s.surface = MarchSurface::triangles;
-    else if (v != "bilinear")
-      throw InputError("", "surface", "must be \"bilinear\" or \"triangles\"");
-    // The triangulated surface's exact slice integral needs the segment estimator: its default there.
-    if (s.surface == MarchSurface::triangles && !params.contains("estimator"))
-      s.estimator = HorizonEstimator::segment;
-  }
-  if (params.contains("tangent")) {
-    const auto& t = params.at("tangent");
+  s.falloff = read_falloff(in);
+  s.weighting = read_weighting(in, true);
+  s.directions = uniform_directions(in.integer("directions", 16, 1, 4096));
+  const bool triangles = in.choice("surface", "bilinear", {"bilinear", "triangles"}) == "triangles";
+  s.surface = triangles ? MarchSurface::triangles : MarchSurface::bilinear;
+  // The triangulated surface's exact slice integral needs the segment estimator: its default there.
+  const std::string estimator =
+      in.choice("estimator", triangles ? "segment" : "slab", {"slab", "segment", "largest_occluder"});
+  s.estimator = estimator == "slab"      ? HorizonEstimator::slab
+                : estimator == "segment" ? HorizonEstimator::segment
+                                         : HorizonEstimator::largest_occluder;
+  const bool largest = s.estimator == HorizonEstimator::largest_occluder;
+  if (in.has("tangent")) {
+    const auto& t = in.raw("tangent");
     if (t == "normal")
       s.real_tangent = true;
     else if (t.is_number() && t.get<double>() >= -1 && t.get<double>() <= 0)
       s.sin_tangent = t.get<double>();
     else
-      throw InputError("", "tangent", "must be \"normal\" or a number in [-1, 0] (sin of the fixed tangent)");
-    if (s.estimator != HorizonEstimator::largest_occluder)
-      throw InputError("", "tangent", "applies only to estimator \"largest_occluder\"");
+      in.fail("tangent", "must be \"normal\" or a number in [-1, 0] (sin of the fixed tangent)");
+    if (!largest) in.fail("tangent", "applies only to estimator \"largest_occluder\"");
   }
-  if (params.contains("occluders")) {
-    const auto& o = params.at("occluders");
-    if (o != "visible" && o != "all") throw InputError("", "occluders", "must be \"visible\" or \"all\"");
-    s.visible_only = o == "visible";
-    if (s.estimator != HorizonEstimator::largest_occluder)
-      throw InputError("", "occluders", "applies only to estimator \"largest_occluder\"");
+  if (largest)
+    in.resolve("tangent", s.real_tangent ? nlohmann::json("normal") : nlohmann::json(s.sin_tangent));
+  if (in.has("occluders") && !largest) in.fail("occluders", "applies only to estimator \"largest_occluder\"");
+  const std::string occluders = in.choice("occluders", "visible", {"visible", "all"});
+  s.visible_only = occluders == "visible";
+  s.reach = in.number("max_distance", default_reach(field, s.falloff), 1e-9, 1e12);
+  if (triangles && (in.has("step") || in.has("steps")))
+    in.fail("surface", "\"triangles\" visits every vertex of the profile: no \"step\" or \"steps\"");
+  s.step = in.number("step", 1.0, 1e-3, 1e6) * field.texel_size;
+  if (in.has("steps")) {
+    if (in.has("step")) in.fail("steps", "give \"step\" or \"steps\", not both");
+    s.step = s.reach / in.integer("steps", 1, 1, 1000000);
   }
-  s.reach = number_param(params, "max_distance", default_reach(field, s.falloff), 1e-9, 1e12);
-  s.step = number_param(params, "step", 1.0, 1e-3, 1e6) * field.texel_size;
-  if (params.contains("steps")) {
-    if (params.contains("step")) throw InputError("", "steps", "give \"step\" or \"steps\", not both");
-    s.step = s.reach / int_param(params, "steps", 1, 1, 1 << 20);
-  }
-  if (s.reach / s.step > 1e7) throw InputError("", "max_distance", "more than 1e7 steps per direction");
-
-  if (s.surface == MarchSurface::triangles && (params.contains("step") || params.contains("steps")))
-    throw InputError("", "surface",
-                     "\"triangles\" visits every vertex of the profile: no \"step\" or \"steps\"");
-  const bool ao_ok = s.falloff.kind == FalloffKind::none && s.weighting == Weighting::cosine &&
-                     s.estimator != HorizonEstimator::largest_occluder;
-  std::vector<std::string> known = {"obscurance", "bent_normal"};
-  if (ao_ok) known.push_back("ao");
-  const std::vector<std::string> layers = select_layers(params, {"obscurance", "bent_normal", "ao"}, known);
+  if (s.reach / s.step > 1e7) in.fail("max_distance", "more than 1e7 steps per direction");
+  const bool ao_ok = s.falloff.kind == FalloffKind::none && s.weighting == Weighting::cosine && !largest;
+  std::vector<std::string> defaults = {"obscurance", "bent_normal"};
+  if (ao_ok) defaults.push_back("ao");
+  const std::vector<std::string> layers = in.layers({"obscurance", "bent_normal", "ao"}, defaults);
   if (wants(layers, "ao") && !ao_ok)
-    throw InputError(
-        "", "layers",
-        "\"ao\" needs falloff \"none\", weighting \"cosine\" and estimator \"slab\" or \"segment\" (use "
-        "\"obscurance\")");
+    in.fail("layers",
+            "\"ao\" needs falloff \"none\", weighting \"cosine\" and estimator \"slab\" or \"segment\" (use "
+            "\"obscurance\")");
+  return s;
+}
 
+LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  const HeightField& field = scene.field;
+  Params in(params);
+  const HbaoSettings s = read_hbao_settings(in, field);
+  const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<float> obsc(field.texel_count());
   std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
   hbao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
@@ -218,6 +205,19 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
   else
     out.attributes.emplace_back("hfbake:hbao:steps_per_direction", std::to_string(int(s.reach / s.step)));
   return out;
+}
+
+MethodInfo hbao_method() {
+  MethodInfo m;
+  m.name = "hbao";
+  m.summary = "brute-force horizon march per texel and direction (the obscurance family's baseline)";
+  m.read = [](Params& in, const MethodContext& c) { read_hbao_settings(in, c.field); };
+  m.bake = bake_hbao;
+  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 0.0; };
+  m.division = WorkDivision::directions;
+  m.division_note = "partial sums over disjoint direction sets (texel tiles would need a halo of the reach)";
+  m.falloff_defines_obscurance = true;
+  return m;
 }
 
 }  // namespace hfbake

@@ -76,6 +76,9 @@ void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
 
 // The reach used when the job gives none: the falloff's support (rho < 1e-4), or for falloff none the whole
 // field (its diagonal when clamped, one period when it repeats).
-double default_reach(const HeightField& field, const Falloff& f);
+double default_reach(const FieldShape& field, const Falloff& f);
+
+// Reads and checks an hbao bake entry (schemas/methods/hbao.schema.json); the layers are in.resolved().
+HbaoSettings read_hbao_settings(Params& in, const FieldShape& field);
 
 }  // namespace hfbake

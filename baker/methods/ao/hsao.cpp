@@ -112,27 +112,43 @@ void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
   });
 }
 
-LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  const HeightField& field = scene.field;
-  if (!params.contains("radius"))
-    throw InputError("", "radius", "hsao needs a radius of influence (world units)");
+HsaoSettings read_hsao_settings(Params& in, const FieldShape& field) {
+  if (!in.has("radius")) in.fail("radius", "hsao needs a radius of influence (world units)");
   HsaoSettings s;
-  s.falloff = parse_falloff(params);
+  s.falloff = read_falloff(in);
   if (s.falloff.kind != FalloffKind::step && s.falloff.kind != FalloffKind::linear &&
       s.falloff.kind != FalloffKind::smooth)
-    throw InputError("", "falloff",
-                     "hsao searches within the radius: use \"step\", \"linear\" or \"smooth\"");
-  s.directions = int_param(params, "directions", 16, 1, 4096);
-  s.steps =
-      int_param(params, "steps", std::max(1, int(std::ceil(s.falloff.radius / field.texel_size))), 1, 65536);
-  s.normal_rays = int_param(params, "normal_rays", 2, 0, 64);
-  const std::vector<std::string> layers =
-      select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
+    in.fail("falloff", "hsao searches within the radius: use \"step\", \"linear\" or \"smooth\"");
+  s.directions = in.integer("directions", 16, 1, 4096);
+  s.steps = in.integer(
+      "steps", std::max(1, int(std::min(65536.0, std::ceil(s.falloff.radius / field.texel_size)))), 1, 65536);
+  s.normal_rays = in.integer("normal_rays", 2, 0, 64);
+  in.layers({"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
+  return s;
+}
 
+LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  const HeightField& field = scene.field;
+  Params in(params);
+  const HsaoSettings s = read_hsao_settings(in, field);
+  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<float> obsc(field.texel_count());
   std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
   hsao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
   return obscurance_layers(field.width, field.height, layers, obsc, bent);
+}
+
+MethodInfo hsao_method() {
+  MethodInfo m;
+  m.name = "hsao";
+  m.summary = "horizon-split obscurance: a near-field march per direction plus normal-split rays";
+  m.read = [](Params& in, const MethodContext& c) { read_hsao_settings(in, c.field); };
+  m.bake = bake_hsao;
+  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 0.0; };
+  m.division = WorkDivision::directions;
+  m.division_note = "partial sums over disjoint direction sets";
+  m.falloff_defines_obscurance = true;
+  return m;
 }
 
 }  // namespace hfbake

@@ -22,6 +22,7 @@
 #include "core/run_control.hpp"
 #include "core/vec.hpp"
 #include "field/height_field.hpp"
+#include "job/params.hpp"
 #include "methods/ao/falloff.hpp"
 
 namespace hfbake {
@@ -45,5 +46,8 @@ HsaoTexel hsao_texel(const HeightField& field, Vec3 normal, int i, int j, const 
 // Whole field, rows in parallel (deterministic). obscurance = 1 - (O_T + O_N); either output may be null.
 void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HsaoSettings& s,
                 const RunControl& rc, float* obscurance, Vec3f* bent);
+
+// Reads and checks an hsao bake entry (schemas/methods/hsao.schema.json).
+HsaoSettings read_hsao_settings(Params& in, const FieldShape& field);
 
 }  // namespace hfbake

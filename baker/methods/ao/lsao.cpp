@@ -174,18 +174,38 @@ std::vector<float> lsao_obscurance(const HeightField& field, const LsaoOptions& 
   return out;
 }
 
-LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+LsaoOptions read_lsao_options(Params& in) {
   LsaoOptions o;
-  o.occlusion.rho = parse_falloff(params);
-  o.occlusion.weighting = parse_weighting(params, true) == Weighting::uniform ? ObscuranceWeighting::uniform
-                                                                              : ObscuranceWeighting::cosine;
-  o.occlusion.sin_t = number_param(params, "tangent", -0.85, -1.0, 0.0);
-  o.directions = int_param(params, "directions", 16, 1, 4096);
-  const auto layers = select_layers(params, {"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
+  o.occlusion.rho = read_falloff(in);
+  o.occlusion.weighting = read_weighting(in, true) == Weighting::uniform ? ObscuranceWeighting::uniform
+                                                                         : ObscuranceWeighting::cosine;
+  o.occlusion.sin_t = in.number("tangent", -0.85, -1.0, 0.0);
+  o.directions = in.integer("directions", 16, 1, 4096);
+  in.layers({"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
+  return o;
+}
+
+LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  Params in(params);
+  const LsaoOptions o = read_lsao_options(in);
+  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<Vec3f> bent;
   std::vector<float> light =
       lsao_obscurance(scene.field, o, rc, nullptr, wants(layers, "bent_normal") ? &bent : nullptr);
   return obscurance_layers(scene.field.width, scene.field.height, layers, light, bent);
+}
+
+MethodInfo lsao_method() {
+  MethodInfo m;
+  m.name = "lsao";
+  m.summary = "P3's line-sweep obscurance: one hull of occluders per sweep line and direction";
+  m.read = [](Params& in, const MethodContext&) { read_lsao_options(in); };
+  m.bake = bake_lsao;
+  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 12.0; };
+  m.division = WorkDivision::directions;
+  m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";
+  m.falloff_defines_obscurance = true;
+  return m;
 }
 
 }  // namespace hfbake

@@ -16,6 +16,7 @@
 
 #include "core/run_control.hpp"
 #include "field/height_field.hpp"
+#include "job/params.hpp"
 #include "methods/ao/obscurance_hull.hpp"
 
 namespace hfbake {
@@ -53,5 +54,8 @@ std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOpti
 // (the texel's normal where nothing is open).
 std::vector<float> lsao_obscurance(const HeightField& field, const LsaoOptions& options, const RunControl& rc,
                                    LsaoStats* stats = nullptr, std::vector<Vec3f>* bent_normal = nullptr);
+
+// Reads and checks an lsao bake entry (schemas/methods/lsao.schema.json); the layers are in.resolved().
+LsaoOptions read_lsao_options(Params& in);
 
 }  // namespace hfbake

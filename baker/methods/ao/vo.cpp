@@ -65,7 +65,7 @@ struct Sat {
   }
 };
 
-int half_width(const HeightField& f, const VoSettings& s) {
+int half_width(const FieldShape& f, const VoSettings& s) {
   return std::max(0, int(std::lround(s.radius / f.texel_size)));
 }
 
@@ -174,22 +174,26 @@ double vo_brute_force(const HeightField& f, Vec3 nn, int i, int j, const VoSetti
   return sum / count;
 }
 
-LayerSet bake_vo(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  const HeightField& field = scene.field;
-  if (!params.contains("radius"))
-    throw InputError("", "radius", "vo needs the footprint half-width (world units)");
+VoSettings read_vo_settings(Params& in, const FieldShape& field) {
+  if (!in.has("radius")) in.fail("radius", "vo needs the footprint half-width (world units)");
   VoSettings s;
-  s.radius = number_param(params, "radius", 0, 1e-12, 1e9);
-  s.box_height = number_param(params, "box_height", s.radius, 1e-12, 1e9);
-  s.fade = number_param(params, "fade", s.radius, 0, 1e9);
-  const int layers_wanted = int_param(params, "depth_layers", 4, 1, 8);
+  s.radius = in.number("radius", 0, 1e-12, 1e9);
+  s.box_height = in.number("box_height", s.radius, 1e-12, 1e9);
+  s.fade = in.number("fade", s.radius, 0, 1e9);
+  const int layers_wanted = in.integer("depth_layers", 4, 1, 8);
   s.levels = 0;
   while ((1 << s.levels) < layers_wanted) ++s.levels;
-  if ((1 << s.levels) != layers_wanted) throw InputError("", "depth_layers", "must be 1, 2, 4 or 8");
+  if ((1 << s.levels) != layers_wanted) in.fail("depth_layers", "must be 1, 2, 4 or 8");
   if (half_width(field, s) > std::max(field.width, field.height))
-    throw InputError("", "radius", "the footprint is larger than the field");
-  const std::vector<std::string> layers = select_layers(params, {"obscurance"}, {"obscurance"});
+    in.fail("radius", "the footprint is larger than the field");
+  in.layers({"obscurance"}, {"obscurance"});
+  return s;
+}
 
+LayerSet bake_vo(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  const HeightField& field = scene.field;
+  Params in(params);
+  const VoSettings s = read_vo_settings(in, field);
   LayerSet out;
   out.width = field.width;
   out.height = field.height;
@@ -199,8 +203,20 @@ LayerSet bake_vo(const Scene& scene, const nlohmann::json& params, const RunCont
   out.attributes.emplace_back("hfbake:vo:quantity",
                               "1 - box volumetric obscurance (tangent-space box, ALSVO estimate); not the "
                               "hemisphere obscurance");
-  (void)layers;
   return out;
+}
+
+MethodInfo vo_method() {
+  MethodInfo m;
+  m.name = "vo";
+  m.summary = "volumetric obscurance (ALSVO): the occupied fraction of a tangent-space box per texel";
+  m.read = [](Params& in, const MethodContext& c) { read_vo_settings(in, c.field); };
+  m.bake = bake_vo;
+  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 8.0; };
+  m.division = WorkDivision::texel_tiles;
+  m.division_note = "texel tiles with a halo of the footprint (summed-area tables are local)";
+  m.falloff_defines_obscurance = true;
+  return m;
 }
 
 }  // namespace hfbake

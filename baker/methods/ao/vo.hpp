@@ -22,6 +22,7 @@
 #include "core/run_control.hpp"
 #include "core/vec.hpp"
 #include "field/height_field.hpp"
+#include "job/params.hpp"
 
 namespace hfbake {
 
@@ -41,5 +42,8 @@ std::vector<float> vo_occlusion(const HeightField& field, const std::vector<Vec3
 
 // The brute-force box volumetric obscurance at one texel, (1/N) sum_j f((p_j - p).n): what vo converges to.
 double vo_brute_force(const HeightField& field, Vec3 normal, int i, int j, const VoSettings& s);
+
+// Reads and checks a vo bake entry (schemas/methods/vo.schema.json).
+VoSettings read_vo_settings(Params& in, const FieldShape& field);
 
 }  // namespace hfbake

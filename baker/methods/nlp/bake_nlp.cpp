@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "job/params.hpp"
 #include "methods/nlp/horizon_march.hpp"
 #include "methods/nlp/nlp_basis.hpp"
 #include "methods/nlp/pyramid.hpp"
@@ -41,41 +42,26 @@ const std::vector<std::string>& nlp_layer_names() {
   return names;
 }
 
-NlpOptions parse_nlp_options(const nlohmann::json& p) {
+NlpOptions read_nlp_options(Params& in) {
   NlpOptions o;
-  o.directions = p.value("directions", o.directions);
-  o.levels_per_octave = p.value("levels_per_octave", o.levels_per_octave);
-  o.level_offset = p.value("level_offset", o.level_offset);
-  o.radiance_level_offset = p.value("radiance_level_offset", o.radiance_level_offset);
-  o.light_directions = p.value("light_directions", o.light_directions);
-  o.light_level_offset = p.value("light_level_offset", o.light_level_offset);
-  o.light_horizon_knots = p.value("light_horizon", std::string("knots")) == "knots";
-  o.subsample = p.value("subsample", o.subsample);
-  o.exact_indirect_cosine = p.value("indirect_cosine", std::string("sh")) == "exact";
-  if (p.contains("azimuth_interpolation")) {
-    const std::string s = p["azimuth_interpolation"].get<std::string>();
-    if (!nlp::parse_azimuth_interpolation(s, o.interpolation))
-      throw InputError("", "azimuth_interpolation", "must be \"linear\" or \"bspline\", not \"" + s + "\"");
-  }
-  if (o.directions < 3) throw InputError("", "directions", "nlp needs at least 3 directions");
-  if (o.levels_per_octave < 1) throw InputError("", "levels_per_octave", "must be >= 1");
-  if (o.level_offset < 0 || o.radiance_level_offset < 0) throw InputError("", "level_offset", "must be >= 0");
-  if (o.light_directions < 1) throw InputError("", "light_directions", "must be >= 1");
-  if (o.subsample != 1 && o.subsample != 2) throw InputError("", "subsample", "must be 1 or 2");
-  if (p.contains("layers")) {
-    o.layers.clear();
-    for (const auto& l : p["layers"]) {
-      const std::string name = l.get<std::string>();
-      const auto& known = nlp_layer_names();
-      if (std::find(known.begin(), known.end(), name) == known.end()) {
-        std::string list;
-        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-        throw InputError("", "layers", "nlp has no layer \"" + name + "\" (it writes " + list + ")");
-      }
-      o.layers.push_back(name);
-    }
-  }
+  o.directions = in.integer("directions", o.directions, 3, 1024);
+  o.levels_per_octave = in.integer("levels_per_octave", o.levels_per_octave, 1, 16);
+  o.level_offset = in.integer("level_offset", o.level_offset, 0, 16);
+  o.radiance_level_offset = in.integer("radiance_level_offset", o.radiance_level_offset, 0, 16);
+  o.light_directions = in.integer("light_directions", o.light_directions, 1, 64);
+  o.light_level_offset = in.integer("light_level_offset", o.light_level_offset, 0, 16);
+  o.light_horizon_knots = in.choice("light_horizon", "knots", {"bspline", "knots"}) == "knots";
+  o.subsample = in.integer("subsample", o.subsample, 1, 2);
+  o.exact_indirect_cosine = in.choice("indirect_cosine", "sh", {"sh", "exact"}) == "exact";
+  nlp::parse_azimuth_interpolation(in.choice("azimuth_interpolation", "linear", {"linear", "bspline"}),
+                                   o.interpolation);
+  o.layers = in.layers(nlp_layer_names(), o.layers);
   return o;
+}
+
+NlpOptions parse_nlp_options(const nlohmann::json& p) {
+  Params in(p);
+  return read_nlp_options(in);
 }
 
 namespace {
@@ -494,6 +480,21 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
 
 LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
   return bake_nlp(scene, parse_nlp_options(params), rc);
+}
+
+MethodInfo nlp_method() {
+  MethodInfo m;
+  m.name = "nlp";
+  m.summary = "NLP/SH multiresolution global illumination (Nowrouzezahrai & Snyder 2009)";
+  m.read = [](Params& in, const MethodContext&) { read_nlp_options(in); };
+  m.bake = [](const Scene& s, const nlohmann::json& p, const RunControl& rc) { return bake_nlp(s, p, rc); };
+  // SH visibility and irradiance while it runs (16 + 48 floats), the height and radiance pyramids.
+  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) {
+    return 4.0 * (16 + 48) + 32;
+  };
+  m.division = WorkDivision::texel_tiles;
+  m.division_note = "texel tiles with a halo of the pyramid's reach (marches read the whole field's pyramid)";
+  return m;
 }
 
 }  // namespace hfbake

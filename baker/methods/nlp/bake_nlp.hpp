@@ -13,6 +13,8 @@
 #include "core/layers.hpp"
 #include "core/run_control.hpp"
 #include "field/scene.hpp"
+#include "job/params.hpp"
+#include "methods/method_table.hpp"
 #include "methods/nlp/wedge_matrices.hpp"
 
 namespace hfbake {
@@ -40,9 +42,14 @@ const std::vector<std::string>& nlp_layer_names();
 // params: the schema-validated bake entry (schemas/methods/nlp.schema.json). Throws InputError for an
 // unknown layer name.
 NlpOptions parse_nlp_options(const nlohmann::json& params);
+// The same with the job's reader (file and pointer in errors; resolved values recorded).
+NlpOptions read_nlp_options(Params& in);
 
 LayerSet bake_nlp(const Scene& scene, const NlpOptions& options, const RunControl& rc);
 LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+
+// nlp's line of the method table.
+MethodInfo nlp_method();
 
 // The SH convention written into the EXR header (attribute "hfbake:sh_convention").
 const char* sh_convention_text();

@@ -5,18 +5,15 @@
 namespace hfbake {
 
 LayerSet bake_p1(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  const P1Params p = parse_p1_params(params);
+  Params in(params);
+  const P1Params p = read_p1_params(in);
   P1Result r = compute_p1(scene, p, rc);
   LayerSet out;
   out.width = r.width;
   out.height = r.height;
   const std::size_t N = std::size_t(r.width) * std::size_t(r.height);
   // Layers in the order the job lists them (default: ao, vsky, direct).
-  std::vector<std::string> order;
-  if (params.contains("layers"))
-    for (const auto& l : params.at("layers")) order.push_back(l.get<std::string>());
-  else
-    order = {"ao", "vsky", "direct"};
+  const std::vector<std::string> order = in.resolved()["layers"].get<std::vector<std::string>>();
   for (const std::string& name : order) {
     if (name == "ao") {
       out.add("ao", mono_channels()).data = std::move(r.ao);
@@ -43,6 +40,19 @@ LayerSet bake_p1(const Scene& scene, const nlohmann::json& params, const RunCont
                               "sin(elevation) per direction k, azimuth 2 pi k / K from +x towards +y; "
                               "horizon_distance: world units to the caster, inf where none");
   return out;
+}
+
+MethodInfo p1_method() {
+  MethodInfo m;
+  m.name = "p1";
+  m.summary = "exact horizons by the convex-hull stack on K line sweeps; ao, vsky, direct light from them";
+  m.read = [](Params& in, const MethodContext&) { read_p1_params(in); };
+  m.bake = bake_p1;
+  // Normals, accumulators and the near field's lifts while the sweeps run (the layers are counted apart).
+  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 60.0; };
+  m.division = WorkDivision::directions;
+  m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";
+  return m;
 }
 
 }  // namespace hfbake

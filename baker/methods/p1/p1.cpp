@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "job/params.hpp"
 #include "methods/p1/horizon_sweep.hpp"
 #include "methods/p1/lighting_table.hpp"
 
@@ -20,13 +21,6 @@ using p1::kHalfPiF;
 
 namespace {
 
-int get_int(const nlohmann::json& e, const char* key, int fallback) {
-  if (!e.contains(key)) return fallback;
-  const auto& v = e.at(key);
-  if (!v.is_number_integer()) throw InputError("", key, "must be an integer");
-  return v.get<int>();
-}
-
 // A RunControl reporting into [begin, begin + span) of the caller's progress.
 RunControl sub_progress(const RunControl& rc, double begin, double span) {
   RunControl sub;
@@ -37,58 +31,40 @@ RunControl sub_progress(const RunControl& rc, double begin, double span) {
 
 }  // namespace
 
-P1Params parse_p1_params(const nlohmann::json& e) {
+const std::vector<std::string>& p1_layer_names() {
+  static const std::vector<std::string> names = {
+      "ao", "vsky", "direct", "horizon", "horizon_distance", "bent_normal"};
+  return names;
+}
+
+P1Params read_p1_params(Params& in) {
   P1Params p;
-  p.directions = get_int(e, "directions", p.directions);
-  p.normal_bins = get_int(e, "normal_bins", p.normal_bins);
-  p.horizon_bins = get_int(e, "horizon_bins", p.horizon_bins);
-  p.wrap_periods = get_int(e, "wrap_periods", p.wrap_periods);
-  if (p.directions < 1) throw InputError("", "directions", "must be >= 1");
+  p.directions = in.integer("directions", p.directions, 1, 4096);
+  p.normal_bins = in.integer("normal_bins", p.normal_bins, 0, 1023);
   if (p.normal_bins != 0 && (p.normal_bins < 3 || p.normal_bins % 2 == 0))
-    throw InputError(
-        "", "normal_bins",
-        "must be 0 (exact) or odd and >= 3 (7, 15, 31, ...: odd counts make up-facing normals exact)");
-  if (p.horizon_bins < 2) throw InputError("", "horizon_bins", "must be >= 2");
-  if (p.wrap_periods < 1) throw InputError("", "wrap_periods", "must be >= 1");
-  if (e.contains("near_radius")) {
-    const auto& v = e.at("near_radius");
-    if (!v.is_number()) throw InputError("", "near_radius", "must be a number");
-    p.near_radius = v.get<double>();
-    if (!(p.near_radius >= 1 && p.near_radius <= 64))
-      throw InputError("", "near_radius", "must be in [1, 64]");
-  }
-  if (e.contains("far_crossings")) {
-    if (!e.at("far_crossings").is_boolean()) throw InputError("", "far_crossings", "must be true or false");
-    p.far_crossings = e.at("far_crossings").get<bool>();
-  }
-  if (e.contains("lights")) {
-    if (!e.at("lights").is_boolean()) throw InputError("", "lights", "must be true or false");
-    p.lights = e.at("lights").get<bool>();
-  }
-  if (e.contains("layers")) {
-    p.ao = p.vsky = p.direct = p.horizon = p.horizon_distance = p.bent_normal = false;
-    for (const auto& l : e.at("layers")) {
-      const std::string name = l.is_string() ? l.get<std::string>() : l.dump();
-      if (name == "ao")
-        p.ao = true;
-      else if (name == "vsky")
-        p.vsky = true;
-      else if (name == "direct")
-        p.direct = true;
-      else if (name == "horizon")
-        p.horizon = true;
-      else if (name == "horizon_distance")
-        p.horizon_distance = true;
-      else if (name == "bent_normal")
-        p.bent_normal = true;
-      else
-        throw InputError("", "layers",
-                         "\"" + name +
-                             "\" is not a layer of method p1 (ao, vsky, direct, horizon, "
-                             "horizon_distance, bent_normal)");
-    }
-  }
+    in.fail("normal_bins",
+            "must be 0 (exact) or odd and >= 3 (7, 15, 31, ...: odd counts make up-facing normals exact)");
+  p.horizon_bins = in.integer("horizon_bins", p.horizon_bins, 2, 65536);
+  p.wrap_periods = in.integer("wrap_periods", p.wrap_periods, 1, 16);
+  p.near_radius = in.number("near_radius", p.near_radius, 1, 64);
+  p.far_crossings = in.boolean("far_crossings", p.far_crossings);
+  p.lights = in.boolean("lights", p.lights);
+  const std::vector<std::string> layers = in.layers(p1_layer_names(), {"ao", "vsky", "direct"});
+  auto wants = [&](const char* name) {
+    return std::find(layers.begin(), layers.end(), name) != layers.end();
+  };
+  p.ao = wants("ao");
+  p.vsky = wants("vsky");
+  p.direct = wants("direct");
+  p.horizon = wants("horizon");
+  p.horizon_distance = wants("horizon_distance");
+  p.bent_normal = wants("bent_normal");
   return p;
+}
+
+P1Params parse_p1_params(const nlohmann::json& e) {
+  Params in(e);
+  return read_p1_params(in);
 }
 
 void facet_normals(const HeightField& f, int i, int j, Vec3f out[2]) {

@@ -30,6 +30,7 @@
 #include "core/layers.hpp"
 #include "core/run_control.hpp"
 #include "field/scene.hpp"
+#include "job/params.hpp"
 
 namespace hfbake {
 
@@ -69,9 +70,13 @@ struct P1Result {
 // backward differences; at a clamp border the missing neighbour is the texel itself).
 void facet_normals(const HeightField& field, int i, int j, Vec3f out[2]);
 
-// Reads the bake entry (schemas/methods/p1.schema.json); throws InputError("", "<key>", ...) on values the
-// schema cannot express (even normal_bins, unknown layers).
+// Reads the bake entry (schemas/methods/p1.schema.json) with every check (even normal_bins, unknown
+// layers), recording the resolved values in `in` (layers in the order written). parse_p1_params: the same
+// from a bare JSON object (errors without file or pointer).
+P1Params read_p1_params(Params& in);
 P1Params parse_p1_params(const nlohmann::json& entry);
+// Every layer p1 can write.
+const std::vector<std::string>& p1_layer_names();
 
 P1Result compute_p1(const Scene& scene, const P1Params& params, const RunControl& rc);
 

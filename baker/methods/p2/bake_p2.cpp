@@ -4,20 +4,11 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "job/params.hpp"
 #include "methods/p1/p1.hpp"
 
 namespace hfbake {
 namespace {
-
-int int_param(const nlohmann::json& e, const char* key, int fallback, int lo, int hi) {
-  if (!e.contains(key)) return fallback;
-  const auto& v = e.at(key);
-  if (!v.is_number_integer()) throw InputError("", key, "must be an integer");
-  const long long x = v.get<long long>();
-  if (x < lo || x > hi)
-    throw InputError("", key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  return int(x);
-}
 
 // A RunControl reporting progress into [a, a + span) of the caller's.
 RunControl sub_range(const RunControl& rc, double a, double span) {
@@ -27,57 +18,31 @@ RunControl sub_range(const RunControl& rc, double a, double span) {
   return s;
 }
 
-bool is_bounce_layer(const std::string& name, int bounces) {
-  if (name.rfind("indirect_b", 0) != 0 || name.size() == 10) return false;
-  int b = 0;
-  for (std::size_t i = 10; i < name.size(); ++i) {
-    if (name[i] < '0' || name[i] > '9' || (i == 10 && name[i] == '0')) return false;
-    b = b * 10 + (name[i] - '0');
-    if (b > 1000) return false;
-  }
-  return b >= 1 && b <= bounces;
-}
-
 }  // namespace
 
-P2Params parse_p2_params(const nlohmann::json& e) {
+P2Params read_p2_params(Params& in, int job_bounces) {
   P2Params p;
-  p.directions = int_param(e, "directions", 64, 1, 4096);
-  p.bounces = int_param(e, "bounces", -1, 0, 64);
-  p.wrap_periods = int_param(e, "wrap_periods", 1, 1, 16);
-  p.supersampling = int_param(e, "supersampling", 1, 1, 16);
-  if (e.contains("visibility")) {
-    const auto& v = e.at("visibility");
-    if (v == "tree")
-      p.visibility = P2Visibility::tree;
-    else if (v == "naive")
-      p.visibility = P2Visibility::naive;
-    else
-      throw InputError("", "visibility", "must be \"tree\" or \"naive\"");
-  }
-  if (e.contains("near_radius")) {
-    const auto& v = e.at("near_radius");
-    if (!v.is_number() || !(v.get<double>() == 0 || (v.get<double>() >= 1 && v.get<double>() <= 16)))
-      throw InputError("", "near_radius", "must be 0 (off) or a number in [1, 16]");
-    p.near_radius = v.get<double>();
-  }
-  if (e.contains("senders")) {
-    const auto& v = e.at("senders");
-    if (v == "facets")
-      p.facet_senders = true;
-    else if (v == "texels")
-      p.facet_senders = false;
-    else
-      throw InputError("", "senders", "must be \"facets\" or \"texels\"");
-  }
-  if (e.contains("layers")) {
-    if (!e.at("layers").is_array()) throw InputError("", "layers", "must be an array of layer names");
-    for (const auto& l : e.at("layers")) {
-      if (!l.is_string()) throw InputError("", "layers", "must be an array of layer names");
-      p.layers.push_back(l.get<std::string>());
-    }
-  }
+  p.directions = in.integer("directions", 64, 1, 4096);
+  p.bounces = in.integer("bounces", -1, 0, 64);
+  p.wrap_periods = in.integer("wrap_periods", 1, 1, 16);
+  p.supersampling = in.integer("supersampling", 1, 1, 16);
+  p.visibility =
+      in.choice("visibility", "tree", {"tree", "naive"}) == "tree" ? P2Visibility::tree : P2Visibility::naive;
+  p.near_radius = in.number("near_radius", p.near_radius, 0, 16);
+  if (p.near_radius != 0 && p.near_radius < 1)
+    in.fail("near_radius", "must be 0 (off) or a number in [1, 16]");
+  p.facet_senders = in.choice("senders", "facets", {"facets", "texels"}) == "facets";
+  const int B = p.bounces >= 0 ? p.bounces : std::max(0, job_bounces);
+  std::vector<std::string> known = {"indirect", "total", "direct"};
+  for (int b = 1; b <= B; ++b) known.push_back("indirect_b" + std::to_string(b));
+  p.layers = in.layers(known, {"indirect", "total", "direct"});
+  in.resolve("bounces", B);
   return p;
+}
+
+P2Params parse_p2_params(const nlohmann::json& e, int job_bounces) {
+  Params in(e);
+  return read_p2_params(in, job_bounces);
 }
 
 P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc) {
@@ -173,15 +138,8 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
 }
 
 LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  P2Params p = parse_p2_params(params);
+  const P2Params p = parse_p2_params(params, scene.bounces);
   const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
-  if (p.layers.empty()) p.layers = {"indirect", "total", "direct"};
-  for (const std::string& name : p.layers)
-    if (name != "indirect" && name != "total" && name != "direct" && !is_bounce_layer(name, B))
-      throw InputError("", "layers",
-                       "\"" + name +
-                           "\" is not a p2 layer (indirect, total, direct, indirect_b1 .. indirect_b" +
-                           std::to_string(B) + ")");
   const P2Result r = compute_p2(scene, p, rc);
   const std::size_t N = std::size_t(r.width) * std::size_t(r.height);
   LayerSet out;
@@ -213,6 +171,29 @@ LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunCont
                                 std::to_string(r.stats.iterations / pts));
   }
   return out;
+}
+
+MethodInfo p2_method() {
+  MethodInfo m;
+  m.name = "p2";
+  m.summary =
+      "direct light from p1, then indirect bounces gathered over the exactly visible terrain (hull tree)";
+  m.read = [](Params& in, const MethodContext& c) { read_p2_params(in, c.bounces); };
+  m.bake = bake_p2;
+  m.working_bytes_per_texel = [](const nlohmann::json& r, const MethodContext&) {
+    const double k = r.value("directions", 64);
+    const int b = r.value("bounces", 0);
+    const bool facets = r.value("senders", std::string("facets")) == "facets";
+    // P1's horizons (K floats) and scratch; direct, exit, indirect and every bounce (RGB floats); the
+    // sweep's double accumulators; facet senders: normals, albedo, exit, next-bounce light and direct
+    // light of two facets (RGB floats each) and their double accumulators.
+    return 4 * k + 60 + 12 * (3 + b) + 24 + (facets ? 5 * 24 + 48 + 48 : 0);
+  };
+  m.division = WorkDivision::bounce_stages;
+  m.division_note =
+      "by direction sets within a bounce; each bounce is a stage that needs the previous bounce's radiance "
+      "of the whole field";
+  return m;
 }
 
 }  // namespace hfbake

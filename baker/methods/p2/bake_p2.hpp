@@ -43,6 +43,8 @@
 #include "core/layers.hpp"
 #include "core/run_control.hpp"
 #include "field/scene.hpp"
+#include "job/params.hpp"
+#include "methods/method_table.hpp"
 #include "methods/p2/indirect_sweep.hpp"
 
 namespace hfbake {
@@ -63,7 +65,10 @@ struct P2Params {
 };
 
 // Reads a bake entry; throws InputError("", "<key>", ...) for what the schema cannot express.
-P2Params parse_p2_params(const nlohmann::json& entry);
+// Reads the bake entry (schemas/methods/p2.schema.json) with every check; indirect_b<b> layers are known up
+// to the bounces it bakes (its own "bounces", else job_bounces).
+P2Params read_p2_params(Params& in, int job_bounces);
+P2Params parse_p2_params(const nlohmann::json& entry, int job_bounces = 64);
 
 struct P2Result {
   int width = 0, height = 0;
@@ -76,5 +81,8 @@ struct P2Result {
 P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc);
 
 LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+
+// p2's line of the method table.
+MethodInfo p2_method();
 
 }  // namespace hfbake

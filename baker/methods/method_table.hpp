@@ -1,0 +1,68 @@
+// The method table: one entry per bake method, the one place that says what a method is, what it reads,
+// what it writes, what it costs and how its work divides. Dispatch (cli), validate, the memory estimate,
+// the reference's choice of quantities and the report all read it.
+//
+// Adding a method: a folder under baker/methods/ with its CMakeLists.txt (a library hfbake_<folder>), a
+// function returning its MethodInfo, one line in method_table.cpp, and schemas/methods/<name>.schema.json.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/layers.hpp"
+#include "core/run_control.hpp"
+#include "field/scene.hpp"
+#include "job/params.hpp"
+
+namespace hfbake {
+
+// How a method's work can be split across machines (the farm issue builds on it).
+enum class WorkDivision {
+  directions,      // partial sums over disjoint sets of azimuths, merged by adding in a fixed order
+  bounce_stages,   // by directions within a bounce; each bounce a stage needing the previous one whole
+  texel_tiles,     // texel tiles with a halo of the method's reach
+  receiver_tiles,  // receiver tiles, each against the whole field's geometry (the reference)
+};
+const char* work_division_name(WorkDivision d);
+
+// What a method's parameter reader may know before the heights are loaded.
+struct MethodContext {
+  FieldShape field;
+  int bounces = 0;  // the job's
+};
+
+struct MethodInfo {
+  const char* name = "";
+  const char* summary = "";  // one line
+  // Reads and checks every parameter of a bake entry (every method-level rule: validate runs it), leaving
+  // the resolved parameters, "layers" included, in the reader. Throws InputError naming file and pointer.
+  void (*read)(Params& params, const MethodContext& context) = nullptr;
+  // Bakes the entry as written (the method reads it again with its own reader).
+  LayerSet (*bake)(const Scene& scene, const nlohmann::json& params, const RunControl& rc) = nullptr;
+  // Bytes per texel held while the method runs, besides its output layers, from the resolved parameters.
+  double (*working_bytes_per_texel)(const nlohmann::json& resolved, const MethodContext& context) = nullptr;
+  WorkDivision division = WorkDivision::directions;
+  const char* division_note = "";  // how, and why not otherwise
+  // Obscurance family: its falloff and radius define the quantity the reference's "obscurance" estimates.
+  bool falloff_defines_obscurance = false;
+};
+
+// Every method, in the order the README lists them.
+std::span<const MethodInfo> method_table();
+// nullptr when no method has that name.
+const MethodInfo* find_method(std::string_view name);
+// "p1", "p2", ... for messages.
+std::vector<std::string> method_names();
+
+// The resolved parameters of one bake entry (method included), after every check. Throws InputError with
+// `file` and `pointer` (e.g. "/bake/2") for an unknown method or a parameter it refuses.
+nlohmann::json resolve_method_params(const nlohmann::json& entry, const MethodContext& context,
+                                     const std::string& file, const std::string& pointer);
+
+// Channels an output layer has (horizon and horizon_distance: one per direction; sh_*: 16 per colour).
+int layer_channel_count(const std::string& layer, const nlohmann::json& resolved);
+
+}  // namespace hfbake
