@@ -78,6 +78,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
                          " field needs about " + gib(need) + " to bake, more than the " + gib(have) +
                          " available");
 
+  check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
   OutputStage stage(job);
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();

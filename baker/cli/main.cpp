@@ -64,6 +64,9 @@ int main(int argc, char** argv) {
   compare_cmd->add_flag("--all", compare.all, "List every checked metric, not only the changes");
   compare_cmd->add_flag("--update-baseline", compare.update_baseline,
                         "After comparing, write NEW over BASELINE (the only way a baseline changes)");
+  compare_cmd->add_flag("--allow-different-job", compare.allow_different_job,
+                        "Compare even when BASELINE is a report of another job (other name, field, scene or "
+                        "reference settings); the differences are printed");
   compare_cmd->add_option("--json", compare_json, "Also write the comparison as JSON to FILE");
   compare_cmd->add_flag("--quiet", compare.quiet, "Print only errors");
 
