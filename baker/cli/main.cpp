@@ -14,11 +14,18 @@
 
 namespace {
 
-std::atomic<bool> g_interrupted{false};  // the one process-wide flag a signal handler may touch
+// The process-wide state a signal handler may touch (both lock-free atomics).
+std::atomic<bool> g_interrupted{false};
+std::atomic<int> g_signal{0};  // the first signal that stopped the bake: its exit status is 128 + it
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free);
 
-extern "C" void on_sigint(int) {
-  if (g_interrupted.exchange(true))
-    std::_Exit(130);  // a second Ctrl-C: stop now (staging is in the output dir)
+// SIGINT (Ctrl-C), SIGTERM (kill, timeout, cron, CI) and SIGHUP (the terminal went away) all stop the bake
+// at its next check; the staging folders are removed on the way out. A second signal stops at once: the
+// staging folders left behind carry this process's id and the next bake of that folder removes them.
+extern "C" void on_stop_signal(int sig) {
+  int none = 0;
+  g_signal.compare_exchange_strong(none, sig);
+  if (g_interrupted.exchange(true)) std::_Exit(128 + sig);
 }
 
 }  // namespace
@@ -102,6 +109,13 @@ int main(int argc, char** argv) {
   if (threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                   std::size_t(threads));
-  std::signal(SIGINT, on_sigint);
+  bake.interrupt_signal = &g_signal;
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction action {};
+    action.sa_handler = on_stop_signal;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART;
+    sigaction(sig, &action, nullptr);
+  }
   return hfbake::run_bake(bake, g_interrupted);
 }
