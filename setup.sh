@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # hfbake setup on Debian bookworm: installs what is missing (apt-get, idempotent), builds, then
 #   ./setup.sh demo   bakes jobs/demo.json and prints where the outputs went
-#   ./setup.sh test   runs the whole test suite through CTest
+#   ./setup.sh test   runs the whole test suite through CTest, then builds the AddressSanitizer +
+#                     UndefinedBehaviorSanitizer variant (ASAN_BUILD_DIR, default build-asan) and runs the
+#                     test suite again under it (see "Sanitizers" in README.md for what it leaves out)
 #   ./setup.sh build  only installs and builds
-# Environment: BUILD_DIR (default build), JOBS (parallel build jobs, default: cores).
+# Environment: BUILD_DIR (default build), ASAN_BUILD_DIR (default build-asan), JOBS (parallel build jobs,
+# default: cores), SANITIZE=0 to skip the sanitized run of `test`.
 set -euo pipefail
 cd "$(dirname "$0")"
 mode=${1:-build}
@@ -45,6 +48,18 @@ case "$mode" in
     ;;
   test)
     ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
+    if [ "${SANITIZE:-1}" != 0 ]; then
+      asan_dir=${ASAN_BUILD_DIR:-build-asan}
+      echo "setup: AddressSanitizer + UndefinedBehaviorSanitizer build in $asan_dir"
+      cmake -S . -B "$asan_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHFBAKE_SANITIZE=address,undefined \
+        -DHFBAKE_BUILD_BENCHMARKS=OFF >/dev/null
+      cmake --build "$asan_dir" -j "$jobs"
+      # Any finding fails the test that made it (UBSan halts on error, like ASan). Left out, because they
+      # cannot run usefully under the sanitizers: see README.md, "Sanitizers".
+      ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1 \
+        UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+        ctest --test-dir "$asan_dir" --output-on-failure -j "$jobs" -LE integration
+    fi
     ;;
   *)
     echo "usage: $0 [build|demo|test]" >&2

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <mutex>
@@ -83,10 +84,13 @@ void add_common_attributes(LayerSet& layers, const Job& job, const std::string& 
 // Bakes one valid job. Throws InputError (bad input), Cancelled, or anything else (a failed job).
 void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
               const ReferenceCache* cache) {
-  const auto t_job = std::chrono::steady_clock::now();
   check_memory(job);
+  const FieldSize size = probe_field_size(job);
 
+  check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
   OutputStage stage(job);
+  for (const fs::path& p : stage.stale_removed())
+    progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();
   const Scene scene = load_scene(job);
@@ -168,7 +172,6 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   if (cancel.load()) throw Cancelled();
   outcome.outputs = stage.commit();
   for (const fs::path& p : outcome.outputs) progress.message(job.name + ": wrote " + p.string());
-  outcome.seconds = seconds_since(t_job);
 }
 
 void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
@@ -354,6 +357,13 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     if (!jobs[i]) continue;
     group.run([&, i] {
       JobOutcome& o = outcomes[i];
+      const auto t_job = std::chrono::steady_clock::now();
+      // However the job ends, the summary shows how long it ran (not 0 s for an interrupted job).
+      struct Timer {
+        JobOutcome& o;
+        std::chrono::steady_clock::time_point t0;
+        ~Timer() { o.seconds = seconds_since(t0); }
+      } timer{o, t_job};
       try {
         bake_job(*jobs[i], progress, cancel, o, cache ? &*cache : nullptr);
       } catch (const Cancelled&) {
@@ -371,7 +381,10 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     if (o.status == JobStatus::threshold_failed) exit_code = std::max(exit_code, 1);
     if (o.status == JobStatus::invalid || o.status == JobStatus::failed) exit_code = std::max(exit_code, 2);
   }
-  if (cancel.load()) exit_code = 130;
+  if (cancel.load()) {
+    const int sig = options.interrupt_signal ? options.interrupt_signal->load() : 0;
+    exit_code = 128 + (sig > 0 ? sig : SIGINT);
+  }
   print_summary(outcomes, options.quiet);
   const double total_seconds = seconds_since(t_start);
   for (std::size_t s = 0; s < suites.size() && !cancel.load(); ++s) {

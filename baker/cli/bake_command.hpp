@@ -17,10 +17,14 @@ struct BakeOptions {
   // --no-cache turns it off.
   std::optional<std::filesystem::path> cache;
   bool no_cache = false;
+  // The signal that set `cancel` (0 or null: SIGINT): an interrupted bake exits 128 + it (130 SIGINT,
+  // 143 SIGTERM, 129 SIGHUP), the status a shell reports for a process that signal killed.
+  const std::atomic<int>* interrupt_signal = nullptr;
 };
 
 // Exit status per the contract: 0 all baked and thresholds held, 1 a threshold or baseline regressed,
-// 2 bad input or a failed job, 130 interrupted (`cancel` was set).
+// 2 bad input or a failed job, 128 + the signal when interrupted (`cancel` was set: 130 SIGINT, 143 SIGTERM,
+// 129 SIGHUP).
 int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel);
 
 // Schema and file checks without baking: 0 all valid, 2 otherwise. Prints one line per problem.

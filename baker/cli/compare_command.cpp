@@ -80,7 +80,7 @@ int run_compare(const CompareOptions& o) {
       pairs.emplace_back("", o.now, fs::exists(o.baseline) ? o.baseline : fs::path());
     }
 
-    bool regression = false;
+    bool regression = false, refused = false;
     nlohmann::json out = nlohmann::json::array();
     for (const auto& [label, now_file, old_file] : pairs) {
       if (now_file.empty()) {  // a whole report went missing
@@ -102,10 +102,22 @@ int run_compare(const CompareOptions& o) {
         throw InputError(now_file.string() + " vs " + old_file.string(), "", e.what());
       }
       c.label = label;
+      if (!c.job_differences.empty()) {
+        const std::string why = another_job_message(c.job_differences);
+        if (!o.allow_different_job) {
+          std::fprintf(stderr, "hfbake: error: %s: %s (compare anyway with --allow-different-job)\n",
+                       old_file.c_str(), why.c_str());
+          refused = true;
+          continue;
+        }
+        if (!o.quiet)
+          std::printf("note: %s: %s (allowed by --allow-different-job)\n", old_file.c_str(), why.c_str());
+      }
       regression = regression || c.regression();
       if (!o.quiet) std::printf("%s", comparison_table(c, o.all).c_str());
       out.push_back(comparison_json(c));
     }
+    if (refused) return 2;  // neither --json nor --update-baseline: the comparison did not happen
     if (o.json) {
       std::ofstream j(*o.json);
       j << nlohmann::json{{"regression", regression}, {"comparisons", out}}.dump(2) << "\n";

@@ -14,11 +14,15 @@ struct CompareOptions {
   std::vector<std::string> tolerances;  // "METRIC=REL[,ABS]", added to / replacing the default checked set
   bool all = false;                     // list every checked metric, not only changes
   bool update_baseline = false;         // after comparing, copy NEW over BASELINE (deliberately)
+  // A baseline that is a report of another job (report/baseline_compare.hpp: job_differences) is refused
+  // (exit 2, one line per such baseline) unless this is set; then the differences are printed as a note.
+  bool allow_different_job = false;
   std::optional<std::filesystem::path> json;  // write the comparison as JSON
   bool quiet = false;
 };
 
-// 0 nothing regressed (or the baseline was updated), 1 a regression, 2 bad input.
+// 0 nothing regressed (or the baseline was updated), 1 a regression, 2 bad input (a baseline of another
+// job included: then nothing is updated).
 int run_compare(const CompareOptions& options);
 
 }  // namespace hfbake

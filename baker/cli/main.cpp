@@ -14,11 +14,18 @@
 
 namespace {
 
-std::atomic<bool> g_interrupted{false};  // the one process-wide flag a signal handler may touch
+// The process-wide state a signal handler may touch (both lock-free atomics).
+std::atomic<bool> g_interrupted{false};
+std::atomic<int> g_signal{0};  // the first signal that stopped the bake: its exit status is 128 + it
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free);
 
-extern "C" void on_sigint(int) {
-  if (g_interrupted.exchange(true))
-    std::_Exit(130);  // a second Ctrl-C: stop now (staging is in the output dir)
+// SIGINT (Ctrl-C), SIGTERM (kill, timeout, cron, CI) and SIGHUP (the terminal went away) all stop the bake
+// at its next check; the staging folders are removed on the way out. A second signal stops at once: the
+// staging folders left behind carry this process's id and the next bake of that folder removes them.
+extern "C" void on_stop_signal(int sig) {
+  int none = 0;
+  g_signal.compare_exchange_strong(none, sig);
+  if (g_interrupted.exchange(true)) std::_Exit(128 + sig);
 }
 
 }  // namespace
@@ -64,6 +71,9 @@ int main(int argc, char** argv) {
   compare_cmd->add_flag("--all", compare.all, "List every checked metric, not only the changes");
   compare_cmd->add_flag("--update-baseline", compare.update_baseline,
                         "After comparing, write NEW over BASELINE (the only way a baseline changes)");
+  compare_cmd->add_flag("--allow-different-job", compare.allow_different_job,
+                        "Compare even when BASELINE is a report of another job (other name, field, scene or "
+                        "reference settings); the differences are printed");
   compare_cmd->add_option("--json", compare_json, "Also write the comparison as JSON to FILE");
   compare_cmd->add_flag("--quiet", compare.quiet, "Print only errors");
 
@@ -99,6 +109,13 @@ int main(int argc, char** argv) {
   if (threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                   std::size_t(threads));
-  std::signal(SIGINT, on_sigint);
+  bake.interrupt_signal = &g_signal;
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction action {};
+    action.sa_handler = on_stop_signal;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART;
+    sigaction(sig, &action, nullptr);
+  }
   return hfbake::run_bake(bake, g_interrupted);
 }

@@ -1,8 +1,11 @@
 #include "cli/outputs.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <fstream>
+#include <string_view>
 
 #include "core/error.hpp"
 #include "io/exr_output.hpp"
@@ -11,6 +14,58 @@
 namespace hfbake {
 namespace fs = std::filesystem;
 
+namespace {
+
+constexpr std::string_view kStagePrefix = ".hfbake-staging-";
+
+std::string host_name() {
+  char buf[256] = {};
+  if (gethostname(buf, sizeof buf - 1) != 0) return "localhost";
+  return buf;
+}
+
+}  // namespace
+
+std::optional<StageOwner> parse_stage_name(const std::string& name) {
+  if (name.compare(0, kStagePrefix.size(), kStagePrefix) != 0) return std::nullopt;
+  StageOwner owner;
+  std::string rest = name.substr(kStagePrefix.size());
+  const auto at = rest.rfind('@');  // job names have no '@' (schema); older stages had no host part
+  if (at != std::string::npos) {
+    owner.host = rest.substr(at + 1);
+    rest.resize(at);
+  }
+  const auto dash = rest.rfind('-');
+  if (dash == std::string::npos || dash + 1 == rest.size()) return std::nullopt;
+  long long pid = 0;
+  for (std::size_t i = dash + 1; i < rest.size(); ++i) {
+    if (rest[i] < '0' || rest[i] > '9' || pid > (1ll << 40)) return std::nullopt;
+    pid = pid * 10 + (rest[i] - '0');
+  }
+  if (pid <= 0) return std::nullopt;
+  owner.pid = pid;
+  return owner;
+}
+
+std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
+  std::vector<fs::path> removed;
+  const std::string host = host_name();
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::optional<StageOwner> owner = parse_stage_name(it->path().filename().string());
+    if (!owner || !it->is_directory(ec)) continue;
+    // Another machine's process (a shared output folder) cannot be checked from here: keep its stage.
+    if (!owner->host.empty() && owner->host != host) continue;
+    if (owner->pid == getpid()) continue;  // this process's own (another job's) stage
+    // kill(pid, 0): 0 = alive, EPERM = alive but another user's, ESRCH = no such process.
+    if (kill(pid_t(owner->pid), 0) == 0 || errno != ESRCH) continue;
+    std::error_code remove_ec;
+    fs::remove_all(it->path(), remove_ec);
+    if (!remove_ec) removed.push_back(it->path());
+  }
+  return removed;
+}
+
 OutputStage::OutputStage(const Job& job) : job_(job) {
   std::error_code ec;
   fs::create_directories(job.output.dir, ec);
@@ -18,8 +73,11 @@ OutputStage::OutputStage(const Job& job) : job_(job) {
     throw InputError(job.file.string(), "/output/dir",
                      "cannot create " + job.output.dir.string() + ": " +
                          (ec ? ec.message() : std::string("not a folder")));
-  // Hidden, per process and job: concurrent jobs and concurrent hfbake processes never share a stage.
-  stage_ = job.output.dir / (".hfbake-staging-" + job.name + "-" + std::to_string(getpid()));
+  // Stages that processes which no longer run left behind (killed by SIGKILL, a second signal, a crash).
+  stale_removed_ = remove_stale_stages(job.output.dir);
+  // Hidden, per process, host and job: concurrent jobs and concurrent hfbake processes never share a stage.
+  stage_ = job.output.dir /
+           (std::string(kStagePrefix) + job.name + "-" + std::to_string(getpid()) + "@" + host_name());
   fs::remove_all(stage_, ec);
   if (!fs::create_directory(stage_, ec) || ec)
     throw InputError(job.file.string(), "/output/dir",

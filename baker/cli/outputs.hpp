@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,9 +12,21 @@
 
 namespace hfbake {
 
+// The staging folder of a process: <output dir>/.hfbake-staging-<job name>-<pid>@<host>.
+struct StageOwner {
+  long long pid = 0;
+  std::string host;  // "" for a stage named without one (older hfbake): taken as this host
+};
+// The owner a staging folder's name records; nullopt for any other name.
+std::optional<StageOwner> parse_stage_name(const std::string& name);
+// Removes the staging folders in `dir` whose process is known to be gone (same host, no such pid) and
+// returns them; those of live processes, of this process and of other hosts are kept.
+std::vector<std::filesystem::path> remove_stale_stages(const std::filesystem::path& dir);
+
 class OutputStage {
  public:
-  // Creates the output folder and the staging folder in it; InputError naming /output/dir if impossible.
+  // Creates the output folder and the staging folder in it, after removing the stale staging folders of
+  // dead processes there; InputError naming /output/dir if impossible.
   explicit OutputStage(const Job& job);
   ~OutputStage();  // removes the staging folder and anything left in it
   OutputStage(const OutputStage&) = delete;
@@ -25,11 +38,14 @@ class OutputStage {
   void write_text(const std::string& filename, const std::string& text);
   // Moves every staged file to its final place (each rename is atomic) and returns the final paths.
   std::vector<std::filesystem::path> commit();
+  // The stale staging folders the constructor removed (to tell the user).
+  const std::vector<std::filesystem::path>& stale_removed() const { return stale_removed_; }
 
  private:
   const Job& job_;
   std::filesystem::path stage_;
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage
+  std::vector<std::filesystem::path> stale_removed_;
 };
 
 }  // namespace hfbake

@@ -3,14 +3,66 @@
 #include "cli/report_writer.hpp"
 
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
 #include "cli/version.hpp"
 #include "core/error.hpp"
+#include "job/content_hash.hpp"
+#include "report/baseline_compare.hpp"
 #include "report/report_document.hpp"
 
 namespace hfbake {
+namespace {
+
+// The job's report.baseline, parsed; nullopt when the job names none.
+std::optional<nlohmann::json> read_baseline(const Job& job) {
+  const nlohmann::json options = job.doc.value("report", nlohmann::json::object());
+  if (!options.contains("baseline")) return std::nullopt;
+  const auto path = job.resolve(options["baseline"].get<std::string>());
+  std::ifstream in(path);
+  if (!in) throw InputError(job.file.string(), "/report/baseline", "cannot read " + path.string());
+  std::stringstream ss;
+  ss << in.rdbuf();
+  try {
+    return nlohmann::json::parse(ss.str());
+  } catch (const nlohmann::json::exception&) {
+    throw InputError(job.file.string(), "/report/baseline", path.string() + " is not valid JSON");
+  }
+}
+
+}  // namespace
+
+nlohmann::json job_scene(const Job& job) {
+  nlohmann::json scene = nlohmann::json::object();
+  for (const char* key : {"height", "surface", "environment", "lights", "bounces"})
+    if (job.doc.contains(key)) scene[key] = job.doc[key];
+  for (const auto& [pointer, path] : job_input_files(job.doc)) {
+    ContentHash h;
+    h.add_file(job.resolve(path));
+    scene[nlohmann::json::json_pointer(pointer)] = "fnv1a:" + h.hex();
+  }
+  return scene;
+}
+
+void check_report_baseline(const Job& job, int width, int height) {
+  if (!job.has_reference) return;
+  const std::optional<nlohmann::json> baseline = read_baseline(job);
+  if (!baseline) return;
+  // The parts of the report this job will write that identify it (build_report writes the same values).
+  const nlohmann::json options = job.doc.value("report", nlohmann::json::object());
+  const nlohmann::json now = {
+      {"job", {{"name", job.name}, {"scene", job_scene(job)}}},
+      {"size", {width, height}},
+      {"crop", options.value("crop", 0)},
+      {"reference", {{"parameters", job.doc.value("reference", nlohmann::json::object())}}}};
+  const std::vector<std::string> differences = job_differences(now, *baseline);
+  if (!differences.empty())
+    throw InputError(job.file.string(), "/report/baseline",
+                     job.resolve(options["baseline"].get<std::string>()).string() + " is " +
+                         another_job_message(differences));
+}
 
 ReportResult write_report(const Job& job, const std::string& job_hash, const ReportInputs& inputs,
                           OutputStage& stage) {
@@ -20,6 +72,7 @@ ReportResult write_report(const Job& job, const std::string& job_hash, const Rep
   spec.job_name = job.name;
   spec.job_file = job.file.string();
   spec.job_hash = job_hash;
+  spec.job_scene = job_scene(job);
   // Resolved: every default filled in (what the reference used).
   spec.reference_parameters = job.reference_resolved.is_object()
                                   ? job.reference_resolved
@@ -27,20 +80,8 @@ ReportResult write_report(const Job& job, const std::string& job_hash, const Rep
   spec.reference_seconds = inputs.reference_seconds;
   spec.crop = options.value("crop", 0);
   spec.thresholds = options.value("thresholds", nlohmann::json::object());
-  if (options.contains("baseline")) {
-    const std::string written = options["baseline"].get<std::string>();
-    const auto path = job.resolve(written);
-    std::ifstream in(path);
-    if (!in) throw InputError(job.file.string(), "/report/baseline", "cannot read " + path.string());
-    std::stringstream ss;
-    ss << in.rdbuf();
-    try {
-      spec.baseline = nlohmann::json::parse(ss.str());
-    } catch (const nlohmann::json::exception& e) {
-      throw InputError(job.file.string(), "/report/baseline", path.string() + " is not valid JSON");
-    }
-    spec.baseline_file = written;
-  }
+  spec.baseline = read_baseline(job);
+  if (spec.baseline) spec.baseline_file = options["baseline"].get<std::string>();
 
   std::vector<ReportMethodInput> methods;
   for (const MethodLayers& m : inputs.methods) {

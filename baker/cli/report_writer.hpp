@@ -29,6 +29,15 @@ struct ReportResult {
   nlohmann::json report;                                        // the report.json document (for report.html)
 };
 
+// report.json's /job/scene: the job's height, surface, environment, lights and bounces as written, each input
+// file's path replaced by "fnv1a:<hash of its bytes>". InputError if an input file cannot be read.
+nlohmann::json job_scene(const Job& job);
+
+// Refuses (InputError at /report/baseline) a report.baseline that is a report of another job than the one
+// this job's report will be (name, field size, crop, reference settings, scene: report/baseline_compare.hpp),
+// before anything is baked. Does nothing for a job without a reference or a baseline.
+void check_report_baseline(const Job& job, int width, int height);
+
 // Compares, writes report.json into the stage, and evaluates the job's thresholds.
 ReportResult write_report(const Job& job, const std::string& job_hash, const ReportInputs& inputs,
                           OutputStage& stage);

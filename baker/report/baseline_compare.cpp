@@ -34,6 +34,36 @@ bool known_metric(const std::string& name) {
   return name == "seconds";
 }
 
+// A JSON value as it would be written in a job file; an absent one as "(not set)".
+std::string show(const std::optional<nlohmann::json>& v) {
+  return v ? v->dump() : "(not set)";
+}
+
+// Every key (objects recursed, joined by '.') where `a` and `b` differ; arrays and scalars compared whole.
+void diff_values(const std::string& prefix, const nlohmann::json* a, const nlohmann::json* b,
+                 std::vector<ParameterChange>& out) {
+  if (a && b && *a == *b) return;
+  if (a && b && a->is_object() && b->is_object()) {
+    std::set<std::string> keys;
+    for (auto& [k, v] : a->items()) keys.insert(k);
+    for (auto& [k, v] : b->items()) keys.insert(k);
+    for (const std::string& k : keys)
+      diff_values(prefix.empty() ? k : prefix + "." + k, a->contains(k) ? &(*a)[k] : nullptr,
+                  b->contains(k) ? &(*b)[k] : nullptr, out);
+    return;
+  }
+  ParameterChange c;
+  c.key = prefix;
+  if (a) c.now = *a;
+  if (b) c.was = *b;
+  out.push_back(std::move(c));
+}
+
+const nlohmann::json* at(const nlohmann::json& doc, const char* pointer) {
+  const nlohmann::json::json_pointer p(pointer);
+  return doc.is_object() && doc.contains(p) ? &doc.at(p) : nullptr;
+}
+
 std::string fmt(std::optional<double> v) {
   if (!v) return "-";
   char buf[32];
@@ -94,11 +124,75 @@ const char* metric_change_name(MetricChange c) {
   return "?";
 }
 
+std::vector<std::string> job_differences(const nlohmann::json& now, const nlohmann::json& baseline) {
+  std::vector<std::string> out;
+  // A difference of one recorded value (both sides must record it): "<what> <baseline> (new: <now>)".
+  auto whole = [&](const char* pointer, const std::string& what) {
+    const nlohmann::json *a = at(now, pointer), *b = at(baseline, pointer);
+    if (a && b && *a != *b) out.push_back(what + " " + b->dump() + " (new: " + a->dump() + ")");
+  };
+  // Key by key: "<what>.<key> <baseline> (new: <now>)". both_record: only keys both sides record (older
+  // reports hold the reference's parameters as written, newer ones resolved: a default that only one side
+  // spells out is not a difference).
+  auto keys = [&](const char* pointer, const std::string& what, bool both_record) {
+    const nlohmann::json *a = at(now, pointer), *b = at(baseline, pointer);
+    if (!a || !b) return;
+    std::vector<ParameterChange> changes;
+    diff_values("", a, b, changes);
+    for (const ParameterChange& c : changes)
+      if (!both_record || (c.now && c.was))
+        out.push_back(what + (c.key.empty() ? "" : "." + c.key) + " " + show(c.was) +
+                      " (new: " + show(c.now) + ")");
+  };
+  whole("/job/name", "job name");
+  whole("/size", "field size");
+  whole("/crop", "crop");
+  keys("/reference/parameters", "reference", true);
+  const std::size_t before_scene = out.size();
+  keys("/job/scene", "scene", false);
+  if (out.size() == before_scene) {
+    const nlohmann::json *a = at(now, "/job/scene_hash"), *b = at(baseline, "/job/scene_hash");
+    if (a && b && *a != *b)
+      out.push_back("the scene's input files differ (scene hash " + b->get<std::string>() +
+                    ", new: " + a->get<std::string>() + ")");
+  }
+  return out;
+}
+
+std::vector<ParameterChange> parameter_changes(const nlohmann::json& now, const nlohmann::json& baseline) {
+  std::vector<ParameterChange> out;
+  const nlohmann::json *a = at(now, "/methods"), *b = at(baseline, "/methods");
+  if (!a || !b || !a->is_object() || !b->is_object()) return out;
+  const nlohmann::json none = nlohmann::json::object();
+  for (auto& [stem, m] : a->items()) {
+    if (!b->contains(stem) || !m.is_object() || !(*b)[stem].is_object()) continue;
+    const nlohmann::json& old = (*b)[stem];
+    const nlohmann::json& pa = m.contains("parameters") ? m["parameters"] : none;
+    const nlohmann::json& pb = old.contains("parameters") ? old["parameters"] : none;
+    diff_values(stem, &pa, &pb, out);
+    // The bake entry as written names its method; a report without it still records the method per stem.
+    if (!pa.contains("method") && !pb.contains("method"))
+      diff_values(stem + ".method", m.contains("method") ? &m["method"] : nullptr,
+                  old.contains("method") ? &old["method"] : nullptr, out);
+  }
+  std::sort(out.begin(), out.end(),
+            [](const ParameterChange& x, const ParameterChange& y) { return x.key < y.key; });
+  return out;
+}
+
+std::string another_job_message(const std::vector<std::string>& differences) {
+  std::string s = "a report of another job:";
+  for (std::size_t i = 0; i < differences.size(); ++i) s += (i ? "; " : " ") + differences[i];
+  return s;
+}
+
 BaselineComparison compare_to_baseline(const nlohmann::json& now, const nlohmann::json& baseline,
                                        const BaselineOptions& options) {
   const nlohmann::json& new_methods = methods_of(now, "the new report");
   const nlohmann::json& old_methods = methods_of(baseline, "the baseline");
   BaselineComparison c;
+  c.job_differences = job_differences(now, baseline);
+  c.parameter_changes = parameter_changes(now, baseline);
 
   auto classify = [&](MetricRow& r) {
     const auto it = options.checked.find(r.metric);
@@ -175,6 +269,11 @@ BaselineComparison compare_to_baseline(const nlohmann::json& now, const nlohmann
 std::string comparison_table(const BaselineComparison& c, bool all) {
   std::string out;
   char line[512];
+  if (!c.parameter_changes.empty()) {
+    out += "  parameters changed since the baseline:\n";
+    for (const ParameterChange& p : c.parameter_changes)
+      out += "    " + p.key + ": " + show(p.was) + " -> " + show(p.now) + "\n";
+  }
   std::snprintf(line, sizeof line, "  %-44s %12s %12s %9s  %s\n", "metric", "baseline", "new", "change", "");
   out += line;
   int shown = 0;
@@ -210,6 +309,14 @@ nlohmann::json comparison_json(const BaselineComparison& c) {
                       {"new", c.added},
                       {"regression", c.regression()}};
   if (!c.label.empty()) j["label"] = c.label;
+  j["job_differences"] = c.job_differences;
+  j["parameter_changes"] = nlohmann::json::array();
+  for (const ParameterChange& p : c.parameter_changes) {
+    nlohmann::json pc = {{"key", p.key}};
+    if (p.now) pc["value"] = *p.now;
+    if (p.was) pc["baseline"] = *p.was;
+    j["parameter_changes"].push_back(std::move(pc));
+  }
   j["rows"] = nlohmann::json::array();
   for (const MetricRow& r : c.rows) {
     nlohmann::json row = {{"key", r.layer.empty() ? r.stem + "." + r.metric : r.key()},

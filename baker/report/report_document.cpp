@@ -90,6 +90,7 @@ ReportOutcome build_report(const ReportSpec& spec, const std::vector<ReportMetho
   nlohmann::json& doc = out.doc;
   doc["hfbake_version"] = spec.hfbake_version;
   doc["job"] = {{"name", spec.job_name}, {"file", spec.job_file}, {"hash", spec.job_hash}};
+  if (!spec.job_scene.is_null()) doc["job"]["scene"] = spec.job_scene;
   doc["size"] = {width, height};
   doc["crop"] = spec.crop;
   doc["region"] = {{"x0", region.x0}, {"y0", region.y0}, {"x1", region.x1}, {"y1", region.y1}};

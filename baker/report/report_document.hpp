@@ -21,6 +21,8 @@ struct ReportMethodInput {
 
 struct ReportSpec {
   std::string hfbake_version, job_name, job_file, job_hash;
+  // What identifies the job's scene for baseline comparisons (report.json /job/scene; null: not written).
+  nlohmann::json job_scene;
   nlohmann::json reference_parameters = nlohmann::json::object();
   double reference_seconds = 0;
   int crop = 0;

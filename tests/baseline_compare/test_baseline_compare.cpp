@@ -3,6 +3,8 @@
 // tolerances) is checked against numbers worked out by hand.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include "report/baseline_compare.hpp"
 
 namespace hfbake {
@@ -166,6 +168,124 @@ TEST(BaselineCompare, NotAReportIsAnError) {
                std::invalid_argument);
   EXPECT_THROW(compare_to_baseline(kBase, report({{"p1", {{"seconds", 1}}}}), BaselineOptions::defaults()),
                std::invalid_argument);
+}
+
+// A report with what identifies its job, as hfbake writes it.
+nlohmann::json identified(const nlohmann::json& methods) {
+  nlohmann::json r = report(methods);
+  r["job"] = {{"name", "cliff"},
+              {"file", "jobs/cliff.json"},
+              {"hash", "0123456789abcdef"},
+              {"scene",
+               {{"height", {{"image", "fnv1a:00000000000000aa"}, {"texel_size", 1.0}}},
+                {"environment", {{"uniform", 1.0}}},
+                {"bounces", 1}}}};
+  r["size"] = {64, 32};
+  r["crop"] = 0;
+  r["reference"] = {{"seconds", 3.0}, {"parameters", {{"samples", 256}, {"seed", 1}}}};
+  return r;
+}
+
+TEST(BaselineJob, TheSameJobHasNoDifferences) {
+  const nlohmann::json a = identified({{"p1", method({{"ao", metrics(0.01, 0.02, 0.015)}})}});
+  nlohmann::json b = a;
+  // What does not identify the job: the file it was run from, the job hash (it covers the method
+  // parameters), metrics, timings.
+  b["job"]["file"] = "elsewhere/cliff.json";
+  b["job"]["hash"] = "fedcba9876543210";
+  b["methods"]["p1"]["layers"]["ao"]["rmse"] = 0.5;
+  b["reference"]["seconds"] = 99.0;
+  EXPECT_TRUE(job_differences(a, b).empty());
+  EXPECT_TRUE(compare_to_baseline(a, b, BaselineOptions::defaults()).job_differences.empty());
+}
+
+TEST(BaselineJob, EachIdentifyingPartIsADifference) {
+  const nlohmann::json base = identified({{"p1", method({{"ao", metrics(0.01, 0.02, 0.015)}})}});
+  auto differences = [&](const std::function<void(nlohmann::json&)>& change) {
+    nlohmann::json now = base;
+    change(now);
+    return job_differences(now, base);
+  };
+  using V = std::vector<std::string>;
+  EXPECT_EQ(differences([](nlohmann::json& r) { r["job"]["name"] = "dune"; }),
+            V{"job name \"cliff\" (new: \"dune\")"});
+  EXPECT_EQ(differences([](nlohmann::json& r) {
+              r["size"] = {64, 64};
+            }),
+            V{"field size [64,32] (new: [64,64])"});
+  EXPECT_EQ(differences([](nlohmann::json& r) { r["crop"] = 4; }), V{"crop 0 (new: 4)"});
+  EXPECT_EQ(differences([](nlohmann::json& r) { r["reference"]["parameters"]["samples"] = 1024; }),
+            V{"reference.samples 256 (new: 1024)"});
+  // A key only one side records is a default spelled out (older reports hold the reference's parameters
+  // as written, newer ones resolved): not a difference.
+  EXPECT_EQ(differences([](nlohmann::json& r) { r["reference"]["parameters"]["replicates"] = 8; }), V{});
+  // The height image's bytes changed (its hash stands in for the path).
+  EXPECT_EQ(
+      differences([](nlohmann::json& r) { r["job"]["scene"]["height"]["image"] = "fnv1a:00000000000000bb"; }),
+      V{"scene.height.image \"fnv1a:00000000000000aa\" (new: \"fnv1a:00000000000000bb\")"});
+  EXPECT_EQ(differences([](nlohmann::json& r) { r["job"]["scene"].erase("bounces"); }),
+            V{"scene.bounces 1 (new: (not set))"});
+  // Several at once: each is named.
+  EXPECT_EQ(differences([](nlohmann::json& r) {
+              r["job"]["name"] = "dune";
+              r["job"]["scene"]["environment"]["uniform"] = 2.0;
+            }).size(),
+            2u);
+  // A document that does not record a part (a report from before /job/scene) is not refused for it.
+  EXPECT_TRUE(differences([](nlohmann::json& r) { r["job"].erase("scene"); }).empty());
+}
+
+TEST(BaselineJob, MessageIsOneLine) {
+  const std::string m = another_job_message({"job name \"a\" (new: \"b\")", "crop 0 (new: 4)"});
+  EXPECT_EQ(m, "a report of another job: job name \"a\" (new: \"b\"); crop 0 (new: 4)");
+}
+
+TEST(BaselineJob, ParameterChangesOfTheStemsBothHave) {
+  nlohmann::json base = identified({{"p1", method({{"ao", metrics(0.01, 0.02, 0.015)}})},
+                                    {"lsao", method({{"obscurance", metrics(0.01, 0.02, 0.015)}})}});
+  base["methods"]["p1"]["parameters"] = {{"method", "p1"}, {"directions", 32}, {"layers", {"ao"}}};
+  base["methods"]["lsao"]["parameters"] = {
+      {"method", "lsao"}, {"radius", 8}, {"falloff", {{"kind", "step"}}}};
+  nlohmann::json now = base;
+  now["methods"]["p1"]["parameters"]["directions"] = 64;
+  now["methods"]["p1"]["parameters"]["layers"] = {"ao", "vsky"};
+  now["methods"]["p1"]["parameters"]["near_radius"] = 4;
+  now["methods"]["lsao"]["parameters"].erase("radius");
+  now["methods"]["lsao"]["parameters"]["falloff"]["kind"] = "smooth";
+  now["methods"]["hbao"] =
+      method(nlohmann::json::object());  // new stem: listed as new metrics, not as parameter changes
+  const std::vector<ParameterChange> c = parameter_changes(now, base);
+  ASSERT_EQ(c.size(), 5u);
+  EXPECT_EQ(c[0].key, "lsao.falloff.kind");
+  EXPECT_EQ(*c[0].was, "step");
+  EXPECT_EQ(*c[0].now, "smooth");
+  EXPECT_EQ(c[1].key, "lsao.radius");
+  EXPECT_EQ(*c[1].was, 8);
+  EXPECT_FALSE(c[1].now);
+  EXPECT_EQ(c[2].key, "p1.directions");
+  EXPECT_EQ(c[3].key, "p1.layers");  // arrays compare whole
+  EXPECT_EQ(*c[3].now, nlohmann::json({"ao", "vsky"}));
+  EXPECT_EQ(c[4].key, "p1.near_radius");
+  EXPECT_FALSE(c[4].was);
+  EXPECT_EQ(*c[4].now, 4);
+  // A stem whose method changed says so.
+  nlohmann::json swapped = base;
+  swapped["methods"]["p1"]["method"] = "p2";
+  swapped["methods"]["p1"]["parameters"]["method"] = "p2";
+  const std::vector<ParameterChange> s = parameter_changes(swapped, base);
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_EQ(s[0].key, "p1.method");
+  EXPECT_EQ(*s[0].now, "p2");
+  // Shown in the table and the JSON.
+  const BaselineComparison cmp = compare_to_baseline(now, base, BaselineOptions::defaults());
+  const std::string table = comparison_table(cmp, false);
+  EXPECT_NE(table.find("p1.directions: 32 -> 64"), std::string::npos) << table;
+  EXPECT_NE(table.find("lsao.radius: 8 -> (not set)"), std::string::npos) << table;
+  const nlohmann::json j = comparison_json(cmp);
+  ASSERT_EQ(j["parameter_changes"].size(), 5u);
+  EXPECT_EQ(j["parameter_changes"][2],
+            (nlohmann::json{{"key", "p1.directions"}, {"value", 64}, {"baseline", 32}}));
+  EXPECT_EQ(j["parameter_changes"][1], (nlohmann::json{{"key", "lsao.radius"}, {"baseline", 8}}));
 }
 
 }  // namespace

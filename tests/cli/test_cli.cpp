@@ -1,5 +1,6 @@
 // The hfbake binary as users and scripts see it: every bad input gives exit 2 and one line naming the file
-// and the field; nothing is left half-written; SIGINT exits 130 with no outputs.
+// and the field; nothing is left half-written; SIGINT, SIGTERM and SIGHUP exit 128 + the signal with no
+// outputs; stale staging folders of dead processes are removed.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
@@ -259,6 +260,131 @@ TEST_F(Cli, InterruptExits130AndLeavesNoOutputs) {
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 130);
   EXPECT_TRUE(output_dir_is_empty());
+}
+
+// Every stop signal a bake gets in practice (Ctrl-C, kill / timeout / cron / CI, a closed terminal) stops it
+// the same way: exit 128 + the signal (what a shell reports for a process that signal killed), the
+// staging folder (which already held an EXR) removed, no output committed, the summary written whole with
+// the time the job really ran.
+class StopSignal : public Cli, public ::testing::WithParamInterface<int> {};
+
+TEST_P(StopSignal, StopsTheBakeRemovesItsStagingAndExits128PlusTheSignal) {
+  const int sig = GetParam();
+  // p1 is quick and its EXR lands in the stage; the reference after it is long enough to be interrupted.
+  nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {256, 256}}}}});
+  j["reference"] = {{"samples", 1000000}};
+  const fs::path p = write_job("x.json", j);
+  const fs::path out = dir_ / "out", summary = dir_ / "summary.json", err = dir_ / "stderr.txt";
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    if (!freopen(err.c_str(), "w", stderr)) _exit(126);
+    execl(HFBAKE_BINARY, "hfbake", "bake", p.c_str(), "--no-cache", "--summary", summary.c_str(),
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait (no time limit but a hang guard) until the stage holds p1's EXR: the bake is mid-way.
+  auto staged_exr = [&]() -> fs::path {
+    std::error_code ec;
+    for (fs::directory_iterator it(out, ec), end; !ec && it != end; it.increment(ec))
+      if (it->path().filename().string().rfind(".hfbake-staging-", 0) == 0 &&
+          fs::exists(it->path() / "t.p1.exr"))
+        return it->path();
+    return {};
+  };
+  fs::path stage;
+  int status = 0;
+  for (int i = 0; i < 60000 && stage.empty(); ++i) {
+    ASSERT_EQ(waitpid(pid, &status, WNOHANG), 0) << "the bake ended before it could be interrupted";
+    stage = staged_exr();
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_FALSE(stage.empty()) << "no staged EXR appeared";
+  // The stage is named after this process (so a later bake can tell whether its owner still runs).
+  EXPECT_NE(stage.filename().string().find("-" + std::to_string(pid) + "@"), std::string::npos) << stage;
+  ASSERT_EQ(kill(pid, sig), 0);
+  pid_t done = 0;
+  for (int i = 0; i < 60000 && done == 0; ++i) {  // hang guard: a bake that ignores the signal fails here
+    done = waitpid(pid, &status, WNOHANG);
+    if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (done == 0) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+    FAIL() << "the bake did not stop after signal " << sig;
+  }
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of stopping: " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 128 + sig);
+  EXPECT_FALSE(fs::exists(stage));
+  EXPECT_TRUE(output_dir_is_empty()) << "an output was committed or a staging folder left behind";
+  // The summary is whole and says what happened, with the time the job ran (it ran at least until p1's
+  // EXR was written, so more than the 0 s an unset time would show).
+  const nlohmann::json s = nlohmann::json::parse(std::ifstream(summary));
+  EXPECT_EQ(s["exit_code"], 128 + sig);
+  ASSERT_EQ(s["jobs"].size(), 1u);
+  EXPECT_EQ(s["jobs"][0]["status"], "interrupted");
+  const double job_seconds = s["jobs"][0]["seconds"].get<double>();
+  EXPECT_GT(job_seconds, 0.0);
+  EXPECT_GE(job_seconds, s["jobs"][0]["methods"]["p1"]["seconds"].get<double>());
+  // The summary on stderr ("  t   interrupted   12.34 s  x.json") shows that same time.
+  std::ifstream text(err);
+  bool found = false;
+  for (std::string line; std::getline(text, line);) {
+    std::istringstream in(line);
+    std::string name, status;
+    double shown = -1;
+    if (!(in >> name >> status >> shown) || name != "t" || status != "interrupted") continue;
+    found = true;
+    EXPECT_NEAR(shown, job_seconds, 0.006) << line;
+  }
+  EXPECT_TRUE(found) << "no summary line for the interrupted job";
+  EXPECT_FALSE(fs::exists(summary.string() + ".tmp-" + std::to_string(pid)));
+}
+
+INSTANTIATE_TEST_SUITE_P(Signals, StopSignal, ::testing::Values(SIGTERM, SIGHUP, SIGINT),
+                         [](const ::testing::TestParamInfo<int>& info) {
+                           return std::string(info.param == SIGTERM  ? "SIGTERM"
+                                              : info.param == SIGHUP ? "SIGHUP"
+                                                                     : "SIGINT");
+                         });
+
+// A staging folder whose process is gone (SIGKILL, a crash, a second Ctrl-C) is removed by the next bake of
+// that output folder; those of live processes and of other hosts are not touched.
+TEST_F(Cli, StaleStagingOfADeadProcessIsRemovedByTheNextBake) {
+  // A pid that is certainly dead: a child that has exited and been reaped.
+  const pid_t dead = fork();
+  ASSERT_GE(dead, 0);
+  if (dead == 0) _exit(0);
+  ASSERT_EQ(waitpid(dead, nullptr, 0), dead);
+  char host[256] = {};
+  ASSERT_EQ(gethostname(host, sizeof host - 1), 0);
+  const fs::path out = dir_ / "out";
+  auto make_stage = [&](const std::string& name) {
+    fs::create_directories(out / name);
+    std::ofstream(out / name / "half.exr") << "half-written";
+    return out / name;
+  };
+  const fs::path stale = make_stage(".hfbake-staging-other_job-" + std::to_string(dead) + "@" + host);
+  const fs::path stale_old_style = make_stage(".hfbake-staging-t-" + std::to_string(dead));  // no host part
+  const fs::path live = make_stage(".hfbake-staging-t-" + std::to_string(getpid()) + "@" + host);
+  const fs::path other_host = make_stage(".hfbake-staging-t-" + std::to_string(dead) + "@not-" + host);
+  const fs::path not_a_stage = make_stage(".hfbake-staging-notes");  // no pid: not hfbake's
+
+  const fs::path p = write_job("x.json", job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}));
+  const Result r = hfbake("bake " + p.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_FALSE(fs::exists(stale_old_style));
+  EXPECT_TRUE(fs::exists(live / "half.exr"));
+  EXPECT_TRUE(fs::exists(other_host / "half.exr"));
+  EXPECT_TRUE(fs::exists(not_a_stage / "half.exr"));
+  EXPECT_NE(r.err.find("removed " + stale.string()), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(out / "t.p1.exr"));
+  // The bake's own stage is gone too.
+  int stages = 0;
+  for (const auto& e : fs::directory_iterator(out))
+    stages += e.path().filename().string().rfind(".hfbake-staging-", 0) == 0;
+  EXPECT_EQ(stages, 3);  // live, other_host, not_a_stage
 }
 
 TEST_F(Cli, ValidateSuiteChecksEveryJobItLists) {

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
+#include <vector>
 
 namespace {
 namespace fs = std::filesystem;
@@ -46,18 +47,36 @@ class Nightly : public ::testing::Test {
 
   // A small job: a p1 sweep over three direction counts against one reference.
   fs::path write_job(const std::string& name, const nlohmann::json& report = nlohmann::json::object()) {
-    nlohmann::json job = {
-        {"version", 1},
-        {"name", name},
-        {"height", {{"procedural", {{"kind", "fractal"}, {"size", {40, 36}}, {"seed", 5}}}}},
-        {"environment", {{"uniform", 1.0}}},
-        {"bake", {{{"method", "p1"}, {"directions", {4, 8, 16}}, {"layers", {"ao"}}}}},
-        {"reference", {{"samples", 256}, {"seed", 1}, {"layers", {"ao"}}}},
-        {"output", {{"dir", "out/" + name}}}};
+    nlohmann::json job = job_doc(name);
     if (!report.empty()) job["report"] = report;
-    const fs::path p = dir_ / (name + ".json");
+    return write_doc(name + ".json", job);
+  }
+  static nlohmann::json job_doc(const std::string& name) {
+    return {{"version", 1},
+            {"name", name},
+            {"height", {{"procedural", {{"kind", "fractal"}, {"size", {40, 36}}, {"seed", 5}}}}},
+            {"environment", {{"uniform", 1.0}}},
+            {"bake", {{{"method", "p1"}, {"directions", {4, 8, 16}}, {"layers", {"ao"}}}}},
+            {"reference", {{"samples", 256}, {"seed", 1}, {"layers", {"ao"}}}},
+            {"output", {{"dir", "out/" + name}}}};
+  }
+  fs::path write_doc(const std::string& file, const nlohmann::json& job) {
+    const fs::path p = dir_ / file;
     std::ofstream(p) << job.dump(2);
     return p;
+  }
+  // Bakes `job` (written to <file>) and returns its report.json.
+  fs::path bake_doc(const std::string& file, const nlohmann::json& job) {
+    const Result r = hfbake("bake " + write_doc(file, job).string() + " --no-cache --quiet");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return dir_ / job["output"]["dir"].get<std::string>() / "report.json";
+  }
+  static std::vector<std::string> error_lines(const std::string& err) {
+    std::vector<std::string> lines;
+    std::istringstream in(err);
+    for (std::string l; std::getline(in, l);)
+      if (l.rfind("hfbake: error: ", 0) == 0) lines.push_back(l);
+    return lines;
   }
 
   nlohmann::json summary() { return nlohmann::json::parse(read_file(dir_ / "summary.json")); }
@@ -198,6 +217,112 @@ TEST_F(Nightly, NightlyJobsAreValid) {
   const Result r = hfbake("validate " + suite.string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("suite of 7 jobs"), std::string::npos) << r.err;
+}
+
+// A baseline of another job (a wrong path in a nightly) must not pass as "ok: 0 regressed": hfbake compare
+// refuses it with one line naming the baseline and what differs, exit 2, unless --allow-different-job.
+TEST_F(Nightly, CompareRefusesABaselineOfAnotherJob) {
+  const nlohmann::json base = job_doc("a");
+  const fs::path baseline = bake_doc("a.json", base);
+  struct Case {
+    std::string what;  // a phrase the error line must contain
+    nlohmann::json job;
+  };
+  std::vector<Case> cases;
+  nlohmann::json other_name = base;
+  other_name["name"] = "b";
+  cases.push_back({"job name \"a\" (new: \"b\")", other_name});
+  nlohmann::json other_field = base;
+  other_field["height"]["procedural"]["seed"] = 6;
+  cases.push_back({"scene.height.procedural.seed 5 (new: 6)", other_field});
+  nlohmann::json other_size = base;
+  other_size["height"]["procedural"]["size"] = {36, 36};
+  cases.push_back({"field size [40,36] (new: [36,36])", other_size});
+  nlohmann::json other_reference = base;
+  other_reference["reference"]["samples"] = 128;
+  cases.push_back({"reference.samples 256 (new: 128)", other_reference});
+  nlohmann::json other_sky = base;
+  other_sky["environment"]["uniform"] = 2.0;
+  cases.push_back({"scene.environment.uniform", other_sky});
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    Case& c = cases[i];
+    c.job["output"]["dir"] = "out/case" + std::to_string(i);
+    const fs::path report = bake_doc("case" + std::to_string(i) + ".json", c.job);
+    Result r = hfbake("compare " + report.string() + " " + baseline.string());
+    EXPECT_EQ(r.exit_code, 2) << c.what << "\n" << r.out;
+    const std::vector<std::string> lines = error_lines(r.err);
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_EQ(lines[0].rfind("hfbake: error: " + baseline.string() + ": a report of another job: ", 0), 0u)
+        << lines[0];
+    EXPECT_NE(lines[0].find(c.what), std::string::npos) << lines[0];
+    EXPECT_EQ(r.out.find("ok:"), std::string::npos) << r.out;
+    // Nothing is updated from a refused comparison either.
+    const std::string before = read_file(baseline);
+    r = hfbake("compare " + report.string() + " " + baseline.string() + " --update-baseline");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_EQ(read_file(baseline), before);
+    // Deliberately: compared, with the differences as a note.
+    r = hfbake("compare " + report.string() + " " + baseline.string() + " --allow-different-job");
+    EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.err;
+    EXPECT_TRUE(error_lines(r.err).empty()) << r.err;
+    EXPECT_NE(r.out.find("note: " + baseline.string() + ": a report of another job"), std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find(c.what), std::string::npos) << r.out;
+  }
+  // Folders: the pair of another job is refused, the others still compared.
+  fs::create_directories(dir_ / "new" / "x");
+  fs::create_directories(dir_ / "old" / "x");
+  fs::copy_file(dir_ / "out" / "case0" / "report.json", dir_ / "new" / "x" / "report.json");
+  fs::copy_file(baseline, dir_ / "old" / "x" / "report.json");
+  const Result r = hfbake("compare " + (dir_ / "new").string() + " " + (dir_ / "old").string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(error_lines(r.err).size(), 1u) << r.err;
+  EXPECT_NE(error_lines(r.err)[0].find((dir_ / "old" / "x" / "report.json").string()), std::string::npos);
+}
+
+// The same job with other method parameters is comparable: the changes are listed with the metrics.
+TEST_F(Nightly, CompareListsParameterChanges) {
+  nlohmann::json job = job_doc("a");
+  job["bake"] = {{{"method", "p1"}, {"directions", 8}, {"layers", {"ao"}}}};
+  const fs::path baseline = bake_doc("a.json", job);
+  job["bake"][0]["directions"] = 16;
+  job["bake"][0]["near_radius"] = 3;
+  job["output"]["dir"] = "out/a2";
+  const fs::path report = bake_doc("a2.json", job);
+  const Result r = hfbake("compare " + report.string() + " " + baseline.string() + " --json " +
+                          (dir_ / "cmp.json").string());
+  EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.err;  // 16 directions are usually better
+  EXPECT_TRUE(error_lines(r.err).empty()) << r.err;
+  EXPECT_NE(r.out.find("p1.directions: 8 -> 16"), std::string::npos) << r.out;
+  // Resolved parameters: the baseline records p1's default near radius, 2.
+  EXPECT_NE(r.out.find("p1.near_radius: 2.0 -> 3.0"), std::string::npos) << r.out;
+  const nlohmann::json cmp = nlohmann::json::parse(read_file(dir_ / "cmp.json"));
+  const nlohmann::json& changes = cmp["comparisons"][0]["parameter_changes"];
+  ASSERT_EQ(changes.size(), 2u) << changes;
+  EXPECT_EQ(changes[0], (nlohmann::json{{"key", "p1.directions"}, {"value", 16}, {"baseline", 8}}));
+  EXPECT_EQ(changes[1], (nlohmann::json{{"key", "p1.near_radius"}, {"value", 3.0}, {"baseline", 2.0}}));
+  EXPECT_TRUE(cmp["comparisons"][0]["job_differences"].empty());
+}
+
+// report.baseline follows the same rule, before anything is baked: exit 2, one line, no outputs.
+TEST_F(Nightly, ReportBaselineOfAnotherJobIsRefusedBeforeBaking) {
+  const fs::path baseline = bake_doc("a.json", job_doc("a"));
+  nlohmann::json job = job_doc("a");
+  job["height"]["procedural"]["seed"] = 6;
+  job["output"]["dir"] = "out/other";
+  job["report"] = {{"baseline", "out/a/report.json"}};
+  const Result r = hfbake("bake " + write_doc("other.json", job).string() + " --no-cache --quiet");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const std::vector<std::string> lines = error_lines(r.err);
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_NE(lines[0].find("other.json: /report/baseline: " + baseline.string() +
+                          " is a report of another job: scene.height.procedural.seed 5 (new: 6)"),
+            std::string::npos)
+      << lines[0];
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "other" / "report.json"));
+  // The same job naming its own earlier report is compared as before.
+  job["height"]["procedural"]["seed"] = 5;
+  EXPECT_EQ(hfbake("bake " + write_doc("other.json", job).string() + " --no-cache --quiet").exit_code, 0);
 }
 
 }  // namespace
