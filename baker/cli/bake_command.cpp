@@ -336,6 +336,22 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
       outcomes[i].status = JobStatus::invalid;
     }
   }
+  // Two jobs whose outputs would land on the same paths (same output folder and name): both refused before
+  // anything is baked, naming each other (one would silently replace the other's files).
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    for (std::size_t k = 0; k < jobs.size(); ++k) {
+      if (i == k || !jobs[i] || !jobs[k]) continue;
+      if (jobs[i]->output.dir != jobs[k]->output.dir || jobs[i]->name != jobs[k]->name) continue;
+      const std::string e = jobs[i]->file.string() + ": /name: its outputs (" +
+                            jobs[i]->output_path("*", ".exr").string() +
+                            ", report.json) would be the same files as " + jobs[k]->file.string() +
+                            "'s (give one another name or output folder)";
+      std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+      outcomes[i].errors.push_back(e);
+      outcomes[i].status = JobStatus::invalid;
+    }
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (outcomes[i].status == JobStatus::invalid) jobs[i].reset();
 
   std::optional<ReferenceCache> cache;
   if (!options.no_cache) {

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "job/manifest.hpp"
 #include "report/baseline_compare.hpp"
 
 namespace hfbake {
@@ -17,15 +18,7 @@ namespace fs = std::filesystem;
 namespace {
 
 nlohmann::json read_json(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string(), "", "cannot read file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  try {
-    return nlohmann::json::parse(ss.str());
-  } catch (const nlohmann::json::exception&) {
-    throw InputError(file.string(), "", "not valid JSON");
-  }
+  return read_json_file(file);  // bounded, with the job parser's checks
 }
 
 void copy_atomically(const fs::path& from, const fs::path& to) {

@@ -98,11 +98,12 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
 }  // namespace
 
 std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& errors) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return std::nullopt;
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const nlohmann::json doc = nlohmann::json::parse(buffer.str(), nullptr, /*allow_exceptions=*/false);
+  nlohmann::json doc;
+  try {
+    doc = read_json_file(file);  // bounded: a regular file under the size limit
+  } catch (const InputError&) {
+    return std::nullopt;  // not a readable suite: load_job reports what is wrong with the file
+  }
   if (!doc.is_object() || !doc.contains("suite")) return std::nullopt;
 
   const std::size_t errors_before = errors.size();

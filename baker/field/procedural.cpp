@@ -46,12 +46,14 @@ double quintic(double t) {
 }
 
 // Periodic value noise with `cells` lattice cells across the unit square, u, v in [0, 1).
-double value_noise(std::uint64_t seed, int octave, int cells_x, int cells_y, double u, double v) {
-  const double x = u * cells_x, y = v * cells_y;
+// 64-bit cell counts: a long thin field doubles its long side's count past int's range (size [2, 100000]).
+double value_noise(std::uint64_t seed, int octave, std::int64_t cells_x, std::int64_t cells_y, double u,
+                   double v) {
+  const double x = u * double(cells_x), y = v * double(cells_y);
   const double fx = std::floor(x), fy = std::floor(y);
-  const int x0 = int(fx), y0 = int(fy);
+  const std::int64_t x0 = std::int64_t(fx), y0 = std::int64_t(fy);
   const double tx = quintic(x - fx), ty = quintic(y - fy);
-  auto lattice = [&](int xi, int yi) {
+  auto lattice = [&](std::int64_t xi, std::int64_t yi) {
     xi = ((xi % cells_x) + cells_x) % cells_x;
     yi = ((yi % cells_y) + cells_y) % cells_y;
     return 2.0 * hash01(seed, xi, yi, octave) - 1.0;
@@ -63,10 +65,10 @@ double value_noise(std::uint64_t seed, int octave, int cells_x, int cells_y, dou
 
 double fractal(const ProceduralSpec& s, double feature, double amp, int i, int j) {
   const double u = double(i) / s.width, v = double(j) / s.height;
-  int cx = std::max(1, int(std::lround(s.width / feature)));
-  int cy = std::max(1, int(std::lround(s.height / feature)));
+  std::int64_t cx = std::max<std::int64_t>(1, std::llround(s.width / feature));
+  std::int64_t cy = std::max<std::int64_t>(1, std::llround(s.height / feature));
   double h = 0, a = amp;
-  const int max_cells = std::max(s.width, s.height);
+  const std::int64_t max_cells = std::max(s.width, s.height);
   for (int octave = 0; octave < 16 && std::min(cx, cy) <= max_cells; ++octave) {
     h += a * value_noise(s.seed, octave, cx, cy, u, v);
     a *= 0.5;

@@ -1,8 +1,10 @@
 #include "job/manifest.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -79,15 +81,120 @@ std::vector<std::pair<std::string, std::string>> job_input_files(const nlohmann:
 }
 
 nlohmann::json parse_json_text(const std::string& text, const std::string& file) {
+  // Nesting first: a deep document would exhaust the stack of whatever walks it (the parser's callers,
+  // the schema validator, the destructor).
+  {
+    int depth = 0;
+    bool in_string = false, escape = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      const char c = text[i];
+      if (in_string) {
+        if (escape)
+          escape = false;
+        else if (c == '\\')
+          escape = true;
+        else if (c == '"')
+          in_string = false;
+      } else if (c == '"') {
+        in_string = true;
+      } else if (c == '[' || c == '{') {
+        if (++depth > kMaxJsonDepth)
+          throw InputError(file, line_column(text, i + 1),
+                           "nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+      } else if (c == ']' || c == '}') {
+        --depth;
+      }
+    }
+  }
+  // Duplicate keys: nlohmann keeps the last silently; a typo that repeats a key must not be ignored.
+  struct Frame {
+    bool array = false;
+    long index = -1;  // arrays: the element being read
+    std::string key;  // objects: the key being read
+    std::set<std::string> keys;
+  };
+  std::vector<Frame> frames;
+  std::string duplicate;
+  auto pointer = [&](std::size_t upto) {
+    std::string p;
+    for (std::size_t k = 0; k < upto; ++k) {
+      p.push_back('/');
+      p.append(frames[k].array ? std::to_string(frames[k].index) : frames[k].key);
+    }
+    return p;
+  };
+  auto element = [&] {
+    if (!frames.empty() && frames.back().array) ++frames.back().index;
+  };
+  using Event = nlohmann::json::parse_event_t;
+  const nlohmann::json::parser_callback_t callback = [&](int, Event event, nlohmann::json& parsed) {
+    switch (event) {
+      case Event::object_start:
+        element();
+        frames.push_back({});
+        break;
+      case Event::array_start:
+        element();
+        frames.push_back({true, -1, "", {}});
+        break;
+      case Event::object_end:
+      case Event::array_end:
+        if (!frames.empty()) frames.pop_back();
+        break;
+      case Event::key:
+        if (!frames.empty()) {
+          Frame& f = frames.back();
+          f.key = parsed.get<std::string>();
+          if (!f.keys.insert(f.key).second && duplicate.empty())
+            duplicate = pointer(frames.size() - 1) + "/" + f.key;
+        }
+        break;
+      case Event::value:
+        element();
+        break;
+    }
+    return true;
+  };
+  nlohmann::json doc;
   try {
-    return nlohmann::json::parse(text);
+    doc = nlohmann::json::parse(text, callback);
   } catch (const nlohmann::json::parse_error& e) {
     std::string what = e.what();
     // nlohmann: "[json.exception.parse_error.101] parse error at line 3, column 5: syntax error while ..."
     const auto colon = what.find(": ");
     if (colon != std::string::npos) what = what.substr(colon + 2);
     throw InputError(file, line_column(text, e.byte), "malformed JSON: " + what);
+  } catch (const nlohmann::json::exception& e) {
+    // out_of_range: a number beyond double's range ("1e309").
+    std::string what = e.what();
+    const auto bracket = what.find("] ");
+    if (bracket != std::string::npos) what = what.substr(bracket + 2);
+    throw InputError(file, "", "malformed JSON: " + what);
   }
+  if (!duplicate.empty())
+    throw InputError(file, duplicate, "duplicate key (the last value would silently replace the first)");
+  return doc;
+}
+
+nlohmann::json read_json_file(const fs::path& file) {
+  const std::string name = file.string();
+  std::error_code ec;
+  const fs::file_status st = fs::status(file, ec);
+  if (ec) throw InputError(name, "", ec.message());
+  if (!fs::is_regular_file(st)) throw InputError(name, "", "not a regular file");
+  const std::uintmax_t size = fs::file_size(file, ec);
+  if (ec) throw InputError(name, "", ec.message());
+  if (size > kMaxJsonFileBytes)
+    throw InputError(name, "",
+                     "the file is " + std::to_string(size) +
+                         " bytes; a JSON file of hfbake's may be at most " +
+                         std::to_string(kMaxJsonFileBytes));
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(name, "", std::error_code(errno, std::generic_category()).message());
+  std::string text(std::size_t(size), '\0');
+  in.read(text.data(), std::streamsize(size));
+  text.resize(std::size_t(in.gcount()));
+  return parse_json_text(text, name);
 }
 
 JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_override) {
@@ -97,16 +204,9 @@ JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_overri
     result.errors.push_back(fname + ": " + (where.empty() ? "" : where + ": ") + what);
   };
 
-  std::ifstream in(file, std::ios::binary);
-  if (!in) {
-    fail("", std::error_code(errno, std::generic_category()).message());
-    return result;
-  }
-  std::stringstream buffer;
-  buffer << in.rdbuf();
   nlohmann::json doc;
   try {
-    doc = parse_json_text(buffer.str(), fname);
+    doc = read_json_file(file);
   } catch (const InputError& e) {
     result.errors.push_back(e.line());
     return result;
@@ -160,8 +260,9 @@ JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_overri
   if (doc.contains("lights")) {
     for (std::size_t i = 0; i < doc["lights"].size(); ++i) {
       const auto& d = doc["lights"][i]["directional"]["direction"];
-      if (d[0].get<double>() == 0 && d[1].get<double>() == 0 && d[2].get<double>() == 0)
-        fail("/lights/" + std::to_string(i) + "/directional/direction", "must not be the zero vector");
+      if (!(std::hypot(d[0].get<double>(), d[1].get<double>(), d[2].get<double>()) >= 1e-6))
+        fail("/lights/" + std::to_string(i) + "/directional/direction",
+             "must have a length of at least 1e-6 (it is normalised; a shorter one has no direction)");
     }
   }
   for (const auto& [ptr, rel] : job_input_files(doc)) {

@@ -68,7 +68,17 @@ std::vector<std::string> method_schema_names();
 // Every input file a job document names, as (JSON pointer, path as written).
 std::vector<std::pair<std::string, std::string>> job_input_files(const nlohmann::json& doc);
 
-// Parses JSON text with errors as "line L, column C: <what>" (for messages).
+// Limits of every JSON file hfbake reads (jobs, suites, reports): a bad or hostile file is an error, never a
+// crash, a hang or an absurd allocation.
+inline constexpr int kMaxJsonDepth = 64;
+inline constexpr std::uintmax_t kMaxJsonFileBytes = 16u << 20;
+
+// Parses JSON text; errors (InputError naming `file`) as "line L, column C: <what>": malformed text, numbers
+// beyond double's range, nesting deeper than kMaxJsonDepth, and a key given twice in one object (its
+// pointer).
 nlohmann::json parse_json_text(const std::string& text, const std::string& file);
+
+// Reads and parses a JSON file: a regular file (not a FIFO, device or folder) of at most kMaxJsonFileBytes.
+nlohmann::json read_json_file(const std::filesystem::path& file);
 
 }  // namespace hfbake

@@ -430,3 +430,35 @@ TEST_F(Cli, EveryExampleJobValidates) {
 }
 
 }  // namespace
+
+namespace hfbake {
+namespace {
+
+// Issue 20: x/job.json and y/job.json, both named "t", baked with one --out land in DIR/job/ with the same
+// names; one used to replace the other's outputs (or the bake failed). Both are refused up front.
+TEST_F(Cli, JobsWhoseOutputsCollideAreRefusedUpFront) {
+  fs::create_directories(dir_ / "x");
+  fs::create_directories(dir_ / "y");
+  const nlohmann::json j = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}});
+  const fs::path a = write_job("x/job.json", j), b = write_job("y/job.json", j);
+  const fs::path out = dir_ / "collide";
+  const Result r = hfbake("bake " + a.string() + " " + b.string() + " --out " + out.string() + " --quiet");
+  EXPECT_EQ(r.exit_code, 2);
+  const auto lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 2u) << r.err;
+  EXPECT_NE(lines[0].find(a.string() + ": /name: "), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find(b.string() + "'s"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[1].find(b.string() + ": /name: "), std::string::npos) << lines[1];
+  EXPECT_FALSE(fs::exists(out / "job" / "t.p1.exr"));
+  // Different names in the same folder are fine.
+  nlohmann::json other = j;
+  other["name"] = "u";
+  write_job("y/job.json", other);
+  EXPECT_EQ(hfbake("bake " + a.string() + " " + b.string() + " --out " + out.string() + " --quiet").exit_code,
+            0);
+  EXPECT_TRUE(fs::exists(out / "job" / "t.p1.exr"));
+  EXPECT_TRUE(fs::exists(out / "job" / "u.p1.exr"));
+}
+
+}  // namespace
+}  // namespace hfbake

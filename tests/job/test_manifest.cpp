@@ -5,6 +5,8 @@
 #include <fstream>
 #include <random>
 
+#include <sys/stat.h>
+
 #include "job/manifest.hpp"
 
 namespace hfbake {
@@ -144,6 +146,87 @@ TEST_F(Manifest, UnreadableFile) {
   const JobLoad r = load_job(dir_ / "absent.json", std::nullopt);
   ASSERT_EQ(r.errors.size(), 1u);
   EXPECT_NE(r.errors[0].find("absent.json: No such file or directory"), std::string::npos) << r.errors[0];
+}
+
+}  // namespace
+}  // namespace hfbake
+
+namespace hfbake {
+namespace {
+
+// Hostile job files (issue 20): each is one line naming the file (and the pointer where there is one),
+// never a crash, a hang or an absurd allocation.
+TEST_F(Manifest, HostileFilesAreOneLineErrors) {
+  const std::string x = (dir_ / "x.json").string();
+  auto one = [&](const std::string& text) {
+    const auto e = errors(text);
+    EXPECT_EQ(e.size(), 1u);
+    return e.empty() ? std::string() : e[0];
+  };
+  EXPECT_EQ(one(minimal(R"(, "bounces": 1e309)")), x + ": malformed JSON: number overflow parsing '1e309'");
+  EXPECT_EQ(one(R"({"version": 1, "name": "a", "name": "b"})"),
+            x + ": /name: duplicate key (the last value would silently replace the first)");
+  EXPECT_EQ(one(minimal("", R"([{"method": "p1"}, {"method": "hbao", "radius": 2, "radius": 3}])")),
+            x + ": /bake/1/radius: duplicate key (the last value would silently replace the first)");
+  EXPECT_EQ(one(minimal(
+                "", R"([{"method": "p1", "layers": ["ao"]}, {"method": "p1", "x": [1, {"k": 1, "k": 2}]}])")),
+            x + ": /bake/1/x/1/k: duplicate key (the last value would silently replace the first)");
+  // The same key in different objects is fine.
+  EXPECT_TRUE(
+      errors(minimal("", R"([{"method": "p1", "directions": 8}, {"method": "p1", "directions": 16}])"))
+          .empty());
+  EXPECT_EQ(one(std::string(100000, '[')), x + ": line 1, column 65: nested deeper than 64 levels");
+  // Brackets inside strings are not nesting.
+  EXPECT_TRUE(errors(minimal(R"(, "description": ")" + std::string(200, '[') + "\"")).empty());
+  // An integer beyond int64 is refused at its pointer (it used to abort in a conversion).
+  const auto huge =
+      errors(minimal("", R"([{"method": "p1", "directions": 123456789012345678901234567890}])"));
+  ASSERT_FALSE(huge.empty());
+  EXPECT_EQ(huge[0].rfind(x + ": /bake/0/directions: ", 0), 0u) << huge[0];
+}
+
+// Values a user could mistype into nonsense are refused with the key's range (issue 20).
+TEST_F(Manifest, RangesForValuesAUserCouldMistype) {
+  auto first = [&](const std::string& text) {
+    const auto e = errors(text);
+    return e.empty() ? std::string("accepted") : e[0].substr((dir_ / "x.json").string().size() + 2);
+  };
+  const std::string h =
+      R"({"version": 1, "name": "t", "bake": [{"method": "p1"}], "height": {"procedural": {"kind": "flat", "size": [8, 8]}, )";
+  EXPECT_EQ(first(h + R"("texel_size": 1e308}})"), "/height/texel_size: must be <= 1000000");
+  EXPECT_EQ(first(h + R"("texel_size": 1e-300}})"), "/height/texel_size: must be >= 0.000001");
+  EXPECT_EQ(first(h + R"("height_scale": 1e38}})"), "/height/height_scale: must be <= 1000000");
+  EXPECT_EQ(first(minimal(R"(, "surface": {"albedo": 5})")).rfind("/surface/albedo", 0), 0u);
+  EXPECT_EQ(first(minimal(R"(, "surface": {"albedo": [0.5, 1.2, 0.5]})")).rfind("/surface/albedo", 0), 0u);
+  EXPECT_EQ(first(minimal(R"(, "surface": {"albedo": [0.5, 1, 0.5]})")), "accepted");
+  EXPECT_EQ(
+      first(minimal(R"(, "lights": [{"directional": {"direction": [1e-200, 0, 1e-200], "irradiance": 1}}])")),
+      "/lights/0/directional/direction: must have a length of at least 1e-6 (it is normalised; a shorter one "
+      "has no direction)");
+  EXPECT_EQ(first(minimal(R"(, "lights": [{"directional": {"direction": [0, 0, 1], "irradiance": 1e308}}])"))
+                .rfind("/lights/0/directional/irradiance", 0),
+            0u);
+}
+
+TEST_F(Manifest, OnlyRegularFilesUnderTheSizeLimitAreRead) {
+  const fs::path fifo = dir_ / "fifo.json";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  auto e = load_job(fifo, std::nullopt).errors;  // would block forever if opened
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], fifo.string() + ": not a regular file");
+  e = load_job("/dev/zero", std::nullopt).errors;  // would grow without end if read
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], "/dev/zero: not a regular file");
+  e = load_job(dir_, std::nullopt).errors;
+  ASSERT_EQ(e.size(), 1u);
+  const fs::path big = dir_ / "big.json";
+  {
+    std::ofstream out(big);
+    out << minimal(R"(, "description": ")" + std::string(kMaxJsonFileBytes, 'a') + "\"");
+  }
+  e = load_job(big, std::nullopt).errors;
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_NE(e[0].find("at most " + std::to_string(kMaxJsonFileBytes)), std::string::npos) << e[0];
 }
 
 }  // namespace
