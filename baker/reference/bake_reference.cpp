@@ -15,6 +15,7 @@
 #endif
 
 #include "core/error.hpp"
+#include "field/triangulation.hpp"
 #include "job/params.hpp"
 #include "methods/method_table.hpp"
 #include "reference/env_sampler.hpp"
@@ -206,7 +207,8 @@ struct Context {
   }
 
   // Albedo and emission at a world point on the surface: barycentric weights of the texel triangle the
-  // point lies over (the same split as the geometry); outside the field (the skirt) the nearest texel.
+  // point lies over (field/triangulation.hpp, the split of the geometry); outside the field (the skirt) the
+  // nearest texel.
   void surface_at(Vec3 p, Rgb& albedo, Rgb& emission) const {
     const double x = p.x / field.texel_size, y = p.y / field.texel_size;
     double fi = std::floor(x), fj = std::floor(y);
@@ -221,23 +223,14 @@ struct Context {
       if (field.height < 2) j = 0, fy = 0;
     }
     fx = std::clamp(fx, 0.0, 1.0), fy = std::clamp(fy, 0.0, 1.0);
-    int ia, ja, ib, jb, ic, jc;
-    double wa, wb, wc;
-    if (fx + fy <= 1) {  // triangle (i, j), (i+1, j), (i, j+1)
-      ia = i, ja = j, wa = 1 - fx - fy;
-      ib = i + 1, jb = j, wb = fx;
-      ic = i, jc = j + 1, wc = fy;
-    } else {  // triangle (i+1, j), (i+1, j+1), (i, j+1)
-      ia = i + 1, ja = j, wa = 1 - fy;
-      ib = i + 1, jb = j + 1, wb = fx + fy - 1;
-      ic = i, jc = j + 1, wc = 1 - fx;
-    }
-    auto idx = [&](int ii, int jj) { return field.index(field.wrap_i(ii), field.wrap_j(jj)); };
-    const std::size_t a = idx(ia, ja), b = idx(ib, jb), c = idx(ic, jc);
+    const FacetWeights fw = facet_weights(fx, fy);
+    auto idx = [&](int c) { return field.index(field.wrap_i(i + fw.di[c]), field.wrap_j(j + fw.dj[c])); };
+    const std::size_t a = idx(0), b = idx(1), c = idx(2);
+    const float wa = float(fw.w[0]), wb = float(fw.w[1]), wc = float(fw.w[2]);
     const auto& al = scene.surface.albedo;
-    albedo = al[a] * float(wa) + al[b] * float(wb) + al[c] * float(wc);
+    albedo = al[a] * wa + al[b] * wb + al[c] * wc;
     const auto& em = scene.surface.emission;
-    emission = em.empty() ? Rgb{} : em[a] * float(wa) + em[b] * float(wb) + em[c] * float(wc);
+    emission = em.empty() ? Rgb{} : em[a] * wa + em[b] * wb + em[c] * wc;
   }
 };
 

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 
+#include "core/azimuth.hpp"
 #include "core/error.hpp"
 #include "job/params.hpp"
 #include "methods/nlp/horizon_march.hpp"
@@ -112,11 +113,8 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
   const nlp::Pyramid hp =
       nlp::build_pyramid(f.z.data(), 1, W, H, f.wrap, o.levels_per_octave, nlp::height_levels(ms));
   const std::vector<std::array<float, 64>> A = nlp::sample_matrices(o.interpolation, m);
-  std::vector<float> cphi(m), sphi(m);
-  for (int a = 0; a < m; ++a) {
-    cphi[a] = float(std::cos(2 * kPi * a / m));
-    sphi[a] = float(std::sin(2 * kPi * a / m));
-  }
+  std::vector<float> cphi, sphi;
+  azimuth_table(m, cphi, sphi);
 
   // Environment in SH and its product matrices (rows k < 9 suffice: the cosine has no band 3).
   const std::array<sh::Coeffs, 3> env = nlp::project_environment(scene.environment);

@@ -9,6 +9,8 @@
 #include <tuple>
 #include <utility>
 
+#include "core/azimuth.hpp"
+#include "field/triangulation.hpp"
 #include "methods/p1/fast_math.hpp"
 #include "methods/p1/horizon_sweep.hpp"
 #include "methods/p2/hull_tree.hpp"
@@ -26,19 +28,6 @@ namespace {
 // P1 does not give to the sky (P1 blends the same elevations to the texel the same way). So P1's direct
 // and this indirect tile the texel's lobe: a uniform emitting furnace gives direct + indirect = 1.
 constexpr int kChannels = 5;
-
-// The facet under the point (x, y) (texel coordinates, not wrapped): the triangle (i, j), (i+1, j),
-// (i, j+1) is facet 0 of texel (i, j), the triangle (i+1, j+1), (i, j+1), (i+1, j) facet 1 of texel
-// (i+1, j+1) (the reference's split).
-struct FacetRef {
-  int i = 0, j = 0, q = 0;
-  bool operator==(const FacetRef&) const = default;
-};
-FacetRef facet_under(double x, double y) {
-  const int i = floor_int(x), j = floor_int(y);
-  const int q = (x - i) + (y - j) <= 1 ? 0 : 1;
-  return {i + q, j + q, q};
-}
 
 // The two facets on either side of a piece of a ray with midpoint (x, y) and direction (ux, uy): the same
 // facet twice, or, when the piece runs along a column, a row or a diagonal (an edge), the two facets the
@@ -356,11 +345,8 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
   ss.wrap_periods = spec.wrap_periods;
   const int K = spec.directions;
   const double wedge = 2 * kPi / K;
-  std::vector<double> cs(K), sn(K);
-  for (int k = 0; k < K; ++k) {
-    cs[k] = std::cos(2 * kPi * k / K);
-    sn[k] = std::sin(2 * kPi * k / K);
-  }
+  std::vector<double> cs, sn;
+  azimuth_table(K, cs, sn);
   P2SweepStats totals;
   std::mutex totals_mutex;
   // Exact near field (IndirectSweepSpec::near_radius): P1's near stencil per direction, with facets.
