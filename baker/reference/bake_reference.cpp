@@ -59,6 +59,20 @@ struct Channels {
     count = total + 3;
   }
   int bounce(int k) const { return bounce0 + 3 * (k - 1); }  // k = 1..bounces
+
+  // The channels of reference layer `layer` (reference_layer_names): the first and how many (1 or 3).
+  struct Slot {
+    int first = 0, channels = 1;
+  };
+  Slot slot(const std::string& layer) const {
+    if (layer == "ao") return {ao, 1};
+    if (layer == "vsky") return {vsky, 1};
+    if (layer == "obscurance") return {obscurance, 1};
+    if (layer == "direct") return {direct, 3};
+    if (layer == "indirect") return {indirect, 3};
+    if (layer == "total") return {total, 3};
+    return {bounce(std::stoi(layer.substr(10))), 3};  // indirect_b<k>
+  }
 };
 
 struct Needs {
@@ -251,365 +265,197 @@ struct Scratch {
   }
 };
 
-// Adds samples [s0, s1) of replicate r of texel (i, j) to sums (ch.count doubles).
+// One texel's samples [c0, c0 + m) of replicate r: where its rays start and which sequences they read.
+struct TexelBatch {
+  const Context& cx;
+  Vec3 n, origin;
+  std::uint64_t texel_seed = 0;
+  int r = 0;
+  std::uint32_t c0 = 0;
+  int m = 0;
+  double* sums = nullptr;  // ch.count doubles of replicate r
+};
+
+// Primary cosine rays: ao, obscurance, and (in sc.hits, sc.dirs) the first segment of the paths.
+void trace_primary(const TexelBatch& b, Scratch& sc) {
+  const Context& cx = b.cx;
+  const Channels& ch = cx.ch;
+  const bool primary_hit = cx.needs.obscurance || (cx.needs.indirect && cx.bounces > 0);
+  const Sequence2 seq = cx.sequence(b.texel_seed, b.r, cx.pair_primary);
+  for (int k = 0; k < b.m; ++k) sc.dirs[k] = reference::cosine_hemisphere(b.n, seq(b.c0 + k));
+  if (primary_hit) {
+    // ao and the path need the whole ray; obscurance alone only reaches the falloff's support. Each
+    // quantity reads the hit its own way: ao any hit, obscurance a hit within the support only, so
+    // neither depends on which other layers the job traces.
+    const bool whole_ray = cx.needs.ao || (cx.needs.indirect && cx.bounces > 0);
+    const float tfar = whole_ray ? kInf : cx.obscurance_tfar;
+    for (int k = 0; k < b.m; ++k) sc.hits[k] = make_rayhit(b.origin, sc.dirs[k], tfar);
+    cx.intersect(sc.hits.data(), b.m);
+    for (int k = 0; k < b.m; ++k) {
+      const RTCRayHit& h = sc.hits[k];
+      const bool hit = h.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+      if (cx.needs.ao) b.sums[ch.ao] += hit ? 0.0 : 1.0;
+      if (cx.needs.obscurance) {
+        const bool within = hit && h.ray.tfar <= cx.obscurance_tfar;
+        b.sums[ch.obscurance] += 1.0 - (within ? cx.options.falloff(h.ray.tfar) : 0.0);
+      }
+    }
+  } else {
+    for (int k = 0; k < b.m; ++k) sc.rays[k] = make_ray(b.origin, sc.dirs[k]);
+    cx.occluded(sc.rays.data(), b.m);
+    for (int k = 0; k < b.m; ++k) b.sums[ch.ao] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
+  }
+}
+
+// Sky view: uniform over the upper hemisphere.
+void trace_vsky(const TexelBatch& b, Scratch& sc) {
+  const Context& cx = b.cx;
+  const Sequence2 seq = cx.sequence(b.texel_seed, b.r, cx.pair_vsky);
+  for (int k = 0; k < b.m; ++k)
+    sc.rays[k] = make_ray(b.origin, reference::uniform_upper_hemisphere(seq(b.c0 + k)));
+  cx.occluded(sc.rays.data(), b.m);
+  for (int k = 0; k < b.m; ++k) b.sums[cx.ch.vsky] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
+}
+
+// Direct light at the receiver: next-event estimation, all the batch's shadow rays in one stream.
+void trace_direct(const TexelBatch& b, Scratch& sc) {
+  const Context& cx = b.cx;
+  int count = 0;
+  for (int k = 0; k < b.m; ++k) {
+    const int added = cx.nee(b.origin, b.n, b.texel_seed, b.r, cx.pair_direct, b.c0 + k, &sc.rays[count],
+                             &sc.shadow[count]);
+    for (int q = 0; q < added; ++q) sc.shadow_sample[count + q] = k;
+    count += added;
+  }
+  cx.occluded(sc.rays.data(), count);
+  for (int q = 0; q < count; ++q)
+    if (sc.rays[q].tfar >= 0) {
+      add_rgb(&b.sums[cx.ch.direct], sc.shadow[q].value);
+      add_rgb(&b.sums[cx.ch.total], sc.shadow[q].value);
+    }
+}
+
+// Indirect: one path per primary ray that hit the surface (sc.hits, sc.dirs from trace_primary), with
+// next-event estimation at every vertex.
+void trace_paths(const TexelBatch& b, Scratch& sc) {
+  const Context& cx = b.cx;
+  const Channels& ch = cx.ch;
+  const double eps = cx.geometry.epsilon();
+  RTCRay nee_rays[64];
+  ShadowSample nee_values[64];
+  const int max_nee = 2 + cx.lights;
+  std::vector<RTCRay> big_rays;
+  std::vector<ShadowSample> big_values;
+  RTCRay* nr = nee_rays;
+  ShadowSample* nv = nee_values;
+  if (max_nee > 64) {
+    big_rays.resize(max_nee);
+    big_values.resize(max_nee);
+    nr = big_rays.data();
+    nv = big_values.data();
+  }
+  for (int k = 0; k < b.m; ++k) {
+    RTCRayHit h = sc.hits[k];
+    if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+    const std::uint32_t s = b.c0 + k;
+    Rgb throughput{1, 1, 1};
+    Vec3 dir = sc.dirs[k];
+    Vec3 pos = vec(&h.ray.org_x) + dir * double(h.ray.tfar);
+    for (int v = 1; v <= cx.bounces; ++v) {
+      Vec3 ng = normalize(Vec3{h.hit.Ng_x, h.hit.Ng_y, h.hit.Ng_z});
+      if (dot(ng, dir) > 0) ng = -ng;
+      Rgb albedo, emission;
+      cx.surface_at(pos, albedo, emission);
+      const Vec3 o = pos + ng * eps;
+      const int pair0 = cx.pair_path + (v - 1) * cx.path_stride;
+      const int count = cx.nee(o, ng, b.texel_seed, b.r, pair0, s, nr, nv);
+      cx.occluded(nr, count);
+      Rgb direct{};
+      for (int q = 0; q < count; ++q)
+        if (nr[q].tfar >= 0) direct += nv[q].value;
+      const Rgb contribution = throughput * (emission + albedo * direct);
+      add_rgb(&b.sums[ch.bounce(v)], contribution);
+      add_rgb(&b.sums[ch.indirect], contribution);
+      add_rgb(&b.sums[ch.total], contribution);
+      if (v == cx.bounces) break;
+      throughput = throughput * albedo;
+      if (throughput.r <= 0 && throughput.g <= 0 && throughput.b <= 0) break;
+      dir = reference::cosine_hemisphere(ng, cx.sequence(b.texel_seed, b.r, pair0 + cx.nee_pairs)(s));
+      h = make_rayhit(o, dir);
+      cx.intersect(&h, 1);
+      if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+      pos = o + dir * double(h.ray.tfar);
+    }
+  }
+}
+
+// Adds samples [s0, s1) of replicate r of texel (i, j) to sums (ch.count doubles), kChunk at a time.
 void run_samples(const Context& cx, int i, int j, std::uint64_t texel_seed, int r, std::uint32_t s0,
                  std::uint32_t s1, double* sums, Scratch& sc) {
   const HeightField& f = cx.field;
-  const std::size_t t = f.index(i, j);
-  const Vec3 n = cx.scene.normals[t].d();
-  const Vec3 origin = f.position(i, j) + n * cx.geometry.epsilon();
-  const Channels& ch = cx.ch;
-  const bool primary_hit = cx.needs.obscurance || (cx.needs.indirect && cx.bounces > 0);
-  const double eps = cx.geometry.epsilon();
-
+  const Vec3 n = cx.scene.normals[f.index(i, j)].d();
+  TexelBatch b{cx, n, f.position(i, j) + n * cx.geometry.epsilon(), texel_seed, r, 0, 0, sums};
+  const bool paths = cx.needs.indirect && cx.bounces > 0;
+  const bool primary_hit = cx.needs.obscurance || paths;
   for (std::uint32_t c0 = s0; c0 < s1; c0 += kChunk) {
-    const int m = int(std::min<std::uint32_t>(kChunk, s1 - c0));
-    // Primary cosine rays: ao, obscurance, first path segment.
-    if (cx.needs.ao || primary_hit) {
-      const Sequence2 seq = cx.sequence(texel_seed, r, cx.pair_primary);
-      for (int k = 0; k < m; ++k) sc.dirs[k] = reference::cosine_hemisphere(n, seq(c0 + k));
-      if (primary_hit) {
-        // ao and the path need the whole ray; obscurance alone only reaches the falloff's support. Each
-        // quantity reads the hit its own way: ao any hit, obscurance a hit within the support only, so
-        // neither depends on which other layers the job traces.
-        const bool whole_ray = cx.needs.ao || (cx.needs.indirect && cx.bounces > 0);
-        const float tfar = whole_ray ? kInf : cx.obscurance_tfar;
-        for (int k = 0; k < m; ++k) sc.hits[k] = make_rayhit(origin, sc.dirs[k], tfar);
-        cx.intersect(sc.hits.data(), m);
-        for (int k = 0; k < m; ++k) {
-          const RTCRayHit& h = sc.hits[k];
-          const bool hit = h.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-          if (cx.needs.ao) sums[ch.ao] += hit ? 0.0 : 1.0;
-          if (cx.needs.obscurance) {
-            const bool within = hit && h.ray.tfar <= cx.obscurance_tfar;
-            sums[ch.obscurance] += 1.0 - (within ? cx.options.falloff(h.ray.tfar) : 0.0);
-          }
-        }
-      } else {
-        for (int k = 0; k < m; ++k) sc.rays[k] = make_ray(origin, sc.dirs[k]);
-        cx.occluded(sc.rays.data(), m);
-        for (int k = 0; k < m; ++k) sums[ch.ao] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
+    b.c0 = c0;
+    b.m = int(std::min<std::uint32_t>(kChunk, s1 - c0));
+    if (cx.needs.ao || primary_hit) trace_primary(b, sc);
+    if (cx.needs.vsky) trace_vsky(b, sc);
+    if (cx.needs.direct) trace_direct(b, sc);
+    if (paths) trace_paths(b, sc);
+  }
+}
+
+// A texel's estimate from B independent replicates: sums per replicate ([r * C + c]), then the mean of
+// the replicate means and its standard error per channel.
+struct ReplicateEstimate {
+  int B = 0, C = 0;
+  std::vector<double> sums, mean, se;
+  ReplicateEstimate(int replicates, int channels)
+      : B(replicates), C(channels), sums(std::size_t(B) * C), mean(C), se(C) {}
+
+  // Runs n samples in each of replicates [r0, r0 + B) of texel (i, j).
+  void run(const Context& cx, int i, int j, std::uint64_t texel_seed, int r0, int n, Scratch& scratch) {
+    std::fill(sums.begin(), sums.end(), 0.0);
+    for (int r = 0; r < B; ++r)
+      run_samples(cx, i, j, texel_seed, r0 + r, 0, std::uint32_t(n), &sums[std::size_t(r) * C], scratch);
+    for (int c = 0; c < C; ++c) {
+      double m = 0;
+      for (int r = 0; r < B; ++r) m += sums[std::size_t(r) * C + c];
+      m /= double(B) * n;
+      double var = 0;
+      for (int r = 0; r < B; ++r) {
+        const double d = sums[std::size_t(r) * C + c] / n - m;
+        var += d * d;
       }
-    }
-    // Sky view: uniform over the upper hemisphere.
-    if (cx.needs.vsky) {
-      const Sequence2 seq = cx.sequence(texel_seed, r, cx.pair_vsky);
-      for (int k = 0; k < m; ++k)
-        sc.rays[k] = make_ray(origin, reference::uniform_upper_hemisphere(seq(c0 + k)));
-      cx.occluded(sc.rays.data(), m);
-      for (int k = 0; k < m; ++k) sums[ch.vsky] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
-    }
-    // Direct light at the receiver.
-    if (cx.needs.direct) {
-      int count = 0;
-      for (int k = 0; k < m; ++k) {
-        const int added =
-            cx.nee(origin, n, texel_seed, r, cx.pair_direct, c0 + k, &sc.rays[count], &sc.shadow[count]);
-        for (int q = 0; q < added; ++q) sc.shadow_sample[count + q] = k;
-        count += added;
-      }
-      cx.occluded(sc.rays.data(), count);
-      for (int q = 0; q < count; ++q)
-        if (sc.rays[q].tfar >= 0) {
-          add_rgb(&sums[ch.direct], sc.shadow[q].value);
-          add_rgb(&sums[ch.total], sc.shadow[q].value);
-        }
-    }
-    // Indirect: one path per primary ray that hit the surface.
-    if (cx.needs.indirect && cx.bounces > 0) {
-      RTCRay nee_rays[64];
-      ShadowSample nee_values[64];
-      const int max_nee = 2 + cx.lights;
-      std::vector<RTCRay> big_rays;
-      std::vector<ShadowSample> big_values;
-      RTCRay* nr = nee_rays;
-      ShadowSample* nv = nee_values;
-      if (max_nee > 64) {
-        big_rays.resize(max_nee);
-        big_values.resize(max_nee);
-        nr = big_rays.data();
-        nv = big_values.data();
-      }
-      for (int k = 0; k < m; ++k) {
-        RTCRayHit h = sc.hits[k];
-        if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-        const std::uint32_t s = c0 + k;
-        Rgb throughput{1, 1, 1};
-        Vec3 dir = sc.dirs[k];
-        Vec3 pos = vec(&h.ray.org_x) + dir * double(h.ray.tfar);
-        for (int b = 1; b <= cx.bounces; ++b) {
-          Vec3 ng = normalize(Vec3{h.hit.Ng_x, h.hit.Ng_y, h.hit.Ng_z});
-          if (dot(ng, dir) > 0) ng = -ng;
-          Rgb albedo, emission;
-          cx.surface_at(pos, albedo, emission);
-          const Vec3 o = pos + ng * eps;
-          const int pair0 = cx.pair_path + (b - 1) * cx.path_stride;
-          const int count = cx.nee(o, ng, texel_seed, r, pair0, s, nr, nv);
-          cx.occluded(nr, count);
-          Rgb direct{};
-          for (int q = 0; q < count; ++q)
-            if (nr[q].tfar >= 0) direct += nv[q].value;
-          const Rgb contribution = throughput * (emission + albedo * direct);
-          add_rgb(&sums[ch.bounce(b)], contribution);
-          add_rgb(&sums[ch.indirect], contribution);
-          add_rgb(&sums[ch.total], contribution);
-          if (b == cx.bounces) break;
-          throughput = throughput * albedo;
-          if (throughput.r <= 0 && throughput.g <= 0 && throughput.b <= 0) break;
-          dir = reference::cosine_hemisphere(ng, cx.sequence(texel_seed, r, pair0 + cx.nee_pairs)(s));
-          h = make_rayhit(o, dir);
-          cx.intersect(&h, 1);
-          if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-          pos = o + dir * double(h.ray.tfar);
-        }
-      }
+      mean[c] = m;
+      se[c] = std::sqrt(var / (double(B) * (B - 1)));
     }
   }
-}
+};
 
-}  // namespace
-
-std::vector<std::string> reference_layer_names(int bounces) {
-  std::vector<std::string> names = {"ao", "vsky", "obscurance", "direct", "indirect", "total"};
-  for (int b = 1; b <= bounces; ++b) names.push_back("indirect_b" + std::to_string(b));
-  return names;
-}
-
-int reference_falloff_entry(const nlohmann::json& job_doc) {
-  const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
-  if (ref.contains("falloff") || ref.contains("radius")) return -1;
-  if (!job_doc.contains("bake") || !job_doc["bake"].is_array()) return -1;
-  const auto& bake = job_doc["bake"];
-  for (std::size_t b = 0; b < bake.size(); ++b) {
-    if (!bake[b].is_object() || !(bake[b].contains("falloff") || bake[b].contains("radius"))) continue;
-    const MethodInfo* m = find_method(bake[b].value("method", ""));
-    if (m && m->falloff_defines_obscurance) return int(b);
-  }
-  return -1;
-}
-
-ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const MethodContext& context,
-                                        const std::string& file) {
-  ReferenceOptions o;
-  const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
-  Params in(ref, file, "/reference");
-  o.samples = in.integer("samples", 256, 1, 1 << 24);
-  o.replicates = in.integer("replicates", 8, 2, 64);
-  o.repeat_tiles = in.integer("repeat_tiles", 1, 1, 16);
-  if (in.has("seed")) {
-    if (!in.raw("seed").is_number_integer() || in.raw("seed").get<long long>() < 0)
-      in.fail("seed", "must be a non-negative integer");
-    o.seed = in.raw("seed").get<std::uint64_t>();
-  }
-  in.resolve("seed", o.seed);
-  o.target_stderr = in.number("target_stderr", 0, 0, 1e9);
-  if (in.has("target_stderr") && !(o.target_stderr > 0))
-    in.fail("target_stderr", "must be a positive number");
-  o.geometry = in.choice("geometry", "grid", {"grid", "triangles"}) == "grid"
-                   ? reference::GeometryKind::grid
-                   : reference::GeometryKind::triangles;
-  o.sh_environment = in.choice("environment", "full", {"full", "sh4"}) == "sh4";
-
-  // Falloff: the reference's own, else the first obscurance-family bake entry's (the same rule).
-  bool have_falloff = false;
-  if (in.has("falloff") || in.has("radius")) {
-    o.falloff = read_falloff(in);
-    have_falloff = true;
-  } else if (const int b = reference_falloff_entry(job_doc); b >= 0) {
-    Params entry(job_doc["bake"][b], file, "/bake/" + std::to_string(b));
-    o.falloff = read_falloff(entry);
-    have_falloff = true;
-  }
-
-  const std::vector<std::string> known = reference_layer_names(context.bounces);
-  if (in.has("layers")) {
-    o.layers = in.layers(known, {});
-  } else if (job_doc.contains("bake") && job_doc["bake"].is_array() && !job_doc["bake"].empty()) {
-    // Only what some method of the job is scored against: the reference layers its resolved layers name.
-    std::set<std::string> scored;
-    const auto& bake = job_doc["bake"];
-    for (std::size_t b = 0; b < bake.size(); ++b) {
-      const nlohmann::json r = resolve_method_params(bake[b], context, file, "/bake/" + std::to_string(b));
-      for (const auto& l : r.value("layers", nlohmann::json::array())) scored.insert(l.get<std::string>());
-    }
-    for (const std::string& l : known)
-      if (scored.count(l) && (l != "obscurance" || have_falloff)) o.layers.push_back(l);
-    if (o.layers.empty()) o.layers = {"ao"};  // nothing comparable: the cheapest layer, for the report's page
-    in.resolve("layers", o.layers);
-  } else {
-    o.layers = {"ao", "vsky"};
-    if (have_falloff) o.layers.push_back("obscurance");
-    for (const char* l : {"direct", "indirect", "total"}) o.layers.push_back(l);
-    in.resolve("layers", o.layers);
-  }
-  o.resolved = in.resolved();
-  return o;
-}
-
-ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc) {
-  MethodContext c;
-  c.field = scene.field;
-  c.bounces = scene.bounces;
-  return read_reference_options(job_doc, c, "");
-}
-
-LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const RunControl& rc) {
-  return bake_reference(scene, parse_reference_options(scene, job_doc), rc);
-}
-
-LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc) {
-  const HeightField& f = scene.field;
-  if (scene.normals.size() != f.texel_count() || scene.surface.albedo.size() != f.texel_count())
-    throw std::invalid_argument("bake_reference: the scene's normals and albedo must cover the field");
-  const int bounces = std::max(0, scene.bounces);
-  const std::vector<std::string> known = reference_layer_names(bounces);
-  for (const std::string& l : options.layers)
-    if (std::find(known.begin(), known.end(), l) == known.end())
-      throw InputError("", "/reference/layers", "unknown reference layer \"" + l + "\"");
+// Which quantities the reference traces: the layers it writes need them.
+Needs needs_of(const ReferenceOptions& options, int bounces) {
   auto wants = [&](const std::string& l) {
     return std::find(options.layers.begin(), options.layers.end(), l) != options.layers.end();
   };
-
-  const Environment env =
-      options.sh_environment ? reference::band_limited_environment(scene.environment) : scene.environment;
-  const EnvSampler sampler = env.uniform ? EnvSampler() : EnvSampler(env);
-  const EmbreeField geometry(f, options.geometry, options.repeat_tiles);
-
-  Context cx(scene, env, sampler, geometry, options, bounces);
-  cx.needs.ao = wants("ao");
-  cx.needs.vsky = wants("vsky");
-  cx.needs.obscurance = wants("obscurance");
+  Needs needs;
+  needs.ao = wants("ao");
+  needs.vsky = wants("vsky");
+  needs.obscurance = wants("obscurance");
   bool any_bounce = false;
   for (int b = 1; b <= bounces; ++b) any_bounce |= wants("indirect_b" + std::to_string(b));
-  cx.needs.indirect = wants("indirect") || wants("total") || any_bounce;
-  cx.needs.direct = wants("direct") || wants("total");
-  if (options.falloff.kind != FalloffKind::none)
-    cx.obscurance_tfar = float(std::min<double>(options.falloff.support(1e-6), 3.0e38));
+  needs.indirect = wants("indirect") || wants("total") || any_bounce;
+  needs.direct = wants("direct") || wants("total");
+  return needs;
+}
 
-  const int B = std::max(2, options.replicates);
-  const int per_replicate_cap = std::max(1, (options.samples + B - 1) / B);
-  const bool adaptive = options.target_stderr > 0;
-  const int pilot = std::max(1, 64 / B);  // per replicate, target_stderr only
-
-  // Output channels, in the order of options.layers.
-  struct Out {
-    std::string name;
-    int first = 0, channels = 1;
-  };
-  std::vector<Out> outs;
-  for (const std::string& l : options.layers) {
-    if (l == "ao") outs.push_back({l, cx.ch.ao, 1});
-    if (l == "vsky") outs.push_back({l, cx.ch.vsky, 1});
-    if (l == "obscurance") outs.push_back({l, cx.ch.obscurance, 1});
-    if (l == "direct") outs.push_back({l, cx.ch.direct, 3});
-    if (l == "indirect") outs.push_back({l, cx.ch.indirect, 3});
-    if (l == "total") outs.push_back({l, cx.ch.total, 3});
-    if (l.rfind("indirect_b", 0) == 0) outs.push_back({l, cx.ch.bounce(std::stoi(l.substr(10))), 3});
-  }
-
-  LayerSet result;
-  result.width = f.width;
-  result.height = f.height;
-  std::vector<float*> value_data, stderr_data;
-  for (const Out& o : outs) {
-    value_data.push_back(result.add(o.name, o.channels == 1 ? mono_channels() : rgb_channels()).data.data());
-  }
-  for (const Out& o : outs)
-    stderr_data.push_back(
-        result.add(o.name + "_stderr", o.channels == 1 ? mono_channels() : rgb_channels()).data.data());
-  float* samples_data = adaptive ? result.add("samples", mono_channels()).data.data() : nullptr;
-  // LayerSet::add may reallocate: take the pointers again now that every layer exists.
-  for (std::size_t k = 0; k < outs.size(); ++k) {
-    value_data[k] = result.find(outs[k].name)->data.data();
-    stderr_data[k] = result.find(outs[k].name + "_stderr")->data.data();
-  }
-  if (adaptive) samples_data = result.find("samples")->data.data();
-
-  const int ts = std::max(1, options.tile_size);
-  const int tiles_x = (f.width + ts - 1) / ts, tiles_y = (f.height + ts - 1) / ts;
-  const int tiles = tiles_x * tiles_y;
-  std::atomic<int> done{0};
-  const int C = cx.ch.count;
-
-  tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
-    FlushDenormals ftz;
-    Scratch scratch(cx.lights);
-    std::vector<double> sums(std::size_t(B) * C);
-    std::vector<double> mean(C), se(C);
-    for (int tile = range.begin(); tile != range.end(); ++tile) {
-      rc.check();
-      const int tx = tile % tiles_x, ty = tile / tiles_x;
-      for (int j = ty * ts; j < std::min(f.height, (ty + 1) * ts); ++j) {
-        for (int i = tx * ts; i < std::min(f.width, (tx + 1) * ts); ++i) {
-          rc.check();  // per texel: a texel of a many-sample reference can take seconds
-          const std::uint64_t texel_seed =
-              reference::hash_combine(reference::mix64(options.seed), std::uint64_t(f.index(i, j)));
-          // Runs n samples in each of replicates [r0, r0 + B) and leaves the mean of the replicate means
-          // and its standard error in mean / se.
-          auto estimate = [&](int r0, int n) {
-            std::fill(sums.begin(), sums.end(), 0.0);
-            for (int r = 0; r < B; ++r)
-              run_samples(cx, i, j, texel_seed, r0 + r, 0, std::uint32_t(n), &sums[std::size_t(r) * C],
-                          scratch);
-            for (int c = 0; c < C; ++c) {
-              double m = 0;
-              for (int r = 0; r < B; ++r) m += sums[std::size_t(r) * C + c];
-              m /= double(B) * n;
-              double var = 0;
-              for (int r = 0; r < B; ++r) {
-                const double d = sums[std::size_t(r) * C + c] / n - m;
-                var += d * d;
-              }
-              mean[c] = m;
-              se[c] = std::sqrt(var / (double(B) * (B - 1)));
-            }
-          };
-          int n = per_replicate_cap;
-          if (adaptive) {
-            // Pilot on independent replicates (ids B..2B-1): predicts the count that reaches the target at
-            // the Monte Carlo rate (QMC usually does better), with a floor of |value| / N for samples that
-            // all agreed (zero spread proves nothing), rounded up to a power of two. The reported estimate
-            // comes from fresh samples only, so stopping early does not bias it or its stderr.
-            estimate(B, pilot);
-            const double n_pilot = double(B) * pilot;
-            double ratio = 0;
-            for (const Out& o : outs)
-              for (int c = 0; c < o.channels; ++c) {
-                const double floor = std::max(1.0, std::abs(mean[o.first + c])) / n_pilot;
-                ratio = std::max(ratio, std::max(se[o.first + c], floor) / options.target_stderr);
-              }
-            const double need = n_pilot * ratio * ratio / B;
-            n = 1;
-            while (n < need && n < per_replicate_cap) n *= 2;  // powers of two keep the sequences' nets
-            n = std::min(n, per_replicate_cap);
-          }
-          estimate(0, n);
-          const std::size_t t = f.index(i, j);
-          for (std::size_t k = 0; k < outs.size(); ++k)
-            for (int c = 0; c < outs[k].channels; ++c) {
-              value_data[k][t * outs[k].channels + c] = float(mean[outs[k].first + c]);
-              stderr_data[k][t * outs[k].channels + c] = float(se[outs[k].first + c]);
-            }
-          if (samples_data) samples_data[t] = float(n * B);
-        }
-      }
-      rc.report(double(done.fetch_add(1) + 1) / tiles);
-    }
-  });
-
-  nlohmann::json setup = {
-      {"geometry", options.geometry == reference::GeometryKind::grid ? "grid" : "triangles"},
-      {"epsilon", geometry.epsilon()},
-      {"replicates", B},
-      {"samples_per_texel", adaptive ? nlohmann::json("adaptive") : nlohmann::json(B * per_replicate_cap)},
-      {"bounces", bounces},
-      {"environment", options.sh_environment ? "sh4" : "full"},
-      {"falloff", falloff_kind_name(options.falloff.kind)},
-      {"radius", options.falloff.radius}};
-  if (f.wrap == Wrap::repeat) {
-    setup["repeat_tiles"] = options.repeat_tiles;
-    setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width, f.height) * f.texel_size;
-  }
+// What the reference records about how it was computed (hfbake:reference_setup).
+nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& options,
+                               const EmbreeField& geometry, int replicates, int per_replicate_cap,
+                               bool adaptive, int bounces) {
+  const nlohmann::json setup = reference_setup(f, options, geometry, B, per_replicate_cap, adaptive, bounces);
   result.attributes.emplace_back("hfbake:reference_setup", setup.dump());
   return result;
 }
