@@ -455,6 +455,220 @@ Needs needs_of(const ReferenceOptions& options, int bounces) {
 nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& options,
                                const EmbreeField& geometry, int replicates, int per_replicate_cap,
                                bool adaptive, int bounces) {
+  nlohmann::json setup = {
+      {"geometry", options.geometry == reference::GeometryKind::grid ? "grid" : "triangles"},
+      {"epsilon", geometry.epsilon()},
+      {"replicates", replicates},
+      {"samples_per_texel",
+       adaptive ? nlohmann::json("adaptive") : nlohmann::json(replicates * per_replicate_cap)},
+      {"bounces", bounces},
+      {"environment", options.sh_environment ? "sh4" : "full"},
+      {"falloff", falloff_kind_name(options.falloff.kind)},
+      {"radius", options.falloff.radius}};
+  if (f.wrap == Wrap::repeat) {
+    setup["repeat_tiles"] = options.repeat_tiles;
+    setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width, f.height) * f.texel_size;
+  }
+  return setup;
+}
+
+}  // namespace
+
+std::vector<std::string> reference_layer_names(int bounces) {
+  std::vector<std::string> names = {"ao", "vsky", "obscurance", "direct", "indirect", "total"};
+  for (int b = 1; b <= bounces; ++b) names.push_back("indirect_b" + std::to_string(b));
+  return names;
+}
+
+int reference_falloff_entry(const nlohmann::json& job_doc) {
+  const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
+  if (ref.contains("falloff") || ref.contains("radius")) return -1;
+  if (!job_doc.contains("bake") || !job_doc["bake"].is_array()) return -1;
+  const auto& bake = job_doc["bake"];
+  for (std::size_t b = 0; b < bake.size(); ++b) {
+    if (!bake[b].is_object() || !(bake[b].contains("falloff") || bake[b].contains("radius"))) continue;
+    const MethodInfo* m = find_method(bake[b].value("method", ""));
+    if (m && m->falloff_defines_obscurance) return int(b);
+  }
+  return -1;
+}
+
+ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const MethodContext& context,
+                                        const std::string& file) {
+  ReferenceOptions o;
+  const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
+  Params in(ref, file, "/reference");
+  o.samples = in.integer("samples", 256, 1, 1 << 24);
+  o.replicates = in.integer("replicates", 8, 2, 64);
+  o.repeat_tiles = in.integer("repeat_tiles", 1, 1, 16);
+  if (in.has("seed")) {
+    if (!in.raw("seed").is_number_integer() || in.raw("seed").get<long long>() < 0)
+      in.fail("seed", "must be a non-negative integer");
+    o.seed = in.raw("seed").get<std::uint64_t>();
+  }
+  in.resolve("seed", o.seed);
+  o.target_stderr = in.number("target_stderr", 0, 0, 1e9);
+  if (in.has("target_stderr") && !(o.target_stderr > 0))
+    in.fail("target_stderr", "must be a positive number");
+  o.geometry = in.choice("geometry", "grid", {"grid", "triangles"}) == "grid"
+                   ? reference::GeometryKind::grid
+                   : reference::GeometryKind::triangles;
+  o.sh_environment = in.choice("environment", "full", {"full", "sh4"}) == "sh4";
+
+  // Falloff: the reference's own, else the first obscurance-family bake entry's (the same rule).
+  bool have_falloff = false;
+  if (in.has("falloff") || in.has("radius")) {
+    o.falloff = read_falloff(in);
+    have_falloff = true;
+  } else if (const int b = reference_falloff_entry(job_doc); b >= 0) {
+    Params entry(job_doc["bake"][b], file, "/bake/" + std::to_string(b));
+    o.falloff = read_falloff(entry);
+    have_falloff = true;
+  }
+
+  const std::vector<std::string> known = reference_layer_names(context.bounces);
+  if (in.has("layers")) {
+    o.layers = in.layers(known, {});
+  } else if (job_doc.contains("bake") && job_doc["bake"].is_array() && !job_doc["bake"].empty()) {
+    // Only what some method of the job is scored against: the reference layers its resolved layers name.
+    std::set<std::string> scored;
+    const auto& bake = job_doc["bake"];
+    for (std::size_t b = 0; b < bake.size(); ++b) {
+      const nlohmann::json r = resolve_method_params(bake[b], context, file, "/bake/" + std::to_string(b));
+      for (const auto& l : r.value("layers", nlohmann::json::array())) scored.insert(l.get<std::string>());
+    }
+    for (const std::string& l : known)
+      if (scored.count(l) && (l != "obscurance" || have_falloff)) o.layers.push_back(l);
+    if (o.layers.empty()) o.layers = {"ao"};  // nothing comparable: the cheapest layer, for the report's page
+    in.resolve("layers", o.layers);
+  } else {
+    o.layers = {"ao", "vsky"};
+    if (have_falloff) o.layers.push_back("obscurance");
+    for (const char* l : {"direct", "indirect", "total"}) o.layers.push_back(l);
+    in.resolve("layers", o.layers);
+  }
+  o.resolved = in.resolved();
+  return o;
+}
+
+ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc) {
+  MethodContext c;
+  c.field = scene.field;
+  c.bounces = scene.bounces;
+  return read_reference_options(job_doc, c, "");
+}
+
+LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const RunControl& rc) {
+  return bake_reference(scene, parse_reference_options(scene, job_doc), rc);
+}
+
+LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc) {
+  const HeightField& f = scene.field;
+  if (scene.normals.size() != f.texel_count() || scene.surface.albedo.size() != f.texel_count())
+    throw std::invalid_argument("bake_reference: the scene's normals and albedo must cover the field");
+  const int bounces = std::max(0, scene.bounces);
+  const std::vector<std::string> known = reference_layer_names(bounces);
+  for (const std::string& l : options.layers)
+    if (std::find(known.begin(), known.end(), l) == known.end())
+      throw InputError("", "/reference/layers", "unknown reference layer \"" + l + "\"");
+  const Environment env =
+      options.sh_environment ? reference::band_limited_environment(scene.environment) : scene.environment;
+  const EnvSampler sampler = env.uniform ? EnvSampler() : EnvSampler(env);
+  const EmbreeField geometry(f, options.geometry, options.repeat_tiles);
+
+  Context cx(scene, env, sampler, geometry, options, bounces);
+  cx.needs = needs_of(options, bounces);
+  if (options.falloff.kind != FalloffKind::none)
+    cx.obscurance_tfar = float(std::min<double>(options.falloff.support(1e-6), 3.0e38));
+
+  const int B = std::max(2, options.replicates);
+  const int per_replicate_cap = std::max(1, (options.samples + B - 1) / B);
+  const bool adaptive = options.target_stderr > 0;
+  const int pilot = std::max(1, 64 / B);  // per replicate, target_stderr only
+
+  // Output channels, in the order of options.layers.
+  struct Out {
+    std::string name;
+    int first = 0, channels = 1;
+  };
+  std::vector<Out> outs;
+  for (const std::string& l : options.layers) {
+    const Channels::Slot c = cx.ch.slot(l);
+    outs.push_back({l, c.first, c.channels});
+  }
+
+  LayerSet result;
+  result.width = f.width;
+  result.height = f.height;
+  std::vector<float*> value_data, stderr_data;
+  for (const Out& o : outs) {
+    value_data.push_back(result.add(o.name, o.channels == 1 ? mono_channels() : rgb_channels()).data.data());
+  }
+  for (const Out& o : outs)
+    stderr_data.push_back(
+        result.add(o.name + "_stderr", o.channels == 1 ? mono_channels() : rgb_channels()).data.data());
+  float* samples_data = adaptive ? result.add("samples", mono_channels()).data.data() : nullptr;
+  // LayerSet::add may reallocate: take the pointers again now that every layer exists.
+  for (std::size_t k = 0; k < outs.size(); ++k) {
+    value_data[k] = result.find(outs[k].name)->data.data();
+    stderr_data[k] = result.find(outs[k].name + "_stderr")->data.data();
+  }
+  if (adaptive) samples_data = result.find("samples")->data.data();
+
+  const int ts = std::max(1, options.tile_size);
+  const int tiles_x = (f.width + ts - 1) / ts, tiles_y = (f.height + ts - 1) / ts;
+  const int tiles = tiles_x * tiles_y;
+  std::atomic<int> done{0};
+  const int C = cx.ch.count;
+
+  tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
+    FlushDenormals ftz;
+    Scratch scratch(cx.lights);
+    ReplicateEstimate est(B, C);
+    const std::vector<double>& mean = est.mean;
+    const std::vector<double>& se = est.se;
+    for (int tile = range.begin(); tile != range.end(); ++tile) {
+      rc.check();
+      const int tx = tile % tiles_x, ty = tile / tiles_x;
+      for (int j = ty * ts; j < std::min(f.height, (ty + 1) * ts); ++j) {
+        for (int i = tx * ts; i < std::min(f.width, (tx + 1) * ts); ++i) {
+          rc.check();  // per texel: a texel of a many-sample reference can take seconds
+          const std::uint64_t texel_seed =
+              reference::hash_combine(reference::mix64(options.seed), std::uint64_t(f.index(i, j)));
+          auto estimate = [&](int r0, int n) { est.run(cx, i, j, texel_seed, r0, n, scratch); };
+          int n = per_replicate_cap;
+          if (adaptive) {
+            // Pilot on independent replicates (ids B..2B-1): predicts the count that reaches the target at
+            // the Monte Carlo rate (QMC usually does better), with a floor of |value| / N for samples that
+            // all agreed (zero spread proves nothing), rounded up to a power of two. The reported estimate
+            // comes from fresh samples only, so stopping early does not bias it or its stderr.
+            estimate(B, pilot);
+            const double n_pilot = double(B) * pilot;
+            double ratio = 0;
+            for (const Out& o : outs)
+              for (int c = 0; c < o.channels; ++c) {
+                const double floor = std::max(1.0, std::abs(mean[o.first + c])) / n_pilot;
+                ratio = std::max(ratio, std::max(se[o.first + c], floor) / options.target_stderr);
+              }
+            const double need = n_pilot * ratio * ratio / B;
+            n = 1;
+            while (n < need && n < per_replicate_cap) n *= 2;  // powers of two keep the sequences' nets
+            n = std::min(n, per_replicate_cap);
+          }
+          estimate(0, n);
+          const std::size_t t = f.index(i, j);
+          for (std::size_t k = 0; k < outs.size(); ++k)
+            for (int c = 0; c < outs[k].channels; ++c) {
+              value_data[k][t * outs[k].channels + c] = float(mean[outs[k].first + c]);
+              stderr_data[k][t * outs[k].channels + c] = float(se[outs[k].first + c]);
+            }
+          if (samples_data) samples_data[t] = float(n * B);
+        }
+      }
+      rc.report(double(done.fetch_add(1) + 1) / tiles);
+    }
+  });
+
   const nlohmann::json setup = reference_setup(f, options, geometry, B, per_replicate_cap, adaptive, bounces);
   result.attributes.emplace_back("hfbake:reference_setup", setup.dump());
   return result;
