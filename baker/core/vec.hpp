@@ -56,4 +56,10 @@ struct Rgb {
 
 inline constexpr double kPi = 3.14159265358979323846;
 
+// floor(x) as an int for |x| < 2^31 without a libm call (baseline x86-64 has no rounding instruction).
+inline int floor_int(double x) {
+  const int i = int(x);
+  return x < double(i) ? i - 1 : i;
+}
+
 }  // namespace hfbake

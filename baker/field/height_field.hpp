@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/vec.hpp"
+#include "field/triangulation.hpp"
 
 namespace hfbake {
 
@@ -44,18 +45,13 @@ struct HeightField : FieldShape {
     return (h00 * (1 - tx) + h10 * tx) * (1 - ty) + (h01 * (1 - tx) + h11 * tx) * ty;
   }
 
-  // Height of the triangulated surface the reference traces (two triangles per quad, split along
-  // (i+1, j)-(i, j+1)) at continuous texel coordinates; outside the grid like bilinear (clamped or tiled).
+  // Height of the triangulated surface the reference traces (field/triangulation.hpp) at continuous texel
+  // coordinates; outside the grid like bilinear (clamped or tiled).
   float triangle_height(double x, double y) const {
     const double fx = std::floor(x), fy = std::floor(y);
     const int i = int(fx), j = int(fy);
     const float tx = float(x - fx), ty = float(y - fy);
-    if (tx + ty <= 1) {
-      const float h00 = at(i, j);
-      return h00 + (at(i + 1, j) - h00) * tx + (at(i, j + 1) - h00) * ty;
-    }
-    const float h11 = at(i + 1, j + 1);
-    return h11 + (at(i, j + 1) - h11) * (1 - tx) + (at(i + 1, j) - h11) * (1 - ty);
+    return facet_height(tx, ty, [&](int di, int dj) { return at(i + di, j + dj); });
   }
 
   Vec3 position(int i, int j) const { return {i * texel_size, j * texel_size, double(z[index(i, j)])}; }

@@ -15,6 +15,7 @@
 #endif
 
 #include "core/error.hpp"
+#include "field/triangulation.hpp"
 #include "job/params.hpp"
 #include "methods/method_table.hpp"
 #include "reference/env_sampler.hpp"
@@ -58,6 +59,20 @@ struct Channels {
     count = total + 3;
   }
   int bounce(int k) const { return bounce0 + 3 * (k - 1); }  // k = 1..bounces
+
+  // The channels of reference layer `layer` (reference_layer_names): the first and how many (1 or 3).
+  struct Slot {
+    int first = 0, channels = 1;
+  };
+  Slot slot(const std::string& layer) const {
+    if (layer == "ao") return {ao, 1};
+    if (layer == "vsky") return {vsky, 1};
+    if (layer == "obscurance") return {obscurance, 1};
+    if (layer == "direct") return {direct, 3};
+    if (layer == "indirect") return {indirect, 3};
+    if (layer == "total") return {total, 3};
+    return {bounce(std::stoi(layer.substr(10))), 3};  // indirect_b<k>
+  }
 };
 
 struct Needs {
@@ -206,7 +221,8 @@ struct Context {
   }
 
   // Albedo and emission at a world point on the surface: barycentric weights of the texel triangle the
-  // point lies over (the same split as the geometry); outside the field (the skirt) the nearest texel.
+  // point lies over (field/triangulation.hpp, the split of the geometry); outside the field (the skirt) the
+  // nearest texel.
   void surface_at(Vec3 p, Rgb& albedo, Rgb& emission) const {
     const double x = p.x / field.texel_size, y = p.y / field.texel_size;
     double fi = std::floor(x), fj = std::floor(y);
@@ -221,23 +237,14 @@ struct Context {
       if (field.height < 2) j = 0, fy = 0;
     }
     fx = std::clamp(fx, 0.0, 1.0), fy = std::clamp(fy, 0.0, 1.0);
-    int ia, ja, ib, jb, ic, jc;
-    double wa, wb, wc;
-    if (fx + fy <= 1) {  // triangle (i, j), (i+1, j), (i, j+1)
-      ia = i, ja = j, wa = 1 - fx - fy;
-      ib = i + 1, jb = j, wb = fx;
-      ic = i, jc = j + 1, wc = fy;
-    } else {  // triangle (i+1, j), (i+1, j+1), (i, j+1)
-      ia = i + 1, ja = j, wa = 1 - fy;
-      ib = i + 1, jb = j + 1, wb = fx + fy - 1;
-      ic = i, jc = j + 1, wc = 1 - fx;
-    }
-    auto idx = [&](int ii, int jj) { return field.index(field.wrap_i(ii), field.wrap_j(jj)); };
-    const std::size_t a = idx(ia, ja), b = idx(ib, jb), c = idx(ic, jc);
+    const FacetWeights fw = facet_weights(fx, fy);
+    auto idx = [&](int c) { return field.index(field.wrap_i(i + fw.di[c]), field.wrap_j(j + fw.dj[c])); };
+    const std::size_t a = idx(0), b = idx(1), c = idx(2);
+    const float wa = float(fw.w[0]), wb = float(fw.w[1]), wc = float(fw.w[2]);
     const auto& al = scene.surface.albedo;
-    albedo = al[a] * float(wa) + al[b] * float(wb) + al[c] * float(wc);
+    albedo = al[a] * wa + al[b] * wb + al[c] * wc;
     const auto& em = scene.surface.emission;
-    emission = em.empty() ? Rgb{} : em[a] * float(wa) + em[b] * float(wb) + em[c] * float(wc);
+    emission = em.empty() ? Rgb{} : em[a] * wa + em[b] * wb + em[c] * wc;
   }
 };
 
@@ -258,120 +265,211 @@ struct Scratch {
   }
 };
 
-// Adds samples [s0, s1) of replicate r of texel (i, j) to sums (ch.count doubles).
+// One texel's samples [c0, c0 + m) of replicate r: where its rays start and which sequences they read.
+struct TexelBatch {
+  const Context& cx;
+  Vec3 n, origin;
+  std::uint64_t texel_seed = 0;
+  int r = 0;
+  std::uint32_t c0 = 0;
+  int m = 0;
+  double* sums = nullptr;  // ch.count doubles of replicate r
+};
+
+// Primary cosine rays: ao, obscurance, and (in sc.hits, sc.dirs) the first segment of the paths.
+void trace_primary(const TexelBatch& b, Scratch& sc) {
+  const Context& cx = b.cx;
+  const Channels& ch = cx.ch;
+  const bool primary_hit = cx.needs.obscurance || (cx.needs.indirect && cx.bounces > 0);
+  const Sequence2 seq = cx.sequence(b.texel_seed, b.r, cx.pair_primary);
+  for (int k = 0; k < b.m; ++k) sc.dirs[k] = reference::cosine_hemisphere(b.n, seq(b.c0 + k));
+  if (primary_hit) {
+    // ao and the path need the whole ray; obscurance alone only reaches the falloff's support. Each
+    // quantity reads the hit its own way: ao any hit, obscurance a hit within the support only, so
+    // neither depends on which other layers the job traces.
+    const bool whole_ray = cx.needs.ao || (cx.needs.indirect && cx.bounces > 0);
+    const float tfar = whole_ray ? kInf : cx.obscurance_tfar;
+    for (int k = 0; k < b.m; ++k) sc.hits[k] = make_rayhit(b.origin, sc.dirs[k], tfar);
+    cx.intersect(sc.hits.data(), b.m);
+    for (int k = 0; k < b.m; ++k) {
+      const RTCRayHit& h = sc.hits[k];
+      const bool hit = h.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+      if (cx.needs.ao) b.sums[ch.ao] += hit ? 0.0 : 1.0;
+      if (cx.needs.obscurance) {
+        const bool within = hit && h.ray.tfar <= cx.obscurance_tfar;
+        b.sums[ch.obscurance] += 1.0 - (within ? cx.options.falloff(h.ray.tfar) : 0.0);
+      }
+    }
+  } else {
+    for (int k = 0; k < b.m; ++k) sc.rays[k] = make_ray(b.origin, sc.dirs[k]);
+    cx.occluded(sc.rays.data(), b.m);
+    for (int k = 0; k < b.m; ++k) b.sums[ch.ao] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
+  }
+}
+
+// Sky view: uniform over the upper hemisphere.
+void trace_vsky(const TexelBatch& b, Scratch& sc) {
+  const Context& cx = b.cx;
+  const Sequence2 seq = cx.sequence(b.texel_seed, b.r, cx.pair_vsky);
+  for (int k = 0; k < b.m; ++k)
+    sc.rays[k] = make_ray(b.origin, reference::uniform_upper_hemisphere(seq(b.c0 + k)));
+  cx.occluded(sc.rays.data(), b.m);
+  for (int k = 0; k < b.m; ++k) b.sums[cx.ch.vsky] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
+}
+
+// Direct light at the receiver: next-event estimation, all the batch's shadow rays in one stream.
+void trace_direct(const TexelBatch& b, Scratch& sc) {
+  const Context& cx = b.cx;
+  int count = 0;
+  for (int k = 0; k < b.m; ++k) {
+    const int added = cx.nee(b.origin, b.n, b.texel_seed, b.r, cx.pair_direct, b.c0 + k, &sc.rays[count],
+                             &sc.shadow[count]);
+    for (int q = 0; q < added; ++q) sc.shadow_sample[count + q] = k;
+    count += added;
+  }
+  cx.occluded(sc.rays.data(), count);
+  for (int q = 0; q < count; ++q)
+    if (sc.rays[q].tfar >= 0) {
+      add_rgb(&b.sums[cx.ch.direct], sc.shadow[q].value);
+      add_rgb(&b.sums[cx.ch.total], sc.shadow[q].value);
+    }
+}
+
+// Indirect: one path per primary ray that hit the surface (sc.hits, sc.dirs from trace_primary), with
+// next-event estimation at every vertex.
+void trace_paths(const TexelBatch& b, Scratch& sc) {
+  const Context& cx = b.cx;
+  const Channels& ch = cx.ch;
+  const double eps = cx.geometry.epsilon();
+  RTCRay nee_rays[64];
+  ShadowSample nee_values[64];
+  const int max_nee = 2 + cx.lights;
+  std::vector<RTCRay> big_rays;
+  std::vector<ShadowSample> big_values;
+  RTCRay* nr = nee_rays;
+  ShadowSample* nv = nee_values;
+  if (max_nee > 64) {
+    big_rays.resize(max_nee);
+    big_values.resize(max_nee);
+    nr = big_rays.data();
+    nv = big_values.data();
+  }
+  for (int k = 0; k < b.m; ++k) {
+    RTCRayHit h = sc.hits[k];
+    if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+    const std::uint32_t s = b.c0 + k;
+    Rgb throughput{1, 1, 1};
+    Vec3 dir = sc.dirs[k];
+    Vec3 pos = vec(&h.ray.org_x) + dir * double(h.ray.tfar);
+    for (int v = 1; v <= cx.bounces; ++v) {
+      Vec3 ng = normalize(Vec3{h.hit.Ng_x, h.hit.Ng_y, h.hit.Ng_z});
+      if (dot(ng, dir) > 0) ng = -ng;
+      Rgb albedo, emission;
+      cx.surface_at(pos, albedo, emission);
+      const Vec3 o = pos + ng * eps;
+      const int pair0 = cx.pair_path + (v - 1) * cx.path_stride;
+      const int count = cx.nee(o, ng, b.texel_seed, b.r, pair0, s, nr, nv);
+      cx.occluded(nr, count);
+      Rgb direct{};
+      for (int q = 0; q < count; ++q)
+        if (nr[q].tfar >= 0) direct += nv[q].value;
+      const Rgb contribution = throughput * (emission + albedo * direct);
+      add_rgb(&b.sums[ch.bounce(v)], contribution);
+      add_rgb(&b.sums[ch.indirect], contribution);
+      add_rgb(&b.sums[ch.total], contribution);
+      if (v == cx.bounces) break;
+      throughput = throughput * albedo;
+      if (throughput.r <= 0 && throughput.g <= 0 && throughput.b <= 0) break;
+      dir = reference::cosine_hemisphere(ng, cx.sequence(b.texel_seed, b.r, pair0 + cx.nee_pairs)(s));
+      h = make_rayhit(o, dir);
+      cx.intersect(&h, 1);
+      if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+      pos = o + dir * double(h.ray.tfar);
+    }
+  }
+}
+
+// Adds samples [s0, s1) of replicate r of texel (i, j) to sums (ch.count doubles), kChunk at a time.
 void run_samples(const Context& cx, int i, int j, std::uint64_t texel_seed, int r, std::uint32_t s0,
                  std::uint32_t s1, double* sums, Scratch& sc) {
   const HeightField& f = cx.field;
-  const std::size_t t = f.index(i, j);
-  const Vec3 n = cx.scene.normals[t].d();
-  const Vec3 origin = f.position(i, j) + n * cx.geometry.epsilon();
-  const Channels& ch = cx.ch;
-  const bool primary_hit = cx.needs.obscurance || (cx.needs.indirect && cx.bounces > 0);
-  const double eps = cx.geometry.epsilon();
-
+  const Vec3 n = cx.scene.normals[f.index(i, j)].d();
+  TexelBatch b{cx, n, f.position(i, j) + n * cx.geometry.epsilon(), texel_seed, r, 0, 0, sums};
+  const bool paths = cx.needs.indirect && cx.bounces > 0;
+  const bool primary_hit = cx.needs.obscurance || paths;
   for (std::uint32_t c0 = s0; c0 < s1; c0 += kChunk) {
-    const int m = int(std::min<std::uint32_t>(kChunk, s1 - c0));
-    // Primary cosine rays: ao, obscurance, first path segment.
-    if (cx.needs.ao || primary_hit) {
-      const Sequence2 seq = cx.sequence(texel_seed, r, cx.pair_primary);
-      for (int k = 0; k < m; ++k) sc.dirs[k] = reference::cosine_hemisphere(n, seq(c0 + k));
-      if (primary_hit) {
-        // ao and the path need the whole ray; obscurance alone only reaches the falloff's support. Each
-        // quantity reads the hit its own way: ao any hit, obscurance a hit within the support only, so
-        // neither depends on which other layers the job traces.
-        const bool whole_ray = cx.needs.ao || (cx.needs.indirect && cx.bounces > 0);
-        const float tfar = whole_ray ? kInf : cx.obscurance_tfar;
-        for (int k = 0; k < m; ++k) sc.hits[k] = make_rayhit(origin, sc.dirs[k], tfar);
-        cx.intersect(sc.hits.data(), m);
-        for (int k = 0; k < m; ++k) {
-          const RTCRayHit& h = sc.hits[k];
-          const bool hit = h.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-          if (cx.needs.ao) sums[ch.ao] += hit ? 0.0 : 1.0;
-          if (cx.needs.obscurance) {
-            const bool within = hit && h.ray.tfar <= cx.obscurance_tfar;
-            sums[ch.obscurance] += 1.0 - (within ? cx.options.falloff(h.ray.tfar) : 0.0);
-          }
-        }
-      } else {
-        for (int k = 0; k < m; ++k) sc.rays[k] = make_ray(origin, sc.dirs[k]);
-        cx.occluded(sc.rays.data(), m);
-        for (int k = 0; k < m; ++k) sums[ch.ao] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
+    b.c0 = c0;
+    b.m = int(std::min<std::uint32_t>(kChunk, s1 - c0));
+    if (cx.needs.ao || primary_hit) trace_primary(b, sc);
+    if (cx.needs.vsky) trace_vsky(b, sc);
+    if (cx.needs.direct) trace_direct(b, sc);
+    if (paths) trace_paths(b, sc);
+  }
+}
+
+// A texel's estimate from B independent replicates: sums per replicate ([r * C + c]), then the mean of
+// the replicate means and its standard error per channel.
+struct ReplicateEstimate {
+  int B = 0, C = 0;
+  std::vector<double> sums, mean, se;
+  ReplicateEstimate(int replicates, int channels)
+      : B(replicates), C(channels), sums(std::size_t(B) * C), mean(C), se(C) {}
+
+  // Runs n samples in each of replicates [r0, r0 + B) of texel (i, j).
+  void run(const Context& cx, int i, int j, std::uint64_t texel_seed, int r0, int n, Scratch& scratch) {
+    std::fill(sums.begin(), sums.end(), 0.0);
+    for (int r = 0; r < B; ++r)
+      run_samples(cx, i, j, texel_seed, r0 + r, 0, std::uint32_t(n), &sums[std::size_t(r) * C], scratch);
+    for (int c = 0; c < C; ++c) {
+      double m = 0;
+      for (int r = 0; r < B; ++r) m += sums[std::size_t(r) * C + c];
+      m /= double(B) * n;
+      double var = 0;
+      for (int r = 0; r < B; ++r) {
+        const double d = sums[std::size_t(r) * C + c] / n - m;
+        var += d * d;
       }
-    }
-    // Sky view: uniform over the upper hemisphere.
-    if (cx.needs.vsky) {
-      const Sequence2 seq = cx.sequence(texel_seed, r, cx.pair_vsky);
-      for (int k = 0; k < m; ++k)
-        sc.rays[k] = make_ray(origin, reference::uniform_upper_hemisphere(seq(c0 + k)));
-      cx.occluded(sc.rays.data(), m);
-      for (int k = 0; k < m; ++k) sums[ch.vsky] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
-    }
-    // Direct light at the receiver.
-    if (cx.needs.direct) {
-      int count = 0;
-      for (int k = 0; k < m; ++k) {
-        const int added =
-            cx.nee(origin, n, texel_seed, r, cx.pair_direct, c0 + k, &sc.rays[count], &sc.shadow[count]);
-        for (int q = 0; q < added; ++q) sc.shadow_sample[count + q] = k;
-        count += added;
-      }
-      cx.occluded(sc.rays.data(), count);
-      for (int q = 0; q < count; ++q)
-        if (sc.rays[q].tfar >= 0) {
-          add_rgb(&sums[ch.direct], sc.shadow[q].value);
-          add_rgb(&sums[ch.total], sc.shadow[q].value);
-        }
-    }
-    // Indirect: one path per primary ray that hit the surface.
-    if (cx.needs.indirect && cx.bounces > 0) {
-      RTCRay nee_rays[64];
-      ShadowSample nee_values[64];
-      const int max_nee = 2 + cx.lights;
-      std::vector<RTCRay> big_rays;
-      std::vector<ShadowSample> big_values;
-      RTCRay* nr = nee_rays;
-      ShadowSample* nv = nee_values;
-      if (max_nee > 64) {
-        big_rays.resize(max_nee);
-        big_values.resize(max_nee);
-        nr = big_rays.data();
-        nv = big_values.data();
-      }
-      for (int k = 0; k < m; ++k) {
-        RTCRayHit h = sc.hits[k];
-        if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-        const std::uint32_t s = c0 + k;
-        Rgb throughput{1, 1, 1};
-        Vec3 dir = sc.dirs[k];
-        Vec3 pos = vec(&h.ray.org_x) + dir * double(h.ray.tfar);
-        for (int b = 1; b <= cx.bounces; ++b) {
-          Vec3 ng = normalize(Vec3{h.hit.Ng_x, h.hit.Ng_y, h.hit.Ng_z});
-          if (dot(ng, dir) > 0) ng = -ng;
-          Rgb albedo, emission;
-          cx.surface_at(pos, albedo, emission);
-          const Vec3 o = pos + ng * eps;
-          const int pair0 = cx.pair_path + (b - 1) * cx.path_stride;
-          const int count = cx.nee(o, ng, texel_seed, r, pair0, s, nr, nv);
-          cx.occluded(nr, count);
-          Rgb direct{};
-          for (int q = 0; q < count; ++q)
-            if (nr[q].tfar >= 0) direct += nv[q].value;
-          const Rgb contribution = throughput * (emission + albedo * direct);
-          add_rgb(&sums[ch.bounce(b)], contribution);
-          add_rgb(&sums[ch.indirect], contribution);
-          add_rgb(&sums[ch.total], contribution);
-          if (b == cx.bounces) break;
-          throughput = throughput * albedo;
-          if (throughput.r <= 0 && throughput.g <= 0 && throughput.b <= 0) break;
-          dir = reference::cosine_hemisphere(ng, cx.sequence(texel_seed, r, pair0 + cx.nee_pairs)(s));
-          h = make_rayhit(o, dir);
-          cx.intersect(&h, 1);
-          if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-          pos = o + dir * double(h.ray.tfar);
-        }
-      }
+      mean[c] = m;
+      se[c] = std::sqrt(var / (double(B) * (B - 1)));
     }
   }
+};
+
+// Which quantities the reference traces: the layers it writes need them.
+Needs needs_of(const ReferenceOptions& options, int bounces) {
+  auto wants = [&](const std::string& l) {
+    return std::find(options.layers.begin(), options.layers.end(), l) != options.layers.end();
+  };
+  Needs needs;
+  needs.ao = wants("ao");
+  needs.vsky = wants("vsky");
+  needs.obscurance = wants("obscurance");
+  bool any_bounce = false;
+  for (int b = 1; b <= bounces; ++b) any_bounce |= wants("indirect_b" + std::to_string(b));
+  needs.indirect = wants("indirect") || wants("total") || any_bounce;
+  needs.direct = wants("direct") || wants("total");
+  return needs;
+}
+
+// What the reference records about how it was computed (hfbake:reference_setup).
+nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& options,
+                               const EmbreeField& geometry, int replicates, int per_replicate_cap,
+                               bool adaptive, int bounces) {
+  nlohmann::json setup = {
+      {"geometry", options.geometry == reference::GeometryKind::grid ? "grid" : "triangles"},
+      {"epsilon", geometry.epsilon()},
+      {"replicates", replicates},
+      {"samples_per_texel",
+       adaptive ? nlohmann::json("adaptive") : nlohmann::json(replicates * per_replicate_cap)},
+      {"bounces", bounces},
+      {"environment", options.sh_environment ? "sh4" : "full"},
+      {"falloff", falloff_kind_name(options.falloff.kind)},
+      {"radius", options.falloff.radius}};
+  if (f.wrap == Wrap::repeat) {
+    setup["repeat_tiles"] = options.repeat_tiles;
+    setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width, f.height) * f.texel_size;
+  }
+  return setup;
 }
 
 }  // namespace
@@ -473,23 +571,13 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   for (const std::string& l : options.layers)
     if (std::find(known.begin(), known.end(), l) == known.end())
       throw InputError("", "/reference/layers", "unknown reference layer \"" + l + "\"");
-  auto wants = [&](const std::string& l) {
-    return std::find(options.layers.begin(), options.layers.end(), l) != options.layers.end();
-  };
-
   const Environment env =
       options.sh_environment ? reference::band_limited_environment(scene.environment) : scene.environment;
   const EnvSampler sampler = env.uniform ? EnvSampler() : EnvSampler(env);
   const EmbreeField geometry(f, options.geometry, options.repeat_tiles);
 
   Context cx(scene, env, sampler, geometry, options, bounces);
-  cx.needs.ao = wants("ao");
-  cx.needs.vsky = wants("vsky");
-  cx.needs.obscurance = wants("obscurance");
-  bool any_bounce = false;
-  for (int b = 1; b <= bounces; ++b) any_bounce |= wants("indirect_b" + std::to_string(b));
-  cx.needs.indirect = wants("indirect") || wants("total") || any_bounce;
-  cx.needs.direct = wants("direct") || wants("total");
+  cx.needs = needs_of(options, bounces);
   if (options.falloff.kind != FalloffKind::none)
     cx.obscurance_tfar = float(std::min<double>(options.falloff.support(1e-6), 3.0e38));
 
@@ -505,13 +593,8 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   };
   std::vector<Out> outs;
   for (const std::string& l : options.layers) {
-    if (l == "ao") outs.push_back({l, cx.ch.ao, 1});
-    if (l == "vsky") outs.push_back({l, cx.ch.vsky, 1});
-    if (l == "obscurance") outs.push_back({l, cx.ch.obscurance, 1});
-    if (l == "direct") outs.push_back({l, cx.ch.direct, 3});
-    if (l == "indirect") outs.push_back({l, cx.ch.indirect, 3});
-    if (l == "total") outs.push_back({l, cx.ch.total, 3});
-    if (l.rfind("indirect_b", 0) == 0) outs.push_back({l, cx.ch.bounce(std::stoi(l.substr(10))), 3});
+    const Channels::Slot c = cx.ch.slot(l);
+    outs.push_back({l, c.first, c.channels});
   }
 
   LayerSet result;
@@ -541,8 +624,9 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
     FlushDenormals ftz;
     Scratch scratch(cx.lights);
-    std::vector<double> sums(std::size_t(B) * C);
-    std::vector<double> mean(C), se(C);
+    ReplicateEstimate est(B, C);
+    const std::vector<double>& mean = est.mean;
+    const std::vector<double>& se = est.se;
     for (int tile = range.begin(); tile != range.end(); ++tile) {
       rc.check();
       const int tx = tile % tiles_x, ty = tile / tiles_x;
@@ -551,26 +635,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
           rc.check();  // per texel: a texel of a many-sample reference can take seconds
           const std::uint64_t texel_seed =
               reference::hash_combine(reference::mix64(options.seed), std::uint64_t(f.index(i, j)));
-          // Runs n samples in each of replicates [r0, r0 + B) and leaves the mean of the replicate means
-          // and its standard error in mean / se.
-          auto estimate = [&](int r0, int n) {
-            std::fill(sums.begin(), sums.end(), 0.0);
-            for (int r = 0; r < B; ++r)
-              run_samples(cx, i, j, texel_seed, r0 + r, 0, std::uint32_t(n), &sums[std::size_t(r) * C],
-                          scratch);
-            for (int c = 0; c < C; ++c) {
-              double m = 0;
-              for (int r = 0; r < B; ++r) m += sums[std::size_t(r) * C + c];
-              m /= double(B) * n;
-              double var = 0;
-              for (int r = 0; r < B; ++r) {
-                const double d = sums[std::size_t(r) * C + c] / n - m;
-                var += d * d;
-              }
-              mean[c] = m;
-              se[c] = std::sqrt(var / (double(B) * (B - 1)));
-            }
-          };
+          auto estimate = [&](int r0, int n) { est.run(cx, i, j, texel_seed, r0, n, scratch); };
           int n = per_replicate_cap;
           if (adaptive) {
             // Pilot on independent replicates (ids B..2B-1): predicts the count that reaches the target at
@@ -604,19 +669,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
     }
   });
 
-  nlohmann::json setup = {
-      {"geometry", options.geometry == reference::GeometryKind::grid ? "grid" : "triangles"},
-      {"epsilon", geometry.epsilon()},
-      {"replicates", B},
-      {"samples_per_texel", adaptive ? nlohmann::json("adaptive") : nlohmann::json(B * per_replicate_cap)},
-      {"bounces", bounces},
-      {"environment", options.sh_environment ? "sh4" : "full"},
-      {"falloff", falloff_kind_name(options.falloff.kind)},
-      {"radius", options.falloff.radius}};
-  if (f.wrap == Wrap::repeat) {
-    setup["repeat_tiles"] = options.repeat_tiles;
-    setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width, f.height) * f.texel_size;
-  }
+  const nlohmann::json setup = reference_setup(f, options, geometry, B, per_replicate_cap, adaptive, bounces);
   result.attributes.emplace_back("hfbake:reference_setup", setup.dump());
   return result;
 }

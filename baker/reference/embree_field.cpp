@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "field/triangulation.hpp"
+
 namespace hfbake::reference {
 namespace {
 
@@ -58,13 +60,14 @@ RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, doub
   const std::size_t quads = std::size_t(nx - 1) * (ny - 1);
   unsigned* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
       g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 2 * quads));
-  std::size_t t = 0;
+  std::size_t t = 0;  // index of the next index
   for (int j = 0; j + 1 < ny; ++j)
     for (int i = 0; i + 1 < nx; ++i) {
-      const unsigned v00 = unsigned(j * nx + i), v10 = v00 + 1, v01 = v00 + unsigned(nx), v11 = v01 + 1;
-      // Split along (i+1, j) - (i, j+1), like Embree's quads (v0 v1 v3) and (v2 v3 v1).
-      idx[3 * t] = v00, idx[3 * t + 1] = v10, idx[3 * t + 2] = v01, ++t;
-      idx[3 * t] = v11, idx[3 * t + 1] = v01, idx[3 * t + 2] = v10, ++t;
+      // The field's split (field/triangulation.hpp), like Embree's quads (v0 v1 v3) and (v2 v3 v1).
+      const unsigned v00 = unsigned(j * nx + i);
+      for (const auto& facet : kFacetCorner) {
+        for (const auto& [di, dj] : facet) idx[t++] = v00 + unsigned(dj * nx + di);
+      }
     }
   rtcCommitGeometry(g);
   return g;

@@ -282,23 +282,12 @@ std::string svg_line_plot(const std::string& title, const std::string& x_label, 
   return s.str();
 }
 
-std::string report_html(const HtmlInputs& in) {
-  const nlohmann::json& r = in.report;
-  const nlohmann::json none = nlohmann::json::object();
-  const nlohmann::json job = r.value("job", none), methods = r.value("methods", none);
-  const nlohmann::json ref_doc = r.value("reference", none);
-  const bool passed = r.value("passed", true);
-  const std::string name = job.value("name", std::string("job"));
+namespace {
 
-  // Keys that failed a threshold or the baseline: their cells are marked.
-  std::set<std::string> failed;
-  for (const auto& t : r.value("thresholds", nlohmann::json::array()))
-    if (!t.value("passed", true)) failed.insert(t.value("key", std::string()));
-  if (r.contains("baseline"))
-    for (const auto& reg : r["baseline"].value("regressions", nlohmann::json::array()))
-      failed.insert(reg.value("key", std::string()));
+// --- the page's sections, in page order -------------------------------------------------------------------
 
-  std::ostringstream h;
+// Styles, title and the verdict.
+void write_head(std::ostringstream& h, const std::string& name, bool passed) {
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
     << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
     << "<title>hfbake report: " << html_escape(name) << "</title>\n<style>\n"
@@ -321,6 +310,13 @@ std::string report_html(const HtmlInputs& in) {
   h << "<p class=\"" << (passed ? "ok" : "bad") << "\" id=\"verdict\">"
     << (passed ? "PASSED: every threshold held" : "FAILED: a threshold or the baseline regressed")
     << "</p>\n";
+}
+
+// Job, version, field size, compared region, reference.
+void write_job_table(std::ostringstream& h, const nlohmann::json& r, const HtmlInputs& in) {
+  const nlohmann::json none = nlohmann::json::object();
+  const nlohmann::json job = r.value("job", none);
+  const nlohmann::json ref_doc = r.value("reference", none);
   h << "<table class=\"meta\">";
   h << "<tr><th>job file</th><td>" << html_escape(job.value("file", std::string())) << "</td></tr>";
   h << "<tr><th>job hash</th><td><code>" << html_escape(job.value("hash", std::string()))
@@ -340,7 +336,10 @@ std::string report_html(const HtmlInputs& in) {
     << html_escape(ref_doc.value("parameters", none).dump()) << "</code>"
     << (in.reference_note.empty() ? "" : "<br>" + html_escape(in.reference_note)) << "</td></tr>";
   h << "</table>\n";
+}
 
+void write_summary(std::ostringstream& h, const HtmlInputs& in, const nlohmann::json& methods,
+                   const std::set<std::string>& failed) {
   // Summary: one row per method and layer.
   h << "<h2>Summary</h2>\n<table class=\"summary\"><tr><th>method</th><th>time "
        "(s)</th><th>layer</th><th>rmse</th>"
@@ -368,7 +367,9 @@ std::string report_html(const HtmlInputs& in) {
     }
   }
   h << "</table>\n";
+}
 
+void write_thresholds(std::ostringstream& h, const nlohmann::json& r) {
   // Thresholds and baseline.
   const nlohmann::json thresholds = r.value("thresholds", nlohmann::json::array());
   if (!thresholds.empty()) {
@@ -383,6 +384,9 @@ std::string report_html(const HtmlInputs& in) {
     }
     h << "</table>\n";
   }
+}
+
+void write_baseline(std::ostringstream& h, const nlohmann::json& r) {
   if (r.contains("baseline")) {
     const auto& b = r["baseline"];
     const auto regs = b.value("regressions", nlohmann::json::array());
@@ -401,7 +405,10 @@ std::string report_html(const HtmlInputs& in) {
       h << "</table>\n";
     }
   }
+}
 
+void write_convergence(std::ostringstream& h, const HtmlInputs& in, const nlohmann::json& methods,
+                       const nlohmann::json& ref_doc) {
   // Convergence: every sweep group, each layer, error metrics against the swept parameter.
   std::map<int, std::vector<const HtmlMethod*>> groups;
   for (const HtmlMethod& m : in.methods)
@@ -445,79 +452,86 @@ std::string report_html(const HtmlInputs& in) {
       h << "</div>\n";
     }
   }
+}
 
-  // Per method: parameters, metrics, images.
-  for (const HtmlMethod& hm : in.methods) {
-    if (!methods.contains(hm.stem)) continue;
-    const nlohmann::json& m = methods[hm.stem];
-    h << "<h2 id=\"m-" << html_escape(hm.stem) << "\">" << html_escape(hm.stem) << "</h2>\n";
-    h << "<p>method <b>" << html_escape(m.value("method", hm.method)) << "</b>, " << json_num(m, "seconds", 3)
-      << " s, parameters <pre>" << html_escape(m.value("parameters", none).dump()) << "</pre></p>\n";
-    h << metrics_table(hm.stem, m.value("layers", none), failed);
-    const auto not_compared = m.value("not_compared", nlohmann::json::array());
-    if (!not_compared.empty()) {
-      h << "<p>Not compared (no reference layer of the same name):";
-      for (const auto& n : not_compared) h << " <code>" << html_escape(n.get<std::string>()) << "</code>";
-      h << "</p>\n";
+// The method's image, the reference's and the signed error per compared layer of one or three channels.
+void write_layer_figures(std::ostringstream& h, const HtmlInputs& in, const HtmlMethod& hm,
+                         const nlohmann::json& m) {
+  const nlohmann::json none = nlohmann::json::object();
+  const int w = hm.layers->width, ht = hm.layers->height;
+  const nlohmann::json compared = m.value("layers", none);
+  for (auto& [layer_name, mm] : compared.items()) {
+    const Layer* ml = hm.layers->find(layer_name);
+    const Layer* rl = in.reference->find(layer_name);
+    if (!ml || !rl || ml->channel_count() != rl->channel_count()) continue;
+    const int nc = ml->channel_count();
+    if (nc != 1 && nc != 3) {
+      h << "<p><code>" << html_escape(layer_name) << "</code>: " << nc << " channels, metrics only.</p>\n";
+      continue;
     }
-    if (!hm.layers || !in.reference) continue;
-    const int w = hm.layers->width, ht = hm.layers->height;
-    if (w != in.reference->width || ht != in.reference->height) continue;
-    const nlohmann::json compared = m.value("layers", none);
-    for (auto& [layer_name, mm] : compared.items()) {
-      const Layer* ml = hm.layers->find(layer_name);
-      const Layer* rl = in.reference->find(layer_name);
-      if (!ml || !rl || ml->channel_count() != rl->channel_count()) continue;
-      const int nc = ml->channel_count();
-      if (nc != 1 && nc != 3) {
-        h << "<p><code>" << html_escape(layer_name) << "</code>: " << nc << " channels, metrics only.</p>\n";
-        continue;
-      }
-      // One display scale for the method and the reference: the 99.5th percentile of the reference.
-      std::vector<double> ref_values(rl->data.begin(), rl->data.end());
-      double display_max = percentile_abs(ref_values, 0.995);
-      if (!(display_max > 0)) display_max = 1;
-      // Signed error, mean over the channels, box-filtered like the images.
-      const Shown shown = shown_size(w, ht, in.max_image_size);
-      std::vector<float> full_err(std::size_t(w) * ht);
-      for (std::size_t t = 0; t < full_err.size(); ++t) {
-        double s = 0;
-        for (int c = 0; c < nc; ++c) s += double(ml->data[t * nc + c]) - double(rl->data[t * nc + c]);
-        full_err[t] = float(s / nc);
-      }
-      const std::vector<float> err_f = down_sample(full_err, w, ht, 1, shown);
-      const std::vector<double> err(err_f.begin(), err_f.end());
-      double scale = percentile_abs(err, 0.99);
-      if (!(scale > 0)) scale = percentile_abs(err, 1.0);
-      if (!(scale > 0)) scale = 1e-6;
-      std::vector<std::uint8_t> px(err.size() * 3);
-      for (std::size_t i = 0; i < err.size(); ++i) diverging_colour(err[i] / scale, &px[3 * i]);
-      const Img err_img = png_image(px, 3, shown, w, ht);
+    // One display scale for the method and the reference: the 99.5th percentile of the reference.
+    std::vector<double> ref_values(rl->data.begin(), rl->data.end());
+    double display_max = percentile_abs(ref_values, 0.995);
+    if (!(display_max > 0)) display_max = 1;
+    // Signed error, mean over the channels, box-filtered like the images.
+    const Shown shown = shown_size(w, ht, in.max_image_size);
+    std::vector<float> full_err(std::size_t(w) * ht);
+    for (std::size_t t = 0; t < full_err.size(); ++t) {
+      double s = 0;
+      for (int c = 0; c < nc; ++c) s += double(ml->data[t * nc + c]) - double(rl->data[t * nc + c]);
+      full_err[t] = float(s / nc);
+    }
+    const std::vector<float> err_f = down_sample(full_err, w, ht, 1, shown);
+    const std::vector<double> err(err_f.begin(), err_f.end());
+    double scale = percentile_abs(err, 0.99);
+    if (!(scale > 0)) scale = percentile_abs(err, 1.0);
+    if (!(scale > 0)) scale = 1e-6;
+    std::vector<std::uint8_t> px(err.size() * 3);
+    for (std::size_t i = 0; i < err.size(); ++i) diverging_colour(err[i] / scale, &px[3 * i]);
+    const Img err_img = png_image(px, 3, shown, w, ht);
 
-      std::uint8_t lo[3], mid[3], hi[3];
-      diverging_colour(-1, lo), diverging_colour(0, mid), diverging_colour(1, hi);
-      char grad[160];
-      std::snprintf(grad, sizeof grad, "rgb(%d,%d,%d),rgb(%d,%d,%d),rgb(%d,%d,%d)", lo[0], lo[1], lo[2],
-                    mid[0], mid[1], mid[2], hi[0], hi[1], hi[2]);
-      const std::string value_legend =
-          legend("0", num(display_max / 2, 3), num(display_max, 3), "#000,#bcbcbc,#fff",
-                 nc == 1 ? "value (linear grey, clipped at " + num(display_max, 3) + ")"
-                         : "light (OpenColorIO display " + (in.display.empty() ? "default" : in.display) +
-                               ", view " + (in.view.empty() ? "default" : in.view) + ", clipped at " +
-                               num(display_max, 3) + ")");
-      h << "<h3>" << html_escape(hm.stem) << " &middot; " << html_escape(layer_name)
-        << "</h3>\n<div class=\"figs\">"
-        << figure(layer_image(*ml, w, ht, in.max_image_size, display_max, in), hm.stem + " " + layer_name,
-                  value_legend)
-        << figure(layer_image(*rl, w, ht, in.max_image_size, display_max, in), "reference " + layer_name,
-                  value_legend)
-        << figure(err_img, "error: " + hm.stem + " - reference" + (nc > 1 ? " (mean of channels)" : ""),
-                  legend("-" + num(scale, 3), "0", "+" + num(scale, 3), grad,
-                         "signed error; blue: method too dark, red: too bright; clipped at p99 |error|"))
-        << "</div>\n";
-    }
+    std::uint8_t lo[3], mid[3], hi[3];
+    diverging_colour(-1, lo), diverging_colour(0, mid), diverging_colour(1, hi);
+    char grad[160];
+    std::snprintf(grad, sizeof grad, "rgb(%d,%d,%d),rgb(%d,%d,%d),rgb(%d,%d,%d)", lo[0], lo[1], lo[2], mid[0],
+                  mid[1], mid[2], hi[0], hi[1], hi[2]);
+    const std::string value_legend = legend(
+        "0", num(display_max / 2, 3), num(display_max, 3), "#000,#bcbcbc,#fff",
+        nc == 1 ? "value (linear grey, clipped at " + num(display_max, 3) + ")"
+                : "light (OpenColorIO display " + (in.display.empty() ? "default" : in.display) + ", view " +
+                      (in.view.empty() ? "default" : in.view) + ", clipped at " + num(display_max, 3) + ")");
+    h << "<h3>" << html_escape(hm.stem) << " &middot; " << html_escape(layer_name)
+      << "</h3>\n<div class=\"figs\">"
+      << figure(layer_image(*ml, w, ht, in.max_image_size, display_max, in), hm.stem + " " + layer_name,
+                value_legend)
+      << figure(layer_image(*rl, w, ht, in.max_image_size, display_max, in), "reference " + layer_name,
+                value_legend)
+      << figure(err_img, "error: " + hm.stem + " - reference" + (nc > 1 ? " (mean of channels)" : ""),
+                legend("-" + num(scale, 3), "0", "+" + num(scale, 3), grad,
+                       "signed error; blue: method too dark, red: too bright; clipped at p99 |error|"))
+      << "</div>\n";
   }
+}
 
+void write_method(std::ostringstream& h, const HtmlInputs& in, const HtmlMethod& hm, const nlohmann::json& m,
+                  const std::set<std::string>& failed) {
+  const nlohmann::json none = nlohmann::json::object();
+  h << "<h2 id=\"m-" << html_escape(hm.stem) << "\">" << html_escape(hm.stem) << "</h2>\n";
+  h << "<p>method <b>" << html_escape(m.value("method", hm.method)) << "</b>, " << json_num(m, "seconds", 3)
+    << " s, parameters <pre>" << html_escape(m.value("parameters", none).dump()) << "</pre></p>\n";
+  h << metrics_table(hm.stem, m.value("layers", none), failed);
+  const auto not_compared = m.value("not_compared", nlohmann::json::array());
+  if (!not_compared.empty()) {
+    h << "<p>Not compared (no reference layer of the same name):";
+    for (const auto& n : not_compared) h << " <code>" << html_escape(n.get<std::string>()) << "</code>";
+    h << "</p>\n";
+  }
+  if (!hm.layers || !in.reference) return;
+  if (hm.layers->width != in.reference->width || hm.layers->height != in.reference->height) return;
+  write_layer_figures(h, in, hm, m);
+}
+
+void write_footer(std::ostringstream& h, const nlohmann::json& r) {
   // A check a browser runs on load: every image decoded (the headless browser test reads the result).
   h << "<script>\nwindow.addEventListener('load', function () {\n"
     << "  var imgs = document.images, ok = 0;\n"
@@ -531,6 +545,35 @@ std::string report_html(const HtmlInputs& in) {
   h << "<p style=\"color:#777;font-size:85%\">Written by hfbake "
     << html_escape(r.value("hfbake_version", std::string()))
     << ". Self-contained: no file or network access is needed to view it.</p>\n</body></html>\n";
+}
+
+}  // namespace
+
+std::string report_html(const HtmlInputs& in) {
+  const nlohmann::json& r = in.report;
+  const nlohmann::json none = nlohmann::json::object();
+  const nlohmann::json job = r.value("job", none), methods = r.value("methods", none);
+  const nlohmann::json ref_doc = r.value("reference", none);
+  const std::string name = job.value("name", std::string("job"));
+
+  // Keys that failed a threshold or the baseline: their cells are marked.
+  std::set<std::string> failed;
+  for (const auto& t : r.value("thresholds", nlohmann::json::array()))
+    if (!t.value("passed", true)) failed.insert(t.value("key", std::string()));
+  if (r.contains("baseline"))
+    for (const auto& reg : r["baseline"].value("regressions", nlohmann::json::array()))
+      failed.insert(reg.value("key", std::string()));
+
+  std::ostringstream h;
+  write_head(h, name, r.value("passed", true));
+  write_job_table(h, r, in);
+  write_summary(h, in, methods, failed);
+  write_thresholds(h, r);
+  write_baseline(h, r);
+  write_convergence(h, in, methods, ref_doc);
+  for (const HtmlMethod& hm : in.methods)
+    if (methods.contains(hm.stem)) write_method(h, in, hm, methods[hm.stem], failed);
+  write_footer(h, r);
   return h.str();
 }
 

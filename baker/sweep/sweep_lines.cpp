@@ -1,5 +1,7 @@
 #include "sweep/sweep_lines.hpp"
 
+#include "core/azimuth.hpp"
+
 namespace hfbake {
 namespace {
 
@@ -20,7 +22,7 @@ SweepDirection plan_direction(const HeightField& field, const SweepSpec& spec, i
   int octant = -1;
   if (spec.azimuths.empty()) {
     const int K = spec.directions;
-    d.phi = 2 * kPi * k / K;
+    d.phi = azimuth(k, K);
     // Exact axes and diagonals (8k/K integral): no rounding noise in the slope or the major axis choice.
     const long long e8 = 8LL * k;
     on_octant = e8 % K == 0;
@@ -164,7 +166,7 @@ TexelPair SweepLine::receiver_texels(int n, const HeightField& f) const {
     p.texel[e] = std::ptrdiff_t(d.x_major ? f.index(u, a) : f.index(a, u));
     p.weight[e] = e == 0 ? 1 - t : t;
     // A border texel whose other line runs off the field takes this sample alone (see texel_taps).
-    if (!d.repeat && t > 0 && d.n_minor > 1 && (a == 0 || a == d.n_minor - 1)) p.weight[e] = 1;
+    if (lone_border_tap(d, a, t)) p.weight[e] = 1;
   }
   return p;
 }

@@ -196,10 +196,11 @@ inline SweepLine sampled_line(const HeightField& field, const SweepDirection& di
   return l;
 }
 
-// floor(x) as an int for |x| < 2^31 without a libm call (baseline x86-64 has no rounding instruction).
-inline int floor_int(double x) {
-  const int i = int(x);
-  return x < double(i) ? i - 1 : i;
+// The clamp-border tap rule: a texel on minor-axis index v, a fraction frac of the way between the samples
+// of two lines, keeps one tap alone when it lies on the first or last row (column) of a clamp field: its
+// other tap is off the field and no receiver. Which tap it keeps: the inside one (texel_taps).
+inline bool lone_border_tap(const SweepDirection& dir, int v, float frac) {
+  return !dir.repeat && frac > 0 && dir.n_minor > 1 && (v == 0 || v == dir.n_minor - 1);
 }
 
 // The texel taps of texel (i, j) for direction dir in a result buffer laid out as
@@ -223,13 +224,9 @@ inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int 
   t.lo = buffer + (std::size_t(la) * std::size_t(dir.n_major) + r) * std::size_t(channels);
   t.hi = buffer + (std::size_t(lb) * std::size_t(dir.n_major) + r) * std::size_t(channels);
   // clamp: a tap off the field is no receiver; the border texel takes its other (inside) tap alone.
-  if (!dir.repeat && t.w_hi > 0 && dir.n_minor > 1) {
-    if (v0 == 0) {
-      t.lo = t.hi;
-      t.w_hi = 0;
-    } else if (v0 == dir.n_minor - 1) {
-      t.w_hi = 0;
-    }
+  if (lone_border_tap(dir, v0, t.w_hi)) {
+    if (v0 == 0) t.lo = t.hi;
+    t.w_hi = 0;
   }
   return t;
 }
@@ -400,7 +397,7 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
             const float frac = float(g - double(floor_int(g)));
             // lo's sample lies frac below the texel on the minor axis, hi's 1 - frac above; a clamp border
             // texel whose lo ran off the field uses hi in both taps (texel_taps).
-            const bool lo_is_hi = !d.repeat && frac > 0 && d.n_minor > 1 && v0 == 0;
+            const bool lo_is_hi = v0 == 0 && lone_border_tap(d, v0, frac);
             off_lo[at] = lo_is_hi ? 1 - frac : -frac;
             off_hi[at] = 1 - frac;
           }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/azimuth.hpp"
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/farfield_slab_table.hpp"
 #include "methods/ao/obscurance_params.hpp"
@@ -42,7 +43,7 @@ bool inside(const HeightField& f, double x, double y) {
 }
 
 void plan(const HeightField& f, const FarfieldOptions& o, int k, DirectionScan& d) {
-  const double phi = 2.0 * kPi * k / o.directions;
+  const double phi = azimuth(k, o.directions);
   d.dx = std::cos(phi), d.dy = std::sin(phi);
   // Snap the axis and diagonal directions exactly.
   for (double* c : {&d.dx, &d.dy})

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/azimuth.hpp"
 #include "core/error.hpp"
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/slice_integral.hpp"
@@ -17,7 +18,7 @@ namespace hfbake {
 std::vector<MarchDirection> uniform_directions(int count) {
   std::vector<MarchDirection> d(count);
   for (int k = 0; k < count; ++k) {
-    const double phi = 2 * kPi * k / count;
+    const double phi = azimuth(k, count);
     d[k] = {std::cos(phi), std::sin(phi), 1.0};
   }
   return d;

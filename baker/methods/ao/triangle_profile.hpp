@@ -65,9 +65,7 @@ void triangle_profile(const HeightField& f, int i, int j, double dx, double dy, 
   const double fx = std::floor(x), fy = std::floor(y);
   const int ii = int(fx), jj = int(fy);
   const double u = x - fx, v = y - fy;
-  const double z00 = f.at(ii, jj), z10 = f.at(ii + 1, jj), z01 = f.at(ii, jj + 1), z11 = f.at(ii + 1, jj + 1);
-  visit(t_end, u + v <= 1 ? z00 + u * (z10 - z00) + v * (z01 - z00)
-                          : z11 + (1 - u) * (z01 - z11) + (1 - v) * (z10 - z11));
+  visit(t_end, facet_height(u, v, [&](int di, int dj) { return double(f.at(ii + di, jj + dj)); }));
 }
 
 }  // namespace hfbake

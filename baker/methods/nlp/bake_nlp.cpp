@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 
+#include "core/azimuth.hpp"
 #include "core/error.hpp"
 #include "job/params.hpp"
 #include "methods/nlp/horizon_march.hpp"
@@ -97,36 +98,128 @@ bool wants(const NlpOptions& o, const char* name) {
   return std::find(o.layers.begin(), o.layers.end(), name) != o.layers.end();
 }
 
-}  // namespace
+// One bake, in phases: the inputs (normals, pyramids, azimuths, the environment's SH products, the lights),
+// pass 1 (visibility V and direct light, Eq. 11), one pass per bounce (indirect radiance U, Eq. 12) and the
+// output layers. The kernels (visibility, radiance) work on a row of receivers at a time, azimuth-major,
+// so neighbouring receivers march the same direction through the same cache lines.
+class NlpBake {
+ public:
+  NlpBake(const Scene& scene, const NlpOptions& o, const RunControl& rc);
+  void direct_pass();
+  void bounce_passes();
+  LayerSet layers();
 
-LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc) {
-  const HeightField& f = scene.field;
-  const int W = f.width, H = f.height, m = o.directions;
-  const std::size_t N = f.texel_count();
-  const std::vector<Vec3f> normals_own =
-      scene.normals.size() == N ? std::vector<Vec3f>{} : compute_normals(f);
-  const std::vector<Vec3f>& normals = scene.normals.size() == N ? scene.normals : normals_own;
+ private:
+  // --- inputs ---
+  static std::vector<LightSetup> setup_lights(const Scene& scene, const NlpOptions& o);
+  void setup_environment();
 
-  const nlp::MarchSetup ms = nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
-                                                   o.level_offset, o.radiance_level_offset);
-  const nlp::Pyramid hp =
-      nlp::build_pyramid(f.z.data(), 1, W, H, f.wrap, o.levels_per_octave, nlp::height_levels(ms));
-  const std::vector<std::array<float, 64>> A = nlp::sample_matrices(o.interpolation, m);
-  std::vector<float> cphi(m), sphi(m);
-  for (int a = 0; a < m; ++a) {
-    cphi[a] = float(std::cos(2 * kPi * a / m));
-    sphi[a] = float(std::sin(2 * kPi * a / m));
-  }
+  // --- kernels ---
+  void receivers(Scratch& s, const int* xs, int cnt, int j) const;
+  float omega_max(Scratch& s, const float* recv, int i, int j, float cx, float cy, const Vec3f& n,
+                  bool light = false) const;
+  void light_visibility(Scratch& s, const float* recv, int i, int j, const Vec3f& n, float* frac) const;
+  void visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const;
+  void radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cnt_row, int j, float* Uout,
+                float* Eout) const;
 
+  // --- shading ---
+  void shade_direct(std::size_t idx, const float* V, const float* frac);
+  void shade_indirect(std::vector<Rgb>& this_bounce, std::size_t idx, const float* U, const float* E);
+  void upsample(const std::vector<float>& buf, int cnt, int i, int j, float* out) const;
+  int coarse_i(int ci) const { return std::min(ci * sub, W - 1); }
+  int coarse_j(int cj) const { return std::min(cj * sub, H - 1); }
+  void report_rows(int rows) { rc.report(std::min(1.0, (rows_done += rows) / units)); }
+
+  const Scene& scene;
+  const NlpOptions& o;
+  const RunControl& rc;
+  const HeightField& f;
+  const int W, H, m;
+  const std::size_t N;
+  const std::vector<Vec3f> normals_own;
+  const std::vector<Vec3f>& normals;
+  const nlp::MarchSetup ms;
+  // Directional lights march with their own (sharper) level offset; the pyramid has enough levels.
+  const nlp::MarchSetup ms_light;
+  const nlp::Pyramid hp;
+  const std::vector<std::array<float, 64>> A;
+  std::vector<float> cphi, sphi;
   // Environment in SH and its product matrices (rows k < 9 suffice: the cosine has no band 3).
-  const std::array<sh::Coeffs, 3> env = nlp::project_environment(scene.environment);
   float T[3][9][kSh];
+  const std::vector<LightSetup> lights;
+  const std::size_t nl;
+  const bool want_vis, want_irr;
+  const int lv, steps;
+  // Receivers of V and U: every texel, or (subsample 2) every other texel in x and y, whose V, U and light
+  // visibility are bilinearly interpolated to the texels in between and shaded with their own normals.
+  const int sub, cw, ch;
+  std::vector<int> xs_full, xs_coarse;
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  const double units;
+  std::atomic<int> rows_done{0};
+
+  // --- results ---
+  std::vector<Rgb> direct, indirect;
+  std::vector<float> vis, irr;
+  int lu = 0;  // radiance levels (the bounces' pyramids)
+};
+
+NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc_)
+    : scene(scene_),
+      o(o_),
+      rc(rc_),
+      f(scene.field),
+      W(f.width),
+      H(f.height),
+      m(o.directions),
+      N(f.texel_count()),
+      normals_own(scene.normals.size() == N ? std::vector<Vec3f>{} : compute_normals(f)),
+      normals(scene.normals.size() == N ? scene.normals : normals_own),
+      ms(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave, o.level_offset,
+                               o.radiance_level_offset)),
+      ms_light(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
+                                     std::max(o.level_offset, o.light_level_offset),
+                                     o.radiance_level_offset)),
+      hp(nlp::build_pyramid(f.z.data(), 1, W, H, f.wrap, o.levels_per_octave, nlp::height_levels(ms))),
+      A(nlp::sample_matrices(o.interpolation, m)),
+      lights(setup_lights(scene, o)),
+      nl(lights.size()),
+      want_vis(wants(o, "sh_visibility")),
+      want_irr(wants(o, "sh_irradiance")),
+      lv(nlp::height_levels(ms)),
+      steps(ms.steps),
+      sub(o.subsample),
+      cw((W + sub - 1) / sub + (sub > 1 && (W - 1) % sub ? 1 : 0)),
+      ch((H + sub - 1) / sub + (sub > 1 && (H - 1) % sub ? 1 : 0)),
+      // Row buffers: V and the lights' visibility (kSh + lights), or U and the exact-cosine E (3 kSh + 3).
+      scratch([lv = lv, steps = steps, W = W,
+               row_floats = std::max(kSh + int(scene.lights.size()), 3 * kSh + 3)] {
+        return Scratch(lv, steps, W, row_floats);
+      }),
+      units(double(H) * (1 + std::max(0, scene.bounces))),
+      direct(N),
+      indirect(N),
+      vis(want_vis ? N * kSh : 0),
+      irr(want_irr ? N * 27 : 0) {
+  azimuth_table(m, cphi, sphi);
+  setup_environment();
+  xs_full.resize(W);
+  xs_coarse.resize(cw);
+  for (int i = 0; i < W; ++i) xs_full[i] = i;
+  for (int ci = 0; ci < cw; ++ci) xs_coarse[ci] = coarse_i(ci);
+}
+
+void NlpBake::setup_environment() {
+  const std::array<sh::Coeffs, 3> env = nlp::project_environment(scene.environment);
   for (int c = 0; c < 3; ++c) {
     const auto pm = sh::product_matrix(env[c]);
     for (int k = 0; k < 9; ++k)
       for (int j = 0; j < kSh; ++j) T[c][k][j] = float(pm[k][j]);
   }
+}
 
+std::vector<LightSetup> NlpBake::setup_lights(const Scene& scene, const NlpOptions& o) {
   std::vector<LightSetup> lights;
   for (const DirectionalLight& dl : scene.lights) {
     LightSetup L;
@@ -146,149 +239,128 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
     for (int k = 0; k < 9; ++k) L.sh[k] = kConv[k] * float(y[k]) * kInvPi;
     lights.push_back(std::move(L));
   }
+  return lights;
+}
 
-  const bool want_vis = wants(o, "sh_visibility"), want_irr = wants(o, "sh_irradiance");
-  std::vector<Rgb> direct(N), indirect(N);
-  std::vector<float> vis(want_vis ? N * kSh : 0), irr(want_irr ? N * 27 : 0);
+// Receiver heights in every height level (Eq. 15's f_i(x, y)) for a row of receivers (xs[t], j).
+void NlpBake::receivers(Scratch& s, const int* xs, int cnt, int j) const {
+  for (int t = 0; t < cnt; ++t)
+    for (int l = 0; l < lv; ++l)
+      s.recv[std::size_t(t) * lv + l] = nlp::sample_level1(hp, hp.levels[l], float(xs[t]), float(j));
+}
 
-  const int lv = nlp::height_levels(ms), steps = ms.steps;
-  // Row buffers: V and the lights' visibility (kSh + lights), or U and the exact-cosine E (3 kSh + 3).
-  const int row_floats = std::max(kSh + int(scene.lights.size()), 3 * kSh + 3);
-  tbb::enumerable_thread_specific<Scratch> scratch([&] { return Scratch(lv, steps, W, row_floats); });
-  const double units = double(H) * (1 + std::max(0, scene.bounces));
-  std::atomic<int> rows_done{0};
+float NlpBake::omega_max(Scratch& s, const float* recv, int i, int j, float cx, float cy, const Vec3f& n,
+                         bool light) const {
+  const int cnt =
+      nlp::march(light ? ms_light : ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
+  if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
+  if (light && o.light_horizon_knots) return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
+  return nlp::bspline_max(s.omega.data(), cnt);
+}
 
-  // Receiver heights in every height level (Eq. 15's f_i(x, y)) for a row of receivers (xs[t], j).
-  auto receivers = [&](Scratch& s, const int* xs, int cnt, int j) {
-    for (int t = 0; t < cnt; ++t)
-      for (int l = 0; l < lv; ++l)
-        s.recv[std::size_t(t) * lv + l] = nlp::sample_level1(hp, hp.levels[l], float(xs[t]), float(j));
-  };
-  // Directional lights march with their own (sharper) level offset; the pyramid has enough levels.
-  const nlp::MarchSetup ms_light =
-      nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
-                            std::max(o.level_offset, o.light_level_offset), o.radiance_level_offset);
-  auto omega_max = [&](Scratch& s, const float* recv, int i, int j, float cx, float cy, const Vec3f& n,
-                       bool light = false) {
-    const int cnt = nlp::march(light ? ms_light : ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(),
-                               s.lev.data());
-    if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
-    if (light && o.light_horizon_knots) return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
-    return nlp::bspline_max(s.omega.data(), cnt);
-  };
-
-  // Receivers of V and U: every texel, or (subsample 2) every other texel in x and y, whose V, U and light
-  // visibility are bilinearly interpolated to the texels in between and shaded with their own normals.
-  const int sub = o.subsample, cw = (W + sub - 1) / sub + (sub > 1 && (W - 1) % sub ? 1 : 0),
-            ch = (H + sub - 1) / sub + (sub > 1 && (H - 1) % sub ? 1 : 0);
-  auto coarse_i = [&](int ci) { return std::min(ci * sub, W - 1); };
-  auto coarse_j = [&](int cj) { return std::min(cj * sub, H - 1); };
-  const std::size_t nl = lights.size();
-  std::vector<int> xs_full(W), xs_coarse(cw);
-  for (int i = 0; i < W; ++i) xs_full[i] = i;
-  for (int ci = 0; ci < cw; ++ci) xs_coarse[ci] = coarse_i(ci);
-
-  // The restricted-extent visibility of each light at receiver (i, j) (NS09 §6).
-  auto light_visibility = [&](Scratch& s, const float* recv, int i, int j, const Vec3f& n, float* frac) {
-    for (std::size_t q = 0; q < nl; ++q) {
-      const LightSetup& L = lights[q];
-      float fr = 0;
-      for (std::size_t k = 0; k < L.cx.size(); ++k) {
-        const float wmax = omega_max(s, recv, i, j, L.cx[k], L.cy[k], n, true);
-        if (L.radius > 0) {
-          const float lo = std::max(L.elevation - L.radius, -1.5707963f);
-          const float hi = std::min(L.elevation + L.radius, 1.5707963f);
-          const float slo = std::sin(std::max(wmax, lo)), shi = std::sin(hi);
-          fr += std::clamp((shi - slo) / (shi - std::sin(lo)), 0.0f, 1.0f);
-        } else {
-          fr += wmax < L.elevation ? 1.0f : 0.0f;
-        }
-      }
-      frac[q] = fr / float(L.cx.size());
-    }
-  };
-
-  // Kernel: V (Eq. 11, 20-21) and the lights' visibility for the row of receivers (xs[t], j), t < cnt:
-  // out[t * stride] = V (kSh floats), then the lights' fractions. Azimuth-major over the row (neighbouring
-  // receivers march the same direction through the same cache lines); each receiver still sums its azimuths
-  // in order, so the bits do not depend on the loop order.
-  auto visibility = [&](Scratch& s, const int* xs, int cnt, int j, float* out, int stride) {
-    receivers(s, xs, cnt, j);
-    for (int t = 0; t < cnt; ++t)
-      std::fill(out + std::size_t(t) * stride, out + std::size_t(t) * stride + kSh, 0.0f);
-    for (int a = 0; a < m; ++a) {
-      const float* Aj = A[a].data();
-      for (int t = 0; t < cnt; ++t) {
-        const int i = xs[t];
-        const float wmax =
-            omega_max(s, s.recv.data() + std::size_t(t) * lv, i, j, cphi[a], sphi[a], normals[f.index(i, j)]);
-        float v[4];
-        nlp::band4(std::sin(wmax), 1.0f, v);
-        float* V = out + std::size_t(t) * stride;
-        for (int r = 0; r < kSh; ++r)
-          V[r] += Aj[r * 4] * v[0] + Aj[r * 4 + 1] * v[1] + Aj[r * 4 + 2] * v[2] + Aj[r * 4 + 3] * v[3];
+// The restricted-extent visibility of each light at receiver (i, j) (NS09 §6).
+void NlpBake::light_visibility(Scratch& s, const float* recv, int i, int j, const Vec3f& n,
+                               float* frac) const {
+  for (std::size_t q = 0; q < nl; ++q) {
+    const LightSetup& L = lights[q];
+    float fr = 0;
+    for (std::size_t k = 0; k < L.cx.size(); ++k) {
+      const float wmax = omega_max(s, recv, i, j, L.cx[k], L.cy[k], n, true);
+      if (L.radius > 0) {
+        const float lo = std::max(L.elevation - L.radius, -1.5707963f);
+        const float hi = std::min(L.elevation + L.radius, 1.5707963f);
+        const float slo = std::sin(std::max(wmax, lo)), shi = std::sin(hi);
+        fr += std::clamp((shi - slo) / (shi - std::sin(lo)), 0.0f, 1.0f);
+      } else {
+        fr += wmax < L.elevation ? 1.0f : 0.0f;
       }
     }
+    frac[q] = fr / float(L.cx.size());
+  }
+}
+
+// Kernel: V (Eq. 11, 20-21) and the lights' visibility for the row of receivers (xs[t], j), t < cnt:
+// out[t * stride] = V (kSh floats), then the lights' fractions. Azimuth-major over the row (neighbouring
+// receivers march the same direction through the same cache lines); each receiver still sums its azimuths
+// in order, so the bits do not depend on the loop order.
+void NlpBake::visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const {
+  receivers(s, xs, cnt, j);
+  for (int t = 0; t < cnt; ++t)
+    std::fill(out + std::size_t(t) * stride, out + std::size_t(t) * stride + kSh, 0.0f);
+  for (int a = 0; a < m; ++a) {
+    const float* Aj = A[a].data();
     for (int t = 0; t < cnt; ++t) {
       const int i = xs[t];
-      light_visibility(s, s.recv.data() + std::size_t(t) * lv, i, j, normals[f.index(i, j)],
-                       out + std::size_t(t) * stride + kSh);
+      const float wmax =
+          omega_max(s, s.recv.data() + std::size_t(t) * lv, i, j, cphi[a], sphi[a], normals[f.index(i, j)]);
+      float v[4];
+      nlp::band4(std::sin(wmax), 1.0f, v);
+      float* V = out + std::size_t(t) * stride;
+      for (int r = 0; r < kSh; ++r)
+        V[r] += Aj[r * 4] * v[0] + Aj[r * 4 + 1] * v[1] + Aj[r * 4 + 2] * v[2] + Aj[r * 4 + 3] * v[3];
     }
-  };
+  }
+  for (int t = 0; t < cnt; ++t) {
+    const int i = xs[t];
+    light_visibility(s, s.recv.data() + std::size_t(t) * lv, i, j, normals[f.index(i, j)],
+                     out + std::size_t(t) * stride + kSh);
+  }
+}
 
-  // Shading of direct light at texel idx from V and the lights' visibility.
-  auto shade_direct = [&](std::size_t idx, const float* V, const float* frac) {
-    const Vec3f n = normals[idx];
-    float y[kSh];
-    sh::eval(n.x, n.y, n.z, y);
-    float e[3] = {}, lin[3][9];
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 9; ++k) {
-        float acc = 0;
-        for (int q = 0; q < kSh; ++q) acc += T[c][k][q] * V[q];
-        lin[c][k] = acc;
-        e[c] += kConv[k] * y[k] * acc;
-      }
-    Rgb d{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
-    float irr_local[27];
-    for (int k = 0; k < 9; ++k)
-      for (int c = 0; c < 3; ++c) irr_local[k * 3 + c] = kConv[k] * lin[c][k] * kInvPi;
-    // Directional lights: exact cosine, visibility over the light's restricted extent (NS09 §6).
-    for (std::size_t q = 0; q < nl; ++q) {
-      const LightSetup& L = lights[q];
-      const float cosn = float(n.x * L.dir.x + n.y * L.dir.y + n.z * L.dir.z);
-      if (cosn <= 0 || frac[q] <= 0) continue;
-      d += L.irradiance * (cosn * frac[q] * kInvPi);
-      for (int k = 0; k < 9; ++k) {
-        irr_local[k * 3 + 0] += L.sh[k] * frac[q] * L.irradiance.r;
-        irr_local[k * 3 + 1] += L.sh[k] * frac[q] * L.irradiance.g;
-        irr_local[k * 3 + 2] += L.sh[k] * frac[q] * L.irradiance.b;
-      }
+// Shading of direct light at texel idx from V and the lights' visibility.
+void NlpBake::shade_direct(std::size_t idx, const float* V, const float* frac) {
+  const Vec3f n = normals[idx];
+  float y[kSh];
+  sh::eval(n.x, n.y, n.z, y);
+  float e[3] = {}, lin[3][9];
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 9; ++k) {
+      float acc = 0;
+      for (int q = 0; q < kSh; ++q) acc += T[c][k][q] * V[q];
+      lin[c][k] = acc;
+      e[c] += kConv[k] * y[k] * acc;
     }
-    direct[idx] = d;
-    if (want_vis) std::copy(V, V + kSh, vis.begin() + idx * kSh);
-    if (want_irr) std::copy(irr_local, irr_local + 27, irr.begin() + idx * 27);
-  };
+  Rgb d{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+  float irr_local[27];
+  for (int k = 0; k < 9; ++k)
+    for (int c = 0; c < 3; ++c) irr_local[k * 3 + c] = kConv[k] * lin[c][k] * kInvPi;
+  // Directional lights: exact cosine, visibility over the light's restricted extent (NS09 §6).
+  for (std::size_t q = 0; q < nl; ++q) {
+    const LightSetup& L = lights[q];
+    const float cosn = float(n.x * L.dir.x + n.y * L.dir.y + n.z * L.dir.z);
+    if (cosn <= 0 || frac[q] <= 0) continue;
+    d += L.irradiance * (cosn * frac[q] * kInvPi);
+    for (int k = 0; k < 9; ++k) {
+      irr_local[k * 3 + 0] += L.sh[k] * frac[q] * L.irradiance.r;
+      irr_local[k * 3 + 1] += L.sh[k] * frac[q] * L.irradiance.g;
+      irr_local[k * 3 + 2] += L.sh[k] * frac[q] * L.irradiance.b;
+    }
+  }
+  direct[idx] = d;
+  if (want_vis) std::copy(V, V + kSh, vis.begin() + idx * kSh);
+  if (want_irr) std::copy(irr_local, irr_local + 27, irr.begin() + idx * 27);
+}
 
-  // Bilinear interpolation of per-receiver vectors (cnt floats each) from the coarse grid to texel (i, j).
-  auto upsample = [&](const std::vector<float>& buf, int cnt, int i, int j, float* out) {
-    const float u = float(i) / sub, v = float(j) / sub;
-    const int i0 = std::min(int(u), cw - 1), j0 = std::min(int(v), ch - 1);
-    const int i1 = std::min(i0 + 1, cw - 1), j1 = std::min(j0 + 1, ch - 1);
-    // Exact positions of the coarse receivers (the last one may sit on the border, closer than sub).
-    const float x0 = float(coarse_i(i0)), x1 = float(coarse_i(i1)), y0 = float(coarse_j(j0)),
-                y1 = float(coarse_j(j1));
-    const float fu = x1 > x0 ? (float(i) - x0) / (x1 - x0) : 0.0f,
-                fv = y1 > y0 ? (float(j) - y0) / (y1 - y0) : 0.0f;
-    const float* a = buf.data() + (std::size_t(j0) * cw + i0) * cnt;
-    const float* b = buf.data() + (std::size_t(j0) * cw + i1) * cnt;
-    const float* c = buf.data() + (std::size_t(j1) * cw + i0) * cnt;
-    const float* d = buf.data() + (std::size_t(j1) * cw + i1) * cnt;
-    for (int k = 0; k < cnt; ++k)
-      out[k] = (a[k] * (1 - fu) + b[k] * fu) * (1 - fv) + (c[k] * (1 - fu) + d[k] * fu) * fv;
-  };
+// Bilinear interpolation of per-receiver vectors (cnt floats each) from the coarse grid to texel (i, j).
+void NlpBake::upsample(const std::vector<float>& buf, int cnt, int i, int j, float* out) const {
+  const float u = float(i) / sub, v = float(j) / sub;
+  const int i0 = std::min(int(u), cw - 1), j0 = std::min(int(v), ch - 1);
+  const int i1 = std::min(i0 + 1, cw - 1), j1 = std::min(j0 + 1, ch - 1);
+  // Exact positions of the coarse receivers (the last one may sit on the border, closer than sub).
+  const float x0 = float(coarse_i(i0)), x1 = float(coarse_i(i1)), y0 = float(coarse_j(j0)),
+              y1 = float(coarse_j(j1));
+  const float fu = x1 > x0 ? (float(i) - x0) / (x1 - x0) : 0.0f,
+              fv = y1 > y0 ? (float(j) - y0) / (y1 - y0) : 0.0f;
+  const float* a = buf.data() + (std::size_t(j0) * cw + i0) * cnt;
+  const float* b = buf.data() + (std::size_t(j0) * cw + i1) * cnt;
+  const float* c = buf.data() + (std::size_t(j1) * cw + i0) * cnt;
+  const float* d = buf.data() + (std::size_t(j1) * cw + i1) * cnt;
+  for (int k = 0; k < cnt; ++k)
+    out[k] = (a[k] * (1 - fu) + b[k] * fu) * (1 - fv) + (c[k] * (1 - fu) + d[k] * fu) * fv;
+}
 
-  // --- pass 1: visibility V, direct light ----------------------------------------------------------------
+// Pass 1: visibility V and direct light, on every texel or on the coarse receivers then upsampled.
+void NlpBake::direct_pass() {
   if (sub == 1) {
     tbb::parallel_for(0, H, [&](int j) {
       rc.check();
@@ -299,7 +371,7 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
         const float* V = s.row.data() + std::size_t(i) * stride;
         shade_direct(f.index(i, j), V, V + kSh);
       }
-      rc.report(std::min(1.0, (rows_done += 1) / units));
+      report_rows(1);
     });
   } else {
     const int stride = kSh + int(nl);
@@ -309,7 +381,7 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       Scratch& s = scratch.local();
       visibility(s, xs_coarse.data(), cw, coarse_j(cj), coarse.data() + std::size_t(cj) * cw * stride,
                  stride);
-      rc.report(std::min(1.0, (rows_done += sub) / units));
+      report_rows(sub);
     });
     tbb::parallel_for(0, H, [&](int j) {
       std::vector<float> buf(stride);
@@ -319,122 +391,128 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       }
     });
   }
+}
 
-  // --- bounces: indirect radiance U (Eq. 12, 20-21) through the radiance pyramid
-  // ----------------------------
+// Kernel: U (3 x 16, colour-major) at receiver (i, j) from the radiance pyramid rp.
+// E (optional, 3 floats): the irradiance / (2 pi / m) of the same casting-set segments with the exact
+// cosine: segment (e0, e1] of radiance r adds r * (F(e1) - F(e0)), F(e) = n_h (e + sin e cos e) / 2 +
+// n_z sin^2 e / 2, the integral of (n_h cos e + n_z sin e) cos e (n_h = n . azimuth).
+// Row form as visibility: receivers (xs[t], j), U at out[t * 3 kSh], E (if exact) at Eout[t * 3].
+void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cnt_row, int j, float* Uout,
+                       float* Eout) const {
+  receivers(s, xs, cnt_row, j);
+  std::fill(Uout, Uout + std::size_t(cnt_row) * 3 * kSh, 0.0f);
+  if (Eout) std::fill(Eout, Eout + std::size_t(cnt_row) * 3, 0.0f);
+  for (int a = 0; a < m; ++a)
+    for (int t = 0; t < cnt_row; ++t) {
+      const int i = xs[t];
+      const Vec3f n = normals[f.index(i, j)];
+      const float* recv = s.recv.data() + std::size_t(t) * lv;
+      float* U = Uout + std::size_t(t) * 3 * kSh;
+      float* E = Eout ? Eout + std::size_t(t) * 3 : nullptr;
+      const float cx = cphi[a], cy = sphi[a];
+      const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
+      const float nh = n.x * cx + n.y * cy, nz = n.z;
+      auto F = [&](float e, float se) {
+        const float ce = std::sqrt(std::max(0.0f, 1 - se * se));
+        return 0.5f * (nh * (e + se * ce) + nz * se * se);
+      };
+      float prevF = E ? F(wmin, std::sin(wmin)) : 0.0f;
+      const int cnt = nlp::march(ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
+      const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
+      float u[3][4] = {}, prev[4];
+      nlp::occlusion4(std::sin(wmin), prev);
+      float run = wmin;
+      bool any = false;
+      for (int p = 0; p < nc; ++p) {
+        if (!(s.curve[p] > run)) continue;
+        run = s.curve[p];
+        const int k = p >> 1;
+        const float dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
+        float rad[3];
+        const nlp::PyramidLevel& L = rp.levels[ms.rlevel[s.lev[k]]];
+        nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
+        float nu[4];
+        const float srun = std::sin(run);
+        nlp::occlusion4(srun, nu);
+        for (int l = 0; l < 4; ++l) {
+          const float dl = nu[l] - prev[l];
+          u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
+          prev[l] = nu[l];
+        }
+        if (E) {
+          const float Fr = F(run, srun), dF = Fr - prevF;
+          E[0] += rad[0] * dF, E[1] += rad[1] * dF, E[2] += rad[2] * dF;
+          prevF = Fr;
+        }
+        any = true;
+      }
+      if (!any) continue;
+      const float* Aj = A[a].data();
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < kSh; ++r)
+          U[c * kSh + r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
+                            Aj[r * 4 + 3] * u[c][3];
+    }
+}
+
+void NlpBake::shade_indirect(std::vector<Rgb>& this_bounce, std::size_t idx, const float* U, const float* E) {
+  if (E) {
+    const float w = float(2 / double(m));  // (2 pi / m) / pi
+    this_bounce[idx] = Rgb{E[0] * w, E[1] * w, E[2] * w};
+  } else {
+    const Vec3f n = normals[idx];
+    float y[kSh];
+    sh::eval(n.x, n.y, n.z, y);
+    float e[3] = {};
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 9; ++k) e[c] += kConv[k] * y[k] * U[c * kSh + k];
+    this_bounce[idx] = Rgb{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+  }
+  if (want_irr)
+    for (int k = 0; k < 9; ++k)
+      for (int c = 0; c < 3; ++c) irr[idx * 27 + k * 3 + c] += kConv[k] * U[c * kSh + k] * kInvPi;
+}
+
+// The bounces: indirect radiance U (Eq. 12, 20-21) through a radiance pyramid of the exitant light of the
+// bounce before (albedo x direct plus emission for the first).
+void NlpBake::bounce_passes() {
   std::vector<float> exitant(N * 3);
   for (std::size_t t = 0; t < N; ++t) {
     Rgb b = scene.surface.albedo.empty() ? Rgb{} : scene.surface.albedo[t] * direct[t];
     if (!scene.surface.emission.empty()) b += scene.surface.emission[t];
     exitant[t * 3] = b.r, exitant[t * 3 + 1] = b.g, exitant[t * 3 + 2] = b.b;
   }
-  const int lu = nlp::radiance_levels(ms);
+  lu = nlp::radiance_levels(ms);
   for (int bounce = 1; bounce <= scene.bounces; ++bounce) {
     const nlp::Pyramid rp = nlp::build_pyramid(exitant.data(), 3, W, H, f.wrap, o.levels_per_octave, lu);
     std::vector<Rgb> this_bounce(N);
-    // Kernel: U (3 x 16, colour-major) at receiver (i, j).
-    // E (optional, 3 floats): the irradiance / (2 pi / m) of the same casting-set segments with the exact
-    // cosine: segment (e0, e1] of radiance r adds r * (F(e1) - F(e0)), F(e) = n_h (e + sin e cos e) / 2 +
-    // n_z sin^2 e / 2, the integral of (n_h cos e + n_z sin e) cos e (n_h = n . azimuth).
-    // Row form as visibility: receivers (xs[t], j), U at out[t * 3 kSh], E (if exact) at Eout[t * 3].
-    auto radiance = [&](Scratch& s, const int* xs, int cnt_row, int j, float* Uout, float* Eout) {
-      receivers(s, xs, cnt_row, j);
-      std::fill(Uout, Uout + std::size_t(cnt_row) * 3 * kSh, 0.0f);
-      if (Eout) std::fill(Eout, Eout + std::size_t(cnt_row) * 3, 0.0f);
-      for (int a = 0; a < m; ++a)
-        for (int t = 0; t < cnt_row; ++t) {
-          const int i = xs[t];
-          const Vec3f n = normals[f.index(i, j)];
-          const float* recv = s.recv.data() + std::size_t(t) * lv;
-          float* U = Uout + std::size_t(t) * 3 * kSh;
-          float* E = Eout ? Eout + std::size_t(t) * 3 : nullptr;
-          const float cx = cphi[a], cy = sphi[a];
-          const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
-          const float nh = n.x * cx + n.y * cy, nz = n.z;
-          auto F = [&](float e, float se) {
-            const float ce = std::sqrt(std::max(0.0f, 1 - se * se));
-            return 0.5f * (nh * (e + se * ce) + nz * se * se);
-          };
-          float prevF = E ? F(wmin, std::sin(wmin)) : 0.0f;
-          const int cnt = nlp::march(ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
-          const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
-          float u[3][4] = {}, prev[4];
-          nlp::occlusion4(std::sin(wmin), prev);
-          float run = wmin;
-          bool any = false;
-          for (int p = 0; p < nc; ++p) {
-            if (!(s.curve[p] > run)) continue;
-            run = s.curve[p];
-            const int k = p >> 1;
-            const float dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
-            float rad[3];
-            const nlp::PyramidLevel& L = rp.levels[ms.rlevel[s.lev[k]]];
-            nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
-            float nu[4];
-            const float srun = std::sin(run);
-            nlp::occlusion4(srun, nu);
-            for (int l = 0; l < 4; ++l) {
-              const float dl = nu[l] - prev[l];
-              u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
-              prev[l] = nu[l];
-            }
-            if (E) {
-              const float Fr = F(run, srun), dF = Fr - prevF;
-              E[0] += rad[0] * dF, E[1] += rad[1] * dF, E[2] += rad[2] * dF;
-              prevF = Fr;
-            }
-            any = true;
-          }
-          if (!any) continue;
-          const float* Aj = A[a].data();
-          for (int c = 0; c < 3; ++c)
-            for (int r = 0; r < kSh; ++r)
-              U[c * kSh + r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
-                                Aj[r * 4 + 3] * u[c][3];
-        }
-    };
-    auto shade_indirect = [&](std::size_t idx, const float* U, const float* E) {
-      if (E) {
-        const float w = float(2 / double(m));  // (2 pi / m) / pi
-        this_bounce[idx] = Rgb{E[0] * w, E[1] * w, E[2] * w};
-      } else {
-        const Vec3f n = normals[idx];
-        float y[kSh];
-        sh::eval(n.x, n.y, n.z, y);
-        float e[3] = {};
-        for (int c = 0; c < 3; ++c)
-          for (int k = 0; k < 9; ++k) e[c] += kConv[k] * y[k] * U[c * kSh + k];
-        this_bounce[idx] = Rgb{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
-      }
-      if (want_irr)
-        for (int k = 0; k < 9; ++k)
-          for (int c = 0; c < 3; ++c) irr[idx * 27 + k * 3 + c] += kConv[k] * U[c * kSh + k] * kInvPi;
-    };
     if (sub == 1) {
       tbb::parallel_for(0, H, [&](int j) {
         rc.check();
         Scratch& s = scratch.local();
         float* U = s.row.data();
         float* E = o.exact_indirect_cosine ? U + std::size_t(W) * 3 * kSh : nullptr;
-        radiance(s, xs_full.data(), W, j, U, E);
+        radiance(rp, s, xs_full.data(), W, j, U, E);
         for (int i = 0; i < W; ++i)
-          shade_indirect(f.index(i, j), U + std::size_t(i) * 3 * kSh, E ? E + std::size_t(i) * 3 : nullptr);
-        rc.report(std::min(1.0, (rows_done += 1) / units));
+          shade_indirect(this_bounce, f.index(i, j), U + std::size_t(i) * 3 * kSh,
+                         E ? E + std::size_t(i) * 3 : nullptr);
+        report_rows(1);
       });
     } else {
       std::vector<float> coarse(std::size_t(cw) * ch * 3 * kSh);
       tbb::parallel_for(0, ch, [&](int cj) {
         rc.check();
         Scratch& s = scratch.local();
-        radiance(s, xs_coarse.data(), cw, coarse_j(cj), coarse.data() + std::size_t(cj) * cw * 3 * kSh,
+        radiance(rp, s, xs_coarse.data(), cw, coarse_j(cj), coarse.data() + std::size_t(cj) * cw * 3 * kSh,
                  nullptr);
-        rc.report(std::min(1.0, (rows_done += sub) / units));
+        report_rows(sub);
       });
       tbb::parallel_for(0, H, [&](int j) {
         float U[3 * kSh];
         for (int i = 0; i < W; ++i) {
           upsample(coarse, 3 * kSh, i, j, U);
-          shade_indirect(f.index(i, j), U, nullptr);
+          shade_indirect(this_bounce, f.index(i, j), U, nullptr);
         }
       });
     }
@@ -444,8 +522,10 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       exitant[t * 3] = b.r, exitant[t * 3 + 1] = b.g, exitant[t * 3 + 2] = b.b;
     }
   }
+}
 
-  // --- layers --------------------------------------------------------------------------------------------
+// The requested layers, in the order of NlpOptions::layers, and the metadata.
+LayerSet NlpBake::layers() {
   LayerSet out;
   out.width = W;
   out.height = H;
@@ -461,10 +541,10 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
       Layer& L = out.add(name, indexed_channels(kSh));
       L.data = std::move(vis);
     } else if (name == "sh_irradiance") {
-      std::vector<std::string> ch;
+      std::vector<std::string> channels;
       for (const std::string& c : indexed_channels(kSh))
-        for (const char* col : {"R", "G", "B"}) ch.push_back(c + "." + col);
-      Layer& L = out.add(name, ch);
+        for (const char* col : {"R", "G", "B"}) channels.push_back(c + "." + col);
+      Layer& L = out.add(name, channels);
       for (std::size_t t = 0; t < N; ++t)
         for (int q = 0; q < 27; ++q) L.data[t * 48 + q] = irr[t * 27 + q];
       std::vector<float>().swap(irr);
@@ -476,6 +556,15 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
                                                         " bytes), steps " + std::to_string(ms.steps) +
                                                         ", radiance levels " + std::to_string(lu));
   return out;
+}
+
+}  // namespace
+
+LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc) {
+  NlpBake bake(scene, o, rc);
+  bake.direct_pass();
+  bake.bounce_passes();
+  return bake.layers();
 }
 
 LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/azimuth.hpp"
+
 namespace hfbake::p1 {
 namespace {
 
@@ -38,7 +40,7 @@ LightingTables build_lighting_tables(const Environment& env, int K, int normal_b
   const std::size_t row = std::size_t(horizon_bins) + 1;
   t.data.resize(std::size_t(K) * normal_bins * row);
   tbb::parallel_for(0, K, [&](int k) {
-    const double phi = 2 * kPi * k / K;
+    const double phi = azimuth(k, K);
     const std::vector<Rgb> profile = azimuth_wedge_profile(env, phi - kPi / K, phi + kPi / K);
     const int R = int(profile.size());
     std::vector<double> prefix(std::size_t(R + 1) * 3);
@@ -87,7 +89,7 @@ SwathProfiles build_swath_profiles(const Environment& env, int K) {
     sp.sb[r] = float(t - std::sin(t) * std::cos(t));
   }
   tbb::parallel_for(0, K, [&](int k) {
-    const double phi = 2 * kPi * k / K;
+    const double phi = azimuth(k, K);
     const std::vector<Rgb> profile =
         k == 0 ? first : azimuth_wedge_profile(env, phi - kPi / K, phi + kPi / K);
     double a[3] = {0, 0, 0}, b[3] = {0, 0, 0};
@@ -108,7 +110,7 @@ SwathProfiles build_swath_profiles(const Environment& env, int K) {
 }
 
 Rgb lighting_table_exact(const Environment& env, int K, int k, double theta_n, double theta_h) {
-  const double phi = 2 * kPi * k / K;
+  const double phi = azimuth(k, K);
   const std::vector<Rgb> profile = azimuth_wedge_profile(env, phi - kPi / K, phi + kPi / K);
   return integrate_rows(profile, K, theta_n, std::min(theta_h, theta_n + kPi / 2));
 }

@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 
+#include "core/azimuth.hpp"
 #include "core/error.hpp"
 #include "job/params.hpp"
 #include "methods/p1/horizon_sweep.hpp"
@@ -67,14 +68,6 @@ P1Params parse_p1_params(const nlohmann::json& e) {
   return read_p1_params(in);
 }
 
-void facet_normals(const HeightField& f, int i, int j, Vec3f out[2]) {
-  const double z = f.at(i, j), inv = 1 / f.texel_size;
-  const double fx = (f.at(i + 1, j) - z) * inv, fy = (f.at(i, j + 1) - z) * inv;  // forward
-  const double bx = (z - f.at(i - 1, j)) * inv, by = (z - f.at(i, j - 1)) * inv;  // backward
-  out[0] = Vec3f::from(normalize(Vec3{-fx, -fy, 1}));
-  out[1] = Vec3f::from(normalize(Vec3{-bx, -by, 1}));
-}
-
 double disk_fraction_above(double elevation, double horizon, double radius) {
   if (radius <= 0) return elevation > horizon ? 1.0 : 0.0;
   const double x = (elevation - horizon) / radius;
@@ -132,11 +125,8 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     });
   if (p.horizon) r.horizon.assign(N * K, 0.0f);
   if (p.horizon_distance) r.horizon_distance.assign(N * K, 0.0f);
-  std::vector<float> cs(K), sn(K);
-  for (int k = 0; k < K; ++k) {
-    cs[k] = float(std::cos(2 * kPi * k / K));
-    sn[k] = float(std::sin(2 * kPi * k / K));
-  }
+  std::vector<float> cs, sn;
+  azimuth_table(K, cs, sn);
   // The near field of every direction (horizon_sweep.hpp): the crossings within near_radius of a texel,
   // as index offsets for interior texels (all crossings on the field) and texel offsets for the rest.
   std::vector<std::vector<p1::NearCrossing>> near(K);

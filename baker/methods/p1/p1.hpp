@@ -66,9 +66,7 @@ struct P1Result {
   std::vector<Rgb> direct_facets;
 };
 
-// The unit normals of the two triangles of texel (i, j) described at P1Result::direct_facets (forward and
-// backward differences; at a clamp border the missing neighbour is the texel itself).
-void facet_normals(const HeightField& field, int i, int j, Vec3f out[2]);
+// facet_normals (field/triangulation.hpp) gives the two normals of P1Result::direct_facets.
 
 // Reads the bake entry (schemas/methods/p1.schema.json) with every check (even normal_bins, unknown
 // layers), recording the resolved values in `in` (layers in the order written). parse_p1_params: the same

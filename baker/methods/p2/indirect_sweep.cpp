@@ -9,6 +9,8 @@
 #include <tuple>
 #include <utility>
 
+#include "core/azimuth.hpp"
+#include "field/triangulation.hpp"
 #include "methods/p1/fast_math.hpp"
 #include "methods/p1/horizon_sweep.hpp"
 #include "methods/p2/hull_tree.hpp"
@@ -25,20 +27,15 @@ namespace {
 // the mean terrain radiance seen from the samples, over exactly the part of the texel's cosine lobe that
 // P1 does not give to the sky (P1 blends the same elevations to the texel the same way). So P1's direct
 // and this indirect tile the texel's lobe: a uniform emitting furnace gives direct + indirect = 1.
-constexpr int kChannels = 5;
-
-// The facet under the point (x, y) (texel coordinates, not wrapped): the triangle (i, j), (i+1, j),
-// (i, j+1) is facet 0 of texel (i, j), the triangle (i+1, j+1), (i, j+1), (i+1, j) facet 1 of texel
-// (i+1, j+1) (the reference's split).
-struct FacetRef {
-  int i = 0, j = 0, q = 0;
-  bool operator==(const FacetRef&) const = default;
+// The slots of one sample's result, in this order.
+enum Slot : int {
+  kRadianceR = 0,  // E/pi gathered with the sample's normal, weighted: R, G, B
+  kRadianceG = 1,
+  kRadianceB = 2,
+  kTerrainWeight = 3,     // the terrain weight it was gathered over
+  kHorizonElevation = 4,  // the global horizon's elevation (radians)
+  kChannels = 5
 };
-FacetRef facet_under(double x, double y) {
-  const int i = floor_int(x), j = floor_int(y);
-  const int q = (x - i) + (y - j) <= 1 ? 0 : 1;
-  return {i + q, j + q, q};
-}
 
 // The two facets on either side of a piece of a ray with midpoint (x, y) and direction (ux, uy): the same
 // facet twice, or, when the piece runs along a column, a row or a diagonal (an edge), the two facets the
@@ -195,8 +192,8 @@ struct LineWorker {
       const int s = q / S;  // the driver's sample
       if (s < line.first_receiver) continue;
       float* o = out + std::size_t(s - line.first_receiver) * kChannels;
-      o[0] = o[1] = o[2] = o[3] = 0;
-      o[4] = -p1::kHalfPiF;  // nothing behind: P1's convention
+      o[kRadianceR] = o[kRadianceG] = o[kRadianceB] = o[kTerrainWeight] = 0;
+      o[kHorizonElevation] = -p1::kHalfPiF;  // nothing behind: P1's convention
       const int r = q - ib;
       // The terrain samples gathered here, 0..terrain_end-1: all before the receiver, or with the near
       // field those at least `lag` behind it (what the lagging tree holds).
@@ -241,14 +238,14 @@ struct LineWorker {
           wf.t_n = std::max(wf.t_n, (hh[j] - hh[r]) * inv_dist[r - j]);
       const Rgb e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, wf, &weight, inv_dist.data(),
                                     &gather_scratch);
-      o[0] = e.r;
-      o[1] = e.g;
-      o[2] = e.b;
-      o[3] = float(weight);
+      o[kRadianceR] = e.r;
+      o[kRadianceG] = e.g;
+      o[kRadianceB] = e.b;
+      o[kTerrainWeight] = float(weight);
       // The global horizon's elevation exactly as P1's HorizonLineWorker computes it.
       if (!spec->p1_sin_horizon && !starts.empty()) {  // (unused when P1's horizons split the lobe)
         const int c = starts.front();
-        o[4] = p1::fast_elevation(float(hh[c] - hh[r]), float(r - c) * float(line.step / S));
+        o[kHorizonElevation] = p1::fast_elevation(float(hh[c] - hh[r]), float(r - c) * float(line.step / S));
       }
     }
     if (!naive) stats.iterations += tree.iterations() - it0;
@@ -356,11 +353,8 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
   ss.wrap_periods = spec.wrap_periods;
   const int K = spec.directions;
   const double wedge = 2 * kPi / K;
-  std::vector<double> cs(K), sn(K);
-  for (int k = 0; k < K; ++k) {
-    cs[k] = std::cos(2 * kPi * k / K);
-    sn[k] = std::sin(2 * kPi * k / K);
-  }
+  std::vector<double> cs, sn;
+  azimuth_table(K, cs, sn);
   P2SweepStats totals;
   std::mutex totals_mutex;
   // Exact near field (IndirectSweepSpec::near_radius): P1's near stencil per direction, with facets.
@@ -383,10 +377,11 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
     std::vector<NearInterval>& iv = near_scratch.local();
     march_near(field, pieces[k], spec.exit_facets->data(), i, j, iv);
     const double top = ce > 0 ? se / ce : std::numeric_limits<double>::infinity();  // tan e
-    const double wb = t.value(3);
+    const double wb = t.value(kTerrainWeight);
     const bool has_far = wb > 0;  // else the samples saw no far terrain: the near field's mean fills in
-    const Rgb far_mean =
-        has_far ? Rgb{float(t.value(0) / wb), float(t.value(1) / wb), float(t.value(2) / wb)} : Rgb{};
+    const Rgb far_mean = has_far ? Rgb{float(t.value(kRadianceR) / wb), float(t.value(kRadianceG) / wb),
+                                       float(t.value(kRadianceB) / wb)}
+                                 : Rgb{};
     auto part = [&](Vec3 n, double* a) {
       const double tw = terrain_weight(n, cs[k], sn[k], K, e, se, ce);
       if (!(tw > 0)) return;
@@ -435,12 +430,12 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
           se = sf, ce = cf;
           e = cf > 0 ? double(p1::fast_atan(sf / cf)) : std::copysign(kPi / 2, double(sf));
         } else {
-          e = t.value(4);
+          e = t.value(kHorizonElevation);
           float sf, cf;
           p1::fast_sincos(float(e), sf, cf);
           se = sf, ce = cf;
         }
-        const double wb = t.value(3);
+        const double wb = t.value(kTerrainWeight);
         if (near) {
           texel_near_far(k, i, j, idx, t, e, se, ce);
           return;
@@ -452,7 +447,8 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
             if (!(tf > 0)) continue;
             double* a = acc_f.data() + fi * 3;
             if (wb > 0) {
-              a[0] += t.value(0) * tf / wb, a[1] += t.value(1) * tf / wb, a[2] += t.value(2) * tf / wb;
+              a[0] += t.value(kRadianceR) * tf / wb, a[1] += t.value(kRadianceG) * tf / wb,
+                  a[2] += t.value(kRadianceB) * tf / wb;
             } else {
               const Rgb x = (*spec.exit_facets)[fi];
               a[0] += x.r * tf, a[1] += x.g * tf, a[2] += x.b * tf;
@@ -463,9 +459,9 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
         double* a = acc.data() + idx * 3;
         if (wb > 0) {
           const double f = tw / wb;
-          a[0] += t.value(0) * f;
-          a[1] += t.value(1) * f;
-          a[2] += t.value(2) * f;
+          a[0] += t.value(kRadianceR) * f;
+          a[1] += t.value(kRadianceG) * f;
+          a[2] += t.value(kRadianceB) * f;
         } else {  // the samples see no terrain above their tangent planes, the texel does: its own surface
           a[0] += exit[idx].r * tw;
           a[1] += exit[idx].g * tw;

@@ -1,0 +1,73 @@
+// The height field's triangulation, the surface the reference traces and the sweeps sample (contract:
+// "two triangles per quad, split along the diagonal from texel (i+1, j) to (i, j+1)", the split Embree's grid
+// and quad geometry use). Every rule about which triangle a point lies on, its weights and its normal lives
+// here; the methods, the reference and HeightField::triangle_height read it.
+//
+// Quad (i, j) spans texels (i, j) .. (i+1, j+1); a point in it has fractions (fx, fy) in [0, 1]^2.
+//   facet 0, the lower triangle, fx + fy <= 1: (i, j), (i+1, j), (i, j+1)
+//   facet 1, the upper triangle, fx + fy >  1: (i+1, j+1), (i, j+1), (i+1, j)
+// Both have their right angle at their first corner. Texel-centred naming (P1, P2): facet 0 of texel (i, j)
+// is the lower triangle of quad (i, j), facet 1 of texel (i, j) the upper triangle of quad (i-1, j-1), so
+// each texel owns the two triangles with their right angle at it.
+#pragma once
+
+#include "core/vec.hpp"
+
+namespace hfbake {
+
+struct HeightField;
+
+// Corner offsets (di, dj) from texel (i, j) of each facet of quad (i, j), in the order above (the order
+// the reference's triangle mesh lists them: Embree's quad (v0 v1 v3) and (v2 v3 v1)).
+inline constexpr int kFacetCorner[2][3][2] = {{{0, 0}, {1, 0}, {0, 1}}, {{1, 1}, {0, 1}, {1, 0}}};
+
+// The facet of the quad that the point with fractions (fx, fy) lies on: 0 (lower) or 1 (upper). Points on
+// the diagonal belong to the lower facet. T is the caller's precision (the test is evaluated in it).
+template <class T>
+inline int facet_of(T fx, T fy) {
+  return fx + fy <= 1 ? 0 : 1;
+}
+
+// The height of the triangulated surface at fractions (tx, ty) of a quad whose corner heights at(di, dj)
+// returns (di, dj in {0, 1}); only the three corners of the point's facet are read.
+template <class T, class CornerHeight>
+inline T facet_height(T tx, T ty, CornerHeight at) {
+  if (facet_of(tx, ty) == 0) {
+    const T h00 = at(0, 0);
+    return h00 + (at(1, 0) - h00) * tx + (at(0, 1) - h00) * ty;
+  }
+  const T h11 = at(1, 1);
+  return h11 + (at(0, 1) - h11) * (1 - tx) + (at(1, 0) - h11) * (1 - ty);
+}
+
+// Barycentric weights of the point with fractions (fx, fy) in its facet: weight w[c] belongs to the corner
+// (i + di[c], j + dj[c]). Lower facet: (i, j), (i+1, j), (i, j+1); upper facet: (i+1, j), (i+1, j+1),
+// (i, j+1) (the order a weighted sum over the corners runs in).
+struct FacetWeights {
+  int facet = 0;
+  int di[3] = {0, 0, 0}, dj[3] = {0, 0, 0};
+  double w[3] = {0, 0, 0};
+};
+inline FacetWeights facet_weights(double fx, double fy) {
+  if (facet_of(fx, fy) == 0) return {0, {0, 1, 0}, {0, 0, 1}, {1 - fx - fy, fx, fy}};
+  return {1, {1, 1, 0}, {0, 1, 1}, {1 - fy, fx + fy - 1, 1 - fx}};
+}
+
+// The facet under the point (x, y) in texel coordinates (not wrapped), named texel-centred: facet q of
+// texel (i, j) (see the top of this file).
+struct FacetRef {
+  int i = 0, j = 0, q = 0;
+  bool operator==(const FacetRef&) const = default;
+};
+inline FacetRef facet_under(double x, double y) {
+  const int i = floor_int(x), j = floor_int(y);
+  const int q = facet_of((x - i), (y - j));
+  return {i + q, j + q, q};
+}
+
+// The unit normals of texel (i, j)'s two facets (texel-centred): [0] the triangle (i, j), (i+1, j),
+// (i, j+1) from forward differences, [1] the triangle (i, j), (i-1, j), (i, j-1) from backward differences.
+// Neighbours are read with HeightField::at: at a clamp border the missing neighbour is the texel itself.
+void facet_normals(const HeightField& field, int i, int j, Vec3f out[2]);
+
+}  // namespace hfbake
