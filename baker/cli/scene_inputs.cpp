@@ -20,6 +20,13 @@ InputSite site(const Job& job, const std::string& pointer) {
   return {job.file.string(), pointer};
 }
 
+// A number as a person writes it: 2, 0.5, 1e-06 (not std::to_string's 2.000000).
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
 std::optional<float> nodata_value(const nlohmann::json& h) {
   if (!h.contains("nodata_value")) return std::nullopt;
   return h["nodata_value"].get<float>();
@@ -44,12 +51,11 @@ std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
   if (!info->has_geotransform) return info;
   const auto& g = info->geotransform;
   if (g[2] != 0 || g[4] != 0)
-    fail("/height/image", file + ": is rotated or sheared (geotransform " + std::to_string(g[2]) + ", " +
-                              std::to_string(g[4]) + "); warp it north-up first (gdalwarp)");
+    fail("/height/image", file + ": is rotated or sheared (geotransform " + num(g[2]) + ", " + num(g[4]) +
+                              "); warp it north-up first (gdalwarp)");
   const double sx = std::abs(g[1]), sy = std::abs(g[5]);
   if (!(std::abs(sx - sy) <= 1e-9 * std::max(sx, sy)))
-    fail("/height/image", file + ": has non-square pixels (" + std::to_string(sx) + " x " +
-                              std::to_string(sy) +
+    fail("/height/image", file + ": has non-square pixels (" + num(sx) + " x " + num(sy) +
                               "); hfbake needs square texels: resample it first, e.g. gdalwarp -tr S S");
   if (h.contains("texel_size") && h["texel_size"].is_number()) {
     const double t = h["texel_size"].get<double>();
@@ -139,8 +145,7 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
   if (h.value("nodata", "error") != "fill") {
     const float first = field.z[field.index(scan.first_i, scan.first_j)];
     std::string what = std::isnan(first) ? "NaN" : std::isinf(first) ? "infinite" : "nodata_value";
-    if (file_value && std::isnan(first))
-      what = "NaN or the file's NoData value (" + std::to_string(*file_nodata) + ")";
+    if (file_value && std::isnan(first)) what = "NaN or the file's NoData value (" + num(*file_nodata) + ")";
     throw InputError(job.file.string(), "/height/image",
                      image + ": texel (" + std::to_string(scan.first_i) + ", " +
                          std::to_string(scan.first_j) + ") is " + what + " (" + std::to_string(scan.count) +
