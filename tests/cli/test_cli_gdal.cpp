@@ -380,3 +380,51 @@ TEST_F(CliGdal, AnInterruptedBakeLeavesNoGeoTiff) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST_F(CliGdal, CompassTermsOfTheHorizonChannels) {
+  // A north-up plane rising 45° towards the north (row 0 = north is the high edge). Geometry says the
+  // horizon looking north (uphill) has sine sin 45°, looking south -sin 45°, east and west 0. With K = 4,
+  // channel k looks along phi = 90° k, compass azimuth A = 90° + phi: east, south, west, north.
+  const int n = 33;
+  std::vector<float> z(std::size_t(n) * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) z[std::size_t(j) * n + i] = float(n - j);
+  {
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    GDALDataset* ds = gtiff->Create((dir_ / "north_up.tif").c_str(), n, n, 1, GDT_Float32, nullptr);
+    ASSERT_TRUE(ds);
+    double gt[6] = {500000, 1, 0, 100000, 0, -1};
+    ds->SetGeoTransform(gt);
+    OGRSpatialReference srs;
+    srs.importFromEPSG(3794);
+    ds->SetSpatialRef(&srs);
+    ASSERT_EQ(
+        ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, n, n, z.data(), n, n, GDT_Float32, 0, 0, nullptr),
+        CE_None);
+    GDALClose(ds);
+  }
+  const nlohmann::json j = {{"version", 1},
+                            {"name", "plane"},
+                            {"height", {{"image", "north_up.tif"}}},
+                            {"bake", {{{"method", "p1"}, {"directions", 4}, {"layers", {"horizon"}}}}},
+                            {"output", {{"dir", "out"}, {"geotiff", true}}}};
+  std::ofstream(dir_ / "plane.json") << j.dump();
+  const Result r = hfbake("bake --quiet " + (dir_ / "plane.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fs::path tif = dir_ / "out" / "plane.p1.horizon.tif";
+  const std::size_t centre = std::size_t(n / 2) * n + n / 2;
+  const double s45 = std::sqrt(0.5);
+  const double expected[4] = {0, -s45, 0, s45};  // east, south, west, north
+  for (int k = 0; k < 4; ++k) {
+    const Raster band = read_raster(tif, k + 1);
+    ASSERT_EQ(band.values.size(), z.size());
+    EXPECT_NEAR(band.values[centre], expected[k], 1e-3) << "channel " << k;
+  }
+  EXPECT_NE(gdalinfo_json(tif)["metadata"][""]["HFBAKE_AZIMUTH_CONVENTION"].get<std::string>().find(
+                "north-up raster: +x = east, +y = south, compass azimuth = (90 + phi) mod 360"),
+            std::string::npos);
+}
+
+}  // namespace
