@@ -94,6 +94,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();
   const Scene scene = load_scene(job);
+  stage.set_georeference(scene.georeference);
   const std::string job_hash = job_content_hash(job);
   progress.end(job.name, "load", seconds_since(t_load));
 

@@ -11,7 +11,7 @@ MethodContext job_method_context(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
   c.field.width = size.width;
   c.field.height = size.height;
-  c.field.texel_size = h.value("texel_size", 1.0);
+  c.field.texel_size = job_texel_size(job);
   c.field.wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
   c.bounces = job_bounces(job);
   return c;

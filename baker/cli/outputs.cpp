@@ -3,12 +3,14 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <fstream>
 #include <string_view>
 
 #include "core/error.hpp"
 #include "io/exr_output.hpp"
+#include "io/geotiff_output.hpp"
 #include "io/preview.hpp"
 
 namespace hfbake {
@@ -25,6 +27,26 @@ std::string host_name() {
 }
 
 }  // namespace
+
+std::string azimuth_convention(const Georeference& geo) {
+  std::string s =
+      "phi (directions, horizon channel k: phi_k = 360 k / K degrees) is measured from +x (image columns, i) "
+      "towards +y (image rows, j)";
+  const auto& g = geo.geotransform;
+  if (!geo.from_file || geo.crs_wkt.empty()) return s + "; the raster has no CRS";
+  // Per unit +x the map moves east by sign(g[1]); per unit +y north by sign(g[5]) (g[5] < 0: rows go
+  // south). A direction phi: east = sign(g[1]) cos phi, north = sign(g[5]) sin phi; compass azimuth A has
+  // east = sin A, north = cos A.
+  const bool east = g[1] > 0, north_up = g[5] < 0;
+  if (east && north_up)
+    return s + "; north-up raster: +x = east, +y = south, compass azimuth = (90 + phi) mod 360";
+  if (east && !north_up)
+    return s + "; south-up raster: +x = east, +y = north, compass azimuth = (90 - phi) mod 360";
+  if (!east && north_up)
+    return s +
+           "; north-up, east-to-west raster: +x = west, +y = south, compass azimuth = (270 - phi) mod 360";
+  return s + "; +x = west, +y = north, compass azimuth = (270 + phi) mod 360";
+}
 
 std::optional<StageOwner> parse_stage_name(const std::string& name) {
   if (name.compare(0, kStagePrefix.size(), kStagePrefix) != 0) return std::nullopt;
@@ -94,8 +116,10 @@ void OutputStage::write_layers(const std::string& stem, const LayerSet& layers) 
   ExrOptions options;
   options.float_pixels = job_.output.float_pixels;
   options.compression = job_.output.compression;
+  options.attributes.emplace_back("hfbake:azimuth_convention", azimuth_convention(georeference_));
   write_exr(stage_ / exr, layers, options);
   staged_.push_back(exr);
+  if (job_.output.geotiff) write_geotiffs(stem, layers);
   if (!job_.output.previews) return;
   PreviewOptions preview;
   preview.display = job_.output.preview_display;
@@ -107,6 +131,21 @@ void OutputStage::write_layers(const std::string& stem, const LayerSet& layers) 
     const std::string png = job_.name + "." + stem + "." + layer.name + ".png";
     write_preview(stage_ / png, layers, layer, preview);
     staged_.push_back(png);
+  }
+}
+
+void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers) {
+  GeoTiffOptions options;
+  for (const auto& [key, value] : layers.attributes) {
+    std::string k = key;  // "hfbake:method" -> "HFBAKE_METHOD" (GDAL metadata names)
+    for (char& c : k) c = c == ':' ? '_' : char(std::toupper(static_cast<unsigned char>(c)));
+    options.metadata.emplace_back(k, value);
+  }
+  options.metadata.emplace_back("HFBAKE_AZIMUTH_CONVENTION", azimuth_convention(georeference_));
+  for (const Layer& layer : layers.layers) {
+    const std::string tif = job_.name + "." + stem + "." + layer.name + ".tif";
+    write_geotiff(stage_ / tif, layers, layer, georeference_, options);
+    staged_.push_back(tif);
   }
 }
 

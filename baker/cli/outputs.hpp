@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/layers.hpp"
+#include "field/georeference.hpp"
 #include "job/manifest.hpp"
 
 namespace hfbake {
@@ -23,6 +24,10 @@ std::optional<StageOwner> parse_stage_name(const std::string& name);
 // returns them; those of live processes, of this process and of other hosts are kept.
 std::vector<std::filesystem::path> remove_stale_stages(const std::filesystem::path& dir);
 
+// The azimuth convention of a bake in words, with the compass mapping when the input's geotransform gives
+// one (north-up: compass azimuth = (90 + phi) mod 360): written into every output's metadata.
+std::string azimuth_convention(const Georeference& geo);
+
 class OutputStage {
  public:
   // Creates the output folder and the staging folder in it, after removing the stale staging folders of
@@ -32,7 +37,9 @@ class OutputStage {
   OutputStage(const OutputStage&) = delete;
   OutputStage& operator=(const OutputStage&) = delete;
 
-  // Writes <name>.<stem>.exr (and previews when the job asks for them) into the stage.
+  // The input's georeferencing and holes, for the GeoTIFF outputs (default: none, pixel size 1).
+  void set_georeference(const Georeference& georeference) { georeference_ = georeference; }
+  // Writes <name>.<stem>.exr (and previews and GeoTIFFs when the job asks for them) into the stage.
   void write_layers(const std::string& stem, const LayerSet& layers);
   // Writes a text file (report.json, ...) into the stage.
   void write_text(const std::string& filename, const std::string& text);
@@ -44,8 +51,10 @@ class OutputStage {
  private:
   const Job& job_;
   std::filesystem::path stage_;
+  void write_geotiffs(const std::string& stem, const LayerSet& layers);
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage
   std::vector<std::filesystem::path> stale_removed_;
+  Georeference georeference_;
 };
 
 }  // namespace hfbake

@@ -1,11 +1,14 @@
 #include "cli/scene_inputs.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <optional>
 #include <string>
 
 #include "core/error.hpp"
 #include "field/nodata.hpp"
+#include "io/georaster_input.hpp"
 #include "io/image_input.hpp"
 #include "io/load_environment.hpp"
 
@@ -17,25 +20,110 @@ InputSite site(const Job& job, const std::string& pointer) {
   return {job.file.string(), pointer};
 }
 
+// A number as a person writes it: 2, 0.5, 1e-06 (not std::to_string's 2.000000).
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
 std::optional<float> nodata_value(const nlohmann::json& h) {
   if (!h.contains("nodata_value")) return std::nullopt;
   return h["nodata_value"].get<float>();
+}
+
+// The height image's header through GDAL when it is a georeferenced raster (nullopt: an image for
+// OpenImageIO), after every check bake and validate make of its georeferencing: a geographic CRS, a
+// rotated or sheared geotransform, non-square pixels, a job texel_size that disagrees with the pixel size.
+std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
+  const nlohmann::json& h = job.doc["height"];
+  const std::string image = h["image"].get<std::string>();
+  std::optional<GeoRasterInfo> info = probe_georaster(job.resolve(image));
+  if (!info) return info;
+  auto fail = [&](const std::string& pointer, const std::string& what) {
+    throw InputError(job.file.string(), pointer, what);
+  };
+  const std::string file = job.resolve(image).string();
+  if (info->geographic)
+    fail("/height/image", file + ": has a geographic CRS (" + info->crs_name +
+                              ", coordinates in degrees); hfbake needs a projected CRS in the heights' unit: "
+                              "reproject it first, e.g. gdalwarp -t_srs EPSG:<UTM zone> in.tif out.tif");
+  if (!info->has_geotransform) return info;
+  const auto& g = info->geotransform;
+  if (g[2] != 0 || g[4] != 0)
+    fail("/height/image", file + ": is rotated or sheared (geotransform " + num(g[2]) + ", " + num(g[4]) +
+                              "); warp it north-up first (gdalwarp)");
+  const double sx = std::abs(g[1]), sy = std::abs(g[5]);
+  if (!(std::abs(sx - sy) <= 1e-9 * std::max(sx, sy)))
+    fail("/height/image", file + ": has non-square pixels (" + num(sx) + " x " + num(sy) +
+                              "); hfbake needs square texels: resample it first, e.g. gdalwarp -tr S S");
+  if (h.contains("texel_size") && h["texel_size"].is_number()) {
+    const double t = h["texel_size"].get<double>();
+    if (!(std::abs(t - sx) <= 1e-9 * sx)) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "is %.9g but the pixel size of %s is %.9g", t, image.c_str(), sx);
+      fail("/height/texel_size",
+           std::string(buf) + (info->linear_unit.empty() ? "" : " " + info->linear_unit) +
+               ": leave texel_size out (or set \"from_file\") to use the file's, or resample the file "
+               "(gdalwarp -tr); height_scale converts the heights' unit");
+    }
+  }
+  return info;
 }
 
 }  // namespace
 
 FieldSize probe_image_field_size(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
+  if (const std::optional<GeoRasterInfo> geo = checked_georaster(job)) return {geo->width, geo->height};
   const ImageInfo info = probe_image(job.resolve(h["image"].get<std::string>()), site(job, "/height/image"));
   return {info.width, info.height};
 }
 
-HeightField load_image_field(const Job& job, double texel_size, Wrap wrap) {
+std::optional<double> image_texel_size(const Job& job) {
+  const nlohmann::json& h = job.doc["height"];
+  const std::optional<GeoRasterInfo> geo = checked_georaster(job);
+  if (geo && geo->has_geotransform) return std::abs(geo->geotransform[1]);
+  if (h.contains("texel_size") && h["texel_size"].is_string())
+    throw InputError(job.file.string(), "/height/texel_size",
+                     "is \"from_file\" but " + h["image"].get<std::string>() +
+                         " has no georeferencing (no geotransform): give texel_size as a number");
+  return std::nullopt;
+}
+
+HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference) {
   const nlohmann::json& h = job.doc["height"];
   const std::string image = h["image"].get<std::string>();
   const ChannelSelector channel = channel_selector(h.contains("channel") ? h["channel"] : nlohmann::json());
-  Plane plane = read_image_channel(job.resolve(image), channel, site(job, "/height/image"),
-                                   site(job, "/height/channel"));
+  const std::optional<GeoRasterInfo> geo = checked_georaster(job);
+  Plane plane;
+  std::optional<double> file_nodata;
+  if (geo) {
+    // Bands by index (0-based, like channels) or by description.
+    int band = -1;
+    std::string names;
+    for (int b = 0; b < geo->bands; ++b)
+      names += (b ? ", " : "") + (geo->band_names[b].empty() ? std::to_string(b) : geo->band_names[b]);
+    if (const int* index = std::get_if<int>(&channel)) {
+      if (*index < geo->bands) band = *index;
+    } else {
+      for (int b = 0; b < geo->bands && band < 0; ++b)
+        if (geo->band_names[b] == std::get<std::string>(channel)) band = b;
+    }
+    if (band < 0)
+      throw InputError(job.file.string(), "/height/channel",
+                       job.resolve(image).string() + ": has no such band (it has " +
+                           std::to_string(geo->bands) + ": " + names + ")");
+    plane = read_georaster_band(job.resolve(image), band, site(job, "/height/image"));
+    file_nodata = geo->nodata[band];
+    georeference.from_file = geo->has_geotransform;
+    georeference.crs_wkt = geo->crs_wkt;
+    georeference.crs_name = geo->crs_name;
+    if (geo->has_geotransform) georeference.geotransform = geo->geotransform;
+  } else {
+    plane = read_image_channel(job.resolve(image), channel, site(job, "/height/image"),
+                               site(job, "/height/channel"));
+  }
   HeightField field;
   field.width = plane.width;
   field.height = plane.height;
@@ -43,18 +131,30 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap) {
   field.wrap = wrap;
   field.z = std::move(plane.values);
 
+  // The file's NoData value (a NaN one is caught as NaN) and the job's nodata_value both mark holes.
   const std::optional<float> nodata = nodata_value(h);
+  const bool file_value = file_nodata && !std::isnan(*file_nodata);
+  std::size_t file_holes = 0;
+  if (file_value) {
+    const float v = float(*file_nodata);
+    for (float& z : field.z)
+      if (z == v) z = std::numeric_limits<float>::quiet_NaN(), ++file_holes;
+  }
   const NodataScan scan = scan_nodata(field, nodata);
   if (scan.count == 0) return field;
   if (h.value("nodata", "error") != "fill") {
     const float first = field.z[field.index(scan.first_i, scan.first_j)];
-    const std::string what = std::isnan(first) ? "NaN" : std::isinf(first) ? "infinite" : "nodata_value";
+    std::string what = std::isnan(first) ? "NaN" : std::isinf(first) ? "infinite" : "nodata_value";
+    if (file_value && std::isnan(first)) what = "NaN or the file's NoData value (" + num(*file_nodata) + ")";
     throw InputError(job.file.string(), "/height/image",
                      image + ": texel (" + std::to_string(scan.first_i) + ", " +
                          std::to_string(scan.first_j) + ") is " + what + " (" + std::to_string(scan.count) +
                          " of " + std::to_string(field.texel_count()) +
                          " texels have no valid height); set \"nodata\": \"fill\" to fill the holes");
   }
+  georeference.holes.assign(field.texel_count(), 0);
+  for (std::size_t t = 0; t < field.z.size(); ++t)
+    georeference.holes[t] = !std::isfinite(field.z[t]) || (nodata && field.z[t] == *nodata);
   if (!fill_nodata(field, nodata))
     throw InputError(job.file.string(), "/height/image", image + ": no texel has a valid height");
   return field;

@@ -4,17 +4,28 @@
 // the JSON pointer and, where there is one, the image.
 #pragma once
 
+#include <optional>
+
 #include "cli/scene_loader.hpp"
 
 namespace hfbake {
 
-// The size of the height image from its header (nothing decoded).
+// The size of the height image from its header (nothing decoded). A georeferenced raster (read through
+// GDAL) is checked here already, so validate refuses what bake refuses: a geographic CRS, a rotated
+// geotransform, non-square pixels, a job texel_size other than the pixel size (InputError at /height/image
+// or /height/texel_size).
 FieldSize probe_image_field_size(const Job& job);
 
+// The height image's pixel size when its file has a geotransform (what texel_size defaults to); nullopt
+// otherwise (InputError when the job's texel_size is "from_file" then).
+std::optional<double> image_texel_size(const Job& job);
+
 // The height image's chosen channel as a field (heights as stored: scale and offset are applied by the
-// caller), with nodata handling: NaN/Inf texels (and texels equal to height.nodata_value) are an error
-// naming the count and the first texel, unless height.nodata is "fill".
-HeightField load_image_field(const Job& job, double texel_size, Wrap wrap);
+// caller), with nodata handling: NaN/Inf texels (and texels equal to height.nodata_value or to the file's
+// NoData value) are an error naming the count and the first texel, unless height.nodata is "fill".
+// Georeferenced rasters are read through GDAL (io/georaster_input.hpp); `georeference` receives their
+// CRS and geotransform, and the holes that were filled (for every input).
+HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference);
 
 // Fills `texels` (already sized to the field) from the surface key at `pointer` ("/surface/albedo" or
 // "/surface/emission"): a number, [r, g, b], or {"image", "colorspace", "scale"} of the field's size.

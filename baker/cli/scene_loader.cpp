@@ -48,6 +48,16 @@ FieldSize probe_field_size(const Job& job) {
   return probe_image_field_size(job);
 }
 
+double job_texel_size(const Job& job) {
+  const nlohmann::json& h = job.doc["height"];
+  if (h.contains("image"))
+    if (const std::optional<double> from_file = image_texel_size(job)) return *from_file;
+  if (h.contains("texel_size") && h["texel_size"].is_string())
+    throw InputError(job.file.string(), "/height/texel_size",
+                     "is \"from_file\" but the field is procedural: give texel_size as a number");
+  return h.value("texel_size", 1.0);
+}
+
 int job_bounces(const Job& job) {
   return job.doc.value("bounces", 1);
 }
@@ -86,12 +96,13 @@ Scene load_scene(const Job& job) {
   scene.name = job.name;
   const nlohmann::json& doc = job.doc;
   const nlohmann::json& h = doc["height"];
-  const double texel = h.value("texel_size", 1.0);
+  const double texel = job_texel_size(job);
   const Wrap wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
+  scene.georeference.geotransform = local_geotransform(texel);
   if (h.contains("procedural")) {
     scene.field = make_procedural(procedural_spec(h["procedural"]), texel, wrap);
   } else {
-    scene.field = load_image_field(job, texel, wrap);
+    scene.field = load_image_field(job, texel, wrap, scene.georeference);
   }
   const double scale = h.value("height_scale", 1.0), offset = h.value("height_offset", 0.0);
   if (scale != 1.0 || offset != 0.0)

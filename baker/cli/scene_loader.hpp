@@ -20,6 +20,10 @@ FieldSize probe_field_size(const Job& job);
 // scratch), estimated from the size alone so an absurd job is refused before anything is allocated.
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size);
 
+// The job's texel size: a georeferenced height raster's pixel size (the job's texel_size, when given,
+// must agree with it), else height.texel_size (default 1). InputError for "from_file" without one.
+double job_texel_size(const Job& job);
+
 // The job's "bounces" (default 1).
 int job_bounces(const Job& job);
 

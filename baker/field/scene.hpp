@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "env/environment.hpp"
+#include "field/georeference.hpp"
 #include "field/height_field.hpp"
 
 namespace hfbake {
@@ -23,6 +24,7 @@ struct Scene {
   Environment environment;
   std::vector<DirectionalLight> lights;  // the job's lights plus the built-in sky's sun
   int bounces = 1;
+  Georeference georeference;  // the input's CRS, geotransform and holes (for GeoTIFF outputs)
 };
 
 }  // namespace hfbake

@@ -316,6 +316,7 @@ JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_overri
   job.output.float_pixels = output.value("pixel_type", "half") == "float";
   job.output.compression = output.value("compression", "zip");
   job.output.previews = output.value("previews", false);
+  job.output.geotiff = output.value("geotiff", false);
   job.output.preview_display = output.value("preview_display", "");
   job.output.preview_view = output.value("preview_view", "");
 

@@ -29,6 +29,7 @@ struct OutputOptions {
   bool float_pixels = false;  // half by default
   std::string compression = "zip";
   bool previews = false;
+  bool geotiff = false;  // also <name>.<stem>.<layer>.tif: float32 Cloud-Optimised GeoTIFFs
   std::string preview_display, preview_view;  // empty: the OCIO config's defaults
 };
 

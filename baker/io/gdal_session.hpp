@@ -1,0 +1,34 @@
+// GDAL set up once per process (drivers registered) and quiet per call: its messages are collected and
+// handed to hfbake's one-line errors instead of being printed on stderr.
+#pragma once
+
+#include <cpl_error.h>
+#include <gdal.h>
+
+#include <mutex>
+#include <string>
+
+namespace hfbake {
+
+class GdalSession {
+ public:
+  GdalSession() {
+    static std::once_flag once;
+    std::call_once(once, [] { GDALAllRegister(); });
+    CPLErrorReset();
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+  }
+  ~GdalSession() { CPLPopErrorHandler(); }
+  GdalSession(const GdalSession&) = delete;
+  GdalSession& operator=(const GdalSession&) = delete;
+
+  // GDAL's last message (first line), or "unknown error".
+  std::string error() const {
+    std::string s = CPLGetLastErrorMsg();
+    const auto nl = s.find('\n');
+    if (nl != std::string::npos) s.resize(nl);
+    return s.empty() ? std::string("unknown error") : s;
+  }
+};
+
+}  // namespace hfbake

@@ -1,0 +1,87 @@
+#include "io/georaster_input.hpp"
+
+#include <cpl_error.h>
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+
+#include <algorithm>
+#include <memory>
+#include <mutex>
+
+#include "core/error.hpp"
+#include "io/gdal_session.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Drivers for image formats OpenImageIO reads as well: without georeferencing they stay with it (its
+// integer-to-[0, 1] convention, its channel names), as before hfbake read rasters through GDAL.
+bool asset_driver(const std::string& driver) {
+  static const char* const names[] = {"GTiff", "PNG", "JPEG", "BMP", "GIF", "PNM", "EXR", "WEBP", "TGA"};
+  return std::find(std::begin(names), std::end(names), driver) != std::end(names);
+}
+
+}  // namespace
+
+std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return std::nullopt;  // the OpenImageIO path names the problem
+  GdalSession session;
+  std::unique_ptr<GDALDataset> ds(
+      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!ds || ds->GetRasterCount() < 1) return std::nullopt;
+  GeoRasterInfo info;
+  info.driver = ds->GetDriver() ? ds->GetDriver()->GetDescription() : "";
+  info.width = ds->GetRasterXSize();
+  info.height = ds->GetRasterYSize();
+  info.bands = ds->GetRasterCount();
+  info.has_geotransform = ds->GetGeoTransform(info.geotransform.data()) == CE_None;
+  if (const OGRSpatialReference* srs = ds->GetSpatialRef(); srs && !srs->IsEmpty()) {
+    char* wkt = nullptr;
+    const char* const options[] = {"FORMAT=WKT2_2019", nullptr};
+    if (srs->exportToWkt(&wkt, options) == OGRERR_NONE && wkt) info.crs_wkt = wkt;
+    CPLFree(wkt);
+    if (const char* name = srs->GetName()) info.crs_name = name;
+    info.geographic = srs->IsGeographic() != 0;
+    if (srs->IsProjected()) {
+      const char* unit = nullptr;
+      srs->GetLinearUnits(&unit);
+      if (unit) info.linear_unit = unit;
+    }
+  }
+  if (!info.has_geotransform && info.crs_wkt.empty() && asset_driver(info.driver)) return std::nullopt;
+  for (int b = 1; b <= info.bands; ++b) {
+    GDALRasterBand* band = ds->GetRasterBand(b);
+    info.band_names.push_back(band->GetDescription());
+    int has = 0;
+    const double v = band->GetNoDataValue(&has);
+    info.nodata.push_back(has ? std::optional<double>(v) : std::nullopt);
+  }
+  return info;
+}
+
+Plane read_georaster_band(const fs::path& file, int band, const InputSite& site) {
+  GdalSession session;
+  std::unique_ptr<GDALDataset> ds(
+      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!ds)
+    throw InputError(site.job_file, site.pointer,
+                     file.string() + ": cannot read the raster: " + session.error());
+  GDALRasterBand* b = ds->GetRasterBand(band + 1);
+  if (!b)
+    throw InputError(site.job_file, site.pointer, file.string() + ": has no band " + std::to_string(band));
+  Plane plane;
+  plane.width = ds->GetRasterXSize();
+  plane.height = ds->GetRasterYSize();
+  plane.values.resize(std::size_t(plane.width) * std::size_t(plane.height));
+  if (b->RasterIO(GF_Read, 0, 0, plane.width, plane.height, plane.values.data(), plane.width, plane.height,
+                  GDT_Float32, 0, 0, nullptr) != CE_None)
+    throw InputError(
+        site.job_file, site.pointer,
+        file.string() + ": cannot decode the raster (corrupt or truncated?): " + session.error());
+  return plane;
+}
+
+}  // namespace hfbake

@@ -1,0 +1,38 @@
+// Height rasters of the GIS world through GDAL: GeoTIFF/COG, VRT, SRTM HGT, Arc/Info ASCII grids, ERDAS
+// IMG, ... with their georeferencing (CRS, geotransform) and their NoData value. Images of the asset world
+// (EXR, PNG, JPEG, a TIFF without georeferencing) stay with OpenImageIO (io/image_input.hpp).
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/image_input.hpp"
+
+namespace hfbake {
+
+// What GDAL says about a raster, from its header (no pixels are read).
+struct GeoRasterInfo {
+  std::string driver;  // GDAL's short driver name: "GTiff", "VRT", "SRTMHGT", "AAIGrid", "HFA", ...
+  int width = 0, height = 0, bands = 0;
+  std::vector<std::string> band_names;  // each band's description ("" when it has none)
+  bool has_geotransform = false;
+  std::array<double, 6> geotransform{0, 1, 0, 0, 0, 1};
+  std::string crs_wkt, crs_name;              // empty: no CRS
+  bool geographic = false;                    // the CRS is geographic (coordinates in degrees)
+  std::string linear_unit;                    // a projected CRS's unit ("metre", "US survey foot", ...)
+  std::vector<std::optional<double>> nodata;  // per band: the NoData value, if the file declares one
+};
+
+// The raster's header when it is one for GDAL (a format OpenImageIO does not read, or a raster with a
+// geotransform or a CRS); nullopt when GDAL cannot open it or it is an image without georeferencing in a
+// format OpenImageIO reads (EXR, PNG, JPEG, plain TIFF, ...), which then stays with OpenImageIO.
+std::optional<GeoRasterInfo> probe_georaster(const std::filesystem::path& file);
+
+// Band `band` (0-based) as float32, row 0 = the first stored row (north for a north-up raster); values as
+// stored (no normalisation, NoData values left as they are). Unreadable or corrupt -> InputError at `site`.
+Plane read_georaster_band(const std::filesystem::path& file, int band, const InputSite& site);
+
+}  // namespace hfbake

@@ -1,0 +1,430 @@
+// hfbake with georeferenced rasters, end to end (the binary): the pixel size of a GeoTIFF is the texel
+// size, its NoData value makes holes, geographic CRSs and non-square pixels are refused in one line, and
+// output.geotiff writes Cloud-Optimised GeoTIFFs georeferenced like the input. The truth is GDAL's own
+// tools (gdal_translate makes the variants, gdalinfo reads the outputs) and a bake of the same heights as
+// an EXR with the texel size given by hand.
+#include <gdal_priv.h>
+#include <gtest/gtest.h>
+#include <ogr_spatialref.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "../io/gdal_tool.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using hfbake::test::gdalinfo_json;
+using hfbake::test::run_tool;
+
+const fs::path kData = HFBAKE_SHARED_DATA_DIR;
+const fs::path kDem = kData / "TM1_564_146.tif";
+
+struct Result {
+  int exit_code = -1;
+  std::string err;
+  std::vector<std::string> error_lines() const {
+    std::vector<std::string> lines;
+    std::istringstream in(err);
+    for (std::string l; std::getline(in, l);)
+      if (l.rfind("hfbake: error: ", 0) == 0) lines.push_back(l);
+    return lines;
+  }
+};
+
+struct Raster {
+  int width = 0, height = 0;
+  std::vector<float> values;
+  std::array<double, 6> gt{};
+  std::optional<double> nodata;
+};
+
+Raster read_raster(const fs::path& file, int band = 1) {
+  Raster r;
+  std::unique_ptr<GDALDataset> ds(GDALDataset::Open(file.c_str(), GDAL_OF_RASTER));
+  if (!ds) return r;
+  r.width = ds->GetRasterXSize();
+  r.height = ds->GetRasterYSize();
+  ds->GetGeoTransform(r.gt.data());
+  GDALRasterBand* b = ds->GetRasterBand(band);
+  int has = 0;
+  const double nd = b->GetNoDataValue(&has);
+  if (has) r.nodata = nd;
+  r.values.resize(std::size_t(r.width) * r.height);
+  if (b->RasterIO(GF_Read, 0, 0, r.width, r.height, r.values.data(), r.width, r.height, GDT_Float32, 0, 0,
+                  nullptr) != CE_None)
+    r.values.clear();
+  return r;
+}
+
+class CliGdal : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(kDem))
+      GTEST_SKIP() << "no real DEM in " << kData << " (the shared data folder is absent)";
+    if (!hfbake::test::have_gdal_tools()) GTEST_SKIP() << "GDAL's tools not found (apt-get install gdal-bin)";
+    GDALAllRegister();
+    dir_ = fs::temp_directory_path() / ("hfbake_test_cli_gdal_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    if (!dir_.empty()) fs::remove_all(dir_, ec);
+  }
+
+  Result hfbake(const std::string& args) {
+    const fs::path err = dir_ / "stderr.txt";
+    const std::string cmd = std::string(HFBAKE_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(err);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    r.err = ss.str();
+    return r;
+  }
+
+  // gdal_translate ARGS (file names relative to the test folder); fails the test when the tool does.
+  void translate(const std::string& args) {
+    int status = -1;
+    run_tool("cd '" + dir_.string() + "' && gdal_translate -q " + args, &status);
+    ASSERT_EQ(status, 0) << "gdal_translate " << args;
+  }
+
+  fs::path write_job(const std::string& file, const std::string& name, const nlohmann::json& height,
+                     int directions = 16) {
+    const nlohmann::json j = {
+        {"version", 1},
+        {"name", name},
+        {"height", height},
+        {"bake", {{{"method", "p1"}, {"directions", directions}, {"layers", {"ao", "vsky"}}}}},
+        {"output", {{"dir", "out_" + name}, {"geotiff", true}, {"pixel_type", "float"}}}};
+    const fs::path p = dir_ / file;
+    std::ofstream(p) << j.dump(2);
+    return p;
+  }
+
+  // The 1 m DEM cut to a 160 x 160 window (georeferencing kept), and the same pixels as a 2 m raster.
+  void make_crops() {
+    translate("-srcwin 400 400 160 160 '" + kDem.string() + "' dem1m.tif");
+    const Raster r = read_raster(dir_ / "dem1m.tif");
+    const double x0 = r.gt[0], y0 = r.gt[3];
+    translate("-a_ullr " + std::to_string(x0) + " " + std::to_string(y0) + " " + std::to_string(x0 + 320) +
+              " " + std::to_string(y0 - 320) + " dem1m.tif dem2m.tif");
+  }
+
+  fs::path dir_;
+};
+
+double max_abs_diff(const std::vector<float>& a, const std::vector<float>& b) {
+  double m = 0;
+  for (std::size_t t = 0; t < a.size(); ++t) m = std::max(m, double(std::abs(a[t] - b[t])));
+  return m;
+}
+
+TEST_F(CliGdal, PixelSizeIsTheDefaultTexelSize) {
+  make_crops();
+  // gdalinfo says the copy's pixels are 2 m: the truth for what hfbake must use.
+  ASSERT_EQ(gdalinfo_json(dir_ / "dem2m.tif")["geoTransform"][1].get<double>(), 2.0);
+  Result r = hfbake("bake --quiet " + write_job("a.json", "m1", {{"image", "dem1m.tif"}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = hfbake("bake --quiet " + write_job("b.json", "m2", {{"image", "dem2m.tif"}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Raster ao1 = read_raster(dir_ / "out_m1" / "m1.p1.ao.tif");
+  const Raster ao2 = read_raster(dir_ / "out_m2" / "m2.p1.ao.tif");
+  ASSERT_EQ(ao1.values.size(), 160u * 160u);
+  ASSERT_EQ(ao2.values.size(), 160u * 160u);
+  EXPECT_GT(max_abs_diff(ao1.values, ao2.values), 0.01) << "the 2 m copy baked like the 1 m one";
+  EXPECT_EQ(ao2.gt[1], 2.0);
+  EXPECT_EQ(ao2.gt[5], -2.0);
+
+  // The same heights as an EXR (no georeferencing: OpenImageIO) with texel_size 2 by hand: the same ao.
+  const Raster heights = read_raster(dir_ / "dem1m.tif");
+  {
+    auto out = OIIO::ImageOutput::create((dir_ / "dem.exr").string());
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(160, 160, 1, OIIO::TypeDesc::FLOAT);
+    ASSERT_TRUE(out->open((dir_ / "dem.exr").string(), spec));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, heights.values.data()));
+    out->close();
+  }
+  r = hfbake("bake --quiet " +
+             write_job("c.json", "e2", {{"image", "dem.exr"}, {"texel_size", 2.0}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Raster exr2 = read_raster(dir_ / "out_e2" / "e2.p1.ao.tif");
+  EXPECT_EQ(max_abs_diff(exr2.values, ao2.values), 0.0);
+  // Without a CRS: the local geotransform, pixel size = texel_size.
+  EXPECT_EQ(exr2.gt[1], 2.0);
+  EXPECT_EQ(exr2.gt[0], -1.0);
+
+  // A job value that agrees is fine, one that disagrees is refused (validate as bake), in one line.
+  r = hfbake("validate " +
+             write_job("d.json", "m1b", {{"image", "dem1m.tif"}, {"texel_size", 1.0}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = hfbake("validate " +
+             write_job("f.json", "m1c", {{"image", "dem1m.tif"}, {"texel_size", "from_file"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const fs::path bad = write_job("g.json", "m2b", {{"image", "dem2m.tif"}, {"texel_size", 1.0}});
+  for (const char* cmd : {"validate ", "bake "}) {
+    r = hfbake(cmd + bad.string());
+    EXPECT_EQ(r.exit_code, 2) << cmd;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_EQ(
+        r.error_lines()[0].rfind("hfbake: error: " + bad.string() +
+                                     ": /height/texel_size: is 1 but the pixel size of dem2m.tif is 2 metre",
+                                 0),
+        0u)
+        << r.err;
+  }
+  // "from_file" needs a file with a geotransform.
+  const fs::path exr_from_file =
+      write_job("h.json", "e3", {{"image", "dem.exr"}, {"texel_size", "from_file"}});
+  r = hfbake("validate " + exr_from_file.string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("/height/texel_size: is \"from_file\" but dem.exr has no georeferencing"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_m2b"));
+}
+
+TEST_F(CliGdal, OutputsHaveTheInputsCrsAndGeotransformAndAreCogs) {
+  make_crops();
+  const Result r = hfbake("bake --quiet " + write_job("a.json", "m1", {{"image", "dem1m.tif"}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json input = gdalinfo_json(dir_ / "dem1m.tif");
+  for (const char* layer : {"ao", "vsky"}) {
+    const fs::path tif = dir_ / "out_m1" / (std::string("m1.p1.") + layer + ".tif");
+    const nlohmann::json out = gdalinfo_json(tif);
+    ASSERT_TRUE(out.is_object()) << tif;
+    EXPECT_EQ(out["geoTransform"], input["geoTransform"]);
+    OGRSpatialReference a, b;
+    ASSERT_EQ(a.importFromWkt(out["coordinateSystem"]["wkt"].get<std::string>().c_str()), OGRERR_NONE);
+    ASSERT_EQ(b.importFromWkt(input["coordinateSystem"]["wkt"].get<std::string>().c_str()), OGRERR_NONE);
+    EXPECT_TRUE(a.IsSame(&b));
+    EXPECT_EQ(out["metadata"]["IMAGE_STRUCTURE"]["LAYOUT"], "COG");
+    EXPECT_EQ(out["bands"][0]["type"], "Float32");
+    EXPECT_FALSE(out["bands"][0].contains("noDataValue")) << "no holes, no NoData tag";
+    EXPECT_NE(out["metadata"][""]["HFBAKE_AZIMUTH_CONVENTION"].get<std::string>().find(
+                  "compass azimuth = (90 + phi) mod 360"),
+              std::string::npos);
+  }
+  // Values equal the EXR's (float EXR, read with OpenImageIO).
+  auto in = OIIO::ImageInput::open((dir_ / "out_m1" / "m1.p1.exr").string());
+  ASSERT_TRUE(in);
+  const OIIO::ImageSpec& spec = in->spec();
+  int c = -1;
+  for (int k = 0; k < spec.nchannels; ++k)
+    if (spec.channelnames[k] == "ao.Y") c = k;
+  ASSERT_GE(c, 0);
+  std::vector<float> exr(160 * 160);
+  ASSERT_TRUE(in->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, exr.data()));
+  EXPECT_EQ(max_abs_diff(exr, read_raster(dir_ / "out_m1" / "m1.p1.ao.tif").values), 0.0);
+}
+
+TEST_F(CliGdal, NodataValueOfTheFileMakesHoles) {
+  // The nodata variant with its NaN holes stored as -9999 and declared as the NoData value: what a GIS
+  // export looks like. The NaN texels of the original are the truth for where the holes are.
+  const Raster nan = read_raster(kData / "TM1_564_146_nodata.tif");
+  ASSERT_EQ(nan.values.size(), 1000u * 1000u);
+  std::vector<float> z = nan.values;
+  std::size_t holes = 0;
+  for (float& v : z)
+    if (std::isnan(v)) v = -9999.0f, ++holes;
+  ASSERT_GT(holes, 0u);
+  {
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    std::unique_ptr<GDALDataset> src(
+        GDALDataset::Open((kData / "TM1_564_146_nodata.tif").c_str(), GDAL_OF_RASTER));
+    GDALDataset* ds = gtiff->Create((dir_ / "minus9999.tif").c_str(), 1000, 1000, 1, GDT_Float32, nullptr);
+    ASSERT_TRUE(ds);
+    std::array<double, 6> gt = nan.gt;
+    ds->SetGeoTransform(gt.data());
+    ds->SetSpatialRef(src->GetSpatialRef());
+    ds->GetRasterBand(1)->SetNoDataValue(-9999);
+    ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 1000, 1000, z.data(), 1000, 1000, GDT_Float32, 0,
+                                             0, nullptr),
+              CE_None);
+    GDALClose(ds);
+  }
+  ASSERT_EQ(gdalinfo_json(dir_ / "minus9999.tif")["bands"][0]["noDataValue"].get<double>(), -9999.0);
+
+  // Without "nodata": "fill" the holes are an error (validate as bake), one line.
+  const fs::path refused = write_job("a.json", "refused", {{"image", "minus9999.tif"}}, 4);
+  for (const char* cmd : {"validate ", "bake "}) {
+    const Result r = hfbake(cmd + refused.string());
+    EXPECT_EQ(r.exit_code, 2) << cmd;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("/height/image: minus9999.tif: texel ("), std::string::npos) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("the file's NoData value (-9999"), std::string::npos) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("(" + std::to_string(holes) + " of 1000000 texels"), std::string::npos)
+        << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out_refused" / "refused.p1.exr"));
+
+  // With "fill": holes, not pits. The GeoTIFF has NoData exactly at the holes, and every other texel
+  // equals the bake of the NaN original (the same holes, filled the same way).
+  Result r =
+      hfbake("bake --quiet " +
+             write_job("b.json", "filled", {{"image", "minus9999.tif"}, {"nodata", "fill"}}, 4).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = hfbake("bake --quiet " +
+             write_job("c.json", "nan",
+                       {{"image", (kData / "TM1_564_146_nodata.tif").string()}, {"nodata", "fill"}}, 4)
+                 .string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Raster filled = read_raster(dir_ / "out_filled" / "filled.p1.ao.tif");
+  const Raster from_nan = read_raster(dir_ / "out_nan" / "nan.p1.ao.tif");
+  ASSERT_EQ(filled.values.size(), z.size());
+  ASSERT_TRUE(filled.nodata);
+  EXPECT_EQ(*filled.nodata, -9999.0);
+  std::size_t marked = 0;
+  for (std::size_t t = 0; t < z.size(); ++t) {
+    if (std::isnan(nan.values[t])) {
+      ASSERT_EQ(filled.values[t], -9999.0f) << t;
+      ++marked;
+    } else {
+      ASSERT_EQ(filled.values[t], from_nan.values[t]) << t;
+      ASSERT_GE(filled.values[t], 0.0f);
+      ASSERT_LE(filled.values[t], 1.0f + 1e-5f);
+    }
+  }
+  EXPECT_EQ(marked, holes);
+  // The ao next to a hole is not that of a pit: -9999 m wells would black out their neighbours.
+  double lowest = 1;
+  for (std::size_t t = 0; t < z.size(); ++t)
+    if (!std::isnan(nan.values[t])) lowest = std::min(lowest, double(filled.values[t]));
+  EXPECT_GT(lowest, 0.2);
+}
+
+TEST_F(CliGdal, GeographicCrsIsRefusedInOneLine) {
+  translate("-srcwin 0 0 64 64 -a_srs EPSG:4326 -a_ullr 15.0 46.5 15.001 46.499 '" + kDem.string() +
+            "' degrees.tif");
+  const fs::path job = write_job("a.json", "deg", {{"image", "degrees.tif"}});
+  for (const char* cmd : {"validate ", "bake "}) {
+    const Result r = hfbake(cmd + job.string());
+    EXPECT_EQ(r.exit_code, 2) << cmd;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_EQ(r.error_lines()[0].rfind("hfbake: error: " + job.string() +
+                                           ": /height/image: " + (dir_ / "degrees.tif").string() +
+                                           ": has a geographic CRS (WGS 84, coordinates in degrees)",
+                                       0),
+              0u)
+        << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out_deg" / "deg.p1.exr"));
+}
+
+TEST_F(CliGdal, NonSquarePixelsAreRefusedInOneLine) {
+  translate("-srcwin 0 0 64 64 -a_ullr 1000 2000 1064 1872 '" + kDem.string() + "' tall.tif");  // 1 x 2 m
+  const fs::path job = write_job("a.json", "tall", {{"image", "tall.tif"}});
+  for (const char* cmd : {"validate ", "bake "}) {
+    const Result r = hfbake(cmd + job.string());
+    EXPECT_EQ(r.exit_code, 2) << cmd;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_EQ(r.error_lines()[0].rfind("hfbake: error: " + job.string() + ": /height/image: " +
+                                           (dir_ / "tall.tif").string() + ": has non-square pixels (1 x 2)",
+                                       0),
+              0u)
+        << r.err;
+  }
+}
+
+TEST_F(CliGdal, AnInterruptedBakeLeavesNoGeoTiff) {
+  // p1's GeoTIFFs are staged before the long reference runs; the interrupt must take them away with it.
+  make_crops();
+  nlohmann::json j = {{"version", 1},
+                      {"name", "stop"},
+                      {"height", {{"image", "dem1m.tif"}}},
+                      {"bake", {{{"method", "p1"}, {"directions", 8}}}},
+                      {"reference", {{"samples", 200000}}},
+                      {"output", {{"dir", "out"}, {"geotiff", true}}}};
+  const fs::path p = dir_ / "stop.json";
+  std::ofstream(p) << j.dump();
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string devnull = "/dev/null";
+    if (!freopen(devnull.c_str(), "w", stderr)) _exit(126);
+    execl(HFBAKE_BINARY, "hfbake", "bake", p.c_str(), "--quiet", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait until p1's GeoTIFF is in the staging folder, then interrupt.
+  bool staged = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!staged && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30)) {
+    std::error_code ec;
+    for (fs::recursive_directory_iterator it(dir_ / "out", ec), end; !ec && it != end; it.increment(ec))
+      if (it->path().filename() == "stop.p1.ao.tif") staged = true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  EXPECT_TRUE(staged) << "p1's GeoTIFF never appeared in the staging folder";
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_TRUE(!fs::exists(dir_ / "out") || fs::is_empty(dir_ / "out"));
+}
+
+}  // namespace
+
+namespace {
+
+TEST_F(CliGdal, CompassTermsOfTheHorizonChannels) {
+  // A north-up plane rising 45° towards the north (row 0 = north is the high edge). Geometry says the
+  // horizon looking north (uphill) has sine sin 45°, looking south -sin 45°, east and west 0. With K = 4,
+  // channel k looks along phi = 90° k, compass azimuth A = 90° + phi: east, south, west, north.
+  const int n = 33;
+  std::vector<float> z(std::size_t(n) * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) z[std::size_t(j) * n + i] = float(n - j);
+  {
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    GDALDataset* ds = gtiff->Create((dir_ / "north_up.tif").c_str(), n, n, 1, GDT_Float32, nullptr);
+    ASSERT_TRUE(ds);
+    double gt[6] = {500000, 1, 0, 100000, 0, -1};
+    ds->SetGeoTransform(gt);
+    OGRSpatialReference srs;
+    srs.importFromEPSG(3794);
+    ds->SetSpatialRef(&srs);
+    ASSERT_EQ(
+        ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, n, n, z.data(), n, n, GDT_Float32, 0, 0, nullptr),
+        CE_None);
+    GDALClose(ds);
+  }
+  const nlohmann::json j = {{"version", 1},
+                            {"name", "plane"},
+                            {"height", {{"image", "north_up.tif"}}},
+                            {"bake", {{{"method", "p1"}, {"directions", 4}, {"layers", {"horizon"}}}}},
+                            {"output", {{"dir", "out"}, {"geotiff", true}}}};
+  std::ofstream(dir_ / "plane.json") << j.dump();
+  const Result r = hfbake("bake --quiet " + (dir_ / "plane.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fs::path tif = dir_ / "out" / "plane.p1.horizon.tif";
+  const std::size_t centre = std::size_t(n / 2) * n + n / 2;
+  const double s45 = std::sqrt(0.5);
+  const double expected[4] = {0, -s45, 0, s45};  // east, south, west, north
+  for (int k = 0; k < 4; ++k) {
+    const Raster band = read_raster(tif, k + 1);
+    ASSERT_EQ(band.values.size(), z.size());
+    EXPECT_NEAR(band.values[centre], expected[k], 1e-3) << "channel " << k;
+  }
+  EXPECT_NE(gdalinfo_json(tif)["metadata"][""]["HFBAKE_AZIMUTH_CONVENTION"].get<std::string>().find(
+                "north-up raster: +x = east, +y = south, compass azimuth = (90 + phi) mod 360"),
+            std::string::npos);
+}
+
+}  // namespace

@@ -1,0 +1,204 @@
+// The GDAL height reader and the Cloud-Optimised GeoTIFF writer, checked against GDAL's own command-line
+// tools: `gdalinfo -json` of the real lidar DEM (../shared/data) and of what hfbake writes.
+#include <gdal_priv.h>
+#include <gtest/gtest.h>
+#include <ogr_spatialref.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include "core/error.hpp"
+#include "gdal_tool.hpp"
+#include "io/georaster_input.hpp"
+#include "io/geotiff_output.hpp"
+#include "temp_folder.hpp"
+
+namespace hfbake {
+namespace {
+namespace fs = std::filesystem;
+using test::gdalinfo_json;
+using test::TempFolder;
+
+const fs::path kData = HFBAKE_SHARED_DATA_DIR;
+
+#define REQUIRE_DATA_AND_TOOLS()                                                                   \
+  do {                                                                                             \
+    if (!fs::exists(kData / "TM1_564_146.tif"))                                                    \
+      GTEST_SKIP() << "no real DEM in " << kData << " (the shared data folder is absent)";         \
+    if (!test::have_gdal_tools()) GTEST_SKIP() << "gdalinfo not found (apt-get install gdal-bin)"; \
+  } while (0)
+
+bool same_crs(const std::string& wkt_a, const std::string& wkt_b) {
+  OGRSpatialReference a, b;
+  if (a.importFromWkt(wkt_a.c_str()) != OGRERR_NONE || b.importFromWkt(wkt_b.c_str()) != OGRERR_NONE)
+    return false;
+  return a.IsSame(&b) != 0;
+}
+
+TEST(GeoRaster, LidarDemHeaderMatchesGdalinfo) {
+  REQUIRE_DATA_AND_TOOLS();
+  for (const char* name : {"TM1_564_146.tif", "TM1_564_146_nodata.tif"}) {
+    const fs::path file = kData / name;
+    const nlohmann::json truth = gdalinfo_json(file);
+    ASSERT_TRUE(truth.is_object()) << name;
+    const std::optional<GeoRasterInfo> info = probe_georaster(file);
+    ASSERT_TRUE(info) << name << ": not taken as a georeferenced raster";
+    EXPECT_EQ(info->driver, "GTiff");
+    EXPECT_EQ(info->width, truth["size"][0].get<int>());
+    EXPECT_EQ(info->height, truth["size"][1].get<int>());
+    ASSERT_TRUE(info->has_geotransform);
+    for (int k = 0; k < 6; ++k) EXPECT_EQ(info->geotransform[k], truth["geoTransform"][k].get<double>()) << k;
+    // The texel size hfbake takes by default: 1 m, as gdalinfo says.
+    EXPECT_EQ(std::abs(info->geotransform[1]), 1.0);
+    EXPECT_TRUE(same_crs(info->crs_wkt, truth["coordinateSystem"]["wkt"].get<std::string>()));
+    EXPECT_FALSE(info->geographic);
+    EXPECT_EQ(info->linear_unit, "metre");
+    EXPECT_NE(info->crs_name.find("Slovene National Grid"), std::string::npos) << info->crs_name;
+    ASSERT_EQ(info->nodata.size(), 1u);
+    const nlohmann::json& band = truth["bands"][0];
+    EXPECT_EQ(info->nodata[0].has_value(), band.contains("noDataValue")) << name;
+  }
+}
+
+TEST(GeoRaster, BandValuesAreAsStored) {
+  REQUIRE_DATA_AND_TOOLS();
+  const Plane p = read_georaster_band(kData / "TM1_564_146.tif", 0, {"job.json", "/height/image"});
+  ASSERT_EQ(p.width, 1000);
+  ASSERT_EQ(p.height, 1000);
+  // gdalinfo -stats computes its own min and max over the file.
+  TempFolder tmp;
+  fs::copy_file(kData / "TM1_564_146.tif", tmp / "dem.tif");
+  const nlohmann::json truth = test::gdalinfo_json_with("-stats", tmp / "dem.tif");
+  ASSERT_TRUE(truth.is_object());
+  float lo = INFINITY, hi = -INFINITY;
+  for (float z : p.values) lo = std::min(lo, z), hi = std::max(hi, z);
+  EXPECT_FLOAT_EQ(lo, truth["bands"][0]["minimum"].get<float>());
+  EXPECT_FLOAT_EQ(hi, truth["bands"][0]["maximum"].get<float>());
+}
+
+TEST(GeoRaster, ImagesWithoutGeoreferencingStayWithOpenImageIO) {
+  TempFolder tmp;
+  GDALAllRegister();
+  GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+  const char* const plain[] = {"PROFILE=BASELINE", nullptr};
+  GDALDataset* ds =
+      gtiff->Create((tmp / "plain.tif").c_str(), 4, 3, 1, GDT_Float32, const_cast<char**>(plain));
+  ASSERT_TRUE(ds);
+  GDALClose(ds);
+  EXPECT_FALSE(probe_georaster(tmp / "plain.tif"));
+  EXPECT_FALSE(probe_georaster(tmp / "missing.tif"));
+  // An Arc/Info ASCII grid is GDAL's whatever it says about itself.
+  std::ofstream(tmp / "g.asc") << "ncols 3\nnrows 2\nxllcorner 100\nyllcorner 200\ncellsize 5\n"
+                                  "NODATA_value -9999\n1 2 3\n4 -9999 6\n";
+  const std::optional<GeoRasterInfo> asc = probe_georaster(tmp / "g.asc");
+  ASSERT_TRUE(asc);
+  EXPECT_EQ(asc->driver, "AAIGrid");
+  EXPECT_EQ(asc->geotransform[1], 5.0);
+  EXPECT_EQ(asc->geotransform[5], -5.0);
+  ASSERT_TRUE(asc->nodata[0]);
+  EXPECT_EQ(*asc->nodata[0], -9999.0);
+  const Plane p = read_georaster_band(tmp / "g.asc", 0, {"j", "/height/image"});
+  EXPECT_EQ(p.values, (std::vector<float>{1, 2, 3, 4, -9999, 6}));
+}
+
+LayerSet test_layers(int w, int h) {
+  LayerSet s;
+  s.width = w;
+  s.height = h;
+  Layer& ao = s.add("ao", mono_channels());
+  for (int t = 0; t < w * h; ++t) ao.data[t] = float(t % 97) / 97.0f;
+  Layer& rgb = s.add("direct", rgb_channels());
+  for (std::size_t t = 0; t < rgb.data.size(); ++t) rgb.data[t] = float(t % 13) / 13.0f;
+  return s;
+}
+
+std::vector<float> read_band(const fs::path& file, int band) {
+  std::unique_ptr<GDALDataset> ds(GDALDataset::Open(file.c_str(), GDAL_OF_RASTER));
+  if (!ds) return {};
+  std::vector<float> v(std::size_t(ds->GetRasterXSize()) * ds->GetRasterYSize());
+  if (ds->GetRasterBand(band)->RasterIO(GF_Read, 0, 0, ds->GetRasterXSize(), ds->GetRasterYSize(), v.data(),
+                                        ds->GetRasterXSize(), ds->GetRasterYSize(), GDT_Float32, 0, 0,
+                                        nullptr) != CE_None)
+    return {};
+  return v;
+}
+
+TEST(GeoTiffOutput, CogWithTheInputsCrsGeotransformAndNodata) {
+  REQUIRE_DATA_AND_TOOLS();
+  const std::optional<GeoRasterInfo> dem = probe_georaster(kData / "TM1_564_146.tif");
+  ASSERT_TRUE(dem);
+  TempFolder tmp;
+  const int w = 700, h = 600;  // larger than one 512 tile: overviews and several tiles
+  const LayerSet layers = test_layers(w, h);
+  Georeference geo;
+  geo.from_file = true;
+  geo.crs_wkt = dem->crs_wkt;
+  geo.geotransform = dem->geotransform;
+  geo.holes.assign(std::size_t(w) * h, 0);
+  geo.holes[5] = geo.holes[123456] = 1;
+  write_geotiff(tmp / "t.ao.tif", layers, layers.layers[0], geo, {{{"HFBAKE_METHOD", "p1"}}});
+  write_geotiff(tmp / "t.direct.tif", layers, layers.layers[1], geo);
+
+  const nlohmann::json input = gdalinfo_json(kData / "TM1_564_146.tif");
+  for (const char* name : {"t.ao.tif", "t.direct.tif"}) {
+    const nlohmann::json out = gdalinfo_json(tmp / name);
+    ASSERT_TRUE(out.is_object()) << name;
+    EXPECT_EQ(out["geoTransform"], input["geoTransform"]) << name;
+    // The same CRS (the writer stores it by its EPSG code, so gdalinfo prints EPSG's canonical WKT, whose
+    // axis names and usage block differ from the input's own GeoKeys-derived WKT).
+    const std::string wkt = out["coordinateSystem"]["wkt"].get<std::string>();
+    EXPECT_TRUE(same_crs(wkt, input["coordinateSystem"]["wkt"].get<std::string>())) << wkt;
+    EXPECT_NE(wkt.find("ID[\"EPSG\",3794]]"), std::string::npos) << wkt;
+    EXPECT_EQ(out["metadata"]["IMAGE_STRUCTURE"]["LAYOUT"], "COG") << out["metadata"].dump();
+    EXPECT_EQ(out["metadata"]["IMAGE_STRUCTURE"]["COMPRESSION"], "DEFLATE");
+    for (const auto& band : out["bands"]) {
+      EXPECT_EQ(band["type"], "Float32");
+      EXPECT_EQ(band["noDataValue"].get<double>(), -9999.0);
+    }
+  }
+  const nlohmann::json ao = gdalinfo_json(tmp / "t.ao.tif");
+  EXPECT_EQ(ao["bands"].size(), 1u);
+  EXPECT_EQ(ao["bands"][0]["description"], "ao.Y");
+  EXPECT_EQ(ao["metadata"][""]["HFBAKE_METHOD"], "p1");
+  const nlohmann::json direct = gdalinfo_json(tmp / "t.direct.tif");
+  ASSERT_EQ(direct["bands"].size(), 3u);
+  EXPECT_EQ(direct["bands"][2]["description"], "direct.B");
+
+  // Values: bit-exact, NoData exactly at the holes.
+  const std::vector<float> v = read_band(tmp / "t.ao.tif", 1);
+  ASSERT_EQ(v.size(), std::size_t(w) * h);
+  for (std::size_t t = 0; t < v.size(); ++t)
+    ASSERT_EQ(v[t], geo.holes[t] ? -9999.0f : layers.layers[0].data[t]) << t;
+  const std::vector<float> g = read_band(tmp / "t.direct.tif", 2);
+  for (std::size_t t = 0; t < g.size(); ++t)
+    ASSERT_EQ(g[t], geo.holes[t] ? -9999.0f : layers.layers[1].data[t * 3 + 1]) << t;
+}
+
+TEST(GeoTiffOutput, WithoutHolesNoNodataTagAndALocalGeotransform) {
+  if (!test::have_gdal_tools()) GTEST_SKIP() << "gdalinfo not found";
+  TempFolder tmp;
+  const LayerSet layers = test_layers(40, 30);
+  Georeference geo;
+  geo.geotransform = local_geotransform(0.25);
+  write_geotiff(tmp / "p.tif", layers, layers.layers[0], geo);
+  const nlohmann::json out = gdalinfo_json(tmp / "p.tif");
+  ASSERT_TRUE(out.is_object());
+  EXPECT_FALSE(out["bands"][0].contains("noDataValue"));
+  EXPECT_FALSE(out.contains("coordinateSystem") && out["coordinateSystem"].contains("wkt") &&
+               !out["coordinateSystem"]["wkt"].get<std::string>().empty());
+  const std::vector<double> gt = out["geoTransform"];
+  EXPECT_EQ(gt, (std::vector<double>{-0.125, 0.25, 0, 0.125, 0, -0.25}));
+}
+
+TEST(GeoTiffOutput, AFailedWriteLeavesNothing) {
+  TempFolder tmp;
+  const LayerSet layers = test_layers(8, 8);
+  EXPECT_THROW(write_geotiff(tmp / "no" / "such" / "folder.tif", layers, layers.layers[0], Georeference{}),
+               InputError);
+  EXPECT_TRUE(fs::is_empty(tmp.path()));
+}
+
+}  // namespace
+}  // namespace hfbake
