@@ -365,10 +365,60 @@ struct RayLineWorker {
     void scan(double p0, double p1) {
       p0 = std::max(p0, 0.0), p1 = std::min(p1, double(n) - 1e-9);
       if (p1 < p0) return;
-      for (double p = std::ceil(p0); p <= p1; p += 1) consider(p);  // columns
       const double v0 = line.line + d.u_start * d.slope + delta, dv = d.su * d.slope;
-      family(v0, dv, p0, p1);                     // rows
-      family(v0 + d.u_start, dv + d.su, p0, p1);  // diagonals
+      if (!points && scan_inside(p0, p1, v0, dv)) return;
+      for (double p = std::ceil(p0); p <= p1; p += 1) consider(p);  // columns
+      family(v0, dv, p0, p1);                                       // rows
+      family(v0 + d.u_start, dv + d.su, p0, p1);                    // diagonals
+    }
+    // scan() where the window and its cells lie inside the field (no clamping, no wrapping): the same
+    // points (columns, rows, diagonals) with their heights read straight from the field's array, in
+    // (u, v) coordinates. Returns false (nothing done) elsewhere.
+    bool scan_inside(double p0, double p1, double v0, double dv) {
+      const double ua = d.u_start + d.su * p0, ub = d.u_start + d.su * p1;
+      const double va = v0 + dv * p0, vb = v0 + dv * p1;
+      const int nu = d.x_major ? f.width : f.height, nv = d.x_major ? f.height : f.width;
+      if (std::min(ua, ub) < 1 || std::max(ua, ub) > nu - 3 || std::min(va, vb) < 1 ||
+          std::max(va, vb) > nv - 3)
+        return false;
+      const float* Z = f.z.data();
+      const std::ptrdiff_t su_s = d.x_major ? 1 : f.width, sv_s = d.x_major ? f.width : 1;
+      auto at = [&](int uu, int vv) { return Z[uu * su_s + vv * sv_s]; };
+      auto take = [&](double p, float z) {
+        const double dzz = double(z) - zt, r = (n - p) * line.step;
+        if (!any || dzz * run > dz * r) dz = dzz, run = r, any = true;
+      };
+      // Columns: p integer, u integer, v on the column edge.
+      for (int k = -floor_int(-p0), k1 = floor_int(p1); k <= k1; ++k) {
+        const int uu = d.u_start + d.su * k;
+        const double v = v0 + dv * k;
+        const int fv = floor_int(v);
+        const float a = at(uu, fv), b = at(uu, fv + 1);
+        take(k, a + (b - a) * float(v - fv));
+      }
+      // Rows: v integer, on the row edge between columns floor u and floor u + 1.
+      if (dv != 0) {
+        const double lo = std::min(va, vb), hi = std::max(va, vb), inv = 1 / dv;
+        for (int k = -floor_int(-lo), k1 = floor_int(hi); k <= k1; ++k) {
+          const double p = (k - v0) * inv, u = d.u_start + d.su * p;
+          const int fu = floor_int(u);
+          const float a = at(fu, k), b = at(fu + 1, k);
+          take(p, a + (b - a) * float(u - fu));
+        }
+      }
+      // Diagonals: u + v integer, on the diagonal (fu + 1, fv)-(fu, fv + 1) of cell (fu, fv).
+      const double dw = d.su + dv;
+      if (dw != 0) {
+        const double w0 = v0 + d.u_start, wa = ua + va, wb = ub + vb, inv = 1 / dw;
+        const double lo = std::min(wa, wb), hi = std::max(wa, wb);
+        for (int k = -floor_int(-lo), k1 = floor_int(hi); k <= k1; ++k) {
+          const double p = (k - w0) * inv, u = d.u_start + d.su * p, v = k - u;
+          const int fv = floor_int(v), cu = k - fv - 1;
+          const float a = at(cu + 1, fv), b = at(cu, fv + 1);
+          take(p, a + (b - a) * float(v - fv));
+        }
+      }
+      return true;
     }
   };
 
