@@ -352,7 +352,19 @@ struct RayLineWorker {
         points->push_back(p), heights->push_back(f.triangle_height(x, y));
         return;
       }
-      const double z = double(f.triangle_height(x, y)) - zt, r = (n - p) * line.step;
+      float h;
+      if (x >= 1 && y >= 1 && x <= f.width - 3 && y <= f.height - 3) {  // inside: no clamp or wrap
+        const int i = floor_int(x), j = floor_int(y);
+        const float tx = float(x - i), ty = float(y - j);
+        const float* Z = f.z.data() + f.index(i, j);
+        if (tx + ty <= 1)
+          h = Z[0] + (Z[1] - Z[0]) * tx + (Z[f.width] - Z[0]) * ty;
+        else
+          h = Z[f.width + 1] + (Z[f.width] - Z[f.width + 1]) * (1 - tx) + (Z[1] - Z[f.width + 1]) * (1 - ty);
+      } else {
+        h = f.triangle_height(x, y);
+      }
+      const double z = double(h) - zt, r = (n - p) * line.step;
       if (!any || z * run > dz * r) dz = z, run = r, any = true;
     }
     // Positions p in [p0, p1] where a + b p is an integer.
