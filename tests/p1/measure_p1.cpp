@@ -38,11 +38,7 @@ using truth::march_from;
 using truth::march_tri;
 using truth::tri_height;
 
-double ao_term(double e, double np, double nz) {
-  const double th = std::min(kPi / 2 - e, kPi / 2 + std::atan2(np, nz));
-  const double st = std::sin(th), ct = std::cos(th);
-  return nz * st * st + np * (th - st * ct);
-}
+using truth::ao_term;
 
 using Stats = truth::ErrorStats;
 

@@ -133,4 +133,80 @@ inline double march_tri(const HeightField& f, int i, int j, double dx, double dy
   return march_from(f, i, j, dx, dy, families, 0, &dz, &run) ? std::atan2(dz, run) : truth::kNone;
 }
 
+// Rough fBm at the texel scale (like a rough DSM): value noise (bilinear lattice, hashed) from `largest`
+// texels down to 1 texel, each octave's amplitude `gain` times the last, then scaled so that the median
+// forward difference |z(i+1, j) - z(i, j)| is tan(slope_deg) (texel size 1): slope_deg 60-80 gives the
+// rough fields of issue 19.
+inline HeightField rough_field(int w, int h, double slope_deg, double gain, std::uint64_t seed,
+                               int largest = 64) {
+  HeightField f;
+  f.width = w, f.height = h, f.wrap = Wrap::clamp, f.texel_size = 1.0;
+  std::vector<double> z(std::size_t(w) * h, 0.0);
+  auto hash = [&](std::uint64_t o, std::int64_t a, std::int64_t b) {
+    std::uint64_t x = seed * 0x9e3779b97f4a7c15ull ^ (o * 0xbf58476d1ce4e5b9ull) ^
+                      (std::uint64_t(a) * 0x94d049bb133111ebull) ^ (std::uint64_t(b) * 0x2545f4914f6cdd1dull);
+    x ^= x >> 31, x *= 0x9e3779b97f4a7c15ull, x ^= x >> 29, x *= 0xbf58476d1ce4e5b9ull, x ^= x >> 32;
+    return 2.0 * double(x >> 11) / 9007199254740992.0 - 1.0;
+  };
+  double amp = 1;
+  std::uint64_t octave = 0;
+  for (int cell = largest; cell >= 1; cell /= 2, amp *= gain, ++octave)
+    for (int j = 0; j < h; ++j)
+      for (int i = 0; i < w; ++i) {
+        const double x = double(i) / cell, y = double(j) / cell;
+        const std::int64_t x0 = std::int64_t(std::floor(x)), y0 = std::int64_t(std::floor(y));
+        const double tx = x - double(x0), ty = y - double(y0);
+        const double a = hash(octave, x0, y0), b = hash(octave, x0 + 1, y0);
+        const double c = hash(octave, x0, y0 + 1), d = hash(octave, x0 + 1, y0 + 1);
+        z[std::size_t(j) * w + i] += amp * ((a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty);
+      }
+  std::vector<double> diffs;
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i + 1 < w; ++i)
+      diffs.push_back(std::fabs(z[std::size_t(j) * w + i + 1] - z[std::size_t(j) * w + i]));
+  std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
+  const double scale = std::tan(slope_deg * kPi / 180) / std::max(diffs[diffs.size() / 2], 1e-30);
+  f.z.resize(z.size());
+  for (std::size_t t = 0; t < z.size(); ++t) f.z[t] = float(z[t] * scale);
+  return f;
+}
+
+// A step of height `step` (world units; texel size 1) along the line through the field's centre at
+// `angle_deg` to the y axis: z = step where (x - cx) cos a + (y - cy) sin a >= 0, else 0 (angle 0: a wall
+// along a column). `terraces` > 1: that many steps, `spacing` texels apart along the same normal.
+inline HeightField step_field(int w, int h, double step, double angle_deg, int terraces = 1,
+                              double spacing = 16) {
+  HeightField f;
+  f.width = w, f.height = h, f.wrap = Wrap::clamp, f.texel_size = 1.0;
+  f.z.resize(std::size_t(w) * h);
+  const double a = angle_deg * kPi / 180, ca = std::cos(a), sa = std::sin(a);
+  const double cx = 0.5 * (w - 1) + 0.25, cy = 0.5 * (h - 1) + 0.125;  // no texel exactly on the step line
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      const double d = (i - cx) * ca + (j - cy) * sa;
+      int n = 0;
+      for (int t = 0; t < terraces; ++t) n += d >= (t - 0.5 * (terraces - 1)) * spacing ? 1 : 0;
+      f.z[f.index(i, j)] = float(step * n);
+    }
+  return f;
+}
+
+// The exact horizons (sin of the elevation) of texel (i, j) for the K azimuths of the sweep (the
+// directions plan_direction builds: the same unit vectors P1 looks along), by march_tri over every column,
+// row and diagonal crossing: out[k]. -1 where nothing lies behind.
+inline void exact_horizons(const HeightField& f, const std::vector<SweepDirection>& dirs, int i, int j,
+                           float* out) {
+  for (std::size_t k = 0; k < dirs.size(); ++k) {
+    const double e = march_tri(f, i, j, dirs[k].dx, dirs[k].dy, 7);
+    out[k] = float(std::sin(e));
+  }
+}
+
+// P1's ao term of one direction (Eq. 5 with the midpoint azimuthal rule, as compute_p1) at elevation e.
+inline double ao_term(double e, double np, double nz) {
+  const double th = std::min(kPi / 2 - e, kPi / 2 + std::atan2(np, nz));
+  const double st = std::sin(th), ct = std::cos(th);
+  return nz * st * st + np * (th - st * ct);
+}
+
 }  // namespace hfbake::truth

@@ -74,6 +74,16 @@ class BasicHullStack {
   Caster query(Pos s, float z) const {
     Caster c;
     if (size_ == 0) return c;
+    const int lo = query_index(s, z);
+    c.any = true;
+    c.dz = double(z_[lo]) - z;
+    c.dist = s - s_[lo];
+    return c;
+  }
+
+  // The stack index of query(s, z)'s caster (the stack must not be empty); the stack's points from the
+  // bottom (farthest) up are position(0), height(0) .. position(size() - 1), height(size() - 1).
+  int query_index(Pos s, float z) const {
     // First index t such that vertex t + 1 is not steeper than vertex t (seen from (s, z)).
     int lo = 0, hi = size_ - 1;
     while (lo < hi) {
@@ -85,11 +95,10 @@ class BasicHullStack {
       else
         lo = m + 1;
     }
-    c.any = true;
-    c.dz = double(z_[lo]) - z;
-    c.dist = s - s_[lo];
-    return c;
+    return lo;
   }
+  Pos position(int i) const { return s_[i]; }
+  float height(int i) const { return z_[i]; }
 
  private:
   std::vector<Pos> s_;

@@ -30,6 +30,23 @@ RunControl sub_progress(const RunControl& rc, double begin, double span) {
   return sub;
 }
 
+// A texel's far caster from its two lines' RayLineWorker results (channels 0-1: slot A, 2-3: slot B, at
+// stride `plane` apart from index `at`), see the tile visitor in compute_p1.
+struct FarPick {
+  float dz, run;
+};
+inline FarPick far_pick(const float* lo, const float* hi, std::size_t plane, std::size_t at, float off_lo,
+                        float w_hi) {
+  if (off_lo >= 0) return {lo[at], lo[plane + at]};
+  const FarPick b{lo[2 * plane + at], lo[3 * plane + at]};
+  if (w_hi == 0) return b;
+  const FarPick a{hi[at], hi[plane + at]};
+  // The steeper (dz / run, runs > 0; run +inf: none).
+  if (a.run == std::numeric_limits<float>::infinity()) return b;
+  if (b.run == std::numeric_limits<float>::infinity()) return a;
+  return a.dz * b.run > b.dz * a.run ? a : b;
+}
+
 }  // namespace
 
 const std::vector<std::string>& p1_layer_names() {
@@ -145,32 +162,6 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       x_major[k] = d.x_major;
     }
   }
-  // The far-field lift of a tap `off` texels from its texel along the minor axis: its height above the
-  // texel's plane, z(tap) - z - g * off, where g is the minmod of the two one-sided differences (the
-  // smaller one when they agree in sign, else 0). On a plane it is the plane's gradient (the lift
-  // vanishes); at a cliff rim or a crease it does not tilt the texel's plane by the drop beside it (the
-  // normal's gradient, an average over both sides, does: issue 4's rim defect). The tap lies on the
-  // texel's column (row), which is straight between texels, so z(tap) - z = off * (one-sided difference)
-  // and lift = off * c with c = right difference - g (off >= 0) or left difference - g (off < 0): the sweep
-  // lines need not carry their samples' heights.
-  std::vector<float> cxl(N), cxr(N), cyl(N), cyr(N);
-  tbb::parallel_for(0, f.height, [&](int j) {
-    auto minmod = [](float a, float b) { return a * b <= 0 ? 0.0f : (std::fabs(a) < std::fabs(b) ? a : b); };
-    const bool rep = f.wrap == Wrap::repeat;
-    for (int i = 0; i < f.width; ++i) {
-      const std::size_t t = f.index(i, j);
-      const float z = f.z[t];
-      const float xl = z - f.at(i - 1, j), xr = f.at(i + 1, j) - z;
-      const float yl = z - f.at(i, j - 1), yr = f.at(i, j + 1) - z;
-      // clamp: a border texel has one difference (the other would be 0 against the clamped copy).
-      const float gxv = rep ? minmod(xl, xr) : (i == 0 ? xr : (i == f.width - 1 ? xl : minmod(xl, xr)));
-      const float gyv = rep ? minmod(yl, yr) : (j == 0 ? yr : (j == f.height - 1 ? yl : minmod(yl, yr)));
-      cxl[t] = xl - gxv, cxr[t] = xr - gxv, cyl[t] = yl - gyv, cyr[t] = yr - gyv;
-    }
-  });
-  auto lift_of = [&](int k_is_x_major, std::size_t t, float off) {
-    return off * (k_is_x_major ? (off >= 0 ? cyr[t] : cyl[t]) : (off >= 0 ? cxr[t] : cxl[t]));
-  };
   const int margin = int(std::ceil(p.near_radius)) + 2;  // texels this far inside have every crossing inside
   const bool clamp = f.wrap == Wrap::clamp;
   // Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
@@ -203,9 +194,9 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
 
   SweepSpec spec;
   spec.directions = K;
-  spec.channels = p1::HorizonLineWorker::channels();
+  spec.channels = p1::RayLineWorker::channels();
   spec.wrap_periods = p.wrap_periods;
-  spec.tile_nearest = p.horizon_distance;
+  spec.tile_nearest = false;
   spec.tile_taps = true;
   spec.tile_values = false;
   spec.zero_buffers = false;  // HorizonLineWorker writes every receiver
@@ -215,9 +206,10 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   const double far_radius = p.near_radius * f.texel_size;
   // One line worker per thread, for the K directions and for the lights' own directions.
   auto make_worker = [&] {
-    p1::HorizonLineWorker w;
+    p1::RayLineWorker w;
     w.far_radius = far_radius;
-    w.crossings = p.far_crossings ? &f : nullptr;
+    w.field = &f;
+    w.hull_crossings = p.far_crossings;
     return w;
   };
   sweep_lines_tiled(f, spec, main_rc, make_worker, [&](const SweepTile& t) {
@@ -253,23 +245,14 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
         for (int x = 0; x < xa; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
         for (int x = xb; x < w; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
         for (int x = 0; x < w; ++x) en[x] = fast_atan(en[x]);
-        // Far field: each tap's caster (>= near_radius behind it) seen from the texel: the tap sample
-        // lies `lift` above the texel's plane (see lift_of; zero on any plane), and the caster is taken
-        // that much higher relative to the texel (transfers compared in tests/p1/measure_p1.cpp: this
-        // one is exact on planes, best on the fractal field, and right at cliff rims).
+        // Far field: the texel's own ray evaluated by its two lines (RayLineWorker): slot B of the line
+        // below, slot A of the line above; a texel on a line (off_lo 0), or whose line below is off a clamp
+        // field (off_lo > 0: lo is the line above), takes slot A of lo; at the last row, slot B of lo.
         const std::size_t row = std::size_t(y) * w;
-        const float *ld = t.lo + row, *lr = t.lo + plane + row;
-        const float *hd = t.hi + row, *hr = t.hi + plane + row;
-        const float* wh = t.w_hi + row;
-        const float *ol = t.off_lo + row, *oh = t.off_hi + row;
-        const float *cl = (x_major[k] ? cyl : cxl).data() + base,
-                    *cr = (x_major[k] ? cyr : cxr).data() + base;
+        const float *ol = t.off_lo + row, *wh = t.w_hi + row;
         for (int x = 0; x < w; ++x) {
-          const float lift_l = ol[x] * (ol[x] >= 0 ? cr[x] : cl[x]);
-          const float lift_h = oh[x] * (oh[x] >= 0 ? cr[x] : cl[x]);
-          const float a = std::max(en[x], p1::far_elevation(ld[x], lr[x], lift_l));
-          const float b = std::max(en[x], p1::far_elevation(hd[x], hr[x], lift_h));
-          e[x] = a + (b - a) * wh[x];
+          const FarPick fp = far_pick(t.lo, t.hi, plane, row + x, ol[x], wh[x]);
+          e[x] = std::max(en[x], p1::caster_elevation(fp.dz, fp.run));
         }
       }
       const float* NX = nx.data() + base;
@@ -353,21 +336,18 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       if (p.horizon)
         for (int x = 0; x < w; ++x)
           r.horizon[p.horizon_by_direction ? k * N + base + x : (base + x) * K + k] = se[x];
-      if (want_distance) {  // the near crossing, or the larger-weight tap's far caster, seen from the
-                            // texel
+      if (want_distance) {  // the near crossing, or the far caster on the texel's own ray
         const std::size_t row = std::size_t(y) * w;
-        const float *dz = t.nearest + row, *run = t.nearest + plane + row;
         for (int x = 0; x < w; ++x) {
           int which;
           const float near_m = near_slope_border(k, t.i0 + x, t.j0 + y, &which);
-          const float off = t.w_hi[row + x] > 0.5f ? t.off_hi[row + x] : t.off_lo[row + x];
-          const float lift = lift_of(x_major[k], base + x, off);
-          const float far_e = p1::far_elevation(dz[x], run[x], lift);
+          const FarPick fp = far_pick(t.lo, t.hi, plane, row + x, t.off_lo[row + x], t.w_hi[row + x]);
+          const float far_e = p1::caster_elevation(fp.dz, fp.run);
           float d;
           if (which >= 0 && fast_atan(near_m) >= far_e)
             d = std::sqrt(1 + near_m * near_m) / near[k][which].inv_s;  // run 1 / inv_s, rise m * run
           else
-            d = run[x] == std::numeric_limits<float>::infinity() ? run[x] : std::hypot(run[x], dz[x] + lift);
+            d = fp.run == std::numeric_limits<float>::infinity() ? fp.run : std::hypot(fp.run, fp.dz);
           r.horizon_distance[(base + x) * K + k] = d;
         }
       }
@@ -404,7 +384,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   // Directional lights: one extra sweep direction per light, at its own azimuth.
   if (!lights.empty()) {
     SweepSpec ls;
-    ls.channels = p1::HorizonLineWorker::channels();
+    ls.channels = p1::RayLineWorker::channels();
     ls.wrap_periods = p.wrap_periods;
     std::vector<double> elevation, radius;
     std::vector<Vec3> dir;
@@ -434,12 +414,12 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       const double g = double(v0) - double(u) * d.slope;
       const float fr = float(g - std::floor(g));
       const bool lo_is_hi = !d.repeat && fr > 0 && d.n_minor > 1 && v0 == 0;  // as texel_taps
-      const float off_lo = lo_is_hi ? 1 - fr : -fr, off_hi = 1 - fr;
+      const float off_lo = lo_is_hi ? 1 - fr : -fr;
       int which;
       const float en = fast_atan(near_slope_at(light_near[li], i, j, &which));
-      const float a = std::max(en, p1::far_elevation(t.lo[0], t.lo[1], lift_of(d.x_major, idx, off_lo)));
-      const float b = std::max(en, p1::far_elevation(t.hi[0], t.hi[1], lift_of(d.x_major, idx, off_hi)));
-      const double frac = disk_fraction_above(elevation[li], a + (b - a) * t.w_hi, radius[li]);
+      const FarPick fp = far_pick(t.lo, t.hi, 1, 0, off_lo, t.w_hi);
+      const float horizon = std::max(en, p1::caster_elevation(fp.dz, fp.run));
+      const double frac = disk_fraction_above(elevation[li], horizon, radius[li]);
       if (frac <= 0) return;
       if (ndl > 0) direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
       if (facets)

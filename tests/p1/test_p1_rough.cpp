@@ -1,0 +1,159 @@
+// P1's horizons against independent truth on terrain rough at the texel scale and on steps (issue 19 item
+// 0): the exact march over the reference's triangulated surface from every texel centre (truth::march_tri,
+// every column, row and diagonal crossing; no hull, no sweep), and closed forms at the foot and the top of
+// a step along a column. Directions that are not multiples of 45 degrees are where the sweep's lines miss
+// the texel centres, so K = 16 and 24 have most of theirs off the diagonals.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "methods/p1/p1.hpp"
+#include "p1_truth.hpp"
+
+namespace hfbake {
+namespace {
+
+Scene make_scene(HeightField f) {
+  Scene s;
+  s.name = "rough";
+  s.normals = compute_normals(f);
+  s.field = std::move(f);
+  s.environment = make_uniform_environment({1, 1, 1});
+  return s;
+}
+
+P1Result horizons(const Scene& s, int K) {
+  P1Params p;
+  p.directions = K;
+  p.horizon = true;
+  p.vsky = p.direct = false;
+  return compute_p1(s, p, RunControl{});
+}
+
+struct Agreement {
+  double p99 = 0, max = 0, above = 0;  // |sin h - sin h_exact|: 99th percentile, max, share above 0.05
+  double max_inner = 0;                // max without the field's outermost texel ring
+  double ao_bias = 0;                  // mean of P1's ao minus the exact horizons' ao
+};
+
+Agreement against_exact_march(const Scene& s, int K) {
+  const HeightField& f = s.field;
+  const P1Result r = horizons(s, K);
+  SweepSpec spec;
+  spec.directions = K;
+  std::vector<SweepDirection> dirs;
+  for (int k = 0; k < K; ++k) dirs.push_back(plan_direction(f, spec, k));
+  std::vector<float> err, h(K);
+  double ao_diff = 0, inner = 0;
+  for (int j = 0; j < f.height; ++j)
+    for (int i = 0; i < f.width; ++i) {
+      const std::size_t idx = f.index(i, j);
+      truth::exact_horizons(f, dirs, i, j, h.data());
+      const Vec3f n = s.normals[idx];
+      double ao = 0;
+      for (int k = 0; k < K; ++k) {
+        err.push_back(std::fabs(r.horizon[idx * K + k] - h[k]));
+        if (i > 0 && j > 0 && i < f.width - 1 && j < f.height - 1)
+          inner = std::max(inner, double(err.back()));
+        ao += truth::ao_term(std::asin(std::clamp(double(h[k]), -1.0, 1.0)),
+                             n.x * dirs[k].dx + n.y * dirs[k].dy, n.z);
+      }
+      ao_diff += r.ao[idx] - ao / K;
+    }
+  Agreement a;
+  a.ao_bias = ao_diff / double(f.texel_count());
+  a.above = double(std::count_if(err.begin(), err.end(), [](float e) { return e > 0.05f; })) / err.size();
+  a.max = *std::max_element(err.begin(), err.end());
+  a.max_inner = inner;
+  std::nth_element(err.begin(), err.begin() + err.size() * 99 / 100, err.end());
+  a.p99 = err[err.size() * 99 / 100];
+  return a;
+}
+
+TEST(P1Rough, HorizonsMatchTheExactMarchOnRoughFields) {
+  struct Case {
+    const char* name;
+    HeightField field;
+  };
+  const Case cases[] = {{"rough60", truth::rough_field(72, 64, 60, 0.7, 11)},
+                        {"rough80", truth::rough_field(64, 72, 80, 0.7, 12)},
+                        {"rough70 gain .5", truth::rough_field(64, 64, 70, 0.5, 13)}};
+  for (const Case& c : cases)
+    for (int K : {16, 24}) {
+      const Agreement a = against_exact_march(make_scene(c.field), K);
+      std::printf(
+          "[rough] %-16s K=%2d |sin h - exact|: p99 %.5f max %.4f, %.3f %% above 0.05; ao bias %+.5f\n",
+          c.name, K, a.p99, a.max, 100 * a.above, a.ao_bias);
+      // Before issue 19 (a lifted blend of the two lines' casters): p99 0.1-0.3, 5-10 % above 0.05.
+      EXPECT_LE(a.p99, 0.005) << c.name << " K=" << K;
+      EXPECT_LE(a.above, 0.002) << c.name << " K=" << K;
+      EXPECT_LE(std::fabs(a.ao_bias), 0.001) << c.name << " K=" << K;
+    }
+}
+
+TEST(P1Rough, HorizonsMatchTheExactMarchOnStepsAndSmoothFields) {
+  struct Case {
+    const char* name;
+    HeightField field;
+    double max;
+  };
+  const Case cases[] = {{"step 20deg", truth::step_field(64, 64, 4, 20), 0.15},
+                        {"terraces 30deg", truth::step_field(64, 64, 4, 30, 3, 12), 0.15},
+                        {"fractal", truth::procedural(ProceduralKind::fractal, 64, 64, Wrap::clamp), 0.15}};
+  for (const Case& c : cases)
+    for (int K : {16, 24}) {
+      const Agreement a = against_exact_march(make_scene(c.field), K);
+      std::printf(
+          "[steps] %-16s K=%2d |sin h - exact|: p99 %.5f max %.4f (inside the border ring %.4f); ao bias "
+          "%+.5f\n",
+          c.name, K, a.p99, a.max, a.max_inner, a.ao_bias);
+      EXPECT_LE(a.p99, 0.005) << c.name << " K=" << K;
+      // The border ring: see the README (a texel there has one line beside it on the field). Issue 19 aims
+      // at 0.02; measured 0.04-0.10 inside the ring (a caster beside neither line's window).
+      EXPECT_LE(a.max_inner, c.max) << c.name << " K=" << K;
+      EXPECT_LE(std::fabs(a.ao_bias), 0.001) << c.name << " K=" << K;
+    }
+}
+
+// A 4 m step along a column (x >= 32 high): on the triangulated surface the cell between the foot column
+// (x = 31) and the top column (x = 32) is one plane rising 4 per texel, so from the foot, looking towards
+// the step (cos phi > 0), tan h = 4 cos phi (the top edge casts it); from the top edge looking over the
+// plateau the horizon is flat, and looking down the step the farthest point on the field casts it:
+// tan h = -4 / (distance to the field's border along the ray).
+TEST(P1Rough, StepAlongAColumnHasTheClosedFormHorizons) {
+  const int W = 64, H = 64, K = 24;
+  const Scene s = make_scene(truth::step_field(W, H, 4, 0));
+  ASSERT_EQ(s.field.at(31, 10), 0.0f);
+  ASSERT_EQ(s.field.at(32, 10), 4.0f);
+  const P1Result r = horizons(s, K);
+  SweepSpec spec;
+  spec.directions = K;
+  double worst_foot = 0, worst_top = 0, worst_down = 0;
+  for (int k = 0; k < K; ++k) {
+    const SweepDirection d = plan_direction(s.field, spec, k);
+    for (int j = 16; j < 48; ++j) {
+      if (d.dx > 0.2) {
+        const double foot = std::sin(std::atan(4 * d.dx));
+        worst_foot = std::max(worst_foot, std::fabs(r.horizon[s.field.index(31, j) * K + k] - foot));
+        worst_top = std::max(worst_top, std::fabs(double(r.horizon[s.field.index(32, j) * K + k])));
+      } else if (d.dx < -0.2) {
+        const double tx = 32 / -d.dx;  // to x = 0
+        const double ty = d.dy > 0 ? (H - 1 - j) / d.dy : (d.dy < 0 ? j / -d.dy : 1e300);
+        const double down = std::sin(std::atan(-4 / std::min(tx, ty)));
+        worst_down = std::max(worst_down, std::fabs(r.horizon[s.field.index(32, j) * K + k] - down));
+      }
+    }
+  }
+  std::printf(
+      "[step] max |sin h - closed form|: foot %.2g, top over the plateau %.2g, top down the step %.2g\n",
+      worst_foot, worst_top, worst_down);
+  EXPECT_LE(worst_foot, 1e-5);
+  EXPECT_LE(worst_top, 1e-5);
+  EXPECT_LE(worst_down, 1e-4);
+}
+
+}  // namespace
+}  // namespace hfbake
