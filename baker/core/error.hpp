@@ -9,7 +9,7 @@ namespace hfbake {
 // Bad input: a job, schema, image or value the user can fix. Exit code 2.
 class InputError : public std::runtime_error {
  public:
-  InputError(std::string file, std::string where, std::string what)
+  InputError(std::string file, std::string where, const std::string& what)
       : std::runtime_error(what), file_(std::move(file)), where_(std::move(where)) {}
   const std::string& file() const { return file_; }
   const std::string& where() const { return where_; }
