@@ -51,22 +51,37 @@ std::size_t available_memory_bytes() {
   return std::size_t(avail);
 }
 
+// "7.1 GiB", or "35 MiB" below a GiB.
 std::string gib(std::size_t bytes) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f GiB", double(bytes) / double(1ull << 30));
+  if (bytes < (std::size_t(1) << 30))
+    std::snprintf(buf, sizeof buf, "%.0f MiB", double(bytes) / double(1ull << 20));
+  else
+    std::snprintf(buf, sizeof buf, "%.1f GiB", double(bytes) / double(1ull << 30));
   return buf;
 }
 
 // Refuses a job that cannot fit in memory, before anything is allocated (validate and bake alike). Returns
 // the estimate.
-std::size_t check_memory(const Job& job) {
+std::string memory_parts_text(const std::vector<MemoryPart>& parts) {
+  std::string t;
+  for (const MemoryPart& p : parts) t += (t.empty() ? "" : ", ") + p.name + " " + gib(p.bytes);
+  return t;
+}
+
+std::size_t check_memory(const Job& job, std::optional<std::size_t> limit,
+                         std::string* parts_text = nullptr) {
   const FieldSize size = probe_field_size(job);
-  const std::size_t need = estimate_peak_bytes(job, size), have = available_memory_bytes();
+  std::vector<MemoryPart> parts;
+  const std::size_t need = estimate_peak_bytes(job, size, &parts);
+  const std::size_t have = limit ? *limit : available_memory_bytes();
+  if (parts_text) *parts_text = memory_parts_text(parts);
   if (need > have)
     throw InputError(job.file.string(), "/height",
                      "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
-                         " field needs about " + gib(need) + " to bake, more than the " + gib(have) +
-                         " available");
+                         " field needs about " + gib(need) + " to bake (" + memory_parts_text(parts) +
+                         "), more than the " + gib(have) +
+                         (limit ? " of --memory-limit" : " available (--memory-limit SIZE sets the budget)"));
   return need;
 }
 
@@ -83,8 +98,8 @@ void add_common_attributes(LayerSet& layers, const Job& job, const std::string& 
 
 // Bakes one valid job. Throws InputError (bad input), Cancelled, or anything else (a failed job).
 void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
-              const ReferenceCache* cache) {
-  check_memory(job);
+              const ReferenceCache* cache, std::optional<std::size_t> memory_limit) {
+  check_memory(job, memory_limit);
   const FieldSize size = probe_field_size(job);
 
   check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
@@ -239,7 +254,38 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
 
 }  // namespace
 
-int run_validate(const std::vector<fs::path>& files, bool quiet) {
+std::optional<std::size_t> parse_memory_size(const std::string& text) {
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  std::string unit = text.substr(used);
+  for (const char* tail : {"iB", "B"})
+    if (unit.size() >= std::char_traits<char>::length(tail) &&
+        unit.compare(unit.size() - std::char_traits<char>::length(tail), std::string::npos, tail) == 0) {
+      unit.resize(unit.size() - std::char_traits<char>::length(tail));
+      break;
+    }
+  double scale = 1;
+  if (unit == "K" || unit == "k")
+    scale = 1024.0;
+  else if (unit == "M" || unit == "m")
+    scale = 1024.0 * 1024;
+  else if (unit == "G" || unit == "g")
+    scale = 1024.0 * 1024 * 1024;
+  else if (unit == "T" || unit == "t")
+    scale = 1024.0 * 1024 * 1024 * 1024;
+  else if (!unit.empty())
+    return std::nullopt;
+  const double bytes = value * scale;
+  if (!(bytes >= 1) || !(bytes < 1.8e19)) return std::nullopt;
+  return std::size_t(bytes);
+}
+
+int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<std::size_t> memory_limit) {
   int exit_code = 0;
   // A suite validates as the jobs it lists (as `bake` would run them).
   std::vector<fs::path> jobs;
@@ -265,13 +311,14 @@ int run_validate(const std::vector<fs::path>& files, bool quiet) {
     }
     try {
       const FieldSize size = probe_field_size(*load.job);
-      const std::size_t need = check_memory(*load.job);
+      std::string parts;
+      const std::size_t need = check_memory(*load.job, memory_limit, &parts);
       // Everything bake refuses about the inputs, refused here first: the same loader reads every image
       // (NaN heights without nodata, environment aspect ratios, channel names, map sizes).
       load_scene(*load.job);
       if (!quiet)
-        std::fprintf(stderr, "hfbake: %s: valid (%dx%d, about %s to bake)\n", file.c_str(), size.width,
-                     size.height, gib(need).c_str());
+        std::fprintf(stderr, "hfbake: %s: valid (%dx%d, about %s to bake: %s)\n", file.c_str(), size.width,
+                     size.height, gib(need).c_str(), parts.c_str());
     } catch (const InputError& e) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
       exit_code = 2;
@@ -382,7 +429,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
         ~Timer() { o.seconds = seconds_since(t0); }
       } timer{o, t_job};
       try {
-        bake_job(*jobs[i], progress, cancel, o, cache ? &*cache : nullptr);
+        bake_job(*jobs[i], progress, cancel, o, cache ? &*cache : nullptr, options.memory_limit);
       } catch (const Cancelled&) {
         o.status = JobStatus::cancelled;
       } catch (const InputError& e) {

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <filesystem>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace hfbake {
@@ -20,7 +21,13 @@ struct BakeOptions {
   // The signal that set `cancel` (0 or null: SIGINT): an interrupted bake exits 128 + it (130 SIGINT,
   // 143 SIGTERM, 129 SIGHUP), the status a shell reports for a process that signal killed.
   const std::atomic<int>* interrupt_signal = nullptr;
+  // --memory-limit: the budget a job's memory estimate must fit (default: the machine's available memory).
+  std::optional<std::size_t> memory_limit;
 };
+
+// "512M", "8G", "1.5GiB", "2000000000": bytes (binary multiples K, M, G, T, optionally "iB" or "B"); nullopt
+// when the text is not a size.
+std::optional<std::size_t> parse_memory_size(const std::string& text);
 
 // Exit status per the contract: 0 all baked and thresholds held, 1 a threshold or baseline regressed,
 // 2 bad input or a failed job, 128 + the signal when interrupted (`cancel` was set: 130 SIGINT, 143 SIGTERM,
@@ -28,6 +35,7 @@ struct BakeOptions {
 int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel);
 
 // Schema and file checks without baking: 0 all valid, 2 otherwise. Prints one line per problem.
-int run_validate(const std::vector<std::filesystem::path>& jobs, bool quiet);
+int run_validate(const std::vector<std::filesystem::path>& jobs, bool quiet,
+                 std::optional<std::size_t> memory_limit = std::nullopt);
 
 }  // namespace hfbake

@@ -54,6 +54,17 @@ int main(int argc, char** argv) {
                        "~/.cache/hfbake/references)");
   bake_cmd->add_flag("--no-cache", bake.no_cache,
                      "Always compute references; do not read or write the cache");
+  const auto memory_size = CLI::Validator(
+      [](std::string& text) {
+        return hfbake::parse_memory_size(text) ? std::string()
+                                               : "not a size (e.g. 512M, 8G, 1.5GiB, or bytes): " + text;
+      },
+      "SIZE");
+  std::string memory_limit;
+  bake_cmd
+      ->add_option("--memory-limit", memory_limit,
+                   "Refuse a job whose memory estimate exceeds SIZE (default: the available memory)")
+      ->check(memory_size);
 
   hfbake::CompareOptions compare;
   std::string compare_json;
@@ -80,6 +91,9 @@ int main(int argc, char** argv) {
   CLI::App* validate_cmd = app.add_subcommand("validate", "Check jobs against the schema and their files");
   validate_cmd->add_option("jobs", validate_jobs, "Job files (JSON)")->required();
   validate_cmd->add_flag("--quiet", validate_quiet, "Print only problems");
+  std::string validate_memory_limit;
+  validate_cmd->add_option("--memory-limit", validate_memory_limit, "As bake's --memory-limit")
+      ->check(memory_size);
 
   try {
     app.parse(argc, argv);
@@ -90,7 +104,9 @@ int main(int argc, char** argv) {
   }
   if (app.got_subcommand(validate_cmd)) {
     std::vector<std::filesystem::path> files(validate_jobs.begin(), validate_jobs.end());
-    return hfbake::run_validate(files, validate_quiet);
+    return hfbake::run_validate(
+        files, validate_quiet,
+        validate_memory_limit.empty() ? std::nullopt : hfbake::parse_memory_size(validate_memory_limit));
   }
   if (app.got_subcommand(compare_cmd)) {
     if (!compare_json.empty()) compare.json = compare_json;
@@ -105,6 +121,7 @@ int main(int argc, char** argv) {
   if (!out.empty()) bake.out = out;
   if (!summary.empty()) bake.summary = summary;
   if (!cache_dir.empty()) bake.cache = cache_dir;
+  if (!memory_limit.empty()) bake.memory_limit = hfbake::parse_memory_size(memory_limit);
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

@@ -62,7 +62,7 @@ int job_bounces(const Job& job) {
   return job.doc.value("bounces", 1);
 }
 
-std::size_t estimate_peak_bytes(const Job& job, FieldSize size) {
+std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts) {
   const double texels = double(size.width) * double(size.height);
   // Field (4), normals (12), albedo (12), emission (12), and the scene's copy during loading (8).
   double per_texel = 48;
@@ -83,11 +83,18 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size) {
     for (const auto& l : r.value("layers", nlohmann::json::array()))
       channels += layer_channel_count(l.get<std::string>(), r);
     const double bytes = 4.0 * channels * 1.5;  // float layers + the half copy written to EXR
+    const double working = m ? m->working_bytes_per_texel(r, context) : 0.0;
     methods += bytes;
     largest = std::max(largest, bytes);
-    scratch = std::max(scratch, m ? m->working_bytes_per_texel(r, context) : 0.0);
+    scratch = std::max(scratch, working);
+    if (parts) parts->push_back({e.stem, std::size_t(texels * (bytes + working))});
   }
-  per_texel += (job.has_reference ? methods + 2 * 4.0 * 24 * 1.5 : largest) + scratch;
+  const double reference = job.has_reference ? 2 * 4.0 * 24 * 1.5 : 0.0;
+  if (parts) {
+    parts->insert(parts->begin(), {"scene", std::size_t(texels * per_texel) + (std::size_t(64) << 20)});
+    if (job.has_reference) parts->push_back({"reference", std::size_t(texels * reference)});
+  }
+  per_texel += (job.has_reference ? methods + reference : largest) + scratch;
   return std::size_t(texels * per_texel) + (std::size_t(64) << 20);  // + fixed overhead
 }
 

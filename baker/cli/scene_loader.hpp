@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
+#include <vector>
 
 #include "field/scene.hpp"
 #include "job/manifest.hpp"
@@ -18,7 +20,14 @@ FieldSize probe_field_size(const Job& job);
 
 // Bytes a bake of `job` needs at peak (field, normals, surface maps, the largest method's layers and
 // scratch), estimated from the size alone so an absurd job is refused before anything is allocated.
-std::size_t estimate_peak_bytes(const Job& job, FieldSize size);
+// `parts` (optional): what the estimate is made of, for messages: "scene" (field, normals, surface maps),
+// each bake entry's stem (its layers and working memory), "reference" (its layers). Methods run one at a
+// time, so the peak is less than their sum when there is no reference.
+struct MemoryPart {
+  std::string name;
+  std::size_t bytes = 0;
+};
+std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts = nullptr);
 
 // The job's texel size: a georeferenced height raster's pixel size (the job's texel_size, when given,
 // must agree with it), else height.texel_size (default 1). InputError for "from_file" without one.

@@ -462,3 +462,31 @@ TEST_F(Cli, JobsWhoseOutputsCollideAreRefusedUpFront) {
 
 }  // namespace
 }  // namespace hfbake
+
+namespace hfbake {
+namespace {
+
+// --memory-limit: a job whose estimate exceeds the budget is refused by validate and by bake before anything
+// is allocated or written, with the estimate's parts and the knob; a budget it fits passes.
+TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
+  const fs::path p = write_job("big.json", job({{"procedural", {{"kind", "flat"}, {"size", {4096, 4096}}}}}));
+  for (const char* cmd : {"validate ", "bake "}) {
+    const Result r = hfbake(cmd + p.string() + " --memory-limit 200M --quiet");
+    EXPECT_EQ(r.exit_code, 2) << cmd;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_NE(lines[0].find(p.string() + ": /height: a 4096x4096 field needs about "), std::string::npos)
+        << lines[0];
+    EXPECT_NE(lines[0].find("(scene "), std::string::npos) << lines[0];
+    EXPECT_NE(lines[0].find(", p1 "), std::string::npos) << lines[0];
+    EXPECT_NE(lines[0].find("more than the 200 MiB of --memory-limit"), std::string::npos) << lines[0];
+  }
+  EXPECT_TRUE(output_dir_is_empty());
+  EXPECT_EQ(hfbake("validate " + p.string() + " --memory-limit 8G --quiet").exit_code, 0);
+  const Result bad = hfbake("validate " + p.string() + " --memory-limit lots");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--memory-limit: not a size"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace hfbake
