@@ -454,6 +454,13 @@ void write_convergence(std::ostringstream& h, const HtmlInputs& in, const nlohma
   }
 }
 
+// "+0.012" / "-0.012" (appended, not char* + string: GCC 12 reports a false -Wrestrict on that form here).
+std::string signed_text(char sign, const std::string& number) {
+  std::string t(1, sign);
+  t += number;
+  return t;
+}
+
 // The method's image, the reference's and the signed error per compared layer of one or three channels.
 void write_layer_figures(std::ostringstream& h, const HtmlInputs& in, const HtmlMethod& hm,
                          const nlohmann::json& m) {
@@ -507,7 +514,7 @@ void write_layer_figures(std::ostringstream& h, const HtmlInputs& in, const Html
       << figure(layer_image(*rl, w, ht, in.max_image_size, display_max, in), "reference " + layer_name,
                 value_legend)
       << figure(err_img, "error: " + hm.stem + " - reference" + (nc > 1 ? " (mean of channels)" : ""),
-                legend("-" + num(scale, 3), "0", "+" + num(scale, 3), grad,
+                legend(signed_text('-', num(scale, 3)), "0", signed_text('+', num(scale, 3)), grad,
                        "signed error; blue: method too dark, red: too bright; clipped at p99 |error|"))
       << "</div>\n";
   }
