@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "cli/scene_inputs.hpp"
 #include "core/error.hpp"
@@ -118,6 +119,19 @@ Scene load_scene(const Job& job) {
     throw InputError(job.file.string(), "/height",
                      "the field is " + std::to_string(scene.field.width) + "x" +
                          std::to_string(scene.field.height) + "; at least 2x2 texels are needed");
+  // Heights whose squares of differences overflow float would turn normals and slopes into inf and NaN
+  // downstream: refuse them here (validate loads the scene too). 1e12 world units is far beyond any terrain.
+  constexpr float kMaxHeight = 1e12f;
+  for (std::size_t t = 0; t < scene.field.z.size(); ++t)
+    if (!(std::fabs(scene.field.z[t]) <= kMaxHeight)) {
+      const int i = int(t % std::size_t(scene.field.width)), j = int(t / std::size_t(scene.field.width));
+      char value[32];
+      std::snprintf(value, sizeof value, "%g", double(scene.field.z[t]));
+      throw InputError(job.file.string(), "/height",
+                       "texel (" + std::to_string(i) + ", " + std::to_string(j) + ") is " + value +
+                           " world units high; heights (after height_scale and height_offset) must be within "
+                           "+-1e12");
+    }
   scene.normals = compute_normals(scene.field);
 
   const std::size_t n = scene.field.texel_count();

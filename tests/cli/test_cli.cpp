@@ -490,3 +490,29 @@ TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
 
 }  // namespace
 }  // namespace hfbake
+
+namespace hfbake {
+namespace {
+
+// Heights of +-3e38 used to bake "ok" (and gave NaN in p1's ao): products of height differences overflow
+// float. validate and bake refuse them, naming the first such texel (issue 20).
+TEST_F(Cli, HeightsBeyondFloatSafeRangeAreRefused) {
+  std::vector<float> z(16 * 16);
+  for (std::size_t t = 0; t < z.size(); ++t) z[t] = (t % 2 ? -3e38f : 3e38f);
+  z[0] = 1.0f;
+  write_float_image(dir_ / "huge.exr", 16, 16, 1, z);
+  const fs::path p = write_job("huge.json", job({{"image", "huge.exr"}}));
+  for (const char* cmd : {"validate ", "bake "}) {
+    const Result r = hfbake(cmd + p.string() + " --quiet");
+    EXPECT_EQ(r.exit_code, 2) << cmd;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_NE(lines[0].find(p.string() + ": /height: texel (1, 0) is -3e+38 world units high"),
+              std::string::npos)
+        << lines[0];
+  }
+  EXPECT_TRUE(output_dir_is_empty());
+}
+
+}  // namespace
+}  // namespace hfbake
