@@ -2,10 +2,12 @@
 // and the field; nothing is left half-written; SIGINT, SIGTERM and SIGHUP exit 128 + the signal with no
 // outputs; stale staging folders of dead processes are removed.
 #include <gtest/gtest.h>
+
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "run_hfbake.hpp"
 
 #include <OpenImageIO/imageio.h>
 #include <chrono>
@@ -20,17 +22,7 @@
 namespace {
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code = -1;
-  std::string err;  // stderr
-  std::vector<std::string> error_lines() const {
-    std::vector<std::string> lines;
-    std::istringstream in(err);
-    for (std::string l; std::getline(in, l);)
-      if (l.rfind("hfbake: error: ", 0) == 0) lines.push_back(l);
-    return lines;
-  }
-};
+using hfbake::cli_test::Result;
 
 class Cli : public ::testing::Test {
  protected:
@@ -44,18 +36,7 @@ class Cli : public ::testing::Test {
     fs::remove_all(dir_);
   }
 
-  Result hfbake(const std::string& args) {
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string cmd = std::string(HFBAKE_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(err);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    r.err = ss.str();
-    return r;
-  }
+  Result hfbake(const std::string& args) { return hfbake::cli_test::run_hfbake(dir_, args); }
 
   fs::path write_job(const std::string& name, const nlohmann::json& job) {
     const fs::path p = dir_ / name;

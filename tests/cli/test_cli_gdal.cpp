@@ -5,10 +5,12 @@
 // an EXR with the texel size given by hand.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
+
 #include <ogr_spatialref.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "run_hfbake.hpp"
 
 #include <OpenImageIO/imageio.h>
 #include <chrono>
@@ -31,17 +33,7 @@ using hfbake::test::run_tool;
 const fs::path kData = HFBAKE_SHARED_DATA_DIR;
 const fs::path kDem = kData / "TM1_564_146.tif";
 
-struct Result {
-  int exit_code = -1;
-  std::string err;
-  std::vector<std::string> error_lines() const {
-    std::vector<std::string> lines;
-    std::istringstream in(err);
-    for (std::string l; std::getline(in, l);)
-      if (l.rfind("hfbake: error: ", 0) == 0) lines.push_back(l);
-    return lines;
-  }
-};
+using hfbake::cli_test::Result;
 
 struct Raster {
   int width = 0, height = 0;
@@ -83,18 +75,7 @@ class CliGdal : public ::testing::Test {
     if (!dir_.empty()) fs::remove_all(dir_, ec);
   }
 
-  Result hfbake(const std::string& args) {
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string cmd = std::string(HFBAKE_BINARY) + " " + args + " 2>" + err.string() + " >/dev/null";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(err);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    r.err = ss.str();
-    return r;
-  }
+  Result hfbake(const std::string& args) { return hfbake::cli_test::run_hfbake(dir_, args); }
 
   // gdal_translate ARGS (file names relative to the test folder); fails the test when the tool does.
   void translate(const std::string& args) {
