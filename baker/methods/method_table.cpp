@@ -31,20 +31,6 @@ std::vector<std::string> method_names() {
   return names;
 }
 
-const char* work_division_name(WorkDivision d) {
-  switch (d) {
-    case WorkDivision::directions:
-      return "directions";
-    case WorkDivision::bounce_stages:
-      return "bounce_stages";
-    case WorkDivision::texel_tiles:
-      return "texel_tiles";
-    case WorkDivision::receiver_tiles:
-      return "receiver_tiles";
-  }
-  return "?";
-}
-
 nlohmann::json resolve_method_params(const nlohmann::json& entry, const MethodContext& context,
                                      const std::string& file, const std::string& pointer) {
   const std::string name = entry.is_object() ? entry.value("method", "") : "";

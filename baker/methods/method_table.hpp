@@ -26,7 +26,6 @@ enum class WorkDivision {
   texel_tiles,     // texel tiles with a halo of the method's reach
   receiver_tiles,  // receiver tiles, each against the whole field's geometry (the reference)
 };
-const char* work_division_name(WorkDivision d);
 
 // What a method's parameter reader may know before the heights are loaded.
 struct MethodContext {
