@@ -40,6 +40,17 @@ ProceduralSpec procedural_spec(const nlohmann::json& p) {
 
 }  // namespace
 
+SceneNeeds scene_needs(const Job& job) {
+  SceneNeeds needs;
+  needs.normals = needs.albedo = job.has_reference;  // the reference shades with both
+  for (const BakeEntry& e : job.bakes) {
+    const MethodInfo* m = find_method(e.method);
+    needs.normals = needs.normals || !m || m->reads_normals;
+    needs.albedo = needs.albedo || !m || m->reads_albedo;
+  }
+  return needs;
+}
+
 FieldSize probe_field_size(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
   if (h.contains("procedural")) {
@@ -132,12 +143,16 @@ Scene load_scene(const Job& job) {
                            " world units high; heights (after height_scale and height_offset) must be within "
                            "+-1e12");
     }
-  scene.normals = compute_normals(scene.field);
+  const SceneNeeds needs = scene_needs(job);
+  if (needs.normals) scene.normals = compute_normals(scene.field);
 
   const std::size_t n = scene.field.texel_count();
   const nlohmann::json surface = doc.value("surface", nlohmann::json::object());
-  scene.surface.albedo.assign(n, Rgb{0.5f, 0.5f, 0.5f});
-  if (surface.contains("albedo")) load_surface_map(job, "/surface/albedo", scene.field, scene.surface.albedo);
+  if (needs.albedo || surface.contains("albedo")) {
+    scene.surface.albedo.assign(n, Rgb{0.5f, 0.5f, 0.5f});
+    if (surface.contains("albedo"))
+      load_surface_map(job, "/surface/albedo", scene.field, scene.surface.albedo);
+  }
   if (surface.contains("emission")) {
     scene.surface.emission.assign(n, Rgb{});
     load_surface_map(job, "/surface/emission", scene.field, scene.surface.emission);

@@ -36,6 +36,16 @@ double job_texel_size(const Job& job);
 // The job's "bounces" (default 1).
 int job_bounces(const Job& job);
 
+// What the job's methods and its reference read from the Scene besides the heights and the lighting
+// (MethodInfo::reads_normals / reads_albedo): load_scene builds only that, the estimate counts only that.
+struct SceneNeeds {
+  bool normals = false;
+  bool albedo = false;
+};
+SceneNeeds scene_needs(const Job& job);
+
+// The job's Scene. Scene::normals and the constant albedo are filled only when scene_needs says a method
+// reads them (an albedo map the job names is always read, so validate checks it).
 Scene load_scene(const Job& job);
 
 }  // namespace hfbake

@@ -1,5 +1,7 @@
 #include "core/layers.hpp"
 
+#include <stdexcept>
+
 #include <cstdio>
 
 namespace hfbake {
@@ -20,6 +22,19 @@ Layer& LayerSet::add(std::string name, std::vector<std::string> channels) {
   layer.name = std::move(name);
   layer.data.assign(std::size_t(width) * std::size_t(height) * channels.size(), 0.0f);
   layer.channels = std::move(channels);
+  layers.push_back(std::move(layer));
+  return layers.back();
+}
+
+Layer& LayerSet::adopt(std::string name, std::vector<std::string> channels, std::vector<float> data) {
+  if (data.size() != std::size_t(width) * std::size_t(height) * channels.size())
+    throw std::logic_error("LayerSet::adopt: layer " + name + " has " + std::to_string(data.size()) +
+                           " values for " + std::to_string(width) + "x" + std::to_string(height) +
+                           " texels x " + std::to_string(channels.size()) + " channels");
+  Layer layer;
+  layer.name = std::move(name);
+  layer.channels = std::move(channels);
+  layer.data = std::move(data);
   layers.push_back(std::move(layer));
   return layers.back();
 }

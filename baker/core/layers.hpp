@@ -40,6 +40,8 @@ struct LayerSet {
   // Adds a zero-filled layer and returns it. The reference stays valid as more layers are added (several
   // tests and bakes fill layers they added earlier: AddressSanitizer found one reading a moved layer).
   Layer& add(std::string name, std::vector<std::string> channels);
+  // Adds a layer holding `data` (moved in, not copied: width * height * channels values, checked).
+  Layer& adopt(std::string name, std::vector<std::string> channels, std::vector<float> data);
   const Layer* find(const std::string& name) const;
   Layer* find(const std::string& name);
 };

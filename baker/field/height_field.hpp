@@ -63,5 +63,8 @@ struct HeightField : FieldShape {
 // Per-texel unit normals as P1 computes them: the sum of the unnormalised normals of the four quads
 // around the texel (honouring texel size and wrap), normalised. Row-major like HeightField::z.
 std::vector<Vec3f> compute_normals(const HeightField& field);
+// The same normal of one texel (compute_normals is this at every texel): for methods that recompute
+// normals from the heights instead of holding 12 bytes per texel (P1).
+Vec3f normal_at(const HeightField& field, int i, int j);
 
 }  // namespace hfbake

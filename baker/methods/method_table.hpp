@@ -45,6 +45,11 @@ struct MethodInfo {
   double (*working_bytes_per_texel)(const nlohmann::json& resolved, const MethodContext& context) = nullptr;
   WorkDivision division = WorkDivision::directions;
   const char* division_note = "";  // how, and why not otherwise
+  // What the method reads from the Scene besides the heights and the lighting. The job loader builds
+  // Scene::normals and Scene::surface.albedo (12 bytes per texel each) only when a method of the job or
+  // the reference reads them; a method that does not must not touch them (they may be empty).
+  bool reads_normals = true;
+  bool reads_albedo = true;
   // Obscurance family: its falloff and radius define the quantity the reference's "obscurance" estimates.
   bool falloff_defines_obscurance = false;
 };

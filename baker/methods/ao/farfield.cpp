@@ -373,6 +373,7 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
 MethodInfo farfield_method() {
   MethodInfo m;
   m.name = "farfield";
+  m.reads_albedo = false;
   m.summary = "P4's far-field obscurance: an exact near field, prefiltered far-field slabs beyond it";
   m.read = [](Params& in, const MethodContext&) { read_farfield_options(in); };
   m.bake = bake_farfield;

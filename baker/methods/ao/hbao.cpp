@@ -211,6 +211,7 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
 MethodInfo hbao_method() {
   MethodInfo m;
   m.name = "hbao";
+  m.reads_albedo = false;
   m.summary = "brute-force horizon march per texel and direction (the obscurance family's baseline)";
   m.read = [](Params& in, const MethodContext& c) { read_hbao_settings(in, c.field); };
   m.bake = bake_hbao;

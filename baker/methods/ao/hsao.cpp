@@ -141,6 +141,7 @@ LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunCo
 MethodInfo hsao_method() {
   MethodInfo m;
   m.name = "hsao";
+  m.reads_albedo = false;
   m.summary = "horizon-split obscurance: a near-field march per direction plus normal-split rays";
   m.read = [](Params& in, const MethodContext& c) { read_hsao_settings(in, c.field); };
   m.bake = bake_hsao;

@@ -198,6 +198,8 @@ LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunCo
 MethodInfo lsao_method() {
   MethodInfo m;
   m.name = "lsao";
+  m.reads_normals = false;  // its own, only for texel receivers
+  m.reads_albedo = false;
   m.summary = "P3's line-sweep obscurance: one hull of occluders per sweep line and direction";
   m.read = [](Params& in, const MethodContext&) { read_lsao_options(in); };
   m.bake = bake_lsao;

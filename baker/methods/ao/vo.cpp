@@ -209,6 +209,7 @@ LayerSet bake_vo(const Scene& scene, const nlohmann::json& params, const RunCont
 MethodInfo vo_method() {
   MethodInfo m;
   m.name = "vo";
+  m.reads_albedo = false;
   m.summary = "volumetric obscurance (ALSVO): the occupied fraction of a tangent-space box per texel";
   m.read = [](Params& in, const MethodContext& c) { read_vo_settings(in, c.field); };
   m.bake = bake_vo;

@@ -80,6 +80,12 @@ P1Params read_p1_params(Params& in) {
   return p;
 }
 
+double p1_working_bytes_per_texel(const P1Params& p) {
+  double bytes = p.direct && !p.ao ? 4 : 0;                        // the ao sum behind a uniform sky's direct
+  if (p.direct && p.facet_direct) bytes += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
+  return bytes;
+}
+
 P1Params parse_p1_params(const nlohmann::json& e) {
   Params in(e);
   return read_p1_params(in);
@@ -101,7 +107,6 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   r.width = f.width;
   r.height = f.height;
   r.directions = K;
-  const std::vector<Vec3f>& normals = scene.normals;
 
   const Environment& env = scene.environment;
   const bool uniform_env = env.uniform || env.levels.empty();
@@ -116,30 +121,44 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   }
   const bool need_theta = need_ao || p.bent_normal || profiles;
 
-  // Per-texel inputs and accumulators as separate arrays, so the per-tile loops below vectorise.
-  std::vector<float> nx(N), ny(N), nz(N);
-  for (std::size_t i = 0; i < N; ++i) nx[i] = normals[i].x, ny[i] = normals[i].y, nz[i] = normals[i].z;
+  // Accumulators: only what the requested layers need, each the layer it becomes (finished in place
+  // below). The normals are not held: each thread recomputes a tile's (normal_at) when the sweep hands it
+  // a tile, and keeps them while the batch's directions visit that tile.
   std::vector<float> ao_sum(need_ao ? N : 0, 0.0f), vsky_sum(p.vsky ? N : 0, 0.0f);
-  std::vector<float> dr(p.direct ? N : 0, 0.0f), dg(p.direct ? N : 0, 0.0f), db(p.direct ? N : 0, 0.0f);
-  std::vector<float> bx(p.bent_normal ? N : 0, 0.0f), by(p.bent_normal ? N : 0, 0.0f),
-      bz(p.bent_normal ? N : 0, 0.0f);
-  // The facets' normals and direct-light sums, [q * N + texel] (facet q of P1Result::direct_facets).
+  std::vector<float> rgb_sum(p.direct && !uniform_env ? 3 * N : 0, 0.0f);  // [3 * texel + c]
+  std::vector<float> bent_sum(p.bent_normal ? 3 * N : 0, 0.0f);            // [3 * texel + c]
+  // The facets' direct-light sums, [q * N + texel] (facet q of P1Result::direct_facets).
   const bool facets = p.direct && p.facet_direct;
   const std::size_t NF = facets ? 2 * N : 0;
-  std::vector<float> fnx(NF), fny(NF), fnz(NF);
   std::vector<float> fao(facets && uniform_env ? NF : 0, 0.0f);
   std::vector<float> fdr(facets && !uniform_env ? NF : 0, 0.0f), fdg(fdr.size(), 0.0f), fdb(fdr.size(), 0.0f);
-  if (facets)
-    tbb::parallel_for(0, f.height, [&](int j) {
-      for (int i = 0; i < f.width; ++i) {
-        Vec3f fn[2];
-        facet_normals(f, i, j, fn);
-        for (int q = 0; q < 2; ++q) {
-          const std::size_t t = q * N + f.index(i, j);
-          fnx[t] = fn[q].x, fny[t] = fn[q].y, fnz[t] = fn[q].z;
+  constexpr int kTileTexels = 32 * 32;  // sweep_lines_tiled's tiles
+  struct TileNormals {
+    int i0 = -1, j0 = -1;
+    // [y * width + x]; the facets' [q * kTileTexels + y * width + x]
+    alignas(64) float nx[kTileTexels], ny[kTileTexels], nz[kTileTexels];
+    alignas(64) float fx[2 * kTileTexels], fy[2 * kTileTexels], fz[2 * kTileTexels];
+  };
+  tbb::enumerable_thread_specific<TileNormals> tile_normals;
+  auto normals_of = [&](const SweepTile& t) -> const TileNormals& {
+    TileNormals& n = tile_normals.local();
+    if (n.i0 == t.i0 && n.j0 == t.j0) return n;
+    n.i0 = t.i0, n.j0 = t.j0;
+    for (int y = 0; y < t.height; ++y)
+      for (int x = 0; x < t.width; ++x) {
+        const int at = y * t.width + x;
+        const Vec3f v = normal_at(f, t.i0 + x, t.j0 + y);
+        n.nx[at] = v.x, n.ny[at] = v.y, n.nz[at] = v.z;
+        if (facets) {
+          Vec3f fn[2];
+          facet_normals(f, t.i0 + x, t.j0 + y, fn);
+          for (int q = 0; q < 2; ++q)
+            n.fx[q * kTileTexels + at] = fn[q].x, n.fy[q * kTileTexels + at] = fn[q].y,
+                                   n.fz[q * kTileTexels + at] = fn[q].z;
         }
       }
-    });
+    return n;
+  };
   if (p.horizon) r.horizon.assign(N * K, 0.0f);
   if (p.horizon_distance) r.horizon_distance.assign(N * K, 0.0f);
   std::vector<float> cs, sn;
@@ -218,6 +237,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     const float c = cs[k], s = sn[k];
     alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax], e[kMax], en[kMax];
     const std::size_t plane = std::size_t(t.width) * t.height;
+    const TileNormals& tn = normals_of(t);
     for (int y = 0; y < t.height; ++y) {
       const std::size_t base = f.index(t.i0, t.j0 + y);
       {
@@ -255,9 +275,9 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           e[x] = std::max(en[x], p1::caster_elevation(fp.dz, fp.run));
         }
       }
-      const float* NX = nx.data() + base;
-      const float* NY = ny.data() + base;
-      const float* NZ = nz.data() + base;
+      const float* NX = tn.nx + y * w;
+      const float* NY = tn.ny + y * w;
+      const float* NZ = tn.nz + y * w;
       for (int x = 0; x < w; ++x) {
         fast_sincos(e[x], se[x], ce[x]);
         np_[x] = NX[x] * c + NY[x] * s;
@@ -286,34 +306,34 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
           for (int x = 0; x < w; ++x) a[x] += NZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
         }
         if (profiles) {
-          float *R = dr.data() + base, *G = dg.data() + base, *B = db.data() + base;
+          float* D = rgb_sum.data() + 3 * base;
           for (int x = 0; x < w; ++x) {
             const Rgb l = profiles->eval(k, th[x], st[x], ct[x], NZ[x], np_[x]);
-            R[x] += l.r, G[x] += l.g, B[x] += l.b;
+            D[3 * x] += l.r, D[3 * x + 1] += l.g, D[3 * x + 2] += l.b;
           }
         }
         if (p.bent_normal) {
-          float *X = bx.data() + base, *Y = by.data() + base, *Z = bz.data() + base;
+          float* X = bent_sum.data() + 3 * base;
           for (int x = 0; x < w; ++x) {
             const float s3 = st[x] * st[x] * st[x], c3 = ct[x] * ct[x] * ct[x];
             const float horiz = NZ[x] * s3 / 3 + np_[x] * (2.0f / 3 - ct[x] + c3 / 3);
             const float vert = NZ[x] * (1 - c3) / 3 + np_[x] * s3 / 3;
-            X[x] += horiz * c, Y[x] += horiz * s, Z[x] += vert;
+            X[3 * x] += horiz * c, X[3 * x + 1] += horiz * s, X[3 * x + 2] += vert;
           }
         }
       }
       if (tables) {
-        float *R = dr.data() + base, *G = dg.data() + base, *B = db.data() + base;
+        float* D = rgb_sum.data() + 3 * base;
         for (int x = 0; x < w; ++x) {
           const float len = std::sqrt(np_[x] * np_[x] + NZ[x] * NZ[x]);
           const Rgb l = tables->lookup(k, fast_atan(np_[x] / NZ[x]), kHalfPiF - e[x]) * len;
-          R[x] += l.r, G[x] += l.g, B[x] += l.b;
+          D[3 * x] += l.r, D[3 * x + 1] += l.g, D[3 * x + 2] += l.b;
         }
       }
       if (facets)  // the same horizons at the facets' normals (np_ and the lobe arrays are reused)
         for (std::size_t q = 0; q < 2; ++q) {
-          const std::size_t fb = q * N + base;
-          const float *FX = fnx.data() + fb, *FY = fny.data() + fb, *FZ = fnz.data() + fb;
+          const std::size_t fb = q * N + base, ft = q * kTileTexels + std::size_t(y) * w;
+          const float *FX = tn.fx + ft, *FY = tn.fy + ft, *FZ = tn.fz + ft;
           for (int x = 0; x < w; ++x) np_[x] = FX[x] * c + FY[x] * s;
           if (uniform_env || profiles) lobe(FZ);
           if (uniform_env) {
@@ -354,22 +374,34 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     }
   });
 
+  // The sums become the layers in place.
   const float inv_k = 1.0f / float(K);
-  if (p.ao) r.ao.resize(N);
-  if (p.vsky) r.vsky.resize(N);
-  if (p.bent_normal) r.bent_normal.resize(N);
-  std::vector<Rgb> direct(p.direct ? N : 0);
+  if (p.direct) {
+    if (uniform_env)
+      r.direct.resize(3 * N);
+    else
+      r.direct = std::move(rgb_sum);
+  }
   tbb::parallel_for(std::size_t(0), N, [&](std::size_t idx) {
-    if (p.ao) r.ao[idx] = ao_sum[idx] * inv_k;
-    if (p.vsky) r.vsky[idx] = 1.0f - vsky_sum[idx] * inv_k;
-    if (p.direct)
-      direct[idx] =
-          uniform_env ? env.uniform_radiance * (ao_sum[idx] * inv_k) : Rgb{dr[idx], dg[idx], db[idx]};
+    if (p.direct && uniform_env) {
+      const Rgb d = env.uniform_radiance * (ao_sum[idx] * inv_k);
+      r.direct[3 * idx] = d.r, r.direct[3 * idx + 1] = d.g, r.direct[3 * idx + 2] = d.b;
+    }
+    if (p.ao) ao_sum[idx] *= inv_k;
+    if (p.vsky) vsky_sum[idx] = 1.0f - vsky_sum[idx] * inv_k;
     if (p.bent_normal) {
-      const Vec3 b{bx[idx], by[idx], bz[idx]};
-      r.bent_normal[idx] = length(b) > 1e-12 ? Vec3f::from(normalize(b)) : normals[idx];
+      float* b = bent_sum.data() + 3 * idx;
+      const Vec3 v{b[0], b[1], b[2]};
+      const Vec3f n = length(v) > 1e-12
+                          ? Vec3f::from(normalize(v))
+                          : normal_at(f, int(idx % std::size_t(f.width)), int(idx / std::size_t(f.width)));
+      b[0] = n.x, b[1] = n.y, b[2] = n.z;
     }
   });
+  if (p.ao) r.ao = std::move(ao_sum);
+  std::vector<float>().swap(ao_sum);
+  if (p.vsky) r.vsky = std::move(vsky_sum);
+  if (p.bent_normal) r.bent_normal = std::move(bent_sum);
 
   std::vector<Rgb> direct_facets(NF);
   if (facets)
@@ -405,7 +437,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     const RunControl light_rc = sub_progress(rc, main_share, 1 - main_share);
     sweep_lines(f, ls, light_rc, make_worker, [&](int li, int i, int j, const TexelTaps& t) {
       const std::size_t idx = f.index(i, j);
-      const double ndl = dot(normals[idx].d(), dir[li]);
+      const double ndl = dot(normal_at(f, i, j).d(), dir[li]);
       if (ndl <= 0 && !facets) return;
       // The horizon in the light's azimuth as for the K directions: the exact near field from the texel
       // center, the far casters of both taps lifted by the minmod gradient, blended.
@@ -421,16 +453,21 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       const float horizon = std::max(en, p1::caster_elevation(fp.dz, fp.run));
       const double frac = disk_fraction_above(elevation[li], horizon, radius[li]);
       if (frac <= 0) return;
-      if (ndl > 0) direct[idx] += lights[li]->irradiance * float(ndl * frac / kPi);
-      if (facets)
+      if (ndl > 0) {
+        const Rgb add = lights[li]->irradiance * float(ndl * frac / kPi);
+        float* d = r.direct.data() + 3 * idx;
+        d[0] += add.r, d[1] += add.g, d[2] += add.b;
+      }
+      if (facets) {
+        Vec3f fn[2];
+        facet_normals(f, i, j, fn);
         for (std::size_t q = 0; q < 2; ++q) {
-          const std::size_t ft = q * N + idx;
-          const double fdl = fnx[ft] * dir[li].x + fny[ft] * dir[li].y + fnz[ft] * dir[li].z;
+          const double fdl = fn[q].x * dir[li].x + fn[q].y * dir[li].y + fn[q].z * dir[li].z;
           if (fdl > 0) direct_facets[2 * idx + q] += lights[li]->irradiance * float(fdl * frac / kPi);
         }
+      }
     });
   }
-  if (p.direct) r.direct = std::move(direct);
   r.direct_facets = std::move(direct_facets);
   rc.report(1.0);
   return r;

@@ -53,17 +53,25 @@ struct P1Params {
   bool horizon_by_direction = false;
 };
 
+// The layers as the EXR stores them (interleaved per texel), so bake_p1 hands them on without a copy.
 struct P1Result {
   int width = 0, height = 0, directions = 0;
   std::vector<float> ao, vsky;  // per texel (empty when not requested)
-  std::vector<Rgb> direct;      // E_direct / pi per texel
+  std::vector<float> direct;    // E_direct / pi, RGB: [3 * texel + c]
   std::vector<float> horizon;   // sin(elevation), [texel * K + k] (horizon_by_direction: [k * N + texel])
   std::vector<float> horizon_distance;  // world units, [texel * K + k]
-  std::vector<Vec3f> bent_normal;       // unit, world frame
+  std::vector<float> bent_normal;       // unit, world frame: [3 * texel + c]
   // E_direct / pi at the normals of the two triangles of the reference's surface that have their right
   // angle at the texel (facet_normals): [2 * texel + 0] the triangle (i, j), (i+1, j), (i, j+1),
   // [2 * texel + 1] the triangle (i, j), (i-1, j), (i, j-1). Empty unless P1Params::facet_direct.
   std::vector<Rgb> direct_facets;
+
+  Rgb direct_at(std::size_t texel) const {
+    return {direct[3 * texel], direct[3 * texel + 1], direct[3 * texel + 2]};
+  }
+  Vec3f bent_normal_at(std::size_t texel) const {
+    return {bent_normal[3 * texel], bent_normal[3 * texel + 1], bent_normal[3 * texel + 2]};
+  }
 };
 
 // facet_normals (field/triangulation.hpp) gives the two normals of P1Result::direct_facets.
@@ -76,7 +84,15 @@ P1Params parse_p1_params(const nlohmann::json& entry);
 // Every layer p1 can write.
 const std::vector<std::string>& p1_layer_names();
 
+// Reads the scene's heights, environment and lights only (normals are recomputed per tile with
+// normal_at; Scene::normals and the surface may be empty). Memory: the requested layers (4 bytes per texel
+// and channel; direct from a uniform sky also its 4-byte ao sum) plus the sweep's bounded line buffers:
+// p1_working_bytes.
 P1Result compute_p1(const Scene& scene, const P1Params& params, const RunControl& rc);
+
+// Bytes per texel compute_p1 holds at peak beyond the layers it returns (the ao sum behind direct from a
+// uniform sky when ao is not requested; P2's facet normals and sums), for the memory estimate.
+double p1_working_bytes_per_texel(const P1Params& params);
 
 // Fraction of a light disk of angular radius `radius` (radians) centred at elevation `elevation` that lies
 // above a horizon at elevation `horizon` (a straight horizon across the disk). radius 0: a step.

@@ -66,7 +66,9 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   if (params.facet_senders) p1.near_radius = std::max(p1.near_radius, params.near_radius);
   p1.horizon_by_direction = true;
   P1Result direct = compute_p1(scene, p1, sub_range(rc, 0, phase));
-  r.direct = std::move(direct.direct);
+  r.direct.resize(N);
+  for (std::size_t i = 0; i < N; ++i) r.direct[i] = direct.direct_at(i);
+  std::vector<float>().swap(direct.direct);
   const std::vector<float> p1_sin_horizon = std::move(direct.horizon);
   rc.check();
 
