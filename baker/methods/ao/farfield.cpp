@@ -194,7 +194,7 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
             const int j = only ? int((*only)[item] / W) : int(item);
             for (int i = i_begin; i < i_end; ++i) {
               const std::size_t idx = field.index(i, j);
-              const Vec3f n = normals[idx];
+              const Vec3f n = normals.empty() ? normal_at(field, i, j) : normals[idx];
               const double nt = n.x * d.dx + n.y * d.dy, nz = n.z;
               const double tangent = std::atan2(-nt, nz);
               const SliceFrame frame_value = slice_frame(nt, nz);
@@ -330,7 +330,9 @@ std::vector<float> farfield_obscurance(const HeightField& field, const std::vect
   if (bent_normal) {
     bent_normal->resize(field.texel_count());
     for (std::size_t t = 0; t < bent.size(); ++t)
-      (*bent_normal)[t] = length(bent[t]) > 1e-12 ? Vec3f::from(normalize(bent[t])) : normals[t];
+      (*bent_normal)[t] = length(bent[t]) > 1e-12 ? Vec3f::from(normalize(bent[t]))
+                          : normals.empty() ? normal_at(field, int(t % field.width), int(t / field.width))
+                                            : normals[t];
   }
   return out;
 }
@@ -365,14 +367,15 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
   const FarfieldOptions o = read_farfield_options(in);
   const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<Vec3f> bent;
-  const std::vector<float> light = farfield_obscurance(scene.field, scene.normals, o, rc, nullptr,
-                                                       wants(layers, "bent_normal") ? &bent : nullptr);
-  return obscurance_layers(scene.field.width, scene.field.height, layers, light, bent);
+  std::vector<float> light = farfield_obscurance(scene.field, scene.normals, o, rc, nullptr,
+                                                 wants(layers, "bent_normal") ? &bent : nullptr);
+  return obscurance_layers(scene.field.width, scene.field.height, layers, std::move(light), std::move(bent));
 }
 
 MethodInfo farfield_method() {
   MethodInfo m;
   m.name = "farfield";
+  m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
   m.summary = "P4's far-field obscurance: an exact near field, prefiltered far-field slabs beyond it";
   m.read = [](Params& in, const MethodContext&) { read_farfield_options(in); };

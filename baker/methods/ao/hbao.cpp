@@ -135,7 +135,8 @@ void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
     rc.check();
     for (int i = 0; i < field.width; ++i) {
       const std::size_t idx = field.index(i, j);
-      const HorizonTexel t = hbao_texel(field, normals[idx].d(), i, j, st);
+      const Vec3 n = normals.empty() ? normal_at(field, i, j).d() : normals[idx].d();
+      const HorizonTexel t = hbao_texel(field, n, i, j, st);
       if (obscurance) obscurance[idx] = float(1.0 - t.occluded);
       if (bent) bent[idx] = Vec3f::from(t.bent_normal);
     }
@@ -200,7 +201,7 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
   std::vector<float> obsc(field.texel_count());
   std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
   hbao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
-  LayerSet out = obscurance_layers(field.width, field.height, layers, obsc, bent);
+  LayerSet out = obscurance_layers(field.width, field.height, layers, std::move(obsc), std::move(bent));
   if (s.surface == MarchSurface::triangles)
     out.attributes.emplace_back("hfbake:hbao:surface", "triangles");
   else
@@ -211,6 +212,7 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
 MethodInfo hbao_method() {
   MethodInfo m;
   m.name = "hbao";
+  m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
   m.summary = "brute-force horizon march per texel and direction (the obscurance family's baseline)";
   m.read = [](Params& in, const MethodContext& c) { read_hbao_settings(in, c.field); };

@@ -104,7 +104,8 @@ void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
     rc.check();
     for (int i = 0; i < field.width; ++i) {
       const std::size_t idx = field.index(i, j);
-      const HsaoTexel t = hsao_texel(field, normals[idx].d(), i, j, s);
+      const Vec3 n = normals.empty() ? normal_at(field, i, j).d() : normals[idx].d();
+      const HsaoTexel t = hsao_texel(field, n, i, j, s);
       if (obscurance) obscurance[idx] = float(std::clamp(1.0 - t.occluded(), 0.0, 1.0));
       if (bent) bent[idx] = Vec3f::from(t.bent_normal);
     }
@@ -135,12 +136,13 @@ LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunCo
   std::vector<float> obsc(field.texel_count());
   std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
   hsao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
-  return obscurance_layers(field.width, field.height, layers, obsc, bent);
+  return obscurance_layers(field.width, field.height, layers, std::move(obsc), std::move(bent));
 }
 
 MethodInfo hsao_method() {
   MethodInfo m;
   m.name = "hsao";
+  m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
   m.summary = "horizon-split obscurance: a near-field march per direction plus normal-split rays";
   m.read = [](Params& in, const MethodContext& c) { read_hsao_settings(in, c.field); };

@@ -166,10 +166,11 @@ std::vector<float> lsao_obscurance(const HeightField& field, const LsaoOptions& 
   std::vector<float> out(mean.size());
   for (std::size_t t = 0; t < mean.size(); ++t) out[t] = float(1.0 - std::clamp(mean[t], 0.0, 1.0));
   if (bent_normal) {
-    const std::vector<Vec3f> normals = compute_normals(field);
     bent_normal->resize(field.texel_count());
     for (std::size_t t = 0; t < bent.size(); ++t)
-      (*bent_normal)[t] = length(bent[t]) > 1e-12 ? Vec3f::from(normalize(bent[t])) : normals[t];
+      (*bent_normal)[t] = length(bent[t]) > 1e-12
+                              ? Vec3f::from(normalize(bent[t]))
+                              : normal_at(field, int(t % field.width), int(t / field.width));
   }
   return out;
 }
@@ -192,7 +193,7 @@ LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunCo
   std::vector<Vec3f> bent;
   std::vector<float> light =
       lsao_obscurance(scene.field, o, rc, nullptr, wants(layers, "bent_normal") ? &bent : nullptr);
-  return obscurance_layers(scene.field.width, scene.field.height, layers, light, bent);
+  return obscurance_layers(scene.field.width, scene.field.height, layers, std::move(light), std::move(bent));
 }
 
 MethodInfo lsao_method() {

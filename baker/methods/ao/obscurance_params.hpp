@@ -27,7 +27,9 @@ bool wants(const std::vector<std::string>& layers, const char* name);
 
 // A method's output, in `layers` order: "bent_normal" from `bent` (one unit vector per texel), every other
 // name ("obscurance", "ao") the scalar `light`. width x height texels.
+// Takes both by value: `light` ends up as the last scalar layer's data (earlier ones copy it), `bent` is
+// freed once converted (no second copy of either is held).
 LayerSet obscurance_layers(int width, int height, const std::vector<std::string>& layers,
-                           const std::vector<float>& light, const std::vector<Vec3f>& bent);
+                           std::vector<float> light, std::vector<Vec3f> bent);
 
 }  // namespace hfbake

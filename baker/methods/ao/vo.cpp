@@ -144,7 +144,7 @@ std::vector<float> vo_occlusion(const HeightField& f, const std::vector<Vec3f>& 
         sat.box(r[0], r[1], r[2], r[3], sum);
         if (!(sum[3] > 0.5)) continue;  // the layer has no texel in this footprint: weight 0
         const std::size_t idx = f.index(i, j);
-        const Vec3 nn = normals[idx].d();
+        const Vec3 nn = normals.empty() ? normal_at(f, i, j).d() : normals[idx].d();
         const double inv = 1.0 / sum[3];
         const double delta = (sum[0] * inv - i) * ts * nn.x + (sum[1] * inv - j) * ts * nn.y +
                              (sum[2] * inv - double(f.z[idx])) * nn.z;
@@ -209,6 +209,7 @@ LayerSet bake_vo(const Scene& scene, const nlohmann::json& params, const RunCont
 MethodInfo vo_method() {
   MethodInfo m;
   m.name = "vo";
+  m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
   m.summary = "volumetric obscurance (ALSVO): the occupied fraction of a tangent-space box per texel";
   m.read = [](Params& in, const MethodContext& c) { read_vo_settings(in, c.field); };
