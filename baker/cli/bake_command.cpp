@@ -108,7 +108,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();
-  const Scene scene = load_scene(job);
+  const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
   stage.set_georeference(scene.georeference);
   const std::string job_hash = job_content_hash(job);
   progress.end(job.name, "load", seconds_since(t_load));

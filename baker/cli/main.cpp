@@ -2,6 +2,7 @@
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include "cli/bake_command.hpp"
 #include "cli/compare_command.hpp"
 #include "cli/version.hpp"
+#include "io/exr_output.hpp"
 
 namespace {
 
@@ -126,6 +128,10 @@ int main(int argc, char** argv) {
   if (threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                   std::size_t(threads));
+  // EXR outputs compress their chunks on OpenEXR's thread pool, as many workers as the bake has (the files'
+  // bytes do not depend on it).
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  hfbake::start_exr_thread_pool(threads > 0 ? threads : int(cores));
   bake.interrupt_signal = &g_signal;
   for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
     struct sigaction action {};

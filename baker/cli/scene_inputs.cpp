@@ -91,7 +91,8 @@ std::optional<double> image_texel_size(const Job& job) {
   return std::nullopt;
 }
 
-HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference) {
+HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference,
+                             const std::function<void(double)>& progress) {
   const nlohmann::json& h = job.doc["height"];
   const std::string image = h["image"].get<std::string>();
   const ChannelSelector channel = channel_selector(h.contains("channel") ? h["channel"] : nlohmann::json());
@@ -114,7 +115,7 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
       throw InputError(job.file.string(), "/height/channel",
                        job.resolve(image).string() + ": has no such band (it has " +
                            std::to_string(geo->bands) + ": " + names + ")");
-    plane = read_georaster_band(job.resolve(image), band, site(job, "/height/image"));
+    plane = read_georaster_band(job.resolve(image), band, site(job, "/height/image"), progress);
     file_nodata = geo->nodata[band];
     georeference.from_file = geo->has_geotransform;
     georeference.crs_wkt = geo->crs_wkt;
@@ -122,7 +123,7 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
     if (geo->has_geotransform) georeference.geotransform = geo->geotransform;
   } else {
     plane = read_image_channel(job.resolve(image), channel, site(job, "/height/image"),
-                               site(job, "/height/channel"));
+                               site(job, "/height/channel"), progress);
   }
   HeightField field;
   field.width = plane.width;

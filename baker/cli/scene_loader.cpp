@@ -110,7 +110,7 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   return std::size_t(texels * per_texel) + (std::size_t(64) << 20);  // + fixed overhead
 }
 
-Scene load_scene(const Job& job) {
+Scene load_scene(const Job& job, const std::function<void(double)>& progress) {
   Scene scene;
   scene.name = job.name;
   const nlohmann::json& doc = job.doc;
@@ -121,7 +121,7 @@ Scene load_scene(const Job& job) {
   if (h.contains("procedural")) {
     scene.field = make_procedural(procedural_spec(h["procedural"]), texel, wrap);
   } else {
-    scene.field = load_image_field(job, texel, wrap, scene.georeference);
+    scene.field = load_image_field(job, texel, wrap, scene.georeference, progress);
   }
   const double scale = h.value("height_scale", 1.0), offset = h.value("height_offset", 0.0);
   if (scale != 1.0 || offset != 0.0)

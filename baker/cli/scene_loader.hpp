@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -45,7 +46,8 @@ struct SceneNeeds {
 SceneNeeds scene_needs(const Job& job);
 
 // The job's Scene. Scene::normals and the constant albedo are filled only when scene_needs says a method
-// reads them (an albedo map the job names is always read, so validate checks it).
-Scene load_scene(const Job& job);
+// reads them (an albedo map the job names is always read, so validate checks it). `progress` (optional): the
+// fraction of the height image read so far, while it is read.
+Scene load_scene(const Job& job, const std::function<void(double)>& progress = {});
 
 }  // namespace hfbake

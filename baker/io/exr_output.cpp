@@ -7,17 +7,24 @@
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+#include <ImfThreading.h>
+#include <ImfTiledOutputFile.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 
 #include "core/error.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
+
+void start_exr_thread_pool(int threads) {
+  Imf::setGlobalThreadCount(std::max(0, threads));
+}
 
 fs::path temporary_sibling(const fs::path& file) {
   static std::atomic<unsigned> counter{0};
@@ -35,8 +42,26 @@ namespace {
 Imf::Compression compression_of(const std::string& name, const fs::path& file) {
   if (name == "zip") return Imf::ZIP_COMPRESSION;
   if (name == "piz") return Imf::PIZ_COMPRESSION;
+  if (name == "dwaa") return Imf::DWAA_COMPRESSION;
+  if (name == "dwab") return Imf::DWAB_COMPRESSION;
   if (name == "none") return Imf::NO_COMPRESSION;
-  throw InputError(file.string(), "", "unknown EXR compression \"" + name + "\" (zip, piz or none)");
+  throw InputError(file.string(), "",
+                   "unknown EXR compression \"" + name + "\" (zip, piz, dwaa, dwab or none)");
+}
+
+// Scanlines OpenEXR compresses together (one chunk of a scanline file).
+int chunk_lines(Imf::Compression c) {
+  switch (c) {
+    case Imf::ZIP_COMPRESSION:
+      return 16;
+    case Imf::PIZ_COMPRESSION:
+    case Imf::DWAA_COMPRESSION:
+      return 32;
+    case Imf::DWAB_COMPRESSION:
+      return 256;
+    default:
+      return 1;
+  }
 }
 
 void check_layers(const LayerSet& layers) {
@@ -96,12 +121,31 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
   for (const auto& [k, v] : layers.attributes) put(k, v);
   for (const auto& [k, v] : options.attributes) put(k, v);
 
+  const int threads = std::max(1, options.threads > 0 ? options.threads : Imf::globalThreadCount());
+  const bool tiled = options.tile_size > 0;
+  if (tiled) {
+    header.setTileDescription(Imf::TileDescription(unsigned(options.tile_size), unsigned(options.tile_size)));
+    header.lineOrder() =
+        Imf::INCREASING_Y;  // tiles stored row of tiles by row of tiles, whatever the threads
+  }
+  // Rows handed to OpenEXR at once: whole chunks (a row of tiles, or scanline blocks), enough of them that
+  // every thread has one, and at least 64 rows. Half channels are converted one such band at a time, so the
+  // extra memory is bounded (channels x width x band halves) whatever the field size.
+  const int chunk = tiled ? options.tile_size : chunk_lines(header.compression());
+  int band_rows = std::max(64, chunk * (tiled ? 1 : threads));
+  band_rows = (band_rows + chunk - 1) / chunk * chunk;
+
   std::error_code ec;
   if (!fs::is_directory(file.parent_path().empty() ? fs::path(".") : file.parent_path(), ec))
     throw InputError(file.string(), "", "cannot write: the folder does not exist");
   const fs::path tmp = temporary_sibling(file);
   try {
-    Imf::OutputFile out(tmp.string().c_str(), header);
+    std::unique_ptr<Imf::OutputFile> scan;
+    std::unique_ptr<Imf::TiledOutputFile> tiles;
+    if (tiled)
+      tiles = std::make_unique<Imf::TiledOutputFile>(tmp.string().c_str(), header, threads);
+    else
+      scan = std::make_unique<Imf::OutputFile>(tmp.string().c_str(), header, threads);
     // Float channels are read straight from the layers.
     const auto float_slice = [&](const Channel& ch) {
       return Imf::Slice(Imf::FLOAT, (char*)ch.data, sizeof(float) * ch.stride,
@@ -109,37 +153,32 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     };
     std::size_t half_channels = 0;
     for (const Channel& ch : channels) half_channels += ch.as_float ? 0 : 1;
-    if (half_channels == 0) {
+    const std::size_t band_values = std::size_t(w) * std::size_t(band_rows);
+    std::vector<half> band(band_values * half_channels);
+    for (int y0 = 0; y0 < h; y0 += band_rows) {
+      const int rows = std::min(band_rows, h - y0);
       Imf::FrameBuffer frame;
-      for (const Channel& ch : channels) frame.insert(ch.name, float_slice(ch));
-      out.setFrameBuffer(frame);
-      out.writePixels(h);
-    } else {
-      // Half channels (OpenEXR does not convert on output): a band of rows at a time, so the extra memory
-      // is bounded (channels x width x kBand halves) whatever the field size.
-      constexpr int kBand = 64;
-      const std::size_t band_values = std::size_t(w) * kBand;
-      std::vector<half> band(band_values * half_channels);
-      for (int y0 = 0; y0 < h; y0 += kBand) {
-        const int rows = std::min(kBand, h - y0);
-        Imf::FrameBuffer frame;
-        std::size_t slot = 0;
-        for (std::size_t k = 0; k < channels.size(); ++k) {
-          const Channel& ch = channels[k];
-          if (ch.as_float) {
-            frame.insert(ch.name, float_slice(ch));
-            continue;
-          }
-          half* dst = band.data() + (slot++) * band_values;
-          const std::size_t first = std::size_t(y0) * w;
-          for (std::size_t i = 0; i < std::size_t(rows) * w; ++i)
-            dst[i] = half(ch.data[(first + i) * ch.stride]);
-          // The slice's base is where row 0 would be, so row y0 lands at the band's start.
-          char* base = (char*)dst - std::ptrdiff_t(sizeof(half)) * std::ptrdiff_t(first);
-          frame.insert(ch.name, Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(w)));
+      std::size_t slot = 0;
+      for (const Channel& ch : channels) {
+        if (ch.as_float) {
+          frame.insert(ch.name, float_slice(ch));
+          continue;
         }
-        out.setFrameBuffer(frame);
-        out.writePixels(rows);
+        half* dst = band.data() + (slot++) * band_values;
+        const std::size_t first = std::size_t(y0) * w;
+        for (std::size_t i = 0; i < std::size_t(rows) * w; ++i)
+          dst[i] = half(ch.data[(first + i) * ch.stride]);
+        // The slice's base is where row 0 would be, so row y0 lands at the band's start.
+        char* base = (char*)dst - std::ptrdiff_t(sizeof(half)) * std::ptrdiff_t(first);
+        frame.insert(ch.name, Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(w)));
+      }
+      if (tiled) {
+        tiles->setFrameBuffer(frame);
+        const int ty0 = y0 / options.tile_size, ty1 = (y0 + rows - 1) / options.tile_size;
+        tiles->writeTiles(0, tiles->numXTiles() - 1, ty0, ty1);
+      } else {
+        scan->setFrameBuffer(frame);
+        scan->writePixels(rows);
       }
     }
   } catch (const std::exception& e) {

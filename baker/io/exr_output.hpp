@@ -12,18 +12,29 @@ namespace hfbake {
 
 struct ExrOptions {
   bool float_pixels = false;        // half by default
-  std::string compression = "zip";  // "zip", "piz" or "none"
+  std::string compression = "zip";  // "zip", "piz", "dwaa", "dwab" (lossy on half colour channels) or "none"
+  // Tile edge in texels (a tiled, single-level file); 0: scanlines. The file's pixels are the same either
+  // way.
+  int tile_size = 0;
+  // Chunks (scanline blocks or tiles) compressed at once, by OpenEXR's thread pool (which the program starts:
+  // start_exr_thread_pool); 0: the pool's size. Never changes the file's bytes.
+  int threads = 0;
   // Written after LayerSet::attributes (same name: this one wins), as string attributes.
   std::vector<std::pair<std::string, std::string>> attributes;
 };
 
-// Writes every layer as channels "<layer>.<suffix>" (scanline, increasing y, data window = the field),
-// plus the string attributes. In a half file, a channel holding a finite value beyond half's range
+// Writes every layer as channels "<layer>.<suffix>" (increasing y, data window = the field; scanlines, or
+// tiles of options.tile_size), a band of rows at a time, plus the string attributes. In a half file, a
+// channel holding a finite value beyond half's range
 // (|v| > 65504) is stored as float rather than turned into infinity. An attribute whose name OpenEXR reserves
 // ("compression", "channels", ...) is stored as "hfbake.<name>". The file is written under a temporary name
 // in the same folder and renamed into place, so a crash never leaves a partial file. Unwritable folder or
 // disk error -> InputError naming the file; inconsistent layers (wrong data size) -> std::logic_error.
 void write_exr(const std::filesystem::path& file, const LayerSet& layers, const ExrOptions& options = {});
+
+// Starts (or resizes) OpenEXR's process-wide thread pool to `threads` workers (0: none, everything in the
+// calling thread). Process state: called once by the program (the CLI's main), never by library code.
+void start_exr_thread_pool(int threads);
 
 // A temporary name beside `file`, unique in this process: ".<name>.tmp-<pid>-<n>".
 std::filesystem::path temporary_sibling(const std::filesystem::path& file);

@@ -62,7 +62,8 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
   return info;
 }
 
-Plane read_georaster_band(const fs::path& file, int band, const InputSite& site) {
+Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
+                          const ReadProgress& progress) {
   GdalSession session;
   std::unique_ptr<GDALDataset> ds(
       GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
@@ -76,11 +77,23 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site)
   plane.width = ds->GetRasterXSize();
   plane.height = ds->GetRasterYSize();
   plane.values.resize(std::size_t(plane.width) * std::size_t(plane.height));
-  if (b->RasterIO(GF_Read, 0, 0, plane.width, plane.height, plane.values.data(), plane.width, plane.height,
-                  GDT_Float32, 0, 0, nullptr) != CE_None)
-    throw InputError(
-        site.job_file, site.pointer,
-        file.string() + ": cannot decode the raster (corrupt or truncated?): " + session.error());
+  int block_x = 0, block_y = 0;
+  b->GetBlockSize(&block_x, &block_y);
+  block_y = std::clamp(block_y, 1, plane.height);
+  // Whole block rows, at least 256 rows (strips of one row would make a band per row).
+  const int rows = (256 + block_y - 1) / block_y * block_y;
+  for (int y0 = 0; y0 < plane.height; y0 += rows) {
+    const int n = std::min(rows, plane.height - y0);
+    float* dst = plane.values.data() + std::size_t(y0) * std::size_t(plane.width);
+    if (b->RasterIO(GF_Read, 0, y0, plane.width, n, dst, plane.width, n, GDT_Float32, 0, 0, nullptr) !=
+        CE_None)
+      throw InputError(site.job_file, site.pointer,
+                       file.string() + ": cannot decode the raster (corrupt or truncated?) at row " +
+                           std::to_string(y0) + ": " + session.error());
+    ds->FlushCache();  // read-only: drops the cached blocks (of every band: pixel-interleaved files cache
+                       // all)
+    if (progress) progress(double(y0 + n) / plane.height);
+  }
   return plane;
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <variant>
@@ -55,8 +56,16 @@ struct Plane {
   int width = 0, height = 0;
   std::vector<float> values;
 };
+
+// The progress of a long read: the fraction of the rows decoded so far, after each band of rows.
+using ReadProgress = std::function<void(double)>;
+
+// Decodes the one channel straight into the plane, a band of scanlines (or a row of tiles) at a time: the
+// plane is the only full-size buffer (a 16384^2 16-bit PNG: 1 GiB of floats, nothing beside it). Values as
+// read_image gives them (integers normalised to [0, 1]).
 Plane read_image_channel(const std::filesystem::path& file, const ChannelSelector& channel,
-                         const InputSite& site, const InputSite& channel_site);
+                         const InputSite& site, const InputSite& channel_site,
+                         const ReadProgress& progress = {});
 
 // A colour image converted to linear RGB through OpenColorIO: 1 channel -> grey, 2 channels -> grey
 // (the second is taken as alpha), 3+ channels -> the first three. `colorspace` empty = the default for

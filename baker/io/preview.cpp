@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 
 #include "core/error.hpp"
@@ -17,16 +18,68 @@
 namespace hfbake {
 namespace fs = std::filesystem;
 
+PreviewSize preview_size(int width, int height, int max_size) {
+  PreviewSize size{width, height, 1};
+  const int longer = std::max(width, height);
+  if (max_size <= 0 || longer <= max_size) return size;
+  size.factor = (longer + max_size - 1) / max_size;
+  size.width = (width + size.factor - 1) / size.factor;
+  size.height = (height + size.factor - 1) / size.factor;
+  return size;
+}
+
+namespace {
+
+// The layer as linear RGB at the preview's size: a copy when it fits, else the f x f box means of the finite
+// values, accumulated one band of f rows at a time (memory: the preview's, plus one row of sums).
+std::vector<float> preview_rgb(const LayerSet& layers, const Layer& layer, const PreviewSize& size) {
+  const int w = layers.width, h = layers.height, nc = layer.channel_count();
+  const std::size_t out_n = std::size_t(size.width) * std::size_t(size.height);
+  std::vector<float> rgb(out_n * 3);
+  if (size.factor == 1) {
+    for (std::size_t i = 0; i < out_n; ++i)
+      for (int c = 0; c < 3; ++c) rgb[3 * i + c] = layer.data[i * nc + (nc == 1 ? 0 : c)];
+    return rgb;
+  }
+  const int f = size.factor;
+  std::vector<double> sum(std::size_t(size.width) * nc);
+  std::vector<int> count(sum.size());
+  for (int py = 0; py < size.height; ++py) {
+    std::fill(sum.begin(), sum.end(), 0.0);
+    std::fill(count.begin(), count.end(), 0);
+    for (int y = py * f; y < std::min(h, py * f + f); ++y) {
+      const float* row = layer.data.data() + std::size_t(y) * std::size_t(w) * nc;
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < nc; ++c) {
+          const float v = row[std::size_t(x) * nc + c];
+          if (!std::isfinite(v)) continue;
+          const std::size_t k = std::size_t(x / f) * nc + c;
+          sum[k] += v;
+          ++count[k];
+        }
+    }
+    for (int px = 0; px < size.width; ++px)
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t k = std::size_t(px) * nc + (nc == 1 ? 0 : c);
+        rgb[(std::size_t(py) * size.width + px) * 3 + c] =
+            count[k] ? float(sum[k] / count[k]) : std::numeric_limits<float>::quiet_NaN();
+      }
+  }
+  return rgb;
+}
+
+}  // namespace
+
 void write_preview(const fs::path& file, const LayerSet& layers, const Layer& layer,
                    const PreviewOptions& options) {
-  const int w = layers.width, h = layers.height, nc = layer.channel_count();
-  const std::size_t n = std::size_t(w) * h;
+  const int nc = layer.channel_count();
+  const std::size_t n = std::size_t(layers.width) * layers.height;
   if ((nc != 1 && nc != 3) || layer.data.size() != n * std::size_t(nc))
     throw std::logic_error("write_preview: layer " + layer.name +
                            " is not a 1- or 3-channel layer of the set's size");
-  std::vector<float> rgb(n * 3);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = layer.data[i * nc + (nc == 1 ? 0 : c)];
+  const PreviewSize size = preview_size(layers.width, layers.height, options.max_size);
+  const int w = size.width, h = size.height;
+  std::vector<float> rgb = preview_rgb(layers, layer, size);
   const bool direction = layer.name == "bent_normal";
   if (direction) {
     for (float& v : rgb) v = 0.5f + 0.5f * v;

@@ -13,11 +13,24 @@ namespace hfbake {
 
 struct PreviewOptions {
   std::string display, view;  // empty: the config's default display / that display's default view
+  // The preview's longer side at most (texels); 0: no limit. A larger layer is reduced by the smallest
+  // integer factor f that fits: each preview pixel is the mean of the finite values of an f x f block of
+  // texels (fewer at the right and bottom edges), taken in linear light before the display transform.
+  int max_size = 2048;
 };
+
+// The preview's size for a width x height layer: (ceil(width / f), ceil(height / f)) with f the reduction
+// factor described at PreviewOptions::max_size (f = 1 when the layer fits).
+struct PreviewSize {
+  int width = 0, height = 0, factor = 1;
+};
+PreviewSize preview_size(int width, int height, int max_size);
 
 // Writes `layer` (1 channel: grey; 3 channels: RGB) of `layers` as an 8-bit RGB PNG. Light-like values
 // go scene-linear -> display/view; direction layers (bent_normal) are data and are shown as
-// 0.5 + 0.5 * xyz without a colour transform. Atomic like write_exr. Errors -> InputError naming the file.
+// 0.5 + 0.5 * xyz without a colour transform. A layer larger than options.max_size is reduced first, a band
+// of f rows at a time (no full-size copy: the extra memory is that of the preview). Atomic like write_exr.
+// Errors -> InputError naming the file.
 void write_preview(const std::filesystem::path& file, const LayerSet& layers, const Layer& layer,
                    const PreviewOptions& options = {});
 

@@ -7,10 +7,14 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfStringAttribute.h>
+#include <ImfThreading.h>
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <limits>
 #include <set>
 
 #include "core/error.hpp"
@@ -185,7 +189,8 @@ TEST(ExrOutput, UnwritableFolderIsAnInputError) {
     fs::permissions(dir / "ro", fs::perms::owner_all);
     EXPECT_TRUE(fs::is_empty(dir / "ro"));
   }
-  EXPECT_THROW(write_exr(dir / "c.exr", sample_layers(2, 2), ExrOptions{false, "lzma", {}}), InputError);
+  EXPECT_THROW(write_exr(dir / "c.exr", sample_layers(2, 2), ExrOptions{false, "lzma", 0, 0, {}}),
+               InputError);
 }
 
 TEST(ExrOutput, InconsistentLayersAreAProgrammingError) {
@@ -235,6 +240,179 @@ TEST(Preview, UnwritableFolderIsAnInputError) {
   set.width = set.height = 2;
   set.add("ao", mono_channels());
   EXPECT_THROW(write_preview(dir / "missing" / "ao.png", set, set.layers[0]), InputError);
+}
+
+}  // namespace
+}  // namespace hfbake
+
+namespace hfbake {
+namespace {
+
+std::string file_bytes(const fs::path& f) {
+  std::ifstream in(f, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Every channel of an EXR as OpenImageIO reads it (floats, interleaved), with the channel names.
+std::pair<std::vector<std::string>, std::vector<float>> read_all(const fs::path& f) {
+  auto in = OIIO::ImageInput::open(f.string());
+  EXPECT_TRUE(in);
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<float> px(std::size_t(spec.width) * spec.height * spec.nchannels);
+  EXPECT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()));
+  return {spec.channelnames, px};
+}
+
+// A 64-channel horizon layer and an ao layer of pseudo-random values, 157 x 83 (not a multiple of any
+// chunk, band or tile).
+LayerSet horizon_layers() {
+  LayerSet set;
+  set.width = 157;
+  set.height = 83;
+  std::uint32_t s = 5;
+  const auto next = [&] { return s = s * 1664525u + 1013904223u, float(s >> 8) / float(1u << 24); };
+  Layer& ao = set.add("ao", mono_channels());
+  for (float& v : ao.data) v = next();
+  Layer& hz = set.add("horizon", indexed_channels(64));
+  for (float& v : hz.data) v = 2 * next() - 1;
+  return set;
+}
+
+TEST(ExrOutput, ThreadsDoNotChangeTheFileAndPixelsAreTheLayers) {
+  TempFolder dir;
+  const LayerSet set = horizon_layers();
+  for (const char* compression : {"zip", "piz", "dwab", "none"})
+    for (const bool as_float : {false, true})
+      for (const int tile : {0, 64}) {
+        const std::string what =
+            std::string(compression) + (as_float ? " float" : " half") + (tile ? " tiled" : " scanline");
+        ExrOptions o;
+        o.compression = compression;
+        o.float_pixels = as_float;
+        o.tile_size = tile;
+        Imf::setGlobalThreadCount(0);  // in the calling thread
+        o.threads = 1;
+        write_exr(dir / "one.exr", set, o);
+        Imf::setGlobalThreadCount(4);  // four workers, eight chunks in flight
+        o.threads = 8;
+        write_exr(dir / "many.exr", set, o);
+        Imf::setGlobalThreadCount(0);
+        EXPECT_TRUE(file_bytes(dir / "one.exr") == file_bytes(dir / "many.exr")) << what;
+        if (std::string(compression) == "dwab") continue;  // lossy: no exact pixels to compare
+        const auto [names, px] = read_all(dir / "many.exr");
+        ASSERT_EQ(names.size(), 65u) << what;
+        const std::size_t texels = std::size_t(set.width) * set.height;
+        std::size_t differ = 0;
+        for (std::size_t c = 0; c < names.size(); ++c) {
+          const std::string& n = names[c];
+          const Layer* l = set.find(n.substr(0, n.rfind('.')));
+          ASSERT_TRUE(l) << n;
+          int k = 0;
+          while (l->name + "." + l->channels[k] != n) ++k;
+          for (std::size_t t = 0; t < texels; ++t) {
+            const float v = l->data[t * l->channels.size() + k];
+            differ += px[t * names.size() + c] != (as_float ? v : float(half(v)));
+          }
+        }
+        EXPECT_EQ(differ, 0u) << what;
+      }
+}
+
+TEST(ExrOutput, TiledFilesAreTiledAndDwaaIsAccepted) {
+  TempFolder dir;
+  ExrOptions o;
+  o.tile_size = 64;
+  write_exr(dir / "t.exr", horizon_layers(), o);
+  auto in = OIIO::ImageInput::open((dir / "t.exr").string());
+  ASSERT_TRUE(in);
+  EXPECT_EQ(in->spec().tile_width, 64);
+  EXPECT_EQ(in->spec().tile_height, 64);
+  o = {};
+  o.compression = "dwaa";
+  write_exr(dir / "d.exr", horizon_layers(), o);
+  EXPECT_EQ(Imf::InputFile((dir / "d.exr").c_str()).header().compression(), Imf::DWAA_COMPRESSION);
+}
+
+TEST(Preview, SizeIsTheSmallestIntegerReductionThatFits) {
+  EXPECT_EQ(preview_size(2048, 1000, 2048).factor, 1);
+  const PreviewSize p = preview_size(16384, 16384, 2048);
+  EXPECT_EQ(p.factor, 8);
+  EXPECT_EQ(p.width, 2048);
+  const PreviewSize q = preview_size(10001, 3000, 2048);  // f = 5: 2001 x 600
+  EXPECT_EQ(q.factor, 5);
+  EXPECT_EQ(q.width, 2001);
+  EXPECT_EQ(q.height, 600);
+  EXPECT_EQ(preview_size(5000, 5000, 0).factor, 1);
+}
+
+// The sRGB encoding (IEC 61966-2-1), the truth for the built-in config's default display.
+double srgb(double v) {
+  v = std::clamp(v, 0.0, 1.0);
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+}
+
+TEST(Preview, ReducedPreviewIsTheBoxFilterOfTheLayer) {
+  TempFolder dir;
+  LayerSet set;
+  set.width = 50;
+  set.height = 23;
+  std::uint32_t s = 9;
+  const auto next = [&] { return s = s * 1664525u + 1013904223u, float(s >> 8) / float(1u << 24); };
+  Layer& ao = set.add("ao", mono_channels());
+  for (float& v : ao.data) v = next();
+  ao.data[3] = std::numeric_limits<float>::quiet_NaN();  // left out of its block's mean
+  Layer& bn = set.add("bent_normal", xyz_channels());
+  for (float& v : bn.data) v = 2 * next() - 1;
+  PreviewOptions o;
+  o.max_size = 16;  // f = 4: 13 x 6, the last column of blocks 2 texels wide, the last row 3 texels high
+  write_preview(dir / "ao.png", set, *set.find("ao"), o);
+  write_preview(dir / "bn.png", set, *set.find("bent_normal"), o);
+  const auto read = [](const fs::path& f, int& w, int& h) {
+    auto in = OIIO::ImageInput::open(f.string());
+    EXPECT_TRUE(in);
+    w = in->spec().width;
+    h = in->spec().height;
+    std::vector<unsigned char> px(std::size_t(w) * h * 3);
+    in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, px.data());
+    return px;
+  };
+  // The box filter, computed here: the mean of the finite texels of each 4 x 4 block.
+  const auto box = [&](const Layer& l, int px, int py, int c) {
+    double sum = 0;
+    int n = 0;
+    for (int y = 4 * py; y < std::min(set.height, 4 * py + 4); ++y)
+      for (int x = 4 * px; x < std::min(set.width, 4 * px + 4); ++x) {
+        const float v = l.data[(std::size_t(y) * set.width + x) * l.channels.size() + c];
+        if (std::isfinite(v)) sum += v, ++n;
+      }
+    return sum / n;
+  };
+  int w = 0, h = 0;
+  const auto a = read(dir / "ao.png", w, h);
+  ASSERT_EQ(w, 13);
+  ASSERT_EQ(h, 6);
+  const auto b = read(dir / "bn.png", w, h);
+  for (int py = 0; py < h; ++py)
+    for (int px = 0; px < w; ++px)
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t k = (std::size_t(py) * w + px) * 3 + c;
+        EXPECT_NEAR(a[k], 255 * srgb(box(ao, px, py, 0)), 0.51 + 1.0) << px << "," << py;
+        EXPECT_NEAR(b[k], 255 * (0.5 + 0.5 * box(bn, px, py, c)), 0.51) << px << "," << py << "," << c;
+      }
+}
+
+TEST(Preview, LayersThatFitAreNotReduced) {
+  TempFolder dir;
+  const LayerSet set = sample_layers(40, 30);
+  PreviewOptions fits, unlimited;
+  fits.max_size = 40;
+  unlimited.max_size = 0;
+  write_preview(dir / "a.png", set, *set.find("ao"), fits);
+  write_preview(dir / "b.png", set, *set.find("ao"), unlimited);
+  EXPECT_TRUE(file_bytes(dir / "a.png") == file_bytes(dir / "b.png"));
+  auto in = OIIO::ImageInput::open((dir / "a.png").string());
+  ASSERT_TRUE(in);
+  EXPECT_EQ(in->spec().width, 40);
 }
 
 }  // namespace

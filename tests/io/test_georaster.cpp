@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -198,6 +200,73 @@ TEST(GeoTiffOutput, AFailedWriteLeavesNothing) {
   EXPECT_THROW(write_geotiff(tmp / "no" / "such" / "folder.tif", layers, layers.layers[0], Georeference{}),
                InputError);
   EXPECT_TRUE(fs::is_empty(tmp.path()));
+}
+
+}  // namespace
+}  // namespace hfbake
+
+namespace hfbake {
+namespace {
+
+// A w x h float32 GeoTIFF (strips or 256-tiles) with a geotransform, values from a fixed recurrence.
+void write_float_geotiff(const fs::path& file, int w, int h, bool tiled) {
+  GDALAllRegister();
+  GDALDriver* drv = GetGDALDriverManager()->GetDriverByName("GTiff");
+  ASSERT_TRUE(drv);
+  const char* strips[] = {"COMPRESS=DEFLATE", nullptr};
+  const char* tiles[] = {"COMPRESS=DEFLATE", "TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256", nullptr};
+  std::unique_ptr<GDALDataset> ds(
+      drv->Create(file.c_str(), w, h, 1, GDT_Float32, const_cast<char**>(tiled ? tiles : strips)));
+  ASSERT_TRUE(ds);
+  double gt[6] = {500000, 2, 0, 100000, 0, -2};
+  ds->SetGeoTransform(gt);
+  std::vector<float> v(std::size_t(w) * h);
+  std::uint32_t s = 11;
+  for (float& x : v) s = s * 1664525u + 1013904223u, x = float(s >> 8) * 1e-3f;
+  ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, w, h, v.data(), w, h, GDT_Float32, 0, 0, nullptr),
+            CE_None);
+}
+
+// GDAL's own read of the whole band in one call: the truth for the banded reader.
+std::vector<float> gdal_whole_band(const fs::path& file) {
+  std::unique_ptr<GDALDataset> ds(GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
+  const int w = ds->GetRasterXSize(), h = ds->GetRasterYSize();
+  std::vector<float> v(std::size_t(w) * h);
+  EXPECT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Read, 0, 0, w, h, v.data(), w, h, GDT_Float32, 0, 0, nullptr),
+            CE_None);
+  return v;
+}
+
+TEST(GeoRaster, BandedReadEqualsGdalsWholeRead) {
+  TempFolder tmp;
+  for (const bool tiled : {false, true}) {
+    const fs::path file = tmp / (tiled ? "tiled.tif" : "strips.tif");
+    write_float_geotiff(file, 700, 613, tiled);
+    std::vector<double> fractions;
+    const Plane p =
+        read_georaster_band(file, 0, {"j", "/height/image"}, [&](double f) { fractions.push_back(f); });
+    EXPECT_EQ(p.width, 700);
+    EXPECT_EQ(p.height, 613);
+    EXPECT_TRUE(p.values == gdal_whole_band(file)) << file;
+    ASSERT_GE(fractions.size(), 2u) << file;  // 613 rows: at least 3 bands of 256
+    EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+    EXPECT_EQ(fractions.back(), 1.0);
+  }
+}
+
+TEST(GeoRaster, TruncatedRasterIsAOneLineErrorNamingTheFile) {
+  TempFolder tmp;
+  const fs::path file = tmp / "cut.tif";
+  write_float_geotiff(file, 1024, 1024, false);
+  fs::resize_file(file, fs::file_size(file) / 2);
+  try {
+    read_georaster_band(file, 0, {"job.json", "/height/image"});
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string line = e.line();
+    EXPECT_EQ(line.rfind("job.json: /height/image: " + file.string() + ": cannot ", 0), 0u) << line;
+    EXPECT_EQ(line.find('\n'), std::string::npos) << line;
+  }
 }
 
 }  // namespace

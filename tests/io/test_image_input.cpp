@@ -2,6 +2,9 @@
 // missing channels.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <fstream>
 
 #include "core/error.hpp"
@@ -155,6 +158,82 @@ TEST(ImageInput, RgbImagesConvertFromTheirDefaultColourSpace) {
     read_rgb_image(dir / "b.exr", "srgbb", kSite, {"j.json", "/x/colorspace"});
   });
   EXPECT_EQ(line.rfind("j.json: /x/colorspace: unknown OpenColorIO colour space \"srgbb\"", 0), 0u) << line;
+}
+
+}  // namespace
+}  // namespace hfbake
+
+namespace hfbake {
+namespace {
+
+// Pseudo-random values in [0, 1) that do not depend on the platform.
+std::vector<float> noise(std::size_t n, std::uint32_t seed) {
+  std::vector<float> v(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    seed = seed * 1664525u + 1013904223u;
+    v[i] = float(seed >> 8) / float(1u << 24);
+  }
+  return v;
+}
+
+// OpenImageIO's own whole-image read of channel c, as floats: the truth for the banded reader.
+std::vector<float> oiio_whole_channel(const fs::path& file, int c) {
+  auto in = OIIO::ImageInput::open(file.string());
+  EXPECT_TRUE(in);
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<float> all(std::size_t(spec.width) * spec.height * spec.nchannels);
+  EXPECT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()));
+  std::vector<float> out(std::size_t(spec.width) * spec.height);
+  for (std::size_t t = 0; t < out.size(); ++t) out[t] = all[t * spec.nchannels + c];
+  return out;
+}
+
+TEST(ImageInput, BandedChannelReadEqualsTheWholeImageRead) {
+  TempFolder dir;
+  const int w = 517, h = 301;  // not multiples of the bands or tiles
+  const auto px = noise(std::size_t(w) * h * 3, 7);
+  write_test_image(dir / "h16.png", w, h, 3, px, OIIO::TypeDesc::UINT16);  // the engine heightmap format
+  {
+    // A tiled 16-bit TIFF: read by rows of tiles.
+    auto out = OIIO::ImageOutput::create("tif");
+    OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT16);
+    spec.tile_width = spec.tile_height = 64;
+    ASSERT_TRUE(out->open((dir / "tiled.tif").string(), spec));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    ASSERT_TRUE(out->close());
+  }
+  for (const char* name : {"h16.png", "tiled.tif"}) {
+    std::vector<double> fractions;
+    const Plane p =
+        read_image_channel(dir / name, 1, kSite, kChannelSite, [&](double f) { fractions.push_back(f); });
+    ASSERT_EQ(p.width, w);
+    ASSERT_EQ(p.height, h);
+    const std::vector<float> truth = oiio_whole_channel(dir / name, 1);
+    ASSERT_EQ(p.values.size(), truth.size());
+    std::size_t differ = 0;
+    for (std::size_t t = 0; t < truth.size(); ++t) differ += p.values[t] != truth[t];
+    EXPECT_EQ(differ, 0u) << name;
+    // Spot check against the written 16-bit value (an independent quantization of the input).
+    EXPECT_FLOAT_EQ(p.values[1000], std::round(px[1000 * 3 + 1] * 65535.f) / 65535.f) << name;
+    ASSERT_FALSE(fractions.empty()) << name;
+    EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end())) << name;
+    EXPECT_EQ(fractions.back(), 1.0) << name;
+  }
+}
+
+TEST(ImageInput, TruncatedBigPngIsAOneLineErrorNamingTheFile) {
+  TempFolder dir;
+  const int w = 1024, h = 1024;
+  write_test_image(dir / "big.png", w, h, 1, noise(std::size_t(w) * h, 3), OIIO::TypeDesc::UINT16);
+  const auto size = fs::file_size(dir / "big.png");
+  fs::resize_file(dir / "big.png", size / 2);
+  const std::string line = error_line([&] { read_image_channel(dir / "big.png", 0, kSite, kChannelSite); });
+  EXPECT_EQ(line.rfind("jobs/x.json: /height/image: " + (dir / "big.png").string() +
+                           ": cannot decode the image (corrupt or truncated?) at row ",
+                       0),
+            0u)
+      << line;
+  EXPECT_EQ(line.find('\n'), std::string::npos) << line;
 }
 
 }  // namespace
