@@ -2,6 +2,10 @@
 
 #include "core/azimuth.hpp"
 
+#include <tbb/task_arena.h>
+
+#include <climits>
+
 namespace hfbake {
 namespace {
 
@@ -127,6 +131,160 @@ void sample_line(const HeightField& f, const SweepDirection& d, int line, float*
     *inside_begin = ib < 0 ? 0 : ib;
     *inside_end = ib < 0 ? 0 : ie;
   }
+}
+
+void sweep_tile_lines(const SweepDirection& d, int i0, int i1, int j0, int j1, int* lo, int* hi) {
+  const int ua = d.x_major ? i0 : j0, ub = (d.x_major ? i1 : j1) - 1;
+  const int va = d.x_major ? j0 : i0, vb = (d.x_major ? j1 : i1) - 1;
+  // g = v0 - u * slope as texel_taps computes it: the rounded product and difference are monotone, so the
+  // smallest g is at (the u with the largest u * slope, va) and the largest at (the other u, vb).
+  auto line_of = [&](int u, int v) { return floor_int(double(v) - double(u) * d.slope); };
+  const int l_min = line_of(d.slope > 0 ? ub : ua, va) - d.line_begin;
+  const int l_max = line_of(d.slope > 0 ? ua : ub, vb) - d.line_begin;
+  if (!d.repeat) {
+    *lo = std::clamp(l_min, 0, d.lines() - 2);
+    *hi = std::clamp(l_max, 0, d.lines() - 2) + 1;
+    return;
+  }
+  const int n = d.n_minor;
+  if (l_max + 1 - l_min + 1 >= n) {
+    *lo = 0;
+    *hi = n - 1;
+    return;
+  }
+  *lo = wrap_index(l_min, n);
+  *hi = wrap_index(l_max + 1, n);
+}
+
+namespace detail {
+
+SweepStream plan_stream(const HeightField& f, const SweepDirection& d, std::size_t budget_bytes, int channels,
+                        bool with_order) {
+  SweepStream s;
+  const int L = d.lines();
+  const int tx = (f.width + kSweepTile - 1) / kSweepTile, ty = (f.height + kSweepTile - 1) / kSweepTile;
+  const std::size_t T = std::size_t(tx) * std::size_t(ty);
+  std::vector<int> first_line(T), last_line(T);
+  for (int tj = 0; tj < ty; ++tj)
+    for (int ti = 0; ti < tx; ++ti) {
+      const std::size_t t = std::size_t(tj) * tx + ti;
+      int lo, hi;
+      sweep_tile_lines(d, ti * kSweepTile, std::min(f.width, (ti + 1) * kSweepTile), tj * kSweepTile,
+                       std::min(f.height, (tj + 1) * kSweepTile), &lo, &hi);
+      if (lo > hi) {  // across the repeat seam: lines [0, hi] from the head, gathered after the last line
+        s.head = std::max(s.head, hi + 1);
+        hi = L - 1;
+      }
+      first_line[t] = lo, last_line[t] = hi;
+    }
+  // Tiles by last line (a counting sort: first[p] = tiles whose last line is below p).
+  s.first.assign(std::size_t(L) + 1, 0);
+  for (std::size_t t = 0; t < T; ++t) ++s.first[std::size_t(last_line[t]) + 1];
+  for (int p = 0; p < L; ++p) s.first[p + 1] += s.first[p];
+  // keep[p]: the first ring line that a tile whose last line is >= p still reads.
+  std::vector<int> keep(std::size_t(L) + 1, INT_MAX);
+  int span = 1;
+  for (std::size_t t = 0; t < T; ++t) {
+    const int a = std::max(first_line[t], s.head);
+    keep[last_line[t]] = std::min(keep[last_line[t]], a);
+    span = std::max(span, last_line[t] - a + 1);
+  }
+  for (int p = L - 1; p >= 0; --p) keep[p] = std::min(keep[p], keep[p + 1]);
+  // The ring lines a chunk size needs: after computing [c0, c1) the lines [keep, c1) are live.
+  auto window_for = [&](int chunk) {
+    int w = 1;
+    for (int c0 = 0; c0 < L; c0 += chunk) {
+      const int c1 = std::min(L, c0 + chunk);
+      if (c1 > s.head) w = std::max(w, c1 - std::max(s.head, std::min(keep[c0], c0)));
+    }
+    return w;
+  };
+  const std::size_t line_bytes = std::size_t(d.n_major) * std::size_t(channels) * sizeof(float);
+  const std::size_t fit = budget_bytes / line_bytes;
+  // Ring lines the budget leaves beside the head (at least one); no more than the lines there are.
+  const int budget = fit > std::size_t(s.head) ? int(std::min(fit - std::size_t(s.head), std::size_t(L))) : 1;
+  s.chunk = std::max(1, budget - span + 1);
+  s.window = window_for(s.chunk);
+  while (s.window > budget && s.chunk > 1) {  // the window is about chunk + span - 1: shrink by the excess
+    s.chunk = std::max(1, s.chunk - (s.window - budget));
+    s.window = window_for(s.chunk);
+  }
+  if (with_order) {
+    s.order.resize(T);
+    std::vector<std::uint32_t> at(s.first.begin(), s.first.end() - 1);
+    for (std::size_t t = 0; t < T; ++t) s.order[at[last_line[t]]++] = std::uint32_t(t);
+  }
+  return s;
+}
+
+SweepPlan plan_sweep(const HeightField& f, const SweepSpec& spec, const std::vector<SweepDirection>& dirs) {
+  SweepPlan plan;
+  const int K = int(dirs.size());
+  const std::size_t C = std::size_t(std::max(1, spec.channels));
+  const std::size_t t_bytes = f.texel_count() * sizeof(float);
+  bool any_y_major = false;
+  for (const SweepDirection& d : dirs) any_y_major = any_y_major || !d.x_major;
+  plan.transposed = any_y_major && t_bytes <= spec.max_buffer_bytes / 4;
+  plan.buffer_budget = spec.max_buffer_bytes - (plan.transposed ? t_bytes : 0);
+  auto whole = [&](int k) {
+    return std::size_t(dirs[k].lines()) * std::size_t(dirs[k].n_major) * C * sizeof(float);
+  };
+  const int batch = std::max(1, spec.batch);
+  for (int k0 = 0; k0 < K;) {
+    SweepBatch b;
+    b.k0 = k0;
+    std::size_t bytes = whole(k0);
+    if (bytes > plan.buffer_budget) {
+      b.stream = true;
+    } else {
+      while (b.nb < batch && k0 + b.nb < K && bytes + whole(k0 + b.nb) <= plan.buffer_budget)
+        bytes += whole(k0 + b.nb++);
+    }
+    plan.batches.push_back(b);
+    k0 += b.nb;
+  }
+  return plan;
+}
+
+}  // namespace detail
+
+std::size_t sweep_buffer_bytes(const HeightField& f, const SweepSpec& spec) {
+  const int K = spec.azimuths.empty() ? spec.directions : int(spec.azimuths.size()), C = spec.channels;
+  if (K <= 0 || C <= 0 || f.width <= 0 || f.height <= 0) return 0;
+  std::vector<SweepDirection> dirs(K);
+  int max_count = 0;
+  for (int k = 0; k < K; ++k) {
+    dirs[k] = plan_direction(f, spec, k);
+    max_count = std::max(max_count, dirs[k].count);
+  }
+  const detail::SweepPlan plan = detail::plan_sweep(f, spec, dirs);
+  const std::size_t tiles = std::size_t((f.width + detail::kSweepTile - 1) / detail::kSweepTile) *
+                            std::size_t((f.height + detail::kSweepTile - 1) / detail::kSweepTile);
+  std::size_t storage = 0, batch_peak = 0;
+  for (const detail::SweepBatch& b : plan.batches) {
+    std::size_t floats = 0, extra = 0;
+    for (int k = b.k0; k < b.k0 + b.nb; ++k) {
+      const SweepDirection& d = dirs[k];
+      const std::size_t line_floats = std::size_t(d.n_major) * std::size_t(C);
+      extra += std::size_t(d.lines()) * sizeof(float*);  // the line table
+      if (b.stream) {
+        const detail::SweepStream s = detail::plan_stream(f, d, plan.buffer_budget, C, false);
+        floats += std::size_t(s.head + s.window) * line_floats;
+        // The tile order and its index, and plan_stream's two ints per tile and per line.
+        extra += tiles * (sizeof(std::uint32_t) + 2 * sizeof(int)) +
+                 (std::size_t(d.lines()) + 1) * (sizeof(std::uint32_t) + sizeof(int));
+      } else {
+        floats += std::size_t(d.lines()) * line_floats;
+      }
+    }
+    storage = std::max(storage, floats * sizeof(float));
+    batch_peak = std::max(batch_peak, extra);
+  }
+  const std::size_t threads = std::size_t(std::max(1, tbb::this_task_arena::max_concurrency()));
+  const std::size_t per_thread =
+      std::size_t(max_count) * sizeof(float) + std::size_t(4 * C + 3) * 32 * 32 * sizeof(float);
+  return storage + batch_peak + (plan.transposed ? f.texel_count() * sizeof(float) : 0) +
+         threads * per_thread;
 }
 
 TexelPair SweepLine::height_taps(int n, const HeightField& f) const {

@@ -82,6 +82,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -95,8 +96,8 @@ struct SweepSpec {
   std::vector<double> azimuths;  // if not empty: explicit azimuths (radians) instead; directions is ignored
   int channels = 1;              // floats each line visitor writes per receiver sample
   int wrap_periods = 1;          // repeat mode: warm-up length in whole periods of the major axis (>= 1)
-  int batch = 4;  // directions swept before each gather pass (more = fewer passes, more memory)
-  std::size_t max_buffer_bytes = std::size_t(512) << 20;  // caps batch so result buffers stay below this
+  int batch = 4;  // directions swept before each gather pass while their whole buffers fit (see Memory)
+  std::size_t max_buffer_bytes = std::size_t(256) << 20;  // bound on the driver's buffers (see Memory)
   bool tile_nearest = true;  // sweep_lines_tiled: also fill SweepTile::nearest (off: nearest is null)
   bool tile_taps = false;    // sweep_lines_tiled: also fill SweepTile::lo, hi, w_hi (both taps apart)
   bool tile_values = true;   // sweep_lines_tiled: fill SweepTile::value (off: value is null)
@@ -203,9 +204,11 @@ inline bool lone_border_tap(const SweepDirection& dir, int v, float frac) {
   return !dir.repeat && frac > 0 && dir.n_minor > 1 && (v == 0 || v == dir.n_minor - 1);
 }
 
-// The texel taps of texel (i, j) for direction dir in a result buffer laid out as
-// buffer[((l - line_begin) * n_major + receiver_index(u)) * channels + c].
-inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int channels, int i, int j) {
+namespace detail {
+
+// texel_taps with the results of relative line p = l - line_begin (0 .. lines() - 1) at line_base(p).
+template <class LineBase>
+TexelTaps texel_taps_at(const SweepDirection& dir, LineBase&& line_base, int channels, int i, int j) {
   const int u = dir.x_major ? i : j, v0 = dir.x_major ? j : i;
   const double g = double(v0) - double(u) * dir.slope;
   const double fl = double(floor_int(g));
@@ -220,9 +223,9 @@ inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int 
     la = std::clamp(la, 0, dir.lines() - 2);
     lb = la + 1;
   }
-  const std::size_t r = std::size_t(dir.receiver_index(u));
-  t.lo = buffer + (std::size_t(la) * std::size_t(dir.n_major) + r) * std::size_t(channels);
-  t.hi = buffer + (std::size_t(lb) * std::size_t(dir.n_major) + r) * std::size_t(channels);
+  const std::size_t r = std::size_t(dir.receiver_index(u)) * std::size_t(channels);
+  t.lo = line_base(la) + r;
+  t.hi = line_base(lb) + r;
   // clamp: a tap off the field is no receiver; the border texel takes its other (inside) tap alone.
   if (lone_border_tap(dir, v0, t.w_hi)) {
     if (v0 == 0) t.lo = t.hi;
@@ -230,6 +233,53 @@ inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int 
   }
   return t;
 }
+
+}  // namespace detail
+
+// The texel taps of texel (i, j) for direction dir in a result buffer laid out as
+// buffer[((l - line_begin) * n_major + receiver_index(u)) * channels + c].
+inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int channels, int i, int j) {
+  const std::size_t line = std::size_t(dir.n_major) * std::size_t(channels);
+  return detail::texel_taps_at(
+      dir, [&](int p) { return buffer + std::size_t(p) * line; }, channels, i, j);
+}
+
+// The same with each line's results anywhere: lines[l - line_begin] points at line l's n_major * channels
+// floats (laid out as in a buffer row; what the driver hands its gathers).
+inline TexelTaps texel_taps(const SweepDirection& dir, const float* const* lines, int channels, int i,
+                            int j) {
+  return detail::texel_taps_at(
+      dir, [&](int p) { return lines[p]; }, channels, i, j);
+}
+
+// The lines a tile's taps read: texel_taps of every texel (i, j) in [i0, i1) x [j0, j1) reads only lines
+// (relative indices l - line_begin) in [*lo, *hi], and reads both ends (exact: floor(v0 - u * slope) is
+// monotone in u and v0 in floating point too, so the tile's corners give its extremes). Repeat: the set
+// wraps when *lo > *hi (lines [*lo, n_minor) and [0, *hi]: the tile blends line n_minor - 1 with line 0);
+// *lo = 0, *hi = n_minor - 1 when the tile needs every line.
+void sweep_tile_lines(const SweepDirection& dir, int i0, int i1, int j0, int j1, int* lo, int* hi);
+
+// ---- Memory ---------------------------------------------------------------------------------------------
+// The driver keeps each direction's line results until the tiles that read them are gathered. Directions go
+// in batches of up to spec.batch whose whole result buffers (lines() * n_major * channels floats each) fit
+// the budget (max_buffer_bytes less the transposed copy below): all their lines, then every 32 x 32 tile
+// for each direction of the batch in ascending k. A direction whose whole buffer does not fit streams
+// alone: its lines are computed in chunks (in parallel within a chunk) into a ring of `window` lines; after
+// each chunk, the tiles whose lines (sweep_tile_lines) are all computed are gathered, in order of their
+// last line, and lines that no tile still needs are overwritten. Repeat: the first `head` lines, which the
+// tiles across the seam (line n_minor - 1 next to line 0) read, are kept apart until those tiles are
+// gathered, last. head + window lines fit the budget whenever one tile's span of lines (about 34 + 32
+// |slope|) does; below that, one chunk is one line and the window is that span. y-major lines read a
+// transposed copy of the field (4 bytes a texel) only when it takes at most a quarter of max_buffer_bytes;
+// otherwise they read the field in place (the same heights). The visitors get the same values whichever way.
+
+// Peak bytes the driver allocates for field and spec: result buffers (whole, or ring and head), the
+// transposed copy, each direction's line table and tile order, and per thread (this arena's
+// tbb::this_task_arena::max_concurrency()) one line's heights and sweep_lines_tiled's tile scratch. It runs
+// the driver's own plan, so the result buffers (the bulk) are exact; for fields whose direction buffers
+// exceed max_buffer_bytes it stays near max_buffer_bytes, independent of the field's height. Excludes what
+// workers and visitors allocate.
+std::size_t sweep_buffer_bytes(const HeightField& field, const SweepSpec& spec);
 
 // One tile of gathered results for the tiled gather (sweep_lines_tiled): texels [i0, i0 + width) x
 // [j0, j0 + height) for direction k, structure-of-arrays per channel so per-texel loops vectorise:
@@ -253,81 +303,162 @@ struct SweepTile {
 
 namespace detail {
 
-// The line phase of every batch, then tile_fn(k0, nb, dirs, buffers, per_dir, i0, i1, j0, j1) for every
-// 32 x 32 tile (tiles in parallel).
+constexpr int kSweepTile = 32;  // the gather's tiles: kSweepTile x kSweepTile texels
+
+// The driver's plan (see Memory): batches of directions and whether they stream.
+struct SweepBatch {
+  int k0 = 0, nb = 1;   // directions [k0, k0 + nb)
+  bool stream = false;  // one direction through a window (nb = 1); else whole buffers
+};
+struct SweepPlan {
+  std::vector<SweepBatch> batches;
+  bool transposed = false;        // y-major lines read a transposed copy of the field
+  std::size_t buffer_budget = 0;  // bytes left for result buffers
+};
+SweepPlan plan_sweep(const HeightField& field, const SweepSpec& spec,
+                     const std::vector<SweepDirection>& dirs);
+
+// One streaming direction's schedule: lines [0, head) in their own store, the others in a ring of window
+// lines (line p in slot (p - head) % window); lines computed chunk at a time; after lines [c0, c1), the
+// tiles order[first[c0] .. first[c1]) are gathered (tile index tj * tiles_x + ti).
+struct SweepStream {
+  int head = 0, window = 1, chunk = 1;
+  std::vector<std::uint32_t> order;
+  std::vector<std::uint32_t> first;  // lines() + 1 entries: tiles in order whose last line is < p
+};
+SweepStream plan_stream(const HeightField& field, const SweepDirection& dir, std::size_t budget_bytes,
+                        int channels, bool with_order);
+
+// Lines of each batch (whole, or streamed), then tile_fn(k0, nb, dirs, lines, i0, i1, j0, j1) for every
+// 32 x 32 tile once per batch (tiles in parallel), where lines[b][l - line_begin] holds line l of direction
+// k0 + b.
 template <class MakeWorker, class TileFn>
 void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const RunControl& rc,
                       MakeWorker&& make_worker, TileFn&& tile_fn) {
   const int K = spec.azimuths.empty() ? spec.directions : int(spec.azimuths.size()), C = spec.channels;
   if (K <= 0 || C <= 0 || field.width <= 0 || field.height <= 0) return;
   std::vector<SweepDirection> dirs(K);
-  std::size_t max_lines_x_major = 0;
   int max_count = 0;
   for (int k = 0; k < K; ++k) {
     dirs[k] = plan_direction(field, spec, k);
-    max_lines_x_major = std::max(max_lines_x_major, std::size_t(dirs[k].lines()) * dirs[k].n_major);
     max_count = std::max(max_count, dirs[k].count);
   }
-  const std::size_t per_dir = max_lines_x_major * std::size_t(C);
-  int batch = std::max(1, std::min(spec.batch, K));
-  while (batch > 1 && per_dir * sizeof(float) * batch > spec.max_buffer_bytes) --batch;
-  // Result buffers; zero-filled unless the caller's worker writes every receiver (spec.zero_buffers).
-  std::unique_ptr<float[]> buffer_storage(spec.zero_buffers ? new float[per_dir * batch]()
-                                                            : new float[per_dir * batch]);
-  struct {
-    float* p;
-    float* data() const { return p; }
-  } buffers{buffer_storage.get()};
+  const SweepPlan plan = plan_sweep(field, spec, dirs);
 
-  // y-major lines read a transposed copy: consecutive samples are then adjacent in memory.
+  // y-major lines read a transposed copy when it is small: consecutive samples are then adjacent in memory.
   std::vector<float> transposed;
-  bool any_y_major = false;
-  for (const SweepDirection& d : dirs) any_y_major = any_y_major || !d.x_major;
-  if (any_y_major) {
+  if (plan.transposed) {
     transposed.resize(field.texel_count());
     tbb::parallel_for(0, field.width, [&](int i) {
       for (int j = 0; j < field.height; ++j)
         transposed[std::size_t(i) * field.height + j] = field.z[field.index(i, j)];
     });
   }
+  const float* tz = transposed.empty() ? nullptr : transposed.data();
 
   using Worker = decltype(make_worker());
   tbb::enumerable_thread_specific<Worker> workers(make_worker);
   tbb::enumerable_thread_specific<std::vector<float>> heights([&] { return std::vector<float>(max_count); });
 
-  for (int k0 = 0; k0 < K; k0 += batch) {
-    const int nb = std::min(batch, K - k0);
-    // Lines of all directions of the batch, as one flat index range.
-    std::vector<int> first_line(nb + 1, 0);
-    for (int b = 0; b < nb; ++b) first_line[b + 1] = first_line[b] + dirs[k0 + b].lines();
-    tbb::parallel_for(tbb::blocked_range<int>(0, first_line[nb], 4), [&](const tbb::blocked_range<int>& r) {
+  // Result storage, grown to the largest batch's need; lines[b][p]: where relative line p of direction
+  // k0 + b lives.
+  std::unique_ptr<float[]> storage;
+  std::size_t storage_floats = 0;
+  auto reserve = [&](std::size_t floats) {
+    if (floats <= storage_floats) return;
+    storage.reset();
+    storage.reset(new float[floats]);
+    storage_floats = floats;
+  };
+  std::vector<std::vector<float*>> lines(std::size_t(std::max(1, spec.batch)));
+  std::vector<const float* const*> tables(lines.size());
+
+  // Relative lines [from[b], to[b]) of directions k0 + b, in parallel, each into lines[b][p].
+  auto run_lines = [&](int k0, int nb, const int* from, const int* to) {
+    std::vector<int> first(nb + 1, 0);
+    for (int b = 0; b < nb; ++b) first[b + 1] = first[b] + (to[b] - from[b]);
+    if (first[nb] == 0) return;
+    tbb::parallel_for(tbb::blocked_range<int>(0, first[nb], 4), [&](const tbb::blocked_range<int>& r) {
       rc.check();
       Worker& worker = workers.local();
       std::vector<float>& z = heights.local();
-      int b = int(std::upper_bound(first_line.begin(), first_line.end(), r.begin()) - first_line.begin()) - 1;
+      int b = int(std::upper_bound(first.begin(), first.end(), r.begin()) - first.begin()) - 1;
       for (int flat = r.begin(); flat < r.end(); ++flat) {
-        while (flat >= first_line[b + 1]) ++b;
+        while (flat >= first[b + 1]) ++b;
         const SweepDirection& dir = dirs[k0 + b];
-        const SweepLine line = sampled_line(field, dir, dir.line_begin + (flat - first_line[b]), z.data(),
-                                            transposed.empty() ? nullptr : transposed.data());
-        float* out = buffers.data() + per_dir * b +
-                     std::size_t(flat - first_line[b]) * std::size_t(dir.n_major) * std::size_t(C);
+        const int p = from[b] + (flat - first[b]);
+        const SweepLine line = sampled_line(field, dir, dir.line_begin + p, z.data(), tz);
+        float* out = lines[b][p];
+        if (spec.zero_buffers) std::fill_n(out, std::size_t(dir.n_major) * std::size_t(C), 0.0f);
         worker(static_cast<const SweepLine&>(line), out);
       }
     });
-    rc.check();
-    // Gather: tiles of texels in parallel; within a texel, directions in ascending k.
-    constexpr int kTile = 32;
-    tbb::parallel_for(tbb::blocked_range2d<int>(0, (field.height + kTile - 1) / kTile, 1, 0,
-                                                (field.width + kTile - 1) / kTile, 1),
-                      [&](const tbb::blocked_range2d<int>& r) {
-                        for (int tj = r.rows().begin(); tj < r.rows().end(); ++tj)
-                          for (int ti = r.cols().begin(); ti < r.cols().end(); ++ti)
-                            tile_fn(k0, nb, dirs.data() + k0, buffers.data(), per_dir, ti * kTile,
-                                    std::min(field.width, (ti + 1) * kTile), tj * kTile,
-                                    std::min(field.height, (tj + 1) * kTile));
-                      });
-    rc.report(double(k0 + nb) / K);
+  };
+  const int tiles_x = (field.width + kSweepTile - 1) / kSweepTile;
+  const int tiles_y = (field.height + kSweepTile - 1) / kSweepTile;
+  auto gather = [&](int k0, int nb, int ti, int tj) {
+    tile_fn(k0, nb, dirs.data() + k0, tables.data(), ti * kSweepTile,
+            std::min(field.width, (ti + 1) * kSweepTile), tj * kSweepTile,
+            std::min(field.height, (tj + 1) * kSweepTile));
+  };
+
+  for (const SweepBatch& batch : plan.batches) {
+    const int k0 = batch.k0, nb = batch.nb;
+    if (!batch.stream) {
+      // Whole buffers: every line of the batch, then every tile once for the batch's directions.
+      std::size_t total = 0;
+      for (int b = 0; b < nb; ++b)
+        total += std::size_t(dirs[k0 + b].lines()) * std::size_t(dirs[k0 + b].n_major) * std::size_t(C);
+      reserve(total);
+      std::vector<int> from(nb, 0), to(nb);
+      std::size_t at = 0;
+      for (int b = 0; b < nb; ++b) {
+        const SweepDirection& d = dirs[k0 + b];
+        const std::size_t line_floats = std::size_t(d.n_major) * std::size_t(C);
+        lines[b].resize(std::size_t(d.lines()));
+        for (int p = 0; p < d.lines(); ++p) lines[b][p] = storage.get() + at + std::size_t(p) * line_floats;
+        tables[b] = lines[b].data();
+        at += std::size_t(d.lines()) * line_floats;
+        to[b] = d.lines();
+      }
+      run_lines(k0, nb, from.data(), to.data());
+      rc.check();
+      // Gather: tiles of texels in parallel; within a texel, directions in ascending k.
+      tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1),
+                        [&](const tbb::blocked_range2d<int>& r) {
+                          for (int tj = r.rows().begin(); tj < r.rows().end(); ++tj)
+                            for (int ti = r.cols().begin(); ti < r.cols().end(); ++ti) gather(k0, nb, ti, tj);
+                        });
+      rc.report(double(k0 + nb) / K);
+      continue;
+    }
+    // Streaming: chunks of lines into the head and the ring; after each, the tiles that became complete.
+    const SweepDirection& d = dirs[k0];
+    const SweepStream s = plan_stream(field, d, plan.buffer_budget, C, true);
+    const std::size_t line_floats = std::size_t(d.n_major) * std::size_t(C);
+    reserve(std::size_t(s.head + s.window) * line_floats);
+    float* head = storage.get();
+    float* ring = head + std::size_t(s.head) * line_floats;
+    const int L = d.lines();
+    lines[0].assign(std::size_t(L), nullptr);
+    tables[0] = lines[0].data();
+    for (int c0 = 0; c0 < L; c0 += s.chunk) {
+      const int c1 = std::min(L, c0 + s.chunk);
+      for (int p = c0; p < c1; ++p)
+        lines[0][p] = p < s.head ? head + std::size_t(p) * line_floats
+                                 : ring + std::size_t((p - s.head) % s.window) * line_floats;
+      run_lines(k0, 1, &c0, &c1);
+      rc.check();
+      const std::uint32_t t0 = s.first[c0], t1 = s.first[c1];
+      if (t1 > t0)
+        tbb::parallel_for(tbb::blocked_range<std::uint32_t>(t0, t1, 1),
+                          [&](const tbb::blocked_range<std::uint32_t>& r) {
+                            for (std::uint32_t t = r.begin(); t < r.end(); ++t)
+                              gather(k0, 1, int(s.order[t] % std::uint32_t(tiles_x)),
+                                     int(s.order[t] / std::uint32_t(tiles_x)));
+                          });
+      rc.report((double(k0) + double(c1) / L) / K);
+    }
   }
 }
 
@@ -341,13 +472,12 @@ void sweep_lines(const HeightField& field, const SweepSpec& spec, const RunContr
                  MakeWorker&& make_worker, TexelVisitor&& texel_visitor) {
   const int C = spec.channels;
   detail::sweep_lines_core(field, spec, rc, make_worker,
-                           [&](int k0, int nb, const SweepDirection* dirs, const float* buffers,
-                               std::size_t per_dir, int i0, int i1, int j0, int j1) {
+                           [&](int k0, int nb, const SweepDirection* dirs, const float* const* const* lines,
+                               int i0, int i1, int j0, int j1) {
                              for (int j = j0; j < j1; ++j)
                                for (int i = i0; i < i1; ++i)
                                  for (int b = 0; b < nb; ++b)
-                                   texel_visitor(k0 + b, i, j,
-                                                 texel_taps(dirs[b], buffers + per_dir * b, C, i, j));
+                                   texel_visitor(k0 + b, i, j, texel_taps(dirs[b], lines[b], C, i, j));
                            });
 }
 
@@ -360,8 +490,8 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
   const int C = spec.channels;
   tbb::enumerable_thread_specific<std::vector<float>> scratch(
       [&] { return std::vector<float>(std::size_t(4 * C + 3) * 32 * 32); });
-  auto gather_tile = [&](int k0, int nb, const SweepDirection* dirs, const float* buffers,
-                         std::size_t per_dir, int i0, int i1, int j0, int j1) {
+  auto gather_tile = [&](int k0, int nb, const SweepDirection* dirs, const float* const* const* lines, int i0,
+                         int i1, int j0, int j1) {
     std::vector<float>& tmp = scratch.local();
     SweepTile tile;
     tile.i0 = i0, tile.j0 = j0, tile.width = i1 - i0, tile.height = j1 - j0, tile.channels = C;
@@ -380,7 +510,7 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
     for (int b = 0; b < nb; ++b) {
       for (int j = j0; j < j1; ++j)
         for (int i = i0; i < i1; ++i) {
-          const TexelTaps t = texel_taps(dirs[b], buffers + per_dir * b, C, i, j);
+          const TexelTaps t = texel_taps(dirs[b], lines[b], C, i, j);
           const std::size_t at = std::size_t(j - j0) * tile.width + (i - i0);
           if (spec.tile_values)
             for (int c = 0; c < C; ++c) value[c * plane + at] = t.value(c);

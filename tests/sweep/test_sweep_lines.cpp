@@ -7,6 +7,10 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <utility>
 
 #include "field/procedural.hpp"
 #include "sweep/sweep_lines.hpp"
@@ -284,6 +288,237 @@ TEST(SweepLines, ProgressReachesOne) {
       f, spec, rc, [] { return RunningMax{}; }, [](int, int, int, const TexelTaps&) {});
   EXPECT_EQ(calls.load(), 3);
   EXPECT_DOUBLE_EQ(last, 1.0);
+}
+
+// ---- Streaming: windows of lines give the visitors the same values as whole buffers ----------------------
+
+// A worker whose every result depends on the line, the receiver and the walk so far: a result read from the
+// wrong line, column or slot of the ring changes what the visitor records.
+struct TagWorker {
+  int channels = 1;
+  void operator()(const SweepLine& line, float* out) const {
+    float m = -1e30f;
+    for (int n = 0; n < line.count; ++n) {
+      if (n >= line.first_receiver)
+        for (int c = 0; c < channels; ++c)
+          out[std::size_t(n - line.first_receiver) * channels + c] = float(line.line) * 4096.0f +
+                                                                     float(n - line.first_receiver) +
+                                                                     0.125f * float(c) + (m - line.z[n]);
+      if (line.is_terrain(n)) m = std::max(m, line.z[n]);
+    }
+  }
+};
+
+// Everything the tile visitor gets, per (k, texel) in the order it arrived, and the texels' k order.
+struct TileRecord {
+  std::vector<float> data;    // [(texel * K + k) * stride ...]
+  std::vector<int> order_ok;  // per texel: 1 while its directions arrived in ascending k
+  std::vector<double> progress;
+};
+
+TileRecord record_tiled(const HeightField& f, SweepSpec spec) {
+  const int K = spec.azimuths.empty() ? spec.directions : int(spec.azimuths.size()), C = spec.channels;
+  spec.tile_taps = true;
+  spec.tile_nearest = true;
+  spec.zero_buffers = false;
+  const std::size_t stride = std::size_t(4 * C + 3);
+  TileRecord rec;
+  rec.data.assign(f.texel_count() * K * stride, -7.0f);
+  rec.order_ok.assign(f.texel_count(), 1);
+  std::vector<int> last(f.texel_count(), -1);
+  RunControl rc;
+  rc.progress = [&](double p) { rec.progress.push_back(p); };
+  sweep_lines_tiled(
+      f, spec, rc, [&] { return TagWorker{C}; },
+      [&](const SweepTile& t) {
+        const std::size_t plane = std::size_t(t.width) * t.height;
+        for (int y = 0; y < t.height; ++y)
+          for (int x = 0; x < t.width; ++x) {
+            const std::size_t texel = f.index(t.i0 + x, t.j0 + y), at = std::size_t(y) * t.width + x;
+            if (t.k <= last[texel]) rec.order_ok[texel] = 0;
+            last[texel] = t.k;
+            float* o = rec.data.data() + (texel * K + t.k) * stride;
+            for (int c = 0; c < C; ++c) {
+              o[4 * c + 0] = t.value[c * plane + at];
+              o[4 * c + 1] = t.nearest[c * plane + at];
+              o[4 * c + 2] = t.lo[c * plane + at];
+              o[4 * c + 3] = t.hi[c * plane + at];
+            }
+            o[4 * C + 0] = t.w_hi[at];
+            o[4 * C + 1] = t.off_lo[at];
+            o[4 * C + 2] = t.off_hi[at];
+          }
+      });
+  return rec;
+}
+
+// The per-texel visitor's taps, per (k, texel).
+std::vector<float> record_texels(const HeightField& f, SweepSpec spec) {
+  const int K = spec.azimuths.empty() ? spec.directions : int(spec.azimuths.size()), C = spec.channels;
+  const std::size_t stride = std::size_t(2 * C + 1);
+  std::vector<float> data(f.texel_count() * K * stride, -7.0f);
+  sweep_lines(
+      f, spec, RunControl{}, [&] { return TagWorker{C}; },
+      [&](int k, int i, int j, const TexelTaps& t) {
+        float* o = data.data() + (f.index(i, j) * K + k) * stride;
+        for (int c = 0; c < C; ++c) o[2 * c] = t.lo[c], o[2 * c + 1] = t.hi[c];
+        o[2 * C] = t.w_hi;
+      });
+  return data;
+}
+
+bool any_stream(const HeightField& f, const SweepSpec& spec) {
+  const int K = spec.azimuths.empty() ? spec.directions : int(spec.azimuths.size());
+  std::vector<SweepDirection> dirs;
+  for (int k = 0; k < K; ++k) dirs.push_back(plan_direction(f, spec, k));
+  for (const detail::SweepBatch& b : detail::plan_sweep(f, spec, dirs).batches)
+    if (b.stream) return true;
+  return false;
+}
+
+TEST(SweepStream, WindowsGiveTheSameVisitorData) {
+  const std::vector<double> azimuths = {0.0,      1e-3,        kPi / 4,       kPi / 2 - 1e-3, 2.0, kPi,
+                                        -kPi / 4, 3 * kPi / 4, kPi / 2 + 0.3, -0.2,           4.5};
+  for (Wrap wrap : {Wrap::clamp, Wrap::repeat})
+    for (auto [w, h] : {std::pair{37, 91}, std::pair{200, 13}, std::pair{64, 64}})
+      for (int C : {1, 4})
+        for (int set = 0; set < 3; ++set) {
+          const HeightField f = test_field(w, h, wrap);
+          SweepSpec whole;
+          whole.channels = C;
+          if (set == 0) whole.directions = 1;
+          if (set == 1) whole.directions = 37;
+          if (set == 2) whole.azimuths = azimuths;
+          whole.batch = 8;
+          whole.max_buffer_bytes = std::size_t(1) << 40;
+          ASSERT_FALSE(any_stream(f, whole));
+          const TileRecord a = record_tiled(f, whole);
+          const std::vector<float> ta = record_texels(f, whole);
+          // Tiny (one line a chunk, window = a tile's span) and medium (chunks of several lines) budgets.
+          std::size_t largest = 0;  // the largest direction's whole buffer
+          for (int k = 0; k < (set == 2 ? int(azimuths.size()) : whole.directions); ++k) {
+            const SweepDirection d = plan_direction(f, whole, k);
+            largest = std::max(largest, std::size_t(d.lines()) * d.n_major * C * sizeof(float));
+          }
+          for (std::size_t bytes : {std::size_t(1), largest / 3}) {
+            SweepSpec small = whole;
+            small.max_buffer_bytes = bytes;
+            ASSERT_TRUE(any_stream(f, small));
+            const TileRecord b = record_tiled(f, small);
+            const std::string what = std::string(wrap == Wrap::clamp ? "clamp " : "repeat ") +
+                                     std::to_string(w) + "x" + std::to_string(h) + " C " + std::to_string(C) +
+                                     " set " + std::to_string(set) + " bytes " + std::to_string(bytes);
+            ASSERT_EQ(a.data.size(), b.data.size());
+            EXPECT_EQ(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)), 0) << what;
+            for (std::size_t t = 0; t < b.order_ok.size(); ++t)
+              ASSERT_TRUE(b.order_ok[t] && a.order_ok[t]) << what;
+            for (float v : b.data) ASSERT_NE(v, -7.0f) << what;  // every (k, texel) visited
+            for (std::size_t p = 1; p < b.progress.size(); ++p) ASSERT_GE(b.progress[p], b.progress[p - 1]);
+            ASSERT_FALSE(b.progress.empty());
+            EXPECT_DOUBLE_EQ(b.progress.back(), 1.0) << what;
+            const std::vector<float> tb = record_texels(f, small);
+            EXPECT_EQ(std::memcmp(ta.data(), tb.data(), ta.size() * sizeof(float)), 0) << what;
+          }
+        }
+}
+
+// The tile's line range against every texel's taps read from a buffer (texel_taps' own arithmetic).
+TEST(SweepStream, TileLinesAreExactlyTheTapsLines) {
+  for (Wrap wrap : {Wrap::clamp, Wrap::repeat})
+    for (auto [w, h] : {std::pair{37, 91}, std::pair{200, 13}, std::pair{70, 70}, std::pair{5, 40}}) {
+      const HeightField f = test_field(w, h, wrap);
+      SweepSpec spec;
+      spec.azimuths = {0.0, 1e-3, kPi / 4, kPi / 2 - 1e-3, 2.0, kPi, -kPi / 4, 3 * kPi / 4, 1.1, -2.9, 4.5};
+      for (int k = 0; k < int(spec.azimuths.size()); ++k) {
+        const SweepDirection d = plan_direction(f, spec, k);
+        std::vector<float> buffer(std::size_t(d.lines()) * d.n_major);
+        for (int j0 = 0; j0 < h; j0 += 32)
+          for (int i0 = 0; i0 < w; i0 += 32) {
+            std::vector<char> read(std::size_t(d.lines()), 0);
+            for (int j = j0; j < std::min(h, j0 + 32); ++j)
+              for (int i = i0; i < std::min(w, i0 + 32); ++i) {
+                const TexelTaps t = texel_taps(d, buffer.data(), 1, i, j);
+                read[std::size_t(t.lo - buffer.data()) / d.n_major] = 1;
+                read[std::size_t(t.hi - buffer.data()) / d.n_major] = 1;
+              }
+            int lo, hi;
+            sweep_tile_lines(d, i0, std::min(w, i0 + 32), j0, std::min(h, j0 + 32), &lo, &hi);
+            // Tight: the last line is read, the first too unless a clamp border row kept its inside tap
+            // alone.
+            ASSERT_TRUE(read[lo] || (!d.repeat && (d.x_major ? j0 : i0) == 0 && read[lo + 1]))
+                << k << " tile " << i0 << "," << j0;
+            ASSERT_TRUE(read[hi]) << k << " tile " << i0 << "," << j0;
+            for (int l = 0; l < d.lines(); ++l) {
+              const bool inside = lo <= hi ? (l >= lo && l <= hi) : (l >= lo || l <= hi);
+              if (read[l]) {
+                ASSERT_TRUE(inside) << k << " tile " << i0 << "," << j0 << " line " << l;
+              }
+            }
+          }
+      }
+    }
+}
+
+// A worker recording, per direction, the span of addresses its outputs occupy (one allocation each).
+struct SpanWorker {
+  std::vector<std::atomic<std::uintptr_t>>* lo;
+  std::vector<std::atomic<std::uintptr_t>>* hi;
+  int channels;
+  void operator()(const SweepLine& line, float* out) const {
+    const std::size_t n = std::size_t(line.receivers()) * channels;
+    const std::uintptr_t a = std::uintptr_t(out), b = std::uintptr_t(out + n);
+    std::atomic<std::uintptr_t>&l = (*lo)[line.dir->k], &h = (*hi)[line.dir->k];
+    for (std::uintptr_t v = l.load(); a < v && !l.compare_exchange_weak(v, a);) {
+    }
+    for (std::uintptr_t v = h.load(); b > v && !h.compare_exchange_weak(v, b);) {
+    }
+    std::fill_n(out, n, 0.0f);
+  }
+};
+
+// A tall field (48 wide): x-major directions have a line per row, y-major ones a sample per row, so clamp
+// mode's whole buffers grow with the height (y-major: with its square); the streaming driver's stay within
+// the budget (which batching fills: whole buffers of several directions).
+TEST(SweepStream, BufferBytesBoundTheResultsAndStayFlatForTallFields) {
+  for (Wrap wrap : {Wrap::clamp, Wrap::repeat}) {
+    SweepSpec spec;
+    spec.directions = 16;
+    spec.channels = 4;
+    spec.batch = 8;
+    spec.max_buffer_bytes = std::size_t(32) << 20;
+    std::size_t previous = 0;
+    for (int h : {4096, 16384}) {
+      const HeightField f = test_field(48, h, wrap);
+      std::size_t whole = 0;  // the largest direction's whole buffer
+      for (int k = 0; k < spec.directions; ++k) {
+        const SweepDirection d = plan_direction(f, spec, k);
+        whole = std::max(whole, std::size_t(d.lines()) * d.n_major * spec.channels * sizeof(float));
+      }
+      const std::size_t bound = sweep_buffer_bytes(f, spec);
+      // Within the budget plus the small parts (line tables, tile orders, per-thread heights and tiles).
+      EXPECT_LT(bound, spec.max_buffer_bytes + (std::size_t(2) << 20)) << h;
+      if (wrap == Wrap::clamp) {
+        if (h == 16384) {
+          EXPECT_LT(bound, whole / 16);  // the whole buffer: about 1.8 GB
+        }
+        if (previous) {
+          EXPECT_LT(double(bound), 1.1 * double(previous)) << h;
+        }
+        previous = bound;
+      }
+      std::vector<std::atomic<std::uintptr_t>> lo(spec.directions), hi(spec.directions);
+      for (auto& v : lo) v = UINTPTR_MAX;
+      for (auto& v : hi) v = 0;
+      sweep_lines(
+          f, spec, RunControl{},
+          [&] {
+            return SpanWorker{&lo, &hi, spec.channels};
+          },
+          [](int, int, int, const TexelTaps&) {});
+      for (int k = 0; k < spec.directions; ++k)
+        EXPECT_LE(hi[k].load() - lo[k].load(), bound) << h << " " << k;
+    }
+  }
 }
 
 }  // namespace
