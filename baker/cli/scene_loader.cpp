@@ -76,15 +76,30 @@ int job_bounces(const Job& job) {
 
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts) {
   const double texels = double(size.width) * double(size.height);
-  // Field (4), normals (12), albedo (12), emission (12), and the scene's copy during loading (8).
-  double per_texel = 48;
-  // Methods: results are kept until the report when there is a reference, else one at a time.
-  double methods = 0, largest = 0;
-  double scratch = 0;  // the largest method's working memory (methods run one at a time)
+  // The process before any field: libraries, thread pools, Embree's device (measured: 140 MB for a 16^2
+  // bake).
+  constexpr double kProcess = 150.0 * (1 << 20);
+  // The scene: heights (decoded straight into the field), the normals and albedo only when read
+  // (scene_needs), the surface maps the job names.
+  const SceneNeeds needs = scene_needs(job);
+  const nlohmann::json surface = job.doc.value("surface", nlohmann::json::object());
+  double scene_per_texel = 4;
+  if (needs.normals) scene_per_texel += 12;
+  if (needs.albedo || surface.contains("albedo")) scene_per_texel += 12;
+  if (surface.contains("emission")) scene_per_texel += 12;
+  // Writing: a GeoTIFF band's plane (4 bytes a texel), a preview's RGB floats and bytes (15 bytes a pixel,
+  // at most io/preview.hpp's 2048 px a side).
+  double writing = job.output.geotiff ? 4 * texels : 0;
+  if (job.output.previews) writing = std::max(writing, 15 * std::min(texels, 2048.0 * 2048.0));
+
   MethodContext context;
   context.field.width = size.width;
   context.field.height = size.height;
+  context.field.wrap =
+      job.doc["height"].value("wrap", std::string("clamp")) == "repeat" ? Wrap::repeat : Wrap::clamp;
   context.bounces = job_bounces(job);
+  // Methods run one at a time; each one's layers are kept until the report when there is a reference.
+  double kept = 0, peak = 0;
   for (const BakeEntry& e : job.bakes) {
     // The method table's reader (resolve_job has usually run it already).
     const nlohmann::json r = e.resolved.is_object()
@@ -94,20 +109,29 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     int channels = 0;
     for (const auto& l : r.value("layers", nlohmann::json::array()))
       channels += layer_channel_count(l.get<std::string>(), r);
-    const double bytes = 4.0 * channels * 1.5;  // float layers + the half copy written to EXR
-    const double working = m ? m->working_bytes_per_texel(r, context) : 0.0;
-    methods += bytes;
-    largest = std::max(largest, bytes);
-    scratch = std::max(scratch, working);
-    if (parts) parts->push_back({e.stem, std::size_t(texels * (bytes + working))});
+    const double layers = 4.0 * channels * texels;
+    const double working = m && m->working_bytes ? m->working_bytes(r, context) : 0.0;
+    peak = std::max(peak, kept + layers + std::max(working, writing));
+    if (job.has_reference) kept += layers;
+    if (parts) parts->push_back({e.stem, std::size_t(layers + working)});
   }
-  const double reference = job.has_reference ? 2 * 4.0 * 24 * 1.5 : 0.0;
+  double reference = 0;
+  if (job.has_reference) {
+    // Its layers (value and standard error, 8 bytes a texel and channel) and Embree's geometry and BVH of
+    // the triangulated field (measured: about 60 bytes a texel).
+    int channels = 0;
+    for (const auto& l : job.reference_resolved.value("layers", nlohmann::json::array()))
+      channels += layer_channel_count(l.get<std::string>(), job.reference_resolved);
+    if (channels == 0) channels = 5;  // not resolved yet: ao, vsky, direct
+    reference = (8.0 * channels + 60) * texels;
+    peak = std::max(peak, kept + reference + writing);
+  }
+  const double scene = kProcess + scene_per_texel * texels;
   if (parts) {
-    parts->insert(parts->begin(), {"scene", std::size_t(texels * per_texel) + (std::size_t(64) << 20)});
-    if (job.has_reference) parts->push_back({"reference", std::size_t(texels * reference)});
+    parts->insert(parts->begin(), {"scene", std::size_t(scene)});
+    if (job.has_reference) parts->push_back({"reference", std::size_t(reference)});
   }
-  per_texel += (job.has_reference ? methods + reference : largest) + scratch;
-  return std::size_t(texels * per_texel) + (std::size_t(64) << 20);  // + fixed overhead
+  return std::size_t(scene + peak);
 }
 
 Scene load_scene(const Job& job, const std::function<void(double)>& progress) {

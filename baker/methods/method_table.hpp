@@ -41,8 +41,10 @@ struct MethodInfo {
   void (*read)(Params& params, const MethodContext& context) = nullptr;
   // Bakes the entry as written (the method reads it again with its own reader).
   LayerSet (*bake)(const Scene& scene, const nlohmann::json& params, const RunControl& rc) = nullptr;
-  // Bytes per texel held while the method runs, besides its output layers, from the resolved parameters.
-  double (*working_bytes_per_texel)(const nlohmann::json& resolved, const MethodContext& context) = nullptr;
+  // Bytes held at the method's peak besides its output layers (4 bytes per texel and channel), from the
+  // resolved parameters and the field's shape: its per-texel arrays and its sweeps' line buffers. What
+  // the memory estimate adds for it (cli/scene_loader.hpp); the README's table says how close it is.
+  double (*working_bytes)(const nlohmann::json& resolved, const MethodContext& context) = nullptr;
   WorkDivision division = WorkDivision::directions;
   const char* division_note = "";  // how, and why not otherwise
   // What the method reads from the Scene besides the heights and the lighting. The job loader builds

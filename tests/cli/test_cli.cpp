@@ -2,6 +2,7 @@
 // and the field; nothing is left half-written; SIGINT, SIGTERM and SIGHUP exit 128 + the signal with no
 // outputs; stale staging folders of dead processes are removed.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <signal.h>
 #include <sys/stat.h>
@@ -492,6 +493,23 @@ TEST_F(Cli, HeightsBeyondFloatSafeRangeAreRefused) {
               std::string::npos)
         << lines[0];
   }
+  EXPECT_TRUE(output_dir_is_empty());
+}
+
+// The refusal comes before the heights are allocated: a 16384^2 field (1 GiB of heights alone, about 6 GiB
+// to bake) refused under --memory-limit 2G leaves the process's peak resident memory near an empty
+// process's (the children's peak, from getrusage: each test runs in its own process).
+TEST_F(Cli, MemoryLimitRefusalAllocatesNothing) {
+  const fs::path p = write_job(
+      "huge.json", job({{"procedural", {{"kind", "fractal"}, {"size", {16384, 16384}}}}},
+                       {{{"method", "p1"}, {"directions", 64}, {"layers", {"ao", "vsky", "direct"}}}}));
+  const Result r = hfbake("bake " + p.string() + " --memory-limit 2G --quiet");
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.err.find("more than the 2.0 GiB of --memory-limit"), std::string::npos) << r.err;
+  rusage usage{};
+  ASSERT_EQ(getrusage(RUSAGE_CHILDREN, &usage), 0);
+  EXPECT_LT(usage.ru_maxrss, 400L * 1024) << "peak KB of the refused bake";  // the heights alone: 1 GiB
   EXPECT_TRUE(output_dir_is_empty());
 }
 

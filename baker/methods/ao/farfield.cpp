@@ -380,7 +380,11 @@ MethodInfo farfield_method() {
   m.summary = "P4's far-field obscurance: an exact near field, prefiltered far-field slabs beyond it";
   m.read = [](Params& in, const MethodContext&) { read_farfield_options(in); };
   m.bake = bake_farfield;
-  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 24.0; };
+  // The occlusion in double (8 bytes a texel) and the bent normals in double (24) while they become layers.
+  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
+    return (wants(r.value("layers", std::vector<std::string>{}), "bent_normal") ? 32.0 : 8.0) *
+           double(c.field.width) * double(c.field.height);
+  };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets";
   m.falloff_defines_obscurance = true;

@@ -217,7 +217,12 @@ MethodInfo hbao_method() {
   m.summary = "brute-force horizon march per texel and direction (the obscurance family's baseline)";
   m.read = [](Params& in, const MethodContext& c) { read_hbao_settings(in, c.field); };
   m.bake = bake_hbao;
-  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 0.0; };
+  // The bent normals (12 bytes a texel) while they become their layer.
+  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
+    return wants(r.value("layers", std::vector<std::string>{}), "bent_normal")
+               ? 12.0 * double(c.field.width) * double(c.field.height)
+               : 0.0;
+  };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets (texel tiles would need a halo of the reach)";
   m.falloff_defines_obscurance = true;

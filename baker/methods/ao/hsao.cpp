@@ -147,7 +147,12 @@ MethodInfo hsao_method() {
   m.summary = "horizon-split obscurance: a near-field march per direction plus normal-split rays";
   m.read = [](Params& in, const MethodContext& c) { read_hsao_settings(in, c.field); };
   m.bake = bake_hsao;
-  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 0.0; };
+  // The bent normals (12 bytes a texel) while they become their layer.
+  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
+    return wants(r.value("layers", std::vector<std::string>{}), "bent_normal")
+               ? 12.0 * double(c.field.width) * double(c.field.height)
+               : 0.0;
+  };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets";
   m.falloff_defines_obscurance = true;

@@ -204,7 +204,13 @@ MethodInfo lsao_method() {
   m.summary = "P3's line-sweep obscurance: one hull of occluders per sweep line and direction";
   m.read = [](Params& in, const MethodContext&) { read_lsao_options(in); };
   m.bake = bake_lsao;
-  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) { return 12.0; };
+  // The mean occlusion in double (8 bytes a texel), the bent normals in double (24), the sweep's line
+  // buffers (bounded by SweepSpec::max_buffer_bytes).
+  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
+    return (wants(r.value("layers", std::vector<std::string>{}), "bent_normal") ? 32.0 : 8.0) *
+               double(c.field.width) * double(c.field.height) +
+           double(SweepSpec{}.max_buffer_bytes);
+  };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";
   m.falloff_defines_obscurance = true;

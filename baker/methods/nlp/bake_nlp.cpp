@@ -577,9 +577,10 @@ MethodInfo nlp_method() {
   m.summary = "NLP/SH multiresolution global illumination (Nowrouzezahrai & Snyder 2009)";
   m.read = [](Params& in, const MethodContext&) { read_nlp_options(in); };
   m.bake = [](const Scene& s, const nlohmann::json& p, const RunControl& rc) { return bake_nlp(s, p, rc); };
-  // SH visibility and irradiance while it runs (16 + 48 floats), the height and radiance pyramids.
-  m.working_bytes_per_texel = [](const nlohmann::json&, const MethodContext&) {
-    return 4.0 * (16 + 48) + 32;
+  // SH visibility and irradiance while it runs (16 + 48 floats), the height and radiance pyramids, the
+  // bounces' radiance: measured 150 bytes a texel beyond its layers at 2048^2 (README "Memory").
+  m.working_bytes = [](const nlohmann::json&, const MethodContext& c) {
+    return 150.0 * double(c.field.width) * double(c.field.height);
   };
   m.division = WorkDivision::texel_tiles;
   m.division_note = "texel tiles with a halo of the pyramid's reach (marches read the whole field's pyramid)";

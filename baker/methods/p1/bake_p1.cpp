@@ -43,9 +43,9 @@ MethodInfo p1_method() {
   m.summary = "exact horizons by the convex-hull stack on K line sweeps; ao, vsky, direct light from them";
   m.read = [](Params& in, const MethodContext&) { read_p1_params(in); };
   m.bake = bake_p1;
-  // Beyond its layers (the accumulators become the layers): see p1_working_bytes_per_texel.
-  m.working_bytes_per_texel = [](const nlohmann::json& r, const MethodContext&) {
-    return p1_working_bytes_per_texel(parse_p1_params(r));
+  // Beyond its layers (the accumulators become the layers): see p1_working_bytes.
+  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
+    return p1_working_bytes(c.field, parse_p1_params(r));
   };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";

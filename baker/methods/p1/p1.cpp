@@ -80,10 +80,26 @@ P1Params read_p1_params(Params& in) {
   return p;
 }
 
-double p1_working_bytes_per_texel(const P1Params& p) {
-  double bytes = p.direct && !p.ao ? 4 : 0;                        // the ao sum behind a uniform sky's direct
-  if (p.direct && p.facet_direct) bytes += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
-  return bytes;
+SweepSpec p1_sweep_spec(const P1Params& p) {
+  SweepSpec spec;
+  spec.directions = p.directions;
+  spec.channels = p1::RayLineWorker::channels();
+  spec.wrap_periods = p.wrap_periods;
+  spec.tile_nearest = false;
+  spec.tile_taps = true;
+  spec.tile_values = false;
+  spec.zero_buffers = false;  // HorizonLineWorker writes every receiver
+  spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
+  return spec;
+}
+
+double p1_working_bytes(const FieldShape& shape, const P1Params& p) {
+  double per_texel = p.direct && !p.ao ? 4 : 0;  // the ao sum behind a uniform sky's direct
+  if (p.direct && p.facet_direct) per_texel += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
+  HeightField field;  // the sweep's plan needs only the shape
+  static_cast<FieldShape&>(field) = shape;
+  return per_texel * double(shape.width) * double(shape.height) +
+         double(sweep_buffer_bytes(field, p1_sweep_spec(p)));
 }
 
 P1Params parse_p1_params(const nlohmann::json& e) {
@@ -211,15 +227,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       if (l.irradiance.r > 0 || l.irradiance.g > 0 || l.irradiance.b > 0) lights.push_back(&l);
   const double main_share = double(K) / double(K + lights.size());
 
-  SweepSpec spec;
-  spec.directions = K;
-  spec.channels = p1::RayLineWorker::channels();
-  spec.wrap_periods = p.wrap_periods;
-  spec.tile_nearest = false;
-  spec.tile_taps = true;
-  spec.tile_values = false;
-  spec.zero_buffers = false;  // HorizonLineWorker writes every receiver
-  spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
+  const SweepSpec spec = p1_sweep_spec(p);
   const bool want_distance = p.horizon_distance;
   const RunControl main_rc = sub_progress(rc, 0.0, main_share);
   const double far_radius = p.near_radius * f.texel_size;

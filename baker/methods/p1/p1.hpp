@@ -31,6 +31,7 @@
 #include "core/run_control.hpp"
 #include "field/scene.hpp"
 #include "job/params.hpp"
+#include "sweep/sweep_lines.hpp"
 
 namespace hfbake {
 
@@ -90,9 +91,12 @@ const std::vector<std::string>& p1_layer_names();
 // p1_working_bytes.
 P1Result compute_p1(const Scene& scene, const P1Params& params, const RunControl& rc);
 
-// Bytes per texel compute_p1 holds at peak beyond the layers it returns (the ao sum behind direct from a
-// uniform sky when ao is not requested; P2's facet normals and sums), for the memory estimate.
-double p1_working_bytes_per_texel(const P1Params& params);
+// Bytes compute_p1 holds at peak beyond the layers it returns, for the memory estimate: per texel the ao
+// sum behind direct from a uniform sky when ao is not requested and P2's facet sums, plus the sweep's
+// line buffers (sweep_buffer_bytes of p1_sweep_spec).
+double p1_working_bytes(const FieldShape& field, const P1Params& params);
+// The sweep compute_p1 runs for its K directions.
+SweepSpec p1_sweep_spec(const P1Params& params);
 
 // Fraction of a light disk of angular radius `radius` (radians) centred at elevation `elevation` that lies
 // above a horizon at elevation `horizon` (a straight horizon across the disk). radius 0: a step.

@@ -1,5 +1,7 @@
 #include "methods/p2/bake_p2.hpp"
 
+#include "sweep/sweep_lines.hpp"
+
 #include <algorithm>
 #include <string>
 
@@ -182,14 +184,15 @@ MethodInfo p2_method() {
       "direct light from p1, then indirect bounces gathered over the exactly visible terrain (hull tree)";
   m.read = [](Params& in, const MethodContext& c) { read_p2_params(in, c.bounces); };
   m.bake = bake_p2;
-  m.working_bytes_per_texel = [](const nlohmann::json& r, const MethodContext&) {
+  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
     const double k = r.value("directions", 64);
     const int b = r.value("bounces", 0);
     const bool facets = r.value("senders", std::string("facets")) == "facets";
-    // P1's horizons (K floats) and scratch; direct, exit, indirect and every bounce (RGB floats); the
-    // sweep's double accumulators; facet senders: normals, albedo, exit, next-bounce light and direct
-    // light of two facets (RGB floats each) and their double accumulators.
-    return 4 * k + 60 + 12 * (3 + b) + 24 + (facets ? 5 * 24 + 48 + 48 : 0);
+    // P1's horizons (K floats a texel) while P2 runs, each bounce's exit radiance (RGB floats), the
+    // sweep's accumulators and, for facet senders, the two facets' radiance: 4 K + 12 b + 83 bytes a texel
+    // (the constant measured at 2048^2, K = 8, one bounce, facets: README "Memory"), plus the line buffers.
+    const double per_texel = 4 * k + 12 * b + (facets ? 83 : 35);
+    return per_texel * double(c.field.width) * double(c.field.height) + double(SweepSpec{}.max_buffer_bytes);
   };
   m.division = WorkDivision::bounce_stages;
   m.division_note =
