@@ -98,8 +98,10 @@ TEST(BentNormal, FractalAgainstHbao) {
   h.falloff = rho;
   h.reach = 16;
   h.directions = uniform_directions(16);
+  std::vector<float> hb_xyz(3 * f.texel_count());
+  hbao_field(f, normals, h, {}, nullptr, hb_xyz.data());
   std::vector<Vec3f> hb(f.texel_count());
-  hbao_field(f, normals, h, {}, nullptr, hb.data());
+  for (std::size_t t = 0; t < hb.size(); ++t) hb[t] = {hb_xyz[3 * t], hb_xyz[3 * t + 1], hb_xyz[3 * t + 2]};
   LsaoOptions l;
   l.directions = 16;
   l.occlusion.rho = rho;

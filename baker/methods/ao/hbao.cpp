@@ -127,10 +127,10 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
 }
 
 void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HbaoSettings& s,
-                const RunControl& rc, float* obscurance, Vec3f* bent) {
+                const RunControl& rc, float* obscurance, float* bent_xyz) {
   std::atomic<int> rows_done{0};
   HbaoSettings st = s;
-  st.bent = bent != nullptr;
+  st.bent = bent_xyz != nullptr;
   tbb::parallel_for(0, field.height, [&](int j) {
     rc.check();
     for (int i = 0; i < field.width; ++i) {
@@ -138,7 +138,10 @@ void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
       const Vec3 n = normals.empty() ? normal_at(field, i, j).d() : normals[idx].d();
       const HorizonTexel t = hbao_texel(field, n, i, j, st);
       if (obscurance) obscurance[idx] = float(1.0 - t.occluded);
-      if (bent) bent[idx] = Vec3f::from(t.bent_normal);
+      if (bent_xyz) {
+        const Vec3f b = Vec3f::from(t.bent_normal);
+        bent_xyz[3 * idx] = b.x, bent_xyz[3 * idx + 1] = b.y, bent_xyz[3 * idx + 2] = b.z;
+      }
     }
     rc.report(double(++rows_done) / field.height);
   });
@@ -199,9 +202,9 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
   const HbaoSettings s = read_hbao_settings(in, field);
   const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<float> obsc(field.texel_count());
-  std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
+  std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);  // [3 * texel + c]
   hbao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
-  LayerSet out = obscurance_layers(field.width, field.height, layers, std::move(obsc), std::move(bent));
+  LayerSet out = obscurance_layers_xyz(field.width, field.height, layers, std::move(obsc), std::move(bent));
   if (s.surface == MarchSurface::triangles)
     out.attributes.emplace_back("hfbake:hbao:surface", "triangles");
   else
@@ -217,12 +220,9 @@ MethodInfo hbao_method() {
   m.summary = "brute-force horizon march per texel and direction (the obscurance family's baseline)";
   m.read = [](Params& in, const MethodContext& c) { read_hbao_settings(in, c.field); };
   m.bake = bake_hbao;
-  // The bent normals (12 bytes a texel) while they become their layer.
-  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
-    return wants(r.value("layers", std::vector<std::string>{}), "bent_normal")
-               ? 12.0 * double(c.field.width) * double(c.field.height)
-               : 0.0;
-  };
+  // Nothing beyond its layers (the bent normals are written interleaved, as their layer).
+  m.working_bytes = [](const nlohmann::json&, const MethodContext&) { return 0.0; };
+
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets (texel tiles would need a halo of the reach)";
   m.falloff_defines_obscurance = true;

@@ -72,7 +72,7 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 normal, int i, int j, con
 
 // Whole field, rows in parallel (deterministic). obscurance / bent may be null.
 void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HbaoSettings& s,
-                const RunControl& rc, float* obscurance, Vec3f* bent);
+                const RunControl& rc, float* obscurance, float* bent_xyz);
 
 // The reach used when the job gives none: the falloff's support (rho < 1e-4), or for falloff none the whole
 // field (its diagonal when clamped, one period when it repeats).

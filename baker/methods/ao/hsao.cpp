@@ -98,7 +98,7 @@ HsaoTexel hsao_texel(const HeightField& field, Vec3 n, int i, int j, const HsaoS
 }
 
 void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HsaoSettings& s,
-                const RunControl& rc, float* obscurance, Vec3f* bent) {
+                const RunControl& rc, float* obscurance, float* bent_xyz) {
   std::atomic<int> rows_done{0};
   tbb::parallel_for(0, field.height, [&](int j) {
     rc.check();
@@ -107,7 +107,10 @@ void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
       const Vec3 n = normals.empty() ? normal_at(field, i, j).d() : normals[idx].d();
       const HsaoTexel t = hsao_texel(field, n, i, j, s);
       if (obscurance) obscurance[idx] = float(std::clamp(1.0 - t.occluded(), 0.0, 1.0));
-      if (bent) bent[idx] = Vec3f::from(t.bent_normal);
+      if (bent_xyz) {
+        const Vec3f b = Vec3f::from(t.bent_normal);
+        bent_xyz[3 * idx] = b.x, bent_xyz[3 * idx + 1] = b.y, bent_xyz[3 * idx + 2] = b.z;
+      }
     }
     rc.report(double(++rows_done) / field.height);
   });
@@ -134,9 +137,9 @@ LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunCo
   const HsaoSettings s = read_hsao_settings(in, field);
   const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<float> obsc(field.texel_count());
-  std::vector<Vec3f> bent(wants(layers, "bent_normal") ? field.texel_count() : 0);
+  std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);  // [3 * texel + c]
   hsao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
-  return obscurance_layers(field.width, field.height, layers, std::move(obsc), std::move(bent));
+  return obscurance_layers_xyz(field.width, field.height, layers, std::move(obsc), std::move(bent));
 }
 
 MethodInfo hsao_method() {
@@ -147,12 +150,9 @@ MethodInfo hsao_method() {
   m.summary = "horizon-split obscurance: a near-field march per direction plus normal-split rays";
   m.read = [](Params& in, const MethodContext& c) { read_hsao_settings(in, c.field); };
   m.bake = bake_hsao;
-  // The bent normals (12 bytes a texel) while they become their layer.
-  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
-    return wants(r.value("layers", std::vector<std::string>{}), "bent_normal")
-               ? 12.0 * double(c.field.width) * double(c.field.height)
-               : 0.0;
-  };
+  // Nothing beyond its layers (the bent normals are written interleaved, as their layer).
+  m.working_bytes = [](const nlohmann::json&, const MethodContext&) { return 0.0; };
+
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets";
   m.falloff_defines_obscurance = true;

@@ -45,7 +45,7 @@ HsaoTexel hsao_texel(const HeightField& field, Vec3 normal, int i, int j, const 
 
 // Whole field, rows in parallel (deterministic). obscurance = 1 - (O_T + O_N); either output may be null.
 void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HsaoSettings& s,
-                const RunControl& rc, float* obscurance, Vec3f* bent);
+                const RunControl& rc, float* obscurance, float* bent_xyz);
 
 // Reads and checks an hsao bake entry (schemas/methods/hsao.schema.json).
 HsaoSettings read_hsao_settings(Params& in, const FieldShape& field);

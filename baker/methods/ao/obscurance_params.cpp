@@ -44,4 +44,22 @@ LayerSet obscurance_layers(int width, int height, const std::vector<std::string>
   return out;
 }
 
+LayerSet obscurance_layers_xyz(int width, int height, const std::vector<std::string>& layers,
+                               std::vector<float> light, std::vector<float> bent_xyz) {
+  LayerSet out;
+  out.width = width;
+  out.height = height;
+  std::size_t scalar_left = 0;
+  for (const std::string& name : layers) scalar_left += name == "bent_normal" ? 0 : 1;
+  for (const std::string& name : layers) {
+    if (name == "bent_normal")
+      out.adopt(name, xyz_channels(), std::move(bent_xyz));
+    else if (--scalar_left == 0)
+      out.adopt(name, mono_channels(), std::move(light));
+    else
+      out.adopt(name, mono_channels(), light);
+  }
+  return out;
+}
+
 }  // namespace hfbake

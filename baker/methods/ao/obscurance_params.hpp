@@ -31,5 +31,8 @@ bool wants(const std::vector<std::string>& layers, const char* name);
 // freed once converted (no second copy of either is held).
 LayerSet obscurance_layers(int width, int height, const std::vector<std::string>& layers,
                            std::vector<float> light, std::vector<Vec3f> bent);
+// The same with the bent normals already interleaved ([3 * texel + c]): they become the layer, no copy.
+LayerSet obscurance_layers_xyz(int width, int height, const std::vector<std::string>& layers,
+                               std::vector<float> light, std::vector<float> bent_xyz);
 
 }  // namespace hfbake
