@@ -21,6 +21,8 @@
 //   cone     a cone with its apex at the field's center, flanks falling at angle_deg.
 #include "field/procedural.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -189,7 +191,8 @@ HeightField make_procedural(const ProceduralSpec& s, double texel_size, Wrap wra
   const double tan_a = std::tan(s.angle_deg * deg);
   const double ax = std::cos(s.aspect_deg * deg), ay = std::sin(s.aspect_deg * deg);
 
-  for (int j = 0; j < s.height; ++j) {
+  // Each texel is a pure function of (spec, i, j): rows in parallel, the same heights for any thread count.
+  tbb::parallel_for(0, s.height, [&](int j) {
     for (int i = 0; i < s.width; ++i) {
       double h = 0;  // in texel units
       switch (s.kind) {
@@ -223,7 +226,7 @@ HeightField make_procedural(const ProceduralSpec& s, double texel_size, Wrap wra
       }
       f.z[f.index(i, j)] = float(h * texel_size);
     }
-  }
+  });
   return f;
 }
 
