@@ -24,24 +24,11 @@ bool wants(const std::vector<std::string>& layers, const char* name) {
 
 LayerSet obscurance_layers(int width, int height, const std::vector<std::string>& layers,
                            std::vector<float> light, std::vector<Vec3f> bent) {
-  LayerSet out;
-  out.width = width;
-  out.height = height;
-  std::size_t scalar_left = 0;
-  for (const std::string& name : layers) scalar_left += name == "bent_normal" ? 0 : 1;
-  for (const std::string& name : layers) {
-    if (name == "bent_normal") {
-      Layer& l = out.add(name, xyz_channels());
-      for (std::size_t t = 0; t < bent.size(); ++t)
-        l.data[3 * t] = bent[t].x, l.data[3 * t + 1] = bent[t].y, l.data[3 * t + 2] = bent[t].z;
-      std::vector<Vec3f>().swap(bent);
-    } else if (--scalar_left == 0) {
-      out.adopt(name, mono_channels(), std::move(light));
-    } else {
-      out.adopt(name, mono_channels(), light);
-    }
-  }
-  return out;
+  std::vector<float> bent_xyz(3 * bent.size());
+  for (std::size_t t = 0; t < bent.size(); ++t)
+    bent_xyz[3 * t] = bent[t].x, bent_xyz[3 * t + 1] = bent[t].y, bent_xyz[3 * t + 2] = bent[t].z;
+  std::vector<Vec3f>().swap(bent);
+  return obscurance_layers_xyz(width, height, layers, std::move(light), std::move(bent_xyz));
 }
 
 LayerSet obscurance_layers_xyz(int width, int height, const std::vector<std::string>& layers,
