@@ -74,24 +74,40 @@ ImageInfo probe_image(const fs::path& file, const InputSite& site) {
 
 namespace {
 
-// Decodes channels [chbegin, chend) (clamped to the image's) as floats; info describes the whole file.
-Image read_channels(const fs::path& file, const InputSite& site, int chbegin, int chend) {
+// Decodes channels [chbegin, chend) (clamped to the image's) as floats, interleaved, a band of rows at a time
+// straight into the result (bands of whole tile rows for a tiled file, else of about 4 MiB of floats and at
+// least 16 rows), reporting progress per band; info describes the whole file.
+Image read_channels(const fs::path& file, const InputSite& site, int chbegin, int chend,
+                    const ReadProgress& progress = {}) {
   auto in = open_input(file, site);
   const OIIO::ImageSpec spec = in->spec();
   check_spec(spec, file, site);
   chbegin = std::clamp(chbegin, 0, spec.nchannels - 1);
   chend = std::clamp(chend, chbegin + 1, spec.nchannels);
+  const std::size_t row = std::size_t(spec.width) * std::size_t(chend - chbegin);
   Image image;
   image.info = info_of(spec, *in);
-  image.pixels.resize(std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(chend - chbegin));
-  if (!in->read_image(0, 0, chbegin, chend, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
-    std::string err = in->geterror();
-    if (err.empty()) err = OIIO::geterror();
-    fail(site, file, "cannot decode the image (corrupt or truncated?): " + first_line(err));
+  image.pixels.resize(row * std::size_t(spec.height));
+  const int band = spec.tile_width > 0 ? std::max(1, spec.tile_height)
+                                       : std::max(16, int((std::size_t(4) << 20) / (4 * row)));
+  for (int y0 = 0; y0 < spec.height; y0 += band) {
+    const int y1 = std::min(spec.height, y0 + band);
+    float* dst = image.pixels.data() + std::size_t(y0) * row;
+    const bool ok = spec.tile_width > 0
+                        ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y0, spec.y + y1, spec.z,
+                                         spec.z + 1, chbegin, chend, OIIO::TypeDesc::FLOAT, dst)
+                        : in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, spec.z, chbegin, chend,
+                                             OIIO::TypeDesc::FLOAT, dst);
+    // Some readers report a short file only through the error state.
+    if (!ok || in->has_error()) {
+      std::string err = in->geterror();
+      if (err.empty()) err = OIIO::geterror();
+      fail(site, file,
+           "cannot decode the image (corrupt or truncated?) at row " + std::to_string(y0) + ": " +
+               first_line(err));
+    }
+    if (progress) progress(double(y1) / spec.height);
   }
-  // Some readers report a short file only through the error state.
-  if (in->has_error())
-    fail(site, file, "cannot decode the image (corrupt or truncated?): " + first_line(in->geterror()));
   in->close();
   return image;
 }
@@ -128,38 +144,13 @@ int find_channel(const ImageInfo& info, const ChannelSelector& channel, const fs
 
 Plane read_image_channel(const fs::path& file, const ChannelSelector& channel, const InputSite& site,
                          const InputSite& channel_site, const ReadProgress& progress) {
-  auto in = open_input(file, site);
-  const OIIO::ImageSpec spec = in->spec();
-  check_spec(spec, file, site);
   // The channel is checked on the header before anything is decoded or allocated.
-  const int c = find_channel(info_of(spec, *in), channel, file, channel_site);
+  const int c = find_channel(probe_image(file, site), channel, file, channel_site);
+  Image image = read_channels(file, site, c, c + 1, progress);
   Plane plane;
-  plane.width = spec.width;
-  plane.height = spec.height;
-  plane.values.resize(std::size_t(spec.width) * std::size_t(spec.height));
-  // Bands of whole tile rows for a tiled file, else of about 4 MiB of floats (at least 16 rows).
-  const int band = spec.tile_width > 0
-                       ? std::max(1, spec.tile_height)
-                       : std::max(16, int((std::size_t(4) << 20) / (4 * std::size_t(spec.width))));
-  for (int y0 = 0; y0 < spec.height; y0 += band) {
-    const int y1 = std::min(spec.height, y0 + band);
-    float* dst = plane.values.data() + std::size_t(y0) * std::size_t(spec.width);
-    const bool ok = spec.tile_width > 0
-                        ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y0, spec.y + y1, spec.z,
-                                         spec.z + 1, c, c + 1, OIIO::TypeDesc::FLOAT, dst)
-                        : in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, spec.z, c, c + 1,
-                                             OIIO::TypeDesc::FLOAT, dst);
-    // Some readers report a short file only through the error state.
-    if (!ok || in->has_error()) {
-      std::string err = in->geterror();
-      if (err.empty()) err = OIIO::geterror();
-      fail(site, file,
-           "cannot decode the image (corrupt or truncated?) at row " + std::to_string(y0) + ": " +
-               first_line(err));
-    }
-    if (progress) progress(double(y1) / spec.height);
-  }
-  in->close();
+  plane.width = image.info.width;
+  plane.height = image.info.height;
+  plane.values = std::move(image.pixels);
   return plane;
 }
 
