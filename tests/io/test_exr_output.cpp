@@ -263,18 +263,22 @@ std::pair<std::vector<std::string>, std::vector<float>> read_all(const fs::path&
   return {spec.channelnames, px};
 }
 
+// Pseudo-random values in [lo, hi) into `values` (a fixed LCG: the same test data on every machine).
+void fill_random(std::vector<float>& values, std::uint32_t seed, float lo, float hi) {
+  for (float& v : values) {
+    seed = seed * 1664525u + 1013904223u;
+    v = lo + (hi - lo) * (float(seed >> 8) / float(1u << 24));
+  }
+}
+
 // A 64-channel horizon layer and an ao layer of pseudo-random values, 157 x 83 (not a multiple of any
 // chunk, band or tile).
 LayerSet horizon_layers() {
   LayerSet set;
   set.width = 157;
   set.height = 83;
-  std::uint32_t s = 5;
-  const auto next = [&] { return s = s * 1664525u + 1013904223u, float(s >> 8) / float(1u << 24); };
-  Layer& ao = set.add("ao", mono_channels());
-  for (float& v : ao.data) v = next();
-  Layer& hz = set.add("horizon", indexed_channels(64));
-  for (float& v : hz.data) v = 2 * next() - 1;
+  fill_random(set.add("ao", mono_channels()).data, 5, 0, 1);
+  fill_random(set.add("horizon", indexed_channels(64)).data, 6, -1, 1);
   return set;
 }
 
@@ -356,13 +360,11 @@ TEST(Preview, ReducedPreviewIsTheBoxFilterOfTheLayer) {
   LayerSet set;
   set.width = 50;
   set.height = 23;
-  std::uint32_t s = 9;
-  const auto next = [&] { return s = s * 1664525u + 1013904223u, float(s >> 8) / float(1u << 24); };
   Layer& ao = set.add("ao", mono_channels());
-  for (float& v : ao.data) v = next();
+  fill_random(ao.data, 9, 0, 1);
   ao.data[3] = std::numeric_limits<float>::quiet_NaN();  // left out of its block's mean
   Layer& bn = set.add("bent_normal", xyz_channels());
-  for (float& v : bn.data) v = 2 * next() - 1;
+  fill_random(bn.data, 10, -1, 1);
   PreviewOptions o;
   o.max_size = 16;  // f = 4: 13 x 6, the last column of blocks 2 texels wide, the last row 3 texels high
   write_preview(dir / "ao.png", set, *set.find("ao"), o);
