@@ -31,10 +31,11 @@ ProceduralSpec procedural_spec(const nlohmann::json& p) {
   s.seed = p.value("seed", std::uint64_t(1));
   s.amplitude = p.value("amplitude", 0.0);
   s.feature_size = p.value("feature_size", 0.0);
-  s.angle_deg = p.value("angle_deg", 30.0);
+  s.angle_deg = p.value("angle_deg", std::nan(""));  // NaN: the kind's default
   s.aspect_deg = p.value("aspect_deg", 0.0);
   s.radius = p.value("radius", 0.0);
   s.depth = p.value("depth", 0.0);
+  s.step = p.value("step", 0.0);
   return s;
 }
 

@@ -19,6 +19,19 @@
 //   trench   a V-trench along the y axis through the field's center column, walls at angle_deg.
 //   pit      a cylindrical pit of radius `radius` and depth `depth` centred in the field.
 //   cone     a cone with its apex at the field's center, flanks falling at angle_deg.
+//   terraces smooth hills (three octaves of the fractal's noise, feature_size default width / 2, amplitude
+//            default width / 16) quantised into flat terraces: z = step * floor(hills / step), vertical
+//            steps of `step` texels (default amplitude / 3) between neighbouring texels.
+//   craters  bowls with raised rims on flat ground, one per cell of a 3 * feature_size grid (feature_size
+//            default width / 10): radius R in [0.5, 1.5] * feature_size, depth d in [0.5, 1] * amplitude
+//            (default 0.4 * feature_size); inside z = d ((r/R)^2 - 1) + d / 4, outside the rim
+//            d / 4 * (1 - (r/R - 1) / 0.6)^2 out to 1.6 R. Overlapping craters add.
+//   ridges   ridged multifractal: sum over octaves of amplitude 2^-o (1 - |noise_o|)^2 (the fractal's
+//            periodic value noise), sharp crests and rounded valleys; feature_size and amplitude as fractal.
+//   rough    fBm steep at the texel scale, like a rough DSM: bilinear lattice noise with cells from 64
+//            texels down to 1, each octave 0.7 times the last, scaled so that the median forward
+//            difference |z(i+1, j) - z(i, j)| is tan(angle_deg) (default 70 degrees). The scale is measured
+//            on the noise's fixed 256x256 window at the origin, so it is the same for every field size.
 #include "field/procedural.hpp"
 
 #include <tbb/parallel_for.h>
@@ -26,6 +39,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 namespace hfbake {
 namespace {
@@ -65,19 +79,86 @@ double value_noise(std::uint64_t seed, int octave, std::int64_t cells_x, std::in
   return (a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty;
 }
 
-double fractal(const ProceduralSpec& s, double feature, double amp, int i, int j) {
+// Octaves of the periodic value noise, from `feature` texels down to one texel (at most `octaves`):
+// each octave's value is shape(noise) and its amplitude half the last one's.
+template <class Shape>
+double octave_sum(const ProceduralSpec& s, double feature, double amp, int i, int j, int octaves, Shape shape) {
   const double u = double(i) / s.width, v = double(j) / s.height;
   std::int64_t cx = std::max<std::int64_t>(1, std::llround(s.width / feature));
   std::int64_t cy = std::max<std::int64_t>(1, std::llround(s.height / feature));
   double h = 0, a = amp;
   const std::int64_t max_cells = std::max(s.width, s.height);
-  for (int octave = 0; octave < 16 && std::min(cx, cy) <= max_cells; ++octave) {
-    h += a * value_noise(s.seed, octave, cx, cy, u, v);
+  for (int octave = 0; octave < octaves && std::min(cx, cy) <= max_cells; ++octave) {
+    h += a * shape(value_noise(s.seed, octave, cx, cy, u, v));
     a *= 0.5;
     cx *= 2;
     cy *= 2;
   }
   return h;
+}
+
+double fractal(const ProceduralSpec& s, double feature, double amp, int i, int j, int octaves = 16) {
+  return octave_sum(s, feature, amp, i, j, octaves, [](double n) { return n; });
+}
+
+double ridges(const ProceduralSpec& s, double feature, double amp, int i, int j) {
+  return octave_sum(s, feature, amp, i, j, 16, [](double n) { return (1 - std::abs(n)) * (1 - std::abs(n)); });
+}
+
+double craters(const ProceduralSpec& s, double feature, double amp, int i, int j) {
+  const double cell = 3 * feature;
+  const std::int64_t ci = std::int64_t(std::floor(i / cell)), cj = std::int64_t(std::floor(j / cell));
+  double h = 0;
+  // A crater reaches at most 1.6 * 1.5 * feature < one cell from its centre: the 3x3 cells around suffice.
+  for (std::int64_t dj = -1; dj <= 1; ++dj) {
+    for (std::int64_t di = -1; di <= 1; ++di) {
+      const std::int64_t bi = ci + di, bj = cj + dj;
+      const double r0 = feature * (0.5 + hash01(s.seed, bi, bj, 1));
+      const double d = amp * (0.5 + 0.5 * hash01(s.seed, bi, bj, 2));
+      const double x0 = (double(bi) + hash01(s.seed, bi, bj, 3)) * cell;
+      const double y0 = (double(bj) + hash01(s.seed, bi, bj, 4)) * cell;
+      const double t = std::hypot(i - x0, j - y0) / r0;
+      if (t < 1) {
+        h += d * (t * t - 1) + d / 4;
+      } else if (t < 1.6) {
+        const double fall = 1 - (t - 1) / 0.6;
+        h += d / 4 * fall * fall;
+      }
+    }
+  }
+  return h;
+}
+
+// Bilinear lattice noise in [-1, 1) with `cell` texels between lattice points, not periodic.
+double lattice_bilinear(std::uint64_t seed, int octave, int cell, int i, int j) {
+  const double x = double(i) / cell, y = double(j) / cell;
+  const std::int64_t x0 = std::int64_t(std::floor(x)), y0 = std::int64_t(std::floor(y));
+  const double tx = x - double(x0), ty = y - double(y0);
+  auto at = [&](std::int64_t a, std::int64_t b) { return 2.0 * hash01(seed, a, b, 100 + octave) - 1.0; };
+  const double a = at(x0, y0), b = at(x0 + 1, y0), c = at(x0, y0 + 1), d = at(x0 + 1, y0 + 1);
+  return (a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty;
+}
+
+double rough_noise(std::uint64_t seed, int i, int j) {
+  double h = 0, a = 1;
+  int octave = 0;
+  for (int cell = 64; cell >= 1; cell /= 2, a *= 0.7, ++octave) h += a * lattice_bilinear(seed, octave, cell, i, j);
+  return h;
+}
+
+// The factor that makes the median forward difference of rough_noise tan(angle_deg), from its fixed
+// 256x256 window at the origin (the same for every field size and thread count).
+double rough_scale(std::uint64_t seed, double angle_deg) {
+  constexpr int n = 256;
+  std::vector<double> z(std::size_t(n) * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) z[std::size_t(j) * n + i] = rough_noise(seed, i, j);
+  std::vector<double> diffs;
+  diffs.reserve(std::size_t(n) * (n - 1));
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) diffs.push_back(std::abs(z[std::size_t(j) * n + i + 1] - z[std::size_t(j) * n + i]));
+  std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
+  return std::tan(angle_deg * kPi / 180) / std::max(diffs[diffs.size() / 2], 1e-30);
 }
 
 double bricks(const ProceduralSpec& s, double feature, double amp, int i, int j) {
@@ -121,7 +202,7 @@ double blocks(const ProceduralSpec& s, double feature, double amp, int i, int j)
 }  // namespace
 
 bool parse_procedural_kind(const std::string& name, ProceduralKind& kind) {
-  for (int k = 0; k <= int(ProceduralKind::cone); ++k) {
+  for (int k = 0; k <= int(kLastProceduralKind); ++k) {
     if (name == procedural_kind_name(ProceduralKind(k))) {
       kind = ProceduralKind(k);
       return true;
@@ -150,6 +231,14 @@ const char* procedural_kind_name(ProceduralKind kind) {
       return "pit";
     case ProceduralKind::cone:
       return "cone";
+    case ProceduralKind::terraces:
+      return "terraces";
+    case ProceduralKind::craters:
+      return "craters";
+    case ProceduralKind::ridges:
+      return "ridges";
+    case ProceduralKind::rough:
+      return "rough";
   }
   return "?";
 }
@@ -183,12 +272,27 @@ HeightField make_procedural(const ProceduralSpec& s, double texel_size, Wrap wra
       if (feature <= 0) feature = size / 12;
       if (amp <= 0) amp = feature;
       break;
+    case ProceduralKind::terraces:
+      if (feature <= 0) feature = size / 2;
+      if (amp <= 0) amp = size / 16;
+      break;
+    case ProceduralKind::ridges:
+      if (feature <= 0) feature = size / 2;
+      if (amp <= 0) amp = size / 8;
+      break;
+    case ProceduralKind::craters:
+      if (feature <= 0) feature = size / 10;
+      if (amp <= 0) amp = 0.4 * feature;
+      break;
     default:
       break;
   }
   const double radius = s.radius > 0 ? s.radius : size / 4;
   const double depth = s.depth > 0 ? s.depth : radius;
-  const double tan_a = std::tan(s.angle_deg * deg);
+  const double angle_deg = std::isnan(s.angle_deg) ? (s.kind == ProceduralKind::rough ? 70.0 : 30.0) : s.angle_deg;
+  const double tan_a = std::tan(angle_deg * deg);
+  const double step = s.step > 0 ? s.step : amp / 3;
+  const double rough = s.kind == ProceduralKind::rough ? rough_scale(s.seed, angle_deg) : 0.0;
   const double ax = std::cos(s.aspect_deg * deg), ay = std::sin(s.aspect_deg * deg);
 
   // Each texel is a pure function of (spec, i, j): rows in parallel, the same heights for any thread count.
@@ -222,6 +326,18 @@ HeightField make_procedural(const ProceduralSpec& s, double texel_size, Wrap wra
           break;
         case ProceduralKind::cone:
           h = -tan_a * std::hypot(i - cx, j - cy);
+          break;
+        case ProceduralKind::terraces:
+          h = step * std::floor(fractal(s, feature, amp, i, j, 3) / step);
+          break;
+        case ProceduralKind::craters:
+          h = craters(s, feature, amp, i, j);
+          break;
+        case ProceduralKind::ridges:
+          h = ridges(s, feature, amp, i, j);
+          break;
+        case ProceduralKind::rough:
+          h = rough * rough_noise(s.seed, i, j);
           break;
       }
       f.z[f.index(i, j)] = float(h * texel_size);

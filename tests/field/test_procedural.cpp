@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "field/procedural.hpp"
 
@@ -17,7 +19,7 @@ HeightField make(ProceduralKind kind, int w, int h, std::uint64_t seed = 1) {
 }
 
 TEST(Procedural, KindsRoundTripByName) {
-  for (int k = 0; k <= int(ProceduralKind::cone); ++k) {
+  for (int k = 0; k <= int(kLastProceduralKind); ++k) {
     ProceduralKind parsed;
     ASSERT_TRUE(parse_procedural_kind(procedural_kind_name(ProceduralKind(k)), parsed));
     EXPECT_EQ(int(parsed), k);
@@ -27,7 +29,8 @@ TEST(Procedural, KindsRoundTripByName) {
 }
 
 TEST(Procedural, DeterministicBySeedAndSeedMatters) {
-  for (auto kind : {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::blocks}) {
+  for (auto kind : {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::blocks, ProceduralKind::terraces,
+                    ProceduralKind::craters, ProceduralKind::ridges, ProceduralKind::rough}) {
     const HeightField a = make(kind, 96, 80, 7), b = make(kind, 96, 80, 7), c = make(kind, 96, 80, 8);
     EXPECT_EQ(a.z, b.z) << procedural_kind_name(kind);
     EXPECT_NE(a.z, c.z) << procedural_kind_name(kind);
@@ -36,7 +39,8 @@ TEST(Procedural, DeterministicBySeedAndSeedMatters) {
 
 TEST(Procedural, FieldsHaveReliefAndFiniteHeights) {
   for (auto kind :
-       {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::sines, ProceduralKind::blocks}) {
+       {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::sines, ProceduralKind::blocks,
+        ProceduralKind::terraces, ProceduralKind::craters, ProceduralKind::ridges, ProceduralKind::rough}) {
     const HeightField f = make(kind, 128, 128);
     float lo = INFINITY, hi = -INFINITY;
     for (float z : f.z) {
@@ -80,6 +84,105 @@ TEST(Procedural, AnalyticShapes) {
   HeightField c = make_procedural(s, 1.0, Wrap::clamp);
   EXPECT_FLOAT_EQ(c.z[c.index(16, 16)], 0.0f);
   EXPECT_NEAR(c.z[c.index(26, 16)], -10 * std::tan(kPi / 6), 1e-5);
+}
+
+TEST(Procedural, TerracesAreFlatStepsOfTheGivenHeight) {
+  ProceduralSpec s;
+  s.kind = ProceduralKind::terraces;
+  s.width = s.height = 128;
+  s.amplitude = 8;
+  s.step = 3;
+  const HeightField f = make_procedural(s, 2.0, Wrap::clamp);
+  std::size_t flat = 0, steps = 0;
+  for (int j = 0; j < 128; ++j)
+    for (int i = 0; i + 1 < 128; ++i) {
+      const double d = std::abs(double(f.z[f.index(i + 1, j)]) - f.z[f.index(i, j)]);
+      if (d == 0) {
+        ++flat;
+        continue;
+      }
+      ++steps;
+      // Every height is a whole number of steps (3 texels x texel size 2): so is every difference.
+      EXPECT_NEAR(d / 6.0, std::round(d / 6.0), 1e-5);
+    }
+  EXPECT_GT(steps, 20u);             // there are cliffs ...
+  EXPECT_GT(flat, 20 * steps);       // ... between wide flat treads
+}
+
+TEST(Procedural, CratersAreBowlsWithRaisedRims) {
+  ProceduralSpec s;
+  s.kind = ProceduralKind::craters;
+  s.width = s.height = 200;
+  s.feature_size = 12;
+  s.amplitude = 5;
+  const HeightField f = make_procedural(s, 1.0, Wrap::clamp);
+  std::size_t below = 0, above = 0, ground = 0;
+  float lo = INFINITY;
+  for (float z : f.z) {
+    below += z < -0.5f;
+    above += z > 0.1f;
+    ground += z == 0.0f;
+    lo = std::min(lo, z);
+  }
+  // The deepest floor: d ((r/R)^2 - 1) + d/4 at the centre, d in [2.5, 5] for amplitude 5.
+  EXPECT_LT(lo, -0.75f * 2.5f);
+  EXPECT_GE(lo, -2 * 0.75f * 5.0f);  // at most two overlapping floors
+  EXPECT_GT(below, f.z.size() / 20);
+  EXPECT_GT(above, f.z.size() / 50);  // rims
+  EXPECT_GT(ground, f.z.size() / 10);  // flat ground between craters
+}
+
+TEST(Procedural, RoughHasTheRequestedMedianSlopeAtAnySize) {
+  for (int size : {96, 300}) {
+    for (double angle : {60.0, 80.0}) {
+      ProceduralSpec s;
+      s.kind = ProceduralKind::rough;
+      s.width = s.height = size;
+      s.angle_deg = angle;
+      s.seed = 11;
+      const HeightField f = make_procedural(s, 1.0, Wrap::clamp);
+      std::vector<double> d;
+      for (int j = 0; j < size; ++j)
+        for (int i = 0; i + 1 < size; ++i) d.push_back(std::abs(double(f.z[f.index(i + 1, j)]) - f.z[f.index(i, j)]));
+      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+      const double median_deg = std::atan(d[d.size() / 2]) * 180 / kPi;
+      EXPECT_NEAR(median_deg, angle, 3.0) << size;
+    }
+  }
+  ProceduralSpec s;
+  s.kind = ProceduralKind::rough;
+  s.width = s.height = 64;
+  const HeightField a = make_procedural(s, 1.0, Wrap::clamp);
+  s.angle_deg = 70;
+  EXPECT_EQ(a.z, make_procedural(s, 1.0, Wrap::clamp).z);  // 70 degrees is rough's default
+}
+
+TEST(Procedural, RidgesHaveSharpCrests) {
+  // (1 - |n|)^2 has a kink where the noise crosses zero: the largest second difference across a crest is
+  // much larger than a smooth fractal's of the same amplitude.
+  auto max_second_difference = [](const HeightField& f) {
+    double m = 0;
+    for (int j = 0; j < f.height; ++j)
+      for (int i = 1; i + 1 < f.width; ++i)
+        m = std::max(m, double(f.z[f.index(i - 1, j)] - 2 * f.z[f.index(i, j)] + f.z[f.index(i + 1, j)]));
+    return m;
+  };
+  ProceduralSpec s;
+  s.width = s.height = 128;
+  s.kind = ProceduralKind::ridges;
+  const HeightField r = make_procedural(s, 1.0, Wrap::clamp);
+  s.kind = ProceduralKind::fractal;
+  const HeightField f = make_procedural(s, 1.0, Wrap::clamp);
+  // Crests are maxima: the most negative second difference (a crest's kink) dominates.
+  auto min_second_difference = [](const HeightField& g) {
+    double m = 0;
+    for (int j = 0; j < g.height; ++j)
+      for (int i = 1; i + 1 < g.width; ++i)
+        m = std::min(m, double(g.z[g.index(i - 1, j)] - 2 * g.z[g.index(i, j)] + g.z[g.index(i + 1, j)]));
+    return m;
+  };
+  EXPECT_LT(min_second_difference(r), 1.5 * min_second_difference(f));
+  EXPECT_GT(max_second_difference(f), 0.0);
 }
 
 }  // namespace
