@@ -394,7 +394,7 @@ void run_samples(const Context& cx, int i, int j, std::uint64_t texel_seed, int 
                  std::uint32_t s1, double* sums, Scratch& sc) {
   const HeightField& f = cx.field;
   const Vec3 n = cx.scene.normals[f.index(i, j)].d();
-  TexelBatch b{cx, n, f.position(i, j) + n * cx.geometry.epsilon(), texel_seed, r, 0, 0, sums};
+  TexelBatch b{cx, n, f.position(i, j) + Vec3{0, 0, cx.geometry.epsilon()}, texel_seed, r, 0, 0, sums};
   const bool paths = cx.needs.indirect && cx.bounces > 0;
   const bool primary_hit = cx.needs.obscurance || paths;
   for (std::uint32_t c0 = s0; c0 < s1; c0 += kChunk) {

@@ -1,7 +1,9 @@
 // The Embree path-traced reference: hfbake's ground truth for every layer a method bakes.
 //
-// Receivers are the texel centers with the P1 normal (Scene::normals), ray origins offset along that
-// normal by EmbreeField::epsilon() (1e-3 texel, more for huge coordinates). Geometry and the solid: see
+// Receivers are the texel centers with the P1 normal (Scene::normals), ray origins lifted vertically by
+// EmbreeField::epsilon() (1e-3 texel, more for huge coordinates): above a point of a height field is always
+// above the surface, where a step along a steep smoothed normal can end under a neighbouring facet (on rough
+// terrain that hid whole wedges of sky and darkened the reference by 4-8 %). Geometry and the solid: see
 // reference/embree_field.hpp. Estimators (each layer also gets "<layer>_stderr"):
 //   ao          cosine-weighted directions about the normal, unlimited distance: mean of V.
 //   vsky        directions uniform in solid angle over the upper (+z) hemisphere: mean of V, which is

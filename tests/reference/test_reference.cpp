@@ -209,6 +209,31 @@ TEST(Reference, PitCenter) {
   EXPECT_NEAR(at(r, "ao", 24, 24).v, 1 - D * D / (D * D + R * R), 0.03);
 }
 
+TEST(Reference, ReceiverInANotchSeesTheWedgeBetweenItsWalls) {
+  // A notch between two straight walls, extruded along y: z = 3 (c - x) on the left, 13 (x - c) on the right.
+  // From the notch the free sky is the dihedral wedge between the wall planes, opening alpha = pi - atan 3 -
+  // atan 13: vsky = 2 alpha / (2 pi). The texel's normal, from central differences, leans far to the left,
+  // over the left wall: a receiver offset along it started under that wall and saw nothing (vsky 0 instead of
+  // 0.127). Receivers are lifted vertically, which is above the surface wherever
+  // the surface is a height field.
+  Scene s;
+  s.name = "notch";
+  HeightField& f = s.field;
+  f.width = f.height = 9;
+  f.texel_size = 1;
+  f.wrap = Wrap::clamp;
+  f.z.resize(f.texel_count());
+  const int c = 4;
+  for (int j = 0; j < 9; ++j)
+    for (int i = 0; i < 9; ++i) f.z[f.index(i, j)] = float(i < c ? 3 * (c - i) : 13 * (i - c));
+  s.normals = compute_normals(f);
+  s.surface.albedo.assign(f.texel_count(), Rgb{0.5f, 0.5f, 0.5f});
+  s.environment = make_uniform_environment({1, 1, 1});
+  const LayerSet r = bake_reference(s, options({"vsky"}, 4096), {});
+  const double alpha = kPi - std::atan(3.0) - std::atan(13.0);
+  EXPECT_WITHIN_3SE(at(r, "vsky", c, 4), alpha / kPi, 1e-3);
+}
+
 TEST(Reference, SunWithAngularSizeOnFlatGround) {
   Scene s = make_scene(spec_of(ProceduralKind::flat, 17), Wrap::clamp, {0.5f, 0.5f, 0.5f}, {0, 0, 0});
   const double zenith = 50 * kDeg;
