@@ -82,7 +82,8 @@ double value_noise(std::uint64_t seed, int octave, std::int64_t cells_x, std::in
 // Octaves of the periodic value noise, from `feature` texels down to one texel (at most `octaves`):
 // each octave's value is shape(noise) and its amplitude half the last one's.
 template <class Shape>
-double octave_sum(const ProceduralSpec& s, double feature, double amp, int i, int j, int octaves, Shape shape) {
+double octave_sum(const ProceduralSpec& s, double feature, double amp, int i, int j, int octaves,
+                  Shape shape) {
   const double u = double(i) / s.width, v = double(j) / s.height;
   std::int64_t cx = std::max<std::int64_t>(1, std::llround(s.width / feature));
   std::int64_t cy = std::max<std::int64_t>(1, std::llround(s.height / feature));
@@ -102,7 +103,8 @@ double fractal(const ProceduralSpec& s, double feature, double amp, int i, int j
 }
 
 double ridges(const ProceduralSpec& s, double feature, double amp, int i, int j) {
-  return octave_sum(s, feature, amp, i, j, 16, [](double n) { return (1 - std::abs(n)) * (1 - std::abs(n)); });
+  return octave_sum(s, feature, amp, i, j, 16,
+                    [](double n) { return (1 - std::abs(n)) * (1 - std::abs(n)); });
 }
 
 double craters(const ProceduralSpec& s, double feature, double amp, int i, int j) {
@@ -142,7 +144,8 @@ double lattice_bilinear(std::uint64_t seed, int octave, int cell, int i, int j) 
 double rough_noise(std::uint64_t seed, int i, int j) {
   double h = 0, a = 1;
   int octave = 0;
-  for (int cell = 64; cell >= 1; cell /= 2, a *= 0.7, ++octave) h += a * lattice_bilinear(seed, octave, cell, i, j);
+  for (int cell = 64; cell >= 1; cell /= 2, a *= 0.7, ++octave)
+    h += a * lattice_bilinear(seed, octave, cell, i, j);
   return h;
 }
 
@@ -156,7 +159,8 @@ double rough_scale(std::uint64_t seed, double angle_deg) {
   std::vector<double> diffs;
   diffs.reserve(std::size_t(n) * (n - 1));
   for (int j = 0; j < n; ++j)
-    for (int i = 0; i + 1 < n; ++i) diffs.push_back(std::abs(z[std::size_t(j) * n + i + 1] - z[std::size_t(j) * n + i]));
+    for (int i = 0; i + 1 < n; ++i)
+      diffs.push_back(std::abs(z[std::size_t(j) * n + i + 1] - z[std::size_t(j) * n + i]));
   std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
   return std::tan(angle_deg * kPi / 180) / std::max(diffs[diffs.size() / 2], 1e-30);
 }
@@ -289,7 +293,8 @@ HeightField make_procedural(const ProceduralSpec& s, double texel_size, Wrap wra
   }
   const double radius = s.radius > 0 ? s.radius : size / 4;
   const double depth = s.depth > 0 ? s.depth : radius;
-  const double angle_deg = std::isnan(s.angle_deg) ? (s.kind == ProceduralKind::rough ? 70.0 : 30.0) : s.angle_deg;
+  const double angle_deg =
+      std::isnan(s.angle_deg) ? (s.kind == ProceduralKind::rough ? 70.0 : 30.0) : s.angle_deg;
   const double tan_a = std::tan(angle_deg * deg);
   const double step = s.step > 0 ? s.step : amp / 3;
   const double rough = s.kind == ProceduralKind::rough ? rough_scale(s.seed, angle_deg) : 0.0;

@@ -10,9 +10,20 @@
 namespace hfbake {
 
 enum class ProceduralKind {
-  fractal, bricks, sines, blocks, flat, slope, trench, pit, cone,
+  fractal,
+  bricks,
+  sines,
+  blocks,
+  flat,
+  slope,
+  trench,
+  pit,
+  cone,
   // Hard terrain (issue 19): the shapes users bring that the P2 fields do not have.
-  terraces, craters, ridges, rough
+  terraces,
+  craters,
+  ridges,
+  rough
 };
 inline constexpr ProceduralKind kLastProceduralKind = ProceduralKind::rough;
 
@@ -26,10 +37,10 @@ struct ProceduralSpec {
   double feature_size = 0;  // horizontal feature scale in texels (0 = the kind's default)
   // slope: plane angle; trench: wall angle; cone: flank angle (default 30); rough: median slope (default 70).
   double angle_deg = std::numeric_limits<double>::quiet_NaN();  // NaN: the kind's default
-  double aspect_deg = 0;    // slope: downhill azimuth (direction the plane faces)
-  double radius = 0;        // pit: radius in texels (0 = width / 4)
-  double depth = 0;         // pit: depth in texels (0 = radius)
-  double step = 0;          // terraces: height of one step in texels (0 = amplitude / 6)
+  double aspect_deg = 0;  // slope: downhill azimuth (direction the plane faces)
+  double radius = 0;      // pit: radius in texels (0 = width / 4)
+  double depth = 0;       // pit: depth in texels (0 = radius)
+  double step = 0;        // terraces: height of one step in texels (0 = amplitude / 3)
 };
 
 bool parse_procedural_kind(const std::string& name, ProceduralKind& kind);

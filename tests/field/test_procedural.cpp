@@ -29,8 +29,9 @@ TEST(Procedural, KindsRoundTripByName) {
 }
 
 TEST(Procedural, DeterministicBySeedAndSeedMatters) {
-  for (auto kind : {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::blocks, ProceduralKind::terraces,
-                    ProceduralKind::craters, ProceduralKind::ridges, ProceduralKind::rough}) {
+  for (auto kind :
+       {ProceduralKind::fractal, ProceduralKind::bricks, ProceduralKind::blocks, ProceduralKind::terraces,
+        ProceduralKind::craters, ProceduralKind::ridges, ProceduralKind::rough}) {
     const HeightField a = make(kind, 96, 80, 7), b = make(kind, 96, 80, 7), c = make(kind, 96, 80, 8);
     EXPECT_EQ(a.z, b.z) << procedural_kind_name(kind);
     EXPECT_NE(a.z, c.z) << procedural_kind_name(kind);
@@ -105,8 +106,8 @@ TEST(Procedural, TerracesAreFlatStepsOfTheGivenHeight) {
       // Every height is a whole number of steps (3 texels x texel size 2): so is every difference.
       EXPECT_NEAR(d / 6.0, std::round(d / 6.0), 1e-5);
     }
-  EXPECT_GT(steps, 20u);             // there are cliffs ...
-  EXPECT_GT(flat, 20 * steps);       // ... between wide flat treads
+  EXPECT_GT(steps, 20u);        // there are cliffs ...
+  EXPECT_GT(flat, 20 * steps);  // ... between wide flat treads
 }
 
 TEST(Procedural, CratersAreBowlsWithRaisedRims) {
@@ -128,7 +129,7 @@ TEST(Procedural, CratersAreBowlsWithRaisedRims) {
   EXPECT_LT(lo, -0.75f * 2.5f);
   EXPECT_GE(lo, -2 * 0.75f * 5.0f);  // at most two overlapping floors
   EXPECT_GT(below, f.z.size() / 20);
-  EXPECT_GT(above, f.z.size() / 50);  // rims
+  EXPECT_GT(above, f.z.size() / 50);   // rims
   EXPECT_GT(ground, f.z.size() / 10);  // flat ground between craters
 }
 
@@ -143,7 +144,8 @@ TEST(Procedural, RoughHasTheRequestedMedianSlopeAtAnySize) {
       const HeightField f = make_procedural(s, 1.0, Wrap::clamp);
       std::vector<double> d;
       for (int j = 0; j < size; ++j)
-        for (int i = 0; i + 1 < size; ++i) d.push_back(std::abs(double(f.z[f.index(i + 1, j)]) - f.z[f.index(i, j)]));
+        for (int i = 0; i + 1 < size; ++i)
+          d.push_back(std::abs(double(f.z[f.index(i + 1, j)]) - f.z[f.index(i, j)]));
       std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
       const double median_deg = std::atan(d[d.size() / 2]) * 180 / kPi;
       EXPECT_NEAR(median_deg, angle, 3.0) << size;
