@@ -54,9 +54,11 @@ struct Channels {
   int bounce0 = 9;  // indirect_b1 at bounce0, b2 at bounce0 + 3, ...
   int total = 0;
   int count = 0;
+  int bent = 0;  // the sum of the unoccluded cosine-sampled directions (x, y, z)
   explicit Channels(int bounces) {
     total = bounce0 + 3 * bounces;
-    count = total + 3;
+    bent = total + 3;
+    count = bent + 3;
   }
   int bounce(int k) const { return bounce0 + 3 * (k - 1); }  // k = 1..bounces
 
@@ -71,12 +73,13 @@ struct Channels {
     if (layer == "direct") return {direct, 3};
     if (layer == "indirect") return {indirect, 3};
     if (layer == "total") return {total, 3};
+    if (layer == "bent_normal") return {bent, 3};
     return {bounce(std::stoi(layer.substr(10))), 3};  // indirect_b<k>
   }
 };
 
 struct Needs {
-  bool ao = false, vsky = false, obscurance = false, direct = false, indirect = false;
+  bool ao = false, vsky = false, obscurance = false, direct = false, indirect = false, bent_normal = false;
 };
 
 void add_rgb(double* a, Rgb c) {
@@ -276,7 +279,13 @@ struct TexelBatch {
   double* sums = nullptr;  // ch.count doubles of replicate r
 };
 
-// Primary cosine rays: ao, obscurance, and (in sc.hits, sc.dirs) the first segment of the paths.
+// Adds the direction of every unoccluded ray to the bent-normal channels.
+void add_unoccluded(double* bent, Vec3 dir) {
+  bent[0] += dir.x, bent[1] += dir.y, bent[2] += dir.z;
+}
+
+// Primary cosine rays: ao, the bent normal, obscurance, and (in sc.hits, sc.dirs) the first segment of the
+// paths.
 void trace_primary(const TexelBatch& b, Scratch& sc) {
   const Context& cx = b.cx;
   const Channels& ch = cx.ch;
@@ -287,7 +296,7 @@ void trace_primary(const TexelBatch& b, Scratch& sc) {
     // ao and the path need the whole ray; obscurance alone only reaches the falloff's support. Each
     // quantity reads the hit its own way: ao any hit, obscurance a hit within the support only, so
     // neither depends on which other layers the job traces.
-    const bool whole_ray = cx.needs.ao || (cx.needs.indirect && cx.bounces > 0);
+    const bool whole_ray = cx.needs.ao || cx.needs.bent_normal || (cx.needs.indirect && cx.bounces > 0);
     const float tfar = whole_ray ? kInf : cx.obscurance_tfar;
     for (int k = 0; k < b.m; ++k) sc.hits[k] = make_rayhit(b.origin, sc.dirs[k], tfar);
     cx.intersect(sc.hits.data(), b.m);
@@ -295,6 +304,7 @@ void trace_primary(const TexelBatch& b, Scratch& sc) {
       const RTCRayHit& h = sc.hits[k];
       const bool hit = h.hit.geomID != RTC_INVALID_GEOMETRY_ID;
       if (cx.needs.ao) b.sums[ch.ao] += hit ? 0.0 : 1.0;
+      if (cx.needs.bent_normal && !hit) add_unoccluded(&b.sums[ch.bent], sc.dirs[k]);
       if (cx.needs.obscurance) {
         const bool within = hit && h.ray.tfar <= cx.obscurance_tfar;
         b.sums[ch.obscurance] += 1.0 - (within ? cx.options.falloff(h.ray.tfar) : 0.0);
@@ -303,7 +313,11 @@ void trace_primary(const TexelBatch& b, Scratch& sc) {
   } else {
     for (int k = 0; k < b.m; ++k) sc.rays[k] = make_ray(b.origin, sc.dirs[k]);
     cx.occluded(sc.rays.data(), b.m);
-    for (int k = 0; k < b.m; ++k) b.sums[ch.ao] += sc.rays[k].tfar >= 0 ? 1.0 : 0.0;
+    for (int k = 0; k < b.m; ++k) {
+      const bool free = sc.rays[k].tfar >= 0;
+      b.sums[ch.ao] += free ? 1.0 : 0.0;
+      if (cx.needs.bent_normal && free) add_unoccluded(&b.sums[ch.bent], sc.dirs[k]);
+    }
   }
 }
 
@@ -400,7 +414,7 @@ void run_samples(const Context& cx, int i, int j, std::uint64_t texel_seed, int 
   for (std::uint32_t c0 = s0; c0 < s1; c0 += kChunk) {
     b.c0 = c0;
     b.m = int(std::min<std::uint32_t>(kChunk, s1 - c0));
-    if (cx.needs.ao || primary_hit) trace_primary(b, sc);
+    if (cx.needs.ao || cx.needs.bent_normal || primary_hit) trace_primary(b, sc);
     if (cx.needs.vsky) trace_vsky(b, sc);
     if (cx.needs.direct) trace_direct(b, sc);
     if (paths) trace_paths(b, sc);
@@ -448,6 +462,7 @@ Needs needs_of(const ReferenceOptions& options, int bounces) {
   for (int b = 1; b <= bounces; ++b) any_bounce |= wants("indirect_b" + std::to_string(b));
   needs.indirect = wants("indirect") || wants("total") || any_bounce;
   needs.direct = wants("direct") || wants("total");
+  needs.bent_normal = wants("bent_normal");
   return needs;
 }
 
@@ -475,7 +490,7 @@ nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& opt
 }  // namespace
 
 std::vector<std::string> reference_layer_names(int bounces) {
-  std::vector<std::string> names = {"ao", "vsky", "obscurance", "direct", "indirect", "total"};
+  std::vector<std::string> names = {"ao", "vsky", "obscurance", "direct", "indirect", "total", "bent_normal"};
   for (int b = 1; b <= bounces; ++b) names.push_back("indirect_b" + std::to_string(b));
   return names;
 }
@@ -601,12 +616,12 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   result.width = f.width;
   result.height = f.height;
   std::vector<float*> value_data, stderr_data;
-  for (const Out& o : outs) {
-    value_data.push_back(result.add(o.name, o.channels == 1 ? mono_channels() : rgb_channels()).data.data());
-  }
+  auto channel_names = [](const Out& o) {
+    return o.channels == 1 ? mono_channels() : o.name == "bent_normal" ? xyz_channels() : rgb_channels();
+  };
+  for (const Out& o : outs) value_data.push_back(result.add(o.name, channel_names(o)).data.data());
   for (const Out& o : outs)
-    stderr_data.push_back(
-        result.add(o.name + "_stderr", o.channels == 1 ? mono_channels() : rgb_channels()).data.data());
+    stderr_data.push_back(result.add(o.name + "_stderr", channel_names(o)).data.data());
   float* samples_data = adaptive ? result.add("samples", mono_channels()).data.data() : nullptr;
   // LayerSet::add may reallocate: take the pointers again now that every layer exists.
   for (std::size_t k = 0; k < outs.size(); ++k) {
@@ -657,11 +672,20 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
           }
           estimate(0, n);
           const std::size_t t = f.index(i, j);
-          for (std::size_t k = 0; k < outs.size(); ++k)
-            for (int c = 0; c < outs[k].channels; ++c) {
-              value_data[k][t * outs[k].channels + c] = float(mean[outs[k].first + c]);
-              stderr_data[k][t * outs[k].channels + c] = float(se[outs[k].first + c]);
+          for (std::size_t k = 0; k < outs.size(); ++k) {
+            // The bent normal is the unit mean of the unoccluded directions (zero where every ray was
+            // blocked); its stderr is the components' divided by that mean's length.
+            double scale = 1;
+            if (outs[k].first == cx.ch.bent) {
+              const double* m = &mean[outs[k].first];
+              const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+              scale = len > 0 ? 1 / len : 0.0;
             }
+            for (int c = 0; c < outs[k].channels; ++c) {
+              value_data[k][t * outs[k].channels + c] = float(mean[outs[k].first + c] * scale);
+              stderr_data[k][t * outs[k].channels + c] = float(se[outs[k].first + c] * scale);
+            }
+          }
           if (samples_data) samples_data[t] = float(n * B);
         }
       }

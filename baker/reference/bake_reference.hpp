@@ -22,6 +22,9 @@
 //               times (emitted at, or reflected by, the k-th vertex). Albedo and emission are interpolated
 //               with the triangle's barycentric weights; hits on the skirt use the nearest border texel.
 //   total       direct + indirect.
+//   bent_normal the unit mean of the unoccluded directions of the ao rays (cosine-weighted about the
+//               normal, unlimited distance): normalize(integral of V w (N.w) dw), P1's definition; zero
+//               where no ray escaped. Scored by the angle between the method's vector and it.
 // Sampling: `replicates` (default 8) independently Owen-scrambled Sobol sequences per texel, each with
 // ceil(samples / replicates) points; the value is the mean of the replicate means and the standard error
 // is their standard deviation / sqrt(replicates) -- an honest estimate of the randomised-QMC error (the

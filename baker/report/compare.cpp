@@ -5,11 +5,48 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/vec.hpp"
+
 namespace hfbake {
 
 CompareRegion crop_region(int width, int height, int crop) {
   crop = std::max(crop, 0);
   return {crop, crop, std::max(crop, width - crop), std::max(crop, height - crop)};
+}
+
+namespace {
+
+// Angles between the method's and the reference's direction vectors, in degrees, in a fixed order.
+void add_angle_metrics(const Layer& method, const Layer& reference, int width, const CompareRegion& region,
+                       LayerMetrics& out) {
+  std::vector<double> angles;
+  double sum = 0;
+  for (int y = region.y0; y < region.y1; ++y)
+    for (int x = region.x0; x < region.x1; ++x) {
+      const std::size_t t = (std::size_t(y) * width + x) * 3;
+      const double a[3] = {method.data[t], method.data[t + 1], method.data[t + 2]};
+      const double b[3] = {reference.data[t], reference.data[t + 1], reference.data[t + 2]};
+      const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      const double lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+      if (!(la > 0) || !(lb > 0)) continue;
+      const double c = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb);
+      const double deg = std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / kPi;
+      angles.push_back(deg);
+      sum += deg;
+    }
+  if (angles.empty()) return;
+  out.angle_mean_deg = sum / double(angles.size());
+  const std::size_t rank = std::size_t(std::ceil(0.99 * double(angles.size())));
+  const std::size_t k = std::min(angles.size() - 1, rank > 0 ? rank - 1 : 0);
+  std::nth_element(angles.begin(), angles.begin() + std::ptrdiff_t(k), angles.end());
+  out.angle_p99_deg = angles[k];
+  out.angle_max_deg = *std::max_element(angles.begin(), angles.end());
+}
+
+}  // namespace
+
+bool is_direction_layer(const std::string& name) {
+  return name == "bent_normal";
 }
 
 LayerMetrics compare_layer(const Layer& method, const Layer& reference, const Layer* stderr_layer, int width,
@@ -72,12 +109,15 @@ LayerMetrics compare_layer(const Layer& method, const Layer& reference, const La
   if (sum_sq > 0 && peak > 0) out.psnr = 10.0 * std::log10(peak * peak / (sum_sq / n));
   out.noise_rmse = std::sqrt(sum_se_sq / n);
   out.excess_rmse = std::sqrt(std::max(out.rmse * out.rmse - out.noise_rmse * out.noise_rmse, 0.0));
+  if (channels == 3 && is_direction_layer(method.name))
+    add_angle_metrics(method, reference, width, region, out);
   return out;
 }
 
 const char* const* metric_names(int& count) {
-  static const char* const names[] = {"mae",  "rmse", "rel_mae",    "max",        "p99",
-                                      "psnr", "bias", "noise_rmse", "excess_rmse"};
+  static const char* const names[] = {"mae",         "rmse",           "rel_mae",       "max",
+                                      "p99",         "psnr",           "bias",          "noise_rmse",
+                                      "excess_rmse", "angle_mean_deg", "angle_p99_deg", "angle_max_deg"};
   count = int(sizeof names / sizeof names[0]);
   return names;
 }
@@ -92,6 +132,9 @@ std::optional<double> metric_value(const LayerMetrics& m, const std::string& nam
   if (name == "bias") return m.bias;
   if (name == "noise_rmse") return m.noise_rmse;
   if (name == "excess_rmse") return m.excess_rmse;
+  if (name == "angle_mean_deg") return m.angle_mean_deg;
+  if (name == "angle_p99_deg") return m.angle_p99_deg;
+  if (name == "angle_max_deg") return m.angle_max_deg;
   return std::nullopt;
 }
 

@@ -25,7 +25,13 @@ struct LayerMetrics {
   double noise_rmse = 0, excess_rmse = 0;
   double reference_mean = 0;
   std::size_t values = 0;  // texels x channels compared
+  // Direction layers (bent_normal): the angle in degrees between the method's and the reference's vectors,
+  // over the texels where both are non-zero: mean, 99th percentile (nearest rank) and max.
+  std::optional<double> angle_mean_deg, angle_p99_deg, angle_max_deg;
 };
+
+// Whether a layer of this name holds a direction (3 channels, compared by angle as well).
+bool is_direction_layer(const std::string& name);
 
 // The region compared: texels [crop, width - crop) x [crop, height - crop).
 struct CompareRegion {

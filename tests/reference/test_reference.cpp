@@ -229,9 +229,33 @@ TEST(Reference, ReceiverInANotchSeesTheWedgeBetweenItsWalls) {
   s.normals = compute_normals(f);
   s.surface.albedo.assign(f.texel_count(), Rgb{0.5f, 0.5f, 0.5f});
   s.environment = make_uniform_environment({1, 1, 1});
-  const LayerSet r = bake_reference(s, options({"vsky"}, 4096), {});
+  const LayerSet r = bake_reference(s, options({"vsky", "ao", "bent_normal"}, 4096), {});
   const double alpha = kPi - std::atan(3.0) - std::atan(13.0);
   EXPECT_WITHIN_3SE(at(r, "vsky", c, 4), alpha / kPi, 1e-3);
+  // ao and the bent normal about the texel's normal N = (cos nu, 0, sin nu) (in the xz plane by symmetry):
+  // a direction at angle psi in the xz plane and beta out of it has N.w = cos(beta) cos(psi - nu) and
+  // dw = cos(beta) dbeta dpsi, over the wedge psi in [atan 13, pi - atan 3] (inside N's hemisphere here).
+  const Vec3 n = s.normals[f.index(c, 4)].d();
+  ASSERT_NEAR(n.y, 0, 1e-6);
+  const double nu = std::atan2(n.z, n.x), psi0 = std::atan(13.0), psi1 = kPi - std::atan(3.0);
+  ASSERT_GT(psi0, nu - kPi / 2);
+  ASSERT_LT(psi1, nu + kPi / 2);
+  // ao = (1/pi) int cos^2 beta dbeta int cos(psi - nu) dpsi = (1/2) [sin(psi - nu)] over the wedge.
+  EXPECT_WITHIN_3SE(at(r, "ao", c, 4), 0.5 * (std::sin(psi1 - nu) - std::sin(psi0 - nu)), 1e-3);
+  // The bent normal: the x and z components are (4/3) int (cos psi, sin psi) cos(psi - nu) dpsi, y is 0.
+  double bx = 0, bz = 0;
+  const int steps = 20000;
+  for (int k = 0; k < steps; ++k) {
+    const double psi = psi0 + (psi1 - psi0) * (k + 0.5) / steps;
+    bx += std::cos(psi) * std::cos(psi - nu);
+    bz += std::sin(psi) * std::cos(psi - nu);
+  }
+  const double len = std::hypot(bx, bz);
+  const Value x = at(r, "bent_normal", c, 4, 0), y = at(r, "bent_normal", c, 4, 1),
+              z = at(r, "bent_normal", c, 4, 2);
+  EXPECT_WITHIN_3SE(x, bx / len, 2e-3);
+  EXPECT_WITHIN_3SE(y, 0.0, 2e-3);
+  EXPECT_WITHIN_3SE(z, bz / len, 2e-3);
 }
 
 TEST(Reference, SunWithAngularSizeOnFlatGround) {
@@ -519,14 +543,16 @@ TEST(Reference, OptionsFromTheJob) {
   ReferenceOptions o = parse_reference_options(s, job);
   EXPECT_EQ(o.falloff.kind, FalloffKind::smooth);
   EXPECT_EQ(o.falloff.radius, 12);
-  // Only what the methods are scored against: p1's ao, vsky, direct and lsao's obscurance.
-  EXPECT_EQ(o.layers, (std::vector<std::string>{"ao", "vsky", "obscurance", "direct"}));
+  // Only what the methods are scored against: p1's ao, vsky, direct and lsao's obscurance and bent normal
+  // (lsao's default layers).
+  EXPECT_EQ(o.layers, (std::vector<std::string>{"ao", "vsky", "obscurance", "direct", "bent_normal"}));
   EXPECT_EQ(o.resolved["layers"], nlohmann::json(o.layers));
   EXPECT_EQ(o.resolved["samples"], 64);
   EXPECT_EQ(o.resolved["replicates"], 8);     // a default, recorded
   job["bake"].push_back({{"method", "p2"}});  // p2 adds indirect and total
-  EXPECT_EQ(parse_reference_options(s, job).layers,
-            (std::vector<std::string>{"ao", "vsky", "obscurance", "direct", "indirect", "total"}));
+  EXPECT_EQ(
+      parse_reference_options(s, job).layers,
+      (std::vector<std::string>{"ao", "vsky", "obscurance", "direct", "indirect", "total", "bent_normal"}));
   job["bake"] = nlohmann::json::array();  // a reference-only job traces everything
   EXPECT_EQ(parse_reference_options(s, job).layers,
             (std::vector<std::string>{"ao", "vsky", "direct", "indirect", "total"}));

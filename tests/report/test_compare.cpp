@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 
+#include "core/vec.hpp"
 #include "job/schema_validation.hpp"
 #include "report/compare.hpp"
 #include "report/report_document.hpp"
@@ -35,6 +36,35 @@ TEST(Compare, ConstantOffset) {
   EXPECT_EQ(r.noise_rmse, 0);
   EXPECT_NEAR(r.excess_rmse, 0.1, 1e-6);
   EXPECT_EQ(r.values, std::size_t(w * h));
+}
+
+TEST(Compare, BentNormalsAreScoredByAngle) {
+  // 100 texels: the reference points up; the method is tilted by 1 degree in 98 texels and by 10 and 30
+  // degrees in the other two (mean 1.38, p99 10, max 30). A zero vector (nothing escaped) is left out of
+  // the angles, not counted as 90 degrees. Lengths do not matter.
+  const int w = 10, h = 10;
+  Layer ref{"bent_normal", xyz_channels(), std::vector<float>(3 * w * h)};
+  Layer m = ref;
+  const double deg = kPi / 180;
+  for (int t = 0; t < w * h; ++t) {
+    ref.data[3 * t + 2] = 1;
+    const double a = t == 7 ? 10 * deg : t == 42 ? 30 * deg : 1 * deg;
+    m.data[3 * t] = float(2 * std::sin(a));
+    m.data[3 * t + 2] = float(2 * std::cos(a));
+  }
+  LayerMetrics r = compare_layer(m, ref, nullptr, w, h, crop_region(w, h, 0));
+  ASSERT_TRUE(r.angle_mean_deg && r.angle_p99_deg && r.angle_max_deg);
+  EXPECT_NEAR(*r.angle_mean_deg, (98 * 1 + 10 + 30) / 100.0, 1e-3);
+  EXPECT_NEAR(*r.angle_p99_deg, 10, 1e-3);
+  EXPECT_NEAR(*r.angle_max_deg, 30, 1e-3);
+  m.data[3 * 42] = m.data[3 * 42 + 2] = 0;
+  r = compare_layer(m, ref, nullptr, w, h, crop_region(w, h, 0));
+  EXPECT_NEAR(*r.angle_max_deg, 10, 1e-3);
+  EXPECT_NEAR(*r.angle_mean_deg, (98 * 1 + 10) / 99.0, 1e-3);
+  // Scalar layers get no angles; the names list them for thresholds.
+  const Layer a = mono("ao", w, h, 0.5f);
+  EXPECT_FALSE(compare_layer(a, a, nullptr, w, h, crop_region(w, h, 0)).angle_mean_deg);
+  EXPECT_TRUE(metric_value(r, "angle_p99_deg"));
 }
 
 TEST(Compare, OutliersMaxAndPercentile) {
