@@ -25,6 +25,7 @@
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
 #include "job/manifest.hpp"
+#include "reference/horizon_reference.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -162,6 +163,10 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
       if (!problem.empty()) progress.message(job.name + ": reference cache: " + problem);
     }
     progress.end(job.name, "reference", seconds);
+    std::vector<const LayerSet*> method_layers;
+    for (const MethodLayers& m : report.methods) method_layers.push_back(&m.layers);
+    add_reference_horizons(scene.field, method_layers, reference,
+                           rc);  // not cached: cheap beside the tracing
     add_common_attributes(reference, job, job_hash, "reference", job.reference_resolved, seconds);
     stage.write_layers("reference", reference);
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};

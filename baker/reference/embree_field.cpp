@@ -165,7 +165,8 @@ EmbreeField::EmbreeField(const HeightField& f, GeometryKind kind, int repeat_til
 
   double max_coord = std::max(std::abs(zmin), std::abs(zmax));
   max_coord = std::max(max_coord, (T + 1) * std::max(f.width, f.height) * ts);
-  epsilon_ = std::max(1e-3 * ts, 16 * double(FLT_EPSILON) * max_coord);
+  float_floor_ = 16 * double(FLT_EPSILON) * max_coord;
+  epsilon_ = std::max(1e-3 * ts, float_floor_);
 }
 
 EmbreeField::~EmbreeField() {

@@ -34,12 +34,16 @@ class EmbreeField {
   // Ray origins are offset by this much along the normal (world units): 1e-3 texel, or 16 float ulps of
   // the largest coordinate when that is larger.
   double epsilon() const { return epsilon_; }
+  // The smallest lift float coordinates resolve: 16 ulps of the largest coordinate (what epsilon() never
+  // goes below). Horizon bisection lifts its receivers by max(1e-5 texel, this): a larger lift raises the
+  // receiver by a visible fraction of a steep near caster's rise.
+  double float_floor() const { return float_floor_; }
   double z_bottom() const { return z_bottom_; }
 
  private:
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr, tile_ = nullptr;
-  double epsilon_ = 0, z_bottom_ = 0;
+  double epsilon_ = 0, z_bottom_ = 0, float_floor_ = 0;
 };
 
 }  // namespace hfbake::reference

@@ -17,6 +17,35 @@ CompareRegion crop_region(int width, int height, int crop) {
 namespace {
 
 // Angles between the method's and the reference's direction vectors, in degrees, in a fixed order.
+void set_angle_metrics(std::vector<double>& angles, double sum, LayerMetrics& out) {
+  if (angles.empty()) return;
+  out.angle_mean_deg = sum / double(angles.size());
+  const std::size_t rank = std::size_t(std::ceil(0.99 * double(angles.size())));
+  const std::size_t k = std::min(angles.size() - 1, rank > 0 ? rank - 1 : 0);
+  std::nth_element(angles.begin(), angles.begin() + std::ptrdiff_t(k), angles.end());
+  out.angle_p99_deg = angles[k];
+  out.angle_max_deg = *std::max_element(angles.begin(), angles.end());
+}
+
+// Elevation layers (horizon: sin of the elevation per channel): |asin(method) - asin(reference)| in degrees.
+void add_elevation_metrics(const Layer& method, const Layer& reference, int width,
+                           const CompareRegion& region, LayerMetrics& out) {
+  const int channels = method.channel_count();
+  std::vector<double> angles;
+  double sum = 0;
+  for (int y = region.y0; y < region.y1; ++y)
+    for (int x = region.x0; x < region.x1; ++x)
+      for (int c = 0; c < channels; ++c) {
+        const std::size_t t = (std::size_t(y) * width + x) * channels + c;
+        const double a = std::asin(std::clamp(double(method.data[t]), -1.0, 1.0));
+        const double b = std::asin(std::clamp(double(reference.data[t]), -1.0, 1.0));
+        const double deg = std::abs(a - b) * 180.0 / kPi;
+        angles.push_back(deg);
+        sum += deg;
+      }
+  set_angle_metrics(angles, sum, out);
+}
+
 void add_angle_metrics(const Layer& method, const Layer& reference, int width, const CompareRegion& region,
                        LayerMetrics& out) {
   std::vector<double> angles;
@@ -34,19 +63,17 @@ void add_angle_metrics(const Layer& method, const Layer& reference, int width, c
       angles.push_back(deg);
       sum += deg;
     }
-  if (angles.empty()) return;
-  out.angle_mean_deg = sum / double(angles.size());
-  const std::size_t rank = std::size_t(std::ceil(0.99 * double(angles.size())));
-  const std::size_t k = std::min(angles.size() - 1, rank > 0 ? rank - 1 : 0);
-  std::nth_element(angles.begin(), angles.begin() + std::ptrdiff_t(k), angles.end());
-  out.angle_p99_deg = angles[k];
-  out.angle_max_deg = *std::max_element(angles.begin(), angles.end());
+  set_angle_metrics(angles, sum, out);
 }
 
 }  // namespace
 
 bool is_direction_layer(const std::string& name) {
   return name == "bent_normal";
+}
+
+bool is_elevation_layer(const std::string& name) {
+  return name == "horizon";
 }
 
 LayerMetrics compare_layer(const Layer& method, const Layer& reference, const Layer* stderr_layer, int width,
@@ -77,6 +104,7 @@ LayerMetrics compare_layer(const Layer& method, const Layer& reference, const La
       const std::size_t t = std::size_t(y) * width + x;
       for (int c = 0; c < channels; ++c) {
         const double m = method.data[t * channels + c], r = reference.data[t * channels + c];
+        if (std::isinf(m) || std::isinf(r)) continue;  // a horizon distance without a caster
         const double d = m - r, a = std::abs(d);
         sum_abs += a;
         sum_sq += d * d;
@@ -94,6 +122,7 @@ LayerMetrics compare_layer(const Layer& method, const Layer& reference, const La
   }
   const double n = double(abs_diff.size());
   LayerMetrics out;
+  if (abs_diff.empty()) return out;  // nothing finite on both sides
   out.values = abs_diff.size();
   out.mae = sum_abs / n;
   out.rmse = std::sqrt(sum_sq / n);
@@ -111,6 +140,7 @@ LayerMetrics compare_layer(const Layer& method, const Layer& reference, const La
   out.excess_rmse = std::sqrt(std::max(out.rmse * out.rmse - out.noise_rmse * out.noise_rmse, 0.0));
   if (channels == 3 && is_direction_layer(method.name))
     add_angle_metrics(method, reference, width, region, out);
+  if (is_elevation_layer(method.name)) add_elevation_metrics(method, reference, width, region, out);
   return out;
 }
 

@@ -26,12 +26,16 @@ struct LayerMetrics {
   double reference_mean = 0;
   std::size_t values = 0;  // texels x channels compared
   // Direction layers (bent_normal): the angle in degrees between the method's and the reference's vectors,
-  // over the texels where both are non-zero: mean, 99th percentile (nearest rank) and max.
+  // over the texels where both are non-zero; elevation layers (horizon): the elevation error in degrees of
+  // every channel: mean, 99th percentile (nearest rank) and max.
   std::optional<double> angle_mean_deg, angle_p99_deg, angle_max_deg;
 };
 
-// Whether a layer of this name holds a direction (3 channels, compared by angle as well).
+// Whether a layer of this name holds a direction (3 channels, compared by angle as well), or sines of
+// elevations (horizon: each channel's elevation error in degrees fills the angle metrics). Values that are
+// infinite on either side (horizon_distance where no caster was found) are left out of every metric.
 bool is_direction_layer(const std::string& name);
+bool is_elevation_layer(const std::string& name);
 
 // The region compared: texels [crop, width - crop) x [crop, height - crop).
 struct CompareRegion {

@@ -1,0 +1,91 @@
+#include "reference/horizon_reference.hpp"
+
+#include <embree3/rtcore.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/azimuth.hpp"
+#include "reference/embree_field.hpp"
+
+namespace hfbake {
+namespace {
+
+RTCRayHit ray_from(const Vec3& o, double c, double s, double e) {
+  RTCRayHit h;
+  h.ray.org_x = float(o.x), h.ray.org_y = float(o.y), h.ray.org_z = float(o.z);
+  h.ray.dir_x = float(std::cos(e) * c), h.ray.dir_y = float(std::cos(e) * s),
+  h.ray.dir_z = float(std::sin(e));
+  h.ray.tnear = 0.0f;
+  h.ray.tfar = std::numeric_limits<float>::infinity();
+  h.ray.time = 0.0f;
+  h.ray.mask = 0xffffffffu;
+  h.ray.id = 0;
+  h.ray.flags = 0;
+  h.hit.geomID = h.hit.primID = h.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return h;
+}
+
+}  // namespace
+
+ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool distance, const RunControl& rc,
+                                           int iterations) {
+  ReferenceHorizons out;
+  out.K = K;
+  const std::size_t N = f.texel_count();
+  out.sin_elevation.assign(N * std::size_t(K), 0.0f);
+  if (distance) out.distance.assign(N * std::size_t(K), 0.0f);
+  const reference::EmbreeField geometry(f, reference::GeometryKind::grid, 1);
+  std::vector<double> cos_phi, sin_phi;
+  azimuth_table(K, cos_phi, sin_phi);
+  const double lift = std::max(1e-5 * f.texel_size, geometry.float_floor());
+  tbb::parallel_for(0, f.height, [&](int j) {
+    rc.check();
+    RTCIntersectContext context;
+    for (int i = 0; i < f.width; ++i) {
+      const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
+      const std::size_t t = f.index(i, j);
+      for (int k = 0; k < K; ++k) {
+        // lo: an occluded elevation (straight down always is), hi: a free one (straight up).
+        double lo = -kPi / 2, hi = kPi / 2, lo_distance = 0;
+        for (int it = 0; it < iterations; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          RTCRayHit h = ray_from(o, cos_phi[k], sin_phi[k], mid);
+          rtcInitIntersectContext(&context);
+          rtcIntersect1(geometry.scene(), &context, &h);
+          if (h.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+            lo = mid;
+            lo_distance = h.ray.tfar;
+          } else {
+            hi = mid;
+          }
+        }
+        out.sin_elevation[t * K + k] = float(std::sin(lo));
+        if (distance) out.distance[t * K + k] = float(lo_distance);
+      }
+    }
+  });
+  return out;
+}
+
+void add_reference_horizons(const HeightField& field, const std::vector<const LayerSet*>& methods,
+                            LayerSet& reference, const RunControl& rc) {
+  if (reference.find("horizon") || reference.find("horizon_distance")) return;
+  const Layer *horizon = nullptr, *distance = nullptr;
+  for (const LayerSet* m : methods) {
+    if (!horizon) horizon = m->find("horizon");
+    if (!distance) distance = m->find("horizon_distance");
+  }
+  if (!horizon && !distance) return;
+  const Layer& shape = horizon ? *horizon : *distance;
+  const int K = shape.channel_count();
+  const bool same_k = !horizon || !distance || distance->channel_count() == K;
+  ReferenceHorizons h = trace_reference_horizons(field, K, distance && same_k, rc);
+  if (horizon) reference.layers.push_back({"horizon", horizon->channels, std::move(h.sin_elevation)});
+  if (distance && same_k)
+    reference.layers.push_back({"horizon_distance", distance->channels, std::move(h.distance)});
+}
+
+}  // namespace hfbake
