@@ -32,9 +32,9 @@ std::vector<OutputLayers> job_outputs(const Job& job) {
 }
 
 std::string list_layers(const OutputLayers& o) {
-  std::vector<std::string> names;
-  for (const auto& [name, n] : o.channels) names.push_back(name);
-  return o.stem + " writes " + (names.empty() ? std::string("nothing") : quoted_list(names));
+  std::string names;
+  for (const auto& [name, n] : o.channels) names += (names.empty() ? "\"" : ", \"") + name + "\"";
+  return o.stem + " writes " + (names.empty() ? std::string("nothing") : names);
 }
 
 struct Channel {
