@@ -70,7 +70,8 @@ std::vector<std::string> layer_suffixes(const std::string& layer, int channels) 
 std::vector<PlannedTexture> plan_textures(const Job& job) {
   std::vector<PlannedTexture> plan;
   const nlohmann::json* list = nullptr;
-  if (job.doc.contains("output") && job.doc["output"].contains("textures")) list = &job.doc["output"]["textures"];
+  if (job.doc.contains("output") && job.doc["output"].contains("textures"))
+    list = &job.doc["output"]["textures"];
   if (!list) return plan;
   const std::string file = job.file.string();
   const bool repeat = job.doc.contains("height") && job.doc["height"].value("wrap", "clamp") == "repeat";
@@ -125,8 +126,9 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
       fail(t.contains("space") ? "space" : "y", "applies to bent_normal, which this entry does not write");
     base.space = t.value("space", "tangent") == "world" ? NormalSpace::world : NormalSpace::tangent;
     if (base.space == NormalSpace::world && t.contains("y"))
-      fail("y", "world space has no green convention (G is hfbake's +y, image down); \"y\" applies to "
-                "\"space\": \"tangent\"");
+      fail("y",
+           "world space has no green convention (G is hfbake's +y, image down); \"y\" applies to "
+           "\"space\": \"tangent\"");
     base.green = t.value("y", "opengl") == "directx" ? GreenAxis::directx : GreenAxis::opengl;
     if (has_direction && base.transfer == Transfer::srgb)
       fail("transfer", "bent_normal is a direction: normal maps are encoded 0.5 + 0.5 n, never sRGB");
@@ -211,8 +213,8 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
             suffix = suffixes[0];
           } else if (std::find(suffixes.begin(), suffixes.end(), suffix) == suffixes.end()) {
             throw InputError(file, ch.pointer,
-                             "\"" + ch.layer + "\" has no channel \"" + suffix + "\" (its channels: " +
-                                 quoted_list(suffixes) + ")");
+                             "\"" + ch.layer + "\" has no channel \"" + suffix +
+                                 "\" (its channels: " + quoted_list(suffixes) + ")");
           }
           pt.spec.channels.push_back({ch.layer, 0, 0});
           pt.suffixes.push_back(suffix);

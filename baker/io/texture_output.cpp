@@ -48,7 +48,8 @@ TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
     const Layer* layer = layers.find(s.layer);
     if (!layer || s.channel < 0 || s.channel >= layer->channel_count() ||
         layer->data.size() != n * std::size_t(layer->channel_count()))
-      throw std::logic_error("texture_pixels: no channel " + std::to_string(s.channel) + " in layer " + s.layer);
+      throw std::logic_error("texture_pixels: no channel " + std::to_string(s.channel) + " in layer " +
+                             s.layer);
     taps[c] = {layer->data.data() + s.channel, layer->channel_count(), 0};
   }
   const int p = spec.padding;
@@ -60,13 +61,17 @@ TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
   const double top = spec.bits == 8 ? 255.0 : 65535.0;
   // The sign of each channel in the chosen frame (normal maps): tangent space with OpenGL's green looks
   // along image up, -y.
-  const double sign[3] = {1, spec.normal_map && spec.space == NormalSpace::tangent && spec.green == GreenAxis::opengl ? -1.0 : 1.0, 1};
+  const double sign[3] = {
+      1,
+      spec.normal_map && spec.space == NormalSpace::tangent && spec.green == GreenAxis::opengl ? -1.0 : 1.0,
+      1};
   for (int y = 0; y < out.height; ++y) {
     const int sy = source_index(y, layers.height, p, spec.repeat);
     for (int x = 0; x < out.width; ++x) {
       const int sx = source_index(x, layers.width, p, spec.repeat);
       const std::size_t src = std::size_t(sy) * std::size_t(layers.width) + std::size_t(sx);
-      std::uint16_t* dst = out.values.data() + (std::size_t(y) * std::size_t(out.width) + std::size_t(x)) * nc;
+      std::uint16_t* dst =
+          out.values.data() + (std::size_t(y) * std::size_t(out.width) + std::size_t(x)) * nc;
       for (int c = 0; c < nc; ++c) {
         double v = taps[c].data ? double(taps[c].data[src * std::size_t(taps[c].stride)]) : taps[c].constant;
         if (spec.normal_map)

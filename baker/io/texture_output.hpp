@@ -20,8 +20,9 @@ struct TextureSource {
 };
 
 // The frame a direction layer (bent_normal) is written in:
-//   world:   hfbake's world frame as stored in the EXR: R = +x (image right), G = +y (image down), B = +z (up).
-//   tangent: the frame of the flat base the height field displaces (the texture's own u, v and its normal):
+//   world:   hfbake's world frame as stored in the EXR: R = +x (image right), G = +y (image down), B = +z
+//   (up). tangent: the frame of the flat base the height field displaces (the texture's own u, v and its
+//   normal):
 //            R = +x (image right), B = +z, G = image up (-y) for "opengl", image down (+y) for "directx".
 enum class NormalSpace { world, tangent };
 enum class GreenAxis { opengl, directx };

@@ -52,7 +52,8 @@ Pixels read(const fs::path& file, const std::string& channel_prefix = "") {
 json job(const fs::path& out, const json& textures) {
   return {{"version", 1},
           {"name", "slope"},
-          {"height", {{"procedural", {{"kind", "slope"}, {"size", {33, 33}}, {"angle_deg", 30}, {"aspect_deg", 90}}}}},
+          {"height",
+           {{"procedural", {{"kind", "slope"}, {"size", {33, 33}}, {"angle_deg", 30}, {"aspect_deg", 90}}}}},
           {"bake", {{{"method", "p1"}, {"directions", 16}, {"layers", {"ao", "vsky", "bent_normal"}}}}},
           {"output", {{"dir", out.string()}, {"pixel_type", "float"}, {"textures", textures}}}};
 }
@@ -88,10 +89,11 @@ TEST(TextureCli, AoTexturesAreTheExrValuesRounded) {
 TEST(TextureCli, SlopeBentNormalsFollowTheDocumentedConventions) {
   TempFolder dir;
   const fs::path out = dir / "out";
-  const json textures = json::array({{{"layers", {"bent_normal"}}, {"space", "world"}, {"format", "tif"}, {"bits", 16}},
-                                     {{"layers", {"bent_normal"}}, {"y", "opengl"}, {"bits", 16}},
-                                     {{"pack", "bn_dx"}, {"channels", {{"R", "ao"}}}, {"format", "tga"}},
-                                     {{"layers", {"bent_normal"}}, {"y", "directx"}, {"format", "tga"}}});
+  const json textures =
+      json::array({{{"layers", {"bent_normal"}}, {"space", "world"}, {"format", "tif"}, {"bits", 16}},
+                   {{"layers", {"bent_normal"}}, {"y", "opengl"}, {"bits", 16}},
+                   {{"pack", "bn_dx"}, {"channels", {{"R", "ao"}}}, {"format", "tga"}},
+                   {{"layers", {"bent_normal"}}, {"y", "directx"}, {"format", "tga"}}});
   const auto r = run_hfbake(dir.path(), "bake --quiet " + write(dir, "j.json", job(out, textures)).string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The plane's normal in closed form: tilted 30 degrees towards its aspect, +y.
@@ -119,10 +121,14 @@ TEST(TextureCli, BadTextureEntriesAreOneLineErrorsAtTheirPointer) {
   } cases[] = {
       {{{"layers", {"ao"}}, {"bits", 16}, {"format", "tga"}}, "/output/textures/0/bits", "TGA holds 8 bits"},
       {{{"layers", {"obscurance"}}}, "/output/textures/0", "no bake entry writes"},
-      {{{"layers", {"bent_normal"}}, {"space", "world"}, {"y", "opengl"}}, "/output/textures/0/y", "world space"},
+      {{{"layers", {"bent_normal"}}, {"space", "world"}, {"y", "opengl"}},
+       "/output/textures/0/y",
+       "world space"},
       {{{"layers", {"ao"}}, {"y", "opengl"}}, "/output/textures/0/y", "bent_normal"},
       {{{"layers", {"ao"}}, {"methods", {"lsao"}}}, "/output/textures/0/methods/0", "no bake output"},
-      {{{"pack", "x"}, {"channels", {{"R", "bent_normal.Q"}}}}, "/output/textures/0/channels/R", "has no channel"},
+      {{{"pack", "x"}, {"channels", {{"R", "bent_normal.Q"}}}},
+       "/output/textures/0/channels/R",
+       "has no channel"},
       {{{"layers", {"ao"}}, {"bits", 12}}, "/output/textures/0/bits", ""},
       {{{"layers", {"ao"}}, {"pack", "x"}}, "/output/textures/0", ""},
   };
@@ -144,8 +150,9 @@ TEST(TextureCli, BadTextureEntriesAreOneLineErrorsAtTheirPointer) {
 
 TEST(TextureCli, TwoEntriesWritingOneFileAreRefused) {
   TempFolder dir;
-  const fs::path f = write(dir, "j.json",
-                           job(dir / "out", json::array({{{"layers", {"ao"}}}, {{"layers", {"ao", "vsky"}}, {"bits", 16}}})));
+  const fs::path f = write(
+      dir, "j.json",
+      job(dir / "out", json::array({{{"layers", {"ao"}}}, {{"layers", {"ao", "vsky"}}, {"bits", 16}}})));
   const auto r = run_hfbake(dir.path(), "validate " + f.string());
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;

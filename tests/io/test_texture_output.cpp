@@ -90,8 +90,8 @@ TEST(Texture, LinearFilesCarryNoColourCurveAndSrgbIsTheStandardCurve) {
   LayerSet s;
   s.width = 4;
   s.height = 1;
-  s.add("direct", rgb_channels()).data = {0.0f, 0.5f, 1.0f, 0.002f, 0.2f, 0.8f,
-                                          0.25f, 0.75f, 0.04f, 0.5f, 0.5f, 0.5f};
+  s.add("direct", rgb_channels()).data = {0.0f,  0.5f,  1.0f,  0.002f, 0.2f, 0.8f,
+                                          0.25f, 0.75f, 0.04f, 0.5f,   0.5f, 0.5f};
   TextureSpec spec;
   spec.channels = {{"direct", 0, 0}, {"direct", 1, 0}, {"direct", 2, 0}};
   spec.transfer = Transfer::srgb;
@@ -170,10 +170,10 @@ TEST(Texture, PaddingRepeatsTheEdgeOrContinuesTheTile) {
   ASSERT_EQ(clamp.width, 7);
   ASSERT_EQ(clamp.height, 6);
   auto at = [](const TexturePixels& p, int x, int y) { return p.values[std::size_t(y) * p.width + x]; };
-  EXPECT_EQ(at(clamp, 0, 0), 0);                          // corner: texel (0, 0)
-  EXPECT_EQ(at(clamp, 6, 5), 255);                        // corner: texel (2, 1)
-  EXPECT_EQ(at(clamp, 3, 2), std::round(0.2 * 255));      // texel (1, 0)
-  EXPECT_EQ(at(clamp, 3, 0), std::round(0.2 * 255));      // above it: the edge repeated
+  EXPECT_EQ(at(clamp, 0, 0), 0);                      // corner: texel (0, 0)
+  EXPECT_EQ(at(clamp, 6, 5), 255);                    // corner: texel (2, 1)
+  EXPECT_EQ(at(clamp, 3, 2), std::round(0.2 * 255));  // texel (1, 0)
+  EXPECT_EQ(at(clamp, 3, 0), std::round(0.2 * 255));  // above it: the edge repeated
   spec.repeat = true;
   const TexturePixels tile = texture_pixels(s, spec);
   EXPECT_EQ(at(tile, 0, 2), std::round(0.2 * 255));  // two left of texel (0, 0): texel (1, 0)

@@ -149,7 +149,8 @@ TEST(Relief, LidarDemAgreesWithDenseRaySampling) {
   std::uint64_t s = 12345;
   for (int n = 0; n < 300; ++n) {
     s = s * 6364136223846793005ull + 1442695040888963407ull;
-    texels.emplace_back(12 + int((s >> 33) % std::uint64_t(w - 24)), 12 + int((s >> 13) % std::uint64_t(h - 24)));
+    texels.emplace_back(12 + int((s >> 33) % std::uint64_t(w - 24)),
+                        12 + int((s >> 13) % std::uint64_t(h - 24)));
   }
   // The whole DEM, as a user would bake it.
   const LayerSet out = bake_relief(f, settings(K, R, true), {});
@@ -175,16 +176,19 @@ TEST(Relief, LidarDemAgreesWithDenseRaySampling) {
     }
     const std::size_t t = f.index(i, j);
     worst_svf = std::max(worst_svf, std::abs(out.find("svf")->data[t] - (1 - svf / K)));
-    worst_pos = std::max(worst_pos, std::abs(out.find("openness_positive")->data[t] - (90 - up_sum / K / kDeg)));
-    worst_neg = std::max(worst_neg, std::abs(out.find("openness_negative")->data[t] - (90 + down_sum / K / kDeg)));
+    worst_pos =
+        std::max(worst_pos, std::abs(out.find("openness_positive")->data[t] - (90 - up_sum / K / kDeg)));
+    worst_neg =
+        std::max(worst_neg, std::abs(out.find("openness_negative")->data[t] - (90 + down_sum / K / kDeg)));
   }
   // The bounds; the march is exact, so the differences are the sampling's (printed).
   EXPECT_LT(worst_h, 0.5);
   EXPECT_LT(worst_pos, 0.5);
   EXPECT_LT(worst_neg, 0.5);
   EXPECT_LT(worst_svf, 0.002);
-  std::printf("max |difference| over %zu texels: horizon %.4f deg, openness + %.4f deg, - %.4f deg, svf %.6f\n",
-              texels.size(), worst_h, worst_pos, worst_neg, worst_svf);
+  std::printf(
+      "max |difference| over %zu texels: horizon %.4f deg, openness + %.4f deg, - %.4f deg, svf %.6f\n",
+      texels.size(), worst_h, worst_pos, worst_neg, worst_svf);
 }
 
 }  // namespace

@@ -26,23 +26,22 @@ double exit_t(double x0, double d, int n) {
   return std::numeric_limits<double>::infinity();
 }
 
-}  // namespace
-
-HorizonPair radius_horizon(const HeightField& field, int i, int j, double dx, double dy, double radius) {
+// The march, with `height(ci, cj)` the corner heights (direct reads inside the field, wrapped or clamped
+// reads near its border).
+template <class Height>
+HorizonPair march(const HeightField& field, int i, int j, double dx, double dy, double t_end, Height height) {
   const double z0 = field.z[field.index(i, j)];
-  double t_end = radius / field.texel_size;
-  if (field.wrap == Wrap::clamp)
-    t_end = std::min({t_end, exit_t(i, dx, field.width), exit_t(j, dy, field.height)});
   HorizonPair h;
   if (!(t_end > 0)) return h;
   h.up = -std::numeric_limits<double>::infinity();
   h.down = std::numeric_limits<double>::infinity();
+  const double inv_texel = 1 / field.texel_size;
   auto visit = [&](double t) {
     const double x = i + t * dx, y = j + t * dy;
     const double fx = std::floor(x), fy = std::floor(y);
     const int ci = int(fx), cj = int(fy);
-    const double z = facet_height(x - fx, y - fy, [&](int di, int dj) { return double(field.at(ci + di, cj + dj)); });
-    const double slope = (z - z0) / (t * field.texel_size);
+    const double z = facet_height(x - fx, y - fy, [&](int di, int dj) { return height(ci + di, cj + dj); });
+    const double slope = (z - z0) / t * inv_texel;
     h.up = std::max(h.up, slope);
     h.down = std::min(h.down, slope);
   };
@@ -59,6 +58,22 @@ HorizonPair radius_horizon(const HeightField& field, int i, int j, double dx, do
   visit(t_end);
   h.any = true;
   return h;
+}
+
+}  // namespace
+
+HorizonPair radius_horizon(const HeightField& field, int i, int j, double dx, double dy, double radius) {
+  double t_end = radius / field.texel_size;
+  const int reach = int(std::ceil(t_end)) + 1;
+  if (i - reach >= 0 && j - reach >= 0 && i + reach < field.width && j + reach < field.height) {
+    const float* z = field.z.data();
+    const std::size_t w = std::size_t(field.width);
+    return march(field, i, j, dx, dy, t_end,
+                 [z, w](int a, int b) { return double(z[std::size_t(b) * w + std::size_t(a)]); });
+  }
+  if (field.wrap == Wrap::clamp)
+    t_end = std::min({t_end, exit_t(i, dx, field.width), exit_t(j, dy, field.height)});
+  return march(field, i, j, dx, dy, t_end, [&field](int a, int b) { return double(field.at(a, b)); });
 }
 
 }  // namespace hfbake

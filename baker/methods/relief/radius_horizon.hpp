@@ -14,7 +14,7 @@ namespace hfbake {
 // radius. The march evaluates exactly those points: the result is exact, not sampled.
 struct HorizonPair {
   double up = 0, down = 0;  // tangents of the highest and lowest elevation: max and min of (z - z0) / d
-  bool any = false;         // false: no surface within the radius (a clamp border right behind); up = down = 0
+  bool any = false;  // false: no surface within the radius (a clamp border right behind); up = down = 0
 };
 
 // radius: world units. clamp fields end at their border (the border point is the last one evaluated);

@@ -53,8 +53,10 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
     return std::find(s.layers.begin(), s.layers.end(), name) != s.layers.end();
   };
   float* svf = wants("svf") ? out.add("svf", mono_channels()).data.data() : nullptr;
-  float* pos = wants("openness_positive") ? out.add("openness_positive", mono_channels()).data.data() : nullptr;
-  float* neg = wants("openness_negative") ? out.add("openness_negative", mono_channels()).data.data() : nullptr;
+  float* pos =
+      wants("openness_positive") ? out.add("openness_positive", mono_channels()).data.data() : nullptr;
+  float* neg =
+      wants("openness_negative") ? out.add("openness_negative", mono_channels()).data.data() : nullptr;
   float* hor = wants("horizon_deg") ? out.add("horizon_deg", indexed_channels(K)).data.data() : nullptr;
   std::atomic<int> rows_done{0};
   tbb::parallel_for(0, h, [&](int j) {
@@ -103,7 +105,8 @@ LayerSet bake_relief(const Scene& scene, const nlohmann::json& params, const Run
 MethodInfo relief_method() {
   MethodInfo m;
   m.name = "relief";
-  m.summary = "GIS relief quantities from radius-limited horizons: sky-view factor, openness, horizons in degrees";
+  m.summary =
+      "GIS relief quantities from radius-limited horizons: sky-view factor, openness, horizons in degrees";
   m.read = [](Params& in, const MethodContext& c) { read_relief_settings(in, c.field); };
   m.bake = bake_relief;
   m.working_bytes = [](const nlohmann::json&, const MethodContext&) { return 0.0; };  // nothing per texel
