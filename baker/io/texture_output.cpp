@@ -74,8 +74,10 @@ TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
           out.values.data() + (std::size_t(y) * std::size_t(out.width) + std::size_t(x)) * nc;
       for (int c = 0; c < nc; ++c) {
         double v = taps[c].data ? double(taps[c].data[src * std::size_t(taps[c].stride)]) : taps[c].constant;
+        // 0 encodes as 0.5, an exact rounding tie (127.5, 32767.5): float noise of a bake (a flat field's
+        // bent normal has |y| ~ 1e-9) would pick either side of it, so components within 1e-6 of 0 are 0.
         if (spec.normal_map)
-          v = 0.5 + 0.5 * sign[c] * v;
+          v = 0.5 + 0.5 * sign[c] * (std::abs(v) < 1e-6 ? 0.0 : v);
         else if (spec.transfer == Transfer::srgb && std::isfinite(v))
           v = srgb_encode(std::clamp(v, 0.0, 1.0));
         v = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 0.0;

@@ -31,7 +31,9 @@ enum class Transfer { linear, srgb };
 struct TextureSpec {
   // 1 (grey), 3 (RGB) or 4 (RGBA) channels. For a normal map: the X, Y, Z channels of one direction layer.
   std::vector<TextureSource> channels;
-  bool normal_map = false;  // encode 0.5 + 0.5 n in `space` (never through the transfer curve)
+  // Encode 0.5 + 0.5 n in `space` (never through the transfer curve). Components within 1e-6 of 0 are
+  // written as 0 (128 or 32768: 0.5 is a rounding tie that float noise would otherwise decide).
+  bool normal_map = false;
   NormalSpace space = NormalSpace::tangent;
   GreenAxis green = GreenAxis::opengl;
   Transfer transfer = Transfer::linear;  // srgb: the sRGB encoding curve (IEC 61966-2-1) before quantising

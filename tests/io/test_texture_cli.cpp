@@ -49,11 +49,12 @@ Pixels read(const fs::path& file, const std::string& channel_prefix = "") {
 }
 
 // A 33 x 33 plane at 30 degrees facing +y (aspect 90: downhill towards +y), p1 with ao and bent normals.
-json job(const fs::path& out, const json& textures) {
+json job(const fs::path& out, const json& textures,
+         const json& procedural = {
+             {"kind", "slope"}, {"size", {33, 33}}, {"angle_deg", 30}, {"aspect_deg", 90}}) {
   return {{"version", 1},
           {"name", "slope"},
-          {"height",
-           {{"procedural", {{"kind", "slope"}, {"size", {33, 33}}, {"angle_deg", 30}, {"aspect_deg", 90}}}}},
+          {"height", {{"procedural", procedural}}},
           {"bake", {{{"method", "p1"}, {"directions", 16}, {"layers", {"ao", "vsky", "bent_normal"}}}}},
           {"output", {{"dir", out.string()}, {"pixel_type", "float"}, {"textures", textures}}}};
 }
@@ -112,6 +113,30 @@ TEST(TextureCli, SlopeBentNormalsFollowTheDocumentedConventions) {
   EXPECT_NEAR(dx.values[t + 1], 0.5 + 0.5 * n[1], 0.004);  // DirectX: G = image down = +y (8 bits)
   EXPECT_GT(dx.values[t + 1], 0.6);
   EXPECT_LT(gl.values[t + 1], 0.4);
+}
+
+TEST(TextureCli, FlatFieldIsHalfHalfOneInBothTangentConventions) {
+  TempFolder dir;
+  const fs::path out = dir / "out";
+  const json textures = json::array({{{"layers", {"bent_normal"}}, {"y", "opengl"}, {"bits", 16}},
+                                     {{"layers", {"bent_normal"}}, {"y", "directx"}, {"format", "tif"}}});
+  const json flat = {{"kind", "flat"}, {"size", {17, 17}}};
+  const auto r =
+      run_hfbake(dir.path(), "bake --quiet " + write(dir, "j.json", job(out, textures, flat)).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Pixels gl = read(out / "textures" / "slope.p1.bent_normal.png");
+  const Pixels dx = read(out / "textures" / "slope.p1.bent_normal.tif");
+  ASSERT_EQ(gl.values.size(), 17u * 17u * 3u);
+  ASSERT_EQ(dx.values.size(), gl.values.size());
+  for (std::size_t t = 0; t < 17 * 17; ++t) {
+    // 0.5 is stored as round(0.5 * 65535) = 32768 and round(0.5 * 255) = 128.
+    EXPECT_EQ(std::lround(gl.values[3 * t] * 65535), 32768);
+    EXPECT_EQ(std::lround(gl.values[3 * t + 1] * 65535), 32768);
+    EXPECT_EQ(std::lround(gl.values[3 * t + 2] * 65535), 65535);
+    EXPECT_EQ(std::lround(dx.values[3 * t] * 255), 128);
+    EXPECT_EQ(std::lround(dx.values[3 * t + 1] * 255), 128);
+    EXPECT_EQ(std::lround(dx.values[3 * t + 2] * 255), 255);
+  }
 }
 
 TEST(TextureCli, BadTextureEntriesAreOneLineErrorsAtTheirPointer) {
