@@ -1,6 +1,7 @@
 #include "cli/method_dispatch.hpp"
 
 #include "cli/scene_loader.hpp"
+#include "cli/texture_plan.hpp"
 #include "core/error.hpp"
 
 namespace hfbake {
@@ -37,6 +38,13 @@ std::vector<std::string> resolve_job(Job& job) {
   if (job.has_reference && errors.empty()) {
     try {
       job.reference_resolved = read_reference_options(job.doc, context, file).resolved;
+    } catch (const InputError& e) {
+      errors.push_back(e.line());
+    }
+  }
+  if (errors.empty()) {
+    try {
+      plan_textures(job);  // output.textures against the resolved layers
     } catch (const InputError& e) {
       errors.push_back(e.line());
     }

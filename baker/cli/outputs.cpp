@@ -9,10 +9,12 @@
 #include <fstream>
 #include <string_view>
 
+#include "cli/texture_plan.hpp"
 #include "core/error.hpp"
 #include "io/exr_output.hpp"
 #include "io/geotiff_output.hpp"
 #include "io/preview.hpp"
+#include "io/texture_output.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -127,6 +129,7 @@ void OutputStage::write_layers(const std::string& stem, const LayerSet& layers) 
   write_exr(stage_ / exr, layers, options);
   staged_.push_back(exr);
   if (job_.output.geotiff) write_geotiffs(stem, layers);
+  write_textures(stem, layers);
   if (!job_.output.previews) return;
   PreviewOptions preview;
   preview.display = job_.output.preview_display;
@@ -156,6 +159,26 @@ void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers
   }
 }
 
+void OutputStage::write_textures(const std::string& stem, const LayerSet& layers) {
+  for (PlannedTexture& t : plan_textures(job_)) {
+    if (t.stem != stem) continue;
+    for (std::size_t c = 0; c < t.spec.channels.size(); ++c) {  // suffix -> the layer's channel index
+      TextureSource& s = t.spec.channels[c];
+      if (s.layer.empty()) continue;
+      const Layer* layer = layers.find(s.layer);
+      const auto at = layer ? std::find(layer->channels.begin(), layer->channels.end(), t.suffixes[c])
+                            : std::vector<std::string>::const_iterator();
+      if (!layer || at == layer->channels.end())
+        throw std::logic_error("texture " + t.file + ": " + stem + " has no channel " + s.layer + "." +
+                               t.suffixes[c]);
+      s.channel = int(at - layer->channels.begin());
+    }
+    std::filesystem::create_directories((stage_ / t.file).parent_path());
+    write_texture(stage_ / t.file, layers, t.spec);
+    staged_.push_back(t.file);
+  }
+}
+
 void OutputStage::write_text(const std::string& filename, const std::string& text) {
   std::ofstream out(stage_ / filename, std::ios::binary);
   out << text;
@@ -169,6 +192,7 @@ std::vector<fs::path> OutputStage::commit() {
   for (const fs::path& name : staged_) {
     const fs::path target = job_.output.dir / name;
     std::error_code ec;
+    if (name.has_parent_path()) fs::create_directories(target.parent_path(), ec);  // textures/
     fs::rename(stage_ / name, target, ec);  // same folder tree: an atomic replace
     if (ec) throw InputError(target.string(), "", "cannot move into place: " + ec.message());
     final_paths.push_back(target);

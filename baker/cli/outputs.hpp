@@ -52,7 +52,8 @@ class OutputStage {
   const Job& job_;
   std::filesystem::path stage_;
   void write_geotiffs(const std::string& stem, const LayerSet& layers);
-  std::vector<std::filesystem::path> staged_;  // file names relative to the stage
+  void write_textures(const std::string& stem, const LayerSet& layers);  // output.textures of this stem
+  std::vector<std::filesystem::path> staged_;                            // file names relative to the stage
   std::vector<std::filesystem::path> stale_removed_;
   Georeference georeference_;
 };

@@ -7,14 +7,15 @@
 #include "methods/nlp/bake_nlp.hpp"
 #include "methods/p1/bake_p1.hpp"
 #include "methods/p2/bake_p2.hpp"
+#include "methods/relief/relief.hpp"
 
 namespace hfbake {
 
 std::span<const MethodInfo> method_table() {
   // One line per method.
   static const std::vector<MethodInfo> table = {
-      p1_method(),   p2_method(),       nlp_method(),  hbao_method(),
-      lsao_method(), farfield_method(), hsao_method(), vo_method(),
+      p1_method(),       p2_method(),   nlp_method(), hbao_method(),   lsao_method(),
+      farfield_method(), hsao_method(), vo_method(),  relief_method(),
   };
   return table;
 }
@@ -46,7 +47,8 @@ nlohmann::json resolve_method_params(const nlohmann::json& entry, const MethodCo
 }
 
 int layer_channel_count(const std::string& layer, const nlohmann::json& resolved) {
-  if (layer == "horizon" || layer == "horizon_distance") return resolved.value("directions", 64);
+  if (layer == "horizon" || layer == "horizon_distance" || layer == "horizon_deg")
+    return resolved.value("directions", 64);
   if (layer == "sh_visibility") return 16;
   if (layer == "sh_irradiance") return 48;
   if (layer == "bent_normal" || layer == "direct" || layer == "indirect" || layer == "total" ||

@@ -139,10 +139,12 @@ TEST(LoadEnvironment, CubeFacePatchLandsAtTheDocumentedDirection) {
   const struct {
     int face;
     Vec3 center, right, up;
-  } cases[] = {{0, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}},     // OpenEXR +x
-               {4, {1, 0, 0}, {0, -1, 0}, {0, 0, 1}},    // OpenEXR +z
-               {2, {0, 0, 1}, {0, 1, 0}, {1, 0, 0}},     // OpenEXR +y
-               {3, {0, 0, -1}, {0, 1, 0}, {-1, 0, 0}}};  // OpenEXR -y
+  } cases[] = {{0, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}},    // OpenEXR +x
+               {4, {1, 0, 0}, {0, -1, 0}, {0, 0, 1}},   // OpenEXR +z
+               {2, {0, 0, 1}, {0, 1, 0}, {1, 0, 0}},    // OpenEXR +y
+               {3, {0, 0, -1}, {0, 1, 0}, {-1, 0, 0}},  // OpenEXR -y
+               {1, {0, -1, 0}, {-1, 0, 0}, {0, 0, 1}},  // OpenEXR -x
+               {5, {-1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};  // OpenEXR -z
   for (const auto& c : cases) {
     TempFolder dir;
     const Environment env =

@@ -1,0 +1,127 @@
+#include "io/texture_output.hpp"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/error.hpp"
+#include "io/exr_output.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+// sRGB's encoding curve (IEC 61966-2-1) of a linear value in [0, 1].
+double srgb_encode(double v) {
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+}
+
+int source_index(int x, int n, int padding, bool repeat) {
+  const int s = x - padding;
+  if (repeat) return ((s % n) + n) % n;
+  return std::clamp(s, 0, n - 1);
+}
+
+}  // namespace
+
+TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
+  const int nc = int(spec.channels.size());
+  if (nc != 1 && nc != 3 && nc != 4) throw std::logic_error("texture_pixels: 1, 3 or 4 channels");
+  if (spec.bits != 8 && spec.bits != 16) throw std::logic_error("texture_pixels: 8 or 16 bits");
+  if (spec.normal_map && nc != 3) throw std::logic_error("texture_pixels: a normal map has 3 channels");
+  struct Tap {
+    const float* data = nullptr;
+    int stride = 0;
+    float constant = 0;
+  };
+  std::vector<Tap> taps(nc);
+  const std::size_t n = std::size_t(layers.width) * std::size_t(layers.height);
+  for (int c = 0; c < nc; ++c) {
+    const TextureSource& s = spec.channels[c];
+    if (s.layer.empty()) {
+      taps[c].constant = s.constant;
+      continue;
+    }
+    const Layer* layer = layers.find(s.layer);
+    if (!layer || s.channel < 0 || s.channel >= layer->channel_count() ||
+        layer->data.size() != n * std::size_t(layer->channel_count()))
+      throw std::logic_error("texture_pixels: no channel " + std::to_string(s.channel) + " in layer " +
+                             s.layer);
+    taps[c] = {layer->data.data() + s.channel, layer->channel_count(), 0};
+  }
+  const int p = spec.padding;
+  TexturePixels out;
+  out.width = layers.width + 2 * p;
+  out.height = layers.height + 2 * p;
+  out.channels = nc;
+  out.values.resize(std::size_t(out.width) * std::size_t(out.height) * std::size_t(nc));
+  const double top = spec.bits == 8 ? 255.0 : 65535.0;
+  // The sign of each channel in the chosen frame (normal maps): tangent space with OpenGL's green looks
+  // along image up, -y.
+  const double sign[3] = {
+      1,
+      spec.normal_map && spec.space == NormalSpace::tangent && spec.green == GreenAxis::opengl ? -1.0 : 1.0,
+      1};
+  for (int y = 0; y < out.height; ++y) {
+    const int sy = source_index(y, layers.height, p, spec.repeat);
+    for (int x = 0; x < out.width; ++x) {
+      const int sx = source_index(x, layers.width, p, spec.repeat);
+      const std::size_t src = std::size_t(sy) * std::size_t(layers.width) + std::size_t(sx);
+      std::uint16_t* dst =
+          out.values.data() + (std::size_t(y) * std::size_t(out.width) + std::size_t(x)) * nc;
+      for (int c = 0; c < nc; ++c) {
+        double v = taps[c].data ? double(taps[c].data[src * std::size_t(taps[c].stride)]) : taps[c].constant;
+        // 0 encodes as 0.5, an exact rounding tie (127.5, 32767.5): float noise of a bake (a flat field's
+        // bent normal has |y| ~ 1e-9) would pick either side of it, so components within 1e-6 of 0 are 0.
+        if (spec.normal_map)
+          v = 0.5 + 0.5 * sign[c] * (std::abs(v) < 1e-6 ? 0.0 : v);
+        else if (spec.transfer == Transfer::srgb && std::isfinite(v))
+          v = srgb_encode(std::clamp(v, 0.0, 1.0));
+        v = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 0.0;
+        dst[c] = std::uint16_t(std::round(v * top));
+      }
+    }
+  }
+  return out;
+}
+
+void write_texture(const fs::path& file, const LayerSet& layers, const TextureSpec& spec) {
+  const TexturePixels px = texture_pixels(layers, spec);
+  const std::string ext = file.extension().string();
+  if (spec.bits == 16 && ext == ".tga") throw std::logic_error("write_texture: TGA holds 8 bits");
+  const OIIO::TypeDesc type = spec.bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16;
+  OIIO::ImageSpec ispec(px.width, px.height, px.channels, type);
+  if (px.channels == 4) ispec.alpha_channel = 3;
+  // Data, not colour, unless the sRGB curve was asked for: no gAMA/sRGB chunk that a viewer would apply.
+  if (spec.transfer == Transfer::srgb && !spec.normal_map) ispec.attribute("oiio:ColorSpace", "sRGB");
+  if (ext == ".tif") ispec.attribute("compression", "zip");
+  if (ext == ".tga") ispec.attribute("compression", "rle");
+  // A packed RGBA texture's alpha is data of its own: never premultiplied into RGB.
+  ispec.attribute("oiio:UnassociatedAlpha", 1);
+  std::vector<std::uint8_t> bytes;
+  const void* data = px.values.data();
+  if (spec.bits == 8) {
+    bytes.assign(px.values.begin(), px.values.end());
+    data = bytes.data();
+  }
+  const fs::path tmp = temporary_sibling(file).string() + ext;  // keeps the extension: it picks the writer
+  std::error_code ec;
+  auto out = OIIO::ImageOutput::create(ext.substr(1));
+  if (!out || !out->open(tmp.string(), ispec) || !out->write_image(type, data) || !out->close()) {
+    std::string err = out ? out->geterror() : OIIO::geterror();
+    if (const auto nl = err.find('\n'); nl != std::string::npos) err.resize(nl);
+    fs::remove(tmp, ec);
+    throw InputError(file.string(), "", "cannot write the texture: " + err);
+  }
+  fs::rename(tmp, file, ec);
+  if (ec) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw InputError(file.string(), "", "cannot move the texture into place: " + ec.message());
+  }
+}
+
+}  // namespace hfbake

@@ -1,0 +1,60 @@
+// Engine-ready textures: chosen layers as linear 8- or 16-bit integer images (PNG, TIFF, TGA), channel
+// packs (R/G/B/A from named layers), normal maps of direction layers (0.5 + 0.5 n, world or tangent space,
+// OpenGL or DirectX green), and optional edge padding for atlases. README "Textures for game engines".
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/layers.hpp"
+
+namespace hfbake {
+
+// One channel of a texture: channel `channel` of layer `layer`, or a constant when `layer` is empty.
+struct TextureSource {
+  std::string layer;
+  int channel = 0;
+  float constant = 0;
+};
+
+// The frame a direction layer (bent_normal) is written in:
+//   world:   hfbake's world frame as stored in the EXR: R = +x (image right), G = +y (image down), B = +z
+//   (up). tangent: the frame of the flat base the height field displaces (the texture's own u, v and its
+//   normal):
+//            R = +x (image right), B = +z, G = image up (-y) for "opengl", image down (+y) for "directx".
+enum class NormalSpace { world, tangent };
+enum class GreenAxis { opengl, directx };
+enum class Transfer { linear, srgb };
+
+struct TextureSpec {
+  // 1 (grey), 3 (RGB) or 4 (RGBA) channels. For a normal map: the X, Y, Z channels of one direction layer.
+  std::vector<TextureSource> channels;
+  // Encode 0.5 + 0.5 n in `space` (never through the transfer curve). Components within 1e-6 of 0 are
+  // written as 0 (128 or 32768: 0.5 is a rounding tie that float noise would otherwise decide).
+  bool normal_map = false;
+  NormalSpace space = NormalSpace::tangent;
+  GreenAxis green = GreenAxis::opengl;
+  Transfer transfer = Transfer::linear;  // srgb: the sRGB encoding curve (IEC 61966-2-1) before quantising
+  int bits = 8;                          // 8 or 16
+  // Texels added on every side: (width + 2 p) x (height + 2 p). A padding texel repeats the nearest edge
+  // texel (clamp fields) or the texel one period away (repeat fields: the tile continues).
+  int padding = 0;
+  bool repeat = false;
+};
+
+// The texture's size and its quantised values, interleaved, rows top first: round(v * (2^bits - 1)) of
+// each channel's value v clamped to [0, 1] (NaN -> 0), after the normal-map encoding or the transfer curve.
+struct TexturePixels {
+  int width = 0, height = 0, channels = 0;
+  std::vector<std::uint16_t> values;
+};
+TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec);
+
+// Writes the texture to `file`; the format follows the extension (.png, .tif, .tga). 16 bits need PNG or
+// TIFF. sRGB-encoded files are tagged sRGB; linear ones carry no colour tag. Failure -> InputError naming
+// the file.
+void write_texture(const std::filesystem::path& file, const LayerSet& layers, const TextureSpec& spec);
+
+}  // namespace hfbake

@@ -1,0 +1,120 @@
+#include "methods/relief/relief.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <sstream>
+
+#include "core/azimuth.hpp"
+#include "methods/relief/radius_horizon.hpp"
+
+namespace hfbake {
+
+namespace {
+constexpr double kDegPerRad = 180 / kPi;
+}
+
+ReliefSettings read_relief_settings(Params& in, const FieldShape& field) {
+  ReliefSettings s;
+  s.directions = in.integer("directions", 16, 1, 4096);
+  s.search_radius = in.number("search_radius", 10 * field.texel_size, 1e-12, 1e12);
+  if (s.search_radius < field.texel_size)
+    in.fail("search_radius", "is shorter than one texel (" + std::to_string(field.texel_size) +
+                                 " world units): no surface point lies within it");
+  if (s.search_radius > 1e5 * field.texel_size)
+    in.fail("search_radius", "is more than 100000 texels: the march's cost grows with it");
+  s.compass = in.choice("azimuth_convention", "hfbake", {"hfbake", "compass"}) == "compass";
+  s.layers = in.layers({"svf", "openness_positive", "openness_negative", "horizon_deg"},
+                       {"svf", "openness_positive", "openness_negative"});
+  return s;
+}
+
+void relief_direction(int k, int K, bool compass, double& dx, double& dy) {
+  const double a = azimuth(k, K);
+  if (compass) {
+    dx = std::sin(a);
+    dy = -std::cos(a);
+  } else {
+    dx = std::cos(a);
+    dy = std::sin(a);
+  }
+}
+
+LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc) {
+  const int w = field.width, h = field.height, K = s.directions;
+  std::vector<double> dx(K), dy(K);
+  for (int k = 0; k < K; ++k) relief_direction(k, K, s.compass, dx[k], dy[k]);
+  LayerSet out;
+  out.width = w;
+  out.height = h;
+  auto wants = [&](const char* name) {
+    return std::find(s.layers.begin(), s.layers.end(), name) != s.layers.end();
+  };
+  float* svf = wants("svf") ? out.add("svf", mono_channels()).data.data() : nullptr;
+  float* pos =
+      wants("openness_positive") ? out.add("openness_positive", mono_channels()).data.data() : nullptr;
+  float* neg =
+      wants("openness_negative") ? out.add("openness_negative", mono_channels()).data.data() : nullptr;
+  float* hor = wants("horizon_deg") ? out.add("horizon_deg", indexed_channels(K)).data.data() : nullptr;
+  std::atomic<int> rows_done{0};
+  tbb::parallel_for(0, h, [&](int j) {
+    rc.check();
+    for (int i = 0; i < w; ++i) {
+      double sum_sin = 0, sum_up = 0, sum_down = 0;
+      const std::size_t t = field.index(i, j);
+      for (int k = 0; k < K; ++k) {
+        // No surface within the radius (beyond a clamp border): level in both senses, open sky.
+        const HorizonPair hp = radius_horizon(field, i, j, dx[k], dy[k], s.search_radius);
+        const double up = std::atan(hp.up), down = std::atan(hp.down);
+        sum_sin += std::sin(std::max(up, 0.0));
+        sum_up += up;
+        sum_down += down;
+        if (hor) hor[t * K + k] = float(up * kDegPerRad);
+      }
+      if (svf) svf[t] = float(1 - sum_sin / K);
+      if (pos) pos[t] = float(90 - sum_up / K * kDegPerRad);
+      if (neg) neg[t] = float(90 + sum_down / K * kDegPerRad);
+    }
+    rc.report(double(++rows_done) / h);
+  });
+  std::ostringstream az;
+  az.precision(10);
+  for (int k = 0; k < K; ++k) az << (k ? " " : "") << 360.0 * k / K;
+  out.attributes.emplace_back("hfbake:relief:azimuths_deg", az.str());
+  out.attributes.emplace_back(
+      "hfbake:relief:azimuth_convention",
+      s.compass ? "compass: direction k at azimuth 360 k / K clockwise from north; north = image top (-y), "
+                  "east = image right (+x)"
+                : "hfbake: direction k at phi = 360 k / K from +x (image right) towards +y (image down)");
+  out.attributes.emplace_back(
+      "hfbake:relief:definitions",
+      "beta_up/down(k): highest/lowest elevation angle of the triangulated surface within search_radius "
+      "along direction k (0 where no surface lies within it); svf = 1 - mean_k sin(max(beta_up, 0)); "
+      "openness_positive = mean_k (90 - beta_up) deg; openness_negative = mean_k (90 + beta_down) deg; "
+      "horizon_deg = beta_up per direction");
+  return out;
+}
+
+LayerSet bake_relief(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  Params in(params);
+  return bake_relief(scene.field, read_relief_settings(in, scene.field), rc);
+}
+
+MethodInfo relief_method() {
+  MethodInfo m;
+  m.name = "relief";
+  m.summary =
+      "GIS relief quantities from radius-limited horizons: sky-view factor, openness, horizons in degrees";
+  m.read = [](Params& in, const MethodContext& c) { read_relief_settings(in, c.field); };
+  m.bake = bake_relief;
+  m.working_bytes = [](const nlohmann::json&, const MethodContext&) { return 0.0; };  // nothing per texel
+  m.division = WorkDivision::texel_tiles;
+  m.division_note = "texel tiles with a halo of search_radius (each texel's horizons are its own)";
+  m.reads_normals = false;
+  m.reads_albedo = false;
+  return m;
+}
+
+}  // namespace hfbake

@@ -1,0 +1,38 @@
+// relief: the relief-visualisation quantities GIS users know from RVT, SAGA and GRASS, from horizons
+// limited to a search radius (radius_horizon.hpp): sky-view factor, positive and negative openness
+// (Yokoyama et al. 2002), and horizon elevation angles in degrees, with azimuths in hfbake's convention or
+// in compass terms. Definitions: README "GIS relief quantities".
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "core/layers.hpp"
+#include "core/run_control.hpp"
+#include "field/height_field.hpp"
+#include "field/scene.hpp"
+#include "methods/method_table.hpp"
+
+namespace hfbake {
+
+struct ReliefSettings {
+  int directions = 16;
+  double search_radius = 10;  // world units (default: 10 texels, RVT's 10 px)
+  bool compass = false;       // direction k at compass azimuth 360 k / K (north = image top, east = right)
+  std::vector<std::string> layers;
+};
+
+ReliefSettings read_relief_settings(Params& in, const FieldShape& field);
+
+// The horizontal unit direction (texel axes: x = columns, y = rows) of direction k of K: hfbake's phi_k =
+// 2 pi k / K from +x towards +y; compass: azimuth A_k = 2 pi k / K clockwise from north = image up (-y), so
+// east = +x: (sin A, -cos A).
+void relief_direction(int k, int K, bool compass, double& dx, double& dy);
+
+LayerSet bake_relief(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+// The same from the heights alone (tests).
+LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc);
+
+MethodInfo relief_method();
+
+}  // namespace hfbake

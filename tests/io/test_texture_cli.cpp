@@ -1,0 +1,189 @@
+// output.textures end to end (the hfbake binary): the textures equal the float EXR's values quantised by
+// the issue's formula, a slope's bent normals follow the documented world and tangent conventions (the
+// plane's normal in closed form is the truth), files appear under textures/ with the stable names, and
+// bad texture entries are refused by validate in one line with their JSON pointer, nothing written.
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "../cli/run_hfbake.hpp"
+#include "temp_folder.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using hfbake::cli_test::run_hfbake;
+using hfbake::test::TempFolder;
+using nlohmann::json;
+constexpr double kPi = 3.14159265358979323846;
+
+struct Pixels {
+  int width = 0, height = 0, channels = 0;
+  std::vector<float> values;  // read as float: 8/16-bit files come back as value / (2^bits - 1)
+  OIIO::TypeDesc type;
+};
+
+Pixels read(const fs::path& file, const std::string& channel_prefix = "") {
+  Pixels p;
+  auto in = OIIO::ImageInput::open(file.string());
+  if (!in) return p;
+  const OIIO::ImageSpec& spec = in->spec();
+  p.width = spec.width;
+  p.height = spec.height;
+  p.type = spec.format;
+  int first = 0, count = spec.nchannels;
+  if (!channel_prefix.empty()) {
+    count = 0;
+    for (int c = 0; c < spec.nchannels; ++c)
+      if (spec.channelnames[c].rfind(channel_prefix, 0) == 0) {
+        if (!count) first = c;
+        ++count;
+      }
+  }
+  p.channels = count;
+  p.values.resize(std::size_t(p.width) * p.height * count);
+  in->read_image(0, 0, first, first + count, OIIO::TypeDesc::FLOAT, p.values.data());
+  return p;
+}
+
+// A 33 x 33 plane at 30 degrees facing +y (aspect 90: downhill towards +y), p1 with ao and bent normals.
+json job(const fs::path& out, const json& textures,
+         const json& procedural = {
+             {"kind", "slope"}, {"size", {33, 33}}, {"angle_deg", 30}, {"aspect_deg", 90}}) {
+  return {{"version", 1},
+          {"name", "slope"},
+          {"height", {{"procedural", procedural}}},
+          {"bake", {{{"method", "p1"}, {"directions", 16}, {"layers", {"ao", "vsky", "bent_normal"}}}}},
+          {"output", {{"dir", out.string()}, {"pixel_type", "float"}, {"textures", textures}}}};
+}
+
+fs::path write(const TempFolder& dir, const std::string& name, const json& j) {
+  const fs::path f = dir / name;
+  std::ofstream(f) << j.dump(2);
+  return f;
+}
+
+TEST(TextureCli, AoTexturesAreTheExrValuesRounded) {
+  TempFolder dir;
+  for (int bits : {8, 16}) {
+    const fs::path out = dir / ("out" + std::to_string(bits));
+    const fs::path f = write(dir, "j.json", job(out, json::array({{{"layers", {"ao"}}, {"bits", bits}}})));
+    const auto r = run_hfbake(dir.path(), "bake --quiet " + f.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Pixels exr = read(out / "slope.p1.exr", "ao.");
+    const Pixels png = read(out / "textures" / "slope.p1.ao.png");
+    ASSERT_EQ(png.channels, 1);
+    ASSERT_EQ(png.width, 33);
+    EXPECT_EQ(png.type, bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
+    const double top = bits == 8 ? 255 : 65535;
+    double lowest = 1;
+    for (std::size_t i = 0; i < exr.values.size(); ++i) {
+      ASSERT_EQ(std::lround(png.values[i] * top), std::lround(std::round(double(exr.values[i]) * top))) << i;
+      lowest = std::min(lowest, double(exr.values[i]));
+    }
+    EXPECT_GT(lowest, 0.99);  // a plane: AO 1 (the values are not sRGB-brightened, not 226..255 of 1)
+  }
+}
+
+TEST(TextureCli, SlopeBentNormalsFollowTheDocumentedConventions) {
+  TempFolder dir;
+  const fs::path out = dir / "out";
+  const json textures =
+      json::array({{{"layers", {"bent_normal"}}, {"space", "world"}, {"format", "tif"}, {"bits", 16}},
+                   {{"layers", {"bent_normal"}}, {"y", "opengl"}, {"bits", 16}},
+                   {{"pack", "bn_dx"}, {"channels", {{"R", "ao"}}}, {"format", "tga"}},
+                   {{"layers", {"bent_normal"}}, {"y", "directx"}, {"format", "tga"}}});
+  const auto r = run_hfbake(dir.path(), "bake --quiet " + write(dir, "j.json", job(out, textures)).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The plane's normal in closed form: tilted 30 degrees towards its aspect, +y.
+  const double n[3] = {0, std::sin(30 * kPi / 180), std::cos(30 * kPi / 180)};
+  const Pixels world = read(out / "textures" / "slope.p1.bent_normal.tif");
+  const Pixels gl = read(out / "textures" / "slope.p1.bent_normal.png");
+  const Pixels dx = read(out / "textures" / "slope.p1.bent_normal.tga");
+  ASSERT_EQ(world.channels, 3);
+  ASSERT_EQ(gl.channels, 3);
+  ASSERT_EQ(dx.channels, 3);
+  const std::size_t t = (16 * 33 + 16) * 3;  // the centre texel
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(world.values[t + c], 0.5 + 0.5 * n[c], 0.003) << "world " << c;
+  EXPECT_NEAR(gl.values[t + 0], 0.5, 0.003);
+  EXPECT_NEAR(gl.values[t + 1], 0.5 - 0.5 * n[1], 0.003);  // OpenGL: G = image up = -y
+  EXPECT_NEAR(gl.values[t + 2], 0.5 + 0.5 * n[2], 0.003);
+  EXPECT_NEAR(dx.values[t + 1], 0.5 + 0.5 * n[1], 0.004);  // DirectX: G = image down = +y (8 bits)
+  EXPECT_GT(dx.values[t + 1], 0.6);
+  EXPECT_LT(gl.values[t + 1], 0.4);
+}
+
+TEST(TextureCli, FlatFieldIsHalfHalfOneInBothTangentConventions) {
+  TempFolder dir;
+  const fs::path out = dir / "out";
+  const json textures = json::array({{{"layers", {"bent_normal"}}, {"y", "opengl"}, {"bits", 16}},
+                                     {{"layers", {"bent_normal"}}, {"y", "directx"}, {"format", "tif"}}});
+  const json flat = {{"kind", "flat"}, {"size", {17, 17}}};
+  const auto r =
+      run_hfbake(dir.path(), "bake --quiet " + write(dir, "j.json", job(out, textures, flat)).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Pixels gl = read(out / "textures" / "slope.p1.bent_normal.png");
+  const Pixels dx = read(out / "textures" / "slope.p1.bent_normal.tif");
+  ASSERT_EQ(gl.values.size(), 17u * 17u * 3u);
+  ASSERT_EQ(dx.values.size(), gl.values.size());
+  for (std::size_t t = 0; t < 17 * 17; ++t) {
+    // 0.5 is stored as round(0.5 * 65535) = 32768 and round(0.5 * 255) = 128.
+    EXPECT_EQ(std::lround(gl.values[3 * t] * 65535), 32768);
+    EXPECT_EQ(std::lround(gl.values[3 * t + 1] * 65535), 32768);
+    EXPECT_EQ(std::lround(gl.values[3 * t + 2] * 65535), 65535);
+    EXPECT_EQ(std::lround(dx.values[3 * t] * 255), 128);
+    EXPECT_EQ(std::lround(dx.values[3 * t + 1] * 255), 128);
+    EXPECT_EQ(std::lround(dx.values[3 * t + 2] * 255), 255);
+  }
+}
+
+TEST(TextureCli, BadTextureEntriesAreOneLineErrorsAtTheirPointer) {
+  const struct {
+    json texture;
+    std::string pointer, words;
+  } cases[] = {
+      {{{"layers", {"ao"}}, {"bits", 16}, {"format", "tga"}}, "/output/textures/0/bits", "TGA holds 8 bits"},
+      {{{"layers", {"obscurance"}}}, "/output/textures/0", "no bake entry writes"},
+      {{{"layers", {"bent_normal"}}, {"space", "world"}, {"y", "opengl"}},
+       "/output/textures/0/y",
+       "world space"},
+      {{{"layers", {"ao"}}, {"y", "opengl"}}, "/output/textures/0/y", "bent_normal"},
+      {{{"layers", {"ao"}}, {"methods", {"lsao"}}}, "/output/textures/0/methods/0", "no bake output"},
+      {{{"pack", "x"}, {"channels", {{"R", "bent_normal.Q"}}}},
+       "/output/textures/0/channels/R",
+       "has no channel"},
+      {{{"layers", {"ao"}}, {"bits", 12}}, "/output/textures/0/bits", ""},
+      {{{"layers", {"ao"}}, {"pack", "x"}}, "/output/textures/0", ""},
+  };
+  for (const auto& c : cases) {
+    TempFolder dir;
+    const fs::path out = dir / "out";
+    const fs::path f = write(dir, "j.json", job(out, json::array({c.texture})));
+    for (const char* cmd : {"validate ", "bake --quiet "}) {
+      const auto r = run_hfbake(dir.path(), cmd + f.string());
+      EXPECT_EQ(r.exit_code, 2) << c.texture.dump() << r.err;
+      const auto lines = r.error_lines();
+      ASSERT_EQ(lines.size(), 1u) << c.texture.dump() << "\n" << r.err;
+      EXPECT_NE(lines[0].find(f.string() + ": " + c.pointer), std::string::npos) << lines[0];
+      EXPECT_NE(lines[0].find(c.words), std::string::npos) << lines[0];
+    }
+    EXPECT_FALSE(fs::exists(out / "textures")) << c.texture.dump();
+  }
+}
+
+TEST(TextureCli, TwoEntriesWritingOneFileAreRefused) {
+  TempFolder dir;
+  const fs::path f = write(
+      dir, "j.json",
+      job(dir / "out", json::array({{{"layers", {"ao"}}}, {{"layers", {"ao", "vsky"}}, {"bits", 16}}})));
+  const auto r = run_hfbake(dir.path(), "validate " + f.string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.err.find("/output/textures/1: writes textures/slope.p1.ao.png, which /output/textures/0"),
+            std::string::npos)
+      << r.err;
+}
+
+}  // namespace
