@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -402,6 +403,16 @@ TEST_F(Cli, EveryExampleJobValidates) {
   int count = 0;
   for (const auto& e : fs::directory_iterator(fs::path(HFBAKE_SOURCE_DIR) / "jobs"))
     if (e.path().extension() == ".json") {
+      // The GIS tour reads the lidar DEM beside the repository (../shared/data), which a checkout may not
+      // have: such a job is left out, saying so, rather than failing the others.
+      std::ifstream in(e.path());
+      const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
+      const std::string image = doc.is_object() ? doc.value("/height/image"_json_pointer, std::string()) : "";
+      if (!image.empty() && image.rfind("../../shared/", 0) == 0 &&
+          !fs::exists(e.path().parent_path() / image)) {
+        std::printf("skipping %s: %s is not on this machine\n", e.path().filename().c_str(), image.c_str());
+        continue;
+      }
       files += " " + e.path().string();
       ++count;
     }
