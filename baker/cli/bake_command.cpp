@@ -148,7 +148,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     CacheLookup lookup = CacheLookup::miss;
     if (cache) {
       cache_key = reference_cache_key(job);
-      lookup = cache->load(cache_key, cached);
+      lookup = cache->load(cache_key, cached, size.width, size.height);
       if (lookup == CacheLookup::corrupt)
         progress.message(job.name + ": reference cache entry " + cache->entry_path(cache_key).string() +
                          " was damaged: removed, computing the reference again");
@@ -243,13 +243,22 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
   }
   // Atomic like every other output: a temporary beside the file, then rename.
   const fs::path tmp = file.string() + ".tmp-" + std::to_string(getpid());
+  bool written = false;
   {
     std::ofstream out(tmp);
-    if (!out) throw InputError(file.string(), "--summary", "cannot write file");
-    out << doc.dump(2) << "\n";
-    if (!out) throw InputError(file.string(), "--summary", "cannot write file");
+    if (out) {
+      out << doc.dump(2) << "\n";
+      out.close();
+      written = bool(out);
+    }
   }
-  fs::rename(tmp, file);
+  std::error_code ec;
+  if (written) fs::rename(tmp, file, ec);
+  if (!written || ec) {  // a full disk or a read-only folder: no temporary is left behind
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw InputError(file.string(), "--summary", "cannot write file" + (ec ? ": " + ec.message() : ""));
+  }
 }
 
 }  // namespace
