@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 // One hfbake run: its exit code (or -signal), its stderr.
-struct Run {
+struct HfbakeRun {
   int exit_code = 0;
   std::string err;
   std::vector<std::string> error_lines() const {
@@ -41,7 +41,7 @@ struct Run {
 };
 
 // Runs hfbake with `args` in `dir`, stderr to a file; killed (and reported as -SIGKILL) after 120 s.
-Run run_hfbake(const fs::path& dir, const std::vector<std::string>& args) {
+HfbakeRun run_hfbake(const fs::path& dir, const std::vector<std::string>& args) {
   const fs::path err = dir / "stderr.txt";
   const pid_t pid = fork();
   if (pid == 0) {
@@ -56,7 +56,7 @@ Run run_hfbake(const fs::path& dir, const std::vector<std::string>& args) {
   }
   int status = 0;
   waitpid(pid, &status, 0);
-  Run r;
+  HfbakeRun r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
   std::ifstream in(err);
   std::stringstream ss;
@@ -95,16 +95,17 @@ json base_job() {
 }
 
 // What a case does in its folder: writes its files and returns hfbake's arguments.
-struct Setup {
+struct CaseSetup {
   std::vector<std::string> args;
   std::string file;     // the file the error names ("" = the job, dir/job.json)
   std::string pointer;  // the JSON pointer (or "line L, column C" for malformed JSON) it names
   std::string what;     // a phrase the message holds
+  bool bake_too = true;  // a validate case: bake must refuse it the same way
 };
 
 struct Case {
   std::string name;
-  std::function<Setup(const fs::path& dir)> setup;
+  std::function<CaseSetup(const fs::path& dir)> setup;
   int exit_code = 2;
   int error_lines = 1;
 };
@@ -119,13 +120,13 @@ std::string write_text(const fs::path& dir, const std::string& text, const std::
 }
 
 // validate and bake alike: both must refuse before anything is baked.
-Setup both(const std::string& job, std::string pointer, std::string what) {
+CaseSetup both(const std::string& job, std::string pointer, std::string what) {
   return {{"validate", job}, "", std::move(pointer), std::move(what)};
 }
 
 std::vector<Case> cases() {
   std::vector<Case> c;
-  auto add = [&](std::string name, std::function<Setup(const fs::path&)> setup, int exit_code = 2,
+  auto add = [&](std::string name, std::function<CaseSetup(const fs::path&)> setup, int exit_code = 2,
                  int lines = 1) { c.push_back({std::move(name), std::move(setup), exit_code, lines}); };
 
   // --- the parser ---------------------------------------------------------------------------------------
@@ -159,14 +160,19 @@ std::vector<Case> cases() {
     j["description"] = std::string(17u << 20, 'x');
     return both(write_job(d, j), "", "may be at most 16777216");
   });
-  add("DevZeroAsJob", [](const fs::path&) { return Setup{{"validate", "/dev/zero"}, "/dev/zero", "", "not a regular file"}; });
+  add("DevZeroAsJob", [](const fs::path&) { return CaseSetup{{"validate", "/dev/zero"}, "/dev/zero", "", "not a regular file"}; });
   add("FifoAsJob", [](const fs::path& d) {
     mkfifo((d / "job.json").c_str(), 0600);
     return both((d / "job.json").string(), "", "not a regular file");
   });
   add("FolderAsJob", [](const fs::path& d) {
     fs::create_directories(d / "job.json");
-    return both((d / "job.json").string(), "", "not a regular file");
+    return CaseSetup{{"validate", (d / "job.json").string()}, "", "", "not a regular file", false};
+  });
+  add("FolderAsJobBake", [](const fs::path& d) {  // bake's command line parser (CLI11) refuses it, in its words
+    fs::create_directories(d / "job.json");
+    return CaseSetup{{"bake", (d / "job.json").string()}, "command line", "jobs",
+                     "directory: " + (d / "job.json").string()};
   });
 
   // --- ranges: values a user could mistype ------------------------------------------------------------
@@ -262,9 +268,9 @@ std::vector<Case> cases() {
   });
   add("HeightImageWiderThanSupported", [](const fs::path& d) {
     const int w = (1 << 20) + 1;
-    write_image(d / "wide.png", w, 2, 1, std::vector<float>(std::size_t(w) * 2, 0.5f), OIIO::TypeDesc::UINT8);
+    write_image(d / "wide.tif", w, 2, 1, std::vector<float>(std::size_t(w) * 2, 0.5f), OIIO::TypeDesc::UINT8);
     json j = base_job();
-    j["height"] = {{"image", "wide.png"}};
+    j["height"] = {{"image", "wide.tif"}};
     return both(write_job(d, j), "/height/image", "fields of up to 1048576 texels a side are supported");
   });
   add("HeightImageOneByOne", [](const fs::path& d) {
@@ -281,20 +287,20 @@ std::vector<Case> cases() {
     fs::resize_file(d / "h.png", fs::file_size(d / "h.png") / 2);
     json j = base_job();
     j["height"] = {{"image", "h.png"}};
-    return Setup{{"bake", write_job(d, j), "--no-cache", "--quiet"}, "", "/height/image", ""};
+    return CaseSetup{{"bake", write_job(d, j), "--no-cache", "--quiet"}, "", "/height/image", ""};
   });
   add("BakeCollidingJobs", [](const fs::path& d) {
     fs::create_directories(d / "x");
     fs::create_directories(d / "y");
     const std::string a = write_job(d, base_job(), "x/job.json"), b = write_job(d, base_job(), "y/job.json");
-    return Setup{{"bake", a, b, "--out", (d / "out").string(), "--quiet"}, a, "/name", "would be the same files"};
+    return CaseSetup{{"bake", a, b, "--out", (d / "out").string(), "--quiet"}, a, "/name", "would be the same files"};
   }, 2, 2);
   add("SummaryIntoAFileNotAFolder", [](const fs::path& d) {
     std::ofstream(d / "file") << "x";
     json j = base_job();
     j["output"]["dir"] = "elsewhere";  // the job bakes; only its summary cannot be written
-    return Setup{{"bake", write_job(d, j), "--quiet", "--no-cache", "--summary", (d / "file/s.json").string()},
-                 (d / "file/s.json").string(), "--summary", "cannot write"};
+    return CaseSetup{{"bake", write_job(d, j), "--quiet", "--no-cache", "--summary", (d / "file/s.json").string()},
+                 (d / "file/s.json").string(), "", "cannot write summary"};
   });
   return c;
 }
@@ -311,10 +317,10 @@ class Hostile : public ::testing::TestWithParam<Case> {
 
 TEST_P(Hostile, OneLineErrorExitCodeAndNothingNewInTheOutputFolder) {
   const Case& k = GetParam();
-  const Setup s = k.setup(dir_);
+  const CaseSetup s = k.setup(dir_);
   const std::string file = s.file.empty() ? (dir_ / "job.json").string() : s.file;
   std::vector<std::vector<std::string>> runs{s.args};
-  if (s.args.front() == "validate") {  // and bake refuses it too, before baking
+  if (s.args.front() == "validate" && s.bake_too) {  // and bake refuses it too, before baking
     std::vector<std::string> bake = s.args;
     bake.front() = "bake";
     bake.insert(bake.end(), {"--no-cache", "--quiet"});
@@ -322,7 +328,7 @@ TEST_P(Hostile, OneLineErrorExitCodeAndNothingNewInTheOutputFolder) {
   }
   for (const auto& args : runs) {
     const auto before = listing(dir_ / "out");
-    const Run r = run_hfbake(dir_, args);
+    const HfbakeRun r = run_hfbake(dir_, args);
     SCOPED_TRACE(args.front());
     EXPECT_EQ(r.exit_code, k.exit_code) << r.err;
     const auto lines = r.error_lines();
@@ -340,5 +346,57 @@ TEST_P(Hostile, OneLineErrorExitCodeAndNothingNewInTheOutputFolder) {
 
 INSTANTIATE_TEST_SUITE_P(Corpus, Hostile, ::testing::ValuesIn(cases()),
                          [](const ::testing::TestParamInfo<Case>& info) { return info.param.name; });
+
+}  // namespace
+
+namespace {
+
+// A process's start time as /proc/<pid>/stat gives it (field 22), read here independently of hfbake.
+unsigned long long start_time_of(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat;
+  std::getline(in, stat);
+  std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+  std::string f;
+  for (int k = 3; k <= 22; ++k) fields >> f;
+  return std::stoull(f);
+}
+
+// SIGKILL leaves a staging folder; its process id may by then belong to another process (after a reboot, on
+// a busy node). The stage records the owner's start time, so the next bake removes the stage of a live id
+// that started at another time, and keeps the stage of a process that still runs.
+TEST(Staging, AStageWhoseProcessIdWasReusedIsRemovedAndALiveOwnersIsKept) {
+  const fs::path dir = fs::temp_directory_path() / ("hfbake_stage_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir / "out");
+  const pid_t live = fork();  // a process that runs for the whole test
+  if (live == 0) {
+    pause();
+    _exit(0);
+  }
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  const unsigned long long start = start_time_of(live);
+  const std::string id = std::to_string(live);
+  const fs::path reused = dir / "out" / (".hfbake-staging-t-" + id + "+" + std::to_string(start + 1) + "@" + host);
+  const fs::path owner = dir / "out" / (".hfbake-staging-u-" + id + "+" + std::to_string(start) + "@" + host);
+  for (const fs::path& p : {reused, owner}) {
+    fs::create_directories(p);
+    std::ofstream(p / "t.p1.exr") << "half-written";
+  }
+  const HfbakeRun r = run_hfbake(dir, {"bake", write_job(dir, base_job()), "--no-cache"});
+  kill(live, SIGKILL);
+  waitpid(live, nullptr, 0);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(reused)) << r.err;
+  EXPECT_TRUE(fs::exists(owner / "t.p1.exr"));
+  EXPECT_NE(r.err.find("removed " + reused.string()), std::string::npos) << r.err;
+  // The bake's own stage carries its id and start time, and is gone after it.
+  for (const auto& e : fs::directory_iterator(dir / "out")) {
+    if (e.path().filename().string().rfind(".hfbake-staging-", 0) == 0) {
+      EXPECT_EQ(e.path(), owner);
+    }
+  }
+  fs::remove_all(dir);
+}
 
 }  // namespace
