@@ -5,6 +5,9 @@
 # multi-line error message). New corpus entries go to a scratch folder, never into the source tree.
 #   tests/fuzz/run_fuzzers.sh BUILD_DIR SECONDS [NAME ...]      (names: job height_image environment report)
 # A finding's input is kept as <scratch>/crash-*; add it to tests/fuzz/regressions/<name>/ once fixed.
+# Leaks are checked once, when each run ends (ASan's detect_leaks), not after every input (libFuzzer's
+# -detect_leaks): OpenImageIO and OpenColorIO keep caches that look like a leak per input and would make every
+# input a full leak scan. NEW_FUNC lines are not printed (-print_funcs=0: no symbolizer processes).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 build=${1:?usage: run_fuzzers.sh BUILD_DIR SECONDS [NAME ...]}
@@ -26,6 +29,7 @@ for name in "${names[@]}"; do
       LSAN_OPTIONS=suppressions=$root/tests/sanitizers/lsan.supp \
       UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       "$exe" -max_total_time="$seconds" -timeout=30 -rss_limit_mb=3072 -max_len=65536 -print_final_stats=1 \
+        -detect_leaks=0 -print_funcs=0 \
         -artifact_prefix="$scratch/$name/" "$scratch/$name/corpus" "${seeds[@]}" \
         >"$scratch/$name/log.txt" 2>&1; then
     echo "run_fuzzers: fuzz_$name FOUND SOMETHING: $scratch/$name/log.txt, inputs $scratch/$name/crash-*" >&2

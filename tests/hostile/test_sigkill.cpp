@@ -126,7 +126,18 @@ TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBak
     killed_mid_bake += wait_exit(pid) == -SIGKILL;
 
     for (const fs::path& p : visible_files(out)) EXPECT_TRUE(whole(p));
-    // compare reads the committed report.json only (none in a staging folder).
+    // compare reads the committed report.json only (none in a staging folder). A kill between the report
+    // and the commit leaves a staged report.json; one is planted every round too (a dead process's).
+    {
+      const pid_t dead = fork();
+      if (dead == 0) _exit(0);
+      waitpid(dead, nullptr, 0);
+      char host[256] = {};
+      gethostname(host, sizeof host - 1);
+      const fs::path stage = out / (".hfbake-staging-k-" + std::to_string(dead) + "@" + host);
+      fs::create_directories(stage);
+      fs::copy_file(dir / "baseline" / "report.json", stage / "report.json", fs::copy_options::overwrite_existing);
+    }
     if (fs::exists(out / "report.json")) {
       const fs::path cmp = dir / "compare.json";
       fs::remove(cmp);
@@ -141,7 +152,7 @@ TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBak
     }
     // The next bake of the folder succeeds and leaves no staging behind (the killed one's is removed).
     ASSERT_EQ(wait_exit(start(bake, err)), 0) << "round " << round;
-    EXPECT_EQ(stages_in(out), 0);
+    EXPECT_EQ(stages_in(out), 0);  // the killed bake's and the planted one are removed
     for (const fs::path& p : visible_files(out)) EXPECT_TRUE(whole(p));
     EXPECT_TRUE(fs::exists(out / "report.json"));
   }
