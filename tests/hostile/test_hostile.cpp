@@ -65,11 +65,13 @@ HfbakeRun run_hfbake(const fs::path& dir, const std::vector<std::string>& args) 
   return r;
 }
 
-// Every path under `dir` (files and folders), relative; empty when it does not exist.
+// Every path under `dir` (files and folders), relative, and "." for the folder itself; empty when it does
+// not exist (so an empty folder left behind is a change).
 std::set<std::string> listing(const fs::path& dir) {
   std::set<std::string> out;
   std::error_code ec;
   if (!fs::exists(dir, ec)) return out;
+  out.insert(".");
   for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
        it.increment(ec))
     out.insert(fs::relative(it->path(), dir).string());
