@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -303,6 +304,19 @@ std::vector<Case> cases() {
     j["output"]["dir"] = "elsewhere";  // the job bakes; only its summary cannot be written
     return CaseSetup{{"bake", write_job(d, j), "--quiet", "--no-cache", "--summary", (d / "file/s.json").string()},
                  (d / "file/s.json").string(), "", "cannot write summary"};
+  });
+  add("CompareReportWithWrongTypes", [](const fs::path& d) {  // found by fuzz_report: compare aborted
+    const fs::path seed = fs::path(HFBAKE_SOURCE_DIR) / "tests/fuzz/regressions/report/scene_hash_not_a_string";
+    std::ifstream in(seed);
+    const std::string text{std::istreambuf_iterator<char>(in), {}};
+    const auto sep = text.find("\n@@\n");
+    fs::create_directories(d / "a");
+    fs::create_directories(d / "b");
+    write_text(d, text.substr(0, sep), "a/report.json");
+    write_text(d, text.substr(sep + 4), "b/report.json");
+    return CaseSetup{{"compare", (d / "a").string(), (d / "b").string()},
+                     (d / "a/report.json").string() + " vs " + (d / "b/report.json").string(), "",
+                     "not a report.json as hfbake writes it"};
   });
   return c;
 }
