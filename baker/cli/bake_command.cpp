@@ -72,9 +72,18 @@ std::string memory_parts_text(const std::vector<MemoryPart>& parts) {
 std::size_t check_memory(const Job& job, std::optional<std::size_t> limit,
                          std::string* parts_text = nullptr) {
   const FieldSize size = probe_field_size(job);
+  const std::size_t have = limit ? *limit : available_memory_bytes();
+  // The heights alone first: the estimate plans the sweeps, whose plan is itself about a byte per 128 texels
+  // (a 1000000^2 field: 8 GB just to estimate), so an absurd size is refused before the plan is made.
+  const double heights = 150.0 * (1 << 20) + 4.0 * double(size.width) * double(size.height);
+  if (heights > double(have))
+    throw InputError(job.file.string(), "/height",
+                     "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                         " field needs about " + gib(std::size_t(std::min(heights, 1.8e19))) +
+                         " or more to bake (its heights alone), more than the " + gib(have) +
+                         (limit ? " of --memory-limit" : " available (--memory-limit SIZE sets the budget)"));
   std::vector<MemoryPart> parts;
   const std::size_t need = estimate_peak_bytes(job, size, &parts);
-  const std::size_t have = limit ? *limit : available_memory_bytes();
   if (parts_text) *parts_text = memory_parts_text(parts);
   if (need > have)
     throw InputError(job.file.string(), "/height",

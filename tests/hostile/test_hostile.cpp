@@ -201,6 +201,9 @@ std::vector<Case> cases() {
         "/lights/0/directional/direction");
   range("ProceduralSizeBeyondTheLimit",
         [](json& j) { j["height"]["procedural"]["size"] = {2, 2000000}; }, "/height/procedural/size/1");
+  // The memory estimate itself used to allocate for the sweeps' plan (8 GB for this one) before refusing.
+  range("ProceduralMillionSquared",
+        [](json& j) { j["height"]["procedural"]["size"] = {1000000, 1000000}; }, "/height");
   range("EnvironmentRotation1e308",
         [](json& j) { j["environment"] = {{"sky", json::object()}, {"rotation_deg", 1e308}}; },
         "/environment/rotation_deg");
