@@ -74,9 +74,10 @@ std::size_t check_memory(const Job& job, std::optional<std::size_t> limit,
   const FieldSize size = probe_field_size(job);
   const std::size_t have = limit ? *limit : available_memory_bytes();
   // The heights alone first: the estimate plans the sweeps, whose plan is itself about a byte per 128 texels
-  // (a 1000000^2 field: 8 GB just to estimate), so an absurd size is refused before the plan is made.
+  // (a 1000000^2 field: 8 GB just to estimate), so a size far beyond the budget (its heights alone over four
+  // times it) is refused before the plan is made; nearer ones get the estimate and its parts.
   const double heights = 150.0 * (1 << 20) + 4.0 * double(size.width) * double(size.height);
-  if (heights > double(have))
+  if (heights > 4.0 * double(have))
     throw InputError(job.file.string(), "/height",
                      "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
                          " field needs about " + gib(std::size_t(std::min(heights, 1.8e19))) +
