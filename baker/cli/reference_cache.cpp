@@ -150,7 +150,7 @@ CacheLookup ReferenceCache::load(const std::string& key, Entry& out, int expect_
       shapes.emplace_back(l.at("name").get<std::string>(), l.at("channels").get<std::vector<std::string>>());
       const std::uint64_t channels = shapes.back().second.size();
       if (channels == 0 || channels > kMaxEntryChannels) return corrupt();
-      payload += texels * channels * sizeof(float);  // <= 2^15 * 2^15 * 2^12 * 4 per layer: no overflow
+      payload += texels * channels * sizeof(float);  // <= 2^20 * 2^20 * 2^12 * 4 = 2^54 a layer: no overflow
       if (payload > file_bytes) return corrupt();
     }
     if (payload != file_bytes - offset) return corrupt();  // truncated or trailing bytes
