@@ -4,9 +4,11 @@
 #   ./setup.sh test   runs the whole test suite through CTest, then builds the AddressSanitizer +
 #                     UndefinedBehaviorSanitizer variant (ASAN_BUILD_DIR, default build-asan) and runs the
 #                     test suite again under it (see "Sanitizers" in README.md for what it leaves out)
+#                     and then builds the libFuzzer harnesses with clang (FUZZ_BUILD_DIR, default build-fuzz)
+#                     and runs each for FUZZ_SECONDS (default 60) under ASan + UBSan (tests/fuzz/run_fuzzers.sh)
 #   ./setup.sh build  only installs and builds
 # Environment: BUILD_DIR (default build), ASAN_BUILD_DIR (default build-asan), JOBS (parallel build jobs,
-# default: cores), SANITIZE=0 to skip the sanitized run of `test`.
+# default: cores), SANITIZE=0 to skip the sanitized run of `test`, FUZZ=0 to skip the fuzzers.
 set -euo pipefail
 cd "$(dirname "$0")"
 mode=${1:-build}
@@ -19,6 +21,7 @@ packages=(build-essential cmake pkg-config git
   libgdal-dev gdal-bin)  # gdal-bin: gdalinfo / gdal_translate, the truth of the GeoTIFF tests
 if [ "$mode" = test ]; then
   packages+=(chromium)  # the HTML report test renders the page in headless Chromium
+  packages+=(clang libclang-rt-14-dev)  # the libFuzzer harnesses (tests/fuzz): clang and its libFuzzer
 fi
 
 missing=()
@@ -61,6 +64,14 @@ case "$mode" in
         LSAN_OPTIONS=suppressions=$(pwd)/tests/sanitizers/lsan.supp \
         UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
         ctest --test-dir "$asan_dir" --output-on-failure -j "$jobs" -LE integration
+    fi
+    if [ "${FUZZ:-1}" != 0 ]; then
+      fuzz_dir=${FUZZ_BUILD_DIR:-build-fuzz}
+      echo "setup: libFuzzer harnesses (clang, ASan + UBSan) in $fuzz_dir, ${FUZZ_SECONDS:-60} s each"
+      cmake -S . -B "$fuzz_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DHFBAKE_FUZZ=ON \
+        -DHFBAKE_BUILD_TESTS=OFF -DHFBAKE_BUILD_BENCHMARKS=OFF >/dev/null
+      cmake --build "$fuzz_dir" -j "$jobs" --target fuzz_job fuzz_height_image fuzz_environment fuzz_report
+      tests/fuzz/run_fuzzers.sh "$fuzz_dir" "${FUZZ_SECONDS:-60}"
     fi
     ;;
   *)

@@ -73,9 +73,19 @@ std::string memory_parts_text(const std::vector<MemoryPart>& parts) {
 std::size_t check_memory(const Job& job, std::optional<std::size_t> limit,
                          std::string* parts_text = nullptr) {
   const FieldSize size = probe_field_size(job);
+  const std::size_t have = limit ? *limit : available_memory_bytes();
+  // The heights alone first: the estimate plans the sweeps, whose plan is itself about a byte per 128 texels
+  // (a 1000000^2 field: 8 GB just to estimate), so a size far beyond the budget (its heights alone over four
+  // times it) is refused before the plan is made; nearer ones get the estimate and its parts.
+  const double heights = 150.0 * (1 << 20) + 4.0 * double(size.width) * double(size.height);
+  if (heights > 4.0 * double(have))
+    throw InputError(job.file.string(), "/height",
+                     "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                         " field needs about " + gib(std::size_t(std::min(heights, 1.8e19))) +
+                         " or more to bake (its heights alone), more than the " + gib(have) +
+                         (limit ? " of --memory-limit" : " available (--memory-limit SIZE sets the budget)"));
   std::vector<MemoryPart> parts;
   const std::size_t need = estimate_peak_bytes(job, size, &parts);
-  const std::size_t have = limit ? *limit : available_memory_bytes();
   if (parts_text) *parts_text = memory_parts_text(parts);
   if (need > have)
     throw InputError(job.file.string(), "/height",
@@ -149,7 +159,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     CacheLookup lookup = CacheLookup::miss;
     if (cache) {
       cache_key = reference_cache_key(job);
-      lookup = cache->load(cache_key, cached);
+      lookup = cache->load(cache_key, cached, size.width, size.height);
       if (lookup == CacheLookup::corrupt)
         progress.message(job.name + ": reference cache entry " + cache->entry_path(cache_key).string() +
                          " was damaged: removed, computing the reference again");
@@ -248,13 +258,22 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
   }
   // Atomic like every other output: a temporary beside the file, then rename.
   const fs::path tmp = file.string() + ".tmp-" + std::to_string(getpid());
+  bool written = false;
   {
     std::ofstream out(tmp);
-    if (!out) throw InputError(file.string(), "--summary", "cannot write file");
-    out << doc.dump(2) << "\n";
-    if (!out) throw InputError(file.string(), "--summary", "cannot write file");
+    if (out) {
+      out << doc.dump(2) << "\n";
+      out.close();
+      written = bool(out);
+    }
   }
-  fs::rename(tmp, file);
+  std::error_code ec;
+  if (written) fs::rename(tmp, file, ec);
+  if (!written || ec) {  // a full disk or a read-only folder: no temporary is left behind
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw InputError(file.string(), "--summary", "cannot write file" + (ec ? ": " + ec.message() : ""));
+  }
 }
 
 }  // namespace

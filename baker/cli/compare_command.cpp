@@ -28,12 +28,18 @@ void copy_atomically(const fs::path& from, const fs::path& to) {
   fs::rename(tmp, to);
 }
 
-// Every report.json under `dir`, by path relative to it.
+// Every report.json under `dir`, by path relative to it. A bake's staging folders (.hfbake-staging-*: what a
+// running, killed or crashed bake had not committed) are not outputs and are not entered.
 std::map<std::string, fs::path> reports_under(const fs::path& dir) {
   std::map<std::string, fs::path> found;
-  for (const auto& e : fs::recursive_directory_iterator(dir))
-    if (e.is_regular_file() && e.path().filename() == "report.json")
-      found[fs::relative(e.path(), dir).string()] = e.path();
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
+    if (it->is_directory() && it->path().filename().string().rfind(".hfbake-staging-", 0) == 0) {
+      it.disable_recursion_pending();
+      continue;
+    }
+    if (it->is_regular_file() && it->path().filename() == "report.json")
+      found[fs::relative(it->path(), dir).string()] = it->path();
+  }
   return found;
 }
 

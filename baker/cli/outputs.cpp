@@ -6,7 +6,11 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
 #include <fstream>
+#include <sstream>
 #include <string_view>
 
 #include "cli/texture_plan.hpp"
@@ -53,6 +57,39 @@ std::string azimuth_convention(const Georeference& geo) {
   return s + "; +x = west, +y = north, compass azimuth = (270 + phi) mod 360";
 }
 
+std::optional<unsigned long long> process_start_time(long long pid) {
+  // /proc/<pid>/stat: "pid (comm) state ..." with starttime the 22nd field; comm may hold spaces and ')'.
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat;
+  if (!std::getline(in, stat)) return std::nullopt;
+  const auto close = stat.rfind(')');
+  if (close == std::string::npos) return std::nullopt;
+  std::istringstream fields(stat.substr(close + 1));
+  std::string field;
+  for (int k = 3; k <= 22; ++k)
+    if (!(fields >> field)) return std::nullopt;
+  try {
+    return std::stoull(field);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+namespace {
+
+// Digits only, below 2^62; nullopt otherwise.
+std::optional<unsigned long long> parse_count(std::string_view s) {
+  if (s.empty() || s.size() > 18) return std::nullopt;
+  unsigned long long v = 0;
+  for (const char c : s) {
+    if (c < '0' || c > '9') return std::nullopt;
+    v = v * 10 + unsigned(c - '0');
+  }
+  return v;
+}
+
+}  // namespace
+
 std::optional<StageOwner> parse_stage_name(const std::string& name) {
   if (name.compare(0, kStagePrefix.size(), kStagePrefix) != 0) return std::nullopt;
   StageOwner owner;
@@ -62,30 +99,46 @@ std::optional<StageOwner> parse_stage_name(const std::string& name) {
     owner.host = rest.substr(at + 1);
     rest.resize(at);
   }
-  const auto dash = rest.rfind('-');
-  if (dash == std::string::npos || dash + 1 == rest.size()) return std::nullopt;
-  long long pid = 0;
-  for (std::size_t i = dash + 1; i < rest.size(); ++i) {
-    if (rest[i] < '0' || rest[i] > '9' || pid > (1ll << 40)) return std::nullopt;
-    pid = pid * 10 + (rest[i] - '0');
+  const auto plus = rest.rfind('+');  // job names have no '+' (schema); older stages had no start time
+  if (plus != std::string::npos) {
+    owner.start = parse_count(std::string_view(rest).substr(plus + 1));
+    if (!owner.start) return std::nullopt;
+    rest.resize(plus);
   }
-  if (pid <= 0) return std::nullopt;
-  owner.pid = pid;
+  const auto dash = rest.rfind('-');
+  if (dash == std::string::npos) return std::nullopt;
+  const std::optional<unsigned long long> pid = parse_count(std::string_view(rest).substr(dash + 1));
+  if (!pid || *pid == 0 || *pid > (1ull << 40)) return std::nullopt;
+  owner.pid = (long long)*pid;
   return owner;
+}
+
+std::string stage_name(const std::string& job_name) {
+  const long long pid = getpid();
+  const std::optional<unsigned long long> start = process_start_time(pid);
+  std::string name = std::string(kStagePrefix) + job_name + "-" + std::to_string(pid);
+  if (start) name.append("+").append(std::to_string(*start));  // (appends: GCC 12 warns on "+" + string)
+  return name.append("@").append(host_name());
+}
+
+bool stage_owner_is_gone(const StageOwner& owner) {
+  if (!owner.host.empty() && owner.host != host_name()) return false;  // another machine's: unknowable
+  if (owner.pid == getpid()) return false;  // this process's own (another job's) stage
+  // kill(pid, 0): 0 = alive, EPERM = alive but another user's, ESRCH = no such process.
+  if (kill(pid_t(owner.pid), 0) != 0 && errno == ESRCH) return true;
+  // A process runs under that id; it is the owner only if it started when the owner did (ids are reused:
+  // after a reboot, or on a busy node, a SIGKILLed bake's id may belong to anything).
+  if (!owner.start) return false;  // an older stage without a start time: keep it while the id lives
+  const std::optional<unsigned long long> now = process_start_time(owner.pid);
+  return now && *now != *owner.start;
 }
 
 std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
   std::vector<fs::path> removed;
-  const std::string host = host_name();
   std::error_code ec;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::optional<StageOwner> owner = parse_stage_name(it->path().filename().string());
-    if (!owner || !it->is_directory(ec)) continue;
-    // Another machine's process (a shared output folder) cannot be checked from here: keep its stage.
-    if (!owner->host.empty() && owner->host != host) continue;
-    if (owner->pid == getpid()) continue;  // this process's own (another job's) stage
-    // kill(pid, 0): 0 = alive, EPERM = alive but another user's, ESRCH = no such process.
-    if (kill(pid_t(owner->pid), 0) == 0 || errno != ESRCH) continue;
+    if (!owner || !it->is_directory(ec) || !stage_owner_is_gone(*owner)) continue;
     std::error_code remove_ec;
     fs::remove_all(it->path(), remove_ec);
     if (!remove_ec) removed.push_back(it->path());
@@ -95,6 +148,7 @@ std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
 
 OutputStage::OutputStage(const Job& job) : job_(job) {
   std::error_code ec;
+  created_dir_ = !fs::exists(job.output.dir, ec);
   fs::create_directories(job.output.dir, ec);
   if (ec || !fs::is_directory(job.output.dir))
     throw InputError(job.file.string(), "/output/dir",
@@ -102,9 +156,9 @@ OutputStage::OutputStage(const Job& job) : job_(job) {
                          (ec ? ec.message() : std::string("not a folder")));
   // Stages that processes which no longer run left behind (killed by SIGKILL, a second signal, a crash).
   stale_removed_ = remove_stale_stages(job.output.dir);
-  // Hidden, per process, host and job: concurrent jobs and concurrent hfbake processes never share a stage.
-  stage_ = job.output.dir /
-           (std::string(kStagePrefix) + job.name + "-" + std::to_string(getpid()) + "@" + host_name());
+  // Hidden, per process (id and start time), host and job: concurrent jobs and concurrent hfbake processes
+  // never share a stage, and a later bake can tell when its owner is gone.
+  stage_ = job.output.dir / stage_name(job.name);
   fs::remove_all(stage_, ec);
   if (!fs::create_directory(stage_, ec) || ec)
     throw InputError(job.file.string(), "/output/dir",
@@ -114,9 +168,34 @@ OutputStage::OutputStage(const Job& job) : job_(job) {
 OutputStage::~OutputStage() {
   std::error_code ec;
   fs::remove_all(stage_, ec);
+  // A job that failed or was stopped leaves no empty output folder behind it (only if it made the folder,
+  // and only while it is empty: another job's stage or outputs keep it).
+  if (created_dir_ && !committed_) fs::remove(job_.output.dir, ec);
+}
+
+void check_layers_finite(const std::string& stem, const LayerSet& layers) {
+  for (const Layer& layer : layers.layers) {
+    // horizon_distance is +inf where nothing lies behind the texel (documented); NaN is never a result.
+    const bool plus_inf_allowed = layer.name == "horizon_distance";
+    const std::size_t nc = layer.channels.size();
+    for (std::size_t k = 0; k < layer.data.size(); ++k) {
+      const float v = layer.data[k];
+      if (std::isfinite(v) || (plus_inf_allowed && v > 0)) continue;
+      const std::size_t texel = k / nc;
+      char value[32];
+      std::snprintf(value, sizeof value, "%g", double(v));
+      throw std::runtime_error(stem + ": layer " + layer.name + ": texel (" +
+                               std::to_string(texel % std::size_t(layers.width)) + ", " +
+                               std::to_string(texel / std::size_t(layers.width)) + ") channel " +
+                               layer.name + "." + layer.channels[k % nc] + " is " + value +
+                               "; nothing of this job was written (a non-finite result is a bug or an input "
+                               "beyond the method's range: please report it)");
+    }
+  }
 }
 
 void OutputStage::write_layers(const std::string& stem, const LayerSet& layers) {
+  check_layers_finite(stem, layers);  // before anything is written: no output holds a NaN or an Inf
   const std::string exr = job_.name + "." + stem + ".exr";
   ExrOptions options;
   options.float_pixels = job_.output.float_pixels;
@@ -198,6 +277,7 @@ std::vector<fs::path> OutputStage::commit() {
     final_paths.push_back(target);
   }
   staged_.clear();
+  committed_ = true;
   return final_paths;
 }
 

@@ -13,33 +13,50 @@
 
 namespace hfbake {
 
-// The staging folder of a process: <output dir>/.hfbake-staging-<job name>-<pid>@<host>.
+// The staging folder of a process: <output dir>/.hfbake-staging-<job name>-<pid>+<start>@<host>, <start> the
+// process's start time (clock ticks after boot, /proc/<pid>/stat), so a reused process id is not taken for
+// the owner.
 struct StageOwner {
   long long pid = 0;
+  std::optional<unsigned long long> start;  // absent in stages of older hfbake
   std::string host;  // "" for a stage named without one (older hfbake): taken as this host
 };
+// A process's start time (clock ticks after boot); nullopt when it does not run (or /proc is not there).
+std::optional<unsigned long long> process_start_time(long long pid);
+// This process's staging folder name for a job.
+std::string stage_name(const std::string& job_name);
+// True when the stage's owner certainly no longer runs: same host, and no process with its id, or one
+// that started at another time than the owner did.
+bool stage_owner_is_gone(const StageOwner& owner);
 // The owner a staging folder's name records; nullopt for any other name.
 std::optional<StageOwner> parse_stage_name(const std::string& name);
-// Removes the staging folders in `dir` whose process is known to be gone (same host, no such pid) and
-// returns them; those of live processes, of this process and of other hosts are kept.
+// Removes the staging folders in `dir` whose owner is gone (stage_owner_is_gone) and returns them; those of
+// live processes, of this process and of other hosts are kept.
 std::vector<std::filesystem::path> remove_stale_stages(const std::filesystem::path& dir);
 
 // The azimuth convention of a bake in words, with the compass mapping when the input's geotransform gives
 // one (north-up: compass azimuth = (90 + phi) mod 360): written into every output's metadata.
 std::string azimuth_convention(const Georeference& geo);
 
+// Throws (a failed job, naming the stem, the layer, the first texel and its channel) when a layer holds a
+// NaN or an infinity (+inf is allowed in horizon_distance, where nothing lies behind the texel).
+void check_layers_finite(const std::string& stem, const LayerSet& layers);
+
 class OutputStage {
  public:
   // Creates the output folder and the staging folder in it, after removing the stale staging folders of
   // dead processes there; InputError naming /output/dir if impossible.
   explicit OutputStage(const Job& job);
-  ~OutputStage();  // removes the staging folder and anything left in it
+  // Removes the staging folder and anything left in it, and the output folder when this job made it and
+  // did not commit (it is then empty unless another job writes there).
+  ~OutputStage();
   OutputStage(const OutputStage&) = delete;
   OutputStage& operator=(const OutputStage&) = delete;
 
   // The input's georeferencing and holes, for the GeoTIFF outputs (default: none, pixel size 1).
   void set_georeference(const Georeference& georeference) { georeference_ = georeference; }
-  // Writes <name>.<stem>.exr (and previews and GeoTIFFs when the job asks for them) into the stage.
+  // Writes <name>.<stem>.exr (and previews and GeoTIFFs when the job asks for them) into the stage, after
+  // check_layers_finite.
   void write_layers(const std::string& stem, const LayerSet& layers);
   // Writes a text file (report.json, ...) into the stage.
   void write_text(const std::string& filename, const std::string& text);
@@ -56,6 +73,8 @@ class OutputStage {
   std::vector<std::filesystem::path> staged_;                            // file names relative to the stage
   std::vector<std::filesystem::path> stale_removed_;
   Georeference georeference_;
+  bool created_dir_ = false;  // the output folder did not exist before this job
+  bool committed_ = false;
 };
 
 }  // namespace hfbake

@@ -1,6 +1,12 @@
 #include "cli/reference_cache.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdint>
 
 #include <atomic>
 #include <cstdlib>
@@ -20,6 +26,11 @@ namespace {
 // File layout: the magic line, one line of JSON (the header), then the payload: every layer's float data
 // in header order, little-endian float32 as in memory (hfbake builds only for little-endian machines).
 constexpr char kMagic[] = "hfbake reference cache 1\n";
+// Bounds of an entry, checked before anything is allocated: the header line (layer names, attributes),
+// the field's sides (what Embree's grid and the sweeps support), the channels of one layer.
+constexpr std::size_t kMaxHeaderBytes = 1u << 20;
+constexpr std::int64_t kMaxEntrySide = 1 << 20;
+constexpr std::uint64_t kMaxEntryChannels = 4096;
 
 std::string payload_checksum(const LayerSet& layers) {
   ContentHash h;
@@ -79,45 +90,83 @@ std::optional<fs::path> default_reference_cache_dir() {
   return std::nullopt;
 }
 
-CacheLookup ReferenceCache::load(const std::string& key, Entry& out) const {
+CacheLookup ReferenceCache::load(const std::string& key, Entry& out, int expect_width,
+                                 int expect_height) const {
   const fs::path file = entry_path(key);
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return CacheLookup::miss;
+  // O_NONBLOCK: a FIFO (or a device) in an entry's place must not hang the bake in open(); fstat then
+  // refuses anything but a regular file.
+  const int fd = ::open(file.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return errno == ENOENT || errno == ENOTDIR ? CacheLookup::miss : CacheLookup::corrupt;
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
   auto corrupt = [&] {
-    in.close();
     std::error_code ec;
     fs::remove(file, ec);
     return CacheLookup::corrupt;
   };
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) return corrupt();
+  const std::uint64_t file_bytes = std::uint64_t(st.st_size);
+  // Reads exactly n bytes (false: a short file or an error).
+  auto read_exactly = [&](char* dst, std::uint64_t n) {
+    while (n > 0) {
+      const ssize_t got = ::read(fd, dst, std::size_t(std::min<std::uint64_t>(n, 1u << 30)));
+      if (got < 0 && errno == EINTR) continue;
+      if (got <= 0) return false;
+      dst += got, n -= std::uint64_t(got);
+    }
+    return true;
+  };
   try {
     std::string magic(sizeof kMagic - 1, '\0');
-    in.read(magic.data(), std::streamsize(magic.size()));
-    if (!in || magic != kMagic) return corrupt();
+    if (!read_exactly(magic.data(), magic.size()) || magic != kMagic) return corrupt();
+    // The header line, at most kMaxHeaderBytes: read a bounded prefix, keep up to the newline.
     std::string header_line;
-    if (!std::getline(in, header_line)) return corrupt();
+    std::uint64_t offset = magic.size();
+    for (char c = 0;;) {
+      if (header_line.size() >= kMaxHeaderBytes || !read_exactly(&c, 1)) return corrupt();
+      ++offset;
+      if (c == '\n') break;
+      header_line.push_back(c);
+    }
     const nlohmann::json header = nlohmann::json::parse(header_line);
     if (header.at("key").get<std::string>() != key) return corrupt();
     Entry e;
     e.seconds = header.at("seconds").get<double>();
-    e.layers.width = header.at("width").get<int>();
-    e.layers.height = header.at("height").get<int>();
-    if (e.layers.width <= 0 || e.layers.height <= 0) return corrupt();
-    const std::size_t texels = std::size_t(e.layers.width) * std::size_t(e.layers.height);
+    const std::int64_t width = header.at("width").get<std::int64_t>();
+    const std::int64_t height = header.at("height").get<std::int64_t>();
+    if (width <= 0 || height <= 0 || width > kMaxEntrySide || height > kMaxEntrySide) return corrupt();
+    // The job's field: an entry of another size is not this job's reference, whatever its key says.
+    if ((expect_width > 0 && width != expect_width) || (expect_height > 0 && height != expect_height))
+      return corrupt();
+    // The payload the header describes must be exactly what follows it in the file, checked in 64-bit
+    // before anything is allocated: a header claiming 60000 x 60000 on a small file is damage, not 14 GB.
+    const std::uint64_t texels = std::uint64_t(width) * std::uint64_t(height);
+    std::uint64_t payload = 0;
+    std::vector<std::pair<std::string, std::vector<std::string>>> shapes;
     for (const auto& l : header.at("layers")) {
-      Layer& layer =
-          e.layers.add(l.at("name").get<std::string>(), l.at("channels").get<std::vector<std::string>>());
-      if (layer.channels.empty()) return corrupt();
-      in.read(reinterpret_cast<char*>(layer.data.data()),
-              std::streamsize(texels * layer.channels.size() * sizeof(float)));
-      if (!in) return corrupt();
+      shapes.emplace_back(l.at("name").get<std::string>(), l.at("channels").get<std::vector<std::string>>());
+      const std::uint64_t channels = shapes.back().second.size();
+      if (channels == 0 || channels > kMaxEntryChannels) return corrupt();
+      payload += texels * channels * sizeof(float);  // <= 2^20 * 2^20 * 2^12 * 4 = 2^54 a layer: no overflow
+      if (payload > file_bytes) return corrupt();
     }
-    if (in.peek() != std::ifstream::traits_type::eof()) return corrupt();  // trailing bytes
+    if (payload != file_bytes - offset) return corrupt();  // truncated or trailing bytes
+    e.layers.width = int(width);
+    e.layers.height = int(height);
+    for (auto& [name, channels] : shapes) {
+      Layer& layer = e.layers.add(name, std::move(channels));
+      if (!read_exactly(reinterpret_cast<char*>(layer.data.data()), layer.data.size() * sizeof(float)))
+        return corrupt();
+    }
     for (const auto& a : header.at("attributes"))
       e.layers.attributes.emplace_back(a.at(0).get<std::string>(), a.at(1).get<std::string>());
     if (payload_checksum(e.layers) != header.at("checksum").get<std::string>()) return corrupt();
     out = std::move(e);
     return CacheLookup::hit;
-  } catch (const std::exception&) {  // malformed header, huge sizes: the entry is not usable
+  } catch (const std::exception&) {  // malformed header: the entry is not usable
     return corrupt();
   }
 }

@@ -1,6 +1,7 @@
 // The reference cache: path-traced references are the expensive part of a nightly run, and they depend only
 // on the scene and the reference parameters, so they are kept between runs under a content hash of
-// everything that determines them. An entry is checked (size and checksum) when it is read; a damaged
+// everything that determines them. An entry is checked (a regular file, its header against the file's
+// length and the job's field size, then its checksum) when it is read; a damaged
 // entry is removed and the reference is computed again. Entries are written atomically (temporary file,
 // then rename), so concurrent jobs and interrupted runs never leave a half-written entry behind.
 #pragma once
@@ -43,8 +44,11 @@ class ReferenceCache {
     LayerSet layers;
     double seconds = 0;  // what computing the reference took: the time a hit saves
   };
-  // hit: `out` holds the entry. corrupt: the entry was unreadable or failed its checksum and was removed.
-  CacheLookup load(const std::string& key, Entry& out) const;
+  // hit: `out` holds the entry. corrupt: the entry was unreadable, not a regular file (a FIFO or a device
+  // is never opened blocking), of another field size than expect_width x expect_height (when given), or
+  // its header disagreed with the file's length (checked before anything is allocated), or it failed its
+  // checksum; it was removed.
+  CacheLookup load(const std::string& key, Entry& out, int expect_width = 0, int expect_height = 0) const;
   // Writes the entry atomically (creating the folder). Returns "" or a one-line reason it could not;
   // a cache that cannot be written never fails a bake.
   std::string store(const std::string& key, const LayerSet& layers, double seconds) const;

@@ -58,7 +58,16 @@ FieldSize probe_field_size(const Job& job) {
     const ProceduralSpec s = procedural_spec(h["procedural"]);
     return {s.width, s.height};
   }
-  return probe_image_field_size(job);
+  const FieldSize size = probe_image_field_size(job);
+  // The sides every method supports (the procedural schema's limit): the sweeps' line indices (up to
+  // width + height lines of up to 2^20 samples each, in int) and the reference's Embree grids. Checked on
+  // the header, before the memory estimate or anything is allocated.
+  if (size.width > kMaxFieldSide || size.height > kMaxFieldSide)
+    throw InputError(job.file.string(), "/height/image",
+                     h["image"].get<std::string>() + ": is " + std::to_string(size.width) + "x" +
+                         std::to_string(size.height) + " texels; fields of up to " +
+                         std::to_string(kMaxFieldSide) + " texels a side are supported");
+  return size;
 }
 
 double job_texel_size(const Job& job) {

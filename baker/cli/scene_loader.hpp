@@ -16,7 +16,11 @@ struct FieldSize {
   int width = 0, height = 0;
 };
 
-// The height field's size, from the procedural spec or the image header (no pixels are read).
+// The longest side of a field (the procedural schema's maximum, and an image's): 2^20 texels.
+inline constexpr int kMaxFieldSide = 1 << 20;
+
+// The height field's size, from the procedural spec or the image header (no pixels are read); InputError
+// at /height/image for an image with a side beyond kMaxFieldSide.
 FieldSize probe_field_size(const Job& job);
 
 // Bytes a bake of `job` needs at peak (field, normals, surface maps, the largest method's layers and

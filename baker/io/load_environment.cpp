@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 
 #include "core/error.hpp"
@@ -135,15 +136,26 @@ class Loader {
            "the image is " + std::to_string(info.width) + "x" + std::to_string(info.height) +
                "; environments are limited to 2^27 pixels");
     RgbImage img = read_rgb_image(file, colorspace_, site(key), site("colorspace"));
+    // Radiance is finite and non-negative: a negative pixel would subtract light and break the reference's
+    // importance sampling (a luminance CDF with negative weights). Checked after the conversion to linear.
     for (std::size_t i = 0; i < img.pixels.size(); ++i) {
-      const Rgb& p = img.pixels[i];
-      if (!std::isfinite(p.r) || !std::isfinite(p.g) || !std::isfinite(p.b))
-        fail(key, file,
-             "pixel (" + std::to_string(i % std::size_t(img.width)) + ", " +
-                 std::to_string(i / std::size_t(img.width)) +
-                 ") is not finite (NaN or Inf); an environment must be finite everywhere");
+      Rgb& p = img.pixels[i];
+      p = p * intensity_;
+      const bool finite = std::isfinite(p.r) && std::isfinite(p.g) && std::isfinite(p.b);
+      if (finite && p.r >= 0 && p.g >= 0 && p.b >= 0) continue;
+      const std::string where = "pixel (" + std::to_string(i % std::size_t(img.width)) + ", " +
+                                std::to_string(i / std::size_t(img.width)) + ")";
+      if (!finite)
+        fail(key, file, where + " is not finite (NaN or Inf" +
+                            (intensity_ != 1 ? " times the intensity " + std::to_string(intensity_) : "") +
+                            "); an environment must be finite everywhere");
+      char value[96];
+      std::snprintf(value, sizeof value, " is negative (%g, %g, %g in linear RGB)", double(p.r), double(p.g),
+                    double(p.b));
+      fail(key, file,
+           where + value + "; radiance must be >= 0 (a colour space conversion of out-of-gamut colours "
+                           "can make negatives: convert the image to linear Rec.709 and clamp at 0 first)");
     }
-    for (Rgb& p : img.pixels) p = p * intensity_;
     return {img.width, img.height, std::move(img.pixels)};
   }
 

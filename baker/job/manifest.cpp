@@ -198,19 +198,24 @@ nlohmann::json read_json_file(const fs::path& file) {
 }
 
 JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_override) {
+  nlohmann::json doc;
+  try {
+    doc = read_json_file(file);
+  } catch (const InputError& e) {
+    JobLoad result;
+    result.errors.push_back(e.line());
+    return result;
+  }
+  return load_job_document(std::move(doc), file, out_override);
+}
+
+JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
+                          const std::optional<fs::path>& out_override) {
   JobLoad result;
   const std::string fname = file.string();
   auto fail = [&](const std::string& where, const std::string& what) {
     result.errors.push_back(fname + ": " + (where.empty() ? "" : where + ": ") + what);
   };
-
-  nlohmann::json doc;
-  try {
-    doc = read_json_file(file);
-  } catch (const InputError& e) {
-    result.errors.push_back(e.line());
-    return result;
-  }
 
   // A numeric parameter given as a list expands into one bake entry per value (a sweep).
   SweepExpansion sweep = expand_parameter_sweeps(doc);

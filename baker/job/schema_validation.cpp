@@ -238,7 +238,20 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
   // An alternative (oneOf/anyOf) that failed produces messages for every branch; when a value failed
   // only through alternatives, keep the summarising message instead of the branches' contradictions.
   if (out.empty() && !raw.empty()) out.push_back(rewrite(raw.front().first, raw.front().second));
-  return out;
+  // One value, one line: when a value fails several branches of an alternative (a number or [r, g, b]; a
+  // number or "from_file"), the branches whose type or constant did not match say nothing about it: keep
+  // the branch that did ("must be <= 1", not also "wrong type").
+  auto says_nothing = [](const SchemaViolation& v) {
+    return v.message == "wrong type" || v.message.rfind("failed to match expected value set by 'const'", 0) == 0;
+  };
+  std::vector<SchemaViolation> kept;
+  for (const SchemaViolation& v : out) {
+    const bool other = std::any_of(out.begin(), out.end(), [&](const SchemaViolation& o) {
+      return &o != &v && o.pointer == v.pointer && !says_nothing(o);
+    });
+    if (!(says_nothing(v) && other)) kept.push_back(v);
+  }
+  return kept;
 }
 
 }  // namespace hfbake

@@ -186,8 +186,10 @@ std::string another_job_message(const std::vector<std::string>& differences) {
   return s;
 }
 
-BaselineComparison compare_to_baseline(const nlohmann::json& now, const nlohmann::json& baseline,
-                                       const BaselineOptions& options) {
+namespace {
+
+BaselineComparison compare_documents(const nlohmann::json& now, const nlohmann::json& baseline,
+                                     const BaselineOptions& options) {
   const nlohmann::json& new_methods = methods_of(now, "the new report");
   const nlohmann::json& old_methods = methods_of(baseline, "the baseline");
   BaselineComparison c;
@@ -264,6 +266,21 @@ BaselineComparison compare_to_baseline(const nlohmann::json& now, const nlohmann
     }
   }
   return c;
+}
+
+}  // namespace
+
+BaselineComparison compare_to_baseline(const nlohmann::json& now, const nlohmann::json& baseline,
+                                       const BaselineOptions& options) {
+  // A report.json whose values have other types than hfbake writes (a hand-edited or damaged file) is not a
+  // report: one line from `compare`, never an uncaught exception.
+  try {
+    return compare_documents(now, baseline, options);
+  } catch (const nlohmann::json::exception& e) {
+    std::string what = e.what();  // "[json.exception.type_error.302] type must be string, but is number"
+    if (const auto b = what.find("] "); b != std::string::npos) what = what.substr(b + 2);
+    throw std::invalid_argument("not a report.json as hfbake writes it: " + what);
+  }
 }
 
 std::string comparison_table(const BaselineComparison& c, bool all) {

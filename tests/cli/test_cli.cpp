@@ -284,7 +284,8 @@ TEST_P(StopSignal, StopsTheBakeRemovesItsStagingAndExits128PlusTheSignal) {
   }
   ASSERT_FALSE(stage.empty()) << "no staged EXR appeared";
   // The stage is named after this process (so a later bake can tell whether its owner still runs).
-  EXPECT_NE(stage.filename().string().find("-" + std::to_string(pid) + "@"), std::string::npos) << stage;
+  // (and its start time, so a reused process id is not taken for it).
+  EXPECT_NE(stage.filename().string().find("-" + std::to_string(pid) + "+"), std::string::npos) << stage;
   ASSERT_EQ(kill(pid, sig), 0);
   pid_t done = 0;
   for (int i = 0; i < 60000 && done == 0; ++i) {  // hang guard: a bake that ignores the signal fails here

@@ -268,6 +268,39 @@ TEST(LoadEnvironment, NonFinitePixelsAreRejected) {
                 ": pixel (5, 3) is not finite (NaN or Inf); an environment must be finite everywhere");
 }
 
+TEST(LoadEnvironment, NegativePixelsAndOverflowingIntensitiesAreRejected) {
+  TempFolder dir;
+  std::vector<float> px(16 * 8 * 3, 1.0f);
+  px[(2 * 16 + 7) * 3 + 0] = -5.0f;
+  write_test_image(dir / "neg.exr", 16, 8, 3, px);
+  const std::string line = error_line(json{{"latlong", "neg.exr"}}, dir.path());
+  EXPECT_EQ(line.rfind("job.json: /environment/latlong: " + (dir / "neg.exr").string() +
+                           ": pixel (7, 2) is negative (-5, 1, 1 in linear RGB); radiance must be >= 0",
+                       0),
+            0u)
+      << line;
+  // A finite float pixel times an allowed intensity beyond float's range.
+  std::vector<float> big(16 * 8 * 3, 1.0f);
+  big[0] = 1e30f;
+  write_test_image(dir / "big.exr", 16, 8, 3, big);
+  EXPECT_EQ(error_line(json{{"latlong", "big.exr"}, {"intensity", 1e9}}, dir.path()),
+            "job.json: /environment/latlong: " + (dir / "big.exr").string() +
+                ": pixel (0, 0) is not finite (NaN or Inf times the intensity 1000000000.000000); an "
+                "environment must be finite everywhere");
+  // A cube face as well as a lat-long.
+  std::vector<float> face(8 * 8 * 3, 1.0f);
+  write_test_image(dir / "f.exr", 8, 8, 3, face);
+  face[3] = -0.25f;
+  write_test_image(dir / "fneg.exr", 8, 8, 3, face);
+  const json cube{{"cubemap", {"f.exr", "f.exr", "f.exr", "f.exr", "fneg.exr", "f.exr"}}};
+  const std::string cube_line = error_line(cube, dir.path());
+  EXPECT_EQ(cube_line.rfind("job.json: /environment/cubemap/4: " + (dir / "fneg.exr").string() +
+                                ": pixel (1, 0) is negative",
+                            0),
+            0u)
+      << cube_line;
+}
+
 TEST(LoadEnvironment, LargeInputsAreResampledToTheCap) {
   TempFolder dir;
   write_latlong_patch(dir / "sky.exr");

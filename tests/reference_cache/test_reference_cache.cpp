@@ -1,10 +1,15 @@
 // The reference cache: an entry comes back bit for bit; any damage (a flipped byte, a truncated file, a
 // wrong header) is detected and the entry removed; the key follows exactly what determines a reference.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 
 #include "cli/reference_cache.hpp"
@@ -134,6 +139,114 @@ TEST_F(Cache, TruncatedExtendedOrForeignEntriesAreCorrupt) {
   EXPECT_EQ(cache.load("g", e), CacheLookup::corrupt);
   std::ofstream(cache.entry_path("h")) << "";
   EXPECT_EQ(cache.load("h", e), CacheLookup::corrupt);
+}
+
+// The peak resident memory of this process so far (VmHWM), in bytes.
+std::size_t peak_resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);)
+    if (line.rfind("VmHWM:", 0) == 0) return std::stoull(line.substr(6)) * 1024;
+  return 0;
+}
+
+// Runs `load` in a child process (a hang is killed after 60 s by SIGALRM, so a blocking open fails the test
+// instead of hanging it): its CacheLookup and how far it raised the child's peak resident memory.
+struct ChildLoad {
+  bool finished = false;
+  int lookup = -1;
+  std::size_t grew_bytes = 0;
+};
+ChildLoad load_in_child(const std::function<CacheLookup()>& load) {
+  int fds[2];
+  if (pipe(fds) != 0) return {};
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    alarm(60);
+    const std::size_t before = peak_resident_bytes();
+    const long long result[2] = {int(load()), (long long)(peak_resident_bytes() - before)};
+    const bool ok = write(fds[1], result, sizeof result) == ssize_t(sizeof result);
+    _exit(ok ? 0 : 1);
+  }
+  close(fds[1]);
+  long long result[2] = {-1, 0};
+  const bool got = read(fds[0], result, sizeof result) == ssize_t(sizeof result);
+  close(fds[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ChildLoad r;
+  r.finished = got && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  r.lookup = int(result[0]);
+  r.grew_bytes = std::size_t(std::max(0ll, result[1]));
+  return r;
+}
+
+// Rewrites the header's width and height (the checksum and payload stay): what a damaged or hostile entry
+// claims.
+void claim_size(const fs::path& file, int width, int height) {
+  std::ifstream in(file, std::ios::binary);
+  std::string magic, header, payload;
+  std::getline(in, magic);
+  std::getline(in, header);
+  payload.assign(std::istreambuf_iterator<char>(in), {});
+  in.close();
+  nlohmann::json h = nlohmann::json::parse(header);
+  h["width"] = width;
+  h["height"] = height;
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << magic << "\n" << h.dump() << "\n" << payload;
+}
+
+TEST_F(Cache, AHeaderClaimingMoreThanTheFileHoldsIsRefusedBeforeAllocating) {
+  const ReferenceCache cache(dir_);
+  ASSERT_EQ(cache.store("big", sample(16, 16), 1.0), "");
+  // 20000 x 20000 x 4 channels would be 6.4 GB of floats; the file holds 4 KiB of them.
+  claim_size(cache.entry_path("big"), 20000, 20000);
+  const ChildLoad r = load_in_child([&] {
+    ReferenceCache::Entry e;
+    return cache.load("big", e);
+  });
+  ASSERT_TRUE(r.finished);
+  EXPECT_EQ(r.lookup, int(CacheLookup::corrupt));
+  EXPECT_LT(r.grew_bytes, std::size_t(64) << 20) << "the header's size was allocated before it was checked";
+  EXPECT_FALSE(fs::exists(cache.entry_path("big")));  // removed: the next bake rebuilds it
+
+  // Absurd and negative sides, and an entry of another field size than the job's.
+  for (const auto& [w, h] : std::vector<std::pair<long long, long long>>{
+           {60000, 60000}, {-16, -16}, {1ll << 40, 1}, {16, 1ll << 62}}) {
+    ASSERT_EQ(cache.store("odd", sample(16, 16), 1.0), "");
+    claim_size(cache.entry_path("odd"), int(std::clamp<long long>(w, -(1ll << 31), (1ll << 31) - 1)),
+               int(std::clamp<long long>(h, -(1ll << 31), (1ll << 31) - 1)));
+    ReferenceCache::Entry e;
+    EXPECT_EQ(cache.load("odd", e), CacheLookup::corrupt) << w << "x" << h;
+  }
+  ASSERT_EQ(cache.store("other", sample(16, 16), 1.0), "");
+  ReferenceCache::Entry e;
+  EXPECT_EQ(cache.load("other", e, 16, 17), CacheLookup::corrupt);
+  ASSERT_EQ(cache.store("same", sample(16, 16), 1.0), "");
+  EXPECT_EQ(cache.load("same", e, 16, 16), CacheLookup::hit);
+}
+
+TEST_F(Cache, AFifoOrAFolderInAnEntrysPlaceDoesNotHang) {
+  const ReferenceCache cache(dir_);
+  ASSERT_EQ(mkfifo(cache.entry_path("fifo").c_str(), 0600), 0);
+  const ChildLoad r = load_in_child([&] {
+    ReferenceCache::Entry e;
+    return cache.load("fifo", e);
+  });
+  ASSERT_TRUE(r.finished) << "opening a FIFO entry hung";
+  EXPECT_EQ(r.lookup, int(CacheLookup::corrupt));
+  EXPECT_FALSE(fs::exists(cache.entry_path("fifo")));
+  // Rebuilt in its place.
+  ASSERT_EQ(cache.store("fifo", sample(4, 4), 1.0), "");
+  ReferenceCache::Entry e;
+  EXPECT_EQ(cache.load("fifo", e), CacheLookup::hit);
+
+  fs::create_directories(cache.entry_path("dir"));
+  EXPECT_EQ(cache.load("dir", e), CacheLookup::corrupt);
+  // A header line without an end (1 MiB and more) is damage too.
+  std::ofstream(cache.entry_path("long"), std::ios::binary)
+      << "hfbake reference cache 1\n" << std::string(std::size_t(2) << 20, '{');
+  EXPECT_EQ(cache.load("long", e), CacheLookup::corrupt);
 }
 
 TEST_F(Cache, KeyFollowsWhatDeterminesTheReference) {

@@ -1,0 +1,61 @@
+// Every output layer is checked finite before anything is written (issue 20): a NaN or an infinity fails the
+// job with a line naming the method, the layer, the first texel and its channel; horizon_distance may be
+// +inf (nothing behind the texel) and nothing else may.
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "cli/outputs.hpp"
+
+namespace hfbake {
+namespace {
+
+LayerSet layers_5x4() {
+  LayerSet s;
+  s.width = 5;
+  s.height = 4;
+  s.add("ao", mono_channels());
+  s.add("direct", rgb_channels());
+  for (Layer& l : s.layers)
+    for (float& v : l.data) v = 0.5f;
+  return s;
+}
+
+std::string failure(const LayerSet& s) {
+  try {
+    check_layers_finite("p1", s);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(FiniteOutputs, FiniteLayersPass) { EXPECT_EQ(failure(layers_5x4()), ""); }
+
+TEST(FiniteOutputs, TheFirstNonFiniteTexelIsNamedWithItsLayerAndChannel) {
+  LayerSet s = layers_5x4();
+  // direct is RGB: texel (3, 2) is index 2 * 5 + 3 = 13, its G value 13 * 3 + 1.
+  s.layers[1].data[13 * 3 + 1] = std::numeric_limits<float>::quiet_NaN();
+  s.layers[1].data[19 * 3 + 2] = std::numeric_limits<float>::infinity();  // a later one is not named
+  EXPECT_EQ(failure(s).rfind("p1: layer direct: texel (3, 2) channel direct.G is nan", 0), 0u) << failure(s);
+  LayerSet t = layers_5x4();
+  t.layers[0].data[4] = -std::numeric_limits<float>::infinity();
+  EXPECT_EQ(failure(t).rfind("p1: layer ao: texel (4, 0) channel ao.Y is -inf", 0), 0u) << failure(t);
+}
+
+TEST(FiniteOutputs, HorizonDistanceMayBePlusInfinityOnly) {
+  LayerSet s = layers_5x4();
+  Layer& d = s.add("horizon_distance", {"000", "001"});
+  for (float& v : d.data) v = 2.0f;
+  d.data[7] = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(failure(s), "");
+  d.data[9] = std::numeric_limits<float>::quiet_NaN();  // texel 4, channel 001
+  EXPECT_EQ(failure(s).rfind("p1: layer horizon_distance: texel (4, 0) channel horizon_distance.001 is nan", 0),
+            0u)
+      << failure(s);
+}
+
+}  // namespace
+}  // namespace hfbake

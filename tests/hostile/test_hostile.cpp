@@ -1,0 +1,421 @@
+// Issue 20's bad-input corpus, case by case, against the hfbake binary: each case is an input a user, a
+// script or a damaged disk can hand hfbake, with what must happen: the exit code, one line
+// "hfbake: error: <file>: <JSON pointer>: <what>" naming the file and the pointer, and nothing new in the
+// output folder (no half-written file, no staging folder, no empty folder). A hang fails the case (each run
+// is killed after 120 s), so do a crash (a signal instead of an exit code).
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// One hfbake run: its exit code (or -signal), its stderr.
+struct HfbakeRun {
+  int exit_code = 0;
+  std::string err;
+  std::vector<std::string> error_lines() const {
+    std::vector<std::string> lines;
+    std::istringstream in(err);
+    for (std::string l; std::getline(in, l);)
+      if (l.rfind("hfbake: error: ", 0) == 0) lines.push_back(l.substr(15));
+    return lines;
+  }
+};
+
+// Runs hfbake with `args` in `dir`, stderr to a file; killed (and reported as -SIGKILL) after 120 s.
+HfbakeRun run_hfbake(const fs::path& dir, const std::vector<std::string>& args) {
+  const fs::path err = dir / "stderr.txt";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (!freopen(err.c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout)) _exit(126);
+    if (chdir(dir.c_str()) != 0) _exit(126);
+    alarm(120);  // SIGALRM's default kills a hung hfbake: the case fails instead of hanging the suite
+    std::vector<char*> argv{const_cast<char*>("hfbake")};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(HFBAKE_BINARY, argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  HfbakeRun r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+  std::ifstream in(err);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  r.err = ss.str();
+  return r;
+}
+
+// Every path under `dir` (files and folders), relative, and "." for the folder itself; empty when it does
+// not exist (so an empty folder left behind is a change).
+std::set<std::string> listing(const fs::path& dir) {
+  std::set<std::string> out;
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return out;
+  out.insert(".");
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
+       it.increment(ec))
+    out.insert(fs::relative(it->path(), dir).string());
+  return out;
+}
+
+void write_image(const fs::path& p, int w, int h, int channels, const std::vector<float>& pixels,
+                 OIIO::TypeDesc type = OIIO::TypeDesc::FLOAT) {
+  auto out = OIIO::ImageOutput::create(p.string());
+  ASSERT_TRUE(out) << p;
+  OIIO::ImageSpec spec(w, h, channels, type);
+  ASSERT_TRUE(out->open(p.string(), spec)) << out->geterror();
+  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, pixels.data())) << out->geterror();
+  out->close();
+}
+
+json base_job() {
+  return {{"version", 1},
+          {"name", "t"},
+          {"height", {{"procedural", {{"kind", "fractal"}, {"size", {16, 16}}}}}},
+          {"bake", {{{"method", "p1"}, {"directions", 4}}}},
+          {"output", {{"dir", "out"}}}};
+}
+
+// What a case does in its folder: writes its files and returns hfbake's arguments.
+struct CaseSetup {
+  std::vector<std::string> args;
+  std::string file;     // the file the error names ("" = the job, dir/job.json)
+  std::string pointer;  // the JSON pointer (or "line L, column C" for malformed JSON) it names
+  std::string what;     // a phrase the message holds
+  bool bake_too = true;  // a validate case: bake must refuse it the same way
+};
+
+struct Case {
+  std::string name;
+  std::function<CaseSetup(const fs::path& dir)> setup;
+  int exit_code = 2;
+  int error_lines = 1;
+};
+
+std::string write_job(const fs::path& dir, const json& j, const std::string& name = "job.json") {
+  std::ofstream(dir / name) << j.dump(2);
+  return (dir / name).string();
+}
+std::string write_text(const fs::path& dir, const std::string& text, const std::string& name = "job.json") {
+  std::ofstream(dir / name, std::ios::binary) << text;
+  return (dir / name).string();
+}
+
+// validate and bake alike: both must refuse before anything is baked.
+CaseSetup both(const std::string& job, std::string pointer, std::string what) {
+  return {{"validate", job}, "", std::move(pointer), std::move(what)};
+}
+
+std::vector<Case> cases() {
+  std::vector<Case> c;
+  auto add = [&](std::string name, std::function<CaseSetup(const fs::path&)> setup, int exit_code = 2,
+                 int lines = 1) { c.push_back({std::move(name), std::move(setup), exit_code, lines}); };
+
+  // --- the parser ---------------------------------------------------------------------------------------
+  add("NumberBeyondDouble", [](const fs::path& d) {
+    std::string t = base_job().dump();
+    t.insert(t.find("\"procedural\""), "\"texel_size\": 1e309, ");
+    return both(write_text(d, t), "", "number overflow");
+  });
+  add("IntegerBeyondInt64", [](const fs::path& d) {
+    json j = base_job();
+    std::string t = j.dump();
+    t.replace(t.find("\"directions\":4"), 14, "\"directions\":123456789012345678901234567890");
+    return both(write_text(d, t), "/bake/0/directions", "");
+  });
+  add("NestedArrays100k", [](const fs::path& d) {
+    return both(write_text(d, std::string(100000, '[') + std::string(100000, ']')), "line 1, column 65",
+                "nested deeper than 64 levels");
+  });
+  add("DuplicateKey", [](const fs::path& d) {
+    std::string t = base_job().dump();
+    t.replace(t.find("\"directions\":4"), 14, "\"directions\":4,\"directions\":8");
+    return both(write_text(d, t), "/bake/0/directions", "duplicate key");
+  });
+  add("NotUtf8", [](const fs::path& d) {
+    std::string t = base_job().dump();
+    t.replace(t.find("\"t\""), 3, "\"t\xff\xfe\"");
+    return both(write_text(d, t), "line 1", "malformed JSON");
+  });
+  add("HugeJobFile", [](const fs::path& d) {
+    json j = base_job();
+    j["description"] = std::string(17u << 20, 'x');
+    return both(write_job(d, j), "", "may be at most 16777216");
+  });
+  add("DevZeroAsJob", [](const fs::path&) { return CaseSetup{{"validate", "/dev/zero"}, "/dev/zero", "", "not a regular file"}; });
+  add("FifoAsJob", [](const fs::path& d) {
+    mkfifo((d / "job.json").c_str(), 0600);
+    return both((d / "job.json").string(), "", "not a regular file");
+  });
+  add("FolderAsJob", [](const fs::path& d) {
+    fs::create_directories(d / "job.json");
+    return CaseSetup{{"validate", (d / "job.json").string()}, "", "", "not a regular file", false};
+  });
+  add("FolderAsJobBake", [](const fs::path& d) {  // bake's command line parser (CLI11) refuses it, in its words
+    fs::create_directories(d / "job.json");
+    return CaseSetup{{"bake", (d / "job.json").string()}, "command line", "jobs",
+                     "directory: " + (d / "job.json").string()};
+  });
+
+  // --- ranges: values a user could mistype ------------------------------------------------------------
+  auto range = [&](std::string name, std::function<void(json&)> edit, std::string pointer) {
+    add(std::move(name), [edit, pointer](const fs::path& d) {
+      json j = base_job();
+      edit(j);
+      return both(write_job(d, j), pointer, "");
+    });
+  };
+  range("TexelSize1e308", [](json& j) { j["height"]["texel_size"] = 1e308; }, "/height/texel_size");
+  range("TexelSizeDenormal", [](json& j) { j["height"]["texel_size"] = 1e-310; }, "/height/texel_size");
+  range("AlbedoFive", [](json& j) { j["surface"] = {{"albedo", 5}}; }, "/surface/albedo");
+  range("LightIrradiance1e308",
+        [](json& j) {
+          j["lights"] = {{{"directional", {{"direction", {0, 0, 1}}, {"irradiance", 1e308}}}}};
+        },
+        "/lights/0/directional/irradiance");
+  range("TinyLightDirection",
+        [](json& j) {
+          j["lights"] = {{{"directional", {{"direction", {1e-200, 0, 1e-200}}, {"irradiance", 1}}}}};
+        },
+        "/lights/0/directional/direction");
+  range("ProceduralSizeBeyondTheLimit",
+        [](json& j) { j["height"]["procedural"]["size"] = {2, 2000000}; }, "/height/procedural/size/1");
+  // The memory estimate itself used to allocate for the sweeps' plan (8 GB for this one) before refusing.
+  range("ProceduralMillionSquared",
+        [](json& j) { j["height"]["procedural"]["size"] = {1000000, 1000000}; }, "/height");
+  range("EnvironmentRotation1e308",
+        [](json& j) { j["environment"] = {{"sky", json::object()}, {"rotation_deg", 1e308}}; },
+        "/environment/rotation_deg");
+
+  // --- the data: validate reads what bake reads --------------------------------------------------------
+  add("TruncatedPng", [](const fs::path& d) {
+    std::vector<float> px(64 * 64);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = float(i % 97) / 97.0f;
+    write_image(d / "h.png", 64, 64, 1, px, OIIO::TypeDesc::UINT16);
+    fs::resize_file(d / "h.png", fs::file_size(d / "h.png") * 2 / 3);
+    json j = base_job();
+    j["height"] = {{"image", "h.png"}};
+    return both(write_job(d, j), "/height/image", "cannot decode the image");
+  });
+  add("NanHeights", [](const fs::path& d) {
+    std::vector<float> px(16 * 16, 1.0f);
+    px[3 * 16 + 5] = std::numeric_limits<float>::quiet_NaN();
+    write_image(d / "h.exr", 16, 16, 1, px);
+    json j = base_job();
+    j["height"] = {{"image", "h.exr"}};
+    return both(write_job(d, j), "/height/image", "texel (5, 3) is NaN");
+  });
+  add("Heights1e38", [](const fs::path& d) {
+    std::vector<float> px(16 * 16, 1.0f);
+    px[17] = 1e38f;
+    write_image(d / "h.exr", 16, 16, 1, px);
+    json j = base_job();
+    j["height"] = {{"image", "h.exr"}};
+    return both(write_job(d, j), "/height", "texel (1, 1) is 1e+38 world units high");
+  });
+  add("HeightPatternPlusMinus3e38", [](const fs::path& d) {
+    std::vector<float> px(16 * 16);
+    for (std::size_t t = 0; t < px.size(); ++t) px[t] = t % 2 ? -3e38f : 3e38f;
+    write_image(d / "h.exr", 16, 16, 1, px);
+    json j = base_job();
+    j["height"] = {{"image", "h.exr"}};
+    return both(write_job(d, j), "/height", "world units high");
+  });
+  add("LatlongPixelMinus5", [](const fs::path& d) {
+    std::vector<float> px(16 * 8 * 3, 1.0f);
+    px[(2 * 16 + 7) * 3 + 1] = -5.0f;
+    write_image(d / "sky.exr", 16, 8, 3, px);
+    json j = base_job();
+    j["environment"] = {{"latlong", "sky.exr"}};
+    return both(write_job(d, j), "/environment/latlong", "pixel (7, 2) is negative");
+  });
+  add("LatlongPixelInf", [](const fs::path& d) {
+    std::vector<float> px(16 * 8 * 3, 1.0f);
+    px[5] = std::numeric_limits<float>::infinity();
+    write_image(d / "sky.exr", 16, 8, 3, px);
+    json j = base_job();
+    j["environment"] = {{"latlong", "sky.exr"}};
+    return both(write_job(d, j), "/environment/latlong", "is not finite");
+  });
+  add("EmissionMapNegative", [](const fs::path& d) {
+    std::vector<float> px(16 * 16 * 3, 0.0f);
+    px[3 * 10] = -1.0f;
+    write_image(d / "glow.exr", 16, 16, 3, px);
+    json j = base_job();
+    j["surface"] = {{"emission", {{"image", "glow.exr"}}}};
+    return both(write_job(d, j), "/surface/emission/image", "is negative or not finite");
+  });
+  add("AlbedoMapOfAnotherSize", [](const fs::path& d) {
+    write_image(d / "a.exr", 8, 8, 3, std::vector<float>(8 * 8 * 3, 0.5f));
+    json j = base_job();
+    j["surface"] = {{"albedo", {{"image", "a.exr"}}}};
+    return both(write_job(d, j), "/surface/albedo/image", "the height field is 16x16");
+  });
+  add("HeightImageWiderThanSupported", [](const fs::path& d) {
+    const int w = (1 << 20) + 1;
+    write_image(d / "wide.tif", w, 2, 1, std::vector<float>(std::size_t(w) * 2, 0.5f), OIIO::TypeDesc::UINT8);
+    json j = base_job();
+    j["height"] = {{"image", "wide.tif"}};
+    return both(write_job(d, j), "/height/image", "fields of up to 1048576 texels a side are supported");
+  });
+  add("HeightImageOneByOne", [](const fs::path& d) {
+    write_image(d / "h.exr", 1, 1, 1, {1.0f});
+    json j = base_job();
+    j["height"] = {{"image", "h.exr"}};
+    return both(write_job(d, j), "/height", "at least 2x2");
+  });
+
+  // --- bake: the same refusals, and nothing left behind --------------------------------------------------
+  add("BakeTruncatedPngLeavesNoFolder", [](const fs::path& d) {
+    std::vector<float> px(64 * 64, 0.25f);
+    write_image(d / "h.png", 64, 64, 1, px, OIIO::TypeDesc::UINT8);
+    fs::resize_file(d / "h.png", fs::file_size(d / "h.png") / 2);
+    json j = base_job();
+    j["height"] = {{"image", "h.png"}};
+    return CaseSetup{{"bake", write_job(d, j), "--no-cache", "--quiet"}, "", "/height/image", ""};
+  });
+  add("BakeCollidingJobs", [](const fs::path& d) {
+    fs::create_directories(d / "x");
+    fs::create_directories(d / "y");
+    const std::string a = write_job(d, base_job(), "x/job.json"), b = write_job(d, base_job(), "y/job.json");
+    return CaseSetup{{"bake", a, b, "--out", (d / "out").string(), "--quiet"}, a, "/name", "would be the same files"};
+  }, 2, 2);
+  add("SummaryIntoAFileNotAFolder", [](const fs::path& d) {
+    std::ofstream(d / "file") << "x";
+    json j = base_job();
+    j["output"]["dir"] = "elsewhere";  // the job bakes; only its summary cannot be written
+    return CaseSetup{{"bake", write_job(d, j), "--quiet", "--no-cache", "--summary", (d / "file/s.json").string()},
+                 (d / "file/s.json").string(), "", "cannot write summary"};
+  });
+  add("CompareReportWithWrongTypes", [](const fs::path& d) {  // found by fuzz_report: compare aborted
+    const fs::path seed = fs::path(HFBAKE_SOURCE_DIR) / "tests/fuzz/regressions/report/scene_hash_not_a_string";
+    std::ifstream in(seed);
+    const std::string text{std::istreambuf_iterator<char>(in), {}};
+    const auto sep = text.find("\n@@\n");
+    fs::create_directories(d / "a");
+    fs::create_directories(d / "b");
+    write_text(d, text.substr(0, sep), "a/report.json");
+    write_text(d, text.substr(sep + 4), "b/report.json");
+    return CaseSetup{{"compare", (d / "a").string(), (d / "b").string()},
+                     (d / "a/report.json").string() + " vs " + (d / "b/report.json").string(), "",
+                     "not a report.json as hfbake writes it"};
+  });
+  return c;
+}
+
+class Hostile : public ::testing::TestWithParam<Case> {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("hfbake_hostile_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_P(Hostile, OneLineErrorExitCodeAndNothingNewInTheOutputFolder) {
+  const Case& k = GetParam();
+  const CaseSetup s = k.setup(dir_);
+  const std::string file = s.file.empty() ? (dir_ / "job.json").string() : s.file;
+  std::vector<std::vector<std::string>> runs{s.args};
+  if (s.args.front() == "validate" && s.bake_too) {  // and bake refuses it too, before baking
+    std::vector<std::string> bake = s.args;
+    bake.front() = "bake";
+    bake.insert(bake.end(), {"--no-cache", "--quiet"});
+    runs.push_back(bake);
+  }
+  for (const auto& args : runs) {
+    const auto before = listing(dir_ / "out");
+    const HfbakeRun r = run_hfbake(dir_, args);
+    SCOPED_TRACE(args.front());
+    EXPECT_EQ(r.exit_code, k.exit_code) << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(int(lines.size()), k.error_lines) << r.err;
+    EXPECT_EQ(lines[0].rfind(file + ": " + (s.pointer.empty() ? "" : s.pointer)), 0u)
+        << "expected \"" << file << ": " << s.pointer << "\" in: " << lines[0];
+    EXPECT_NE(lines[0].find(s.what), std::string::npos) << lines[0];
+    EXPECT_EQ(listing(dir_ / "out"), before) << "the output folder changed";
+    EXPECT_EQ(r.err.find("AddressSanitizer"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("runtime error"), std::string::npos) << r.err;
+  }
+  // Nothing half-written beside the job either (temporaries of the summary, the cache, ...).
+  for (const auto& p : listing(dir_)) EXPECT_EQ(p.find(".tmp-"), std::string::npos) << p;
+}
+
+INSTANTIATE_TEST_SUITE_P(Corpus, Hostile, ::testing::ValuesIn(cases()),
+                         [](const ::testing::TestParamInfo<Case>& info) { return info.param.name; });
+
+}  // namespace
+
+namespace {
+
+// A process's start time as /proc/<pid>/stat gives it (field 22), read here independently of hfbake.
+unsigned long long start_time_of(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat;
+  std::getline(in, stat);
+  std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+  std::string f;
+  for (int k = 3; k <= 22; ++k) fields >> f;
+  return std::stoull(f);
+}
+
+// SIGKILL leaves a staging folder; its process id may by then belong to another process (after a reboot, on
+// a busy node). The stage records the owner's start time, so the next bake removes the stage of a live id
+// that started at another time, and keeps the stage of a process that still runs.
+TEST(Staging, AStageWhoseProcessIdWasReusedIsRemovedAndALiveOwnersIsKept) {
+  const fs::path dir = fs::temp_directory_path() / ("hfbake_stage_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir / "out");
+  const pid_t live = fork();  // a process that runs for the whole test
+  if (live == 0) {
+    pause();
+    _exit(0);
+  }
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  const unsigned long long start = start_time_of(live);
+  const std::string id = std::to_string(live);
+  const fs::path reused = dir / "out" / (".hfbake-staging-t-" + id + "+" + std::to_string(start + 1) + "@" + host);
+  const fs::path owner = dir / "out" / (".hfbake-staging-u-" + id + "+" + std::to_string(start) + "@" + host);
+  for (const fs::path& p : {reused, owner}) {
+    fs::create_directories(p);
+    std::ofstream(p / "t.p1.exr") << "half-written";
+  }
+  const HfbakeRun r = run_hfbake(dir, {"bake", write_job(dir, base_job()), "--no-cache"});
+  kill(live, SIGKILL);
+  waitpid(live, nullptr, 0);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(reused)) << r.err;
+  EXPECT_TRUE(fs::exists(owner / "t.p1.exr"));
+  EXPECT_NE(r.err.find("removed " + reused.string()), std::string::npos) << r.err;
+  // The bake's own stage carries its id and start time, and is gone after it.
+  for (const auto& e : fs::directory_iterator(dir / "out")) {
+    if (e.path().filename().string().rfind(".hfbake-staging-", 0) == 0) {
+      EXPECT_EQ(e.path(), owner);
+    }
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace

@@ -1,0 +1,164 @@
+// SIGKILL at random moments (issue 20: the OOM killer, a node failure): 20 bakes of one output folder, each
+// killed at a random moment of its run. After every kill:
+//   - every file a later bake or `hfbake compare` reads as an output is whole: each EXR and PNG decodes,
+//     report.json parses, and `compare` on the folder reads no report but the committed one (never one in
+//     a staging folder);
+//   - the next bake of the same folder succeeds, removes the killed bake's staging folder, and leaves no
+//     staging folder of its own.
+// The moments come from a fixed seed (reproducible), spread over the measured length of a whole bake.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+namespace fs = std::filesystem;
+
+pid_t start(const std::vector<std::string>& args, const fs::path& err) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (!freopen(err.c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout)) _exit(126);
+    std::vector<char*> argv{const_cast<char*>("hfbake")};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(HFBAKE_BINARY, argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+int wait_exit(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+}
+
+bool is_stage(const fs::path& p) { return p.filename().string().rfind(".hfbake-staging-", 0) == 0; }
+
+// The files outside staging folders: what a later bake or compare can take for outputs.
+std::vector<fs::path> visible_files(const fs::path& dir) {
+  std::vector<fs::path> out;
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
+       it.increment(ec)) {
+    if (it->is_directory() && is_stage(it->path())) {
+      it.disable_recursion_pending();
+      continue;
+    }
+    if (it->is_regular_file()) out.push_back(it->path());
+  }
+  return out;
+}
+
+int stages_in(const fs::path& dir) {
+  int n = 0;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) n += is_stage(it->path());
+  return n;
+}
+
+// A whole output: an image that decodes completely, or JSON that parses.
+::testing::AssertionResult whole(const fs::path& p) {
+  const std::string ext = p.extension().string();
+  if (ext == ".json") {
+    std::ifstream in(p);
+    if (nlohmann::json::parse(in, nullptr, false).is_discarded())
+      return ::testing::AssertionFailure() << p << " is not whole JSON";
+    return ::testing::AssertionSuccess();
+  }
+  if (ext == ".exr" || ext == ".png") {
+    auto in = OIIO::ImageInput::open(p.string());
+    if (!in) return ::testing::AssertionFailure() << p << ": " << OIIO::geterror();
+    const OIIO::ImageSpec& spec = in->spec();
+    std::vector<float> px(std::size_t(spec.width) * spec.height * spec.nchannels);
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()) || in->has_error())
+      return ::testing::AssertionFailure() << p << " does not decode: " << in->geterror();
+    return ::testing::AssertionSuccess();
+  }
+  if (ext == ".html") return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << p << " is not an output hfbake writes";
+}
+
+TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBakeCleansUp) {
+  const fs::path dir = fs::temp_directory_path() / ("hfbake_sigkill_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  // Methods, previews, a reference, report.json and report.html: every kind of output, written over about
+  // a second; the reference cache is this test's own (a killed store must not damage later hits).
+  const nlohmann::json job = {
+      {"version", 1},
+      {"name", "k"},
+      {"height", {{"procedural", {{"kind", "fractal"}, {"size", {48, 48}}, {"seed", 5}}}}},
+      {"bake", {{{"method", "p1"}, {"directions", 8}}, {{"method", "hbao"}, {"directions", 4}, {"radius", 4}}}},
+      {"reference", {{"samples", 64}, {"seed", 1}}},
+      {"output", {{"dir", "out"}, {"previews", true}}}};
+  const fs::path job_file = dir / "k.json", out = dir / "out", err = dir / "stderr.txt";
+  std::ofstream(job_file) << job.dump(2);
+  const std::vector<std::string> bake = {"bake", job_file.string(), "--quiet", "--cache",
+                                         (dir / "cache").string()};
+  const std::vector<std::string> bake_no_cache = {"bake", job_file.string(), "--quiet", "--no-cache"};
+
+  // A whole bake: its length spreads the kill moments; its report is the baseline compare reads against.
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_EQ(wait_exit(start(bake_no_cache, err)), 0);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  fs::create_directories(dir / "baseline");
+  fs::copy_file(out / "report.json", dir / "baseline" / "report.json");
+
+  std::mt19937 rng(20);
+  std::uniform_real_distribution<double> moment(0.0, 1.2 * seconds);
+  int killed_mid_bake = 0;
+  for (int round = 0; round < 20; ++round) {
+    SCOPED_TRACE("round " + std::to_string(round));
+    // Half the rounds hit the reference cache (short bakes), half compute it (long ones).
+    const pid_t pid = start(round % 2 ? bake : bake_no_cache, err);
+    std::this_thread::sleep_for(std::chrono::duration<double>(moment(rng)));
+    kill(pid, SIGKILL);
+    killed_mid_bake += wait_exit(pid) == -SIGKILL;
+
+    for (const fs::path& p : visible_files(out)) EXPECT_TRUE(whole(p));
+    // compare reads the committed report.json only (none in a staging folder). A kill between the report
+    // and the commit leaves a staged report.json; one is planted every round too (a dead process's).
+    {
+      const pid_t dead = fork();
+      if (dead == 0) _exit(0);
+      waitpid(dead, nullptr, 0);
+      char host[256] = {};
+      gethostname(host, sizeof host - 1);
+      const fs::path stage = out / (".hfbake-staging-k-" + std::to_string(dead) + "@" + host);
+      fs::create_directories(stage);
+      fs::copy_file(dir / "baseline" / "report.json", stage / "report.json", fs::copy_options::overwrite_existing);
+    }
+    if (fs::exists(out / "report.json")) {
+      const fs::path cmp = dir / "compare.json";
+      fs::remove(cmp);
+      const int code = wait_exit(start({"compare", out.string(), (dir / "baseline").string(), "--json",
+                                        cmp.string(), "--quiet"},
+                                       dir / "compare_err.txt"));
+      EXPECT_TRUE(code == 0 || code == 1) << code;
+      std::ifstream in(cmp);
+      const nlohmann::json c = nlohmann::json::parse(in, nullptr, false);
+      ASSERT_FALSE(c.is_discarded());
+      for (const auto& comparison : c["comparisons"]) EXPECT_EQ(comparison.value("label", ""), "report.json");
+    }
+    // The next bake of the folder succeeds and leaves no staging behind (the killed one's is removed).
+    ASSERT_EQ(wait_exit(start(bake, err)), 0) << "round " << round;
+    EXPECT_EQ(stages_in(out), 0);  // the killed bake's and the planted one are removed
+    for (const fs::path& p : visible_files(out)) EXPECT_TRUE(whole(p));
+    EXPECT_TRUE(fs::exists(out / "report.json"));
+  }
+  // The moments were spread over whole bakes: most kills hit a running bake (not one already done).
+  EXPECT_GE(killed_mid_bake, 10);
+  fs::remove_all(dir);
+}
+
+}  // namespace
