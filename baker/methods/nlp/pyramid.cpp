@@ -81,6 +81,30 @@ std::size_t Pyramid::bytes() const {
   return b;
 }
 
+namespace {
+
+// Level l's blur and grid (the one rule build_pyramid and pyramid_bytes share).
+void level_grid(int l, int k, int W, int H, bool repeat, double& s, int& w, int& h, double& sx, double& sy) {
+  s = l == 0 ? 0.0 : pyramid_blur(l, k);
+  double g = 1;
+  while (g * 2 <= s / 2) g *= 2;
+  axis_grid(W, repeat, g, w, sx);
+  axis_grid(H, repeat, g, h, sy);
+}
+
+}  // namespace
+
+std::size_t pyramid_bytes(int channels, int W, int H, Wrap wrap, int k, int level_count) {
+  std::size_t b = 0;
+  for (int l = 0; l < std::max(1, level_count); ++l) {
+    double s, sx, sy;
+    int w, h;
+    level_grid(l, k, W, H, wrap == Wrap::repeat, s, w, h, sx, sy);
+    b += std::size_t(w) * std::size_t(h) * std::size_t(channels) * sizeof(float);
+  }
+  return b;
+}
+
 Pyramid build_pyramid(const float* data, int channels, int W, int H, Wrap wrap, int k, int level_count) {
   Pyramid p;
   p.channels = channels;
@@ -92,12 +116,8 @@ Pyramid build_pyramid(const float* data, int channels, int W, int H, Wrap wrap, 
   const int c = channels;
   for (int l = 0; l < int(p.levels.size()); ++l) {
     PyramidLevel& lv = p.levels[l];
-    const double s = l == 0 ? 0.0 : pyramid_blur(l, k);
-    double g = 1;
-    while (g * 2 <= s / 2) g *= 2;
-    double sx, sy;
-    axis_grid(W, p.repeat, g, lv.w, sx);
-    axis_grid(H, p.repeat, g, lv.h, sy);
+    double s, sx, sy;
+    level_grid(l, k, W, H, p.repeat, s, lv.w, lv.h, sx, sy);
     lv.inv_sx = float(1 / sx);
     lv.inv_sy = float(1 / sy);
     lv.blur = s;

@@ -42,6 +42,10 @@ double pyramid_blur(int level, int levels_per_octave);
 Pyramid build_pyramid(const float* data, int channels, int field_w, int field_h, Wrap wrap,
                       int levels_per_octave, int level_count);
 
+// Bytes build_pyramid allocates for these arguments (its levels), without building it: for estimates.
+std::size_t pyramid_bytes(int channels, int field_w, int field_h, Wrap wrap, int levels_per_octave,
+                          int level_count);
+
 // Bilinear read of level `lv` at texel coordinates (x, y) (x = i at texel centers), `channels` values to out.
 // Clamp: coordinates are clamped to the field. Repeat: the level tiles.
 inline void sample_level(const Pyramid& p, const PyramidLevel& lv, float x, float y, float* out) {
