@@ -185,13 +185,15 @@ inline void add_slab(const SlabTable& table, SectorState& st, double x, double d
 
 namespace {
 
-// The occluded measure sum_k sum_slabs band per texel, summed in float (one rounding per direction, k
-// ascending) into occluded[texel] (zeroed first); only the texels in `only` when it is not null, then into
-// occluded[item]. bent_xyz (optional, whole field only): per texel, the sum over directions of the
-// cosine-weighted open direction (unnormalised), [3 * texel + c].
+// The occluded measure sum_k sum_slabs band per texel, summed in Acc (float for the layers: one rounding per
+// direction, k ascending; double for the few texels of farfield_occlusion_at) into occluded[texel] (zeroed
+// first); only the texels in `only` when it is not null, then into occluded[item]. bent_xyz (optional, whole
+// field only): per texel, the sum over directions of the cosine-weighted open direction (unnormalised),
+// [3 * texel + c].
+template <class Acc>
 void farfield_occluded(const HeightField& field, const std::vector<Vec3f>& normals,
                        const FarfieldOptions& options, const RunControl& rc, const std::vector<std::size_t>* only,
-                       FarfieldStats* stats, float* occluded, float* bent_xyz = nullptr) {
+                       FarfieldStats* stats, Acc* occluded, float* bent_xyz = nullptr) {
   FarfieldOptions o = options;
   o.directions = std::max(o.directions, 1);
   o.interval = std::max(o.interval, 1);
@@ -200,7 +202,7 @@ void farfield_occluded(const HeightField& field, const std::vector<Vec3f>& norma
   const int W = field.width, H = field.height, K = o.directions;
   const double ts = field.texel_size;
   const bool bent = bent_xyz != nullptr;
-  std::fill_n(occluded, only ? only->size() : field.texel_count(), 0.0f);
+  std::fill_n(occluded, only ? only->size() : field.texel_count(), Acc(0));
   if (bent) std::fill_n(bent_xyz, 3 * field.texel_count(), 0.0f);
   const SlabTable table(o.rho);
   const double support = o.rho.support(1e-5) / ts;  // texels beyond which rho < 1e-5
@@ -322,8 +324,8 @@ void farfield_occluded(const HeightField& field, const std::vector<Vec3f>& norma
                 sum += st.occluded;
                 dir_sum.h += st.dir.h, dir_sum.v += st.dir.v;
               }
-              float& acc = occluded[only ? item : idx];
-              acc = float(double(acc) + (open_end ? near.occluded : sum / halves));
+              Acc& acc = occluded[only ? item : idx];
+              acc = Acc(double(acc) + (open_end ? near.occluded : sum / halves));
               if (bent) {
                 const SliceVec open = open_direction(frame_value, tangent, kHalfPi);
                 const SliceVec occ = open_end ? near.dir : SliceVec{dir_sum.h / halves, dir_sum.v / halves};
@@ -383,10 +385,10 @@ std::vector<float> farfield_obscurance(const HeightField& field, const std::vect
 std::vector<double> farfield_occlusion_at(const HeightField& field, const std::vector<Vec3f>& normals,
                                           const FarfieldOptions& options,
                                           const std::vector<std::size_t>& texels, FarfieldStats* stats) {
-  std::vector<float> sum(texels.size());
-  farfield_occluded(field, normals, options, RunControl{}, &texels, stats, sum.data());
   std::vector<double> out(texels.size());
-  for (std::size_t t = 0; t < texels.size(); ++t) out[t] = double(sum[t]) * 2.0 / std::max(options.directions, 1);
+  farfield_occluded(field, normals, options, RunControl{}, &texels, stats, out.data());
+  const double scale = 2.0 / std::max(options.directions, 1);
+  for (double& v : out) v *= scale;
   return out;
 }
 
