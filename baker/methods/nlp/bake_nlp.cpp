@@ -501,7 +501,9 @@ void NlpBake::bounce_passes() {
   exit_from(direct, false);
   lu = nlp::radiance_levels(ms);
   for (int bounce = 1; bounce <= scene.bounces; ++bounce) {
-    const nlp::Pyramid rp = nlp::build_pyramid(exitant.data(), 3, W, H, f.wrap, o.levels_per_octave, lu);
+    // The radiance pyramid in binary16 (half its memory; the heights stay float).
+    const nlp::Pyramid rp =
+        nlp::build_pyramid(exitant.data(), 3, W, H, f.wrap, o.levels_per_octave, lu, /*half=*/true);
     std::vector<float>().swap(exitant);  // the pyramid's level 0 is a copy of it
     // The last bounce adds straight into `indirect` (the same sum); the others keep their light for the
     // next bounce's exitant radiance.
@@ -590,16 +592,16 @@ double nlp_working_bytes(const FieldShape& field, const NlpOptions& o, int bounc
   const double heights = double(
       nlp::pyramid_bytes(1, W, H, field.wrap, o.levels_per_octave, nlp::height_levels(ms)));
   const double radiance = double(
-      nlp::pyramid_bytes(3, W, H, field.wrap, o.levels_per_octave, nlp::radiance_levels(ms)));
+      nlp::pyramid_bytes(3, W, H, field.wrap, o.levels_per_octave, nlp::radiance_levels(ms), true));
   // The layers the estimate counts that are not allocated until the end: direct, indirect, total.
   double rgb_layers = 0;
   for (const char* name : {"direct", "indirect", "total"})
     if (std::find(o.layers.begin(), o.layers.end(), name) != o.layers.end()) rgb_layers += 12 * N;
   // Always: the height pyramid, direct and indirect (RGB floats). While a bounce's radiance pyramid is
-  // built: the exitant radiance and one level's horizontal pass (12 bytes a texel each), then the pyramid,
-  // and for all but the last bounce that bounce's light (12).
+  // built: the exitant radiance, one level in float and its horizontal pass (12 bytes a texel each), the
+  // pyramid (binary16), and for all but the last bounce that bounce's light (12).
   const double held = heights + 24 * N;
-  const double bounce = bounces > 0 ? radiance + 24 * N + (bounces > 1 ? 12 * N : 0) : 0;
+  const double bounce = bounces > 0 ? radiance + 36 * N + (bounces > 1 ? 12 * N : 0) : 0;
   return std::max(held, held + bounce - rgb_layers);
 }
 
