@@ -141,20 +141,21 @@ void scan(const HeightField& f, DirectionScan& d, const RunControl& rc) {
         }
       }
     });
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, cols, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-          for (std::size_t c = r.begin(); c < r.end(); ++c) {
-            const std::size_t o0 = std::size_t(l0) * cols + c;
-            double a = d.sum0[o0], b = d.sum1[o0];
-            int n = d.count[o0];
-            for (int l = l0; l < l1; ++l) {
-              const float v0 = raw0[std::size_t(l - l0) * cols + c], v1 = raw1[std::size_t(l - l0) * cols + c];
-              if (v0 != kNone) a += v0, b += v1, ++n;
-              const std::size_t o = std::size_t(l + 1) * cols + c;
-              d.sum0[o] = a, d.sum1[o] = b, d.count[o] = n;
-            }
-          }
-        });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cols, 64),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t c = r.begin(); c < r.end(); ++c) {
+                          const std::size_t o0 = std::size_t(l0) * cols + c;
+                          double a = d.sum0[o0], b = d.sum1[o0];
+                          int n = d.count[o0];
+                          for (int l = l0; l < l1; ++l) {
+                            const float v0 = raw0[std::size_t(l - l0) * cols + c],
+                                        v1 = raw1[std::size_t(l - l0) * cols + c];
+                            if (v0 != kNone) a += v0, b += v1, ++n;
+                            const std::size_t o = std::size_t(l + 1) * cols + c;
+                            d.sum0[o] = a, d.sum1[o] = b, d.count[o] = n;
+                          }
+                        }
+                      });
   }
 }
 
@@ -192,8 +193,9 @@ namespace {
 // [3 * texel + c].
 template <class Acc>
 void farfield_occluded(const HeightField& field, const std::vector<Vec3f>& normals,
-                       const FarfieldOptions& options, const RunControl& rc, const std::vector<std::size_t>* only,
-                       FarfieldStats* stats, Acc* occluded, float* bent_xyz = nullptr) {
+                       const FarfieldOptions& options, const RunControl& rc,
+                       const std::vector<std::size_t>* only, FarfieldStats* stats, Acc* occluded,
+                       float* bent_xyz = nullptr) {
   FarfieldOptions o = options;
   o.directions = std::max(o.directions, 1);
   o.interval = std::max(o.interval, 1);
@@ -429,7 +431,8 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
   // The sums are the layers: accumulated in float and finished in place, handed on without a copy.
   std::vector<float> light(scene.field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * scene.field.texel_count() : 0);
-  farfield_layers(scene.field, scene.normals, o, rc, nullptr, light.data(), bent.empty() ? nullptr : bent.data());
+  farfield_layers(scene.field, scene.normals, o, rc, nullptr, light.data(),
+                  bent.empty() ? nullptr : bent.data());
   return obscurance_layers_xyz(scene.field.width, scene.field.height, layers, std::move(light),
                                std::move(bent));
 }

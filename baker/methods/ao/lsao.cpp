@@ -68,8 +68,8 @@ struct LsaoWorker {
             // The texel's normal recomputed from the heights (normal_at: the same values compute_normals
             // gives, without holding 12 bytes a texel).
             const std::size_t ti = std::size_t(taps.texel[c]);
-            const Vec3f nv = normal_at(*field, int(ti % std::size_t(field->width)),
-                                       int(ti / std::size_t(field->width)));
+            const Vec3f nv =
+                normal_at(*field, int(ti % std::size_t(field->width)), int(ti / std::size_t(field->width)));
             const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
             const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
             SlicePoint occ{-1, 0};

@@ -518,7 +518,8 @@ void NlpBake::bounce_passes() {
         float* E = o.exact_indirect_cosine ? U + std::size_t(W) * 3 * kSh : nullptr;
         radiance(rp, s, xs_full.data(), W, j, U, E);
         for (int i = 0; i < W; ++i)
-          shade_indirect(target, last, i, j, U + std::size_t(i) * 3 * kSh, E ? E + std::size_t(i) * 3 : nullptr);
+          shade_indirect(target, last, i, j, U + std::size_t(i) * 3 * kSh,
+                         E ? E + std::size_t(i) * 3 : nullptr);
         report_rows(1);
       });
     } else {
@@ -589,10 +590,10 @@ double nlp_working_bytes(const FieldShape& field, const NlpOptions& o, int bounc
   const double N = double(W) * double(H);
   const nlp::MarchSetup ms = nlp::make_march_setup(W, H, field.texel_size, field.wrap, o.levels_per_octave,
                                                    o.level_offset, o.radiance_level_offset);
-  const double heights = double(
-      nlp::pyramid_bytes(1, W, H, field.wrap, o.levels_per_octave, nlp::height_levels(ms)));
-  const double radiance = double(
-      nlp::pyramid_bytes(3, W, H, field.wrap, o.levels_per_octave, nlp::radiance_levels(ms), true));
+  const double heights =
+      double(nlp::pyramid_bytes(1, W, H, field.wrap, o.levels_per_octave, nlp::height_levels(ms)));
+  const double radiance =
+      double(nlp::pyramid_bytes(3, W, H, field.wrap, o.levels_per_octave, nlp::radiance_levels(ms), true));
   // The layers the estimate counts that are not allocated until the end: direct, indirect, total.
   double rgb_layers = 0;
   for (const char* name : {"direct", "indirect", "total"})

@@ -21,10 +21,10 @@
 namespace hfbake::nlp {
 
 struct PyramidLevel {
-  int w = 0, h = 0;              // grid nodes
-  float inv_sx = 1, inv_sy = 1;  // grid nodes per texel (texel coordinate x -> node coordinate x * inv_sx)
-  double blur = 0;               // kernel scale s_l in texels
-  std::vector<float> data;       // row-major, `channels` interleaved (empty when the pyramid is half)
+  int w = 0, h = 0;                 // grid nodes
+  float inv_sx = 1, inv_sy = 1;     // grid nodes per texel (texel coordinate x -> node coordinate x * inv_sx)
+  double blur = 0;                  // kernel scale s_l in texels
+  std::vector<float> data;          // row-major, `channels` interleaved (empty when the pyramid is half)
   std::vector<std::uint16_t> half;  // Pyramid::half_scale > 0: the same as binary16 of value / half_scale
 };
 

@@ -84,7 +84,8 @@ double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
   const double line_buffers = double(sweep_buffer_bytes(field, indirect_sweep_spec(is)));
   double bounce_phase = 0;
   for (int b = 1; b <= B; ++b) {
-    double t = 12 + 12 + (p.facet_senders ? 24 : 0) + 24 + 12 + (b > 1 ? 12 : 0) + (keep ? 12.0 * (b - 1) : 0);
+    double t =
+        12 + 12 + (p.facet_senders ? 24 : 0) + 24 + 12 + (b > 1 ? 12 : 0) + (keep ? 12.0 * (b - 1) : 0);
     if (p.facet_senders && b < B) t += 48 + 24;
     bounce_phase = std::max(bounce_phase, horizons + t * N + line_buffers);
   }

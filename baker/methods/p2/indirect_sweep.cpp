@@ -363,8 +363,7 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
   P2SweepStats totals;
   std::mutex totals_mutex;
   // Exact near field (IndirectSweepSpec::near_radius): P1's near stencil per direction, with facets.
-  const bool near =
-      spec.near_radius > 0 && spec.exit_facets && spec.p1_sin_horizon && spec.gather;
+  const bool near = spec.near_radius > 0 && spec.exit_facets && spec.p1_sin_horizon && spec.gather;
   std::vector<std::vector<NearPiece>> pieces(near ? K : 0);
   for (int k = 0; k < int(pieces.size()); ++k) {
     const SweepDirection d = plan_direction(field, ss, k);
