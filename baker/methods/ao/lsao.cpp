@@ -24,6 +24,7 @@ namespace {
 struct LsaoWorker {
   const LsaoOptions* options = nullptr;
   const HeightField* field = nullptr;
+  const std::vector<Vec3f>* normals = nullptr;  // empty: recomputed per tap (normal_at)
   std::atomic<std::uint64_t>* samples = nullptr;
   std::atomic<std::uint64_t>* iterations = nullptr;
   ObscuranceHull hull;
@@ -65,11 +66,12 @@ struct LsaoWorker {
           for (int c = 0; c < 2; ++c) {
             // The texel's height carried to the line along its own tangent plane (minor-axis slope from its
             // normal): exact on planes, the texel's own detail elsewhere.
-            // The texel's normal recomputed from the heights (normal_at: the same values compute_normals
-            // gives, without holding 12 bytes a texel).
+            // The texel's normal: held (compute_normals) or recomputed from the heights (normal_at, the same
+            // values) on fields too large to hold them (lsao_holds_normals).
             const std::size_t ti = std::size_t(taps.texel[c]);
-            const Vec3f nv =
-                normal_at(*field, int(ti % std::size_t(field->width)), int(ti / std::size_t(field->width)));
+            const Vec3f nv = !normals->empty() ? (*normals)[ti]
+                                               : normal_at(*field, int(ti % std::size_t(field->width)),
+                                                           int(ti / std::size_t(field->width)));
             const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
             const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
             SlicePoint occ{-1, 0};
@@ -119,12 +121,15 @@ void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunCo
   std::vector<SweepDirection> dirs(std::size_t(spec.directions));
   for (int k = 0; k < spec.directions; ++k) dirs[std::size_t(k)] = plan_direction(field, spec, k);
   std::atomic<std::uint64_t> samples{0}, iterations{0};
+  const std::vector<Vec3f> normals =
+      options.texel_receivers && lsao_holds_normals(field) ? compute_normals(field) : std::vector<Vec3f>();
   sweep_lines(
       field, spec, rc,
       [&] {
         LsaoWorker w;
         w.options = &options;
         w.field = &field;
+        w.normals = &normals;
         w.samples = &samples;
         w.iterations = &iterations;
         w.bent = want_bent;
@@ -158,6 +163,10 @@ void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunCo
     stats->samples = samples;
     stats->iterations = iterations;
   }
+}
+
+bool lsao_holds_normals(const FieldShape& field) {
+  return double(field.width) * double(field.height) <= 8192.0 * 8192.0;
 }
 
 std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOptions& options,
@@ -229,8 +238,9 @@ MethodInfo lsao_method() {
   m.summary = "P3's line-sweep obscurance: one hull of occluders per sweep line and direction";
   m.read = [](Params& in, const MethodContext&) { read_lsao_options(in); };
   m.bake = bake_lsao;
-  // The sums are its layers (float, finished in place; the bent normals interleaved): beyond them only the
-  // obscurance's 4 bytes a texel when the job asks for bent_normal alone, and the sweep's line buffers
+  // The sums are its layers (float, finished in place; the bent normals interleaved): beyond them the
+  // obscurance's 4 bytes a texel when the job asks for bent_normal alone, the normals (12) up to 8192^2
+  // texels (lsao_holds_normals), and the sweep's line buffers
   // (bounded by SweepSpec::max_buffer_bytes; sweep_buffer_bytes of lsao's spec).
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
     const auto layers = r.value("layers", std::vector<std::string>{});
@@ -241,7 +251,8 @@ MethodInfo lsao_method() {
     spec.channels = bent ? 6 : 2;
     HeightField field;  // the sweep's plan needs only the shape
     static_cast<FieldShape&>(field) = c.field;
-    return (wants(layers, "obscurance") ? 0.0 : 4.0) * texels + double(sweep_buffer_bytes(field, spec));
+    return ((wants(layers, "obscurance") ? 0.0 : 4.0) + (lsao_holds_normals(c.field) ? 12.0 : 0.0)) * texels +
+           double(sweep_buffer_bytes(field, spec));
   };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";
