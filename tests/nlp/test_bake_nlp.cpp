@@ -239,6 +239,56 @@ TEST(NlpPyramid, LevelZeroIsTheFieldAndLevelsKeepTheMean) {
     EXPECT_NEAR(nlp::sample_level1(p, p.levels[l], 20.0f, 12.0f), 10.0f - 3.0f, 1e-3) << l;
 }
 
+// binary16 against its definition: known encodings, round to nearest even at the halfway points, every
+// finite half value back and forth exactly, saturation instead of infinity.
+TEST(NlpPyramid, HalfConversions) {
+  EXPECT_EQ(nlp::float_to_half(1.0f), 0x3C00);
+  EXPECT_EQ(nlp::float_to_half(-2.0f), 0xC000);
+  EXPECT_EQ(nlp::float_to_half(65504.0f), 0x7BFF);
+  EXPECT_EQ(nlp::float_to_half(1e9f), 0x7BFF);
+  EXPECT_EQ(nlp::float_to_half(std::ldexp(1.0f, -24)), 0x0001);
+  EXPECT_EQ(nlp::float_to_half(1.0f + std::ldexp(1.0f, -11)), 0x3C00);      // tie: to even
+  EXPECT_EQ(nlp::float_to_half(1.0f + 3 * std::ldexp(1.0f, -11)), 0x3C02);  // tie: to even (up)
+  EXPECT_EQ(nlp::half_to_float(0x3555), 0x1.554p-2f);
+  EXPECT_EQ(nlp::half_to_float(0x0200), std::ldexp(1.0f, -15));  // subnormal
+  for (std::uint32_t h = 0; h < 65536; ++h) {
+    if (((h >> 10) & 0x1f) == 0x1f) continue;  // inf and NaN
+    const float f = nlp::half_to_float(std::uint16_t(h));
+    const int e = ((h >> 10) & 0x1f) == 0 ? -14 : int((h >> 10) & 0x1f) - 15;
+    const float m = ((h >> 10) & 0x1f) == 0 ? float(h & 0x3ff) / 1024 : 1 + float(h & 0x3ff) / 1024;
+    ASSERT_EQ(f, ((h & 0x8000) ? -1 : 1) * std::ldexp(m, e)) << h;
+    if (h != 0x8000) {
+      ASSERT_EQ(nlp::float_to_half(f), h) << h;
+    }
+  }
+}
+
+// A half pyramid reads what the float one does to within half's relative rounding (2^-11 of the largest
+// value, the scale it is stored against), also for values far above half's range.
+TEST(NlpPyramid, HalfLevelsMatchFloatLevels) {
+  const int W = 37, H = 29;
+  for (float amplitude : {1.0f, 3e6f}) {
+    std::vector<float> rad(std::size_t(W) * H * 3);
+    for (std::size_t t = 0; t < rad.size(); ++t) rad[t] = amplitude * float(1.5 + std::sin(0.37 * double(t)));
+    for (Wrap wrap : {Wrap::clamp, Wrap::repeat}) {
+      const nlp::Pyramid a = nlp::build_pyramid(rad.data(), 3, W, H, wrap, 4, 10);
+      const nlp::Pyramid b = nlp::build_pyramid(rad.data(), 3, W, H, wrap, 4, 10, true);
+      ASSERT_GT(b.half_scale, 0.0f);
+      EXPECT_EQ(b.bytes() * 2, a.bytes());
+      EXPECT_EQ(nlp::pyramid_bytes(3, W, H, wrap, 4, 10, true), b.bytes());
+      EXPECT_EQ(nlp::pyramid_bytes(3, W, H, wrap, 4, 10), a.bytes());
+      for (int l = 0; l < 10; ++l)
+        for (float y = 0; y < H; y += 0.7f)
+          for (float x = 0; x < W; x += 0.9f) {
+            float va[3], vb[3];
+            nlp::sample_level(a, a.levels[l], x, y, va);
+            nlp::sample_level(b, b.levels[l], x, y, vb);
+            for (int c = 0; c < 3; ++c) ASSERT_NEAR(vb[c], va[c], 2.5f * amplitude * 0x1p-11f) << l;
+          }
+    }
+  }
+}
+
 TEST(NlpMarch, BsplineCurveOfAConstantIsConstant) {
   const float w[5] = {0.3f, 0.3f, 0.3f, 0.3f, 0.3f};
   float c[9];

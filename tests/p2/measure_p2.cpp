@@ -163,12 +163,8 @@ void speed(int N, int K, int naive_K) {
     const bool same = std::memcmp(b.data(), c.data(), b.size() * sizeof(Rgb)) == 0;
     // The default sender model: per-facet radiance (two facets per texel) and their next-bounce light.
     std::vector<Rgb> exit_f(2 * f.texel_count(), Rgb{0.5f, 0.5f, 0.5f}), facet_e;
-    std::vector<Vec3f> facet_n(2 * f.texel_count());
-    for (int j = 0; j < f.height; ++j)
-      for (int i = 0; i < f.width; ++i) facet_normals(f, i, j, &facet_n[2 * f.index(i, j)]);
     IndirectSweepSpec fs = spec;
     fs.exit_facets = &exit_f;
-    fs.facet_normals = &facet_n;
     t0 = CpuClock{};
     sweep_indirect(f, normals, exit, fs, RunControl{}, nullptr, &facet_e);
     const double bounce_facets = t0.seconds() * 1000 / K;

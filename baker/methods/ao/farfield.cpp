@@ -30,8 +30,6 @@ struct DirectionScan {
   std::vector<int> level_count;       // intervals per level
   std::vector<std::size_t> level_at;  // offset of level n's first interval column
   std::size_t columns = 0;            // total intervals over all levels
-  // Per line: m0, m1 of every interval column (raw maxima, kNone where the line has no terrain there).
-  std::vector<float> raw0, raw1;
   // Prefix sums over lines: entry (l, c) = sum over lines < l, (lines + 1) x columns.
   std::vector<double> sum0, sum1;
   std::vector<int> count;
@@ -62,6 +60,9 @@ void plan(const HeightField& f, const FarfieldOptions& o, int k, DirectionScan& 
     if (o.sector_average) t_extra = std::ceil(s_extra * std::tan(kPi / o.directions)) + 1;
   }
   d.b0 = o.interval;
+  // The traversal reads an interval of level n only at a distance below the falloff's support with
+  // b0 2^n <= growth x that distance: levels beyond that are never read, and are not built.
+  const double longest = o.growth * o.rho.support(1e-5) / f.texel_size;
   d.s0 = std::floor(smin);
   d.t0 = std::floor(tmin) - t_extra;
   d.samples = int(std::ceil(smax) - d.s0 + 1 + s_extra);
@@ -69,11 +70,11 @@ void plan(const HeightField& f, const FarfieldOptions& o, int k, DirectionScan& 
   d.level_count.clear();
   d.level_at.clear();
   d.columns = 0;
-  for (int n = (d.samples + d.b0 - 1) / d.b0;; n = (n + 1) / 2) {
+  for (int n = (d.samples + d.b0 - 1) / d.b0, len = d.b0;; n = (n + 1) / 2, len *= 2) {
     d.level_at.push_back(d.columns);
     d.level_count.push_back(n);
     d.columns += std::size_t(n);
-    if (n == 1) break;
+    if (n == 1 || !(2.0 * len <= longest * (1 + 1e-9))) break;
   }
   d.levels = int(d.level_count.size());
 }
@@ -83,53 +84,79 @@ float height_at(const HeightField& f, double x, double y) {
   return f.bilinear(x, y);
 }
 
-// Scan, pyramid and prefix sums of one direction.
+// Lines whose raw maxima are held at once while the prefix sums are built (about 16 MiB of them).
+int scan_chunk_lines(const DirectionScan& d) {
+  return int(std::clamp<std::size_t>((std::size_t(16) << 20) / (8 * std::max<std::size_t>(d.columns, 1)), 16,
+                                     std::size_t(std::max(d.lines, 16))));
+}
+
+// Bytes scan() holds for d: the prefix sums (two doubles and a count per line and interval column) and one
+// chunk of raw maxima.
+std::size_t scan_bytes(const DirectionScan& d) {
+  return std::size_t(d.lines + 1) * d.columns * (2 * sizeof(double) + sizeof(int)) +
+         std::size_t(scan_chunk_lines(d)) * d.columns * 2 * sizeof(float);
+}
+
+// Scan, pyramid and prefix sums of one direction. The raw maxima of a chunk of lines at a time (in
+// parallel), then their running sums per column (in parallel over columns, lines in order): the same sums
+// as over all lines at once.
 void scan(const HeightField& f, DirectionScan& d, const RunControl& rc) {
   const std::size_t cols = d.columns;
-  d.raw0.assign(std::size_t(d.lines) * cols, kNone);
-  d.raw1.assign(std::size_t(d.lines) * cols, kNone);
-  const double ts = f.texel_size;
-  tbb::parallel_for(tbb::blocked_range<int>(0, d.lines, 8), [&](const tbb::blocked_range<int>& r) {
-    rc.check();
-    for (int l = r.begin(); l < r.end(); ++l) {
-      float* m0 = &d.raw0[std::size_t(l) * cols];
-      float* m1 = &d.raw1[std::size_t(l) * cols];
-      const double t = d.t0 + l;
-      for (int m = 0; m < d.samples; ++m) {
-        const double s = d.s0 + m;
-        const float z = height_at(f, s * d.dx - t * d.dy, s * d.dy + t * d.dx);
-        if (z == kNone) continue;
-        const int j = m / d.b0;
-        m0[j] = std::max(m0[j], z);
-        m1[j] = std::max(m1[j], float(double(z) - m * ts));
-      }
-      for (int n = 1; n < d.levels; ++n) {
-        const std::size_t child = d.level_at[n - 1], parent = d.level_at[n];
-        const int nc = d.level_count[n - 1];
-        for (int j = 0; j < d.level_count[n]; ++j) {
-          const std::size_t a = child + 2 * j, b = 2 * j + 1 < nc ? a + 1 : a;
-          m0[parent + j] = std::max(m0[a], m0[b]);
-          m1[parent + j] = std::max(m1[a], m1[b]);
-        }
-      }
-    }
-  });
+  const int chunk = scan_chunk_lines(d);
+  std::vector<float> raw0(std::size_t(chunk) * cols), raw1(std::size_t(chunk) * cols);
+  // Freed first: a larger direction's sums never coexist with the previous one's.
+  std::vector<double>().swap(d.sum0);
+  std::vector<double>().swap(d.sum1);
+  std::vector<int>().swap(d.count);
   d.sum0.assign(std::size_t(d.lines + 1) * cols, 0.0);
   d.sum1.assign(std::size_t(d.lines + 1) * cols, 0.0);
   d.count.assign(std::size_t(d.lines + 1) * cols, 0);
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, cols, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t c = r.begin(); c < r.end(); ++c) {
-          double a = 0, b = 0;
-          int n = 0;
-          for (int l = 0; l < d.lines; ++l) {
-            const float v0 = d.raw0[std::size_t(l) * cols + c], v1 = d.raw1[std::size_t(l) * cols + c];
-            if (v0 != kNone) a += v0, b += v1, ++n;
-            const std::size_t o = std::size_t(l + 1) * cols + c;
-            d.sum0[o] = a, d.sum1[o] = b, d.count[o] = n;
+  const double ts = f.texel_size;
+  for (int l0 = 0; l0 < d.lines; l0 += chunk) {
+    const int l1 = std::min(d.lines, l0 + chunk);
+    std::fill(raw0.begin(), raw0.end(), kNone);
+    std::fill(raw1.begin(), raw1.end(), kNone);
+    tbb::parallel_for(tbb::blocked_range<int>(l0, l1, 8), [&](const tbb::blocked_range<int>& r) {
+      rc.check();
+      for (int l = r.begin(); l < r.end(); ++l) {
+        float* m0 = &raw0[std::size_t(l - l0) * cols];
+        float* m1 = &raw1[std::size_t(l - l0) * cols];
+        const double t = d.t0 + l;
+        for (int m = 0; m < d.samples; ++m) {
+          const double s = d.s0 + m;
+          const float z = height_at(f, s * d.dx - t * d.dy, s * d.dy + t * d.dx);
+          if (z == kNone) continue;
+          const int j = m / d.b0;
+          m0[j] = std::max(m0[j], z);
+          m1[j] = std::max(m1[j], float(double(z) - m * ts));
+        }
+        for (int n = 1; n < d.levels; ++n) {
+          const std::size_t child = d.level_at[n - 1], parent = d.level_at[n];
+          const int nc = d.level_count[n - 1];
+          for (int j = 0; j < d.level_count[n]; ++j) {
+            const std::size_t a = child + 2 * j, b = 2 * j + 1 < nc ? a + 1 : a;
+            m0[parent + j] = std::max(m0[a], m0[b]);
+            m1[parent + j] = std::max(m1[a], m1[b]);
           }
         }
-      });
+      }
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cols, 64),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t c = r.begin(); c < r.end(); ++c) {
+                          const std::size_t o0 = std::size_t(l0) * cols + c;
+                          double a = d.sum0[o0], b = d.sum1[o0];
+                          int n = d.count[o0];
+                          for (int l = l0; l < l1; ++l) {
+                            const float v0 = raw0[std::size_t(l - l0) * cols + c],
+                                        v1 = raw1[std::size_t(l - l0) * cols + c];
+                            if (v0 != kNone) a += v0, b += v1, ++n;
+                            const std::size_t o = std::size_t(l + 1) * cols + c;
+                            d.sum0[o] = a, d.sum1[o] = b, d.count[o] = n;
+                          }
+                        }
+                      });
+  }
 }
 
 // Horizon and accumulated occluded band of one (half) sector.
@@ -159,12 +186,16 @@ inline void add_slab(const SlabTable& table, SectorState& st, double x, double d
 
 namespace {
 
-// The occluded measure sum_k sum_slabs band per texel; only the texels in `only` when it is not null.
-// bent (optional): per texel, the sum over directions of the cosine-weighted open direction (unnormalised).
-std::vector<double> farfield_occluded(const HeightField& field, const std::vector<Vec3f>& normals,
-                                      const FarfieldOptions& options, const RunControl& rc,
-                                      const std::vector<std::size_t>* only, FarfieldStats* stats,
-                                      std::vector<Vec3>* bent = nullptr) {
+// The occluded measure sum_k sum_slabs band per texel, summed in Acc (float for the layers: one rounding per
+// direction, k ascending; double for the few texels of farfield_occlusion_at) into occluded[texel] (zeroed
+// first); only the texels in `only` when it is not null, then into occluded[item]. bent_xyz (optional, whole
+// field only): per texel, the sum over directions of the cosine-weighted open direction (unnormalised),
+// [3 * texel + c].
+template <class Acc>
+void farfield_occluded(const HeightField& field, const std::vector<Vec3f>& normals,
+                       const FarfieldOptions& options, const RunControl& rc,
+                       const std::vector<std::size_t>* only, FarfieldStats* stats, Acc* occluded,
+                       float* bent_xyz = nullptr) {
   FarfieldOptions o = options;
   o.directions = std::max(o.directions, 1);
   o.interval = std::max(o.interval, 1);
@@ -172,8 +203,9 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
   if (!o.sector_average) o.split = false;
   const int W = field.width, H = field.height, K = o.directions;
   const double ts = field.texel_size;
-  std::vector<double> occluded(field.texel_count(), 0.0);
-  if (bent) bent->assign(field.texel_count(), Vec3{0, 0, 0});
+  const bool bent = bent_xyz != nullptr;
+  std::fill_n(occluded, only ? only->size() : field.texel_count(), Acc(0));
+  if (bent) std::fill_n(bent_xyz, 3 * field.texel_count(), 0.0f);
   const SlabTable table(o.rho);
   const double support = o.rho.support(1e-5) / ts;  // texels beyond which rho < 1e-5
   std::atomic<std::uint64_t> near_count{0}, far_count{0};
@@ -294,12 +326,16 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
                 sum += st.occluded;
                 dir_sum.h += st.dir.h, dir_sum.v += st.dir.v;
               }
-              occluded[idx] += open_end ? near.occluded : sum / halves;
+              Acc& acc = occluded[only ? item : idx];
+              acc = Acc(double(acc) + (open_end ? near.occluded : sum / halves));
               if (bent) {
                 const SliceVec open = open_direction(frame_value, tangent, kHalfPi);
                 const SliceVec occ = open_end ? near.dir : SliceVec{dir_sum.h / halves, dir_sum.v / halves};
                 const double h = open.h + occ.h, v = open.v + occ.v;
-                (*bent)[idx] += Vec3{h * d.dx, h * d.dy, v};
+                float* b = bent_xyz + 3 * idx;
+                b[0] = float(double(b[0]) + h * d.dx);
+                b[1] = float(double(b[1]) + h * d.dy);
+                b[2] = float(double(b[2]) + v);
               }
             }
           }
@@ -308,31 +344,42 @@ std::vector<double> farfield_occluded(const HeightField& field, const std::vecto
         });
     rc.report(double(k + 1) / K);
   }
-  for (double& v : occluded) v *= 2.0 / K;
   if (stats) {
     stats->near_samples = near_count;
     stats->virtual_points = far_count;
     stats->texel_directions = std::uint64_t(only ? only->size() : field.texel_count()) * K;
   }
-  return occluded;
 }
 
 }  // namespace
 
+void farfield_layers(const HeightField& field, const std::vector<Vec3f>& normals,
+                     const FarfieldOptions& options, const RunControl& rc, FarfieldStats* stats, float* light,
+                     float* bent_xyz) {
+  farfield_occluded(field, normals, options, rc, nullptr, stats, light, bent_xyz);
+  const double scale = 2.0 / std::max(options.directions, 1);
+  const std::size_t N = field.texel_count();
+  for (std::size_t t = 0; t < N; ++t) light[t] = float(std::clamp(1.0 - double(light[t]) * scale, 0.0, 1.0));
+  if (bent_xyz)
+    for (std::size_t t = 0; t < N; ++t) {
+      float* b = bent_xyz + 3 * t;
+      const Vec3 v{b[0], b[1], b[2]};
+      const Vec3f n = length(v) > 1e-12 ? Vec3f::from(normalize(v))
+                      : normals.empty() ? normal_at(field, int(t % field.width), int(t / field.width))
+                                        : normals[t];
+      b[0] = n.x, b[1] = n.y, b[2] = n.z;
+    }
+}
+
 std::vector<float> farfield_obscurance(const HeightField& field, const std::vector<Vec3f>& normals,
                                        const FarfieldOptions& options, const RunControl& rc,
                                        FarfieldStats* stats, std::vector<Vec3f>* bent_normal) {
-  std::vector<Vec3> bent;
-  const std::vector<double> occluded =
-      farfield_occluded(field, normals, options, rc, nullptr, stats, bent_normal ? &bent : nullptr);
-  std::vector<float> out(field.texel_count());
-  for (std::size_t t = 0; t < out.size(); ++t) out[t] = float(std::clamp(1.0 - occluded[t], 0.0, 1.0));
+  std::vector<float> out(field.texel_count()), bent(bent_normal ? 3 * field.texel_count() : 0);
+  farfield_layers(field, normals, options, rc, stats, out.data(), bent_normal ? bent.data() : nullptr);
   if (bent_normal) {
     bent_normal->resize(field.texel_count());
-    for (std::size_t t = 0; t < bent.size(); ++t)
-      (*bent_normal)[t] = length(bent[t]) > 1e-12 ? Vec3f::from(normalize(bent[t]))
-                          : normals.empty() ? normal_at(field, int(t % field.width), int(t / field.width))
-                                            : normals[t];
+    for (std::size_t t = 0; t < bent_normal->size(); ++t)
+      (*bent_normal)[t] = {bent[3 * t], bent[3 * t + 1], bent[3 * t + 2]};
   }
   return out;
 }
@@ -340,11 +387,26 @@ std::vector<float> farfield_obscurance(const HeightField& field, const std::vect
 std::vector<double> farfield_occlusion_at(const HeightField& field, const std::vector<Vec3f>& normals,
                                           const FarfieldOptions& options,
                                           const std::vector<std::size_t>& texels, FarfieldStats* stats) {
-  const std::vector<double> occluded =
-      farfield_occluded(field, normals, options, RunControl{}, &texels, stats);
   std::vector<double> out(texels.size());
-  for (std::size_t t = 0; t < texels.size(); ++t) out[t] = occluded[texels[t]];
+  farfield_occluded(field, normals, options, RunControl{}, &texels, stats, out.data());
+  const double scale = 2.0 / std::max(options.directions, 1);
+  for (double& v : out) v *= scale;
   return out;
+}
+
+double farfield_working_bytes(const FieldShape& shape, const FarfieldOptions& options) {
+  FarfieldOptions o = options;
+  o.directions = std::max(o.directions, 1);
+  o.interval = std::max(o.interval, 1);
+  HeightField field;  // plan() needs only the shape
+  static_cast<FieldShape&>(field) = shape;
+  std::size_t peak = 0;
+  DirectionScan d;
+  for (int k = 0; k < o.directions; ++k) {
+    plan(field, o, k, d);
+    peak = std::max(peak, scan_bytes(d));
+  }
+  return double(peak);
 }
 
 FarfieldOptions read_farfield_options(Params& in) {
@@ -366,10 +428,13 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
   Params in(params);
   const FarfieldOptions o = read_farfield_options(in);
   const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
-  std::vector<Vec3f> bent;
-  std::vector<float> light = farfield_obscurance(scene.field, scene.normals, o, rc, nullptr,
-                                                 wants(layers, "bent_normal") ? &bent : nullptr);
-  return obscurance_layers(scene.field.width, scene.field.height, layers, std::move(light), std::move(bent));
+  // The sums are the layers: accumulated in float and finished in place, handed on without a copy.
+  std::vector<float> light(scene.field.texel_count());
+  std::vector<float> bent(wants(layers, "bent_normal") ? 3 * scene.field.texel_count() : 0);
+  farfield_layers(scene.field, scene.normals, o, rc, nullptr, light.data(),
+                  bent.empty() ? nullptr : bent.data());
+  return obscurance_layers_xyz(scene.field.width, scene.field.height, layers, std::move(light),
+                               std::move(bent));
 }
 
 MethodInfo farfield_method() {
@@ -380,10 +445,19 @@ MethodInfo farfield_method() {
   m.summary = "P4's far-field obscurance: an exact near field, prefiltered far-field slabs beyond it";
   m.read = [](Params& in, const MethodContext&) { read_farfield_options(in); };
   m.bake = bake_farfield;
-  // The occlusion in double (8 bytes a texel) and the bent normals in double (24) while they become layers.
+  // The sums are its layers (float, finished in place; the bent normals interleaved): beyond them only the
+  // obscurance's 4 bytes a texel when the job asks for bent_normal alone, and the largest direction's scan
+  // (farfield_working_bytes: its prefix sums over lines of the interval pyramid).
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
-    return (wants(r.value("layers", std::vector<std::string>{}), "bent_normal") ? 32.0 : 8.0) *
-           double(c.field.width) * double(c.field.height);
+    FarfieldOptions o;  // what the scan's plan reads (the resolved near_field may be the -1 of its default)
+    o.rho = parse_falloff(r);
+    o.directions = r.value("directions", o.directions);
+    o.interval = r.value("interval", o.interval);
+    o.growth = r.value("growth", o.growth);
+    o.sector_average = r.value("sector_average", o.sector_average);
+    const bool obscurance = wants(r.value("layers", std::vector<std::string>{}), "obscurance");
+    return (obscurance ? 0.0 : 4.0) * double(c.field.width) * double(c.field.height) +
+           farfield_working_bytes(c.field, o);
   };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets";

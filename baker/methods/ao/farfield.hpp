@@ -57,6 +57,17 @@ std::vector<float> farfield_obscurance(const HeightField& field, const std::vect
                                        FarfieldStats* stats = nullptr,
                                        std::vector<Vec3f>* bent_normal = nullptr);
 
+// The layers straight into the caller's arrays (the sums accumulate there in float, k ascending, and are
+// finished in place): light[texel] the obscurance, bent_xyz (optional) [3 * texel + c] the bent normal.
+// Holds nothing else per texel: the largest direction's scan (farfield_working_bytes) while it runs.
+void farfield_layers(const HeightField& field, const std::vector<Vec3f>& normals,
+                     const FarfieldOptions& options, const RunControl& rc, FarfieldStats* stats, float* light,
+                     float* bent_xyz);
+
+// Bytes farfield holds beyond its layers for a field of this shape: the largest direction's prefix sums
+// over its lines of the interval pyramid (levels the traversal can read only) and a chunk of raw maxima.
+double farfield_working_bytes(const FieldShape& field, const FarfieldOptions& options);
+
 // The occluded measure (1 - obscurance, before clamping) at the given texels only (row-major indices):
 // for tests and measurements that need a few receivers of a large field.
 std::vector<double> farfield_occlusion_at(const HeightField& field, const std::vector<Vec3f>& normals,

@@ -24,7 +24,7 @@ namespace {
 struct LsaoWorker {
   const LsaoOptions* options = nullptr;
   const HeightField* field = nullptr;
-  const std::vector<Vec3f>* normals = nullptr;
+  const std::vector<Vec3f>* normals = nullptr;  // empty: recomputed per tap (normal_at)
   std::atomic<std::uint64_t>* samples = nullptr;
   std::atomic<std::uint64_t>* iterations = nullptr;
   ObscuranceHull hull;
@@ -66,8 +66,12 @@ struct LsaoWorker {
           for (int c = 0; c < 2; ++c) {
             // The texel's height carried to the line along its own tangent plane (minor-axis slope from its
             // normal): exact on planes, the texel's own detail elsewhere.
+            // The texel's normal: held (compute_normals) or recomputed from the heights (normal_at, the same
+            // values) on fields too large to hold them (lsao_holds_normals).
             const std::size_t ti = std::size_t(taps.texel[c]);
-            const Vec3f nv = (*normals)[ti];
+            const Vec3f nv = !normals->empty() ? (*normals)[ti]
+                                               : normal_at(*field, int(ti % std::size_t(field->width)),
+                                                           int(ti / std::size_t(field->width)));
             const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
             const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
             SlicePoint occ{-1, 0};
@@ -104,19 +108,21 @@ struct LsaoWorker {
 
 }  // namespace
 
-std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOptions& options,
-                                        const RunControl& rc, LsaoStats* stats, std::vector<Vec3>* bent) {
-  const bool want_bent = bent && options.texel_receivers && options.estimator == LsaoEstimator::hull;
-  if (bent) bent->assign(field.texel_count(), Vec3{0, 0, 0});
+void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
+               float* sum, float* bent_xyz) {
+  const bool want_bent = bent_xyz && options.texel_receivers && options.estimator == LsaoEstimator::hull;
+  const std::size_t N = field.texel_count();
+  std::fill_n(sum, N, 0.0f);
+  if (bent_xyz) std::fill_n(bent_xyz, 3 * N, 0.0f);
   SweepSpec spec;
   spec.directions = std::max(options.directions, 1);
   spec.channels = want_bent ? 6 : 2;
   spec.wrap_periods = std::max(options.wrap_periods, 1);
   std::vector<SweepDirection> dirs(std::size_t(spec.directions));
   for (int k = 0; k < spec.directions; ++k) dirs[std::size_t(k)] = plan_direction(field, spec, k);
-  std::vector<double> sum(field.texel_count(), 0.0);
-  const std::vector<Vec3f> normals = options.texel_receivers ? compute_normals(field) : std::vector<Vec3f>();
   std::atomic<std::uint64_t> samples{0}, iterations{0};
+  const std::vector<Vec3f> normals =
+      options.texel_receivers && lsao_holds_normals(field) ? compute_normals(field) : std::vector<Vec3f>();
   sweep_lines(
       field, spec, rc,
       [&] {
@@ -142,35 +148,61 @@ std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOpti
           if (t.w_hi == 0) return t.lo[ch1];
           return (1 - f) * t.lo[ch1] + f * t.hi[ch0];
         };
+        // Float sums, one rounding per direction (k ascending for every texel: deterministic).
         const std::size_t idx = field.index(i, j);
-        sum[idx] += blend(0, 1);
+        sum[idx] = float(double(sum[idx]) + blend(0, 1));
         if (want_bent) {
           const double h = blend(2, 4), v = blend(3, 5);
-          (*bent)[idx] += Vec3{h * d.dx, h * d.dy, v};
+          float* b = bent_xyz + 3 * idx;
+          b[0] = float(double(b[0]) + h * d.dx);
+          b[1] = float(double(b[1]) + h * d.dy);
+          b[2] = float(double(b[2]) + v);
         }
       });
-  const double inv = 1.0 / spec.directions;
-  for (double& v : sum) v *= inv;
   if (stats) {
     stats->samples = samples;
     stats->iterations = iterations;
   }
-  return sum;
+}
+
+bool lsao_holds_normals(const FieldShape& field) {
+  return double(field.width) * double(field.height) <= 8192.0 * 8192.0;
+}
+
+std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOptions& options,
+                                        const RunControl& rc, LsaoStats* stats) {
+  std::vector<float> sum(field.texel_count());
+  lsao_sums(field, options, rc, stats, sum.data(), nullptr);
+  const double inv = 1.0 / std::max(options.directions, 1);
+  std::vector<double> mean(sum.size());
+  for (std::size_t t = 0; t < sum.size(); ++t) mean[t] = double(sum[t]) * inv;
+  return mean;
+}
+
+void lsao_layers(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
+                 float* light, float* bent_xyz) {
+  lsao_sums(field, options, rc, stats, light, bent_xyz);
+  const double inv = 1.0 / std::max(options.directions, 1);
+  const std::size_t N = field.texel_count();
+  for (std::size_t t = 0; t < N; ++t) light[t] = float(1.0 - std::clamp(double(light[t]) * inv, 0.0, 1.0));
+  if (bent_xyz)
+    for (std::size_t t = 0; t < N; ++t) {
+      float* b = bent_xyz + 3 * t;
+      const Vec3 v{b[0], b[1], b[2]};
+      const Vec3f n = length(v) > 1e-12 ? Vec3f::from(normalize(v))
+                                        : normal_at(field, int(t % field.width), int(t / field.width));
+      b[0] = n.x, b[1] = n.y, b[2] = n.z;
+    }
 }
 
 std::vector<float> lsao_obscurance(const HeightField& field, const LsaoOptions& options, const RunControl& rc,
                                    LsaoStats* stats, std::vector<Vec3f>* bent_normal) {
-  std::vector<Vec3> bent;
-  const std::vector<double> mean =
-      lsao_mean_occlusion(field, options, rc, stats, bent_normal ? &bent : nullptr);
-  std::vector<float> out(mean.size());
-  for (std::size_t t = 0; t < mean.size(); ++t) out[t] = float(1.0 - std::clamp(mean[t], 0.0, 1.0));
+  std::vector<float> out(field.texel_count()), bent(bent_normal ? 3 * field.texel_count() : 0);
+  lsao_layers(field, options, rc, stats, out.data(), bent_normal ? bent.data() : nullptr);
   if (bent_normal) {
     bent_normal->resize(field.texel_count());
-    for (std::size_t t = 0; t < bent.size(); ++t)
-      (*bent_normal)[t] = length(bent[t]) > 1e-12
-                              ? Vec3f::from(normalize(bent[t]))
-                              : normal_at(field, int(t % field.width), int(t / field.width));
+    for (std::size_t t = 0; t < bent_normal->size(); ++t)
+      (*bent_normal)[t] = {bent[3 * t], bent[3 * t + 1], bent[3 * t + 2]};
   }
   return out;
 }
@@ -190,10 +222,12 @@ LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunCo
   Params in(params);
   const LsaoOptions o = read_lsao_options(in);
   const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
-  std::vector<Vec3f> bent;
-  std::vector<float> light =
-      lsao_obscurance(scene.field, o, rc, nullptr, wants(layers, "bent_normal") ? &bent : nullptr);
-  return obscurance_layers(scene.field.width, scene.field.height, layers, std::move(light), std::move(bent));
+  // The sums are the layers: accumulated in float and finished in place, handed on without a copy.
+  std::vector<float> light(scene.field.texel_count());
+  std::vector<float> bent(wants(layers, "bent_normal") ? 3 * scene.field.texel_count() : 0);
+  lsao_layers(scene.field, o, rc, nullptr, light.data(), bent.empty() ? nullptr : bent.data());
+  return obscurance_layers_xyz(scene.field.width, scene.field.height, layers, std::move(light),
+                               std::move(bent));
 }
 
 MethodInfo lsao_method() {
@@ -204,12 +238,21 @@ MethodInfo lsao_method() {
   m.summary = "P3's line-sweep obscurance: one hull of occluders per sweep line and direction";
   m.read = [](Params& in, const MethodContext&) { read_lsao_options(in); };
   m.bake = bake_lsao;
-  // The mean occlusion in double (8 bytes a texel), the bent normals in double (24), the sweep's line
-  // buffers (bounded by SweepSpec::max_buffer_bytes).
+  // The sums are its layers (float, finished in place; the bent normals interleaved): beyond them the
+  // obscurance's 4 bytes a texel when the job asks for bent_normal alone, the normals (12) up to 8192^2
+  // texels (lsao_holds_normals), and the sweep's line buffers
+  // (bounded by SweepSpec::max_buffer_bytes; sweep_buffer_bytes of lsao's spec).
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
-    return (wants(r.value("layers", std::vector<std::string>{}), "bent_normal") ? 32.0 : 8.0) *
-               double(c.field.width) * double(c.field.height) +
-           double(SweepSpec{}.max_buffer_bytes);
+    const auto layers = r.value("layers", std::vector<std::string>{});
+    const bool bent = wants(layers, "bent_normal");
+    const double texels = double(c.field.width) * double(c.field.height);
+    SweepSpec spec;
+    spec.directions = std::max(1, r.value("directions", 16));
+    spec.channels = bent ? 6 : 2;
+    HeightField field;  // the sweep's plan needs only the shape
+    static_cast<FieldShape&>(field) = c.field;
+    return ((wants(layers, "obscurance") ? 0.0 : 4.0) + (lsao_holds_normals(c.field) ? 12.0 : 0.0)) * texels +
+           double(sweep_buffer_bytes(field, spec));
   };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";

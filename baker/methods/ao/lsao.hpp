@@ -43,15 +43,25 @@ struct LsaoStats {
   std::uint64_t iterations = 0;  // hull loop tests (P3: between samples and 2 x samples)
 };
 
-// Mean over the K directions of the per-direction value (P3 Eq. 1, before clamping), per texel.
-// bent (optional; hull estimator with texel receivers, else zeros): per texel the sum over directions of the
+// Per texel the sums over the K directions, accumulated in float (one rounding per direction, k ascending:
+// the same bits for any thread count): sum[N] of the per-direction value (P3 Eq. 1, before clamping) and,
+// when bent_xyz is not null (hull estimator with texel receivers, else zeros), bent_xyz[3 * texel + c] of the
 // cosine-weighted open direction about the texel's normal, each direction's band from the tangent plane up
 // to its largest occluder weighted by 1 - rho(|h|) (the occlusion P3's Eq. 1 counts), unnormalised.
+// Normals: held (compute_normals, 12 bytes a texel) up to 8192^2 texels, recomputed per tap from the heights
+// beyond (normal_at: the same values, about 40 % more CPU time): lsao_holds_normals. Nothing else is held
+// beyond the two outputs and the sweep's bounded line buffers.
+void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
+               float* sum, float* bent_xyz);
+bool lsao_holds_normals(const FieldShape& field);
+// The layers, finished in place from lsao_sums: light[t] = 1 - clamp(sum / K, 0, 1); bent_xyz (optional)
+// normalised (the texel's normal where nothing is open).
+void lsao_layers(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
+                 float* light, float* bent_xyz);
+// Mean over the K directions of the per-direction value (lsao_sums / K), per texel: for tests.
 std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOptions& options,
-                                        const RunControl& rc, LsaoStats* stats = nullptr,
-                                        std::vector<Vec3>* bent = nullptr);
-// The obscurance layer: 1 - clamp(mean occlusion, 0, 1); bent_normal (optional): the normalised bent
-// (the texel's normal where nothing is open).
+                                        const RunControl& rc, LsaoStats* stats = nullptr);
+// lsao_layers into vectors (bent_normal optional): for tests.
 std::vector<float> lsao_obscurance(const HeightField& field, const LsaoOptions& options, const RunControl& rc,
                                    LsaoStats* stats = nullptr, std::vector<Vec3f>* bent_normal = nullptr);
 

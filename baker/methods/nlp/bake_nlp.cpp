@@ -68,6 +68,8 @@ NlpOptions parse_nlp_options(const nlohmann::json& p) {
 namespace {
 
 constexpr int kSh = sh::kCount;
+// sh_irradiance: 16 coefficients x RGB a texel, held as the layer itself (bands l < 3 filled: 27 floats).
+constexpr std::size_t kIrrChannels = 3 * kSh;
 constexpr float kInvPi = float(1 / kPi);
 // Clamped-cosine convolution per coefficient (l <= 2; band 3 is zero).
 constexpr float kConv[9] = {3.14159265f, 2.09439510f, 2.09439510f, 2.09439510f, 0.78539816f,
@@ -85,13 +87,15 @@ struct LightSetup {
 struct Scratch {
   std::vector<float> recv, omega, dist, curve, row;
   std::vector<int> lev;
+  std::vector<Vec3f> nrm;  // the row's receivers' normals (normal_at)
   explicit Scratch(int levels, int steps, int width, int row_floats)
       : recv(std::size_t(levels) * width),
         omega(steps + 1),
         dist(steps + 1),
         curve(2 * steps + 2),
         row(std::size_t(row_floats) * width),
-        lev(steps + 1) {}
+        lev(steps + 1),
+        nrm(std::size_t(width)) {}
 };
 
 bool wants(const NlpOptions& o, const char* name) {
@@ -124,8 +128,10 @@ class NlpBake {
                 float* Eout) const;
 
   // --- shading ---
-  void shade_direct(std::size_t idx, const float* V, const float* frac);
-  void shade_indirect(std::vector<Rgb>& this_bounce, std::size_t idx, const float* U, const float* E);
+  void shade_direct(int i, int j, const float* V, const float* frac);
+  // add: this_bounce[idx] += the texel's indirect light (the last bounce adds straight into `indirect`);
+  // else this_bounce[idx] = it.
+  void shade_indirect(std::vector<Rgb>& this_bounce, bool add, int i, int j, const float* U, const float* E);
   void upsample(const std::vector<float>& buf, int cnt, int i, int j, float* out) const;
   int coarse_i(int ci) const { return std::min(ci * sub, W - 1); }
   int coarse_j(int cj) const { return std::min(cj * sub, H - 1); }
@@ -137,8 +143,6 @@ class NlpBake {
   const HeightField& f;
   const int W, H, m;
   const std::size_t N;
-  const std::vector<Vec3f> normals_own;
-  const std::vector<Vec3f>& normals;
   const nlp::MarchSetup ms;
   // Directional lights march with their own (sharper) level offset; the pyramid has enough levels.
   const nlp::MarchSetup ms_light;
@@ -174,8 +178,6 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       H(f.height),
       m(o.directions),
       N(f.texel_count()),
-      normals_own(scene.normals.size() == N ? std::vector<Vec3f>{} : compute_normals(f)),
-      normals(scene.normals.size() == N ? scene.normals : normals_own),
       ms(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave, o.level_offset,
                                o.radiance_level_offset)),
       ms_light(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
@@ -201,7 +203,7 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       direct(N),
       indirect(N),
       vis(want_vis ? N * kSh : 0),
-      irr(want_irr ? N * 27 : 0) {
+      irr(want_irr ? N * kIrrChannels : 0) {
   azimuth_table(m, cphi, sphi);
   setup_environment();
   xs_full.resize(W);
@@ -242,8 +244,10 @@ std::vector<LightSetup> NlpBake::setup_lights(const Scene& scene, const NlpOptio
   return lights;
 }
 
-// Receiver heights in every height level (Eq. 15's f_i(x, y)) for a row of receivers (xs[t], j).
+// Receiver heights in every height level (Eq. 15's f_i(x, y)) for a row of receivers (xs[t], j), and their
+// normals (recomputed from the heights: normal_at, the values compute_normals gives).
 void NlpBake::receivers(Scratch& s, const int* xs, int cnt, int j) const {
+  for (int t = 0; t < cnt; ++t) s.nrm[std::size_t(t)] = normal_at(f, xs[t], j);
   for (int t = 0; t < cnt; ++t)
     for (int l = 0; l < lv; ++l)
       s.recv[std::size_t(t) * lv + l] = nlp::sample_level1(hp, hp.levels[l], float(xs[t]), float(j));
@@ -292,7 +296,7 @@ void NlpBake::visibility(Scratch& s, const int* xs, int cnt, int j, float* out, 
     for (int t = 0; t < cnt; ++t) {
       const int i = xs[t];
       const float wmax =
-          omega_max(s, s.recv.data() + std::size_t(t) * lv, i, j, cphi[a], sphi[a], normals[f.index(i, j)]);
+          omega_max(s, s.recv.data() + std::size_t(t) * lv, i, j, cphi[a], sphi[a], s.nrm[std::size_t(t)]);
       float v[4];
       nlp::band4(std::sin(wmax), 1.0f, v);
       float* V = out + std::size_t(t) * stride;
@@ -302,14 +306,15 @@ void NlpBake::visibility(Scratch& s, const int* xs, int cnt, int j, float* out, 
   }
   for (int t = 0; t < cnt; ++t) {
     const int i = xs[t];
-    light_visibility(s, s.recv.data() + std::size_t(t) * lv, i, j, normals[f.index(i, j)],
+    light_visibility(s, s.recv.data() + std::size_t(t) * lv, i, j, s.nrm[std::size_t(t)],
                      out + std::size_t(t) * stride + kSh);
   }
 }
 
 // Shading of direct light at texel idx from V and the lights' visibility.
-void NlpBake::shade_direct(std::size_t idx, const float* V, const float* frac) {
-  const Vec3f n = normals[idx];
+void NlpBake::shade_direct(int i, int j, const float* V, const float* frac) {
+  const std::size_t idx = f.index(i, j);
+  const Vec3f n = normal_at(f, i, j);
   float y[kSh];
   sh::eval(n.x, n.y, n.z, y);
   float e[3] = {}, lin[3][9];
@@ -338,7 +343,7 @@ void NlpBake::shade_direct(std::size_t idx, const float* V, const float* frac) {
   }
   direct[idx] = d;
   if (want_vis) std::copy(V, V + kSh, vis.begin() + idx * kSh);
-  if (want_irr) std::copy(irr_local, irr_local + 27, irr.begin() + idx * 27);
+  if (want_irr) std::copy(irr_local, irr_local + 27, irr.begin() + idx * kIrrChannels);
 }
 
 // Bilinear interpolation of per-receiver vectors (cnt floats each) from the coarse grid to texel (i, j).
@@ -369,7 +374,7 @@ void NlpBake::direct_pass() {
       visibility(s, xs_full.data(), W, j, s.row.data(), stride);
       for (int i = 0; i < W; ++i) {
         const float* V = s.row.data() + std::size_t(i) * stride;
-        shade_direct(f.index(i, j), V, V + kSh);
+        shade_direct(i, j, V, V + kSh);
       }
       report_rows(1);
     });
@@ -387,7 +392,7 @@ void NlpBake::direct_pass() {
       std::vector<float> buf(stride);
       for (int i = 0; i < W; ++i) {
         upsample(coarse, stride, i, j, buf.data());
-        shade_direct(f.index(i, j), buf.data(), buf.data() + kSh);
+        shade_direct(i, j, buf.data(), buf.data() + kSh);
       }
     });
   }
@@ -406,7 +411,7 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
   for (int a = 0; a < m; ++a)
     for (int t = 0; t < cnt_row; ++t) {
       const int i = xs[t];
-      const Vec3f n = normals[f.index(i, j)];
+      const Vec3f n = s.nrm[std::size_t(t)];
       const float* recv = s.recv.data() + std::size_t(t) * lv;
       float* U = Uout + std::size_t(t) * 3 * kSh;
       float* E = Eout ? Eout + std::size_t(t) * 3 : nullptr;
@@ -456,37 +461,55 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
     }
 }
 
-void NlpBake::shade_indirect(std::vector<Rgb>& this_bounce, std::size_t idx, const float* U, const float* E) {
+void NlpBake::shade_indirect(std::vector<Rgb>& this_bounce, bool add, int i, int j, const float* U,
+                             const float* E) {
+  const std::size_t idx = f.index(i, j);
+  Rgb v;
   if (E) {
     const float w = float(2 / double(m));  // (2 pi / m) / pi
-    this_bounce[idx] = Rgb{E[0] * w, E[1] * w, E[2] * w};
+    v = Rgb{E[0] * w, E[1] * w, E[2] * w};
   } else {
-    const Vec3f n = normals[idx];
+    const Vec3f n = normal_at(f, i, j);
     float y[kSh];
     sh::eval(n.x, n.y, n.z, y);
     float e[3] = {};
     for (int c = 0; c < 3; ++c)
       for (int k = 0; k < 9; ++k) e[c] += kConv[k] * y[k] * U[c * kSh + k];
-    this_bounce[idx] = Rgb{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+    v = Rgb{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
   }
+  if (add)
+    this_bounce[idx] += v;
+  else
+    this_bounce[idx] = v;
   if (want_irr)
     for (int k = 0; k < 9; ++k)
-      for (int c = 0; c < 3; ++c) irr[idx * 27 + k * 3 + c] += kConv[k] * U[c * kSh + k] * kInvPi;
+      for (int c = 0; c < 3; ++c) irr[idx * kIrrChannels + k * 3 + c] += kConv[k] * U[c * kSh + k] * kInvPi;
 }
 
 // The bounces: indirect radiance U (Eq. 12, 20-21) through a radiance pyramid of the exitant light of the
 // bounce before (albedo x direct plus emission for the first).
 void NlpBake::bounce_passes() {
-  std::vector<float> exitant(N * 3);
-  for (std::size_t t = 0; t < N; ++t) {
-    Rgb b = scene.surface.albedo.empty() ? Rgb{} : scene.surface.albedo[t] * direct[t];
-    if (!scene.surface.emission.empty()) b += scene.surface.emission[t];
-    exitant[t * 3] = b.r, exitant[t * 3 + 1] = b.g, exitant[t * 3 + 2] = b.b;
-  }
+  std::vector<float> exitant;
+  auto exit_from = [&](const std::vector<Rgb>& light, bool reflect_only) {
+    exitant.resize(N * 3);
+    for (std::size_t t = 0; t < N; ++t) {
+      Rgb b = scene.surface.albedo.empty() ? Rgb{} : scene.surface.albedo[t] * light[t];
+      if (!reflect_only && !scene.surface.emission.empty()) b += scene.surface.emission[t];
+      exitant[t * 3] = b.r, exitant[t * 3 + 1] = b.g, exitant[t * 3 + 2] = b.b;
+    }
+  };
+  exit_from(direct, false);
   lu = nlp::radiance_levels(ms);
   for (int bounce = 1; bounce <= scene.bounces; ++bounce) {
-    const nlp::Pyramid rp = nlp::build_pyramid(exitant.data(), 3, W, H, f.wrap, o.levels_per_octave, lu);
-    std::vector<Rgb> this_bounce(N);
+    // The radiance pyramid in binary16 (half its memory; the heights stay float).
+    const nlp::Pyramid rp =
+        nlp::build_pyramid(exitant.data(), 3, W, H, f.wrap, o.levels_per_octave, lu, /*half=*/true);
+    std::vector<float>().swap(exitant);  // the pyramid's level 0 is a copy of it
+    // The last bounce adds straight into `indirect` (the same sum); the others keep their light for the
+    // next bounce's exitant radiance.
+    const bool last = bounce == scene.bounces;
+    std::vector<Rgb> this_bounce(last ? 0 : N);
+    std::vector<Rgb>& target = last ? indirect : this_bounce;
     if (sub == 1) {
       tbb::parallel_for(0, H, [&](int j) {
         rc.check();
@@ -495,7 +518,7 @@ void NlpBake::bounce_passes() {
         float* E = o.exact_indirect_cosine ? U + std::size_t(W) * 3 * kSh : nullptr;
         radiance(rp, s, xs_full.data(), W, j, U, E);
         for (int i = 0; i < W; ++i)
-          shade_indirect(this_bounce, f.index(i, j), U + std::size_t(i) * 3 * kSh,
+          shade_indirect(target, last, i, j, U + std::size_t(i) * 3 * kSh,
                          E ? E + std::size_t(i) * 3 : nullptr);
         report_rows(1);
       });
@@ -512,14 +535,13 @@ void NlpBake::bounce_passes() {
         float U[3 * kSh];
         for (int i = 0; i < W; ++i) {
           upsample(coarse, 3 * kSh, i, j, U);
-          shade_indirect(this_bounce, f.index(i, j), U, nullptr);
+          shade_indirect(target, last, i, j, U, nullptr);
         }
       });
     }
-    for (std::size_t t = 0; t < N; ++t) {
-      indirect[t] += this_bounce[t];
-      const Rgb b = scene.surface.albedo.empty() ? Rgb{} : scene.surface.albedo[t] * this_bounce[t];
-      exitant[t * 3] = b.r, exitant[t * 3 + 1] = b.g, exitant[t * 3 + 2] = b.b;
+    if (!last) {
+      for (std::size_t t = 0; t < N; ++t) indirect[t] += this_bounce[t];
+      exit_from(this_bounce, true);
     }
   }
 }
@@ -538,16 +560,12 @@ LayerSet NlpBake::layers() {
         L.data[t * 3] = v.r, L.data[t * 3 + 1] = v.g, L.data[t * 3 + 2] = v.b;
       }
     } else if (name == "sh_visibility") {
-      Layer& L = out.add(name, indexed_channels(kSh));
-      L.data = std::move(vis);
+      out.adopt(name, indexed_channels(kSh), std::move(vis));
     } else if (name == "sh_irradiance") {
       std::vector<std::string> channels;
       for (const std::string& c : indexed_channels(kSh))
         for (const char* col : {"R", "G", "B"}) channels.push_back(c + "." + col);
-      Layer& L = out.add(name, channels);
-      for (std::size_t t = 0; t < N; ++t)
-        for (int q = 0; q < 27; ++q) L.data[t * 48 + q] = irr[t * 27 + q];
-      std::vector<float>().swap(irr);
+      out.adopt(name, channels, std::move(irr));  // 48 floats a texel, the bands l = 3 zero
     }
   }
   out.attributes.emplace_back("hfbake:sh_convention", sh_convention_text());
@@ -567,6 +585,27 @@ LayerSet bake_nlp(const Scene& scene, const NlpOptions& o, const RunControl& rc)
   return bake.layers();
 }
 
+double nlp_working_bytes(const FieldShape& field, const NlpOptions& o, int bounces) {
+  const int W = field.width, H = field.height;
+  const double N = double(W) * double(H);
+  const nlp::MarchSetup ms = nlp::make_march_setup(W, H, field.texel_size, field.wrap, o.levels_per_octave,
+                                                   o.level_offset, o.radiance_level_offset);
+  const double heights =
+      double(nlp::pyramid_bytes(1, W, H, field.wrap, o.levels_per_octave, nlp::height_levels(ms)));
+  const double radiance =
+      double(nlp::pyramid_bytes(3, W, H, field.wrap, o.levels_per_octave, nlp::radiance_levels(ms), true));
+  // The layers the estimate counts that are not allocated until the end: direct, indirect, total.
+  double rgb_layers = 0;
+  for (const char* name : {"direct", "indirect", "total"})
+    if (std::find(o.layers.begin(), o.layers.end(), name) != o.layers.end()) rgb_layers += 12 * N;
+  // Always: the height pyramid, direct and indirect (RGB floats). While a bounce's radiance pyramid is
+  // built: the exitant radiance, one level in float and its horizontal pass (12 bytes a texel each), the
+  // pyramid (binary16), and for all but the last bounce that bounce's light (12).
+  const double held = heights + 24 * N;
+  const double bounce = bounces > 0 ? radiance + 36 * N + (bounces > 1 ? 12 * N : 0) : 0;
+  return std::max(held, held + bounce - rgb_layers);
+}
+
 LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
   return bake_nlp(scene, parse_nlp_options(params), rc);
 }
@@ -577,10 +616,11 @@ MethodInfo nlp_method() {
   m.summary = "NLP/SH multiresolution global illumination (Nowrouzezahrai & Snyder 2009)";
   m.read = [](Params& in, const MethodContext&) { read_nlp_options(in); };
   m.bake = [](const Scene& s, const nlohmann::json& p, const RunControl& rc) { return bake_nlp(s, p, rc); };
-  // SH visibility and irradiance while it runs (16 + 48 floats), the height and radiance pyramids, the
-  // bounces' radiance: measured 150 bytes a texel beyond its layers at 2048^2 (README "Memory").
-  m.working_bytes = [](const nlohmann::json&, const MethodContext& c) {
-    return 150.0 * double(c.field.width) * double(c.field.height);
+  m.reads_normals = false;  // normal_at per row of receivers
+  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
+    Params in(r);
+    const NlpOptions o = read_nlp_options(in);
+    return nlp_working_bytes(c.field, o, c.bounces);
   };
   m.division = WorkDivision::texel_tiles;
   m.division_note = "texel tiles with a halo of the pyramid's reach (marches read the whole field's pyramid)";

@@ -48,6 +48,10 @@ NlpOptions read_nlp_options(Params& in);
 LayerSet bake_nlp(const Scene& scene, const NlpOptions& options, const RunControl& rc);
 LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
 
+// Bytes bake_nlp holds at its peak beyond its layers (the height and radiance pyramids from their exact
+// sizes, direct and indirect, a bounce's exitant radiance): the method table's working_bytes.
+double nlp_working_bytes(const FieldShape& field, const NlpOptions& options, int bounces);
+
 // nlp's line of the method table.
 MethodInfo nlp_method();
 

@@ -3,6 +3,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
 
 namespace hfbake::nlp {
 
@@ -77,11 +80,74 @@ double pyramid_blur(int level, int k) {
 
 std::size_t Pyramid::bytes() const {
   std::size_t b = 0;
-  for (const PyramidLevel& l : levels) b += l.data.size() * sizeof(float);
+  for (const PyramidLevel& l : levels) b += l.data.size() * sizeof(float) + l.half.size() * 2;
   return b;
 }
 
-Pyramid build_pyramid(const float* data, int channels, int W, int H, Wrap wrap, int k, int level_count) {
+namespace {
+
+std::vector<float> make_half_table() {
+  std::vector<float> t(65536);
+  for (std::uint32_t h = 0; h < 65536; ++h) {
+    const std::uint32_t sign = (h & 0x8000u) << 16, e = (h >> 10) & 0x1f, m = h & 0x3ff;
+    float v;
+    if (e == 0)
+      v = std::ldexp(float(m), -24);  // subnormal (and zero)
+    else if (e == 31)
+      v = m ? std::numeric_limits<float>::quiet_NaN() : std::numeric_limits<float>::infinity();
+    else
+      v = std::ldexp(float(m | 0x400u), int(e) - 25);
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, 4);
+    bits |= sign;
+    std::memcpy(&v, &bits, 4);
+    t[h] = v;
+  }
+  return t;
+}
+
+}  // namespace
+
+float half_to_float(std::uint16_t h) {
+  static const std::vector<float> table = make_half_table();
+  return table[h];
+}
+
+std::uint16_t float_to_half(float f) {
+  // GCC's _Float16 conversion rounds to nearest even; saturate first so nothing becomes infinite.
+  constexpr float kMax = 65504.0f;
+  const _Float16 h = _Float16(std::clamp(f, -kMax, kMax));
+  std::uint16_t bits;
+  std::memcpy(&bits, &h, 2);
+  return bits;
+}
+
+namespace {
+
+// Level l's blur and grid (the one rule build_pyramid and pyramid_bytes share).
+void level_grid(int l, int k, int W, int H, bool repeat, double& s, int& w, int& h, double& sx, double& sy) {
+  s = l == 0 ? 0.0 : pyramid_blur(l, k);
+  double g = 1;
+  while (g * 2 <= s / 2) g *= 2;
+  axis_grid(W, repeat, g, w, sx);
+  axis_grid(H, repeat, g, h, sy);
+}
+
+}  // namespace
+
+std::size_t pyramid_bytes(int channels, int W, int H, Wrap wrap, int k, int level_count, bool half) {
+  std::size_t b = 0;
+  for (int l = 0; l < std::max(1, level_count); ++l) {
+    double s, sx, sy;
+    int w, h;
+    level_grid(l, k, W, H, wrap == Wrap::repeat, s, w, h, sx, sy);
+    b += std::size_t(w) * std::size_t(h) * std::size_t(channels) * (half ? 2 : sizeof(float));
+  }
+  return b;
+}
+
+Pyramid build_pyramid(const float* data, int channels, int W, int H, Wrap wrap, int k, int level_count,
+                      bool half) {
   Pyramid p;
   p.channels = channels;
   p.field_w = W;
@@ -90,22 +156,39 @@ Pyramid build_pyramid(const float* data, int channels, int W, int H, Wrap wrap, 
   p.levels_per_octave = k;
   p.levels.resize(std::max(1, level_count));
   const int c = channels;
+  const std::size_t n_in = std::size_t(W) * std::size_t(H) * std::size_t(c);
+  if (half) {
+    // A power of two at least the largest |value| / 32768: every filtered value (a convex combination)
+    // stays below half's largest finite 65504, and scaling by it is exact.
+    float peak = 0;
+    for (std::size_t t = 0; t < n_in; ++t)
+      if (std::isfinite(data[t])) peak = std::max(peak, std::fabs(data[t]));
+    p.half_scale = peak > 0 ? std::ldexp(1.0f, std::ilogb(peak) + 1 - 15) : 1.0f;
+  }
+  // Rounds a finished level to binary16 and frees its floats.
+  auto to_half = [&](PyramidLevel& lv, const float* values) {
+    lv.half.resize(std::size_t(lv.w) * lv.h * c);
+    const float inv = 1.0f / p.half_scale;
+    tbb::parallel_for(std::size_t(0), lv.half.size(),
+                      [&](std::size_t t) { lv.half[t] = float_to_half(values[t] * inv); });
+    std::vector<float>().swap(lv.data);
+  };
   for (int l = 0; l < int(p.levels.size()); ++l) {
     PyramidLevel& lv = p.levels[l];
-    const double s = l == 0 ? 0.0 : pyramid_blur(l, k);
-    double g = 1;
-    while (g * 2 <= s / 2) g *= 2;
-    double sx, sy;
-    axis_grid(W, p.repeat, g, lv.w, sx);
-    axis_grid(H, p.repeat, g, lv.h, sy);
+    double s, sx, sy;
+    level_grid(l, k, W, H, p.repeat, s, lv.w, lv.h, sx, sy);
     lv.inv_sx = float(1 / sx);
     lv.inv_sy = float(1 / sy);
     lv.blur = s;
-    lv.data.assign(std::size_t(lv.w) * lv.h * c, 0.0f);
     if (s <= 0 && lv.w == W && lv.h == H) {
-      std::copy(data, data + std::size_t(W) * H * c, lv.data.begin());
+      if (half) {
+        to_half(lv, data);
+      } else {
+        lv.data.assign(data, data + n_in);
+      }
       continue;
     }
+    lv.data.assign(std::size_t(lv.w) * lv.h * c, 0.0f);
     const Taps tx = make_taps(W, p.repeat, lv.w, sx, s), ty = make_taps(H, p.repeat, lv.h, sy, s);
     // Horizontal pass: every field row to lv.w nodes.
     std::vector<float> tmp(std::size_t(lv.w) * H * c, 0.0f);
@@ -125,6 +208,7 @@ Pyramid build_pyramid(const float* data, int channels, int W, int H, Wrap wrap, 
         for (int a = 0; a < lv.w * c; ++a) out[a] += w * in[a];
       }
     });
+    if (half) to_half(lv, lv.data.data());
   }
   return p;
 }

@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "field/height_field.hpp"
@@ -20,10 +21,11 @@
 namespace hfbake::nlp {
 
 struct PyramidLevel {
-  int w = 0, h = 0;              // grid nodes
-  float inv_sx = 1, inv_sy = 1;  // grid nodes per texel (texel coordinate x -> node coordinate x * inv_sx)
-  double blur = 0;               // kernel scale s_l in texels
-  std::vector<float> data;       // row-major, `channels` interleaved
+  int w = 0, h = 0;                 // grid nodes
+  float inv_sx = 1, inv_sy = 1;     // grid nodes per texel (texel coordinate x -> node coordinate x * inv_sx)
+  double blur = 0;                  // kernel scale s_l in texels
+  std::vector<float> data;          // row-major, `channels` interleaved (empty when the pyramid is half)
+  std::vector<std::uint16_t> half;  // Pyramid::half_scale > 0: the same as binary16 of value / half_scale
 };
 
 struct Pyramid {
@@ -32,15 +34,28 @@ struct Pyramid {
   bool repeat = false;
   int levels_per_octave = 4;
   std::vector<PyramidLevel> levels;
+  // > 0: the levels are held as binary16 (PyramidLevel::half) of value / half_scale, a power of two chosen
+  // from the largest value so nothing overflows: half the memory, relative rounding <= 2^-11.
+  float half_scale = 0;
 
   std::size_t bytes() const;
 };
 
+// binary16 -> float (exact), and float -> binary16 rounded to nearest even (overflow saturates to the largest
+// finite value).
+float half_to_float(std::uint16_t h);
+std::uint16_t float_to_half(float f);
+
 double pyramid_blur(int level, int levels_per_octave);
 
-// data: field_w x field_h texels, `channels` interleaved. level_count >= 1.
+// data: field_w x field_h texels, `channels` interleaved. level_count >= 1. half: hold the levels as
+// binary16 (Pyramid::half_scale; each level filtered in float, then rounded once).
 Pyramid build_pyramid(const float* data, int channels, int field_w, int field_h, Wrap wrap,
-                      int levels_per_octave, int level_count);
+                      int levels_per_octave, int level_count, bool half = false);
+
+// Bytes build_pyramid allocates for these arguments (its levels), without building it: for estimates.
+std::size_t pyramid_bytes(int channels, int field_w, int field_h, Wrap wrap, int levels_per_octave,
+                          int level_count, bool half = false);
 
 // Bilinear read of level `lv` at texel coordinates (x, y) (x = i at texel centers), `channels` values to out.
 // Clamp: coordinates are clamped to the field. Repeat: the level tiles.
@@ -68,6 +83,17 @@ inline void sample_level(const Pyramid& p, const PyramidLevel& lv, float x, floa
     j1 = j0 + 1 < lv.h ? j0 + 1 : j0;
   }
   const int c = p.channels;
+  if (p.half_scale > 0) {
+    const std::uint16_t* r0 = lv.half.data() + std::size_t(j0) * lv.w * c;
+    const std::uint16_t* r1 = lv.half.data() + std::size_t(j1) * lv.w * c;
+    for (int k = 0; k < c; ++k) {
+      const float a00 = half_to_float(r0[i0 * c + k]), a10 = half_to_float(r0[i1 * c + k]);
+      const float a01 = half_to_float(r1[i0 * c + k]), a11 = half_to_float(r1[i1 * c + k]);
+      const float a = a00 + (a10 - a00) * fu, b = a01 + (a11 - a01) * fu;
+      out[k] = (a + (b - a) * fv) * p.half_scale;
+    }
+    return;
+  }
   const float* r0 = lv.data.data() + std::size_t(j0) * lv.w * c;
   const float* r1 = lv.data.data() + std::size_t(j1) * lv.w * c;
   for (int k = 0; k < c; ++k) {

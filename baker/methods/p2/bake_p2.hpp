@@ -62,6 +62,9 @@ struct P2Params {
   // IndirectSweepSpec::near_radius); 0: every receiver gathers on its line (the method as published).
   double near_radius = 4;           // (P1's exact near field then reaches as far: compute_p2)
   std::vector<std::string> layers;  // empty: indirect, total, direct
+  // Keep each bounce's indirect apart (P2Result::indirect_b); bake_p2 keeps them only for indirect_b
+  // layers (12 bytes a texel and bounce).
+  bool keep_bounces = true;
 };
 
 // Reads a bake entry; throws InputError("", "<key>", ...) for what the schema cannot express.
@@ -73,12 +76,21 @@ P2Params parse_p2_params(const nlohmann::json& entry, int job_bounces = 64);
 struct P2Result {
   int width = 0, height = 0;
   std::vector<Rgb> direct;                   // E_direct / pi (from P1)
-  std::vector<std::vector<Rgb>> indirect_b;  // E / pi of bounce b = 1..bounces (index b - 1)
+  std::vector<std::vector<Rgb>> indirect_b;  // E / pi of bounce b = 1..bounces (index b - 1); empty
+                                             // without P2Params::keep_bounces
   std::vector<Rgb> indirect;                 // sum over the bounces
   P2SweepStats stats;                        // summed over the bounces' sweeps
 };
 
 P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc);
+
+// The P1 bake compute_p2 runs for direct light and the horizons that split each texel's lobe.
+struct P1Params;
+P1Params p2_direct_params(const P2Params& params);
+// Bytes compute_p2 and bake_p2 hold at their peak beyond the output layers (P1's K horizons a texel while
+// the bounces run, the exit radiance, the sweep's sums, the line buffers): the method table's working_bytes.
+// params with bounces resolved (>= 0).
+double p2_working_bytes(const FieldShape& field, const P2Params& params);
 
 LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
 

@@ -340,17 +340,22 @@ void facet_segment_radiance(const HeightField& f, const Rgb* facet_exit, double 
   *slope = m1 * 12.0f;  // / integral of (u - 1/2)^2 over [0, 1]
 }
 
+SweepSpec indirect_sweep_spec(const IndirectSweepSpec& spec) {
+  SweepSpec ss;
+  ss.directions = spec.directions;
+  ss.channels = kChannels;
+  ss.wrap_periods = spec.wrap_periods;
+  return ss;
+}
+
 std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3f>& normals,
                                 const std::vector<Rgb>& exit, const IndirectSweepSpec& spec,
                                 const RunControl& rc, P2SweepStats* stats, std::vector<Rgb>* facet_result) {
   const std::size_t texels = field.texel_count();
   std::vector<double> acc(texels * 3, 0.0);
-  const bool facets = spec.exit_facets && spec.facet_normals && facet_result;
+  const bool facets = spec.exit_facets && facet_result;
   std::vector<double> acc_f(facets ? texels * 6 : 0, 0.0);  // [(2 * texel + q) * 3 + channel]
-  SweepSpec ss;
-  ss.directions = spec.directions;
-  ss.channels = kChannels;
-  ss.wrap_periods = spec.wrap_periods;
+  const SweepSpec ss = indirect_sweep_spec(spec);
   const int K = spec.directions;
   const double wedge = 2 * kPi / K;
   std::vector<double> cs, sn;
@@ -358,8 +363,7 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
   P2SweepStats totals;
   std::mutex totals_mutex;
   // Exact near field (IndirectSweepSpec::near_radius): P1's near stencil per direction, with facets.
-  const bool near =
-      spec.near_radius > 0 && spec.exit_facets && spec.facet_normals && spec.p1_sin_horizon && spec.gather;
+  const bool near = spec.near_radius > 0 && spec.exit_facets && spec.p1_sin_horizon && spec.gather;
   std::vector<std::vector<NearPiece>> pieces(near ? K : 0);
   for (int k = 0; k < int(pieces.size()); ++k) {
     const SweepDirection d = plan_direction(field, ss, k);
@@ -400,9 +404,11 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
       a[0] += er + fm.r * wf, a[1] += eg + fm.g * wf, a[2] += eb + fm.b * wf;
     };
     part(normals[idx].d(), acc.data() + idx * 3);
-    if (facets)
-      for (int q = 0; q < 2; ++q)
-        part((*spec.facet_normals)[2 * idx + q].d(), acc_f.data() + (2 * idx + q) * 3);
+    if (facets) {
+      Vec3f fn[2];
+      facet_normals(field, i, j, fn);
+      for (int q = 0; q < 2; ++q) part(fn[q].d(), acc_f.data() + (2 * idx + q) * 3);
+    }
   };
   sweep_lines(
       field, ss, rc,
@@ -440,10 +446,12 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
           texel_near_far(k, i, j, idx, t, e, se, ce);
           return;
         }
-        if (facets)  // the same mean terrain radiance over the facets' lobes
+        if (facets) {  // the same mean terrain radiance over the facets' lobes
+          Vec3f fn[2];
+          facet_normals(field, i, j, fn);
           for (int q = 0; q < 2; ++q) {
             const std::size_t fi = 2 * idx + q;
-            const double tf = terrain_weight((*spec.facet_normals)[fi].d(), cs[k], sn[k], K, e, se, ce);
+            const double tf = terrain_weight(fn[q].d(), cs[k], sn[k], K, e, se, ce);
             if (!(tf > 0)) continue;
             double* a = acc_f.data() + fi * 3;
             if (wb > 0) {
@@ -454,6 +462,7 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
               a[0] += x.r * tf, a[1] += x.g * tf, a[2] += x.b * tf;
             }
           }
+        }
         const double tw = terrain_weight(normals[idx].d(), cs[k], sn[k], K, e, se, ce);
         if (!(tw > 0)) return;
         double* a = acc.data() + idx * 3;

@@ -10,6 +10,7 @@
 #include "core/run_control.hpp"
 #include "core/vec.hpp"
 #include "field/height_field.hpp"
+#include "sweep/sweep_lines.hpp"
 
 namespace hfbake {
 
@@ -43,12 +44,12 @@ struct IndirectSweepSpec {
   // is used.
   const std::vector<float>* p1_sin_horizon = nullptr;
   // Facet senders: the exit radiance of every texel's two facets (P1Result::direct_facets' layout,
-  // [2 * texel + q]) and their unit normals (facet_normals). When given, the terrain a receiver sees
-  // radiates per facet of the reference's triangulated surface, as the reference shades its hits, instead
-  // of per texel with the smoothed normal: each line segment's radiance is its length-weighted mean over
-  // the facets it crosses (with a linear trend for partly visible segments). Both or neither.
+  // [2 * texel + q]). When given, the terrain a receiver sees radiates per facet of the reference's
+  // triangulated surface, as the reference shades its hits, instead of per texel with the smoothed normal:
+  // each line segment's radiance is its length-weighted mean over the facets it crosses (with a linear
+  // trend for partly visible segments). The facets' normals are recomputed from the heights where needed
+  // (facet_normals, field/triangulation.hpp), not held.
   const std::vector<Rgb>* exit_facets = nullptr;
-  const std::vector<Vec3f>* facet_normals = nullptr;
   // Exact near field (facet senders and P1's horizons only; 0: off, the method as published): every
   // texel gathers the terrain within near_radius texels itself, from its centre over the triangulated
   // surface (every column, row and diagonal crossing of P1's near-field stencil, each piece radiating
@@ -59,6 +60,9 @@ struct IndirectSweepSpec {
   // where it is largest (tests/p2/measure_p2_centre).
   double near_radius = 0;
 };
+
+// The line sweep sweep_indirect runs (for estimates: sweep_buffer_bytes of it).
+SweepSpec indirect_sweep_spec(const IndirectSweepSpec& spec);
 
 // E_indirect / pi per texel (row-major) from the exit radiance `exit` per texel, for one bounce.
 // normals: compute_normals(field). stats (optional) is filled with the totals of the sweep.
