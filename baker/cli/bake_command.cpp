@@ -165,7 +165,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     }
     LayerSet reference = lookup == CacheLookup::hit ? std::move(cached.layers)
                          : merged                   ? merged->reference()
-                                                    : bake_reference(scene, job_reference_options(job, scene), rc);
+                                  : bake_reference(scene, job_reference_options(job, scene), rc);
     const double seconds = merged && lookup != CacheLookup::hit ? merged->seconds(-1) : seconds_since(t0);
     if (cache && lookup != CacheLookup::hit) {
       const std::string problem = cache->store(cache_key, reference, seconds);

@@ -70,8 +70,9 @@ int main(int argc, char** argv) {
       ->check(memory_size);
 
   std::string shard;
-  bake_cmd->add_option("--shard", shard,
-                       "I/N: bake only shard I (0-based) of N of each job into <out>/shards/ (see hfbake merge)");
+  bake_cmd->add_option(
+      "--shard", shard,
+      "I/N: bake only shard I (0-based) of N of each job into <out>/shards/ (see hfbake merge)");
   // hfbake merge: the outputs of `bake` from a job's shards.
   hfbake::BakeOptions merge;
   std::vector<std::string> merge_jobs;
@@ -79,8 +80,11 @@ int main(int argc, char** argv) {
   int merge_threads = 0;
   CLI::App* merge_cmd = app.add_subcommand(
       "merge", "Write each job's outputs from its shards (bake --shard I/N): the same files bake writes");
-  merge_cmd->add_option("jobs", merge_jobs, "Job files (JSON) or suites")->required()->check(CLI::ExistingFile);
-  merge_cmd->add_option("--out", merge_out, "Output folder, as bake's --out (the shards are in <out>/shards)");
+  merge_cmd->add_option("jobs", merge_jobs, "Job files (JSON) or suites")
+      ->required()
+      ->check(CLI::ExistingFile);
+  merge_cmd->add_option("--out", merge_out,
+                        "Output folder, as bake's --out (the shards are in <out>/shards)");
   merge_cmd->add_flag("--quiet", merge.quiet, "No progress output (errors are still printed)");
   merge_cmd->add_option("--summary", merge_summary, "Write a machine-readable JSON summary to FILE");
   merge_cmd->add_option("--cache", merge_cache, "Reference cache folder, as bake's");
@@ -94,13 +98,16 @@ int main(int argc, char** argv) {
   std::string slurm_out, slurm_cache;
   CLI::App* slurm_cmd = app.add_subcommand(
       "slurm", "Bake on a Slurm cluster: one array task per job and shard, then a merge job (afterok)");
-  slurm_cmd->add_option("jobs", slurm_inputs, "Job files (JSON) or suites")->required()->check(CLI::ExistingFile);
+  slurm_cmd->add_option("jobs", slurm_inputs, "Job files (JSON) or suites")
+      ->required()
+      ->check(CLI::ExistingFile);
   slurm_cmd->add_option("--shards", slurm.shards, "Shards per job (bake --shard I/N)")
       ->required()
       ->check(CLI::Range(1, 4096));
   slurm_cmd->add_option("--partition", slurm.partition, "sbatch --partition");
   slurm_cmd->add_option("--time", slurm.time, "sbatch --time (per task)");
-  slurm_cmd->add_option("--mem", slurm.mem, "sbatch --mem per task (default: the job's memory estimate + 20 %)");
+  slurm_cmd->add_option("--mem", slurm.mem,
+                        "sbatch --mem per task (default: the job's memory estimate + 20 %)");
   slurm_cmd->add_option("--sbatch-arg", slurm.sbatch_args, "Any further sbatch option (repeatable)");
   slurm_cmd->add_flag("--wait", slurm.wait, "Wait for the merge and exit with its status");
   slurm_cmd->add_flag("--resume", slurm.resume, "Submit only the shards whose file is not complete");

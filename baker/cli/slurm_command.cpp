@@ -156,9 +156,9 @@ int run_slurm(const SlurmOptions& o) {
   const std::string exe = quoted(own_executable().string());
   const std::string name = jobs.size() == 1 ? jobs.front().job.stem().string() : common.filename().string();
   std::ostringstream head;
-  auto common_head = [&](std::ostringstream& s, const std::string& job_name) {
+  auto common_head = [&](std::ostringstream& s, const std::string& job_name, const char* log) {
     s << "#SBATCH --job-name=" << job_name << "\n";
-    s << "#SBATCH --output=" << (dir / "logs" / "%x-%A_%a.out").string() << "\n";
+    s << "#SBATCH --output=" << (dir / "logs" / log).string() << "\n";
     s << "#SBATCH --mem=" << mem << "\n";
     s << "#SBATCH --cpus-per-task=" << o.threads << "\n";
     if (!o.partition.empty()) s << "#SBATCH --partition=" << o.partition << "\n";
@@ -172,7 +172,7 @@ int run_slurm(const SlurmOptions& o) {
        << "# Each task bakes one shard into <output>/shards/ (a re-run of a finished shard does nothing).\n"
        << "# Resubmit some tasks by hand: sbatch --array=2,5 " << (dir / "bake.sbatch").string() << "\n"
        << "# Memory: the job's estimate (hfbake validate) + 20 %; every task holds whole-field layers.\n";
-  common_head(bake, "hfbake-" + name);
+  common_head(bake, "hfbake-" + name, "%x-%A_%a.out");
   bake << "#SBATCH --array=0-" << tasks.size() - 1 << "\n"
        << "#SBATCH --requeue\n"
        << "set -euo pipefail\n"
@@ -195,7 +195,7 @@ int run_slurm(const SlurmOptions& o) {
         << " (hfbake slurm): merges the shards into the outputs\n"
         << "# `hfbake bake` writes (bit-identical). It names any shard that is missing or damaged.\n"
         << "# Run it by hand after resubmitting tasks: sbatch " << (dir / "merge.sbatch").string() << "\n";
-  common_head(merge, "hfbake-merge-" + name);
+  common_head(merge, "hfbake-merge-" + name, "%x-%j.out");
   merge << "set -euo pipefail\n"
         << "exec " << exe << " merge";
   for (const fs::path& f : o.inputs) merge << " " << quoted(fs::absolute(f).string());

@@ -33,7 +33,8 @@ double default_reach(const FieldShape& field, const Falloff& f) {
   return std::isfinite(support) ? support : whole;
 }
 
-HbaoSums hbao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s, int d0, int d1) {
+HbaoSums hbao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s, int d0,
+                         int d1) {
   const double z0 = field.z[field.index(i, j)];
   const double ts = field.texel_size;
   const bool clamp = field.wrap == Wrap::clamp;
@@ -149,8 +150,8 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
   const int K = int(s.directions.size()), B = direction_block_count(K);
   HbaoSums total = hbao_texel_sums(field, n, i, j, s, 0, direction_block_begin(1, K));
   for (int b = 1; b < B; ++b)
-    hbao_add_sums(total,
-                  hbao_texel_sums(field, n, i, j, s, direction_block_begin(b, K), direction_block_begin(b + 1, K)));
+    hbao_add_sums(total, hbao_texel_sums(field, n, i, j, s, direction_block_begin(b, K),
+                                         direction_block_begin(b + 1, K)));
   return hbao_finish(total, hbao_weight_sum(s), n, s);
 }
 
@@ -188,7 +189,8 @@ void hbao_field_block(const HeightField& field, const HbaoSettings& s, int block
       const std::size_t idx = field.index(i, j);
       const HbaoSums t = hbao_texel_sums(field, normal_at(field, i, j).d(), i, j, st, d0, d1);
       occluded[idx] = t.occluded;
-      if (bent_xyz) bent_xyz[3 * idx] = t.bent.x, bent_xyz[3 * idx + 1] = t.bent.y, bent_xyz[3 * idx + 2] = t.bent.z;
+      if (bent_xyz)
+        bent_xyz[3 * idx] = t.bent.x, bent_xyz[3 * idx + 1] = t.bent.y, bent_xyz[3 * idx + 2] = t.bent.z;
     }
     rc.report(double(++rows_done) / field.height);
   });

@@ -49,7 +49,8 @@ LayerSet bake_p1(const Scene& scene, const nlohmann::json& params, const RunCont
 LayerSet p1_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
   const P1Params p = parse_p1_params(params);
   const int K = p.directions;
-  P1Sums s = p1_direction_sums(scene, p, direction_block_begin(block, K), direction_block_begin(block + 1, K), rc);
+  P1Sums s =
+      p1_direction_sums(scene, p, direction_block_begin(block, K), direction_block_begin(block + 1, K), rc);
   LayerSet out;
   out.width = scene.field.width, out.height = scene.field.height;
   const std::size_t N = scene.field.texel_count();
@@ -63,7 +64,8 @@ LayerSet p1_bake_block(const Scene& scene, const nlohmann::json& params, int blo
   const std::string at = "@" + std::to_string(s.k_begin);
   const std::vector<std::string> block_channels = indexed_channels(s.k_end - s.k_begin);
   if (!s.horizon.empty()) out.adopt("horizon" + at, block_channels, std::move(s.horizon));
-  if (!s.horizon_distance.empty()) out.adopt("horizon_distance" + at, block_channels, std::move(s.horizon_distance));
+  if (!s.horizon_distance.empty())
+    out.adopt("horizon_distance" + at, block_channels, std::move(s.horizon_distance));
   return out;
 }
 

@@ -50,7 +50,8 @@ inline FarPick far_pick(const float* lo, const float* hi, std::size_t plane, std
 
 // Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
 // with the border rules (clamp: crossings off the field are not terrain; repeat: wrapped).
-float near_slope(const HeightField& f, const std::vector<p1::NearCrossing>& stencil, int i, int j, int* which) {
+float near_slope(const HeightField& f, const std::vector<p1::NearCrossing>& stencil, int i, int j,
+                 int* which) {
   const bool clamp = f.wrap == Wrap::clamp;
   const float Z = f.z[f.index(i, j)];
   float best = -1e30f;
@@ -127,8 +128,10 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p) {
   double per_texel = p.direct && !p.ao ? 4 : 0;  // the ao sum behind a uniform sky's direct
   if (p.direct && p.facet_direct) per_texel += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
   if (direction_block_count(p.directions) > 1)  // one direction block's sums beside the total (compute_p1)
-    per_texel += (p.direct ? 12 : p.ao ? 4 : 0) + (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) +
-                 (p.direct && p.facet_direct ? 24 : 0);
+    per_texel += (p.direct ? 12
+                  : p.ao   ? 4
+                           : 0) +
+                 (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) + (p.direct && p.facet_direct ? 24 : 0);
   HeightField field;  // the sweep's plan needs only the shape
   static_cast<FieldShape&>(field) = shape;
   return per_texel * double(shape.width) * double(shape.height) +
@@ -182,7 +185,8 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
   const std::size_t NF = facets ? 2 * N : 0;
   std::vector<float>&fao = r.fao, &fdr = r.fdr, &fdg = r.fdg, &fdb = r.fdb;
   fao.assign(facets && uniform_env ? NF : 0, 0.0f);
-  fdr.assign(facets && !uniform_env ? NF : 0, 0.0f), fdg.assign(fdr.size(), 0.0f), fdb.assign(fdr.size(), 0.0f);
+  fdr.assign(facets && !uniform_env ? NF : 0, 0.0f), fdg.assign(fdr.size(), 0.0f),
+      fdb.assign(fdr.size(), 0.0f);
   constexpr int kTileTexels = 32 * 32;  // sweep_lines_tiled's tiles
   struct TileNormals {
     int i0 = -1, j0 = -1;
@@ -402,7 +406,8 @@ void p1_add_sums(P1Sums& total, const P1Sums& block) {
   auto add = [](std::vector<float>& t, const std::vector<float>& b) {
     for (std::size_t i = 0; i < t.size(); ++i) t[i] += b[i];
   };
-  add(total.ao, block.ao), add(total.vsky, block.vsky), add(total.rgb, block.rgb), add(total.bent, block.bent);
+  add(total.ao, block.ao), add(total.vsky, block.vsky), add(total.rgb, block.rgb),
+      add(total.bent, block.bent);
   add(total.fao, block.fao), add(total.fdr, block.fdr), add(total.fdg, block.fdg), add(total.fdb, block.fdb);
   total.k_end = block.k_end;
 }
@@ -411,18 +416,17 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   const std::size_t N = scene.field.texel_count();
   const int K = p.directions, B = direction_block_count(K);
   std::vector<float> horizon(p.horizon ? N * K : 0), distance(p.horizon_distance ? N * K : 0);
-  const double lights_share = p.direct && p.lights && !scene.lights.empty() ? double(scene.lights.size()) /
-                                                                                   double(K + scene.lights.size())
-                                                                             : 0.0;
+  const double lights_share = p.direct && p.lights && !scene.lights.empty()
+                                  ? double(scene.lights.size()) / double(K + scene.lights.size())
+                                  : 0.0;
   // Direction blocks (core/direction_blocks.hpp): each summed from zero, the blocks added in order -- the
   // order `hfbake merge` adds the farm's shards in.
   P1Sums total;
   for (int b = 0; b < B; ++b) {
     const int k0 = direction_block_begin(b, K), k1 = direction_block_begin(b + 1, K);
-    P1Sums part = p1_direction_sums(scene, p, k0, k1,
-                                    sub_progress(rc, (1 - lights_share) * k0 / K, (1 - lights_share) * (k1 - k0) / K),
-                                    horizon.empty() ? nullptr : horizon.data(),
-                                    distance.empty() ? nullptr : distance.data());
+    P1Sums part = p1_direction_sums(
+        scene, p, k0, k1, sub_progress(rc, (1 - lights_share) * k0 / K, (1 - lights_share) * (k1 - k0) / K),
+        horizon.empty() ? nullptr : horizon.data(), distance.empty() ? nullptr : distance.data());
     if (b == 0)
       total = std::move(part);
     else
