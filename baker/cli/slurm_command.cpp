@@ -45,8 +45,8 @@ int run_capture(const std::string& command, std::string* output) {
 }
 
 struct Task {
-  fs::path job;  // absolute
-  fs::path out;  // the job's output folder (absolute)
+  fs::path job;  // as given (the scripts run in the submission's folder: --chdir)
+  fs::path out;  // the job's output folder
   int shard = 0;
 };
 
@@ -118,12 +118,12 @@ int run_slurm(const SlurmOptions& o) {
       }
       const Job& job = *load.job;
       need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
-      jobs.push_back({fs::absolute(file), fs::absolute(job.output.dir), 0});
+      jobs.push_back({file, out ? *out : job.output.dir, 0});
       if (common.empty()) common = fs::absolute(job.output.dir);
     }
   }
   if (jobs.empty()) return fail("command line: no jobs");
-  if (o.out) common = fs::absolute(*o.out);
+  if (o.out && plain > 1) common = fs::absolute(*o.out);
   const fs::path dir = common / "slurm";
 
   // Tasks: job-major, shard-minor; with --resume only the shards not complete on disk.
@@ -158,6 +158,7 @@ int run_slurm(const SlurmOptions& o) {
   std::ostringstream head;
   auto common_head = [&](std::ostringstream& s, const std::string& job_name, const char* log) {
     s << "#SBATCH --job-name=" << job_name << "\n";
+    s << "#SBATCH --chdir=" << fs::current_path().string() << "\n";  // job paths are as given
     s << "#SBATCH --output=" << (dir / "logs" / log).string() << "\n";
     s << "#SBATCH --mem=" << mem << "\n";
     s << "#SBATCH --cpus-per-task=" << o.threads << "\n";
@@ -198,8 +199,8 @@ int run_slurm(const SlurmOptions& o) {
   common_head(merge, "hfbake-merge-" + name, "%x-%j.out");
   merge << "set -euo pipefail\n"
         << "exec " << exe << " merge";
-  for (const fs::path& f : o.inputs) merge << " " << quoted(fs::absolute(f).string());
-  if (o.out) merge << " --out " << quoted(fs::absolute(*o.out).string());
+  for (const fs::path& f : o.inputs) merge << " " << quoted(f.string());
+  if (o.out) merge << " --out " << quoted(o.out->string());
   merge << " --threads \"${SLURM_CPUS_PER_TASK:-" << o.threads << "}\"" << bake_flags(o)
         << (o.quiet ? " --quiet" : "") << "\n";
 
