@@ -56,7 +56,10 @@ std::string array_list(const std::vector<int>& ids) {
   for (std::size_t i = 0; i < ids.size();) {
     std::size_t j = i;
     while (j + 1 < ids.size() && ids[j + 1] == ids[j] + 1) ++j;
-    s += (s.empty() ? "" : ",") + std::to_string(ids[i]) + (j > i ? "-" + std::to_string(ids[j]) : "");
+    // Appended piece by piece (GCC 12's -Wrestrict misfires on "literal" + std::string).
+    if (!s.empty()) s += ',';
+    s += std::to_string(ids[i]);
+    if (j > i) s.append(1, '-').append(std::to_string(ids[j]));
     i = j + 1;
   }
   return s;
@@ -228,7 +231,7 @@ int run_slurm(const SlurmOptions& o) {
   std::string cmd = "sbatch --parsable";
   if (!array_id.empty()) cmd += " --dependency=afterok:" + array_id + " --kill-on-invalid-dep=yes";
   if (o.wait) cmd += " --wait";
-  cmd += " " + quoted((dir / "merge.sbatch").string()) + " 2>&1";
+  cmd.append(1, ' ').append(quoted((dir / "merge.sbatch").string())).append(" 2>&1");
   std::string out;
   const int status = run_capture(cmd, &out);
   const std::string merge_id = out.substr(0, out.find_first_of(";\n"));

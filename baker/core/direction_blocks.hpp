@@ -19,4 +19,21 @@ inline int direction_block_begin(int b, int K) {
   return int((long long)b * K / direction_block_count(K));
 }
 
+// A double carried as two floats (hi + lo, about 48 bits): how a method whose sums are double passes them
+// through float layers (the shard files). A block's double sum is split once; a total adds blocks by
+// join + join, split again (add_split), in bake and merge alike, so both round identically.
+struct SplitDouble {
+  float hi = 0, lo = 0;
+};
+inline SplitDouble split_double(double x) {
+  const float hi = float(x);
+  return {hi, float(x - double(hi))};
+}
+inline double join_double(SplitDouble s) {
+  return double(s.hi) + double(s.lo);
+}
+inline void add_split(SplitDouble& total, SplitDouble block) {
+  total = split_double(join_double(total) + join_double(block));
+}
+
 }  // namespace hfbake

@@ -1,5 +1,7 @@
 #include "farm/merge_blocks.hpp"
 
+#include "core/direction_blocks.hpp"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -20,6 +22,15 @@ void add_direction_block(LayerSet& total, LayerSet&& block) {
     if (t->data.size() != l.data.size()) throw std::runtime_error("blocks of different sizes for " + l.name);
     float* a = t->data.data();
     const float* b = l.data.data();
+    if (l.name.size() > 3 && l.name.compare(l.name.size() - 3, 3, "#2f") == 0) {
+      // Doubles as (hi, lo) float pairs (core/direction_blocks.hpp add_split).
+      for (std::size_t i = 0; i + 1 < t->data.size(); i += 2) {
+        SplitDouble s{a[i], a[i + 1]};
+        add_split(s, {b[i], b[i + 1]});
+        a[i] = s.hi, a[i + 1] = s.lo;
+      }
+      continue;
+    }
     for (std::size_t i = 0; i < t->data.size(); ++i) a[i] += b[i];
   }
 }

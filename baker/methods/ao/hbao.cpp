@@ -121,12 +121,12 @@ HbaoSums hbao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const H
       occluded += d.weight * (s.weighting == Weighting::cosine ? 2 * occl : occl);
     bent += d.weight * Vec3{dir.h * d.dx, dir.h * d.dy, dir.v};
   }
-  return {float(occluded), Vec3f::from(bent)};
+  return {split_double(occluded), {split_double(bent.x), split_double(bent.y), split_double(bent.z)}};
 }
 
 void hbao_add_sums(HbaoSums& total, const HbaoSums& block) {
-  total.occluded += block.occluded;
-  total.bent.x += block.bent.x, total.bent.y += block.bent.y, total.bent.z += block.bent.z;
+  add_split(total.occluded, block.occluded);
+  for (int c = 0; c < 3; ++c) add_split(total.bent[c], block.bent[c]);
 }
 
 double hbao_weight_sum(const HbaoSettings& s) {
@@ -137,9 +137,9 @@ double hbao_weight_sum(const HbaoSettings& s) {
 
 HorizonTexel hbao_finish(const HbaoSums& sums, double weight_sum, Vec3 n, const HbaoSettings& s) {
   HorizonTexel t;
-  t.occluded = double(sums.occluded) / weight_sum;
+  t.occluded = join_double(sums.occluded) / weight_sum;
   if (s.estimator == HorizonEstimator::largest_occluder) t.occluded = std::clamp(t.occluded, 0.0, 1.0);
-  const Vec3 bent = sums.bent.d();
+  const Vec3 bent{join_double(sums.bent[0]), join_double(sums.bent[1]), join_double(sums.bent[2])};
   t.bent_normal = length(bent) > 1e-12 ? normalize(bent) : n;
   return t;
 }
@@ -188,9 +188,10 @@ void hbao_field_block(const HeightField& field, const HbaoSettings& s, int block
     for (int i = 0; i < field.width; ++i) {
       const std::size_t idx = field.index(i, j);
       const HbaoSums t = hbao_texel_sums(field, normal_at(field, i, j).d(), i, j, st, d0, d1);
-      occluded[idx] = t.occluded;
+      occluded[2 * idx] = t.occluded.hi, occluded[2 * idx + 1] = t.occluded.lo;
       if (bent_xyz)
-        bent_xyz[3 * idx] = t.bent.x, bent_xyz[3 * idx + 1] = t.bent.y, bent_xyz[3 * idx + 2] = t.bent.z;
+        for (int c = 0; c < 3; ++c)
+          bent_xyz[6 * idx + 2 * c] = t.bent[c].hi, bent_xyz[6 * idx + 2 * c + 1] = t.bent[c].lo;
     }
     rc.report(double(++rows_done) / field.height);
   });
@@ -202,8 +203,11 @@ void hbao_field_finish(const HeightField& field, const HbaoSettings& s, const fl
   tbb::parallel_for(0, field.height, [&](int j) {
     for (int i = 0; i < field.width; ++i) {
       const std::size_t idx = field.index(i, j);
-      HbaoSums sums{occluded[idx], {}};
-      if (bent_sums) sums.bent = {bent_sums[3 * idx], bent_sums[3 * idx + 1], bent_sums[3 * idx + 2]};
+      HbaoSums sums;
+      sums.occluded = {occluded[2 * idx], occluded[2 * idx + 1]};
+      if (bent_sums)
+        for (int c = 0; c < 3; ++c)
+          sums.bent[c] = {bent_sums[6 * idx + 2 * c], bent_sums[6 * idx + 2 * c + 1]};
       const HorizonTexel t = hbao_finish(sums, wsum, normal_at(field, i, j).d(), s);
       if (obscurance) obscurance[idx] = float(1.0 - t.occluded);
       if (bent_xyz) {
@@ -281,7 +285,7 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
 
 namespace {
 
-// Farm blocks: "occluded" and, with bent_normal, "bent" (the raw sums: HbaoSums).
+// Farm blocks: "occluded#2f" and, with bent_normal, "bent#2f" (the raw sums: HbaoSums, as hi/lo pairs).
 LayerSet hbao_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
   const HeightField& field = scene.field;
   Params in(params);
@@ -289,8 +293,10 @@ LayerSet hbao_bake_block(const Scene& scene, const nlohmann::json& params, int b
   const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
   LayerSet out;
   out.width = field.width, out.height = field.height;
-  float* occluded = out.add("occluded", mono_channels()).data.data();
-  float* bent = wants(layers, "bent_normal") ? out.add("bent", xyz_channels()).data.data() : nullptr;
+  float* occluded = out.add("occluded#2f", {"hi", "lo"}).data.data();
+  float* bent = wants(layers, "bent_normal")
+                    ? out.add("bent#2f", {"X.hi", "X.lo", "Y.hi", "Y.lo", "Z.hi", "Z.lo"}).data.data()
+                    : nullptr;
   hbao_field_block(field, s, block, rc, occluded, bent);
   return out;
 }
@@ -303,9 +309,9 @@ LayerSet hbao_finish_blocks(const Scene& scene, const nlohmann::json& params, La
   const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<float> obsc(field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);
-  const Layer* bs = sums.find("bent");
-  hbao_field_finish(field, s, sums.find("occluded")->data.data(), bs ? bs->data.data() : nullptr, obsc.data(),
-                    bent.empty() ? nullptr : bent.data());
+  const Layer* bs = sums.find("bent#2f");
+  hbao_field_finish(field, s, sums.find("occluded#2f")->data.data(), bs ? bs->data.data() : nullptr,
+                    obsc.data(), bent.empty() ? nullptr : bent.data());
   sums = LayerSet();
   LayerSet out = obscurance_layers_xyz(field.width, field.height, layers, std::move(obsc), std::move(bent));
   if (s.surface == MarchSurface::triangles)
