@@ -223,15 +223,15 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
   const int KH = horizon_out ? K : nb, KD = distance_out ? K : nb;
   std::vector<float> cs, sn;
   azimuth_table(K, cs, sn);
-  // The near field of every direction (horizon_sweep.hpp): the crossings within near_radius of a texel,
-  // as index offsets for interior texels (all crossings on the field) and texel offsets for the rest.
+  // The near field of each direction of the block (horizon_sweep.hpp): the crossings within near_radius of a
+  // texel, as index offsets for interior texels (all crossings on the field) and texel offsets for the rest.
   std::vector<std::vector<p1::NearCrossing>> near(K);
   std::vector<std::vector<std::ptrdiff_t>> near_a(K), near_b(K);
   std::vector<char> x_major(K);
   {
     SweepSpec probe;
     probe.directions = K;
-    for (int k = 0; k < K; ++k) {
+    for (int k = k_begin; k < k_end; ++k) {  // the block's directions
       const SweepDirection d = plan_direction(f, probe, k);
       near[k] = p1::near_field_stencil(d.dx, d.dy, p.near_radius, f.texel_size);
       for (const p1::NearCrossing& c : near[k]) {
