@@ -19,6 +19,7 @@ packages=(build-essential cmake pkg-config git
   libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev openimageio-tools libopencolorio-dev
   nlohmann-json3-dev libvalijson-dev libcli11-dev libgtest-dev libbenchmark-dev
   libgdal-dev gdal-bin)  # gdal-bin: gdalinfo / gdal_translate, the truth of the GeoTIFF tests
+packages+=(slurm-wlm munge)  # the farm's integration tests start a one-node Slurm (tests/farm)
 if [ "$mode" = test ]; then
   packages+=(chromium)  # the HTML report test renders the page in headless Chromium
   packages+=(clang libclang-rt-14-dev)  # the libFuzzer harnesses (tests/fuzz): clang and its libFuzzer

@@ -19,6 +19,7 @@
 #include "cli/report_page.hpp"
 #include "cli/report_writer.hpp"
 #include "cli/scene_loader.hpp"
+#include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
 #include "cli/test_break.hpp"
 #include "cli/version.hpp"
@@ -109,11 +110,18 @@ void add_common_attributes(LayerSet& layers, const Job& job, const std::string& 
 
 // Bakes one valid job. Throws InputError (bad input), Cancelled, or anything else (a failed job).
 void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
-              const ReferenceCache* cache, std::optional<std::size_t> memory_limit) {
-  check_memory(job, memory_limit);
+              const ReferenceCache* cache, const BakeOptions& options) {
+  check_memory(job, options.memory_limit);
   const FieldSize size = probe_field_size(job);
 
   check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
+  if (options.shard) {
+    outcome.outputs = {bake_shard(job, *options.shard, progress, cancel, outcome, cache)};
+    return;
+  }
+  // hfbake merge: every shard checked before anything is written; the layers come from them.
+  std::optional<MergedShards> merged;
+  if (options.merge) merged.emplace(job, size.width, size.height);
   OutputStage stage(job);
   for (const fs::path& p : stage.stale_removed())
     progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
@@ -133,8 +141,10 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     progress.begin(job.name, entry.stem);
     const auto t0 = std::chrono::steady_clock::now();
     const double cpu0 = process_cpu_seconds();
-    LayerSet layers = run_method(entry, scene, rc);
-    const double seconds = seconds_since(t0), cpu_seconds = process_cpu_seconds() - cpu0;
+    const int index = int(&entry - job.bakes.data());
+    LayerSet layers = merged ? merged->method(index, scene, rc) : run_method(entry, scene, rc);
+    const double seconds = merged ? merged->seconds(index) : seconds_since(t0);
+    const double cpu_seconds = merged ? merged->cpu_seconds(index) : process_cpu_seconds() - cpu0;
     if (apply_test_break(entry.method, entry.stem, layers))
       progress.message(job.name + ": " + entry.stem +
                        ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
@@ -164,10 +174,10 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
         progress.message(job.name + ": reference cache entry " + cache->entry_path(cache_key).string() +
                          " was damaged: removed, computing the reference again");
     }
-    LayerSet reference = lookup == CacheLookup::hit
-                             ? std::move(cached.layers)
-                             : bake_reference(scene, job_reference_options(job, scene), rc);
-    const double seconds = seconds_since(t0);
+    LayerSet reference = lookup == CacheLookup::hit ? std::move(cached.layers)
+                         : merged                   ? merged->reference()
+                                  : bake_reference(scene, job_reference_options(job, scene), rc);
+    const double seconds = merged && lookup != CacheLookup::hit ? merged->seconds(-1) : seconds_since(t0);
     if (cache && lookup != CacheLookup::hit) {
       const std::string problem = cache->store(cache_key, reference, seconds);
       if (!problem.empty()) progress.message(job.name + ": reference cache: " + problem);
@@ -453,7 +463,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
         ~Timer() { o.seconds = seconds_since(t0); }
       } timer{o, t_job};
       try {
-        bake_job(*jobs[i], progress, cancel, o, cache ? &*cache : nullptr, options.memory_limit);
+        bake_job(*jobs[i], progress, cancel, o, cache ? &*cache : nullptr, options);
       } catch (const Cancelled&) {
         o.status = JobStatus::cancelled;
       } catch (const InputError& e) {
@@ -475,7 +485,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   }
   print_summary(outcomes, options.quiet);
   const double total_seconds = seconds_since(t_start);
-  for (std::size_t s = 0; s < suites.size() && !cancel.load(); ++s) {
+  for (std::size_t s = 0; s < suites.size() && !cancel.load() && !options.shard; ++s) {
     std::vector<JobOutcome> members;
     for (std::size_t i = 0; i < inputs.size(); ++i)
       if (inputs[i].suite == int(s)) members.push_back(outcomes[i]);

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "farm/shard_plan.hpp"
+
 namespace hfbake {
 
 struct BakeOptions {
@@ -23,6 +25,10 @@ struct BakeOptions {
   const std::atomic<int>* interrupt_signal = nullptr;
   // --memory-limit: the budget a job's memory estimate must fit (default: the machine's available memory).
   std::optional<std::size_t> memory_limit;
+  // The farm (cli/shard_command.hpp): --shard I/N bakes that shard of each job into its shard file;
+  // merge (`hfbake merge`) writes each job's outputs from its shards instead of baking.
+  std::optional<ShardId> shard;
+  bool merge = false;
 };
 
 // "512M", "8G", "1.5GiB", "2000000000": bytes (binary multiples K, M, G, T, optionally "iB" or "B"); nullopt

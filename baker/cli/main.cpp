@@ -11,6 +11,7 @@
 
 #include "cli/bake_command.hpp"
 #include "cli/compare_command.hpp"
+#include "cli/slurm_command.hpp"
 #include "cli/version.hpp"
 #include "io/exr_output.hpp"
 
@@ -68,6 +69,55 @@ int main(int argc, char** argv) {
                    "Refuse a job whose memory estimate exceeds SIZE (default: the available memory)")
       ->check(memory_size);
 
+  std::string shard;
+  bake_cmd->add_option(
+      "--shard", shard,
+      "I/N: bake only shard I (0-based) of N of each job into <out>/shards/ (see hfbake merge)");
+  // hfbake merge: the outputs of `bake` from a job's shards.
+  hfbake::BakeOptions merge;
+  std::vector<std::string> merge_jobs;
+  std::string merge_out, merge_summary, merge_cache;
+  int merge_threads = 0;
+  CLI::App* merge_cmd = app.add_subcommand(
+      "merge", "Write each job's outputs from its shards (bake --shard I/N): the same files bake writes");
+  merge_cmd->add_option("jobs", merge_jobs, "Job files (JSON) or suites")
+      ->required()
+      ->check(CLI::ExistingFile);
+  merge_cmd->add_option("--out", merge_out,
+                        "Output folder, as bake's --out (the shards are in <out>/shards)");
+  merge_cmd->add_flag("--quiet", merge.quiet, "No progress output (errors are still printed)");
+  merge_cmd->add_option("--summary", merge_summary, "Write a machine-readable JSON summary to FILE");
+  merge_cmd->add_option("--cache", merge_cache, "Reference cache folder, as bake's");
+  merge_cmd->add_flag("--no-cache", merge.no_cache, "Do not read or write the reference cache");
+  merge_cmd->add_option("--threads", merge_threads, "Worker threads (default: all cores)")
+      ->check(CLI::Range(1, 4096));
+
+  // hfbake slurm: shards as a Slurm job array, then the merge.
+  hfbake::SlurmOptions slurm;
+  std::vector<std::string> slurm_inputs;
+  std::string slurm_out, slurm_cache;
+  CLI::App* slurm_cmd = app.add_subcommand(
+      "slurm", "Bake on a Slurm cluster: one array task per job and shard, then a merge job (afterok)");
+  slurm_cmd->add_option("jobs", slurm_inputs, "Job files (JSON) or suites")
+      ->required()
+      ->check(CLI::ExistingFile);
+  slurm_cmd->add_option("--shards", slurm.shards, "Shards per job (bake --shard I/N)")
+      ->required()
+      ->check(CLI::Range(1, 4096));
+  slurm_cmd->add_option("--partition", slurm.partition, "sbatch --partition");
+  slurm_cmd->add_option("--time", slurm.time, "sbatch --time (per task)");
+  slurm_cmd->add_option("--mem", slurm.mem,
+                        "sbatch --mem per task (default: the job's memory estimate + 20 %)");
+  slurm_cmd->add_option("--sbatch-arg", slurm.sbatch_args, "Any further sbatch option (repeatable)");
+  slurm_cmd->add_flag("--wait", slurm.wait, "Wait for the merge and exit with its status");
+  slurm_cmd->add_flag("--resume", slurm.resume, "Submit only the shards whose file is not complete");
+  slurm_cmd->add_option("--out", slurm_out, "As bake's --out");
+  slurm_cmd->add_option("--cache", slurm_cache, "As bake's --cache (a folder every node sees)");
+  slurm_cmd->add_flag("--no-cache", slurm.no_cache, "As bake's --no-cache");
+  slurm_cmd->add_option("--threads", slurm.threads, "Threads per task (--cpus-per-task; default 1)")
+      ->check(CLI::Range(1, 4096));
+  slurm_cmd->add_flag("--quiet", slurm.quiet, "As bake's --quiet");
+
   hfbake::CompareOptions compare;
   std::string compare_json;
   CLI::App* compare_cmd = app.add_subcommand(
@@ -114,16 +164,40 @@ int main(int argc, char** argv) {
     if (!compare_json.empty()) compare.json = compare_json;
     return hfbake::run_compare(compare);
   }
-  if (!app.got_subcommand(bake_cmd)) {
+  if (app.got_subcommand(slurm_cmd)) {
+    slurm.inputs.assign(slurm_inputs.begin(), slurm_inputs.end());
+    if (!slurm_out.empty()) slurm.out = slurm_out;
+    if (!slurm_cache.empty()) slurm.cache = slurm_cache;
+    return hfbake::run_slurm(slurm);
+  }
+  if (app.got_subcommand(merge_cmd)) {
+    merge.merge = true;
+    merge.jobs.assign(merge_jobs.begin(), merge_jobs.end());
+    if (!merge_out.empty()) merge.out = merge_out;
+    if (!merge_summary.empty()) merge.summary = merge_summary;
+    if (!merge_cache.empty()) merge.cache = merge_cache;
+    bake = std::move(merge);
+    threads = merge_threads;
+  } else if (!app.got_subcommand(bake_cmd)) {
     std::fputs(app.help().c_str(), stdout);
     return 2;
   }
 
-  bake.jobs.assign(bake_jobs.begin(), bake_jobs.end());
-  if (!out.empty()) bake.out = out;
-  if (!summary.empty()) bake.summary = summary;
-  if (!cache_dir.empty()) bake.cache = cache_dir;
-  if (!memory_limit.empty()) bake.memory_limit = hfbake::parse_memory_size(memory_limit);
+  if (!bake.merge) {
+    bake.jobs.assign(bake_jobs.begin(), bake_jobs.end());
+    if (!out.empty()) bake.out = out;
+    if (!summary.empty()) bake.summary = summary;
+    if (!cache_dir.empty()) bake.cache = cache_dir;
+    if (!memory_limit.empty()) bake.memory_limit = hfbake::parse_memory_size(memory_limit);
+    if (!shard.empty()) {
+      bake.shard = hfbake::parse_shard_id(shard);
+      if (!bake.shard) {
+        std::fprintf(stderr, "hfbake: error: command line: --shard %s: must be I/N with 0 <= I < N <= 4096\n",
+                     shard.c_str());
+        return 2;
+      }
+    }
+  }
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

@@ -47,6 +47,15 @@ struct MethodInfo {
   double (*working_bytes)(const nlohmann::json& resolved, const MethodContext& context) = nullptr;
   WorkDivision division = WorkDivision::directions;
   const char* division_note = "";  // how, and why not otherwise
+  // The farm (baker/farm) for a method that divides by directions: bake_block gives the raw sums of
+  // direction block `block` (core/direction_blocks.hpp, of the entry's K) as float layers; the merge adds
+  // same-named layers in block order (the first block's taken as they are; a name containing '@' is never
+  // added, only kept) and finish_blocks turns them into what `bake` returns -- bit-identical to it, because
+  // bake sums the same blocks the same way. Null: the method runs whole (in shard 0).
+  LayerSet (*bake_block)(const Scene& scene, const nlohmann::json& params, int block,
+                         const RunControl& rc) = nullptr;
+  LayerSet (*finish_blocks)(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+                            const RunControl& rc) = nullptr;
   // What the method reads from the Scene besides the heights and the lighting. The job loader builds
   // Scene::normals and Scene::surface.albedo (12 bytes per texel each) only when a method of the job or
   // the reference reads them; a method that does not must not touch them (they may be empty).

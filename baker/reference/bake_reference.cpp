@@ -612,9 +612,11 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
     outs.push_back({l, c.first, c.channels});
   }
 
+  const int row0 = std::clamp(options.row_begin, 0, f.height);
+  const int row1 = options.row_end < 0 ? f.height : std::clamp(options.row_end, row0, f.height);
   LayerSet result;
   result.width = f.width;
-  result.height = f.height;
+  result.height = row1 - row0;
   std::vector<float*> value_data, stderr_data;
   auto channel_names = [](const Out& o) {
     return o.channels == 1 ? mono_channels() : o.name == "bent_normal" ? xyz_channels() : rgb_channels();
@@ -631,7 +633,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   if (adaptive) samples_data = result.find("samples")->data.data();
 
   const int ts = std::max(1, options.tile_size);
-  const int tiles_x = (f.width + ts - 1) / ts, tiles_y = (f.height + ts - 1) / ts;
+  const int tiles_x = (f.width + ts - 1) / ts, tiles_y = (row1 - row0 + ts - 1) / ts;
   const int tiles = tiles_x * tiles_y;
   std::atomic<int> done{0};
   const int C = cx.ch.count;
@@ -645,7 +647,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
     for (int tile = range.begin(); tile != range.end(); ++tile) {
       rc.check();
       const int tx = tile % tiles_x, ty = tile / tiles_x;
-      for (int j = ty * ts; j < std::min(f.height, (ty + 1) * ts); ++j) {
+      for (int j = row0 + ty * ts; j < std::min(row1, row0 + (ty + 1) * ts); ++j) {
         for (int i = tx * ts; i < std::min(f.width, (tx + 1) * ts); ++i) {
           rc.check();  // per texel: a texel of a many-sample reference can take seconds
           const std::uint64_t texel_seed =
@@ -671,7 +673,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
             n = std::min(n, per_replicate_cap);
           }
           estimate(0, n);
-          const std::size_t t = f.index(i, j);
+          const std::size_t t = f.index(i, j - row0);
           for (std::size_t k = 0; k < outs.size(); ++k) {
             // The bent normal is the unit mean of the unoccluded directions (zero where every ray was
             // blocked); its stderr is the components' divided by that mean's length.

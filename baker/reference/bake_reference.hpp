@@ -73,6 +73,10 @@ struct ReferenceOptions {
   // slower than single rays (and 45 % slower with the coherent flag), so single rays are the default.
   bool ray_streams = false;
   int tile_size = 16;
+  // The farm's receiver tiles: only rows [row_begin, row_end) (-1: the last row) are traced, each against
+  // the whole field; the result holds those rows only. Each texel's samples depend on (seed, texel) alone,
+  // so the rows are the same bits as in a whole bake.
+  int row_begin = 0, row_end = -1;
   // The job's "reference" object with every default filled in (what the bake used; read_reference_options).
   nlohmann::json resolved = nlohmann::json::object();
 };

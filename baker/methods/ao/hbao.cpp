@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/azimuth.hpp"
+#include "core/direction_blocks.hpp"
 #include "core/error.hpp"
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/slice_integral.hpp"
@@ -32,16 +33,18 @@ double default_reach(const FieldShape& field, const Falloff& f) {
   return std::isfinite(support) ? support : whole;
 }
 
-HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s) {
+HbaoSums hbao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s, int d0,
+                         int d1) {
   const double z0 = field.z[field.index(i, j)];
   const double ts = field.texel_size;
   const bool clamp = field.wrap == Wrap::clamp;
   const double xmax = field.width - 1, ymax = field.height - 1;
   const bool segment = s.estimator == HorizonEstimator::segment;
 
-  double wsum = 0, occluded = 0;
+  double occluded = 0;
   Vec3 bent{0, 0, 0};
-  for (const MarchDirection& d : s.directions) {
+  for (int di = d0; di < d1; ++di) {
+    const MarchDirection& d = s.directions[std::size_t(di)];
     const SliceFrame frame = slice_frame(n.x * d.dx + n.y * d.dy, n.z);
     const double step_w = d.step > 0 ? d.step * ts : s.step;  // world units per step
     const double step_t = step_w / ts;                        // texels per step
@@ -112,18 +115,44 @@ HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const Hb
         dir.h -= b.h, dir.v -= b.v;
       }
     }
-    wsum += d.weight;
     if (s.estimator == HorizonEstimator::largest_occluder)
       occluded += d.weight * largest;
     else
       occluded += d.weight * (s.weighting == Weighting::cosine ? 2 * occl : occl);
     bent += d.weight * Vec3{dir.h * d.dx, dir.h * d.dy, dir.v};
   }
+  return {split_double(occluded), {split_double(bent.x), split_double(bent.y), split_double(bent.z)}};
+}
+
+void hbao_add_sums(HbaoSums& total, const HbaoSums& block) {
+  add_split(total.occluded, block.occluded);
+  for (int c = 0; c < 3; ++c) add_split(total.bent[c], block.bent[c]);
+}
+
+double hbao_weight_sum(const HbaoSettings& s) {
+  double wsum = 0;
+  for (const MarchDirection& d : s.directions) wsum += d.weight;
+  return wsum;
+}
+
+HorizonTexel hbao_finish(const HbaoSums& sums, double weight_sum, Vec3 n, const HbaoSettings& s) {
   HorizonTexel t;
-  t.occluded = occluded / wsum;
+  t.occluded = join_double(sums.occluded) / weight_sum;
   if (s.estimator == HorizonEstimator::largest_occluder) t.occluded = std::clamp(t.occluded, 0.0, 1.0);
+  const Vec3 bent{join_double(sums.bent[0]), join_double(sums.bent[1]), join_double(sums.bent[2])};
   t.bent_normal = length(bent) > 1e-12 ? normalize(bent) : n;
   return t;
+}
+
+HorizonTexel hbao_texel(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s) {
+  // Direction blocks (core/direction_blocks.hpp), each summed from zero, added in order: what `hfbake
+  // merge` does with the blocks of other machines.
+  const int K = int(s.directions.size()), B = direction_block_count(K);
+  HbaoSums total = hbao_texel_sums(field, n, i, j, s, 0, direction_block_begin(1, K));
+  for (int b = 1; b < B; ++b)
+    hbao_add_sums(total, hbao_texel_sums(field, n, i, j, s, direction_block_begin(b, K),
+                                         direction_block_begin(b + 1, K)));
+  return hbao_finish(total, hbao_weight_sum(s), n, s);
 }
 
 void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HbaoSettings& s,
@@ -144,6 +173,48 @@ void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
       }
     }
     rc.report(double(++rows_done) / field.height);
+  });
+}
+
+void hbao_field_block(const HeightField& field, const HbaoSettings& s, int block, const RunControl& rc,
+                      float* occluded, float* bent_xyz) {
+  std::atomic<int> rows_done{0};
+  HbaoSettings st = s;
+  st.bent = bent_xyz != nullptr;
+  const int K = int(s.directions.size());
+  const int d0 = direction_block_begin(block, K), d1 = direction_block_begin(block + 1, K);
+  tbb::parallel_for(0, field.height, [&](int j) {
+    rc.check();
+    for (int i = 0; i < field.width; ++i) {
+      const std::size_t idx = field.index(i, j);
+      const HbaoSums t = hbao_texel_sums(field, normal_at(field, i, j).d(), i, j, st, d0, d1);
+      occluded[2 * idx] = t.occluded.hi, occluded[2 * idx + 1] = t.occluded.lo;
+      if (bent_xyz)
+        for (int c = 0; c < 3; ++c)
+          bent_xyz[6 * idx + 2 * c] = t.bent[c].hi, bent_xyz[6 * idx + 2 * c + 1] = t.bent[c].lo;
+    }
+    rc.report(double(++rows_done) / field.height);
+  });
+}
+
+void hbao_field_finish(const HeightField& field, const HbaoSettings& s, const float* occluded,
+                       const float* bent_sums, float* obscurance, float* bent_xyz) {
+  const double wsum = hbao_weight_sum(s);
+  tbb::parallel_for(0, field.height, [&](int j) {
+    for (int i = 0; i < field.width; ++i) {
+      const std::size_t idx = field.index(i, j);
+      HbaoSums sums;
+      sums.occluded = {occluded[2 * idx], occluded[2 * idx + 1]};
+      if (bent_sums)
+        for (int c = 0; c < 3; ++c)
+          sums.bent[c] = {bent_sums[6 * idx + 2 * c], bent_sums[6 * idx + 2 * c + 1]};
+      const HorizonTexel t = hbao_finish(sums, wsum, normal_at(field, i, j).d(), s);
+      if (obscurance) obscurance[idx] = float(1.0 - t.occluded);
+      if (bent_xyz) {
+        const Vec3f b = Vec3f::from(t.bent_normal);
+        bent_xyz[3 * idx] = b.x, bent_xyz[3 * idx + 1] = b.y, bent_xyz[3 * idx + 2] = b.z;
+      }
+    }
   });
 }
 
@@ -212,6 +283,46 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
   return out;
 }
 
+namespace {
+
+// Farm blocks: "occluded#2f" and, with bent_normal, "bent#2f" (the raw sums: HbaoSums, as hi/lo pairs).
+LayerSet hbao_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
+  const HeightField& field = scene.field;
+  Params in(params);
+  const HbaoSettings s = read_hbao_settings(in, field);
+  const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  LayerSet out;
+  out.width = field.width, out.height = field.height;
+  float* occluded = out.add("occluded#2f", {"hi", "lo"}).data.data();
+  float* bent = wants(layers, "bent_normal")
+                    ? out.add("bent#2f", {"X.hi", "X.lo", "Y.hi", "Y.lo", "Z.hi", "Z.lo"}).data.data()
+                    : nullptr;
+  hbao_field_block(field, s, block, rc, occluded, bent);
+  return out;
+}
+
+LayerSet hbao_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+                            const RunControl&) {
+  const HeightField& field = scene.field;
+  Params in(params);
+  const HbaoSettings s = read_hbao_settings(in, field);
+  const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  std::vector<float> obsc(field.texel_count());
+  std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);
+  const Layer* bs = sums.find("bent#2f");
+  hbao_field_finish(field, s, sums.find("occluded#2f")->data.data(), bs ? bs->data.data() : nullptr,
+                    obsc.data(), bent.empty() ? nullptr : bent.data());
+  sums = LayerSet();
+  LayerSet out = obscurance_layers_xyz(field.width, field.height, layers, std::move(obsc), std::move(bent));
+  if (s.surface == MarchSurface::triangles)
+    out.attributes.emplace_back("hfbake:hbao:surface", "triangles");
+  else
+    out.attributes.emplace_back("hfbake:hbao:steps_per_direction", std::to_string(int(s.reach / s.step)));
+  return out;
+}
+
+}  // namespace
+
 MethodInfo hbao_method() {
   MethodInfo m;
   m.name = "hbao";
@@ -225,6 +336,8 @@ MethodInfo hbao_method() {
 
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets (texel tiles would need a halo of the reach)";
+  m.bake_block = hbao_bake_block;
+  m.finish_blocks = hbao_finish_blocks;
   m.falloff_defines_obscurance = true;
   return m;
 }

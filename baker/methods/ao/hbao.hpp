@@ -23,6 +23,7 @@
 
 #include <vector>
 
+#include "core/direction_blocks.hpp"
 #include "core/run_control.hpp"
 #include "core/vec.hpp"
 #include "field/height_field.hpp"
@@ -69,6 +70,26 @@ struct HorizonTexel {
 };
 
 HorizonTexel hbao_texel(const HeightField& field, Vec3 normal, int i, int j, const HbaoSettings& s);
+
+// The farm's direction blocks (core/direction_blocks.hpp): hbao_texel sums each block of directions from
+// zero in double, adds the blocks in order (as SplitDouble: 48 bits) and finishes; `hfbake merge` adds
+// blocks baked on other machines the same way, so both give the same bits.
+struct HbaoSums {
+  SplitDouble occluded;  // sum over the directions of weight * occluded measure
+  SplitDouble bent[3];   // sum of weight * the open direction (when HbaoSettings::bent)
+};
+HbaoSums hbao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const HbaoSettings& s, int d0,
+                         int d1);
+void hbao_add_sums(HbaoSums& total, const HbaoSums& block);
+double hbao_weight_sum(const HbaoSettings& s);  // of every direction, in order
+HorizonTexel hbao_finish(const HbaoSums& sums, double weight_sum, Vec3 n, const HbaoSettings& s);
+// Block `block` of the whole field: per texel the block's occluded sum (hi, lo) and (bent_xyz not null) bent
+// sums (X hi, X lo, Y hi, ...), normals from the heights (normal_at); and the whole field's finish from the
+// summed blocks.
+void hbao_field_block(const HeightField& field, const HbaoSettings& s, int block, const RunControl& rc,
+                      float* occluded, float* bent_xyz);
+void hbao_field_finish(const HeightField& field, const HbaoSettings& s, const float* occluded,
+                       const float* bent_sums, float* obscurance, float* bent_xyz);
 
 // Whole field, rows in parallel (deterministic). obscurance / bent may be null.
 void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HbaoSettings& s,

@@ -1,13 +1,14 @@
 #include "methods/p1/bake_p1.hpp"
 
+#include "core/direction_blocks.hpp"
 #include "methods/p1/p1.hpp"
 
 namespace hfbake {
 
-LayerSet bake_p1(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  Params in(params);
-  const P1Params p = read_p1_params(in);
-  P1Result r = compute_p1(scene, p, rc);
+namespace {
+
+// The layers of a P1Result, in the order the job lists them (moved, never copied).
+LayerSet p1_layers(P1Result&& r, const Params& in) {
   LayerSet out;
   out.width = r.width;
   out.height = r.height;
@@ -35,6 +36,68 @@ LayerSet bake_p1(const Scene& scene, const nlohmann::json& params, const RunCont
   return out;
 }
 
+}  // namespace
+
+LayerSet bake_p1(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+  Params in(params);
+  const P1Params p = read_p1_params(in);
+  return p1_layers(compute_p1(scene, p, rc), in);
+}
+
+// Farm blocks: the raw sums as layers named after P1Sums' members; each block's horizons as
+// "horizon@<k_begin>" ("horizon_distance@<k_begin>"), kept apart and placed by p1_finish_blocks.
+LayerSet p1_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
+  const P1Params p = parse_p1_params(params);
+  const int K = p.directions;
+  P1Sums s =
+      p1_direction_sums(scene, p, direction_block_begin(block, K), direction_block_begin(block + 1, K), rc);
+  LayerSet out;
+  out.width = scene.field.width, out.height = scene.field.height;
+  const std::size_t N = scene.field.texel_count();
+  auto put = [&](const char* name, std::vector<float>& v) {
+    if (v.empty()) return;
+    std::vector<std::string> channels = indexed_channels(int(v.size() / N));
+    out.adopt(name, std::move(channels), std::move(v));
+  };
+  put("ao", s.ao), put("vsky", s.vsky), put("rgb", s.rgb), put("bent", s.bent);
+  put("fao", s.fao), put("fdr", s.fdr), put("fdg", s.fdg), put("fdb", s.fdb);
+  const std::string at = "@" + std::to_string(s.k_begin);
+  const std::vector<std::string> block_channels = indexed_channels(s.k_end - s.k_begin);
+  if (!s.horizon.empty()) out.adopt("horizon" + at, block_channels, std::move(s.horizon));
+  if (!s.horizon_distance.empty())
+    out.adopt("horizon_distance" + at, block_channels, std::move(s.horizon_distance));
+  return out;
+}
+
+LayerSet p1_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+                          const RunControl& rc) {
+  Params in(params);
+  const P1Params p = read_p1_params(in);
+  const int K = p.directions;
+  const std::size_t N = scene.field.texel_count();
+  P1Sums s;
+  s.k_begin = 0, s.k_end = K;
+  auto take = [&](const char* name, std::vector<float>& v) {
+    if (Layer* l = sums.find(name)) v = std::move(l->data);
+  };
+  take("ao", s.ao), take("vsky", s.vsky), take("rgb", s.rgb), take("bent", s.bent);
+  take("fao", s.fao), take("fdr", s.fdr), take("fdg", s.fdg), take("fdb", s.fdb);
+  // The blocks' horizons into [texel * K + k].
+  auto place = [&](const std::string& name, std::vector<float>& all) {
+    for (const Layer& l : sums.layers) {
+      if (l.name.rfind(name + "@", 0) != 0) continue;
+      if (all.empty()) all.assign(N * std::size_t(K), 0.0f);
+      const int k0 = std::stoi(l.name.substr(name.size() + 1)), n = l.channel_count();
+      for (std::size_t t = 0; t < N; ++t)
+        for (int c = 0; c < n; ++c) all[t * K + k0 + c] = l.data[t * n + c];
+    }
+  };
+  place("horizon", s.horizon);
+  place("horizon_distance", s.horizon_distance);
+  sums = LayerSet();
+  return p1_layers(p1_finish(scene, p, std::move(s), rc), in);
+}
+
 MethodInfo p1_method() {
   MethodInfo m;
   m.name = "p1";
@@ -48,6 +111,8 @@ MethodInfo p1_method() {
     return p1_working_bytes(c.field, parse_p1_params(r));
   };
   m.division = WorkDivision::directions;
+  m.bake_block = p1_bake_block;
+  m.finish_blocks = p1_finish_blocks;
   m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";
   return m;
 }

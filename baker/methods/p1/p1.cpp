@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "core/azimuth.hpp"
+#include "core/direction_blocks.hpp"
 #include "core/error.hpp"
 #include "job/params.hpp"
 #include "methods/p1/horizon_sweep.hpp"
@@ -45,6 +46,36 @@ inline FarPick far_pick(const float* lo, const float* hi, std::size_t plane, std
   if (a.run == std::numeric_limits<float>::infinity()) return b;
   if (b.run == std::numeric_limits<float>::infinity()) return a;
   return a.dz * b.run > b.dz * a.run ? a : b;
+}
+
+// Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
+// with the border rules (clamp: crossings off the field are not terrain; repeat: wrapped).
+float near_slope(const HeightField& f, const std::vector<p1::NearCrossing>& stencil, int i, int j,
+                 int* which) {
+  const bool clamp = f.wrap == Wrap::clamp;
+  const float Z = f.z[f.index(i, j)];
+  float best = -1e30f;
+  *which = -1;
+  for (std::size_t c = 0; c < stencil.size(); ++c) {
+    const p1::NearCrossing& x = stencil[c];
+    const float px = float(i) + x.x, py = float(j) + x.y;
+    if (clamp &&
+        (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
+      continue;
+    const float za = f.at(i + x.ai, j + x.aj), zb = f.at(i + x.bi, j + x.bj);
+    const float m = (za + (zb - za) * x.w - Z) * x.inv_s;
+    if (m > best) best = m, *which = int(c);
+  }
+  return best;
+}
+
+// One line worker per thread, for the K directions and for the lights' own directions.
+p1::RayLineWorker make_ray_worker(const HeightField& f, const P1Params& p) {
+  p1::RayLineWorker w;
+  w.far_radius = p.near_radius * f.texel_size;
+  w.field = &f;
+  w.hull_crossings = p.far_crossings;
+  return w;
 }
 
 }  // namespace
@@ -96,6 +127,11 @@ SweepSpec p1_sweep_spec(const P1Params& p) {
 double p1_working_bytes(const FieldShape& shape, const P1Params& p) {
   double per_texel = p.direct && !p.ao ? 4 : 0;  // the ao sum behind a uniform sky's direct
   if (p.direct && p.facet_direct) per_texel += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
+  if (direction_block_count(p.directions) > 1)  // one direction block's sums beside the total (compute_p1)
+    per_texel += (p.direct ? 12
+                  : p.ao   ? 4
+                           : 0) +
+                 (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) + (p.direct && p.facet_direct ? 24 : 0);
   HeightField field;  // the sweep's plan needs only the shape
   static_cast<FieldShape&>(field) = shape;
   return per_texel * double(shape.width) * double(shape.height) +
@@ -115,14 +151,14 @@ double disk_fraction_above(double elevation, double horizon, double radius) {
   return (std::acos(-x) + x * std::sqrt(1 - x * x)) / kPi;
 }
 
-P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc) {
+P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
+                         float* horizon_out, float* distance_out) {
   const HeightField& f = scene.field;
   const std::size_t N = f.texel_count();
   const int K = p.directions;
-  P1Result r;
-  r.width = f.width;
-  r.height = f.height;
-  r.directions = K;
+  const int nb = k_end - k_begin;  // the block's directions; the sweep's t.k counts from k_begin
+  P1Sums r;
+  r.k_begin = k_begin, r.k_end = k_end;
 
   const Environment& env = scene.environment;
   const bool uniform_env = env.uniform || env.levels.empty();
@@ -140,14 +176,17 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   // Accumulators: only what the requested layers need, each the layer it becomes (finished in place
   // below). The normals are not held: each thread recomputes a tile's (normal_at) when the sweep hands it
   // a tile, and keeps them while the batch's directions visit that tile.
-  std::vector<float> ao_sum(need_ao ? N : 0, 0.0f), vsky_sum(p.vsky ? N : 0, 0.0f);
-  std::vector<float> rgb_sum(p.direct && !uniform_env ? 3 * N : 0, 0.0f);  // [3 * texel + c]
-  std::vector<float> bent_sum(p.bent_normal ? 3 * N : 0, 0.0f);            // [3 * texel + c]
+  std::vector<float>&ao_sum = r.ao, &vsky_sum = r.vsky, &rgb_sum = r.rgb, &bent_sum = r.bent;
+  ao_sum.assign(need_ao ? N : 0, 0.0f), vsky_sum.assign(p.vsky ? N : 0, 0.0f);
+  rgb_sum.assign(p.direct && !uniform_env ? 3 * N : 0, 0.0f);  // [3 * texel + c]
+  bent_sum.assign(p.bent_normal ? 3 * N : 0, 0.0f);            // [3 * texel + c]
   // The facets' direct-light sums, [q * N + texel] (facet q of P1Result::direct_facets).
   const bool facets = p.direct && p.facet_direct;
   const std::size_t NF = facets ? 2 * N : 0;
-  std::vector<float> fao(facets && uniform_env ? NF : 0, 0.0f);
-  std::vector<float> fdr(facets && !uniform_env ? NF : 0, 0.0f), fdg(fdr.size(), 0.0f), fdb(fdr.size(), 0.0f);
+  std::vector<float>&fao = r.fao, &fdr = r.fdr, &fdg = r.fdg, &fdb = r.fdb;
+  fao.assign(facets && uniform_env ? NF : 0, 0.0f);
+  fdr.assign(facets && !uniform_env ? NF : 0, 0.0f), fdg.assign(fdr.size(), 0.0f),
+      fdb.assign(fdr.size(), 0.0f);
   constexpr int kTileTexels = 32 * 32;  // sweep_lines_tiled's tiles
   struct TileNormals {
     int i0 = -1, j0 = -1;
@@ -175,19 +214,24 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       }
     return n;
   };
-  if (p.horizon) r.horizon.assign(N * K, 0.0f);
-  if (p.horizon_distance) r.horizon_distance.assign(N * K, 0.0f);
+  // Horizons straight into the caller's [texel * K + k] (by direction: [k * N + texel]) arrays, else into
+  // the block's own, [texel * nb + k - k_begin] ([(k - k_begin) * N + texel]).
+  if (p.horizon && !horizon_out) r.horizon.assign(N * nb, 0.0f);
+  if (p.horizon_distance && !distance_out) r.horizon_distance.assign(N * nb, 0.0f);
+  float* const hz = horizon_out ? horizon_out : r.horizon.data();
+  float* const hd = distance_out ? distance_out : r.horizon_distance.data();
+  const int KH = horizon_out ? K : nb, KD = distance_out ? K : nb;
   std::vector<float> cs, sn;
   azimuth_table(K, cs, sn);
-  // The near field of every direction (horizon_sweep.hpp): the crossings within near_radius of a texel,
-  // as index offsets for interior texels (all crossings on the field) and texel offsets for the rest.
+  // The near field of each direction of the block (horizon_sweep.hpp): the crossings within near_radius of a
+  // texel, as index offsets for interior texels (all crossings on the field) and texel offsets for the rest.
   std::vector<std::vector<p1::NearCrossing>> near(K);
   std::vector<std::vector<std::ptrdiff_t>> near_a(K), near_b(K);
   std::vector<char> x_major(K);
   {
     SweepSpec probe;
     probe.directions = K;
-    for (int k = 0; k < K; ++k) {
+    for (int k = k_begin; k < k_end; ++k) {  // the block's directions
       const SweepDirection d = plan_direction(f, probe, k);
       near[k] = p1::near_field_stencil(d.dx, d.dy, p.near_radius, f.texel_size);
       for (const p1::NearCrossing& c : near[k]) {
@@ -198,50 +242,21 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     }
   }
   const int margin = int(std::ceil(p.near_radius)) + 2;  // texels this far inside have every crossing inside
-  const bool clamp = f.wrap == Wrap::clamp;
-  // Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
-  // with the border rules (clamp: crossings off the field are not terrain; repeat: wrapped).
   auto near_slope_at = [&](const std::vector<p1::NearCrossing>& stencil, int i, int j, int* which) {
-    const float Z = f.z[f.index(i, j)];
-    float best = -1e30f;
-    *which = -1;
-    for (std::size_t c = 0; c < stencil.size(); ++c) {
-      const p1::NearCrossing& x = stencil[c];
-      const float px = float(i) + x.x, py = float(j) + x.y;
-      if (clamp &&
-          (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
-        continue;
-      const float za = f.at(i + x.ai, j + x.aj), zb = f.at(i + x.bi, j + x.bj);
-      const float m = (za + (zb - za) * x.w - Z) * x.inv_s;
-      if (m > best) best = m, *which = int(c);
-    }
-    return best;
+    return near_slope(f, stencil, i, j, which);
   };
   auto near_slope_border = [&](int k, int i, int j, int* which) {
     return near_slope_at(near[k], i, j, which);
   };
 
-  std::vector<const DirectionalLight*> lights;
-  if (p.direct && p.lights)
-    for (const DirectionalLight& l : scene.lights)
-      if (l.irradiance.r > 0 || l.irradiance.g > 0 || l.irradiance.b > 0) lights.push_back(&l);
-  const double main_share = double(K) / double(K + lights.size());
-
-  const SweepSpec spec = p1_sweep_spec(p);
+  SweepSpec spec = p1_sweep_spec(p);
+  for (int k = k_begin; k < k_end; ++k) spec.azimuths.push_back(azimuth(k, K));  // the same directions
   const bool want_distance = p.horizon_distance;
-  const RunControl main_rc = sub_progress(rc, 0.0, main_share);
-  const double far_radius = p.near_radius * f.texel_size;
-  // One line worker per thread, for the K directions and for the lights' own directions.
-  auto make_worker = [&] {
-    p1::RayLineWorker w;
-    w.far_radius = far_radius;
-    w.field = &f;
-    w.hull_crossings = p.far_crossings;
-    return w;
-  };
+  const RunControl& main_rc = rc;
+  auto make_worker = [&] { return make_ray_worker(f, p); };
   sweep_lines_tiled(f, spec, main_rc, make_worker, [&](const SweepTile& t) {
     constexpr int kMax = 32;
-    const int k = t.k, w = t.width;
+    const int k = k_begin + t.k, w = t.width;
     const float c = cs[k], s = sn[k];
     alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax], e[kMax], en[kMax];
     const std::size_t plane = std::size_t(t.width) * t.height;
@@ -363,7 +378,8 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
         }
       if (p.horizon)
         for (int x = 0; x < w; ++x)
-          r.horizon[p.horizon_by_direction ? k * N + base + x : (base + x) * K + k] = se[x];
+          hz[p.horizon_by_direction ? std::size_t(k - k_begin + (KH == K ? k_begin : 0)) * N + base + x
+                                    : (base + x) * KH + (KH == K ? k : k - k_begin)] = se[x];
       if (want_distance) {  // the near crossing, or the far caster on the texel's own ray
         const std::size_t row = std::size_t(y) * w;
         for (int x = 0; x < w; ++x) {
@@ -376,11 +392,71 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
             d = std::sqrt(1 + near_m * near_m) / near[k][which].inv_s;  // run 1 / inv_s, rise m * run
           else
             d = fp.run == std::numeric_limits<float>::infinity() ? fp.run : std::hypot(fp.run, fp.dz);
-          r.horizon_distance[(base + x) * K + k] = d;
+          hd[(base + x) * KD + (KD == K ? k : k - k_begin)] = d;
         }
       }
     }
   });
+
+  (void)margin;
+  return r;
+}
+
+void p1_add_sums(P1Sums& total, const P1Sums& block) {
+  auto add = [](std::vector<float>& t, const std::vector<float>& b) {
+    for (std::size_t i = 0; i < t.size(); ++i) t[i] += b[i];
+  };
+  add(total.ao, block.ao), add(total.vsky, block.vsky), add(total.rgb, block.rgb),
+      add(total.bent, block.bent);
+  add(total.fao, block.fao), add(total.fdr, block.fdr), add(total.fdg, block.fdg), add(total.fdb, block.fdb);
+  total.k_end = block.k_end;
+}
+
+P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc) {
+  const std::size_t N = scene.field.texel_count();
+  const int K = p.directions, B = direction_block_count(K);
+  std::vector<float> horizon(p.horizon ? N * K : 0), distance(p.horizon_distance ? N * K : 0);
+  const double lights_share = p.direct && p.lights && !scene.lights.empty()
+                                  ? double(scene.lights.size()) / double(K + scene.lights.size())
+                                  : 0.0;
+  // Direction blocks (core/direction_blocks.hpp): each summed from zero, the blocks added in order -- the
+  // order `hfbake merge` adds the farm's shards in.
+  P1Sums total;
+  for (int b = 0; b < B; ++b) {
+    const int k0 = direction_block_begin(b, K), k1 = direction_block_begin(b + 1, K);
+    P1Sums part = p1_direction_sums(
+        scene, p, k0, k1, sub_progress(rc, (1 - lights_share) * k0 / K, (1 - lights_share) * (k1 - k0) / K),
+        horizon.empty() ? nullptr : horizon.data(), distance.empty() ? nullptr : distance.data());
+    if (b == 0)
+      total = std::move(part);
+    else
+      p1_add_sums(total, part);
+  }
+  total.horizon = std::move(horizon);
+  total.horizon_distance = std::move(distance);
+  return p1_finish(scene, p, std::move(total), sub_progress(rc, 1 - lights_share, lights_share));
+}
+
+P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const RunControl& rc) {
+  const HeightField& f = scene.field;
+  const std::size_t N = f.texel_count();
+  const int K = p.directions;
+  P1Result r;
+  r.width = f.width;
+  r.height = f.height;
+  r.directions = K;
+  r.horizon = std::move(sums.horizon);
+  r.horizon_distance = std::move(sums.horizon_distance);
+  const Environment& env = scene.environment;
+  const bool uniform_env = env.uniform || env.levels.empty();
+  const bool facets = p.direct && p.facet_direct;
+  const std::size_t NF = facets ? 2 * N : 0;
+  std::vector<float>&ao_sum = sums.ao, &vsky_sum = sums.vsky, &rgb_sum = sums.rgb, &bent_sum = sums.bent;
+  const std::vector<float>&fao = sums.fao, &fdr = sums.fdr, &fdg = sums.fdg, &fdb = sums.fdb;
+  std::vector<const DirectionalLight*> lights;
+  if (p.direct && p.lights)
+    for (const DirectionalLight& l : scene.lights)
+      if (l.irradiance.r > 0 || l.irradiance.g > 0 || l.irradiance.b > 0) lights.push_back(&l);
 
   // The sums become the layers in place.
   const float inv_k = 1.0f / float(K);
@@ -442,8 +518,11 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
       light_near.push_back(
           p1::near_field_stencil(light_dirs.back().dx, light_dirs.back().dy, p.near_radius, f.texel_size));
     }
-    const RunControl light_rc = sub_progress(rc, main_share, 1 - main_share);
-    sweep_lines(f, ls, light_rc, make_worker, [&](int li, int i, int j, const TexelTaps& t) {
+    auto make_worker = [&] { return make_ray_worker(f, p); };
+    auto near_slope_at = [&](const std::vector<p1::NearCrossing>& stencil, int i, int j, int* which) {
+      return near_slope(f, stencil, i, j, which);
+    };
+    sweep_lines(f, ls, rc, make_worker, [&](int li, int i, int j, const TexelTaps& t) {
       const std::size_t idx = f.index(i, j);
       const double ndl = dot(normal_at(f, i, j).d(), dir[li]);
       if (ndl <= 0 && !facets) return;

@@ -91,6 +91,28 @@ const std::vector<std::string>& p1_layer_names();
 // p1_working_bytes.
 P1Result compute_p1(const Scene& scene, const P1Params& params, const RunControl& rc);
 
+// The farm's direction blocks (core/direction_blocks.hpp): compute_p1 sums each block of directions from
+// zero (p1_direction_sums), adds the blocks in order (p1_add_sums) and finishes (p1_finish: the means, the
+// bent normal, direct from the sums, then the directional lights' own sweeps). `hfbake merge` does the same
+// with blocks baked on other machines, so both give the same bits.
+struct P1Sums {
+  int k_begin = 0, k_end = 0;  // the directions summed
+  // Per texel, each direction's term summed (empty when not needed): ao's and vsky's, direct's RGB
+  // [3 * texel + c] for a non-uniform environment, the bent normal's [3 * texel + c], and P2's facet sums
+  // [q * N + texel] (fao: uniform environment; fdr, fdg, fdb: otherwise).
+  std::vector<float> ao, vsky, rgb, bent, fao, fdr, fdg, fdb;
+  // The horizons of directions [k_begin, k_end): [texel * n + k - k_begin] (horizon_by_direction:
+  // [(k - k_begin) * N + texel]), n = k_end - k_begin; p1_finish wants all K in P1Result's layout.
+  std::vector<float> horizon, horizon_distance;
+};
+// Directions [k_begin, k_end) of params.directions. horizon_out / distance_out (optional, N * K floats in
+// P1Result's layout): write the horizons there instead of into the returned sums.
+P1Sums p1_direction_sums(const Scene& scene, const P1Params& params, int k_begin, int k_end,
+                         const RunControl& rc, float* horizon_out = nullptr, float* distance_out = nullptr);
+// total += block, elementwise (the horizons are not touched); total.k_end = block.k_end.
+void p1_add_sums(P1Sums& total, const P1Sums& block);
+P1Result p1_finish(const Scene& scene, const P1Params& params, P1Sums&& sums, const RunControl& rc);
+
 // Bytes compute_p1 holds at peak beyond the layers it returns, for the memory estimate: per texel the ao
 // sum behind direct from a uniform sky when ao is not requested and P2's facet sums, plus the sweep's
 // line buffers (sweep_buffer_bytes of p1_sweep_spec).

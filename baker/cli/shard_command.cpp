@@ -1,0 +1,196 @@
+#include "cli/shard_command.hpp"
+
+#include <time.h>
+
+#include <chrono>
+#include <regex>
+#include <set>
+
+#include "cli/method_dispatch.hpp"
+#include "cli/scene_loader.hpp"
+#include "cli/version.hpp"
+#include "core/error.hpp"
+#include "farm/merge_blocks.hpp"
+#include "job/content_hash.hpp"
+#include "methods/method_table.hpp"
+#include "reference/bake_reference.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+double process_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+ShardIdentity identity_of(const Job& job, ShardId id, int width, int height) {
+  return {job.name, job_content_hash(job), hfbake_version(), id, width, height};
+}
+
+// Rows [r0, r1) of a whole-field LayerSet.
+LayerSet rows_of(const LayerSet& all, int r0, int r1) {
+  LayerSet out;
+  out.width = all.width, out.height = r1 - r0;
+  out.attributes = all.attributes;
+  for (const Layer& l : all.layers) {
+    Layer& d = out.add(l.name, l.channels);
+    const std::size_t row = std::size_t(all.width) * l.channels.size();
+    std::copy(l.data.begin() + std::ptrdiff_t(row * r0), l.data.begin() + std::ptrdiff_t(row * r1),
+              d.data.begin());
+  }
+  return out;
+}
+
+}  // namespace
+
+fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::atomic<bool>& cancel,
+                    JobOutcome& outcome, const ReferenceCache* cache) {
+  const FieldSize size = probe_field_size(job);
+  const ShardIdentity identity = identity_of(job, id, size.width, size.height);
+  const fs::path path = shard_path(job, id);
+  const std::string label = job.name + " [shard " + shard_id_text(id) + "]";
+  if (shard_is_complete(path, identity)) {
+    progress.message(label + ": already baked: " + path.string());
+    return path;
+  }
+  progress.begin(job.name, "load");
+  const auto t_load = std::chrono::steady_clock::now();
+  const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
+  progress.end(job.name, "load", seconds_since(t_load));
+
+  const ShardWork work = shard_work(job, size.height, id);
+  ShardWriter writer(path, identity);
+  auto run = [&](const std::string& step, ShardPart part, auto&& compute) {
+    if (cancel.load()) throw Cancelled();
+    RunControl rc;
+    rc.cancel = &cancel;
+    rc.progress = [&](double f) { progress.update(job.name, step, f); };
+    progress.begin(job.name, step);
+    const auto t0 = std::chrono::steady_clock::now();
+    const double cpu0 = process_cpu_seconds();
+    const LayerSet layers = compute(rc);
+    part.seconds = seconds_since(t0), part.cpu_seconds = process_cpu_seconds() - cpu0;
+    progress.end(job.name, step, part.seconds);
+    outcome.methods[step] = {{"seconds", part.seconds}, {"cpu_seconds", part.cpu_seconds}};
+    writer.add(std::move(part), layers);
+  };
+  for (const ShardWork::Entry& e : work.entries) {
+    const BakeEntry& entry = job.bakes[std::size_t(e.entry)];
+    if (e.whole) {
+      ShardPart part;
+      part.entry = e.entry, part.kind = "whole";
+      run(entry.stem, part, [&](const RunControl& rc) { return run_method(entry, scene, rc); });
+      continue;
+    }
+    const MethodInfo* m = find_method(entry.method);
+    for (int b = e.block_begin; b < e.block_end; ++b) {
+      ShardPart part;
+      part.entry = e.entry, part.kind = "block", part.block = b;
+      run(entry.stem + "#" + std::to_string(b), part,
+          [&](const RunControl& rc) { return m->bake_block(scene, entry.params, b, rc); });
+    }
+  }
+  if (work.row_end > work.row_begin) {
+    ShardPart part;
+    part.entry = -1, part.kind = "rows", part.row_begin = work.row_begin, part.row_end = work.row_end;
+    run("reference", part, [&](const RunControl& rc) {
+      if (cache) {
+        ReferenceCache::Entry cached;
+        if (cache->load(reference_cache_key(job), cached) == CacheLookup::hit &&
+            cached.layers.width == size.width && cached.layers.height == size.height)
+          return rows_of(cached.layers, work.row_begin, work.row_end);
+      }
+      ReferenceOptions o = job_reference_options(job, scene);
+      o.row_begin = work.row_begin, o.row_end = work.row_end;
+      return bake_reference(scene, o, rc);
+    });
+  }
+  if (cancel.load()) throw Cancelled();
+  writer.commit();
+  return path;
+}
+
+MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), height_(height) {
+  // How many shards: from the names in the shards folder (one count only).
+  const fs::path dir = job.output.dir / "shards";
+  const std::regex name(std::regex_replace(job.name, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
+                        R"(\.shard-(\d+)-of-(\d+)\.hfshard)");
+  std::set<int> counts;
+  std::error_code ec;
+  for (const auto& f : fs::directory_iterator(dir, ec)) {
+    std::smatch m;
+    const std::string n = f.path().filename().string();
+    if (std::regex_match(n, m, name)) counts.insert(std::stoi(m[2].str()));
+  }
+  if (counts.empty())
+    throw InputError(dir.string(), "", "no shards of job " + job.name + " (bake them with --shard I/N)");
+  if (counts.size() > 1) {
+    std::string list;
+    for (int c : counts) list += (list.empty() ? "" : ", ") + std::to_string(c);
+    throw InputError(dir.string(), "",
+                     "shards of job " + job.name + " for different shard counts (" + list +
+                         "): remove the ones of the count not wanted");
+  }
+  count_ = *counts.begin();
+  for (int i = 0; i < count_; ++i) {
+    const ShardId id{i, count_};
+    readers_.emplace_back(shard_path(job, id), identity_of(job, id, width, height));
+    // The parts must be those this hfbake's plan gives the shard.
+    const ShardWork w = shard_work(job, height, id);
+    std::size_t expect = w.row_end > w.row_begin ? 1 : 0;
+    for (const ShardWork::Entry& e : w.entries)
+      expect += e.whole ? 1 : std::size_t(e.block_end - e.block_begin);
+    if (readers_.back().parts().size() != expect)
+      throw InputError(
+          readers_.back().file().string(), "",
+          "shard " + shard_id_text(id) + " holds other parts than this job's plan: bake it again");
+  }
+}
+
+LayerSet MergedShards::method(int entry, const Scene& scene, const RunControl& rc) {
+  const BakeEntry& e = job_.bakes[std::size_t(entry)];
+  const int B = entry_direction_blocks(e);
+  LayerSet total;
+  for (ShardReader& r : readers_)
+    for (std::size_t p = 0; p < r.parts().size(); ++p) {
+      const ShardPart& part = r.parts()[p];
+      if (part.entry != entry) continue;
+      if (part.kind == "whole") return r.load(p);
+      add_direction_block(total, r.load(p));  // shards hold ascending blocks; shards in order
+    }
+  if (B == 0 || total.layers.empty())
+    throw InputError(job_.file.string(), e.pointer, "no shard holds " + e.stem);
+  return find_method(e.method)->finish_blocks(scene, e.params, std::move(total), rc);
+}
+
+LayerSet MergedShards::reference() {
+  std::vector<LayerSet> bands;
+  for (ShardReader& r : readers_)
+    for (std::size_t p = 0; p < r.parts().size(); ++p)
+      if (r.parts()[p].entry == -1) bands.push_back(r.load(p));
+  return stack_row_bands(std::move(bands), height_);
+}
+
+double MergedShards::seconds(int entry) const {
+  double s = 0;
+  for (const ShardReader& r : readers_)
+    for (const ShardPart& p : r.parts())
+      if (p.entry == entry) s += p.seconds;
+  return s;
+}
+
+double MergedShards::cpu_seconds(int entry) const {
+  double s = 0;
+  for (const ShardReader& r : readers_)
+    for (const ShardPart& p : r.parts())
+      if (p.entry == entry) s += p.cpu_seconds;
+  return s;
+}
+
+}  // namespace hfbake

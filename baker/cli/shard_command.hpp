@@ -1,0 +1,48 @@
+// `hfbake bake JOB --shard I/N` and `hfbake merge JOB`: the farm's two halves of a bake (baker/farm says
+// which work a shard does and how its file is laid out).
+#pragma once
+
+#include <atomic>
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include "cli/job_outcome.hpp"
+#include "cli/progress.hpp"
+#include "cli/reference_cache.hpp"
+#include "core/layers.hpp"
+#include "core/run_control.hpp"
+#include "farm/shard_file.hpp"
+#include "field/scene.hpp"
+#include "job/manifest.hpp"
+
+namespace hfbake {
+
+// Computes shard `id` of a valid job into its shard file (farm/shard_plan.hpp shard_path) and returns the
+// path. A complete shard file of the same job and hfbake is kept as it is (a re-run does nothing). With a
+// cache holding the job's reference, the shard's reference rows are read from it.
+std::filesystem::path bake_shard(const Job& job, ShardId id, Progress& progress,
+                                 const std::atomic<bool>& cancel, JobOutcome& outcome,
+                                 const ReferenceCache* cache);
+
+// The shards of a job, opened and checked for `hfbake merge`: every shard 0..N-1 present, whole, of this job
+// and this hfbake (InputError naming the shard otherwise, before anything is baked or written).
+class MergedShards {
+ public:
+  MergedShards(const Job& job, int width, int height);
+  int count() const { return count_; }
+  // Bake entry `entry` as `hfbake bake` computes it: the whole method from its shard, or its direction
+  // blocks added in order and finished (MethodInfo::finish_blocks).
+  LayerSet method(int entry, const Scene& scene, const RunControl& rc);
+  LayerSet reference();
+  // The seconds (and CPU seconds) the shards spent on an entry (-1: the reference), summed.
+  double seconds(int entry) const;
+  double cpu_seconds(int entry) const;
+
+ private:
+  const Job& job_;
+  int count_ = 0, height_ = 0;
+  std::vector<ShardReader> readers_;
+};
+
+}  // namespace hfbake

@@ -1,0 +1,260 @@
+#include "cli/slurm_command.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "cli/method_dispatch.hpp"
+#include "cli/scene_loader.hpp"
+#include "cli/suite.hpp"
+#include "cli/version.hpp"
+#include "farm/shard_file.hpp"
+#include "job/content_hash.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+// 'text' for a POSIX shell.
+std::string quoted(const std::string& text) {
+  std::string q = "'";
+  for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+fs::path own_executable() {
+  std::error_code ec;
+  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::path("hfbake") : p;
+}
+
+// Runs a command, returns its exit status and its standard output.
+int run_capture(const std::string& command, std::string* output) {
+  FILE* p = popen(command.c_str(), "r");
+  if (!p) return 127;
+  char buf[4096];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) output->append(buf, n);
+  const int status = pclose(p);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+}
+
+struct Task {
+  fs::path job;  // as given (the scripts run in the submission's folder: --chdir)
+  fs::path out;  // the job's output folder
+  int shard = 0;
+};
+
+// Compact Slurm array list: "0-3,5,7-8".
+std::string array_list(const std::vector<int>& ids) {
+  std::string s;
+  for (std::size_t i = 0; i < ids.size();) {
+    std::size_t j = i;
+    while (j + 1 < ids.size() && ids[j + 1] == ids[j] + 1) ++j;
+    // Appended piece by piece (GCC 12's -Wrestrict misfires on "literal" + std::string).
+    if (!s.empty()) s += ',';
+    s += std::to_string(ids[i]);
+    if (j > i) s.append(1, '-').append(std::to_string(ids[j]));
+    i = j + 1;
+  }
+  return s;
+}
+
+std::string bake_flags(const SlurmOptions& o) {
+  std::string f;
+  if (o.no_cache) f += " --no-cache";
+  if (o.cache) f += " --cache " + quoted(fs::absolute(*o.cache).string());
+  return f;
+}
+
+void write_file(const fs::path& file, const std::string& text) {
+  fs::create_directories(file.parent_path());
+  const fs::path tmp = file.string() + ".tmp-" + std::to_string(getpid());
+  {
+    std::ofstream out(tmp);
+    out << text;
+    if (!out) throw std::runtime_error("cannot write " + tmp.string());
+  }
+  fs::permissions(tmp, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+                  fs::perm_options::add);
+  fs::rename(tmp, file);
+}
+
+}  // namespace
+
+int run_slurm(const SlurmOptions& o) {
+  auto fail = [](const std::string& line) {
+    std::fprintf(stderr, "hfbake: error: %s\n", line.c_str());
+    return 2;
+  };
+  if (o.shards < 1 || o.shards > 4096) return fail("command line: --shards must be 1..4096");
+  // The jobs, each with the output folder bake would give it (suites: <suite out>/<job stem>).
+  std::vector<Task> jobs;
+  std::vector<std::string> errors;
+  std::size_t plain = 0;
+  for (const fs::path& f : o.inputs) plain += !load_suite(f, errors).has_value();
+  if (!errors.empty()) return fail(errors.front());
+  fs::path common;
+  std::size_t need_bytes = 0;
+  for (const fs::path& f : o.inputs) {
+    std::vector<std::pair<fs::path, std::optional<fs::path>>> members;
+    if (std::optional<Suite> suite = load_suite(f, errors)) {
+      if (o.out) suite->output_dir = fs::absolute(*o.out / suite->name);
+      for (const fs::path& j : suite->jobs) members.push_back({j, suite->output_dir / j.stem()});
+      if (common.empty()) common = suite->output_dir;
+    } else {
+      std::optional<fs::path> out;
+      if (o.out) out = plain > 1 ? *o.out / f.stem() : *o.out;
+      members.push_back({f, out});
+    }
+    for (const auto& [file, out] : members) {
+      JobLoad load = load_job(file, out);
+      if (load.job) load.errors = resolve_job(*load.job);
+      if (!load.job || !load.errors.empty()) {
+        for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+        return 2;
+      }
+      const Job& job = *load.job;
+      need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
+      jobs.push_back({file, out ? *out : job.output.dir, 0});
+      if (common.empty()) common = fs::absolute(job.output.dir);
+    }
+  }
+  if (jobs.empty()) return fail("command line: no jobs");
+  if (o.out && plain > 1) common = fs::absolute(*o.out);
+  const fs::path dir = common / "slurm";
+
+  // Tasks: job-major, shard-minor; with --resume only the shards not complete on disk.
+  std::vector<Task> tasks;
+  std::vector<int> submit;
+  for (const Task& j : jobs)
+    for (int s = 0; s < o.shards; ++s) {
+      if (o.resume) {
+        JobLoad load = load_job(j.job, j.out);
+        if (load.job) {
+          resolve_job(*load.job);
+          const FieldSize size = probe_field_size(*load.job);
+          const ShardId id{s, o.shards};
+          const ShardIdentity ident{
+              load.job->name, job_content_hash(*load.job), hfbake_version(), id, size.width, size.height};
+          if (shard_is_complete(shard_path(*load.job, id), ident)) {
+            tasks.push_back({j.job, j.out, s});
+            continue;
+          }
+        }
+      }
+      submit.push_back(int(tasks.size()));
+      tasks.push_back({j.job, j.out, s});
+    }
+
+  const std::string mem =
+      !o.mem.empty()
+          ? o.mem
+          : std::to_string(std::max<std::size_t>(512, (need_bytes + need_bytes / 5) >> 20) + 1) + "M";
+  const std::string exe = quoted(own_executable().string());
+  const std::string name = jobs.size() == 1 ? jobs.front().job.stem().string() : common.filename().string();
+  std::ostringstream head;
+  auto common_head = [&](std::ostringstream& s, const std::string& job_name, const char* log) {
+    s << "#SBATCH --job-name=" << job_name << "\n";
+    s << "#SBATCH --chdir=" << fs::current_path().string() << "\n";  // job paths are as given
+    s << "#SBATCH --output=" << (dir / "logs" / log).string() << "\n";
+    s << "#SBATCH --mem=" << mem << "\n";
+    s << "#SBATCH --cpus-per-task=" << o.threads << "\n";
+    if (!o.partition.empty()) s << "#SBATCH --partition=" << o.partition << "\n";
+    if (!o.time.empty()) s << "#SBATCH --time=" << o.time << "\n";
+    for (const std::string& a : o.sbatch_args) s << "#SBATCH " << a << "\n";
+  };
+
+  std::ostringstream bake;
+  bake << "#!/bin/bash\n"
+       << "# Written by hfbake " << hfbake_version() << " (hfbake slurm): one array task per (job, shard).\n"
+       << "# Each task bakes one shard into <output>/shards/ (a re-run of a finished shard does nothing).\n"
+       << "# Resubmit some tasks by hand: sbatch --array=2,5 " << (dir / "bake.sbatch").string() << "\n"
+       << "# Memory: the job's estimate (hfbake validate) + 20 %; every task holds whole-field layers.\n";
+  common_head(bake, "hfbake-" + name, "%x-%A_%a.out");
+  bake << "#SBATCH --array=0-" << tasks.size() - 1 << "\n"
+       << "#SBATCH --requeue\n"
+       << "set -euo pipefail\n"
+       << "N=" << o.shards << "\n"
+       << "JOBS=(\n";
+  for (const Task& t : tasks) bake << "  " << quoted(t.job.string()) << "\n";
+  bake << ")\nOUTS=(\n";
+  for (const Task& t : tasks) bake << "  " << quoted(t.out.string()) << "\n";
+  bake << ")\nSHARDS=(";
+  for (const Task& t : tasks) bake << " " << t.shard;
+  bake << " )\n"
+       << "i=${SLURM_ARRAY_TASK_ID:?run me with sbatch --array}\n"
+       << "exec " << exe << " bake \"${JOBS[$i]}\" --shard \"${SHARDS[$i]}/$N\" --out \"${OUTS[$i]}\""
+       << " --threads \"${SLURM_CPUS_PER_TASK:-" << o.threads << "}\"" << bake_flags(o)
+       << (o.quiet ? " --quiet" : "") << "\n";
+
+  std::ostringstream merge;
+  merge << "#!/bin/bash\n"
+        << "# Written by hfbake " << hfbake_version()
+        << " (hfbake slurm): merges the shards into the outputs\n"
+        << "# `hfbake bake` writes (bit-identical). It names any shard that is missing or damaged.\n"
+        << "# Run it by hand after resubmitting tasks: sbatch " << (dir / "merge.sbatch").string() << "\n";
+  common_head(merge, "hfbake-merge-" + name, "%x-%j.out");
+  merge << "set -euo pipefail\n"
+        << "exec " << exe << " merge";
+  for (const fs::path& f : o.inputs) merge << " " << quoted(f.string());
+  if (o.out) merge << " --out " << quoted(o.out->string());
+  merge << " --threads \"${SLURM_CPUS_PER_TASK:-" << o.threads << "}\"" << bake_flags(o)
+        << (o.quiet ? " --quiet" : "") << "\n";
+
+  try {
+    write_file(dir / "bake.sbatch", bake.str());
+    write_file(dir / "merge.sbatch", merge.str());
+    fs::create_directories(dir / "logs");
+  } catch (const std::exception& e) {
+    return fail(dir.string() + ": " + e.what());
+  }
+
+  std::string array_id;
+  if (!submit.empty()) {
+    std::string out;
+    const std::string cmd = "sbatch --parsable --array=" + array_list(submit) + " " +
+                            quoted((dir / "bake.sbatch").string()) + " 2>&1";
+    if (run_capture(cmd, &out) != 0) return fail((dir / "bake.sbatch").string() + ": sbatch failed: " + out);
+    array_id = out.substr(0, out.find_first_of(";\n"));
+    if (!o.quiet)
+      std::fprintf(stderr, "hfbake: submitted %zu shard task%s as array job %s (%s)\n", submit.size(),
+                   submit.size() == 1 ? "" : "s", array_id.c_str(), (dir / "bake.sbatch").c_str());
+  } else if (!o.quiet) {
+    std::fprintf(stderr, "hfbake: every shard is complete; submitting the merge only\n");
+  }
+  std::string cmd = "sbatch --parsable";
+  if (!array_id.empty()) cmd += " --dependency=afterok:" + array_id + " --kill-on-invalid-dep=yes";
+  if (o.wait) cmd += " --wait";
+  cmd.append(1, ' ').append(quoted((dir / "merge.sbatch").string())).append(" 2>&1");
+  std::string out;
+  const int status = run_capture(cmd, &out);
+  const std::string merge_id = out.substr(0, out.find_first_of(";\n"));
+  if (!o.wait) {
+    if (status != 0) return fail((dir / "merge.sbatch").string() + ": sbatch failed: " + out);
+    if (!o.quiet) std::fprintf(stderr, "hfbake: submitted the merge as job %s (afterok)\n", merge_id.c_str());
+    return 0;
+  }
+  if (status != 0) {
+    // Name what is missing: the shards no task completed.
+    for (const Task& t : tasks) {
+      JobLoad load = load_job(t.job, t.out);
+      if (!load.job) continue;
+      resolve_job(*load.job);
+      const fs::path p = shard_path(*load.job, {t.shard, o.shards});
+      if (!fs::exists(p))
+        std::fprintf(stderr, "hfbake: error: %s: shard %d/%d is missing (its task failed: see %s)\n",
+                     p.c_str(), t.shard, o.shards, (dir / "logs").c_str());
+    }
+    std::fprintf(stderr, "hfbake: error: %s: the merge job %s ended with status %d (log: %s)\n",
+                 (dir / "merge.sbatch").c_str(), merge_id.c_str(), status, (dir / "logs").c_str());
+  }
+  return status;
+}
+
+}  // namespace hfbake

@@ -1,0 +1,195 @@
+#include "farm/shard_file.hpp"
+
+#include <unistd.h>
+
+#include <cstring>
+#include <system_error>
+
+#include "core/error.hpp"
+#include "job/content_hash.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char kMagic[] = "hfbake shard 1\n";
+constexpr char kEnd[] = "hfbake shard end";  // 16 bytes, then the header offset (8 bytes)
+constexpr std::size_t kTrailer = 16 + 8;
+
+std::string host_name() {
+  char buf[256] = {};
+  if (gethostname(buf, sizeof buf - 1) != 0) return "localhost";
+  return buf;
+}
+
+std::string bytes_checksum(const float* data, std::size_t count) {
+  ContentHash h;
+  h.add(std::string_view(reinterpret_cast<const char*>(data), count * sizeof(float)));
+  return h.hex();
+}
+
+}  // namespace
+
+ShardWriter::ShardWriter(fs::path final_path, ShardIdentity identity)
+    : final_(std::move(final_path)), identity_(std::move(identity)) {
+  fs::create_directories(final_.parent_path());
+  tmp_ = final_.string() + ".tmp-" + std::to_string(getpid()) + "@" + host_name();
+  out_.open(tmp_, std::ios::binary | std::ios::trunc);
+  if (!out_) throw std::runtime_error("cannot write " + tmp_.string());
+  out_.write(kMagic, sizeof kMagic - 1);
+  offset_ = sizeof kMagic - 1;
+}
+
+ShardWriter::~ShardWriter() {
+  if (committed_) return;
+  out_.close();
+  std::error_code ec;
+  fs::remove(tmp_, ec);
+}
+
+void ShardWriter::add(ShardPart part, const LayerSet& layers) {
+  part.width = layers.width, part.height = layers.height;
+  part.layers = nlohmann::json::array();
+  for (const Layer& l : layers.layers) {
+    part.layers.push_back({{"name", l.name},
+                           {"channels", l.channels},
+                           {"offset", offset_},
+                           {"floats", l.data.size()},
+                           {"checksum", bytes_checksum(l.data.data(), l.data.size())}});
+    out_.write(reinterpret_cast<const char*>(l.data.data()), std::streamsize(l.data.size() * sizeof(float)));
+    offset_ += l.data.size() * sizeof(float);
+  }
+  part.attributes = layers.attributes;
+  if (!out_) throw std::runtime_error("cannot write " + tmp_.string());
+  parts_.push_back(std::move(part));
+}
+
+void ShardWriter::commit() {
+  nlohmann::json header = {{"job", identity_.job_name},           {"job_hash", identity_.job_hash},
+                           {"hfbake_version", identity_.version}, {"shard", identity_.id.index},
+                           {"shards", identity_.id.count},        {"width", identity_.width},
+                           {"height", identity_.height}};
+  header["parts"] = nlohmann::json::array();
+  for (const ShardPart& p : parts_) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& [k, v] : p.attributes) a.push_back({k, v});
+    header["parts"].push_back({{"entry", p.entry},
+                               {"kind", p.kind},
+                               {"block", p.block},
+                               {"row_begin", p.row_begin},
+                               {"row_end", p.row_end},
+                               {"seconds", p.seconds},
+                               {"cpu_seconds", p.cpu_seconds},
+                               {"width", p.width},
+                               {"height", p.height},
+                               {"layers", p.layers},
+                               {"attributes", a}});
+  }
+  const std::string text = header.dump() + "\n";
+  out_.write(text.data(), std::streamsize(text.size()));
+  unsigned char off[8];
+  for (int b = 0; b < 8; ++b) off[b] = static_cast<unsigned char>(offset_ >> (8 * b));
+  out_.write(kEnd, 16);
+  out_.write(reinterpret_cast<const char*>(off), 8);
+  out_.flush();
+  if (!out_) throw std::runtime_error("cannot write " + tmp_.string());
+  out_.close();
+  fs::rename(tmp_, final_);
+  committed_ = true;
+}
+
+ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : file_(file) {
+  const std::string name = file.string();
+  const std::string which = "shard " + shard_id_text(expected.id);
+  std::error_code ec;
+  if (!fs::exists(file, ec))
+    throw InputError(name, "",
+                     which + " is missing (bake it with --shard " + shard_id_text(expected.id) + ")");
+  const std::uintmax_t size = fs::file_size(file, ec);
+  in_.open(file, std::ios::binary);
+  if (ec || !in_) throw InputError(name, "", "cannot read " + which);
+  auto damaged = [&](const std::string& why) {
+    return InputError(name, "",
+                      which + " is truncated or damaged (" + why + "): bake it again with --shard " +
+                          shard_id_text(expected.id));
+  };
+  char magic[sizeof kMagic - 1];
+  if (size < sizeof magic + kTrailer || !in_.read(magic, sizeof magic) ||
+      std::memcmp(magic, kMagic, sizeof magic) != 0)
+    throw damaged("no shard header");
+  char trailer[kTrailer];
+  in_.seekg(std::streamoff(size - kTrailer));
+  if (!in_.read(trailer, kTrailer) || std::memcmp(trailer, kEnd, 16) != 0) throw damaged("no end marker");
+  std::uint64_t header_at = 0;
+  for (int b = 0; b < 8; ++b)
+    header_at |= std::uint64_t(static_cast<unsigned char>(trailer[16 + b])) << (8 * b);
+  if (header_at < sizeof magic || header_at >= size - kTrailer) throw damaged("bad header offset");
+  std::string text(std::size_t(size - kTrailer - header_at), '\0');
+  in_.seekg(std::streamoff(header_at));
+  if (!in_.read(text.data(), std::streamsize(text.size()))) throw damaged("unreadable header");
+  nlohmann::json h;
+  try {
+    h = nlohmann::json::parse(text);
+    if (h.at("job_hash") != expected.job_hash || h.at("job") != expected.job_name)
+      throw InputError(name, "",
+                       which + " belongs to another job (" + h.at("job").get<std::string>() + ", hash " +
+                           h.at("job_hash").get<std::string>() + "; this job's is " + expected.job_hash +
+                           "): bake it again with --shard " + shard_id_text(expected.id));
+    if (h.at("hfbake_version") != expected.version)
+      throw InputError(name, "",
+                       which + " was baked by hfbake " + h.at("hfbake_version").get<std::string>() +
+                           ", not " + expected.version + ": bake it again");
+    if (h.at("shard") != expected.id.index || h.at("shards") != expected.id.count ||
+        h.at("width") != expected.width || h.at("height") != expected.height)
+      throw damaged("header of another shard or field size");
+    for (const auto& p : h.at("parts")) {
+      ShardPart part;
+      part.entry = p.at("entry");
+      part.kind = p.at("kind");
+      part.block = p.at("block");
+      part.row_begin = p.at("row_begin"), part.row_end = p.at("row_end");
+      part.seconds = p.at("seconds"), part.cpu_seconds = p.at("cpu_seconds");
+      part.width = p.at("width"), part.height = p.at("height");
+      part.layers = p.at("layers");
+      for (const auto& l : part.layers)
+        if (l.at("offset").get<std::uint64_t>() + l.at("floats").get<std::uint64_t>() * sizeof(float) >
+            header_at)
+          throw damaged("a layer beyond the data");
+      for (const auto& a : p.at("attributes")) part.attributes.emplace_back(a.at(0), a.at(1));
+      parts_.push_back(std::move(part));
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw damaged(std::string("bad header: ") + e.what());
+  }
+}
+
+LayerSet ShardReader::load(std::size_t i) {
+  const ShardPart& p = parts_.at(i);
+  LayerSet out;
+  out.width = p.width, out.height = p.height;
+  for (const auto& l : p.layers) {
+    Layer& layer = out.add(l.at("name").get<std::string>(), l.at("channels").get<std::vector<std::string>>());
+    if (layer.data.size() != l.at("floats").get<std::size_t>())
+      throw InputError(file_.string(), "", "layer " + layer.name + " has the wrong size");
+    in_.seekg(std::streamoff(l.at("offset").get<std::uint64_t>()));
+    in_.read(reinterpret_cast<char*>(layer.data.data()), std::streamsize(layer.data.size() * sizeof(float)));
+    if (!in_ || bytes_checksum(layer.data.data(), layer.data.size()) != l.at("checksum").get<std::string>())
+      throw InputError(file_.string(), "",
+                       "shard data damaged (checksum of " + layer.name + "): bake the shard again");
+  }
+  out.attributes = p.attributes;
+  return out;
+}
+
+bool shard_is_complete(const fs::path& file, const ShardIdentity& expected) {
+  try {
+    ShardReader r(file, expected);
+    for (std::size_t i = 0; i < r.parts().size(); ++i) r.load(i);
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+}  // namespace hfbake

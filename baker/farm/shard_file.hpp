@@ -1,0 +1,82 @@
+// The shard file: what one `hfbake bake JOB --shard I/N` computed, for `hfbake merge`.
+//
+// Layout: the magic line "hfbake shard 1\n"; the parts' float data (little-endian float32, each layer's
+// values as in memory), written as each part is computed; then one line of JSON (the header: the job's
+// name and content hash, the hfbake version, I, N, the field's size, and per part its entry, kind, block
+// or rows, seconds, layers with their byte offsets and an FNV-1a checksum of its bytes); then a 24-byte
+// trailer: "hfbake shard end" and the header's offset as 8 little-endian bytes. A file is written under a
+// temporary name beside its final one and renamed when complete, so a shard file is whole or absent; the
+// trailer and each part's checksum catch a file truncated or damaged afterwards.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/layers.hpp"
+#include "farm/shard_plan.hpp"
+
+namespace hfbake {
+
+// What identifies the job a shard belongs to (checked by the merge).
+struct ShardIdentity {
+  std::string job_name, job_hash, version;
+  ShardId id;
+  int width = 0, height = 0;
+};
+
+struct ShardPart {
+  int entry = -1;                  // index into Job::bakes; -1: the reference
+  std::string kind;                // "whole", "block", "rows"
+  int block = 0;                   // kind "block"
+  int row_begin = 0, row_end = 0;  // kind "rows"
+  double seconds = 0, cpu_seconds = 0;
+  nlohmann::json layers = nlohmann::json::array();  // header: per layer name, channels, offset, checksum
+  std::vector<std::pair<std::string, std::string>> attributes;
+  int width = 0, height = 0;
+};
+
+class ShardWriter {
+ public:
+  // Opens a temporary file beside `final_path` (creating its folder); std::runtime_error if impossible.
+  ShardWriter(std::filesystem::path final_path, ShardIdentity identity);
+  ~ShardWriter();  // removes the temporary file unless committed
+  ShardWriter(const ShardWriter&) = delete;
+  ShardWriter& operator=(const ShardWriter&) = delete;
+  // Appends a part's layers (written now; `part` gives everything but the layers).
+  void add(ShardPart part, const LayerSet& layers);
+  // Writes the header and the trailer and renames the file into place.
+  void commit();
+
+ private:
+  std::filesystem::path final_, tmp_;
+  ShardIdentity identity_;
+  std::ofstream out_;
+  std::uint64_t offset_ = 0;
+  std::vector<ShardPart> parts_;
+  bool committed_ = false;
+};
+
+class ShardReader {
+ public:
+  // Reads the header. Throws InputError naming the file: missing, truncated or damaged, of another job
+  // (job hash or name), another hfbake version, or another shard than `expected`.
+  ShardReader(const std::filesystem::path& file, const ShardIdentity& expected);
+  const std::vector<ShardPart>& parts() const { return parts_; }
+  // Loads part i's layers and attributes; InputError naming the file when a checksum fails.
+  LayerSet load(std::size_t i);
+  const std::filesystem::path& file() const { return file_; }
+
+ private:
+  std::filesystem::path file_;
+  std::ifstream in_;
+  std::vector<ShardPart> parts_;
+};
+
+// Whether `file` is a complete shard of `expected` (the check a re-run does to skip a finished shard).
+bool shard_is_complete(const std::filesystem::path& file, const ShardIdentity& expected);
+
+}  // namespace hfbake

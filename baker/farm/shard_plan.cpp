@@ -1,0 +1,70 @@
+#include "farm/shard_plan.hpp"
+
+#include <charconv>
+
+#include "core/direction_blocks.hpp"
+#include "methods/method_table.hpp"
+
+namespace hfbake {
+
+std::optional<ShardId> parse_shard_id(const std::string& text) {
+  const std::size_t slash = text.find('/');
+  if (slash == std::string::npos) return std::nullopt;
+  ShardId id;
+  const char* b = text.data();
+  const char* e = text.data() + text.size();
+  auto r1 = std::from_chars(b, b + slash, id.index);
+  auto r2 = std::from_chars(b + slash + 1, e, id.count);
+  if (r1.ec != std::errc() || r1.ptr != b + slash || r2.ec != std::errc() || r2.ptr != e) return std::nullopt;
+  if (id.count < 1 || id.count > 4096 || id.index < 0 || id.index >= id.count) return std::nullopt;
+  return id;
+}
+
+std::string shard_id_text(ShardId id) {
+  return std::to_string(id.index) + "/" + std::to_string(id.count);
+}
+
+static int entry_directions_or_zero(const BakeEntry& e) {
+  return e.resolved.is_object() && e.resolved.contains("directions") &&
+                 e.resolved["directions"].is_number_integer()
+             ? e.resolved["directions"].get<int>()
+             : 0;
+}
+
+int entry_direction_blocks(const BakeEntry& entry) {
+  const MethodInfo* m = find_method(entry.method);
+  if (!m || !m->bake_block || !m->finish_blocks) return 0;
+  const int K = entry_directions_or_zero(entry);
+  return K > 0 ? direction_block_count(K) : 0;
+}
+
+ShardWork shard_work(const Job& job, int field_height, ShardId id) {
+  ShardWork w;
+  const long long I = id.index, N = id.count;
+  for (std::size_t e = 0; e < job.bakes.size(); ++e) {
+    const int B = entry_direction_blocks(job.bakes[e]);
+    ShardWork::Entry x;
+    x.entry = int(e);
+    if (B == 0) {
+      if (static_cast<long long>(e) % N != I) continue;
+      x.whole = true;
+    } else {
+      x.block_begin = int(I * B / N), x.block_end = int((I + 1) * B / N);
+      if (x.block_begin == x.block_end) continue;
+    }
+    w.entries.push_back(x);
+  }
+  if (job.has_reference) {
+    const long long R = (field_height + kReferenceBandRows - 1) / kReferenceBandRows;
+    w.row_begin = int(std::min<long long>(field_height, I * R / N * kReferenceBandRows));
+    w.row_end = int(std::min<long long>(field_height, (I + 1) * R / N * kReferenceBandRows));
+  }
+  return w;
+}
+
+std::filesystem::path shard_path(const Job& job, ShardId id) {
+  return job.output.dir / "shards" /
+         (job.name + ".shard-" + std::to_string(id.index) + "-of-" + std::to_string(id.count) + ".hfshard");
+}
+
+}  // namespace hfbake

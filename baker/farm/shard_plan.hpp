@@ -1,0 +1,46 @@
+// Which part of a job shard I of N computes. The work of a job divides into units that do not depend on N:
+//   - a direction-dividing method (MethodInfo::bake_block: p1, hbao) into its direction blocks
+//     (core/direction_blocks.hpp); shard I takes blocks [I B / N, (I + 1) B / N);
+//   - the reference into bands of kReferenceBandRows receiver rows; shard I takes bands [I R / N, (I + 1) R /
+//   N)
+//     (one contiguous run of rows), each traced against the whole field;
+//   - any other method runs whole, in shard (entry index mod N).
+// Shards beyond a method's block count simply have none of its blocks.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "job/manifest.hpp"
+
+namespace hfbake {
+
+struct ShardId {
+  int index = 0, count = 1;  // shard `index` of `count`
+};
+// "I/N" with 0 <= I < N <= 4096; nullopt otherwise.
+std::optional<ShardId> parse_shard_id(const std::string& text);
+std::string shard_id_text(ShardId id);  // "I/N"
+
+inline constexpr int kReferenceBandRows = 32;
+
+// Direction blocks of a resolved bake entry (0: the method runs whole).
+int entry_direction_blocks(const BakeEntry& entry);
+
+struct ShardWork {
+  struct Entry {
+    int entry = 0;       // index into Job::bakes
+    bool whole = false;  // the whole method; else blocks [block_begin, block_end)
+    int block_begin = 0, block_end = 0;
+  };
+  std::vector<Entry> entries;      // in job order; entries with nothing for this shard are left out
+  int row_begin = 0, row_end = 0;  // the reference's receiver rows (empty: none, or no reference)
+};
+ShardWork shard_work(const Job& job, int field_height, ShardId id);
+
+// <output dir>/shards/<name>.shard-<I>-of-<N>.hfshard
+std::filesystem::path shard_path(const Job& job, ShardId id);
+
+}  // namespace hfbake

@@ -1,0 +1,162 @@
+// The farm's plan and shard file: every direction block and reference row is in exactly one shard for any
+// shard count; the shard file round-trips and refuses truncation, damage and other jobs; the merge's block
+// sums and row stacking against sums and copies written out by hand.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include "core/direction_blocks.hpp"
+#include "core/error.hpp"
+#include "farm/merge_blocks.hpp"
+#include "farm/shard_file.hpp"
+#include "farm/shard_plan.hpp"
+
+namespace hfbake {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(ShardPlan, ParsesShardIds) {
+  ASSERT_TRUE(parse_shard_id("0/1"));
+  EXPECT_EQ(parse_shard_id("3/4")->index, 3);
+  EXPECT_EQ(parse_shard_id("3/4")->count, 4);
+  for (const char* bad : {"4/4", "-1/4", "1/0", "1", "1/", "/4", "a/4", "1/4x", "1/5000", " 1/4"})
+    EXPECT_FALSE(parse_shard_id(bad)) << bad;
+}
+
+TEST(ShardPlan, DirectionBlocksPartitionTheDirections) {
+  for (int K : {1, 2, 3, 7, 8, 9, 16, 63, 64, 4096}) {
+    const int B = direction_block_count(K);
+    EXPECT_EQ(B, std::min(K, 8));
+    EXPECT_EQ(direction_block_begin(0, K), 0);
+    EXPECT_EQ(direction_block_begin(B, K), K);
+    for (int b = 0; b < B; ++b) EXPECT_LT(direction_block_begin(b, K), direction_block_begin(b + 1, K));
+  }
+}
+
+Job three_entry_job() {
+  Job job;
+  job.name = "j";
+  job.output.dir = "/tmp/x";
+  job.has_reference = true;
+  BakeEntry p1, lsao, hbao;
+  p1.method = "p1", p1.resolved = {{"directions", 16}};
+  lsao.method = "lsao", lsao.resolved = {{"directions", 16}};
+  hbao.method = "hbao", hbao.resolved = {{"directions", 5}};
+  job.bakes = {p1, lsao, hbao};
+  return job;
+}
+
+TEST(ShardPlan, EveryBlockRowAndWholeMethodIsInExactlyOneShard) {
+  for (int height : {1, 31, 32, 33, 1000}) {
+    const Job job = three_entry_job();
+    for (int N = 1; N <= 20; ++N) {
+      std::vector<int> p1(8), hbao(5), rows(height), lsao(1);
+      for (int I = 0; I < N; ++I) {
+        const ShardWork w = shard_work(job, height, {I, N});
+        for (const ShardWork::Entry& e : w.entries) {
+          if (e.entry == 1) {
+            EXPECT_TRUE(e.whole);
+            ++lsao[0];
+          } else {
+            EXPECT_FALSE(e.whole);
+            for (int b = e.block_begin; b < e.block_end; ++b) ++(e.entry == 0 ? p1 : hbao).at(std::size_t(b));
+          }
+        }
+        for (int r = w.row_begin; r < w.row_end; ++r) ++rows.at(std::size_t(r));
+      }
+      for (int c : p1) EXPECT_EQ(c, 1) << "N " << N;
+      for (int c : hbao) EXPECT_EQ(c, 1) << "N " << N;
+      for (int c : rows) EXPECT_EQ(c, 1) << "N " << N << " height " << height;
+      EXPECT_EQ(lsao[0], 1);
+    }
+  }
+}
+
+TEST(MergeBlocks, AddsInBlockOrderAndKeepsPerBlockLayers) {
+  auto block = [](float v, const char* kept) {
+    LayerSet s;
+    s.width = 2, s.height = 1;
+    s.add("ao", {"Y"}).data = {v, 2 * v};
+    s.add(kept, {"000"}).data = {v, v};
+    return s;
+  };
+  LayerSet total;
+  add_direction_block(total, block(1e8f, "horizon@0"));
+  add_direction_block(total, block(1.0f, "horizon@4"));
+  add_direction_block(total, block(-1e8f, "horizon@8"));
+  // ((1e8 + 1) - 1e8) in float: 1e8 + 1 rounds to 1e8, so 0 -- the order, not the exact sum.
+  EXPECT_EQ(total.find("ao")->data[0], 0.0f);
+  ASSERT_TRUE(total.find("horizon@4"));
+  EXPECT_EQ(total.find("horizon@4")->data[0], 1.0f);
+  EXPECT_EQ(total.layers.size(), 4u);
+}
+
+TEST(MergeBlocks, SplitDoublesKeep48Bits) {
+  SplitDouble t = split_double(1.0);
+  add_split(t, split_double(1e-12));
+  EXPECT_NEAR(join_double(t), 1.0 + 1e-12, 1e-15);
+}
+
+TEST(MergeBlocks, StacksRowBands) {
+  std::vector<LayerSet> bands(2);
+  for (int b = 0; b < 2; ++b) {
+    bands[b].width = 2, bands[b].height = b + 1;
+    bands[b].add("ao", {"Y"}).data.assign(std::size_t(2 * (b + 1)), float(b + 1));
+  }
+  const LayerSet all = stack_row_bands(std::move(bands), 3);
+  EXPECT_EQ(all.find("ao")->data, (std::vector<float>{1, 1, 2, 2, 2, 2}));
+}
+
+TEST(ShardFile, RoundTripsAndRefusesDamage) {
+  const fs::path dir = fs::temp_directory_path() / ("hfbake_shard_test_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path file = dir / "j.shard-1-of-2.hfshard";
+  const ShardIdentity id{"j", "0123456789abcdef", "v1", {1, 2}, 3, 2};
+  LayerSet l;
+  l.width = 3, l.height = 2;
+  l.add("ao", {"Y"}).data = {1, 2, 3, 4, 5, 6};
+  l.attributes.emplace_back("k", "v");
+  {
+    ShardWriter w(file, id);
+    ShardPart p;
+    p.entry = 0, p.kind = "block", p.block = 4;
+    w.add(p, l);
+    EXPECT_FALSE(fs::exists(file));  // not before commit
+    w.commit();
+  }
+  ASSERT_TRUE(shard_is_complete(file, id));
+  ShardReader r(file, id);
+  ASSERT_EQ(r.parts().size(), 1u);
+  EXPECT_EQ(r.parts()[0].block, 4);
+  const LayerSet back = r.load(0);
+  EXPECT_EQ(back.find("ao")->data, l.find("ao")->data);
+  EXPECT_EQ(back.attributes, l.attributes);
+
+  ShardIdentity other = id;
+  other.job_hash = "fedcba9876543210";
+  EXPECT_THROW(ShardReader(file, other), InputError);
+  EXPECT_FALSE(shard_is_complete(file, other));
+  // Truncated: one byte short.
+  const auto size = fs::file_size(file);
+  fs::copy_file(file, dir / "t", fs::copy_options::overwrite_existing);
+  fs::resize_file(dir / "t", size - 1);
+  EXPECT_THROW(ShardReader(dir / "t", id), InputError);
+  // A flipped data byte: the header reads, the layer's checksum does not match.
+  {
+    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(20);
+    f.put('\x7f');
+  }
+  ShardReader damaged(file, id);
+  EXPECT_THROW(damaged.load(0), InputError);
+  EXPECT_FALSE(shard_is_complete(file, id));
+  EXPECT_THROW(ShardReader(dir / "missing", id), InputError);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace hfbake

@@ -1,0 +1,67 @@
+#!/bin/bash
+# Shards + merge give the bits of a single-machine bake, for shard counts below, at and above the direction
+# blocks; missing, truncated and foreign shards are refused naming the shard (exit 2); a re-run shard is kept.
+set -u
+H=$1 W=$2
+. "$(dirname "$0")/common.sh"
+rm -rf "$W" && mkdir -p "$W" && cd "$W" || exit 1
+# p1 with every layer, a non-uniform environment (the built-in sky) and two suns; hbao with bent
+# normals; lsao (runs whole in one shard); a reference of every layer the methods are scored against.
+cat >job.json <<'J'
+{"version": 1, "name": "farm",
+ "height": {"procedural": {"kind": "fractal", "size": [67, 53], "seed": 5}},
+ "environment": {"sky": {"sun": {"elevation_deg": 40}}},
+ "lights": [{"directional": {"direction": [0.3, 0.2, 1.0], "irradiance": 2}},
+            {"directional": {"direction": [-0.5, 0.1, 0.6], "irradiance": [1, 0.5, 0.2]}}],
+ "bake": [{"method": "p1", "directions": 12,
+           "layers": ["ao", "vsky", "direct", "horizon", "horizon_distance", "bent_normal"]},
+          {"method": "hbao", "directions": 10, "radius": 5, "falloff": "smooth"},
+          {"method": "lsao", "directions": 8, "radius": 5}],
+ "reference": {"samples": 16},
+ "output": {"dir": "out", "previews": true}}
+J
+"$H" validate job.json --quiet || fail "test job invalid"
+"$H" bake job.json --no-cache --quiet --out whole || fail "bake"
+for N in 1 3 11; do
+  for ((i = 0; i < N; i++)); do
+    "$H" bake job.json --no-cache --quiet --out "s$N" --shard "$i/$N" || fail "bake --shard $i/$N"
+  done
+  "$H" merge job.json --no-cache --quiet --out "s$N" || fail "merge of $N shards"
+  same_outputs whole "s$N"
+  echo "ok: $N shards merge to the bake's bits"
+done
+
+# A re-run of a complete shard keeps it (idempotent), and the merge is the same again.
+before=$(stat -c %Y%N s3/shards/farm.shard-1-of-3.hfshard)
+sleep 1
+"$H" bake job.json --no-cache --quiet --out s3 --shard 1/3 || fail "re-run shard"
+[ "$(stat -c %Y%N s3/shards/farm.shard-1-of-3.hfshard)" = "$before" ] || fail "a complete shard was baked again"
+
+expect_refusal() {  # expect_refusal WHAT PATTERN: the merge of s3 exits 2 naming the shard
+  local err
+  err=$("$H" merge job.json --no-cache --quiet --out s3 2>&1 >/dev/null)
+  local rc=$?
+  [ $rc = 2 ] || fail "$1: merge exit $rc, expected 2"
+  [ "$(echo "$err" | grep -c 'hfbake: error:')" = 1 ] || fail "$1: not one error line: $err"
+  echo "$err" | grep -q "farm.shard-1-of-3.hfshard" || fail "$1: the error does not name the shard: $err"
+  echo "$err" | grep -q "$2" || fail "$1: the error does not say '$2': $err"
+  echo "ok: $1 refused: $err"
+}
+cp s3/shards/farm.shard-1-of-3.hfshard keep
+rm s3/shards/farm.shard-1-of-3.hfshard
+expect_refusal "a deleted shard" "missing"
+head -c $(($(stat -c %s keep) - 100)) keep >s3/shards/farm.shard-1-of-3.hfshard
+expect_refusal "a truncated shard" "truncated"
+cp keep s3/shards/farm.shard-1-of-3.hfshard
+printf '\x01' | dd of=s3/shards/farm.shard-1-of-3.hfshard bs=1 seek=100 conv=notrunc 2>/dev/null
+expect_refusal "a damaged shard" "damaged"
+sed 's/"seed": 5/"seed": 6/' job.json >other.json
+mkdir -p other && cp other.json other/job.json
+"$H" bake other/job.json --no-cache --quiet --out o --shard 1/3 || fail "other shard"
+cp o/shards/farm.shard-1-of-3.hfshard s3/shards/
+expect_refusal "a shard of another job" "another job"
+# Nothing was written by the refused merges: the outputs are those of the first merge.
+cp keep s3/shards/farm.shard-1-of-3.hfshard
+same_outputs whole s3
+"$H" bake job.json --quiet --shard 3/3 >/dev/null 2>&1 && fail "--shard 3/3 accepted"
+echo "ok: all"
