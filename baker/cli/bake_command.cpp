@@ -71,6 +71,15 @@ std::string memory_parts_text(const std::vector<MemoryPart>& parts) {
   return t;
 }
 
+// "; the largest part, p2, shrinks with its directions (...)": what to change to make the job fit.
+std::string largest_part_knob(const std::vector<MemoryPart>& parts) {
+  const MemoryPart* largest = nullptr;
+  for (const MemoryPart& p : parts)
+    if (!largest || p.bytes > largest->bytes) largest = &p;
+  if (!largest || largest->knob.empty()) return "";
+  return "; the largest part, " + largest->name + ", shrinks with " + largest->knob;
+}
+
 std::size_t check_memory(const Job& job, std::optional<std::size_t> limit,
                          std::string* parts_text = nullptr) {
   const FieldSize size = probe_field_size(job);
@@ -93,7 +102,8 @@ std::size_t check_memory(const Job& job, std::optional<std::size_t> limit,
                      "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
                          " field needs about " + gib(need) + " to bake (" + memory_parts_text(parts) +
                          "), more than the " + gib(have) +
-                         (limit ? " of --memory-limit" : " available (--memory-limit SIZE sets the budget)"));
+                         (limit ? " of --memory-limit" : " available (--memory-limit SIZE sets the budget)") +
+                         largest_part_knob(parts));
   return need;
 }
 

@@ -110,6 +110,7 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   context.bounces = job_bounces(job);
   // Methods run one at a time; each one's layers are kept until the report when there is a reference.
   double kept = 0, peak = 0;
+  int horizon_channels = 0;  // the reference adds horizon and horizon_distance for the first method's K
   for (const BakeEntry& e : job.bakes) {
     // The method table's reader (resolve_job has usually run it already).
     const nlohmann::json r = e.resolved.is_object()
@@ -123,7 +124,10 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double working = m && m->working_bytes ? m->working_bytes(r, context) : 0.0;
     peak = std::max(peak, kept + layers + std::max(working, writing));
     if (job.has_reference) kept += layers;
-    if (parts) parts->push_back({e.stem, std::size_t(layers + working)});
+    if (parts) parts->push_back({e.stem, std::size_t(layers + working), m ? m->memory_knob : ""});
+    for (const auto& l : r.value("layers", nlohmann::json::array()))
+      if ((l == "horizon" || l == "horizon_distance") && horizon_channels == 0)
+        horizon_channels = 2 * layer_channel_count(l.get<std::string>(), r);
   }
   double reference = 0;
   if (job.has_reference) {
@@ -133,13 +137,15 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     for (const auto& l : job.reference_resolved.value("layers", nlohmann::json::array()))
       channels += layer_channel_count(l.get<std::string>(), job.reference_resolved);
     if (channels == 0) channels = 5;  // not resolved yet: ao, vsky, direct
-    reference = (8.0 * channels + 60) * texels;
+    reference = (8.0 * channels + 60 + 4.0 * horizon_channels) * texels;
     peak = std::max(peak, kept + reference + writing);
   }
   const double scene = kProcess + scene_per_texel * texels;
   if (parts) {
-    parts->insert(parts->begin(), {"scene", std::size_t(scene)});
-    if (job.has_reference) parts->push_back({"reference", std::size_t(reference)});
+    parts->insert(parts->begin(), {"scene", std::size_t(scene), "a smaller field"});
+    if (job.has_reference)
+      parts->push_back({"reference", std::size_t(reference),
+                        "fewer reference.layers (8 bytes a texel a channel; the sample count does not change it) or bounces"});
   }
   return std::size_t(scene + peak);
 }

@@ -31,6 +31,7 @@ FieldSize probe_field_size(const Job& job);
 struct MemoryPart {
   std::string name;
   std::size_t bytes = 0;
+  std::string knob;  // what shrinks it (MethodInfo::memory_knob for a method)
 };
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts = nullptr);
 

@@ -45,6 +45,9 @@ struct MethodInfo {
   // resolved parameters and the field's shape: its per-texel arrays and its sweeps' line buffers. What
   // the memory estimate adds for it (cli/scene_loader.hpp); the README's table says how close it is.
   double (*working_bytes)(const nlohmann::json& resolved, const MethodContext& context) = nullptr;
+  // What a user lowers to make the method fit a memory budget, for the refusal message ("its directions
+  // (...)").
+  const char* memory_knob = "a smaller field";
   WorkDivision division = WorkDivision::directions;
   const char* division_note = "";  // how, and why not otherwise
   // The farm (baker/farm) for a method that divides by directions: bake_block gives the raw sums of

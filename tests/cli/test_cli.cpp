@@ -476,6 +476,14 @@ TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
     EXPECT_NE(lines[0].find("more than the 200 MiB of --memory-limit"), std::string::npos) << lines[0];
   }
   EXPECT_TRUE(output_dir_is_empty());
+  // The knob: a p2 at K = 64 on 2048^2 is mostly p1's horizons (4 bytes a texel per direction).
+  nlohmann::json p2 = job({{"procedural", {{"kind", "flat"}, {"size", {2048, 2048}}}}},
+                          {{{"method", "p2"}, {"directions", 64}}});
+  const fs::path q = write_job("p2.json", p2);
+  const Result r = hfbake("validate " + q.string() + " --memory-limit 1G --quiet");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("; the largest part, p2, shrinks with its directions (p1's horizons"), std::string::npos)
+      << r.err;
   EXPECT_EQ(hfbake("validate " + p.string() + " --memory-limit 8G --quiet").exit_code, 0);
   const Result bad = hfbake("validate " + p.string() + " --memory-limit lots");
   EXPECT_EQ(bad.exit_code, 2);

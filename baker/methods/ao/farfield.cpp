@@ -448,6 +448,7 @@ MethodInfo farfield_method() {
   // The sums are its layers (float, finished in place; the bent normals interleaved): beyond them only the
   // obscurance's 4 bytes a texel when the job asks for bent_normal alone, and the largest direction's scan
   // (farfield_working_bytes: its prefix sums over lines of the interval pyramid).
+  m.memory_knob = "its layers (bent_normal: 12 bytes a texel) and its radius (the far field's scan)";
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
     FarfieldOptions o;  // what the scan's plan reads (the resolved near_field may be the -1 of its default)
     o.rho = parse_falloff(r);

@@ -332,6 +332,7 @@ MethodInfo hbao_method() {
   m.read = [](Params& in, const MethodContext& c) { read_hbao_settings(in, c.field); };
   m.bake = bake_hbao;
   // Nothing beyond its layers (the bent normals are written interleaved, as their layer).
+  m.memory_knob = "its layers (bent_normal: 12 bytes a texel)";
   m.working_bytes = [](const nlohmann::json&, const MethodContext&) { return 0.0; };
 
   m.division = WorkDivision::directions;

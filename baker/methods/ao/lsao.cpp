@@ -242,6 +242,7 @@ MethodInfo lsao_method() {
   // obscurance's 4 bytes a texel when the job asks for bent_normal alone, the normals (12) up to 8192^2
   // texels (lsao_holds_normals), and the sweep's line buffers
   // (bounded by SweepSpec::max_buffer_bytes; sweep_buffer_bytes of lsao's spec).
+  m.memory_knob = "its layers (bent_normal: 12 bytes a texel)";
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
     const auto layers = r.value("layers", std::vector<std::string>{});
     const bool bent = wants(layers, "bent_normal");

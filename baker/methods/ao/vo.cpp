@@ -215,6 +215,7 @@ MethodInfo vo_method() {
   m.read = [](Params& in, const MethodContext& c) { read_vo_settings(in, c.field); };
   m.bake = bake_vo;
   // The occupancy's summed-area tables (measured: 44 bytes a texel at 2048^2, README "Memory").
+  m.memory_knob = "a smaller field (its summed-area tables take 44 bytes a texel whatever its parameters)";
   m.working_bytes = [](const nlohmann::json&, const MethodContext& c) {
     return 44.0 * double(c.field.width) * double(c.field.height);
   };

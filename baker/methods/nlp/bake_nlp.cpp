@@ -617,6 +617,7 @@ MethodInfo nlp_method() {
   m.read = [](Params& in, const MethodContext&) { read_nlp_options(in); };
   m.bake = [](const Scene& s, const nlohmann::json& p, const RunControl& rc) { return bake_nlp(s, p, rc); };
   m.reads_normals = false;  // normal_at per row of receivers
+  m.memory_knob = "its layers (sh_visibility and sh_irradiance: 64 and 192 bytes a texel)";
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
     Params in(r);
     const NlpOptions o = read_nlp_options(in);

@@ -107,6 +107,7 @@ MethodInfo p1_method() {
   m.read = [](Params& in, const MethodContext&) { read_p1_params(in); };
   m.bake = bake_p1;
   // Beyond its layers (the accumulators become the layers): see p1_working_bytes.
+  m.memory_knob = "its layers (horizon and horizon_distance: 4 bytes a texel per direction each)";
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
     return p1_working_bytes(c.field, parse_p1_params(r));
   };

@@ -240,6 +240,7 @@ MethodInfo p2_method() {
       "direct light from p1, then indirect bounces gathered over the exactly visible terrain (hull tree)";
   m.read = [](Params& in, const MethodContext& c) { read_p2_params(in, c.bounces); };
   m.bake = bake_p2;
+  m.memory_knob = "its directions (p1's horizons: 4 bytes a texel per direction) and the indirect_b layers";
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
     return p2_working_bytes(c.field, parse_p2_params(r, c.bounces));
   };

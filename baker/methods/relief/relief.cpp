@@ -109,6 +109,7 @@ MethodInfo relief_method() {
       "GIS relief quantities from radius-limited horizons: sky-view factor, openness, horizons in degrees";
   m.read = [](Params& in, const MethodContext& c) { read_relief_settings(in, c.field); };
   m.bake = bake_relief;
+  m.memory_knob = "its layers (horizon_deg: 4 bytes a texel per direction)";
   m.working_bytes = [](const nlohmann::json&, const MethodContext&) { return 0.0; };  // nothing per texel
   m.division = WorkDivision::texel_tiles;
   m.division_note = "texel tiles with a halo of search_radius (each texel's horizons are its own)";
