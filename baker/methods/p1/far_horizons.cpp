@@ -169,6 +169,33 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       if (texel_z_[n] == texel_z_[n]) bound_[pat.first[n]] = std::max(bound_[pat.first[n]], texel_z_[n]);
     hb = bound_.data();
   }
+  // Skip bounds: per column c, the highest texel of the cells the strip touches in the bands beside it
+  // (rows from floor(v_{l-1} - |slope|) to ceil(v_l + |slope|), border rows clamped); a band's surface
+  // in the strip lies below the larger of its two columns', a block's of kBlock bands below its columns'.
+  if (!on_line) {
+    col_max_.resize(std::size_t(count));
+    const double as = std::fabs(d.slope);
+    for (int n = 0; n < count; ++n) {
+      const double v = l - 1 + pat.minor[pat.first[n]];
+      const int r0 = floor_int(v - as), r1 = -floor_int(-(v + 1 + as));
+      const std::int64_t mo = pat.major_a[pat.first[n]];
+      float m = -std::numeric_limits<float>::infinity();
+      for (int rr = r0; rr <= r1; ++rr) {
+        const int row = rep ? wrap_index(rr, nv) : std::clamp(rr, 0, nv - 1);
+        m = std::max(m, Z[mo + std::ptrdiff_t(row) * ms]);
+      }
+      col_max_[n] = m;
+    }
+    block_max_.assign(std::size_t(count / kBlock + 1), -std::numeric_limits<float>::infinity());
+    for (int n = 0; n < count; ++n) {
+      float& b = block_max_[std::size_t(n / kBlock)];
+      b = std::max(b, col_max_[n]);
+      if (n % kBlock == 0 && n > 0) {  // a block's last column is the next block's first
+        float& p = block_max_[std::size_t(n / kBlock - 1)];
+        p = std::max(p, col_max_[n]);
+      }
+    }
+  }
   hull_.reset(int(E));
   const double step = line.step;
   const double reach = std::max(far_radius / step, 1.0);  // steps; the near field covers the rest
@@ -255,6 +282,14 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
     auto beaten = [&](double x, double hx) {  // the bound at x is no steeper than the best point
       return any && (hx - zt) * brun <= bdz * ((n - x) * step);
     };
+    // Nothing in positions [x0, x1] (clipped to the far field) that is at most h high beats the best.
+    auto lower = [&](double x0, double x1, float h) {
+      if (!any) return false;
+      const double x = h >= zt ? std::min(x1, hi) : std::max(x0, lo);
+      return (double(h) - zt) * brun <= bdz * ((n - x) * step);
+    };
+    auto band_lower = [&](int c) { return lower(c, c + 1, std::max(col_max_[c], col_max_[c + 1])); };
+    auto block_lower = [&](int k) { return lower(k * kBlock, (k + 1) * kBlock, block_max_[k]); };
     if (lo > hi) continue;
     const double pq = hull_.position(q);
     const int c0 = std::clamp(floor_int(pq), floor_int(lo), floor_int(hi));
@@ -268,7 +303,13 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
         while (j > 0 && hull_.position(j) > a) --j;
         if (beaten(a, hull_at(j, a))) break;
       }
-      band(a - 1), column(a - 1), --a;
+      const int k = (a - 1) / kBlock;
+      if (block_lower(k)) {
+        a = k * kBlock;
+        continue;
+      }
+      if (!band_lower(a - 1)) band(a - 1), column(a - 1);
+      --a;
     }
     const double right_end = std::min(hi, hull_.position(hull_.size() - 1));
     for (int j = q; b < right_end;) {
@@ -276,7 +317,13 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
         while (j + 1 < hull_.size() && hull_.position(j + 1) <= b) ++j;
         if (beaten(b, hull_at(j, b))) break;
       }
-      band(b), column(b + 1), ++b;
+      const int k = b / kBlock;
+      if (block_lower(k)) {
+        b = (k + 1) * kBlock;
+        continue;
+      }
+      if (!band_lower(b)) band(b), column(b + 1);
+      ++b;
     }
     if (any) o[0] = float(bdz), o[1] = float(brun);
   }

@@ -80,6 +80,8 @@ struct FarHorizonWorker {
   int next_slot_ = 0;
   std::vector<float> prev_, cur_, bound_, texel_z_;  // line l - 1's and l's profiles, the strip's bound
   std::vector<int> texel_r_;                         // the strip's texel at each sample: minor coordinate
+  std::vector<float> col_max_, block_max_;           // skip bounds: per column, per block of kBlock bands
+  static constexpr int kBlock = 8;
   int last_k_ = -1, last_line_ = 0;                  // whose profile cur_ holds after a call
   HullStackF hull_;
 
