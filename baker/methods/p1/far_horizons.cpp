@@ -201,6 +201,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
   const double reach = std::max(far_radius / step, 1.0);  // steps; the near field covers the rest
   const double dvp = d.su * d.slope;                        // a ray's minor coordinate per step
   const double dws = d.su + dvp;                            // ... and its u + v per step
+  const double inv_dvp = dvp != 0 ? 1 / dvp : 0, inv_dws = dws != 0 ? 1 / dws : 0;
   std::size_t fed = 0;
 
   for (int n = R0; n < count; ++n) {
@@ -254,7 +255,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       const double va = r + dvp * (c - n), vb = va + dvp;
       const int kr = dvp > 0 ? floor_int(va) + 1 : -floor_int(-va) - 1;
       if ((dvp > 0 ? kr < vb : kr > vb) && (rep || (kr >= 0 && kr < nv))) {
-        const double p = n + (kr - r) / dvp, uc = u_at(p);
+        const double p = n + (kr - r) * inv_dvp, uc = u_at(p);
         if (p > c && p < c + 1) {
           const int fu = floor_int(uc);
           const float a = Zr(fu, kr), b = Zr(fu + 1, kr);
@@ -264,7 +265,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       const double wa = d.u(c) + va, wb = wa + dws;
       for (int kd = dws > 0 ? floor_int(wa) + 1 : -floor_int(-wa) - 1; dws > 0 ? kd < wb : kd > wb;
            kd += dws > 0 ? 1 : -1) {
-        const double p = c + (kd - wa) / dws, uc = u_at(p), vc = kd - uc;
+        const double p = c + (kd - wa) * inv_dws, uc = u_at(p), vc = kd - uc;
         if (!rep && (vc < -1e-9 || vc > vtop)) continue;
         if (!(p > c && p < c + 1)) continue;
         const int fv = floor_int(vc), cu = kd - fv - 1;
