@@ -1,6 +1,7 @@
 #include "methods/p1/p1.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -97,8 +98,12 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p) {
   if (p.direct && p.facet_direct) per_texel += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
   HeightField field;  // the sweep's plan needs only the shape
   static_cast<FieldShape&>(field) = shape;
+  // Each thread's far-field worker: two direction patterns, the lines' heights, the hull (FarHorizonWorker).
+  const int longest = std::max(shape.width, shape.height) * (shape.wrap == Wrap::repeat ? p.wrap_periods + 1 : 1);
+  const double workers = double(tbb::this_task_arena::max_concurrency()) *
+                         double(p1::FarHorizonWorker::scratch_bytes(longest));
   return per_texel * double(shape.width) * double(shape.height) +
-         double(sweep_buffer_bytes(field, p1_sweep_spec(p)));
+         double(sweep_buffer_bytes(field, p1_sweep_spec(p))) + workers;
 }
 
 P1Params parse_p1_params(const nlohmann::json& e) {
