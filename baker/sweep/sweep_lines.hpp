@@ -170,10 +170,10 @@ struct SweepLine {
 
 // What the per-texel visitor gets for one (texel, direction): the two samples it blends.
 struct TexelTaps {
-  const float* lo = nullptr;  // result of line l0 at the texel's column (channels floats)
-  const float* hi = nullptr;  // result of line l0 + 1
+  const float* lo = nullptr;     // result of line l0 at the texel's column (channels floats)
+  const float* hi = nullptr;     // result of line l0 + 1
   const float* strip = nullptr;  // result of line l0 + 1 always, also at a lone border tap (strip_line)
-  float w_hi = 0;             // weight of hi (0 <= w_hi < 1); lo has 1 - w_hi
+  float w_hi = 0;                // weight of hi (0 <= w_hi < 1); lo has 1 - w_hi
   float value(int c) const { return w_hi == 0 ? lo[c] : lo[c] * (1 - w_hi) + hi[c] * w_hi; }
   const float* nearest() const { return w_hi > 0.5f ? hi : lo; }
 };
@@ -345,7 +345,8 @@ struct SweepStream {
 SweepStream plan_stream(const HeightField& field, const SweepDirection& dir, std::size_t budget_bytes,
                         int channels, bool with_order);
 
-// The strip results (TexelTaps::strip) of the texels [i0, i1) x [j0, j1) into out[(c * height + y) * width + x].
+// The strip results (TexelTaps::strip) of the texels [i0, i1) x [j0, j1) into out[(c * height + y) * width +
+// x].
 inline void gather_strips(const SweepDirection& dir, const float* const* lines, int C, int i0, int i1, int j0,
                           int j1, float* out) {
   const std::size_t plane = std::size_t(i1 - i0) * std::size_t(j1 - j0);
@@ -548,8 +549,7 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
     tile.strip = strip;
     for (int b = 0; b < nb; ++b) {
       if (strip && !spec.tile_values && !nearest && !lo) {
-        // Strips alone: one line per texel, read along the tile's rows (the line changes only where
-        // floor(v0 - u * slope) does).
+        // Strips alone: one result per texel (its strip's line), without the taps' rules.
         detail::gather_strips(dirs[b], lines[b], C, i0, i1, j0, j1, strip);
         tile.k = k0 + b;
         tile_visitor(static_cast<const SweepTile&>(tile));

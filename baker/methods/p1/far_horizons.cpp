@@ -74,8 +74,8 @@ void LinePattern::build(const HeightField& f, const SweepDirection& d) {
 }
 
 std::size_t LinePattern::bytes() const {
-  return pos.capacity() * (sizeof(double) * 2 + sizeof(std::int64_t) * 2 + sizeof(std::int32_t) * 2 +
-                           sizeof(float)) +
+  return pos.capacity() *
+             (sizeof(double) * 2 + sizeof(std::int64_t) * 2 + sizeof(std::int32_t) * 2 + sizeof(float)) +
          (first.capacity() + strip_d.capacity()) * sizeof(std::int32_t);
 }
 
@@ -157,7 +157,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
     for (int s = strip_line(d, u, r); s != l; s = strip_line(d, u, r)) r += s > l ? -1 : 1;
     texel_r_[n] = r;
     texel_z_[n] = rep || (r >= 0 && r < nv) ? Z[pat.major_a[pat.first[n]] + std::ptrdiff_t(row_of(r)) * ms]
-                                             : std::numeric_limits<float>::quiet_NaN();
+                                            : std::numeric_limits<float>::quiet_NaN();
   }
   const std::size_t E = pat.pos.size();
   const bool on_line = d.slope == 0 || d.slope == 1 || d.slope == -1;  // every texel on line l - 1
@@ -199,8 +199,8 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
   hull_.reset(int(E));
   const double step = line.step;
   const double reach = std::max(far_radius / step, 1.0);  // steps; the near field covers the rest
-  const double dvp = d.su * d.slope;                        // a ray's minor coordinate per step
-  const double dws = d.su + dvp;                            // ... and its u + v per step
+  const double dvp = d.su * d.slope;                      // a ray's minor coordinate per step
+  const double dws = d.su + dvp;                          // ... and its u + v per step
   const double inv_dvp = dvp != 0 ? 1 / dvp : 0, inv_dws = dws != 0 ? 1 / dws : 0;
   std::size_t fed = 0;
 
@@ -225,7 +225,8 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
     const int r = texel_r_[n];
     auto u_at = [&](double p) { return d.u_start + d.su * p; };
     auto Zr = [&](long long uu, long long vv) {
-      if (rep) return Z[std::int64_t(wrap_index(uu, nu)) * major_stride + std::ptrdiff_t(wrap_index(vv, nv)) * ms];
+      if (rep)
+        return Z[std::int64_t(wrap_index(uu, nu)) * major_stride + std::ptrdiff_t(wrap_index(vv, nv)) * ms];
       vv = vv < 0 ? 0 : (vv >= nv ? nv - 1 : vv);
       return Z[uu * major_stride + vv * ms];
     };

@@ -46,13 +46,13 @@ namespace hfbake::p1 {
 // (held as the array offset of that column or row: `major_*`) and its minor one, line index + d_*.
 // Repeat mode: major coordinates and the d_* are wrapped into the field ([0, n) for d_a, [0, n] for d_b).
 struct LinePattern {
-  int k = -1;  // the direction it was built for
+  int k = -1;               // the direction it was built for
   std::vector<double> pos;  // steps from sample 0, increasing
   std::vector<std::int64_t> major_a, major_b;
   std::vector<std::int32_t> d_a, d_b;
   std::vector<float> w;
-  std::vector<double> minor;        // minor coordinate of the point on line 0 (clamp: on-field test)
-  std::vector<std::int32_t> first;  // count + 1: sample n's entry is first[n], its crossings follow
+  std::vector<double> minor;          // minor coordinate of the point on line 0 (clamp: on-field test)
+  std::vector<std::int32_t> first;    // count + 1: sample n's entry is first[n], its crossings follow
   std::vector<std::int32_t> strip_d;  // per sample: strip l's texel there has minor coordinate l + strip_d
 
   void build(const HeightField& field, const SweepDirection& dir);
@@ -82,7 +82,7 @@ struct FarHorizonWorker {
   std::vector<int> texel_r_;                         // the strip's texel at each sample: minor coordinate
   std::vector<float> col_max_, block_max_;           // skip bounds: per column, per block of kBlock bands
   static constexpr int kBlock = 8;
-  int last_k_ = -1, last_line_ = 0;                  // whose profile cur_ holds after a call
+  int last_k_ = -1, last_line_ = 0;  // whose profile cur_ holds after a call
   HullStackF hull_;
 
   const LinePattern& pattern(const SweepDirection& dir);

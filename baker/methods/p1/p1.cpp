@@ -99,9 +99,10 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p) {
   HeightField field;  // the sweep's plan needs only the shape
   static_cast<FieldShape&>(field) = shape;
   // Each thread's far-field worker: two direction patterns, the lines' heights, the hull (FarHorizonWorker).
-  const int longest = std::max(shape.width, shape.height) * (shape.wrap == Wrap::repeat ? p.wrap_periods + 1 : 1);
-  const double workers = double(tbb::this_task_arena::max_concurrency()) *
-                         double(p1::FarHorizonWorker::scratch_bytes(longest));
+  const int longest =
+      std::max(shape.width, shape.height) * (shape.wrap == Wrap::repeat ? p.wrap_periods + 1 : 1);
+  const double workers =
+      double(tbb::this_task_arena::max_concurrency()) * double(p1::FarHorizonWorker::scratch_bytes(longest));
   return per_texel * double(shape.width) * double(shape.height) +
          double(sweep_buffer_bytes(field, p1_sweep_spec(p))) + workers;
 }
@@ -441,7 +442,8 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     for (std::size_t li = 0; li < lights.size(); ++li) {
       light_dirs.push_back(plan_direction(f, ls, int(li)));
       const SweepDirection& d = light_dirs.back();
-      light_near.push_back(p1::near_field_stencil(d.dx, d.dy, near_radius_of(d, p.near_radius), f.texel_size));
+      light_near.push_back(
+          p1::near_field_stencil(d.dx, d.dy, near_radius_of(d, p.near_radius), f.texel_size));
     }
     const RunControl light_rc = sub_progress(rc, main_share, 1 - main_share);
     sweep_lines(f, ls, light_rc, make_worker, [&](int li, int i, int j, const TexelTaps& t) {
