@@ -300,7 +300,7 @@ TEST(ReferenceHorizons, AddedForTheMethodsThatBakeThem) {
   LayerSet method;
   method.width = method.height = 9;
   std::vector<std::string> names;
-  for (int k = 0; k < 5; ++k) names.push_back("k" + std::to_string(k));
+  for (int k = 0; k < 5; ++k) names.push_back(std::string(1, 'k') + std::to_string(k));
   method.add("horizon", names);
   LayerSet reference;
   reference.width = reference.height = 9;

@@ -61,7 +61,8 @@ LayerSet p1_bake_block(const Scene& scene, const nlohmann::json& params, int blo
   };
   put("ao", s.ao), put("vsky", s.vsky), put("rgb", s.rgb), put("bent", s.bent);
   put("fao", s.fao), put("fdr", s.fdr), put("fdg", s.fdg), put("fdb", s.fdb);
-  const std::string at = "@" + std::to_string(s.k_begin);
+  std::string at = "@";  // appended, not "@" + ...: GCC 12's false -Wrestrict on that form
+  at += std::to_string(s.k_begin);
   const std::vector<std::string> block_channels = indexed_channels(s.k_end - s.k_begin);
   if (!s.horizon.empty()) out.adopt("horizon" + at, block_channels, std::move(s.horizon));
   if (!s.horizon_distance.empty())
