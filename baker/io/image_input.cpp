@@ -79,13 +79,15 @@ void check_exr_header(const fs::path& file, const InputSite& site) {
     unsigned char size_bytes[4] = {};
     if (!read_string(type) || !in.read(reinterpret_cast<char*>(size_bytes), 4))
       fail(site, file, "cannot read the image: a truncated or corrupt EXR header");
-    const std::int32_t size = std::int32_t(std::uint32_t(size_bytes[0]) | std::uint32_t(size_bytes[1]) << 8 |
-                                           std::uint32_t(size_bytes[2]) << 16 | std::uint32_t(size_bytes[3]) << 24);
+    const std::int32_t size =
+        std::int32_t(std::uint32_t(size_bytes[0]) | std::uint32_t(size_bytes[1]) << 8 |
+                     std::uint32_t(size_bytes[2]) << 16 | std::uint32_t(size_bytes[3]) << 24);
     const std::uint64_t at = std::uint64_t(in.tellg());
     if (size < 0 || at + std::uint64_t(size) > length)
       fail(site, file,
-           "cannot read the image: its EXR header's attribute \"" + printable(name) + "\" claims " + std::to_string(size) +
-               " bytes, more than the file's " + std::to_string(length) + " (corrupt or truncated?)");
+           "cannot read the image: its EXR header's attribute \"" + printable(name) + "\" claims " +
+               std::to_string(size) + " bytes, more than the file's " + std::to_string(length) +
+               " (corrupt or truncated?)");
     in.seekg(std::streamoff(size), std::ios::cur);
   }
 }
