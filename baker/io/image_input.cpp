@@ -24,7 +24,7 @@ namespace {
 // OpenImageIO's messages can span lines; keep the first non-empty one.
 std::string first_line(std::string s) {
   while (!s.empty() && (s.front() == '\n' || s.front() == ' ')) s.erase(s.begin());
-  const auto nl = s.find('\n');
+  const auto nl = s.find_first_of("\n\r");  // (a carriage return in a channel name too: one line)
   if (nl != std::string::npos) s.resize(nl);
   return s.empty() ? std::string("unknown error") : s;
 }
