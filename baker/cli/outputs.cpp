@@ -8,9 +8,9 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <stdexcept>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string_view>
 
 #include "cli/texture_plan.hpp"
@@ -186,8 +186,8 @@ void check_layers_finite(const std::string& stem, const LayerSet& layers) {
       std::snprintf(value, sizeof value, "%g", double(v));
       throw std::runtime_error(stem + ": layer " + layer.name + ": texel (" +
                                std::to_string(texel % std::size_t(layers.width)) + ", " +
-                               std::to_string(texel / std::size_t(layers.width)) + ") channel " +
-                               layer.name + "." + layer.channels[k % nc] + " is " + value +
+                               std::to_string(texel / std::size_t(layers.width)) + ") channel " + layer.name +
+                               "." + layer.channels[k % nc] + " is " + value +
                                "; nothing of this job was written (a non-finite result is a bug or an input "
                                "beyond the method's range: please report it)");
     }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <memory>
 
@@ -23,7 +24,7 @@ namespace {
 // OpenImageIO's messages can span lines; keep the first non-empty one.
 std::string first_line(std::string s) {
   while (!s.empty() && (s.front() == '\n' || s.front() == ' ')) s.erase(s.begin());
-  const auto nl = s.find('\n');
+  const auto nl = s.find_first_of("\n\r");  // (a carriage return in a channel name too: one line)
   if (nl != std::string::npos) s.resize(nl);
   return s.empty() ? std::string("unknown error") : s;
 }
@@ -32,6 +33,22 @@ std::string first_line(std::string s) {
 // file is shorter: a 500-byte file took 1.7 GB and 13 s to refuse (found by tests/fuzz/fuzz_environment).
 // Walks the header's attributes (name, type, int32 size, value; an empty name ends a header, multi-part
 // files have several) and refuses a size beyond the file before OpenEXR reads it. Not an EXR: nothing.
+// A name from a file, for a one-line message: control bytes as \xNN.
+std::string printable(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    const unsigned char u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u != 0x7f) {
+      out.push_back(c);
+    } else {
+      char hex[5];
+      std::snprintf(hex, sizeof hex, "\\x%02x", unsigned(u));
+      out += hex;
+    }
+  }
+  return out;
+}
+
 void check_exr_header(const fs::path& file, const InputSite& site) {
   std::ifstream in(file, std::ios::binary);
   unsigned char head[8] = {};
@@ -62,13 +79,15 @@ void check_exr_header(const fs::path& file, const InputSite& site) {
     unsigned char size_bytes[4] = {};
     if (!read_string(type) || !in.read(reinterpret_cast<char*>(size_bytes), 4))
       fail(site, file, "cannot read the image: a truncated or corrupt EXR header");
-    const std::int32_t size = std::int32_t(std::uint32_t(size_bytes[0]) | std::uint32_t(size_bytes[1]) << 8 |
-                                           std::uint32_t(size_bytes[2]) << 16 | std::uint32_t(size_bytes[3]) << 24);
+    const std::int32_t size =
+        std::int32_t(std::uint32_t(size_bytes[0]) | std::uint32_t(size_bytes[1]) << 8 |
+                     std::uint32_t(size_bytes[2]) << 16 | std::uint32_t(size_bytes[3]) << 24);
     const std::uint64_t at = std::uint64_t(in.tellg());
     if (size < 0 || at + std::uint64_t(size) > length)
       fail(site, file,
-           "cannot read the image: its EXR header's attribute \"" + name + "\" claims " + std::to_string(size) +
-               " bytes, more than the file's " + std::to_string(length) + " (corrupt or truncated?)");
+           "cannot read the image: its EXR header's attribute \"" + printable(name) + "\" claims " +
+               std::to_string(size) + " bytes, more than the file's " + std::to_string(length) +
+               " (corrupt or truncated?)");
     in.seekg(std::streamoff(size), std::ios::cur);
   }
 }

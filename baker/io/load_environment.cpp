@@ -146,15 +146,17 @@ class Loader {
       const std::string where = "pixel (" + std::to_string(i % std::size_t(img.width)) + ", " +
                                 std::to_string(i / std::size_t(img.width)) + ")";
       if (!finite)
-        fail(key, file, where + " is not finite (NaN or Inf" +
-                            (intensity_ != 1 ? " times the intensity " + std::to_string(intensity_) : "") +
-                            "); an environment must be finite everywhere");
+        fail(key, file,
+             where + " is not finite (NaN or Inf" +
+                 (intensity_ != 1 ? " times the intensity " + std::to_string(intensity_) : "") +
+                 "); an environment must be finite everywhere");
       char value[96];
       std::snprintf(value, sizeof value, " is negative (%g, %g, %g in linear RGB)", double(p.r), double(p.g),
                     double(p.b));
       fail(key, file,
-           where + value + "; radiance must be >= 0 (a colour space conversion of out-of-gamut colours "
-                           "can make negatives: convert the image to linear Rec.709 and clamp at 0 first)");
+           where + value +
+               "; radiance must be >= 0 (a colour space conversion of out-of-gamut colours "
+               "can make negatives: convert the image to linear Rec.709 and clamp at 0 first)");
     }
     return {img.width, img.height, std::move(img.pixels)};
   }

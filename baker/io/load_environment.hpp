@@ -22,8 +22,9 @@ struct EnvironmentLoadOptions {
 // solid-angle-weighted mean of up to 4 x 4 bilinear samples. Relative paths resolve against `base_dir`.
 // Problems (missing file, corrupt image, wrong aspect, unequal cube faces, unknown colour space, an
 // image over 2^27 pixels, pixels that are negative or
-// not finite after the conversion to linear and the intensity) -> InputError at the key's JSON pointer; two sources at
-// once -> InputError at the object's pointer. No source key at all -> uniform radiance 1 (times intensity).
+// not finite after the conversion to linear and the intensity) -> InputError at the key's JSON pointer; two
+// sources at once -> InputError at the object's pointer. No source key at all -> uniform radiance 1 (times
+// intensity).
 EnvironmentLighting load_environment(const nlohmann::json& environment, const std::filesystem::path& base_dir,
                                      const EnvironmentLoadOptions& options = {});
 

@@ -242,7 +242,8 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
   // number or "from_file"), the branches whose type or constant did not match say nothing about it: keep
   // the branch that did ("must be <= 1", not also "wrong type").
   auto says_nothing = [](const SchemaViolation& v) {
-    return v.message == "wrong type" || v.message.rfind("failed to match expected value set by 'const'", 0) == 0;
+    return v.message == "wrong type" ||
+           v.message.rfind("failed to match expected value set by 'const'", 0) == 0;
   };
   std::vector<SchemaViolation> kept;
   for (const SchemaViolation& v : out) {

@@ -22,7 +22,8 @@ namespace hfbake::fuzz {
 inline void check_error_line(const std::string& line, const std::string& file) {
   if (line.find('\n') != std::string::npos || line.find('\r') != std::string::npos)
     finding("an error message spans lines: " + line);
-  if (line.rfind(file, 0) != 0) finding("an error message does not start with the file " + file + ": " + line);
+  if (line.rfind(file, 0) != 0)
+    finding("an error message does not start with the file " + file + ": " + line);
 }
 
 // A per-process scratch folder (in $TMPDIR, /dev/shm when there is one: no disk writes per input).
@@ -40,10 +41,11 @@ inline const std::filesystem::path& scratch_dir() {
 }
 
 // Writes the bytes to <scratch>/<name> and returns the path.
-inline std::filesystem::path write_scratch(const std::string& name, const unsigned char* data, std::size_t size) {
+inline std::filesystem::path write_scratch(const std::string& name, const unsigned char* data,
+                                           std::size_t size) {
   const std::filesystem::path p = scratch_dir() / name;
-  std::ofstream(p, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data),
-                                                             std::streamsize(size));
+  std::ofstream(p, std::ios::binary | std::ios::trunc)
+      .write(reinterpret_cast<const char*>(data), std::streamsize(size));
   return p;
 }
 

@@ -32,7 +32,9 @@ std::string failure(const LayerSet& s) {
   return "";
 }
 
-TEST(FiniteOutputs, FiniteLayersPass) { EXPECT_EQ(failure(layers_5x4()), ""); }
+TEST(FiniteOutputs, FiniteLayersPass) {
+  EXPECT_EQ(failure(layers_5x4()), "");
+}
 
 TEST(FiniteOutputs, TheFirstNonFiniteTexelIsNamedWithItsLayerAndChannel) {
   LayerSet s = layers_5x4();
@@ -52,8 +54,8 @@ TEST(FiniteOutputs, HorizonDistanceMayBePlusInfinityOnly) {
   d.data[7] = std::numeric_limits<float>::infinity();
   EXPECT_EQ(failure(s), "");
   d.data[9] = std::numeric_limits<float>::quiet_NaN();  // texel 4, channel 001
-  EXPECT_EQ(failure(s).rfind("p1: layer horizon_distance: texel (4, 0) channel horizon_distance.001 is nan", 0),
-            0u)
+  EXPECT_EQ(
+      failure(s).rfind("p1: layer horizon_distance: texel (4, 0) channel horizon_distance.001 is nan", 0), 0u)
       << failure(s);
 }
 

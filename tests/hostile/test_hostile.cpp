@@ -100,9 +100,9 @@ json base_job() {
 // What a case does in its folder: writes its files and returns hfbake's arguments.
 struct CaseSetup {
   std::vector<std::string> args;
-  std::string file;     // the file the error names ("" = the job, dir/job.json)
-  std::string pointer;  // the JSON pointer (or "line L, column C" for malformed JSON) it names
-  std::string what;     // a phrase the message holds
+  std::string file;      // the file the error names ("" = the job, dir/job.json)
+  std::string pointer;   // the JSON pointer (or "line L, column C" for malformed JSON) it names
+  std::string what;      // a phrase the message holds
   bool bake_too = true;  // a validate case: bake must refuse it the same way
 };
 
@@ -130,7 +130,9 @@ CaseSetup both(const std::string& job, std::string pointer, std::string what) {
 std::vector<Case> cases() {
   std::vector<Case> c;
   auto add = [&](std::string name, std::function<CaseSetup(const fs::path&)> setup, int exit_code = 2,
-                 int lines = 1) { c.push_back({std::move(name), std::move(setup), exit_code, lines}); };
+                 int lines = 1) {
+    c.push_back({std::move(name), std::move(setup), exit_code, lines});
+  };
 
   // --- the parser ---------------------------------------------------------------------------------------
   add("NumberBeyondDouble", [](const fs::path& d) {
@@ -163,7 +165,9 @@ std::vector<Case> cases() {
     j["description"] = std::string(17u << 20, 'x');
     return both(write_job(d, j), "", "may be at most 16777216");
   });
-  add("DevZeroAsJob", [](const fs::path&) { return CaseSetup{{"validate", "/dev/zero"}, "/dev/zero", "", "not a regular file"}; });
+  add("DevZeroAsJob", [](const fs::path&) {
+    return CaseSetup{{"validate", "/dev/zero"}, "/dev/zero", "", "not a regular file"};
+  });
   add("FifoAsJob", [](const fs::path& d) {
     mkfifo((d / "job.json").c_str(), 0600);
     return both((d / "job.json").string(), "", "not a regular file");
@@ -172,11 +176,14 @@ std::vector<Case> cases() {
     fs::create_directories(d / "job.json");
     return CaseSetup{{"validate", (d / "job.json").string()}, "", "", "not a regular file", false};
   });
-  add("FolderAsJobBake", [](const fs::path& d) {  // bake's command line parser (CLI11) refuses it, in its words
-    fs::create_directories(d / "job.json");
-    return CaseSetup{{"bake", (d / "job.json").string()}, "command line", "jobs",
-                     "directory: " + (d / "job.json").string()};
-  });
+  add("FolderAsJobBake",
+      [](const fs::path& d) {  // bake's command line parser (CLI11) refuses it, in its words
+        fs::create_directories(d / "job.json");
+        return CaseSetup{{"bake", (d / "job.json").string()},
+                         "command line",
+                         "jobs",
+                         "directory: " + (d / "job.json").string()};
+      });
 
   // --- ranges: values a user could mistype ------------------------------------------------------------
   auto range = [&](std::string name, std::function<void(json&)> edit, std::string pointer) {
@@ -186,27 +193,47 @@ std::vector<Case> cases() {
       return both(write_job(d, j), pointer, "");
     });
   };
-  range("TexelSize1e308", [](json& j) { j["height"]["texel_size"] = 1e308; }, "/height/texel_size");
-  range("TexelSizeDenormal", [](json& j) { j["height"]["texel_size"] = 1e-310; }, "/height/texel_size");
-  range("AlbedoFive", [](json& j) { j["surface"] = {{"albedo", 5}}; }, "/surface/albedo");
-  range("LightIrradiance1e308",
-        [](json& j) {
-          j["lights"] = {{{"directional", {{"direction", {0, 0, 1}}, {"irradiance", 1e308}}}}};
-        },
-        "/lights/0/directional/irradiance");
-  range("TinyLightDirection",
-        [](json& j) {
-          j["lights"] = {{{"directional", {{"direction", {1e-200, 0, 1e-200}}, {"irradiance", 1}}}}};
-        },
-        "/lights/0/directional/direction");
-  range("ProceduralSizeBeyondTheLimit",
-        [](json& j) { j["height"]["procedural"]["size"] = {2, 2000000}; }, "/height/procedural/size/1");
+  range(
+      "TexelSize1e308", [](json& j) { j["height"]["texel_size"] = 1e308; }, "/height/texel_size");
+  range(
+      "TexelSizeDenormal", [](json& j) { j["height"]["texel_size"] = 1e-310; }, "/height/texel_size");
+  range(
+      "AlbedoFive",
+      [](json& j) {
+        j["surface"] = {{"albedo", 5}};
+      },
+      "/surface/albedo");
+  range(
+      "LightIrradiance1e308",
+      [](json& j) {
+        j["lights"] = {{{"directional", {{"direction", {0, 0, 1}}, {"irradiance", 1e308}}}}};
+      },
+      "/lights/0/directional/irradiance");
+  range(
+      "TinyLightDirection",
+      [](json& j) {
+        j["lights"] = {{{"directional", {{"direction", {1e-200, 0, 1e-200}}, {"irradiance", 1}}}}};
+      },
+      "/lights/0/directional/direction");
+  range(
+      "ProceduralSizeBeyondTheLimit",
+      [](json& j) {
+        j["height"]["procedural"]["size"] = {2, 2000000};
+      },
+      "/height/procedural/size/1");
   // The memory estimate itself used to allocate for the sweeps' plan (8 GB for this one) before refusing.
-  range("ProceduralMillionSquared",
-        [](json& j) { j["height"]["procedural"]["size"] = {1000000, 1000000}; }, "/height");
-  range("EnvironmentRotation1e308",
-        [](json& j) { j["environment"] = {{"sky", json::object()}, {"rotation_deg", 1e308}}; },
-        "/environment/rotation_deg");
+  range(
+      "ProceduralMillionSquared",
+      [](json& j) {
+        j["height"]["procedural"]["size"] = {1000000, 1000000};
+      },
+      "/height");
+  range(
+      "EnvironmentRotation1e308",
+      [](json& j) {
+        j["environment"] = {{"sky", json::object()}, {"rotation_deg", 1e308}};
+      },
+      "/environment/rotation_deg");
 
   // --- the data: validate reads what bake reads --------------------------------------------------------
   add("TruncatedPng", [](const fs::path& d) {
@@ -295,21 +322,30 @@ std::vector<Case> cases() {
     j["height"] = {{"image", "h.png"}};
     return CaseSetup{{"bake", write_job(d, j), "--no-cache", "--quiet"}, "", "/height/image", ""};
   });
-  add("BakeCollidingJobs", [](const fs::path& d) {
-    fs::create_directories(d / "x");
-    fs::create_directories(d / "y");
-    const std::string a = write_job(d, base_job(), "x/job.json"), b = write_job(d, base_job(), "y/job.json");
-    return CaseSetup{{"bake", a, b, "--out", (d / "out").string(), "--quiet"}, a, "/name", "would be the same files"};
-  }, 2, 2);
+  add(
+      "BakeCollidingJobs",
+      [](const fs::path& d) {
+        fs::create_directories(d / "x");
+        fs::create_directories(d / "y");
+        const std::string a = write_job(d, base_job(), "x/job.json"),
+                          b = write_job(d, base_job(), "y/job.json");
+        return CaseSetup{
+            {"bake", a, b, "--out", (d / "out").string(), "--quiet"}, a, "/name", "would be the same files"};
+      },
+      2, 2);
   add("SummaryIntoAFileNotAFolder", [](const fs::path& d) {
     std::ofstream(d / "file") << "x";
     json j = base_job();
     j["output"]["dir"] = "elsewhere";  // the job bakes; only its summary cannot be written
-    return CaseSetup{{"bake", write_job(d, j), "--quiet", "--no-cache", "--summary", (d / "file/s.json").string()},
-                 (d / "file/s.json").string(), "", "cannot write summary"};
+    return CaseSetup{
+        {"bake", write_job(d, j), "--quiet", "--no-cache", "--summary", (d / "file/s.json").string()},
+        (d / "file/s.json").string(),
+        "",
+        "cannot write summary"};
   });
   add("CompareReportWithWrongTypes", [](const fs::path& d) {  // found by fuzz_report: compare aborted
-    const fs::path seed = fs::path(HFBAKE_SOURCE_DIR) / "tests/fuzz/regressions/report/scene_hash_not_a_string";
+    const fs::path seed =
+        fs::path(HFBAKE_SOURCE_DIR) / "tests/fuzz/regressions/report/scene_hash_not_a_string";
     std::ifstream in(seed);
     const std::string text{std::istreambuf_iterator<char>(in), {}};
     const auto sep = text.find("\n@@\n");
@@ -318,7 +354,8 @@ std::vector<Case> cases() {
     write_text(d, text.substr(0, sep), "a/report.json");
     write_text(d, text.substr(sep + 4), "b/report.json");
     return CaseSetup{{"compare", (d / "a").string(), (d / "b").string()},
-                     (d / "a/report.json").string() + " vs " + (d / "b/report.json").string(), "",
+                     (d / "a/report.json").string() + " vs " + (d / "b/report.json").string(),
+                     "",
                      "not a report.json as hfbake writes it"};
   });
   return c;
@@ -396,7 +433,8 @@ TEST(Staging, AStageWhoseProcessIdWasReusedIsRemovedAndALiveOwnersIsKept) {
   gethostname(host, sizeof host - 1);
   const unsigned long long start = start_time_of(live);
   const std::string id = std::to_string(live);
-  const fs::path reused = dir / "out" / (".hfbake-staging-t-" + id + "+" + std::to_string(start + 1) + "@" + host);
+  const fs::path reused =
+      dir / "out" / (".hfbake-staging-t-" + id + "+" + std::to_string(start + 1) + "@" + host);
   const fs::path owner = dir / "out" / (".hfbake-staging-u-" + id + "+" + std::to_string(start) + "@" + host);
   for (const fs::path& p : {reused, owner}) {
     fs::create_directories(p);

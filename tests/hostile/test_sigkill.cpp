@@ -43,7 +43,9 @@ int wait_exit(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
 }
 
-bool is_stage(const fs::path& p) { return p.filename().string().rfind(".hfbake-staging-", 0) == 0; }
+bool is_stage(const fs::path& p) {
+  return p.filename().string().rfind(".hfbake-staging-", 0) == 0;
+}
 
 // The files outside staging folders: what a later bake or compare can take for outputs.
 std::vector<fs::path> visible_files(const fs::path& dir) {
@@ -90,7 +92,8 @@ int stages_in(const fs::path& dir) {
 }
 
 TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBakeCleansUp) {
-  const fs::path dir = fs::temp_directory_path() / ("hfbake_sigkill_" + std::to_string(std::random_device{}()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("hfbake_sigkill_" + std::to_string(std::random_device{}()));
   fs::create_directories(dir);
   // Methods, previews, a reference, report.json and report.html: every kind of output, written over about
   // a second; the reference cache is this test's own (a killed store must not damage later hits).
@@ -98,7 +101,8 @@ TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBak
       {"version", 1},
       {"name", "k"},
       {"height", {{"procedural", {{"kind", "fractal"}, {"size", {48, 48}}, {"seed", 5}}}}},
-      {"bake", {{{"method", "p1"}, {"directions", 8}}, {{"method", "hbao"}, {"directions", 4}, {"radius", 4}}}},
+      {"bake",
+       {{{"method", "p1"}, {"directions", 8}}, {{"method", "hbao"}, {"directions", 4}, {"radius", 4}}}},
       {"reference", {{"samples", 64}, {"seed", 1}}},
       {"output", {{"dir", "out"}, {"previews", true}}}};
   const fs::path job_file = dir / "k.json", out = dir / "out", err = dir / "stderr.txt";
@@ -136,14 +140,15 @@ TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBak
       gethostname(host, sizeof host - 1);
       const fs::path stage = out / (".hfbake-staging-k-" + std::to_string(dead) + "@" + host);
       fs::create_directories(stage);
-      fs::copy_file(dir / "baseline" / "report.json", stage / "report.json", fs::copy_options::overwrite_existing);
+      fs::copy_file(dir / "baseline" / "report.json", stage / "report.json",
+                    fs::copy_options::overwrite_existing);
     }
     if (fs::exists(out / "report.json")) {
       const fs::path cmp = dir / "compare.json";
       fs::remove(cmp);
-      const int code = wait_exit(start({"compare", out.string(), (dir / "baseline").string(), "--json",
-                                        cmp.string(), "--quiet"},
-                                       dir / "compare_err.txt"));
+      const int code = wait_exit(
+          start({"compare", out.string(), (dir / "baseline").string(), "--json", cmp.string(), "--quiet"},
+                dir / "compare_err.txt"));
       EXPECT_TRUE(code == 0 || code == 1) << code;
       std::ifstream in(cmp);
       const nlohmann::json c = nlohmann::json::parse(in, nullptr, false);

@@ -244,8 +244,8 @@ TEST_F(Cache, AFifoOrAFolderInAnEntrysPlaceDoesNotHang) {
   fs::create_directories(cache.entry_path("dir"));
   EXPECT_EQ(cache.load("dir", e), CacheLookup::corrupt);
   // A header line without an end (1 MiB and more) is damage too.
-  std::ofstream(cache.entry_path("long"), std::ios::binary)
-      << "hfbake reference cache 1\n" << std::string(std::size_t(2) << 20, '{');
+  std::ofstream(cache.entry_path("long"), std::ios::binary) << "hfbake reference cache 1\n"
+                                                            << std::string(std::size_t(2) << 20, '{');
   EXPECT_EQ(cache.load("long", e), CacheLookup::corrupt);
 }
 
