@@ -2,11 +2,26 @@
 // Thread-safe: several jobs and the methods' worker threads report concurrently.
 #pragma once
 
+#include <time.h>
+
 #include <chrono>
 #include <mutex>
 #include <string>
 
 namespace hfbake {
+
+// Wall seconds since t0.
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// CPU seconds of the whole process (all worker threads): the cost of a method on a shared, loaded machine,
+// where wall time measures the other users too.
+inline double process_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
 
 class Progress {
  public:

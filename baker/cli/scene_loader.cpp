@@ -145,7 +145,8 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     parts->insert(parts->begin(), {"scene", std::size_t(scene), "a smaller field"});
     if (job.has_reference)
       parts->push_back({"reference", std::size_t(reference),
-                        "fewer reference.layers (8 bytes a texel a channel; the sample count does not change it) or bounces"});
+                        "fewer reference.layers (8 bytes a texel a channel; the sample count does not change "
+                        "it) or bounces"});
   }
   return std::size_t(scene + peak);
 }

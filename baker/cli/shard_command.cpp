@@ -7,6 +7,7 @@
 #include <set>
 
 #include "cli/method_dispatch.hpp"
+#include "cli/progress.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
@@ -19,15 +20,6 @@ namespace hfbake {
 namespace fs = std::filesystem;
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-double process_cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
 
 ShardIdentity identity_of(const Job& job, ShardId id, int width, int height) {
   return {job.name, job_content_hash(job), hfbake_version(), id, width, height};

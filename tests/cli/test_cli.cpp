@@ -13,8 +13,8 @@
 #include <OpenImageIO/imageio.h>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -482,7 +482,8 @@ TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
   const fs::path q = write_job("p2.json", p2);
   const Result r = hfbake("validate " + q.string() + " --memory-limit 1G --quiet");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("; the largest part, p2, shrinks with its directions (p1's horizons"), std::string::npos)
+  EXPECT_NE(r.err.find("; the largest part, p2, shrinks with its directions (p1's horizons"),
+            std::string::npos)
       << r.err;
   EXPECT_EQ(hfbake("validate " + p.string() + " --memory-limit 8G --quiet").exit_code, 0);
   const Result bad = hfbake("validate " + p.string() + " --memory-limit lots");

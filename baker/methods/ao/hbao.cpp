@@ -267,6 +267,21 @@ HbaoSettings read_hbao_settings(Params& in, const FieldShape& field) {
   return s;
 }
 
+namespace {
+
+// The layers of a finished hbao (bake and the farm's merge alike), tagged with how it marched.
+LayerSet hbao_layers(const HeightField& field, const HbaoSettings& s, const std::vector<std::string>& layers,
+                     std::vector<float>&& obsc, std::vector<float>&& bent) {
+  LayerSet out = obscurance_layers_xyz(field.width, field.height, layers, std::move(obsc), std::move(bent));
+  if (s.surface == MarchSurface::triangles)
+    out.attributes.emplace_back("hfbake:hbao:surface", "triangles");
+  else
+    out.attributes.emplace_back("hfbake:hbao:steps_per_direction", std::to_string(int(s.reach / s.step)));
+  return out;
+}
+
+}  // namespace
+
 LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
   const HeightField& field = scene.field;
   Params in(params);
@@ -275,12 +290,7 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
   std::vector<float> obsc(field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);  // [3 * texel + c]
   hbao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
-  LayerSet out = obscurance_layers_xyz(field.width, field.height, layers, std::move(obsc), std::move(bent));
-  if (s.surface == MarchSurface::triangles)
-    out.attributes.emplace_back("hfbake:hbao:surface", "triangles");
-  else
-    out.attributes.emplace_back("hfbake:hbao:steps_per_direction", std::to_string(int(s.reach / s.step)));
-  return out;
+  return hbao_layers(field, s, layers, std::move(obsc), std::move(bent));
 }
 
 namespace {
@@ -313,12 +323,7 @@ LayerSet hbao_finish_blocks(const Scene& scene, const nlohmann::json& params, La
   hbao_field_finish(field, s, sums.find("occluded#2f")->data.data(), bs ? bs->data.data() : nullptr,
                     obsc.data(), bent.empty() ? nullptr : bent.data());
   sums = LayerSet();
-  LayerSet out = obscurance_layers_xyz(field.width, field.height, layers, std::move(obsc), std::move(bent));
-  if (s.surface == MarchSurface::triangles)
-    out.attributes.emplace_back("hfbake:hbao:surface", "triangles");
-  else
-    out.attributes.emplace_back("hfbake:hbao:steps_per_direction", std::to_string(int(s.reach / s.step)));
-  return out;
+  return hbao_layers(field, s, layers, std::move(obsc), std::move(bent));
 }
 
 }  // namespace
