@@ -101,6 +101,7 @@ struct SweepSpec {
   bool tile_nearest = true;  // sweep_lines_tiled: also fill SweepTile::nearest (off: nearest is null)
   bool tile_taps = false;    // sweep_lines_tiled: also fill SweepTile::lo, hi, w_hi (both taps apart)
   bool tile_values = true;   // sweep_lines_tiled: fill SweepTile::value (off: value is null)
+  bool tile_strip = false;   // sweep_lines_tiled: also fill SweepTile::strip (see strip_line)
   bool zero_buffers =
       true;  // zero the result buffers first (off: the worker writes every receiver's C floats)
 };
@@ -169,9 +170,10 @@ struct SweepLine {
 
 // What the per-texel visitor gets for one (texel, direction): the two samples it blends.
 struct TexelTaps {
-  const float* lo = nullptr;  // result of line l0 at the texel's column (channels floats)
-  const float* hi = nullptr;  // result of line l0 + 1
-  float w_hi = 0;             // weight of hi (0 <= w_hi < 1); lo has 1 - w_hi
+  const float* lo = nullptr;     // result of line l0 at the texel's column (channels floats)
+  const float* hi = nullptr;     // result of line l0 + 1
+  const float* strip = nullptr;  // result of line l0 + 1 always, also at a lone border tap (strip_line)
+  float w_hi = 0;                // weight of hi (0 <= w_hi < 1); lo has 1 - w_hi
   float value(int c) const { return w_hi == 0 ? lo[c] : lo[c] * (1 - w_hi) + hi[c] * w_hi; }
   const float* nearest() const { return w_hi > 0.5f ? hi : lo; }
 };
@@ -204,6 +206,17 @@ inline bool lone_border_tap(const SweepDirection& dir, int v, float frac) {
   return !dir.repeat && frac > 0 && dir.n_minor > 1 && (v == 0 || v == dir.n_minor - 1);
 }
 
+// Strips: the texels whose centres lie between line l - 1 and line l (v_{l-1}(u) <= v0 < v_l(u) on their
+// column u, i.e. floor(v0 - u * slope) = l - 1) form strip l; each column has exactly one texel of each
+// strip, and every texel's ray towards phi_k stays inside its strip. A line visitor that computes per strip
+// (on line l, the texels of strip l: P1's far field) writes them as line l's receivers; TexelTaps::strip and
+// SweepTile::strip hand each texel its strip's result. Unlike the two taps, a strip never needs a border
+// rule: every texel of a clamp field has both its lines among the direction's lines (plan_direction), even
+// where one of them runs off the field. strip_line: the line index l of texel (u, v0)'s strip (unwrapped).
+inline int strip_line(const SweepDirection& dir, int u, int v0) {
+  return floor_int(double(v0) - double(u) * dir.slope) + 1;
+}
+
 namespace detail {
 
 // texel_taps with the results of relative line p = l - line_begin (0 .. lines() - 1) at line_base(p).
@@ -226,6 +239,7 @@ TexelTaps texel_taps_at(const SweepDirection& dir, LineBase&& line_base, int cha
   const std::size_t r = std::size_t(dir.receiver_index(u)) * std::size_t(channels);
   t.lo = line_base(la) + r;
   t.hi = line_base(lb) + r;
+  t.strip = t.hi;  // line l0 + 1 (la + 1, wrapped in repeat mode): never clamped on the field
   // clamp: a tap off the field is no receiver; the border texel takes its other (inside) tap alone.
   if (lone_border_tap(dir, v0, t.w_hi)) {
     if (v0 == 0) t.lo = t.hi;
@@ -299,6 +313,8 @@ struct SweepTile {
   const float* w_hi = nullptr;
   const float* off_lo = nullptr;  // signed offset (texels) along the minor axis from the texel to lo's sample
   const float* off_hi = nullptr;  // ... and to hi's sample (each [y * width + x])
+  // With SweepSpec::tile_strip: the result of the texel's strip (TexelTaps::strip, strip_line), same layout.
+  const float* strip = nullptr;
 };
 
 namespace detail {
@@ -328,6 +344,28 @@ struct SweepStream {
 };
 SweepStream plan_stream(const HeightField& field, const SweepDirection& dir, std::size_t budget_bytes,
                         int channels, bool with_order);
+
+// The strip results (TexelTaps::strip) of the texels [i0, i1) x [j0, j1) into out[(c * height + y) * width +
+// x].
+inline void gather_strips(const SweepDirection& dir, const float* const* lines, int C, int i0, int i1, int j0,
+                          int j1, float* out) {
+  const std::size_t plane = std::size_t(i1 - i0) * std::size_t(j1 - j0);
+  for (int j = j0; j < j1; ++j)
+    for (int i = i0; i < i1; ++i) {
+      const int u = dir.x_major ? i : j, v0 = dir.x_major ? j : i;
+      int p = strip_line(dir, u, v0) - 1 - dir.line_begin;  // as texel_taps_at's la, then la + 1
+      if (dir.repeat) {
+        p %= dir.n_minor;
+        if (p < 0) p += dir.n_minor;
+        p = p + 1 == dir.n_minor ? 0 : p + 1;
+      } else {
+        p = std::clamp(p, 0, dir.lines() - 2) + 1;
+      }
+      const float* src = lines[p] + std::size_t(dir.receiver_index(u)) * std::size_t(C);
+      const std::size_t at = std::size_t(j - j0) * std::size_t(i1 - i0) + std::size_t(i - i0);
+      for (int c = 0; c < C; ++c) out[c * plane + at] = src[c];
+    }
+}
 
 // Lines of each batch (whole, or streamed), then tile_fn(k0, nb, dirs, lines, i0, i1, j0, j1) for every
 // 32 x 32 tile once per batch (tiles in parallel), where lines[b][l - line_begin] holds line l of direction
@@ -489,7 +527,7 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
                        MakeWorker&& make_worker, TileVisitor&& tile_visitor) {
   const int C = spec.channels;
   tbb::enumerable_thread_specific<std::vector<float>> scratch(
-      [&] { return std::vector<float>(std::size_t(4 * C + 3) * 32 * 32); });
+      [&] { return std::vector<float>(std::size_t(5 * C + 3) * 32 * 32); });
   auto gather_tile = [&](int k0, int nb, const SweepDirection* dirs, const float* const* const* lines, int i0,
                          int i1, int j0, int j1) {
     std::vector<float>& tmp = scratch.local();
@@ -507,13 +545,24 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
     tile.value = spec.tile_values ? value : nullptr;
     tile.nearest = nearest;
     tile.lo = lo, tile.hi = hi, tile.w_hi = w_hi;
+    float* strip = spec.tile_strip ? tmp.data() + (4 * C + 3) * plane : nullptr;
+    tile.strip = strip;
     for (int b = 0; b < nb; ++b) {
+      if (strip && !spec.tile_values && !nearest && !lo) {
+        // Strips alone: one result per texel (its strip's line), without the taps' rules.
+        detail::gather_strips(dirs[b], lines[b], C, i0, i1, j0, j1, strip);
+        tile.k = k0 + b;
+        tile_visitor(static_cast<const SweepTile&>(tile));
+        continue;
+      }
       for (int j = j0; j < j1; ++j)
         for (int i = i0; i < i1; ++i) {
           const TexelTaps t = texel_taps(dirs[b], lines[b], C, i, j);
           const std::size_t at = std::size_t(j - j0) * tile.width + (i - i0);
           if (spec.tile_values)
             for (int c = 0; c < C; ++c) value[c * plane + at] = t.value(c);
+          if (strip)
+            for (int c = 0; c < C; ++c) strip[c * plane + at] = t.strip[c];
           if (nearest) {
             const float* n = t.nearest();
             for (int c = 0; c < C; ++c) nearest[c * plane + at] = n[c];

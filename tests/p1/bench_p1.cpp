@@ -5,11 +5,13 @@
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
+#include <atomic>
 #include <cstdio>
 #include <fstream>
 #include <map>
 #include <string>
 
+#include "methods/p1/far_horizons.hpp"
 #include "methods/p1/horizon_sweep.hpp"
 #include "methods/p1/p1.hpp"
 #include "p1_truth.hpp"
@@ -71,6 +73,81 @@ void BM_Horizons(benchmark::State& state) {
   set_counters(state, double(s.field.texel_count()) * K);
 }
 
+const HeightField& field_of(int kind, int size) {  // 0: the smooth fractal, 1: rough fBm (60 degrees)
+  static std::map<std::pair<int, int>, HeightField> cache;
+  auto it = cache.find({kind, size});
+  if (it != cache.end()) return it->second;
+  HeightField f = kind == 0 ? truth::procedural(ProceduralKind::fractal, size, size, Wrap::clamp)
+                            : truth::rough_field(size, size, 60, 0.7, 3);
+  return cache.emplace(std::make_pair(kind, size), std::move(f)).first->second;
+}
+
+// P1's far field alone (the strip search, FarHorizonWorker, as compute_p1 runs it with near_radius 2) and
+// the strip gather, summed per texel; counters: texel-directions/s and the bands searched per texel.
+// Args: field (0 fractal, 1 rough), size, K, threads.
+void BM_FarField(benchmark::State& state) {
+  const int kind = int(state.range(0)), size = int(state.range(1)), K = int(state.range(2));
+  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, int(state.range(3)));
+  const HeightField& f = field_of(kind, size);
+  std::vector<float> acc(f.texel_count());
+  SweepSpec spec;
+  spec.directions = K;
+  spec.channels = p1::FarHorizonWorker::channels();
+  spec.tile_nearest = spec.tile_values = false;
+  spec.tile_strip = true;
+  spec.zero_buffers = false;
+  std::atomic<std::uint64_t> texels{0}, bands{0};
+  struct Counting : p1::FarHorizonWorker {
+    std::atomic<std::uint64_t>*t = nullptr, *b = nullptr;
+    ~Counting() {
+      if (t) *t += texels, *b += bands;
+    }
+  };
+  for (auto _ : state) {
+    sweep_lines_tiled(
+        f, spec, RunControl{},
+        [&] {
+          Counting w;
+          w.field = &f;
+          w.far_radius = 2 * f.texel_size;
+          w.t = &texels, w.b = &bands;
+          return w;
+        },
+        [&](const SweepTile& t) {
+          const std::size_t plane = std::size_t(t.width) * t.height;
+          for (int y = 0; y < t.height; ++y)
+            for (int x = 0; x < t.width; ++x)
+              acc[f.index(t.i0 + x, t.j0 + y)] += t.strip[plane + std::size_t(y) * t.width + x];
+        });
+    benchmark::DoNotOptimize(acc.data());
+  }
+  set_counters(state, double(f.texel_count()) * K);
+  state.counters["bands/texel"] = double(bands) / std::max<double>(1, double(texels));
+}
+
+// The hull stack alone: push every sample of random lines (the worst input: no coherence) and query
+// from a point beyond each, per sample.
+void BM_HullStack(benchmark::State& state) {
+  const int n = int(state.range(0));
+  std::vector<float> z(n);
+  std::uint64_t x = 12345;
+  for (float& v : z) {
+    x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+    v = float(double(x >> 11) / 9007199254740992.0 * 100.0);
+  }
+  p1::HullStackF h;
+  double sum = 0;
+  for (auto _ : state) {
+    h.reset(n);
+    for (int i = 0; i < n; ++i) {
+      h.add(i, z[i]);
+      sum += h.query_index(i + 1.5, z[i]);
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  state.counters["samples/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsIterationInvariantRate);
+}
+
 // Horizons + lighting: ao, vsky and direct (sky through the exact tables + sun).
 void BM_P1Lighting(benchmark::State& state) {
   const int size = int(state.range(0)), K = int(state.range(1)), threads = int(state.range(2));
@@ -113,6 +190,14 @@ void HorizonArgs(benchmark::internal::Benchmark* b) {
   b->Args({4096, 16, 2});
 }
 
+BENCHMARK(BM_FarField)
+    ->Args({0, 512, 64, 1})
+    ->Args({1, 512, 64, 1})
+    ->Args({0, 1024, 64, 1})
+    ->Args({0, 1024, 64, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime();
+BENCHMARK(BM_HullStack)->Arg(1024)->Arg(16384);
 BENCHMARK(BM_Horizons)->Apply(HorizonArgs)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_P1Lighting)->Apply(HorizonArgs)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_BruteForceMarch)

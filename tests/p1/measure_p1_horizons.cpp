@@ -81,6 +81,7 @@ int main(int argc, char** argv) {
   p.near_radius = near_radius;
   p.vsky = p.direct = false;
   p.horizon = true;
+  p.horizon_distance = std::getenv("MEASURE_WORST") != nullptr;
   const P1Result r = compute_p1(scene, p, RunControl{});
 
   SweepSpec spec;
@@ -130,7 +131,7 @@ int main(int argc, char** argv) {
   for (int c = 0; c < 2; ++c) {
     const double above =
         double(std::count_if(cls[c].begin(), cls[c].end(), [](float e) { return e > 0.05f; }));
-    std::printf(" | %s p99 %.4f max %.4f (inner %.4f) >.05 %.2f%%", c == 0 ? "45deg" : "other",
+    std::printf(" | %s p99 %.2g max %.2g (inner %.2g) >.05 %.2f%%", c == 0 ? "45deg" : "other",
                 quantile(cls[c], 0.99),
                 cls[c].empty() ? 0.0 : double(*std::max_element(cls[c].begin(), cls[c].end())), inner[c],
                 100 * above / std::max<double>(1, double(cls[c].size())));
@@ -148,8 +149,11 @@ int main(int argc, char** argv) {
       const auto [i, j] = texels[order[q] / K];
       const int k = int(order[q] % K);
       const double e = march_exact_sin(f, dirs[k], i, j);
-      std::printf("  texel (%d, %d) k %d: p1 %.4f exact %.4f\n", i, j, k, r.horizon[f.index(i, j) * K + k],
-                  e);
+      double dz, run;
+      truth::march_from(f, i, j, dirs[k].dx, dirs[k].dy, 7, 0, &dz, &run);
+      std::printf("  texel (%d, %d) k %d: p1 %.4f exact %.4f; caster at %.3f (p1 %.3f)\n", i, j, k,
+                  r.horizon[f.index(i, j) * K + k], e, std::hypot(dz, run),
+                  r.horizon_distance[f.index(i, j) * K + k]);
     }
   }
   if (timed) {

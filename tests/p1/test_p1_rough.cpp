@@ -36,6 +36,7 @@ P1Result horizons(const Scene& s, int K) {
 struct Agreement {
   double p99 = 0, max = 0, above = 0;  // |sin h - sin h_exact|: 99th percentile, max, share above 0.05
   double max_inner = 0;                // max without the field's outermost texel ring
+  double max_axes = 0, max_other = 0;  // max over multiples of 45 degrees, and over the other directions
   double ao_bias = 0;                  // mean of P1's ao minus the exact horizons' ao
 };
 
@@ -47,7 +48,7 @@ Agreement against_exact_march(const Scene& s, int K) {
   std::vector<SweepDirection> dirs;
   for (int k = 0; k < K; ++k) dirs.push_back(plan_direction(f, spec, k));
   std::vector<float> err, h(K);
-  double ao_diff = 0, inner = 0;
+  double ao_diff = 0, inner = 0, axes = 0, other = 0;
   for (int j = 0; j < f.height; ++j)
     for (int i = 0; i < f.width; ++i) {
       const std::size_t idx = f.index(i, j);
@@ -58,6 +59,8 @@ Agreement against_exact_march(const Scene& s, int K) {
         err.push_back(std::fabs(r.horizon[idx * K + k] - h[k]));
         if (i > 0 && j > 0 && i < f.width - 1 && j < f.height - 1)
           inner = std::max(inner, double(err.back()));
+        double& cls = (8 * k) % K == 0 ? axes : other;
+        cls = std::max(cls, double(err.back()));
         ao += truth::ao_term(std::asin(std::clamp(double(h[k]), -1.0, 1.0)),
                              n.x * dirs[k].dx + n.y * dirs[k].dy, n.z);
       }
@@ -68,6 +71,7 @@ Agreement against_exact_march(const Scene& s, int K) {
   a.above = double(std::count_if(err.begin(), err.end(), [](float e) { return e > 0.05f; })) / err.size();
   a.max = *std::max_element(err.begin(), err.end());
   a.max_inner = inner;
+  a.max_axes = axes, a.max_other = other;
   std::nth_element(err.begin(), err.begin() + err.size() * 99 / 100, err.end());
   a.p99 = err[err.size() * 99 / 100];
   return a;
@@ -82,14 +86,16 @@ TEST(P1Rough, HorizonsMatchTheExactMarchOnRoughFields) {
                         {"rough80", truth::rough_field(64, 72, 80, 0.7, 12)},
                         {"rough70 gain .5", truth::rough_field(64, 64, 70, 0.5, 13)}};
   for (const Case& c : cases)
-    for (int K : {16, 24}) {
+    for (int K : {16, 24, 37}) {
       const Agreement a = against_exact_march(make_scene(c.field), K);
       std::printf(
-          "[rough] %-16s K=%2d |sin h - exact|: p99 %.5f max %.4f, %.3f %% above 0.05; ao bias %+.5f\n",
-          c.name, K, a.p99, a.max, 100 * a.above, a.ao_bias);
-      // Before issue 19 (a lifted blend of the two lines' casters): p99 0.1-0.3, 5-10 % above 0.05.
+          "[rough] %-16s K=%2d |sin h - exact|: p99 %.2g max %.2g (45deg %.2g, others %.2g); ao bias %+.2g\n",
+          c.name, K, a.p99, a.max, a.max_axes, a.max_other, a.ao_bias);
+      // Issue 19's aims, every texel (the border ring too) and every direction. Before issue 19 (a lifted
+      // blend of the two lines' casters): p99 0.1-0.3, max 1.0-1.2; after the first ray search (stop 21):
+      // p99 <= 0.0005 but max 0.5-0.96. The strip search is exact: measured max 2e-6 (float heights).
       EXPECT_LE(a.p99, 0.005) << c.name << " K=" << K;
-      EXPECT_LE(a.above, 0.002) << c.name << " K=" << K;
+      EXPECT_LE(a.max, 0.02) << c.name << " K=" << K;
       EXPECT_LE(std::fabs(a.ao_bias), 0.001) << c.name << " K=" << K;
     }
 }
@@ -98,22 +104,20 @@ TEST(P1Rough, HorizonsMatchTheExactMarchOnStepsAndSmoothFields) {
   struct Case {
     const char* name;
     HeightField field;
-    double max;
   };
-  const Case cases[] = {{"step 20deg", truth::step_field(64, 64, 4, 20), 0.15},
-                        {"terraces 30deg", truth::step_field(64, 64, 4, 30, 3, 12), 0.15},
-                        {"fractal", truth::procedural(ProceduralKind::fractal, 64, 64, Wrap::clamp), 0.15}};
+  const Case cases[] = {{"step 20deg", truth::step_field(64, 64, 4, 20)},
+                        {"terraces 30deg", truth::step_field(64, 64, 4, 30, 3, 12)},
+                        {"fractal", truth::procedural(ProceduralKind::fractal, 64, 64, Wrap::clamp)}};
   for (const Case& c : cases)
     for (int K : {16, 24}) {
       const Agreement a = against_exact_march(make_scene(c.field), K);
       std::printf(
-          "[steps] %-16s K=%2d |sin h - exact|: p99 %.5f max %.4f (inside the border ring %.4f); ao bias "
-          "%+.5f\n",
-          c.name, K, a.p99, a.max, a.max_inner, a.ao_bias);
+          "[steps] %-16s K=%2d |sin h - exact|: p99 %.2g max %.2g (inside the border ring %.2g; 45deg %.2g, "
+          "others %.2g); ao bias %+.2g\n",
+          c.name, K, a.p99, a.max, a.max_inner, a.max_axes, a.max_other, a.ao_bias);
+      // Before (stop 21): max 0.04-0.10 inside the border ring, more on it (one line on the field).
       EXPECT_LE(a.p99, 0.005) << c.name << " K=" << K;
-      // The border ring: see the README (a texel there has one line beside it on the field). Issue 19 aims
-      // at 0.02; measured 0.04-0.10 inside the ring (a caster beside neither line's window).
-      EXPECT_LE(a.max_inner, c.max) << c.name << " K=" << K;
+      EXPECT_LE(a.max, 0.02) << c.name << " K=" << K;
       EXPECT_LE(std::fabs(a.ao_bias), 0.001) << c.name << " K=" << K;
     }
 }

@@ -521,5 +521,53 @@ TEST(SweepStream, BufferBytesBoundTheResultsAndStayFlatForTallFields) {
   }
 }
 
+// The strip gather (SweepSpec::tile_strip, what P1's far field reads): every texel of every direction gets
+// the result of the line just above it on its column, line l with l - 1 <= v0 - u * slope < l (checked in
+// long double from the direction's slope, not with strip_line), also on the clamp border rows where one
+// of its two lines runs off the field, and the same whether the lines stream or not.
+struct LineColumnWorker {
+  static constexpr int channels() { return 2; }
+  void operator()(const SweepLine& line, float* out) const {
+    for (int n = line.first_receiver; n < line.count; ++n) {
+      out[2 * (n - line.first_receiver)] = float(line.line);
+      out[2 * (n - line.first_receiver) + 1] = float(line.dir->u(n));
+    }
+  }
+};
+
+TEST(SweepLines, StripGatherGivesEachTexelTheLineAboveIt) {
+  int checked = 0, bad = 0;
+  for (const Wrap wrap : {Wrap::clamp, Wrap::repeat})
+    for (const auto& [w, h] : {std::pair{37, 91}, std::pair{64, 64}, std::pair{200, 13}})
+      for (const std::size_t budget : {std::size_t(1), std::size_t(256) << 20}) {
+        const HeightField f = test_field(w, h, wrap);
+        SweepSpec spec;
+        spec.directions = 37;
+        spec.channels = 2;
+        spec.tile_strip = true;
+        spec.tile_values = spec.tile_nearest = false;
+        spec.max_buffer_bytes = budget;
+        sweep_lines_tiled(
+            f, spec, RunControl{}, [] { return LineColumnWorker{}; },
+            [&](const SweepTile& t) {
+              const SweepDirection d = plan_direction(f, spec, t.k);
+              const std::size_t plane = std::size_t(t.width) * t.height;
+              for (int y = 0; y < t.height; ++y)
+                for (int x = 0; x < t.width; ++x) {
+                  const int i = t.i0 + x, j = t.j0 + y, u = d.x_major ? i : j, v0 = d.x_major ? j : i;
+                  const float line = t.strip[std::size_t(y) * t.width + x];
+                  const float col = t.strip[plane + std::size_t(y) * t.width + x];
+                  const long double g = (long double)v0 - (long double)u * (long double)d.slope;
+                  long double below = g - ((long double)line - 1);  // in [0, 1) (repeat: modulo n_minor)
+                  if (d.repeat) below -= d.n_minor * std::floor(below / d.n_minor);
+                  ++checked;
+                  if (!(below >= 0 && below < 1) || int(col) != u) ++bad;
+                }
+            });
+      }
+  EXPECT_GT(checked, 0);
+  EXPECT_EQ(bad, 0) << "of " << checked;
+}
+
 }  // namespace
 }  // namespace hfbake

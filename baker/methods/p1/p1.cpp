@@ -1,6 +1,7 @@
 #include "methods/p1/p1.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include "core/direction_blocks.hpp"
 #include "core/error.hpp"
 #include "job/params.hpp"
+#include "methods/p1/far_horizons.hpp"
 #include "methods/p1/horizon_sweep.hpp"
 #include "methods/p1/lighting_table.hpp"
 
@@ -31,21 +33,19 @@ RunControl sub_progress(const RunControl& rc, double begin, double span) {
   return sub;
 }
 
-// A texel's far caster from its two lines' RayLineWorker results (channels 0-1: slot A, 2-3: slot B, at
-// stride `plane` apart from index `at`), see the tile visitor in compute_p1.
+// A texel's far caster: its strip's FarHorizonWorker result (channel 0: dz, 1: run; run +inf: none), at
+// stride `plane` apart from index `at`.
 struct FarPick {
   float dz, run;
 };
-inline FarPick far_pick(const float* lo, const float* hi, std::size_t plane, std::size_t at, float off_lo,
-                        float w_hi) {
-  if (off_lo >= 0) return {lo[at], lo[plane + at]};
-  const FarPick b{lo[2 * plane + at], lo[3 * plane + at]};
-  if (w_hi == 0) return b;
-  const FarPick a{hi[at], hi[plane + at]};
-  // The steeper (dz / run, runs > 0; run +inf: none).
-  if (a.run == std::numeric_limits<float>::infinity()) return b;
-  if (b.run == std::numeric_limits<float>::infinity()) return a;
-  return a.dz * b.run > b.dz * a.run ? a : b;
+inline FarPick far_pick(const float* strip, std::size_t plane, std::size_t at) {
+  return {strip[at], strip[plane + at]};
+}
+
+// The near field's radius in texels for direction d: near_radius, or one line step if that is longer (the
+// far field starts at least one step behind each texel: FarHorizonWorker).
+double near_radius_of(const SweepDirection& d, double near_radius) {
+  return std::max(near_radius, d.step / d.texel_size);
 }
 
 // Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
@@ -70,11 +70,10 @@ float near_slope(const HeightField& f, const std::vector<p1::NearCrossing>& sten
 }
 
 // One line worker per thread, for the K directions and for the lights' own directions.
-p1::RayLineWorker make_ray_worker(const HeightField& f, const P1Params& p) {
-  p1::RayLineWorker w;
+p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
+  p1::FarHorizonWorker w;
   w.far_radius = p.near_radius * f.texel_size;
   w.field = &f;
-  w.hull_crossings = p.far_crossings;
   return w;
 }
 
@@ -114,12 +113,12 @@ P1Params read_p1_params(Params& in) {
 SweepSpec p1_sweep_spec(const P1Params& p) {
   SweepSpec spec;
   spec.directions = p.directions;
-  spec.channels = p1::RayLineWorker::channels();
+  spec.channels = p1::FarHorizonWorker::channels();
   spec.wrap_periods = p.wrap_periods;
   spec.tile_nearest = false;
-  spec.tile_taps = true;
+  spec.tile_strip = true;
   spec.tile_values = false;
-  spec.zero_buffers = false;  // HorizonLineWorker writes every receiver
+  spec.zero_buffers = false;  // FarHorizonWorker writes every receiver
   spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
   return spec;
 }
@@ -134,8 +133,13 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p) {
                  (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) + (p.direct && p.facet_direct ? 24 : 0);
   HeightField field;  // the sweep's plan needs only the shape
   static_cast<FieldShape&>(field) = shape;
+  // Each thread's far-field worker: two direction patterns, the lines' heights, the hull (FarHorizonWorker).
+  const int longest =
+      std::max(shape.width, shape.height) * (shape.wrap == Wrap::repeat ? p.wrap_periods + 1 : 1);
+  const double workers =
+      double(tbb::this_task_arena::max_concurrency()) * double(p1::FarHorizonWorker::scratch_bytes(longest));
   return per_texel * double(shape.width) * double(shape.height) +
-         double(sweep_buffer_bytes(field, p1_sweep_spec(p)));
+         double(sweep_buffer_bytes(field, p1_sweep_spec(p))) + workers;
 }
 
 P1Params parse_p1_params(const nlohmann::json& e) {
@@ -233,7 +237,7 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
     probe.directions = K;
     for (int k = k_begin; k < k_end; ++k) {  // the block's directions
       const SweepDirection d = plan_direction(f, probe, k);
-      near[k] = p1::near_field_stencil(d.dx, d.dy, p.near_radius, f.texel_size);
+      near[k] = p1::near_field_stencil(d.dx, d.dy, near_radius_of(d, p.near_radius), f.texel_size);
       for (const p1::NearCrossing& c : near[k]) {
         near_a[k].push_back(std::ptrdiff_t(c.aj) * f.width + c.ai);
         near_b[k].push_back(std::ptrdiff_t(c.bj) * f.width + c.bi);
@@ -288,13 +292,11 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
         for (int x = 0; x < xa; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
         for (int x = xb; x < w; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
         for (int x = 0; x < w; ++x) en[x] = fast_atan(en[x]);
-        // Far field: the texel's own ray evaluated by its two lines (RayLineWorker): slot B of the line
-        // below, slot A of the line above; a texel on a line (off_lo 0), or whose line below is off a clamp
-        // field (off_lo > 0: lo is the line above), takes slot A of lo; at the last row, slot B of lo.
+        // Far field: the steepest point of the texel's own ray at least near_radius away, exact on the
+        // triangulated surface (FarHorizonWorker, by the texel's strip).
         const std::size_t row = std::size_t(y) * w;
-        const float *ol = t.off_lo + row, *wh = t.w_hi + row;
         for (int x = 0; x < w; ++x) {
-          const FarPick fp = far_pick(t.lo, t.hi, plane, row + x, ol[x], wh[x]);
+          const FarPick fp = far_pick(t.strip, plane, row + x);
           e[x] = std::max(en[x], p1::caster_elevation(fp.dz, fp.run));
         }
       }
@@ -385,7 +387,7 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
         for (int x = 0; x < w; ++x) {
           int which;
           const float near_m = near_slope_border(k, t.i0 + x, t.j0 + y, &which);
-          const FarPick fp = far_pick(t.lo, t.hi, plane, row + x, t.off_lo[row + x], t.w_hi[row + x]);
+          const FarPick fp = far_pick(t.strip, plane, row + x);
           const float far_e = p1::caster_elevation(fp.dz, fp.run);
           float d;
           if (which >= 0 && fast_atan(near_m) >= far_e)
@@ -500,7 +502,7 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
   // Directional lights: one extra sweep direction per light, at its own azimuth.
   if (!lights.empty()) {
     SweepSpec ls;
-    ls.channels = p1::RayLineWorker::channels();
+    ls.channels = p1::FarHorizonWorker::channels();
     ls.wrap_periods = p.wrap_periods;
     std::vector<double> elevation, radius;
     std::vector<Vec3> dir;
@@ -515,8 +517,9 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
     }
     for (std::size_t li = 0; li < lights.size(); ++li) {
       light_dirs.push_back(plan_direction(f, ls, int(li)));
+      const SweepDirection& d = light_dirs.back();
       light_near.push_back(
-          p1::near_field_stencil(light_dirs.back().dx, light_dirs.back().dy, p.near_radius, f.texel_size));
+          p1::near_field_stencil(d.dx, d.dy, near_radius_of(d, p.near_radius), f.texel_size));
     }
     auto make_worker = [&] { return make_ray_worker(f, p); };
     auto near_slope_at = [&](const std::vector<p1::NearCrossing>& stencil, int i, int j, int* which) {
@@ -527,16 +530,10 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
       const double ndl = dot(normal_at(f, i, j).d(), dir[li]);
       if (ndl <= 0 && !facets) return;
       // The horizon in the light's azimuth as for the K directions: the exact near field from the texel
-      // center, the far casters of both taps lifted by the minmod gradient, blended.
-      const SweepDirection& d = light_dirs[li];
-      const int u = d.x_major ? i : j, v0 = d.x_major ? j : i;
-      const double g = double(v0) - double(u) * d.slope;
-      const float fr = float(g - std::floor(g));
-      const bool lo_is_hi = !d.repeat && fr > 0 && d.n_minor > 1 && v0 == 0;  // as texel_taps
-      const float off_lo = lo_is_hi ? 1 - fr : -fr;
+      // center, the exact far field from its strip.
       int which;
       const float en = fast_atan(near_slope_at(light_near[li], i, j, &which));
-      const FarPick fp = far_pick(t.lo, t.hi, 1, 0, off_lo, t.w_hi);
+      const FarPick fp = far_pick(t.strip, 1, 0);
       const float horizon = std::max(en, p1::caster_elevation(fp.dz, fp.run));
       const double frac = disk_fraction_above(elevation[li], horizon, radius[li]);
       if (frac <= 0) return;

@@ -4,7 +4,7 @@
 // and horizons from the same sweep.
 //
 // Per texel and direction k (phi_k = 2 pi k / K), with horizon elevation e_k (the larger of the exact
-// near-field march from the texel center and the two sweep taps' far casters, see horizon_sweep.hpp), normal
+// near-field march from the texel center and the exact far field of its strip, far_horizons.hpp), normal
 // N, N_p = N.d_k, theta_k = min(pi/2 - e_k, pi/2 + atan(N_p / N_z)) (P1 Eq. 4 with the pi/2 the extracted
 // text drops: the horizon or where the normal's hemisphere ends):
 //   ao    = (1/K) sum_k [ N_z sin^2 theta_k + N_p (theta_k - sin theta_k cos theta_k) ]
@@ -42,7 +42,7 @@ struct P1Params {
   int wrap_periods = 1;    // repeat mode warm-up (see SweepSpec)
   // Texels: horizons marched exactly from each texel center this far (horizon_sweep.hpp).
   double near_radius = 2;
-  bool far_crossings = true;  // far field: also the lines' row and diagonal crossings (triangle kinks)
+  bool far_crossings = true;  // no longer used (the far field is exact: far_horizons.hpp); read for old jobs
   bool ao = true, vsky = true, direct = true;
   bool horizon = false, horizon_distance = false, bent_normal = false;
   bool lights = true;  // add the scene's directional lights to direct

@@ -1,0 +1,334 @@
+#include "methods/p1/far_horizons.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace hfbake::p1 {
+namespace {
+
+int wrap_index(long long a, int n) {
+  a %= n;
+  return int(a < 0 ? a + n : a);
+}
+
+}  // namespace
+
+void LinePattern::build(const HeightField& f, const SweepDirection& d) {
+  k = d.k;
+  pos.clear(), major_a.clear(), major_b.clear(), d_a.clear(), d_b.clear(), w.clear(), minor.clear();
+  first.assign(std::size_t(d.count) + 1, 0);
+  strip_d.assign(std::size_t(d.count), 0);
+  const bool rep = d.repeat;
+  const int nmaj = d.n_major, nmin = d.n_minor;
+  const std::int64_t major_stride = d.x_major ? 1 : f.width;
+  auto moff = [&](int u) { return std::int64_t(rep ? wrap_index(u, nmaj) : u) * major_stride; };
+  auto dmin = [&](int v) { return std::int32_t(rep ? wrap_index(v, nmin) : v); };
+  auto push = [&](double p, int ua, int va, int ub, int vb, double wb, double m) {
+    pos.push_back(p);
+    major_a.push_back(moff(ua)), major_b.push_back(moff(ub));
+    const std::int32_t da = dmin(va);
+    d_a.push_back(da), d_b.push_back(rep && vb == va + 1 ? da + 1 : dmin(vb));
+    w.push_back(float(wb));
+    minor.push_back(m);
+  };
+  struct Crossing {
+    double t;
+    int ua, va, ub, vb;
+    double wb, m;
+  };
+  for (int n = 0; n < d.count; ++n) {
+    first[n] = std::int32_t(pos.size());
+    const int u = d.u(n);
+    const double x = double(u) * d.slope;  // minor coordinate of line 0 (line l: l + x), as sample_line
+    const int jb = floor_int(x);
+    const double t = x - jb;
+    push(n, u, jb, u, jb + 1, t, x);
+    strip_d[n] = t > 0 ? jb : jb - 1;
+    if (n + 1 >= d.count) break;
+    const int u1 = d.u(n + 1);
+    const double x1 = double(u1) * d.slope;
+    Crossing c[3];
+    int m = 0;
+    if (x1 != x) {  // rows: integers strictly between x and x1 (at most one, |slope| <= 1)
+      const int kr = x1 > x ? floor_int(x) + 1 : -floor_int(-x) - 1;
+      if (x1 > x ? kr < x1 : kr > x1) {
+        const double tp = (kr - x) / (x1 - x), uc = u + d.su * tp;
+        const int fu = floor_int(uc);
+        c[m++] = {tp, fu, kr, fu + 1, kr, uc - fu, double(kr)};
+      }
+    }
+    const double w0 = u + x, w1 = u1 + x1;
+    if (w1 != w0)  // diagonals u + v = integer strictly between (at most two)
+      for (int kd = w1 > w0 ? floor_int(w0) + 1 : -floor_int(-w0) - 1; w1 > w0 ? kd < w1 : kd > w1;
+           kd += w1 > w0 ? 1 : -1) {
+        const double tp = (kd - w0) / (w1 - w0), uc = u + d.su * tp, vc = kd - uc;
+        const int fv = floor_int(vc), cu = kd - fv - 1;  // edge (cu + 1, fv)-(cu, fv + 1) of cell (cu, fv)
+        c[m++] = {tp, cu + 1, fv, cu, fv + 1, vc - fv, vc};
+      }
+    std::sort(c, c + m, [](const Crossing& a, const Crossing& b) { return a.t < b.t; });
+    for (int i = 0; i < m; ++i)
+      if (c[i].t > 0 && c[i].t < 1) push(n + c[i].t, c[i].ua, c[i].va, c[i].ub, c[i].vb, c[i].wb, c[i].m);
+  }
+  first[d.count] = std::int32_t(pos.size());
+}
+
+std::size_t LinePattern::bytes() const {
+  return pos.capacity() *
+             (sizeof(double) * 2 + sizeof(std::int64_t) * 2 + sizeof(std::int32_t) * 2 + sizeof(float)) +
+         (first.capacity() + strip_d.capacity()) * sizeof(std::int32_t);
+}
+
+std::size_t FarHorizonWorker::scratch_bytes(int count) {
+  // At most 4 entries a step (a sample, a row, two diagonals): two patterns, three profiles, the hull.
+  const std::size_t entries = 4 * std::size_t(count);
+  const std::size_t pattern = entries * (2 * 8 + 2 * 8 + 2 * 4 + 4) + 2 * 4 * std::size_t(count);
+  return 2 * pattern + entries * (3 * 4 + 8 + 4) + std::size_t(count) * (4 + 4);
+}
+
+const LinePattern& FarHorizonWorker::pattern(const SweepDirection& d) {
+  for (LinePattern& p : patterns_)
+    if (p.k == d.k) return p;
+  LinePattern& p = patterns_[next_slot_];
+  next_slot_ ^= 1;
+  p.build(*field, d);
+  return p;
+}
+
+void FarHorizonWorker::profile(const LinePattern& pat, const SweepDirection& d, int line,
+                               std::vector<float>& out) const {
+  const std::size_t E = pat.pos.size();
+  out.resize(E);
+  const float* Z = field->z.data();
+  const int nv = d.n_minor;
+  const std::ptrdiff_t ms = d.x_major ? field->width : 1;
+  if (d.repeat) {
+    for (std::size_t e = 0; e < E; ++e) {
+      int ra = line + pat.d_a[e], rb = line + pat.d_b[e];
+      ra -= ra >= nv ? nv : 0;
+      rb -= rb >= nv ? nv : 0;
+      const float za = Z[pat.major_a[e] + ra * ms], zb = Z[pat.major_b[e] + rb * ms];
+      out[e] = za + (zb - za) * pat.w[e];
+    }
+    return;
+  }
+  const float none = -std::numeric_limits<float>::infinity();
+  const double top = nv - 1 + 1e-9;
+  for (std::size_t e = 0; e < E; ++e) {
+    const double v = line + pat.minor[e];
+    if (v < -1e-9 || v > top) {
+      out[e] = none;
+      continue;
+    }
+    const int ra = std::clamp(line + pat.d_a[e], 0, nv - 1), rb = std::clamp(line + pat.d_b[e], 0, nv - 1);
+    const float za = Z[pat.major_a[e] + ra * ms], zb = Z[pat.major_b[e] + rb * ms];
+    out[e] = za + (zb - za) * pat.w[e];
+  }
+}
+
+void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
+  const SweepDirection& d = *line.dir;
+  const HeightField& f = *field;
+  const float inf = std::numeric_limits<float>::infinity();
+  const int R0 = line.first_receiver, count = line.count;
+  for (int n = R0; n < count; ++n) out[2 * (n - R0)] = 0.0f, out[2 * (n - R0) + 1] = inf;
+  const LinePattern& pat = pattern(d);
+  const int l = line.line, nv = d.n_minor, nu = d.n_major;
+  const bool rep = d.repeat;
+  const int lprev = rep ? (l == 0 ? nv - 1 : l - 1) : l - 1;
+  if (last_k_ == d.k && last_line_ == lprev)
+    std::swap(prev_, cur_);  // the last call's line l is this one's line l - 1
+  else
+    profile(pat, d, lprev, prev_);
+  profile(pat, d, l, cur_);
+  last_k_ = d.k, last_line_ = l;
+
+  const float* Z = f.z.data();
+  const std::ptrdiff_t ms = d.x_major ? f.width : 1;
+  const std::int64_t major_stride = d.x_major ? 1 : f.width;
+  auto row_of = [&](long long r) { return rep ? wrap_index(r, nv) : int(r); };
+  // The strip's texel at each sample (NaN where it is off a clamp field) and its minor coordinate.
+  texel_z_.resize(std::size_t(count));
+  texel_r_.resize(std::size_t(count));
+  for (int n = 0; n < count; ++n) {
+    const int u = d.u(n);
+    int r = l + pat.strip_d[n];
+    // The same texel as strip_line (the gather's rule), also where u * slope rounds to an integer.
+    for (int s = strip_line(d, u, r); s != l; s = strip_line(d, u, r)) r += s > l ? -1 : 1;
+    texel_r_[n] = r;
+    texel_z_[n] = rep || (r >= 0 && r < nv) ? Z[pat.major_a[pat.first[n]] + std::ptrdiff_t(row_of(r)) * ms]
+                                            : std::numeric_limits<float>::quiet_NaN();
+  }
+  const std::size_t E = pat.pos.size();
+  const bool on_line = d.slope == 0 || d.slope == 1 || d.slope == -1;  // every texel on line l - 1
+  const float* hb = prev_.data();
+  if (!on_line) {
+    bound_.resize(E);
+    for (std::size_t e = 0; e < E; ++e) bound_[e] = std::max(prev_[e], cur_[e]);
+    for (int n = 0; n < count; ++n)
+      if (texel_z_[n] == texel_z_[n]) bound_[pat.first[n]] = std::max(bound_[pat.first[n]], texel_z_[n]);
+    hb = bound_.data();
+  }
+  // Skip bounds: per column c, the highest texel of the cells the strip touches in the bands beside it
+  // (rows from floor(v_{l-1} - |slope|) to ceil(v_l + |slope|), border rows clamped); a band's surface
+  // in the strip lies below the larger of its two columns', a block's of kBlock bands below its columns'.
+  if (!on_line) {
+    col_max_.resize(std::size_t(count));
+    const double as = std::fabs(d.slope);
+    for (int n = 0; n < count; ++n) {
+      const double v = l - 1 + pat.minor[pat.first[n]];
+      const int r0 = floor_int(v - as), r1 = -floor_int(-(v + 1 + as));
+      const std::int64_t mo = pat.major_a[pat.first[n]];
+      float m = -std::numeric_limits<float>::infinity();
+      for (int rr = r0; rr <= r1; ++rr) {
+        const int row = rep ? wrap_index(rr, nv) : std::clamp(rr, 0, nv - 1);
+        m = std::max(m, Z[mo + std::ptrdiff_t(row) * ms]);
+      }
+      col_max_[n] = m;
+    }
+    block_max_.assign(std::size_t(count / kBlock + 1), -std::numeric_limits<float>::infinity());
+    for (int n = 0; n < count; ++n) {
+      float& b = block_max_[std::size_t(n / kBlock)];
+      b = std::max(b, col_max_[n]);
+      if (n % kBlock == 0 && n > 0) {  // a block's last column is the next block's first
+        float& p = block_max_[std::size_t(n / kBlock - 1)];
+        p = std::max(p, col_max_[n]);
+      }
+    }
+  }
+  hull_.reset(int(E));
+  const double step = line.step;
+  const double reach = std::max(far_radius / step, 1.0);  // steps; the near field covers the rest
+  const double dvp = d.su * d.slope;                      // a ray's minor coordinate per step
+  const double dws = d.su + dvp;                          // ... and its u + v per step
+  const double inv_dvp = dvp != 0 ? 1 / dvp : 0, inv_dws = dws != 0 ? 1 / dws : 0;
+  std::size_t fed = 0;
+
+  for (int n = R0; n < count; ++n) {
+    const double cut = n - reach;
+    // The points up to the first column at or after the cut: the kinks' heights are linear between two
+    // columns (or a column and a line's crossing), so the hull bounds the strip up to the cut only with
+    // the column beyond it.
+    const double cut_column = std::ceil(cut - 1e-9) + 1e-9;
+    for (; fed < E && pat.pos[fed] <= cut_column; ++fed)
+      if (hb[fed] > -inf) hull_.add(pat.pos[fed], hb[fed]);
+    const float zt = texel_z_[n];
+    if (hull_.size() == 0 || !(zt == zt)) continue;
+    float* o = out + 2 * std::size_t(n - R0);
+    const int q = hull_.query_index(n, zt);
+    if (on_line) {  // T's ray is line l - 1: its hull's caster is exact
+      o[0] = float(double(hull_.height(q)) - zt), o[1] = float((n - hull_.position(q)) * step);
+      continue;
+    }
+    ++texels;
+    // T's ray: minor coordinate r + dvp (p - n), major u(p) = u_start + su p.
+    const int r = texel_r_[n];
+    auto u_at = [&](double p) { return d.u_start + d.su * p; };
+    auto Zr = [&](long long uu, long long vv) {
+      if (rep)
+        return Z[std::int64_t(wrap_index(uu, nu)) * major_stride + std::ptrdiff_t(wrap_index(vv, nv)) * ms];
+      vv = vv < 0 ? 0 : (vv >= nv ? nv - 1 : vv);
+      return Z[uu * major_stride + vv * ms];
+    };
+    // Where T's ray is on the field (clamp), and the far field's end.
+    double lo = 0, hi = cut;
+    if (!rep) {
+      const double pa = n + (0 - r) / dvp, pb = n + (nv - 1 - r) / dvp;
+      lo = std::max(lo, std::min(pa, pb) - 1e-9), hi = std::min(hi, std::max(pa, pb) + 1e-9);
+    }
+    const double vtop = nv - 1 + 1e-9;
+    bool any = false;
+    double bdz = 0, brun = 1;
+    auto take = [&](double p, float h) {
+      const double dz = double(h) - zt, run = (n - p) * step;
+      if (!any || dz * brun > bdz * run) bdz = dz, brun = run, any = true;
+    };
+    auto column = [&](int c) {
+      if (c < 0 || c >= n) return;
+      const double v = r + dvp * (c - n);
+      if (!rep && (v < -1e-9 || v > vtop)) return;
+      const int fv = floor_int(v), uu = d.u(c);
+      const float a = Zr(uu, fv), b = Zr(uu, fv + 1);
+      take(c, a + (b - a) * float(v - fv));
+    };
+    auto band = [&](int c) {  // the crossings strictly between columns c and c + 1
+      ++bands;
+      const double va = r + dvp * (c - n), vb = va + dvp;
+      const int kr = dvp > 0 ? floor_int(va) + 1 : -floor_int(-va) - 1;
+      if ((dvp > 0 ? kr < vb : kr > vb) && (rep || (kr >= 0 && kr < nv))) {
+        const double p = n + (kr - r) * inv_dvp, uc = u_at(p);
+        if (p > c && p < c + 1) {
+          const int fu = floor_int(uc);
+          const float a = Zr(fu, kr), b = Zr(fu + 1, kr);
+          take(p, a + (b - a) * float(uc - fu));
+        }
+      }
+      const double wa = d.u(c) + va, wb = wa + dws;
+      for (int kd = dws > 0 ? floor_int(wa) + 1 : -floor_int(-wa) - 1; dws > 0 ? kd < wb : kd > wb;
+           kd += dws > 0 ? 1 : -1) {
+        const double p = c + (kd - wa) * inv_dws, uc = u_at(p), vc = kd - uc;
+        if (!rep && (vc < -1e-9 || vc > vtop)) continue;
+        if (!(p > c && p < c + 1)) continue;
+        const int fv = floor_int(vc), cu = kd - fv - 1;
+        const float a = Zr(cu + 1, fv), b = Zr(cu, fv + 1);
+        take(p, a + (b - a) * float(vc - fv));
+      }
+    };
+    // The hull's value at x (between its vertices j and j + 1, or vertex j itself).
+    auto hull_at = [&](int j, double x) {
+      const double p0 = hull_.position(j), h0 = hull_.height(j);
+      if (x <= p0 || j + 1 >= hull_.size()) return h0;
+      const double p1 = hull_.position(j + 1), h1 = hull_.height(j + 1);
+      return h0 + (h1 - h0) * (x - p0) / (p1 - p0);
+    };
+    auto beaten = [&](double x, double hx) {  // the bound at x is no steeper than the best point
+      return any && (hx - zt) * brun <= bdz * ((n - x) * step);
+    };
+    // Nothing in positions [x0, x1] (clipped to the far field) that is at most h high beats the best.
+    auto lower = [&](double x0, double x1, float h) {
+      if (!any) return false;
+      const double x = h >= zt ? std::min(x1, hi) : std::max(x0, lo);
+      return (double(h) - zt) * brun <= bdz * ((n - x) * step);
+    };
+    auto band_lower = [&](int c) { return lower(c, c + 1, std::max(col_max_[c], col_max_[c + 1])); };
+    auto block_lower = [&](int k) { return lower(k * kBlock, (k + 1) * kBlock, block_max_[k]); };
+    if (lo > hi) continue;
+    const double pq = hull_.position(q);
+    const int c0 = std::clamp(floor_int(pq), floor_int(lo), floor_int(hi));
+    int a = c0, b = c0;
+    column(c0);
+    if (pq > c0 && c0 < hi) band(c0), column(c0 + 1), b = c0 + 1;
+    // Left: the bound is unimodal with its peak at pq, so for a <= pq it bounds every point before a.
+    const double left_end = std::max(lo, hull_.position(0));
+    for (int j = q; a > left_end;) {
+      if (a <= pq) {
+        while (j > 0 && hull_.position(j) > a) --j;
+        if (beaten(a, hull_at(j, a))) break;
+      }
+      const int k = (a - 1) / kBlock;
+      if (block_lower(k)) {
+        a = k * kBlock;
+        continue;
+      }
+      if (!band_lower(a - 1)) band(a - 1), column(a - 1);
+      --a;
+    }
+    const double right_end = std::min(hi, hull_.position(hull_.size() - 1));
+    for (int j = q; b < right_end;) {
+      if (b >= pq) {
+        while (j + 1 < hull_.size() && hull_.position(j + 1) <= b) ++j;
+        if (beaten(b, hull_at(j, b))) break;
+      }
+      const int k = b / kBlock;
+      if (block_lower(k)) {
+        b = (k + 1) * kBlock;
+        continue;
+      }
+      if (!band_lower(b)) band(b), column(b + 1);
+      ++b;
+    }
+    if (any) o[0] = float(bdz), o[1] = float(brun);
+  }
+}
+
+}  // namespace hfbake::p1
