@@ -7,6 +7,8 @@
 namespace hfbake::p1 {
 namespace {
 
+constexpr double kMinGap = 1e-7;  // steps: the least gap between two entries of a LinePattern
+
 int wrap_index(long long a, int n) {
   a %= n;
   return int(a < 0 ? a + n : a);
@@ -67,8 +69,15 @@ void LinePattern::build(const HeightField& f, const SweepDirection& d) {
         c[m++] = {tp, cu + 1, fv, cu, fv + 1, vc - fv, vc};
       }
     std::sort(c, c + m, [](const Crossing& a, const Crossing& b) { return a.t < b.t; });
-    for (int i = 0; i < m; ++i)
-      if (c[i].t > 0 && c[i].t < 1) push(n + c[i].t, c[i].ua, c[i].va, c[i].ub, c[i].vb, c[i].wb, c[i].m);
+    // Positions increase by at least kMinGap (the hull's precondition, with room for rounding): a crossing
+    // nearer a sample (u * slope an integer up to rounding) or another crossing is that point already, to
+    // kMinGap times the surface's slope, and is left out. Two vertices 1e-15 apart, float heights one ulp
+    // apart, made the hull non-concave and its binary search miss the steepest vertex.
+    for (int i = 0; i < m; ++i) {
+      const double p = n + c[i].t;
+      if (p > pos.back() + kMinGap && p < double(n + 1) - kMinGap)
+        push(p, c[i].ua, c[i].va, c[i].ub, c[i].vb, c[i].wb, c[i].m);
+    }
   }
   first[d.count] = std::int32_t(pos.size());
 }
@@ -152,12 +161,17 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
   texel_r_.resize(std::size_t(count));
   for (int n = 0; n < count; ++n) {
     const int u = d.u(n);
+    // The same texel as strip_line (the gather's rule), also where u * slope rounds to an integer. The
+    // rule is monotone in r but rounding can skip l (r - u * slope rounds up to l from below): then no
+    // texel at this column reads strip l, and the skipped texel, on line l, is in cur_ already.
     int r = l + pat.strip_d[n];
-    // The same texel as strip_line (the gather's rule), also where u * slope rounds to an integer.
-    for (int s = strip_line(d, u, r); s != l; s = strip_line(d, u, r)) r += s > l ? -1 : 1;
+    int s = strip_line(d, u, r);
+    while (s > l) s = strip_line(d, u, --r);
+    while (s < l) s = strip_line(d, u, ++r);
     texel_r_[n] = r;
-    texel_z_[n] = rep || (r >= 0 && r < nv) ? Z[pat.major_a[pat.first[n]] + std::ptrdiff_t(row_of(r)) * ms]
-                                            : std::numeric_limits<float>::quiet_NaN();
+    texel_z_[n] = s == l && (rep || (r >= 0 && r < nv))
+                      ? Z[pat.major_a[pat.first[n]] + std::ptrdiff_t(row_of(r)) * ms]
+                      : std::numeric_limits<float>::quiet_NaN();
   }
   const std::size_t E = pat.pos.size();
   const bool on_line = d.slope == 0 || d.slope == 1 || d.slope == -1;  // every texel on line l - 1
