@@ -6,7 +6,8 @@ H=$1 W=$2
 . "$(dirname "$0")/common.sh"
 rm -rf "$W" && mkdir -p "$W" && cd "$W" || exit 1
 # p1 with every layer, a non-uniform environment (the built-in sky) and two suns; hbao with bent
-# normals; lsao (runs whole in one shard); a reference of every layer the methods are scored against.
+# normals; lsao, farfield and hsao with bent normals and more directions than blocks (block partial sums);
+# vo (runs whole in one shard); a reference of every layer the methods are scored against.
 cat >job.json <<'J'
 {"version": 1, "name": "farm",
  "height": {"procedural": {"kind": "fractal", "size": [67, 53], "seed": 5}},
@@ -16,7 +17,10 @@ cat >job.json <<'J'
  "bake": [{"method": "p1", "directions": 12,
            "layers": ["ao", "vsky", "direct", "horizon", "horizon_distance", "bent_normal"]},
           {"method": "hbao", "directions": 10, "radius": 5, "falloff": "smooth"},
-          {"method": "lsao", "directions": 8, "radius": 5}],
+          {"method": "lsao", "directions": 12, "radius": 5, "layers": ["obscurance", "bent_normal"]},
+          {"method": "farfield", "directions": 10, "radius": 8, "layers": ["obscurance", "bent_normal"]},
+          {"method": "hsao", "directions": 9, "radius": 4, "layers": ["obscurance", "bent_normal"]},
+          {"method": "vo", "radius": 4}],
  "reference": {"samples": 16},
  "output": {"dir": "out", "previews": true}}
 J
