@@ -22,7 +22,17 @@ namespace fs = std::filesystem;
 namespace {
 
 ShardIdentity identity_of(const Job& job, ShardId id, int width, int height) {
-  return {job.name, job_content_hash(job), hfbake_version(), id, width, height};
+  return {job.name, job_content_hash(job), hfbake_version(), id, width, height, "", ""};
+}
+
+// A staged entry's stage file: "shard" index = the stage, count = the entry's stages.
+ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, int height) {
+  const BakeEntry& e = job.bakes[std::size_t(entry)];
+  ShardIdentity id = identity_of(job, {stage, entry_stages(e)}, width, height);
+  id.what = "stage " + std::to_string(stage) + " of " + e.stem;
+  id.redo =
+      "bake it with --stage " + std::to_string(stage) + " and --shard " + std::to_string(entry) + " mod N/N";
+  return id;
 }
 
 // Rows [r0, r1) of a whole-field LayerSet.
@@ -42,21 +52,68 @@ LayerSet rows_of(const LayerSet& all, int r0, int r1) {
 }  // namespace
 
 fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::atomic<bool>& cancel,
-                    JobOutcome& outcome, const ReferenceCache* cache) {
+                    JobOutcome& outcome, const ReferenceCache* cache, int stage) {
   const FieldSize size = probe_field_size(job);
   const ShardIdentity identity = identity_of(job, id, size.width, size.height);
   const fs::path path = shard_path(job, id);
   const std::string label = job.name + " [shard " + shard_id_text(id) + "]";
-  if (shard_is_complete(path, identity)) {
-    progress.message(label + ": already baked: " + path.string());
-    return path;
+  const ShardWork work = shard_work(job, size.height, id);
+  // The staged entries' stage `stage` (stage 0 beside the shard's other work); returns false when there
+  // is nothing to do (every such stage file complete, or no entry has that stage).
+  std::vector<int> todo;
+  for (int e : work.staged)
+    if (stage < entry_stages(job.bakes[std::size_t(e)]) &&
+        !shard_is_complete(stage_path(job, e, stage), stage_identity(job, e, stage, size.width, size.height)))
+      todo.push_back(e);
+  const bool shard_done = stage > 0 || shard_is_complete(path, identity);
+  if (shard_done && todo.empty()) {
+    progress.message(label + (stage > 0 ? " stage " + std::to_string(stage) : std::string()) +
+                     ": nothing to bake (complete or no such stage)");
+    return stage > 0 ? fs::path() : path;
   }
+  // The previous stage's files, checked before loading anything.
+  std::vector<ShardReader> previous;
+  for (int e : todo)
+    if (stage > 0)
+      previous.emplace_back(stage_path(job, e, stage - 1),
+                            stage_identity(job, e, stage - 1, size.width, size.height));
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();
   const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
   progress.end(job.name, "load", seconds_since(t_load));
 
-  const ShardWork work = shard_work(job, size.height, id);
+  for (std::size_t t = 0; t < todo.size(); ++t) {
+    if (cancel.load()) throw Cancelled();
+    const int e = todo[t];
+    const BakeEntry& entry = job.bakes[std::size_t(e)];
+    const std::string step = entry.stem + "@stage" + std::to_string(stage);
+    RunControl rc;
+    rc.cancel = &cancel;
+    rc.progress = [&](double f) { progress.update(job.name, step, f); };
+    progress.begin(job.name, step);
+    const auto t0 = std::chrono::steady_clock::now();
+    const double cpu0 = process_cpu_seconds();
+    ShardWriter writer(stage_path(job, e, stage), stage_identity(job, e, stage, size.width, size.height));
+    ShardPart part;
+    part.entry = e, part.kind = "stage", part.block = stage;
+    // Seconds of this stage and the earlier ones (the merge reports the entry's total).
+    double seconds = 0, cpu = 0;
+    LayerSet prev;
+    if (stage > 0) {
+      seconds = previous[t].parts().at(0).seconds, cpu = previous[t].parts().at(0).cpu_seconds;
+      prev = previous[t].load(0);
+    }
+    const LayerSet state =
+        find_method(entry.method)->bake_stage(scene, entry.params, stage, std::move(prev), rc);
+    part.seconds = seconds + seconds_since(t0), part.cpu_seconds = cpu + process_cpu_seconds() - cpu0;
+    progress.end(job.name, step, part.seconds);
+    outcome.methods[step] = {{"seconds", part.seconds}, {"cpu_seconds", part.cpu_seconds}};
+    writer.add(std::move(part), state);
+    if (cancel.load()) throw Cancelled();
+    writer.commit();
+  }
+  if (shard_done) return stage > 0 ? stage_path(job, todo.front(), stage) : path;
+
   ShardWriter writer(path, identity);
   auto run = [&](const std::string& step, ShardPart part, auto&& compute) {
     if (cancel.load()) throw Cancelled();
@@ -130,6 +187,11 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
                          "): remove the ones of the count not wanted");
   }
   count_ = *counts.begin();
+  // Staged entries: their last stage's file, whichever shard made it.
+  for (std::size_t e = 0; e < job.bakes.size(); ++e)
+    if (const int S = entry_stages(job.bakes[e]); S > 0)
+      stages_.emplace(int(e), ShardReader(stage_path(job, int(e), S - 1),
+                                          stage_identity(job, int(e), S - 1, width, height)));
   for (int i = 0; i < count_; ++i) {
     const ShardId id{i, count_};
     readers_.emplace_back(shard_path(job, id), identity_of(job, id, width, height));
@@ -148,6 +210,8 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
 LayerSet MergedShards::method(int entry, const Scene& scene, const RunControl& rc) {
   const BakeEntry& e = job_.bakes[std::size_t(entry)];
   const int B = entry_direction_blocks(e);
+  if (auto st = stages_.find(entry); st != stages_.end())
+    return find_method(e.method)->finish_stages(scene, e.params, st->second.load(0), rc);
   LayerSet total;
   for (ShardReader& r : readers_)
     for (std::size_t p = 0; p < r.parts().size(); ++p) {
@@ -170,6 +234,7 @@ LayerSet MergedShards::reference() {
 }
 
 double MergedShards::seconds(int entry) const {
+  if (auto st = stages_.find(entry); st != stages_.end()) return st->second.parts().at(0).seconds;
   double s = 0;
   for (const ShardReader& r : readers_)
     for (const ShardPart& p : r.parts())
@@ -178,6 +243,7 @@ double MergedShards::seconds(int entry) const {
 }
 
 double MergedShards::cpu_seconds(int entry) const {
+  if (auto st = stages_.find(entry); st != stages_.end()) return st->second.parts().at(0).cpu_seconds;
   double s = 0;
   for (const ShardReader& r : readers_)
     for (const ShardPart& p : r.parts())

@@ -20,10 +20,12 @@ namespace hfbake {
 
 // Computes shard `id` of a valid job into its shard file (farm/shard_plan.hpp shard_path) and returns the
 // path. A complete shard file of the same job and hfbake is kept as it is (a re-run does nothing). With a
-// cache holding the job's reference, the shard's reference rows are read from it.
+// cache holding the job's reference, the shard's reference rows are read from it. Staged entries (p2) of
+// the shard run stage `stage` into their stage files (farm/shard_plan.hpp stage_path) from the previous
+// stage's; stage 0 comes with the shard's other work, a later stage alone (`bake --shard I/N --stage S`).
 std::filesystem::path bake_shard(const Job& job, ShardId id, Progress& progress,
                                  const std::atomic<bool>& cancel, JobOutcome& outcome,
-                                 const ReferenceCache* cache);
+                                 const ReferenceCache* cache, int stage = 0);
 
 // The shards of a job, opened and checked for `hfbake merge`: every shard 0..N-1 present, whole, of this job
 // and this hfbake (InputError naming the shard otherwise, before anything is baked or written).
@@ -43,6 +45,7 @@ class MergedShards {
   const Job& job_;
   int count_ = 0, height_ = 0;
   std::vector<ShardReader> readers_;
+  std::map<int, ShardReader> stages_;  // staged entries: the last stage's file
 };
 
 }  // namespace hfbake

@@ -140,8 +140,14 @@ int run_slurm(const SlurmOptions& o) {
           resolve_job(*load.job);
           const FieldSize size = probe_field_size(*load.job);
           const ShardId id{s, o.shards};
-          const ShardIdentity ident{
-              load.job->name, job_content_hash(*load.job), hfbake_version(), id, size.width, size.height};
+          const ShardIdentity ident{load.job->name,
+                                    job_content_hash(*load.job),
+                                    hfbake_version(),
+                                    id,
+                                    size.width,
+                                    size.height,
+                                    "",
+                                    ""};
           if (shard_is_complete(shard_path(*load.job, id), ident)) {
             tasks.push_back({j.job, j.out, s});
             continue;

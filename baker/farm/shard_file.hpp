@@ -26,6 +26,9 @@ struct ShardIdentity {
   std::string job_name, job_hash, version;
   ShardId id;
   int width = 0, height = 0;
+  // For messages: what the file is ("shard I/N" when empty) and how to make it again ("bake it with
+  // --shard I/N" when empty).
+  std::string what, redo;
 };
 
 struct ShardPart {
