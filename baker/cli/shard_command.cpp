@@ -7,10 +7,12 @@
 #include <set>
 
 #include "cli/method_dispatch.hpp"
+#include "cli/outputs.hpp"
 #include "cli/progress.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
+#include "farm/build_id.hpp"
 #include "farm/merge_blocks.hpp"
 #include "job/content_hash.hpp"
 #include "methods/method_table.hpp"
@@ -22,17 +24,13 @@ namespace fs = std::filesystem;
 namespace {
 
 ShardIdentity identity_of(const Job& job, ShardId id, int width, int height) {
-  return {job.name, job_content_hash(job), hfbake_version(), id, width, height, "", ""};
+  return shard_identity(job, id, width, height);
 }
 
-// A staged entry's stage file: "shard" index = the stage, count = the entry's stages.
-ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, int height) {
-  const BakeEntry& e = job.bakes[std::size_t(entry)];
-  ShardIdentity id = identity_of(job, {stage, entry_stages(e)}, width, height);
-  id.what = "stage " + std::to_string(stage) + " of " + e.stem;
-  id.redo =
-      "bake it with --stage " + std::to_string(stage) + " and --shard " + std::to_string(entry) + " mod N/N";
-  return id;
+// This process as the owner of a temporary shard file: <pid>+<start>@<host> (as staging folders name it).
+std::string temporary_owner() {
+  const std::string stage = stage_name("x");  // .hfbake-staging-x-<pid>+<start>@<host>
+  return stage.substr(stage.rfind('-') + 1);
 }
 
 // Rows [r0, r1) of a whole-field LayerSet.
@@ -51,6 +49,43 @@ LayerSet rows_of(const LayerSet& all, int r0, int r1) {
 
 }  // namespace
 
+std::string shard_version() {
+  const std::string id = executable_build_id();
+  return id.empty() ? std::string(hfbake_version())
+                    : std::string(hfbake_version()) + "+build." + id.substr(0, 16);
+}
+
+ShardIdentity shard_identity(const Job& job, ShardId id, int width, int height) {
+  return {job.name, job_content_hash(job), shard_version(), id, width, height, "", ""};
+}
+
+ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, int height) {
+  const BakeEntry& e = job.bakes[std::size_t(entry)];
+  ShardIdentity id = shard_identity(job, {stage, entry_stages(e)}, width, height);
+  id.what = "stage " + std::to_string(stage) + " of " + e.stem;
+  id.redo =
+      "bake it with --stage " + std::to_string(stage) + " and --shard " + std::to_string(entry) + " mod N/N";
+  return id;
+}
+
+std::vector<fs::path> remove_stale_shard_files(const fs::path& dir) {
+  std::vector<fs::path> removed;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const auto tmp = name.rfind(".hfshard.tmp-");
+    if (tmp == std::string::npos) continue;
+    // The owner part read as a staging folder's, so by the same rule.
+    const std::optional<StageOwner> owner =
+        parse_stage_name(std::string(".hfbake-staging-x-") + name.substr(tmp + 13));
+    if (!owner || !it->is_regular_file(ec) || !stage_owner_is_gone(*owner)) continue;
+    std::error_code remove_ec;
+    fs::remove(it->path(), remove_ec);
+    if (!remove_ec) removed.push_back(it->path());
+  }
+  return removed;
+}
+
 fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::atomic<bool>& cancel,
                     JobOutcome& outcome, const ReferenceCache* cache, int stage) {
   const FieldSize size = probe_field_size(job);
@@ -58,6 +93,8 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
   const fs::path path = shard_path(job, id);
   const std::string label = job.name + " [shard " + shard_id_text(id) + "]";
   const ShardWork work = shard_work(job, size.height, id);
+  for (const fs::path& p : remove_stale_shard_files(path.parent_path()))
+    progress.message(label + ": removed " + p.string() + " (left by a process that no longer runs)");
   // The staged entries' stage `stage` (stage 0 beside the shard's other work); returns false when there
   // is nothing to do (every such stage file complete, or no entry has that stage).
   std::vector<int> todo;
@@ -93,7 +130,8 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
     progress.begin(job.name, step);
     const auto t0 = std::chrono::steady_clock::now();
     const double cpu0 = process_cpu_seconds();
-    ShardWriter writer(stage_path(job, e, stage), stage_identity(job, e, stage, size.width, size.height));
+    ShardWriter writer(stage_path(job, e, stage), stage_identity(job, e, stage, size.width, size.height),
+                       temporary_owner());
     ShardPart part;
     part.entry = e, part.kind = "stage", part.block = stage;
     // Seconds of this stage and the earlier ones (the merge reports the entry's total).
@@ -114,7 +152,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
   }
   if (shard_done) return stage > 0 ? stage_path(job, todo.front(), stage) : path;
 
-  ShardWriter writer(path, identity);
+  ShardWriter writer(path, identity, temporary_owner());
   auto run = [&](const std::string& step, ShardPart part, auto&& compute) {
     if (cancel.load()) throw Cancelled();
     RunControl rc;

@@ -18,6 +18,18 @@
 
 namespace hfbake {
 
+// What a shard (stage file) of this job must carry to be merged: the job's name and hash, shard_version().
+ShardIdentity shard_identity(const Job& job, ShardId id, int width, int height);
+// A staged entry's stage file: "shard" index = the stage, count = the entry's stages.
+ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, int height);
+// The version a shard records: hfbake_version() (the version and git revision CMake configured), then
+// "+build." and the executable's GNU build id (farm/build_id.hpp), which changes whenever the binary does.
+std::string shard_version();
+// Removes the temporary shard files (<shard>.tmp-<pid>+<start>@<host>) in `dir` whose writer certainly no
+// longer runs (cli/outputs.hpp stage_owner_is_gone: this host, no such process or another one with that
+// id); returns them. A killed task's temporary file is never read as a shard; this only frees its space.
+std::vector<std::filesystem::path> remove_stale_shard_files(const std::filesystem::path& dir);
+
 // Computes shard `id` of a valid job into its shard file (farm/shard_plan.hpp shard_path) and returns the
 // path. A complete shard file of the same job and hfbake is kept as it is (a re-run does nothing). With a
 // cache holding the job's reference, the shard's reference rows are read from it. Staged entries (p2) of

@@ -10,6 +10,7 @@
 
 #include "cli/method_dispatch.hpp"
 #include "cli/scene_loader.hpp"
+#include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
 #include "cli/version.hpp"
 #include "farm/shard_file.hpp"
@@ -153,16 +154,14 @@ int run_slurm(const SlurmOptions& o) {
     if (!load.job || !resolve_job(*load.job).empty()) return false;
     const Job& job = *load.job;
     const FieldSize size = probe_field_size(job);
-    const std::string hash = job_content_hash(job);
     const ShardId id{t.shard, o.shards};
-    if (stage == 0 && !shard_is_complete(shard_path(job, id), {job.name, hash, hfbake_version(), id,
-                                                               size.width, size.height, "", ""}))
+    if (stage == 0 &&
+        !shard_is_complete(shard_path(job, id), shard_identity(job, id, size.width, size.height)))
       return false;
     for (std::size_t e = 0; e < t.stages.size(); ++e)
       if (int(e) % o.shards == t.shard && t.stages[e] > stage &&
-          !shard_is_complete(
-              stage_path(job, int(e), stage),
-              {job.name, hash, hfbake_version(), {stage, t.stages[e]}, size.width, size.height, "", ""}))
+          !shard_is_complete(stage_path(job, int(e), stage),
+                             stage_identity(job, int(e), stage, size.width, size.height)))
         return false;
     return true;
   };

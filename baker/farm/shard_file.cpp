@@ -31,10 +31,11 @@ std::string bytes_checksum(const float* data, std::size_t count) {
 
 }  // namespace
 
-ShardWriter::ShardWriter(fs::path final_path, ShardIdentity identity)
+ShardWriter::ShardWriter(fs::path final_path, ShardIdentity identity, std::string owner)
     : final_(std::move(final_path)), identity_(std::move(identity)) {
   fs::create_directories(final_.parent_path());
-  tmp_ = final_.string() + ".tmp-" + std::to_string(getpid()) + "@" + host_name();
+  if (owner.empty()) owner = std::to_string(getpid()) + "@" + host_name();
+  tmp_ = final_.string() + ".tmp-" + owner;
   out_.open(tmp_, std::ios::binary | std::ios::trunc);
   if (!out_) throw std::runtime_error("cannot write " + tmp_.string());
   out_.write(kMagic, sizeof kMagic - 1);

@@ -44,8 +44,9 @@ struct ShardPart {
 
 class ShardWriter {
  public:
-  // Opens a temporary file beside `final_path` (creating its folder); std::runtime_error if impossible.
-  ShardWriter(std::filesystem::path final_path, ShardIdentity identity);
+  // Opens a temporary file beside `final_path` (creating its folder), named <final>.tmp-<owner> (default
+  // owner: <pid>@<host>); std::runtime_error if impossible.
+  ShardWriter(std::filesystem::path final_path, ShardIdentity identity, std::string owner = "");
   ~ShardWriter();  // removes the temporary file unless committed
   ShardWriter(const ShardWriter&) = delete;
   ShardWriter& operator=(const ShardWriter&) = delete;

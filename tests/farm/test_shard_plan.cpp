@@ -139,7 +139,7 @@ TEST(ShardFile, RoundTripsAndRefusesDamage) {
   const fs::path dir = fs::temp_directory_path() / ("hfbake_shard_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const fs::path file = dir / "j.shard-1-of-2.hfshard";
-  const ShardIdentity id{"j", "0123456789abcdef", "v1", {1, 2}, 3, 2};
+  const ShardIdentity id{"j", "0123456789abcdef", "v1", {1, 2}, 3, 2, "", ""};
   LayerSet l;
   l.width = 3, l.height = 2;
   l.add("ao", {"Y"}).data = {1, 2, 3, 4, 5, 6};

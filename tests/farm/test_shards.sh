@@ -64,6 +64,29 @@ mkdir -p other && cp other.json other/job.json
 "$H" bake other/job.json --no-cache --quiet --out o --shard 1/3 || fail "other shard"
 cp o/shards/farm.shard-1-of-3.hfshard s3/shards/
 expect_refusal "a shard of another job" "another job"
+# The version a shard records carries the binary's GNU build id (readelf's), so a rebuilt hfbake's shards
+# are refused; a shard whose header names another build (same length, edited in place) is refused.
+build=$(readelf -n "$H" | sed -n 's/.*Build ID: \([0-9a-f]*\).*/\1/p')
+[ -n "$build" ] || fail "no build id in $H"
+cp keep s3/shards/farm.shard-1-of-3.hfshard
+grep -aq "+build.${build:0:16}" s3/shards/farm.shard-1-of-3.hfshard || fail "the shard's version lacks the build id ${build:0:16}"
+sed -i "s/+build.${build:0:16}/+build.0000000000000000/" s3/shards/farm.shard-1-of-3.hfshard
+expect_refusal "a shard of another build" "0000000000000000"
+# Temporary shard files of writers that no longer run are removed by the next bake of a shard there;
+# those of a live process (this shell: its pid and start time) and of another host are kept.
+cp keep s3/shards/farm.shard-1-of-3.hfshard
+start=$(awk '{print $22}' /proc/$$/stat)
+host=$(hostname)
+touch "s3/shards/farm.shard-0-of-3.hfshard.tmp-999999999+1@$host" "s3/shards/farm.shard-0-of-3.hfshard.tmp-$$+$start@$host" \
+  "s3/shards/farm.shard-0-of-3.hfshard.tmp-999999999+1@elsewhere" "s3/shards/farm.shard-2-of-3.hfshard.tmp-999999998@$host"
+msg=$("$H" bake job.json --no-cache --out s3 --shard 1/3 2>&1) || fail "re-run shard: $msg"
+[ ! -e "s3/shards/farm.shard-0-of-3.hfshard.tmp-999999999+1@$host" ] || fail "a dead writer's file was kept"
+[ ! -e "s3/shards/farm.shard-2-of-3.hfshard.tmp-999999998@$host" ] || fail "a dead writer's file (no start time) was kept"
+echo "$msg" | grep -q "removed .*tmp-999999999+1@$host" || fail "the removal was not told: $msg"
+[ -e "s3/shards/farm.shard-0-of-3.hfshard.tmp-$$+$start@$host" ] || fail "a live writer's file was removed"
+[ -e "s3/shards/farm.shard-0-of-3.hfshard.tmp-999999999+1@elsewhere" ] || fail "another host's file was removed"
+rm -f s3/shards/*.tmp-*
+echo "ok: stale temporary shard files removed, live and foreign ones kept"
 # Nothing was written by the refused merges: the outputs are those of the first merge.
 cp keep s3/shards/farm.shard-1-of-3.hfshard
 same_outputs whole s3
