@@ -385,8 +385,8 @@ MethodInfo p2_method() {
   m.bake_stage = p2_bake_stage;
   m.finish_stages = p2_finish_stages;
   m.division_note =
-      "by direction sets within a bounce; each bounce is a stage that needs the previous bounce's radiance "
-      "of the whole field";
+      "bounces as successive stages (stage 0 direct light, stage b bounce b, each needing the previous stage "
+      "of the whole field), each stage whole in one shard; directions within a bounce are not divided yet";
   return m;
 }
 
