@@ -114,7 +114,8 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
 
   check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
   if (options.shard) {
-    outcome.outputs = {bake_shard(job, *options.shard, progress, cancel, outcome, cache)};
+    const fs::path made = bake_shard(job, *options.shard, progress, cancel, outcome, cache, options.stage);
+    if (!made.empty()) outcome.outputs = {made};
     return;
   }
   // hfbake merge: every shard checked before anything is written; the layers come from them.

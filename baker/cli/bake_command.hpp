@@ -28,6 +28,7 @@ struct BakeOptions {
   // The farm (cli/shard_command.hpp): --shard I/N bakes that shard of each job into its shard file;
   // merge (`hfbake merge`) writes each job's outputs from its shards instead of baking.
   std::optional<ShardId> shard;
+  int stage = 0;  // --stage S (with --shard): stage S of the staged methods (p2's bounce S)
   bool merge = false;
 };
 

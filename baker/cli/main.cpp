@@ -73,6 +73,13 @@ int main(int argc, char** argv) {
   bake_cmd->add_option(
       "--shard", shard,
       "I/N: bake only shard I (0-based) of N of each job into <out>/shards/ (see hfbake merge)");
+  int stage = 0;
+  bake_cmd
+      ->add_option(
+          "--stage", stage,
+          "S: with --shard, stage S of the staged methods (p2: stage 0 direct light, S its bounce S; "
+          "stage S needs stage S - 1 of the same job)")
+      ->check(CLI::Range(0, 64));
   // hfbake merge: the outputs of `bake` from a job's shards.
   hfbake::BakeOptions merge;
   std::vector<std::string> merge_jobs;
@@ -189,6 +196,11 @@ int main(int argc, char** argv) {
     if (!summary.empty()) bake.summary = summary;
     if (!cache_dir.empty()) bake.cache = cache_dir;
     if (!memory_limit.empty()) bake.memory_limit = hfbake::parse_memory_size(memory_limit);
+    bake.stage = stage;
+    if (stage > 0 && shard.empty()) {
+      std::fprintf(stderr, "hfbake: error: command line: --stage needs --shard I/N\n");
+      return 2;
+    }
     if (!shard.empty()) {
       bake.shard = hfbake::parse_shard_id(shard);
       if (!bake.shard) {

@@ -7,10 +7,12 @@
 #include <set>
 
 #include "cli/method_dispatch.hpp"
+#include "cli/outputs.hpp"
 #include "cli/progress.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
+#include "farm/build_id.hpp"
 #include "farm/merge_blocks.hpp"
 #include "job/content_hash.hpp"
 #include "methods/method_table.hpp"
@@ -22,7 +24,13 @@ namespace fs = std::filesystem;
 namespace {
 
 ShardIdentity identity_of(const Job& job, ShardId id, int width, int height) {
-  return {job.name, job_content_hash(job), hfbake_version(), id, width, height};
+  return shard_identity(job, id, width, height);
+}
+
+// This process as the owner of a temporary shard file: <pid>+<start>@<host> (as staging folders name it).
+std::string temporary_owner() {
+  const std::string stage = stage_name("x");  // .hfbake-staging-x-<pid>+<start>@<host>
+  return stage.substr(stage.rfind('-') + 1);
 }
 
 // Rows [r0, r1) of a whole-field LayerSet.
@@ -41,23 +49,110 @@ LayerSet rows_of(const LayerSet& all, int r0, int r1) {
 
 }  // namespace
 
+std::string shard_version() {
+  const std::string id = executable_build_id();
+  return id.empty() ? std::string(hfbake_version())
+                    : std::string(hfbake_version()) + "+build." + id.substr(0, 16);
+}
+
+ShardIdentity shard_identity(const Job& job, ShardId id, int width, int height) {
+  return {job.name, job_content_hash(job), shard_version(), id, width, height, "", ""};
+}
+
+ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, int height) {
+  const BakeEntry& e = job.bakes[std::size_t(entry)];
+  ShardIdentity id = shard_identity(job, {stage, entry_stages(e)}, width, height);
+  id.what = "stage " + std::to_string(stage) + " of " + e.stem;
+  id.redo =
+      "bake it with --stage " + std::to_string(stage) + " and --shard " + std::to_string(entry) + " mod N/N";
+  return id;
+}
+
+std::vector<fs::path> remove_stale_shard_files(const fs::path& dir) {
+  std::vector<fs::path> removed;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const auto tmp = name.rfind(".hfshard.tmp-");
+    if (tmp == std::string::npos) continue;
+    // The owner part read as a staging folder's, so by the same rule.
+    const std::optional<StageOwner> owner =
+        parse_stage_name(std::string(".hfbake-staging-x-") + name.substr(tmp + 13));
+    if (!owner || !it->is_regular_file(ec) || !stage_owner_is_gone(*owner)) continue;
+    std::error_code remove_ec;
+    fs::remove(it->path(), remove_ec);
+    if (!remove_ec) removed.push_back(it->path());
+  }
+  return removed;
+}
+
 fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::atomic<bool>& cancel,
-                    JobOutcome& outcome, const ReferenceCache* cache) {
+                    JobOutcome& outcome, const ReferenceCache* cache, int stage) {
   const FieldSize size = probe_field_size(job);
   const ShardIdentity identity = identity_of(job, id, size.width, size.height);
   const fs::path path = shard_path(job, id);
   const std::string label = job.name + " [shard " + shard_id_text(id) + "]";
-  if (shard_is_complete(path, identity)) {
-    progress.message(label + ": already baked: " + path.string());
-    return path;
+  const ShardWork work = shard_work(job, size.height, id);
+  for (const fs::path& p : remove_stale_shard_files(path.parent_path()))
+    progress.message(label + ": removed " + p.string() + " (left by a process that no longer runs)");
+  // The staged entries' stage `stage` (stage 0 beside the shard's other work); returns false when there
+  // is nothing to do (every such stage file complete, or no entry has that stage).
+  std::vector<int> todo;
+  for (int e : work.staged)
+    if (stage < entry_stages(job.bakes[std::size_t(e)]) &&
+        !shard_is_complete(stage_path(job, e, stage), stage_identity(job, e, stage, size.width, size.height)))
+      todo.push_back(e);
+  const bool shard_done = stage > 0 || shard_is_complete(path, identity);
+  if (shard_done && todo.empty()) {
+    progress.message(label + (stage > 0 ? " stage " + std::to_string(stage) : std::string()) +
+                     ": nothing to bake (complete or no such stage)");
+    return stage > 0 ? fs::path() : path;
   }
+  // The previous stage's files, checked before loading anything.
+  std::vector<ShardReader> previous;
+  for (int e : todo)
+    if (stage > 0)
+      previous.emplace_back(stage_path(job, e, stage - 1),
+                            stage_identity(job, e, stage - 1, size.width, size.height));
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();
   const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
   progress.end(job.name, "load", seconds_since(t_load));
 
-  const ShardWork work = shard_work(job, size.height, id);
-  ShardWriter writer(path, identity);
+  for (std::size_t t = 0; t < todo.size(); ++t) {
+    if (cancel.load()) throw Cancelled();
+    const int e = todo[t];
+    const BakeEntry& entry = job.bakes[std::size_t(e)];
+    const std::string step = entry.stem + "@stage" + std::to_string(stage);
+    RunControl rc;
+    rc.cancel = &cancel;
+    rc.progress = [&](double f) { progress.update(job.name, step, f); };
+    progress.begin(job.name, step);
+    const auto t0 = std::chrono::steady_clock::now();
+    const double cpu0 = process_cpu_seconds();
+    ShardWriter writer(stage_path(job, e, stage), stage_identity(job, e, stage, size.width, size.height),
+                       temporary_owner());
+    ShardPart part;
+    part.entry = e, part.kind = "stage", part.block = stage;
+    // Seconds of this stage and the earlier ones (the merge reports the entry's total).
+    double seconds = 0, cpu = 0;
+    LayerSet prev;
+    if (stage > 0) {
+      seconds = previous[t].parts().at(0).seconds, cpu = previous[t].parts().at(0).cpu_seconds;
+      prev = previous[t].load(0);
+    }
+    const LayerSet state =
+        find_method(entry.method)->bake_stage(scene, entry.params, stage, std::move(prev), rc);
+    part.seconds = seconds + seconds_since(t0), part.cpu_seconds = cpu + process_cpu_seconds() - cpu0;
+    progress.end(job.name, step, part.seconds);
+    outcome.methods[step] = {{"seconds", part.seconds}, {"cpu_seconds", part.cpu_seconds}};
+    writer.add(std::move(part), state);
+    if (cancel.load()) throw Cancelled();
+    writer.commit();
+  }
+  if (shard_done) return stage > 0 ? stage_path(job, todo.front(), stage) : path;
+
+  ShardWriter writer(path, identity, temporary_owner());
   auto run = [&](const std::string& step, ShardPart part, auto&& compute) {
     if (cancel.load()) throw Cancelled();
     RunControl rc;
@@ -130,6 +225,11 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
                          "): remove the ones of the count not wanted");
   }
   count_ = *counts.begin();
+  // Staged entries: their last stage's file, whichever shard made it.
+  for (std::size_t e = 0; e < job.bakes.size(); ++e)
+    if (const int S = entry_stages(job.bakes[e]); S > 0)
+      stages_.emplace(int(e), ShardReader(stage_path(job, int(e), S - 1),
+                                          stage_identity(job, int(e), S - 1, width, height)));
   for (int i = 0; i < count_; ++i) {
     const ShardId id{i, count_};
     readers_.emplace_back(shard_path(job, id), identity_of(job, id, width, height));
@@ -148,6 +248,8 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
 LayerSet MergedShards::method(int entry, const Scene& scene, const RunControl& rc) {
   const BakeEntry& e = job_.bakes[std::size_t(entry)];
   const int B = entry_direction_blocks(e);
+  if (auto st = stages_.find(entry); st != stages_.end())
+    return find_method(e.method)->finish_stages(scene, e.params, st->second.load(0), rc);
   LayerSet total;
   for (ShardReader& r : readers_)
     for (std::size_t p = 0; p < r.parts().size(); ++p) {
@@ -170,6 +272,7 @@ LayerSet MergedShards::reference() {
 }
 
 double MergedShards::seconds(int entry) const {
+  if (auto st = stages_.find(entry); st != stages_.end()) return st->second.parts().at(0).seconds;
   double s = 0;
   for (const ShardReader& r : readers_)
     for (const ShardPart& p : r.parts())
@@ -178,6 +281,7 @@ double MergedShards::seconds(int entry) const {
 }
 
 double MergedShards::cpu_seconds(int entry) const {
+  if (auto st = stages_.find(entry); st != stages_.end()) return st->second.parts().at(0).cpu_seconds;
   double s = 0;
   for (const ShardReader& r : readers_)
     for (const ShardPart& p : r.parts())

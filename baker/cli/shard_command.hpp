@@ -18,12 +18,26 @@
 
 namespace hfbake {
 
+// What a shard (stage file) of this job must carry to be merged: the job's name and hash, shard_version().
+ShardIdentity shard_identity(const Job& job, ShardId id, int width, int height);
+// A staged entry's stage file: "shard" index = the stage, count = the entry's stages.
+ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, int height);
+// The version a shard records: hfbake_version() (the version and git revision CMake configured), then
+// "+build." and the executable's GNU build id (farm/build_id.hpp), which changes whenever the binary does.
+std::string shard_version();
+// Removes the temporary shard files (<shard>.tmp-<pid>+<start>@<host>) in `dir` whose writer certainly no
+// longer runs (cli/outputs.hpp stage_owner_is_gone: this host, no such process or another one with that
+// id); returns them. A killed task's temporary file is never read as a shard; this only frees its space.
+std::vector<std::filesystem::path> remove_stale_shard_files(const std::filesystem::path& dir);
+
 // Computes shard `id` of a valid job into its shard file (farm/shard_plan.hpp shard_path) and returns the
 // path. A complete shard file of the same job and hfbake is kept as it is (a re-run does nothing). With a
-// cache holding the job's reference, the shard's reference rows are read from it.
+// cache holding the job's reference, the shard's reference rows are read from it. Staged entries (p2) of
+// the shard run stage `stage` into their stage files (farm/shard_plan.hpp stage_path) from the previous
+// stage's; stage 0 comes with the shard's other work, a later stage alone (`bake --shard I/N --stage S`).
 std::filesystem::path bake_shard(const Job& job, ShardId id, Progress& progress,
                                  const std::atomic<bool>& cancel, JobOutcome& outcome,
-                                 const ReferenceCache* cache);
+                                 const ReferenceCache* cache, int stage = 0);
 
 // The shards of a job, opened and checked for `hfbake merge`: every shard 0..N-1 present, whole, of this job
 // and this hfbake (InputError naming the shard otherwise, before anything is baked or written).
@@ -43,6 +57,7 @@ class MergedShards {
   const Job& job_;
   int count_ = 0, height_ = 0;
   std::vector<ShardReader> readers_;
+  std::map<int, ShardReader> stages_;  // staged entries: the last stage's file
 };
 
 }  // namespace hfbake

@@ -10,6 +10,7 @@
 
 #include "cli/method_dispatch.hpp"
 #include "cli/scene_loader.hpp"
+#include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
 #include "cli/version.hpp"
 #include "farm/shard_file.hpp"
@@ -48,6 +49,7 @@ struct Task {
   fs::path job;  // as given (the scripts run in the submission's folder: --chdir)
   fs::path out;  // the job's output folder
   int shard = 0;
+  std::vector<int> stages;  // the job's staged entries' stage counts, by entry index (0: not staged)
 };
 
 // Compact Slurm array list: "0-3,5,7-8".
@@ -121,7 +123,9 @@ int run_slurm(const SlurmOptions& o) {
       }
       const Job& job = *load.job;
       need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
-      jobs.push_back({file, out ? *out : job.output.dir, 0});
+      std::vector<int> stages;
+      for (const BakeEntry& e : job.bakes) stages.push_back(entry_stages(e));
+      jobs.push_back({file, out ? *out : job.output.dir, 0, stages});
       if (common.empty()) common = fs::absolute(job.output.dir);
     }
   }
@@ -129,28 +133,43 @@ int run_slurm(const SlurmOptions& o) {
   if (o.out && plain > 1) common = fs::absolute(*o.out);
   const fs::path dir = common / "slurm";
 
-  // Tasks: job-major, shard-minor; with --resume only the shards not complete on disk.
+  // Tasks: job-major, shard-minor. Stage 0 of every task (the shard), then stage s = 1, 2, ... of the
+  // tasks whose shard runs a staged entry (p2) with that stage; with --resume only the tasks whose files
+  // are not complete on disk.
   std::vector<Task> tasks;
-  std::vector<int> submit;
   for (const Task& j : jobs)
-    for (int s = 0; s < o.shards; ++s) {
-      if (o.resume) {
-        JobLoad load = load_job(j.job, j.out);
-        if (load.job) {
-          resolve_job(*load.job);
-          const FieldSize size = probe_field_size(*load.job);
-          const ShardId id{s, o.shards};
-          const ShardIdentity ident{
-              load.job->name, job_content_hash(*load.job), hfbake_version(), id, size.width, size.height};
-          if (shard_is_complete(shard_path(*load.job, id), ident)) {
-            tasks.push_back({j.job, j.out, s});
-            continue;
-          }
-        }
-      }
-      submit.push_back(int(tasks.size()));
-      tasks.push_back({j.job, j.out, s});
-    }
+    for (int s = 0; s < o.shards; ++s) tasks.push_back({j.job, j.out, s, j.stages});
+  int stage_count = 1;
+  for (const Task& j : jobs)
+    for (int st : j.stages) stage_count = std::max(stage_count, st);
+  // Whether task t has work in stage `stage`, and (--resume) whether that work is not on disk yet.
+  auto has_stage = [&](const Task& t, int stage) {
+    if (stage == 0) return true;
+    for (std::size_t e = 0; e < t.stages.size(); ++e)
+      if (int(e) % o.shards == t.shard && t.stages[e] > stage) return true;
+    return false;
+  };
+  auto complete = [&](const Task& t, int stage) {
+    JobLoad load = load_job(t.job, t.out);
+    if (!load.job || !resolve_job(*load.job).empty()) return false;
+    const Job& job = *load.job;
+    const FieldSize size = probe_field_size(job);
+    const ShardId id{t.shard, o.shards};
+    if (stage == 0 &&
+        !shard_is_complete(shard_path(job, id), shard_identity(job, id, size.width, size.height)))
+      return false;
+    for (std::size_t e = 0; e < t.stages.size(); ++e)
+      if (int(e) % o.shards == t.shard && t.stages[e] > stage &&
+          !shard_is_complete(stage_path(job, int(e), stage),
+                             stage_identity(job, int(e), stage, size.width, size.height)))
+        return false;
+    return true;
+  };
+  std::vector<std::vector<int>> submit(static_cast<std::size_t>(stage_count));  // per stage: task indices
+  for (int stage = 0; stage < stage_count; ++stage)
+    for (std::size_t t = 0; t < tasks.size(); ++t)
+      if (has_stage(tasks[t], stage) && !(o.resume && complete(tasks[t], stage)))
+        submit[std::size_t(stage)].push_back(int(t));
 
   const std::string mem =
       !o.mem.empty()
@@ -175,6 +194,9 @@ int run_slurm(const SlurmOptions& o) {
        << "# Written by hfbake " << hfbake_version() << " (hfbake slurm): one array task per (job, shard).\n"
        << "# Each task bakes one shard into <output>/shards/ (a re-run of a finished shard does nothing).\n"
        << "# Resubmit some tasks by hand: sbatch --array=2,5 " << (dir / "bake.sbatch").string() << "\n"
+       << "# Argument: the stage (default 0; p2's bounce b is stage b, run after stage b - 1 of every task:\n"
+       << "#   sbatch --array=0-1 --dependency=afterok:<stage 0's job id> " << (dir / "bake.sbatch").string()
+       << " 1).\n"
        << "# Memory: the job's estimate (hfbake validate) + 20 %; every task holds whole-field layers.\n";
   common_head(bake, "hfbake-" + name, "%x-%A_%a.out");
   bake << "#SBATCH --array=0-" << tasks.size() - 1 << "\n"
@@ -189,7 +211,9 @@ int run_slurm(const SlurmOptions& o) {
   for (const Task& t : tasks) bake << " " << t.shard;
   bake << " )\n"
        << "i=${SLURM_ARRAY_TASK_ID:?run me with sbatch --array}\n"
-       << "exec " << exe << " bake \"${JOBS[$i]}\" --shard \"${SHARDS[$i]}/$N\" --out \"${OUTS[$i]}\""
+       << "STAGE=${1:-0}\n"
+       << "exec " << exe << " bake \"${JOBS[$i]}\" --shard \"${SHARDS[$i]}/$N\" --stage \"$STAGE\""
+       << " --out \"${OUTS[$i]}\""
        << " --threads \"${SLURM_CPUS_PER_TASK:-" << o.threads << "}\"" << bake_flags(o)
        << (o.quiet ? " --quiet" : "") << "\n";
 
@@ -215,19 +239,25 @@ int run_slurm(const SlurmOptions& o) {
     return fail(dir.string() + ": " + e.what());
   }
 
+  // One array per stage, each after the previous (afterok: every task of it succeeded).
   std::string array_id;
-  if (!submit.empty()) {
+  for (int stage = 0; stage < stage_count; ++stage) {
+    const std::vector<int>& list = submit[std::size_t(stage)];
+    if (list.empty()) continue;
     std::string out;
-    const std::string cmd = "sbatch --parsable --array=" + array_list(submit) + " " +
-                            quoted((dir / "bake.sbatch").string()) + " 2>&1";
+    std::string cmd = "sbatch --parsable --array=" + array_list(list);
+    if (!array_id.empty()) cmd += " --dependency=afterok:" + array_id + " --kill-on-invalid-dep=yes";
+    cmd.append(1, ' ').append(quoted((dir / "bake.sbatch").string()));
+    if (stage > 0) cmd.append(1, ' ').append(std::to_string(stage));
+    cmd += " 2>&1";
     if (run_capture(cmd, &out) != 0) return fail((dir / "bake.sbatch").string() + ": sbatch failed: " + out);
     array_id = out.substr(0, out.find_first_of(";\n"));
     if (!o.quiet)
-      std::fprintf(stderr, "hfbake: submitted %zu shard task%s as array job %s (%s)\n", submit.size(),
-                   submit.size() == 1 ? "" : "s", array_id.c_str(), (dir / "bake.sbatch").c_str());
-  } else if (!o.quiet) {
-    std::fprintf(stderr, "hfbake: every shard is complete; submitting the merge only\n");
+      std::fprintf(stderr, "hfbake: submitted %zu task%s of stage %d as array job %s (%s)\n", list.size(),
+                   list.size() == 1 ? "" : "s", stage, array_id.c_str(), (dir / "bake.sbatch").c_str());
   }
+  if (array_id.empty() && !o.quiet)
+    std::fprintf(stderr, "hfbake: every shard is complete; submitting the merge only\n");
   std::string cmd = "sbatch --parsable";
   if (!array_id.empty()) cmd += " --dependency=afterok:" + array_id + " --kill-on-invalid-dep=yes";
   if (o.wait) cmd += " --wait";

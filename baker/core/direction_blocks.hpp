@@ -37,3 +37,44 @@ inline void add_split(SplitDouble& total, SplitDouble block) {
 }
 
 }  // namespace hfbake
+
+namespace hfbake {
+
+// Float sums by blocks, for a method that accumulates per texel in float one direction at a time, k
+// ascending (lsao, farfield): each block is summed from zero (one rounding per direction), and the block
+// sums are added to the total in float in block order (the first block is taken as it is) -- what
+// farm/merge_blocks.cpp add_direction_block does with blocks baked elsewhere. A block of one direction
+// needs no partial sum; others keep theirs in `partial` (a float per texel and channel) between directions.
+class FloatBlocks {
+ public:
+  explicit FloatBlocks(int K) : K_(std::max(K, 1)), first_end_(direction_block_begin(1, K_)) {
+    multi_ = direction_block_count(K_) < K_;
+  }
+  // Whether some block holds more than one direction (then `partial` is read and written).
+  bool needs_partial() const { return multi_; }
+  // Direction k's value v for one texel channel: total (the caller's sum) and partial (its block's).
+  void add(int k, double v, float& total, float& partial) const {
+    const int b = block_of(k);
+    const bool starts = k == direction_block_begin(b, K_), ends = k + 1 == direction_block_begin(b + 1, K_);
+    const float p = float((starts ? 0.0 : double(partial)) + v);
+    if (!ends) {
+      partial = p;
+      return;
+    }
+    total = k < first_end_ ? p : total + p;
+  }
+
+ private:
+  int block_of(int k) const {
+    // The block b with begin(b) <= k < begin(b + 1) (begin(b) = b K / B, B <= 8).
+    const int B = direction_block_count(K_);
+    int b = int((long long)k * B / K_);
+    while (b + 1 < B && direction_block_begin(b + 1, K_) <= k) ++b;
+    while (b > 0 && direction_block_begin(b, K_) > k) --b;
+    return b;
+  }
+  int K_, first_end_;
+  bool multi_ = false;
+};
+
+}  // namespace hfbake

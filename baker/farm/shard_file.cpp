@@ -31,10 +31,11 @@ std::string bytes_checksum(const float* data, std::size_t count) {
 
 }  // namespace
 
-ShardWriter::ShardWriter(fs::path final_path, ShardIdentity identity)
+ShardWriter::ShardWriter(fs::path final_path, ShardIdentity identity, std::string owner)
     : final_(std::move(final_path)), identity_(std::move(identity)) {
   fs::create_directories(final_.parent_path());
-  tmp_ = final_.string() + ".tmp-" + std::to_string(getpid()) + "@" + host_name();
+  if (owner.empty()) owner = std::to_string(getpid()) + "@" + host_name();
+  tmp_ = final_.string() + ".tmp-" + owner;
   out_.open(tmp_, std::ios::binary | std::ios::trunc);
   if (!out_) throw std::runtime_error("cannot write " + tmp_.string());
   out_.write(kMagic, sizeof kMagic - 1);
@@ -101,18 +102,16 @@ void ShardWriter::commit() {
 
 ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : file_(file) {
   const std::string name = file.string();
-  const std::string which = "shard " + shard_id_text(expected.id);
+  const std::string which = expected.what.empty() ? "shard " + shard_id_text(expected.id) : expected.what;
+  const std::string redo =
+      expected.redo.empty() ? "bake it with --shard " + shard_id_text(expected.id) : expected.redo;
   std::error_code ec;
-  if (!fs::exists(file, ec))
-    throw InputError(name, "",
-                     which + " is missing (bake it with --shard " + shard_id_text(expected.id) + ")");
+  if (!fs::exists(file, ec)) throw InputError(name, "", which + " is missing (" + redo + ")");
   const std::uintmax_t size = fs::file_size(file, ec);
   in_.open(file, std::ios::binary);
   if (ec || !in_) throw InputError(name, "", "cannot read " + which);
   auto damaged = [&](const std::string& why) {
-    return InputError(name, "",
-                      which + " is truncated or damaged (" + why + "): bake it again with --shard " +
-                          shard_id_text(expected.id));
+    return InputError(name, "", which + " is truncated or damaged (" + why + "): " + redo);
   };
   char magic[sizeof kMagic - 1];
   if (size < sizeof magic + kTrailer || !in_.read(magic, sizeof magic) ||
@@ -135,7 +134,7 @@ ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : 
       throw InputError(name, "",
                        which + " belongs to another job (" + h.at("job").get<std::string>() + ", hash " +
                            h.at("job_hash").get<std::string>() + "; this job's is " + expected.job_hash +
-                           "): bake it again with --shard " + shard_id_text(expected.id));
+                           "): " + redo);
     if (h.at("hfbake_version") != expected.version)
       throw InputError(name, "",
                        which + " was baked by hfbake " + h.at("hfbake_version").get<std::string>() +

@@ -26,6 +26,9 @@ struct ShardIdentity {
   std::string job_name, job_hash, version;
   ShardId id;
   int width = 0, height = 0;
+  // For messages: what the file is ("shard I/N" when empty) and how to make it again ("bake it with
+  // --shard I/N" when empty).
+  std::string what, redo;
 };
 
 struct ShardPart {
@@ -41,8 +44,9 @@ struct ShardPart {
 
 class ShardWriter {
  public:
-  // Opens a temporary file beside `final_path` (creating its folder); std::runtime_error if impossible.
-  ShardWriter(std::filesystem::path final_path, ShardIdentity identity);
+  // Opens a temporary file beside `final_path` (creating its folder), named <final>.tmp-<owner> (default
+  // owner: <pid>@<host>); std::runtime_error if impossible.
+  ShardWriter(std::filesystem::path final_path, ShardIdentity identity, std::string owner = "");
   ~ShardWriter();  // removes the temporary file unless committed
   ShardWriter(const ShardWriter&) = delete;
   ShardWriter& operator=(const ShardWriter&) = delete;

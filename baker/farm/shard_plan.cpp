@@ -38,6 +38,19 @@ int entry_direction_blocks(const BakeEntry& entry) {
   return K > 0 ? direction_block_count(K) : 0;
 }
 
+int entry_stages(const BakeEntry& entry) {
+  const MethodInfo* m = find_method(entry.method);
+  return m && m->stages && m->bake_stage && m->finish_stages && entry.resolved.is_object()
+             ? m->stages(entry.resolved)
+             : 0;
+}
+
+int job_stages(const Job& job) {
+  int s = 0;
+  for (const BakeEntry& e : job.bakes) s = std::max(s, entry_stages(e));
+  return s;
+}
+
 ShardWork shard_work(const Job& job, int field_height, ShardId id) {
   ShardWork w;
   const long long I = id.index, N = id.count;
@@ -45,6 +58,10 @@ ShardWork shard_work(const Job& job, int field_height, ShardId id) {
     const int B = entry_direction_blocks(job.bakes[e]);
     ShardWork::Entry x;
     x.entry = int(e);
+    if (entry_stages(job.bakes[e]) > 0) {
+      if (static_cast<long long>(e) % N == I) w.staged.push_back(int(e));
+      continue;
+    }
     if (B == 0) {
       if (static_cast<long long>(e) % N != I) continue;
       x.whole = true;
@@ -65,6 +82,16 @@ ShardWork shard_work(const Job& job, int field_height, ShardId id) {
 std::filesystem::path shard_path(const Job& job, ShardId id) {
   return job.output.dir / "shards" /
          (job.name + ".shard-" + std::to_string(id.index) + "-of-" + std::to_string(id.count) + ".hfshard");
+}
+
+}  // namespace hfbake
+
+namespace hfbake {
+
+std::filesystem::path stage_path(const Job& job, int entry, int stage) {
+  return job.output.dir / "shards" /
+         (job.name + "." + job.bakes[std::size_t(entry)].stem + ".stage-" + std::to_string(stage) +
+          ".hfshard");
 }
 
 }  // namespace hfbake

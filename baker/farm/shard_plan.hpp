@@ -4,6 +4,9 @@
 //   - the reference into bands of kReferenceBandRows receiver rows; shard I takes bands [I R / N, (I + 1) R /
 //   N)
 //     (one contiguous run of rows), each traced against the whole field;
+//   - a staged method (MethodInfo::stages: p2, stage 0 its direct light, stage b its bounce b) runs each
+//     stage whole, in shard (entry index mod N), into its own stage file (stage_path), stage s after stage
+//     s - 1 (`bake --shard I/N --stage s`; stage 0 with the shard's other work);
 //   - any other method runs whole, in shard (entry index mod N).
 // Shards beyond a method's block count simply have none of its blocks.
 #pragma once
@@ -29,6 +32,11 @@ inline constexpr int kReferenceBandRows = 32;
 // Direction blocks of a resolved bake entry (0: the method runs whole).
 int entry_direction_blocks(const BakeEntry& entry);
 
+// Stages of a resolved bake entry (0: not staged).
+int entry_stages(const BakeEntry& entry);
+// The most stages of any entry of the job (0: none staged).
+int job_stages(const Job& job);
+
 struct ShardWork {
   struct Entry {
     int entry = 0;       // index into Job::bakes
@@ -37,10 +45,13 @@ struct ShardWork {
   };
   std::vector<Entry> entries;      // in job order; entries with nothing for this shard are left out
   int row_begin = 0, row_end = 0;  // the reference's receiver rows (empty: none, or no reference)
+  std::vector<int> staged;         // staged entries whose stages this shard runs (not in `entries`)
 };
 ShardWork shard_work(const Job& job, int field_height, ShardId id);
 
 // <output dir>/shards/<name>.shard-<I>-of-<N>.hfshard
 std::filesystem::path shard_path(const Job& job, ShardId id);
+// <output dir>/shards/<name>.<stem>.stage-<s>.hfshard: a staged entry's state after stage s (any N).
+std::filesystem::path stage_path(const Job& job, int entry, int stage);
 
 }  // namespace hfbake

@@ -59,6 +59,16 @@ struct MethodInfo {
                          const RunControl& rc) = nullptr;
   LayerSet (*finish_blocks)(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
                             const RunControl& rc) = nullptr;
+  // The farm for a method whose work runs in successive stages, each needing the previous one's result of
+  // the whole field (p2: stage 0 its direct light, stage b its bounce b): stages(resolved) says how many;
+  // bake_stage computes stage `stage` from the previous stage's state (empty for stage 0) and returns the
+  // state after it, as float layers (the shard file's); finish_stages turns the last state into what `bake`
+  // returns -- bit-identical to it, because bake runs the same stages in order. Null: not staged.
+  int (*stages)(const nlohmann::json& resolved) = nullptr;
+  LayerSet (*bake_stage)(const Scene& scene, const nlohmann::json& params, int stage, LayerSet&& previous,
+                         const RunControl& rc) = nullptr;
+  LayerSet (*finish_stages)(const Scene& scene, const nlohmann::json& params, LayerSet&& last,
+                            const RunControl& rc) = nullptr;
   // What the method reads from the Scene besides the heights and the lighting. The job loader builds
   // Scene::normals and Scene::surface.albedo (12 bytes per texel each) only when a method of the job or
   // the reference reads them; a method that does not must not touch them (they may be empty).

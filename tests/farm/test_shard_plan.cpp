@@ -42,11 +42,14 @@ Job three_entry_job() {
   job.name = "j";
   job.output.dir = "/tmp/x";
   job.has_reference = true;
-  BakeEntry p1, lsao, hbao;
+  BakeEntry p1, vo, hbao, lsao, farfield, hsao;
   p1.method = "p1", p1.resolved = {{"directions", 16}};
-  lsao.method = "lsao", lsao.resolved = {{"directions", 16}};
+  vo.method = "vo", vo.resolved = {{"directions", 16}};  // runs whole
   hbao.method = "hbao", hbao.resolved = {{"directions", 5}};
-  job.bakes = {p1, lsao, hbao};
+  lsao.method = "lsao", lsao.resolved = {{"directions", 12}};
+  farfield.method = "farfield", farfield.resolved = {{"directions", 3}};
+  hsao.method = "hsao", hsao.resolved = {{"directions", 64}};
+  job.bakes = {p1, vo, hbao, lsao, farfield, hsao};
   return job;
 }
 
@@ -54,24 +57,25 @@ TEST(ShardPlan, EveryBlockRowAndWholeMethodIsInExactlyOneShard) {
   for (int height : {1, 31, 32, 33, 1000}) {
     const Job job = three_entry_job();
     for (int N = 1; N <= 20; ++N) {
-      std::vector<int> p1(8), hbao(5), rows(height), lsao(1);
+      // Blocks per entry: min(K, 8) for the direction-dividing methods; vo runs whole (one unit).
+      std::vector<std::vector<int>> seen = {std::vector<int>(8), std::vector<int>(1), std::vector<int>(5),
+                                            std::vector<int>(8), std::vector<int>(3), std::vector<int>(8)};
+      std::vector<int> rows(height);
       for (int I = 0; I < N; ++I) {
         const ShardWork w = shard_work(job, height, {I, N});
         for (const ShardWork::Entry& e : w.entries) {
-          if (e.entry == 1) {
-            EXPECT_TRUE(e.whole);
-            ++lsao[0];
-          } else {
-            EXPECT_FALSE(e.whole);
-            for (int b = e.block_begin; b < e.block_end; ++b) ++(e.entry == 0 ? p1 : hbao).at(std::size_t(b));
-          }
+          EXPECT_EQ(e.whole, e.entry == 1) << "entry " << e.entry;
+          if (e.whole)
+            ++seen[1][0];
+          else
+            for (int b = e.block_begin; b < e.block_end; ++b)
+              ++seen.at(std::size_t(e.entry)).at(std::size_t(b));
         }
         for (int r = w.row_begin; r < w.row_end; ++r) ++rows.at(std::size_t(r));
       }
-      for (int c : p1) EXPECT_EQ(c, 1) << "N " << N;
-      for (int c : hbao) EXPECT_EQ(c, 1) << "N " << N;
+      for (const auto& entry : seen)
+        for (int c : entry) EXPECT_EQ(c, 1) << "N " << N;
       for (int c : rows) EXPECT_EQ(c, 1) << "N " << N << " height " << height;
-      EXPECT_EQ(lsao[0], 1);
     }
   }
 }
@@ -95,6 +99,26 @@ TEST(MergeBlocks, AddsInBlockOrderAndKeepsPerBlockLayers) {
   EXPECT_EQ(total.layers.size(), 4u);
 }
 
+// FloatBlocks against sums written out by hand: each block from zero in float, the blocks added in order.
+TEST(MergeBlocks, FloatBlocksSumEachBlockFromZero) {
+  for (int K : {1, 5, 8, 9, 20}) {
+    std::vector<double> v(static_cast<std::size_t>(K));
+    for (int k = 0; k < K; ++k) v[std::size_t(k)] = (k % 2 ? 1e8 : 1.0) * (k % 3 ? 1.0 : -1.0) + 0.1 * k;
+    float expect = 0;
+    for (int b = 0; b < direction_block_count(K); ++b) {
+      float block = 0;
+      for (int k = direction_block_begin(b, K); k < direction_block_begin(b + 1, K); ++k)
+        block = float(double(block) + v[std::size_t(k)]);
+      expect = b == 0 ? block : expect + block;
+    }
+    const FloatBlocks blocks(K);
+    EXPECT_EQ(blocks.needs_partial(), K > 8);
+    float total = 12345, partial = 0;
+    for (int k = 0; k < K; ++k) blocks.add(k, v[std::size_t(k)], total, partial);
+    EXPECT_EQ(total, expect) << "K " << K;
+  }
+}
+
 TEST(MergeBlocks, SplitDoublesKeep48Bits) {
   SplitDouble t = split_double(1.0);
   add_split(t, split_double(1e-12));
@@ -115,7 +139,7 @@ TEST(ShardFile, RoundTripsAndRefusesDamage) {
   const fs::path dir = fs::temp_directory_path() / ("hfbake_shard_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const fs::path file = dir / "j.shard-1-of-2.hfshard";
-  const ShardIdentity id{"j", "0123456789abcdef", "v1", {1, 2}, 3, 2};
+  const ShardIdentity id{"j", "0123456789abcdef", "v1", {1, 2}, 3, 2, "", ""};
   LayerSet l;
   l.width = 3, l.height = 2;
   l.add("ao", {"Y"}).data = {1, 2, 3, 4, 5, 6};

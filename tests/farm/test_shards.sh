@@ -6,7 +6,8 @@ H=$1 W=$2
 . "$(dirname "$0")/common.sh"
 rm -rf "$W" && mkdir -p "$W" && cd "$W" || exit 1
 # p1 with every layer, a non-uniform environment (the built-in sky) and two suns; hbao with bent
-# normals; lsao (runs whole in one shard); a reference of every layer the methods are scored against.
+# normals; lsao, farfield and hsao with bent normals and more directions than blocks (block partial sums);
+# vo (runs whole in one shard); a reference of every layer the methods are scored against.
 cat >job.json <<'J'
 {"version": 1, "name": "farm",
  "height": {"procedural": {"kind": "fractal", "size": [67, 53], "seed": 5}},
@@ -16,7 +17,10 @@ cat >job.json <<'J'
  "bake": [{"method": "p1", "directions": 12,
            "layers": ["ao", "vsky", "direct", "horizon", "horizon_distance", "bent_normal"]},
           {"method": "hbao", "directions": 10, "radius": 5, "falloff": "smooth"},
-          {"method": "lsao", "directions": 8, "radius": 5}],
+          {"method": "lsao", "directions": 12, "radius": 5, "layers": ["obscurance", "bent_normal"]},
+          {"method": "farfield", "directions": 10, "radius": 8, "layers": ["obscurance", "bent_normal"]},
+          {"method": "hsao", "directions": 9, "radius": 4, "layers": ["obscurance", "bent_normal"]},
+          {"method": "vo", "radius": 4}],
  "reference": {"samples": 16},
  "output": {"dir": "out", "previews": true}}
 J
@@ -60,6 +64,29 @@ mkdir -p other && cp other.json other/job.json
 "$H" bake other/job.json --no-cache --quiet --out o --shard 1/3 || fail "other shard"
 cp o/shards/farm.shard-1-of-3.hfshard s3/shards/
 expect_refusal "a shard of another job" "another job"
+# The version a shard records carries the binary's GNU build id (readelf's), so a rebuilt hfbake's shards
+# are refused; a shard whose header names another build (same length, edited in place) is refused.
+build=$(readelf -n "$H" | sed -n 's/.*Build ID: \([0-9a-f]*\).*/\1/p')
+[ -n "$build" ] || fail "no build id in $H"
+cp keep s3/shards/farm.shard-1-of-3.hfshard
+grep -aq "+build.${build:0:16}" s3/shards/farm.shard-1-of-3.hfshard || fail "the shard's version lacks the build id ${build:0:16}"
+sed -i "s/+build.${build:0:16}/+build.0000000000000000/" s3/shards/farm.shard-1-of-3.hfshard
+expect_refusal "a shard of another build" "0000000000000000"
+# Temporary shard files of writers that no longer run are removed by the next bake of a shard there;
+# those of a live process (this shell: its pid and start time) and of another host are kept.
+cp keep s3/shards/farm.shard-1-of-3.hfshard
+start=$(awk '{print $22}' /proc/$$/stat)
+host=$(hostname)
+touch "s3/shards/farm.shard-0-of-3.hfshard.tmp-999999999+1@$host" "s3/shards/farm.shard-0-of-3.hfshard.tmp-$$+$start@$host" \
+  "s3/shards/farm.shard-0-of-3.hfshard.tmp-999999999+1@elsewhere" "s3/shards/farm.shard-2-of-3.hfshard.tmp-999999998@$host"
+msg=$("$H" bake job.json --no-cache --out s3 --shard 1/3 2>&1) || fail "re-run shard: $msg"
+[ ! -e "s3/shards/farm.shard-0-of-3.hfshard.tmp-999999999+1@$host" ] || fail "a dead writer's file was kept"
+[ ! -e "s3/shards/farm.shard-2-of-3.hfshard.tmp-999999998@$host" ] || fail "a dead writer's file (no start time) was kept"
+echo "$msg" | grep -q "removed .*tmp-999999999+1@$host" || fail "the removal was not told: $msg"
+[ -e "s3/shards/farm.shard-0-of-3.hfshard.tmp-$$+$start@$host" ] || fail "a live writer's file was removed"
+[ -e "s3/shards/farm.shard-0-of-3.hfshard.tmp-999999999+1@elsewhere" ] || fail "another host's file was removed"
+rm -f s3/shards/*.tmp-*
+echo "ok: stale temporary shard files removed, live and foreign ones kept"
 # Nothing was written by the refused merges: the outputs are those of the first merge.
 cp keep s3/shards/farm.shard-1-of-3.hfshard
 same_outputs whole s3

@@ -1,8 +1,12 @@
 #!/bin/bash
 # The farm through a real Slurm: a throw-away one-node cluster (slurm_cluster.sh) in the build tree, stopped
 # by the PIDs it started whatever happens (trap). Cases:
-#   array_merge     a suite of 2 jobs x 3 shards as one array + merge (hfbake slurm --wait): bit-identical to
-#                   hfbake bake of the same suite
+#   array_merge     a suite of 6 jobs (p1, hbao, lsao, farfield, hsao, vo, nlp, references) x 2 shards as one
+#                   array of 12 tasks + merge (hfbake slurm --wait): bit-identical to hfbake bake of the suite
+#   big_job         one 256^2 job with p1, hbao and a reference as 4 shards + merge: bit-identical (the 2048^2
+#                   job of the same kind is measured by farm-bench, not tested: see the README)
+#   p2_stages       p2 with 2 bounces as staged shards (3 stage arrays chained by afterok, then the merge):
+#                   bit-identical to hfbake bake
 #   deleted_shard   after hfbake slurm, a deleted shard makes the merge job fail naming it
 #   scancel_resume  a task cancelled (scancel) is resubmitted by hfbake slurm --resume: the same bits
 #   shared_cache    two bakes of one reference sharing a cache folder, as concurrent Slurm jobs: both
@@ -38,14 +42,60 @@ wait_gone() {  # wait_gone JOBID: until Slurm no longer lists it as pending or r
 case "$CASE" in
 array_merge)
   job a 1 16 && job b 2 16
-  echo '{"version": 1, "suite": "nightly", "jobs": ["a.json", "b.json"]}' >suite.json
+  # Four more jobs: the other direction-dividing methods, vo and nlp (whole), one without a reference.
+  obsc() {  # obsc NAME SEED BAKE REFERENCE
+    cat >"$1.json" <<J
+{"version": 1, "name": "$1",
+ "height": {"procedural": {"kind": "fractal", "size": [53, 41], "seed": $2}},
+ "environment": {"uniform": [1, 1, 1]},
+ "bake": [$3]$4,
+ "output": {"dir": "out-$1"}}
+J
+  }
+  obsc c 3 '{"method": "lsao", "directions": 12, "radius": 5, "layers": ["obscurance", "bent_normal"]}' ', "reference": {"samples": 8}'
+  obsc d 4 '{"method": "farfield", "directions": 10, "radius": 8}, {"method": "vo", "radius": 4}' ''
+  obsc e 5 '{"method": "hsao", "directions": 9, "radius": 4, "layers": ["obscurance", "bent_normal"]}' ''
+  obsc f 6 '{"method": "nlp"}, {"method": "hbao", "directions": 12, "radius": 4}' ', "reference": {"samples": 8}'
+  echo '{"version": 1, "suite": "nightly", "jobs": ["a.json", "b.json", "c.json", "d.json", "e.json", "f.json"]}' >suite.json
   "$H" bake suite.json --no-cache --quiet --out whole || fail "bake of the suite"
-  "$H" slurm suite.json --shards 3 --out farm --no-cache --quiet --wait || fail "hfbake slurm --wait exit $?"
-  grep -q -- "--array=0-5" farm/nightly/slurm/bake.sbatch || fail "not one array of 6 tasks"
+  "$H" slurm suite.json --shards 2 --out farm --no-cache --quiet --wait || fail "hfbake slurm --wait exit $?"
+  grep -q -- "--array=0-11" farm/nightly/slurm/bake.sbatch || fail "not one array of 12 tasks"
   grep -q -- "--requeue" farm/nightly/slurm/bake.sbatch || fail "no --requeue"
-  same_outputs whole/nightly/a farm/nightly/a
-  same_outputs whole/nightly/b farm/nightly/b
+  for j in a b c d e f; do same_outputs whole/nightly/$j farm/nightly/$j; done
   for f in suite.json index.html junit.xml; do [ -f farm/nightly/$f ] || fail "no suite $f"; done
+  ;;
+big_job)
+  cat >big.json <<J
+{"version": 1, "name": "big",
+ "height": {"procedural": {"kind": "fractal", "size": [256, 256], "seed": 7}},
+ "environment": {"uniform": [1, 1, 1]},
+ "lights": [{"directional": {"direction": [0.3, 0.2, 1.0], "irradiance": 2}}],
+ "bake": [{"method": "p1", "directions": 16}, {"method": "hbao", "directions": 16, "radius": 6}],
+ "reference": {"samples": 8},
+ "output": {"dir": "out-big"}}
+J
+  "$H" bake big.json --no-cache --quiet --out whole || fail "bake"
+  "$H" slurm big.json --shards 4 --out farm --no-cache --quiet --wait || fail "hfbake slurm --wait exit $?"
+  [ "$(ls farm/shards/big.shard-*-of-4.hfshard | wc -l)" = 4 ] || fail "not 4 shards: $(ls farm/shards)"
+  same_outputs whole farm
+  ;;
+p2_stages)
+  cat >p2.json <<J
+{"version": 1, "name": "p2",
+ "height": {"procedural": {"kind": "fractal", "size": [61, 47], "seed": 3}},
+ "environment": {"sky": {"sun": {"elevation_deg": 35}}},
+ "bounces": 2,
+ "bake": [{"method": "p2", "directions": 12, "layers": ["indirect", "total", "direct", "indirect_b1", "indirect_b2"]},
+          {"method": "hbao", "directions": 10, "radius": 5}],
+ "reference": {"samples": 8},
+ "output": {"dir": "out-p2"}}
+J
+  "$H" bake p2.json --no-cache --quiet --out whole || fail "bake"
+  "$H" slurm p2.json --shards 2 --out farm --no-cache --wait 2>slurm.err || fail "hfbake slurm --wait exit $? ($(cat slurm.err))"
+  cat slurm.err
+  for st in 0 1 2; do grep -q "of stage $st as array job" slurm.err || fail "stage $st was not submitted"; done
+  for st in 0 1 2; do [ -f farm/shards/p2.p2.stage-$st.hfshard ] || fail "no stage $st file: $(ls farm/shards)"; done
+  same_outputs whole farm
   ;;
 deleted_shard)
   job a 1 16

@@ -8,8 +8,10 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "core/azimuth.hpp"
+#include "core/direction_blocks.hpp"
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/farfield_slab_table.hpp"
 #include "methods/ao/obscurance_params.hpp"
@@ -195,7 +197,7 @@ template <class Acc>
 void farfield_occluded(const HeightField& field, const std::vector<Vec3f>& normals,
                        const FarfieldOptions& options, const RunControl& rc,
                        const std::vector<std::size_t>* only, FarfieldStats* stats, Acc* occluded,
-                       float* bent_xyz = nullptr) {
+                       float* bent_xyz = nullptr, int block = -1) {
   FarfieldOptions o = options;
   o.directions = std::max(o.directions, 1);
   o.interval = std::max(o.interval, 1);
@@ -209,8 +211,26 @@ void farfield_occluded(const HeightField& field, const std::vector<Vec3f>& norma
   const SlabTable table(o.rho);
   const double support = o.rho.support(1e-5) / ts;  // texels beyond which rho < 1e-5
   std::atomic<std::uint64_t> near_count{0}, far_count{0};
+  // The farm's direction blocks (core/direction_blocks.hpp): the float layers sum every direction by blocks
+  // (FloatBlocks), or block `block` alone from zero; the double sums of farfield_occlusion_at in one run.
+  constexpr bool by_blocks = std::is_same_v<Acc, float>;
+  const FloatBlocks blocks(K);
+  const int k0 = block >= 0 ? direction_block_begin(block, K) : 0;
+  const int k1 = block >= 0 ? direction_block_begin(block + 1, K) : K;
+  const int C = bent ? 4 : 1;
+  std::vector<float> partial(by_blocks && block < 0 && blocks.needs_partial() ? C * field.texel_count() : 0);
+  auto add = [&](int k, std::size_t idx, double v, Acc& total, int c) {
+    if constexpr (by_blocks) {
+      if (block >= 0)
+        total = float(double(total) + v);
+      else
+        blocks.add(k, v, total, partial.empty() ? total : partial[C * idx + std::size_t(c)]);
+    } else {
+      total = Acc(double(total) + v);
+    }
+  };
   DirectionScan d;
-  for (int k = 0; k < K; ++k) {
+  for (int k = k0; k < k1; ++k) {
     plan(field, o, k, d);
     scan(field, d, rc);
     const double sector_tan = std::tan(kPi / K);
@@ -326,28 +346,26 @@ void farfield_occluded(const HeightField& field, const std::vector<Vec3f>& norma
                 sum += st.occluded;
                 dir_sum.h += st.dir.h, dir_sum.v += st.dir.v;
               }
-              Acc& acc = occluded[only ? item : idx];
-              acc = Acc(double(acc) + (open_end ? near.occluded : sum / halves));
-              if (bent) {
-                const SliceVec open = open_direction(frame_value, tangent, kHalfPi);
-                const SliceVec occ = open_end ? near.dir : SliceVec{dir_sum.h / halves, dir_sum.v / halves};
-                const double h = open.h + occ.h, v = open.v + occ.v;
-                float* b = bent_xyz + 3 * idx;
-                b[0] = float(double(b[0]) + h * d.dx);
-                b[1] = float(double(b[1]) + h * d.dy);
-                b[2] = float(double(b[2]) + v);
-              }
+              add(k, idx, open_end ? near.occluded : sum / halves, occluded[only ? item : idx], 0);
+              if constexpr (by_blocks)
+                if (bent) {
+                  const SliceVec open = open_direction(frame_value, tangent, kHalfPi);
+                  const SliceVec occ = open_end ? near.dir : SliceVec{dir_sum.h / halves, dir_sum.v / halves};
+                  const double h = open.h + occ.h, v = open.v + occ.v;
+                  float* b = bent_xyz + 3 * idx;
+                  add(k, idx, h * d.dx, b[0], 1), add(k, idx, h * d.dy, b[1], 2), add(k, idx, v, b[2], 3);
+                }
             }
           }
           near_count += nn;
           far_count += nf;
         });
-    rc.report(double(k + 1) / K);
+    rc.report(double(k + 1 - k0) / (k1 - k0));
   }
   if (stats) {
     stats->near_samples = near_count;
     stats->virtual_points = far_count;
-    stats->texel_directions = std::uint64_t(only ? only->size() : field.texel_count()) * K;
+    stats->texel_directions = std::uint64_t(only ? only->size() : field.texel_count()) * (k1 - k0);
   }
 }
 
@@ -357,6 +375,16 @@ void farfield_layers(const HeightField& field, const std::vector<Vec3f>& normals
                      const FarfieldOptions& options, const RunControl& rc, FarfieldStats* stats, float* light,
                      float* bent_xyz) {
   farfield_occluded(field, normals, options, rc, nullptr, stats, light, bent_xyz);
+  farfield_finish(field, normals, options, light, bent_xyz);
+}
+
+void farfield_block_sums(const HeightField& field, const FarfieldOptions& options, int block,
+                         const RunControl& rc, float* occluded, float* bent_xyz) {
+  farfield_occluded(field, std::vector<Vec3f>(), options, rc, nullptr, nullptr, occluded, bent_xyz, block);
+}
+
+void farfield_finish(const HeightField& field, const std::vector<Vec3f>& normals,
+                     const FarfieldOptions& options, float* light, float* bent_xyz) {
   const double scale = 2.0 / std::max(options.directions, 1);
   const std::size_t N = field.texel_count();
   for (std::size_t t = 0; t < N; ++t) light[t] = float(std::clamp(1.0 - double(light[t]) * scale, 0.0, 1.0));
@@ -437,6 +465,37 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
                                std::move(bent));
 }
 
+namespace {
+
+// Farm blocks: "sum" and, with bent_normal, "bent" (farfield_block_sums; merged by float addition).
+LayerSet farfield_bake_block(const Scene& scene, const nlohmann::json& params, int block,
+                             const RunControl& rc) {
+  Params in(params);
+  const FarfieldOptions o = read_farfield_options(in);
+  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  LayerSet out;
+  out.width = scene.field.width, out.height = scene.field.height;
+  float* sum = out.add("sum", {"Y"}).data.data();
+  float* bent = wants(layers, "bent_normal") ? out.add("bent", {"X", "Y", "Z"}).data.data() : nullptr;
+  farfield_block_sums(scene.field, o, block, rc, sum, bent);
+  return out;
+}
+
+LayerSet farfield_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+                                const RunControl&) {
+  Params in(params);
+  const FarfieldOptions o = read_farfield_options(in);
+  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  std::vector<float> light = std::move(sums.find("sum")->data), bent;
+  if (wants(layers, "bent_normal")) bent = std::move(sums.find("bent")->data);
+  sums = LayerSet();
+  farfield_finish(scene.field, scene.normals, o, light.data(), bent.empty() ? nullptr : bent.data());
+  return obscurance_layers_xyz(scene.field.width, scene.field.height, layers, std::move(light),
+                               std::move(bent));
+}
+
+}  // namespace
+
 MethodInfo farfield_method() {
   MethodInfo m;
   m.name = "farfield";
@@ -456,12 +515,18 @@ MethodInfo farfield_method() {
     o.interval = r.value("interval", o.interval);
     o.growth = r.value("growth", o.growth);
     o.sector_average = r.value("sector_average", o.sector_average);
-    const bool obscurance = wants(r.value("layers", std::vector<std::string>{}), "obscurance");
-    return (obscurance ? 0.0 : 4.0) * double(c.field.width) * double(c.field.height) +
+    const auto layers = r.value("layers", std::vector<std::string>{});
+    // The farm's block partial sums (FloatBlocks) when a block holds more than one direction.
+    const double partial =
+        FloatBlocks(o.directions).needs_partial() ? (wants(layers, "bent_normal") ? 16.0 : 4.0) : 0.0;
+    return ((wants(layers, "obscurance") ? 0.0 : 4.0) + partial) * double(c.field.width) *
+               double(c.field.height) +
            farfield_working_bytes(c.field, o);
   };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets";
+  m.bake_block = farfield_bake_block;
+  m.finish_blocks = farfield_finish_blocks;
   m.falloff_defines_obscurance = true;
   return m;
 }

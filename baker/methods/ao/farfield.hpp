@@ -64,6 +64,14 @@ void farfield_layers(const HeightField& field, const std::vector<Vec3f>& normals
                      const FarfieldOptions& options, const RunControl& rc, FarfieldStats* stats, float* light,
                      float* bent_xyz);
 
+// Direction block `block` alone (core/direction_blocks.hpp), summed from zero into occluded (and bent_xyz):
+// what a shard computes; farfield_layers sums the same blocks (FloatBlocks). farfield_finish turns the sums
+// into the layers in place (what farfield_layers does after summing).
+void farfield_block_sums(const HeightField& field, const FarfieldOptions& options, int block,
+                         const RunControl& rc, float* occluded, float* bent_xyz);
+void farfield_finish(const HeightField& field, const std::vector<Vec3f>& normals,
+                     const FarfieldOptions& options, float* light, float* bent_xyz);
+
 // Bytes farfield holds beyond its layers for a field of this shape: the largest direction's prefix sums
 // over its lines of the interval pyramid (levels the traversal can read only) and a chunk of raw maxima.
 double farfield_working_bytes(const FieldShape& field, const FarfieldOptions& options);

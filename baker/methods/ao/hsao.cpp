@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 
+#include "core/direction_blocks.hpp"
 #include "core/error.hpp"
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/obscurance_params.hpp"
@@ -29,7 +30,8 @@ struct DepthSurface {
 
 }  // namespace
 
-HsaoTexel hsao_texel(const HeightField& field, Vec3 n, int i, int j, const HsaoSettings& s) {
+HsaoSums hsao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const HsaoSettings& s, int d0,
+                         int d1) {
   const DepthSurface surf{field, 1.0 / field.texel_size};
   const double R = s.falloff.radius, step = R / s.steps;
   // Lift the receiver by a tiny offset along n so the flat ground around it does not count as "below"
@@ -44,7 +46,7 @@ HsaoTexel hsao_texel(const HeightField& field, Vec3 n, int i, int j, const HsaoS
 
   HsaoTexel out;
   Vec3 bent{0, 0, 0};
-  for (int d = 0; d < s.directions; ++d) {
+  for (int d = d0; d < d1; ++d) {
     const double theta = 2 * kPi * d / s.directions;
     const Vec3 T = t1 * std::cos(theta) + t2 * std::sin(theta);
     // Horizon ray.
@@ -93,9 +95,49 @@ HsaoTexel hsao_texel(const HeightField& field, Vec3 n, int i, int j, const HsaoS
       }
     }
   }
-  out.bent_normal = length(bent) > 1e-12 ? normalize(bent) : n;
-  return out;
+  return {split_double(out.horizon_occlusion),
+          split_double(out.normal_occlusion),
+          {split_double(bent.x), split_double(bent.y), split_double(bent.z)}};
 }
+
+void hsao_add_sums(HsaoSums& total, const HsaoSums& block) {
+  add_split(total.horizon, block.horizon);
+  add_split(total.normal, block.normal);
+  for (int c = 0; c < 3; ++c) add_split(total.bent[c], block.bent[c]);
+}
+
+HsaoTexel hsao_finish(const HsaoSums& sums, Vec3 n) {
+  HsaoTexel t;
+  t.horizon_occlusion = join_double(sums.horizon);
+  t.normal_occlusion = join_double(sums.normal);
+  const Vec3 bent{join_double(sums.bent[0]), join_double(sums.bent[1]), join_double(sums.bent[2])};
+  t.bent_normal = length(bent) > 1e-12 ? normalize(bent) : n;
+  return t;
+}
+
+HsaoTexel hsao_texel(const HeightField& field, Vec3 n, int i, int j, const HsaoSettings& s) {
+  // Direction blocks (core/direction_blocks.hpp), each summed from zero, added in order: what `hfbake
+  // merge` does with the blocks of other machines.
+  const int K = s.directions, B = direction_block_count(K);
+  HsaoSums total = hsao_texel_sums(field, n, i, j, s, 0, direction_block_begin(1, K));
+  for (int b = 1; b < B; ++b)
+    hsao_add_sums(total, hsao_texel_sums(field, n, i, j, s, direction_block_begin(b, K),
+                                         direction_block_begin(b + 1, K)));
+  return hsao_finish(total, n);
+}
+
+namespace {
+
+// The texel's obscurance and bent normal into the layers' arrays (either may be null).
+void hsao_store(const HsaoTexel& t, std::size_t idx, float* obscurance, float* bent_xyz) {
+  if (obscurance) obscurance[idx] = float(std::clamp(1.0 - t.occluded(), 0.0, 1.0));
+  if (bent_xyz) {
+    const Vec3f b = Vec3f::from(t.bent_normal);
+    bent_xyz[3 * idx] = b.x, bent_xyz[3 * idx + 1] = b.y, bent_xyz[3 * idx + 2] = b.z;
+  }
+}
+
+}  // namespace
 
 void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HsaoSettings& s,
                 const RunControl& rc, float* obscurance, float* bent_xyz) {
@@ -105,12 +147,7 @@ void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
     for (int i = 0; i < field.width; ++i) {
       const std::size_t idx = field.index(i, j);
       const Vec3 n = normals.empty() ? normal_at(field, i, j).d() : normals[idx].d();
-      const HsaoTexel t = hsao_texel(field, n, i, j, s);
-      if (obscurance) obscurance[idx] = float(std::clamp(1.0 - t.occluded(), 0.0, 1.0));
-      if (bent_xyz) {
-        const Vec3f b = Vec3f::from(t.bent_normal);
-        bent_xyz[3 * idx] = b.x, bent_xyz[3 * idx + 1] = b.y, bent_xyz[3 * idx + 2] = b.z;
-      }
+      hsao_store(hsao_texel(field, n, i, j, s), idx, obscurance, bent_xyz);
     }
     rc.report(double(++rows_done) / field.height);
   });
@@ -142,6 +179,61 @@ LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunCo
   return obscurance_layers_xyz(field.width, field.height, layers, std::move(obsc), std::move(bent));
 }
 
+namespace {
+
+// Farm blocks: "sums#2f" (horizon hi, lo, normal hi, lo) and "bent#2f" (X hi, lo, ...): HsaoSums of block
+// `block` per texel, normals from the heights (normal_at, as hsao_field without held normals).
+LayerSet hsao_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
+  const HeightField& field = scene.field;
+  Params in(params);
+  const HsaoSettings s = read_hsao_settings(in, field);
+  LayerSet out;
+  out.width = field.width, out.height = field.height;
+  float* sums = out.add("sums#2f", {"T.hi", "T.lo", "N.hi", "N.lo"}).data.data();
+  float* bent = out.add("bent#2f", {"X.hi", "X.lo", "Y.hi", "Y.lo", "Z.hi", "Z.lo"}).data.data();
+  const int K = s.directions, d0 = direction_block_begin(block, K), d1 = direction_block_begin(block + 1, K);
+  std::atomic<int> rows_done{0};
+  tbb::parallel_for(0, field.height, [&](int j) {
+    rc.check();
+    for (int i = 0; i < field.width; ++i) {
+      const std::size_t idx = field.index(i, j);
+      const HsaoSums t = hsao_texel_sums(field, normal_at(field, i, j).d(), i, j, s, d0, d1);
+      const SplitDouble v[5] = {t.horizon, t.normal, t.bent[0], t.bent[1], t.bent[2]};
+      for (int c = 0; c < 2; ++c) sums[4 * idx + 2 * c] = v[c].hi, sums[4 * idx + 2 * c + 1] = v[c].lo;
+      for (int c = 0; c < 3; ++c)
+        bent[6 * idx + 2 * c] = v[2 + c].hi, bent[6 * idx + 2 * c + 1] = v[2 + c].lo;
+    }
+    rc.report(double(++rows_done) / field.height);
+  });
+  return out;
+}
+
+LayerSet hsao_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+                            const RunControl&) {
+  const HeightField& field = scene.field;
+  Params in(params);
+  read_hsao_settings(in, field);
+  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  std::vector<float> obsc(field.texel_count());
+  std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);
+  const float* ts = sums.find("sums#2f")->data.data();
+  const float* bs = sums.find("bent#2f")->data.data();
+  tbb::parallel_for(0, field.height, [&](int j) {
+    for (int i = 0; i < field.width; ++i) {
+      const std::size_t idx = field.index(i, j);
+      HsaoSums t;
+      t.horizon = {ts[4 * idx], ts[4 * idx + 1]}, t.normal = {ts[4 * idx + 2], ts[4 * idx + 3]};
+      for (int c = 0; c < 3; ++c) t.bent[c] = {bs[6 * idx + 2 * c], bs[6 * idx + 2 * c + 1]};
+      hsao_store(hsao_finish(t, normal_at(field, i, j).d()), idx, obsc.data(),
+                 bent.empty() ? nullptr : bent.data());
+    }
+  });
+  sums = LayerSet();
+  return obscurance_layers_xyz(field.width, field.height, layers, std::move(obsc), std::move(bent));
+}
+
+}  // namespace
+
 MethodInfo hsao_method() {
   MethodInfo m;
   m.name = "hsao";
@@ -156,6 +248,8 @@ MethodInfo hsao_method() {
 
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets";
+  m.bake_block = hsao_bake_block;
+  m.finish_blocks = hsao_finish_blocks;
   m.falloff_defines_obscurance = true;
   return m;
 }

@@ -19,6 +19,7 @@
 
 #include <vector>
 
+#include "core/direction_blocks.hpp"
 #include "core/run_control.hpp"
 #include "core/vec.hpp"
 #include "field/height_field.hpp"
@@ -42,6 +43,18 @@ struct HsaoTexel {
 };
 
 HsaoTexel hsao_texel(const HeightField& field, Vec3 normal, int i, int j, const HsaoSettings& s);
+
+// The farm's direction blocks (core/direction_blocks.hpp): hsao_texel sums each block of directions [d0, d1)
+// from zero in double, adds the blocks in order as SplitDouble (48 bits) and finishes; `hfbake merge` adds
+// blocks baked elsewhere the same way, so both give the same bits.
+struct HsaoSums {
+  SplitDouble horizon, normal;  // O_T and O_N of the block's directions
+  SplitDouble bent[3];          // the block's unnormalised bent direction
+};
+HsaoSums hsao_texel_sums(const HeightField& field, Vec3 normal, int i, int j, const HsaoSettings& s, int d0,
+                         int d1);
+void hsao_add_sums(HsaoSums& total, const HsaoSums& block);
+HsaoTexel hsao_finish(const HsaoSums& sums, Vec3 normal);
 
 // Whole field, rows in parallel (deterministic). obscurance = 1 - (O_T + O_N); either output may be null.
 void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, const HsaoSettings& s,

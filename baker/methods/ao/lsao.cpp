@@ -4,6 +4,8 @@
 #include <atomic>
 #include <cmath>
 
+#include "core/azimuth.hpp"
+#include "core/direction_blocks.hpp"
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/obscurance_params.hpp"
 #include "methods/ao/slice_integral.hpp"
@@ -108,18 +110,31 @@ struct LsaoWorker {
 
 }  // namespace
 
-void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
-               float* sum, float* bent_xyz) {
+namespace {
+
+// The sweep of lsao_sums (block < 0: every direction, summed by the farm's blocks, FloatBlocks) or of
+// lsao_block_sums (direction block `block` only, summed from zero).
+void lsao_sweep(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
+                int block, float* sum, float* bent_xyz) {
   const bool want_bent = bent_xyz && options.texel_receivers && options.estimator == LsaoEstimator::hull;
   const std::size_t N = field.texel_count();
   std::fill_n(sum, N, 0.0f);
   if (bent_xyz) std::fill_n(bent_xyz, 3 * N, 0.0f);
+  const int K = std::max(options.directions, 1);
   SweepSpec spec;
-  spec.directions = std::max(options.directions, 1);
+  spec.directions = K;
+  if (block >= 0)  // the block's azimuths, as plan_direction gives them for k of K
+    for (int k = direction_block_begin(block, K); k < direction_block_begin(block + 1, K); ++k)
+      spec.azimuths.push_back(azimuth(k, K));
+  const int k0 = block >= 0 ? direction_block_begin(block, K) : 0;
+  const FloatBlocks blocks(K);
+  // Block partial sums between a block's directions (whole bake, blocks of more than one direction).
+  std::vector<float> partial(block < 0 && blocks.needs_partial() ? (want_bent ? 4 : 1) * N : 0);
   spec.channels = want_bent ? 6 : 2;
   spec.wrap_periods = std::max(options.wrap_periods, 1);
-  std::vector<SweepDirection> dirs(std::size_t(spec.directions));
-  for (int k = 0; k < spec.directions; ++k) dirs[std::size_t(k)] = plan_direction(field, spec, k);
+  const int swept = spec.azimuths.empty() ? K : int(spec.azimuths.size());
+  std::vector<SweepDirection> dirs(static_cast<std::size_t>(swept));
+  for (int k = 0; k < swept; ++k) dirs[std::size_t(k)] = plan_direction(field, spec, k);
   std::atomic<std::uint64_t> samples{0}, iterations{0};
   const std::vector<Vec3f> normals =
       options.texel_receivers && lsao_holds_normals(field) ? compute_normals(field) : std::vector<Vec3f>();
@@ -148,21 +163,38 @@ void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunCo
           if (t.w_hi == 0) return t.lo[ch1];
           return (1 - f) * t.lo[ch1] + f * t.hi[ch0];
         };
-        // Float sums, one rounding per direction (k ascending for every texel: deterministic).
+        // Float sums, one rounding per direction (k ascending for every texel: deterministic); the whole
+        // bake adds them by the farm's blocks (FloatBlocks), a block alone from zero.
         const std::size_t idx = field.index(i, j);
-        sum[idx] = float(double(sum[idx]) + blend(0, 1));
-        if (want_bent) {
-          const double h = blend(2, 4), v = blend(3, 5);
-          float* b = bent_xyz + 3 * idx;
-          b[0] = float(double(b[0]) + h * d.dx);
-          b[1] = float(double(b[1]) + h * d.dy);
-          b[2] = float(double(b[2]) + v);
+        const double value[4] = {blend(0, 1), want_bent ? blend(2, 4) * d.dx : 0.0,
+                                 want_bent ? blend(2, 4) * d.dy : 0.0, want_bent ? blend(3, 5) : 0.0};
+        float* out[4] = {sum + idx, want_bent ? bent_xyz + 3 * idx : nullptr,
+                         want_bent ? bent_xyz + 3 * idx + 1 : nullptr,
+                         want_bent ? bent_xyz + 3 * idx + 2 : nullptr};
+        for (int c = 0; c < (want_bent ? 4 : 1); ++c) {
+          if (block >= 0)
+            *out[c] = float(double(*out[c]) + value[c]);
+          else
+            blocks.add(k0 + k, value[c], *out[c],
+                       partial.empty() ? *out[c] : partial[(want_bent ? 4 : 1) * idx + c]);
         }
       });
   if (stats) {
     stats->samples = samples;
     stats->iterations = iterations;
   }
+}
+
+}  // namespace
+
+void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
+               float* sum, float* bent_xyz) {
+  lsao_sweep(field, options, rc, stats, -1, sum, bent_xyz);
+}
+
+void lsao_block_sums(const HeightField& field, const LsaoOptions& options, int block, const RunControl& rc,
+                     float* sum, float* bent_xyz) {
+  lsao_sweep(field, options, rc, nullptr, block, sum, bent_xyz);
 }
 
 bool lsao_holds_normals(const FieldShape& field) {
@@ -182,6 +214,10 @@ std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOpti
 void lsao_layers(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
                  float* light, float* bent_xyz) {
   lsao_sums(field, options, rc, stats, light, bent_xyz);
+  lsao_finish(field, options, light, bent_xyz);
+}
+
+void lsao_finish(const HeightField& field, const LsaoOptions& options, float* light, float* bent_xyz) {
   const double inv = 1.0 / std::max(options.directions, 1);
   const std::size_t N = field.texel_count();
   for (std::size_t t = 0; t < N; ++t) light[t] = float(1.0 - std::clamp(double(light[t]) * inv, 0.0, 1.0));
@@ -230,6 +266,36 @@ LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunCo
                                std::move(bent));
 }
 
+namespace {
+
+// Farm blocks: "sum" and, with bent_normal, "bent" (lsao_block_sums; merged by float addition).
+LayerSet lsao_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
+  Params in(params);
+  const LsaoOptions o = read_lsao_options(in);
+  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  LayerSet out;
+  out.width = scene.field.width, out.height = scene.field.height;
+  float* sum = out.add("sum", {"Y"}).data.data();
+  float* bent = wants(layers, "bent_normal") ? out.add("bent", {"X", "Y", "Z"}).data.data() : nullptr;
+  lsao_block_sums(scene.field, o, block, rc, sum, bent);
+  return out;
+}
+
+LayerSet lsao_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+                            const RunControl&) {
+  Params in(params);
+  const LsaoOptions o = read_lsao_options(in);
+  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  std::vector<float> light = std::move(sums.find("sum")->data), bent;
+  if (wants(layers, "bent_normal")) bent = std::move(sums.find("bent")->data);
+  sums = LayerSet();
+  lsao_finish(scene.field, o, light.data(), bent.empty() ? nullptr : bent.data());
+  return obscurance_layers_xyz(scene.field.width, scene.field.height, layers, std::move(light),
+                               std::move(bent));
+}
+
+}  // namespace
+
 MethodInfo lsao_method() {
   MethodInfo m;
   m.name = "lsao";
@@ -252,11 +318,17 @@ MethodInfo lsao_method() {
     spec.channels = bent ? 6 : 2;
     HeightField field;  // the sweep's plan needs only the shape
     static_cast<FieldShape&>(field) = c.field;
-    return ((wants(layers, "obscurance") ? 0.0 : 4.0) + (lsao_holds_normals(c.field) ? 12.0 : 0.0)) * texels +
+    // The farm's block partial sums (FloatBlocks) when a block holds more than one direction.
+    const double partial = FloatBlocks(spec.directions).needs_partial() ? (bent ? 16.0 : 4.0) : 0.0;
+    return ((wants(layers, "obscurance") ? 0.0 : 4.0) + (lsao_holds_normals(c.field) ? 12.0 : 0.0) +
+            partial) *
+               texels +
            double(sweep_buffer_bytes(field, spec));
   };
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";
+  m.bake_block = lsao_bake_block;
+  m.finish_blocks = lsao_finish_blocks;
   m.falloff_defines_obscurance = true;
   return m;
 }

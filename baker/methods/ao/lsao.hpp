@@ -43,17 +43,23 @@ struct LsaoStats {
   std::uint64_t iterations = 0;  // hull loop tests (P3: between samples and 2 x samples)
 };
 
-// Per texel the sums over the K directions, accumulated in float (one rounding per direction, k ascending:
-// the same bits for any thread count): sum[N] of the per-direction value (P3 Eq. 1, before clamping) and,
-// when bent_xyz is not null (hull estimator with texel receivers, else zeros), bent_xyz[3 * texel + c] of the
-// cosine-weighted open direction about the texel's normal, each direction's band from the tangent plane up
-// to its largest occluder weighted by 1 - rho(|h|) (the occlusion P3's Eq. 1 counts), unnormalised.
+// Per texel the sums over the K directions, accumulated in float (one rounding per direction, k ascending,
+// by the farm's direction blocks: core/direction_blocks.hpp FloatBlocks; the same bits for any thread count
+// and for `hfbake merge` of lsao_block_sums): sum[N] of the per-direction value (P3 Eq. 1, before clamping)
+// and, when bent_xyz is not null (hull estimator with texel receivers, else zeros), bent_xyz[3 * texel + c]
+// of the cosine-weighted open direction about the texel's normal, each direction's band from the tangent
+// plane up to its largest occluder weighted by 1 - rho(|h|) (the occlusion P3's Eq. 1 counts), unnormalised.
 // Normals: held (compute_normals, 12 bytes a texel) up to 8192^2 texels, recomputed per tap from the heights
 // beyond (normal_at: the same values, about 40 % more CPU time): lsao_holds_normals. Nothing else is held
 // beyond the two outputs and the sweep's bounded line buffers.
 void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
                float* sum, float* bent_xyz);
 bool lsao_holds_normals(const FieldShape& field);
+// Direction block `block` alone (core/direction_blocks.hpp), summed from zero: what a shard computes.
+void lsao_block_sums(const HeightField& field, const LsaoOptions& options, int block, const RunControl& rc,
+                     float* sum, float* bent_xyz);
+// Finishes sums in place into the layers (what lsao_layers does after lsao_sums).
+void lsao_finish(const HeightField& field, const LsaoOptions& options, float* light, float* bent_xyz);
 // The layers, finished in place from lsao_sums: light[t] = 1 - clamp(sum / K, 0, 1); bent_xyz (optional)
 // normalised (the texel's normal where nothing is open).
 void lsao_layers(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,

@@ -220,7 +220,12 @@ MethodInfo vo_method() {
     return 44.0 * double(c.field.width) * double(c.field.height);
   };
   m.division = WorkDivision::texel_tiles;
-  m.division_note = "texel tiles with a halo of the footprint (summed-area tables are local)";
+  // The farm runs it whole in one shard (no bake_block): a tile's own summed-area tables would round
+  // differently from the whole field's (differences of large prefix sums), so tiles could not merge to the
+  // single bake's bits, and vo is one pass over the field (cheap beside the reference and the sweeps).
+  m.division_note =
+      "whole, in one shard: tiles with a halo of the footprint would work, but their own summed-area tables "
+      "round differently from the whole field's (not bit-identical), and the pass is cheap";
   m.falloff_defines_obscurance = true;
   return m;
 }

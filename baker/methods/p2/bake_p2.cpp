@@ -22,6 +22,16 @@ RunControl sub_range(const RunControl& rc, double a, double span) {
   return s;
 }
 
+// The mean albedo of the three corners of texel (i, j)'s facet q (q = 0: (i, j), (i + 1, j), (i, j + 1);
+// q = 1: (i, j), (i - 1, j), (i, j - 1)).
+Rgb facet_albedo(const Scene& scene, int i, int j, int q) {
+  const HeightField& f = scene.field;
+  const int d = q == 0 ? 1 : -1;
+  const std::size_t t = f.index(i, j), a = f.index(f.wrap_i(i + d), j), b = f.index(i, f.wrap_j(j + d));
+  const auto& al = scene.surface.albedo;
+  return (al[t] + al[a] + al[b]) * (1.0f / 3);
+}
+
 }  // namespace
 
 P2Params read_p2_params(Params& in, int job_bounces) {
@@ -94,41 +104,30 @@ double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
   return std::max(output, std::max(p1_phase, bounce_phase) - layers);
 }
 
-P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc) {
+P2State p2_stage0(const Scene& scene, const P2Params& params, const RunControl& rc) {
   const HeightField& f = scene.field;
-  const int B = params.bounces >= 0 ? params.bounces : std::max(0, scene.bounces);
   const std::size_t N = f.texel_count();
-  const double phase = 1.0 / (1 + B);
-  P2Result r;
-  r.width = f.width;
-  r.height = f.height;
+  P2State r;
 
   // Direct light: P1 on the same driver (its horizons, its lighting tables, its sun shadows).
   const P1Params p1 = p2_direct_params(params);
-  P1Result direct = compute_p1(scene, p1, sub_range(rc, 0, phase));
+  P1Result direct = compute_p1(scene, p1, rc);
   r.direct.resize(N);
   for (std::size_t i = 0; i < N; ++i) r.direct[i] = direct.direct_at(i);
   std::vector<float>().swap(direct.direct);
-  const std::vector<float> p1_sin_horizon = std::move(direct.horizon);
+  r.p1_sin_horizon = std::move(direct.horizon);
   rc.check();
 
   // Exit radiance of bounce 0: reflected direct light plus emission.
-  std::vector<Rgb> exit(N);
+  r.exit.resize(N);
   const bool emits = scene.surface.emission.size() == N;
   for (std::size_t i = 0; i < N; ++i)
-    exit[i] = scene.surface.albedo[i] * r.direct[i] + (emits ? scene.surface.emission[i] : Rgb{});
+    r.exit[i] = scene.surface.albedo[i] * r.direct[i] + (emits ? scene.surface.emission[i] : Rgb{});
   // Facet senders: each texel's two facets (P1Result::direct_facets), lit with their own normals, with
   // the mean albedo and emission of their three corners (the reference interpolates them over the facet).
   // Their exit radiance replaces P1's facet light in place; albedos and normals are recomputed where needed.
-  const auto facet_albedo = [&](int i, int j, int q) {
-    const int d = q == 0 ? 1 : -1;  // the corners (i, j), (i + d, j), (i, j + d)
-    const std::size_t t = f.index(i, j), a = f.index(f.wrap_i(i + d), j), b = f.index(i, f.wrap_j(j + d));
-    const auto& al = scene.surface.albedo;
-    return (al[t] + al[a] + al[b]) * (1.0f / 3);
-  };
-  std::vector<Rgb> facet_exit;
   if (params.facet_senders) {
-    facet_exit = std::move(direct.direct_facets);
+    r.facet_exit = std::move(direct.direct_facets);
     tbb::parallel_for(0, f.height, [&](int j) {
       for (int i = 0; i < f.width; ++i) {
         const std::size_t t = f.index(i, j);
@@ -139,60 +138,85 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
           if (emits)
             em = (scene.surface.emission[t] + scene.surface.emission[a] + scene.surface.emission[b]) *
                  (1.0f / 3);
-          facet_exit[2 * t + q] = facet_albedo(i, j, q) * facet_exit[2 * t + q] + em;
+          r.facet_exit[2 * t + q] = facet_albedo(scene, i, j, q) * r.facet_exit[2 * t + q] + em;
         }
       }
     });
   }
   std::vector<Rgb>().swap(direct.direct_facets);
+  return r;
+}
 
+void p2_bounce(const Scene& scene, const P2Params& params, int B, P2State& r, const RunControl& rc) {
+  const HeightField& f = scene.field;
+  const std::size_t N = f.texel_count();
+  const int b = r.bounces_done + 1;
   IndirectSweepSpec spec;
   spec.directions = params.directions;
   spec.visibility = params.visibility;
   spec.wrap_periods = params.wrap_periods;
   spec.supersampling = params.supersampling;
-  spec.p1_sin_horizon = &p1_sin_horizon;
+  spec.p1_sin_horizon = &r.p1_sin_horizon;
   if (params.facet_senders) {
-    spec.exit_facets = &facet_exit;
+    spec.exit_facets = &r.facet_exit;
     spec.near_radius = params.near_radius;
   }
   std::vector<Rgb> facet_e;
-  for (int b = 1; b <= B; ++b) {
-    P2SweepStats st;
-    std::vector<Rgb> e = sweep_indirect(f, scene.normals, exit, spec, sub_range(rc, b * phase, phase), &st,
-                                        params.facet_senders && b < B ? &facet_e : nullptr);
-    if (params.facet_senders && b < B)
-      tbb::parallel_for(0, f.height, [&](int j) {
-        for (int i = 0; i < f.width; ++i)
-          for (int q = 0; q < 2; ++q) {
-            const std::size_t fq = 2 * f.index(i, j) + q;
-            facet_exit[fq] = facet_albedo(i, j, q) * facet_e[fq];
-          }
-      });
-    r.stats.receivers += st.receivers;
-    r.stats.iterations += st.iterations;
-    r.stats.naive_iterations += st.naive_iterations;
-    r.stats.horizons += st.horizons;
-    r.stats.run_starts += st.run_starts;
-    r.stats.pushed += st.pushed;
-    r.stats.horizons_pushed += st.horizons_pushed;
-    if (b < B)
-      for (std::size_t i = 0; i < N; ++i) exit[i] = scene.surface.albedo[i] * e[i];
+  P2SweepStats st;
+  std::vector<Rgb> e = sweep_indirect(f, scene.normals, r.exit, spec, rc, &st,
+                                      params.facet_senders && b < B ? &facet_e : nullptr);
+  if (params.facet_senders && b < B)
+    tbb::parallel_for(0, f.height, [&](int j) {
+      for (int i = 0; i < f.width; ++i)
+        for (int q = 0; q < 2; ++q) {
+          const std::size_t fq = 2 * f.index(i, j) + q;
+          r.facet_exit[fq] = facet_albedo(scene, i, j, q) * facet_e[fq];
+        }
+    });
+  r.stats.receivers += st.receivers;
+  r.stats.iterations += st.iterations;
+  r.stats.naive_iterations += st.naive_iterations;
+  r.stats.horizons += st.horizons;
+  r.stats.run_starts += st.run_starts;
+  r.stats.pushed += st.pushed;
+  r.stats.horizons_pushed += st.horizons_pushed;
+  if (b < B)
+    for (std::size_t i = 0; i < N; ++i) r.exit[i] = scene.surface.albedo[i] * e[i];
+  else
+    std::vector<Rgb>().swap(r.exit);
+  if (b == 1) {  // 0 + e: the same values (the sums never hold -0)
+    if (params.keep_bounces)
+      r.indirect = e;
     else
-      std::vector<Rgb>().swap(exit);
-    if (b == 1) {  // 0 + e: the same values (the sums never hold -0)
-      if (params.keep_bounces)
-        r.indirect = e;
-      else
-        r.indirect = std::move(e);
-    } else {
-      for (std::size_t i = 0; i < N; ++i) r.indirect[i] += e[i];
-    }
-    if (params.keep_bounces) r.indirect_b.push_back(std::move(e));
+      r.indirect = std::move(e);
+  } else {
+    for (std::size_t i = 0; i < N; ++i) r.indirect[i] += e[i];
   }
-  if (B == 0) r.indirect.assign(N, Rgb{});
-  rc.report(1.0);
+  if (params.keep_bounces) r.indirect_b.push_back(std::move(e));
+  r.bounces_done = b;
+}
+
+P2Result p2_result(P2State&& s, int width, int height) {
+  P2Result r;
+  r.width = width, r.height = height;
+  r.direct = std::move(s.direct);
+  r.indirect = std::move(s.indirect);
+  r.indirect_b = std::move(s.indirect_b);
+  r.stats = s.stats;
+  if (s.bounces_done == 0) r.indirect.assign(std::size_t(width) * std::size_t(height), Rgb{});
   return r;
+}
+
+P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc) {
+  const int B = params.bounces >= 0 ? params.bounces : std::max(0, scene.bounces);
+  const double phase = 1.0 / (1 + B);
+  P2State s = p2_stage0(scene, params, sub_range(rc, 0, phase));
+  for (int b = 1; b <= B; ++b) {
+    rc.check();
+    p2_bounce(scene, params, B, s, sub_range(rc, b * phase, phase));
+  }
+  rc.report(1.0);
+  return p2_result(std::move(s), scene.field.width, scene.field.height);
 }
 
 LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
@@ -200,7 +224,10 @@ LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunCont
   p.keep_bounces = std::any_of(p.layers.begin(), p.layers.end(),
                                [](const std::string& l) { return l.rfind("indirect_b", 0) == 0; });
   const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
-  const P2Result r = compute_p2(scene, p, rc);
+  return p2_layers(p, B, compute_p2(scene, p, rc));
+}
+
+LayerSet p2_layers(const P2Params& p, int B, const P2Result& r) {
   const std::size_t N = std::size_t(r.width) * std::size_t(r.height);
   LayerSet out;
   out.width = r.width;
@@ -233,6 +260,115 @@ LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunCont
   return out;
 }
 
+namespace {
+
+// The farm's stages (MethodInfo::stages): the P2State between them as float layers (Rgb arrays as 3
+// channels, the horizons as K channels in their own [k * texels + texel] order) and the sweep's counts as
+// attributes. The last stage keeps only what the layers need.
+std::vector<float> rgb_floats(std::vector<Rgb>&& v) {
+  std::vector<float> f(3 * v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) f[3 * i] = v[i].r, f[3 * i + 1] = v[i].g, f[3 * i + 2] = v[i].b;
+  std::vector<Rgb>().swap(v);
+  return f;
+}
+std::vector<Rgb> rgb_of(const Layer* l) {
+  std::vector<Rgb> v(l ? l->data.size() / 3 : 0);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = {l->data[3 * i], l->data[3 * i + 1], l->data[3 * i + 2]};
+  return v;
+}
+
+P2Params stage_params(const Scene& scene, const nlohmann::json& params) {
+  P2Params p = parse_p2_params(params, scene.bounces);
+  p.keep_bounces = std::any_of(p.layers.begin(), p.layers.end(),
+                               [](const std::string& l) { return l.rfind("indirect_b", 0) == 0; });
+  return p;
+}
+
+LayerSet state_layers(P2State&& s, int width, int height, bool last) {
+  LayerSet out;
+  out.width = width, out.height = height;
+  const std::size_t N = std::size_t(width) * std::size_t(height);
+  auto put = [&](const std::string& name, std::vector<Rgb>& v, int per_texel) {
+    if (v.empty()) return;
+    std::vector<std::string> ch;
+    for (int q = 0; q < per_texel; ++q)
+      for (const char* c : {"R", "G", "B"}) ch.push_back(std::to_string(q) + "." + c);
+    out.adopt(name, std::move(ch), rgb_floats(std::move(v)));
+  };
+  put("direct", s.direct, 1);
+  put("indirect", s.indirect, 1);
+  for (std::size_t b = 0; b < s.indirect_b.size(); ++b)
+    put("indirect_b" + std::to_string(b + 1), s.indirect_b[b], 1);
+  if (!last) {
+    put("exit", s.exit, 1);
+    put("facet_exit", s.facet_exit, 2);
+    if (!s.p1_sin_horizon.empty()) {
+      const int K = int(s.p1_sin_horizon.size() / N);  // before the move (argument order is unspecified)
+      out.adopt("horizon", indexed_channels(K), std::move(s.p1_sin_horizon));
+    }
+  }
+  const P2SweepStats& t = s.stats;
+  out.attributes = {{"bounces_done", std::to_string(s.bounces_done)},
+                    {"receivers", std::to_string(t.receivers)},
+                    {"iterations", std::to_string(t.iterations)},
+                    {"naive_iterations", std::to_string(t.naive_iterations)},
+                    {"horizons", std::to_string(t.horizons)},
+                    {"run_starts", std::to_string(t.run_starts)},
+                    {"pushed", std::to_string(t.pushed)},
+                    {"horizons_pushed", std::to_string(t.horizons_pushed)}};
+  return out;
+}
+
+P2State state_of(LayerSet&& l) {
+  P2State s;
+  s.direct = rgb_of(l.find("direct"));
+  s.indirect = rgb_of(l.find("indirect"));
+  for (int b = 1; const Layer* x = l.find("indirect_b" + std::to_string(b)); ++b)
+    s.indirect_b.push_back(rgb_of(x));
+  s.exit = rgb_of(l.find("exit"));
+  s.facet_exit = rgb_of(l.find("facet_exit"));
+  if (Layer* h = l.find("horizon")) s.p1_sin_horizon = std::move(h->data);
+  auto count = [&](const char* key) -> std::uint64_t {
+    for (const auto& [k, v] : l.attributes)
+      if (k == key) return std::stoull(v);
+    return 0;
+  };
+  s.bounces_done = int(count("bounces_done"));
+  s.stats.receivers = count("receivers"), s.stats.iterations = count("iterations");
+  s.stats.naive_iterations = count("naive_iterations"), s.stats.horizons = count("horizons");
+  s.stats.run_starts = count("run_starts"), s.stats.pushed = count("pushed");
+  s.stats.horizons_pushed = count("horizons_pushed");
+  l = LayerSet();
+  return s;
+}
+
+int p2_stages(const nlohmann::json& resolved) {
+  return 1 + std::max(0, resolved.value("bounces", 0));
+}
+
+LayerSet p2_bake_stage(const Scene& scene, const nlohmann::json& params, int stage, LayerSet&& previous,
+                       const RunControl& rc) {
+  const P2Params p = stage_params(scene, params);
+  const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
+  P2State s = stage == 0 ? p2_stage0(scene, p, rc) : state_of(std::move(previous));
+  if (stage > 0) {
+    if (s.bounces_done != stage - 1)
+      throw std::runtime_error("p2 stage " + std::to_string(stage) + " after stage " +
+                               std::to_string(s.bounces_done));
+    p2_bounce(scene, p, B, s, rc);
+  }
+  return state_layers(std::move(s), scene.field.width, scene.field.height, stage == B);
+}
+
+LayerSet p2_finish_stages(const Scene& scene, const nlohmann::json& params, LayerSet&& last,
+                          const RunControl&) {
+  const P2Params p = stage_params(scene, params);
+  const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
+  return p2_layers(p, B, p2_result(state_of(std::move(last)), scene.field.width, scene.field.height));
+}
+
+}  // namespace
+
 MethodInfo p2_method() {
   MethodInfo m;
   m.name = "p2";
@@ -245,9 +381,12 @@ MethodInfo p2_method() {
     return p2_working_bytes(c.field, parse_p2_params(r, c.bounces));
   };
   m.division = WorkDivision::bounce_stages;
+  m.stages = p2_stages;
+  m.bake_stage = p2_bake_stage;
+  m.finish_stages = p2_finish_stages;
   m.division_note =
-      "by direction sets within a bounce; each bounce is a stage that needs the previous bounce's radiance "
-      "of the whole field";
+      "bounces as successive stages (stage 0 direct light, stage b bounce b, each needing the previous stage "
+      "of the whole field), each stage whole in one shard; directions within a bounce are not divided yet";
   return m;
 }
 

@@ -84,6 +84,24 @@ struct P2Result {
 
 P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc);
 
+// compute_p2 as its stages (the farm runs them as successive tasks, baker/farm): stage 0 P1's direct light
+// and horizons, stage b (1..bounces) bounce b, each from the state the previous stage left. compute_p2 is
+// p2_stage0, then p2_bounce for b = 1..bounces, then p2_result: the same operations in the same order.
+struct P2State {
+  int bounces_done = 0;
+  std::vector<Rgb> direct;                   // E_direct / pi
+  std::vector<float> p1_sin_horizon;         // P1's horizons ([k * texels + texel], sin e)
+  std::vector<Rgb> exit;                     // the exit radiance the next bounce gathers
+  std::vector<Rgb> facet_exit;               // facet senders: [2 * texel + q]
+  std::vector<Rgb> indirect;                 // the sum of the bounces done (empty before bounce 1)
+  std::vector<std::vector<Rgb>> indirect_b;  // with P2Params::keep_bounces
+  P2SweepStats stats;
+};
+P2State p2_stage0(const Scene& scene, const P2Params& params, const RunControl& rc);
+// Bounce state.bounces_done + 1 of `bounces` (the last frees what no later bounce needs).
+void p2_bounce(const Scene& scene, const P2Params& params, int bounces, P2State& state, const RunControl& rc);
+P2Result p2_result(P2State&& state, int width, int height);
+
 // The P1 bake compute_p2 runs for direct light and the horizons that split each texel's lobe.
 struct P1Params;
 P1Params p2_direct_params(const P2Params& params);
@@ -93,6 +111,8 @@ P1Params p2_direct_params(const P2Params& params);
 double p2_working_bytes(const FieldShape& field, const P2Params& params);
 
 LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+// bake_p2's layers of a result (B: the bounces baked).
+LayerSet p2_layers(const P2Params& params, int bounces, const P2Result& result);
 
 // p2's line of the method table.
 MethodInfo p2_method();
