@@ -33,6 +33,11 @@ struct NlpOptions {
   // the texel normal; false = NS09 §7, U dotted with the order-3 clamped-cosine lobe (it over-weights grazing
   // radiance). subsample 2 always uses U. sh_irradiance is U's either way.
   bool exact_indirect_cosine = false;
+  // Senders of indirect light: true = every texel's two facets of the triangulated surface radiate the
+  // light of their own normals, and the stretch a casting-set step reveals radiates from its middle, its
+  // facet's light (issue 19: on terraces a cliff face radiated the bright treads at its ends); false = NS09,
+  // the radiance pyramid of texel-centre light read at the casting-set point.
+  bool facet_senders = true;
   std::vector<std::string> layers = {"direct", "indirect", "total", "sh_visibility", "sh_irradiance"};
 };
 
