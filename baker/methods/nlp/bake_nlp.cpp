@@ -53,9 +53,10 @@ NlpOptions read_nlp_options(Params& in) {
   o.light_directions = in.integer("light_directions", o.light_directions, 1, 64);
   o.light_level_offset = in.integer("light_level_offset", o.light_level_offset, 0, 16);
   o.light_horizon_knots = in.choice("light_horizon", "knots", {"bspline", "knots"}) == "knots";
+  o.visibility_horizon_knots = in.choice("visibility_horizon", "bspline", {"bspline", "knots"}) == "knots";
   o.subsample = in.integer("subsample", o.subsample, 1, 2);
   o.exact_indirect_cosine = in.choice("indirect_cosine", "sh", {"sh", "exact"}) == "exact";
-  o.facet_senders = in.choice("senders", "facets", {"facets", "texels"}) == "facets";
+  o.facet_senders = in.choice("senders", "texels", {"facets", "texels"}) == "facets";
   nlp::parse_azimuth_interpolation(in.choice("azimuth_interpolation", "linear", {"linear", "bspline"}),
                                    o.interpolation);
   o.layers = in.layers(nlp_layer_names(), o.layers);
@@ -266,7 +267,8 @@ float NlpBake::omega_max(Scratch& s, const float* recv, int i, int j, float cx, 
   const int cnt =
       nlp::march(light ? ms_light : ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
   if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
-  if (light && o.light_horizon_knots) return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
+  if (light ? o.light_horizon_knots : o.visibility_horizon_knots)
+    return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
   return nlp::bspline_max(s.omega.data(), cnt);
 }
 
