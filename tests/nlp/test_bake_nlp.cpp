@@ -166,6 +166,41 @@ TEST(NlpBake, CliffFaceRadiatesItsOwnLight) {
   EXPECT_GT(std::abs(got_texels / want - 1), 0.06);  // the bound fails on NS09's senders
 }
 
+// A thin wall (one column of height h on flat ground) 12 texels from the receiver, between two knots of the
+// march (d = 11.3 and 13.5 texels: they read the wall's bilinear flank at 0.31 h and the ground). Its top is
+// at elevation atan(h / 12) = 18.4 degrees, so a sun at 15 degrees towards it is blocked and one at 21
+// degrees is not. NS09's one sample a knot misses the wall and lights the receiver; near_spacing 0.5 samples
+// between the knots and finds it.
+TEST(NlpBake, NearSpacingFindsAWallBetweenKnots) {
+  const int W = 64, H = 33, wall = 40, ri = 28, rj = 16;
+  Scene s;
+  s.field.width = W, s.field.height = H, s.field.texel_size = 1, s.field.wrap = Wrap::clamp;
+  s.field.z.assign(std::size_t(W) * H, 0.0f);
+  for (int j = 0; j < H; ++j) s.field.z[s.field.index(wall, j)] = 4.0f;
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), Rgb{0, 0, 0});
+  s.environment = make_uniform_environment(Rgb{0, 0, 0});
+  s.bounces = 0;
+  for (double spacing : {0.0, 0.5})
+    for (double elev : {15.0, 21.0}) {
+      DirectionalLight L;
+      L.direction = Vec3{std::cos(elev * kPi / 180), 0, std::sin(elev * kPi / 180)};
+      L.angular_diameter = 0;
+      L.irradiance = Rgb{1, 1, 1};
+      s.lights = {L};
+      NlpOptions o;
+      o.layers = {"direct"};
+      o.near_spacing = spacing;
+      const float got = texel(bake_nlp(s, o, RunControl{}), "direct", ri, rj)[0];
+      const double lit = std::sin(elev * kPi / 180) / kPi;
+      const bool blocked = elev < std::atan(4.0 / (wall - ri)) * 180 / kPi;
+      if (spacing > 0 || !blocked)
+        EXPECT_NEAR(got, blocked ? 0.0 : lit, 1e-5) << spacing << " " << elev;
+      else
+        EXPECT_NEAR(got, lit, 1e-5) << "NS09's knots were expected to miss the wall";
+    }
+}
+
 // A tilted plane under a uniform environment (whole sphere): the plane never occludes its own hemisphere,
 // E/pi = L.
 TEST(NlpBake, SlopeUnderUniformEnvironment) {

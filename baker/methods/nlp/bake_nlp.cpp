@@ -56,6 +56,7 @@ NlpOptions read_nlp_options(Params& in) {
   o.visibility_horizon_knots = in.choice("visibility_horizon", "bspline", {"bspline", "knots"}) == "knots";
   o.subsample = in.integer("subsample", o.subsample, 1, 2);
   o.exact_indirect_cosine = in.choice("indirect_cosine", "sh", {"sh", "exact"}) == "exact";
+  o.near_spacing = in.number("near_spacing", o.near_spacing, 0, 64);
   o.facet_senders = in.choice("senders", "texels", {"facets", "texels"}) == "facets";
   nlp::parse_azimuth_interpolation(in.choice("azimuth_interpolation", "linear", {"linear", "bspline"}),
                                    o.interpolation);
@@ -100,6 +101,11 @@ struct Scratch {
         lev(steps + 1),
         nrm(std::size_t(width)) {}
 };
+
+nlp::MarchSetup with_near_spacing(nlp::MarchSetup s, double spacing) {
+  s.near_spacing = float(spacing);
+  return s;
+}
 
 bool wants(const NlpOptions& o, const char* name) {
   return std::find(o.layers.begin(), o.layers.end(), name) != o.layers.end();
@@ -186,11 +192,13 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       H(f.height),
       m(o.directions),
       N(f.texel_count()),
-      ms(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave, o.level_offset,
-                               o.radiance_level_offset)),
-      ms_light(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
-                                     std::max(o.level_offset, o.light_level_offset),
-                                     o.radiance_level_offset)),
+      ms(with_near_spacing(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
+                                                 o.level_offset, o.radiance_level_offset),
+                           o.near_spacing)),
+      ms_light(with_near_spacing(
+          nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
+                                std::max(o.level_offset, o.light_level_offset), o.radiance_level_offset),
+          o.near_spacing)),
       hp(nlp::build_pyramid(f.z.data(), 1, W, H, f.wrap, o.levels_per_octave, nlp::height_levels(ms))),
       A(nlp::sample_matrices(o.interpolation, m)),
       lights(setup_lights(scene, o)),

@@ -37,9 +37,12 @@ struct NlpOptions {
   bool exact_indirect_cosine = false;
   // Senders of indirect light: true = every texel's two facets of the triangulated surface radiate the
   // light of their own normals, and the stretch a casting-set step reveals radiates from its middle, its
-  // facet's light (issue 19: on terraces a cliff face radiated the bright treads at its ends); false (default)
-  // = NS09, the radiance pyramid of texel-centre light read at the casting-set point.
+  // facet's light (issue 19: on terraces a cliff face radiated the bright treads at its ends); false
+  // (default) = NS09, the radiance pyramid of texel-centre light read at the casting-set point.
   bool facet_senders = false;
+  // > 0: the march samples the unfiltered field at most this many texels apart between knots and each knot
+  // keeps the steepest sample (MarchSetup::near_spacing); 0 = NS09, one sample a knot.
+  double near_spacing = 0;
   std::vector<std::string> layers = {"direct", "indirect", "total", "sh_visibility", "sh_irradiance"};
 };
 

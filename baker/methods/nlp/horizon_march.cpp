@@ -1,6 +1,7 @@
 #include "methods/nlp/horizon_march.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace hfbake::nlp {
@@ -50,6 +51,27 @@ inline float sample_clamped(const PyramidLevel& lv, float x, float y) {
   return a + (b - a) * fv;
 }
 
+// MarchSetup::near_spacing: the knots on level 0 take the steepest slope of the samples between them and the
+// knot before (at most near_spacing apart). omega holds slopes (before the arctangent), so the largest slope
+// is the largest angle.
+template <class Level0>
+void near_maxima(const MarchSetup& s, Level0 height, float fi, float fj, float cx, float cy, float recv0,
+                 int inner, float* omega) {
+  float prev = 0;
+  for (int k = 0; k < inner && s.level[k] == 0; prev = s.dist[k], ++k) {
+    const float gap = s.dist[k] - prev;
+    if (!(gap > s.near_spacing)) continue;
+    const int n = int(std::ceil(gap / s.near_spacing));
+    const float step = gap / float(n);
+    float best = omega[k];
+    for (int q = 1; q < n; ++q) {
+      const float t = s.dist[k] - float(q) * step;
+      best = std::max(best, (height(fi + t * cx, fj + t * cy) - recv0) / (t * s.texel_size));
+    }
+    omega[k] = best;
+  }
+}
+
 }  // namespace
 
 int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float cy, const float* recv,
@@ -77,6 +99,10 @@ int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float 
       dist[k] = d;
       lev[k] = k;
     }
+    if (s.near_spacing > 0)
+      near_maxima(
+          s, [&](float x, float y) { return sample_clamped(levels[0], x, y); }, fi, fj, cx, cy, recv[0],
+          inner, omega);
   } else {
     for (int k = 0; k < inner; ++k) {
       const int l = s.level[k];
@@ -85,6 +111,10 @@ int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float 
       dist[k] = d;
       lev[k] = k;
     }
+    if (s.near_spacing > 0)
+      near_maxima(
+          s, [&](float x, float y) { return sample_level1(hp, hp.levels[0], x, y); }, fi, fj, cx, cy, recv[0],
+          inner, omega);
   }
   int n = inner;
   if (inner < s.steps) {  // the border knot (clamp only: t_exit is infinite in repeat mode)
