@@ -110,6 +110,131 @@ TEST(NlpBake, EmittingTrenchWallsExactCosine) {
   }
 }
 
+// A single straight cliff (issue 19): flat ground at height 0, a step of height h between columns c and c + 1
+// (the triangulated surface makes the face one plane, tilted t = atan h), flat again at h beyond; uniform sky
+// L = 1, albedo rho, one bounce. A receiver on the low ground D texels from the foot sees only the sky and
+// the face. The face sees the sky above the horizon in front of it (the low ground blocks the rest, the high
+// ground lies behind its plane): exit radiance rho (1 + cos t) / 2. Its cosine-weighted view factor from the
+// receiver, per azimuth phi up to the face's top edge at elevation e(phi) = atan(h cos phi / (D + 1)), is
+// sin^2 e / 2: indirect E/pi = rho (1 + cos t) / 2 * (1 / 2 pi) * integral of sin^2 e(phi) dphi over the
+// azimuths that reach the face inside the field. Texel senders (NS09) give the face the light of the flat
+// treads at its ends, far too bright; facet senders light the face with its own normal.
+TEST(NlpBake, CliffFaceRadiatesItsOwnLight) {
+  const int W = 48, H = 161, c = 30, row = 80;
+  const double h = 6, rho = 0.6;
+  Scene s;
+  s.field.width = W, s.field.height = H, s.field.texel_size = 1, s.field.wrap = Wrap::clamp;
+  s.field.z.assign(std::size_t(W) * H, 0.0f);
+  for (int j = 0; j < H; ++j)
+    for (int i = c + 1; i < W; ++i) s.field.z[s.field.index(i, j)] = float(h);
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), Rgb{float(rho), float(rho), float(rho)});
+  s.environment = make_uniform_environment(Rgb{1, 1, 1});
+  s.bounces = 1;
+  const double face = rho * (1 + 1 / std::sqrt(1 + h * h)) / 2;
+  double want = 0, got_facets = 0, got_texels = 0;
+  for (bool facets : {true, false}) {
+    NlpOptions o;
+    o.directions = 64;
+    o.levels_per_octave = 8;
+    o.exact_indirect_cosine = true;
+    o.facet_senders = facets;
+    o.layers = {"indirect"};
+    const LayerSet ls = bake_nlp(s, o, RunControl{});
+    for (int D = 3; D <= 16; ++D) {
+      const float v = texel(ls, "indirect", c - D, row)[0];
+      (facets ? got_facets : got_texels) += v;
+      if (!facets) continue;
+      double F = 0;
+      const int n = 20000;
+      for (int q = 0; q < n; ++q) {
+        const double phi = -kPi / 2 + kPi * (q + 0.5) / n;
+        if (std::abs((D + 1) * std::tan(phi)) > row) continue;  // leaves the field before the face
+        const double e = std::atan(h * std::cos(phi) / (D + 1));
+        F += std::sin(e) * std::sin(e) * (kPi / n);
+      }
+      want += face * F / (2 * kPi);
+    }
+  }
+  std::printf(
+      "cliff, receivers 3..16 texels from the foot, mean indirect: closed form %.5f, facet senders "
+      "%.5f (%+.1f %%), texel senders %.5f (%+.1f %%)\n",
+      want / 14, got_facets / 14, 100 * (got_facets / want - 1), got_texels / 14,
+      100 * (got_texels / want - 1));
+  // Measured: facet senders +3.2 %, texel senders +9.8 % (h = 3: -4.1 % and +6.0 %).
+  EXPECT_NEAR(got_facets / want, 1.0, 0.06);
+  EXPECT_GT(std::abs(got_texels / want - 1), 0.06);  // the bound fails on NS09's senders
+}
+
+// A thin wall (one column of height h on flat ground) 12 texels from the receiver, between two knots of the
+// march (d = 11.3 and 13.5 texels: they read the wall's bilinear flank at 0.31 h and the ground). Its top is
+// at elevation atan(h / 12) = 18.4 degrees, so a sun at 15 degrees towards it is blocked and one at 21
+// degrees is not. NS09's one sample a knot misses the wall and lights the receiver; near_spacing 0.5 samples
+// between the knots and finds it.
+TEST(NlpBake, NearSpacingFindsAWallBetweenKnots) {
+  const int W = 64, H = 33, wall = 40, ri = 28, rj = 16;
+  Scene s;
+  s.field.width = W, s.field.height = H, s.field.texel_size = 1, s.field.wrap = Wrap::clamp;
+  s.field.z.assign(std::size_t(W) * H, 0.0f);
+  for (int j = 0; j < H; ++j) s.field.z[s.field.index(wall, j)] = 4.0f;
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), Rgb{0, 0, 0});
+  s.environment = make_uniform_environment(Rgb{0, 0, 0});
+  s.bounces = 0;
+  for (double spacing : {0.0, 0.5})
+    for (double elev : {15.0, 21.0}) {
+      DirectionalLight L;
+      L.direction = Vec3{std::cos(elev * kPi / 180), 0, std::sin(elev * kPi / 180)};
+      L.angular_diameter = 0;
+      L.irradiance = Rgb{1, 1, 1};
+      s.lights = {L};
+      NlpOptions o;
+      o.layers = {"direct"};
+      o.near_spacing = spacing;
+      const float got = texel(bake_nlp(s, o, RunControl{}), "direct", ri, rj)[0];
+      const double lit = std::sin(elev * kPi / 180) / kPi;
+      const bool blocked = elev < std::atan(4.0 / (wall - ri)) * 180 / kPi;
+      if (spacing > 0 || !blocked)
+        EXPECT_NEAR(got, blocked ? 0.0 : lit, 1e-5) << spacing << " " << elev;
+      else
+        EXPECT_NEAR(got, lit, 1e-5) << "NS09's knots were expected to miss the wall";
+    }
+}
+
+// A raised texel (i - 1, j) beside a receiver (i, j) on flat ground, a sun at azimuth 135 degrees and 30
+// degrees up: its ray runs along the triangulation's facet edge from (i, j) to (i - 1, j + 1), where the
+// triangulated surface (the reference's) is flat, so the receiver is lit. The bilinear surface bulges there
+// (0.21 h one texel out), which NS09's knots read as an occluder; near_spacing reads the triangulated
+// surface near the receiver.
+TEST(NlpBake, NearSpacingReadsTheTriangulatedSurface) {
+  const int W = 33, H = 33, ri = 16, rj = 16;
+  Scene s;
+  s.field.width = W, s.field.height = H, s.field.texel_size = 1, s.field.wrap = Wrap::clamp;
+  s.field.z.assign(std::size_t(W) * H, 0.0f);
+  s.field.z[s.field.index(ri - 1, rj)] = 4.0f;
+  s.field.z[s.field.index(ri + 1, rj)] = 4.0f;  // behind the receiver: its normal stays +z
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), Rgb{0, 0, 0});
+  s.environment = make_uniform_environment(Rgb{0, 0, 0});
+  s.bounces = 0;
+  const double elev = 30 * kPi / 180, az = 135 * kPi / 180;
+  DirectionalLight L;
+  L.direction = Vec3{std::cos(elev) * std::cos(az), std::cos(elev) * std::sin(az), std::sin(elev)};
+  L.angular_diameter = 0;
+  L.irradiance = Rgb{1, 1, 1};
+  s.lights = {L};
+  NlpOptions o;
+  o.layers = {"direct"};
+  const Vec3f n = normal_at(s.field, ri, rj);
+  const double lit = (n.x * L.direction.x + n.y * L.direction.y + n.z * L.direction.z) / kPi;
+  const float ns09 = texel(bake_nlp(s, o, RunControl{}), "direct", ri, rj)[0];
+  o.near_spacing = 0.5;
+  const float got = texel(bake_nlp(s, o, RunControl{}), "direct", ri, rj)[0];
+  std::printf("sun along a facet edge: lit %.5f, near_spacing %.5f, NS09 %.5f\n", lit, got, ns09);
+  EXPECT_NEAR(got, lit, 1e-5);
+  EXPECT_EQ(ns09, 0.0f);  // the bilinear bulge this test is about
+}
+
 // A tilted plane under a uniform environment (whole sphere): the plane never occludes its own hemisphere,
 // E/pi = L.
 TEST(NlpBake, SlopeUnderUniformEnvironment) {

@@ -9,6 +9,7 @@
 
 #include "core/azimuth.hpp"
 #include "core/error.hpp"
+#include "field/triangulation.hpp"
 #include "job/params.hpp"
 #include "methods/nlp/horizon_march.hpp"
 #include "methods/nlp/nlp_basis.hpp"
@@ -52,8 +53,11 @@ NlpOptions read_nlp_options(Params& in) {
   o.light_directions = in.integer("light_directions", o.light_directions, 1, 64);
   o.light_level_offset = in.integer("light_level_offset", o.light_level_offset, 0, 16);
   o.light_horizon_knots = in.choice("light_horizon", "knots", {"bspline", "knots"}) == "knots";
+  o.visibility_horizon_knots = in.choice("visibility_horizon", "bspline", {"bspline", "knots"}) == "knots";
   o.subsample = in.integer("subsample", o.subsample, 1, 2);
   o.exact_indirect_cosine = in.choice("indirect_cosine", "sh", {"sh", "exact"}) == "exact";
+  o.near_spacing = in.number("near_spacing", o.near_spacing, 0, 64);
+  o.facet_senders = in.choice("senders", "texels", {"facets", "texels"}) == "facets";
   nlp::parse_azimuth_interpolation(in.choice("azimuth_interpolation", "linear", {"linear", "bspline"}),
                                    o.interpolation);
   o.layers = in.layers(nlp_layer_names(), o.layers);
@@ -98,6 +102,11 @@ struct Scratch {
         nrm(std::size_t(width)) {}
 };
 
+nlp::MarchSetup with_near_spacing(nlp::MarchSetup s, double spacing) {
+  s.near_spacing = float(spacing);
+  return s;
+}
+
 bool wants(const NlpOptions& o, const char* name) {
   return std::find(o.layers.begin(), o.layers.end(), name) != o.layers.end();
 }
@@ -124,11 +133,13 @@ class NlpBake {
                   bool light = false) const;
   void light_visibility(Scratch& s, const float* recv, int i, int j, const Vec3f& n, float* frac) const;
   void visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const;
+  void facet_radiance(float x, float y, float* out) const;
   void radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cnt_row, int j, float* Uout,
                 float* Eout) const;
 
   // --- shading ---
   void shade_direct(int i, int j, const float* V, const float* frac);
+  void direct_facets(int i, int j, const float (&lin)[3][9], const float* frac);
   // add: this_bounce[idx] += the texel's indirect light (the last bounce adds straight into `indirect`);
   // else this_bounce[idx] = it.
   void shade_indirect(std::vector<Rgb>& this_bounce, bool add, int i, int j, const float* U, const float* E);
@@ -165,6 +176,9 @@ class NlpBake {
 
   // --- results ---
   std::vector<Rgb> direct, indirect;
+  // Facet senders: the exit radiance of every texel's two facets ([2 * texel + q], facet_normals' order)
+  // for the bounce being gathered; empty with texel senders or without bounces.
+  std::vector<Rgb> facet_exit;
   std::vector<float> vis, irr;
   int lu = 0;  // radiance levels (the bounces' pyramids)
 };
@@ -178,11 +192,13 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       H(f.height),
       m(o.directions),
       N(f.texel_count()),
-      ms(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave, o.level_offset,
-                               o.radiance_level_offset)),
-      ms_light(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
-                                     std::max(o.level_offset, o.light_level_offset),
-                                     o.radiance_level_offset)),
+      ms(with_near_spacing(nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
+                                                 o.level_offset, o.radiance_level_offset),
+                           o.near_spacing)),
+      ms_light(with_near_spacing(
+          nlp::make_march_setup(W, H, f.texel_size, f.wrap, o.levels_per_octave,
+                                std::max(o.level_offset, o.light_level_offset), o.radiance_level_offset),
+          o.near_spacing)),
       hp(nlp::build_pyramid(f.z.data(), 1, W, H, f.wrap, o.levels_per_octave, nlp::height_levels(ms))),
       A(nlp::sample_matrices(o.interpolation, m)),
       lights(setup_lights(scene, o)),
@@ -210,6 +226,7 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
   xs_coarse.resize(cw);
   for (int i = 0; i < W; ++i) xs_full[i] = i;
   for (int ci = 0; ci < cw; ++ci) xs_coarse[ci] = coarse_i(ci);
+  if (o.facet_senders && scene.bounces > 0) facet_exit.resize(2 * N);
 }
 
 void NlpBake::setup_environment() {
@@ -258,7 +275,8 @@ float NlpBake::omega_max(Scratch& s, const float* recv, int i, int j, float cx, 
   const int cnt =
       nlp::march(light ? ms_light : ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
   if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
-  if (light && o.light_horizon_knots) return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
+  if (light ? o.light_horizon_knots : o.visibility_horizon_knots)
+    return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
   return nlp::bspline_max(s.omega.data(), cnt);
 }
 
@@ -342,8 +360,36 @@ void NlpBake::shade_direct(int i, int j, const float* V, const float* frac) {
     }
   }
   direct[idx] = d;
+  if (!facet_exit.empty()) direct_facets(i, j, lin, frac);
   if (want_vis) std::copy(V, V + kSh, vis.begin() + idx * kSh);
   if (want_irr) std::copy(irr_local, irr_local + 27, irr.begin() + idx * kIrrChannels);
+}
+
+// Facet senders: the exit radiance (albedo x direct) of texel (i, j)'s two facets, lit with their own
+// normals: the texel's environment light `lin` (its SH visibility times the environment, bands l <= 2) dotted
+// with the clamped cosine about each facet normal, and the lights with the exact cosine and the texel's
+// visibility of them.
+void NlpBake::direct_facets(int i, int j, const float (&lin)[3][9], const float* frac) {
+  const std::size_t idx = f.index(i, j);
+  const Rgb albedo = scene.surface.albedo.empty() ? Rgb{} : scene.surface.albedo[idx];
+  Vec3f fn[2];
+  facet_normals(f, i, j, fn);
+  for (int q = 0; q < 2; ++q) {
+    float y[kSh];
+    sh::eval(fn[q].x, fn[q].y, fn[q].z, y);
+    float e[3] = {};
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 9; ++k) e[c] += kConv[k] * y[k] * lin[c][k];
+    Rgb d{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+    for (std::size_t l = 0; l < nl; ++l) {
+      const LightSetup& L = lights[l];
+      const float cosn = float(fn[q].x * L.dir.x + fn[q].y * L.dir.y + fn[q].z * L.dir.z);
+      if (cosn > 0 && frac[l] > 0) d += L.irradiance * (cosn * frac[l] * kInvPi);
+    }
+    Rgb b = albedo * d;
+    if (!scene.surface.emission.empty()) b += scene.surface.emission[idx];
+    facet_exit[2 * idx + q] = b;
+  }
 }
 
 // Bilinear interpolation of per-receiver vectors (cnt floats each) from the coarse grid to texel (i, j).
@@ -398,6 +444,23 @@ void NlpBake::direct_pass() {
   }
 }
 
+// Facet senders: the exit radiance of the facet of the triangulated surface under (x, y) (texel
+// coordinates; clamped to the field, wrapped on a repeating one).
+void NlpBake::facet_radiance(float x, float y, float* out) const {
+  if (f.wrap == Wrap::repeat) {
+    x -= std::floor(x / W) * W;
+    y -= std::floor(y / H) * H;
+  } else {
+    x = std::clamp(x, 0.0f, float(W - 1));
+    y = std::clamp(y, 0.0f, float(H - 1));
+  }
+  const FacetRef r = facet_under(x, y);
+  const int i = f.wrap == Wrap::repeat ? r.i % W : std::min(r.i, W - 1);
+  const int j = f.wrap == Wrap::repeat ? r.j % H : std::min(r.j, H - 1);
+  const Rgb v = facet_exit[2 * f.index(i, j) + r.q];
+  out[0] = v.r, out[1] = v.g, out[2] = v.b;
+}
+
 // Kernel: U (3 x 16, colour-major) at receiver (i, j) from the radiance pyramid rp.
 // E (optional, 3 floats): the irradiance / (2 pi / m) of the same casting-set segments with the exact
 // cosine: segment (e0, e1] of radiance r adds r * (F(e1) - F(e0)), F(e) = n_h (e + sin e cos e) / 2 +
@@ -406,6 +469,7 @@ void NlpBake::direct_pass() {
 void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cnt_row, int j, float* Uout,
                        float* Eout) const {
   receivers(s, xs, cnt_row, j);
+  const bool facets = !facet_exit.empty();
   std::fill(Uout, Uout + std::size_t(cnt_row) * 3 * kSh, 0.0f);
   if (Eout) std::fill(Eout, Eout + std::size_t(cnt_row) * 3, 0.0f);
   for (int a = 0; a < m; ++a)
@@ -429,14 +493,28 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
       nlp::occlusion4(std::sin(wmin), prev);
       float run = wmin;
       bool any = false;
+      float before = 0, dd = 0;  // distances of the previous curve point and this one
       for (int p = 0; p < nc; ++p) {
+        const int k = p >> 1;
+        before = dd;
+        dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
         if (!(s.curve[p] > run)) continue;
         run = s.curve[p];
-        const int k = p >> 1;
-        const float dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
         float rad[3];
-        const nlp::PyramidLevel& L = rp.levels[ms.rlevel[s.lev[k]]];
-        nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
+        const int rl = ms.rlevel[s.lev[k]];
+        const nlp::PyramidLevel& L = rp.levels[rl];
+        if (facets) {
+          // The stretch this step reveals lies between the previous curve point and this one: it radiates
+          // from its middle, the light of the facet there (level 0) or the filtered facet light.
+          const float ds = 0.5f * (before + dd);
+          if (rl == 0) {
+            facet_radiance(i + ds * cx, j + ds * cy, rad);
+          } else {
+            nlp::sample_level(rp, L, i + ds * cx, j + ds * cy, rad);
+          }
+        } else {
+          nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
+        }
         float nu[4];
         const float srun = std::sin(run);
         nlp::occlusion4(srun, nu);
@@ -499,6 +577,14 @@ void NlpBake::bounce_passes() {
     }
   };
   exit_from(direct, false);
+  // Facet senders: the pyramid filters the mean of each texel's two facets (level 0 is read per facet).
+  auto facet_means = [&] {
+    for (std::size_t t = 0; t < N; ++t) {
+      const Rgb b = (facet_exit[2 * t] + facet_exit[2 * t + 1]) * 0.5f;
+      exitant[t * 3] = b.r, exitant[t * 3 + 1] = b.g, exitant[t * 3 + 2] = b.b;
+    }
+  };
+  if (!facet_exit.empty()) facet_means();
   lu = nlp::radiance_levels(ms);
   for (int bounce = 1; bounce <= scene.bounces; ++bounce) {
     // The radiance pyramid in binary16 (half its memory; the heights stay float).
@@ -542,6 +628,11 @@ void NlpBake::bounce_passes() {
     if (!last) {
       for (std::size_t t = 0; t < N; ++t) indirect[t] += this_bounce[t];
       exit_from(this_bounce, true);
+      // Later bounces: both facets radiate their texel's reflected indirect light.
+      for (std::size_t t = 0; t < facet_exit.size() / 2; ++t) {
+        const Rgb b{exitant[t * 3], exitant[t * 3 + 1], exitant[t * 3 + 2]};
+        facet_exit[2 * t] = b, facet_exit[2 * t + 1] = b;
+      }
     }
   }
 }
@@ -598,10 +689,11 @@ double nlp_working_bytes(const FieldShape& field, const NlpOptions& o, int bounc
   double rgb_layers = 0;
   for (const char* name : {"direct", "indirect", "total"})
     if (std::find(o.layers.begin(), o.layers.end(), name) != o.layers.end()) rgb_layers += 12 * N;
-  // Always: the height pyramid, direct and indirect (RGB floats). While a bounce's radiance pyramid is
+  // Always: the height pyramid, direct and indirect (RGB floats), with facet senders and bounces the two
+  // facets' exit radiance (RGB floats). While a bounce's radiance pyramid is
   // built: the exitant radiance, one level in float and its horizontal pass (12 bytes a texel each), the
   // pyramid (binary16), and for all but the last bounce that bounce's light (12).
-  const double held = heights + 24 * N;
+  const double held = heights + 24 * N + (o.facet_senders && bounces > 0 ? 24 * N : 0);
   const double bounce = bounces > 0 ? radiance + 36 * N + (bounces > 1 ? 12 * N : 0) : 0;
   return std::max(held, held + bounce - rgb_layers);
 }

@@ -27,12 +27,22 @@ struct NlpOptions {
   nlp::AzimuthInterpolation interpolation = nlp::AzimuthInterpolation::linear;
   int light_level_offset = 4;       // o_v for directional lights' visibility (>= level_offset)
   bool light_horizon_knots = true;  // lights: max over the knot angles instead of the B-spline curve
-  int light_directions = 3;         // azimuths across a directional light's disk (NS09 §9: 3)
-  int subsample = 1;                // 1, or 2: V and U on a 2x2-subsampled grid, shading at full resolution
+  // Visibility V: the same choice (default the B-spline curve, NS09 Eq. 16, which lowers sharp peaks).
+  bool visibility_horizon_knots = false;
+  int light_directions = 3;  // azimuths across a directional light's disk (NS09 §9: 3)
+  int subsample = 1;         // 1, or 2: V and U on a 2x2-subsampled grid, shading at full resolution
   // The indirect layer: true = the casting-set segments integrated per azimuth with the exact cosine about
   // the texel normal; false = NS09 §7, U dotted with the order-3 clamped-cosine lobe (it over-weights grazing
   // radiance). subsample 2 always uses U. sh_irradiance is U's either way.
   bool exact_indirect_cosine = false;
+  // Senders of indirect light: true = every texel's two facets of the triangulated surface radiate the
+  // light of their own normals, and the stretch a casting-set step reveals radiates from its middle, its
+  // facet's light (issue 19: on terraces a cliff face radiated the bright treads at its ends); false
+  // (default) = NS09, the radiance pyramid of texel-centre light read at the casting-set point.
+  bool facet_senders = false;
+  // > 0: the march samples the unfiltered field at most this many texels apart between knots and each knot
+  // keeps the steepest sample (MarchSetup::near_spacing); 0 = NS09, one sample a knot.
+  double near_spacing = 0;
   std::vector<std::string> layers = {"direct", "indirect", "total", "sh_visibility", "sh_irradiance"};
 };
 

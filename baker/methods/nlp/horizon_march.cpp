@@ -1,6 +1,9 @@
 #include "methods/nlp/horizon_march.hpp"
 
+#include "field/triangulation.hpp"
+
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace hfbake::nlp {
@@ -50,6 +53,52 @@ inline float sample_clamped(const PyramidLevel& lv, float x, float y) {
   return a + (b - a) * fv;
 }
 
+// The triangulated surface (field/triangulation.hpp, the reference's) over level 0, which is the field
+// itself: its height at texel coordinates (x, y), clamped to the field or tiled.
+float triangle_height(const PyramidLevel& lv, bool repeat, float x, float y) {
+  if (repeat) {
+    x -= std::floor(x / lv.w) * lv.w;
+    y -= std::floor(y / lv.h) * lv.h;
+  } else {
+    x = std::clamp(x, 0.0f, float(lv.w - 1));
+    y = std::clamp(y, 0.0f, float(lv.h - 1));
+  }
+  const int i = std::min(int(x), lv.w - 1), j = std::min(int(y), lv.h - 1);
+  auto at = [&](int di, int dj) {
+    int ii = i + di, jj = j + dj;
+    if (repeat) {
+      ii = ii == lv.w ? 0 : ii;
+      jj = jj == lv.h ? 0 : jj;
+    } else {
+      ii = std::min(ii, lv.w - 1);
+      jj = std::min(jj, lv.h - 1);
+    }
+    return lv.data[std::size_t(jj) * lv.w + ii];
+  };
+  return facet_height(x - float(i), y - float(j), at);
+}
+
+// MarchSetup::near_spacing: the knots on level 0 read the triangulated surface (bilinear heights bulge where
+// a march runs along a facet edge, and near the receiver that bulge is a steep false occluder) and take the
+// steepest slope of the samples between them and the knot before (at most near_spacing apart). omega holds
+// slopes (before the arctangent), so the largest slope is the largest angle.
+void near_maxima(const MarchSetup& s, const PyramidLevel& lv, bool repeat, float fi, float fj, float cx,
+                 float cy, float recv0, int inner, float* omega) {
+  float prev = 0;
+  for (int k = 0; k < inner && s.level[k] == 0; prev = s.dist[k], ++k) {
+    const float d = s.dist[k], gap = d - prev;
+    float best = (triangle_height(lv, repeat, fi + d * cx, fj + d * cy) - recv0) / (d * s.texel_size);
+    const int n = gap > s.near_spacing ? int(std::ceil(gap / s.near_spacing)) : 1;
+    const float step = gap / float(n);
+    for (int q = 1; q < n; ++q) {
+      const float t = d - float(q) * step;
+      best = std::max(best,
+                      (triangle_height(lv, repeat, fi + t * cx, fj + t * cy) - recv0) / (t * s.texel_size));
+    }
+    omega[k] = best;
+  }
+}
+
 }  // namespace
 
 int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float cy, const float* recv,
@@ -77,6 +126,7 @@ int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float 
       dist[k] = d;
       lev[k] = k;
     }
+    if (s.near_spacing > 0) near_maxima(s, levels[0], false, fi, fj, cx, cy, recv[0], inner, omega);
   } else {
     for (int k = 0; k < inner; ++k) {
       const int l = s.level[k];
@@ -85,6 +135,7 @@ int march(const MarchSetup& s, const Pyramid& hp, int i, int j, float cx, float 
       dist[k] = d;
       lev[k] = k;
     }
+    if (s.near_spacing > 0) near_maxima(s, hp.levels[0], s.repeat, fi, fj, cx, cy, recv[0], inner, omega);
   }
   int n = inner;
   if (inner < s.steps) {  // the border knot (clamp only: t_exit is infinite in repeat mode)

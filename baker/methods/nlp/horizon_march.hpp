@@ -43,6 +43,10 @@ struct MarchSetup {
   float texel_size = 1;
   bool repeat = false;
   int width = 0, height = 0;
+  // > 0: where a knot reads level 0 (the field itself) and lies more than this many texels beyond the knot
+  // before it, the stretch between them is sampled at most this far apart and the knot takes the largest
+  // blocking angle (a peak between two knots is not missed). 0: NS09, one sample a knot.
+  float near_spacing = 0;
 };
 
 // levels: the height pyramid's level count is steps - k_v * o_v (at least 1); likewise radiance.
