@@ -23,6 +23,7 @@ packages+=(slurm-wlm munge)  # the farm's integration tests start a one-node Slu
 if [ "$mode" = test ]; then
   packages+=(chromium)  # the HTML report test renders the page in headless Chromium
   packages+=(clang libclang-rt-14-dev)  # the libFuzzer harnesses (tests/fuzz): clang and its libFuzzer
+  packages+=(python3)  # tests/hostile/random_jobs.py: random valid jobs baked under a time limit
 fi
 
 missing=()
