@@ -67,6 +67,20 @@ double pit_closed_form(double R, double D, double r) {
   return (1.0 - u) - (R * R / r) * std::log((r + R * R) / (r * u + R * R));
 }
 
+// The working memory of a tiled field's scan is bounded by the field and the falloff's support for every K:
+// with K = 2 the half-sector is 90 degrees, and the sideways reach s * tan(pi / K) once asked 17 billion GiB
+// for a 3x48 field (validate refused the job).
+TEST(Farfield, WorkingBytesStayBoundedAtFewDirections) {
+  FieldShape shape;
+  shape.width = 3, shape.height = 48, shape.wrap = Wrap::repeat;
+  for (int K : {1, 2, 3, 4, 16}) {
+    FarfieldOptions o;
+    o.directions = K;
+    o.rho = {FalloffKind::exponential, 1};
+    EXPECT_LT(farfield_working_bytes(shape, o), 1e6) << "K = " << K;
+  }
+}
+
 TEST(Farfield, PitClosedForm) {
   const double R = 64, D = 64;
   const HeightField f = pit_field(257, R, D);

@@ -59,7 +59,9 @@ void plan(const HeightField& f, const FarfieldOptions& o, int k, DirectionScan& 
     // Tiled terrain in front of every receiver, out to where rho is negligible (at most one period).
     const double support = o.rho.support(1e-5) / f.texel_size;
     s_extra = std::ceil(std::min(support, double(std::max(f.width, f.height))));
-    if (o.sector_average) t_extra = std::ceil(s_extra * std::tan(kPi / o.directions)) + 1;
+    // Sideways as far as the sector reaches within the support (no farther than the support itself: with
+    // K <= 3 the half-sector is 60-180 degrees and its tangent grows without bound; K = 2 asked 1e16).
+    if (o.sector_average) t_extra = std::ceil(std::min(s_extra * std::tan(kPi / o.directions), s_extra)) + 1;
   }
   d.b0 = o.interval;
   // The traversal reads an interval of level n only at a distance below the falloff's support with
