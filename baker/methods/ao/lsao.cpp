@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "methods/ao/bake_ao.hpp"
+#include "methods/ao/lsao_tangent_hull.hpp"
 #include "methods/ao/obscurance_params.hpp"
 #include "methods/ao/slice_integral.hpp"
 #include "sweep/sweep_lines.hpp"
@@ -47,8 +48,89 @@ struct LsaoWorker {
   }
 
   bool bent = false;
+  // LsaoTangent::receiver: one hull and measure per tangent bin.
+  std::vector<TangentHull> bins;
+  std::vector<TangentMeasure> bin_measure;
+
+  // The texel's normal: held (compute_normals) or recomputed from the heights (normal_at, the same values)
+  // on fields too large to hold them (lsao_holds_normals).
+  Vec3f normal(std::size_t ti) const {
+    return !normals->empty() ? (*normals)[ti]
+                             : normal_at(*field, int(ti % std::size_t(field->width)),
+                                         int(ti / std::size_t(field->width)));
+  }
+
+  // LsaoTangent::receiver (lsao_tangent_hull.hpp): every texel a receiver at its own height and tangent.
+  void receiver_line(const SweepLine& line, float* out) {
+    const OcclusionFunction& f = options->occlusion;
+    const int C = bent ? 6 : 2;
+    const int B = int(bins.size());
+    const bool use_brute = options->estimator != LsaoEstimator::hull;
+    const bool cosine = f.weighting == ObscuranceWeighting::cosine;
+    for (TangentHull& h : bins) {
+      h.clear();
+      h.reserve(std::size_t(line.count));
+    }
+    terrain.clear();
+    if (use_brute) terrain.reserve(std::size_t(line.count));
+    std::uint64_t tests = 0;
+    for (int n = 0; n < line.count; ++n) {
+      const SlicePoint p{line.s(n), double(line.z[n])};
+      if (n >= line.first_receiver) {
+        float* o = out + C * (n - line.first_receiver);
+        const TexelPair taps = line.height_taps(n, *field);
+        const double v = line.dir->v(line.line, n), frac = v - std::floor(v);
+        for (int c = 0; c < 2; ++c) {
+          const std::size_t ti = std::size_t(taps.texel[c]);
+          const Vec3f nv = normal(ti);
+          // The texel's height carried to the line along its own tangent plane (as the fixed tangent does).
+          const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
+          const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
+          const SliceFrame frame = slice_frame(nv.x * line.dir->dx + nv.y * line.dir->dy, nv.z);
+          const TangentMeasure m(f.rho, f.weighting, frame.tangent);
+          double best = 0;
+          SlicePoint occ{-1, 0};
+          if (use_brute) {
+            best = brute_tangent_chain(terrain.data(), terrain.size(), t, m,
+                                       options->estimator == LsaoEstimator::brute_visible, &occ);
+          } else {
+            // The two bins whose tangents bracket the texel's (the end bin beyond the limits).
+            const double pos = std::clamp((frame.tangent + kTangentBinLimit) / (2 * kTangentBinLimit) * (B - 1),
+                                          0.0, double(B - 1));
+            const int b0 = int(std::floor(pos)), b1 = std::min(b0 + 1, B - 1);
+            for (int b = b0; b <= b1; ++b) {
+              const TangentHull::Chain ch = bins[std::size_t(b)].query(t, m);
+              if (b == b0 || ch.sum > best) best = ch.sum, occ = ch.occluder;
+            }
+          }
+          // The cosine measure scales with the normal's length in the slice (slice_integral.hpp).
+          o[c] = float(cosine ? std::hypot(frame.nt, frame.nz) * best : best);
+          if (bent) {
+            SliceVec bv = open_direction(frame, frame.tangent, 0.5 * kPi);
+            if (occ.s > 0) {
+              const double r = f.rho(std::hypot(occ.s, occ.z));
+              const SliceVec b = open_direction(frame, frame.tangent, std::atan2(occ.z, occ.s));
+              bv.h -= r * b.h, bv.v -= r * b.v;
+            }
+            o[2 + 2 * c] = float(bv.h), o[3 + 2 * c] = float(bv.v);
+          }
+        }
+      }
+      if (!use_brute)
+        for (int b = 0; b < B; ++b) tests += bins[std::size_t(b)].prune(p, bin_measure[std::size_t(b)]);
+      if (line.is_terrain(n)) {
+        if (use_brute)
+          terrain.push_back(p);
+        else
+          for (TangentHull& h : bins) h.push(p);
+      }
+    }
+    *samples += std::uint64_t(line.count);
+    *iterations += tests;
+  }
 
   void operator()(const SweepLine& line, float* out) {
+    if (options->tangent == LsaoTangent::receiver) return receiver_line(line, out);
     const OcclusionFunction& f = options->occlusion;
     const int C = bent ? 6 : 2;
     hull.clear();
@@ -66,12 +148,8 @@ struct LsaoWorker {
           for (int c = 0; c < 2; ++c) {
             // The texel's height carried to the line along its own tangent plane (minor-axis slope from its
             // normal): exact on planes, the texel's own detail elsewhere.
-            // The texel's normal: held (compute_normals) or recomputed from the heights (normal_at, the same
-            // values) on fields too large to hold them (lsao_holds_normals).
             const std::size_t ti = std::size_t(taps.texel[c]);
-            const Vec3f nv = !normals->empty() ? (*normals)[ti]
-                                               : normal_at(*field, int(ti % std::size_t(field->width)),
-                                                           int(ti / std::size_t(field->width)));
+            const Vec3f nv = normal(ti);
             const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
             const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
             SlicePoint occ{-1, 0};
@@ -110,7 +188,9 @@ struct LsaoWorker {
 
 void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
                float* sum, float* bent_xyz) {
-  const bool want_bent = bent_xyz && options.texel_receivers && options.estimator == LsaoEstimator::hull;
+  const bool receiver = options.tangent == LsaoTangent::receiver;
+  const bool texel_receivers = options.texel_receivers || receiver;
+  const bool want_bent = bent_xyz && texel_receivers && (receiver || options.estimator == LsaoEstimator::hull);
   const std::size_t N = field.texel_count();
   std::fill_n(sum, N, 0.0f);
   if (bent_xyz) std::fill_n(bent_xyz, 3 * N, 0.0f);
@@ -122,7 +202,7 @@ void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunCo
   for (int k = 0; k < spec.directions; ++k) dirs[std::size_t(k)] = plan_direction(field, spec, k);
   std::atomic<std::uint64_t> samples{0}, iterations{0};
   const std::vector<Vec3f> normals =
-      options.texel_receivers && lsao_holds_normals(field) ? compute_normals(field) : std::vector<Vec3f>();
+      texel_receivers && lsao_holds_normals(field) ? compute_normals(field) : std::vector<Vec3f>();
   sweep_lines(
       field, spec, rc,
       [&] {
@@ -133,6 +213,12 @@ void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunCo
         w.samples = &samples;
         w.iterations = &iterations;
         w.bent = want_bent;
+        if (receiver) {
+          const int B = std::max(options.tangent_bins, 1);
+          w.bins.resize(std::size_t(B));
+          for (int b = 0; b < B; ++b)
+            w.bin_measure.emplace_back(options.occlusion.rho, options.occlusion.weighting, tangent_bin_angle(b, B));
+        }
         return w;
       },
       [&](int k, int i, int j, const TexelTaps& t) {
@@ -212,7 +298,20 @@ LsaoOptions read_lsao_options(Params& in) {
   o.occlusion.rho = read_falloff(in);
   o.occlusion.weighting = read_weighting(in, true) == Weighting::uniform ? ObscuranceWeighting::uniform
                                                                          : ObscuranceWeighting::cosine;
-  o.occlusion.sin_t = in.number("tangent", -0.85, -1.0, 0.0);
+  // "normal" (default): each texel's own tangent, hulls per tangent bin; a number: P3's fixed tangent sin t.
+  const nlohmann::json tangent = in.has("tangent") ? in.raw("tangent") : nlohmann::json("normal");
+  if (tangent == "normal") {
+    o.tangent = LsaoTangent::receiver;
+    in.resolve("tangent", "normal");
+    o.tangent_bins = in.integer("tangent_bins", 7, 1, 64);
+  } else {
+    if (!tangent.is_number() || !(tangent.get<double>() >= -1.0 && tangent.get<double>() <= 0.0))
+      in.fail("tangent", "must be \"normal\" or a number in [-1, 0] (sin of P3's fixed tangent)");
+    o.tangent = LsaoTangent::fixed;
+    o.occlusion.sin_t = tangent.get<double>();
+    in.resolve("tangent", o.occlusion.sin_t);
+    if (in.has("tangent_bins")) in.fail("tangent_bins", "applies only to tangent \"normal\"");
+  }
   o.directions = in.integer("directions", 16, 1, 4096);
   in.layers({"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
   return o;

@@ -27,12 +27,21 @@ enum class LsaoEstimator {
   brute_all,      // per sample, the largest occlusion over all earlier samples ("the only occluder")
 };
 
+// Which tangent an occluder must rise above before it counts.
+enum class LsaoTangent {
+  receiver,  // the texel's own tangent per direction, hulls per tangent bin (lsao_tangent_hull.hpp)
+  fixed,     // P3 strategy 3: OcclusionFunction::sin_t for every receiver (P3's -0.85: a screen-space choice
+             // that misses gentle terrain's occlusion; with falloff none and -1 the exact horizon AO)
+};
+
 struct LsaoOptions {
   int directions = 16;          // K
-  OcclusionFunction occlusion;  // falloff, fixed tangent, weighting
+  OcclusionFunction occlusion;  // falloff, weighting; sin_t: the fixed tangent (LsaoTangent::fixed)
+  LsaoTangent tangent = LsaoTangent::receiver;
+  int tangent_bins = 7;  // receiver: hulls per line (tangents evenly in [-74.5, 74.5] degrees)
   LsaoEstimator estimator = LsaoEstimator::hull;
   int wrap_periods = 1;  // repeat fields: warm-up periods of the sweep
-  // true: each texel is a receiver at its own height (the line's hull queried at the texel's height and the
+  // true: each texel is a receiver at its own height (LsaoTangent::receiver always is) (the line's hull queried at the texel's height and the
   // sample's along-distance); false: P3 as written, the line samples are the receivers (interpolated
   // heights) and the sweep blends their results.
   bool texel_receivers = true;
