@@ -51,6 +51,7 @@ struct LsaoWorker {
   // LsaoTangent::receiver: one hull and measure per tangent bin.
   std::vector<TangentHull> bins;
   std::vector<TangentMeasure> bin_measure;
+  WindowHull window;
 
   // The texel's normal: held (compute_normals) or recomputed from the heights (normal_at, the same values)
   // on fields too large to hold them (lsao_holds_normals).
@@ -71,11 +72,22 @@ struct LsaoWorker {
       h.clear();
       h.reserve(std::size_t(line.count));
     }
+    // Falloffs that end: the bins hold the current block of W samples, `window` the previous one.
+    const int W = use_brute ? 0 : tangent_window(f.rho, line.step);
+    window.reserve(std::size_t(W > 0 ? W : 0));
+    window.build(line.z, 0, 0, 0, 0, line.step);  // empty
     terrain.clear();
     if (use_brute) terrain.reserve(std::size_t(line.count));
     std::uint64_t tests = 0;
     for (int n = 0; n < line.count; ++n) {
       const SlicePoint p{line.s(n), double(line.z[n])};
+      if (W > 0) {
+        if (n > 0 && n % W == 0) {  // a new block: the one before becomes the window's far part
+          window.build(line.z, n - W, n, line.inside_begin, line.inside_end, line.step);
+          for (TangentHull& h : bins) h.clear();
+        }
+        window.drop_before(n - W);
+      }
       if (n >= line.first_receiver) {
         float* o = out + C * (n - line.first_receiver);
         const TexelPair taps = line.height_taps(n, *field);
@@ -94,13 +106,17 @@ struct LsaoWorker {
             best = brute_tangent_chain(terrain.data(), terrain.size(), t, m,
                                        options->estimator == LsaoEstimator::brute_visible, &occ);
           } else {
-            // The two bins whose tangents bracket the texel's (the end bin beyond the limits).
+            // The two bins whose tangents bracket the texel's (the end bin beyond the limits), each walked
+            // with the texel's own measure and continued into the window's far part; the larger counts.
             const double pos = std::clamp((frame.tangent + kTangentBinLimit) / (2 * kTangentBinLimit) * (B - 1),
                                           0.0, double(B - 1));
             const int b0 = int(std::floor(pos)), b1 = std::min(b0 + 1, B - 1);
             for (int b = b0; b <= b1; ++b) {
-              const TangentHull::Chain ch = bins[std::size_t(b)].query(t, m);
-              if (b == b0 || ch.sum > best) best = ch.sum, occ = ch.occluder;
+              TangentChain chain(m);
+              SlicePoint o1 = bins[std::size_t(b)].query(t, chain);
+              const SlicePoint o2 = window.query(t, chain);
+              if (o1.s < 0 || (o2.s > 0 && o2.z * o1.s > o1.z * o2.s)) o1 = o2;  // the higher one
+              if (b == b0 || chain.sum > best) best = chain.sum, occ = o1;
             }
           }
           // The cosine measure scales with the normal's length in the slice (slice_integral.hpp).

@@ -61,13 +61,24 @@ struct TangentMeasure {
     if (!cosine) return sin_e - sin_t;
     return std::max(0.0, sin_e * sin_e * cos_t - sin_e * cos_e * sin_t - (e - t) * sin_t);
   }
-  // Occluder at vector (hs, hz) from the receiver, hs > 0.
+  // Occluder at vector (hs, hz) from the receiver, hs > 0: rho at the horizontal distance, as the chain's
+  // slab bands and the window count it (P3 takes |h|; on steep ground that drops occluders the bands count).
   double operator()(double hs, double hz) const {
     const double d = std::sqrt(hs * hs + hz * hz);
     const double e = std::atan2(hz, hs);
     const double g = band(e, hz / d, hs / d);
-    return g > 0 ? g * rho(d) : 0.0;
+    return g > 0 ? g * rho(hs) : 0.0;
   }
+};
+
+// The running band sum of a visible chain seen from one receiver, nearest point first: each point that rises
+// above the chain adds the band between the chain's elevation and its own (starting at the tangent).
+struct TangentChain {
+  const TangentMeasure* f;
+  double sum = 0;  // G_t units (before the slice-length factor)
+  double e_max;    // highest elevation so far (starts at the tangent)
+  explicit TangentChain(const TangentMeasure& m) : f(&m), e_max(m.t) {}
+  void add(double hs, double hz);  // a point at (hs > 0, hz) from the receiver
 };
 
 // One tangent bin's hull on one line: P3's stack, pruned with that bin's measure. Reuse per thread.
@@ -79,16 +90,49 @@ class TangentHull {
   std::size_t prune(SlicePoint p, const TangentMeasure& f);
   void push(SlicePoint p) { stack_.push_back(p); }
   std::size_t size() const { return stack_.size(); }
-
-  struct Chain {
-    double sum = 0;       // the chain's band sum, G_t units (before the slice-length factor)
-    SlicePoint occluder;  // the largest occluder: vector receiver -> occluder (s back, z up); s = -1: none
-  };
-  // The chain value for receiver p with measure f (its own tangent), without popping.
-  Chain query(SlicePoint p, const TangentMeasure& f) const;
+  // Walks the stack for receiver p with the chain's measure (its own tangent), without popping: from the top
+  // to the largest occluder by P3's rule, then kChainExtra points on; adds the visited points to `chain`.
+  // Returns the largest occluder (vector receiver -> occluder; s = -1: none).
+  SlicePoint query(SlicePoint p, TangentChain& chain) const;
 
  private:
   std::vector<SlicePoint> stack_;
+};
+
+// The window (samples) of falloff f on a line of step `step`: 0 when the falloff never ends (none,
+// exponential, rational: one hull per bin over the whole line, as P3).
+int tangent_window(const Falloff& f, double step);
+
+// Falloffs that end (step, linear, smooth): the window of W samples a receiver sees (hs <= W step <= R), cut
+// in blocks of W samples. P3's pruning is only sound while every point it compares stays inside the window
+// (a point popped for a farther, higher one is lost when that one leaves the window: at R = 8 texels this
+// was most of the hull's error), so the bins' hulls restart at each block and hold only the current block;
+// the previous block's part of the window, [n - W, block start), is this upper convex hull, built once per
+// block from its right end leftwards with an undo log, and shrunk from its left end as the window moves on
+// (each point inserted and undone once: O(1) amortised per sample, whatever the radius). From a receiver to
+// the right of the block, the horizon over any suffix is the tangent point of its upper hull.
+class WindowHull {
+ public:
+  void reserve(std::size_t n);
+  // Builds the hull of the line's samples [begin, end) that are terrain (in [inside_begin, inside_end));
+  // sample i at s = i * step, height z[i].
+  void build(const float* z, int begin, int end, int inside_begin, int inside_end, double step);
+  // Drops the samples before `first` (the window's start).
+  void drop_before(int first);
+  bool empty() const { return hull_.empty(); }
+  // Walks from the block's nearest hull vertex to the tangent point of receiver p, adding each to `chain`.
+  // Returns the last vertex visited (vector receiver -> vertex) or s = -1 when empty.
+  SlicePoint query(SlicePoint p, TangentChain& chain) const;
+
+ private:
+  struct Vertex {
+    SlicePoint p;
+    int index;
+  };
+  std::vector<Vertex> hull_;    // right to left: hull_[0] the block's last terrain sample, back() the leftmost
+  std::vector<Vertex> popped_;  // undo log: vertices each insertion removed
+  std::vector<int> inserted_;   // per insertion (right to left): the sample index and how many it popped
+  std::vector<int> pops_;
 };
 
 // Brute force over every earlier sample for receiver p, the samples in walk order: visible_only: the slab sum
