@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "methods/ao/bake_ao.hpp"
-#include "methods/ao/lsao_tangent_hull.hpp"
+#include "methods/ao/lsao_chain_hull.hpp"
 #include "methods/ao/obscurance_params.hpp"
 #include "methods/ao/slice_integral.hpp"
 #include "sweep/sweep_lines.hpp"
@@ -48,9 +48,8 @@ struct LsaoWorker {
   }
 
   bool bent = false;
-  // LsaoTangent::receiver: one hull and measure per tangent bin.
-  std::vector<TangentHull> bins;
-  std::vector<TangentMeasure> bin_measure;
+  // LsaoTangent::receiver: the chain hull of the current block and the window's previous block.
+  ChainHull chain_hull;
   WindowHull window;
 
   // The texel's normal: held (compute_normals) or recomputed from the heights (normal_at, the same values)
@@ -61,21 +60,20 @@ struct LsaoWorker {
                                          int(ti / std::size_t(field->width)));
   }
 
-  // LsaoTangent::receiver (lsao_tangent_hull.hpp): every texel a receiver at its own height and tangent.
+  // LsaoTangent::receiver (lsao_chain_hull.hpp): every texel a receiver at its own height and tangent.
   void receiver_line(const SweepLine& line, float* out) {
     const OcclusionFunction& f = options->occlusion;
     const int C = bent ? 6 : 2;
-    const int B = int(bins.size());
     const bool use_brute = options->estimator != LsaoEstimator::hull;
-    const bool cosine = f.weighting == ObscuranceWeighting::cosine;
-    for (TangentHull& h : bins) {
-      h.clear();
-      h.reserve(std::size_t(line.count));
-    }
-    // Falloffs that end: the bins hold the current block of W samples, `window` the previous one.
-    const int W = use_brute ? 0 : tangent_window(f.rho, line.step);
-    window.reserve(std::size_t(W > 0 ? W : 0));
-    window.build(line.z, 0, 0, 0, 0, line.step);  // empty
+    const Weighting weighting =
+        f.weighting == ObscuranceWeighting::cosine ? Weighting::cosine : Weighting::uniform;
+    const double support = f.rho.support(1e-4), tol = options->rho_tolerance;
+    // Falloffs that end: the hull holds the current block of W samples, `window` the previous one.
+    const int W = use_brute ? 0 : chain_window(f.rho, line.step);
+    chain_hull.clear();
+    chain_hull.reserve(std::size_t(W > 0 ? std::min(W, line.count) : line.count));
+    window.clear();
+    window.reserve(std::size_t(W > 0 ? std::min(W, line.count) : 0));
     terrain.clear();
     if (use_brute) terrain.reserve(std::size_t(line.count));
     std::uint64_t tests = 0;
@@ -83,8 +81,8 @@ struct LsaoWorker {
       const SlicePoint p{line.s(n), double(line.z[n])};
       if (W > 0) {
         if (n > 0 && n % W == 0) {  // a new block: the one before becomes the window's far part
-          window.build(line.z, n - W, n, line.inside_begin, line.inside_end, line.step);
-          for (TangentHull& h : bins) h.clear();
+          window.build(line.z, n - W, n, line.inside_begin, line.inside_end, line.step, f.rho, tol);
+          chain_hull.clear();
         }
         window.drop_before(n - W);
       }
@@ -99,46 +97,33 @@ struct LsaoWorker {
           const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
           const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
           const SliceFrame frame = slice_frame(nv.x * line.dir->dx + nv.y * line.dir->dy, nv.z);
-          const TangentMeasure m(f.rho, f.weighting, frame.tangent);
-          double best = 0;
-          SlicePoint occ{-1, 0};
+          TangentChain chain(f.rho, weighting, frame);
           if (use_brute) {
-            best = brute_tangent_chain(terrain.data(), terrain.size(), t, m,
-                                       options->estimator == LsaoEstimator::brute_visible, &occ);
+            brute_chain(terrain.data(), terrain.size(), t, chain);
           } else {
-            // The two bins whose tangents bracket the texel's (the end bin beyond the limits), each walked
-            // with the texel's own measure and continued into the window's far part; the larger counts.
-            const double pos = std::clamp((frame.tangent + kTangentBinLimit) / (2 * kTangentBinLimit) * (B - 1),
-                                          0.0, double(B - 1));
-            const int b0 = int(std::floor(pos)), b1 = std::min(b0 + 1, B - 1);
-            for (int b = b0; b <= b1; ++b) {
-              TangentChain chain(m);
-              SlicePoint o1 = bins[std::size_t(b)].query(t, chain);
-              const SlicePoint o2 = window.query(t, chain);
-              if (o1.s < 0 || (o2.s > 0 && o2.z * o1.s > o1.z * o2.s)) o1 = o2;  // the higher one
-              if (b == b0 || chain.sum > best) best = chain.sum, occ = o1;
-            }
+            chain_hull.query(t, support, chain);
+            window.query(t, support, chain);  // farther than the whole current block
           }
           // The cosine measure scales with the normal's length in the slice (slice_integral.hpp).
-          o[c] = float(cosine ? std::hypot(frame.nt, frame.nz) * best : best);
+          o[c] = float(weighting == Weighting::cosine ? std::hypot(frame.nt, frame.nz) * chain.sum : chain.sum);
           if (bent) {
+            // Open from the tangent plane up; the band below the horizon occluded with rho at the horizon.
             SliceVec bv = open_direction(frame, frame.tangent, 0.5 * kPi);
-            if (occ.s > 0) {
-              const double r = f.rho(std::hypot(occ.s, occ.z));
-              const SliceVec b = open_direction(frame, frame.tangent, std::atan2(occ.z, occ.s));
+            if (chain.top.s > 0) {
+              const double r = f.rho(std::hypot(chain.top.s, chain.top.z));
+              const SliceVec b = open_direction(frame, frame.tangent, chain.e_max);
               bv.h -= r * b.h, bv.v -= r * b.v;
             }
             o[2 + 2 * c] = float(bv.h), o[3 + 2 * c] = float(bv.v);
           }
         }
       }
-      if (!use_brute)
-        for (int b = 0; b < B; ++b) tests += bins[std::size_t(b)].prune(p, bin_measure[std::size_t(b)]);
+      if (!use_brute) tests += chain_hull.prune(p, f.rho, tol);
       if (line.is_terrain(n)) {
         if (use_brute)
           terrain.push_back(p);
         else
-          for (TangentHull& h : bins) h.push(p);
+          chain_hull.push(p);
       }
     }
     *samples += std::uint64_t(line.count);
@@ -229,12 +214,6 @@ void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunCo
         w.samples = &samples;
         w.iterations = &iterations;
         w.bent = want_bent;
-        if (receiver) {
-          const int B = std::max(options.tangent_bins, 1);
-          w.bins.resize(std::size_t(B));
-          for (int b = 0; b < B; ++b)
-            w.bin_measure.emplace_back(options.occlusion.rho, options.occlusion.weighting, tangent_bin_angle(b, B));
-        }
         return w;
       },
       [&](int k, int i, int j, const TexelTaps& t) {
@@ -314,19 +293,17 @@ LsaoOptions read_lsao_options(Params& in) {
   o.occlusion.rho = read_falloff(in);
   o.occlusion.weighting = read_weighting(in, true) == Weighting::uniform ? ObscuranceWeighting::uniform
                                                                          : ObscuranceWeighting::cosine;
-  // "normal" (default): each texel's own tangent, hulls per tangent bin; a number: P3's fixed tangent sin t.
+  // "normal" (default): each texel's own tangent, the visible chain's bands; a number: P3's fixed tangent sin t.
   const nlohmann::json tangent = in.has("tangent") ? in.raw("tangent") : nlohmann::json("normal");
   if (tangent == "normal") {
     o.tangent = LsaoTangent::receiver;
     in.resolve("tangent", "normal");
-    o.tangent_bins = in.integer("tangent_bins", 7, 1, 64);
   } else {
     if (!tangent.is_number() || !(tangent.get<double>() >= -1.0 && tangent.get<double>() <= 0.0))
       in.fail("tangent", "must be \"normal\" or a number in [-1, 0] (sin of P3's fixed tangent)");
     o.tangent = LsaoTangent::fixed;
     o.occlusion.sin_t = tangent.get<double>();
     in.resolve("tangent", o.occlusion.sin_t);
-    if (in.has("tangent_bins")) in.fail("tangent_bins", "applies only to tangent \"normal\"");
   }
   o.directions = in.integer("directions", 16, 1, 4096);
   in.layers({"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});

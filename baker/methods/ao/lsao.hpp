@@ -29,7 +29,7 @@ enum class LsaoEstimator {
 
 // Which tangent an occluder must rise above before it counts.
 enum class LsaoTangent {
-  receiver,  // the texel's own tangent per direction, hulls per tangent bin (lsao_tangent_hull.hpp)
+  receiver,  // the texel's own tangent per direction, the visible chain's bands (lsao_chain_hull.hpp)
   fixed,     // P3 strategy 3: OcclusionFunction::sin_t for every receiver (P3's -0.85: a screen-space choice
              // that misses gentle terrain's occlusion; with falloff none and -1 the exact horizon AO)
 };
@@ -38,7 +38,7 @@ struct LsaoOptions {
   int directions = 16;          // K
   OcclusionFunction occlusion;  // falloff, weighting; sin_t: the fixed tangent (LsaoTangent::fixed)
   LsaoTangent tangent = LsaoTangent::receiver;
-  int tangent_bins = 7;  // receiver: hulls per line (tangents evenly in [-74.5, 74.5] degrees)
+  double rho_tolerance = 0.1;  // receiver: the chain hull's merge tolerance in rho (lsao_chain_hull.hpp)
   LsaoEstimator estimator = LsaoEstimator::hull;
   int wrap_periods = 1;  // repeat fields: warm-up periods of the sweep
   // true: each texel is a receiver at its own height (LsaoTangent::receiver always is) (the line's hull queried at the texel's height and the
