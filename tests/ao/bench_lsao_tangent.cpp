@@ -1,8 +1,8 @@
 // lsao's tangent strategies (issue 19 item 3): cost and a decomposition of the error.
 //
 //   build/tests/ao/ao_bench_lsao_tangent [google-benchmark flags]   texel-directions per CPU-second, one
-//       thread, 512^2 fractal, K = 16: the receiver tangent and P3's fixed tangent, step and smooth falloffs at R =
-//       4, 64 and 1024 texels, rational at 16 (it never ends) and none.
+//       thread, 512^2 fractal, K = 16: the receiver tangent and P3's fixed tangent, step and smooth falloffs
+//       at R = 4, 64 and 1024 texels, rational at 16 (it never ends) and none.
 //   build/tests/ao/ao_bench_lsao_tangent --measure   per field (96^2, K = 16; smooth R = 32 and step R = 8):
 //       mean and rmse of lsao - hbao (slab estimator, one-texel bilinear steps) for the fixed tangent, the
 //       receiver tangent's chain hull and its brute force over the same line samples (every visible band:
@@ -119,7 +119,8 @@ void measure() {
       const Diff b = run(LsaoTangent::receiver, LsaoEstimator::hull);
       const Diff c = run(LsaoTangent::receiver, LsaoEstimator::brute_visible);
       std::printf("%-9s %-6s%3.0f %8.4f | %+.4f / %.4f  %+.4f / %.4f  %+.4f / %.4f\n", fd.name,
-                  falloff_kind_name(rho.kind), rho.radius, ref_mean, a.mean, a.rmse, b.mean, b.rmse, c.mean, c.rmse);
+                  falloff_kind_name(rho.kind), rho.radius, ref_mean, a.mean, a.rmse, b.mean, b.rmse, c.mean,
+                  c.rmse);
     }
 }
 

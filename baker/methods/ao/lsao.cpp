@@ -55,9 +55,9 @@ struct LsaoWorker {
   // The texel's normal: held (compute_normals) or recomputed from the heights (normal_at, the same values)
   // on fields too large to hold them (lsao_holds_normals).
   Vec3f normal(std::size_t ti) const {
-    return !normals->empty() ? (*normals)[ti]
-                             : normal_at(*field, int(ti % std::size_t(field->width)),
-                                         int(ti / std::size_t(field->width)));
+    return !normals->empty()
+               ? (*normals)[ti]
+               : normal_at(*field, int(ti % std::size_t(field->width)), int(ti / std::size_t(field->width)));
   }
 
   // LsaoTangent::receiver (lsao_chain_hull.hpp): every texel a receiver at its own height and tangent.
@@ -98,6 +98,7 @@ struct LsaoWorker {
           const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
           const SliceFrame frame = slice_frame(nv.x * line.dir->dx + nv.y * line.dir->dy, nv.z);
           TangentChain chain(f.rho, weighting, frame);
+          chain.want_direction = bent;
           if (use_brute) {
             brute_chain(terrain.data(), terrain.size(), t, chain);
           } else {
@@ -105,16 +106,15 @@ struct LsaoWorker {
             window.query(t, support, chain);  // farther than the whole current block
           }
           // The cosine measure scales with the normal's length in the slice (slice_integral.hpp).
-          o[c] = float(weighting == Weighting::cosine ? std::hypot(frame.nt, frame.nz) * chain.sum : chain.sum);
+          o[c] =
+              float(weighting == Weighting::cosine ? std::hypot(frame.nt, frame.nz) * chain.sum : chain.sum);
           if (bent) {
-            // Open from the tangent plane up; the band below the horizon occluded with rho at the horizon.
-            SliceVec bv = open_direction(frame, frame.tangent, 0.5 * kPi);
-            if (chain.top.s > 0) {
-              const double r = f.rho(std::hypot(chain.top.s, chain.top.z));
-              const SliceVec b = open_direction(frame, frame.tangent, chain.e_max);
-              bv.h -= r * b.h, bv.v -= r * b.v;
-            }
-            o[2 + 2 * c] = float(bv.h), o[3 + 2 * c] = float(bv.v);
+            // Open from the tangent plane up, less the chain's bands weighted by rho (hbao's slab bent
+            // normal); the chain's sum is for the unit in-slice normal.
+            const SliceVec open = open_direction(frame, frame.tangent, 0.5 * kPi);
+            const double len = std::hypot(frame.nt, frame.nz);
+            o[2 + 2 * c] = float(open.h - len * chain.direction.h);
+            o[3 + 2 * c] = float(open.v - len * chain.direction.v);
           }
         }
       }
@@ -191,7 +191,8 @@ void lsao_sums(const HeightField& field, const LsaoOptions& options, const RunCo
                float* sum, float* bent_xyz) {
   const bool receiver = options.tangent == LsaoTangent::receiver;
   const bool texel_receivers = options.texel_receivers || receiver;
-  const bool want_bent = bent_xyz && texel_receivers && (receiver || options.estimator == LsaoEstimator::hull);
+  const bool want_bent =
+      bent_xyz && texel_receivers && (receiver || options.estimator == LsaoEstimator::hull);
   const std::size_t N = field.texel_count();
   std::fill_n(sum, N, 0.0f);
   if (bent_xyz) std::fill_n(bent_xyz, 3 * N, 0.0f);
@@ -293,7 +294,8 @@ LsaoOptions read_lsao_options(Params& in) {
   o.occlusion.rho = read_falloff(in);
   o.occlusion.weighting = read_weighting(in, true) == Weighting::uniform ? ObscuranceWeighting::uniform
                                                                          : ObscuranceWeighting::cosine;
-  // "normal" (default): each texel's own tangent, the visible chain's bands; a number: P3's fixed tangent sin t.
+  // "normal" (default): each texel's own tangent, the visible chain's bands; a number: P3's fixed tangent sin
+  // t.
   const nlohmann::json tangent = in.has("tangent") ? in.raw("tangent") : nlohmann::json("normal");
   if (tangent == "normal") {
     o.tangent = LsaoTangent::receiver;

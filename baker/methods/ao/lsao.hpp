@@ -41,9 +41,9 @@ struct LsaoOptions {
   double rho_tolerance = 0.1;  // receiver: the chain hull's merge tolerance in rho (lsao_chain_hull.hpp)
   LsaoEstimator estimator = LsaoEstimator::hull;
   int wrap_periods = 1;  // repeat fields: warm-up periods of the sweep
-  // true: each texel is a receiver at its own height (LsaoTangent::receiver always is) (the line's hull queried at the texel's height and the
-  // sample's along-distance); false: P3 as written, the line samples are the receivers (interpolated
-  // heights) and the sweep blends their results.
+  // true: each texel is a receiver at its own height (LsaoTangent::receiver always is) (the line's hull
+  // queried at the texel's height and the sample's along-distance); false: P3 as written, the line samples
+  // are the receivers (interpolated heights) and the sweep blends their results.
   bool texel_receivers = true;
 };
 

@@ -30,30 +30,46 @@ void TangentChain::add(double hs, double hz, double x) {
   // falloff); the cosine measure doubled.
   const double c = band_occlusion(rho, weighting, frame, e_max, e, x);
   sum += weighting == Weighting::cosine ? 2 * c : c;
+  if (want_direction) {
+    const SliceVec b = band_direction(rho, frame, e_max, e, x);
+    direction.h += b.h, direction.v += b.v;
+  }
   e_max = e;
   slope_max = hz / hs;
-  top = {hs, hz};
 }
 
 namespace {
 
-// b is higher than a seen from p (both behind p: positive horizontal distances).
-bool higher(const ChainPoint& b, const ChainPoint& a, SlicePoint p) {
-  return (a.z - p.z) * (p.s - b.s) < (b.z - p.z) * (p.s - a.s);
+// b is at least as high as a seen from p (both behind p: positive horizontal distances).
+bool at_least_as_high(const ChainPoint& b, const ChainPoint& a, SlicePoint p) {
+  return (a.z - p.z) * (p.s - b.s) <= (b.z - p.z) * (p.s - a.s);
 }
 
-// Walks points[0], points[stride], ... (nearest first, `count` of them) for receiver p.
+// a merges into b (b farther): b stands for a's stretch too.
+void merge(ChainPoint& b, const ChainPoint& a) {
+  if (a.near_s > b.near_s) b.near_s = a.near_s, b.near_z = a.near_z;
+  b.zmax = std::max(b.zmax, a.near_z);
+}
+
+// Walks points[0], points[stride], ... (nearest first, `count` of them) for receiver p; zmax_of(k): the
+// highest height of point k and everything after it.
+template <class ZMax>
 void walk(const ChainPoint* points, std::ptrdiff_t count, std::ptrdiff_t stride, SlicePoint p, double support,
-          TangentChain& chain) {
-  int since_rise = 0;
-  for (std::ptrdiff_t k = 0; k < count && since_rise <= kChainExtra; ++k) {
+          TangentChain& chain, const ZMax& zmax_of) {
+  for (std::ptrdiff_t k = 0; k < count; ++k) {
     const ChainPoint& q = points[k * stride];
+    // Nothing from here on is nearer than q's near end nor higher than zmax: stop when that cannot rise.
+    const double nearest = p.s - q.near_s;
+    if (nearest > support || !(zmax_of(k) - p.z > chain.slope_max * nearest)) break;
     const double hs = p.s - q.s;
-    if (hs > support) break;
-    const double e_before = chain.e_max;
-    // The merged stretch [q.s, q.s_near] is counted at its middle.
-    chain.add(hs, q.z - p.z, p.s - 0.5 * (q.s + q.s_near));
-    since_rise = chain.e_max > e_before ? 0 : since_rise + 1;
+    if (q.near_s > q.s) {
+      const double e_before = chain.e_max;
+      chain.add(nearest, q.near_z - p.z, nearest);
+      // A rising merged stretch is counted at its middle; otherwise the rays meet q's own face.
+      chain.add(hs, q.z - p.z, chain.e_max > e_before ? 0.5 * (hs + nearest) : hs);
+    } else {
+      chain.add(hs, q.z - p.z, hs);
+    }
   }
 }
 
@@ -65,8 +81,8 @@ std::size_t ChainHull::prune(SlicePoint p, const Falloff& rho, double tolerance)
     const ChainPoint& a = stack_[n - 1];
     ChainPoint& b = stack_[n - 2];
     ++tests;
-    if (!higher(b, a, p) || rho(p.s - b.s) < rho(p.s - a.s_near) - tolerance) break;
-    b.s_near = std::max(b.s_near, a.s_near);
+    if (!at_least_as_high(b, a, p) || rho(p.s - b.s) < rho(p.s - a.near_s) - tolerance) break;
+    merge(b, a);
     stack_.pop_back();
     --n;
   }
@@ -75,7 +91,9 @@ std::size_t ChainHull::prune(SlicePoint p, const Falloff& rho, double tolerance)
 
 void ChainHull::query(SlicePoint p, double support, TangentChain& chain) const {
   if (stack_.empty()) return;
-  walk(&stack_.back(), std::ptrdiff_t(stack_.size()), -1, p, support, chain);
+  const ChainPoint* top = &stack_.back();
+  walk(top, std::ptrdiff_t(stack_.size()), -1, p, support, chain,
+       [&](std::ptrdiff_t k) { return top[-k].zmax; });
 }
 
 void WindowHull::reserve(std::size_t n) {
@@ -95,21 +113,25 @@ void WindowHull::build(const float* z, int begin, int end, int inside_begin, int
   clear();
   const double s_end = end * step;
   for (int i = std::min(end, inside_end); i-- > std::max(begin, inside_begin);) {
-    ChainPoint q{i * step, double(z[i]), i * step, i};
+    const double zi = double(z[i]);
+    ChainPoint q{i * step, zi, i * step, zi, zi, i};
+    // zmax: the running maximum over the insertions (the back vertex is always the latest insertion).
+    const double before = hull_.empty() ? zi : hull_.back().zmax;
     // Extended on the left: the leftmost vertex a merges into q when it lies on or below the segment from q
     // to the vertex after it (so q or that vertex hides it from every receiver beyond the block) and rho at
-    // q is within the tolerance of rho at a's nearest sample, seen from the nearest receiver.
+    // q is within the tolerance of rho at a's near end, seen from the nearest receiver.
     int popped = 0;
     while (hull_.size() >= 2) {
       const ChainPoint& a = hull_[hull_.size() - 1];
       const ChainPoint& c = hull_[hull_.size() - 2];
       const bool below = (a.s - q.s) * (c.z - q.z) - (a.z - q.z) * (c.s - q.s) >= 0;
-      if (!below || rho(s_end - q.s) < rho(s_end - a.s_near) - tolerance) break;
-      q.s_near = std::max(q.s_near, a.s_near);
+      if (!below || rho(s_end - q.s) < rho(s_end - a.near_s) - tolerance) break;
+      merge(q, a);
       popped_.push_back(a);
       hull_.pop_back();
       ++popped;
     }
+    q.zmax = std::max(q.zmax, before);
     hull_.push_back(q);
     pops_.push_back(popped);
   }
@@ -128,7 +150,10 @@ void WindowHull::drop_before(int first) {
 
 void WindowHull::query(SlicePoint p, double support, TangentChain& chain) const {
   if (hull_.empty()) return;
-  walk(hull_.data(), std::ptrdiff_t(hull_.size()), 1, p, support, chain);
+  // The last insertion's zmax covers every vertex left.
+  const double zmax = hull_.back().zmax;
+  walk(hull_.data(), std::ptrdiff_t(hull_.size()), 1, p, support, chain,
+       [&](std::ptrdiff_t) { return zmax; });
 }
 
 void brute_chain(const SlicePoint* pts, std::size_t count, SlicePoint p, TangentChain& chain) {

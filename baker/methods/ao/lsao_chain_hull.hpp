@@ -18,7 +18,9 @@
 // of the distances they stand for). With falloff none or a step (inside the radius) this is the convex hull
 // of P1 and the sum telescopes to the exact horizon obscurance of the line samples; with a smooth falloff the
 // hull keeps about 1 / tolerance points per falloff range whatever the radius. A query walks from the top
-// outwards, adding each point that rises above the chain, up to kChainExtra points past the last rise.
+// outwards, adding each point that rises above the chain (a merged point: its near end at its own distance,
+// then the point itself, counted at the middle of the stretch when the near end rose), and stops where no
+// point farther on can rise (zmax) or beyond the falloff's support.
 //
 // Falloffs that end (step, linear, smooth): a receiver sees a window of W samples (hs <= W step <= R).
 // Pruning is only sound while the points it compares stay inside the window (a point merged into a farther
@@ -29,6 +31,7 @@
 // amortised per sample and independent of the radius.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -37,8 +40,6 @@
 #include "methods/ao/slice_integral.hpp"
 
 namespace hfbake {
-
-constexpr int kChainExtra = 4;  // points a query follows past the chain's last rise
 
 // The window (samples) of falloff f on a line of step `step`: 0 when the falloff never ends (none,
 // exponential, rational: one hull over the whole line, as P3).
@@ -49,10 +50,11 @@ struct TangentChain {
   Falloff rho;
   Weighting weighting = Weighting::cosine;
   SliceFrame frame;  // the unit in-slice normal perpendicular to the receiver's tangent
-  double sum = 0;    // the occluded measure (cosine: doubled, so a horizon e over a level texel gives sin^2 e)
-  double e_max;      // highest elevation so far (starts at the tangent)
-  double slope_max;  // tan e_max: rising points are found without a trigonometric call
-  SlicePoint top{-1, 0};  // the highest point so far (vector receiver -> point; s = -1: none)
+  double sum = 0;  // the occluded measure (cosine: doubled, so a horizon e over a level texel gives sin^2 e)
+  double e_max;    // highest elevation so far (starts at the tangent)
+  double slope_max;             // tan e_max: rising points are found without a trigonometric call
+  bool want_direction = false;  // also sum the bands' rho-weighted cosine direction (band_direction)
+  SliceVec direction;           // that sum, for the unit in-slice normal (bent normals)
 
   // `slice`: the receiver's normal in the slice (n.D, n.z), any positive length.
   TangentChain(const Falloff& f, Weighting w, const SliceFrame& slice);
@@ -61,9 +63,13 @@ struct TangentChain {
   void add(double hs, double hz, double x);
 };
 
-// A hull point: its position, and the nearest sample it stands for (s_near >= s; merged points).
+// A hull point: its position; the nearest sample merged into it (near_s >= s; itself when none): the near end
+// of the stretch of profile it stands for; and zmax, the highest height of it, its near end and every point
+// farther on in its hull (what lets a walk stop once nothing farther can rise above the chain).
 struct ChainPoint {
-  double s = 0, z = 0, s_near = 0;
+  double s = 0, z = 0;
+  double near_s = 0, near_z = 0;
+  double zmax = 0;
   int index = 0;  // WindowHull: the sample index
 };
 
@@ -74,7 +80,10 @@ class ChainHull {
   void clear() { stack_.clear(); }
   // Prunes the top for receiver p (a line sample); returns the loop tests.
   std::size_t prune(SlicePoint p, const Falloff& rho, double tolerance);
-  void push(SlicePoint p) { stack_.push_back({p.s, p.z, p.s, 0}); }
+  void push(SlicePoint p) {
+    const double below = stack_.empty() ? p.z : stack_.back().zmax;
+    stack_.push_back({p.s, p.z, p.s, p.z, std::max(below, p.z), 0});
+  }
   std::size_t size() const { return stack_.size(); }
   // Adds the chain of receiver p (not necessarily a sample), without popping; support: the falloff's.
   void query(SlicePoint p, double support, TangentChain& chain) const;
