@@ -18,10 +18,9 @@ namespace {
 // at the sample's along-distance. The gather then takes for each texel the channel that is that texel, so
 // a receiver is never an interpolated height (on rough terrain that is worth about 1 % of AO against a
 // march from the texel centres); axis and diagonal directions sample texel centres exactly.
-// With the bent normal (hull estimator, texel receivers), four more channels: per texel (c = 0, 1) the slice
-// components (along the direction, up) of the cosine-weighted open direction about the texel's normal, with
-// the band from its tangent plane up to the largest occluder weighted by 1 - rho(|h|), as P3's Eq. 1 counts
-// it.
+// With the bent normal (receiver tangent, or the fixed one's hull estimator with texel receivers), four more
+// channels: per texel (c = 0, 1) the slice components (along the direction, up) of the cosine-weighted open
+// direction about the texel's normal (lsao_sums).
 struct LsaoWorker {
   const LsaoOptions* options = nullptr;
   const HeightField* field = nullptr;
