@@ -31,6 +31,12 @@ const Falloff kFalloffs[] = {{FalloffKind::none, 0},     {FalloffKind::step, 7},
                              {FalloffKind::smooth, 10},  {FalloffKind::smooth, 200},
                              {FalloffKind::rational, 5}, {FalloffKind::exponential, 4}};
 
+// Float sums; exponential and rational bands by 2-point Gauss (lsao_chain_hull.cpp): 2e-4 relative measured.
+double tolerance(const Falloff& rho, double want) {
+  const bool gauss = rho.kind == FalloffKind::exponential || rho.kind == FalloffKind::rational;
+  return gauss ? 5e-4 * want : 2e-6;
+}
+
 // A plane, level or tilted, occludes nothing seen from its own tangent: every direction gives 0 (P3's fixed
 // tangent gives Wt < 0 per direction and needs the clamp, digest 0.3 C).
 TEST(LsaoTangent, PlanesAreOpen) {
@@ -67,8 +73,8 @@ TEST(LsaoTangent, WallClosedForm) {
       const auto w = cosine ? ObscuranceWeighting::cosine : ObscuranceWeighting::uniform;
       const double got = lsao_mean_occlusion(f, receiver(8, rho, w), RunControl{})[idx];
       const double want = test::wall_occlusion(d, h, 8, cosine, [&](double x) { return rho(x); });
-      EXPECT_NEAR(got, want, 2e-6) << falloff_kind_name(rho.kind) << " R " << rho.radius << " cosine "
-                                   << cosine;
+      EXPECT_NEAR(got, want, tolerance(rho, want))
+          << falloff_kind_name(rho.kind) << " R " << rho.radius << " cosine " << cosine;
     }
 }
 
@@ -83,7 +89,7 @@ TEST(LsaoTangent, PitClosedForm) {
   for (const Falloff& rho : kFalloffs) {
     const double got = lsao_mean_occlusion(f, receiver(4, rho), RunControl{})[idx];
     const double want = test::pit_occlusion(rw, depth, [&](double x) { return rho(x); });
-    EXPECT_NEAR(got, want, 2e-6) << falloff_kind_name(rho.kind) << " R " << rho.radius;
+    EXPECT_NEAR(got, want, tolerance(rho, want)) << falloff_kind_name(rho.kind) << " R " << rho.radius;
   }
   LsaoOptions fixed = receiver(4, {FalloffKind::smooth, 200});
   fixed.tangent = LsaoTangent::fixed;

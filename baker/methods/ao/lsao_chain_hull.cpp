@@ -22,13 +22,41 @@ TangentChain::TangentChain(const Falloff& f, Weighting w, const SliceFrame& slic
   frame = {slice.nt / len, slice.nz / len, slice.tangent};
 }
 
+namespace {
+
+// band_occlusion for the chain: the closed forms of slice_integral for falloffs none, step, linear and
+// smooth; for exponential and rational (no closed form) 2-point Gauss-Legendre on pieces of at most pi/8
+// (band_occlusion uses 8 points a piece, which was 70 % of lsao's time with them; the chain's bands are
+// narrow and the integrand smooth: within 2e-4 relative of the closed form on the wall, tests/ao).
+double chain_band(const Falloff& rho, Weighting w, const SliceFrame& s, double a, double b, double x) {
+  if (rho.kind != FalloffKind::exponential && rho.kind != FalloffKind::rational)
+    return band_occlusion(rho, w, s, a, b, x);
+  const double lo = std::max(a, s.tangent), hi = std::min(b, 0.5 * kPi);
+  if (!(hi > lo)) return 0.0;
+  const bool cosine = w == Weighting::cosine;
+  auto g = [&](double e) {
+    const double c = std::cos(e), wt = cosine ? std::max(0.0, s.nt * c + s.nz * std::sin(e)) * c : c;
+    return c > 0 ? rho(x / c) * wt : 0.0;
+  };
+  const int pieces = std::max(1, int(std::ceil((hi - lo) / (kPi / 8))));
+  const double len = (hi - lo) / pieces, half = 0.5 * len, node = half / std::sqrt(3.0);
+  double sum = 0;
+  for (int p = 0; p < pieces; ++p) {
+    const double mid = lo + (p + 0.5) * len;
+    sum += g(mid - node) + g(mid + node);
+  }
+  return sum * half;
+}
+
+}  // namespace
+
 void TangentChain::add(double hs, double hz, double x) {
   if (!(hz > slope_max * hs)) return;
   const double e = std::atan2(hz, hs);
   if (!(e > e_max)) return;  // rounding at the same elevation
   // The band's rays meet a vertical slab at horizontal distance x (hbao's slab estimator, exact for the
   // falloff); the cosine measure doubled.
-  const double c = band_occlusion(rho, weighting, frame, e_max, e, x);
+  const double c = chain_band(rho, weighting, frame, e_max, e, x);
   sum += weighting == Weighting::cosine ? 2 * c : c;
   if (want_direction) {
     const SliceVec b = band_direction(rho, frame, e_max, e, x);
