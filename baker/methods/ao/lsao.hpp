@@ -30,8 +30,10 @@ namespace hfbake {
 
 enum class LsaoEstimator {
   hull,           // P3: the obscurance hull, O(1) amortised per sample
-  brute_visible,  // per sample, the largest occlusion over the earlier visible samples (O(M^2) per line)
-  brute_all,      // per sample, the largest occlusion over all earlier samples ("the only occluder")
+  brute_visible,  // per sample, the largest occlusion over the earlier visible samples (O(M^2) per line);
+                  // receiver tangent: the band sum over every earlier visible sample (brute_chain)
+  brute_all,      // per sample, the largest occlusion over all earlier samples ("the only occluder");
+                  // receiver tangent: as brute_visible
 };
 
 // Which tangent an occluder must rise above before it counts.
