@@ -105,15 +105,13 @@ struct LsaoWorker {
             window.query(t, support, chain);  // farther than the whole current block
           }
           // The cosine measure scales with the normal's length in the slice (slice_integral.hpp).
-          o[c] =
-              float(weighting == Weighting::cosine ? std::hypot(frame.nt, frame.nz) * chain.sum : chain.sum);
+          o[c] = float(weighting == Weighting::cosine ? chain.length * chain.sum : chain.sum);
           if (bent) {
             // Open from the tangent plane up, less the chain's bands weighted by rho (hbao's slab bent
             // normal); the chain's sum is for the unit in-slice normal.
             const SliceVec open = open_direction(frame, frame.tangent, 0.5 * kPi);
-            const double len = std::hypot(frame.nt, frame.nz);
-            o[2 + 2 * c] = float(open.h - len * chain.direction.h);
-            o[3 + 2 * c] = float(open.v - len * chain.direction.v);
+            o[2 + 2 * c] = float(open.h - chain.length * chain.direction.h);
+            o[3 + 2 * c] = float(open.v - chain.length * chain.direction.v);
           }
         }
       }

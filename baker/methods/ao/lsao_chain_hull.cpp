@@ -18,8 +18,8 @@ int chain_window(const Falloff& f, double step) {
 
 TangentChain::TangentChain(const Falloff& f, Weighting w, const SliceFrame& slice)
     : rho(f), weighting(w), e_max(slice.tangent), slope_max(-slice.nt / slice.nz) {
-  const double len = std::hypot(slice.nt, slice.nz);
-  frame = {slice.nt / len, slice.nz / len, slice.tangent};
+  length = std::hypot(slice.nt, slice.nz);
+  frame = {slice.nt / length, slice.nz / length, slice.tangent};
 }
 
 namespace {

@@ -49,7 +49,8 @@ int chain_window(const Falloff& f, double step);
 struct TangentChain {
   Falloff rho;
   Weighting weighting = Weighting::cosine;
-  SliceFrame frame;  // the unit in-slice normal perpendicular to the receiver's tangent
+  SliceFrame frame;   // the unit in-slice normal perpendicular to the receiver's tangent
+  double length = 1;  // the receiver's normal's length in the slice, |(n.D, n.z)|
   double sum = 0;  // the occluded measure (cosine: doubled, so a horizon e over a level texel gives sin^2 e)
   double e_max;    // highest elevation so far (starts at the tangent)
   double slope_max;             // tan e_max: rising points are found without a trigonometric call
