@@ -90,6 +90,12 @@ struct LsaoWorker {
         const TexelPair taps = line.height_taps(n, *field);
         const double v = line.dir->v(line.line, n), frac = v - std::floor(v);
         for (int c = 0; c < 2; ++c) {
+          if (c == 1 && frac == 0) {
+            // On a texel row (axis and diagonal directions, 8 of K = 16) the gather reads channel 0 only.
+            o[1] = o[0];
+            if (bent) o[4] = o[2], o[5] = o[3];
+            break;
+          }
           const std::size_t ti = std::size_t(taps.texel[c]);
           const Vec3f nv = normal(ti);
           // The texel's height carried to the line along its own tangent plane (as the fixed tangent does).
