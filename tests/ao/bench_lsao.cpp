@@ -3,7 +3,8 @@
 //   build/tests/ao/ao_bench_lsao [google-benchmark flags]   throughput: texel-directions per CPU-second
 //       (items_per_second = texels x K / CPU time, one thread, so it holds on a loaded machine; the methods
 //       parallelise over lines / rows) at 512^2, 1024^2, 2048^2 and K = 8..64, and cost against the radius
-//       (1024^2, K = 16, step falloff): LSAO, farfield and hbao in one run.
+//       (1024^2, K = 16, step falloff): LSAO (its default, the receiver tangent; P3's fixed tangent beside it
+//       in ao_bench_lsao_tangent), farfield and hbao in one run.
 //   build/tests/ao/ao_bench_lsao --measure [fractal|bricks|sines|blocks|dem]   accuracy tables (printed):
 //       LSAO's hull against the brute-force largest visible occluder over the same line samples (P3's
 //       reference; and against hbao's largest_occluder march, which samples its own rays), and farfield

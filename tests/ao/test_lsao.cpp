@@ -20,6 +20,7 @@ LsaoOptions options(int K, FalloffKind kind, double radius, double sin_t, Obscur
   LsaoOptions o;
   o.directions = K;
   o.occlusion = {{kind, radius}, sin_t, w};
+  o.tangent = LsaoTangent::fixed;  // these tests are of P3 as written (strategy 3)
   return o;
 }
 

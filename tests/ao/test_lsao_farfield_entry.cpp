@@ -28,6 +28,7 @@ TEST(LsaoFarfieldSchemas, ValidEntries) {
           R"({"method": "lsao"})",
           R"({"method": "lsao", "directions": 32, "radius": 8, "falloff": "rational", "weighting": "uniform"})",
           R"({"method": "lsao", "radius": 8, "tangent": -1, "layers": ["obscurance"]})",
+          R"({"method": "lsao", "radius": 8, "falloff": "smooth", "tangent": "normal"})",
           R"({"method": "farfield"})",
           R"({"method": "farfield", "radius": 30, "falloff": "smooth", "interval": 4, "near_field": 10})",
           R"({"method": "farfield", "sector_average": false, "split": false, "growth": 0.5, "weighting": "cosine"})",
@@ -44,7 +45,7 @@ TEST(LsaoFarfieldSchemas, InvalidEntries) {
   };
   for (const Case& c : {
            Case{R"({"method": "lsao", "tangent": 0.5})", "/bake/0/tangent"},
-           Case{R"({"method": "lsao", "tangent": "normal"})", "/bake/0/tangent"},
+           Case{R"({"method": "lsao", "tangent": "up"})", "/bake/0/tangent"},
            Case{R"({"method": "lsao", "layers": ["ao"]})", "/bake/0/layers/0"},
            Case{R"({"method": "farfield", "layers": ["bent"]})", "/bake/0/layers/0"},
            Case{R"({"method": "lsao", "radus": 3})", "/bake/0"},

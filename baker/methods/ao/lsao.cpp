@@ -7,6 +7,7 @@
 #include "core/azimuth.hpp"
 #include "core/direction_blocks.hpp"
 #include "methods/ao/bake_ao.hpp"
+#include "methods/ao/lsao_chain_hull.hpp"
 #include "methods/ao/obscurance_params.hpp"
 #include "methods/ao/slice_integral.hpp"
 #include "sweep/sweep_lines.hpp"
@@ -19,10 +20,9 @@ namespace {
 // at the sample's along-distance. The gather then takes for each texel the channel that is that texel, so
 // a receiver is never an interpolated height (on rough terrain that is worth about 1 % of AO against a
 // march from the texel centres); axis and diagonal directions sample texel centres exactly.
-// With the bent normal (hull estimator, texel receivers), four more channels: per texel (c = 0, 1) the slice
-// components (along the direction, up) of the cosine-weighted open direction about the texel's normal, with
-// the band from its tangent plane up to the largest occluder weighted by 1 - rho(|h|), as P3's Eq. 1 counts
-// it.
+// With the bent normal (receiver tangent, or the fixed one's hull estimator with texel receivers), four more
+// channels: per texel (c = 0, 1) the slice components (along the direction, up) of the cosine-weighted open
+// direction about the texel's normal (lsao_sums).
 struct LsaoWorker {
   const LsaoOptions* options = nullptr;
   const HeightField* field = nullptr;
@@ -49,8 +49,94 @@ struct LsaoWorker {
   }
 
   bool bent = false;
+  // LsaoTangent::receiver: the chain hull of the current block and the window's previous block.
+  ChainHull chain_hull;
+  WindowHull window;
+
+  // The texel's normal: held (compute_normals) or recomputed from the heights (normal_at, the same values)
+  // on fields too large to hold them (lsao_holds_normals).
+  Vec3f normal(std::size_t ti) const {
+    return !normals->empty()
+               ? (*normals)[ti]
+               : normal_at(*field, int(ti % std::size_t(field->width)), int(ti / std::size_t(field->width)));
+  }
+
+  // LsaoTangent::receiver (lsao_chain_hull.hpp): every texel a receiver at its own height and tangent.
+  void receiver_line(const SweepLine& line, float* out) {
+    const OcclusionFunction& f = options->occlusion;
+    const int C = bent ? 6 : 2;
+    const bool use_brute = options->estimator != LsaoEstimator::hull;
+    const Weighting weighting =
+        f.weighting == ObscuranceWeighting::cosine ? Weighting::cosine : Weighting::uniform;
+    const double support = f.rho.support(1e-4), tol = options->rho_tolerance;
+    // Falloffs that end: the hull holds the current block of W samples, `window` the previous one.
+    const int W = use_brute ? 0 : chain_window(f.rho, line.step);
+    chain_hull.clear();
+    chain_hull.reserve(std::size_t(W > 0 ? std::min(W, line.count) : line.count));
+    window.clear();
+    window.reserve(std::size_t(W > 0 ? std::min(W, line.count) : 0));
+    terrain.clear();
+    if (use_brute) terrain.reserve(std::size_t(line.count));
+    std::uint64_t tests = 0;
+    for (int n = 0; n < line.count; ++n) {
+      const SlicePoint p{line.s(n), double(line.z[n])};
+      if (W > 0) {
+        if (n > 0 && n % W == 0) {  // a new block: the one before becomes the window's far part
+          window.build(line.z, n - W, n, line.inside_begin, line.inside_end, line.step, f.rho, tol);
+          chain_hull.clear();
+        }
+        window.drop_before(n - W);
+      }
+      if (n >= line.first_receiver) {
+        float* o = out + C * (n - line.first_receiver);
+        const TexelPair taps = line.height_taps(n, *field);
+        const double v = line.dir->v(line.line, n), frac = v - std::floor(v);
+        for (int c = 0; c < 2; ++c) {
+          if (c == 1 && frac == 0) {
+            // On a texel row (axis and diagonal directions, 8 of K = 16) the gather reads channel 0 only.
+            o[1] = o[0];
+            if (bent) o[4] = o[2], o[5] = o[3];
+            break;
+          }
+          const std::size_t ti = std::size_t(taps.texel[c]);
+          const Vec3f nv = normal(ti);
+          // The texel's height carried to the line along its own tangent plane (as the fixed tangent does).
+          const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
+          const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
+          const SliceFrame frame = slice_frame(nv.x * line.dir->dx + nv.y * line.dir->dy, nv.z);
+          TangentChain chain(f.rho, weighting, frame);
+          chain.want_direction = bent;
+          if (use_brute) {
+            brute_chain(terrain.data(), terrain.size(), t, chain);
+          } else {
+            chain_hull.query(t, support, chain);
+            window.query(t, support, chain);  // farther than the whole current block
+          }
+          // The cosine measure scales with the normal's length in the slice (slice_integral.hpp).
+          o[c] = float(weighting == Weighting::cosine ? chain.length * chain.sum : chain.sum);
+          if (bent) {
+            // Open from the tangent plane up, less the chain's bands weighted by rho (hbao's slab bent
+            // normal); the chain's sum is for the unit in-slice normal.
+            const SliceVec open = open_direction(frame, frame.tangent, 0.5 * kPi);
+            o[2 + 2 * c] = float(open.h - chain.length * chain.direction.h);
+            o[3 + 2 * c] = float(open.v - chain.length * chain.direction.v);
+          }
+        }
+      }
+      if (!use_brute) tests += chain_hull.prune(p, f.rho, tol);
+      if (line.is_terrain(n)) {
+        if (use_brute)
+          terrain.push_back(p);
+        else
+          chain_hull.push(p);
+      }
+    }
+    *samples += std::uint64_t(line.count);
+    *iterations += tests;
+  }
 
   void operator()(const SweepLine& line, float* out) {
+    if (options->tangent == LsaoTangent::receiver) return receiver_line(line, out);
     const OcclusionFunction& f = options->occlusion;
     const int C = bent ? 6 : 2;
     hull.clear();
@@ -68,12 +154,8 @@ struct LsaoWorker {
           for (int c = 0; c < 2; ++c) {
             // The texel's height carried to the line along its own tangent plane (minor-axis slope from its
             // normal): exact on planes, the texel's own detail elsewhere.
-            // The texel's normal: held (compute_normals) or recomputed from the heights (normal_at, the same
-            // values) on fields too large to hold them (lsao_holds_normals).
             const std::size_t ti = std::size_t(taps.texel[c]);
-            const Vec3f nv = !normals->empty() ? (*normals)[ti]
-                                               : normal_at(*field, int(ti % std::size_t(field->width)),
-                                                           int(ti / std::size_t(field->width)));
+            const Vec3f nv = normal(ti);
             const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
             const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
             SlicePoint occ{-1, 0};
@@ -116,7 +198,10 @@ namespace {
 // lsao_block_sums (direction block `block` only, summed from zero).
 void lsao_sweep(const HeightField& field, const LsaoOptions& options, const RunControl& rc, LsaoStats* stats,
                 int block, float* sum, float* bent_xyz) {
-  const bool want_bent = bent_xyz && options.texel_receivers && options.estimator == LsaoEstimator::hull;
+  const bool receiver = options.tangent == LsaoTangent::receiver;
+  const bool texel_receivers = options.texel_receivers || receiver;
+  const bool want_bent =
+      bent_xyz && texel_receivers && (receiver || options.estimator == LsaoEstimator::hull);
   const std::size_t N = field.texel_count();
   std::fill_n(sum, N, 0.0f);
   if (bent_xyz) std::fill_n(bent_xyz, 3 * N, 0.0f);
@@ -137,7 +222,7 @@ void lsao_sweep(const HeightField& field, const LsaoOptions& options, const RunC
   for (int k = 0; k < swept; ++k) dirs[std::size_t(k)] = plan_direction(field, spec, k);
   std::atomic<std::uint64_t> samples{0}, iterations{0};
   const std::vector<Vec3f> normals =
-      options.texel_receivers && lsao_holds_normals(field) ? compute_normals(field) : std::vector<Vec3f>();
+      texel_receivers && lsao_holds_normals(field) ? compute_normals(field) : std::vector<Vec3f>();
   sweep_lines(
       field, spec, rc,
       [&] {
@@ -248,7 +333,19 @@ LsaoOptions read_lsao_options(Params& in) {
   o.occlusion.rho = read_falloff(in);
   o.occlusion.weighting = read_weighting(in, true) == Weighting::uniform ? ObscuranceWeighting::uniform
                                                                          : ObscuranceWeighting::cosine;
-  o.occlusion.sin_t = in.number("tangent", -0.85, -1.0, 0.0);
+  // "normal" (default): each texel's own tangent, the visible chain's bands; a number: P3's fixed tangent sin
+  // t.
+  const nlohmann::json tangent = in.has("tangent") ? in.raw("tangent") : nlohmann::json("normal");
+  if (tangent == "normal") {
+    o.tangent = LsaoTangent::receiver;
+    in.resolve("tangent", "normal");
+  } else {
+    if (!tangent.is_number() || !(tangent.get<double>() >= -1.0 && tangent.get<double>() <= 0.0))
+      in.fail("tangent", "must be \"normal\" or a number in [-1, 0] (sin of P3's fixed tangent)");
+    o.tangent = LsaoTangent::fixed;
+    o.occlusion.sin_t = tangent.get<double>();
+    in.resolve("tangent", o.occlusion.sin_t);
+  }
   o.directions = in.integer("directions", 16, 1, 4096);
   in.layers({"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
   return o;

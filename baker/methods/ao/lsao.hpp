@@ -1,14 +1,21 @@
 // Line-sweep ambient obscurance (P3, Timonen 2013) on the shared line sweep (baker/sweep): per azimuth
-// phi_k = 2 pi k / K one sweep whose lines carry the obscurance hull (obscurance_hull.hpp); every line
-// sample is a receiver of P3 Eq. 1 with the fixed tangent sin t (strategy 3), and the sweep brings the
-// per-sample values back to the texel centres by its documented two-tap rule. O(K) per texel whatever the
-// radius and falloff. Sampling: the sweep's lines step one texel column (row) at a time and interpolate
-// heights along that column only, so axis and diagonal directions sample texel centres exactly (P3 §5.2's
-// box pattern for K = 8, n = 1) and other directions interpolate between two texels of one column.
+// phi_k = 2 pi k / K one sweep whose lines carry a hull of occluders, and the sweep brings the per-sample
+// values back to the texel centres by its documented two-tap rule. O(K) per texel whatever the radius.
+// Two tangent strategies (LsaoTangent):
+// * receiver (default, issue 19): each texel's own tangent plane per direction; the slice's value is the
+//   contract's measure of the bands between that tangent and the horizon, each weighted by the falloff where
+//   its rays meet the terrain (hbao's slab integral), over the visible chain of a per-line chain hull
+//   (lsao_chain_hull.hpp). Exact on planes, walls and pits for every falloff.
+// * fixed: P3 as written, the obscurance hull (obscurance_hull.hpp) with P3 Eq. 1 for the single largest
+//   occluder and the fixed tangent sin t (strategy 3: a screen-space choice that misses gentle terrain's
+//   occlusion).
+// Sampling: the sweep's lines step one texel column (row) at a time and interpolate heights along that column
+// only, so axis and diagonal directions sample texel centres exactly (P3 §5.2's box pattern for K = 8, n = 1)
+// and other directions interpolate between two texels of one column.
 //
 // Output: obscurance = 1 - clamp(mean_k value_k, 0, 1) (P3 leaves the mapping open, digest §9.1). With
-// cosine weighting and rho = 1 this converges to the contract's cosine-weighted AO of an upward normal
-// (sin^2 of the horizon elevation); with uniform weighting to HBAO's solid-angle estimator (sin e).
+// cosine weighting and rho = 1 this converges to the contract's cosine-weighted AO (fixed tangent: of an
+// upward normal, sin^2 of the horizon elevation); with uniform weighting to HBAO's solid-angle estimator.
 #pragma once
 
 #include <cstdint>
@@ -23,18 +30,29 @@ namespace hfbake {
 
 enum class LsaoEstimator {
   hull,           // P3: the obscurance hull, O(1) amortised per sample
-  brute_visible,  // per sample, the largest occlusion over the earlier visible samples (O(M^2) per line)
-  brute_all,      // per sample, the largest occlusion over all earlier samples ("the only occluder")
+  brute_visible,  // per sample, the largest occlusion over the earlier visible samples (O(M^2) per line);
+                  // receiver tangent: the band sum over every earlier visible sample (brute_chain)
+  brute_all,      // per sample, the largest occlusion over all earlier samples ("the only occluder");
+                  // receiver tangent: as brute_visible
+};
+
+// Which tangent an occluder must rise above before it counts.
+enum class LsaoTangent {
+  receiver,  // the texel's own tangent per direction, the visible chain's bands (lsao_chain_hull.hpp)
+  fixed,     // P3 strategy 3: OcclusionFunction::sin_t for every receiver (P3's -0.85: a screen-space choice
+             // that misses gentle terrain's occlusion; with falloff none and -1 the exact horizon AO)
 };
 
 struct LsaoOptions {
   int directions = 16;          // K
-  OcclusionFunction occlusion;  // falloff, fixed tangent, weighting
+  OcclusionFunction occlusion;  // falloff, weighting; sin_t: the fixed tangent (LsaoTangent::fixed)
+  LsaoTangent tangent = LsaoTangent::receiver;
+  double rho_tolerance = 0.1;  // receiver: the chain hull's merge tolerance in rho (lsao_chain_hull.hpp)
   LsaoEstimator estimator = LsaoEstimator::hull;
   int wrap_periods = 1;  // repeat fields: warm-up periods of the sweep
-  // true: each texel is a receiver at its own height (the line's hull queried at the texel's height and the
-  // sample's along-distance); false: P3 as written, the line samples are the receivers (interpolated
-  // heights) and the sweep blends their results.
+  // true: each texel is a receiver at its own height (LsaoTangent::receiver always is) (the line's hull
+  // queried at the texel's height and the sample's along-distance); false: P3 as written, the line samples
+  // are the receivers (interpolated heights) and the sweep blends their results.
   bool texel_receivers = true;
 };
 
@@ -45,10 +63,11 @@ struct LsaoStats {
 
 // Per texel the sums over the K directions, accumulated in float (one rounding per direction, k ascending,
 // by the farm's direction blocks: core/direction_blocks.hpp FloatBlocks; the same bits for any thread count
-// and for `hfbake merge` of lsao_block_sums): sum[N] of the per-direction value (P3 Eq. 1, before clamping)
-// and, when bent_xyz is not null (hull estimator with texel receivers, else zeros), bent_xyz[3 * texel + c]
-// of the cosine-weighted open direction about the texel's normal, each direction's band from the tangent
-// plane up to its largest occluder weighted by 1 - rho(|h|) (the occlusion P3's Eq. 1 counts), unnormalised.
+// and for `hfbake merge` of lsao_block_sums): sum[N] of the per-direction value (before clamping) and, when
+// bent_xyz is not null (receiver tangent, or the fixed one's hull estimator with texel receivers; else
+// zeros), bent_xyz[3 * texel + c] of the cosine-weighted open direction about the texel's normal,
+// unnormalised: receiver tangent: each direction's open band less the chain's bands weighted by rho (as
+// hbao); fixed: the band from the tangent plane up to its largest occluder weighted by 1 - rho(|h|).
 // Normals: held (compute_normals, 12 bytes a texel) up to 8192^2 texels, recomputed per tap from the heights
 // beyond (normal_at: the same values, about 40 % more CPU time): lsao_holds_normals. Nothing else is held
 // beyond the two outputs and the sweep's bounded line buffers.

@@ -1,0 +1,119 @@
+// lsao's receiver-tangent strategy for a field seen from above (issue 19 item 3): per line a hull of the
+// visible chain's points, walked from each texel with its own tangent, the chain's bands summed as hbao's
+// slab estimator sums them.
+//
+// Why: P3's fixed tangent (sin t = -0.85, strategy 3) is a screen-space choice: an occluder counts only once
+// it lifts that tangent past the horizontal, so the gentle occluders of terrain count for nothing (gentle
+// craters, smooth R = 32: 98 % of the occlusion missing). Here the tangent of a texel towards direction D is
+// its own (P3 strategy 1, digest §2: t = atan2(-n.D, n.z)); the obscurance of the slice is the contract's
+// cosine-weighted (or uniform) measure of the bands between that tangent and the horizon, each band weighted
+// by rho at the distance where its rays meet the terrain (band_occlusion: a vertical slab at the point's
+// horizontal distance, hbao's estimator), scaled by the normal's length in the slice. A single largest
+// occluder (P3 Eq. 1) under-occludes with a falloff, since the bands nearer than it carry more weight.
+//
+// The hull (ChainHull) is tangent-free: the sweep's line samples prune it as P3's Alg. 1 does, with a pop
+// rule that keeps what the chain needs: the top a is merged into the point b below it when b is higher seen
+// from the sample (a cannot be the horizon of a later receiver beyond b's line) and rho at b differs from rho
+// at the nearest point a stands for by at most `tolerance` (the merged bands are then counted at the middle
+// of the distances they stand for). With falloff none or a step (inside the radius) this is the convex hull
+// of P1 and the sum telescopes to the exact horizon obscurance of the line samples; with a smooth falloff the
+// hull keeps about 1 / tolerance points per falloff range whatever the radius. A query walks from the top
+// outwards, adding each point that rises above the chain (a merged point: its near end at its own distance,
+// then the point itself, counted at the middle of the stretch when the near end rose), and stops where no
+// point farther on can rise (zmax) or beyond the falloff's support.
+//
+// Falloffs that end (step, linear, smooth): a receiver sees a window of W samples (hs <= W step <= R).
+// Pruning is only sound while the points it compares stay inside the window (a point merged into a farther
+// one is lost when that one leaves it: at R = 8 texels that was most of the error), so the hull restarts at
+// each block of W samples and holds only the current block; the window's part in the previous block is a
+// WindowHull: the same rule built once per block from its right end leftwards with an undo log, and shrunk
+// from its left end as the window moves on. Each point is pushed and popped (inserted and undone) once: O(1)
+// amortised per sample and independent of the radius.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+#include "methods/ao/falloff.hpp"
+#include "methods/ao/obscurance_hull.hpp"
+#include "methods/ao/slice_integral.hpp"
+
+namespace hfbake {
+
+// The window (samples) of falloff f on a line of step `step`: 0 when the falloff never ends (none,
+// exponential, rational: one hull over the whole line, as P3).
+int chain_window(const Falloff& f, double step);
+
+// The running band sum of the visible chain seen from one receiver, nearest point first.
+struct TangentChain {
+  Falloff rho;
+  Weighting weighting = Weighting::cosine;
+  SliceFrame frame;   // the unit in-slice normal perpendicular to the receiver's tangent
+  double length = 1;  // the receiver's normal's length in the slice, |(n.D, n.z)|
+  double sum = 0;  // the occluded measure (cosine: doubled, so a horizon e over a level texel gives sin^2 e)
+  double e_max;    // highest elevation so far (starts at the tangent)
+  double slope_max;             // tan e_max: rising points are found without a trigonometric call
+  bool want_direction = false;  // also sum the bands' rho-weighted cosine direction (band_direction)
+  SliceVec direction;           // that sum, for the unit in-slice normal (bent normals)
+
+  // `slice`: the receiver's normal in the slice (n.D, n.z), any positive length.
+  TangentChain(const Falloff& f, Weighting w, const SliceFrame& slice);
+  // A point at (hs > 0, hz) from the receiver standing for the profile's stretch at horizontal distances
+  // around x: adds the band from the chain's elevation up to its own, if it rises above it.
+  void add(double hs, double hz, double x);
+};
+
+// A hull point: its position; the nearest sample merged into it (near_s >= s; itself when none): the near end
+// of the stretch of profile it stands for; and zmax, the highest height of it, its near end and every point
+// farther on in its hull (what lets a walk stop once nothing farther can rise above the chain).
+struct ChainPoint {
+  double s = 0, z = 0;
+  double near_s = 0, near_z = 0;
+  double zmax = 0;
+  int index = 0;  // WindowHull: the sample index
+};
+
+// One line's hull. Reuse one per thread (clear() keeps the capacity).
+class ChainHull {
+ public:
+  void reserve(std::size_t n) { stack_.reserve(n); }
+  void clear() { stack_.clear(); }
+  // Prunes the top for receiver p (a line sample); returns the loop tests.
+  std::size_t prune(SlicePoint p, const Falloff& rho, double tolerance);
+  void push(SlicePoint p) {
+    const double below = stack_.empty() ? p.z : stack_.back().zmax;
+    stack_.push_back({p.s, p.z, p.s, p.z, std::max(below, p.z), 0});
+  }
+  std::size_t size() const { return stack_.size(); }
+  // Adds the chain of receiver p (not necessarily a sample), without popping; support: the falloff's.
+  void query(SlicePoint p, double support, TangentChain& chain) const;
+
+ private:
+  std::vector<ChainPoint> stack_;
+};
+
+// The previous block's part of the window (file comment).
+class WindowHull {
+ public:
+  void reserve(std::size_t n);
+  void clear();
+  // Builds the hull of the line's samples [begin, end) that are terrain (in [inside_begin, inside_end));
+  // sample i at s = i * step, height z[i]; merges judged from the nearest receiver (s = end * step).
+  void build(const float* z, int begin, int end, int inside_begin, int inside_end, double step,
+             const Falloff& rho, double tolerance);
+  void drop_before(int first);  // undoes the samples before the window's start
+  void query(SlicePoint p, double support, TangentChain& chain) const;
+
+ private:
+  std::vector<ChainPoint> hull_;    // right to left: hull_[0] the block's last terrain sample
+  std::vector<ChainPoint> popped_;  // undo log: the vertices each insertion removed, in order
+  std::vector<int> pops_;           // per insertion (right to left): how many it removed
+};
+
+// Brute force for receiver p over every earlier sample pts[0..count) (in walk order): the band sum over
+// every visible sample, each at its own distance (what the hull's chain approximates). O(M): tests and
+// measurements.
+void brute_chain(const SlicePoint* pts, std::size_t count, SlicePoint p, TangentChain& chain);
+
+}  // namespace hfbake
