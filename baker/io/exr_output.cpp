@@ -134,6 +134,9 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
   const int chunk = tiled ? options.tile_size : chunk_lines(header.compression());
   int band_rows = std::max(64, chunk * (tiled ? 1 : threads));
   band_rows = (band_rows + chunk - 1) / chunk * chunk;
+  // No more rows than the image has (one band then holds it all): a 70000 x 2 field's tiled band of 256
+  // rows took 35 MB a channel.
+  band_rows = std::min(band_rows, h);
 
   std::error_code ec;
   if (!fs::is_directory(file.parent_path().empty() ? fs::path(".") : file.parent_path(), ec))
