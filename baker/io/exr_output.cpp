@@ -5,6 +5,7 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 #include <ImfThreading.h>
@@ -189,6 +190,20 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     std::string what = e.what();
     if (const auto nl = what.find('\n'); nl != std::string::npos) what.resize(nl);
     throw InputError(file.string(), "", "cannot write the EXR: " + what);
+  }
+  // A full disk can fail the last buffered writes where OpenEXR does not look (its stream's flush when the
+  // file closes: a 0-byte EXR was moved into place with exit 0). Read the header and the chunk table back:
+  // only a whole file is moved into place.
+  bool whole = false;
+  try {
+    Imf::InputFile written(tmp.string().c_str(), 1);
+    whole = written.isComplete();
+  } catch (const std::exception&) {
+  }
+  if (!whole) {
+    fs::remove(tmp, ec);
+    throw InputError(file.string(), "",
+                     "cannot write the EXR: the written file is not whole (is the disk full?)");
   }
   fs::rename(tmp, file, ec);
   if (ec) {

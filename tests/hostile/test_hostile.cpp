@@ -45,13 +45,20 @@ struct HfbakeRun {
 };
 
 // Runs hfbake with `args` in `dir`, stderr to a file; killed (and reported as -SIGKILL) after 120 s.
-HfbakeRun run_hfbake(const fs::path& dir, const std::vector<std::string>& args) {
+// file_size_limit > 0: the largest file the run may write (RLIMIT_FSIZE, SIGXFSZ ignored: a write beyond it
+// fails with EFBIG, as on a full disk).
+HfbakeRun run_hfbake(const fs::path& dir, const std::vector<std::string>& args, long file_size_limit = 0) {
   const fs::path err = dir / "stderr.txt", out = dir / "stdout.txt";
   const pid_t pid = fork();
   if (pid == 0) {
     if (!freopen(err.c_str(), "w", stderr) || !freopen(out.c_str(), "w", stdout)) _exit(126);
     if (chdir(dir.c_str()) != 0) _exit(126);
     alarm(120);  // SIGALRM's default kills a hung hfbake: the case fails instead of hanging the suite
+    if (file_size_limit > 0) {
+      signal(SIGXFSZ, SIG_IGN);
+      const struct rlimit limit { rlim_t(file_size_limit), rlim_t(file_size_limit) };
+      if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(126);
+    }
     std::vector<char*> argv{const_cast<char*>("hfbake")};
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
@@ -606,6 +613,28 @@ TEST(ThinField, BothOrientationsOfA20000x2ImageBakeWithinTheEstimate) {
 #endif
     fs::remove_all(dir / "out");
   }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+
+namespace {
+
+// A full disk under the last buffered write of an EXR: OpenEXR flushes its stream when the file closes and
+// does not look at the result, so a truncated EXR (1 KiB of a 2 KiB file) was moved into place and the bake
+// exited 0. Every EXR is read back (header and chunk table) before it is moved into place: the bake fails
+// with one line naming the EXR, and leaves no output folder and no temporary.
+TEST(FullDisk, AnExrCutShortByTheDiskIsNeverMovedIntoPlace) {
+  const fs::path dir = fs::temp_directory_path() / ("hfbake_full_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  const std::string job = write_job(dir, base_job());
+  const HfbakeRun r = run_hfbake(dir, {"bake", job, "--no-cache", "--quiet"}, 1024);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_NE(lines[0].find("t.p1.exr: cannot write the EXR"), std::string::npos) << lines[0];
+  EXPECT_TRUE(listing(dir / "out").empty()) << "the output folder is left behind";
+  for (const auto& p : listing(dir)) EXPECT_EQ(p.find(".tmp"), std::string::npos) << p;
   fs::remove_all(dir);
 }
 
