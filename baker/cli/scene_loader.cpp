@@ -7,6 +7,7 @@
 #include "cli/scene_inputs.hpp"
 #include "core/error.hpp"
 #include "field/procedural.hpp"
+#include "io/load_environment.hpp"
 #include "methods/method_table.hpp"
 
 namespace hfbake {
@@ -122,7 +123,9 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
       channels += layer_channel_count(l.get<std::string>(), r);
     const double layers = 4.0 * channels * texels;
     const double working = m && m->working_bytes ? m->working_bytes(r, context) : 0.0;
-    peak = std::max(peak, kept + layers + std::max(working, writing));
+    // Its EXR: each half channel converted a band of at most 256 rows at a time (io/exr_output.cpp).
+    const double exr_band = 2.0 * channels * std::min(texels, 256.0 * size.width);
+    peak = std::max(peak, kept + layers + std::max({working, writing, exr_band}));
     if (job.has_reference) kept += layers;
     if (parts) parts->push_back({e.stem, std::size_t(layers + working), m ? m->memory_knob : ""});
     for (const auto& l : r.value("layers", nlohmann::json::array()))
@@ -140,9 +143,20 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     reference = (8.0 * channels + 60 + 4.0 * horizon_channels) * texels;
     peak = std::max(peak, kept + reference + writing);
   }
-  const double scene = kProcess + scene_per_texel * texels;
+  // The environment: the world lat-long kept through the bake (with the reference's sampling tables), and
+  // its images while they are read, before any method runs (measured: 8192 x 4096 half EXR, 24 bytes a
+  // pixel).
+  EnvironmentLoadOptions env_options;
+  env_options.job_file = job.file.string();
+  const EnvironmentBytes env =
+      environment_bytes(job.doc.value("environment", nlohmann::json::object()), job.base_dir, env_options);
+  peak = std::max(peak, env.loading);
+  const double scene = kProcess + scene_per_texel * texels + env.kept;
   if (parts) {
     parts->insert(parts->begin(), {"scene", std::size_t(scene), "a smaller field"});
+    if (env.loading > 0)
+      parts->push_back({"environment", std::size_t(env.loading),
+                        "a smaller environment image (24 bytes a pixel while it is read)"});
     if (job.has_reference)
       parts->push_back({"reference", std::size_t(reference),
                         "fewer reference.layers (8 bytes a texel a channel; the sample count does not change "

@@ -5,6 +5,7 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 #include <ImfThreading.h>
@@ -134,6 +135,9 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
   const int chunk = tiled ? options.tile_size : chunk_lines(header.compression());
   int band_rows = std::max(64, chunk * (tiled ? 1 : threads));
   band_rows = (band_rows + chunk - 1) / chunk * chunk;
+  // No more rows than the image has (one band then holds it all): a 70000 x 2 field's tiled band of 256
+  // rows took 35 MB a channel.
+  band_rows = std::min(band_rows, h);
 
   std::error_code ec;
   if (!fs::is_directory(file.parent_path().empty() ? fs::path(".") : file.parent_path(), ec))
@@ -186,6 +190,20 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     std::string what = e.what();
     if (const auto nl = what.find('\n'); nl != std::string::npos) what.resize(nl);
     throw InputError(file.string(), "", "cannot write the EXR: " + what);
+  }
+  // A full disk can fail the last buffered writes where OpenEXR does not look (its stream's flush when the
+  // file closes: a 0-byte EXR was moved into place with exit 0). Read the header and the chunk table back:
+  // only a whole file is moved into place.
+  bool whole = false;
+  try {
+    Imf::InputFile written(tmp.string().c_str(), 1);
+    whole = written.isComplete();
+  } catch (const std::exception&) {
+  }
+  if (!whole) {
+    fs::remove(tmp, ec);
+    throw InputError(file.string(), "",
+                     "cannot write the EXR: the written file is not whole (is the disk full?)");
   }
   fs::rename(tmp, file, ec);
   if (ec) {

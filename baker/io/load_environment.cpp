@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "core/error.hpp"
 #include "env/env_mapping.hpp"
@@ -267,6 +270,47 @@ class Loader {
 EnvironmentLighting load_environment(const json& environment, const fs::path& base_dir,
                                      const EnvironmentLoadOptions& options) {
   return Loader(environment, base_dir, options).load();
+}
+
+EnvironmentBytes environment_bytes(const json& environment, const fs::path& base_dir,
+                                   const EnvironmentLoadOptions& options) {
+  EnvironmentBytes b;
+  if (!environment.is_object()) return b;
+  // The world lat-long of `rows` rows: texels, mip levels and the reference's sampling tables.
+  auto kept = [](int rows) { return 32.0 * 2.0 * double(rows) * double(rows); };
+  if (environment.contains("sky")) {
+    b.kept = kept(SkySpec{}.height);
+    return b;
+  }
+  std::vector<std::pair<std::string, std::string>> files;  // key, file
+  if (environment.contains("latlong") && environment["latlong"].is_string())
+    files.emplace_back("latlong", environment["latlong"].get<std::string>());
+  else if (environment.contains("cross") && environment["cross"].is_string())
+    files.emplace_back("cross", environment["cross"].get<std::string>());
+  else if (environment.contains("cubemap") && environment["cubemap"].is_array())
+    for (std::size_t f = 0; f < environment["cubemap"].size(); ++f)
+      if (environment["cubemap"][f].is_string())
+        files.emplace_back("cubemap/" + std::to_string(f), environment["cubemap"][f].get<std::string>());
+  if (files.empty()) return b;
+  double sum = 0, largest = 0;
+  int rows = 0;
+  for (const auto& [key, name] : files) {
+    const ImageInfo info = probe_image(base_dir / name, {options.job_file, options.pointer + "/" + key});
+    const double px = double(info.width) * double(info.height);
+    if (px > double(kMaxInputPixels)) return {};  // refused by the loader, with its own message
+    sum += px, largest = std::max(largest, px);
+    // Rows of the world lat-long (Loader::latlong, from_faces): the lat-long's height, twice a face's side.
+    const int face = key != "cross"                      ? info.width
+                     : info.width * 3 == info.height * 4 ? info.width / 4
+                                                         : info.width / 3;
+    const int latitude = key == "latlong" ? info.height : 2 * face;
+    rows = std::max(rows, std::clamp(pow2_at_least(latitude), 8, options.max_height));
+  }
+  // Every image held as linear RGB (12 bytes a pixel) until the resampling, and while the last one is read
+  // its decoded channels beside it (read_rgb_image: up to 12 bytes a pixel more).
+  b.loading = 12 * sum + 12 * largest;
+  b.kept = kept(rows);
+  return b;
 }
 
 }  // namespace hfbake

@@ -70,8 +70,30 @@ SweepDirection plan_direction(const HeightField& field, const SweepSpec& spec, i
     d.count = d.n_major;
     d.first_receiver = 0;
     d.u_start = d.su > 0 ? 0 : d.n_major - 1;
+    // Thin fields: lines keep the columns around their run (header: trimmed lines).
+    if (spec.trim_thin_lines && d.slope != 0) {
+      const double need = std::ceil((d.n_minor + 2) / std::fabs(d.slope)) + 4;
+      if (4 * need <= d.n_major) d.span = int(need);
+    }
   }
   return d;
+}
+
+int line_u_start(const SweepDirection& d, int line) {
+  if (d.span == 0) return d.u_start;
+  // Columns where v = line + u * slope lies in [-1.5, n_minor + 0.5], widened by a column each side.
+  const double ua = (-1.5 - line) / d.slope, ub = (d.n_minor + 0.5 - line) / d.slope;
+  const double lo = std::floor(std::min(ua, ub)) - 1;
+  const int first = int(std::clamp(lo, 0.0, double(d.n_major - d.span)));
+  return d.su > 0 ? first : first + d.span - 1;
+}
+
+SweepDirection line_direction(const SweepDirection& d, int line) {
+  if (d.span == 0) return d;
+  SweepDirection t = d;
+  t.count = d.span;
+  t.u_start = line_u_start(d, line);
+  return t;
 }
 
 void sample_line(const HeightField& f, const SweepDirection& d, int line, float* z, int* inside_begin,
@@ -199,7 +221,7 @@ SweepStream plan_stream(const HeightField& f, const SweepDirection& d, std::size
     }
     return w;
   };
-  const std::size_t line_bytes = std::size_t(d.n_major) * std::size_t(channels) * sizeof(float);
+  const std::size_t line_bytes = std::size_t(d.stride()) * std::size_t(channels) * sizeof(float);
   const std::size_t fit = budget_bytes / line_bytes;
   // Ring lines the budget leaves beside the head (at least one); no more than the lines there are.
   const int budget = fit > std::size_t(s.head) ? int(std::min(fit - std::size_t(s.head), std::size_t(L))) : 1;
@@ -227,7 +249,7 @@ SweepPlan plan_sweep(const HeightField& f, const SweepSpec& spec, const std::vec
   plan.transposed = any_y_major && t_bytes <= spec.max_buffer_bytes / 4;
   plan.buffer_budget = spec.max_buffer_bytes - (plan.transposed ? t_bytes : 0);
   auto whole = [&](int k) {
-    return std::size_t(dirs[k].lines()) * std::size_t(dirs[k].n_major) * C * sizeof(float);
+    return std::size_t(dirs[k].lines()) * std::size_t(dirs[k].stride()) * C * sizeof(float);
   };
   const int batch = std::max(1, spec.batch);
   for (int k0 = 0; k0 < K;) {
@@ -265,7 +287,7 @@ std::size_t sweep_buffer_bytes(const HeightField& f, const SweepSpec& spec) {
     std::size_t floats = 0, extra = 0;
     for (int k = b.k0; k < b.k0 + b.nb; ++k) {
       const SweepDirection& d = dirs[k];
-      const std::size_t line_floats = std::size_t(d.n_major) * std::size_t(C);
+      const std::size_t line_floats = std::size_t(d.stride()) * std::size_t(C);
       extra += std::size_t(d.lines()) * sizeof(float*);  // the line table
       if (b.stream) {
         const detail::SweepStream s = detail::plan_stream(f, d, plan.buffer_budget, C, false);

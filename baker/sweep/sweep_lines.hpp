@@ -39,7 +39,16 @@
 //   inside tap alone (weight 1, a sample less than one texel away): no result of a point off the field
 //   ever reaches a texel. Samples off the field are still handed to the visitor (their heights are the
 //   clamped border heights); their results are unused. All n_major columns are samples of every line
-//   (first_receiver = 0, no warm-up).
+//   (first_receiver = 0, no warm-up), except on thin fields (below).
+// * clamp, thin fields (trimmed lines): when a direction's lines cross the field in runs far shorter than
+//   n_major (|slope| > 0 and (n_minor + 2) / |slope| + 4 <= n_major / 4: every x-major direction of a
+//   5000 x 2 field but the axis), lines() * n_major samples would grow with the square of the long side while
+//   only the runs matter. Each line then keeps SweepDirection::span consecutive columns around its run, the
+//   columns where v lies in [-1.5, n_minor + 0.5] (every terrain sample, and every receiver a texel tap
+//   reads, v in (-1, n_minor]); the worker sees that piece as the whole line (line_direction: count = span,
+//   its own u_start), and SweepLine::s keeps the full line's distances, so results are the same bits as
+//   untrimmed lines for workers that use s(n) and the positions (tests/sweep). Work and result buffers
+//   are then linear in the texels: about 2 n_major (n_minor + 2) samples per direction.
 // * repeat: the field tiles. Lines l in [0, n_minor) suffice (line l + n_minor has the same heights); each
 //   line first walks a warm-up of wrap_periods * n_major samples (terrain only, no receivers), then the
 //   n_major receiver samples. Bound: a receiver sees at least wrap_periods * n_major * step of tiled
@@ -104,6 +113,7 @@ struct SweepSpec {
   bool tile_strip = false;   // sweep_lines_tiled: also fill SweepTile::strip (see strip_line)
   bool zero_buffers =
       true;  // zero the result buffers first (off: the worker writes every receiver's C floats)
+  bool trim_thin_lines = true;  // clamp, thin fields: trimmed lines (off: every line walks every column)
 };
 
 // The lines of one direction (plain data; see the header comment for the geometry).
@@ -120,10 +130,13 @@ struct SweepDirection {
   int u_start = 0;                   // major coordinate of sample 0
   int count = 0;                     // samples per line (warm-up + receivers)
   int first_receiver = 0;            // samples [first_receiver, count) are receivers: one per column u
-  double step = 1;                   // world distance between consecutive samples
+  int span = 0;     // clamp, thin fields: samples each line keeps (line_direction); 0: every column (count)
+  double step = 1;  // world distance between consecutive samples
   double texel_size = 1;
 
   int lines() const { return line_end - line_begin; }
+  // Result slots per line (receivers of the longest line): the stride of a line's results.
+  int stride() const { return span > 0 ? span : n_major; }
   int receivers() const { return count - first_receiver; }
   // Major coordinate of sample n, and the minor coordinate of line l there.
   int u(int n) const { return u_start + n * su; }
@@ -135,6 +148,17 @@ struct SweepDirection {
 // Builds direction k of spec (azimuth 2 pi k / K, or spec.azimuths[k]) for field (exposed for tests and for
 // visitors that precompute per direction).
 SweepDirection plan_direction(const HeightField& field, const SweepSpec& spec, int k);
+
+// Line `line` of dir as its worker sees it: dir itself, or for a trimmed direction (span > 0) a copy whose
+// count is span and whose u_start is the line's first kept column (the kept columns lie in [0, n_major)).
+SweepDirection line_direction(const SweepDirection& dir, int line);
+// u_start of line_direction(dir, line) (dir.u_start when the direction is not trimmed).
+int line_u_start(const SweepDirection& dir, int line);
+// Where the result of column u of line `line` sits among the line's dir.stride() result slots.
+inline int line_slot(const SweepDirection& dir, int line, int u) {
+  if (dir.span == 0) return dir.receiver_index(u);
+  return dir.receiver_index(u) - dir.receiver_index(line_u_start(dir, line));
+}
 
 // Two texels and their weights (texel index into the row-major field, or -1 for a texel outside a clamp
 // field; weights sum to 1).
@@ -155,7 +179,9 @@ struct SweepLine {
 
   int receivers() const { return count - first_receiver; }
   bool is_terrain(int n) const { return n >= inside_begin && n < inside_end; }
-  double s(int n) const { return n * step; }  // world distance of sample n from sample 0 along the walk
+  int s_offset = 0;  // trimmed lines: the full line's index of sample 0 (s keeps the full line's distances)
+  // World distance of sample n from the full line's sample 0 along the walk.
+  double s(int n) const { return (n + s_offset) * step; }
   // Texel coordinates of sample n (x = column, y = row; repeat mode: not wrapped).
   double x(int n) const { return dir->x_major ? double(dir->u(n)) : dir->v(line, n); }
   double y(int n) const { return dir->x_major ? dir->v(line, n) : double(dir->u(n)); }
@@ -185,7 +211,8 @@ void sample_line(const HeightField& field, const SweepDirection& dir, int line, 
                  int* inside_end, const float* transposed = nullptr);
 
 // Line `line` of direction `dir`, sampled into z[0..dir.count) (z must hold dir.count floats and outlive the
-// returned line): what the driver hands each line visitor, and what tests use to walk one line by hand.
+// returned line): what tests use to walk one line by hand. The driver hands each line visitor
+// sampled_line(field, line_direction(dir, line), line, ...): the same line, trimmed on thin fields.
 inline SweepLine sampled_line(const HeightField& field, const SweepDirection& dir, int line, float* z,
                               const float* transposed = nullptr) {
   SweepLine l;
@@ -195,6 +222,8 @@ inline SweepLine sampled_line(const HeightField& field, const SweepDirection& di
   l.first_receiver = dir.first_receiver;
   l.z = z;
   l.step = dir.step;
+  // A trimmed line's direction (line_direction) starts later along the walk than the full line.
+  if (dir.span > 0) l.s_offset = dir.su > 0 ? dir.u_start : dir.n_major - 1 - dir.u_start;
   sample_line(field, dir, line, z, &l.inside_begin, &l.inside_end, transposed);
   return l;
 }
@@ -236,9 +265,14 @@ TexelTaps texel_taps_at(const SweepDirection& dir, LineBase&& line_base, int cha
     la = std::clamp(la, 0, dir.lines() - 2);
     lb = la + 1;
   }
-  const std::size_t r = std::size_t(dir.receiver_index(u)) * std::size_t(channels);
-  t.lo = line_base(la) + r;
-  t.hi = line_base(lb) + r;
+  if (dir.span == 0) {
+    const std::size_t r = std::size_t(dir.receiver_index(u)) * std::size_t(channels);
+    t.lo = line_base(la) + r;
+    t.hi = line_base(lb) + r;
+  } else {  // trimmed lines: each line's results start at its first kept column
+    t.lo = line_base(la) + std::size_t(line_slot(dir, la + dir.line_begin, u)) * std::size_t(channels);
+    t.hi = line_base(lb) + std::size_t(line_slot(dir, lb + dir.line_begin, u)) * std::size_t(channels);
+  }
   t.strip = t.hi;  // line l0 + 1 (la + 1, wrapped in repeat mode): never clamped on the field
   // clamp: a tap off the field is no receiver; the border texel takes its other (inside) tap alone.
   if (lone_border_tap(dir, v0, t.w_hi)) {
@@ -251,14 +285,15 @@ TexelTaps texel_taps_at(const SweepDirection& dir, LineBase&& line_base, int cha
 }  // namespace detail
 
 // The texel taps of texel (i, j) for direction dir in a result buffer laid out as
-// buffer[((l - line_begin) * n_major + receiver_index(u)) * channels + c].
+// buffer[((l - line_begin) * stride() + line_slot(dir, l, u)) * channels + c] (untrimmed: the slot is
+// receiver_index(u) and the stride n_major).
 inline TexelTaps texel_taps(const SweepDirection& dir, const float* buffer, int channels, int i, int j) {
-  const std::size_t line = std::size_t(dir.n_major) * std::size_t(channels);
+  const std::size_t line = std::size_t(dir.stride()) * std::size_t(channels);
   return detail::texel_taps_at(
       dir, [&](int p) { return buffer + std::size_t(p) * line; }, channels, i, j);
 }
 
-// The same with each line's results anywhere: lines[l - line_begin] points at line l's n_major * channels
+// The same with each line's results anywhere: lines[l - line_begin] points at line l's stride() * channels
 // floats (laid out as in a buffer row; what the driver hands its gathers).
 inline TexelTaps texel_taps(const SweepDirection& dir, const float* const* lines, int channels, int i,
                             int j) {
@@ -275,7 +310,7 @@ void sweep_tile_lines(const SweepDirection& dir, int i0, int i1, int j0, int j1,
 
 // ---- Memory ---------------------------------------------------------------------------------------------
 // The driver keeps each direction's line results until the tiles that read them are gathered. Directions go
-// in batches of up to spec.batch whose whole result buffers (lines() * n_major * channels floats each) fit
+// in batches of up to spec.batch whose whole result buffers (lines() * stride() * channels floats each) fit
 // the budget (max_buffer_bytes less the transposed copy below): all their lines, then every 32 x 32 tile
 // for each direction of the batch in ascending k. A direction whose whole buffer does not fit streams
 // alone: its lines are computed in chunks (in parallel within a chunk) into a ring of `window` lines; after
@@ -361,7 +396,7 @@ inline void gather_strips(const SweepDirection& dir, const float* const* lines, 
       } else {
         p = std::clamp(p, 0, dir.lines() - 2) + 1;
       }
-      const float* src = lines[p] + std::size_t(dir.receiver_index(u)) * std::size_t(C);
+      const float* src = lines[p] + std::size_t(line_slot(dir, p + dir.line_begin, u)) * std::size_t(C);
       const std::size_t at = std::size_t(j - j0) * std::size_t(i1 - i0) + std::size_t(i - i0);
       for (int c = 0; c < C; ++c) out[c * plane + at] = src[c];
     }
@@ -425,9 +460,13 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
         while (flat >= first[b + 1]) ++b;
         const SweepDirection& dir = dirs[k0 + b];
         const int p = from[b] + (flat - first[b]);
-        const SweepLine line = sampled_line(field, dir, dir.line_begin + p, z.data(), tz);
+        const int l = dir.line_begin + p;
+        SweepDirection trimmed;
+        const SweepDirection* ld = &dir;
+        if (dir.span > 0) trimmed = line_direction(dir, l), ld = &trimmed;
+        const SweepLine line = sampled_line(field, *ld, l, z.data(), tz);
         float* out = lines[b][p];
-        if (spec.zero_buffers) std::fill_n(out, std::size_t(dir.n_major) * std::size_t(C), 0.0f);
+        if (spec.zero_buffers) std::fill_n(out, std::size_t(dir.stride()) * std::size_t(C), 0.0f);
         worker(static_cast<const SweepLine&>(line), out);
       }
     });
@@ -446,13 +485,13 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
       // Whole buffers: every line of the batch, then every tile once for the batch's directions.
       std::size_t total = 0;
       for (int b = 0; b < nb; ++b)
-        total += std::size_t(dirs[k0 + b].lines()) * std::size_t(dirs[k0 + b].n_major) * std::size_t(C);
+        total += std::size_t(dirs[k0 + b].lines()) * std::size_t(dirs[k0 + b].stride()) * std::size_t(C);
       reserve(total);
       std::vector<int> from(nb, 0), to(nb);
       std::size_t at = 0;
       for (int b = 0; b < nb; ++b) {
         const SweepDirection& d = dirs[k0 + b];
-        const std::size_t line_floats = std::size_t(d.n_major) * std::size_t(C);
+        const std::size_t line_floats = std::size_t(d.stride()) * std::size_t(C);
         lines[b].resize(std::size_t(d.lines()));
         for (int p = 0; p < d.lines(); ++p) lines[b][p] = storage.get() + at + std::size_t(p) * line_floats;
         tables[b] = lines[b].data();
@@ -473,7 +512,7 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
     // Streaming: chunks of lines into the head and the ring; after each, the tiles that became complete.
     const SweepDirection& d = dirs[k0];
     const SweepStream s = plan_stream(field, d, plan.buffer_budget, C, true);
-    const std::size_t line_floats = std::size_t(d.n_major) * std::size_t(C);
+    const std::size_t line_floats = std::size_t(d.stride()) * std::size_t(C);
     reserve(std::size_t(s.head + s.window) * line_floats);
     float* head = storage.get();
     float* ring = head + std::size_t(s.head) * line_floats;

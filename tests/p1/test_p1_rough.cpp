@@ -107,7 +107,10 @@ TEST(P1Rough, HorizonsMatchTheExactMarchOnStepsAndSmoothFields) {
   };
   const Case cases[] = {{"step 20deg", truth::step_field(64, 64, 4, 20)},
                         {"terraces 30deg", truth::step_field(64, 64, 4, 30, 3, 12)},
-                        {"fractal", truth::procedural(ProceduralKind::fractal, 64, 64, Wrap::clamp)}};
+                        {"fractal", truth::procedural(ProceduralKind::fractal, 64, 64, Wrap::clamp)},
+                        // Thin fields: the sweep trims each line to its run across the field.
+                        {"thin 300x4", truth::rough_field(300, 4, 60, 0.7, 14)},
+                        {"thin 3x240", truth::rough_field(3, 240, 60, 0.7, 15)}};
   for (const Case& c : cases)
     for (int K : {16, 24}) {
       const Agreement a = against_exact_march(make_scene(c.field), K);

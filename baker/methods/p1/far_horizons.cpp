@@ -17,7 +17,7 @@ int wrap_index(long long a, int n) {
 }  // namespace
 
 void LinePattern::build(const HeightField& f, const SweepDirection& d) {
-  k = d.k;
+  k = d.k, u_start = d.u_start, count = d.count;
   pos.clear(), major_a.clear(), major_b.clear(), d_a.clear(), d_b.clear(), w.clear(), minor.clear();
   first.assign(std::size_t(d.count) + 1, 0);
   strip_d.assign(std::size_t(d.count), 0);
@@ -97,7 +97,7 @@ std::size_t FarHorizonWorker::scratch_bytes(int count) {
 
 const LinePattern& FarHorizonWorker::pattern(const SweepDirection& d) {
   for (LinePattern& p : patterns_)
-    if (p.k == d.k) return p;
+    if (p.k == d.k && p.u_start == d.u_start && p.count == d.count) return p;
   LinePattern& p = patterns_[next_slot_];
   next_slot_ ^= 1;
   p.build(*field, d);
@@ -145,12 +145,12 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
   const int l = line.line, nv = d.n_minor, nu = d.n_major;
   const bool rep = d.repeat;
   const int lprev = rep ? (l == 0 ? nv - 1 : l - 1) : l - 1;
-  if (last_k_ == d.k && last_line_ == lprev)
+  if (last_k_ == d.k && last_line_ == lprev && last_u_start_ == d.u_start)
     std::swap(prev_, cur_);  // the last call's line l is this one's line l - 1
   else
     profile(pat, d, lprev, prev_);
   profile(pat, d, l, cur_);
-  last_k_ = d.k, last_line_ = l;
+  last_k_ = d.k, last_line_ = l, last_u_start_ = d.u_start;
 
   const float* Z = f.z.data();
   const std::ptrdiff_t ms = d.x_major ? f.width : 1;

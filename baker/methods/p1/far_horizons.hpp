@@ -46,8 +46,9 @@ namespace hfbake::p1 {
 // (held as the array offset of that column or row: `major_*`) and its minor one, line index + d_*.
 // Repeat mode: major coordinates and the d_* are wrapped into the field ([0, n) for d_a, [0, n] for d_b).
 struct LinePattern {
-  int k = -1;               // the direction it was built for
-  std::vector<double> pos;  // steps from sample 0, increasing
+  int k = -1;                  // the direction it was built for
+  int u_start = 0, count = 0;  // ... and its line's first column and length (trimmed lines differ per line)
+  std::vector<double> pos;     // steps from sample 0, increasing
   std::vector<std::int64_t> major_a, major_b;
   std::vector<std::int32_t> d_a, d_b;
   std::vector<float> w;
@@ -82,7 +83,7 @@ struct FarHorizonWorker {
   std::vector<int> texel_r_;                         // the strip's texel at each sample: minor coordinate
   std::vector<float> col_max_, block_max_;           // skip bounds: per column, per block of kBlock bands
   static constexpr int kBlock = 8;
-  int last_k_ = -1, last_line_ = 0;  // whose profile cur_ holds after a call
+  int last_k_ = -1, last_line_ = 0, last_u_start_ = 0;  // whose profile cur_ holds after a call
   HullStackF hull_;
 
   const LinePattern& pattern(const SweepDirection& dir);
