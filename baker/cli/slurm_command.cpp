@@ -12,7 +12,6 @@
 #include "cli/scene_loader.hpp"
 #include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
-#include "cli/version.hpp"
 #include "farm/shard_file.hpp"
 #include "job/content_hash.hpp"
 
@@ -191,7 +190,7 @@ int run_slurm(const SlurmOptions& o) {
 
   std::ostringstream bake;
   bake << "#!/bin/bash\n"
-       << "# Written by hfbake " << hfbake_version() << " (hfbake slurm): one array task per (job, shard).\n"
+       << "# Written by hfbake " << shard_version() << " (hfbake slurm): one array task per (job, shard).\n"
        << "# Each task bakes one shard into <output>/shards/ (a re-run of a finished shard does nothing).\n"
        << "# Resubmit some tasks by hand: sbatch --array=2,5 " << (dir / "bake.sbatch").string() << "\n"
        << "# Argument: the stage (default 0; p2's bounce b is stage b, run after stage b - 1 of every task:\n"
@@ -219,7 +218,7 @@ int run_slurm(const SlurmOptions& o) {
 
   std::ostringstream merge;
   merge << "#!/bin/bash\n"
-        << "# Written by hfbake " << hfbake_version()
+        << "# Written by hfbake " << shard_version()
         << " (hfbake slurm): merges the shards into the outputs\n"
         << "# `hfbake bake` writes (bit-identical). It names any shard that is missing or damaged.\n"
         << "# Run it by hand after resubmitting tasks: sbatch " << (dir / "merge.sbatch").string() << "\n";
