@@ -279,6 +279,17 @@ int run_slurm(const SlurmOptions& o) {
       if (!fs::exists(p))
         std::fprintf(stderr, "hfbake: error: %s: shard %d/%d is missing (its task failed: see %s)\n",
                      p.c_str(), t.shard, o.shards, (dir / "logs").c_str());
+      // Staged entries of this shard: the first stage no task completed.
+      for (std::size_t e = 0; e < t.stages.size(); ++e) {
+        if (int(e) % o.shards != t.shard) continue;
+        for (int st = 0; st < t.stages[e]; ++st) {
+          const fs::path sp = stage_path(*load.job, int(e), st);
+          if (fs::exists(sp)) continue;
+          std::fprintf(stderr, "hfbake: error: %s: stage %d of %s is missing (its task failed: see %s)\n",
+                       sp.c_str(), st, load.job->bakes[e].stem.c_str(), (dir / "logs").c_str());
+          break;
+        }
+      }
     }
     std::fprintf(stderr, "hfbake: error: %s: the merge job %s ended with status %d (log: %s)\n",
                  (dir / "merge.sbatch").c_str(), merge_id.c_str(), status, (dir / "logs").c_str());
