@@ -44,6 +44,20 @@ int run_capture(const std::string& command, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
 }
 
+// A command's output as one line (errors are one line): line breaks become "; ", the last one dropped.
+std::string one_line(std::string text) {
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
+  std::string out;
+  for (char c : text) {
+    if (c == '\r') continue;
+    if (c == '\n')
+      out += "; ";
+    else
+      out += c;
+  }
+  return out;
+}
+
 struct Task {
   fs::path job;  // as given (the scripts run in the submission's folder: --chdir)
   fs::path out;  // the job's output folder
@@ -249,7 +263,8 @@ int run_slurm(const SlurmOptions& o) {
     cmd.append(1, ' ').append(quoted((dir / "bake.sbatch").string()));
     if (stage > 0) cmd.append(1, ' ').append(std::to_string(stage));
     cmd += " 2>&1";
-    if (run_capture(cmd, &out) != 0) return fail((dir / "bake.sbatch").string() + ": sbatch failed: " + out);
+    if (run_capture(cmd, &out) != 0)
+      return fail((dir / "bake.sbatch").string() + ": sbatch failed: " + one_line(out));
     array_id = out.substr(0, out.find_first_of(";\n"));
     if (!o.quiet)
       std::fprintf(stderr, "hfbake: submitted %zu task%s of stage %d as array job %s (%s)\n", list.size(),
@@ -265,7 +280,7 @@ int run_slurm(const SlurmOptions& o) {
   const int status = run_capture(cmd, &out);
   const std::string merge_id = out.substr(0, out.find_first_of(";\n"));
   if (!o.wait) {
-    if (status != 0) return fail((dir / "merge.sbatch").string() + ": sbatch failed: " + out);
+    if (status != 0) return fail((dir / "merge.sbatch").string() + ": sbatch failed: " + one_line(out));
     if (!o.quiet) std::fprintf(stderr, "hfbake: submitted the merge as job %s (afterok)\n", merge_id.c_str());
     return 0;
   }
