@@ -12,7 +12,6 @@
 #include "cli/scene_loader.hpp"
 #include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
-#include "cli/version.hpp"
 #include "farm/shard_file.hpp"
 #include "job/content_hash.hpp"
 
@@ -43,6 +42,20 @@ int run_capture(const std::string& command, std::string* output) {
   while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) output->append(buf, n);
   const int status = pclose(p);
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+}
+
+// A command's output as one line (errors are one line): line breaks become "; ", the last one dropped.
+std::string one_line(std::string text) {
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
+  std::string out;
+  for (char c : text) {
+    if (c == '\r') continue;
+    if (c == '\n')
+      out += "; ";
+    else
+      out += c;
+  }
+  return out;
 }
 
 struct Task {
@@ -191,7 +204,7 @@ int run_slurm(const SlurmOptions& o) {
 
   std::ostringstream bake;
   bake << "#!/bin/bash\n"
-       << "# Written by hfbake " << hfbake_version() << " (hfbake slurm): one array task per (job, shard).\n"
+       << "# Written by hfbake " << shard_version() << " (hfbake slurm): one array task per (job, shard).\n"
        << "# Each task bakes one shard into <output>/shards/ (a re-run of a finished shard does nothing).\n"
        << "# Resubmit some tasks by hand: sbatch --array=2,5 " << (dir / "bake.sbatch").string() << "\n"
        << "# Argument: the stage (default 0; p2's bounce b is stage b, run after stage b - 1 of every task:\n"
@@ -219,7 +232,7 @@ int run_slurm(const SlurmOptions& o) {
 
   std::ostringstream merge;
   merge << "#!/bin/bash\n"
-        << "# Written by hfbake " << hfbake_version()
+        << "# Written by hfbake " << shard_version()
         << " (hfbake slurm): merges the shards into the outputs\n"
         << "# `hfbake bake` writes (bit-identical). It names any shard that is missing or damaged.\n"
         << "# Run it by hand after resubmitting tasks: sbatch " << (dir / "merge.sbatch").string() << "\n";
@@ -250,7 +263,8 @@ int run_slurm(const SlurmOptions& o) {
     cmd.append(1, ' ').append(quoted((dir / "bake.sbatch").string()));
     if (stage > 0) cmd.append(1, ' ').append(std::to_string(stage));
     cmd += " 2>&1";
-    if (run_capture(cmd, &out) != 0) return fail((dir / "bake.sbatch").string() + ": sbatch failed: " + out);
+    if (run_capture(cmd, &out) != 0)
+      return fail((dir / "bake.sbatch").string() + ": sbatch failed: " + one_line(out));
     array_id = out.substr(0, out.find_first_of(";\n"));
     if (!o.quiet)
       std::fprintf(stderr, "hfbake: submitted %zu task%s of stage %d as array job %s (%s)\n", list.size(),
@@ -266,7 +280,7 @@ int run_slurm(const SlurmOptions& o) {
   const int status = run_capture(cmd, &out);
   const std::string merge_id = out.substr(0, out.find_first_of(";\n"));
   if (!o.wait) {
-    if (status != 0) return fail((dir / "merge.sbatch").string() + ": sbatch failed: " + out);
+    if (status != 0) return fail((dir / "merge.sbatch").string() + ": sbatch failed: " + one_line(out));
     if (!o.quiet) std::fprintf(stderr, "hfbake: submitted the merge as job %s (afterok)\n", merge_id.c_str());
     return 0;
   }
@@ -280,6 +294,17 @@ int run_slurm(const SlurmOptions& o) {
       if (!fs::exists(p))
         std::fprintf(stderr, "hfbake: error: %s: shard %d/%d is missing (its task failed: see %s)\n",
                      p.c_str(), t.shard, o.shards, (dir / "logs").c_str());
+      // Staged entries of this shard: the first stage no task completed.
+      for (std::size_t e = 0; e < t.stages.size(); ++e) {
+        if (int(e) % o.shards != t.shard) continue;
+        for (int st = 0; st < t.stages[e]; ++st) {
+          const fs::path sp = stage_path(*load.job, int(e), st);
+          if (fs::exists(sp)) continue;
+          std::fprintf(stderr, "hfbake: error: %s: stage %d of %s is missing (its task failed: see %s)\n",
+                       sp.c_str(), st, load.job->bakes[e].stem.c_str(), (dir / "logs").c_str());
+          break;
+        }
+      }
     }
     std::fprintf(stderr, "hfbake: error: %s: the merge job %s ended with status %d (log: %s)\n",
                  (dir / "merge.sbatch").c_str(), merge_id.c_str(), status, (dir / "logs").c_str());
