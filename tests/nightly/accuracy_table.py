@@ -47,6 +47,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--hfbake", required=True)
     ap.add_argument("--vs", help="a second binary (before): cells read 'before -> after'")
+    ap.add_argument("--vs-jobs", help="folder with the before versions of the job files (same names), for jobs"
+                    " whose keys the old binary does not know (e.g. git show OLD:jobs/... into it)")
     ap.add_argument("--out", required=True)
     ap.add_argument("--cache", help="reference cache (default OUT/cache)")
     ap.add_argument("--threads", type=int)
@@ -58,7 +60,8 @@ def main():
     for job in a.jobs:
         name = os.path.splitext(os.path.basename(job))[0]
         for label, exe in binaries:
-            reports[(name, label)] = bake(exe, job, os.path.join(a.out, label, name), cache, a.threads)
+            path = os.path.join(a.vs_jobs, os.path.basename(job)) if label == "before" and a.vs_jobs else job
+            reports[(name, label)] = bake(exe, path, os.path.join(a.out, label, name), cache, a.threads)
     names = [os.path.splitext(os.path.basename(j))[0] for j in a.jobs]
     print("excess_rmse / bias (% of the reference mean); bent normals and horizons: mean angle error"
           + ("; cells: before -> after" if a.vs else ""))
