@@ -33,21 +33,6 @@ std::string first_line(std::string s) {
 // file is shorter: a 500-byte file took 1.7 GB and 13 s to refuse (found by tests/fuzz/fuzz_environment).
 // Walks the header's attributes (name, type, int32 size, value; an empty name ends a header, multi-part
 // files have several) and refuses a size beyond the file before OpenEXR reads it. Not an EXR: nothing.
-// A name from a file, for a one-line message: control bytes as \xNN.
-std::string printable(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    const unsigned char u = static_cast<unsigned char>(c);
-    if (u >= 0x20 && u != 0x7f) {
-      out.push_back(c);
-    } else {
-      char hex[5];
-      std::snprintf(hex, sizeof hex, "\\x%02x", unsigned(u));
-      out += hex;
-    }
-  }
-  return out;
-}
 
 void check_exr_header(const fs::path& file, const InputSite& site) {
   std::ifstream in(file, std::ios::binary);

@@ -214,12 +214,12 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
   JobLoad result;
   const std::string fname = file.string();
   auto fail = [&](const std::string& where, const std::string& what) {
-    result.errors.push_back(fname + ": " + (where.empty() ? "" : where + ": ") + what);
+    result.errors.push_back(printable(fname + ": " + (where.empty() ? "" : where + ": ") + what));
   };
 
   // A numeric parameter given as a list expands into one bake entry per value (a sweep).
   SweepExpansion sweep = expand_parameter_sweeps(doc);
-  for (const std::string& e : sweep.errors) result.errors.push_back(fname + ": " + e);
+  for (const std::string& e : sweep.errors) result.errors.push_back(printable(fname + ": " + e));
   doc = std::move(sweep.doc);
   // The document against job.schema.json, and each bake entry against its method's own schema
   // (schemas/methods/<method>.schema.json: adding a method adds a schema file, not a line here or in

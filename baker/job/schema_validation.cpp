@@ -103,8 +103,8 @@ SchemaViolation rewrite(std::string pointer, std::string text) {
   static const std::regex max_re(R"(Expected number less than or equal to ([-0-9.e+]+))");
   static const std::regex xmax_re(R"(Expected number less than ([-0-9.e+]+))");
   static const std::regex unknown_re(
-      R"(Object contains a property that could not be validated using 'properties' or 'additionalProperties' constraints: '(.*)'\.?)");
-  static const std::regex missing_re(R"(Missing required property '(.*)'\.?)");
+      R"(Object contains a property that could not be validated using 'properties' or 'additionalProperties' constraints: '([\s\S]*)'\.?)");
+  static const std::regex missing_re(R"(Missing required property '([\s\S]*)'\.?)");
   static const std::regex type_re(R"(Value type not permitted by 'type' constraint\.?)");
   static const std::regex enum_re(R"(Failed to match against any enum values\.?)");
   static const std::regex min_items_re(R"(Array should contain no fewer than (\d+) elements\.?)");
