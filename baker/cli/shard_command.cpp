@@ -119,15 +119,20 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
   const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
   progress.end(job.name, "load", seconds_since(t_load));
 
+  // A step's run control (cancel flag, progress under the step's name), its progress line begun.
+  auto begin_step = [&](const std::string& step) {
+    RunControl rc;
+    rc.cancel = &cancel;
+    rc.progress = [&progress, &job, step](double f) { progress.update(job.name, step, f); };
+    progress.begin(job.name, step);
+    return rc;
+  };
   for (std::size_t t = 0; t < todo.size(); ++t) {
     if (cancel.load()) throw Cancelled();
     const int e = todo[t];
     const BakeEntry& entry = job.bakes[std::size_t(e)];
     const std::string step = entry.stem + "@stage" + std::to_string(stage);
-    RunControl rc;
-    rc.cancel = &cancel;
-    rc.progress = [&](double f) { progress.update(job.name, step, f); };
-    progress.begin(job.name, step);
+    const RunControl rc = begin_step(step);
     const auto t0 = std::chrono::steady_clock::now();
     const double cpu0 = process_cpu_seconds();
     ShardWriter writer(stage_path(job, e, stage), stage_identity(job, e, stage, size.width, size.height),
@@ -155,10 +160,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
   ShardWriter writer(path, identity, temporary_owner());
   auto run = [&](const std::string& step, ShardPart part, auto&& compute) {
     if (cancel.load()) throw Cancelled();
-    RunControl rc;
-    rc.cancel = &cancel;
-    rc.progress = [&](double f) { progress.update(job.name, step, f); };
-    progress.begin(job.name, step);
+    const RunControl rc = begin_step(step);
     const auto t0 = std::chrono::steady_clock::now();
     const double cpu0 = process_cpu_seconds();
     const LayerSet layers = compute(rc);
