@@ -475,12 +475,9 @@ LayerSet farfield_bake_block(const Scene& scene, const nlohmann::json& params, i
   Params in(params);
   const FarfieldOptions o = read_farfield_options(in);
   const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
-  LayerSet out;
-  out.width = scene.field.width, out.height = scene.field.height;
-  float* sum = out.add("sum", {"Y"}).data.data();
-  float* bent = wants(layers, "bent_normal") ? out.add("bent", {"X", "Y", "Z"}).data.data() : nullptr;
-  farfield_block_sums(scene.field, o, block, rc, sum, bent);
-  return out;
+  BlockSums out = block_sum_layers(scene.field.width, scene.field.height, wants(layers, "bent_normal"));
+  farfield_block_sums(scene.field, o, block, rc, out.sum, out.bent);
+  return std::move(out.set);
 }
 
 LayerSet farfield_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
@@ -488,9 +485,8 @@ LayerSet farfield_finish_blocks(const Scene& scene, const nlohmann::json& params
   Params in(params);
   const FarfieldOptions o = read_farfield_options(in);
   const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
-  std::vector<float> light = std::move(sums.find("sum")->data), bent;
-  if (wants(layers, "bent_normal")) bent = std::move(sums.find("bent")->data);
-  sums = LayerSet();
+  std::vector<float> light, bent;
+  take_block_sums(std::move(sums), wants(layers, "bent_normal"), &light, &bent);
   farfield_finish(scene.field, scene.normals, o, light.data(), bent.empty() ? nullptr : bent.data());
   return obscurance_layers_xyz(scene.field.width, scene.field.height, layers, std::move(light),
                                std::move(bent));

@@ -370,12 +370,9 @@ LayerSet lsao_bake_block(const Scene& scene, const nlohmann::json& params, int b
   Params in(params);
   const LsaoOptions o = read_lsao_options(in);
   const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
-  LayerSet out;
-  out.width = scene.field.width, out.height = scene.field.height;
-  float* sum = out.add("sum", {"Y"}).data.data();
-  float* bent = wants(layers, "bent_normal") ? out.add("bent", {"X", "Y", "Z"}).data.data() : nullptr;
-  lsao_block_sums(scene.field, o, block, rc, sum, bent);
-  return out;
+  BlockSums out = block_sum_layers(scene.field.width, scene.field.height, wants(layers, "bent_normal"));
+  lsao_block_sums(scene.field, o, block, rc, out.sum, out.bent);
+  return std::move(out.set);
 }
 
 LayerSet lsao_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
@@ -383,9 +380,8 @@ LayerSet lsao_finish_blocks(const Scene& scene, const nlohmann::json& params, La
   Params in(params);
   const LsaoOptions o = read_lsao_options(in);
   const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
-  std::vector<float> light = std::move(sums.find("sum")->data), bent;
-  if (wants(layers, "bent_normal")) bent = std::move(sums.find("bent")->data);
-  sums = LayerSet();
+  std::vector<float> light, bent;
+  take_block_sums(std::move(sums), wants(layers, "bent_normal"), &light, &bent);
   lsao_finish(scene.field, o, light.data(), bent.empty() ? nullptr : bent.data());
   return obscurance_layers_xyz(scene.field.width, scene.field.height, layers, std::move(light),
                                std::move(bent));

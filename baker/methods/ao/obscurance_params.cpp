@@ -49,4 +49,18 @@ LayerSet obscurance_layers_xyz(int width, int height, const std::vector<std::str
   return out;
 }
 
+BlockSums block_sum_layers(int width, int height, bool bent) {
+  BlockSums b;
+  b.set.width = width, b.set.height = height;
+  b.sum = b.set.add("sum", {"Y"}).data.data();
+  if (bent) b.bent = b.set.add("bent", {"X", "Y", "Z"}).data.data();
+  return b;
+}
+
+void take_block_sums(LayerSet&& sums, bool bent, std::vector<float>* sum, std::vector<float>* bent_xyz) {
+  *sum = std::move(sums.find("sum")->data);
+  if (bent) *bent_xyz = std::move(sums.find("bent")->data);
+  sums = LayerSet();
+}
+
 }  // namespace hfbake

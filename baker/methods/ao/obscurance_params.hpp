@@ -35,4 +35,15 @@ LayerSet obscurance_layers(int width, int height, const std::vector<std::string>
 LayerSet obscurance_layers_xyz(int width, int height, const std::vector<std::string>& layers,
                                std::vector<float> light, std::vector<float> bent_xyz);
 
+// The farm's direction-block partial sums of a float-summing method (lsao, farfield): layer "sum" (one
+// float a texel) and, when `bent`, layer "bent" (three). block_sum_layers makes them (zeroed) and hands out
+// their data; take_block_sums moves them out of a merged set (bent empty without "bent_normal").
+struct BlockSums {
+  LayerSet set;
+  float* sum = nullptr;
+  float* bent = nullptr;  // null without bent
+};
+BlockSums block_sum_layers(int width, int height, bool bent);
+void take_block_sums(LayerSet&& sums, bool bent, std::vector<float>* sum, std::vector<float>* bent_xyz);
+
 }  // namespace hfbake

@@ -716,7 +716,8 @@ MethodInfo nlp_method() {
     return nlp_working_bytes(c.field, o, c.bounces);
   };
   m.division = WorkDivision::texel_tiles;
-  m.division_note = "whole, in one shard: its pyramids span the whole field, so a tile's halo would be the whole field";
+  m.division_note =
+      "whole, in one shard: its pyramids span the whole field, so a tile's halo would be the whole field";
   return m;
 }
 
