@@ -449,7 +449,7 @@ FarfieldOptions read_farfield_options(Params& in) {
   o.sector_average = in.boolean("sector_average", true);
   o.split = in.boolean("split", true);
   o.growth = in.number("growth", 1.0, 0.125, 8.0);
-  o.triangles = in.choice("surface", "bilinear", {"bilinear", "triangles"}) == "triangles";
+  o.triangles = in.choice("surface", "triangles", {"bilinear", "triangles"}) == "triangles";
   in.layers({"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
   return o;
 }
