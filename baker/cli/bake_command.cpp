@@ -27,6 +27,7 @@
 #include "job/content_hash.hpp"
 #include "job/manifest.hpp"
 #include "reference/horizon_reference.hpp"
+#include "reference/sh_visibility_reference.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -184,8 +185,9 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     progress.end(job.name, "reference", seconds);
     std::vector<const LayerSet*> method_layers;
     for (const MethodLayers& m : report.methods) method_layers.push_back(&m.layers);
-    add_reference_horizons(scene.field, method_layers, reference,
-                           rc);  // not cached: cheap beside the tracing
+    // Not cached: cheap beside the tracing.
+    add_reference_horizons(scene.field, method_layers, reference, rc);
+    add_reference_sh_visibility(scene.field, method_layers, reference, rc);
     add_common_attributes(reference, job, job_hash, "reference", job.reference_resolved, seconds);
     stage.write_layers("reference", reference);
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};

@@ -30,6 +30,30 @@ RTCRayHit ray_from(const Vec3& o, double c, double s, double e) {
 
 }  // namespace
 
+TexelHorizon bisect_horizon(const reference::EmbreeField& geometry, const Vec3& o, double c, double s,
+                            int iterations) {
+  // lo: an occluded elevation (straight down always is), hi: a free one (straight up).
+  double lo = -kPi / 2, hi = kPi / 2, lo_distance = 0;
+  RTCIntersectContext context;
+  for (int it = 0; it < iterations; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    RTCRayHit h = ray_from(o, c, s, mid);
+    rtcInitIntersectContext(&context);
+    rtcIntersect1(geometry.scene(), &context, &h);
+    if (h.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+      lo = mid;
+      lo_distance = h.ray.tfar;
+    } else {
+      hi = mid;
+    }
+  }
+  return {lo, lo_distance};
+}
+
+double horizon_receiver_lift(const HeightField& f, const reference::EmbreeField& geometry) {
+  return std::max(1e-5 * f.texel_size, geometry.float_floor());
+}
+
 ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool distance, const RunControl& rc,
                                            int iterations) {
   ReferenceHorizons out;
@@ -40,30 +64,16 @@ ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool dis
   const reference::EmbreeField geometry(f, reference::GeometryKind::grid, 1);
   std::vector<double> cos_phi, sin_phi;
   azimuth_table(K, cos_phi, sin_phi);
-  const double lift = std::max(1e-5 * f.texel_size, geometry.float_floor());
+  const double lift = horizon_receiver_lift(f, geometry);
   tbb::parallel_for(0, f.height, [&](int j) {
     rc.check();
-    RTCIntersectContext context;
     for (int i = 0; i < f.width; ++i) {
       const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
       const std::size_t t = f.index(i, j);
       for (int k = 0; k < K; ++k) {
-        // lo: an occluded elevation (straight down always is), hi: a free one (straight up).
-        double lo = -kPi / 2, hi = kPi / 2, lo_distance = 0;
-        for (int it = 0; it < iterations; ++it) {
-          const double mid = 0.5 * (lo + hi);
-          RTCRayHit h = ray_from(o, cos_phi[k], sin_phi[k], mid);
-          rtcInitIntersectContext(&context);
-          rtcIntersect1(geometry.scene(), &context, &h);
-          if (h.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-            lo = mid;
-            lo_distance = h.ray.tfar;
-          } else {
-            hi = mid;
-          }
-        }
-        out.sin_elevation[t * K + k] = float(std::sin(lo));
-        if (distance) out.distance[t * K + k] = float(lo_distance);
+        const TexelHorizon h = bisect_horizon(geometry, o, cos_phi[k], sin_phi[k], iterations);
+        out.sin_elevation[t * K + k] = float(std::sin(h.elevation));
+        if (distance) out.distance[t * K + k] = float(h.distance);
       }
     }
   });

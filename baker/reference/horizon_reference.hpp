@@ -25,6 +25,20 @@ struct ReferenceHorizons {
   std::vector<float> distance;       // [texel * K + k], world units (empty unless asked for)
 };
 
+namespace reference {
+class EmbreeField;
+}
+
+// One receiver's horizon along the azimuth (c, s) (a unit vector in the xy-plane): the elevation in radians
+// after `iterations` halvings of [-pi/2, pi/2], and the distance to the hit of the highest occluded ray.
+struct TexelHorizon {
+  double elevation = 0, distance = 0;
+};
+TexelHorizon bisect_horizon(const reference::EmbreeField& geometry, const Vec3& receiver, double c, double s,
+                            int iterations);
+// The lift of a horizon receiver above its texel centre: max(1e-5 texel, the geometry's float floor).
+double horizon_receiver_lift(const HeightField& field, const reference::EmbreeField& geometry);
+
 ReferenceHorizons trace_reference_horizons(const HeightField& field, int K, bool distance,
                                            const RunControl& rc, int iterations = 40);
 

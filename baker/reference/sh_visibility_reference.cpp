@@ -1,0 +1,93 @@
+#include "reference/sh_visibility_reference.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+#include "core/azimuth.hpp"
+#include "reference/embree_field.hpp"
+#include "reference/horizon_reference.hpp"
+#include "reference/sh_environment.hpp"
+
+namespace hfbake {
+namespace {
+
+constexpr int kNodes = 10;
+
+// Gauss-Legendre nodes and weights on [-1, 1]: Newton's method on P_n from Chebyshev starting points.
+struct GaussLegendre {
+  std::array<double, kNodes> x{}, w{};
+  GaussLegendre() {
+    for (int i = 0; i < kNodes; ++i) {
+      double t = std::cos(kPi * (i + 0.75) / (kNodes + 0.5)), dp = 1;
+      for (int it = 0; it < 100; ++it) {
+        double p0 = 1, p1 = t;
+        for (int n = 2; n <= kNodes; ++n) {
+          const double p2 = ((2 * n - 1) * t * p1 - (n - 1) * p0) / n;
+          p0 = p1, p1 = p2;
+        }
+        dp = kNodes * (t * p1 - p0) / (t * t - 1);
+        const double step = p1 / dp;
+        t -= step;
+        if (std::abs(step) < 1e-16) break;
+      }
+      x[i] = t, w[i] = 2 / ((1 - t * t) * dp * dp);
+    }
+  }
+};
+
+}  // namespace
+
+std::array<double, 16> sh_visibility_of_horizons(const std::vector<double>& elevation) {
+  static const GaussLegendre gl;
+  const int K = int(elevation.size());
+  std::vector<double> cos_phi, sin_phi;
+  azimuth_table(K, cos_phi, sin_phi);
+  std::array<double, 16> c{};
+  const double dphi = 2 * kPi / K;
+  for (int k = 0; k < K; ++k) {
+    const double a = elevation[k], b = kPi / 2, half = 0.5 * (b - a), mid = 0.5 * (a + b);
+    for (int n = 0; n < kNodes; ++n) {
+      const double e = mid + half * gl.x[n], ce = std::cos(e);
+      const auto y = reference::sh_basis(Vec3{ce * cos_phi[k], ce * sin_phi[k], std::sin(e)});
+      const double wgt = dphi * half * gl.w[n] * ce;
+      for (int i = 0; i < 16; ++i) c[i] += wgt * y[i];
+    }
+  }
+  return c;
+}
+
+std::vector<float> trace_reference_sh_visibility(const HeightField& f, int azimuths, const RunControl& rc,
+                                                 int iterations) {
+  std::vector<float> out(f.texel_count() * 16);
+  const reference::EmbreeField geometry(f, reference::GeometryKind::grid, 1);
+  std::vector<double> cos_phi, sin_phi;
+  azimuth_table(azimuths, cos_phi, sin_phi);
+  const double lift = horizon_receiver_lift(f, geometry);
+  tbb::parallel_for(0, f.height, [&](int j) {
+    rc.check();
+    std::vector<double> elevation(azimuths);
+    for (int i = 0; i < f.width; ++i) {
+      const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
+      for (int k = 0; k < azimuths; ++k)
+        elevation[k] = bisect_horizon(geometry, o, cos_phi[k], sin_phi[k], iterations).elevation;
+      const std::array<double, 16> c = sh_visibility_of_horizons(elevation);
+      float* dst = out.data() + f.index(i, j) * 16;
+      for (int n = 0; n < 16; ++n) dst[n] = float(c[n]);
+    }
+  });
+  return out;
+}
+
+void add_reference_sh_visibility(const HeightField& field, const std::vector<const LayerSet*>& methods,
+                                 LayerSet& reference, const RunControl& rc, int azimuths) {
+  if (reference.find("sh_visibility")) return;
+  const Layer* sh = nullptr;
+  for (const LayerSet* m : methods)
+    if (!sh) sh = m->find("sh_visibility");
+  if (!sh || sh->channel_count() != 16) return;
+  reference.layers.push_back(
+      {"sh_visibility", sh->channels, trace_reference_sh_visibility(field, azimuths, rc)});
+}
+
+}  // namespace hfbake
