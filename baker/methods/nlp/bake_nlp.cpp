@@ -56,6 +56,7 @@ NlpOptions read_nlp_options(Params& in) {
   o.visibility_horizon_knots = in.choice("visibility_horizon", "bspline", {"bspline", "knots"}) == "knots";
   o.subsample = in.integer("subsample", o.subsample, 1, 2);
   o.exact_indirect_cosine = in.choice("indirect_cosine", "sh", {"sh", "exact"}) == "exact";
+  o.exact_direct_cosine = in.choice("direct_cosine", "sh", {"sh", "exact"}) == "exact";
   o.near_spacing = in.number("near_spacing", o.near_spacing, 0, 64);
   o.facet_senders = in.choice("senders", "texels", {"facets", "texels"}) == "facets";
   nlp::parse_azimuth_interpolation(in.choice("azimuth_interpolation", "linear", {"linear", "bspline"}),
@@ -89,17 +90,19 @@ struct LightSetup {
 
 // Per-thread buffers: one row of receivers (heights per level, per-receiver outputs) and one march.
 struct Scratch {
-  std::vector<float> recv, omega, dist, curve, row;
-  std::vector<int> lev;
+  std::vector<float> recv;  // [l * width + t]: receiver t's height in level l
+  std::vector<float> omega, dist, curve, row, wmax;
   std::vector<Vec3f> nrm;  // the row's receivers' normals (normal_at)
+  nlp::RowMarch rm;        // one azimuth's march of the row
   explicit Scratch(int levels, int steps, int width, int row_floats)
       : recv(std::size_t(levels) * width),
         omega(steps + 1),
         dist(steps + 1),
         curve(2 * steps + 2),
         row(std::size_t(row_floats) * width),
-        lev(steps + 1),
-        nrm(std::size_t(width)) {}
+        wmax(std::size_t(width)),
+        nrm(std::size_t(width)),
+        rm(steps, width) {}
 };
 
 nlp::MarchSetup with_near_spacing(nlp::MarchSetup s, double spacing) {
@@ -126,19 +129,20 @@ class NlpBake {
   // --- inputs ---
   static std::vector<LightSetup> setup_lights(const Scene& scene, const NlpOptions& o);
   void setup_environment();
+  void setup_environment_wedges();
+  void env_above(int a, float e, float nh, float nz, float* out) const;
 
   // --- kernels ---
   void receivers(Scratch& s, const int* xs, int cnt, int j) const;
-  float omega_max(Scratch& s, const float* recv, int i, int j, float cx, float cy, const Vec3f& n,
-                  bool light = false) const;
-  void light_visibility(Scratch& s, const float* recv, int i, int j, const Vec3f& n, float* frac) const;
-  void visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const;
+  void horizons(Scratch& s, const int* xs, int cnt, int j, float cx, float cy, bool light) const;
+  void light_visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const;
+  void visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride, bool exact_env) const;
   void facet_radiance(float x, float y, float* out) const;
   void radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cnt_row, int j, float* Uout,
                 float* Eout) const;
 
   // --- shading ---
-  void shade_direct(int i, int j, const float* V, const float* frac);
+  void shade_direct(int i, int j, const float* V, const float* frac, const float* E);
   void direct_facets(int i, int j, const float (&lin)[3][9], const float* frac);
   // add: this_bounce[idx] += the texel's indirect light (the last bounce adds straight into `indirect`);
   // else this_bounce[idx] = it.
@@ -162,6 +166,12 @@ class NlpBake {
   std::vector<float> cphi, sphi;
   // Environment in SH and its product matrices (rows k < 9 suffice: the cosine has no band 3).
   float T[3][9][kSh];
+  // direct_cosine exact: per azimuth a, the environment's mean radiance over the wedge of a, per lat-long
+  // row r (env_rad[(a * env_rows + r) * 3 + c]), and its integrals from the zenith down to row r's upper
+  // edge, of L cos^2 e (env_cum[(a * (env_rows + 1) + r) * 6 + c]) and of L sin e cos e (+ 3 + c); env_edge:
+  // the row edges' F(e) = ((e + sin e cos e) / 2, sin^2 e / 2).
+  int env_rows = 0;
+  std::vector<float> env_rad, env_cum, env_edge;
   const std::vector<LightSetup> lights;
   const std::size_t nl;
   const bool want_vis, want_irr;
@@ -212,7 +222,7 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       ch((H + sub - 1) / sub + (sub > 1 && (H - 1) % sub ? 1 : 0)),
       // Row buffers: V and the lights' visibility (kSh + lights), or U and the exact-cosine E (3 kSh + 3).
       scratch([lv = lv, steps = steps, W = W,
-               row_floats = std::max(kSh + int(scene.lights.size()), 3 * kSh + 3)] {
+               row_floats = std::max(kSh + int(scene.lights.size()) + 3, 3 * kSh + 3)] {
         return Scratch(lv, steps, W, row_floats);
       }),
       units(double(H) * (1 + std::max(0, scene.bounces))),
@@ -222,6 +232,7 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       irr(want_irr ? N * kIrrChannels : 0) {
   azimuth_table(m, cphi, sphi);
   setup_environment();
+  if (o.exact_direct_cosine) setup_environment_wedges();
   xs_full.resize(W);
   xs_coarse.resize(cw);
   for (int i = 0; i < W; ++i) xs_full[i] = i;
@@ -236,6 +247,55 @@ void NlpBake::setup_environment() {
     for (int k = 0; k < 9; ++k)
       for (int j = 0; j < kSh; ++j) T[c][k][j] = float(pm[k][j]);
   }
+}
+
+void NlpBake::setup_environment_wedges() {
+  const Environment& env = scene.environment;
+  std::vector<std::vector<Rgb>> prof(static_cast<std::size_t>(m));
+  for (int a = 0; a < m; ++a) {
+    const double phi = azimuth(a, m);
+    prof[std::size_t(a)] = azimuth_wedge_profile(env, phi - kPi / m, phi + kPi / m);
+    if (prof[std::size_t(a)].empty()) prof[std::size_t(a)].assign(1, env.uniform_radiance);
+  }
+  env_rows = int(prof[0].size());
+  const int h = env_rows;
+  std::vector<double> F1(std::size_t(h) + 1), F2(std::size_t(h) + 1);
+  env_edge.resize(2 * (std::size_t(h) + 1));
+  for (int r = 0; r <= h; ++r) {
+    const double e = kPi / 2 - kPi * r / h, se = std::sin(e), ce = std::cos(e);
+    F1[r] = 0.5 * (e + se * ce), F2[r] = 0.5 * se * se;
+    env_edge[2 * r] = float(F1[r]), env_edge[2 * r + 1] = float(F2[r]);
+  }
+  env_rad.resize(std::size_t(m) * h * 3);
+  env_cum.resize(std::size_t(m) * (h + 1) * 6);
+  for (int a = 0; a < m; ++a) {
+    double c1[3] = {}, c2[3] = {};
+    for (int r = 0; r <= h; ++r) {
+      float* C = &env_cum[(std::size_t(a) * (h + 1) + r) * 6];
+      for (int c = 0; c < 3; ++c) C[c] = float(c1[c]), C[3 + c] = float(c2[c]);
+      if (r == h) break;
+      const Rgb L = prof[std::size_t(a)][std::size_t(r)];
+      const double l[3] = {L.r, L.g, L.b};
+      for (int c = 0; c < 3; ++c) {
+        env_rad[(std::size_t(a) * h + r) * 3 + c] = float(l[c]);
+        c1[c] += l[c] * (F1[r] - F1[r + 1]);
+        c2[c] += l[c] * (F2[r] - F2[r + 1]);
+      }
+    }
+  }
+}
+
+// direct_cosine exact: adds to out (RGB) the integral over azimuth a's elevations above e of the wedge's
+// radiance times (nh cos e + nz sin e) cos e, nh = n . azimuth, nz = n_z (e at or above omega_min).
+void NlpBake::env_above(int a, float e, float nh, float nz, float* out) const {
+  const int h = env_rows;
+  int r = int((0.5f - e * float(1 / kPi)) * float(h));
+  r = r < 0 ? 0 : (r > h - 1 ? h - 1 : r);
+  const float se = std::sin(e), ce = std::cos(e);
+  const float d1 = env_edge[2 * r] - 0.5f * (e + se * ce), d2 = env_edge[2 * r + 1] - 0.5f * se * se;
+  const float* C = &env_cum[(std::size_t(a) * (h + 1) + r) * 6];
+  const float* L = &env_rad[(std::size_t(a) * h + r) * 3];
+  for (int c = 0; c < 3; ++c) out[c] += nh * (C[c] + L[c] * d1) + nz * (C[3 + c] + L[c] * d2);
 }
 
 std::vector<LightSetup> NlpBake::setup_lights(const Scene& scene, const NlpOptions& o) {
@@ -265,72 +325,93 @@ std::vector<LightSetup> NlpBake::setup_lights(const Scene& scene, const NlpOptio
 // normals (recomputed from the heights: normal_at, the values compute_normals gives).
 void NlpBake::receivers(Scratch& s, const int* xs, int cnt, int j) const {
   for (int t = 0; t < cnt; ++t) s.nrm[std::size_t(t)] = normal_at(f, xs[t], j);
+  for (int l = 0; l < lv; ++l)
+    for (int t = 0; t < cnt; ++t)
+      s.recv[std::size_t(l) * W + t] = nlp::sample_level1(hp, hp.levels[l], float(xs[t]), float(j));
+}
+
+// The horizon omega_max of every receiver of the row along (cx, cy) into s.wmax (lights: their march
+// setup and horizon rule): the knots' or the B-spline curve's maximum, omega_min where the ray leaves the
+// field at once.
+void NlpBake::horizons(Scratch& s, const int* xs, int cnt, int j, float cx, float cy, bool light) const {
+  nlp::RowMarch& rm = s.rm;
+  nlp::march_row(light ? ms_light : ms, hp, xs, cnt, xs == xs_full.data(), j, cx, cy, s.recv.data(), W, rm);
+  if (light ? o.light_horizon_knots : o.visibility_horizon_knots) {
+    nlp::row_knot_max(rm, cnt, s.wmax.data());
+  } else {
+    nlp::row_angles(rm, cnt);
+    for (int t = 0; t < cnt; ++t) {
+      const int n = rm.n[t];
+      for (int k = 0; k < n; ++k) s.omega[k] = rm.omega[std::size_t(k) * rm.stride + t];
+      s.wmax[t] = n > 0 ? nlp::bspline_max(s.omega.data(), n) : 0.0f;
+    }
+  }
   for (int t = 0; t < cnt; ++t)
-    for (int l = 0; l < lv; ++l)
-      s.recv[std::size_t(t) * lv + l] = nlp::sample_level1(hp, hp.levels[l], float(xs[t]), float(j));
+    if (rm.n[t] == 0) {
+      const Vec3f& n = s.nrm[std::size_t(t)];
+      s.wmax[t] = nlp::omega_min(n.x, n.y, n.z, cx, cy);
+    }
 }
 
-float NlpBake::omega_max(Scratch& s, const float* recv, int i, int j, float cx, float cy, const Vec3f& n,
-                         bool light) const {
-  const int cnt =
-      nlp::march(light ? ms_light : ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
-  if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
-  if (light ? o.light_horizon_knots : o.visibility_horizon_knots)
-    return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
-  return nlp::bspline_max(s.omega.data(), cnt);
-}
-
-// The restricted-extent visibility of each light at receiver (i, j) (NS09 §6).
-void NlpBake::light_visibility(Scratch& s, const float* recv, int i, int j, const Vec3f& n,
-                               float* frac) const {
+// The restricted-extent visibility of each light at the row's receivers (NS09 §6): out[t * stride + q].
+void NlpBake::light_visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const {
   for (std::size_t q = 0; q < nl; ++q) {
     const LightSetup& L = lights[q];
-    float fr = 0;
+    for (int t = 0; t < cnt; ++t) out[std::size_t(t) * stride + q] = 0;
     for (std::size_t k = 0; k < L.cx.size(); ++k) {
-      const float wmax = omega_max(s, recv, i, j, L.cx[k], L.cy[k], n, true);
-      if (L.radius > 0) {
-        const float lo = std::max(L.elevation - L.radius, -1.5707963f);
-        const float hi = std::min(L.elevation + L.radius, 1.5707963f);
-        const float slo = std::sin(std::max(wmax, lo)), shi = std::sin(hi);
-        fr += std::clamp((shi - slo) / (shi - std::sin(lo)), 0.0f, 1.0f);
-      } else {
-        fr += wmax < L.elevation ? 1.0f : 0.0f;
+      horizons(s, xs, cnt, j, L.cx[k], L.cy[k], true);
+      for (int t = 0; t < cnt; ++t) {
+        const float wmax = s.wmax[t];
+        float& fr = out[std::size_t(t) * stride + q];
+        if (L.radius > 0) {
+          const float lo = std::max(L.elevation - L.radius, -1.5707963f);
+          const float hi = std::min(L.elevation + L.radius, 1.5707963f);
+          const float slo = std::sin(std::max(wmax, lo)), shi = std::sin(hi);
+          fr += std::clamp((shi - slo) / (shi - std::sin(lo)), 0.0f, 1.0f);
+        } else {
+          fr += wmax < L.elevation ? 1.0f : 0.0f;
+        }
       }
     }
-    frac[q] = fr / float(L.cx.size());
+    for (int t = 0; t < cnt; ++t) out[std::size_t(t) * stride + q] /= float(L.cx.size());
   }
 }
 
 // Kernel: V (Eq. 11, 20-21) and the lights' visibility for the row of receivers (xs[t], j), t < cnt:
-// out[t * stride] = V (kSh floats), then the lights' fractions. Azimuth-major over the row (neighbouring
-// receivers march the same direction through the same cache lines); each receiver still sums its azimuths
-// in order, so the bits do not depend on the loop order.
-void NlpBake::visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const {
+// out[t * stride] = V (kSh floats), then the lights' fractions (then, exact_env, the environment light).
+// Azimuth-major over the row (one row march per azimuth); each receiver still sums its azimuths in order, so
+// the bits do not depend on the loop order or the thread.
+void NlpBake::visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride,
+                         bool exact_env) const {
   receivers(s, xs, cnt, j);
-  for (int t = 0; t < cnt; ++t)
+  const int eoff = kSh + int(nl);  // exact_env: the environment light (3 floats) after the lights' fractions
+  for (int t = 0; t < cnt; ++t) {
     std::fill(out + std::size_t(t) * stride, out + std::size_t(t) * stride + kSh, 0.0f);
+    if (exact_env)
+      std::fill(out + std::size_t(t) * stride + eoff, out + std::size_t(t) * stride + eoff + 3, 0.0f);
+  }
   for (int a = 0; a < m; ++a) {
     const float* Aj = A[a].data();
+    horizons(s, xs, cnt, j, cphi[a], sphi[a], false);
     for (int t = 0; t < cnt; ++t) {
-      const int i = xs[t];
-      const float wmax =
-          omega_max(s, s.recv.data() + std::size_t(t) * lv, i, j, cphi[a], sphi[a], s.nrm[std::size_t(t)]);
+      const float wmax = s.wmax[t];
       float v[4];
       nlp::band4(std::sin(wmax), 1.0f, v);
       float* V = out + std::size_t(t) * stride;
       for (int r = 0; r < kSh; ++r)
         V[r] += Aj[r * 4] * v[0] + Aj[r * 4 + 1] * v[1] + Aj[r * 4 + 2] * v[2] + Aj[r * 4 + 3] * v[3];
+      if (exact_env) {
+        const Vec3f& n = s.nrm[std::size_t(t)];
+        const float wmin = nlp::omega_min(n.x, n.y, n.z, cphi[a], sphi[a]);
+        env_above(a, std::max(wmax, wmin), n.x * cphi[a] + n.y * sphi[a], n.z, V + eoff);
+      }
     }
   }
-  for (int t = 0; t < cnt; ++t) {
-    const int i = xs[t];
-    light_visibility(s, s.recv.data() + std::size_t(t) * lv, i, j, s.nrm[std::size_t(t)],
-                     out + std::size_t(t) * stride + kSh);
-  }
+  light_visibility(s, xs, cnt, j, out + kSh, stride);
 }
 
 // Shading of direct light at texel idx from V and the lights' visibility.
-void NlpBake::shade_direct(int i, int j, const float* V, const float* frac) {
+void NlpBake::shade_direct(int i, int j, const float* V, const float* frac, const float* E) {
   const std::size_t idx = f.index(i, j);
   const Vec3f n = normal_at(f, i, j);
   float y[kSh];
@@ -344,6 +425,10 @@ void NlpBake::shade_direct(int i, int j, const float* V, const float* frac) {
       e[c] += kConv[k] * y[k] * acc;
     }
   Rgb d{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+  if (E) {
+    const float w = float(2 / double(m));  // (2 pi / m) / pi
+    d = Rgb{E[0] * w, E[1] * w, E[2] * w};
+  }
   float irr_local[27];
   for (int k = 0; k < 9; ++k)
     for (int c = 0; c < 3; ++c) irr_local[k * 3 + c] = kConv[k] * lin[c][k] * kInvPi;
@@ -416,11 +501,12 @@ void NlpBake::direct_pass() {
     tbb::parallel_for(0, H, [&](int j) {
       rc.check();
       Scratch& s = scratch.local();
-      const int stride = kSh + int(nl);
-      visibility(s, xs_full.data(), W, j, s.row.data(), stride);
+      const bool exact = o.exact_direct_cosine;
+      const int stride = kSh + int(nl) + (exact ? 3 : 0);
+      visibility(s, xs_full.data(), W, j, s.row.data(), stride, exact);
       for (int i = 0; i < W; ++i) {
         const float* V = s.row.data() + std::size_t(i) * stride;
-        shade_direct(i, j, V, V + kSh);
+        shade_direct(i, j, V, V + kSh, exact ? V + kSh + nl : nullptr);
       }
       report_rows(1);
     });
@@ -430,15 +516,15 @@ void NlpBake::direct_pass() {
     tbb::parallel_for(0, ch, [&](int cj) {
       rc.check();
       Scratch& s = scratch.local();
-      visibility(s, xs_coarse.data(), cw, coarse_j(cj), coarse.data() + std::size_t(cj) * cw * stride,
-                 stride);
+      visibility(s, xs_coarse.data(), cw, coarse_j(cj), coarse.data() + std::size_t(cj) * cw * stride, stride,
+                 false);
       report_rows(sub);
     });
     tbb::parallel_for(0, H, [&](int j) {
       std::vector<float> buf(stride);
       for (int i = 0; i < W; ++i) {
         upsample(coarse, stride, i, j, buf.data());
-        shade_direct(i, j, buf.data(), buf.data() + kSh);
+        shade_direct(i, j, buf.data(), buf.data() + kSh, nullptr);
       }
     });
   }
@@ -472,11 +558,13 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
   const bool facets = !facet_exit.empty();
   std::fill(Uout, Uout + std::size_t(cnt_row) * 3 * kSh, 0.0f);
   if (Eout) std::fill(Eout, Eout + std::size_t(cnt_row) * 3, 0.0f);
-  for (int a = 0; a < m; ++a)
+  nlp::RowMarch& rm = s.rm;
+  for (int a = 0; a < m; ++a) {
+    nlp::march_row(ms, hp, xs, cnt_row, xs == xs_full.data(), j, cphi[a], sphi[a], s.recv.data(), W, rm);
+    nlp::row_angles(rm, cnt_row);
     for (int t = 0; t < cnt_row; ++t) {
       const int i = xs[t];
       const Vec3f n = s.nrm[std::size_t(t)];
-      const float* recv = s.recv.data() + std::size_t(t) * lv;
       float* U = Uout + std::size_t(t) * 3 * kSh;
       float* E = Eout ? Eout + std::size_t(t) * 3 : nullptr;
       const float cx = cphi[a], cy = sphi[a];
@@ -487,7 +575,11 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
         return 0.5f * (nh * (e + se * ce) + nz * se * se);
       };
       float prevF = E ? F(wmin, std::sin(wmin)) : 0.0f;
-      const int cnt = nlp::march(ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
+      const int cnt = rm.n[t];
+      for (int k = 0; k < cnt; ++k) {
+        s.omega[k] = rm.omega[std::size_t(k) * rm.stride + t];
+        s.dist[k] = rm.dist(ms, k, t);
+      }
       const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
       float u[3][4] = {}, prev[4];
       nlp::occlusion4(std::sin(wmin), prev);
@@ -501,7 +593,7 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
         if (!(s.curve[p] > run)) continue;
         run = s.curve[p];
         float rad[3];
-        const int rl = ms.rlevel[s.lev[k]];
+        const int rl = ms.rlevel[k];
         const nlp::PyramidLevel& L = rp.levels[rl];
         if (facets) {
           // The stretch this step reveals lies between the previous curve point and this one: it radiates
@@ -537,6 +629,7 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
           U[c * kSh + r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
                             Aj[r * 4 + 3] * u[c][3];
     }
+  }
 }
 
 void NlpBake::shade_indirect(std::vector<Rgb>& this_bounce, bool add, int i, int j, const float* U,

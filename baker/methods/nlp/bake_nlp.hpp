@@ -35,6 +35,12 @@ struct NlpOptions {
   // the texel normal; false = NS09 §7, U dotted with the order-3 clamped-cosine lobe (it over-weights grazing
   // radiance). subsample 2 always uses U. sh_irradiance is U's either way.
   bool exact_indirect_cosine = false;
+  // The direct layer's environment light: true = per azimuth, the environment's radiance over that azimuth's
+  // wedge integrated above the horizon with the exact cosine about the texel normal (as P1's lighting
+  // tables); false = NS09, the SH product of the environment with V dotted with the order-3 clamped-cosine
+  // lobe (order-4 truncation: -0.5 to -0.7 % on smooth ground). subsample 2 always uses the SH form;
+  // sh_visibility, sh_irradiance and the facet senders' light are the SH form either way.
+  bool exact_direct_cosine = false;
   // Senders of indirect light: true = every texel's two facets of the triangulated surface radiate the
   // light of their own normals, and the stretch a casting-set step reveals radiates from its middle, its
   // facet's light (issue 19: on terraces a cliff face radiated the bright treads at its ends); false
