@@ -88,12 +88,61 @@ struct LightSetup {
   float sh[9];                // a_l Y_k(dir) / pi: the light's contribution to sh_irradiance per unit
 };
 
+// The radiance kernel's per-receiver state along one azimuth (RowMarch order: receiver t of the row).
+struct RadianceRow {
+  std::vector<float> run, prevF, nh, cur, prev, u;  // prev: 4 a receiver, u: 3 x 4
+  std::vector<float> lim;                           // 2 n - 1: the receiver's curve points
+  std::vector<float> hit;                           // 1: this point is in the receiver's casting set
+  std::vector<unsigned char> any;
+  explicit RadianceRow(int width)
+      : run(std::size_t(width)),
+        prevF(std::size_t(width)),
+        nh(std::size_t(width)),
+        cur(std::size_t(width)),
+        prev(4 * std::size_t(width)),
+        u(12 * std::size_t(width)),
+        lim(std::size_t(width)),
+        hit(std::size_t(width)),
+        any(std::size_t(width)) {}
+};
+
+// Curve point p (knots k-1..k+2 of every receiver in w0..w3; even p: knot k, odd: between k and k + 1) for
+// a row of receivers: cur[t] = its value, and where it is one of the receiver's curve points (p < lim[t])
+// above the running maximum run[t], run[t] = it and hit[t] = 1 (else 0). Returns whether any receiver hit.
+int curve_point(int cnt, int p, const float* __restrict w0, const float* __restrict w1,
+                const float* __restrict w2, const float* __restrict w3, const float* __restrict lim,
+                float* __restrict cur, float* __restrict run, float* __restrict hit) {
+  const float fp = float(p);
+  int hits = 0;
+  if (p & 1) {
+    for (int t = 0; t < cnt; ++t) {
+      const float c = (w0[t] + 23 * w1[t] + 23 * w2[t] + w3[t]) * (1.0f / 48), r = run[t];
+      const bool h = (fp < lim[t]) & (c > r);
+      run[t] = h ? c : r;
+      cur[t] = c;
+      hit[t] = h ? 1.0f : 0.0f;
+      hits |= int(h);
+    }
+  } else {
+    for (int t = 0; t < cnt; ++t) {
+      const float c = (w0[t] + 4 * w1[t] + w2[t]) * (1.0f / 6), r = run[t];
+      const bool h = (fp < lim[t]) & (c > r);
+      run[t] = h ? c : r;
+      cur[t] = c;
+      hit[t] = h ? 1.0f : 0.0f;
+      hits |= int(h);
+    }
+  }
+  return hits;
+}
+
 // Per-thread buffers: one row of receivers (heights per level, per-receiver outputs) and one march.
 struct Scratch {
   std::vector<float> recv;  // [l * width + t]: receiver t's height in level l
   std::vector<float> omega, dist, curve, row, wmax;
   std::vector<Vec3f> nrm;  // the row's receivers' normals (normal_at)
   nlp::RowMarch rm;        // one azimuth's march of the row
+  RadianceRow rad;
   explicit Scratch(int levels, int steps, int width, int row_floats)
       : recv(std::size_t(levels) * width),
         omega(steps + 1),
@@ -102,7 +151,8 @@ struct Scratch {
         row(std::size_t(row_floats) * width),
         wmax(std::size_t(width)),
         nrm(std::size_t(width)),
-        rm(steps, width) {}
+        rm(steps, width),
+        rad(width) {}
 };
 
 nlp::MarchSetup with_near_spacing(nlp::MarchSetup s, double spacing) {
@@ -551,54 +601,71 @@ void NlpBake::facet_radiance(float x, float y, float* out) const {
 // E (optional, 3 floats): the irradiance / (2 pi / m) of the same casting-set segments with the exact
 // cosine: segment (e0, e1] of radiance r adds r * (F(e1) - F(e0)), F(e) = n_h (e + sin e cos e) / 2 +
 // n_z sin^2 e / 2, the integral of (n_h cos e + n_z sin e) cos e (n_h = n . azimuth).
-// Row form as visibility: receivers (xs[t], j), U at out[t * 3 kSh], E (if exact) at Eout[t * 3].
+// Row form as visibility: receivers (xs[t], j), U at out[t * 3 kSh], E (if exact) at Eout[t * 3]. Only U's
+// bands l < 3 are computed (shading and sh_irradiance read no more; band 3 stays 0), and none when E is
+// wanted and sh_irradiance is not.
+// Per azimuth, the B-spline curve of the whole row's knots is evaluated point by point (knot-major, every
+// receiver at once; knots past a receiver's last repeat it, which is bspline_curve's end rule), and each
+// receiver's running maximum picks its casting set; only the casting-set points do per-receiver work. Each
+// receiver sums its points and azimuths in order: the bits do not depend on the row or the thread.
 void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cnt_row, int j, float* Uout,
                        float* Eout) const {
   receivers(s, xs, cnt_row, j);
   const bool facets = !facet_exit.empty();
+  const int nU = Eout && !want_irr ? 0 : 9;
   std::fill(Uout, Uout + std::size_t(cnt_row) * 3 * kSh, 0.0f);
   if (Eout) std::fill(Eout, Eout + std::size_t(cnt_row) * 3, 0.0f);
   nlp::RowMarch& rm = s.rm;
+  RadianceRow& q = s.rad;
+  const std::size_t st = std::size_t(rm.stride);
   for (int a = 0; a < m; ++a) {
-    nlp::march_row(ms, hp, xs, cnt_row, xs == xs_full.data(), j, cphi[a], sphi[a], s.recv.data(), W, rm);
+    const float cx = cphi[a], cy = sphi[a];
+    nlp::march_row(ms, hp, xs, cnt_row, xs == xs_full.data(), j, cx, cy, s.recv.data(), W, rm);
     nlp::row_angles(rm, cnt_row);
-    for (int t = 0; t < cnt_row; ++t) {
-      const int i = xs[t];
-      const Vec3f n = s.nrm[std::size_t(t)];
-      float* U = Uout + std::size_t(t) * 3 * kSh;
-      float* E = Eout ? Eout + std::size_t(t) * 3 : nullptr;
-      const float cx = cphi[a], cy = sphi[a];
-      const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
-      const float nh = n.x * cx + n.y * cy, nz = n.z;
-      auto F = [&](float e, float se) {
-        const float ce = std::sqrt(std::max(0.0f, 1 - se * se));
-        return 0.5f * (nh * (e + se * ce) + nz * se * se);
-      };
-      float prevF = E ? F(wmin, std::sin(wmin)) : 0.0f;
-      const int cnt = rm.n[t];
-      for (int k = 0; k < cnt; ++k) {
-        s.omega[k] = rm.omega[std::size_t(k) * rm.stride + t];
-        s.dist[k] = rm.dist(ms, k, t);
-      }
-      const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
-      float u[3][4] = {}, prev[4];
-      nlp::occlusion4(std::sin(wmin), prev);
-      float run = wmin;
-      bool any = false;
-      float before = 0, dd = 0;  // distances of the previous curve point and this one
-      for (int p = 0; p < nc; ++p) {
-        const int k = p >> 1;
-        before = dd;
-        dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
-        if (!(s.curve[p] > run)) continue;
-        run = s.curve[p];
-        float rad[3];
+    const int max_n = rm.max_n;
+    if (max_n == 0) continue;
+    float* w = rm.omega.data();
+    for (int t = 0; t < cnt_row; ++t) {  // pad: knots past a receiver's last (and row max_n) repeat it
+      const int n = rm.n[t];
+      if (n > 0)
+        for (int k = n; k <= max_n; ++k) w[k * st + t] = w[std::size_t(n - 1) * st + t];
+      const Vec3f nn = s.nrm[std::size_t(t)];
+      const float wmin = nlp::omega_min(nn.x, nn.y, nn.z, cx, cy);
+      q.run[t] = wmin;
+      q.lim[t] = float(2 * n - 1);
+      q.nh[t] = nn.x * cx + nn.y * cy;
+      q.any[t] = 0;
+      const float se = std::sin(wmin), ce = std::sqrt(std::max(0.0f, 1 - se * se));
+      q.prevF[t] = Eout ? 0.5f * (q.nh[t] * (wmin + se * ce) + nn.z * se * se) : 0.0f;
+      nlp::occlusion4(se, &q.prev[std::size_t(t) * 4]);
+      std::fill(&q.u[std::size_t(t) * 12], &q.u[std::size_t(t) * 12] + 12, 0.0f);
+    }
+    // Distance of curve point p of receiver t (knots, and the geometric mean between two).
+    auto dist_p = [&](int p, int t) {
+      const int k = p >> 1;
+      return (p & 1) ? std::sqrt(rm.dist(ms, k, t) * rm.dist(ms, k + 1, t)) : rm.dist(ms, k, t);
+    };
+    for (int p = 0; p < 2 * max_n - 1; ++p) {
+      const int k = p >> 1;
+      const float* w0 = w + std::size_t(k > 0 ? k - 1 : 0) * st;
+      const float* w1 = w + std::size_t(k) * st;
+      const float* w2 = w + std::size_t(k + 1) * st;
+      const float* w3 = w + std::size_t(k + 2 <= max_n ? k + 2 : max_n) * st;
+      const int hits =
+          curve_point(cnt_row, p, w0, w1, w2, w3, q.lim.data(), q.cur.data(), q.run.data(), q.hit.data());
+      const float* cur = q.cur.data();
+      if (hits == 0) continue;
+      for (int t = 0; t < cnt_row; ++t) {
+        if (q.hit[t] == 0) continue;
+        const int i = xs[t];
+        const float run = cur[t], dd = dist_p(p, t);
+        float rad[3] = {};
         const int rl = ms.rlevel[k];
         const nlp::PyramidLevel& L = rp.levels[rl];
         if (facets) {
           // The stretch this step reveals lies between the previous curve point and this one: it radiates
           // from its middle, the light of the facet there (level 0) or the filtered facet light.
-          const float ds = 0.5f * (before + dd);
+          const float ds = 0.5f * ((p > 0 ? dist_p(p - 1, t) : 0.0f) + dd);
           if (rl == 0) {
             facet_radiance(i + ds * cx, j + ds * cy, rad);
           } else {
@@ -610,24 +677,34 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
         float nu[4];
         const float srun = std::sin(run);
         nlp::occlusion4(srun, nu);
+        float* u = &q.u[std::size_t(t) * 12];
+        float* prev = &q.prev[std::size_t(t) * 4];
         for (int l = 0; l < 4; ++l) {
           const float dl = nu[l] - prev[l];
-          u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
+          u[l] += rad[0] * dl, u[4 + l] += rad[1] * dl, u[8 + l] += rad[2] * dl;
           prev[l] = nu[l];
         }
-        if (E) {
-          const float Fr = F(run, srun), dF = Fr - prevF;
+        if (Eout) {
+          float* E = Eout + std::size_t(t) * 3;
+          const float ce = std::sqrt(std::max(0.0f, 1 - srun * srun));
+          const float Fr = 0.5f * (q.nh[t] * (run + srun * ce) + s.nrm[std::size_t(t)].z * srun * srun);
+          const float dF = Fr - q.prevF[t];
           E[0] += rad[0] * dF, E[1] += rad[1] * dF, E[2] += rad[2] * dF;
-          prevF = Fr;
+          q.prevF[t] = Fr;
         }
-        any = true;
+        q.any[t] = 1;
       }
-      if (!any) continue;
-      const float* Aj = A[a].data();
+    }
+    if (nU == 0) continue;
+    const float* Aj = A[a].data();
+    for (int t = 0; t < cnt_row; ++t) {
+      if (!q.any[t]) continue;
+      float* U = Uout + std::size_t(t) * 3 * kSh;
+      const float* u = &q.u[std::size_t(t) * 12];
       for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < kSh; ++r)
-          U[c * kSh + r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
-                            Aj[r * 4 + 3] * u[c][3];
+        for (int r = 0; r < nU; ++r)
+          U[c * kSh + r] += Aj[r * 4] * u[c * 4] + Aj[r * 4 + 1] * u[c * 4 + 1] +
+                            Aj[r * 4 + 2] * u[c * 4 + 2] + Aj[r * 4 + 3] * u[c * 4 + 3];
     }
   }
 }

@@ -295,10 +295,15 @@ void row_angles(RowMarch& r, int cnt) {
 }
 
 void row_knot_max(const RowMarch& r, int cnt, float* out) {
-  for (int t = 0; t < cnt; ++t) out[t] = -std::numeric_limits<float>::infinity();
+  float* __restrict o = out;
+  const int* __restrict n = r.n.data();
+  for (int t = 0; t < cnt; ++t) o[t] = -std::numeric_limits<float>::infinity();
   for (int k = 0; k < r.max_n; ++k) {
-    const float* om = r.omega.data() + std::size_t(k) * r.stride;
-    for (int t = 0; t < cnt; ++t) out[t] = k < r.n[t] ? std::max(out[t], om[t]) : out[t];
+    const float* __restrict om = r.omega.data() + std::size_t(k) * r.stride;
+    for (int t = 0; t < cnt; ++t) {
+      const float v = om[t], cur = o[t];
+      o[t] = (k < n[t]) & (v > cur) ? v : cur;
+    }
   }
   for (int t = 0; t < cnt; ++t) out[t] = fast_atan(out[t]);
 }

@@ -25,7 +25,8 @@ namespace hfbake::nlp {
 
 // |error| <= 1.2e-5 rad (Abramowitz & Stegun 4.4.49 with octant reduction), plain arithmetic.
 inline float fast_atan(float x) {
-  // Branch-free (selects), so loops over arrays of slopes vectorise.
+  // Branch-free (selects), so loops over arrays of slopes vectorise (with -fno-trapping-math, which lets the
+  // compiler run the division for every lane: nlp's CMakeLists).
   const float ax = std::abs(x);
   const bool inv = ax > 1;
   const float t = inv ? 1 / ax : ax, t2 = t * t;
