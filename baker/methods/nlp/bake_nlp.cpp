@@ -53,12 +53,12 @@ NlpOptions read_nlp_options(Params& in) {
   o.light_directions = in.integer("light_directions", o.light_directions, 1, 64);
   o.light_level_offset = in.integer("light_level_offset", o.light_level_offset, 0, 16);
   o.light_horizon_knots = in.choice("light_horizon", "knots", {"bspline", "knots"}) == "knots";
-  o.visibility_horizon_knots = in.choice("visibility_horizon", "bspline", {"bspline", "knots"}) == "knots";
+  o.visibility_horizon_knots = in.choice("visibility_horizon", "knots", {"bspline", "knots"}) == "knots";
   o.subsample = in.integer("subsample", o.subsample, 1, 2);
-  o.exact_indirect_cosine = in.choice("indirect_cosine", "sh", {"sh", "exact"}) == "exact";
-  o.exact_direct_cosine = in.choice("direct_cosine", "sh", {"sh", "exact"}) == "exact";
+  o.exact_indirect_cosine = in.choice("indirect_cosine", "exact", {"sh", "exact"}) == "exact";
+  o.exact_direct_cosine = in.choice("direct_cosine", "exact", {"sh", "exact"}) == "exact";
   o.near_spacing = in.number("near_spacing", o.near_spacing, 0, 64);
-  o.facet_senders = in.choice("senders", "texels", {"facets", "texels"}) == "facets";
+  o.facet_senders = in.choice("senders", "facets", {"facets", "texels"}) == "facets";
   nlp::parse_azimuth_interpolation(in.choice("azimuth_interpolation", "linear", {"linear", "bspline"}),
                                    o.interpolation);
   o.layers = in.layers(nlp_layer_names(), o.layers);
