@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 
 #include "core/azimuth.hpp"
 #include "core/error.hpp"
@@ -76,6 +77,7 @@ constexpr int kSh = sh::kCount;
 // sh_irradiance: 16 coefficients x RGB a texel, held as the layer itself (bands l < 3 filled: 27 floats).
 constexpr std::size_t kIrrChannels = 3 * kSh;
 constexpr float kInvPi = float(1 / kPi);
+constexpr float kInf = std::numeric_limits<float>::infinity();
 // Clamped-cosine convolution per coefficient (l <= 2; band 3 is zero).
 constexpr float kConv[9] = {3.14159265f, 2.09439510f, 2.09439510f, 2.09439510f, 0.78539816f,
                             0.78539816f, 0.78539816f, 0.78539816f, 0.78539816f};
@@ -230,6 +232,9 @@ class NlpBake {
   // visibility are bilinearly interpolated to the texels in between and shaded with their own normals.
   const int sub, cw, ch;
   std::vector<int> xs_full, xs_coarse;
+  // Distance of B-spline curve point p for knots inside the field: d_k at p = 2k, sqrt(d_k d_(k+1)) at
+  // p = 2k + 1 (the border knot's points are computed per receiver).
+  std::vector<float> point_dist;
   tbb::enumerable_thread_specific<Scratch> scratch;
   const double units;
   std::atomic<int> rows_done{0};
@@ -287,6 +292,10 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
   xs_coarse.resize(cw);
   for (int i = 0; i < W; ++i) xs_full[i] = i;
   for (int ci = 0; ci < cw; ++ci) xs_coarse[ci] = coarse_i(ci);
+  for (int k = 0; k < steps; ++k) {
+    point_dist.push_back(ms.dist[k]);
+    if (k + 1 < steps) point_dist.push_back(std::sqrt(ms.dist[k] * ms.dist[k + 1]));
+  }
   if (o.facet_senders && scene.bounces > 0) facet_exit.resize(2 * N);
 }
 
@@ -643,6 +652,7 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
     // Distance of curve point p of receiver t (knots, and the geometric mean between two).
     auto dist_p = [&](int p, int t) {
       const int k = p >> 1;
+      if ((p >> 1) + (p & 1) < rm.n[t] - 1 || !(rm.exit[t] < kInf)) return point_dist[std::size_t(p)];
       return (p & 1) ? std::sqrt(rm.dist(ms, k, t) * rm.dist(ms, k + 1, t)) : rm.dist(ms, k, t);
     };
     for (int p = 0; p < 2 * max_n - 1; ++p) {
