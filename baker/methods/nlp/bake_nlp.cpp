@@ -384,9 +384,17 @@ std::vector<LightSetup> NlpBake::setup_lights(const Scene& scene, const NlpOptio
 // normals (recomputed from the heights: normal_at, the values compute_normals gives).
 void NlpBake::receivers(Scratch& s, const int* xs, int cnt, int j) const {
   for (int t = 0; t < cnt; ++t) s.nrm[std::size_t(t)] = normal_at(f, xs[t], j);
-  for (int l = 0; l < lv; ++l)
-    for (int t = 0; t < cnt; ++t)
-      s.recv[std::size_t(l) * W + t] = nlp::sample_level1(hp, hp.levels[l], float(xs[t]), float(j));
+  for (int l = 0; l < lv; ++l) {
+    const nlp::PyramidLevel& L = hp.levels[l];
+    float* out = s.recv.data() + std::size_t(l) * W;
+    if (L.w == W && L.h == H && L.inv_sx == 1 && L.inv_sy == 1) {
+      // A level on the field's grid read at a texel centre: its node, exactly what the bilinear read gives.
+      const float* row = L.data.data() + std::size_t(j) * W;
+      for (int t = 0; t < cnt; ++t) out[t] = row[xs[t]];
+    } else {
+      for (int t = 0; t < cnt; ++t) out[t] = nlp::sample_level1(hp, L, float(xs[t]), float(j));
+    }
+  }
 }
 
 // The horizon omega_max of every receiver of the row along (cx, cy) into s.wmax (lights: their march
