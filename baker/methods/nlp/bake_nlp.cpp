@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 
 #include "core/azimuth.hpp"
 #include "core/error.hpp"
@@ -53,11 +54,12 @@ NlpOptions read_nlp_options(Params& in) {
   o.light_directions = in.integer("light_directions", o.light_directions, 1, 64);
   o.light_level_offset = in.integer("light_level_offset", o.light_level_offset, 0, 16);
   o.light_horizon_knots = in.choice("light_horizon", "knots", {"bspline", "knots"}) == "knots";
-  o.visibility_horizon_knots = in.choice("visibility_horizon", "bspline", {"bspline", "knots"}) == "knots";
+  o.visibility_horizon_knots = in.choice("visibility_horizon", "knots", {"bspline", "knots"}) == "knots";
   o.subsample = in.integer("subsample", o.subsample, 1, 2);
-  o.exact_indirect_cosine = in.choice("indirect_cosine", "sh", {"sh", "exact"}) == "exact";
+  o.exact_indirect_cosine = in.choice("indirect_cosine", "exact", {"sh", "exact"}) == "exact";
+  o.exact_direct_cosine = in.choice("direct_cosine", "exact", {"sh", "exact"}) == "exact";
   o.near_spacing = in.number("near_spacing", o.near_spacing, 0, 64);
-  o.facet_senders = in.choice("senders", "texels", {"facets", "texels"}) == "facets";
+  o.facet_senders = in.choice("senders", "facets", {"facets", "texels"}) == "facets";
   nlp::parse_azimuth_interpolation(in.choice("azimuth_interpolation", "linear", {"linear", "bspline"}),
                                    o.interpolation);
   o.layers = in.layers(nlp_layer_names(), o.layers);
@@ -75,6 +77,7 @@ constexpr int kSh = sh::kCount;
 // sh_irradiance: 16 coefficients x RGB a texel, held as the layer itself (bands l < 3 filled: 27 floats).
 constexpr std::size_t kIrrChannels = 3 * kSh;
 constexpr float kInvPi = float(1 / kPi);
+constexpr float kInf = std::numeric_limits<float>::infinity();
 // Clamped-cosine convolution per coefficient (l <= 2; band 3 is zero).
 constexpr float kConv[9] = {3.14159265f, 2.09439510f, 2.09439510f, 2.09439510f, 0.78539816f,
                             0.78539816f, 0.78539816f, 0.78539816f, 0.78539816f};
@@ -87,19 +90,71 @@ struct LightSetup {
   float sh[9];                // a_l Y_k(dir) / pi: the light's contribution to sh_irradiance per unit
 };
 
+// The radiance kernel's per-receiver state along one azimuth (RowMarch order: receiver t of the row).
+struct RadianceRow {
+  std::vector<float> run, prevF, nh, cur, prev, u;  // prev: 4 a receiver, u: 3 x 4
+  std::vector<float> lim;                           // 2 n - 1: the receiver's curve points
+  std::vector<float> hit;                           // 1: this point is in the receiver's casting set
+  std::vector<unsigned char> any;
+  explicit RadianceRow(int width)
+      : run(std::size_t(width)),
+        prevF(std::size_t(width)),
+        nh(std::size_t(width)),
+        cur(std::size_t(width)),
+        prev(4 * std::size_t(width)),
+        u(12 * std::size_t(width)),
+        lim(std::size_t(width)),
+        hit(std::size_t(width)),
+        any(std::size_t(width)) {}
+};
+
+// Curve point p (knots k-1..k+2 of every receiver in w0..w3; even p: knot k, odd: between k and k + 1) for
+// a row of receivers: cur[t] = its value, and where it is one of the receiver's curve points (p < lim[t])
+// above the running maximum run[t], run[t] = it and hit[t] = 1 (else 0). Returns whether any receiver hit.
+int curve_point(int cnt, int p, const float* __restrict w0, const float* __restrict w1,
+                const float* __restrict w2, const float* __restrict w3, const float* __restrict lim,
+                float* __restrict cur, float* __restrict run, float* __restrict hit) {
+  const float fp = float(p);
+  int hits = 0;
+  if (p & 1) {
+    for (int t = 0; t < cnt; ++t) {
+      const float c = (w0[t] + 23 * w1[t] + 23 * w2[t] + w3[t]) * (1.0f / 48), r = run[t];
+      const bool h = (fp < lim[t]) & (c > r);
+      run[t] = h ? c : r;
+      cur[t] = c;
+      hit[t] = h ? 1.0f : 0.0f;
+      hits |= int(h);
+    }
+  } else {
+    for (int t = 0; t < cnt; ++t) {
+      const float c = (w0[t] + 4 * w1[t] + w2[t]) * (1.0f / 6), r = run[t];
+      const bool h = (fp < lim[t]) & (c > r);
+      run[t] = h ? c : r;
+      cur[t] = c;
+      hit[t] = h ? 1.0f : 0.0f;
+      hits |= int(h);
+    }
+  }
+  return hits;
+}
+
 // Per-thread buffers: one row of receivers (heights per level, per-receiver outputs) and one march.
 struct Scratch {
-  std::vector<float> recv, omega, dist, curve, row;
-  std::vector<int> lev;
+  std::vector<float> recv;  // [l * width + t]: receiver t's height in level l
+  std::vector<float> omega, dist, curve, row, wmax;
   std::vector<Vec3f> nrm;  // the row's receivers' normals (normal_at)
+  nlp::RowMarch rm;        // one azimuth's march of the row
+  RadianceRow rad;
   explicit Scratch(int levels, int steps, int width, int row_floats)
       : recv(std::size_t(levels) * width),
         omega(steps + 1),
         dist(steps + 1),
         curve(2 * steps + 2),
         row(std::size_t(row_floats) * width),
-        lev(steps + 1),
-        nrm(std::size_t(width)) {}
+        wmax(std::size_t(width)),
+        nrm(std::size_t(width)),
+        rm(steps, width),
+        rad(width) {}
 };
 
 nlp::MarchSetup with_near_spacing(nlp::MarchSetup s, double spacing) {
@@ -126,19 +181,20 @@ class NlpBake {
   // --- inputs ---
   static std::vector<LightSetup> setup_lights(const Scene& scene, const NlpOptions& o);
   void setup_environment();
+  void setup_environment_wedges();
+  void env_above(int a, float e, float nh, float nz, float* out) const;
 
   // --- kernels ---
   void receivers(Scratch& s, const int* xs, int cnt, int j) const;
-  float omega_max(Scratch& s, const float* recv, int i, int j, float cx, float cy, const Vec3f& n,
-                  bool light = false) const;
-  void light_visibility(Scratch& s, const float* recv, int i, int j, const Vec3f& n, float* frac) const;
-  void visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const;
+  void horizons(Scratch& s, const int* xs, int cnt, int j, float cx, float cy, bool light) const;
+  void light_visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const;
+  void visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride, bool exact_env) const;
   void facet_radiance(float x, float y, float* out) const;
   void radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cnt_row, int j, float* Uout,
                 float* Eout) const;
 
   // --- shading ---
-  void shade_direct(int i, int j, const float* V, const float* frac);
+  void shade_direct(int i, int j, const float* V, const float* frac, const float* E);
   void direct_facets(int i, int j, const float (&lin)[3][9], const float* frac);
   // add: this_bounce[idx] += the texel's indirect light (the last bounce adds straight into `indirect`);
   // else this_bounce[idx] = it.
@@ -162,6 +218,12 @@ class NlpBake {
   std::vector<float> cphi, sphi;
   // Environment in SH and its product matrices (rows k < 9 suffice: the cosine has no band 3).
   float T[3][9][kSh];
+  // direct_cosine exact: per azimuth a, the environment's mean radiance over the wedge of a, per lat-long
+  // row r (env_rad[(a * env_rows + r) * 3 + c]), and its integrals from the zenith down to row r's upper
+  // edge, of L cos^2 e (env_cum[(a * (env_rows + 1) + r) * 6 + c]) and of L sin e cos e (+ 3 + c); env_edge:
+  // the row edges' F(e) = ((e + sin e cos e) / 2, sin^2 e / 2).
+  int env_rows = 0;
+  std::vector<float> env_rad, env_cum, env_edge;
   const std::vector<LightSetup> lights;
   const std::size_t nl;
   const bool want_vis, want_irr;
@@ -170,6 +232,9 @@ class NlpBake {
   // visibility are bilinearly interpolated to the texels in between and shaded with their own normals.
   const int sub, cw, ch;
   std::vector<int> xs_full, xs_coarse;
+  // Distance of B-spline curve point p for knots inside the field: d_k at p = 2k, sqrt(d_k d_(k+1)) at
+  // p = 2k + 1 (the border knot's points are computed per receiver).
+  std::vector<float> point_dist;
   tbb::enumerable_thread_specific<Scratch> scratch;
   const double units;
   std::atomic<int> rows_done{0};
@@ -212,7 +277,7 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       ch((H + sub - 1) / sub + (sub > 1 && (H - 1) % sub ? 1 : 0)),
       // Row buffers: V and the lights' visibility (kSh + lights), or U and the exact-cosine E (3 kSh + 3).
       scratch([lv = lv, steps = steps, W = W,
-               row_floats = std::max(kSh + int(scene.lights.size()), 3 * kSh + 3)] {
+               row_floats = std::max(kSh + int(scene.lights.size()) + 3, 3 * kSh + 3)] {
         return Scratch(lv, steps, W, row_floats);
       }),
       units(double(H) * (1 + std::max(0, scene.bounces))),
@@ -222,10 +287,15 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       irr(want_irr ? N * kIrrChannels : 0) {
   azimuth_table(m, cphi, sphi);
   setup_environment();
+  if (o.exact_direct_cosine) setup_environment_wedges();
   xs_full.resize(W);
   xs_coarse.resize(cw);
   for (int i = 0; i < W; ++i) xs_full[i] = i;
   for (int ci = 0; ci < cw; ++ci) xs_coarse[ci] = coarse_i(ci);
+  for (int k = 0; k < steps; ++k) {
+    point_dist.push_back(ms.dist[k]);
+    if (k + 1 < steps) point_dist.push_back(std::sqrt(ms.dist[k] * ms.dist[k + 1]));
+  }
   if (o.facet_senders && scene.bounces > 0) facet_exit.resize(2 * N);
 }
 
@@ -236,6 +306,55 @@ void NlpBake::setup_environment() {
     for (int k = 0; k < 9; ++k)
       for (int j = 0; j < kSh; ++j) T[c][k][j] = float(pm[k][j]);
   }
+}
+
+void NlpBake::setup_environment_wedges() {
+  const Environment& env = scene.environment;
+  std::vector<std::vector<Rgb>> prof(static_cast<std::size_t>(m));
+  for (int a = 0; a < m; ++a) {
+    const double phi = azimuth(a, m);
+    prof[std::size_t(a)] = azimuth_wedge_profile(env, phi - kPi / m, phi + kPi / m);
+    if (prof[std::size_t(a)].empty()) prof[std::size_t(a)].assign(1, env.uniform_radiance);
+  }
+  env_rows = int(prof[0].size());
+  const int h = env_rows;
+  std::vector<double> F1(std::size_t(h) + 1), F2(std::size_t(h) + 1);
+  env_edge.resize(2 * (std::size_t(h) + 1));
+  for (int r = 0; r <= h; ++r) {
+    const double e = kPi / 2 - kPi * r / h, se = std::sin(e), ce = std::cos(e);
+    F1[r] = 0.5 * (e + se * ce), F2[r] = 0.5 * se * se;
+    env_edge[2 * r] = float(F1[r]), env_edge[2 * r + 1] = float(F2[r]);
+  }
+  env_rad.resize(std::size_t(m) * h * 3);
+  env_cum.resize(std::size_t(m) * (h + 1) * 6);
+  for (int a = 0; a < m; ++a) {
+    double c1[3] = {}, c2[3] = {};
+    for (int r = 0; r <= h; ++r) {
+      float* C = &env_cum[(std::size_t(a) * (h + 1) + r) * 6];
+      for (int c = 0; c < 3; ++c) C[c] = float(c1[c]), C[3 + c] = float(c2[c]);
+      if (r == h) break;
+      const Rgb L = prof[std::size_t(a)][std::size_t(r)];
+      const double l[3] = {L.r, L.g, L.b};
+      for (int c = 0; c < 3; ++c) {
+        env_rad[(std::size_t(a) * h + r) * 3 + c] = float(l[c]);
+        c1[c] += l[c] * (F1[r] - F1[r + 1]);
+        c2[c] += l[c] * (F2[r] - F2[r + 1]);
+      }
+    }
+  }
+}
+
+// direct_cosine exact: adds to out (RGB) the integral over azimuth a's elevations above e of the wedge's
+// radiance times (nh cos e + nz sin e) cos e, nh = n . azimuth, nz = n_z (e at or above omega_min).
+void NlpBake::env_above(int a, float e, float nh, float nz, float* out) const {
+  const int h = env_rows;
+  int r = int((0.5f - e * float(1 / kPi)) * float(h));
+  r = r < 0 ? 0 : (r > h - 1 ? h - 1 : r);
+  const float se = std::sin(e), ce = std::cos(e);
+  const float d1 = env_edge[2 * r] - 0.5f * (e + se * ce), d2 = env_edge[2 * r + 1] - 0.5f * se * se;
+  const float* C = &env_cum[(std::size_t(a) * (h + 1) + r) * 6];
+  const float* L = &env_rad[(std::size_t(a) * h + r) * 3];
+  for (int c = 0; c < 3; ++c) out[c] += nh * (C[c] + L[c] * d1) + nz * (C[3 + c] + L[c] * d2);
 }
 
 std::vector<LightSetup> NlpBake::setup_lights(const Scene& scene, const NlpOptions& o) {
@@ -265,72 +384,101 @@ std::vector<LightSetup> NlpBake::setup_lights(const Scene& scene, const NlpOptio
 // normals (recomputed from the heights: normal_at, the values compute_normals gives).
 void NlpBake::receivers(Scratch& s, const int* xs, int cnt, int j) const {
   for (int t = 0; t < cnt; ++t) s.nrm[std::size_t(t)] = normal_at(f, xs[t], j);
+  for (int l = 0; l < lv; ++l) {
+    const nlp::PyramidLevel& L = hp.levels[l];
+    float* out = s.recv.data() + std::size_t(l) * W;
+    if (L.w == W && L.h == H && L.inv_sx == 1 && L.inv_sy == 1) {
+      // A level on the field's grid read at a texel centre: its node, exactly what the bilinear read gives.
+      const float* row = L.data.data() + std::size_t(j) * W;
+      for (int t = 0; t < cnt; ++t) out[t] = row[xs[t]];
+    } else {
+      for (int t = 0; t < cnt; ++t) out[t] = nlp::sample_level1(hp, L, float(xs[t]), float(j));
+    }
+  }
+}
+
+// The horizon omega_max of every receiver of the row along (cx, cy) into s.wmax (lights: their march
+// setup and horizon rule): the knots' or the B-spline curve's maximum, omega_min where the ray leaves the
+// field at once.
+void NlpBake::horizons(Scratch& s, const int* xs, int cnt, int j, float cx, float cy, bool light) const {
+  nlp::RowMarch& rm = s.rm;
+  nlp::march_row(light ? ms_light : ms, hp, xs, cnt, xs == xs_full.data(), j, cx, cy, s.recv.data(), W, rm);
+  if (light ? o.light_horizon_knots : o.visibility_horizon_knots) {
+    nlp::row_knot_max(rm, cnt, s.wmax.data());
+  } else {
+    nlp::row_angles(rm, cnt);
+    for (int t = 0; t < cnt; ++t) {
+      const int n = rm.n[t];
+      for (int k = 0; k < n; ++k) s.omega[k] = rm.omega[std::size_t(k) * rm.stride + t];
+      s.wmax[t] = n > 0 ? nlp::bspline_max(s.omega.data(), n) : 0.0f;
+    }
+  }
   for (int t = 0; t < cnt; ++t)
-    for (int l = 0; l < lv; ++l)
-      s.recv[std::size_t(t) * lv + l] = nlp::sample_level1(hp, hp.levels[l], float(xs[t]), float(j));
+    if (rm.n[t] == 0) {
+      const Vec3f& n = s.nrm[std::size_t(t)];
+      s.wmax[t] = nlp::omega_min(n.x, n.y, n.z, cx, cy);
+    }
 }
 
-float NlpBake::omega_max(Scratch& s, const float* recv, int i, int j, float cx, float cy, const Vec3f& n,
-                         bool light) const {
-  const int cnt =
-      nlp::march(light ? ms_light : ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
-  if (cnt == 0) return nlp::omega_min(n.x, n.y, n.z, cx, cy);
-  if (light ? o.light_horizon_knots : o.visibility_horizon_knots)
-    return *std::max_element(s.omega.begin(), s.omega.begin() + cnt);
-  return nlp::bspline_max(s.omega.data(), cnt);
-}
-
-// The restricted-extent visibility of each light at receiver (i, j) (NS09 §6).
-void NlpBake::light_visibility(Scratch& s, const float* recv, int i, int j, const Vec3f& n,
-                               float* frac) const {
+// The restricted-extent visibility of each light at the row's receivers (NS09 §6): out[t * stride + q].
+void NlpBake::light_visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const {
   for (std::size_t q = 0; q < nl; ++q) {
     const LightSetup& L = lights[q];
-    float fr = 0;
+    for (int t = 0; t < cnt; ++t) out[std::size_t(t) * stride + q] = 0;
     for (std::size_t k = 0; k < L.cx.size(); ++k) {
-      const float wmax = omega_max(s, recv, i, j, L.cx[k], L.cy[k], n, true);
-      if (L.radius > 0) {
-        const float lo = std::max(L.elevation - L.radius, -1.5707963f);
-        const float hi = std::min(L.elevation + L.radius, 1.5707963f);
-        const float slo = std::sin(std::max(wmax, lo)), shi = std::sin(hi);
-        fr += std::clamp((shi - slo) / (shi - std::sin(lo)), 0.0f, 1.0f);
-      } else {
-        fr += wmax < L.elevation ? 1.0f : 0.0f;
+      horizons(s, xs, cnt, j, L.cx[k], L.cy[k], true);
+      for (int t = 0; t < cnt; ++t) {
+        const float wmax = s.wmax[t];
+        float& fr = out[std::size_t(t) * stride + q];
+        if (L.radius > 0) {
+          const float lo = std::max(L.elevation - L.radius, -1.5707963f);
+          const float hi = std::min(L.elevation + L.radius, 1.5707963f);
+          const float slo = std::sin(std::max(wmax, lo)), shi = std::sin(hi);
+          fr += std::clamp((shi - slo) / (shi - std::sin(lo)), 0.0f, 1.0f);
+        } else {
+          fr += wmax < L.elevation ? 1.0f : 0.0f;
+        }
       }
     }
-    frac[q] = fr / float(L.cx.size());
+    for (int t = 0; t < cnt; ++t) out[std::size_t(t) * stride + q] /= float(L.cx.size());
   }
 }
 
 // Kernel: V (Eq. 11, 20-21) and the lights' visibility for the row of receivers (xs[t], j), t < cnt:
-// out[t * stride] = V (kSh floats), then the lights' fractions. Azimuth-major over the row (neighbouring
-// receivers march the same direction through the same cache lines); each receiver still sums its azimuths
-// in order, so the bits do not depend on the loop order.
-void NlpBake::visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride) const {
+// out[t * stride] = V (kSh floats), then the lights' fractions (then, exact_env, the environment light).
+// Azimuth-major over the row (one row march per azimuth); each receiver still sums its azimuths in order, so
+// the bits do not depend on the loop order or the thread.
+void NlpBake::visibility(Scratch& s, const int* xs, int cnt, int j, float* out, int stride,
+                         bool exact_env) const {
   receivers(s, xs, cnt, j);
-  for (int t = 0; t < cnt; ++t)
+  const int eoff = kSh + int(nl);  // exact_env: the environment light (3 floats) after the lights' fractions
+  for (int t = 0; t < cnt; ++t) {
     std::fill(out + std::size_t(t) * stride, out + std::size_t(t) * stride + kSh, 0.0f);
+    if (exact_env)
+      std::fill(out + std::size_t(t) * stride + eoff, out + std::size_t(t) * stride + eoff + 3, 0.0f);
+  }
   for (int a = 0; a < m; ++a) {
     const float* Aj = A[a].data();
+    horizons(s, xs, cnt, j, cphi[a], sphi[a], false);
     for (int t = 0; t < cnt; ++t) {
-      const int i = xs[t];
-      const float wmax =
-          omega_max(s, s.recv.data() + std::size_t(t) * lv, i, j, cphi[a], sphi[a], s.nrm[std::size_t(t)]);
+      const float wmax = s.wmax[t];
       float v[4];
       nlp::band4(std::sin(wmax), 1.0f, v);
       float* V = out + std::size_t(t) * stride;
       for (int r = 0; r < kSh; ++r)
         V[r] += Aj[r * 4] * v[0] + Aj[r * 4 + 1] * v[1] + Aj[r * 4 + 2] * v[2] + Aj[r * 4 + 3] * v[3];
+      if (exact_env) {
+        const Vec3f& n = s.nrm[std::size_t(t)];
+        const float wmin = nlp::omega_min(n.x, n.y, n.z, cphi[a], sphi[a]);
+        env_above(a, std::max(wmax, wmin), n.x * cphi[a] + n.y * sphi[a], n.z, V + eoff);
+      }
     }
   }
-  for (int t = 0; t < cnt; ++t) {
-    const int i = xs[t];
-    light_visibility(s, s.recv.data() + std::size_t(t) * lv, i, j, s.nrm[std::size_t(t)],
-                     out + std::size_t(t) * stride + kSh);
-  }
+  light_visibility(s, xs, cnt, j, out + kSh, stride);
 }
 
 // Shading of direct light at texel idx from V and the lights' visibility.
-void NlpBake::shade_direct(int i, int j, const float* V, const float* frac) {
+void NlpBake::shade_direct(int i, int j, const float* V, const float* frac, const float* E) {
   const std::size_t idx = f.index(i, j);
   const Vec3f n = normal_at(f, i, j);
   float y[kSh];
@@ -344,6 +492,10 @@ void NlpBake::shade_direct(int i, int j, const float* V, const float* frac) {
       e[c] += kConv[k] * y[k] * acc;
     }
   Rgb d{e[0] * kInvPi, e[1] * kInvPi, e[2] * kInvPi};
+  if (E) {
+    const float w = float(2 / double(m));  // (2 pi / m) / pi
+    d = Rgb{E[0] * w, E[1] * w, E[2] * w};
+  }
   float irr_local[27];
   for (int k = 0; k < 9; ++k)
     for (int c = 0; c < 3; ++c) irr_local[k * 3 + c] = kConv[k] * lin[c][k] * kInvPi;
@@ -416,11 +568,12 @@ void NlpBake::direct_pass() {
     tbb::parallel_for(0, H, [&](int j) {
       rc.check();
       Scratch& s = scratch.local();
-      const int stride = kSh + int(nl);
-      visibility(s, xs_full.data(), W, j, s.row.data(), stride);
+      const bool exact = o.exact_direct_cosine;
+      const int stride = kSh + int(nl) + (exact ? 3 : 0);
+      visibility(s, xs_full.data(), W, j, s.row.data(), stride, exact);
       for (int i = 0; i < W; ++i) {
         const float* V = s.row.data() + std::size_t(i) * stride;
-        shade_direct(i, j, V, V + kSh);
+        shade_direct(i, j, V, V + kSh, exact ? V + kSh + nl : nullptr);
       }
       report_rows(1);
     });
@@ -430,15 +583,15 @@ void NlpBake::direct_pass() {
     tbb::parallel_for(0, ch, [&](int cj) {
       rc.check();
       Scratch& s = scratch.local();
-      visibility(s, xs_coarse.data(), cw, coarse_j(cj), coarse.data() + std::size_t(cj) * cw * stride,
-                 stride);
+      visibility(s, xs_coarse.data(), cw, coarse_j(cj), coarse.data() + std::size_t(cj) * cw * stride, stride,
+                 false);
       report_rows(sub);
     });
     tbb::parallel_for(0, H, [&](int j) {
       std::vector<float> buf(stride);
       for (int i = 0; i < W; ++i) {
         upsample(coarse, stride, i, j, buf.data());
-        shade_direct(i, j, buf.data(), buf.data() + kSh);
+        shade_direct(i, j, buf.data(), buf.data() + kSh, nullptr);
       }
     });
   }
@@ -465,48 +618,72 @@ void NlpBake::facet_radiance(float x, float y, float* out) const {
 // E (optional, 3 floats): the irradiance / (2 pi / m) of the same casting-set segments with the exact
 // cosine: segment (e0, e1] of radiance r adds r * (F(e1) - F(e0)), F(e) = n_h (e + sin e cos e) / 2 +
 // n_z sin^2 e / 2, the integral of (n_h cos e + n_z sin e) cos e (n_h = n . azimuth).
-// Row form as visibility: receivers (xs[t], j), U at out[t * 3 kSh], E (if exact) at Eout[t * 3].
+// Row form as visibility: receivers (xs[t], j), U at out[t * 3 kSh], E (if exact) at Eout[t * 3]. Only U's
+// bands l < 3 are computed (shading and sh_irradiance read no more; band 3 stays 0), and none when E is
+// wanted and sh_irradiance is not.
+// Per azimuth, the B-spline curve of the whole row's knots is evaluated point by point (knot-major, every
+// receiver at once; knots past a receiver's last repeat it, which is bspline_curve's end rule), and each
+// receiver's running maximum picks its casting set; only the casting-set points do per-receiver work. Each
+// receiver sums its points and azimuths in order: the bits do not depend on the row or the thread.
 void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cnt_row, int j, float* Uout,
                        float* Eout) const {
   receivers(s, xs, cnt_row, j);
   const bool facets = !facet_exit.empty();
+  const int nU = Eout && !want_irr ? 0 : 9;
   std::fill(Uout, Uout + std::size_t(cnt_row) * 3 * kSh, 0.0f);
   if (Eout) std::fill(Eout, Eout + std::size_t(cnt_row) * 3, 0.0f);
-  for (int a = 0; a < m; ++a)
-    for (int t = 0; t < cnt_row; ++t) {
-      const int i = xs[t];
-      const Vec3f n = s.nrm[std::size_t(t)];
-      const float* recv = s.recv.data() + std::size_t(t) * lv;
-      float* U = Uout + std::size_t(t) * 3 * kSh;
-      float* E = Eout ? Eout + std::size_t(t) * 3 : nullptr;
-      const float cx = cphi[a], cy = sphi[a];
-      const float wmin = nlp::omega_min(n.x, n.y, n.z, cx, cy);
-      const float nh = n.x * cx + n.y * cy, nz = n.z;
-      auto F = [&](float e, float se) {
-        const float ce = std::sqrt(std::max(0.0f, 1 - se * se));
-        return 0.5f * (nh * (e + se * ce) + nz * se * se);
-      };
-      float prevF = E ? F(wmin, std::sin(wmin)) : 0.0f;
-      const int cnt = nlp::march(ms, hp, i, j, cx, cy, recv, s.omega.data(), s.dist.data(), s.lev.data());
-      const int nc = nlp::bspline_curve(s.omega.data(), cnt, s.curve.data());
-      float u[3][4] = {}, prev[4];
-      nlp::occlusion4(std::sin(wmin), prev);
-      float run = wmin;
-      bool any = false;
-      float before = 0, dd = 0;  // distances of the previous curve point and this one
-      for (int p = 0; p < nc; ++p) {
-        const int k = p >> 1;
-        before = dd;
-        dd = (p & 1) ? std::sqrt(s.dist[k] * s.dist[k + 1]) : s.dist[k];
-        if (!(s.curve[p] > run)) continue;
-        run = s.curve[p];
-        float rad[3];
-        const int rl = ms.rlevel[s.lev[k]];
+  nlp::RowMarch& rm = s.rm;
+  RadianceRow& q = s.rad;
+  const std::size_t st = std::size_t(rm.stride);
+  for (int a = 0; a < m; ++a) {
+    const float cx = cphi[a], cy = sphi[a];
+    nlp::march_row(ms, hp, xs, cnt_row, xs == xs_full.data(), j, cx, cy, s.recv.data(), W, rm);
+    nlp::row_angles(rm, cnt_row);
+    const int max_n = rm.max_n;
+    if (max_n == 0) continue;
+    float* w = rm.omega.data();
+    for (int t = 0; t < cnt_row; ++t) {  // pad: knots past a receiver's last (and row max_n) repeat it
+      const int n = rm.n[t];
+      if (n > 0)
+        for (int k = n; k <= max_n; ++k) w[k * st + t] = w[std::size_t(n - 1) * st + t];
+      const Vec3f nn = s.nrm[std::size_t(t)];
+      const float wmin = nlp::omega_min(nn.x, nn.y, nn.z, cx, cy);
+      q.run[t] = wmin;
+      q.lim[t] = float(2 * n - 1);
+      q.nh[t] = nn.x * cx + nn.y * cy;
+      q.any[t] = 0;
+      const float se = std::sin(wmin), ce = std::sqrt(std::max(0.0f, 1 - se * se));
+      q.prevF[t] = Eout ? 0.5f * (q.nh[t] * (wmin + se * ce) + nn.z * se * se) : 0.0f;
+      nlp::occlusion4(se, &q.prev[std::size_t(t) * 4]);
+      std::fill(&q.u[std::size_t(t) * 12], &q.u[std::size_t(t) * 12] + 12, 0.0f);
+    }
+    // Distance of curve point p of receiver t (knots, and the geometric mean between two).
+    auto dist_p = [&](int p, int t) {
+      const int k = p >> 1;
+      if ((p >> 1) + (p & 1) < rm.n[t] - 1 || !(rm.exit[t] < kInf)) return point_dist[std::size_t(p)];
+      return (p & 1) ? std::sqrt(rm.dist(ms, k, t) * rm.dist(ms, k + 1, t)) : rm.dist(ms, k, t);
+    };
+    for (int p = 0; p < 2 * max_n - 1; ++p) {
+      const int k = p >> 1;
+      const float* w0 = w + std::size_t(k > 0 ? k - 1 : 0) * st;
+      const float* w1 = w + std::size_t(k) * st;
+      const float* w2 = w + std::size_t(k + 1) * st;
+      const float* w3 = w + std::size_t(k + 2 <= max_n ? k + 2 : max_n) * st;
+      const int hits =
+          curve_point(cnt_row, p, w0, w1, w2, w3, q.lim.data(), q.cur.data(), q.run.data(), q.hit.data());
+      const float* cur = q.cur.data();
+      if (hits == 0) continue;
+      for (int t = 0; t < cnt_row; ++t) {
+        if (q.hit[t] == 0) continue;
+        const int i = xs[t];
+        const float run = cur[t], dd = dist_p(p, t);
+        float rad[3] = {};
+        const int rl = ms.rlevel[k];
         const nlp::PyramidLevel& L = rp.levels[rl];
         if (facets) {
           // The stretch this step reveals lies between the previous curve point and this one: it radiates
           // from its middle, the light of the facet there (level 0) or the filtered facet light.
-          const float ds = 0.5f * (before + dd);
+          const float ds = 0.5f * ((p > 0 ? dist_p(p - 1, t) : 0.0f) + dd);
           if (rl == 0) {
             facet_radiance(i + ds * cx, j + ds * cy, rad);
           } else {
@@ -518,25 +695,36 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
         float nu[4];
         const float srun = std::sin(run);
         nlp::occlusion4(srun, nu);
+        float* u = &q.u[std::size_t(t) * 12];
+        float* prev = &q.prev[std::size_t(t) * 4];
         for (int l = 0; l < 4; ++l) {
           const float dl = nu[l] - prev[l];
-          u[0][l] += rad[0] * dl, u[1][l] += rad[1] * dl, u[2][l] += rad[2] * dl;
+          u[l] += rad[0] * dl, u[4 + l] += rad[1] * dl, u[8 + l] += rad[2] * dl;
           prev[l] = nu[l];
         }
-        if (E) {
-          const float Fr = F(run, srun), dF = Fr - prevF;
+        if (Eout) {
+          float* E = Eout + std::size_t(t) * 3;
+          const float ce = std::sqrt(std::max(0.0f, 1 - srun * srun));
+          const float Fr = 0.5f * (q.nh[t] * (run + srun * ce) + s.nrm[std::size_t(t)].z * srun * srun);
+          const float dF = Fr - q.prevF[t];
           E[0] += rad[0] * dF, E[1] += rad[1] * dF, E[2] += rad[2] * dF;
-          prevF = Fr;
+          q.prevF[t] = Fr;
         }
-        any = true;
+        q.any[t] = 1;
       }
-      if (!any) continue;
-      const float* Aj = A[a].data();
-      for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < kSh; ++r)
-          U[c * kSh + r] += Aj[r * 4] * u[c][0] + Aj[r * 4 + 1] * u[c][1] + Aj[r * 4 + 2] * u[c][2] +
-                            Aj[r * 4 + 3] * u[c][3];
     }
+    if (nU == 0) continue;
+    const float* Aj = A[a].data();
+    for (int t = 0; t < cnt_row; ++t) {
+      if (!q.any[t]) continue;
+      float* U = Uout + std::size_t(t) * 3 * kSh;
+      const float* u = &q.u[std::size_t(t) * 12];
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < nU; ++r)
+          U[c * kSh + r] += Aj[r * 4] * u[c * 4] + Aj[r * 4 + 1] * u[c * 4 + 1] +
+                            Aj[r * 4 + 2] * u[c * 4 + 2] + Aj[r * 4 + 3] * u[c * 4 + 3];
+    }
+  }
 }
 
 void NlpBake::shade_indirect(std::vector<Rgb>& this_bounce, bool add, int i, int j, const float* U,

@@ -27,22 +27,30 @@ struct NlpOptions {
   nlp::AzimuthInterpolation interpolation = nlp::AzimuthInterpolation::linear;
   int light_level_offset = 4;       // o_v for directional lights' visibility (>= level_offset)
   bool light_horizon_knots = true;  // lights: max over the knot angles instead of the B-spline curve
-  // Visibility V: the same choice (default the B-spline curve, NS09 Eq. 16, which lowers sharp peaks).
-  bool visibility_horizon_knots = false;
+  // Visibility V: the same choice (default the knots; NS09 Eq. 16's B-spline curve lowers sharp peaks).
+  // The defaults below (issue 19 item 1: knots, exact cosines, facet senders, near_spacing 0.5) are the
+  // README's measured choice; NS09's behaviour is the preset in the README ("nlp", "Presets").
+  bool visibility_horizon_knots = true;
   int light_directions = 3;  // azimuths across a directional light's disk (NS09 §9: 3)
   int subsample = 1;         // 1, or 2: V and U on a 2x2-subsampled grid, shading at full resolution
   // The indirect layer: true = the casting-set segments integrated per azimuth with the exact cosine about
   // the texel normal; false = NS09 §7, U dotted with the order-3 clamped-cosine lobe (it over-weights grazing
   // radiance). subsample 2 always uses U. sh_irradiance is U's either way.
-  bool exact_indirect_cosine = false;
+  bool exact_indirect_cosine = true;
+  // The direct layer's environment light: true = per azimuth, the environment's radiance over that azimuth's
+  // wedge integrated above the horizon with the exact cosine about the texel normal (as P1's lighting
+  // tables); false = NS09, the SH product of the environment with V dotted with the order-3 clamped-cosine
+  // lobe (order-4 truncation: -0.5 to -0.7 % on smooth ground). subsample 2 always uses the SH form;
+  // sh_visibility, sh_irradiance and the facet senders' light are the SH form either way.
+  bool exact_direct_cosine = true;
   // Senders of indirect light: true = every texel's two facets of the triangulated surface radiate the
   // light of their own normals, and the stretch a casting-set step reveals radiates from its middle, its
-  // facet's light (issue 19: on terraces a cliff face radiated the bright treads at its ends); false
-  // (default) = NS09, the radiance pyramid of texel-centre light read at the casting-set point.
-  bool facet_senders = false;
+  // facet's light (issue 19: on terraces a cliff face radiated the bright treads at its ends); false = NS09,
+  // the radiance pyramid of texel-centre light read at the casting-set point.
+  bool facet_senders = true;
   // > 0: the march samples the unfiltered field at most this many texels apart between knots and each knot
   // keeps the steepest sample (MarchSetup::near_spacing); 0 = NS09, one sample a knot.
-  double near_spacing = 0;
+  double near_spacing = 0.5;
   std::vector<std::string> layers = {"direct", "indirect", "total", "sh_visibility", "sh_irradiance"};
 };
 

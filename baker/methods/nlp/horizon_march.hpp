@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "methods/nlp/pyramid.hpp"
@@ -24,7 +25,8 @@ namespace hfbake::nlp {
 
 // |error| <= 1.2e-5 rad (Abramowitz & Stegun 4.4.49 with octant reduction), plain arithmetic.
 inline float fast_atan(float x) {
-  // Branch-free (selects), so loops over arrays of slopes vectorise.
+  // Branch-free (selects), so loops over arrays of slopes vectorise (with -fno-trapping-math, which lets the
+  // compiler run the division for every lane: nlp's CMakeLists).
   const float ax = std::abs(x);
   const bool inv = ax > 1;
   const float t = inv ? 1 / ax : ax, t2 = t * t;
@@ -60,6 +62,43 @@ int radiance_levels(const MarchSetup& s);
 // leaves the field at once). recv[l]: the receiver's height in level l.
 int march(const MarchSetup& s, const Pyramid& heights, int i, int j, float cx, float cy, const float* recv,
           float* omega, float* dist, int* lev);
+
+// The row form of march (the kernels' form): one azimuth, receivers (xs[t], j), t < cnt, the knots of all
+// receivers at once, knot-major (omega[k * stride + t]) so each knot is a loop over the row. Where a level
+// has the field's own grid (level 0 and the levels up to about 4 texels of blur), the offset of knot k from
+// its receiver, d_k (cx, cy), is split once into whole texels and a fraction shared by the whole row, so a
+// run of receivers reads contiguous texels with one set of bilinear (or, for near_spacing, triangle)
+// weights; coarser levels, repeat fields and the border ring read as march does. The results equal march's
+// to float rounding (the fraction is taken from d_k cx instead of i + d_k cx), and they depend only on the
+// receiver and the azimuth: the same bits for any row length, thread or tile.
+struct RowMarch {
+  int stride = 0;
+  std::vector<float> omega;  // [k * stride + t]: slopes (tan of the blocking angle); angles after row_angles
+  std::vector<int> n;        // knots of receiver t (the border knot, if any, last)
+  std::vector<float> exit;   // receiver t's border knot distance (texels); infinite when it has none
+  int max_n = 0;             // max of n over the row
+  std::vector<float> tmp;    // per-row scratch (triangle samples)
+  RowMarch() = default;
+  RowMarch(int steps, int width)
+      : stride(width),
+        omega(std::size_t(steps + 1) * std::size_t(width)),
+        n(std::size_t(width)),
+        exit(std::size_t(width)),
+        tmp(std::size_t(width)) {}
+  // Distance of knot k of receiver t (k < n[t]).
+  float dist(const MarchSetup& s, int k, int t) const {
+    return k + 1 == n[t] && exit[t] < std::numeric_limits<float>::infinity() ? exit[t] : s.dist[k];
+  }
+};
+
+// recv[l * recv_stride + t]: receiver t's height in level l. contiguous: xs[t] == xs[0] + t (enables the
+// shared-fraction loads; otherwise every receiver is gathered, with the same arithmetic and bits).
+void march_row(const MarchSetup& s, const Pyramid& heights, const int* xs, int cnt, bool contiguous, int j,
+               float cx, float cy, const float* recv, int recv_stride, RowMarch& out);
+// fast_atan of every knot slope (k < max_n) in place.
+void row_angles(RowMarch& r, int cnt);
+// Per receiver, the largest knot slope's angle (the knots horizon), or `none` where n[t] == 0: out[t].
+void row_knot_max(const RowMarch& r, int cnt, float* out);
 
 // B-spline curve of the knots at knots and midpoints: out[2k] at knot k, out[2k + 1] between k and k + 1.
 // Returns 2n - 1 (0 when n == 0).

@@ -108,9 +108,13 @@ std::vector<float> make_half_table() {
 
 }  // namespace
 
-float half_to_float(std::uint16_t h) {
+const float* half_table() {
   static const std::vector<float> table = make_half_table();
-  return table[h];
+  return table.data();
+}
+
+float half_to_float(std::uint16_t h) {
+  return half_table()[h];
 }
 
 std::uint16_t float_to_half(float f) {
@@ -164,6 +168,7 @@ Pyramid build_pyramid(const float* data, int channels, int W, int H, Wrap wrap, 
     for (std::size_t t = 0; t < n_in; ++t)
       if (std::isfinite(data[t])) peak = std::max(peak, std::fabs(data[t]));
     p.half_scale = peak > 0 ? std::ldexp(1.0f, std::ilogb(peak) + 1 - 15) : 1.0f;
+    p.half_table = half_table();
   }
   // Rounds a finished level to binary16 and frees its floats.
   auto to_half = [&](PyramidLevel& lv, const float* values) {

@@ -37,6 +37,9 @@ struct Pyramid {
   // > 0: the levels are held as binary16 (PyramidLevel::half) of value / half_scale, a power of two chosen
   // from the largest value so nothing overflows: half the memory, relative rounding <= 2^-11.
   float half_scale = 0;
+  // half_scale > 0: binary16 -> float for all 65536 values (half_to_float's table), read inline by
+  // sample_level.
+  const float* half_table = nullptr;
 
   std::size_t bytes() const;
 };
@@ -44,6 +47,8 @@ struct Pyramid {
 // binary16 -> float (exact), and float -> binary16 rounded to nearest even (overflow saturates to the largest
 // finite value).
 float half_to_float(std::uint16_t h);
+// The table half_to_float reads (65536 floats, built once).
+const float* half_table();
 std::uint16_t float_to_half(float f);
 
 double pyramid_blur(int level, int levels_per_octave);
@@ -84,11 +89,12 @@ inline void sample_level(const Pyramid& p, const PyramidLevel& lv, float x, floa
   }
   const int c = p.channels;
   if (p.half_scale > 0) {
+    const float* lut = p.half_table;
     const std::uint16_t* r0 = lv.half.data() + std::size_t(j0) * lv.w * c;
     const std::uint16_t* r1 = lv.half.data() + std::size_t(j1) * lv.w * c;
     for (int k = 0; k < c; ++k) {
-      const float a00 = half_to_float(r0[i0 * c + k]), a10 = half_to_float(r0[i1 * c + k]);
-      const float a01 = half_to_float(r1[i0 * c + k]), a11 = half_to_float(r1[i1 * c + k]);
+      const float a00 = lut[r0[i0 * c + k]], a10 = lut[r0[i1 * c + k]];
+      const float a01 = lut[r1[i0 * c + k]], a11 = lut[r1[i1 * c + k]];
       const float a = a00 + (a10 - a00) * fu, b = a01 + (a11 - a01) * fu;
       out[k] = (a + (b - a) * fv) * p.half_scale;
     }
