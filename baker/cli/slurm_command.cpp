@@ -63,8 +63,9 @@ struct Task {
   fs::path out;  // the job's output folder
   int shard = 0;
   int stages = 0;  // the job's most stages (0: none staged)
-  // Per shard, per stage: its pieces of the staged entries (farm/shard_plan.hpp stage_work).
-  std::vector<std::vector<std::vector<StageItem>>> items;
+  // Per stage: this task's pieces of the staged entries (farm/shard_plan.hpp stage_work); a job's entry in
+  // `jobs` holds every shard's, shard after shard.
+  std::vector<std::vector<StageItem>> items;
 };
 
 // Compact Slurm array list: "0-3,5,7-8".
@@ -139,10 +140,9 @@ int run_slurm(const SlurmOptions& o) {
       const Job& job = *load.job;
       need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
       const int stages = job_stages(job);
-      std::vector<std::vector<std::vector<StageItem>>> items(std::size_t(o.shards));
+      std::vector<std::vector<StageItem>> items;
       for (int s = 0; s < o.shards; ++s)
-        for (int st = 0; st < stages; ++st)
-          items[std::size_t(s)].push_back(stage_work(job, {s, o.shards}, st));
+        for (int st = 0; st < stages; ++st) items.push_back(stage_work(job, {s, o.shards}, st));
       jobs.push_back({file, out ? *out : job.output.dir, 0, stages, std::move(items)});
       if (common.empty()) common = fs::absolute(job.output.dir);
     }
@@ -156,13 +156,16 @@ int run_slurm(const SlurmOptions& o) {
   // are not complete on disk.
   std::vector<Task> tasks;
   for (const Task& j : jobs)
-    for (int s = 0; s < o.shards; ++s) tasks.push_back({j.job, j.out, s, j.stages, j.items});
+    for (int s = 0; s < o.shards; ++s) {
+      const auto first = j.items.begin() + std::ptrdiff_t(s) * j.stages;
+      tasks.push_back({j.job, j.out, s, j.stages, {first, first + j.stages}});
+    }
   int stage_count = 1;
   for (const Task& j : jobs) stage_count = std::max(stage_count, j.stages);
   // Task t's pieces of stage `stage`.
   auto items_of = [&](const Task& t, int stage) -> const std::vector<StageItem>& {
     static const std::vector<StageItem> none;
-    return stage < t.stages ? t.items[std::size_t(t.shard)][std::size_t(stage)] : none;
+    return stage < t.stages ? t.items[std::size_t(stage)] : none;
   };
   // Whether task t has work in stage `stage`, and (--resume) whether that work is not on disk yet.
   auto has_stage = [&](const Task& t, int stage) { return stage == 0 || !items_of(t, stage).empty(); };
