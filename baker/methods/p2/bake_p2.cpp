@@ -474,7 +474,7 @@ LayerSet p2_finish_stage_blocks(const Scene& scene, const nlohmann::json& params
       (facet && facet->data.size() != 12 * N))
     throw std::runtime_error("p2 stage " + std::to_string(stage) + ": blocks of another layout");
   P2SweepStats st;
-  const int blocks = p2_stage_blocks(params, stage);
+  const int blocks = direction_block_count(p.directions);
   for (int b = 0; b < blocks; ++b)
     for (int i = 0; i < 7; ++i) {
       const std::string key = std::string(kStatNames[i]) + "@" + std::to_string(b);
@@ -506,7 +506,9 @@ MethodInfo p2_method() {
       "direct light from p1, then indirect bounces gathered over the exactly visible terrain (hull tree)";
   m.read = [](Params& in, const MethodContext& c) { read_p2_params(in, c.bounces); };
   m.bake = bake_p2;
-  m.memory_knob = "its directions (p1's horizons: 4 bytes a texel per direction) and the indirect_b layers";
+  m.memory_knob =
+      "its directions (p1's horizons: 4 bytes a texel per direction, kept up to 1 GiB), its bounces and "
+      "the indirect_b layers";
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
     return p2_working_bytes(c.field, parse_p2_params(r, c.bounces));
   };
