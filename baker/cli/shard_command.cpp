@@ -86,27 +86,28 @@ StageSources::StageSources(const Job& job, int entry, int stage, int width, int 
     state_.emplace(stage_path(job, entry, stage), whole);
     return;
   }
-  // Every block of the stage, then the state before it.
+  // Every block of the stage, then the state before it (none before stage 0).
   for (int b = 0; b < B; ++b)
     blocks_.emplace_back(stage_block_path(job, entry, stage, b),
                          stage_item_identity(job, stage, {entry, b}, width, height));
-  state_.emplace(stage_path(job, entry, stage - 1), stage_identity(job, entry, stage - 1, width, height));
+  if (stage > 0)
+    state_.emplace(stage_path(job, entry, stage - 1), stage_identity(job, entry, stage - 1, width, height));
 }
 
 double StageSources::seconds() const {
-  double s = state_->parts().at(0).seconds;
+  double s = state_ ? state_->parts().at(0).seconds : 0;
   for (const ShardReader& r : blocks_) s += r.parts().at(0).seconds;
   return s;
 }
 
 double StageSources::cpu_seconds() const {
-  double s = state_->parts().at(0).cpu_seconds;
+  double s = state_ ? state_->parts().at(0).cpu_seconds : 0;
   for (const ShardReader& r : blocks_) s += r.parts().at(0).cpu_seconds;
   return s;
 }
 
 LayerSet StageSources::load(const Scene& scene, const RunControl& rc) {
-  LayerSet state = state_->load(0);
+  LayerSet state = state_ ? state_->load(0) : LayerSet();
   if (blocks_.empty()) return state;
   LayerSet total;
   for (ShardReader& r : blocks_) add_direction_block(total, r.load(0));  // in block order

@@ -29,8 +29,8 @@ ShardIdentity stage_item_identity(const Job& job, int stage, StageItem item, int
 
 // The files that give a staged entry's state after stage `stage`: the stage's file when complete (or the
 // stage is whole), else, for a stage divided by direction blocks, the previous stage's file and the stage's
-// block files, merged on load (MethodInfo::finish_stage_blocks). Opened and checked on construction
-// (InputError naming the first file missing, truncated or of another job).
+// block files (stage 0: its block files alone), merged on load (MethodInfo::finish_stage_blocks). Opened and
+// checked on construction (InputError naming the first file missing, truncated or of another job).
 class StageSources {
  public:
   StageSources(const Job& job, int entry, int stage, int width, int height);

@@ -7,7 +7,7 @@
 //   - a staged method (MethodInfo::stages: p2, stage 0 its direct light, stage b its bounce b) runs stage
 //     s after stage s - 1 (`bake --shard I/N --stage s`; stage 0 with the shard's other work): a whole
 //     stage in shard (entry index mod N), into its own stage file (stage_path); a stage divided by
-//     direction blocks (MethodInfo::stage_blocks: p2's bounces) as blocks, shard I taking blocks
+//     direction blocks (MethodInfo::stage_blocks: every stage of p2) as blocks, shard I taking blocks
 //     [I B / N, (I + 1) B / N), each into its own block file (stage_block_path). Whoever first needs the
 //     state after such a stage (the next stage's tasks, the merge) adds its blocks to the state before it
 //     (MethodInfo::finish_stage_blocks); the next stage's tasks also write it as the stage's file;
@@ -48,8 +48,8 @@ struct StageItem {
   int entry = 0;
   int block = -1;
 };
-// What shard `id` computes of stage `stage` (stage 0: the whole stage 0 of the staged entries of
-// ShardWork::staged), in entry order and block order.
+// What shard `id` computes of stage `stage`: a whole stage in shard (entry index mod N), a divided one's
+// blocks [I B / N, (I + 1) B / N), in entry order and block order.
 std::vector<StageItem> stage_work(const Job& job, ShardId id, int stage);
 
 struct ShardWork {

@@ -1,6 +1,6 @@
 #!/bin/bash
-# p2 with 2 bounces as staged shards (stage 0 its direct light, whole; stage b its bounce b, divided by
-# direction blocks across the shards, each block from the whole field's previous stage) merges to the bits
+# p2 with 2 bounces as staged shards (stage 0 its direct light, stage b its bounce b, each divided by
+# direction blocks across the shards, a bounce's blocks from the whole field's previous stage) merges to the bits
 # of a single-machine bake, for 1, 2, 3 and 5 shards (K = 16: 8 blocks of 2 directions, so 3 and 5 shards
 # take unequal runs of blocks), with a second p2 entry of 1 bounce (fewer stages, K = 8: blocks of one
 # direction, texel senders) and a direction-dividing method beside them. A stage whose previous stage is
@@ -30,12 +30,15 @@ for N in 1 2 3 5; do
     done
   done
   for b in 0 1 2 3 4 5 6 7; do
-    ls "s$N"/shards/p2farm.p2-0.stage-2.block-$b.hfshard >/dev/null || fail "no block $b of the last stage"
+    for s in 0 2; do
+      ls "s$N"/shards/p2farm.p2-0.stage-$s.block-$b.hfshard >/dev/null || fail "no block $b of stage $s"
+    done
   done
+  ls "s$N"/shards/p2farm.p2-0.stage-0.hfshard >/dev/null || fail "stage 0 not merged into its file by stage 1"
   ls "s$N"/shards/p2farm.p2-0.stage-1.hfshard >/dev/null || fail "stage 1 not merged into its file by stage 2"
   "$H" merge job.json --no-cache --quiet --out "s$N" || fail "merge of $N shards"
   same_outputs whole "s$N"
-  echo "ok: $N shards, 3 stages, bounces by 8 direction blocks: the bake's bits"
+  echo "ok: $N shards, 3 stages, each by 8 direction blocks: the bake's bits"
 done
 # Stage 2 without stage 1 (neither its file nor one of its blocks): refused, naming the missing block.
 rm -f s2/shards/p2farm.p2-0.stage-[12].hfshard s2/shards/p2farm.p2-0.stage-[12].block-*.hfshard

@@ -80,8 +80,8 @@ TEST(ShardPlan, EveryBlockRowAndWholeMethodIsInExactlyOneShard) {
   }
 }
 
-// p2's stages: stage 0 whole in shard (entry mod N); each bounce's direction blocks (min(K, 8)) each in
-// exactly one shard, in block order; no stage beyond the entry's bounces.
+// p2's stages: every stage's direction blocks (min(K, 8); stage 0 p1's, stage b bounce b's) each in exactly
+// one shard, in block order; no stage beyond the entry's bounces.
 TEST(ShardPlan, EveryStageBlockIsInExactlyOneShard) {
   Job job;
   job.name = "j";
@@ -92,32 +92,29 @@ TEST(ShardPlan, EveryStageBlockIsInExactlyOneShard) {
   c.method = "p2", c.resolved = {{"directions", 5}, {"bounces", 1}};
   job.bakes = {a, b, c};
   ASSERT_EQ(job_stages(job), 3);
-  EXPECT_EQ(entry_stage_blocks(job.bakes[0], 0), 0);
+  EXPECT_EQ(entry_stage_blocks(job.bakes[0], 0), 8);
   EXPECT_EQ(entry_stage_blocks(job.bakes[0], 1), 8);
   EXPECT_EQ(entry_stage_blocks(job.bakes[2], 1), 5);
   EXPECT_EQ(entry_stage_blocks(job.bakes[1], 1), 0);
   for (int N = 1; N <= 11; ++N)
     for (int stage = 0; stage < 3; ++stage) {
-      std::vector<std::vector<int>> seen(3);  // per entry: how often each block (or the whole stage: 0)
+      std::vector<std::vector<int>> seen(3);  // per entry: how often each block
       for (int e = 0; e < 3; ++e) seen[std::size_t(e)].assign(8, 0);
       for (int I = 0; I < N; ++I) {
         int last_entry = -1, last_block = -1;
         for (const StageItem& item : stage_work(job, {I, N}, stage)) {
           ASSERT_NE(item.entry, 1);
-          if (stage == 0) {
-            EXPECT_EQ(item.block, -1);
-            EXPECT_EQ(item.entry % N, I);
-          } else {
-            EXPECT_GE(item.block, 0);
-            if (item.entry == last_entry) EXPECT_GT(item.block, last_block);
+          EXPECT_GE(item.block, 0);
+          if (item.entry == last_entry) {
+            EXPECT_GT(item.block, last_block);
           }
           last_entry = item.entry, last_block = item.block;
-          seen[std::size_t(item.entry)][std::size_t(std::max(item.block, 0))] += 1;
+          seen[std::size_t(item.entry)][std::size_t(item.block)] += 1;
         }
       }
       for (int e : {0, 2}) {
         const int stages = e == 0 ? 3 : 2;
-        const int units = stage >= stages ? 0 : stage == 0 ? 1 : (e == 0 ? 8 : 5);
+        const int units = stage >= stages ? 0 : e == 0 ? 8 : 5;
         for (int u = 0; u < 8; ++u)
           EXPECT_EQ(seen[std::size_t(e)][std::size_t(u)], u < units ? 1 : 0)
               << "N " << N << " stage " << stage << " entry " << e << " unit " << u;

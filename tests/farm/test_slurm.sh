@@ -6,7 +6,7 @@
 #   big_job         one 256^2 job with p1, hbao and a reference as 4 shards + merge: bit-identical (the 2048^2
 #                   job of the same kind is measured by farm-bench, not tested: see the README)
 #   p2_stages       p2 with 2 bounces, K = 16, as 3 staged shards (3 stage arrays chained by afterok, each
-#                   bounce's 8 direction blocks across the 3 tasks, then the merge): bit-identical to hfbake bake
+#                   stage's 8 direction blocks across the 3 tasks, then the merge): bit-identical to hfbake bake
 #   deleted_shard   after hfbake slurm, a deleted shard makes the merge job fail naming it
 #   scancel_resume  a task cancelled (scancel) is resubmitted by hfbake slurm --resume: the same bits
 #   shared_cache    two bakes of one reference sharing a cache folder, as concurrent Slurm jobs: both
@@ -96,7 +96,7 @@ J
   grep -q "3 tasks of stage 0 as array job" slurm.err || fail "stage 0 was not submitted as 3 tasks"
   for st in 1 2; do grep -q "3 tasks of stage $st as array job" slurm.err || fail "stage $st was not divided over the 3 tasks"; done
   for st in 0 1; do [ -f farm/shards/p2.p2.stage-$st.hfshard ] || fail "no stage $st file: $(ls farm/shards)"; done
-  for st in 1 2; do
+  for st in 0 1 2; do
     for b in 0 1 2 3 4 5 6 7; do
       [ -f farm/shards/p2.p2.stage-$st.block-$b.hfshard ] || fail "no block $b of stage $st: $(ls farm/shards)"
     done

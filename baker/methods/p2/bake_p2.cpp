@@ -122,18 +122,19 @@ double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
 }
 
 P2State p2_stage0(const Scene& scene, const P2Params& params, const RunControl& rc) {
+  // Direct light: P1 on the same driver (its horizons, its lighting tables, its sun shadows).
+  const P1Params p1 = p2_direct_params(params, p2_keeps_horizons(scene.field, params, scene.bounces));
+  return p2_state_of_direct(scene, params, compute_p1(scene, p1, rc));
+}
+
+P2State p2_state_of_direct(const Scene& scene, const P2Params& params, P1Result&& direct) {
   const HeightField& f = scene.field;
   const std::size_t N = f.texel_count();
   P2State r;
-
-  // Direct light: P1 on the same driver (its horizons, its lighting tables, its sun shadows).
-  const P1Params p1 = p2_direct_params(params, p2_keeps_horizons(f, params, scene.bounces));
-  P1Result direct = compute_p1(scene, p1, rc);
   r.direct.resize(N);
   for (std::size_t i = 0; i < N; ++i) r.direct[i] = direct.direct_at(i);
   std::vector<float>().swap(direct.direct);
   r.p1_sin_horizon = std::move(direct.horizon);
-  rc.check();
 
   // Exit radiance of bounce 0: reflected direct light plus emission.
   r.exit.resize(N);
@@ -421,8 +422,58 @@ LayerSet p2_bake_stage(const Scene& scene, const nlohmann::json& params, int sta
 // values a texel, "facet#2f": 6, before the last bounce with facet senders), which the merge adds by
 // add_split in block order (farm/merge_blocks.cpp) as p2_bounce does; its sweep counts as attributes
 // "<count>@<b>" (kept apart by the merge, summed here).
-int p2_stage_blocks(const nlohmann::json& resolved, int stage) {
-  return stage > 0 ? direction_block_count(resolved.value("directions", 64)) : 0;
+// Stage 0 (p1's direct light) divides by the same blocks: block b's P1Sums (p1_direction_sums) as layers
+// named after their members, its horizons (when kept) as "horizon@<k_begin>", added in float in block
+// order by the merge as compute_p1 adds them (p1_add_sums), then finished by p1_finish.
+int p2_stage_blocks(const nlohmann::json& resolved, int) {
+  return direction_block_count(resolved.value("directions", 64));
+}
+
+LayerSet p1_block_layers(const Scene& scene, const P2Params& p, int block, const RunControl& rc) {
+  const int K = p.directions;
+  const P1Params p1 = p2_direct_params(p, p2_keeps_horizons(scene.field, p, scene.bounces));
+  P1Sums s =
+      p1_direction_sums(scene, p1, direction_block_begin(block, K), direction_block_begin(block + 1, K), rc);
+  LayerSet out;
+  out.width = scene.field.width, out.height = scene.field.height;
+  const std::size_t N = scene.field.texel_count();
+  auto put = [&](const std::string& name, std::vector<float>& v) {
+    if (v.empty()) return;
+    std::vector<std::string> channels = indexed_channels(int(v.size() / N));  // before the move
+    out.adopt(name, std::move(channels), std::move(v));
+  };
+  put("ao", s.ao), put("vsky", s.vsky), put("rgb", s.rgb), put("bent", s.bent);
+  put("fao", s.fao), put("fdr", s.fdr), put("fdg", s.fdg), put("fdb", s.fdb);
+  put("horizon@" + std::to_string(s.k_begin), s.horizon);  // [(k - k_begin) * N + texel]
+  return out;
+}
+
+P1Result p1_of_block_layers(const Scene& scene, const P2Params& p, LayerSet&& sums, const RunControl& rc) {
+  const int K = p.directions;
+  const std::size_t N = scene.field.texel_count();
+  const P1Params p1 = p2_direct_params(p, p2_keeps_horizons(scene.field, p, scene.bounces));
+  P1Sums s;
+  s.k_begin = 0, s.k_end = K;
+  auto take = [&](const char* name, std::vector<float>& v) {
+    if (Layer* l = sums.find(name)) v = std::move(l->data);
+  };
+  take("ao", s.ao), take("vsky", s.vsky), take("rgb", s.rgb), take("bent", s.bent);
+  take("fao", s.fao), take("fdr", s.fdr), take("fdg", s.fdg), take("fdb", s.fdb);
+  if (p1.horizon) {  // the blocks' horizons into [k * N + texel]
+    s.horizon.assign(N * std::size_t(K), 0.0f);
+    int placed = 0;
+    for (const Layer& l : sums.layers) {
+      if (l.name.rfind("horizon@", 0) != 0) continue;
+      const std::size_t k0 = std::size_t(std::stoi(l.name.substr(8)));
+      if (k0 * N + l.data.size() > s.horizon.size())
+        throw std::runtime_error("p2 stage 0: horizons of another K");
+      std::copy(l.data.begin(), l.data.end(), s.horizon.begin() + std::ptrdiff_t(k0 * N));
+      placed += l.channel_count();
+    }
+    if (placed != K) throw std::runtime_error("p2 stage 0: the blocks' horizons do not cover the directions");
+  }
+  sums = LayerSet();
+  return p1_finish(scene, p1, std::move(s), rc);
 }
 
 const char* const kStatNames[] = {"receivers",  "iterations", "naive_iterations", "horizons",
@@ -437,6 +488,7 @@ LayerSet p2_bake_stage_block(const Scene& scene, const nlohmann::json& params, i
                              LayerSet&& previous, const RunControl& rc) {
   const P2Params p = stage_params(scene, params);
   const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
+  if (stage == 0) return p1_block_layers(scene, p, block, rc);
   const P2State s = stage_state_before(stage, std::move(previous));
   P2BlockSums sums = p2_bounce_block(scene, p, B, s, block, rc);
   LayerSet out;
@@ -462,9 +514,12 @@ LayerSet p2_bake_stage_block(const Scene& scene, const nlohmann::json& params, i
 }
 
 LayerSet p2_finish_stage_blocks(const Scene& scene, const nlohmann::json& params, int stage,
-                                LayerSet&& previous, LayerSet&& sums, const RunControl&) {
+                                LayerSet&& previous, LayerSet&& sums, const RunControl& rc) {
   const P2Params p = stage_params(scene, params);
   const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
+  if (stage == 0)
+    return state_layers(p2_state_of_direct(scene, p, p1_of_block_layers(scene, p, std::move(sums), rc)),
+                        scene.field.width, scene.field.height, B == 0);
   P2State s = stage_state_before(stage, std::move(previous));
   const std::size_t N = scene.field.texel_count();
   const Layer* total = sums.find("indirect#2f");
@@ -520,9 +575,11 @@ MethodInfo p2_method() {
   m.bake_stage_block = p2_bake_stage_block;
   m.finish_stage_blocks = p2_finish_stage_blocks;
   m.division_note =
-      "bounces as successive stages (stage 0 direct light, whole in one shard; stage b bounce b, needing "
-      "the previous stage of the whole field), each bounce by direction blocks across the shards, their "
-      "double sums merged exactly (SplitDouble) in block order as the single-machine bake sums them";
+      "bounces as successive stages (stage 0 direct light, stage b bounce b, needing the previous stage of "
+      "the whole field), each by direction blocks across the shards: stage 0 p1's float block sums, a "
+      "bounce's "
+      "double sums passed as two floats (SplitDouble), merged in block order as the single-machine bake sums "
+      "them";
   return m;
 }
 

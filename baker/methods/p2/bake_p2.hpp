@@ -109,6 +109,9 @@ struct P2State {
   P2SweepStats stats;
 };
 P2State p2_stage0(const Scene& scene, const P2Params& params, const RunControl& rc);
+// Stage 0's state from P1's result (p2_direct_params): what p2_stage0 does after compute_p1.
+struct P1Result;
+P2State p2_state_of_direct(const Scene& scene, const P2Params& params, P1Result&& direct);
 // Bounce state.bounces_done + 1 of `bounces` (the last frees what no later bounce needs): its direction
 // blocks (core/direction_blocks.hpp) by p2_bounce_block, added by add_indirect_block in block order, then
 // p2_finish_bounce. The farm runs the blocks as separate tasks and merges them the same way.
