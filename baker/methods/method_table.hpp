@@ -69,7 +69,7 @@ struct MethodInfo {
                          const RunControl& rc) = nullptr;
   LayerSet (*finish_stages)(const Scene& scene, const nlohmann::json& params, LayerSet&& last,
                             const RunControl& rc) = nullptr;
-  // A stage divided by direction blocks (p2's bounces; core/direction_blocks.hpp of the entry's K):
+  // A stage divided by direction blocks (every stage of p2; core/direction_blocks.hpp of the entry's K):
   // stage_blocks(resolved, stage) says how many (0: the stage runs whole through bake_stage);
   // bake_stage_block gives block `block`'s raw sums from the state before the stage (the previous stage's,
   // whole) as float layers, added by the farm like bake_block's (farm/merge_blocks.cpp add_direction_block);

@@ -96,8 +96,10 @@ struct P2Result {
 P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc);
 
 // compute_p2 as its stages (the farm runs them as successive tasks, baker/farm): stage 0 P1's direct light
-// and horizons, stage b (1..bounces) bounce b, each from the state the previous stage left. compute_p2 is
-// p2_stage0, then p2_bounce for b = 1..bounces, then p2_result: the same operations in the same order.
+// (and horizons, when kept), stage b (1..bounces) bounce b, each from the state the previous stage left.
+// compute_p2 is p2_stage0, then p2_bounce for b = 1..bounces, then p2_result: the same operations in the same
+// order. Each stage sums its directions in the direction blocks (core/direction_blocks.hpp), which the farm
+// computes as separate tasks (MethodInfo::stage_blocks) and adds in the same order.
 struct P2State {
   int bounces_done = 0;
   std::vector<Rgb> direct;                   // E_direct / pi
