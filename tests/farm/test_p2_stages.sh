@@ -1,6 +1,6 @@
 #!/bin/bash
 # p2 with 2 bounces as staged shards (stage 0 its direct light, stage b its bounce b, each divided by
-# direction blocks across the shards, a bounce's blocks from the whole field's previous stage) merges to the bits
+# direction blocks across the shards, a bounce's blocks from the whole field's previous stage) merges to the (float) bits
 # of a single-machine bake, for 1, 2, 3 and 5 shards (K = 16: 8 blocks of 2 directions, so 3 and 5 shards
 # take unequal runs of blocks), with a second p2 entry of 1 bounce (fewer stages, K = 8: blocks of one
 # direction, texel senders) and a direction-dividing method beside them. A stage whose previous stage is
@@ -19,7 +19,7 @@ cat >job.json <<'J'
            "layers": ["indirect", "total", "direct", "indirect_b1", "indirect_b2"]},
           {"method": "hbao", "directions": 10, "radius": 5},
           {"method": "p2", "directions": 8, "bounces": 1, "senders": "texels"}],
- "output": {"dir": "out", "previews": true}}
+ "output": {"dir": "out", "previews": true, "pixel_type": "float"}}
 J
 "$H" validate job.json --quiet || fail "test job invalid"
 "$H" bake job.json --no-cache --quiet --out whole || fail "bake"
