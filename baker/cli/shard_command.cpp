@@ -68,6 +68,54 @@ ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, in
   return id;
 }
 
+ShardIdentity stage_item_identity(const Job& job, int stage, StageItem item, int width, int height) {
+  if (item.block < 0) return stage_identity(job, item.entry, stage, width, height);
+  const BakeEntry& e = job.bakes[std::size_t(item.entry)];
+  ShardIdentity id = shard_identity(job, {item.block, entry_stage_blocks(e, stage)}, width, height);
+  id.what = "direction block " + std::to_string(item.block) + " of stage " + std::to_string(stage) + " of " +
+            e.stem;
+  id.redo = "bake it with --stage " + std::to_string(stage) + " and the --shard I/N that holds the block";
+  return id;
+}
+
+StageSources::StageSources(const Job& job, int entry, int stage, int width, int height)
+    : job_(job), entry_(entry), stage_(stage) {
+  const ShardIdentity whole = stage_identity(job, entry, stage, width, height);
+  const int B = entry_stage_blocks(job.bakes[std::size_t(entry)], stage);
+  if (B == 0 || shard_is_complete(stage_path(job, entry, stage), whole)) {
+    state_.emplace(stage_path(job, entry, stage), whole);
+    return;
+  }
+  // Every block of the stage, then the state before it (none before stage 0).
+  for (int b = 0; b < B; ++b)
+    blocks_.emplace_back(stage_block_path(job, entry, stage, b),
+                         stage_item_identity(job, stage, {entry, b}, width, height));
+  if (stage > 0)
+    state_.emplace(stage_path(job, entry, stage - 1), stage_identity(job, entry, stage - 1, width, height));
+}
+
+double StageSources::seconds() const {
+  double s = state_ ? state_->parts().at(0).seconds : 0;
+  for (const ShardReader& r : blocks_) s += r.parts().at(0).seconds;
+  return s;
+}
+
+double StageSources::cpu_seconds() const {
+  double s = state_ ? state_->parts().at(0).cpu_seconds : 0;
+  for (const ShardReader& r : blocks_) s += r.parts().at(0).cpu_seconds;
+  return s;
+}
+
+LayerSet StageSources::load(const Scene& scene, const RunControl& rc) {
+  LayerSet state = state_ ? state_->load(0) : LayerSet();
+  if (blocks_.empty()) return state;
+  LayerSet total;
+  for (ShardReader& r : blocks_) add_direction_block(total, r.load(0));  // in block order
+  const BakeEntry& e = job_.bakes[std::size_t(entry_)];
+  return find_method(e.method)->finish_stage_blocks(scene, e.params, stage_, std::move(state),
+                                                    std::move(total), rc);
+}
+
 std::vector<fs::path> remove_stale_shard_files(const fs::path& dir) {
   std::vector<fs::path> removed;
   std::error_code ec;
@@ -95,25 +143,26 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
   const ShardWork work = shard_work(job, size.height, id);
   for (const fs::path& p : remove_stale_shard_files(path.parent_path()))
     progress.message(label + ": removed " + p.string() + " (left by a process that no longer runs)");
-  // The staged entries' stage `stage` (stage 0 beside the shard's other work); returns false when there
-  // is nothing to do (every such stage file complete, or no entry has that stage).
-  std::vector<int> todo;
-  for (int e : work.staged)
-    if (stage < entry_stages(job.bakes[std::size_t(e)]) &&
-        !shard_is_complete(stage_path(job, e, stage), stage_identity(job, e, stage, size.width, size.height)))
-      todo.push_back(e);
+  // The staged entries' pieces of stage `stage` (stage 0 beside the shard's other work) not yet complete.
+  std::vector<StageItem> todo;
+  for (const StageItem& item : stage_work(job, id, stage))
+    if (!shard_is_complete(stage_item_path(job, stage, item),
+                           stage_item_identity(job, stage, item, size.width, size.height)))
+      todo.push_back(item);
   const bool shard_done = stage > 0 || shard_is_complete(path, identity);
   if (shard_done && todo.empty()) {
     progress.message(label + (stage > 0 ? " stage " + std::to_string(stage) : std::string()) +
                      ": nothing to bake (complete or no such stage)");
     return stage > 0 ? fs::path() : path;
   }
-  // The previous stage's files, checked before loading anything.
-  std::vector<ShardReader> previous;
-  for (int e : todo)
-    if (stage > 0)
-      previous.emplace_back(stage_path(job, e, stage - 1),
-                            stage_identity(job, e, stage - 1, size.width, size.height));
+  // The state before the stage of each entry with work (its file, or the files it is merged from), checked
+  // before loading anything.
+  std::map<int, StageSources> previous;
+  if (stage > 0)
+    for (const StageItem& item : todo)
+      if (!previous.count(item.entry))
+        previous.emplace(std::piecewise_construct, std::forward_as_tuple(item.entry),
+                         std::forward_as_tuple(job, item.entry, stage - 1, size.width, size.height));
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();
   const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
@@ -127,35 +176,69 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
     progress.begin(job.name, step);
     return rc;
   };
+  // The state before the stage, per entry: loaded once (merged from its blocks and written as that stage's
+  // file when it was divided, so later readers find it whole).
+  int state_entry = -1;
+  LayerSet state;
+  double state_seconds = 0, state_cpu = 0;
   for (std::size_t t = 0; t < todo.size(); ++t) {
     if (cancel.load()) throw Cancelled();
-    const int e = todo[t];
+    const StageItem item = todo[t];
+    const int e = item.entry;
     const BakeEntry& entry = job.bakes[std::size_t(e)];
-    const std::string step = entry.stem + "@stage" + std::to_string(stage);
+    const MethodInfo* m = find_method(entry.method);
+    if (stage > 0 && state_entry != e) {
+      StageSources& src = previous.at(e);
+      state_entry = e;
+      state_seconds = src.seconds(), state_cpu = src.cpu_seconds();
+      if (src.merged()) {
+        const std::string step = entry.stem + "@stage" + std::to_string(stage - 1);
+        const RunControl rc = begin_step(step);
+        const auto t0 = std::chrono::steady_clock::now();
+        state = src.load(scene, rc);
+        ShardWriter w(stage_path(job, e, stage - 1),
+                      stage_identity(job, e, stage - 1, size.width, size.height), temporary_owner());
+        ShardPart part;
+        part.entry = e, part.kind = "stage", part.block = stage - 1;
+        part.seconds = state_seconds, part.cpu_seconds = state_cpu;
+        w.add(std::move(part), state);
+        if (cancel.load()) throw Cancelled();
+        w.commit();
+        progress.end(job.name, step, seconds_since(t0));
+      } else {
+        state = src.load(scene, RunControl{});
+      }
+    }
+    const std::string step = entry.stem + "@stage" + std::to_string(stage) +
+                             (item.block >= 0 ? "#" + std::to_string(item.block) : std::string());
     const RunControl rc = begin_step(step);
     const auto t0 = std::chrono::steady_clock::now();
     const double cpu0 = process_cpu_seconds();
-    ShardWriter writer(stage_path(job, e, stage), stage_identity(job, e, stage, size.width, size.height),
-                       temporary_owner());
+    ShardWriter writer(stage_item_path(job, stage, item),
+                       stage_item_identity(job, stage, item, size.width, size.height), temporary_owner());
     ShardPart part;
-    part.entry = e, part.kind = "stage", part.block = stage;
-    // Seconds of this stage and the earlier ones (the merge reports the entry's total).
+    part.entry = e, part.kind = item.block < 0 ? "stage" : "stage-block";
+    part.block = item.block < 0 ? stage : item.block;
+    // A whole stage's file: the seconds of this stage and the earlier ones (the merge reports the entry's
+    // total); a block's: its own.
     double seconds = 0, cpu = 0;
+    if (item.block < 0) seconds = state_seconds, cpu = state_cpu;
+    // The state for this piece: the last piece of the entry takes it, the others a copy.
+    const bool last_of_entry = t + 1 == todo.size() || todo[t + 1].entry != e;
     LayerSet prev;
-    if (stage > 0) {
-      seconds = previous[t].parts().at(0).seconds, cpu = previous[t].parts().at(0).cpu_seconds;
-      prev = previous[t].load(0);
-    }
-    const LayerSet state =
-        find_method(entry.method)->bake_stage(scene, entry.params, stage, std::move(prev), rc);
+    if (stage > 0) prev = last_of_entry ? std::move(state) : LayerSet(state);
+    const LayerSet out =
+        item.block < 0 ? m->bake_stage(scene, entry.params, stage, std::move(prev), rc)
+                       : m->bake_stage_block(scene, entry.params, stage, item.block, std::move(prev), rc);
+    if (last_of_entry) state_entry = -1, state = LayerSet();
     part.seconds = seconds + seconds_since(t0), part.cpu_seconds = cpu + process_cpu_seconds() - cpu0;
     progress.end(job.name, step, part.seconds);
     outcome.methods[step] = {{"seconds", part.seconds}, {"cpu_seconds", part.cpu_seconds}};
-    writer.add(std::move(part), state);
+    writer.add(std::move(part), out);
     if (cancel.load()) throw Cancelled();
     writer.commit();
   }
-  if (shard_done) return stage > 0 ? stage_path(job, todo.front(), stage) : path;
+  if (shard_done) return stage > 0 ? stage_item_path(job, stage, todo.front()) : path;
 
   ShardWriter writer(path, identity, temporary_owner());
   auto run = [&](const std::string& step, ShardPart part, auto&& compute) {
@@ -230,8 +313,8 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
   // Staged entries: their last stage's file, whichever shard made it.
   for (std::size_t e = 0; e < job.bakes.size(); ++e)
     if (const int S = entry_stages(job.bakes[e]); S > 0)
-      stages_.emplace(int(e), ShardReader(stage_path(job, int(e), S - 1),
-                                          stage_identity(job, int(e), S - 1, width, height)));
+      stages_.emplace(std::piecewise_construct, std::forward_as_tuple(int(e)),
+                      std::forward_as_tuple(job, int(e), S - 1, width, height));
   for (int i = 0; i < count_; ++i) {
     const ShardId id{i, count_};
     readers_.emplace_back(shard_path(job, id), identity_of(job, id, width, height));
@@ -251,7 +334,7 @@ LayerSet MergedShards::method(int entry, const Scene& scene, const RunControl& r
   const BakeEntry& e = job_.bakes[std::size_t(entry)];
   const int B = entry_direction_blocks(e);
   if (auto st = stages_.find(entry); st != stages_.end())
-    return find_method(e.method)->finish_stages(scene, e.params, st->second.load(0), rc);
+    return find_method(e.method)->finish_stages(scene, e.params, st->second.load(scene, rc), rc);
   LayerSet total;
   for (ShardReader& r : readers_)
     for (std::size_t p = 0; p < r.parts().size(); ++p) {
@@ -274,7 +357,7 @@ LayerSet MergedShards::reference() {
 }
 
 double MergedShards::seconds(int entry) const {
-  if (auto st = stages_.find(entry); st != stages_.end()) return st->second.parts().at(0).seconds;
+  if (auto st = stages_.find(entry); st != stages_.end()) return st->second.seconds();
   double s = 0;
   for (const ShardReader& r : readers_)
     for (const ShardPart& p : r.parts())
@@ -283,7 +366,7 @@ double MergedShards::seconds(int entry) const {
 }
 
 double MergedShards::cpu_seconds(int entry) const {
-  if (auto st = stages_.find(entry); st != stages_.end()) return st->second.parts().at(0).cpu_seconds;
+  if (auto st = stages_.find(entry); st != stages_.end()) return st->second.cpu_seconds();
   double s = 0;
   for (const ShardReader& r : readers_)
     for (const ShardPart& p : r.parts())

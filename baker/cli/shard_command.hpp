@@ -5,6 +5,7 @@
 #include <atomic>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "cli/job_outcome.hpp"
@@ -22,6 +23,29 @@ namespace hfbake {
 ShardIdentity shard_identity(const Job& job, ShardId id, int width, int height);
 // A staged entry's stage file: "shard" index = the stage, count = the entry's stages.
 ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, int height);
+// A piece of a stage's file (farm/shard_plan.hpp StageItem): stage_identity for a whole stage; a block's
+// "shard" index = the block, count = the stage's blocks.
+ShardIdentity stage_item_identity(const Job& job, int stage, StageItem item, int width, int height);
+
+// The files that give a staged entry's state after stage `stage`: the stage's file when complete (or the
+// stage is whole), else, for a stage divided by direction blocks, the previous stage's file and the stage's
+// block files (stage 0: its block files alone), merged on load (MethodInfo::finish_stage_blocks). Opened and
+// checked on construction (InputError naming the first file missing, truncated or of another job).
+class StageSources {
+ public:
+  StageSources(const Job& job, int entry, int stage, int width, int height);
+  bool merged() const { return !blocks_.empty(); }  // made from blocks (not yet a stage file)
+  LayerSet load(const Scene& scene, const RunControl& rc);
+  double seconds() const;  // the entry's seconds up to this stage, every shard's summed
+  double cpu_seconds() const;
+
+ private:
+  const Job& job_;
+  int entry_ = 0, stage_ = 0;
+  std::optional<ShardReader> state_;
+  std::vector<ShardReader> blocks_;
+};
+
 // The version a shard records: hfbake_version() (the version and git revision CMake configured), then
 // "+build." and the executable's GNU build id (farm/build_id.hpp), which changes whenever the binary does.
 std::string shard_version();
@@ -57,7 +81,7 @@ class MergedShards {
   const Job& job_;
   int count_ = 0, height_ = 0;
   std::vector<ShardReader> readers_;
-  std::map<int, ShardReader> stages_;  // staged entries: the last stage's file
+  std::map<int, StageSources> stages_;  // staged entries: the last stage's files
 };
 
 }  // namespace hfbake

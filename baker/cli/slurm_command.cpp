@@ -62,7 +62,10 @@ struct Task {
   fs::path job;  // as given (the scripts run in the submission's folder: --chdir)
   fs::path out;  // the job's output folder
   int shard = 0;
-  std::vector<int> stages;  // the job's staged entries' stage counts, by entry index (0: not staged)
+  int stages = 0;  // the job's most stages (0: none staged)
+  // Per stage: this task's pieces of the staged entries (farm/shard_plan.hpp stage_work); a job's entry in
+  // `jobs` holds every shard's, shard after shard.
+  std::vector<std::vector<StageItem>> items;
 };
 
 // Compact Slurm array list: "0-3,5,7-8".
@@ -136,9 +139,11 @@ int run_slurm(const SlurmOptions& o) {
       }
       const Job& job = *load.job;
       need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
-      std::vector<int> stages;
-      for (const BakeEntry& e : job.bakes) stages.push_back(entry_stages(e));
-      jobs.push_back({file, out ? *out : job.output.dir, 0, stages});
+      const int stages = job_stages(job);
+      std::vector<std::vector<StageItem>> items;
+      for (int s = 0; s < o.shards; ++s)
+        for (int st = 0; st < stages; ++st) items.push_back(stage_work(job, {s, o.shards}, st));
+      jobs.push_back({file, out ? *out : job.output.dir, 0, stages, std::move(items)});
       if (common.empty()) common = fs::absolute(job.output.dir);
     }
   }
@@ -151,17 +156,19 @@ int run_slurm(const SlurmOptions& o) {
   // are not complete on disk.
   std::vector<Task> tasks;
   for (const Task& j : jobs)
-    for (int s = 0; s < o.shards; ++s) tasks.push_back({j.job, j.out, s, j.stages});
+    for (int s = 0; s < o.shards; ++s) {
+      const auto first = j.items.begin() + std::ptrdiff_t(s) * j.stages;
+      tasks.push_back({j.job, j.out, s, j.stages, {first, first + j.stages}});
+    }
   int stage_count = 1;
-  for (const Task& j : jobs)
-    for (int st : j.stages) stage_count = std::max(stage_count, st);
-  // Whether task t has work in stage `stage`, and (--resume) whether that work is not on disk yet.
-  auto has_stage = [&](const Task& t, int stage) {
-    if (stage == 0) return true;
-    for (std::size_t e = 0; e < t.stages.size(); ++e)
-      if (int(e) % o.shards == t.shard && t.stages[e] > stage) return true;
-    return false;
+  for (const Task& j : jobs) stage_count = std::max(stage_count, j.stages);
+  // Task t's pieces of stage `stage`.
+  auto items_of = [&](const Task& t, int stage) -> const std::vector<StageItem>& {
+    static const std::vector<StageItem> none;
+    return stage < t.stages ? t.items[std::size_t(stage)] : none;
   };
+  // Whether task t has work in stage `stage`, and (--resume) whether that work is not on disk yet.
+  auto has_stage = [&](const Task& t, int stage) { return stage == 0 || !items_of(t, stage).empty(); };
   auto complete = [&](const Task& t, int stage) {
     JobLoad load = load_job(t.job, t.out);
     if (!load.job || !resolve_job(*load.job).empty()) return false;
@@ -171,10 +178,9 @@ int run_slurm(const SlurmOptions& o) {
     if (stage == 0 &&
         !shard_is_complete(shard_path(job, id), shard_identity(job, id, size.width, size.height)))
       return false;
-    for (std::size_t e = 0; e < t.stages.size(); ++e)
-      if (int(e) % o.shards == t.shard && t.stages[e] > stage &&
-          !shard_is_complete(stage_path(job, int(e), stage),
-                             stage_identity(job, int(e), stage, size.width, size.height)))
+    for (const StageItem& item : items_of(t, stage))
+      if (!shard_is_complete(stage_item_path(job, stage, item),
+                             stage_item_identity(job, stage, item, size.width, size.height)))
         return false;
     return true;
   };
@@ -207,7 +213,9 @@ int run_slurm(const SlurmOptions& o) {
        << "# Written by hfbake " << shard_version() << " (hfbake slurm): one array task per (job, shard).\n"
        << "# Each task bakes one shard into <output>/shards/ (a re-run of a finished shard does nothing).\n"
        << "# Resubmit some tasks by hand: sbatch --array=2,5 " << (dir / "bake.sbatch").string() << "\n"
-       << "# Argument: the stage (default 0; p2's bounce b is stage b, run after stage b - 1 of every task:\n"
+       << "# Argument: the stage (default 0; p2's bounce b is stage b, its direction blocks across the "
+          "tasks,\n"
+       << "# run after stage b - 1 of every task:\n"
        << "#   sbatch --array=0-1 --dependency=afterok:<stage 0's job id> " << (dir / "bake.sbatch").string()
        << " 1).\n"
        << "# Memory: the job's estimate (hfbake validate) + 20 %; every task holds whole-field layers.\n";
@@ -294,16 +302,22 @@ int run_slurm(const SlurmOptions& o) {
       if (!fs::exists(p))
         std::fprintf(stderr, "hfbake: error: %s: shard %d/%d is missing (its task failed: see %s)\n",
                      p.c_str(), t.shard, o.shards, (dir / "logs").c_str());
-      // Staged entries of this shard: the first stage no task completed.
-      for (std::size_t e = 0; e < t.stages.size(); ++e) {
-        if (int(e) % o.shards != t.shard) continue;
-        for (int st = 0; st < t.stages[e]; ++st) {
-          const fs::path sp = stage_path(*load.job, int(e), st);
-          if (fs::exists(sp)) continue;
-          std::fprintf(stderr, "hfbake: error: %s: stage %d of %s is missing (its task failed: see %s)\n",
-                       sp.c_str(), st, load.job->bakes[e].stem.c_str(), (dir / "logs").c_str());
-          break;
+      // Staged entries: the pieces of this shard of the first stage where one is missing.
+      for (int st = 0; st < t.stages; ++st) {
+        bool missing = false;
+        for (const StageItem& item : items_of(t, st)) {
+          const fs::path sp = stage_item_path(*load.job, st, item);
+          if (fs::exists(sp) || (item.block >= 0 && fs::exists(stage_path(*load.job, item.entry, st))))
+            continue;
+          missing = true;
+          std::fprintf(
+              stderr, "hfbake: error: %s: %s of %s is missing (its task failed: see %s)\n", sp.c_str(),
+              (item.block < 0 ? "stage " + std::to_string(st)
+                              : "block " + std::to_string(item.block) + " of stage " + std::to_string(st))
+                  .c_str(),
+              load.job->bakes[std::size_t(item.entry)].stem.c_str(), (dir / "logs").c_str());
         }
+        if (missing) break;
       }
     }
     std::fprintf(stderr, "hfbake: error: %s: the merge job %s ended with status %d (log: %s)\n",

@@ -13,6 +13,10 @@ void add_direction_block(LayerSet& total, LayerSet&& block) {
     total = std::move(block);
     return;
   }
+  for (auto& a : block.attributes)  // per-block attributes (p2's "<count>@<b>"): kept
+    if (std::none_of(total.attributes.begin(), total.attributes.end(),
+                     [&](const auto& x) { return x.first == a.first; }))
+      total.attributes.push_back(std::move(a));
   for (Layer& l : block.layers) {
     Layer* t = l.name.find('@') == std::string::npos ? total.find(l.name) : nullptr;
     if (!t) {

@@ -45,6 +45,28 @@ int entry_stages(const BakeEntry& entry) {
              : 0;
 }
 
+int entry_stage_blocks(const BakeEntry& entry, int stage) {
+  const MethodInfo* m = find_method(entry.method);
+  if (!m || !m->stage_blocks || !m->bake_stage_block || !m->finish_stage_blocks || entry_stages(entry) == 0)
+    return 0;
+  return m->stage_blocks(entry.resolved, stage);
+}
+
+std::vector<StageItem> stage_work(const Job& job, ShardId id, int stage) {
+  std::vector<StageItem> out;
+  const long long I = id.index, N = id.count;
+  for (std::size_t e = 0; e < job.bakes.size(); ++e) {
+    if (stage >= entry_stages(job.bakes[e])) continue;
+    const long long B = entry_stage_blocks(job.bakes[e], stage);
+    if (B == 0) {
+      if (static_cast<long long>(e) % N == I) out.push_back({int(e), -1});
+      continue;
+    }
+    for (long long b = I * B / N; b < (I + 1) * B / N; ++b) out.push_back({int(e), int(b)});
+  }
+  return out;
+}
+
 int job_stages(const Job& job) {
   int s = 0;
   for (const BakeEntry& e : job.bakes) s = std::max(s, entry_stages(e));
@@ -92,6 +114,21 @@ std::filesystem::path stage_path(const Job& job, int entry, int stage) {
   return job.output.dir / "shards" /
          (job.name + "." + job.bakes[std::size_t(entry)].stem + ".stage-" + std::to_string(stage) +
           ".hfshard");
+}
+
+}  // namespace hfbake
+
+namespace hfbake {
+
+std::filesystem::path stage_block_path(const Job& job, int entry, int stage, int block) {
+  return job.output.dir / "shards" /
+         (job.name + "." + job.bakes[std::size_t(entry)].stem + ".stage-" + std::to_string(stage) +
+          ".block-" + std::to_string(block) + ".hfshard");
+}
+
+std::filesystem::path stage_item_path(const Job& job, int stage, StageItem item) {
+  return item.block < 0 ? stage_path(job, item.entry, stage)
+                        : stage_block_path(job, item.entry, stage, item.block);
 }
 
 }  // namespace hfbake

@@ -69,6 +69,17 @@ struct MethodInfo {
                          const RunControl& rc) = nullptr;
   LayerSet (*finish_stages)(const Scene& scene, const nlohmann::json& params, LayerSet&& last,
                             const RunControl& rc) = nullptr;
+  // A stage divided by direction blocks (every stage of p2; core/direction_blocks.hpp of the entry's K):
+  // stage_blocks(resolved, stage) says how many (0: the stage runs whole through bake_stage);
+  // bake_stage_block gives block `block`'s raw sums from the state before the stage (the previous stage's,
+  // whole) as float layers, added by the farm like bake_block's (farm/merge_blocks.cpp add_direction_block);
+  // finish_stage_blocks turns the state before the stage and the blocks' total into the state after it:
+  // what bake_stage returns, bit-identical, because bake sums the same blocks the same way.
+  int (*stage_blocks)(const nlohmann::json& resolved, int stage) = nullptr;
+  LayerSet (*bake_stage_block)(const Scene& scene, const nlohmann::json& params, int stage, int block,
+                               LayerSet&& previous, const RunControl& rc) = nullptr;
+  LayerSet (*finish_stage_blocks)(const Scene& scene, const nlohmann::json& params, int stage,
+                                  LayerSet&& previous, LayerSet&& sums, const RunControl& rc) = nullptr;
   // What the method reads from the Scene besides the heights and the lighting. The job loader builds
   // Scene::normals and Scene::surface.albedo (12 bytes per texel each) only when a method of the job or
   // the reference reads them; a method that does not must not touch them (they may be empty).

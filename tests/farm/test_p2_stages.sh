@@ -1,8 +1,10 @@
 #!/bin/bash
-# p2 with 2 bounces as staged shards (stage 0 its direct light, stage b its bounce b, each from the whole
-# field's previous stage) merges to the bits of a single-machine bake, for 1 and 2 shards, with a second p2
-# entry of 1 bounce (fewer stages) and a direction-dividing method beside them; a stage whose previous stage
-# is missing is refused naming that file, before anything is baked.
+# p2 with 2 bounces as staged shards (stage 0 its direct light, stage b its bounce b, each divided by
+# direction blocks across the shards, a bounce's blocks from the whole field's previous stage) merges to the (float) bits
+# of a single-machine bake, for 1, 2, 3 and 5 shards (K = 16: 8 blocks of 2 directions, so 3 and 5 shards
+# take unequal runs of blocks), with a second p2 entry of 1 bounce (fewer stages, K = 8: blocks of one
+# direction, texel senders) and a direction-dividing method beside them. A stage whose previous stage is
+# missing is refused naming a missing file, before anything is baked; so is a merge without a block.
 set -u
 H=$1 W=$2
 . "$(dirname "$0")/common.sh"
@@ -13,33 +15,41 @@ cat >job.json <<'J'
  "environment": {"sky": {"sun": {"elevation_deg": 35}}},
  "lights": [{"directional": {"direction": [0.3, 0.2, 1.0], "irradiance": 2}}],
  "bounces": 2,
- "bake": [{"method": "p2", "directions": 12,
+ "bake": [{"method": "p2", "directions": 16,
            "layers": ["indirect", "total", "direct", "indirect_b1", "indirect_b2"]},
           {"method": "hbao", "directions": 10, "radius": 5},
           {"method": "p2", "directions": 8, "bounces": 1, "senders": "texels"}],
- "output": {"dir": "out", "previews": true}}
+ "output": {"dir": "out", "previews": true, "pixel_type": "float"}}
 J
 "$H" validate job.json --quiet || fail "test job invalid"
 "$H" bake job.json --no-cache --quiet --out whole || fail "bake"
-for N in 1 2; do
+for N in 1 2 3 5; do
   for s in 0 1 2; do
     for ((i = 0; i < N; i++)); do
       "$H" bake job.json --no-cache --quiet --out "s$N" --shard "$i/$N" --stage $s || fail "--shard $i/$N --stage $s"
     done
   done
-  ls "s$N"/shards/p2farm.p2-0.stage-2.hfshard >/dev/null || fail "no last stage file"
+  for b in 0 1 2 3 4 5 6 7; do
+    for s in 0 2; do
+      ls "s$N"/shards/p2farm.p2-0.stage-$s.block-$b.hfshard >/dev/null || fail "no block $b of stage $s"
+    done
+  done
+  ls "s$N"/shards/p2farm.p2-0.stage-0.hfshard >/dev/null || fail "stage 0 not merged into its file by stage 1"
+  ls "s$N"/shards/p2farm.p2-0.stage-1.hfshard >/dev/null || fail "stage 1 not merged into its file by stage 2"
   "$H" merge job.json --no-cache --quiet --out "s$N" || fail "merge of $N shards"
   same_outputs whole "s$N"
-  echo "ok: $N shards, 3 stages: the bake's bits"
+  echo "ok: $N shards, 3 stages, each by 8 direction blocks: the bake's bits"
 done
-# Stage 2 without stage 1: refused, naming stage 1's file.
-rm -rf s2/shards/p2farm.p2-0.stage-[12].hfshard
+# Stage 2 without stage 1 (neither its file nor one of its blocks): refused, naming the missing block.
+rm -f s2/shards/p2farm.p2-0.stage-[12].hfshard s2/shards/p2farm.p2-0.stage-[12].block-*.hfshard
+rm -f s2/shards/p2farm.p2-0.stage-1.block-3.hfshard
+cp s3/shards/p2farm.p2-0.stage-1.block-[0-2].hfshard s2/shards/
 err=$("$H" bake job.json --no-cache --quiet --out s2 --shard 0/2 --stage 2 2>&1)
 rc=$?
 [ $rc = 2 ] || fail "stage 2 without stage 1: exit $rc, expected 2 ($err)"
-echo "$err" | grep -q "p2farm.p2-0.stage-1.hfshard.*missing" || fail "the error does not name stage 1: $err"
-[ ! -e s2/shards/p2farm.p2-0.stage-2.hfshard ] || fail "stage 2 written without stage 1"
-# The merge without the last stage names it.
+echo "$err" | grep -q "p2farm.p2-0.stage-1.block-3.hfshard.*missing" || fail "the error does not name block 3 of stage 1: $err"
+ls s2/shards/p2farm.p2-0.stage-2.block-*.hfshard >/dev/null 2>&1 && fail "stage 2 written without stage 1"
+# The merge without the last stage names its first missing block.
 err=$("$H" merge job.json --no-cache --quiet --out s2 2>&1)
-[ $? = 2 ] && echo "$err" | grep -q "p2farm.p2-0.stage-2.hfshard" || fail "merge without the last stage: $err"
+[ $? = 2 ] && echo "$err" | grep -q "p2farm.p2-0.stage-2.block-0.hfshard" || fail "merge without the last stage: $err"
 echo "ok: all"

@@ -80,6 +80,49 @@ TEST(ShardPlan, EveryBlockRowAndWholeMethodIsInExactlyOneShard) {
   }
 }
 
+// p2's stages: every stage's direction blocks (min(K, 8); stage 0 p1's, stage b bounce b's) each in exactly
+// one shard, in block order; no stage beyond the entry's bounces.
+TEST(ShardPlan, EveryStageBlockIsInExactlyOneShard) {
+  Job job;
+  job.name = "j";
+  job.output.dir = "/tmp/x";
+  BakeEntry a, b, c;
+  a.method = "p2", a.resolved = {{"directions", 16}, {"bounces", 2}};
+  b.method = "p1", b.resolved = {{"directions", 8}};
+  c.method = "p2", c.resolved = {{"directions", 5}, {"bounces", 1}};
+  job.bakes = {a, b, c};
+  ASSERT_EQ(job_stages(job), 3);
+  EXPECT_EQ(entry_stage_blocks(job.bakes[0], 0), 8);
+  EXPECT_EQ(entry_stage_blocks(job.bakes[0], 1), 8);
+  EXPECT_EQ(entry_stage_blocks(job.bakes[2], 1), 5);
+  EXPECT_EQ(entry_stage_blocks(job.bakes[1], 1), 0);
+  for (int N = 1; N <= 11; ++N)
+    for (int stage = 0; stage < 3; ++stage) {
+      std::vector<std::vector<int>> seen(3);  // per entry: how often each block
+      for (int e = 0; e < 3; ++e) seen[std::size_t(e)].assign(8, 0);
+      for (int I = 0; I < N; ++I) {
+        int last_entry = -1, last_block = -1;
+        for (const StageItem& item : stage_work(job, {I, N}, stage)) {
+          ASSERT_NE(item.entry, 1);
+          EXPECT_GE(item.block, 0);
+          if (item.entry == last_entry) {
+            EXPECT_GT(item.block, last_block);
+          }
+          last_entry = item.entry, last_block = item.block;
+          seen[std::size_t(item.entry)][std::size_t(item.block)] += 1;
+        }
+      }
+      for (int e : {0, 2}) {
+        const int stages = e == 0 ? 3 : 2;
+        const int units = stage >= stages ? 0 : e == 0 ? 8 : 5;
+        for (int u = 0; u < 8; ++u)
+          EXPECT_EQ(seen[std::size_t(e)][std::size_t(u)], u < units ? 1 : 0)
+              << "N " << N << " stage " << stage << " entry " << e << " unit " << u;
+      }
+    }
+  EXPECT_EQ(stage_block_path(job, 0, 2, 7).filename(), "j..stage-2.block-7.hfshard");
+}
+
 TEST(MergeBlocks, AddsInBlockOrderAndKeepsPerBlockLayers) {
   auto block = [](float v, const char* kept) {
     LayerSet s;

@@ -5,8 +5,8 @@
 #                   array of 12 tasks + merge (hfbake slurm --wait): bit-identical to hfbake bake of the suite
 #   big_job         one 256^2 job with p1, hbao and a reference as 4 shards + merge: bit-identical (the 2048^2
 #                   job of the same kind is measured by farm-bench, not tested: see the README)
-#   p2_stages       p2 with 2 bounces as staged shards (3 stage arrays chained by afterok, then the merge):
-#                   bit-identical to hfbake bake
+#   p2_stages       p2 with 2 bounces, K = 16, as 3 staged shards (3 stage arrays chained by afterok, each
+#                   stage's 8 direction blocks across the 3 tasks, then the merge): bit-identical to hfbake bake
 #   deleted_shard   after hfbake slurm, a deleted shard makes the merge job fail naming it
 #   scancel_resume  a task cancelled (scancel) is resubmitted by hfbake slurm --resume: the same bits
 #   shared_cache    two bakes of one reference sharing a cache folder, as concurrent Slurm jobs: both
@@ -85,16 +85,22 @@ p2_stages)
  "height": {"procedural": {"kind": "fractal", "size": [61, 47], "seed": 3}},
  "environment": {"sky": {"sun": {"elevation_deg": 35}}},
  "bounces": 2,
- "bake": [{"method": "p2", "directions": 12, "layers": ["indirect", "total", "direct", "indirect_b1", "indirect_b2"]},
+ "bake": [{"method": "p2", "directions": 16, "layers": ["indirect", "total", "direct", "indirect_b1", "indirect_b2"]},
           {"method": "hbao", "directions": 10, "radius": 5}],
  "reference": {"samples": 8},
  "output": {"dir": "out-p2"}}
 J
   "$H" bake p2.json --no-cache --quiet --out whole || fail "bake"
-  "$H" slurm p2.json --shards 2 --out farm --no-cache --wait 2>slurm.err || fail "hfbake slurm --wait exit $? ($(cat slurm.err))"
+  "$H" slurm p2.json --shards 3 --out farm --no-cache --wait 2>slurm.err || fail "hfbake slurm --wait exit $? ($(cat slurm.err))"
   cat slurm.err
-  for st in 0 1 2; do grep -q "of stage $st as array job" slurm.err || fail "stage $st was not submitted"; done
-  for st in 0 1 2; do [ -f farm/shards/p2.p2.stage-$st.hfshard ] || fail "no stage $st file: $(ls farm/shards)"; done
+  grep -q "3 tasks of stage 0 as array job" slurm.err || fail "stage 0 was not submitted as 3 tasks"
+  for st in 1 2; do grep -q "3 tasks of stage $st as array job" slurm.err || fail "stage $st was not divided over the 3 tasks"; done
+  for st in 0 1; do [ -f farm/shards/p2.p2.stage-$st.hfshard ] || fail "no stage $st file: $(ls farm/shards)"; done
+  for st in 0 1 2; do
+    for b in 0 1 2 3 4 5 6 7; do
+      [ -f farm/shards/p2.p2.stage-$st.block-$b.hfshard ] || fail "no block $b of stage $st: $(ls farm/shards)"
+    done
+  done
   same_outputs whole farm
   ;;
 deleted_shard)

@@ -4,12 +4,18 @@
 //   BM_Bounce: one full indirect bounce (visibility + exact gathering), N^2 texels, K directions;
 //     items = texel-directions.
 //   BM_Visibility: the sweep with visibility only (tree or naive), N = 1024.
+//   BM_P2HorizonsKeptOrRecomputed: compute_p2 (p1's direct light, then one bounce, facet senders) on a 512^2
+//     fractal, K = 32, with p1's horizons kept from the direct-light sweep (1) or recomputed per direction
+//     block in the bounce (0, p2_keeps_horizons); the same bits, the second pays p1's horizon sweep again.
 // Run: build-p2/tests/p2/bench_p2 --benchmark_filter=Line
 #include <benchmark/benchmark.h>
 
 #include <vector>
 
+#include "env/environment.hpp"
 #include "field/procedural.hpp"
+#include "field/scene.hpp"
+#include "methods/p2/bake_p2.hpp"
 #include "methods/p2/hull_tree.hpp"
 #include "methods/p2/indirect_sweep.hpp"
 #include "methods/p2/naive_visibility.hpp"
@@ -96,7 +102,30 @@ void BM_Visibility(benchmark::State& state) {
             state.range(1) ? P2Visibility::tree : P2Visibility::naive);
 }
 
+// args: keep (1) or recompute (0) p1's horizons
+void BM_P2HorizonsKeptOrRecomputed(benchmark::State& state) {
+  Scene s;
+  s.field = field(0, 512);
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), Rgb{0.5f, 0.5f, 0.5f});
+  s.environment = make_uniform_environment({1, 1, 1});
+  s.bounces = 1;
+  P2Params p;
+  p.directions = 32;
+  p.bounces = 1;
+  p.keep_horizons = int(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(compute_p2(s, p, RunControl{}));
+  state.SetItemsProcessed(std::int64_t(state.iterations()) * std::int64_t(s.field.texel_count()) * 32);
+  state.SetLabel(state.range(0) ? "kept" : "recomputed");
+}
+
 BENCHMARK(BM_LineTree)->DenseRange(0, 3);
+BENCHMARK(BM_P2HorizonsKeptOrRecomputed)
+    ->DenseRange(0, 1)
+    ->Iterations(1)
+    ->Repetitions(5)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LineNaive)->DenseRange(0, 3);
 BENCHMARK(BM_Bounce)
     ->ArgsProduct({{0, 1, 2, 3}, {512, 1024}, {16, 32, 64, 128}})

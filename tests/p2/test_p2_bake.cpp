@@ -487,6 +487,60 @@ TEST(P2Bake, SupersamplingAlongLines) {
   EXPECT_LT(max_abs_dev(s, compute_p2(s, p, RunControl{}), 8), 1e-5);
 }
 
+// P1's horizons kept whole from stage 0 or recomputed per direction block in every bounce
+// (p2_keeps_horizons): the same bits, for direction blocks of one and of two directions, clamp and repeat,
+// facet and texel senders, with a sun (P1's direct reads its own sweep either way).
+TEST(P2Bake, RecomputedHorizonsGiveTheKeptBits) {
+  for (Wrap wrap : {Wrap::clamp, Wrap::repeat})
+    for (int K : {8, 12, 16})
+      for (bool facets : {true, false}) {
+        Scene s =
+            make_scene(procedural(ProceduralKind::fractal, 37, wrap, 5), {0.4f, 0.6f, 0.9f}, 0.7f, 0, 2);
+        DirectionalLight sun;
+        sun.direction = normalize(Vec3{0.4, -0.3, 0.8});
+        sun.irradiance = {2, 2, 1.5f};
+        s.lights.push_back(sun);
+        P2Params p = params(K, 2);
+        p.facet_senders = facets;
+        p.keep_horizons = 1;
+        const P2Result kept = compute_p2(s, p, RunControl{});
+        p.keep_horizons = 0;
+        const P2Result again = compute_p2(s, p, RunControl{});
+        ASSERT_EQ(kept.indirect_b.size(), 2u);
+        for (std::size_t i = 0; i < kept.indirect.size(); ++i)
+          for (int c = 0; c < 3; ++c) {
+            auto at = [&](const Rgb& v) { return c == 0 ? v.r : c == 1 ? v.g : v.b; };
+            ASSERT_EQ(at(kept.direct[i]), at(again.direct[i])) << "K " << K << " texel " << i;
+            ASSERT_EQ(at(kept.indirect[i]), at(again.indirect[i])) << "K " << K << " texel " << i;
+            ASSERT_EQ(at(kept.indirect_b[0][i]), at(again.indirect_b[0][i])) << "K " << K << " texel " << i;
+          }
+        EXPECT_EQ(kept.stats.iterations, again.stats.iterations);
+        EXPECT_GT(kept.indirect[100].g, 0.0f);
+      }
+}
+
+// The rule: kept while P1's horizons of every direction take at most 1 GiB, never without bounces.
+TEST(P2Bake, HorizonsKeptOnlyWhileSmall) {
+  auto shape = [](int n) {
+    FieldShape f;
+    f.width = f.height = n;
+    return f;
+  };
+  EXPECT_TRUE(p2_keeps_horizons(shape(2048), params(64, 1), 0));  // 4 * 64 * 2048^2 = 1 GiB
+  EXPECT_FALSE(p2_keeps_horizons(shape(2049), params(64, 1), 0));
+  EXPECT_FALSE(p2_keeps_horizons(shape(64), params(64, 0), 3));
+  EXPECT_TRUE(p2_keeps_horizons(shape(64), params(64, -1), 3));
+  P2Params forced = params(64, 1);
+  forced.keep_horizons = 0;
+  EXPECT_FALSE(p2_keeps_horizons(shape(64), forced, 0));
+  // Recomputing holds one block's horizons (8 of 64 directions) instead of all 64.
+  forced.layers = {"indirect", "total", "direct"};
+  P2Params kept = forced;
+  kept.keep_horizons = 1;
+  const double saved = p2_working_bytes(shape(1024), kept) - p2_working_bytes(shape(1024), forced);
+  EXPECT_GT(saved, 4.0 * 56 * 1024 * 1024 * 0.9);
+}
+
 TEST(P2Bake, SameBitsForAnyThreadCount) {
   const Scene s =
       make_scene(procedural(ProceduralKind::fractal, 48, Wrap::clamp), {1, 0.8f, 0.6f}, 0.7f, 0, 2);

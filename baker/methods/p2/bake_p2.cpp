@@ -7,20 +7,13 @@
 #include <algorithm>
 #include <string>
 
+#include "core/direction_blocks.hpp"
 #include "core/error.hpp"
 #include "job/params.hpp"
 #include "methods/p1/p1.hpp"
 
 namespace hfbake {
 namespace {
-
-// A RunControl reporting progress into [a, a + span) of the caller's.
-RunControl sub_range(const RunControl& rc, double a, double span) {
-  RunControl s;
-  s.cancel = rc.cancel;
-  if (rc.progress) s.progress = [&rc, a, span](double f) { rc.report(a + span * f); };
-  return s;
-}
 
 // The mean albedo of the three corners of texel (i, j)'s facet q (q = 0: (i, j), (i + 1, j), (i, j + 1);
 // q = 1: (i, j), (i - 1, j), (i, j - 1)).
@@ -59,13 +52,13 @@ P2Params parse_p2_params(const nlohmann::json& e, int job_bounces) {
   return read_p2_params(in, job_bounces);
 }
 
-P1Params p2_direct_params(const P2Params& params) {
+P1Params p2_direct_params(const P2Params& params, bool horizons) {
   P1Params p1;
   p1.directions = params.directions;
   p1.wrap_periods = params.wrap_periods;
   p1.ao = p1.vsky = false;
   p1.direct = true;
-  p1.horizon = true;  // the lobe split uses P1's own horizons (K floats per texel while P2 runs)
+  p1.horizon = horizons;  // the lobe split uses P1's own horizons (p2_keeps_horizons)
   p1.facet_direct = params.facet_senders;
   // P1's exact near field reaches at least as far as the texels' own near-field gather.
   if (params.facet_senders) p1.near_radius = std::max(p1.near_radius, params.near_radius);
@@ -73,31 +66,55 @@ P1Params p2_direct_params(const P2Params& params) {
   return p1;
 }
 
+P1Params p2_horizon_params(const P2Params& params) {
+  P1Params p1 = p2_direct_params(params, true);
+  p1.ao = p1.vsky = p1.direct = p1.facet_direct = p1.lights = false;
+  p1.horizon = true;
+  return p1;
+}
+
+bool p2_keeps_horizons(const FieldShape& field, const P2Params& p, int job_bounces) {
+  if ((p.bounces >= 0 ? p.bounces : job_bounces) <= 0) return false;  // no bounce reads them
+  if (p.keep_horizons >= 0) return p.keep_horizons == 1;
+  return 4.0 * p.directions * double(field.width) * double(field.height) <= kP2KeptHorizonBytes;
+}
+
 double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
   const double N = double(shape.width) * double(shape.height);
-  const int B = std::max(0, p.bounces);
-  const double horizons = 4.0 * p.directions * N;
+  const int B = std::max(0, p.bounces), K = p.directions;
+  const bool kept = p2_keeps_horizons(shape, p, B);
+  const double horizons = kept ? 4.0 * K * N : 0;  // P1's horizons of every direction, kept
   // The layers the estimate counts separately, allocated only at the end (from direct and indirect).
   const double layers = 12.0 * double(p.layers.size()) * N;
   const bool keep = std::any_of(p.layers.begin(), p.layers.end(),
                                 [](const std::string& l) { return l.rfind("indirect_b", 0) == 0; });
-  // P1: its horizons and direct (and the facets' light) plus its own working memory.
-  const double p1_phase = horizons + 12 * N + p1_working_bytes(shape, p2_direct_params(p));
-  // A bounce: P1's horizons, direct, the exit radiance, the facets' (24), the sweep's double sums (24) and
-  // its result (12), the indirect sum from the second bounce on; before the last bounce the facets' double
-  // sums (48) and their result (24); the bounces kept for indirect_b layers (12 each); the line buffers.
+  // P1: its kept horizons and direct (and the facets' light) plus its own working memory.
+  const double p1_phase = horizons + 12 * N + p1_working_bytes(shape, p2_direct_params(p, kept));
+  // A bounce, one direction block at a time: P1's kept horizons, or the block's recomputed (4 bytes a
+  // texel per direction of the largest block) and P1's sweep recomputing them (before the block's own
+  // sweep); direct, the exit radiance, the facets' (24), the block's double sums (24) and the blocks'
+  // total (24, SplitDouble), the indirect sum from the second bounce on; before the last bounce the
+  // facets' block sums (48) and total (48); the bounces kept for indirect_b layers (12 each); the line
+  // buffers of one block's sweep.
+  const int blocks = direction_block_count(K), largest = (K + blocks - 1) / blocks;
   IndirectSweepSpec is;
-  is.directions = p.directions;
+  is.directions = K;
+  is.k_begin = 0, is.k_end = largest;
   is.wrap_periods = p.wrap_periods;
   HeightField field;  // the sweep's plan needs only the shape
   static_cast<FieldShape&>(field) = shape;
-  const double line_buffers = double(sweep_buffer_bytes(field, indirect_sweep_spec(is)));
+  double line_buffers = double(sweep_buffer_bytes(field, indirect_sweep_spec(is)));
+  double block_horizons = 0;
+  if (!kept) {
+    block_horizons = 4.0 * largest * N;
+    line_buffers = std::max(line_buffers, p1_working_bytes(shape, p2_horizon_params(p)));
+  }
   double bounce_phase = 0;
   for (int b = 1; b <= B; ++b) {
     double t =
-        12 + 12 + (p.facet_senders ? 24 : 0) + 24 + 12 + (b > 1 ? 12 : 0) + (keep ? 12.0 * (b - 1) : 0);
-    if (p.facet_senders && b < B) t += 48 + 24;
-    bounce_phase = std::max(bounce_phase, horizons + t * N + line_buffers);
+        12 + 12 + (p.facet_senders ? 24 : 0) + 24 + 24 + (b > 1 ? 12 : 0) + (keep ? 12.0 * (b - 1) : 0);
+    if (p.facet_senders && b < B) t += 48 + 48;
+    bounce_phase = std::max(bounce_phase, horizons + block_horizons + t * N + line_buffers);
   }
   // Writing the layers: direct and indirect (and the kept bounces) beside them.
   const double output = (24 + (keep ? 12.0 * B : 0)) * N;
@@ -105,18 +122,19 @@ double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
 }
 
 P2State p2_stage0(const Scene& scene, const P2Params& params, const RunControl& rc) {
+  // Direct light: P1 on the same driver (its horizons, its lighting tables, its sun shadows).
+  const P1Params p1 = p2_direct_params(params, p2_keeps_horizons(scene.field, params, scene.bounces));
+  return p2_state_of_direct(scene, params, compute_p1(scene, p1, rc));
+}
+
+P2State p2_state_of_direct(const Scene& scene, const P2Params& params, P1Result&& direct) {
   const HeightField& f = scene.field;
   const std::size_t N = f.texel_count();
   P2State r;
-
-  // Direct light: P1 on the same driver (its horizons, its lighting tables, its sun shadows).
-  const P1Params p1 = p2_direct_params(params);
-  P1Result direct = compute_p1(scene, p1, rc);
   r.direct.resize(N);
   for (std::size_t i = 0; i < N; ++i) r.direct[i] = direct.direct_at(i);
   std::vector<float>().swap(direct.direct);
   r.p1_sin_horizon = std::move(direct.horizon);
-  rc.check();
 
   // Exit radiance of bounce 0: reflected direct light plus emission.
   r.exit.resize(N);
@@ -147,25 +165,48 @@ P2State p2_stage0(const Scene& scene, const P2Params& params, const RunControl& 
   return r;
 }
 
-void p2_bounce(const Scene& scene, const P2Params& params, int B, P2State& r, const RunControl& rc) {
+P2BlockSums p2_bounce_block(const Scene& scene, const P2Params& params, int B, const P2State& r, int block,
+                            const RunControl& rc) {
   const HeightField& f = scene.field;
   const std::size_t N = f.texel_count();
-  const int b = r.bounces_done + 1;
+  const int b = r.bounces_done + 1, K = params.directions;
   IndirectSweepSpec spec;
-  spec.directions = params.directions;
+  spec.directions = K;
+  spec.k_begin = direction_block_begin(block, K), spec.k_end = direction_block_begin(block + 1, K);
   spec.visibility = params.visibility;
   spec.wrap_periods = params.wrap_periods;
   spec.supersampling = params.supersampling;
-  spec.p1_sin_horizon = &r.p1_sin_horizon;
+  // P1's horizons of the block: kept from stage 0, or recomputed now (the same bits: p1_direction_sums of
+  // the same block, as compute_p1 runs it).
+  std::vector<float> recomputed;
+  double p1_share = 0;
+  if (r.p1_sin_horizon.empty()) {
+    p1_share = 0.2;
+    P1Sums h = p1_direction_sums(scene, p2_horizon_params(params), spec.k_begin, spec.k_end,
+                                 p2_sub_range(rc, 0, p1_share));
+    recomputed = std::move(h.horizon);
+    spec.p1_sin_horizon = recomputed.data();
+  } else {
+    spec.p1_sin_horizon = r.p1_sin_horizon.data() + std::size_t(spec.k_begin) * N;
+  }
   if (params.facet_senders) {
     spec.exit_facets = &r.facet_exit;
     spec.near_radius = params.near_radius;
   }
-  std::vector<Rgb> facet_e;
-  P2SweepStats st;
-  std::vector<Rgb> e = sweep_indirect(f, scene.normals, r.exit, spec, rc, &st,
-                                      params.facet_senders && b < B ? &facet_e : nullptr);
-  if (params.facet_senders && b < B)
+  P2BlockSums s;
+  sweep_indirect_sums(f, scene.normals, r.exit, spec, p2_sub_range(rc, p1_share, 1 - p1_share), &s.stats,
+                      s.texel, params.facet_senders && b < B ? &s.facet : nullptr);
+  return s;
+}
+
+void p2_finish_bounce(const Scene& scene, const P2Params& params, int B, P2State& r, const float* total,
+                      const float* facet_total, const P2SweepStats& st) {
+  const HeightField& f = scene.field;
+  const std::size_t N = f.texel_count();
+  const int b = r.bounces_done + 1;
+  std::vector<Rgb> e = indirect_of_total(total, N);
+  if (params.facet_senders && b < B) {
+    const std::vector<Rgb> facet_e = indirect_of_total(facet_total, 2 * N);
     tbb::parallel_for(0, f.height, [&](int j) {
       for (int i = 0; i < f.width; ++i)
         for (int q = 0; q < 2; ++q) {
@@ -173,13 +214,8 @@ void p2_bounce(const Scene& scene, const P2Params& params, int B, P2State& r, co
           r.facet_exit[fq] = facet_albedo(scene, i, j, q) * facet_e[fq];
         }
     });
-  r.stats.receivers += st.receivers;
-  r.stats.iterations += st.iterations;
-  r.stats.naive_iterations += st.naive_iterations;
-  r.stats.horizons += st.horizons;
-  r.stats.run_starts += st.run_starts;
-  r.stats.pushed += st.pushed;
-  r.stats.horizons_pushed += st.horizons_pushed;
+  }
+  add_sweep_stats(r.stats, st);
   if (b < B)
     for (std::size_t i = 0; i < N; ++i) r.exit[i] = scene.surface.albedo[i] * e[i];
   else
@@ -194,6 +230,24 @@ void p2_bounce(const Scene& scene, const P2Params& params, int B, P2State& r, co
   }
   if (params.keep_bounces) r.indirect_b.push_back(std::move(e));
   r.bounces_done = b;
+  if (b == B) std::vector<float>().swap(r.p1_sin_horizon);
+}
+
+void p2_bounce(const Scene& scene, const P2Params& params, int B, P2State& r, const RunControl& rc) {
+  // Direction blocks (core/direction_blocks.hpp): each summed from zero, the blocks added in order -- the
+  // order `hfbake merge` adds the farm's blocks in (p2_finish_stage_blocks).
+  const int K = params.directions, blocks = direction_block_count(K);
+  std::vector<float> total, facet_total;
+  P2SweepStats st;
+  for (int k = 0; k < blocks; ++k) {
+    const int k0 = direction_block_begin(k, K), k1 = direction_block_begin(k + 1, K);
+    const P2BlockSums s =
+        p2_bounce_block(scene, params, B, r, k, p2_sub_range(rc, double(k0) / K, double(k1 - k0) / K));
+    add_indirect_block(total, s.texel);
+    if (!s.facet.empty()) add_indirect_block(facet_total, s.facet);
+    add_sweep_stats(st, s.stats);
+  }
+  p2_finish_bounce(scene, params, B, r, total.data(), facet_total.data(), st);
 }
 
 P2Result p2_result(P2State&& s, int width, int height) {
@@ -210,10 +264,10 @@ P2Result p2_result(P2State&& s, int width, int height) {
 P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc) {
   const int B = params.bounces >= 0 ? params.bounces : std::max(0, scene.bounces);
   const double phase = 1.0 / (1 + B);
-  P2State s = p2_stage0(scene, params, sub_range(rc, 0, phase));
+  P2State s = p2_stage0(scene, params, p2_sub_range(rc, 0, phase));
   for (int b = 1; b <= B; ++b) {
     rc.check();
-    p2_bounce(scene, params, B, s, sub_range(rc, b * phase, phase));
+    p2_bounce(scene, params, B, s, p2_sub_range(rc, b * phase, phase));
   }
   rc.report(1.0);
   return p2_result(std::move(s), scene.field.width, scene.field.height);
@@ -342,6 +396,15 @@ P2State state_of(LayerSet&& l) {
   return s;
 }
 
+// The state before stage `stage` (the previous stage's).
+P2State stage_state_before(int stage, LayerSet&& previous) {
+  P2State s = state_of(std::move(previous));
+  if (s.bounces_done != stage - 1)
+    throw std::runtime_error("p2 stage " + std::to_string(stage) + " after stage " +
+                             std::to_string(s.bounces_done));
+  return s;
+}
+
 int p2_stages(const nlohmann::json& resolved) {
   return 1 + std::max(0, resolved.value("bounces", 0));
 }
@@ -350,13 +413,135 @@ LayerSet p2_bake_stage(const Scene& scene, const nlohmann::json& params, int sta
                        const RunControl& rc) {
   const P2Params p = stage_params(scene, params);
   const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
-  P2State s = stage == 0 ? p2_stage0(scene, p, rc) : state_of(std::move(previous));
-  if (stage > 0) {
-    if (s.bounces_done != stage - 1)
-      throw std::runtime_error("p2 stage " + std::to_string(stage) + " after stage " +
-                               std::to_string(s.bounces_done));
-    p2_bounce(scene, p, B, s, rc);
+  P2State s = stage == 0 ? p2_stage0(scene, p, rc) : stage_state_before(stage, std::move(previous));
+  if (stage > 0) p2_bounce(scene, p, B, s, rc);
+  return state_layers(std::move(s), scene.field.width, scene.field.height, stage == B);
+}
+
+// A bounce's direction blocks on the farm: block b's double sums as SplitDouble pairs ("indirect#2f": 3
+// values a texel, "facet#2f": 6, before the last bounce with facet senders), which the merge adds by
+// add_split in block order (farm/merge_blocks.cpp) as p2_bounce does; its sweep counts as attributes
+// "<count>@<b>" (kept apart by the merge, summed here).
+// Stage 0 (p1's direct light) divides by the same blocks: block b's P1Sums (p1_direction_sums) as layers
+// named after their members, its horizons (when kept) as "horizon@<k_begin>", added in float in block
+// order by the merge as compute_p1 adds them (p1_add_sums), then finished by p1_finish.
+int p2_stage_blocks(const nlohmann::json& resolved, int) {
+  return direction_block_count(resolved.value("directions", 64));
+}
+
+LayerSet p1_block_layers(const Scene& scene, const P2Params& p, int block, const RunControl& rc) {
+  const int K = p.directions;
+  const P1Params p1 = p2_direct_params(p, p2_keeps_horizons(scene.field, p, scene.bounces));
+  P1Sums s =
+      p1_direction_sums(scene, p1, direction_block_begin(block, K), direction_block_begin(block + 1, K), rc);
+  LayerSet out;
+  out.width = scene.field.width, out.height = scene.field.height;
+  const std::size_t N = scene.field.texel_count();
+  auto put = [&](const std::string& name, std::vector<float>& v) {
+    if (v.empty()) return;
+    std::vector<std::string> channels = indexed_channels(int(v.size() / N));  // before the move
+    out.adopt(name, std::move(channels), std::move(v));
+  };
+  put("ao", s.ao), put("vsky", s.vsky), put("rgb", s.rgb), put("bent", s.bent);
+  put("fao", s.fao), put("fdr", s.fdr), put("fdg", s.fdg), put("fdb", s.fdb);
+  put("horizon@" + std::to_string(s.k_begin), s.horizon);  // [(k - k_begin) * N + texel]
+  return out;
+}
+
+P1Result p1_of_block_layers(const Scene& scene, const P2Params& p, LayerSet&& sums, const RunControl& rc) {
+  const int K = p.directions;
+  const std::size_t N = scene.field.texel_count();
+  const P1Params p1 = p2_direct_params(p, p2_keeps_horizons(scene.field, p, scene.bounces));
+  P1Sums s;
+  s.k_begin = 0, s.k_end = K;
+  auto take = [&](const char* name, std::vector<float>& v) {
+    if (Layer* l = sums.find(name)) v = std::move(l->data);
+  };
+  take("ao", s.ao), take("vsky", s.vsky), take("rgb", s.rgb), take("bent", s.bent);
+  take("fao", s.fao), take("fdr", s.fdr), take("fdg", s.fdg), take("fdb", s.fdb);
+  if (p1.horizon) {  // the blocks' horizons into [k * N + texel]
+    s.horizon.assign(N * std::size_t(K), 0.0f);
+    int placed = 0;
+    for (const Layer& l : sums.layers) {
+      if (l.name.rfind("horizon@", 0) != 0) continue;
+      const std::size_t k0 = std::size_t(std::stoi(l.name.substr(8)));
+      if (k0 * N + l.data.size() > s.horizon.size())
+        throw std::runtime_error("p2 stage 0: horizons of another K");
+      std::copy(l.data.begin(), l.data.end(), s.horizon.begin() + std::ptrdiff_t(k0 * N));
+      placed += l.channel_count();
+    }
+    if (placed != K) throw std::runtime_error("p2 stage 0: the blocks' horizons do not cover the directions");
   }
+  sums = LayerSet();
+  return p1_finish(scene, p1, std::move(s), rc);
+}
+
+const char* const kStatNames[] = {"receivers",  "iterations", "naive_iterations", "horizons",
+                                  "run_starts", "pushed",     "horizons_pushed"};
+std::uint64_t* stat_field(P2SweepStats& t, int i) {
+  std::uint64_t* f[] = {&t.receivers,  &t.iterations, &t.naive_iterations, &t.horizons,
+                        &t.run_starts, &t.pushed,     &t.horizons_pushed};
+  return f[i];
+}
+
+LayerSet p2_bake_stage_block(const Scene& scene, const nlohmann::json& params, int stage, int block,
+                             LayerSet&& previous, const RunControl& rc) {
+  const P2Params p = stage_params(scene, params);
+  const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
+  if (stage == 0) return p1_block_layers(scene, p, block, rc);
+  const P2State s = stage_state_before(stage, std::move(previous));
+  P2BlockSums sums = p2_bounce_block(scene, p, B, s, block, rc);
+  LayerSet out;
+  out.width = scene.field.width, out.height = scene.field.height;
+  auto put = [&](const std::string& name, std::vector<double>& v, int per_texel) {
+    if (v.empty()) return;
+    std::vector<std::string> ch;
+    for (int q = 0; q < per_texel; ++q)
+      for (const char* c : {"R", "G", "B"})
+        for (const char* h : {"hi", "lo"})
+          ch.push_back((per_texel > 1 ? std::to_string(q) + "." : std::string()) + c + "." + h);
+    std::vector<float> split;
+    add_indirect_block(split, v);
+    std::vector<double>().swap(v);
+    out.adopt(name, std::move(ch), std::move(split));
+  };
+  put("indirect#2f", sums.texel, 1);
+  put("facet#2f", sums.facet, 2);
+  for (int i = 0; i < 7; ++i)
+    out.attributes.emplace_back(std::string(kStatNames[i]) + "@" + std::to_string(block),
+                                std::to_string(*stat_field(sums.stats, i)));
+  return out;
+}
+
+LayerSet p2_finish_stage_blocks(const Scene& scene, const nlohmann::json& params, int stage,
+                                LayerSet&& previous, LayerSet&& sums, const RunControl& rc) {
+  const P2Params p = stage_params(scene, params);
+  const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
+  if (stage == 0)
+    return state_layers(p2_state_of_direct(scene, p, p1_of_block_layers(scene, p, std::move(sums), rc)),
+                        scene.field.width, scene.field.height, B == 0);
+  P2State s = stage_state_before(stage, std::move(previous));
+  const std::size_t N = scene.field.texel_count();
+  const Layer* total = sums.find("indirect#2f");
+  const Layer* facet = sums.find("facet#2f");
+  const bool want_facet = p.facet_senders && stage < B;
+  if (!total || total->data.size() != 6 * N || want_facet != (facet != nullptr) ||
+      (facet && facet->data.size() != 12 * N))
+    throw std::runtime_error("p2 stage " + std::to_string(stage) + ": blocks of another layout");
+  P2SweepStats st;
+  const int blocks = direction_block_count(p.directions);
+  for (int b = 0; b < blocks; ++b)
+    for (int i = 0; i < 7; ++i) {
+      const std::string key = std::string(kStatNames[i]) + "@" + std::to_string(b);
+      auto it = std::find_if(sums.attributes.begin(), sums.attributes.end(),
+                             [&](const auto& a) { return a.first == key; });
+      if (it == sums.attributes.end())
+        throw std::runtime_error("p2 stage " + std::to_string(stage) + ": direction block " +
+                                 std::to_string(b) + " missing from the sums");
+      *stat_field(st, i) += std::stoull(it->second);
+    }
+  p2_finish_bounce(scene, p, B, s, total->data.data(), facet ? facet->data.data() : nullptr, st);
+  sums = LayerSet();
   return state_layers(std::move(s), scene.field.width, scene.field.height, stage == B);
 }
 
@@ -376,7 +561,9 @@ MethodInfo p2_method() {
       "direct light from p1, then indirect bounces gathered over the exactly visible terrain (hull tree)";
   m.read = [](Params& in, const MethodContext& c) { read_p2_params(in, c.bounces); };
   m.bake = bake_p2;
-  m.memory_knob = "its directions (p1's horizons: 4 bytes a texel per direction) and the indirect_b layers";
+  m.memory_knob =
+      "its directions (p1's horizons: 4 bytes a texel per direction, kept up to 1 GiB), its bounces and "
+      "the indirect_b layers";
   m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
     return p2_working_bytes(c.field, parse_p2_params(r, c.bounces));
   };
@@ -384,9 +571,15 @@ MethodInfo p2_method() {
   m.stages = p2_stages;
   m.bake_stage = p2_bake_stage;
   m.finish_stages = p2_finish_stages;
+  m.stage_blocks = p2_stage_blocks;
+  m.bake_stage_block = p2_bake_stage_block;
+  m.finish_stage_blocks = p2_finish_stage_blocks;
   m.division_note =
-      "bounces as successive stages (stage 0 direct light, stage b bounce b, each needing the previous stage "
-      "of the whole field), each stage whole in one shard; directions within a bounce are not divided yet";
+      "bounces as successive stages (stage 0 direct light, stage b bounce b, needing the previous stage of "
+      "the whole field), each by direction blocks across the shards: stage 0 p1's float block sums, a "
+      "bounce's "
+      "double sums passed as two floats (SplitDouble), merged in block order as the single-machine bake sums "
+      "them";
   return m;
 }
 

@@ -65,7 +65,18 @@ struct P2Params {
   // Keep each bounce's indirect apart (P2Result::indirect_b); bake_p2 keeps them only for indirect_b
   // layers (12 bytes a texel and bounce).
   bool keep_bounces = true;
+  // P1's horizons between stage 0 and the bounces (not a job parameter; tests set it): 1 kept whole from
+  // stage 0, 0 recomputed a direction block at a time in each bounce, -1 by p2_keeps_horizons' rule.
+  int keep_horizons = -1;
 };
+
+// The rule that decides whether P2 keeps P1's horizons of every direction from stage 0 for its bounces
+// (4 bytes a texel per direction) or recomputes each bounce's direction block of them when it runs
+// (p1_direction_sums of the block, as compute_p1 runs it: the same bits, P1's horizon sweep once more per
+// bounce, 4 bytes a texel per direction of one block): kept while they take at most
+// kP2KeptHorizonBytes, or as P2Params::keep_horizons says. Never kept without bounces (none reads them).
+inline constexpr double kP2KeptHorizonBytes = double(1 << 30);
+bool p2_keeps_horizons(const FieldShape& field, const P2Params& params, int job_bounces);
 
 // Reads a bake entry; throws InputError("", "<key>", ...) for what the schema cannot express.
 // Reads the bake entry (schemas/methods/p2.schema.json) with every check; indirect_b<b> layers are known up
@@ -85,12 +96,14 @@ struct P2Result {
 P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc);
 
 // compute_p2 as its stages (the farm runs them as successive tasks, baker/farm): stage 0 P1's direct light
-// and horizons, stage b (1..bounces) bounce b, each from the state the previous stage left. compute_p2 is
-// p2_stage0, then p2_bounce for b = 1..bounces, then p2_result: the same operations in the same order.
+// (and horizons, when kept), stage b (1..bounces) bounce b, each from the state the previous stage left.
+// compute_p2 is p2_stage0, then p2_bounce for b = 1..bounces, then p2_result: the same operations in the same
+// order. Each stage sums its directions in the direction blocks (core/direction_blocks.hpp), which the farm
+// computes as separate tasks (MethodInfo::stage_blocks) and adds in the same order.
 struct P2State {
   int bounces_done = 0;
   std::vector<Rgb> direct;                   // E_direct / pi
-  std::vector<float> p1_sin_horizon;         // P1's horizons ([k * texels + texel], sin e)
+  std::vector<float> p1_sin_horizon;         // P1's kept horizons ([k * texels + texel], sin e), or empty
   std::vector<Rgb> exit;                     // the exit radiance the next bounce gathers
   std::vector<Rgb> facet_exit;               // facet senders: [2 * texel + q]
   std::vector<Rgb> indirect;                 // the sum of the bounces done (empty before bounce 1)
@@ -98,15 +111,32 @@ struct P2State {
   P2SweepStats stats;
 };
 P2State p2_stage0(const Scene& scene, const P2Params& params, const RunControl& rc);
-// Bounce state.bounces_done + 1 of `bounces` (the last frees what no later bounce needs).
+// Stage 0's state from P1's result (p2_direct_params): what p2_stage0 does after compute_p1.
+struct P1Result;
+P2State p2_state_of_direct(const Scene& scene, const P2Params& params, P1Result&& direct);
+// Bounce state.bounces_done + 1 of `bounces` (the last frees what no later bounce needs): its direction
+// blocks (core/direction_blocks.hpp) by p2_bounce_block, added by add_indirect_block in block order, then
+// p2_finish_bounce. The farm runs the blocks as separate tasks and merges them the same way.
 void p2_bounce(const Scene& scene, const P2Params& params, int bounces, P2State& state, const RunControl& rc);
+struct P2BlockSums {
+  std::vector<double> texel, facet;  // sweep_indirect_sums' acc and facet_acc (facet: before the last bounce)
+  P2SweepStats stats;
+};
+P2BlockSums p2_bounce_block(const Scene& scene, const P2Params& params, int bounces, const P2State& state,
+                            int block, const RunControl& rc);
+// total, facet_total: the blocks' totals (add_indirect_block; facet_total only before the last bounce with
+// facet senders); stats: the blocks' counts summed.
+void p2_finish_bounce(const Scene& scene, const P2Params& params, int bounces, P2State& state,
+                      const float* total, const float* facet_total, const P2SweepStats& stats);
 P2Result p2_result(P2State&& state, int width, int height);
 
-// The P1 bake compute_p2 runs for direct light and the horizons that split each texel's lobe.
+// The P1 bake compute_p2 runs for direct light (and, horizons: the horizons that split each texel's lobe,
+// p2_keeps_horizons), and the one a bounce runs to recompute a direction block's horizons.
 struct P1Params;
-P1Params p2_direct_params(const P2Params& params);
-// Bytes compute_p2 and bake_p2 hold at their peak beyond the output layers (P1's K horizons a texel while
-// the bounces run, the exit radiance, the sweep's sums, the line buffers): the method table's working_bytes.
+P1Params p2_direct_params(const P2Params& params, bool horizons);
+P1Params p2_horizon_params(const P2Params& params);
+// Bytes compute_p2 and bake_p2 hold at their peak beyond the output layers (P1's horizons, kept or one
+// block's, the exit radiance, the sweep's sums, the line buffers): the method table's working_bytes.
 // params with bounces resolved (>= 0).
 double p2_working_bytes(const FieldShape& field, const P2Params& params);
 

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/azimuth.hpp"
+#include "core/direction_blocks.hpp"
 #include "field/triangulation.hpp"
 #include "methods/p1/fast_math.hpp"
 #include "methods/p1/horizon_sweep.hpp"
@@ -340,31 +341,45 @@ void facet_segment_radiance(const HeightField& f, const Rgb* facet_exit, double 
   *slope = m1 * 12.0f;  // / integral of (u - 1/2)^2 over [0, 1]
 }
 
+RunControl p2_sub_range(const RunControl& rc, double a, double span) {
+  RunControl s;
+  s.cancel = rc.cancel;
+  if (rc.progress) s.progress = [&rc, a, span](double f) { rc.report(a + span * f); };
+  return s;
+}
+
 SweepSpec indirect_sweep_spec(const IndirectSweepSpec& spec) {
   SweepSpec ss;
   ss.directions = spec.directions;
+  const int k1 = spec.k_end < 0 ? spec.directions : spec.k_end;
+  for (int k = spec.k_begin; k < k1; ++k) ss.azimuths.push_back(azimuth(k, spec.directions));
   ss.channels = kChannels;
   ss.wrap_periods = spec.wrap_periods;
   return ss;
 }
 
-std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3f>& normals,
-                                const std::vector<Rgb>& exit, const IndirectSweepSpec& spec,
-                                const RunControl& rc, P2SweepStats* stats, std::vector<Rgb>* facet_result) {
+void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& normals,
+                         const std::vector<Rgb>& exit, const IndirectSweepSpec& spec, const RunControl& rc,
+                         P2SweepStats* stats, std::vector<double>& acc, std::vector<double>* facet_acc) {
   const std::size_t texels = field.texel_count();
-  std::vector<double> acc(texels * 3, 0.0);
-  const bool facets = spec.exit_facets && facet_result;
-  std::vector<double> acc_f(facets ? texels * 6 : 0, 0.0);  // [(2 * texel + q) * 3 + channel]
+  acc.assign(texels * 3, 0.0);
+  const bool facets = spec.exit_facets && facet_acc;
+  std::vector<double> no_facets;
+  std::vector<double>& acc_f = facets ? *facet_acc : no_facets;  // [(2 * texel + q) * 3 + channel]
+  acc_f.assign(facets ? texels * 6 : 0, 0.0);
+  // The sweep's direction k is direction k_begin + k of K (indirect_sweep_spec's azimuths).
   const SweepSpec ss = indirect_sweep_spec(spec);
-  const int K = spec.directions;
+  const int K = spec.directions, nb = int(ss.azimuths.size());
   const double wedge = 2 * kPi / K;
   std::vector<double> cs, sn;
   azimuth_table(K, cs, sn);
+  cs.erase(cs.begin(), cs.begin() + spec.k_begin), cs.resize(std::size_t(nb));
+  sn.erase(sn.begin(), sn.begin() + spec.k_begin), sn.resize(std::size_t(nb));
   P2SweepStats totals;
   std::mutex totals_mutex;
   // Exact near field (IndirectSweepSpec::near_radius): P1's near stencil per direction, with facets.
   const bool near = spec.near_radius > 0 && spec.exit_facets && spec.p1_sin_horizon && spec.gather;
-  std::vector<std::vector<NearPiece>> pieces(near ? K : 0);
+  std::vector<std::vector<NearPiece>> pieces(near ? nb : 0);
   for (int k = 0; k < int(pieces.size()); ++k) {
     const SweepDirection d = plan_direction(field, ss, k);
     pieces[k] = near_pieces(d.dx, d.dy, spec.near_radius, field.texel_size);
@@ -431,7 +446,7 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
         // 1e-7 of P1's own), or the line samples' blended elevation.
         double e, se, ce;
         if (spec.p1_sin_horizon) {
-          const float sf = std::clamp((*spec.p1_sin_horizon)[std::size_t(k) * texels + idx], -1.0f, 1.0f);
+          const float sf = std::clamp(spec.p1_sin_horizon[std::size_t(k) * texels + idx], -1.0f, 1.0f);
           const float cf = std::sqrt(std::max(0.0f, 1 - sf * sf));
           se = sf, ce = cf;
           e = cf > 0 ? double(p1::fast_atan(sf / cf)) : std::copysign(kPi / 2, double(sf));
@@ -477,16 +492,66 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
           a[2] += exit[idx].b * tw;
         }
       });
-  std::vector<Rgb> result(texels);
-  for (std::size_t p = 0; p < texels; ++p)
-    result[p] = {float(acc[3 * p]), float(acc[3 * p + 1]), float(acc[3 * p + 2])};
-  if (facets) {
-    facet_result->resize(2 * texels);
-    for (std::size_t p = 0; p < 2 * texels; ++p)
-      (*facet_result)[p] = {float(acc_f[3 * p]), float(acc_f[3 * p + 1]), float(acc_f[3 * p + 2])};
-  }
   if (stats) *stats = totals;
-  return result;
+}
+
+void add_indirect_block(std::vector<float>& total, const std::vector<double>& block) {
+  if (total.empty()) {  // the first block, split once
+    total.resize(2 * block.size());
+    for (std::size_t i = 0; i < block.size(); ++i) {
+      const SplitDouble s = split_double(block[i]);
+      total[2 * i] = s.hi, total[2 * i + 1] = s.lo;
+    }
+    return;
+  }
+  for (std::size_t i = 0; i < block.size(); ++i) {
+    SplitDouble t{total[2 * i], total[2 * i + 1]};
+    add_split(t, split_double(block[i]));
+    total[2 * i] = t.hi, total[2 * i + 1] = t.lo;
+  }
+}
+
+std::vector<Rgb> indirect_of_total(const float* total, std::size_t count) {
+  std::vector<Rgb> out(count);
+  auto at = [&](std::size_t i) { return float(join_double({total[2 * i], total[2 * i + 1]})); };
+  for (std::size_t p = 0; p < count; ++p) out[p] = {at(3 * p), at(3 * p + 1), at(3 * p + 2)};
+  return out;
+}
+
+void add_sweep_stats(P2SweepStats& total, const P2SweepStats& s) {
+  total.receivers += s.receivers;
+  total.iterations += s.iterations;
+  total.naive_iterations += s.naive_iterations;
+  total.horizons += s.horizons;
+  total.run_starts += s.run_starts;
+  total.pushed += s.pushed;
+  total.horizons_pushed += s.horizons_pushed;
+}
+
+std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3f>& normals,
+                                const std::vector<Rgb>& exit, const IndirectSweepSpec& spec,
+                                const RunControl& rc, P2SweepStats* stats, std::vector<Rgb>* facet_result) {
+  const int K = spec.directions, B = direction_block_count(K);
+  const std::size_t texels = field.texel_count();
+  const bool facets = spec.exit_facets && facet_result;
+  std::vector<float> total, facet_total;
+  std::vector<double> acc, acc_f;
+  P2SweepStats st;
+  for (int b = 0; b < B; ++b) {
+    IndirectSweepSpec s = spec;
+    s.k_begin = direction_block_begin(b, K), s.k_end = direction_block_begin(b + 1, K);
+    if (spec.p1_sin_horizon) s.p1_sin_horizon = spec.p1_sin_horizon + std::size_t(s.k_begin) * texels;
+    P2SweepStats block_stats;
+    sweep_indirect_sums(field, normals, exit, s,
+                        p2_sub_range(rc, double(s.k_begin) / K, double(s.k_end - s.k_begin) / K),
+                        &block_stats, acc, facets ? &acc_f : nullptr);
+    add_sweep_stats(st, block_stats);
+    add_indirect_block(total, acc);
+    if (facets) add_indirect_block(facet_total, acc_f);
+  }
+  if (facets) *facet_result = indirect_of_total(facet_total.data(), 2 * texels);
+  if (stats) *stats = st;
+  return indirect_of_total(total.data(), texels);
 }
 
 }  // namespace hfbake

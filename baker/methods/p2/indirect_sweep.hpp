@@ -28,6 +28,9 @@ struct P2SweepStats {
 
 struct IndirectSweepSpec {
   int directions = 64;
+  // The directions swept: [k_begin, k_end) of the K (k_end < 0: all K). sweep_indirect sweeps every
+  // direction block (core/direction_blocks.hpp) this way; sweep_indirect_sums one of them.
+  int k_begin = 0, k_end = -1;
   P2Visibility visibility = P2Visibility::tree;
   bool gather = true;    // false: visibility only (benchmarks, statistics); the result is all zero
   int wrap_periods = 1;  // repeat mode warm-up (SweepSpec::wrap_periods)
@@ -38,11 +41,12 @@ struct IndirectSweepSpec {
   // terrain is exactly P1's; with S > 1 it is the finer line's, so the split can differ from P1's by the
   // sub-sample horizon change).
   int supersampling = 1;
-  // P1's horizons at the texels (P1Result::horizon with horizon_by_direction: sin e, [k * texels + texel]).
+  // P1's horizons at the texels of the directions swept (P1Result::horizon with horizon_by_direction: sin e,
+  // [(k - k_begin) * texels + texel]).
   // When given, they split each texel's lobe between P1's sky and this terrain, so the two halves meet
   // exactly whatever way P1 brings its horizons to the texels; when null, the line samples' blended elevation
   // is used.
-  const std::vector<float>* p1_sin_horizon = nullptr;
+  const float* p1_sin_horizon = nullptr;
   // Facet senders: the exit radiance of every texel's two facets (P1Result::direct_facets' layout,
   // [2 * texel + q]). When given, the terrain a receiver sees radiates per facet of the reference's
   // triangulated surface, as the reference shades its hits, instead of per texel with the smoothed normal:
@@ -61,11 +65,30 @@ struct IndirectSweepSpec {
   double near_radius = 0;
 };
 
-// The line sweep sweep_indirect runs (for estimates: sweep_buffer_bytes of it).
+// A RunControl reporting progress into [a, a + span) of the caller's.
+RunControl p2_sub_range(const RunControl& rc, double a, double span);
+
+// The line sweep sweep_indirect_sums runs (for estimates: sweep_buffer_bytes of it).
 SweepSpec indirect_sweep_spec(const IndirectSweepSpec& spec);
 
-// E_indirect / pi per texel (row-major) from the exit radiance `exit` per texel, for one bounce.
-// normals: compute_normals(field). stats (optional) is filled with the totals of the sweep.
+// The double sums over directions [spec.k_begin, spec.k_end) (one direction block), each from zero, k
+// ascending: E_indirect / pi per texel, acc[3 * texel + c], and with facet_acc (facet senders only) at the
+// facets' normals, [(2 * texel + q) * 3 + c]. stats: the sweep's counts.
+void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& normals,
+                         const std::vector<Rgb>& exit, const IndirectSweepSpec& spec, const RunControl& rc,
+                         P2SweepStats* stats, std::vector<double>& acc, std::vector<double>* facet_acc);
+// A bounce's total over the direction blocks (core/direction_blocks.hpp): each block's double sums split
+// once into SplitDouble (hi, lo) float pairs, [2 * value + {0, 1}], and added by add_split in block order
+// (`total` empty: the first block) -- what the farm's merge does with the blocks baked elsewhere
+// (farm/merge_blocks.cpp, "#2f" layers), so both give the same bits.
+void add_indirect_block(std::vector<float>& total, const std::vector<double>& block);
+// The total's values as RGB (count RGB values: 6 floats each).
+std::vector<Rgb> indirect_of_total(const float* total, std::size_t count);
+void add_sweep_stats(P2SweepStats& total, const P2SweepStats& s);
+
+// E_indirect / pi per texel (row-major) from the exit radiance `exit` per texel, for one bounce: every
+// direction block by sweep_indirect_sums, added by add_indirect_block. normals: compute_normals(field).
+// stats (optional) is filled with the totals of the sweep.
 // facet_result (optional, facet senders only): E_indirect / pi at the facets' normals, [2 * texel + q]
 // (each texel's gathered terrain radiance over the part of the facet's lobe below P1's horizons): the
 // facets' exit radiance of the next bounce.
