@@ -577,7 +577,13 @@ LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const
   return bake_reference(scene, parse_reference_options(scene, job_doc), rc);
 }
 
-LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc) {
+int reference_band_count(const ReferenceOptions& options, int rows) {
+  const int ts = std::max(1, options.tile_size);
+  return (std::max(0, rows) + ts - 1) / ts;
+}
+
+LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc,
+                        ReferenceResume* resume) {
   const HeightField& f = scene.field;
   if (scene.normals.size() != f.texel_count() || scene.surface.albedo.size() != f.texel_count())
     throw std::invalid_argument("bake_reference: the scene's normals and albedo must cover the field");
@@ -633,19 +639,63 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   if (adaptive) samples_data = result.find("samples")->data.data();
 
   const int ts = std::max(1, options.tile_size);
-  const int tiles_x = (f.width + ts - 1) / ts, tiles_y = (row1 - row0 + ts - 1) / ts;
+  const int tiles_x = (f.width + ts - 1) / ts, tiles_y = reference_band_count(options, row1 - row0);
   const int tiles = tiles_x * tiles_y;
-  std::atomic<int> done{0};
   const int C = cx.ch.count;
 
-  tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
+  // A band (a row of tiles): its floats in every layer, for resuming (ReferenceResume).
+  auto band_floats = [&](int band) {
+    const std::size_t rows = std::size_t(std::min(row1 - row0, (band + 1) * ts) - band * ts);
+    std::size_t n = 0;
+    for (const Layer& l : result.layers) n += rows * std::size_t(f.width) * l.channels.size();
+    return n;
+  };
+  auto band_copy = [&](int band, float* to, const float* from) {  // to or from is the band's floats
+    const std::size_t first = std::size_t(band) * ts * std::size_t(f.width);
+    const std::size_t texels =
+        std::size_t(std::min(row1 - row0, (band + 1) * ts) - band * ts) * std::size_t(f.width);
+    std::size_t at = 0;
+    for (Layer& l : result.layers) {
+      const std::size_t nc = l.channels.size();
+      float* layer = l.data.data() + first * nc;
+      if (to)
+        std::copy(layer, layer + texels * nc, to + at);
+      else
+        std::copy(from + at, from + at + texels * nc, layer);
+      at += texels * nc;
+    }
+  };
+  std::vector<char> band_done(std::size_t(tiles_y), 0);
+  if (resume && resume->load) {
+    std::vector<float> buffer;
+    for (int band = 0; band < tiles_y; ++band) {
+      buffer.assign(band_floats(band), 0.0f);
+      if (!resume->load(band, buffer)) continue;
+      band_copy(band, nullptr, buffer.data());
+      band_done[std::size_t(band)] = 1;
+      ++resume->bands_resumed;
+    }
+  }
+  // The tiles left to trace, and how many of each band's are still running.
+  std::vector<int> todo;
+  std::vector<std::atomic<int>> band_left(static_cast<std::size_t>(tiles_y));
+  for (int tile = 0; tile < tiles; ++tile)
+    if (!band_done[std::size_t(tile / tiles_x)]) {
+      todo.push_back(tile);
+      band_left[std::size_t(tile / tiles_x)].fetch_add(1);
+    }
+  std::atomic<int> done{tiles - int(todo.size())};
+  std::atomic<int> bands_traced{0};
+
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, todo.size(), 1), [&](const auto& range) {
     FlushDenormals ftz;
     Scratch scratch(cx.lights);
     ReplicateEstimate est(B, C);
     const std::vector<double>& mean = est.mean;
     const std::vector<double>& se = est.se;
-    for (int tile = range.begin(); tile != range.end(); ++tile) {
+    for (std::size_t next = range.begin(); next != range.end(); ++next) {
       rc.check();
+      const int tile = todo[next];
       const int tx = tile % tiles_x, ty = tile / tiles_x;
       for (int j = row0 + ty * ts; j < std::min(row1, row0 + (ty + 1) * ts); ++j) {
         for (int i = tx * ts; i < std::min(f.width, (tx + 1) * ts); ++i) {
@@ -691,9 +741,18 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
           if (samples_data) samples_data[t] = float(n * B);
         }
       }
+      if (band_left[std::size_t(ty)].fetch_sub(1) == 1) {  // the band's last tile: the band is final
+        bands_traced.fetch_add(1);
+        if (resume && resume->store) {
+          std::vector<float> values(band_floats(ty));
+          band_copy(ty, values.data(), nullptr);
+          resume->store(ty, values);
+        }
+      }
       rc.report(double(done.fetch_add(1) + 1) / tiles);
     }
   });
+  if (resume) resume->bands_traced = bands_traced.load();
 
   const nlohmann::json setup = reference_setup(f, options, geometry, B, per_replicate_cap, adaptive, bounces);
   result.attributes.emplace_back("hfbake:reference_setup", setup.dump());

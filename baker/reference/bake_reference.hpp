@@ -43,7 +43,9 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -98,7 +100,23 @@ ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::jso
 // else -1. Nothing else of the bake list reaches the reference (the reference cache keys on exactly this).
 int reference_falloff_entry(const nlohmann::json& job_doc);
 
-LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc);
+// Resuming a reference that was killed: the traced rows are cut into bands of options.tile_size rows (band b:
+// rows row_begin + b * tile_size ..., the last one shorter), and each texel's samples depend on (seed, texel)
+// alone, so a band's floats are the same bits whenever and wherever it is traced. Before tracing,
+// `load(band, values)` may fill a band from an earlier run (true: taken as is, not traced); each band traced
+// here is handed to `store` once its last tile is done. `values` holds the band's rows of every layer of the
+// result, in the result's layer order (reference_band_floats of them). The callbacks do the files (cli/);
+// they must not throw. bands_resumed / bands_traced count what this bake did.
+struct ReferenceResume {
+  std::function<bool(int band, std::span<float> values)> load;
+  std::function<void(int band, std::span<const float> values)> store;
+  int bands_resumed = 0, bands_traced = 0;
+};
+// The number of bands of a reference over `rows` rows.
+int reference_band_count(const ReferenceOptions& options, int rows);
+
+LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc,
+                        ReferenceResume* resume = nullptr);
 LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const RunControl& rc);
 
 }  // namespace hfbake

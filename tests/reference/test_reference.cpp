@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <span>
 
 #include "../p1/p1_truth.hpp"
 #include "core/azimuth.hpp"
@@ -501,6 +503,53 @@ TEST(Reference, DeterministicForAnyThreadCount) {
         0, std::memcmp(one.layers[k].data.data(), two.layers[k].data.data(), one.layers[k].data.size() * 4))
         << one.layers[k].name;
   }
+}
+
+// Resuming (ReferenceResume): bands handed out by one bake and given back to another are taken as they are,
+// and the bands traced afresh are the same bits as in a whole bake (rows of 7 and a shorter last band, a
+// row range as the farm cuts it, the adaptive "samples" layer included).
+TEST(Reference, ResumedBandsGiveTheBitsOfAWholeBake) {
+  Scene s = make_scene(spec_of(ProceduralKind::fractal, 30));
+  ReferenceOptions o = options({"ao", "vsky"}, 32);
+  o.target_stderr = 0.05;
+  o.tile_size = 7;
+  o.row_begin = 3;
+  o.row_end = 27;  // 24 rows: bands of 7, 7, 7, 3
+  ASSERT_EQ(reference_band_count(o, 24), 4);
+  std::map<int, std::vector<float>> stored;
+  ReferenceResume first;
+  first.store = [&](int band, std::span<const float> v) { stored[band].assign(v.begin(), v.end()); };
+  const LayerSet whole = bake_reference(s, o, {}, &first);
+  EXPECT_EQ(first.bands_traced, 4);
+  EXPECT_EQ(first.bands_resumed, 0);
+  ASSERT_EQ(stored.size(), 4u);
+  // Bands 1 and 3 come back (band 2 with the wrong size is refused by the loader, as a damaged file is).
+  ReferenceResume second;
+  second.load = [&](int band, std::span<float> v) {
+    if (band % 2 == 0 || stored[band].size() != v.size()) return false;
+    std::copy(stored[band].begin(), stored[band].end(), v.begin());
+    return true;
+  };
+  int stores = 0;
+  second.store = [&](int, std::span<const float>) { ++stores; };
+  const LayerSet resumed = bake_reference(s, o, {}, &second);
+  EXPECT_EQ(second.bands_resumed, 2);
+  EXPECT_EQ(second.bands_traced, 2);
+  EXPECT_EQ(stores, 2);  // only what it traced
+  ASSERT_EQ(whole.layers.size(), resumed.layers.size());
+  for (std::size_t k = 0; k < whole.layers.size(); ++k)
+    EXPECT_EQ(0, std::memcmp(whole.layers[k].data.data(), resumed.layers[k].data.data(),
+                             whole.layers[k].data.size() * 4))
+        << whole.layers[k].name;
+  // A band given back with other values is taken as given: the loader is the one that checks.
+  ReferenceResume third;
+  third.load = [&](int band, std::span<float> v) {
+    std::fill(v.begin(), v.end(), 0.25f);
+    return band == 3;
+  };
+  const LayerSet odd = bake_reference(s, o, {}, &third);
+  EXPECT_EQ(odd.find("ao")->data[std::size_t(30) * 21], 0.25f);  // row 3 + 21: band 3
+  EXPECT_NE(odd.find("ao")->data[std::size_t(30) * 20], 0.25f);
 }
 
 TEST(Reference, TargetStderrSpendsSamplesWhereTheNoiseIs) {
