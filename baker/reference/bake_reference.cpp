@@ -470,16 +470,15 @@ Needs needs_of(const ReferenceOptions& options, int bounces) {
 nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& options,
                                const EmbreeField& geometry, int replicates, int per_replicate_cap,
                                bool adaptive, int bounces) {
-  nlohmann::json setup = {
-      {"geometry", options.geometry == reference::GeometryKind::grid ? "grid" : "triangles"},
-      {"epsilon", geometry.epsilon()},
-      {"replicates", replicates},
-      {"samples_per_texel",
-       adaptive ? nlohmann::json("adaptive") : nlohmann::json(replicates * per_replicate_cap)},
-      {"bounces", bounces},
-      {"environment", options.sh_environment ? "sh4" : "full"},
-      {"falloff", falloff_kind_name(options.falloff.kind)},
-      {"radius", options.falloff.radius}};
+  nlohmann::json setup = {{"geometry", reference::geometry_name(options.geometry)},
+                          {"epsilon", geometry.epsilon()},
+                          {"replicates", replicates},
+                          {"samples_per_texel", adaptive ? nlohmann::json("adaptive")
+                                                         : nlohmann::json(replicates * per_replicate_cap)},
+                          {"bounces", bounces},
+                          {"environment", options.sh_environment ? "sh4" : "full"},
+                          {"falloff", falloff_kind_name(options.falloff.kind)},
+                          {"radius", options.falloff.radius}};
   if (f.wrap == Wrap::repeat) {
     setup["repeat_tiles"] = options.repeat_tiles;
     setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width, f.height) * f.texel_size;
@@ -525,9 +524,7 @@ ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const Met
   o.target_stderr = in.number("target_stderr", 0, 0, 1e9);
   if (in.has("target_stderr") && !(o.target_stderr > 0))
     in.fail("target_stderr", "must be a positive number");
-  o.geometry = in.choice("geometry", "grid", {"grid", "triangles"}) == "grid"
-                   ? reference::GeometryKind::grid
-                   : reference::GeometryKind::triangles;
+  o.geometry = reference::geometry_kind(in.choice("geometry", "quads", {"quads", "grid", "triangles"}));
   o.sh_environment = in.choice("environment", "full", {"full", "sh4"}) == "sh4";
 
   // Falloff: the reference's own, else the first obscurance-family bake entry's (the same rule).

@@ -65,15 +65,19 @@ struct ReferenceOptions {
   double target_stderr = 0;  // 0: off
   int replicates = 8;
   Falloff falloff;  // obscurance
-  // grid (default) or triangles: the same surface. Measured at 1024^2: triangles trace ~12 % faster but
-  // build 2x slower and take 4.6x the memory (250 MB vs 54 MB; 960 MB vs 155 MB at 2048^2).
-  reference::GeometryKind geometry = reference::GeometryKind::grid;
+  // quads (default), grid or triangles: the same surface, and quads and grid the same bits (the same robust
+  // intersector; tests/reference). Measured at 1024^2 (ao rays per CPU second, tests/reference/
+  // bench_reference BM_AoRays1024, a loaded machine): grid 2.9 M, triangles 3.8 M, quads 4.1 M single rays
+  // and 4.4 M in streams; memory (geometry and BVH) grid 54 MB, quads 155 MB, triangles 250 MB
+  // (embree_bytes_per_texel). Quads trace one BVH (its skirt is quads too); grid and triangles two.
+  reference::GeometryKind geometry = reference::GeometryKind::quads;
   int repeat_tiles = 1;         // wrap repeat: tiles instanced on each side
   bool sh_environment = false;  // light with the environment band-limited to SH order 4
   // Trace each texel's batches with rtcOccluded1M / rtcIntersect1M instead of one rtcOccluded1 /
-  // rtcIntersect1 per ray. Measured (1024^2 fractal, ao, Embree 3.13.5 without ISPC): streams are ~15 %
-  // slower than single rays (and 45 % slower with the coherent flag), so single rays are the default.
-  bool ray_streams = false;
+  // rtcIntersect1 per ray: the same bits. Measured (1024^2 fractal, ao, 32 rays a call, Embree 3.13.5
+  // without ISPC): quads 4.4 M rays per CPU second in streams, 4.1 M single (grid: 3.0 M and 2.9 M). With 4
+  // rays a call (32 samples, 8 replicates) streams were ~15 % slower on the grid.
+  bool ray_streams = true;
   int tile_size = 16;
   // The farm's receiver tiles: only rows [row_begin, row_end) (-1: the last row) are traced, each against
   // the whole field; the result holds those rows only. Each texel's samples depend on (seed, texel) alone,
