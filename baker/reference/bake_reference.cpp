@@ -271,6 +271,7 @@ struct Scratch {
 // One texel's samples [c0, c0 + m) of replicate r: where its rays start and which sequences they read.
 struct TexelBatch {
   const Context& cx;
+  reference::Frame frame;  // about the receiver's normal
   Vec3 n, origin;
   std::uint64_t texel_seed = 0;
   int r = 0;
@@ -291,7 +292,7 @@ void trace_primary(const TexelBatch& b, Scratch& sc) {
   const Channels& ch = cx.ch;
   const bool primary_hit = cx.needs.obscurance || (cx.needs.indirect && cx.bounces > 0);
   const Sequence2 seq = cx.sequence(b.texel_seed, b.r, cx.pair_primary);
-  for (int k = 0; k < b.m; ++k) sc.dirs[k] = reference::cosine_hemisphere(b.n, seq(b.c0 + k));
+  for (int k = 0; k < b.m; ++k) sc.dirs[k] = reference::cosine_hemisphere(b.frame, seq(b.c0 + k));
   if (primary_hit) {
     // ao and the path need the whole ray; obscurance alone only reaches the falloff's support. Each
     // quantity reads the hit its own way: ao any hit, obscurance a hit within the support only, so
@@ -408,7 +409,8 @@ void run_samples(const Context& cx, int i, int j, std::uint64_t texel_seed, int 
                  std::uint32_t s1, double* sums, Scratch& sc) {
   const HeightField& f = cx.field;
   const Vec3 n = cx.scene.normals[f.index(i, j)].d();
-  TexelBatch b{cx, n, f.position(i, j) + Vec3{0, 0, cx.geometry.epsilon()}, texel_seed, r, 0, 0, sums};
+  const Vec3 origin = f.position(i, j) + Vec3{0, 0, cx.geometry.epsilon()};
+  TexelBatch b{cx, reference::Frame(n), n, origin, texel_seed, r, 0, 0, sums};
   const bool paths = cx.needs.indirect && cx.bounces > 0;
   const bool primary_hit = cx.needs.obscurance || paths;
   for (std::uint32_t c0 = s0; c0 < s1; c0 += kChunk) {

@@ -106,13 +106,20 @@ inline void basis(Vec3 n, Vec3& t, Vec3& b) {
   b = {c, s + n.y * n.y * a, -n.y};
 }
 
+// The basis around unit n, made once for many directions.
+struct Frame {
+  Vec3 t, b, n;
+  explicit Frame(Vec3 normal) : n(normal) { basis(n, t, b); }
+};
+
 // Cosine-weighted hemisphere around unit n: pdf cos(theta) / pi.
-inline Vec3 cosine_hemisphere(Vec3 n, Point2 p) {
+inline Vec3 cosine_hemisphere(const Frame& f, Point2 p) {
   const double r = std::sqrt(p.u), phi = 2 * kPi * p.v;
   const double z = std::sqrt(std::max(0.0, 1.0 - p.u));
-  Vec3 t, b;
-  basis(n, t, b);
-  return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z;
+  return f.t * (r * std::cos(phi)) + f.b * (r * std::sin(phi)) + f.n * z;
+}
+inline Vec3 cosine_hemisphere(Vec3 n, Point2 p) {
+  return cosine_hemisphere(Frame(n), p);
 }
 
 // Uniform over the upper (+z) hemisphere: pdf 1 / (2 pi). z = u is uniform (Archimedes), so the fraction
