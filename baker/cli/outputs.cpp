@@ -189,7 +189,7 @@ OutputStage::OutputStage(const Job& job) : job_(job) {
                      "cannot write into " + job.output.dir.string() + ": " + ec.message());
   // Stages that processes which no longer run left behind (killed by SIGKILL, a second signal, a crash):
   // this job's reference checkpoints are taken over first (a resumed reference), then the stages removed.
-  adopted_checkpoints_ = adopt_stale_checkpoints(job.output.dir, job.name, checkpoint_dir());
+  adopt_stale_checkpoints(job.output.dir, job.name, checkpoint_dir());
   stale_removed_ = remove_stale_stages(job.output.dir);
 }
 

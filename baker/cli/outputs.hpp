@@ -73,9 +73,8 @@ class OutputStage {
   // The stale staging folders the constructor removed (to tell the user).
   const std::vector<std::filesystem::path>& stale_removed() const { return stale_removed_; }
   // Where this job's reference checkpoints its bands: inside the stage, with the checkpoint files the
-  // constructor adopted from this job's stale stages (adopted_checkpoints() of them).
+  // constructor adopted from this job's stale stages.
   std::filesystem::path checkpoint_dir() const { return stage_checkpoint_dir(stage_); }
-  int adopted_checkpoints() const { return adopted_checkpoints_; }
 
  private:
   const Job& job_;
@@ -84,7 +83,6 @@ class OutputStage {
   void write_textures(const std::string& stem, const LayerSet& layers);  // output.textures of this stem
   std::vector<std::filesystem::path> staged_;                            // file names relative to the stage
   std::vector<std::filesystem::path> stale_removed_;
-  int adopted_checkpoints_ = 0;
   Georeference georeference_;
   bool created_dir_ = false;  // the output folder did not exist before this job
   bool committed_ = false;
