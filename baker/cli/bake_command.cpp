@@ -16,6 +16,7 @@
 #include "cli/outputs.hpp"
 #include "cli/progress.hpp"
 #include "cli/reference_cache.hpp"
+#include "cli/reference_checkpoint.hpp"
 #include "cli/report_page.hpp"
 #include "cli/report_writer.hpp"
 #include "cli/scene_loader.hpp"
@@ -174,9 +175,26 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
         progress.message(job.name + ": reference cache entry " + cache->entry_path(cache_key).string() +
                          " was damaged: removed, computing the reference again");
     }
+    // Traced here: each finished band is checkpointed into the stage, and the bands a killed bake of this
+    // job left (adopted by the stage) are taken instead of traced (cli/reference_checkpoint.hpp).
+    std::optional<ReferenceResume> resume;
+    std::string checkpoint_problem;
+    auto trace = [&] {
+      const ReferenceOptions options = job_reference_options(job, scene);
+      const ReferenceCheckpoint checkpoint(stage.checkpoint_dir(),
+                                           reference_checkpoint_key(job, options, size.width, size.height));
+      resume = checkpoint.resume(&checkpoint_problem);
+      return bake_reference(scene, options, rc, &*resume);
+    };
     LayerSet reference = lookup == CacheLookup::hit ? std::move(cached.layers)
                          : merged                   ? merged->reference()
-                                  : bake_reference(scene, job_reference_options(job, scene), rc);
+                                                    : trace();
+    if (!checkpoint_problem.empty())
+      progress.message(job.name + ": reference checkpoint: " + checkpoint_problem + " (a kill now loses it)");
+    if (resume && resume->bands_resumed > 0)
+      progress.message(job.name + ": reference: resumed " + std::to_string(resume->bands_resumed) + " of " +
+                       std::to_string(resume->bands_resumed + resume->bands_traced) +
+                       " bands from a killed bake's checkpoints");
     const double seconds = merged && lookup != CacheLookup::hit ? merged->seconds(-1) : seconds_since(t0);
     if (cache && lookup != CacheLookup::hit) {
       const std::string problem = cache->store(cache_key, reference, seconds);
@@ -191,6 +209,9 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     add_common_attributes(reference, job, job_hash, "reference", job.reference_resolved, seconds);
     stage.write_layers("reference", reference);
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};
+    if (resume)
+      outcome.methods["reference"]["bands"] = {{"resumed", resume->bands_resumed},
+                                               {"traced", resume->bands_traced}};
     if (cache) {
       outcome.methods["reference"]["cache"] =
           lookup == CacheLookup::corrupt ? "rebuilt" : cache_lookup_name(lookup);

@@ -110,6 +110,7 @@ std::optional<StageOwner> parse_stage_name(const std::string& name) {
   const std::optional<unsigned long long> pid = parse_count(std::string_view(rest).substr(dash + 1));
   if (!pid || *pid == 0 || *pid > (1ull << 40)) return std::nullopt;
   owner.pid = (long long)*pid;
+  owner.job = rest.substr(0, dash);
   return owner;
 }
 
@@ -146,6 +147,31 @@ std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
   return removed;
 }
 
+fs::path stage_checkpoint_dir(const fs::path& stage) {
+  return stage / "reference-checkpoint";
+}
+
+int adopt_stale_checkpoints(const fs::path& dir, const std::string& job_name, const fs::path& into) {
+  int moved = 0;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::optional<StageOwner> owner = parse_stage_name(it->path().filename().string());
+    if (!owner || owner->job != job_name || !it->is_directory(ec) || !stage_owner_is_gone(*owner)) continue;
+    const fs::path from = stage_checkpoint_dir(it->path());
+    std::error_code walk;
+    for (fs::directory_iterator f(from, walk), fend; !walk && f != fend; f.increment(walk)) {
+      // Whole band files only (a killed writer's temporary is left to be removed with its stage).
+      if (f->path().extension() != ".hfckpt" || !f->is_regular_file(walk)) continue;
+      std::error_code move;
+      fs::create_directories(into, move);
+      if (fs::exists(into / f->path().filename(), move)) continue;
+      fs::rename(f->path(), into / f->path().filename(), move);  // same file system: atomic
+      moved += !move;
+    }
+  }
+  return moved;
+}
+
 OutputStage::OutputStage(const Job& job) : job_(job) {
   std::error_code ec;
   created_dir_ = !fs::exists(job.output.dir, ec);
@@ -154,8 +180,6 @@ OutputStage::OutputStage(const Job& job) : job_(job) {
     throw InputError(job.file.string(), "/output/dir",
                      "cannot create " + job.output.dir.string() + ": " +
                          (ec ? ec.message() : std::string("not a folder")));
-  // Stages that processes which no longer run left behind (killed by SIGKILL, a second signal, a crash).
-  stale_removed_ = remove_stale_stages(job.output.dir);
   // Hidden, per process (id and start time), host and job: concurrent jobs and concurrent hfbake processes
   // never share a stage, and a later bake can tell when its owner is gone.
   stage_ = job.output.dir / stage_name(job.name);
@@ -163,6 +187,10 @@ OutputStage::OutputStage(const Job& job) : job_(job) {
   if (!fs::create_directory(stage_, ec) || ec)
     throw InputError(job.file.string(), "/output/dir",
                      "cannot write into " + job.output.dir.string() + ": " + ec.message());
+  // Stages that processes which no longer run left behind (killed by SIGKILL, a second signal, a crash):
+  // this job's reference checkpoints are taken over first (a resumed reference), then the stages removed.
+  adopt_stale_checkpoints(job.output.dir, job.name, checkpoint_dir());
+  stale_removed_ = remove_stale_stages(job.output.dir);
 }
 
 OutputStage::~OutputStage() {

@@ -17,6 +17,7 @@ namespace hfbake {
 // process's start time (clock ticks after boot, /proc/<pid>/stat), so a reused process id is not taken for
 // the owner.
 struct StageOwner {
+  std::string job;  // the job's name
   long long pid = 0;
   std::optional<unsigned long long> start;  // absent in stages of older hfbake
   std::string host;  // "" for a stage named without one (older hfbake): taken as this host
@@ -33,6 +34,13 @@ std::optional<StageOwner> parse_stage_name(const std::string& name);
 // Removes the staging folders in `dir` whose owner is gone (stage_owner_is_gone) and returns them; those of
 // live processes, of this process and of other hosts are kept.
 std::vector<std::filesystem::path> remove_stale_stages(const std::filesystem::path& dir);
+// The folder of a stage that holds its reference's checkpoints (cli/reference_checkpoint).
+std::filesystem::path stage_checkpoint_dir(const std::filesystem::path& stage);
+// Moves the checkpoint files of job `job_name`'s stages in `dir` whose owner is gone into `into` (a file
+// already there is kept), so removing those stages does not lose a killed reference's work. Returns how many
+// files it moved.
+int adopt_stale_checkpoints(const std::filesystem::path& dir, const std::string& job_name,
+                            const std::filesystem::path& into);
 
 // The azimuth convention of a bake in words, with the compass mapping when the input's geotransform gives
 // one (north-up: compass azimuth = (90 + phi) mod 360): written into every output's metadata.
@@ -64,6 +72,9 @@ class OutputStage {
   std::vector<std::filesystem::path> commit();
   // The stale staging folders the constructor removed (to tell the user).
   const std::vector<std::filesystem::path>& stale_removed() const { return stale_removed_; }
+  // Where this job's reference checkpoints its bands: inside the stage, with the checkpoint files the
+  // constructor adopted from this job's stale stages.
+  std::filesystem::path checkpoint_dir() const { return stage_checkpoint_dir(stage_); }
 
  private:
   const Job& job_;

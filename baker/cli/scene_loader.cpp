@@ -9,6 +9,7 @@
 #include "field/procedural.hpp"
 #include "io/load_environment.hpp"
 #include "methods/method_table.hpp"
+#include "reference/embree_field.hpp"
 
 namespace hfbake {
 
@@ -135,12 +136,14 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   double reference = 0;
   if (job.has_reference) {
     // Its layers (value and standard error, 8 bytes a texel and channel) and Embree's geometry and BVH of
-    // the triangulated field (measured: about 60 bytes a texel).
+    // the triangulated field (reference/embree_field.hpp: 60 to 260 bytes a texel by reference.geometry).
     int channels = 0;
     for (const auto& l : job.reference_resolved.value("layers", nlohmann::json::array()))
       channels += layer_channel_count(l.get<std::string>(), job.reference_resolved);
     if (channels == 0) channels = 5;  // not resolved yet: ao, vsky, direct
-    reference = (8.0 * channels + 60 + 4.0 * horizon_channels) * texels;
+    const double embree = reference::embree_bytes_per_texel(
+        reference::geometry_kind(job.reference_resolved.value("geometry", std::string("quads"))));
+    reference = (8.0 * channels + embree + 4.0 * horizon_channels) * texels;
     peak = std::max(peak, kept + reference + writing);
   }
   // The environment: the world lat-long kept through the bake (with the reference's sampling tables), and

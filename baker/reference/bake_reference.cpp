@@ -271,6 +271,7 @@ struct Scratch {
 // One texel's samples [c0, c0 + m) of replicate r: where its rays start and which sequences they read.
 struct TexelBatch {
   const Context& cx;
+  reference::Frame frame;  // about the receiver's normal
   Vec3 n, origin;
   std::uint64_t texel_seed = 0;
   int r = 0;
@@ -291,7 +292,7 @@ void trace_primary(const TexelBatch& b, Scratch& sc) {
   const Channels& ch = cx.ch;
   const bool primary_hit = cx.needs.obscurance || (cx.needs.indirect && cx.bounces > 0);
   const Sequence2 seq = cx.sequence(b.texel_seed, b.r, cx.pair_primary);
-  for (int k = 0; k < b.m; ++k) sc.dirs[k] = reference::cosine_hemisphere(b.n, seq(b.c0 + k));
+  for (int k = 0; k < b.m; ++k) sc.dirs[k] = reference::cosine_hemisphere(b.frame, seq(b.c0 + k));
   if (primary_hit) {
     // ao and the path need the whole ray; obscurance alone only reaches the falloff's support. Each
     // quantity reads the hit its own way: ao any hit, obscurance a hit within the support only, so
@@ -408,7 +409,8 @@ void run_samples(const Context& cx, int i, int j, std::uint64_t texel_seed, int 
                  std::uint32_t s1, double* sums, Scratch& sc) {
   const HeightField& f = cx.field;
   const Vec3 n = cx.scene.normals[f.index(i, j)].d();
-  TexelBatch b{cx, n, f.position(i, j) + Vec3{0, 0, cx.geometry.epsilon()}, texel_seed, r, 0, 0, sums};
+  const Vec3 origin = f.position(i, j) + Vec3{0, 0, cx.geometry.epsilon()};
+  TexelBatch b{cx, reference::Frame(n), n, origin, texel_seed, r, 0, 0, sums};
   const bool paths = cx.needs.indirect && cx.bounces > 0;
   const bool primary_hit = cx.needs.obscurance || paths;
   for (std::uint32_t c0 = s0; c0 < s1; c0 += kChunk) {
@@ -470,16 +472,15 @@ Needs needs_of(const ReferenceOptions& options, int bounces) {
 nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& options,
                                const EmbreeField& geometry, int replicates, int per_replicate_cap,
                                bool adaptive, int bounces) {
-  nlohmann::json setup = {
-      {"geometry", options.geometry == reference::GeometryKind::grid ? "grid" : "triangles"},
-      {"epsilon", geometry.epsilon()},
-      {"replicates", replicates},
-      {"samples_per_texel",
-       adaptive ? nlohmann::json("adaptive") : nlohmann::json(replicates * per_replicate_cap)},
-      {"bounces", bounces},
-      {"environment", options.sh_environment ? "sh4" : "full"},
-      {"falloff", falloff_kind_name(options.falloff.kind)},
-      {"radius", options.falloff.radius}};
+  nlohmann::json setup = {{"geometry", reference::geometry_name(options.geometry)},
+                          {"epsilon", geometry.epsilon()},
+                          {"replicates", replicates},
+                          {"samples_per_texel", adaptive ? nlohmann::json("adaptive")
+                                                         : nlohmann::json(replicates * per_replicate_cap)},
+                          {"bounces", bounces},
+                          {"environment", options.sh_environment ? "sh4" : "full"},
+                          {"falloff", falloff_kind_name(options.falloff.kind)},
+                          {"radius", options.falloff.radius}};
   if (f.wrap == Wrap::repeat) {
     setup["repeat_tiles"] = options.repeat_tiles;
     setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width, f.height) * f.texel_size;
@@ -525,9 +526,7 @@ ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const Met
   o.target_stderr = in.number("target_stderr", 0, 0, 1e9);
   if (in.has("target_stderr") && !(o.target_stderr > 0))
     in.fail("target_stderr", "must be a positive number");
-  o.geometry = in.choice("geometry", "grid", {"grid", "triangles"}) == "grid"
-                   ? reference::GeometryKind::grid
-                   : reference::GeometryKind::triangles;
+  o.geometry = reference::geometry_kind(in.choice("geometry", "quads", {"quads", "grid", "triangles"}));
   o.sh_environment = in.choice("environment", "full", {"full", "sh4"}) == "sh4";
 
   // Falloff: the reference's own, else the first obscurance-family bake entry's (the same rule).
@@ -577,7 +576,13 @@ LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const
   return bake_reference(scene, parse_reference_options(scene, job_doc), rc);
 }
 
-LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc) {
+int reference_band_count(const ReferenceOptions& options, int rows) {
+  const int ts = std::max(1, options.tile_size);
+  return (std::max(0, rows) + ts - 1) / ts;
+}
+
+LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc,
+                        ReferenceResume* resume) {
   const HeightField& f = scene.field;
   if (scene.normals.size() != f.texel_count() || scene.surface.albedo.size() != f.texel_count())
     throw std::invalid_argument("bake_reference: the scene's normals and albedo must cover the field");
@@ -633,19 +638,63 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   if (adaptive) samples_data = result.find("samples")->data.data();
 
   const int ts = std::max(1, options.tile_size);
-  const int tiles_x = (f.width + ts - 1) / ts, tiles_y = (row1 - row0 + ts - 1) / ts;
+  const int tiles_x = (f.width + ts - 1) / ts, tiles_y = reference_band_count(options, row1 - row0);
   const int tiles = tiles_x * tiles_y;
-  std::atomic<int> done{0};
   const int C = cx.ch.count;
 
-  tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
+  // A band (a row of tiles): its floats in every layer, for resuming (ReferenceResume).
+  auto band_floats = [&](int band) {
+    const std::size_t rows = std::size_t(std::min(row1 - row0, (band + 1) * ts) - band * ts);
+    std::size_t n = 0;
+    for (const Layer& l : result.layers) n += rows * std::size_t(f.width) * l.channels.size();
+    return n;
+  };
+  auto band_copy = [&](int band, float* to, const float* from) {  // to or from is the band's floats
+    const std::size_t first = std::size_t(band) * ts * std::size_t(f.width);
+    const std::size_t texels =
+        std::size_t(std::min(row1 - row0, (band + 1) * ts) - band * ts) * std::size_t(f.width);
+    std::size_t at = 0;
+    for (Layer& l : result.layers) {
+      const std::size_t nc = l.channels.size();
+      float* layer = l.data.data() + first * nc;
+      if (to)
+        std::copy(layer, layer + texels * nc, to + at);
+      else
+        std::copy(from + at, from + at + texels * nc, layer);
+      at += texels * nc;
+    }
+  };
+  std::vector<char> band_done(std::size_t(tiles_y), 0);
+  if (resume && resume->load) {
+    std::vector<float> buffer;
+    for (int band = 0; band < tiles_y; ++band) {
+      buffer.assign(band_floats(band), 0.0f);
+      if (!resume->load(band, buffer)) continue;
+      band_copy(band, nullptr, buffer.data());
+      band_done[std::size_t(band)] = 1;
+      ++resume->bands_resumed;
+    }
+  }
+  // The tiles left to trace, and how many of each band's are still running.
+  std::vector<int> todo;
+  std::vector<std::atomic<int>> band_left(static_cast<std::size_t>(tiles_y));
+  for (int tile = 0; tile < tiles; ++tile)
+    if (!band_done[std::size_t(tile / tiles_x)]) {
+      todo.push_back(tile);
+      band_left[std::size_t(tile / tiles_x)].fetch_add(1);
+    }
+  std::atomic<int> done{tiles - int(todo.size())};
+  std::atomic<int> bands_traced{0};
+
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, todo.size(), 1), [&](const auto& range) {
     FlushDenormals ftz;
     Scratch scratch(cx.lights);
     ReplicateEstimate est(B, C);
     const std::vector<double>& mean = est.mean;
     const std::vector<double>& se = est.se;
-    for (int tile = range.begin(); tile != range.end(); ++tile) {
+    for (std::size_t next = range.begin(); next != range.end(); ++next) {
       rc.check();
+      const int tile = todo[next];
       const int tx = tile % tiles_x, ty = tile / tiles_x;
       for (int j = row0 + ty * ts; j < std::min(row1, row0 + (ty + 1) * ts); ++j) {
         for (int i = tx * ts; i < std::min(f.width, (tx + 1) * ts); ++i) {
@@ -691,9 +740,18 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
           if (samples_data) samples_data[t] = float(n * B);
         }
       }
+      if (band_left[std::size_t(ty)].fetch_sub(1) == 1) {  // the band's last tile: the band is final
+        bands_traced.fetch_add(1);
+        if (resume && resume->store) {
+          std::vector<float> values(band_floats(ty));
+          band_copy(ty, values.data(), nullptr);
+          resume->store(ty, values);
+        }
+      }
       rc.report(double(done.fetch_add(1) + 1) / tiles);
     }
   });
+  if (resume) resume->bands_traced = bands_traced.load();
 
   const nlohmann::json setup = reference_setup(f, options, geometry, B, per_replicate_cap, adaptive, bounces);
   result.attributes.emplace_back("hfbake:reference_setup", setup.dump());

@@ -43,7 +43,9 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -63,15 +65,19 @@ struct ReferenceOptions {
   double target_stderr = 0;  // 0: off
   int replicates = 8;
   Falloff falloff;  // obscurance
-  // grid (default) or triangles: the same surface. Measured at 1024^2: triangles trace ~12 % faster but
-  // build 2x slower and take 4.6x the memory (250 MB vs 54 MB; 960 MB vs 155 MB at 2048^2).
-  reference::GeometryKind geometry = reference::GeometryKind::grid;
+  // quads (default), grid or triangles: the same surface, and quads and grid the same bits (the same robust
+  // intersector; tests/reference). Measured at 1024^2 (ao rays per CPU second, tests/reference/
+  // bench_reference BM_AoRays1024, a loaded machine): grid 2.9 M, triangles 3.8 M, quads 4.1 M single rays
+  // and 4.4 M in streams; memory (geometry and BVH) grid 54 MB, quads 155 MB, triangles 250 MB
+  // (embree_bytes_per_texel). Quads trace one BVH (its skirt is quads too); grid and triangles two.
+  reference::GeometryKind geometry = reference::GeometryKind::quads;
   int repeat_tiles = 1;         // wrap repeat: tiles instanced on each side
   bool sh_environment = false;  // light with the environment band-limited to SH order 4
   // Trace each texel's batches with rtcOccluded1M / rtcIntersect1M instead of one rtcOccluded1 /
-  // rtcIntersect1 per ray. Measured (1024^2 fractal, ao, Embree 3.13.5 without ISPC): streams are ~15 %
-  // slower than single rays (and 45 % slower with the coherent flag), so single rays are the default.
-  bool ray_streams = false;
+  // rtcIntersect1 per ray: the same bits. Measured (1024^2 fractal, ao, 32 rays a call, Embree 3.13.5
+  // without ISPC): quads 4.4 M rays per CPU second in streams, 4.1 M single (grid: 3.0 M and 2.9 M). With 4
+  // rays a call (32 samples, 8 replicates) streams were ~15 % slower on the grid.
+  bool ray_streams = true;
   int tile_size = 16;
   // The farm's receiver tiles: only rows [row_begin, row_end) (-1: the last row) are traced, each against
   // the whole field; the result holds those rows only. Each texel's samples depend on (seed, texel) alone,
@@ -98,7 +104,23 @@ ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::jso
 // else -1. Nothing else of the bake list reaches the reference (the reference cache keys on exactly this).
 int reference_falloff_entry(const nlohmann::json& job_doc);
 
-LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc);
+// Resuming a reference that was killed: the traced rows are cut into bands of options.tile_size rows (band b:
+// rows row_begin + b * tile_size ..., the last one shorter), and each texel's samples depend on (seed, texel)
+// alone, so a band's floats are the same bits whenever and wherever it is traced. Before tracing,
+// `load(band, values)` may fill a band from an earlier run (true: taken as is, not traced); each band traced
+// here is handed to `store` once its last tile is done. `values` holds the band's rows of every layer of the
+// result, in the result's layer order (reference_band_floats of them). The callbacks do the files (cli/);
+// they must not throw. bands_resumed / bands_traced count what this bake did.
+struct ReferenceResume {
+  std::function<bool(int band, std::span<float> values)> load;
+  std::function<void(int band, std::span<const float> values)> store;
+  int bands_resumed = 0, bands_traced = 0;
+};
+// The number of bands of a reference over `rows` rows.
+int reference_band_count(const ReferenceOptions& options, int rows);
+
+LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, const RunControl& rc,
+                        ReferenceResume* resume = nullptr);
 LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const RunControl& rc);
 
 }  // namespace hfbake

@@ -49,6 +49,28 @@ RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, doub
     rtcCommitGeometry(g);
     return g;
   }
+  if (kind == GeometryKind::quads) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_QUAD);
+    float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), std::size_t(nx) * ny));
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        float* p = v + 3 * (std::size_t(j) * nx + i);
+        p[0] = float(i * ts), p[1] = float(j * ts), p[2] = height(i, j);
+      }
+    const std::size_t quads = std::size_t(nx - 1) * (ny - 1);
+    unsigned* idx = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), quads));
+    std::size_t t = 0;
+    for (int j = 0; j + 1 < ny; ++j)
+      for (int i = 0; i + 1 < nx; ++i) {
+        // v0 v1 v2 v3 = (i, j) (i+1, j) (i+1, j+1) (i, j+1): Embree splits it along v1-v3, the field's split.
+        const unsigned v00 = unsigned(j * nx + i);
+        idx[t++] = v00, idx[t++] = v00 + 1, idx[t++] = v00 + unsigned(nx) + 1, idx[t++] = v00 + unsigned(nx);
+      }
+    rtcCommitGeometry(g);
+    return g;
+  }
   RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
   float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                          3 * sizeof(float), std::size_t(nx) * ny));
@@ -74,9 +96,12 @@ RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, doub
 }
 
 // Walls from the boundary polyline (closed, counter-clockwise or not) down to z_bottom, plus a bottom cap.
-RTCGeometry make_skirt(RTCDevice device, const std::vector<std::array<float, 3>>& ring, float z_bottom) {
+// As quads (a wall quad is the two wall triangles, a cap triangle a quad with its last vertex repeated) when
+// the sheet is made of quads: one primitive type, so a ray traverses one BVH instead of two.
+RTCGeometry make_skirt(RTCDevice device, const std::vector<std::array<float, 3>>& ring, float z_bottom,
+                       bool quads) {
   const std::size_t n = ring.size();
-  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  RTCGeometry g = rtcNewGeometry(device, quads ? RTC_GEOMETRY_TYPE_QUAD : RTC_GEOMETRY_TYPE_TRIANGLE);
   float* v = static_cast<float*>(
       rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 2 * n + 1));
   float cx = 0, cy = 0;
@@ -86,20 +111,43 @@ RTCGeometry make_skirt(RTCDevice device, const std::vector<std::array<float, 3>>
     cx += ring[k][0] / float(n), cy += ring[k][1] / float(n);
   }
   v[6 * n] = cx, v[6 * n + 1] = cy, v[6 * n + 2] = z_bottom;  // cap center (the footprint is convex)
-  unsigned* idx = static_cast<unsigned*>(
-      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 3 * n));
-  for (std::size_t k = 0; k < n; ++k) {
-    const unsigned a = unsigned(2 * k), b = unsigned(2 * ((k + 1) % n));
-    unsigned* t = idx + 9 * k;
-    t[0] = a, t[1] = b, t[2] = a + 1;                    // wall
-    t[3] = b, t[4] = b + 1, t[5] = a + 1;                // wall
-    t[6] = a + 1, t[7] = b + 1, t[8] = unsigned(2 * n);  // bottom cap fan
+  if (quads) {
+    unsigned* idx = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), 2 * n));
+    for (std::size_t k = 0; k < n; ++k) {
+      const unsigned a = unsigned(2 * k), b = unsigned(2 * ((k + 1) % n));
+      unsigned* q = idx + 8 * k;
+      q[0] = a, q[1] = b, q[2] = b + 1, q[3] = a + 1;                              // wall: (a b a') (b' a' b)
+      q[4] = a + 1, q[5] = b + 1, q[6] = unsigned(2 * n), q[7] = unsigned(2 * n);  // bottom cap fan
+    }
+  } else {
+    unsigned* idx = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 3 * n));
+    for (std::size_t k = 0; k < n; ++k) {
+      const unsigned a = unsigned(2 * k), b = unsigned(2 * ((k + 1) % n));
+      unsigned* t = idx + 9 * k;
+      t[0] = a, t[1] = b, t[2] = a + 1;                    // wall
+      t[3] = b, t[4] = b + 1, t[5] = a + 1;                // wall
+      t[6] = a + 1, t[7] = b + 1, t[8] = unsigned(2 * n);  // bottom cap fan
+    }
   }
   rtcCommitGeometry(g);
   return g;
 }
 
 }  // namespace
+
+GeometryKind geometry_kind(const std::string& name) {
+  return name == "grid"        ? GeometryKind::grid
+         : name == "triangles" ? GeometryKind::triangles
+                               : GeometryKind::quads;
+}
+const char* geometry_name(GeometryKind kind) {
+  return kind == GeometryKind::grid ? "grid" : kind == GeometryKind::triangles ? "triangles" : "quads";
+}
+double embree_bytes_per_texel(GeometryKind kind) {
+  return kind == GeometryKind::grid ? 60 : kind == GeometryKind::triangles ? 260 : 160;
+}
 
 EmbreeField::EmbreeField(const HeightField& f, GeometryKind kind, int repeat_tiles) {
   if (f.width < 2 || f.height < 2)
@@ -157,7 +205,7 @@ EmbreeField::EmbreeField(const HeightField& f, GeometryKind kind, int repeat_til
     for (int i = i1; i > i0; --i) ring.push_back({float(i * ts), float(j1 * ts), f.at(i, j1)});
     for (int j = j1; j > j0; --j) ring.push_back({float(i0 * ts), float(j * ts), f.at(i0, j)});
   }
-  RTCGeometry skirt = make_skirt(device_, ring, float(z_bottom_));
+  RTCGeometry skirt = make_skirt(device_, ring, float(z_bottom_), kind == GeometryKind::quads && !repeat);
   rtcAttachGeometry(scene_, skirt);
   rtcReleaseGeometry(skirt);
   rtcCommitScene(scene_);

@@ -17,11 +17,17 @@
 
 #include <embree3/rtcore.h>
 
+#include <string>
+
 #include "field/height_field.hpp"
 
 namespace hfbake::reference {
 
-enum class GeometryKind { grid, triangles };
+enum class GeometryKind { grid, triangles, quads };
+GeometryKind geometry_kind(const std::string& name);  // "grid", "triangles", "quads" (else quads)
+const char* geometry_name(GeometryKind kind);
+// Embree's geometry and BVH per texel, measured at 1024^2 (rounded up): for the memory estimate.
+double embree_bytes_per_texel(GeometryKind kind);
 
 class EmbreeField {
  public:

@@ -29,11 +29,10 @@ inline std::uint64_t hash_combine(std::uint64_t a, std::uint64_t b) {
 }
 
 inline std::uint32_t reverse_bits(std::uint32_t x) {
+  x = __builtin_bswap32(x);  // the bytes reversed; then the bits within each byte
   x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
   x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-  x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
-  x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
-  return (x >> 16) | (x << 16);
+  return ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
 }
 
 // A bijection on 32-bit words in which bit k of the result depends only on bits 0..k of x: applied to
@@ -51,15 +50,28 @@ inline std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) {
 }
 
 // The first two Sobol dimensions as 32-bit fractions: van der Corput, and the sequence with direction
-// numbers v_0 = 2^31, v_k = v_{k-1} ^ (v_{k-1} >> 1).
+// numbers v_0 = 2^31, v_k = v_{k-1} ^ (v_{k-1} >> 1): the XOR of v_k over the set bits k of the index,
+// here 8 bits at a time from tables of the XORs of every byte's bits (the same bits as the bit loop, four
+// loads instead of 32 data-dependent branches: it was a tenth of the reference's time).
 inline std::uint32_t sobol_dim0(std::uint32_t index) {
   return reverse_bits(index);
 }
+struct SobolDim1Tables {
+  std::uint32_t t[4][256] = {};
+  constexpr SobolDim1Tables() {
+    std::uint32_t v[32] = {};
+    v[0] = 1u << 31;
+    for (int k = 1; k < 32; ++k) v[k] = v[k - 1] ^ (v[k - 1] >> 1);
+    for (int b = 0; b < 4; ++b)
+      for (int x = 0; x < 256; ++x)
+        for (int k = 0; k < 8; ++k)
+          if (x & (1 << k)) t[b][x] ^= v[8 * b + k];
+  }
+};
+inline constexpr SobolDim1Tables kSobolDim1{};
 inline std::uint32_t sobol_dim1(std::uint32_t index) {
-  std::uint32_t result = 0, v = 1u << 31;
-  for (; index; index >>= 1, v ^= v >> 1)
-    if (index & 1u) result ^= v;
-  return result;
+  return kSobolDim1.t[0][index & 0xffu] ^ kSobolDim1.t[1][(index >> 8) & 0xffu] ^
+         kSobolDim1.t[2][(index >> 16) & 0xffu] ^ kSobolDim1.t[3][index >> 24];
 }
 
 inline double to_unit(std::uint32_t x) {
@@ -94,13 +106,20 @@ inline void basis(Vec3 n, Vec3& t, Vec3& b) {
   b = {c, s + n.y * n.y * a, -n.y};
 }
 
+// The basis around unit n, made once for many directions.
+struct Frame {
+  Vec3 t, b, n;
+  explicit Frame(Vec3 normal) : n(normal) { basis(n, t, b); }
+};
+
 // Cosine-weighted hemisphere around unit n: pdf cos(theta) / pi.
-inline Vec3 cosine_hemisphere(Vec3 n, Point2 p) {
+inline Vec3 cosine_hemisphere(const Frame& f, Point2 p) {
   const double r = std::sqrt(p.u), phi = 2 * kPi * p.v;
   const double z = std::sqrt(std::max(0.0, 1.0 - p.u));
-  Vec3 t, b;
-  basis(n, t, b);
-  return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z;
+  return f.t * (r * std::cos(phi)) + f.b * (r * std::sin(phi)) + f.n * z;
+}
+inline Vec3 cosine_hemisphere(Vec3 n, Point2 p) {
+  return cosine_hemisphere(Frame(n), p);
 }
 
 // Uniform over the upper (+z) hemisphere: pdf 1 / (2 pi). z = u is uniform (Archimedes), so the fraction

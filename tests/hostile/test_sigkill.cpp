@@ -5,7 +5,8 @@
 //     a staging folder);
 //   - the next bake of the same folder succeeds, removes the killed bake's staging folder, and leaves no
 //     staging folder of its own.
-// The moments come from a fixed seed (reproducible), spread over the measured length of a whole bake.
+// The moments come from a fixed seed (reproducible), spread over the measured length of a whole bake. The
+// second test does the same to a bake with a long reference, which resumes from its checkpoints.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -13,6 +14,7 @@
 
 #include <OpenImageIO/imageio.h>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -91,6 +93,35 @@ int stages_in(const fs::path& dir) {
   return ::testing::AssertionFailure() << p << " is not an output hfbake writes";
 }
 
+// compare reads the committed report.json only (none in a staging folder). A kill between the report and
+// the commit leaves a staged report.json; one is planted every round too (a dead process's stage of job
+// `job`). dir/baseline/report.json: a whole report of the job.
+void expect_compare_reads_the_committed_report(const fs::path& dir, const fs::path& out,
+                                               const std::string& job) {
+  {
+    const pid_t dead = fork();
+    if (dead == 0) _exit(0);
+    waitpid(dead, nullptr, 0);
+    char host[256] = {};
+    gethostname(host, sizeof host - 1);
+    const fs::path stage = out / (".hfbake-staging-" + job + "-" + std::to_string(dead) + "@" + host);
+    fs::create_directories(stage);
+    fs::copy_file(dir / "baseline" / "report.json", stage / "report.json",
+                  fs::copy_options::overwrite_existing);
+  }
+  if (!fs::exists(out / "report.json")) return;
+  const fs::path cmp = dir / "compare.json";
+  fs::remove(cmp);
+  const int code = wait_exit(
+      start({"compare", out.string(), (dir / "baseline").string(), "--json", cmp.string(), "--quiet"},
+            dir / "compare_err.txt"));
+  EXPECT_TRUE(code == 0 || code == 1) << code;
+  std::ifstream in(cmp);
+  const nlohmann::json c = nlohmann::json::parse(in, nullptr, false);
+  ASSERT_FALSE(c.is_discarded());
+  for (const auto& comparison : c["comparisons"]) EXPECT_EQ(comparison.value("label", ""), "report.json");
+}
+
 TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBakeCleansUp) {
   const fs::path dir =
       fs::temp_directory_path() / ("hfbake_sigkill_" + std::to_string(std::random_device{}()));
@@ -137,31 +168,7 @@ TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBak
     killed_mid_bake += wait_exit(pid) == -SIGKILL;
 
     for (const fs::path& p : visible_files(out)) EXPECT_TRUE(whole(p));
-    // compare reads the committed report.json only (none in a staging folder). A kill between the report
-    // and the commit leaves a staged report.json; one is planted every round too (a dead process's).
-    {
-      const pid_t dead = fork();
-      if (dead == 0) _exit(0);
-      waitpid(dead, nullptr, 0);
-      char host[256] = {};
-      gethostname(host, sizeof host - 1);
-      const fs::path stage = out / (".hfbake-staging-k-" + std::to_string(dead) + "@" + host);
-      fs::create_directories(stage);
-      fs::copy_file(dir / "baseline" / "report.json", stage / "report.json",
-                    fs::copy_options::overwrite_existing);
-    }
-    if (fs::exists(out / "report.json")) {
-      const fs::path cmp = dir / "compare.json";
-      fs::remove(cmp);
-      const int code = wait_exit(
-          start({"compare", out.string(), (dir / "baseline").string(), "--json", cmp.string(), "--quiet"},
-                dir / "compare_err.txt"));
-      EXPECT_TRUE(code == 0 || code == 1) << code;
-      std::ifstream in(cmp);
-      const nlohmann::json c = nlohmann::json::parse(in, nullptr, false);
-      ASSERT_FALSE(c.is_discarded());
-      for (const auto& comparison : c["comparisons"]) EXPECT_EQ(comparison.value("label", ""), "report.json");
-    }
+    expect_compare_reads_the_committed_report(dir, out, "k");
     // The next bake of the folder succeeds and leaves no staging behind (the killed one's is removed).
     ASSERT_EQ(wait_exit(start(bake, err)), 0) << "round " << round;
     EXPECT_EQ(stages_in(out), 0);  // the killed bake's and the planted one are removed
@@ -169,6 +176,63 @@ TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBak
     EXPECT_TRUE(fs::exists(out / "report.json"));
   }
   // The moments were spread over whole bakes: most kills hit a running bake (not one already done).
+  EXPECT_GE(killed_mid_bake, 10);
+  fs::remove_all(dir);
+}
+
+// The same with a long reference that checkpoints its bands (cli/reference_checkpoint.hpp): a kill leaves
+// band files in the dead bake's stage, which the next bake adopts. They are never taken for outputs, the
+// next bake succeeds, resumes from them with the bits of an uninterrupted bake, and leaves no stage (nor
+// checkpoint) behind.
+std::vector<float> exr_pixels(const fs::path& exr) {
+  auto in = OIIO::ImageInput::open(exr.string());
+  if (!in) return {};
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<float> px(std::size_t(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
+  return px;
+}
+
+TEST(SigKill, TwentyKilledReferenceBakesResumeAndLeaveNothingALaterBakeOrCompareReads) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("hfbake_sigkill_ref_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  const nlohmann::json job = {
+      {"version", 1},
+      {"name", "r"},
+      {"height", {{"procedural", {{"kind", "fractal"}, {"size", {96, 96}}, {"seed", 5}}}}},
+      {"bake", {{{"method", "p1"}, {"directions", 8}}}},
+      {"reference", {{"samples", 256}, {"seed", 1}, {"layers", {"ao", "vsky"}}}},
+      {"output", {{"dir", "out"}, {"pixel_type", "float"}}}};
+  const fs::path job_file = dir / "r.json", out = dir / "out", err = dir / "stderr.txt";
+  std::ofstream(job_file) << job.dump(2);
+  const std::vector<std::string> bake = {"bake", job_file.string(), "--quiet", "--no-cache"};
+
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_EQ(wait_exit(start(bake, err)), 0);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  fs::create_directories(dir / "baseline");
+  fs::copy_file(out / "report.json", dir / "baseline" / "report.json");
+  const std::vector<float> truth = exr_pixels(out / "r.reference.exr");
+  ASSERT_FALSE(truth.empty());
+
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int killed_mid_bake = 0;
+  for (int round = 0; round < 20; ++round) {
+    SCOPED_TRACE("round " + std::to_string(round));
+    const pid_t pid = start(bake, err);
+    std::this_thread::sleep_for(std::chrono::duration<double>(unit(rng) * 1.1 * seconds));
+    kill(pid, SIGKILL);
+    killed_mid_bake += wait_exit(pid) == -SIGKILL;
+    for (const fs::path& p : visible_files(out)) EXPECT_TRUE(whole(p));
+    expect_compare_reads_the_committed_report(dir, out, "r");
+    ASSERT_EQ(wait_exit(start(bake, err)), 0) << "round " << round;
+    EXPECT_EQ(stages_in(out), 0);
+    for (const fs::path& p : visible_files(out)) EXPECT_TRUE(whole(p));
+    const std::vector<float> now = exr_pixels(out / "r.reference.exr");
+    EXPECT_TRUE(now.size() == truth.size() && std::memcmp(now.data(), truth.data(), 4 * now.size()) == 0);
+  }
   EXPECT_GE(killed_mid_bake, 10);
   fs::remove_all(dir);
 }

@@ -1,15 +1,18 @@
 // Reference throughput: ao occlusion rays per second on a 1024^2 fractal field with 2 threads (grid vs
-// triangle mesh, ray streams vs single rays), and the time to a per-texel ao standard error of 0.005 at
-// 512^2. Run: build/tests/reference/bench_reference [--benchmark_filter=...]
+// triangle mesh vs quads, ray streams vs single rays; and Embree's calls alone), and the time to a per-texel
+// ao standard error of 0.005 at 512^2. Run: build/tests/reference/bench_reference [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
 #include <sys/resource.h>
 
 #include <chrono>
+#include <limits>
 
 #include "field/procedural.hpp"
 #include "reference/bake_reference.hpp"
+#include "reference/embree_field.hpp"
+#include "reference/sampling.hpp"
 
 namespace hfbake {
 namespace {
@@ -42,14 +45,20 @@ const Scene& scene1024() {
   return s;
 }
 
-// ao only: one occlusion ray per sample. Rays = texels x samples (rounded to replicates).
+// ao only: one occlusion ray per sample, 256 samples a texel (32 per replicate: the default), on the rows
+// 448..575 of the 1024^2 field (traced against the whole field). Rays = texels x samples. Arg 0: geometry
+// (grid, triangles, quads), arg 1: rtcOccluded1M streams instead of single rays.
 void BM_AoRays1024(benchmark::State& state) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
   const Scene& s = scene1024();
   ReferenceOptions o;
   o.layers = {"ao"};
-  o.samples = 32;
-  o.geometry = state.range(0) ? reference::GeometryKind::triangles : reference::GeometryKind::grid;
+  o.samples = 256;
+  o.row_begin = 448;
+  o.row_end = 576;
+  const reference::GeometryKind kinds[] = {reference::GeometryKind::grid, reference::GeometryKind::triangles,
+                                           reference::GeometryKind::quads};
+  o.geometry = kinds[state.range(0)];
   o.ray_streams = state.range(1) != 0;
   double rays = 0, trace_cpu = 0, build_cpu = 0;
   for (auto _ : state) {
@@ -59,21 +68,106 @@ void BM_AoRays1024(benchmark::State& state) {
     const LayerSet r = bake_reference(s, o, {});
     const double c2 = cpu_seconds();
     benchmark::DoNotOptimize(r.layers[0].data.data());
-    rays += double(s.field.texel_count()) * o.samples;
+    rays += double(s.field.width) * (o.row_end - o.row_begin) * o.samples;
     build_cpu += c1 - c0;
     trace_cpu += (c2 - c1) - (c1 - c0);  // the bake builds the same scene once
   }
   state.counters["rays_per_cpu_second"] = rays / trace_cpu;
   state.counters["rays_per_second_2_threads"] = 2 * rays / trace_cpu;
   state.counters["build_cpu_seconds"] = build_cpu / double(state.iterations());
-  state.SetLabel(std::string(state.range(0) ? "triangles" : "grid") +
+  const char* geometries[] = {"grid", "triangles", "quads"};
+  state.SetLabel(std::string(geometries[state.range(0)]) +
                  (state.range(1) ? ", 1M streams" : ", single rays"));
 }
 BENCHMARK(BM_AoRays1024)
-    ->Args({0, 1})
-    ->Args({0, 0})
-    ->Args({1, 1})
-    ->Args({1, 0})
+    ->ArgsProduct({{0, 1, 2}, {0, 1}})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime();
+
+// Embree's occlusion calls side by side on the same rays: 64 cosine-distributed rays from each of 64k texels
+// of the 1024^2 field (every 4th texel of every 4th row), traced one by one (rtcOccluded1), as packets of
+// 4, 8, 16 rays of one texel (rtcOccluded4/8/16), or as one stream (rtcOccluded1M); kernel 0 only makes the
+// rays (the cost of the sample generation). Arg 0: kernel, arg 1: triangles instead of the grid.
+template <int N, typename Packet, typename Call>
+void trace_packets(RTCScene scene, const std::vector<RTCRay>& rays, int n, Call call, int& free_rays) {
+  RTCIntersectContext c;
+  rtcInitIntersectContext(&c);
+  alignas(64) Packet p;
+  alignas(64) int valid[N];
+  for (int k0 = 0; k0 < n; k0 += N) {
+    for (int q = 0; q < N; ++q) {
+      const RTCRay& r = rays[std::size_t(k0 + q)];
+      valid[q] = -1;
+      p.org_x[q] = r.org_x, p.org_y[q] = r.org_y, p.org_z[q] = r.org_z;
+      p.dir_x[q] = r.dir_x, p.dir_y[q] = r.dir_y, p.dir_z[q] = r.dir_z;
+      p.tnear[q] = 0, p.tfar[q] = r.tfar, p.time[q] = 0, p.mask[q] = ~0u, p.id[q] = 0, p.flags[q] = 0;
+    }
+    call(valid, scene, &c, &p);
+    for (int q = 0; q < N; ++q) free_rays += p.tfar[q] >= 0;
+  }
+}
+
+void BM_OcclusionKernels(benchmark::State& state) {
+  const Scene& s = scene1024();
+  const int kernel = int(state.range(0));
+  const reference::GeometryKind kinds[] = {reference::GeometryKind::grid, reference::GeometryKind::triangles,
+                                           reference::GeometryKind::quads};
+  const reference::EmbreeField g(s.field, kinds[state.range(1)], 1);
+  constexpr int kRays = 64;
+  std::vector<RTCRay> rays(kRays);
+  double traced = 0, cpu = 0;
+  int free_rays = 0;
+  for (auto _ : state) {
+    const double c0 = cpu_seconds();
+    for (int j = 0; j < s.field.height; j += 4)
+      for (int i = 0; i < s.field.width; i += 4) {
+        const Vec3 n = s.normals[s.field.index(i, j)].d();
+        const Vec3 o = s.field.position(i, j) + Vec3{0, 0, g.epsilon()};
+        const reference::Sequence2 seq = reference::Sequence2::make(std::uint64_t(s.field.index(i, j)));
+        for (int k = 0; k < kRays; ++k) {
+          const Vec3 d = reference::cosine_hemisphere(n, seq(std::uint32_t(k)));
+          RTCRay& r = rays[std::size_t(k)];
+          r.org_x = float(o.x), r.org_y = float(o.y), r.org_z = float(o.z), r.tnear = 0;
+          r.dir_x = float(d.x), r.dir_y = float(d.y), r.dir_z = float(d.z), r.time = 0;
+          r.tfar = std::numeric_limits<float>::infinity(), r.mask = ~0u, r.id = 0, r.flags = 0;
+        }
+        RTCIntersectContext c;
+        rtcInitIntersectContext(&c);
+        switch (kernel) {
+          case 1:
+            for (RTCRay& r : rays) rtcOccluded1(g.scene(), &c, &r);
+            for (const RTCRay& r : rays) free_rays += r.tfar >= 0;
+            break;
+          case 2:
+            trace_packets<4, RTCRay4>(g.scene(), rays, kRays, rtcOccluded4, free_rays);
+            break;
+          case 3:
+            trace_packets<8, RTCRay8>(g.scene(), rays, kRays, rtcOccluded8, free_rays);
+            break;
+          case 4:
+            trace_packets<16, RTCRay16>(g.scene(), rays, kRays, rtcOccluded16, free_rays);
+            break;
+          case 5:
+            rtcOccluded1M(g.scene(), &c, rays.data(), kRays, sizeof(RTCRay));
+            for (const RTCRay& r : rays) free_rays += r.tfar >= 0;
+            break;
+          default:
+            break;
+        }
+        traced += kRays;
+      }
+    cpu += cpu_seconds() - c0;
+  }
+  benchmark::DoNotOptimize(free_rays);  // (a count of escaped rays: keeps the traces from being dropped)
+  state.counters["rays_per_cpu_second"] = traced / cpu;
+  const char* names[] = {"make rays only", "rtcOccluded1",  "rtcOccluded4",
+                         "rtcOccluded8",   "rtcOccluded16", "rtcOccluded1M"};
+  const char* geometries[] = {", grid", ", triangles", ", quads"};
+  state.SetLabel(std::string(names[kernel]) + geometries[state.range(1)]);
+}
+BENCHMARK(BM_OcclusionKernels)
+    ->ArgsProduct({{0, 1, 2, 3, 4, 5}, {0, 1, 2}})
     ->Unit(benchmark::kSecond)
     ->Iterations(1)
     ->UseRealTime();

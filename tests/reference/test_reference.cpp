@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <span>
 
 #include "../p1/p1_truth.hpp"
 #include "core/azimuth.hpp"
@@ -89,6 +91,22 @@ double horizon(const HeightField& f, int i, int j, double phi) {
   return best;
 }
 
+// The table forms of the Sobol generator and the bit reversal against their definitions, bit by bit.
+TEST(Sampling, SobolAndBitReversalMatchTheirDefinitions) {
+  std::uint64_t x = 12345;
+  for (int n = 0; n < 200000; ++n) {
+    x = reference::mix64(x);
+    const std::uint32_t index = n < 1000 ? std::uint32_t(n) : std::uint32_t(x);
+    std::uint32_t dim1 = 0, v = 1u << 31, reversed = 0;
+    for (int k = 0; k < 32; ++k, v ^= v >> 1) {
+      if (index & (1u << k)) dim1 ^= v;
+      if (index & (1u << k)) reversed |= 1u << (31 - k);
+    }
+    ASSERT_EQ(reference::sobol_dim1(index), dim1) << index;
+    ASSERT_EQ(reference::reverse_bits(index), reversed) << index;
+  }
+}
+
 TEST(Sampling, PrefixesAreNets) {
   // The first 2^m points of a scrambled sequence: one point in every elementary interval of area 2^-m.
   for (std::uint64_t stream : {1ull, 77ull, 123456789ull}) {
@@ -110,7 +128,8 @@ TEST(Geometry, SurfaceSplitAndSkirt) {
   HeightField f;
   f.width = f.height = 2;
   f.z = {0, 0, 0, 1};  // h(1,1) = 1: the split decides the height at (0.7, 0.7)
-  for (auto kind : {reference::GeometryKind::grid, reference::GeometryKind::triangles}) {
+  for (auto kind :
+       {reference::GeometryKind::grid, reference::GeometryKind::triangles, reference::GeometryKind::quads}) {
     reference::EmbreeField g(f, kind, 1);
     auto down = [&](double x, double y) {
       RTCRayHit rh{};
@@ -500,6 +519,80 @@ TEST(Reference, DeterministicForAnyThreadCount) {
     EXPECT_EQ(
         0, std::memcmp(one.layers[k].data.data(), two.layers[k].data.data(), one.layers[k].data.size() * 4))
         << one.layers[k].name;
+  }
+}
+
+// Resuming (ReferenceResume): bands handed out by one bake and given back to another are taken as they are,
+// and the bands traced afresh are the same bits as in a whole bake (rows of 7 and a shorter last band, a
+// row range as the farm cuts it, the adaptive "samples" layer included).
+TEST(Reference, ResumedBandsGiveTheBitsOfAWholeBake) {
+  Scene s = make_scene(spec_of(ProceduralKind::fractal, 30));
+  ReferenceOptions o = options({"ao", "vsky"}, 32);
+  o.target_stderr = 0.05;
+  o.tile_size = 7;
+  o.row_begin = 3;
+  o.row_end = 27;  // 24 rows: bands of 7, 7, 7, 3
+  ASSERT_EQ(reference_band_count(o, 24), 4);
+  std::map<int, std::vector<float>> stored;
+  ReferenceResume first;
+  first.store = [&](int band, std::span<const float> v) { stored[band].assign(v.begin(), v.end()); };
+  const LayerSet whole = bake_reference(s, o, {}, &first);
+  EXPECT_EQ(first.bands_traced, 4);
+  EXPECT_EQ(first.bands_resumed, 0);
+  ASSERT_EQ(stored.size(), 4u);
+  // Bands 1 and 3 come back (band 2 with the wrong size is refused by the loader, as a damaged file is).
+  ReferenceResume second;
+  second.load = [&](int band, std::span<float> v) {
+    if (band % 2 == 0 || stored[band].size() != v.size()) return false;
+    std::copy(stored[band].begin(), stored[band].end(), v.begin());
+    return true;
+  };
+  int stores = 0;
+  second.store = [&](int, std::span<const float>) { ++stores; };
+  const LayerSet resumed = bake_reference(s, o, {}, &second);
+  EXPECT_EQ(second.bands_resumed, 2);
+  EXPECT_EQ(second.bands_traced, 2);
+  EXPECT_EQ(stores, 2);  // only what it traced
+  ASSERT_EQ(whole.layers.size(), resumed.layers.size());
+  for (std::size_t k = 0; k < whole.layers.size(); ++k)
+    EXPECT_EQ(0, std::memcmp(whole.layers[k].data.data(), resumed.layers[k].data.data(),
+                             whole.layers[k].data.size() * 4))
+        << whole.layers[k].name;
+  // A band given back with other values is taken as given: the loader is the one that checks.
+  ReferenceResume third;
+  third.load = [&](int band, std::span<float> v) {
+    std::fill(v.begin(), v.end(), 0.25f);
+    return band == 3;
+  };
+  const LayerSet odd = bake_reference(s, o, {}, &third);
+  EXPECT_EQ(odd.find("ao")->data[std::size_t(30) * 21], 0.25f);  // row 3 + 21: band 3
+  EXPECT_NE(odd.find("ao")->data[std::size_t(30) * 20], 0.25f);
+}
+
+// The quad mesh (with its quad skirt) and the grid are the same surface traced by the same robust
+// intersector: every layer, hit distances included (obscurance, the paths), has the same bits, with single
+// rays or streams (rtcOccluded1M / rtcIntersect1M), on a rough field under a sky with a sun, 2 bounces.
+TEST(Reference, QuadsGridAndStreamsGiveTheSameBits) {
+  Scene s = make_scene(spec_of(ProceduralKind::fractal, 40), Wrap::clamp, {0.6f, 0.5f, 0.4f});
+  s.bounces = 2;
+  const EnvironmentLighting sky = make_sky_environment(SkySpec{});
+  s.environment = sky.environment;
+  s.lights = sky.lights;
+  ReferenceOptions o = options({"ao", "vsky", "obscurance", "direct", "indirect", "bent_normal"}, 32);
+  o.falloff.kind = FalloffKind::smooth;
+  o.falloff.radius = 6;
+  o.geometry = reference::GeometryKind::grid;
+  o.ray_streams = false;
+  const LayerSet grid = bake_reference(s, o, {});
+  for (const bool streams : {false, true}) {
+    o.geometry = reference::GeometryKind::quads;
+    o.ray_streams = streams;
+    const LayerSet quads = bake_reference(s, o, {});
+    ASSERT_EQ(grid.layers.size(), quads.layers.size());
+    for (std::size_t k = 0; k < grid.layers.size(); ++k)
+      EXPECT_EQ(0, std::memcmp(grid.layers[k].data.data(), quads.layers[k].data.data(),
+                               grid.layers[k].data.size() * 4))
+          << grid.layers[k].name << (streams ? ", streams" : ", single rays");
   }
 }
 
