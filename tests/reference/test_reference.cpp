@@ -697,6 +697,12 @@ TEST(Reference, OptionsFromTheJob) {
   EXPECT_EQ(o.resolved["layers"], nlohmann::json(o.layers));
   EXPECT_EQ(o.resolved["samples"], 64);
   EXPECT_EQ(o.resolved["replicates"], 8);     // a default, recorded
+  EXPECT_EQ(o.resolved["geometry"], "quads");  // small fields: the faster geometry
+  MethodContext big;
+  big.field.width = 4096, big.field.height = 4097;  // beyond 4096² texels: the grid's third of the memory
+  EXPECT_EQ(read_reference_options(job, big, "j.json").resolved["geometry"], "grid");
+  big.field.height = 4096;
+  EXPECT_EQ(read_reference_options(job, big, "j.json").resolved["geometry"], "quads");
   job["bake"].push_back({{"method", "p2"}});  // p2 adds indirect and total
   EXPECT_EQ(
       parse_reference_options(s, job).layers,
