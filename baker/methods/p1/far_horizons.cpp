@@ -101,6 +101,16 @@ const LinePattern& FarHorizonWorker::pattern(const SweepDirection& d) {
   LinePattern& p = patterns_[next_slot_];
   next_slot_ ^= 1;
   p.build(*field, d);
+  p.near.clear(), p.near_a.clear(), p.near_b.clear();
+  if (beat_near) {
+    const double radius = near_radius_of(d, far_radius / field->texel_size);
+    p.near = near_field_stencil(d.dx, d.dy, radius, field->texel_size);
+    for (const NearCrossing& c : p.near) {
+      p.near_a.push_back(std::ptrdiff_t(c.aj) * field->width + c.ai);
+      p.near_b.push_back(std::ptrdiff_t(c.bj) * field->width + c.bi);
+    }
+    p.near_margin = int(std::ceil(radius)) + 2;
+  }
   return p;
 }
 
@@ -183,31 +193,27 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       if (texel_z_[n] == texel_z_[n]) bound_[pat.first[n]] = std::max(bound_[pat.first[n]], texel_z_[n]);
     hb = bound_.data();
   }
-  // Skip bounds: per column c, the highest texel of the cells the strip touches in the bands beside it
-  // (rows from floor(v_{l-1} - |slope|) to ceil(v_l + |slope|), border rows clamped); a band's surface
-  // in the strip lies below the larger of its two columns', a block's of kBlock bands below its columns'.
+  // Skip bounds: per band c (columns c to c + 1), the highest entry of the strip's bound in it, both
+  // columns included. The surface of the strip in the band is below the bound's linear interpolation
+  // between its entries (see the header), so the band's points on any texel's ray lie below its largest
+  // entry; a block of kBlock bands below its bands' largest. `slack` covers the lerps' float rounding (a
+  // ray's crossing can coincide with an entry computed with other weights).
   if (!on_line) {
-    col_max_.resize(std::size_t(count));
-    const double as = std::fabs(d.slope);
-    for (int n = 0; n < count; ++n) {
-      const double v = l - 1 + pat.minor[pat.first[n]];
-      const int r0 = floor_int(v - as), r1 = -floor_int(-(v + 1 + as));
-      const std::int64_t mo = pat.major_a[pat.first[n]];
-      float m = -std::numeric_limits<float>::infinity();
-      for (int rr = r0; rr <= r1; ++rr) {
-        const int row = rep ? wrap_index(rr, nv) : std::clamp(rr, 0, nv - 1);
-        m = std::max(m, Z[mo + std::ptrdiff_t(row) * ms]);
-      }
-      col_max_[n] = m;
+    band_max_.resize(std::size_t(count));
+    float scale = 0;
+    for (std::size_t e = 0; e < E; ++e)
+      if (hb[e] > -inf) scale = std::max(scale, std::fabs(hb[e]));
+    const float slack = scale * 1e-6f;
+    for (int c = 0; c + 1 < count; ++c) {
+      float m = hb[pat.first[c]];
+      for (int e = pat.first[c] + 1; e <= pat.first[c + 1]; ++e) m = std::max(m, hb[e]);
+      band_max_[c] = m + slack;
     }
-    block_max_.assign(std::size_t(count / kBlock + 1), -std::numeric_limits<float>::infinity());
-    for (int n = 0; n < count; ++n) {
-      float& b = block_max_[std::size_t(n / kBlock)];
-      b = std::max(b, col_max_[n]);
-      if (n % kBlock == 0 && n > 0) {  // a block's last column is the next block's first
-        float& p = block_max_[std::size_t(n / kBlock - 1)];
-        p = std::max(p, col_max_[n]);
-      }
+    band_max_[count - 1] = -inf;
+    block_max_.assign(std::size_t(count / kBlock + 1), -inf);
+    for (int c = 0; c + 1 < count; ++c) {
+      float& b = block_max_[std::size_t(c / kBlock)];
+      b = std::max(b, band_max_[c]);
     }
   }
   hull_.reset(int(E));
@@ -237,6 +243,27 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
     ++texels;
     // T's ray: minor coordinate r + dvp (p - n), major u(p) = u_start + su p.
     const int r = texel_r_[n];
+    bool any = false, found = false;
+    double bdz = 0, brun = 1;
+    if (beat_near) {  // the best point starts as the near field's, lowered by more than atan's error
+      const int iu = rep ? wrap_index(d.u(n), nu) : d.u(n), ir = row_of(r);
+      const int ti = d.x_major ? iu : ir, tj = d.x_major ? ir : iu;
+      float m = -1e30f;
+      const int mg = pat.near_margin;
+      if (ti >= mg && tj >= mg && ti < f.width - mg && tj < f.height - mg) {
+        const float* zc = Z + f.index(ti, tj);
+        const std::vector<NearCrossing>& st = pat.near;
+        for (std::size_t c = 0; c < st.size(); ++c) {
+          const float za = zc[pat.near_a[c]], zb = zc[pat.near_b[c]];
+          const float mc = (za + (zb - za) * st[c].w - zc[0]) * st[c].inv_s;
+          m = mc > m ? mc : m;
+        }
+      } else {
+        int which;
+        m = near_slope(f, pat.near, ti, tj, &which);
+      }
+      if (m > -1e29f) any = true, bdz = double(m) - 1e-6 * (1 + double(m) * m), brun = 1;
+    }
     auto u_at = [&](double p) { return d.u_start + d.su * p; };
     auto Zr = [&](long long uu, long long vv) {
       if (rep)
@@ -251,11 +278,9 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       lo = std::max(lo, std::min(pa, pb) - 1e-9), hi = std::min(hi, std::max(pa, pb) + 1e-9);
     }
     const double vtop = nv - 1 + 1e-9;
-    bool any = false;
-    double bdz = 0, brun = 1;
     auto take = [&](double p, float h) {
       const double dz = double(h) - zt, run = (n - p) * step;
-      if (!any || dz * brun > bdz * run) bdz = dz, brun = run, any = true;
+      if (!any || dz * brun > bdz * run) bdz = dz, brun = run, any = found = true;
     };
     auto column = [&](int c) {
       if (c < 0 || c >= n) return;
@@ -304,14 +329,19 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       const double x = h >= zt ? std::min(x1, hi) : std::max(x0, lo);
       return (double(h) - zt) * brun <= bdz * ((n - x) * step);
     };
-    auto band_lower = [&](int c) { return lower(c, c + 1, std::max(col_max_[c], col_max_[c + 1])); };
+    auto band_lower = [&](int c) { return lower(c, c + 1, band_max_[c]); };
     auto block_lower = [&](int k) { return lower(k * kBlock, (k + 1) * kBlock, block_max_[k]); };
     if (lo > hi) continue;
     const double pq = hull_.position(q);
+    if (beaten(pq, hull_.height(q))) continue;  // the bound's peak is below the near field's point
     const int c0 = std::clamp(floor_int(pq), floor_int(lo), floor_int(hi));
     int a = c0, b = c0;
-    column(c0);
-    if (pq > c0 && c0 < hi) band(c0), column(c0 + 1), b = c0 + 1;
+    if (pq > c0 && c0 < hi) {
+      if (!band_lower(c0)) column(c0), band(c0), column(c0 + 1);
+      b = c0 + 1;
+    } else {
+      column(c0);
+    }
     // Left: the bound is unimodal with its peak at pq, so for a <= pq it bounds every point before a.
     const double left_end = std::max(lo, hull_.position(0));
     for (int j = q; a > left_end;) {
@@ -341,7 +371,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       if (!band_lower(b)) band(b), column(b + 1);
       ++b;
     }
-    if (any) o[0] = float(bdz), o[1] = float(brun);
+    if (found) o[0] = float(bdz), o[1] = float(brun);
   }
 }
 

@@ -53,4 +53,22 @@ std::vector<NearCrossing> near_field_stencil(double dx, double dy, double radius
   return out;
 }
 
+float near_slope(const HeightField& f, const std::vector<NearCrossing>& stencil, int i, int j, int* which) {
+  const bool clamp = f.wrap == Wrap::clamp;
+  const float Z = f.z[f.index(i, j)];
+  float best = -1e30f;
+  *which = -1;
+  for (std::size_t c = 0; c < stencil.size(); ++c) {
+    const NearCrossing& x = stencil[c];
+    const float px = float(i) + x.x, py = float(j) + x.y;
+    if (clamp &&
+        (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
+      continue;
+    const float za = f.at(i + x.ai, j + x.aj), zb = f.at(i + x.bi, j + x.bj);
+    const float m = (za + (zb - za) * x.w - Z) * x.inv_s;
+    if (m > best) best = m, *which = int(c);
+  }
+  return best;
+}
+
 }  // namespace hfbake::p1

@@ -22,6 +22,8 @@ using p1::fast_atan;
 using p1::fast_atan2_pos;
 using p1::fast_sincos;
 using p1::kHalfPiF;
+using p1::near_radius_of;
+using p1::near_slope;
 
 namespace {
 
@@ -42,38 +44,12 @@ inline FarPick far_pick(const float* strip, std::size_t plane, std::size_t at) {
   return {strip[at], strip[plane + at]};
 }
 
-// The near field's radius in texels for direction d: near_radius, or one line step if that is longer (the
-// far field starts at least one step behind each texel: FarHorizonWorker).
-double near_radius_of(const SweepDirection& d, double near_radius) {
-  return std::max(near_radius, d.step / d.texel_size);
-}
-
-// Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
-// with the border rules (clamp: crossings off the field are not terrain; repeat: wrapped).
-float near_slope(const HeightField& f, const std::vector<p1::NearCrossing>& stencil, int i, int j,
-                 int* which) {
-  const bool clamp = f.wrap == Wrap::clamp;
-  const float Z = f.z[f.index(i, j)];
-  float best = -1e30f;
-  *which = -1;
-  for (std::size_t c = 0; c < stencil.size(); ++c) {
-    const p1::NearCrossing& x = stencil[c];
-    const float px = float(i) + x.x, py = float(j) + x.y;
-    if (clamp &&
-        (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
-      continue;
-    const float za = f.at(i + x.ai, j + x.aj), zb = f.at(i + x.bi, j + x.bj);
-    const float m = (za + (zb - za) * x.w - Z) * x.inv_s;
-    if (m > best) best = m, *which = int(c);
-  }
-  return best;
-}
-
 // One line worker per thread, for the K directions and for the lights' own directions.
 p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
   p1::FarHorizonWorker w;
   w.far_radius = p.near_radius * f.texel_size;
   w.field = &f;
+  w.beat_near = true;  // the near field is marched from each texel anyway: its slope prunes the far search
   return w;
 }
 
