@@ -101,16 +101,7 @@ const LinePattern& FarHorizonWorker::pattern(const SweepDirection& d) {
   LinePattern& p = patterns_[next_slot_];
   next_slot_ ^= 1;
   p.build(*field, d);
-  p.near.clear(), p.near_a.clear(), p.near_b.clear();
-  if (beat_near) {
-    const double radius = near_radius_of(d, far_radius / field->texel_size);
-    p.near = near_field_stencil(d.dx, d.dy, radius, field->texel_size);
-    for (const NearCrossing& c : p.near) {
-      p.near_a.push_back(std::ptrdiff_t(c.aj) * field->width + c.ai);
-      p.near_b.push_back(std::ptrdiff_t(c.bj) * field->width + c.bi);
-    }
-    p.near_margin = int(std::ceil(radius)) + 2;
-  }
+  p.near = beat_near ? near_stencil(*field, d, far_radius / field->texel_size) : NearStencil{};
   return p;
 }
 
@@ -248,20 +239,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
     if (beat_near) {  // the best point starts as the near field's, lowered by more than atan's error
       const int iu = rep ? wrap_index(d.u(n), nu) : d.u(n), ir = row_of(r);
       const int ti = d.x_major ? iu : ir, tj = d.x_major ? ir : iu;
-      float m = -1e30f;
-      const int mg = pat.near_margin;
-      if (ti >= mg && tj >= mg && ti < f.width - mg && tj < f.height - mg) {
-        const float* zc = Z + f.index(ti, tj);
-        const std::vector<NearCrossing>& st = pat.near;
-        for (std::size_t c = 0; c < st.size(); ++c) {
-          const float za = zc[pat.near_a[c]], zb = zc[pat.near_b[c]];
-          const float mc = (za + (zb - za) * st[c].w - zc[0]) * st[c].inv_s;
-          m = mc > m ? mc : m;
-        }
-      } else {
-        int which;
-        m = near_slope(f, pat.near, ti, tj, &which);
-      }
+      const float m = near_slope_at(f, pat.near, ti, tj);
       if (m > -1e29f) any = true, bdz = double(m) - 1e-6 * (1 + double(m) * m), brun = 1;
     }
     auto u_at = [&](double p) { return d.u_start + d.su * p; };

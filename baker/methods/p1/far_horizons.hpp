@@ -56,11 +56,7 @@ struct LinePattern {
   std::vector<double> minor;          // minor coordinate of the point on line 0 (clamp: on-field test)
   std::vector<std::int32_t> first;    // count + 1: sample n's entry is first[n], its crossings follow
   std::vector<std::int32_t> strip_d;  // per sample: strip l's texel there has minor coordinate l + strip_d
-  // FarHorizonWorker::beat_near: the direction's near-field stencil, and its crossings' texels as index
-  // offsets from the texel (for texels whose crossings are all on the field).
-  std::vector<NearCrossing> near;
-  std::vector<std::ptrdiff_t> near_a, near_b;
-  int near_margin = 0;  // texels this far inside the field have every near crossing on it
+  NearStencil near;                   // FarHorizonWorker::beat_near: the direction's near field
 
   void build(const HeightField& field, const SweepDirection& dir);
   std::size_t bytes() const;

@@ -211,4 +211,19 @@ inline double near_radius_of(const SweepDirection& d, double near_radius) {
 // largest of (za + (zb - za) w - z) inv_s over the stencil.
 float near_slope(const HeightField& f, const std::vector<NearCrossing>& stencil, int i, int j, int* which);
 
+// A direction's near field: near_field_stencil at near_radius_of(d, near_radius), and its crossings'
+// texels as index offsets from the texel, valid for texels at least `margin` texels inside the field (all
+// their crossings on it).
+struct NearStencil {
+  std::vector<NearCrossing> crossings;
+  std::vector<std::ptrdiff_t> a, b;
+  int margin = 0;
+};
+NearStencil near_stencil(const HeightField& f, const SweepDirection& d, double near_radius);
+// out[x] = near_slope(f, s.crossings, i0 + x, j, .) for x in [0, w): the interior run by the index
+// offsets, one crossing at a time over the run (vectorised), the texels near the border one by one.
+void near_slopes_row(const HeightField& f, const NearStencil& s, int i0, int j, int w, float* out);
+// The same for one texel (the worker's per-texel call; same bits).
+float near_slope_at(const HeightField& f, const NearStencil& s, int i, int j);
+
 }  // namespace hfbake::p1
