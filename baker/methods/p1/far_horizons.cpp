@@ -214,6 +214,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
   const double dws = d.su + dvp;                          // ... and its u + v per step
   const double inv_dvp = dvp != 0 ? 1 / dvp : 0, inv_dws = dws != 0 ? 1 / dws : 0;
   std::size_t fed = 0;
+  int hint = -1;  // the band of the last texel's far caster: the next texel's is usually in or near it
 
   for (int n = R0; n < count; ++n) {
     const double cut = n - reach;
@@ -312,6 +313,10 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
     if (lo > hi) continue;
     const double pq = hull_.position(q);
     if (beaten(pq, hull_.height(q))) continue;  // the bound's peak is below the near field's point
+    // The neighbour's caster band first (when it lies wholly in this texel's far field): a best point
+    // near the final one from the start prunes most of the walk's bands. Evaluating a band twice is
+    // harmless (take keeps the first of equal points).
+    if (hint >= lo && hint + 1 <= hi && !band_lower(hint)) column(hint), band(hint), column(hint + 1);
     const int c0 = std::clamp(floor_int(pq), floor_int(lo), floor_int(hi));
     int a = c0, b = c0;
     if (pq > c0 && c0 < hi) {
@@ -349,7 +354,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       if (!band_lower(b)) band(b), column(b + 1);
       ++b;
     }
-    if (found) o[0] = float(bdz), o[1] = float(brun);
+    if (found) o[0] = float(bdz), o[1] = float(brun), hint = floor_int(n - brun / step);
   }
 }
 
