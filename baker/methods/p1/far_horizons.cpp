@@ -261,34 +261,43 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       const double dz = double(h) - zt, run = (n - p) * step;
       if (!any || dz * brun > bdz * run) bdz = dz, brun = run, any = found = true;
     };
-    auto column = [&](int c) {
+    // Column c's point of T's ray, v = r + dvp (c - n) its minor coordinate, fv = floor(v).
+    auto column_at = [&](int c, double v, int fv) {
       if (c < 0 || c >= n) return;
-      const double v = r + dvp * (c - n);
       if (!rep && (v < -1e-9 || v > vtop)) return;
-      const int fv = floor_int(v), uu = d.u(c);
+      const int uu = d.u(c);
       const float a = Zr(uu, fv), b = Zr(uu, fv + 1);
       take(c, a + (b - a) * float(v - fv));
     };
-    auto band = [&](int c) {  // the crossings strictly between columns c and c + 1
+    auto column = [&](int c) {
+      const double v = r + dvp * (c - n);
+      column_at(c, v, floor_int(v));
+    };
+    // The crossings strictly between columns c and c + 1 (with_column: and column c's point). One floor:
+    // every crossing inside the band lies between texel columns u(c) and u(c) + su, so its edge's lower
+    // major coordinate is fu below, and a diagonal's row is kd - fu - 1.
+    auto band = [&](int c, bool with_column) {
       ++bands;
       const double va = r + dvp * (c - n), vb = va + dvp;
-      const int kr = dvp > 0 ? floor_int(va) + 1 : -floor_int(-va) - 1;
+      const int fa = floor_int(va), ca = va > fa ? fa + 1 : fa;  // floor and ceiling of va
+      if (with_column) column_at(c, va, fa);
+      const int fu = d.su > 0 ? d.u(c) : d.u(c) - 1;
+      const int kr = dvp > 0 ? fa + 1 : ca - 1;
       if ((dvp > 0 ? kr < vb : kr > vb) && (rep || (kr >= 0 && kr < nv))) {
         const double p = n + (kr - r) * inv_dvp, uc = u_at(p);
         if (p > c && p < c + 1) {
-          const int fu = floor_int(uc);
           const float a = Zr(fu, kr), b = Zr(fu + 1, kr);
           take(p, a + (b - a) * float(uc - fu));
         }
       }
       const double wa = d.u(c) + va, wb = wa + dws;
-      for (int kd = dws > 0 ? floor_int(wa) + 1 : -floor_int(-wa) - 1; dws > 0 ? kd < wb : kd > wb;
+      for (int kd = dws > 0 ? d.u(c) + fa + 1 : d.u(c) + ca - 1; dws > 0 ? kd < wb : kd > wb;
            kd += dws > 0 ? 1 : -1) {
         const double p = c + (kd - wa) * inv_dws, uc = u_at(p), vc = kd - uc;
         if (!rep && (vc < -1e-9 || vc > vtop)) continue;
         if (!(p > c && p < c + 1)) continue;
-        const int fv = floor_int(vc), cu = kd - fv - 1;
-        const float a = Zr(cu + 1, fv), b = Zr(cu, fv + 1);
+        const int fv = kd - fu - 1;
+        const float a = Zr(fu + 1, fv), b = Zr(fu, fv + 1);
         take(p, a + (b - a) * float(vc - fv));
       }
     };
@@ -316,11 +325,11 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
     // The neighbour's caster band first (when it lies wholly in this texel's far field): a best point
     // near the final one from the start prunes most of the walk's bands. Evaluating a band twice is
     // harmless (take keeps the first of equal points).
-    if (hint >= lo && hint + 1 <= hi && !band_lower(hint)) column(hint), band(hint), column(hint + 1);
+    if (hint >= lo && hint + 1 <= hi && !band_lower(hint)) band(hint, true), column(hint + 1);
     const int c0 = std::clamp(floor_int(pq), floor_int(lo), floor_int(hi));
     int a = c0, b = c0;
     if (pq > c0 && c0 < hi) {
-      if (!band_lower(c0)) column(c0), band(c0), column(c0 + 1);
+      if (!band_lower(c0)) band(c0, true), column(c0 + 1);
       b = c0 + 1;
     } else {
       column(c0);
@@ -337,7 +346,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
         a = k * kBlock;
         continue;
       }
-      if (!band_lower(a - 1)) band(a - 1), column(a - 1);
+      if (!band_lower(a - 1)) band(a - 1, true);
       --a;
     }
     const double right_end = std::min(hi, hull_.position(hull_.size() - 1));
@@ -351,7 +360,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
         b = (k + 1) * kBlock;
         continue;
       }
-      if (!band_lower(b)) band(b), column(b + 1);
+      if (!band_lower(b)) band(b, false), column(b + 1);
       ++b;
     }
     if (found) o[0] = float(bdz), o[1] = float(brun), hint = floor_int(n - brun / step);
