@@ -1,13 +1,21 @@
-// P1 throughput: horizons alone (sweep + hull stack + gather) and horizons + lighting (compute_p1: ao, vsky,
-// direct from the built-in sky through the exact tables, plus its sun), by size, K and threads, in
-// texel-directions per second; and the brute-force march from every texel (one direction) for the ratio.
-//   ./bench_p1 --benchmark_filter=...   (see tests/p1/README of the closing note for the table)
+// P1 throughput in texel-directions per second of CPU time (process CPU: all threads), the whole bake and
+// its parts, on the smooth built-in fractal (field 0) and rough fBm, 60 degrees at the texel scale (field 1),
+// at 256², 512² and 1024², K = 16 and 64:
+//   BM_P1Bake     compute_p1: ao + direct under a uniform sky (the issue 17 job's layers), everything
+//   BM_FarField   the sweep, FarHorizonWorker's strip search (starting from each texel's near field, as
+//                 compute_p1 runs it) and the strip gather; counter bands/texel: bands searched per texel
+//   BM_NearField  the near field alone: near_slopes_row over every row, per direction
+//   BM_Gather     the sweep driver and the strip gather alone (a line worker that only writes "none")
+// plus the hull stack alone and the brute-force march for scale. Args: field, size, K (BM_P1Bake: and
+// threads). For the README's table:
+//   build/tests/p1/bench_p1 --benchmark_filter='BM_P1Bake/0/' --benchmark_repetitions=3
+//       --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
 #include <atomic>
-#include <cstdio>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <string>
 
@@ -19,18 +27,13 @@
 namespace hfbake {
 namespace {
 
-const Scene& scene_of(int size) {
-  static std::map<int, Scene> cache;
-  auto it = cache.find(size);
+const HeightField& field_of(int kind, int size) {  // 0: the smooth fractal, 1: rough fBm (60 degrees)
+  static std::map<std::pair<int, int>, HeightField> cache;
+  auto it = cache.find({kind, size});
   if (it != cache.end()) return it->second;
-  Scene s;
-  s.field = truth::procedural(ProceduralKind::fractal, size, size, Wrap::clamp);
-  s.normals = compute_normals(s.field);
-  s.surface.albedo.assign(s.field.texel_count(), Rgb{0.5f, 0.5f, 0.5f});
-  EnvironmentLighting sky = make_sky_environment(SkySpec{});
-  s.environment = std::move(sky.environment);
-  s.lights = std::move(sky.lights);
-  return cache.emplace(size, std::move(s)).first->second;
+  HeightField f = kind == 0 ? truth::procedural(ProceduralKind::fractal, size, size, Wrap::clamp)
+                            : truth::rough_field(size, size, 60, 0.7, 3);
+  return cache.emplace(std::make_pair(kind, size), std::move(f)).first->second;
 }
 
 double peak_rss_mb() {
@@ -48,46 +51,28 @@ void set_counters(benchmark::State& state, double work) {
   state.counters["peak_rss_MB"] = peak_rss_mb();
 }
 
-// Horizons alone: the sweep, the hull stack (far field with crossings) and the gather of every texel's
-// far caster (summed per texel so the compiler keeps it; no near field, no lighting).
-void BM_Horizons(benchmark::State& state) {
-  const int size = int(state.range(0)), K = int(state.range(1)), threads = int(state.range(2));
-  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
-  const Scene& s = scene_of(size);
-  std::vector<float> acc(s.field.texel_count());
-  SweepSpec spec;
-  spec.directions = K;
-  spec.channels = p1::HorizonLineWorker::channels();
+// The whole bake as `hfbake bake` runs it for layers ao + direct under a uniform sky (no lights).
+void BM_P1Bake(benchmark::State& state) {
+  const int kind = int(state.range(0)), size = int(state.range(1)), K = int(state.range(2));
+  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, int(state.range(3)));
+  Scene s;
+  s.field = field_of(kind, size);
+  P1Params p;
+  p.directions = K;
+  p.ao = p.direct = true;
+  p.vsky = false;
   for (auto _ : state) {
-    sweep_lines(
-        s.field, spec, RunControl{},
-        [&] {  // as compute_p1 runs it: lagging the default near radius, with the triangulation's crossings
-          p1::HorizonLineWorker w;
-          w.far_radius = 2 * s.field.texel_size;
-          w.crossings = &s.field;
-          return w;
-        },
-        [&](int, int i, int j, const TexelTaps& t) { acc[s.field.index(i, j)] += t.value(0); });
-    benchmark::DoNotOptimize(acc.data());
+    P1Result r = compute_p1(s, p, RunControl{});
+    benchmark::DoNotOptimize(r.ao.data());
   }
   set_counters(state, double(s.field.texel_count()) * K);
 }
 
-const HeightField& field_of(int kind, int size) {  // 0: the smooth fractal, 1: rough fBm (60 degrees)
-  static std::map<std::pair<int, int>, HeightField> cache;
-  auto it = cache.find({kind, size});
-  if (it != cache.end()) return it->second;
-  HeightField f = kind == 0 ? truth::procedural(ProceduralKind::fractal, size, size, Wrap::clamp)
-                            : truth::rough_field(size, size, 60, 0.7, 3);
-  return cache.emplace(std::make_pair(kind, size), std::move(f)).first->second;
-}
-
 // P1's far field alone (the strip search, FarHorizonWorker, as compute_p1 runs it with near_radius 2) and
 // the strip gather, summed per texel; counters: texel-directions/s and the bands searched per texel.
-// Args: field (0 fractal, 1 rough), size, K, threads.
 void BM_FarField(benchmark::State& state) {
   const int kind = int(state.range(0)), size = int(state.range(1)), K = int(state.range(2));
-  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, int(state.range(3)));
+  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
   const HeightField& f = field_of(kind, size);
   std::vector<float> acc(f.texel_count());
   SweepSpec spec;
@@ -96,6 +81,7 @@ void BM_FarField(benchmark::State& state) {
   spec.tile_nearest = spec.tile_values = false;
   spec.tile_strip = true;
   spec.zero_buffers = false;
+  spec.batch = 8;
   std::atomic<std::uint64_t> texels{0}, bands{0};
   struct Counting : p1::FarHorizonWorker {
     std::atomic<std::uint64_t>*t = nullptr, *b = nullptr;
@@ -110,6 +96,7 @@ void BM_FarField(benchmark::State& state) {
           Counting w;
           w.field = &f;
           w.far_radius = 2 * f.texel_size;
+          w.beat_near = true;
           w.t = &texels, w.b = &bands;
           return w;
         },
@@ -123,6 +110,61 @@ void BM_FarField(benchmark::State& state) {
   }
   set_counters(state, double(f.texel_count()) * K);
   state.counters["bands/texel"] = double(bands) / std::max<double>(1, double(texels));
+}
+
+// The near field alone: every texel's steepest near crossing (near_radius 2) for each of K directions.
+void BM_NearField(benchmark::State& state) {
+  const int kind = int(state.range(0)), size = int(state.range(1)), K = int(state.range(2));
+  const HeightField& f = field_of(kind, size);
+  SweepSpec probe;
+  probe.directions = K;
+  std::vector<p1::NearStencil> near;
+  for (int k = 0; k < K; ++k) near.push_back(p1::near_stencil(f, plan_direction(f, probe, k), 2.0));
+  std::vector<float> acc(f.texel_count()), row(std::size_t(f.width));
+  for (auto _ : state) {
+    for (int k = 0; k < K; ++k)
+      for (int j = 0; j < f.height; ++j) {
+        p1::near_slopes_row(f, near[k], 0, j, f.width, row.data());
+        float* a = acc.data() + f.index(0, j);
+        for (int i = 0; i < f.width; ++i) a[i] += row[i];
+      }
+    benchmark::DoNotOptimize(acc.data());
+  }
+  set_counters(state, double(f.texel_count()) * K);
+}
+
+// The sweep driver and the strip gather alone: every line sampled, its receivers written "none" (no
+// search), every texel's strip result gathered and summed.
+void BM_Gather(benchmark::State& state) {
+  const int kind = int(state.range(0)), size = int(state.range(1)), K = int(state.range(2));
+  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
+  const HeightField& f = field_of(kind, size);
+  std::vector<float> acc(f.texel_count());
+  SweepSpec spec;
+  spec.directions = K;
+  spec.channels = p1::FarHorizonWorker::channels();
+  spec.tile_nearest = spec.tile_values = false;
+  spec.tile_strip = true;
+  spec.zero_buffers = false;
+  spec.batch = 8;
+  struct NoSearch {
+    void operator()(const SweepLine& line, float* out) const {
+      for (int n = line.first_receiver; n < line.count; ++n)
+        out[2 * (n - line.first_receiver)] = 0, out[2 * (n - line.first_receiver) + 1] = line.z[n];
+    }
+  };
+  for (auto _ : state) {
+    sweep_lines_tiled(
+        f, spec, RunControl{}, [] { return NoSearch{}; },
+        [&](const SweepTile& t) {
+          const std::size_t plane = std::size_t(t.width) * t.height;
+          for (int y = 0; y < t.height; ++y)
+            for (int x = 0; x < t.width; ++x)
+              acc[f.index(t.i0 + x, t.j0 + y)] += t.strip[plane + std::size_t(y) * t.width + x];
+        });
+    benchmark::DoNotOptimize(acc.data());
+  }
+  set_counters(state, double(f.texel_count()) * K);
 }
 
 // The hull stack alone: push every sample of random lines (the worst input: no coherence) and query
@@ -148,64 +190,42 @@ void BM_HullStack(benchmark::State& state) {
   state.counters["samples/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsIterationInvariantRate);
 }
 
-// Horizons + lighting: ao, vsky and direct (sky through the exact tables + sun).
-void BM_P1Lighting(benchmark::State& state) {
-  const int size = int(state.range(0)), K = int(state.range(1)), threads = int(state.range(2));
-  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
-  const Scene& s = scene_of(size);
-  P1Params p;
-  p.directions = K;
-  for (auto _ : state) {
-    P1Result r = compute_p1(s, p, RunControl{});
-    benchmark::DoNotOptimize(r.ao.data());
-  }
-  set_counters(state, double(s.field.texel_count()) * K);
-}
-
-// Brute force: march from every texel center over every sample to the border, one direction (0.3 rad).
+// Brute force: march from every texel center over every crossing to the border, one direction (0.3 rad).
 void BM_BruteForceMarch(benchmark::State& state) {
-  const int size = int(state.range(0));
-  const Scene& s = scene_of(size);
-  const HeightField& f = s.field;
+  const HeightField& f = field_of(0, int(state.range(0)));
   SweepSpec spec;
   spec.azimuths = {0.3};
   const SweepDirection d = plan_direction(f, spec, 0);
   double sum = 0;
   for (auto _ : state) {
     for (int j = 0; j < f.height; ++j)
-      for (int i = 0; i < f.width; ++i)
-        sum += truth::march_from_texel(f, i, j, d.phi, d.step / f.texel_size, 0);
+      for (int i = 0; i < f.width; ++i) sum += truth::march_tri(f, i, j, d.dx, d.dy, 7);
     benchmark::DoNotOptimize(sum);
   }
   set_counters(state, double(f.texel_count()));
 }
 
-void HorizonArgs(benchmark::internal::Benchmark* b) {
-  for (int size : {256, 512, 1024, 2048})
-    for (int K : {16, 64, 256})
-      for (int t : {1, 2}) {
-        if (size >= 2048 && K > 64) continue;
-        b->Args({size, K, t});
+// field x size x K (x threads for the whole bake: 1, and 2 at 1024²).
+void PartArgs(benchmark::internal::Benchmark* b) {
+  for (int kind : {0, 1})
+    for (int size : {256, 512, 1024})
+      for (int K : {16, 64}) b->Args({kind, size, K});
+}
+void BakeArgs(benchmark::internal::Benchmark* b) {
+  for (int kind : {0, 1})
+    for (int size : {256, 512, 1024})
+      for (int K : {16, 64}) {
+        b->Args({kind, size, K, 1});
+        if (size == 1024) b->Args({kind, size, K, 2});
       }
-  b->Args({4096, 16, 2});
 }
 
-BENCHMARK(BM_FarField)
-    ->Args({0, 512, 64, 1})
-    ->Args({1, 512, 64, 1})
-    ->Args({0, 1024, 64, 1})
-    ->Args({0, 1024, 64, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->MeasureProcessCPUTime();
+BENCHMARK(BM_P1Bake)->Apply(BakeArgs)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+BENCHMARK(BM_FarField)->Apply(PartArgs)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+BENCHMARK(BM_NearField)->Apply(PartArgs)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+BENCHMARK(BM_Gather)->Apply(PartArgs)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 BENCHMARK(BM_HullStack)->Arg(1024)->Arg(16384);
-BENCHMARK(BM_Horizons)->Apply(HorizonArgs)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_P1Lighting)->Apply(HorizonArgs)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_BruteForceMarch)
-    ->Arg(512)
-    ->Arg(1024)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(1)
-    ->UseRealTime();
+BENCHMARK(BM_BruteForceMarch)->Arg(256)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 }  // namespace hfbake

@@ -101,6 +101,7 @@ const LinePattern& FarHorizonWorker::pattern(const SweepDirection& d) {
   LinePattern& p = patterns_[next_slot_];
   next_slot_ ^= 1;
   p.build(*field, d);
+  p.near = beat_near ? near_stencil(*field, d, far_radius / field->texel_size) : NearStencil{};
   return p;
 }
 
@@ -183,31 +184,27 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       if (texel_z_[n] == texel_z_[n]) bound_[pat.first[n]] = std::max(bound_[pat.first[n]], texel_z_[n]);
     hb = bound_.data();
   }
-  // Skip bounds: per column c, the highest texel of the cells the strip touches in the bands beside it
-  // (rows from floor(v_{l-1} - |slope|) to ceil(v_l + |slope|), border rows clamped); a band's surface
-  // in the strip lies below the larger of its two columns', a block's of kBlock bands below its columns'.
+  // Skip bounds: per band c (columns c to c + 1), the highest entry of the strip's bound in it, both
+  // columns included. The surface of the strip in the band is below the bound's linear interpolation
+  // between its entries (see the header), so the band's points on any texel's ray lie below its largest
+  // entry; a block of kBlock bands below its bands' largest. `slack` covers the lerps' float rounding (a
+  // ray's crossing can coincide with an entry computed with other weights).
   if (!on_line) {
-    col_max_.resize(std::size_t(count));
-    const double as = std::fabs(d.slope);
-    for (int n = 0; n < count; ++n) {
-      const double v = l - 1 + pat.minor[pat.first[n]];
-      const int r0 = floor_int(v - as), r1 = -floor_int(-(v + 1 + as));
-      const std::int64_t mo = pat.major_a[pat.first[n]];
-      float m = -std::numeric_limits<float>::infinity();
-      for (int rr = r0; rr <= r1; ++rr) {
-        const int row = rep ? wrap_index(rr, nv) : std::clamp(rr, 0, nv - 1);
-        m = std::max(m, Z[mo + std::ptrdiff_t(row) * ms]);
-      }
-      col_max_[n] = m;
+    band_max_.resize(std::size_t(count));
+    float scale = 0;
+    for (std::size_t e = 0; e < E; ++e)
+      if (hb[e] > -inf) scale = std::max(scale, std::fabs(hb[e]));
+    const float slack = scale * 1e-6f;
+    for (int c = 0; c + 1 < count; ++c) {
+      float m = hb[pat.first[c]];
+      for (int e = pat.first[c] + 1; e <= pat.first[c + 1]; ++e) m = std::max(m, hb[e]);
+      band_max_[c] = m + slack;
     }
-    block_max_.assign(std::size_t(count / kBlock + 1), -std::numeric_limits<float>::infinity());
-    for (int n = 0; n < count; ++n) {
-      float& b = block_max_[std::size_t(n / kBlock)];
-      b = std::max(b, col_max_[n]);
-      if (n % kBlock == 0 && n > 0) {  // a block's last column is the next block's first
-        float& p = block_max_[std::size_t(n / kBlock - 1)];
-        p = std::max(p, col_max_[n]);
-      }
+    band_max_[count - 1] = -inf;
+    block_max_.assign(std::size_t(count / kBlock + 1), -inf);
+    for (int c = 0; c + 1 < count; ++c) {
+      float& b = block_max_[std::size_t(c / kBlock)];
+      b = std::max(b, band_max_[c]);
     }
   }
   hull_.reset(int(E));
@@ -217,6 +214,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
   const double dws = d.su + dvp;                          // ... and its u + v per step
   const double inv_dvp = dvp != 0 ? 1 / dvp : 0, inv_dws = dws != 0 ? 1 / dws : 0;
   std::size_t fed = 0;
+  int hint = -1;  // the band of the last texel's far caster: the next texel's is usually in or near it
 
   for (int n = R0; n < count; ++n) {
     const double cut = n - reach;
@@ -237,6 +235,14 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
     ++texels;
     // T's ray: minor coordinate r + dvp (p - n), major u(p) = u_start + su p.
     const int r = texel_r_[n];
+    bool any = false, found = false;
+    double bdz = 0, brun = 1;
+    if (beat_near) {  // the best point starts as the near field's, lowered by more than atan's error
+      const int iu = rep ? wrap_index(d.u(n), nu) : d.u(n), ir = row_of(r);
+      const int ti = d.x_major ? iu : ir, tj = d.x_major ? ir : iu;
+      const float m = near_slope_at(f, pat.near, ti, tj);
+      if (m > -1e29f) any = true, bdz = double(m) - 1e-6 * (1 + double(m) * m), brun = 1;
+    }
     auto u_at = [&](double p) { return d.u_start + d.su * p; };
     auto Zr = [&](long long uu, long long vv) {
       if (rep)
@@ -251,40 +257,47 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       lo = std::max(lo, std::min(pa, pb) - 1e-9), hi = std::min(hi, std::max(pa, pb) + 1e-9);
     }
     const double vtop = nv - 1 + 1e-9;
-    bool any = false;
-    double bdz = 0, brun = 1;
     auto take = [&](double p, float h) {
       const double dz = double(h) - zt, run = (n - p) * step;
-      if (!any || dz * brun > bdz * run) bdz = dz, brun = run, any = true;
+      if (!any || dz * brun > bdz * run) bdz = dz, brun = run, any = found = true;
     };
-    auto column = [&](int c) {
+    // Column c's point of T's ray, v = r + dvp (c - n) its minor coordinate, fv = floor(v).
+    auto column_at = [&](int c, double v, int fv) {
       if (c < 0 || c >= n) return;
-      const double v = r + dvp * (c - n);
       if (!rep && (v < -1e-9 || v > vtop)) return;
-      const int fv = floor_int(v), uu = d.u(c);
+      const int uu = d.u(c);
       const float a = Zr(uu, fv), b = Zr(uu, fv + 1);
       take(c, a + (b - a) * float(v - fv));
     };
-    auto band = [&](int c) {  // the crossings strictly between columns c and c + 1
+    auto column = [&](int c) {
+      const double v = r + dvp * (c - n);
+      column_at(c, v, floor_int(v));
+    };
+    // The crossings strictly between columns c and c + 1 (with_column: and column c's point). One floor:
+    // every crossing inside the band lies between texel columns u(c) and u(c) + su, so its edge's lower
+    // major coordinate is fu below, and a diagonal's row is kd - fu - 1.
+    auto band = [&](int c, bool with_column) {
       ++bands;
       const double va = r + dvp * (c - n), vb = va + dvp;
-      const int kr = dvp > 0 ? floor_int(va) + 1 : -floor_int(-va) - 1;
+      const int fa = floor_int(va), ca = va > fa ? fa + 1 : fa;  // floor and ceiling of va
+      if (with_column) column_at(c, va, fa);
+      const int fu = d.su > 0 ? d.u(c) : d.u(c) - 1;
+      const int kr = dvp > 0 ? fa + 1 : ca - 1;
       if ((dvp > 0 ? kr < vb : kr > vb) && (rep || (kr >= 0 && kr < nv))) {
         const double p = n + (kr - r) * inv_dvp, uc = u_at(p);
         if (p > c && p < c + 1) {
-          const int fu = floor_int(uc);
           const float a = Zr(fu, kr), b = Zr(fu + 1, kr);
           take(p, a + (b - a) * float(uc - fu));
         }
       }
       const double wa = d.u(c) + va, wb = wa + dws;
-      for (int kd = dws > 0 ? floor_int(wa) + 1 : -floor_int(-wa) - 1; dws > 0 ? kd < wb : kd > wb;
+      for (int kd = dws > 0 ? d.u(c) + fa + 1 : d.u(c) + ca - 1; dws > 0 ? kd < wb : kd > wb;
            kd += dws > 0 ? 1 : -1) {
         const double p = c + (kd - wa) * inv_dws, uc = u_at(p), vc = kd - uc;
         if (!rep && (vc < -1e-9 || vc > vtop)) continue;
         if (!(p > c && p < c + 1)) continue;
-        const int fv = floor_int(vc), cu = kd - fv - 1;
-        const float a = Zr(cu + 1, fv), b = Zr(cu, fv + 1);
+        const int fv = kd - fu - 1;
+        const float a = Zr(fu + 1, fv), b = Zr(fu, fv + 1);
         take(p, a + (b - a) * float(vc - fv));
       }
     };
@@ -304,14 +317,23 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       const double x = h >= zt ? std::min(x1, hi) : std::max(x0, lo);
       return (double(h) - zt) * brun <= bdz * ((n - x) * step);
     };
-    auto band_lower = [&](int c) { return lower(c, c + 1, std::max(col_max_[c], col_max_[c + 1])); };
+    auto band_lower = [&](int c) { return lower(c, c + 1, band_max_[c]); };
     auto block_lower = [&](int k) { return lower(k * kBlock, (k + 1) * kBlock, block_max_[k]); };
     if (lo > hi) continue;
     const double pq = hull_.position(q);
+    if (beaten(pq, hull_.height(q))) continue;  // the bound's peak is below the near field's point
+    // The neighbour's caster band first (when it lies wholly in this texel's far field): a best point
+    // near the final one from the start prunes most of the walk's bands. Evaluating a band twice is
+    // harmless (take keeps the first of equal points).
+    if (hint >= lo && hint + 1 <= hi && !band_lower(hint)) band(hint, true), column(hint + 1);
     const int c0 = std::clamp(floor_int(pq), floor_int(lo), floor_int(hi));
     int a = c0, b = c0;
-    column(c0);
-    if (pq > c0 && c0 < hi) band(c0), column(c0 + 1), b = c0 + 1;
+    if (pq > c0 && c0 < hi) {
+      if (!band_lower(c0)) band(c0, true), column(c0 + 1);
+      b = c0 + 1;
+    } else {
+      column(c0);
+    }
     // Left: the bound is unimodal with its peak at pq, so for a <= pq it bounds every point before a.
     const double left_end = std::max(lo, hull_.position(0));
     for (int j = q; a > left_end;) {
@@ -324,7 +346,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
         a = k * kBlock;
         continue;
       }
-      if (!band_lower(a - 1)) band(a - 1), column(a - 1);
+      if (!band_lower(a - 1)) band(a - 1, true);
       --a;
     }
     const double right_end = std::min(hi, hull_.position(hull_.size() - 1));
@@ -338,10 +360,10 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
         b = (k + 1) * kBlock;
         continue;
       }
-      if (!band_lower(b)) band(b), column(b + 1);
+      if (!band_lower(b)) band(b, false), column(b + 1);
       ++b;
     }
-    if (any) o[0] = float(bdz), o[1] = float(brun);
+    if (found) o[0] = float(bdz), o[1] = float(brun), hint = floor_int(n - brun / step);
   }
 }
 

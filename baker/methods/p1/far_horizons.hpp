@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "field/height_field.hpp"
+#include "methods/p1/horizon_sweep.hpp"
 #include "methods/p1/hull_stack.hpp"
 #include "sweep/sweep_lines.hpp"
 
@@ -55,6 +56,7 @@ struct LinePattern {
   std::vector<double> minor;          // minor coordinate of the point on line 0 (clamp: on-field test)
   std::vector<std::int32_t> first;    // count + 1: sample n's entry is first[n], its crossings follow
   std::vector<std::int32_t> strip_d;  // per sample: strip l's texel there has minor coordinate l + strip_d
+  NearStencil near;                   // FarHorizonWorker::beat_near: the direction's near field
 
   void build(const HeightField& field, const SweepDirection& dir);
   std::size_t bytes() const;
@@ -66,6 +68,11 @@ struct LinePattern {
 struct FarHorizonWorker {
   const HeightField* field = nullptr;  // the field the sweep runs on
   double far_radius = 0;               // world units: the far field starts this far from the texel
+  // Write a texel's far caster only where it is steeper than the texel's near field (near_slope over
+  // near_field_stencil with radius near_radius_of(dir, far_radius / texel_size)), else none: the search
+  // starts from the near field's slope and prunes everything below it. A texel's max(near, far) keeps its
+  // bits: the start is lowered by 1e-6 (1 + m^2) in slope (about 1e-6 rad), more than fast_atan's error.
+  bool beat_near = false;
 
   static constexpr int channels() { return 2; }
   void operator()(const SweepLine& line, float* out);
@@ -81,7 +88,7 @@ struct FarHorizonWorker {
   int next_slot_ = 0;
   std::vector<float> prev_, cur_, bound_, texel_z_;  // line l - 1's and l's profiles, the strip's bound
   std::vector<int> texel_r_;                         // the strip's texel at each sample: minor coordinate
-  std::vector<float> col_max_, block_max_;           // skip bounds: per column, per block of kBlock bands
+  std::vector<float> band_max_, block_max_;          // skip bounds: per band, per block of kBlock bands
   static constexpr int kBlock = 8;
   int last_k_ = -1, last_line_ = 0, last_u_start_ = 0;  // whose profile cur_ holds after a call
   HullStackF hull_;

@@ -53,4 +53,71 @@ std::vector<NearCrossing> near_field_stencil(double dx, double dy, double radius
   return out;
 }
 
+float near_slope(const HeightField& f, const std::vector<NearCrossing>& stencil, int i, int j, int* which) {
+  const bool clamp = f.wrap == Wrap::clamp;
+  const float Z = f.z[f.index(i, j)];
+  float best = -1e30f;
+  *which = -1;
+  for (std::size_t c = 0; c < stencil.size(); ++c) {
+    const NearCrossing& x = stencil[c];
+    const float px = float(i) + x.x, py = float(j) + x.y;
+    if (clamp &&
+        (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
+      continue;
+    const float za = f.at(i + x.ai, j + x.aj), zb = f.at(i + x.bi, j + x.bj);
+    const float m = (za + (zb - za) * x.w - Z) * x.inv_s;
+    if (m > best) best = m, *which = int(c);
+  }
+  return best;
+}
+
+NearStencil near_stencil(const HeightField& f, const SweepDirection& d, double near_radius) {
+  NearStencil s;
+  const double radius = near_radius_of(d, near_radius);
+  s.crossings = near_field_stencil(d.dx, d.dy, radius, f.texel_size);
+  for (const NearCrossing& c : s.crossings) {
+    s.a.push_back(std::ptrdiff_t(c.aj) * f.width + c.ai);
+    s.b.push_back(std::ptrdiff_t(c.bj) * f.width + c.bi);
+  }
+  s.margin = int(std::ceil(radius)) + 2;
+  return s;
+}
+
+void near_slopes_row(const HeightField& f, const NearStencil& s, int i0, int j, int w, float* out) {
+  const float* Z = f.z.data() + f.index(i0, j);
+  for (int x = 0; x < w; ++x) out[x] = -1e30f;
+  int xa = w, xb = w;  // the interior run [xa, xb) of the row
+  if (j >= s.margin && j < f.height - s.margin) {
+    xa = std::clamp(s.margin - i0, 0, w);
+    xb = std::clamp(f.width - s.margin - i0, xa, w);
+  }
+  for (std::size_t c = 0; c < s.crossings.size(); ++c) {
+    const float* za = Z + s.a[c];
+    const float* zb = Z + s.b[c];
+    const float wc = s.crossings[c].w, inv_s = s.crossings[c].inv_s;
+    for (int x = xa; x < xb; ++x) {
+      const float m = (za[x] + (zb[x] - za[x]) * wc - Z[x]) * inv_s;
+      out[x] = m > out[x] ? m : out[x];
+    }
+  }
+  int which;
+  for (int x = 0; x < xa; ++x) out[x] = near_slope(f, s.crossings, i0 + x, j, &which);
+  for (int x = xb; x < w; ++x) out[x] = near_slope(f, s.crossings, i0 + x, j, &which);
+}
+
+float near_slope_at(const HeightField& f, const NearStencil& s, int i, int j) {
+  if (i < s.margin || j < s.margin || i >= f.width - s.margin || j >= f.height - s.margin) {
+    int which;
+    return near_slope(f, s.crossings, i, j, &which);
+  }
+  const float* Z = f.z.data() + f.index(i, j);
+  float m = -1e30f;
+  for (std::size_t c = 0; c < s.crossings.size(); ++c) {
+    const float za = Z[s.a[c]], zb = Z[s.b[c]];
+    const float mc = (za + (zb - za) * s.crossings[c].w - Z[0]) * s.crossings[c].inv_s;
+    m = mc > m ? mc : m;
+  }
+  return m;
+}
+
 }  // namespace hfbake::p1

@@ -199,4 +199,31 @@ struct NearCrossing {
 // reference's quad split, (i+1, j)-(i, j+1)) at distances 0 < s <= radius texels, ordered by s.
 std::vector<NearCrossing> near_field_stencil(double dx, double dy, double radius, double texel_size);
 
+// The near field's radius in texels for direction d: near_radius, or one line step if that is longer (the
+// far field starts at least one step behind each texel: FarHorizonWorker).
+inline double near_radius_of(const SweepDirection& d, double near_radius) {
+  return std::max(near_radius, d.step / d.texel_size);
+}
+
+// Steepest near-field slope (rise / run) from texel (i, j) over `stencil` and its crossing (-1: none; the
+// slope is then -1e30), with the border rules (clamp: crossings off the field are not terrain; repeat:
+// wrapped). Texels whose crossings are all on the field get the same bits from any loop that takes the
+// largest of (za + (zb - za) w - z) inv_s over the stencil.
+float near_slope(const HeightField& f, const std::vector<NearCrossing>& stencil, int i, int j, int* which);
+
+// A direction's near field: near_field_stencil at near_radius_of(d, near_radius), and its crossings'
+// texels as index offsets from the texel, valid for texels at least `margin` texels inside the field (all
+// their crossings on it).
+struct NearStencil {
+  std::vector<NearCrossing> crossings;
+  std::vector<std::ptrdiff_t> a, b;
+  int margin = 0;
+};
+NearStencil near_stencil(const HeightField& f, const SweepDirection& d, double near_radius);
+// out[x] = near_slope(f, s.crossings, i0 + x, j, .) for x in [0, w): the interior run by the index
+// offsets, one crossing at a time over the run (vectorised), the texels near the border one by one.
+void near_slopes_row(const HeightField& f, const NearStencil& s, int i0, int j, int w, float* out);
+// The same for one texel (the worker's per-texel call; same bits).
+float near_slope_at(const HeightField& f, const NearStencil& s, int i, int j);
+
 }  // namespace hfbake::p1

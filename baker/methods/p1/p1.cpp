@@ -22,6 +22,8 @@ using p1::fast_atan;
 using p1::fast_atan2_pos;
 using p1::fast_sincos;
 using p1::kHalfPiF;
+using p1::near_radius_of;
+using p1::near_slope;
 
 namespace {
 
@@ -42,38 +44,12 @@ inline FarPick far_pick(const float* strip, std::size_t plane, std::size_t at) {
   return {strip[at], strip[plane + at]};
 }
 
-// The near field's radius in texels for direction d: near_radius, or one line step if that is longer (the
-// far field starts at least one step behind each texel: FarHorizonWorker).
-double near_radius_of(const SweepDirection& d, double near_radius) {
-  return std::max(near_radius, d.step / d.texel_size);
-}
-
-// Steepest near-field slope (rise / run) from texel (i, j) in direction k and its crossing (-1: none),
-// with the border rules (clamp: crossings off the field are not terrain; repeat: wrapped).
-float near_slope(const HeightField& f, const std::vector<p1::NearCrossing>& stencil, int i, int j,
-                 int* which) {
-  const bool clamp = f.wrap == Wrap::clamp;
-  const float Z = f.z[f.index(i, j)];
-  float best = -1e30f;
-  *which = -1;
-  for (std::size_t c = 0; c < stencil.size(); ++c) {
-    const p1::NearCrossing& x = stencil[c];
-    const float px = float(i) + x.x, py = float(j) + x.y;
-    if (clamp &&
-        (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
-      continue;
-    const float za = f.at(i + x.ai, j + x.aj), zb = f.at(i + x.bi, j + x.bj);
-    const float m = (za + (zb - za) * x.w - Z) * x.inv_s;
-    if (m > best) best = m, *which = int(c);
-  }
-  return best;
-}
-
 // One line worker per thread, for the K directions and for the lights' own directions.
 p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
   p1::FarHorizonWorker w;
   w.far_radius = p.near_radius * f.texel_size;
   w.field = &f;
+  w.beat_near = true;  // the near field is marched from each texel anyway: its slope prunes the far search
   return w;
 }
 
@@ -227,30 +203,16 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
   const int KH = horizon_out ? K : nb, KD = distance_out ? K : nb;
   std::vector<float> cs, sn;
   azimuth_table(K, cs, sn);
-  // The near field of each direction of the block (horizon_sweep.hpp): the crossings within near_radius of a
-  // texel, as index offsets for interior texels (all crossings on the field) and texel offsets for the rest.
-  std::vector<std::vector<p1::NearCrossing>> near(K);
-  std::vector<std::vector<std::ptrdiff_t>> near_a(K), near_b(K);
-  std::vector<char> x_major(K);
+  // The near field of each direction of the block (horizon_sweep.hpp, near_stencil).
+  std::vector<p1::NearStencil> near(K);
   {
     SweepSpec probe;
     probe.directions = K;
-    for (int k = k_begin; k < k_end; ++k) {  // the block's directions
-      const SweepDirection d = plan_direction(f, probe, k);
-      near[k] = p1::near_field_stencil(d.dx, d.dy, near_radius_of(d, p.near_radius), f.texel_size);
-      for (const p1::NearCrossing& c : near[k]) {
-        near_a[k].push_back(std::ptrdiff_t(c.aj) * f.width + c.ai);
-        near_b[k].push_back(std::ptrdiff_t(c.bj) * f.width + c.bi);
-      }
-      x_major[k] = d.x_major;
-    }
+    for (int k = k_begin; k < k_end; ++k)
+      near[k] = p1::near_stencil(f, plan_direction(f, probe, k), p.near_radius);
   }
-  const int margin = int(std::ceil(p.near_radius)) + 2;  // texels this far inside have every crossing inside
-  auto near_slope_at = [&](const std::vector<p1::NearCrossing>& stencil, int i, int j, int* which) {
-    return near_slope(f, stencil, i, j, which);
-  };
   auto near_slope_border = [&](int k, int i, int j, int* which) {
-    return near_slope_at(near[k], i, j, which);
+    return near_slope(f, near[k].crossings, i, j, which);
   };
 
   SweepSpec spec = p1_sweep_spec(p);
@@ -270,27 +232,7 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
       {
         // Near field: the steepest crossing within near_radius, marched from the texel center itself
         // (interior texels by the direction's fixed stencil, vectorised; border texels one by one).
-        const int j = t.j0 + y;
-        const float* Z = f.z.data() + base;
-        for (int x = 0; x < w; ++x) en[x] = -1e30f;
-        int xa = w, xb = w;  // interior run [xa, xb) of this row
-        if (j >= margin && j < f.height - margin) {
-          xa = std::clamp(margin - t.i0, 0, w);
-          xb = std::clamp(f.width - margin - t.i0, xa, w);
-        }
-        const std::vector<p1::NearCrossing>& nc = near[k];
-        for (std::size_t c = 0; c < nc.size(); ++c) {
-          const float* za = Z + near_a[k][c];
-          const float* zb = Z + near_b[k][c];
-          const float wc = nc[c].w, inv_s = nc[c].inv_s;
-          for (int x = xa; x < xb; ++x) {
-            const float m = (za[x] + (zb[x] - za[x]) * wc - Z[x]) * inv_s;
-            en[x] = m > en[x] ? m : en[x];
-          }
-        }
-        int which;
-        for (int x = 0; x < xa; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
-        for (int x = xb; x < w; ++x) en[x] = near_slope_border(k, t.i0 + x, j, &which);
+        p1::near_slopes_row(f, near[k], t.i0, t.j0 + y, w, en);
         for (int x = 0; x < w; ++x) en[x] = fast_atan(en[x]);
         // Far field: the steepest point of the texel's own ray at least near_radius away, exact on the
         // triangulated surface (FarHorizonWorker, by the texel's strip).
@@ -391,7 +333,8 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
           const float far_e = p1::caster_elevation(fp.dz, fp.run);
           float d;
           if (which >= 0 && fast_atan(near_m) >= far_e)
-            d = std::sqrt(1 + near_m * near_m) / near[k][which].inv_s;  // run 1 / inv_s, rise m * run
+            d = std::sqrt(1 + near_m * near_m) /
+                near[k].crossings[which].inv_s;  // run 1 / inv_s, rise m * run
           else
             d = fp.run == std::numeric_limits<float>::infinity() ? fp.run : std::hypot(fp.run, fp.dz);
           hd[(base + x) * KD + (KD == K ? k : k - k_begin)] = d;
@@ -400,7 +343,6 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
     }
   });
 
-  (void)margin;
   return r;
 }
 
