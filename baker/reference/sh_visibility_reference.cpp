@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/azimuth.hpp"
+#include "methods/nlp/quadrature.hpp"
 #include "reference/embree_field.hpp"
 #include "reference/horizon_reference.hpp"
 #include "reference/sh_environment.hpp"
@@ -12,34 +13,12 @@
 namespace hfbake {
 namespace {
 
-constexpr int kNodes = 10;
-
-// Gauss-Legendre nodes and weights on [-1, 1]: Newton's method on P_n from Chebyshev starting points.
-struct GaussLegendre {
-  std::array<double, kNodes> x{}, w{};
-  GaussLegendre() {
-    for (int i = 0; i < kNodes; ++i) {
-      double t = std::cos(kPi * (i + 0.75) / (kNodes + 0.5)), dp = 1;
-      for (int it = 0; it < 100; ++it) {
-        double p0 = 1, p1 = t;
-        for (int n = 2; n <= kNodes; ++n) {
-          const double p2 = ((2 * n - 1) * t * p1 - (n - 1) * p0) / n;
-          p0 = p1, p1 = p2;
-        }
-        dp = kNodes * (t * p1 - p0) / (t * t - 1);
-        const double step = p1 / dp;
-        t -= step;
-        if (std::abs(step) < 1e-16) break;
-      }
-      x[i] = t, w[i] = 2 / ((1 - t * t) * dp * dp);
-    }
-  }
-};
+constexpr int kNodes = 10;  // Gauss-Legendre in elevation: exact for the basis times cos e (degree <= 4)
 
 }  // namespace
 
 std::array<double, 16> sh_visibility_of_horizons(const std::vector<double>& elevation) {
-  static const GaussLegendre gl;
+  static const QuadratureRule gl = gauss_legendre(kNodes);
   const int K = int(elevation.size());
   std::vector<double> cos_phi, sin_phi;
   azimuth_table(K, cos_phi, sin_phi);
