@@ -23,8 +23,8 @@ void check_device(RTCDevice device, const char* what) {
 // The sheet: nx x ny vertices with vertex (i, j) at (x0 + i ts, y0 + j ts, height(i, j)).
 template <class HeightAt>
 RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, double ts, HeightAt height) {
-  if (kind == GeometryKind::grid) {
-    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_GRID);
+  // The texel centres, row-major: the vertices of every geometry kind.
+  auto set_vertices = [&](RTCGeometry g) {
     float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                            3 * sizeof(float), std::size_t(nx) * ny));
     for (int j = 0; j < ny; ++j)
@@ -32,6 +32,10 @@ RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, doub
         float* p = v + 3 * (std::size_t(j) * nx + i);
         p[0] = float(i * ts), p[1] = float(j * ts), p[2] = height(i, j);
       }
+  };
+  if (kind == GeometryKind::grid) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_GRID);
+    set_vertices(g);
     // Grids of at most 1024 x 1024 quads sharing border vertices (Embree allows up to 32767 per side).
     constexpr int kBlock = 1024;
     const int bx = (nx - 2) / kBlock + 1, by = (ny - 2) / kBlock + 1;
@@ -51,13 +55,7 @@ RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, doub
   }
   if (kind == GeometryKind::quads) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_QUAD);
-    float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                           3 * sizeof(float), std::size_t(nx) * ny));
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        float* p = v + 3 * (std::size_t(j) * nx + i);
-        p[0] = float(i * ts), p[1] = float(j * ts), p[2] = height(i, j);
-      }
+    set_vertices(g);
     const std::size_t quads = std::size_t(nx - 1) * (ny - 1);
     unsigned* idx = static_cast<unsigned*>(
         rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), quads));
@@ -72,13 +70,7 @@ RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, doub
     return g;
   }
   RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                         3 * sizeof(float), std::size_t(nx) * ny));
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      float* p = v + 3 * (std::size_t(j) * nx + i);
-      p[0] = float(i * ts), p[1] = float(j * ts), p[2] = height(i, j);
-    }
+  set_vertices(g);
   const std::size_t quads = std::size_t(nx - 1) * (ny - 1);
   unsigned* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
       g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 2 * quads));

@@ -22,34 +22,18 @@
 #include <thread>
 #include <vector>
 
+#include "child_process.hpp"
+
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 pid_t start(const fs::path& dir, const std::vector<std::string>& args) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    if (!freopen((dir / "stderr.txt").c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout)) _exit(126);
-    if (chdir(dir.c_str()) != 0) _exit(126);
-    alarm(300);  // a hang fails the test instead of stalling the suite
-    std::vector<char*> argv{const_cast<char*>("hfbake")};
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(HFBAKE_BINARY, argv.data());
-    _exit(127);
-  }
-  return pid;
+  return hfbake_test::start_hfbake(args, dir / "stderr.txt", dir, 300);
 }
 
-int wait_exit(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-}
-
-bool is_stage(const fs::path& p) {
-  return p.filename().string().rfind(".hfbake-staging-", 0) == 0;
-}
+using hfbake_test::is_stage;
+using hfbake_test::wait_exit;
 
 // The band files in the output folder's staging folders.
 std::vector<fs::path> checkpoints(const fs::path& out) {

@@ -23,31 +23,17 @@
 #include <thread>
 #include <vector>
 
+#include "child_process.hpp"
+
 namespace {
 namespace fs = std::filesystem;
 
 pid_t start(const std::vector<std::string>& args, const fs::path& err) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    if (!freopen(err.c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout)) _exit(126);
-    std::vector<char*> argv{const_cast<char*>("hfbake")};
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(HFBAKE_BINARY, argv.data());
-    _exit(127);
-  }
-  return pid;
+  return hfbake_test::start_hfbake(args, err);
 }
 
-int wait_exit(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-}
-
-bool is_stage(const fs::path& p) {
-  return p.filename().string().rfind(".hfbake-staging-", 0) == 0;
-}
+using hfbake_test::is_stage;
+using hfbake_test::wait_exit;
 
 // The files outside staging folders: what a later bake or compare can take for outputs.
 std::vector<fs::path> visible_files(const fs::path& dir) {

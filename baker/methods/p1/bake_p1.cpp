@@ -38,6 +38,25 @@ LayerSet p1_layers(P1Result&& r, const Params& in) {
 
 }  // namespace
 
+void p1_sums_to_layers(P1Sums& s, LayerSet& out) {
+  const std::size_t N = std::size_t(out.width) * out.height;
+  auto put = [&](const char* name, std::vector<float>& v) {
+    if (v.empty()) return;
+    std::vector<std::string> channels = indexed_channels(int(v.size() / N));  // before the move
+    out.adopt(name, std::move(channels), std::move(v));
+  };
+  put("ao", s.ao), put("vsky", s.vsky), put("rgb", s.rgb), put("bent", s.bent);
+  put("fao", s.fao), put("fdr", s.fdr), put("fdg", s.fdg), put("fdb", s.fdb);
+}
+
+void p1_sums_from_layers(LayerSet& sums, P1Sums& s) {
+  auto take = [&](const char* name, std::vector<float>& v) {
+    if (Layer* l = sums.find(name)) v = std::move(l->data);
+  };
+  take("ao", s.ao), take("vsky", s.vsky), take("rgb", s.rgb), take("bent", s.bent);
+  take("fao", s.fao), take("fdr", s.fdr), take("fdg", s.fdg), take("fdb", s.fdb);
+}
+
 LayerSet bake_p1(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
   Params in(params);
   const P1Params p = read_p1_params(in);
@@ -53,14 +72,7 @@ LayerSet p1_bake_block(const Scene& scene, const nlohmann::json& params, int blo
       p1_direction_sums(scene, p, direction_block_begin(block, K), direction_block_begin(block + 1, K), rc);
   LayerSet out;
   out.width = scene.field.width, out.height = scene.field.height;
-  const std::size_t N = scene.field.texel_count();
-  auto put = [&](const char* name, std::vector<float>& v) {
-    if (v.empty()) return;
-    std::vector<std::string> channels = indexed_channels(int(v.size() / N));
-    out.adopt(name, std::move(channels), std::move(v));
-  };
-  put("ao", s.ao), put("vsky", s.vsky), put("rgb", s.rgb), put("bent", s.bent);
-  put("fao", s.fao), put("fdr", s.fdr), put("fdg", s.fdg), put("fdb", s.fdb);
+  p1_sums_to_layers(s, out);
   std::string at = "@";  // appended, not "@" + ...: GCC 12's false -Wrestrict on that form
   at += std::to_string(s.k_begin);
   const std::vector<std::string> block_channels = indexed_channels(s.k_end - s.k_begin);
@@ -78,11 +90,7 @@ LayerSet p1_finish_blocks(const Scene& scene, const nlohmann::json& params, Laye
   const std::size_t N = scene.field.texel_count();
   P1Sums s;
   s.k_begin = 0, s.k_end = K;
-  auto take = [&](const char* name, std::vector<float>& v) {
-    if (Layer* l = sums.find(name)) v = std::move(l->data);
-  };
-  take("ao", s.ao), take("vsky", s.vsky), take("rgb", s.rgb), take("bent", s.bent);
-  take("fao", s.fao), take("fdr", s.fdr), take("fdg", s.fdg), take("fdb", s.fdb);
+  p1_sums_from_layers(sums, s);
   // The blocks' horizons into [texel * K + k].
   auto place = [&](const std::string& name, std::vector<float>& all) {
     for (const Layer& l : sums.layers) {

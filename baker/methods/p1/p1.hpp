@@ -109,6 +109,11 @@ struct P1Sums {
 // P1Result's layout): write the horizons there instead of into the returned sums.
 P1Sums p1_direction_sums(const Scene& scene, const P1Params& params, int k_begin, int k_end,
                          const RunControl& rc, float* horizon_out = nullptr, float* distance_out = nullptr);
+// The farm's form of the sums: each non-empty one moved into `out` as the float layer of its name ("ao",
+// "vsky", "rgb", "bent", "fao", "fdr", "fdg", "fdb"; channels from its size per texel of out's field), and
+// back (the layers' data moved out). The horizons are not touched.
+void p1_sums_to_layers(P1Sums& s, LayerSet& out);
+void p1_sums_from_layers(LayerSet& sums, P1Sums& s);
 // total += block, elementwise (the horizons are not touched); total.k_end = block.k_end.
 void p1_add_sums(P1Sums& total, const P1Sums& block);
 P1Result p1_finish(const Scene& scene, const P1Params& params, P1Sums&& sums, const RunControl& rc);

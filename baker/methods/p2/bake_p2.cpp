@@ -437,14 +437,11 @@ LayerSet p1_block_layers(const Scene& scene, const P2Params& p, int block, const
   LayerSet out;
   out.width = scene.field.width, out.height = scene.field.height;
   const std::size_t N = scene.field.texel_count();
-  auto put = [&](const std::string& name, std::vector<float>& v) {
-    if (v.empty()) return;
-    std::vector<std::string> channels = indexed_channels(int(v.size() / N));  // before the move
-    out.adopt(name, std::move(channels), std::move(v));
-  };
-  put("ao", s.ao), put("vsky", s.vsky), put("rgb", s.rgb), put("bent", s.bent);
-  put("fao", s.fao), put("fdr", s.fdr), put("fdg", s.fdg), put("fdb", s.fdb);
-  put("horizon@" + std::to_string(s.k_begin), s.horizon);  // [(k - k_begin) * N + texel]
+  p1_sums_to_layers(s, out);
+  if (!s.horizon.empty()) {  // [(k - k_begin) * N + texel]
+    std::vector<std::string> channels = indexed_channels(int(s.horizon.size() / N));  // before the move
+    out.adopt("horizon@" + std::to_string(s.k_begin), std::move(channels), std::move(s.horizon));
+  }
   return out;
 }
 
@@ -454,11 +451,7 @@ P1Result p1_of_block_layers(const Scene& scene, const P2Params& p, LayerSet&& su
   const P1Params p1 = p2_direct_params(p, p2_keeps_horizons(scene.field, p, scene.bounces));
   P1Sums s;
   s.k_begin = 0, s.k_end = K;
-  auto take = [&](const char* name, std::vector<float>& v) {
-    if (Layer* l = sums.find(name)) v = std::move(l->data);
-  };
-  take("ao", s.ao), take("vsky", s.vsky), take("rgb", s.rgb), take("bent", s.bent);
-  take("fao", s.fao), take("fdr", s.fdr), take("fdg", s.fdg), take("fdb", s.fdb);
+  p1_sums_from_layers(sums, s);
   if (p1.horizon) {  // the blocks' horizons into [k * N + texel]
     s.horizon.assign(N * std::size_t(K), 0.0f);
     int placed = 0;
