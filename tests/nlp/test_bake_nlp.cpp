@@ -99,7 +99,8 @@ TEST(NlpBake, DirectCosineExactMatchesClosedForms) {
   NlpOptions o;
   o.layers = {"direct"};
   o.exact_direct_cosine = true;
-  const float* d = texel(bake_nlp(s, o, RunControl{}), "direct", 16, 16);
+  const LayerSet baked = bake_nlp(s, o, RunControl{});  // d points into it
+  const float* d = texel(baked, "direct", 16, 16);
   const float want[3] = {sky.horizon.r + (sky.zenith.r - sky.horizon.r) * 2 / 3.0f,
                          sky.horizon.g + (sky.zenith.g - sky.horizon.g) * 2 / 3.0f,
                          sky.horizon.b + (sky.zenith.b - sky.horizon.b) * 2 / 3.0f};
