@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <memory>
 
@@ -77,11 +78,79 @@ void check_exr_header(const fs::path& file, const InputSite& site) {
   }
 }
 
+// OpenImageIO (2.4) decodes a JPEG's Photoshop metadata (an APP13 segment: "Photoshop 3.0", then "8BIM"
+// resource blocks; block 0x0404 holds IPTC datasets) trusting the sizes inside it, and reads past the segment
+// when a size is damaged (found by tests/fuzz/fuzz_height_image: a heap over-read in decode_iptc_iim). Walks
+// the markers before the image data and refuses an APP13 whose blocks or datasets claim more bytes than the
+// segment holds (under either reading of block 0x0404's size), before OpenImageIO sees it. Not a JPEG:
+// nothing.
+void check_jpeg_metadata(const fs::path& file, const InputSite& site) {
+  std::ifstream in(file, std::ios::binary);
+  unsigned char soi[2] = {};
+  if (!in.read(reinterpret_cast<char*>(soi), 2) || soi[0] != 0xFF || soi[1] != 0xD8) return;
+  auto be16 = [](const unsigned char* b) { return std::uint32_t(b[0]) << 8 | b[1]; };
+  auto be32 = [](const unsigned char* b) {
+    return std::uint32_t(b[0]) << 24 | std::uint32_t(b[1]) << 16 | std::uint32_t(b[2]) << 8 | b[3];
+  };
+  auto damaged = [&](const std::string& what) {
+    fail(site, file,
+         "cannot read the image: its Photoshop metadata (JPEG APP13 segment) is damaged: " + what);
+  };
+  std::vector<unsigned char> d;
+  for (int segments = 0; segments < 4096; ++segments) {
+    int c = in.get();
+    if (c != 0xFF) return;  // not at a marker: libjpeg reports it
+    while (c == 0xFF) c = in.get();
+    if (c == EOF || c == 0xD9 || c == 0xDA) return;       // the end, or the image data begins
+    if (c == 0x01 || (c >= 0xD0 && c <= 0xD7)) continue;  // markers without a segment
+    unsigned char len_bytes[2] = {};
+    if (!in.read(reinterpret_cast<char*>(len_bytes), 2)) return;
+    const std::uint32_t len = be16(len_bytes);
+    if (len < 2) return;
+    if (c != 0xED) {
+      in.seekg(std::streamoff(len - 2), std::ios::cur);
+      continue;
+    }
+    d.assign(len - 2, 0);
+    in.read(reinterpret_cast<char*>(d.data()), std::streamsize(d.size()));
+    const std::size_t n = std::size_t(in.gcount());  // a segment cut short by the file's end: what is there
+    if (n < 14 || std::memcmp(d.data(), "Photoshop 3.0\0", 14) != 0) {
+      if (!in) return;
+      continue;
+    }
+    std::size_t p = 14;
+    while (p + 4 <= n && std::memcmp(d.data() + p, "8BIM", 4) == 0) {
+      if (p + 7 > n) damaged("a resource block is cut short");
+      const std::uint32_t id = be16(d.data() + p + 4);
+      const std::size_t q = p + 6 + ((1 + std::size_t(d[p + 6]) + 1) & ~std::size_t(1));  // the name, even
+      if (q + 4 > n) damaged("a resource block is cut short");
+      const std::size_t size = be32(d.data() + q), begin = q + 4;
+      if (size > n - begin)
+        damaged("a resource block claims " + std::to_string(size) + " bytes, its segment holds " +
+                std::to_string(n - begin));
+      if (id == 0x0404) {
+        // Read as a 4-byte gap and a 2-byte size too: either reading must stay inside the segment.
+        if (p + 12 > n || be16(d.data() + p + 10) > n - (p + 12))
+          damaged("the IPTC block's size runs past its segment");
+        for (std::size_t r = begin, end = begin + size; r < end && d[r] == 0x1C;) {
+          if (r + 5 > end) damaged("an IPTC dataset is cut short");
+          const std::uint32_t dl = be16(d.data() + r + 3);
+          if ((dl & 0x8000) || dl > end - (r + 5)) damaged("an IPTC dataset runs past its block");
+          r += 5 + dl;
+        }
+      }
+      p = begin + size + (size & 1);
+    }
+    if (!in) return;
+  }
+}
+
 std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& file, const InputSite& site) {
   std::error_code ec;
   if (!fs::exists(file, ec)) fail(site, file, "no such file");
   if (fs::is_directory(file, ec)) fail(site, file, "is a folder, not an image");
   check_exr_header(file, site);
+  check_jpeg_metadata(file, site);
   auto in = OIIO::ImageInput::open(file.string());
   if (!in) fail(site, file, "cannot read the image: " + first_line(OIIO::geterror()));
   return in;
