@@ -146,7 +146,8 @@ TEST(MethodTable, ResolvedParametersHoldTheDefaults) {
       resolve_method_params({{"method", "hbao"}, {"radius", 3}, {"step", 0.5}}, context(), "", "/bake/0");
   EXPECT_EQ(stepped["surface"], "bilinear");  // a step means the stepped march
   EXPECT_EQ(stepped["estimator"], "slab");
-  EXPECT_EQ(resolve_method_params({{"method", "farfield"}}, context(), "", "/bake/0")["surface"], "triangles");
+  EXPECT_EQ(resolve_method_params({{"method", "farfield"}}, context(), "", "/bake/0")["surface"],
+            "triangles");
   EXPECT_EQ(hbao["max_distance"], 3.0);  // the step falloff's support
   EXPECT_EQ(hbao["layers"], nlohmann::json({"obscurance", "bent_normal"}));
   const nlohmann::json plain = resolve_method_params({{"method", "hbao"}}, context(), "", "/bake/0");

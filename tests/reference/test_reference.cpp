@@ -696,7 +696,7 @@ TEST(Reference, OptionsFromTheJob) {
   EXPECT_EQ(o.layers, (std::vector<std::string>{"ao", "vsky", "obscurance", "direct", "bent_normal"}));
   EXPECT_EQ(o.resolved["layers"], nlohmann::json(o.layers));
   EXPECT_EQ(o.resolved["samples"], 64);
-  EXPECT_EQ(o.resolved["replicates"], 8);     // a default, recorded
+  EXPECT_EQ(o.resolved["replicates"], 8);      // a default, recorded
   EXPECT_EQ(o.resolved["geometry"], "quads");  // small fields: the faster geometry
   MethodContext big;
   big.field.width = 4096, big.field.height = 4097;  // beyond 4096² texels: the grid's third of the memory
