@@ -42,4 +42,13 @@ inline bool is_stage(const std::filesystem::path& p) {
   return p.filename().string().rfind(".hfbake-staging-", 0) == 0;
 }
 
+// How many staging folders `dir` holds.
+inline int stages_in(const std::filesystem::path& dir) {
+  int n = 0;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+    n += is_stage(it->path());
+  return n;
+}
+
 }  // namespace hfbake_test

@@ -33,6 +33,7 @@ pid_t start(const fs::path& dir, const std::vector<std::string>& args) {
 }
 
 using hfbake_test::is_stage;
+using hfbake_test::stages_in;
 using hfbake_test::wait_exit;
 
 // The band files in the output folder's staging folders.
@@ -47,13 +48,6 @@ std::vector<fs::path> checkpoints(const fs::path& out) {
       if (f->path().extension() == ".hfckpt") files.push_back(f->path());
   }
   return files;
-}
-
-int stages_in(const fs::path& dir) {
-  int n = 0;
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) n += is_stage(it->path());
-  return n;
 }
 
 // Starts a bake and SIGKILLs it as soon as `bands` band files exist. True when it was killed mid-reference.

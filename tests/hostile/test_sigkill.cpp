@@ -33,6 +33,7 @@ pid_t start(const std::vector<std::string>& args, const fs::path& err) {
 }
 
 using hfbake_test::is_stage;
+using hfbake_test::stages_in;
 using hfbake_test::wait_exit;
 
 // The files outside staging folders: what a later bake or compare can take for outputs.
@@ -48,13 +49,6 @@ std::vector<fs::path> visible_files(const fs::path& dir) {
     if (it->is_regular_file()) out.push_back(it->path());
   }
   return out;
-}
-
-int stages_in(const fs::path& dir) {
-  int n = 0;
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) n += is_stage(it->path());
-  return n;
 }
 
 // A whole output: an image that decodes completely, or JSON that parses.
