@@ -68,13 +68,9 @@ void BM_P1Bake(benchmark::State& state) {
   set_counters(state, double(s.field.texel_count()) * K);
 }
 
-// P1's far field alone (the strip search, FarHorizonWorker, as compute_p1 runs it with near_radius 2) and
-// the strip gather, summed per texel; counters: texel-directions/s and the bands searched per texel.
-void BM_FarField(benchmark::State& state) {
-  const int kind = int(state.range(0)), size = int(state.range(1)), K = int(state.range(2));
-  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
-  const HeightField& f = field_of(kind, size);
-  std::vector<float> acc(f.texel_count());
+// The sweep as compute_p1 runs its far field: the strip gather, FarHorizonWorker's channels, 8 directions a
+// batch.
+SweepSpec strip_sweep_spec(int K) {
   SweepSpec spec;
   spec.directions = K;
   spec.channels = p1::FarHorizonWorker::channels();
@@ -82,6 +78,17 @@ void BM_FarField(benchmark::State& state) {
   spec.tile_strip = true;
   spec.zero_buffers = false;
   spec.batch = 8;
+  return spec;
+}
+
+// P1's far field alone (the strip search, FarHorizonWorker, as compute_p1 runs it with near_radius 2) and
+// the strip gather, summed per texel; counters: texel-directions/s and the bands searched per texel.
+void BM_FarField(benchmark::State& state) {
+  const int kind = int(state.range(0)), size = int(state.range(1)), K = int(state.range(2));
+  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
+  const HeightField& f = field_of(kind, size);
+  std::vector<float> acc(f.texel_count());
+  const SweepSpec spec = strip_sweep_spec(K);
   std::atomic<std::uint64_t> texels{0}, bands{0};
   struct Counting : p1::FarHorizonWorker {
     std::atomic<std::uint64_t>*t = nullptr, *b = nullptr;
@@ -140,13 +147,7 @@ void BM_Gather(benchmark::State& state) {
   tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
   const HeightField& f = field_of(kind, size);
   std::vector<float> acc(f.texel_count());
-  SweepSpec spec;
-  spec.directions = K;
-  spec.channels = p1::FarHorizonWorker::channels();
-  spec.tile_nearest = spec.tile_values = false;
-  spec.tile_strip = true;
-  spec.zero_buffers = false;
-  spec.batch = 8;
+  const SweepSpec spec = strip_sweep_spec(K);
   struct NoSearch {
     void operator()(const SweepLine& line, float* out) const {
       for (int n = line.first_receiver; n < line.count; ++n)
