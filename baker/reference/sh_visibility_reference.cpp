@@ -17,11 +17,14 @@ constexpr int kNodes = 10;  // Gauss-Legendre in elevation: exact for the basis 
 
 }  // namespace
 
-std::array<double, 16> sh_visibility_of_horizons(const std::vector<double>& elevation) {
+namespace {
+
+// The projection from horizons at the azimuths of the tables (cos_phi, sin_phi: azimuth_table of K).
+std::array<double, 16> project_horizons(const std::vector<double>& elevation,
+                                        const std::vector<double>& cos_phi,
+                                        const std::vector<double>& sin_phi) {
   static const QuadratureRule gl = gauss_legendre(kNodes);
   const int K = int(elevation.size());
-  std::vector<double> cos_phi, sin_phi;
-  azimuth_table(K, cos_phi, sin_phi);
   std::array<double, 16> c{};
   const double dphi = 2 * kPi / K;
   for (int k = 0; k < K; ++k) {
@@ -34,6 +37,14 @@ std::array<double, 16> sh_visibility_of_horizons(const std::vector<double>& elev
     }
   }
   return c;
+}
+
+}  // namespace
+
+std::array<double, 16> sh_visibility_of_horizons(const std::vector<double>& elevation) {
+  std::vector<double> cos_phi, sin_phi;
+  azimuth_table(int(elevation.size()), cos_phi, sin_phi);
+  return project_horizons(elevation, cos_phi, sin_phi);
 }
 
 std::vector<float> trace_reference_sh_visibility(const HeightField& f, int azimuths, const RunControl& rc,
@@ -50,7 +61,7 @@ std::vector<float> trace_reference_sh_visibility(const HeightField& f, int azimu
       const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
       for (int k = 0; k < azimuths; ++k)
         elevation[k] = bisect_horizon(geometry, o, cos_phi[k], sin_phi[k], iterations).elevation;
-      const std::array<double, 16> c = sh_visibility_of_horizons(elevation);
+      const std::array<double, 16> c = project_horizons(elevation, cos_phi, sin_phi);  // no allocation
       float* dst = out.data() + f.index(i, j) * 16;
       for (int n = 0; n < 16; ++n) dst[n] = float(c[n]);
     }
