@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <initializer_list>
 #include <memory>
 
 #include "core/error.hpp"
@@ -97,10 +98,14 @@ void check_jpeg_metadata(const fs::path& file, const InputSite& site) {
          "cannot read the image: its Photoshop metadata (JPEG APP13 segment) is damaged: " + what);
   };
   std::vector<unsigned char> d;
-  for (int segments = 0; segments < 4096; ++segments) {
+  for (int segments = 0; segments < 65536; ++segments) {
+    // Find the next marker as libjpeg does: it skips (with a warning) any bytes before a 0xFF, then the
+    // 0xFF fill bytes, and takes FF 00 for data, not a marker. (A walker that stopped at the first stray
+    // byte missed an APP13 that libjpeg still hands to OpenImageIO: found by fuzz_height_image.)
     int c = in.get();
-    if (c != 0xFF) return;  // not at a marker: libjpeg reports it
+    while (c != EOF && c != 0xFF) c = in.get();
     while (c == 0xFF) c = in.get();
+    if (c == 0) continue;
     if (c == EOF || c == 0xD9 || c == 0xDA) return;       // the end, or the image data begins
     if (c == 0x01 || (c >= 0xD0 && c <= 0xD7)) continue;  // markers without a segment
     unsigned char len_bytes[2] = {};
@@ -145,14 +150,68 @@ void check_jpeg_metadata(const fs::path& file, const InputSite& site) {
   }
 }
 
+// The formats hfbake reads through OpenImageIO, and the reader each file goes to, told by its first bytes
+// (the extension only for Targa, which has no signature). Left to itself, OpenImageIO tries every reader it
+// has on a file its extension's reader refuses, including rarely used ones that abort on damaged input (a
+// damaged Wavefront RLA file named .exr stopped the process on an assertion in OpenImageIO 2.4's RLA reader:
+// found by tests/fuzz/fuzz_height_image). A file in no listed format is refused before any reader sees it.
+// (A height raster GDAL reads never gets here: cli/scene_inputs sends it to io/georaster_input.)
+constexpr const char* kReadableFormats = "EXR, TIFF, PNG, JPEG, HDR, PNM/PFM, BMP, TGA, GIF, WebP";
+
+const char* reader_for(const fs::path& file, const InputSite& site) {
+  std::ifstream in(file, std::ios::binary);
+  unsigned char b[12] = {};
+  in.read(reinterpret_cast<char*>(b), sizeof b);
+  const std::size_t n = std::size_t(in.gcount());
+  auto starts = [&](std::initializer_list<int> bytes) {
+    if (bytes.size() > n) return false;
+    std::size_t i = 0;
+    for (const int v : bytes) {
+      if (v >= 0 && b[i] != v) return false;  // v < 0: any byte
+      ++i;
+    }
+    return true;
+  };
+  if (starts({0x76, 0x2f, 0x31, 0x01})) return "openexr";
+  if (starts({'I', 'I', 42, 0}) || starts({'M', 'M', 0, 42}) || starts({'I', 'I', 43, 0}) ||
+      starts({'M', 'M', 0, 43}))
+    return "tiff";
+  if (starts({0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a})) return "png";
+  if (starts({0xff, 0xd8})) return "jpeg";  // libjpeg skips stray bytes before the next marker
+  if (starts({'#', '?'})) return "hdr";     // #?RADIANCE, #?RGBE
+  if (n >= 3 && b[0] == 'P' && std::strchr("123456fF", b[1]) && b[1] != 0 && std::isspace(b[2])) return "pnm";
+  if (starts({'B', 'M'})) return "bmp";
+  if (starts({'G', 'I', 'F', '8'})) return "gif";
+  if (starts({'R', 'I', 'F', 'F', -1, -1, -1, -1, 'W', 'E', 'B', 'P'})) return "webp";
+  // Targa: no signature at the start; a version-2 file ends with "TRUEVISION-XFILE.\0", an older one has
+  // only its extension.
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".tga" || ext == ".tpic") return "targa";
+  char tail[18] = {};
+  in.clear();
+  if (in.seekg(-18, std::ios::end) && in.read(tail, 18) && std::memcmp(tail, "TRUEVISION-XFILE.", 18) == 0)
+    return "targa";
+  fail(site, file,
+       std::string("cannot read the image: not in a format hfbake reads (") + kReadableFormats +
+           "); convert it, e.g. oiiotool FILE -o FILE.exr");
+}
+
 std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& file, const InputSite& site) {
   std::error_code ec;
   if (!fs::exists(file, ec)) fail(site, file, "no such file");
   if (fs::is_directory(file, ec)) fail(site, file, "is a folder, not an image");
+  const char* const reader = reader_for(file, site);
   check_exr_header(file, site);
   check_jpeg_metadata(file, site);
-  auto in = OIIO::ImageInput::open(file.string());
+  // Only that format's reader: create() by format name does not open, so nothing falls back to the others.
+  auto in = OIIO::ImageInput::create(reader);
   if (!in) fail(site, file, "cannot read the image: " + first_line(OIIO::geterror()));
+  OIIO::ImageSpec spec;
+  if (!in->open(file.string(), spec)) {
+    const std::string why = in->geterror();
+    fail(site, file, "cannot read the image: " + first_line(why.empty() ? OIIO::geterror() : why));
+  }
   return in;
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <iterator>
 
 #include "core/error.hpp"
 #include "image_fixtures.hpp"
@@ -101,6 +102,77 @@ TEST(ImageInput, CorruptFile) {
         "jobs/x.json: /height/image: " + (dir / name).string() + ": cannot read the image: ";
     EXPECT_EQ(line.substr(0, prefix.size()), prefix) << line;
     EXPECT_EQ(line.find('\n'), std::string::npos) << line;
+  }
+}
+
+// Each listed format is read by the reader its first bytes name, whatever the file is called (Targa, which
+// has no signature, by its extension or the version-2 footer).
+TEST(ImageInput, ReadsEveryListedFormatByItsSignature) {
+  TempFolder dir;
+  std::vector<float> px(8 * 4 * 3);
+  for (std::size_t i = 0; i < px.size(); ++i) px[i] = float(i % 5) / 4;
+  for (const char* name :
+       {"a.exr", "a.tif", "a.png", "a.jpg", "a.hdr", "a.ppm", "a.bmp", "a.tga", "a.gif", "a.webp"}) {
+    write_test_image(dir / name, 8, 4, 3, px,
+                     std::string(name) == "a.exr" || std::string(name) == "a.hdr" ? OIIO::TypeDesc::FLOAT
+                                                                                  : OIIO::TypeDesc::UINT8);
+    const ImageInfo info = probe_image(dir / name, kSite);
+    EXPECT_EQ(info.width, 8) << name;
+    EXPECT_EQ(info.height, 4) << name;
+    EXPECT_EQ(read_image(dir / name, kSite).pixels.size(), std::size_t(8 * 4 * info.channels)) << name;
+    if (std::string(name) == "a.tga") continue;
+    const fs::path renamed = dir / (std::string(name) + ".height");
+    fs::copy_file(dir / name, renamed);
+    EXPECT_EQ(probe_image(renamed, kSite).width, 8) << renamed;
+  }
+}
+
+// Formats OpenImageIO has readers for but hfbake does not list are refused before any reader sees them,
+// under their own extension or a listed one (a damaged RLA file named .exr aborted the process inside
+// OpenImageIO 2.4's RLA reader: tests/fuzz/regressions/height_image).
+TEST(ImageInput, RefusesFormatsItDoesNotList) {
+  TempFolder dir;
+  const std::vector<float> px(4 * 4, 0.5f);
+  for (const char* name : {"a.rla", "a.sgi", "a.dpx"}) {
+    write_test_image(dir / name, 4, 4, 1, px, OIIO::TypeDesc::UINT8);
+    const fs::path disguised = dir / (std::string(name) + ".exr");
+    fs::copy_file(dir / name, disguised);
+    for (const fs::path& f : {dir / name, disguised})
+      EXPECT_EQ(
+          error_line([&] { probe_image(f, kSite); }),
+          "jobs/x.json: /height/image: " + f.string() +
+              ": cannot read the image: not in a format hfbake reads (EXR, TIFF, PNG, JPEG, HDR, PNM/PFM, "
+              "BMP, TGA, GIF, WebP); convert it, e.g. oiiotool FILE -o FILE.exr");
+  }
+}
+
+// A JPEG whose Photoshop block (APP13) claims more bytes than its segment holds is refused before
+// OpenImageIO decodes it (OpenImageIO 2.4 reads past the segment), also when stray bytes stand before the
+// segment's marker: libjpeg skips them and still hands the segment over.
+TEST(ImageInput, RefusesJpegPhotoshopBlocksLongerThanTheirSegment) {
+  TempFolder dir;
+  write_test_image(dir / "plain.jpg", 8, 8, 1, std::vector<float>(64, 0.5f), OIIO::TypeDesc::UINT8);
+  std::string jpeg;
+  {
+    std::ifstream in(dir / "plain.jpg", std::ios::binary);
+    jpeg.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_GT(jpeg.size(), 4u);
+  // "Photoshop 3.0\0", then resource 0x0404 (IPTC) with an empty name claiming 100 bytes, in 44 bytes.
+  std::string app13 = std::string("Photoshop 3.0", 14) + "8BIM" + std::string("\x04\x04\0\0", 4) +
+                      std::string("\0\0\0\x64", 4) + std::string(16, '\x1c');
+  const std::size_t len = app13.size() + 2;
+  app13 = std::string("\xff\xed") + char(len >> 8) + char(len & 0xff) + app13;
+  for (const std::string& stray : {std::string(), std::string("\x13\x92\x02")}) {
+    const fs::path f = dir / (stray.empty() ? "app13.jpg" : "app13_stray.jpg");
+    {
+      std::ofstream out(f, std::ios::binary);
+      out << jpeg.substr(0, 2) << stray << app13 << jpeg.substr(2);
+    }
+    const std::string line = error_line([&] { probe_image(f, kSite); });
+    EXPECT_EQ(line, "jobs/x.json: /height/image: " + f.string() +
+                        ": cannot read the image: its Photoshop metadata (JPEG APP13 segment) is damaged: a "
+                        "resource block claims 100 bytes, its segment holds 16");
   }
 }
 
