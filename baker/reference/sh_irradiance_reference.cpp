@@ -15,6 +15,7 @@ namespace {
 // stand-in has 8 rows of 22.5 degrees): the integrand Y_i cos e is a trigonometric polynomial of degree <= 3
 // for bands 0..2, which 8 nodes integrate to rounding over such an interval.
 constexpr int kNodes = 8;
+constexpr int kMaxRows = 512;
 
 const QuadratureRule& rule() {
   static const QuadratureRule gl = gauss_legendre(kNodes);
@@ -52,6 +53,28 @@ ShEnvironmentTable make_sh_environment_table(const Environment& env, int azimuth
     const double phi = azimuth(k, azimuths);
     profile[std::size_t(k)] = azimuth_wedge_profile(env, phi - kPi / azimuths, phi + kPi / azimuths);
     if (profile[std::size_t(k)].empty()) profile[std::size_t(k)].assign(1, env.uniform_radiance);
+  }
+  // At most kMaxRows rows (an 8192 x 4096 map's table would take 113 MB): groups of `merge` rows, the
+  // group's radiance the solid-angle-weighted mean of its rows (rows of pi / 512 = 0.35 degrees and finer).
+  const int rows0 = int(profile[0].size());
+  int merge = 1;
+  for (int m = 2; rows0 / merge > kMaxRows && m <= rows0 / 64; ++m)
+    if (rows0 % m == 0) merge = m;
+  if (merge > 1) {
+    for (std::vector<Rgb>& p : profile) {
+      std::vector<Rgb> merged(std::size_t(rows0 / merge));
+      for (int g = 0; g < rows0 / merge; ++g) {
+        double sum[3] = {}, weight = 0;
+        for (int r = g * merge; r < (g + 1) * merge; ++r) {
+          const double w = std::sin(kPi / 2 - kPi * r / rows0) - std::sin(kPi / 2 - kPi * (r + 1) / rows0);
+          sum[0] += w * p[std::size_t(r)].r, sum[1] += w * p[std::size_t(r)].g,
+              sum[2] += w * p[std::size_t(r)].b;
+          weight += w;
+        }
+        merged[std::size_t(g)] = {float(sum[0] / weight), float(sum[1] / weight), float(sum[2] / weight)};
+      }
+      p = std::move(merged);
+    }
   }
   t.rows = int(profile[0].size());
   const int h = t.rows;

@@ -65,9 +65,12 @@ Vec3 direction(double elevation_deg, double azimuth_deg) {
 // 2b / 3), L_20 = Y_20 pi b / 2, the rest zero; a sun of irradiance E whose disk (half-angle alpha, cos
 // alpha = k) is all visible adds E Y_lm(d) times 2 / (1 + k), 1, k for l = 0, 1, 2 (the disk mean of the
 // zonal P_l); c_lm = (A_l / pi) L_lm with A_l / pi = 1, 2/3, 1/4.
-TEST(ShIrradianceReference, FlatGroundUnderASkyGradientAndASunIsTheClosedForm) {
+class FlatGround : public ::testing::TestWithParam<int> {};
+
+// H = 1024 rows: the environment table merges them in pairs (at most 512 rows).
+TEST_P(FlatGround, UnderASkyGradientAndASunIsTheClosedForm) {
   const double a = 0.7, b = 0.5;
-  const int H = 256, W = 2 * H;
+  const int H = GetParam(), W = 2 * H;
   std::vector<Rgb> texels(std::size_t(W) * H);
   for (int r = 0; r < H; ++r) {
     const double z0 = std::cos(kPi * r / H), z1 = std::cos(kPi * (r + 1) / H);
@@ -103,6 +106,8 @@ TEST(ShIrradianceReference, FlatGroundUnderASkyGradientAndASunIsTheClosedForm) {
             << v.se << ", truth " << truth;
       }
 }
+
+INSTANTIATE_TEST_SUITE_P(ShIrradianceReference, FlatGround, ::testing::Values(256, 1024));
 
 // V = [w . n > 0] on a plane of normal n, which never sees itself: under a uniform sky of radiance 1 the
 // incident projection is the hemisphere's zonal coefficients sqrt(pi), sqrt(3 pi) / 2, 0 rotated to n.
