@@ -261,7 +261,9 @@ TEST(Report, ReliefLayersAreComparedOnlyWithTheReferencesSettings) {
         build_report(ReportSpec{}, {{"relief", "relief", 1.0, params, &method}}, reference);
     const nlohmann::json& m = out.doc["methods"]["relief"];
     EXPECT_EQ(m["layers"].contains("svf"), comparable) << params.dump();
-    if (comparable) EXPECT_NEAR(m["layers"]["svf"]["mae"].get<double>(), 0.1, 1e-6);
+    if (comparable) {
+      EXPECT_NEAR(m["layers"]["svf"]["mae"].get<double>(), 0.1, 1e-6);
+    }
   }
   // Without the record (a reference of another hfbake, or none traced): not compared.
   reference.attributes.clear();
