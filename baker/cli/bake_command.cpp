@@ -28,6 +28,7 @@
 #include "job/content_hash.hpp"
 #include "job/manifest.hpp"
 #include "reference/horizon_reference.hpp"
+#include "reference/relief_reference.hpp"
 #include "reference/sh_visibility_reference.hpp"
 
 namespace hfbake {
@@ -206,6 +207,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     // Not cached: cheap beside the tracing.
     add_reference_horizons(scene.field, method_layers, reference, rc);
     add_reference_sh_visibility(scene.field, method_layers, reference, rc);
+    add_reference_relief(scene.field, method_layers, reference, rc);
     add_common_attributes(reference, job, job_hash, "reference", job.reference_resolved, seconds);
     stage.write_layers("reference", reference);
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};

@@ -113,6 +113,10 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   // Methods run one at a time; each one's layers are kept until the report when there is a reference.
   double kept = 0, peak = 0;
   int horizon_channels = 0;  // the reference adds horizon and horizon_distance for the first method's K
+  // ... and sh_visibility (16 floats a texel) and the first relief entry's layers, whose horizons (up and
+  // down, doubles) it holds while it computes them (reference/relief_reference.cpp).
+  double added_per_texel = 0;
+  bool sh_visibility_added = false, relief_added = false;
   for (const BakeEntry& e : job.bakes) {
     // The method table's reader (resolve_job has usually run it already).
     const nlohmann::json r = e.resolved.is_object()
@@ -132,6 +136,17 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     for (const auto& l : r.value("layers", nlohmann::json::array()))
       if ((l == "horizon" || l == "horizon_distance") && horizon_channels == 0)
         horizon_channels = 2 * layer_channel_count(l.get<std::string>(), r);
+    for (const auto& l : r.value("layers", nlohmann::json::array()))
+      if (l == "sh_visibility" && !sh_visibility_added) {
+        added_per_texel += 4.0 * 16;
+        sh_visibility_added = true;
+      }
+    if (e.method == "relief" && !relief_added) {
+      for (const auto& l : r.value("layers", nlohmann::json::array()))
+        added_per_texel += 4.0 * layer_channel_count(l.get<std::string>(), r);
+      added_per_texel += 16.0 * r.value("directions", 16);
+      relief_added = true;
+    }
   }
   double reference = 0;
   if (job.has_reference) {
@@ -143,7 +158,7 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     if (channels == 0) channels = 5;  // not resolved yet: ao, vsky, direct
     const double embree = reference::embree_bytes_per_texel(
         reference::geometry_kind(job.reference_resolved.value("geometry", std::string("quads"))));
-    reference = (8.0 * channels + embree + 4.0 * horizon_channels) * texels;
+    reference = (8.0 * channels + embree + 4.0 * horizon_channels + added_per_texel) * texels;
     peak = std::max(peak, kept + reference + writing);
   }
   // The environment: the world lat-long kept through the bake (with the reference's sampling tables), and

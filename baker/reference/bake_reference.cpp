@@ -14,13 +14,16 @@
 #define HFBAKE_HAVE_MXCSR 1
 #endif
 
+#include "core/azimuth.hpp"
 #include "core/error.hpp"
 #include "field/triangulation.hpp"
 #include "job/params.hpp"
 #include "methods/method_table.hpp"
 #include "reference/env_sampler.hpp"
+#include "reference/horizon_reference.hpp"
 #include "reference/sampling.hpp"
 #include "reference/sh_environment.hpp"
+#include "reference/sh_irradiance_reference.hpp"
 
 namespace hfbake {
 namespace {
@@ -32,6 +35,10 @@ using reference::Sequence2;
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr int kChunk = 64;  // rays per stream call (per texel, per replicate)
+// sh_irradiance: the azimuths of its environment term's horizons and their bisection steps (pi / 2^20:
+// 3e-6 rad).
+constexpr int kShAzimuths = 128;
+constexpr int kShIterations = 20;
 
 // Flush-to-zero / denormals-are-zero while tracing (Embree's advice), restored afterwards so other work
 // sharing the worker threads is unaffected.
@@ -55,10 +62,12 @@ struct Channels {
   int total = 0;
   int count = 0;
   int bent = 0;  // the sum of the unoccluded cosine-sampled directions (x, y, z)
+  int sh = 0;    // sh_irradiance's Monte Carlo terms: L_in Y_i, i < 9, RGB ([sh + i * 3 + c])
   explicit Channels(int bounces) {
     total = bounce0 + 3 * bounces;
     bent = total + 3;
-    count = bent + 3;
+    sh = bent + 3;
+    count = sh + reference::kShIrradianceSums;
   }
   int bounce(int k) const { return bounce0 + 3 * (k - 1); }  // k = 1..bounces
 
@@ -74,12 +83,14 @@ struct Channels {
     if (layer == "indirect") return {indirect, 3};
     if (layer == "total") return {total, 3};
     if (layer == "bent_normal") return {bent, 3};
-    return {bounce(std::stoi(layer.substr(10))), 3};  // indirect_b<k>
+    if (layer == "sh_irradiance") return {sh, reference::kShIrradianceSums};  // written as 48 (band 3 zero)
+    return {bounce(std::stoi(layer.substr(10))), 3};                          // indirect_b<k>
   }
 };
 
 struct Needs {
   bool ao = false, vsky = false, obscurance = false, direct = false, indirect = false, bent_normal = false;
+  bool sh_irradiance = false;
 };
 
 void add_rgb(double* a, Rgb c) {
@@ -131,7 +142,10 @@ struct Context {
   int lights = 0;
   // Dimension pairs: primary (ao / obscurance / first path direction), vsky, the receiver's
   // next-event estimation, then per path vertex: next-event estimation and the continuation direction.
+  // sh_irradiance's come after every one of those (so tracing it changes no other layer's bits): its
+  // hemisphere direction, a point on each light's disk, then its paths' vertices (same stride).
   int pair_primary = 0, pair_vsky = 1, pair_direct = 2, nee_pairs = 0, pair_path = 0, path_stride = 0;
+  int pair_sh = 0, pair_sh_path = 0;
   float obscurance_tfar = kInf;
 
   Context(const Scene& s, const Environment& e, const EnvSampler& es, const EmbreeField& g,
@@ -141,6 +155,8 @@ struct Context {
     nee_pairs = 2 + lights;
     pair_path = pair_direct + nee_pairs;
     path_stride = nee_pairs + 1;
+    pair_sh = pair_path + (bounces + 1) * path_stride;
+    pair_sh_path = pair_sh + 1 + lights;
   }
 
   Sequence2 sequence(std::uint64_t texel_seed, int replicate, int pair) const {
@@ -350,57 +366,132 @@ void trace_direct(const TexelBatch& b, Scratch& sc) {
     }
 }
 
+// The shadow rays of next-event estimation at one path vertex (2 + lights of them).
+struct NeeBuffers {
+  RTCRay fixed_rays[64];
+  ShadowSample fixed_values[64];
+  std::vector<RTCRay> big_rays;
+  std::vector<ShadowSample> big_values;
+  RTCRay* rays = fixed_rays;
+  ShadowSample* values = fixed_values;
+  explicit NeeBuffers(int lights) {
+    const int max_nee = 2 + lights;
+    if (max_nee > 64) {
+      big_rays.resize(max_nee);
+      big_values.resize(max_nee);
+      rays = big_rays.data();
+      values = big_values.data();
+    }
+  }
+  NeeBuffers(const NeeBuffers&) = delete;
+  NeeBuffers& operator=(const NeeBuffers&) = delete;
+};
+
+// The Lambertian path from the surface hit h of the ray along `dir` (sample s of replicate b.r): at each
+// vertex v = 1..bounces, add(v, throughput * (emission + albedo * direct)), with next-event estimation on
+// the pairs pair_base + (v - 1) * path_stride and the continuation direction on the next pair. The sum of
+// what it adds estimates the radiance arriving along -dir at the ray's origin from the surface.
+template <class Add>
+void follow_path(const TexelBatch& b, RTCRayHit h, Vec3 dir, std::uint32_t s, int pair_base, NeeBuffers& nb,
+                 Add&& add) {
+  const Context& cx = b.cx;
+  const double eps = cx.geometry.epsilon();
+  RTCRay* nr = nb.rays;
+  ShadowSample* nv = nb.values;
+  Rgb throughput{1, 1, 1};
+  Vec3 pos = vec(&h.ray.org_x) + dir * double(h.ray.tfar);
+  for (int v = 1; v <= cx.bounces; ++v) {
+    Vec3 ng = normalize(Vec3{h.hit.Ng_x, h.hit.Ng_y, h.hit.Ng_z});
+    if (dot(ng, dir) > 0) ng = -ng;
+    Rgb albedo, emission;
+    cx.surface_at(pos, albedo, emission);
+    const Vec3 o = pos + ng * eps;
+    const int pair0 = pair_base + (v - 1) * cx.path_stride;
+    const int count = cx.nee(o, ng, b.texel_seed, b.r, pair0, s, nr, nv);
+    cx.occluded(nr, count);
+    Rgb direct{};
+    for (int q = 0; q < count; ++q)
+      if (nr[q].tfar >= 0) direct += nv[q].value;
+    add(v, throughput * (emission + albedo * direct));
+    if (v == cx.bounces) break;
+    throughput = throughput * albedo;
+    if (throughput.r <= 0 && throughput.g <= 0 && throughput.b <= 0) break;
+    dir = reference::cosine_hemisphere(ng, cx.sequence(b.texel_seed, b.r, pair0 + cx.nee_pairs)(s));
+    h = make_rayhit(o, dir);
+    cx.intersect(&h, 1);
+    if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+    pos = o + dir * double(h.ray.tfar);
+  }
+}
+
 // Indirect: one path per primary ray that hit the surface (sc.hits, sc.dirs from trace_primary), with
 // next-event estimation at every vertex.
 void trace_paths(const TexelBatch& b, Scratch& sc) {
   const Context& cx = b.cx;
   const Channels& ch = cx.ch;
-  const double eps = cx.geometry.epsilon();
-  RTCRay nee_rays[64];
-  ShadowSample nee_values[64];
-  const int max_nee = 2 + cx.lights;
-  std::vector<RTCRay> big_rays;
-  std::vector<ShadowSample> big_values;
-  RTCRay* nr = nee_rays;
-  ShadowSample* nv = nee_values;
-  if (max_nee > 64) {
-    big_rays.resize(max_nee);
-    big_values.resize(max_nee);
-    nr = big_rays.data();
-    nv = big_values.data();
-  }
+  NeeBuffers nb(cx.lights);
   for (int k = 0; k < b.m; ++k) {
-    RTCRayHit h = sc.hits[k];
+    const RTCRayHit& h = sc.hits[k];
     if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-    const std::uint32_t s = b.c0 + k;
-    Rgb throughput{1, 1, 1};
-    Vec3 dir = sc.dirs[k];
-    Vec3 pos = vec(&h.ray.org_x) + dir * double(h.ray.tfar);
-    for (int v = 1; v <= cx.bounces; ++v) {
-      Vec3 ng = normalize(Vec3{h.hit.Ng_x, h.hit.Ng_y, h.hit.Ng_z});
-      if (dot(ng, dir) > 0) ng = -ng;
-      Rgb albedo, emission;
-      cx.surface_at(pos, albedo, emission);
-      const Vec3 o = pos + ng * eps;
-      const int pair0 = cx.pair_path + (v - 1) * cx.path_stride;
-      const int count = cx.nee(o, ng, b.texel_seed, b.r, pair0, s, nr, nv);
-      cx.occluded(nr, count);
-      Rgb direct{};
-      for (int q = 0; q < count; ++q)
-        if (nr[q].tfar >= 0) direct += nv[q].value;
-      const Rgb contribution = throughput * (emission + albedo * direct);
+    follow_path(b, h, sc.dirs[k], b.c0 + k, cx.pair_path, nb, [&](int v, Rgb contribution) {
       add_rgb(&b.sums[ch.bounce(v)], contribution);
       add_rgb(&b.sums[ch.indirect], contribution);
       add_rgb(&b.sums[ch.total], contribution);
-      if (v == cx.bounces) break;
-      throughput = throughput * albedo;
-      if (throughput.r <= 0 && throughput.g <= 0 && throughput.b <= 0) break;
-      dir = reference::cosine_hemisphere(ng, cx.sequence(b.texel_seed, b.r, pair0 + cx.nee_pairs)(s));
-      h = make_rayhit(o, dir);
-      cx.intersect(&h, 1);
-      if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-      pos = o + dir * double(h.ray.tfar);
+    });
+  }
+}
+
+// sh_irradiance's Monte Carlo terms (reference/sh_irradiance_reference.hpp): the terrain's radiance over the
+// upper hemisphere of the normal (uniform directions, pdf 1 / (2 pi), each hit continued as the indirect
+// layer's paths) and each light's disk (a uniform point of the disk, radiance E / (pi sin^2 alpha) times
+// the disk's solid angle), times Y_i, i < 9. Reads and overwrites sc.hits and sc.dirs.
+void trace_sh_irradiance(const TexelBatch& b, Scratch& sc) {
+  const Context& cx = b.cx;
+  double* sums = &b.sums[cx.ch.sh];
+  auto add = [&](Vec3 w, Rgb value) {
+    const auto y = reference::sh_basis(w);
+    for (int i = 0; i < 9; ++i) {
+      sums[i * 3] += value.r * y[i];
+      sums[i * 3 + 1] += value.g * y[i];
+      sums[i * 3 + 2] += value.b * y[i];
     }
+  };
+  if (cx.bounces > 0) {
+    const Sequence2 seq = cx.sequence(b.texel_seed, b.r, cx.pair_sh);
+    for (int k = 0; k < b.m; ++k) {
+      sc.dirs[k] = reference::uniform_hemisphere(b.frame, seq(b.c0 + k));
+      sc.hits[k] = make_rayhit(b.origin, sc.dirs[k]);
+    }
+    cx.intersect(sc.hits.data(), b.m);
+    NeeBuffers nb(cx.lights);
+    for (int k = 0; k < b.m; ++k) {
+      const RTCRayHit& h = sc.hits[k];
+      if (h.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+      Rgb radiance{};
+      follow_path(b, h, sc.dirs[k], b.c0 + k, cx.pair_sh_path, nb,
+                  [&](int, Rgb contribution) { radiance += contribution; });
+      add(sc.dirs[k], radiance * float(2 * kPi));
+    }
+  }
+  for (int l = 0; l < cx.lights; ++l) {
+    const DirectionalLight& light = cx.scene.lights[l];
+    const double alpha = 0.5 * light.angular_diameter;
+    const Sequence2 seq = cx.sequence(b.texel_seed, b.r, cx.pair_sh + 1 + l);
+    double scale = 1;  // E / (pi sin^2 alpha) x 2 pi (1 - cos alpha), per unit of E
+    double one_minus_cos = 0;
+    if (alpha > 0) {
+      const double s2 = std::sin(alpha / 2);
+      one_minus_cos = 2 * s2 * s2;
+      scale = 2 * one_minus_cos / (one_minus_cos * (2 - one_minus_cos));
+    }
+    for (int k = 0; k < b.m; ++k) {
+      sc.dirs[k] = alpha > 0 ? reference::uniform_cone(light.direction, one_minus_cos, seq(b.c0 + k))
+                             : light.direction;
+      sc.rays[k] = make_ray(b.origin, sc.dirs[k]);
+    }
+    cx.occluded(sc.rays.data(), b.m);
+    for (int k = 0; k < b.m; ++k)
+      if (sc.rays[k].tfar >= 0) add(sc.dirs[k], light.irradiance * float(scale));
   }
 }
 
@@ -420,6 +511,7 @@ void run_samples(const Context& cx, int i, int j, std::uint64_t texel_seed, int 
     if (cx.needs.vsky) trace_vsky(b, sc);
     if (cx.needs.direct) trace_direct(b, sc);
     if (paths) trace_paths(b, sc);
+    if (cx.needs.sh_irradiance) trace_sh_irradiance(b, sc);
   }
 }
 
@@ -465,6 +557,7 @@ Needs needs_of(const ReferenceOptions& options, int bounces) {
   needs.indirect = wants("indirect") || wants("total") || any_bounce;
   needs.direct = wants("direct") || wants("total");
   needs.bent_normal = wants("bent_normal");
+  needs.sh_irradiance = wants("sh_irradiance");
   return needs;
 }
 
@@ -481,6 +574,8 @@ nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& opt
                           {"environment", options.sh_environment ? "sh4" : "full"},
                           {"falloff", falloff_kind_name(options.falloff.kind)},
                           {"radius", options.falloff.radius}};
+  if (std::find(options.layers.begin(), options.layers.end(), "sh_irradiance") != options.layers.end())
+    setup["sh_irradiance_horizons"] = {{"azimuths", kShAzimuths}, {"bisections", kShIterations}};
   if (f.wrap == Wrap::repeat) {
     setup["repeat_tiles"] = options.repeat_tiles;
     setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width, f.height) * f.texel_size;
@@ -491,7 +586,8 @@ nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& opt
 }  // namespace
 
 std::vector<std::string> reference_layer_names(int bounces) {
-  std::vector<std::string> names = {"ao", "vsky", "obscurance", "direct", "indirect", "total", "bent_normal"};
+  std::vector<std::string> names = {"ao",       "vsky",  "obscurance",  "direct",
+                                    "indirect", "total", "bent_normal", "sh_irradiance"};
   for (int b = 1; b <= bounces; ++b) names.push_back("indirect_b" + std::to_string(b));
   return names;
 }
@@ -602,6 +698,10 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
 
   Context cx(scene, env, sampler, geometry, options, bounces);
   cx.needs = needs_of(options, bounces);
+  const reference::ShEnvironmentTable sh_table = cx.needs.sh_irradiance
+                                                     ? reference::make_sh_environment_table(env, kShAzimuths)
+                                                     : reference::ShEnvironmentTable{};
+  const double sh_lift = horizon_receiver_lift(f, geometry);
   if (options.falloff.kind != FalloffKind::none)
     cx.obscurance_tfar = float(std::min<double>(options.falloff.support(1e-6), 3.0e38));
 
@@ -628,6 +728,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   result.height = row1 - row0;
   std::vector<float*> value_data, stderr_data;
   auto channel_names = [](const Out& o) {
+    if (o.name == "sh_irradiance") return reference::sh_irradiance_channels();  // 48: band 3 written as 0
     return o.channels == 1 ? mono_channels() : o.name == "bent_normal" ? xyz_channels() : rgb_channels();
   };
   for (const Out& o : outs) value_data.push_back(result.add(o.name, channel_names(o)).data.data());
@@ -694,6 +795,8 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
     FlushDenormals ftz;
     Scratch scratch(cx.lights);
     ReplicateEstimate est(B, C);
+    std::vector<double> sh_elevation(cx.needs.sh_irradiance ? kShAzimuths : 0);
+    double sh_environment[reference::kShIrradianceSums] = {};
     const std::vector<double>& mean = est.mean;
     const std::vector<double>& se = est.se;
     for (std::size_t next = range.begin(); next != range.end(); ++next) {
@@ -727,7 +830,30 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
           }
           estimate(0, n);
           const std::size_t t = f.index(i, j - row0);
+          if (cx.needs.sh_irradiance) {
+            // Its environment term: no noise, from the texel's horizons.
+            std::fill(sh_environment, sh_environment + reference::kShIrradianceSums, 0.0);
+            const Vec3 o = f.position(i, j) + Vec3{0, 0, sh_lift};
+            for (int k = 0; k < kShAzimuths; ++k)
+              sh_elevation[std::size_t(k)] =
+                  bisect_horizon(geometry, o, sh_table.cos_phi[k], sh_table.sin_phi[k], kShIterations)
+                      .elevation;
+            reference::add_sh_environment_above(sh_table, sh_elevation.data(), sh_environment);
+          }
           for (std::size_t k = 0; k < outs.size(); ++k) {
+            if (outs[k].first == cx.ch.sh && outs[k].name == "sh_irradiance") {
+              // c_lm = (A_l / pi) L_lm for bands 0..2 (environment term + Monte Carlo terms), band 3 zero.
+              float* v = value_data[k] + t * 48;
+              float* e = stderr_data[k] + t * 48;
+              std::fill(v, v + 48, 0.0f);
+              std::fill(e, e + 48, 0.0f);
+              for (int q = 0; q < reference::kShIrradianceSums; ++q) {
+                const double a = reference::kShIrradianceScale[std::size_t(q / 3)];
+                v[q] = float(a * (mean[cx.ch.sh + q] + sh_environment[q]));
+                e[q] = float(a * se[cx.ch.sh + q]);
+              }
+              continue;
+            }
             // The bent normal is the unit mean of the unoccluded directions (zero where every ray was
             // blocked); its stderr is the components' divided by that mean's length.
             double scale = 1;

@@ -31,13 +31,16 @@ RTCRayHit ray_from(const Vec3& o, double c, double s, double e) {
 }  // namespace
 
 TexelHorizon bisect_horizon(const reference::EmbreeField& geometry, const Vec3& o, double c, double s,
-                            int iterations) {
+                            int iterations, double max_horizontal) {
   // lo: an occluded elevation (straight down always is), hi: a free one (straight up).
   double lo = -kPi / 2, hi = kPi / 2, lo_distance = 0;
+  const bool limited = max_horizontal < std::numeric_limits<double>::infinity();
   RTCIntersectContext context;
   for (int it = 0; it < iterations; ++it) {
     const double mid = 0.5 * (lo + hi);
     RTCRayHit h = ray_from(o, c, s, mid);
+    if (limited)  // the ray's length at which it is max_horizontal away horizontally
+      h.ray.tfar = float(std::min(max_horizontal / std::max(std::cos(mid), 1e-30), 3.0e38));
     rtcInitIntersectContext(&context);
     rtcIntersect1(geometry.scene(), &context, &h);
     if (h.hit.geomID != RTC_INVALID_GEOMETRY_ID) {

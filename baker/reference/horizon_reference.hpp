@@ -11,6 +11,7 @@
 // counts as terrain, so looking out over a border the horizon is the border's edge.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "core/layers.hpp"
@@ -31,11 +32,14 @@ class EmbreeField;
 
 // One receiver's horizon along the azimuth (c, s) (a unit vector in the xy-plane): the elevation in radians
 // after `iterations` halvings of [-pi/2, pi/2], and the distance to the hit of the highest occluded ray.
+// max_horizontal (world units): only surface within that horizontal distance counts (the rays end there): the
+// horizon within a search radius, as relief's. Straight down is occluded whatever the limit (the surface
+// under the receiver).
 struct TexelHorizon {
   double elevation = 0, distance = 0;
 };
 TexelHorizon bisect_horizon(const reference::EmbreeField& geometry, const Vec3& receiver, double c, double s,
-                            int iterations);
+                            int iterations, double max_horizontal = std::numeric_limits<double>::infinity());
 // The lift of a horizon receiver above its texel centre: max(1e-5 texel, the geometry's float floor).
 double horizon_receiver_lift(const HeightField& field, const reference::EmbreeField& geometry);
 

@@ -129,6 +129,12 @@ inline Vec3 uniform_upper_hemisphere(Point2 p) {
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
+// Uniform over the hemisphere around f.n: pdf 1 / (2 pi).
+inline Vec3 uniform_hemisphere(const Frame& f, Point2 p) {
+  const double z = p.u, r = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = 2 * kPi * p.v;
+  return f.t * (r * std::cos(phi)) + f.b * (r * std::sin(phi)) + f.n * z;
+}
+
 // Uniform over the cone of half-angle alpha around unit axis d; one_minus_cos = 1 - cos(alpha) (passed in
 // so tiny cones keep their precision). pdf 1 / (2 pi one_minus_cos).
 inline Vec3 uniform_cone(Vec3 d, double one_minus_cos, Point2 p) {

@@ -65,6 +65,23 @@ bool obscurance_comparable(const nlohmann::json& params, const LayerSet& referen
   return std::abs(r - rr) <= 1e-9 * std::max(1.0, std::abs(rr));
 }
 
+// relief's layers (svf, openness_*, horizon_deg) depend on its directions, search radius and azimuth
+// convention; the reference computes them for one relief entry and records its settings
+// ("hfbake:relief_reference"). Another entry's are a different quantity.
+bool relief_comparable(const nlohmann::json& params, const LayerSet& reference) {
+  nlohmann::json record;
+  for (const auto& [key, value] : reference.attributes)
+    if (key == "hfbake:relief_reference") record = nlohmann::json::parse(value, nullptr, false);
+  if (!record.is_object() || !params.is_object()) return false;
+  for (const char* key : {"directions", "search_radius", "azimuth_convention"})
+    if (!params.contains(key) || !record.contains(key) || params[key] != record[key]) return false;
+  return true;
+}
+
+bool is_relief_layer(const std::string& name) {
+  return name == "svf" || name == "openness_positive" || name == "openness_negative" || name == "horizon_deg";
+}
+
 }  // namespace
 
 nlohmann::json metrics_json(const LayerMetrics& m) {
@@ -120,7 +137,8 @@ ReportOutcome build_report(const ReportSpec& spec, const std::vector<ReportMetho
       for (const Layer& l : m.layers->layers) {
         const Layer* r = reference.find(l.name);
         if (!r || ends_with(l.name, "_stderr") || r->channel_count() != l.channel_count() ||
-            (l.name == "obscurance" && !obscurance_comparable(m.parameters, reference))) {
+            (l.name == "obscurance" && !obscurance_comparable(m.parameters, reference)) ||
+            (is_relief_layer(l.name) && !relief_comparable(m.parameters, reference))) {
           jm["not_compared"].push_back(l.name);
           continue;
         }

@@ -213,10 +213,25 @@ TEST_F(Nightly, SuiteWithABrokenMethodExitsOneAndFoldersCompare) {
 TEST_F(Nightly, NightlyJobsAreValid) {
   // jobs/nightly must keep validating as the method schemas evolve (it is what CI runs every night).
   // validate expands the suite into its jobs.
-  const fs::path suite = fs::path(HFBAKE_SOURCE_DIR) / "jobs" / "nightly" / "suite.json";
-  const Result r = hfbake("validate " + suite.string());
+  const fs::path nightly = fs::path(HFBAKE_SOURCE_DIR) / "jobs" / "nightly";
+  // The dem job reads a window of the lidar DEM beside the repository (../shared/data, through
+  // jobs/nightly/data/dem_400_300_160.vrt), which a checkout may not have: then the other jobs are validated
+  // one by one, saying so.
+  if (!fs::exists(fs::path(HFBAKE_SOURCE_DIR) / ".." / "shared" / "data" / "TM1_564_146.tif")) {
+    std::printf("../shared/data is not on this machine: validating the nightly jobs but dem.json\n");
+    std::string files;
+    int count = 0;
+    for (const auto& e : fs::directory_iterator(nightly / "fields"))
+      if (e.path().extension() == ".json" && e.path().filename() != "dem.json")
+        files += " " + e.path().string(), ++count;
+    EXPECT_EQ(count, 11);
+    const Result r = hfbake("validate" + files);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return;
+  }
+  const Result r = hfbake("validate " + (nightly / "suite.json").string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("suite of 11 jobs"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("suite of 12 jobs"), std::string::npos) << r.err;
 }
 
 // A baseline of another job (a wrong path in a nightly) must not pass as "ok: 0 regressed": hfbake compare

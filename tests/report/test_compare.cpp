@@ -232,5 +232,45 @@ TEST(Report, ObscurancesBakedWithOtherSettingsThanTheReferenceAreNotCompared) {
   }
 }
 
+TEST(Report, ReliefLayersAreComparedOnlyWithTheReferencesSettings) {
+  // The reference computed relief's quantities for 8 directions, radius 10, compass azimuths.
+  LayerSet reference;
+  reference.width = reference.height = 4;
+  reference.add("svf", mono_channels()).data.assign(16, 0.9f);
+  reference.attributes.emplace_back(
+      "hfbake:relief_reference",
+      R"({"directions": 8, "search_radius": 10.0, "azimuth_convention": "compass"})");
+  LayerSet method = reference;
+  method.attributes.clear();
+  method.find("svf")->data.assign(16, 0.8f);
+  const nlohmann::json same = {
+      {"method", "relief"}, {"directions", 8}, {"search_radius", 10.0}, {"azimuth_convention", "compass"}};
+  const std::vector<std::pair<nlohmann::json, bool>> cases = {
+      {same, true},
+      {{{"method", "relief"}, {"directions", 8}, {"search_radius", 10}, {"azimuth_convention", "compass"}},
+       true},  // an integer radius is the same number
+      {{{"method", "relief"}, {"directions", 16}, {"search_radius", 10.0}, {"azimuth_convention", "compass"}},
+       false},
+      {{{"method", "relief"}, {"directions", 8}, {"search_radius", 5.0}, {"azimuth_convention", "compass"}},
+       false},
+      {{{"method", "relief"}, {"directions", 8}, {"search_radius", 10.0}, {"azimuth_convention", "hfbake"}},
+       false},
+  };
+  for (const auto& [params, comparable] : cases) {
+    const ReportOutcome out =
+        build_report(ReportSpec{}, {{"relief", "relief", 1.0, params, &method}}, reference);
+    const nlohmann::json& m = out.doc["methods"]["relief"];
+    EXPECT_EQ(m["layers"].contains("svf"), comparable) << params.dump();
+    if (comparable) {
+      EXPECT_NEAR(m["layers"]["svf"]["mae"].get<double>(), 0.1, 1e-6);
+    }
+  }
+  // Without the record (a reference of another hfbake, or none traced): not compared.
+  reference.attributes.clear();
+  EXPECT_FALSE(build_report(ReportSpec{}, {{"relief", "relief", 1.0, same, &method}}, reference)
+                   .doc["methods"]["relief"]["layers"]
+                   .contains("svf"));
+}
+
 }  // namespace
 }  // namespace hfbake

@@ -1,0 +1,129 @@
+#include "reference/relief_reference.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "methods/relief/relief.hpp"
+#include "reference/embree_field.hpp"
+#include "reference/horizon_reference.hpp"
+
+namespace hfbake {
+namespace {
+
+constexpr double kDegPerRad = 180.0 / kPi;
+
+// The highest elevation within the radius along every direction, from every texel centre of f.
+void trace_up(const HeightField& f, const ReliefReferenceSettings& s, const RunControl& rc, int iterations,
+              std::vector<double>& out) {
+  const int K = s.directions;
+  out.assign(f.texel_count() * std::size_t(K), 0.0);
+  const reference::EmbreeField geometry(f, reference::GeometryKind::grid, 1);
+  std::vector<double> dx(static_cast<std::size_t>(K)), dy(static_cast<std::size_t>(K));
+  for (int k = 0; k < K; ++k) relief_direction(k, K, s.compass, dx[std::size_t(k)], dy[std::size_t(k)]);
+  const double lift = horizon_receiver_lift(f, geometry);
+  tbb::parallel_for(0, f.height, [&](int j) {
+    rc.check();
+    for (int i = 0; i < f.width; ++i) {
+      // A clamp border texel's receiver is nudged 1e-4 texel into the field: rays along the border then run
+      // over the surface, not along the skirt's plane (where Embree may let them through between the
+      // border's triangles and the skirt).
+      Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
+      if (f.wrap == Wrap::clamp) {
+        const double nudge = 1e-4 * f.texel_size;
+        if (i == 0) o.x += nudge;
+        if (i == f.width - 1) o.x -= nudge;
+        if (j == 0) o.y += nudge;
+        if (j == f.height - 1) o.y -= nudge;
+      }
+      for (int k = 0; k < K; ++k) {
+        const double x = dx[std::size_t(k)], y = dy[std::size_t(k)];
+        // A clamp border texel looking out of the field: no surface along the ray at all (the skirt is not
+        // surface), 0 as relief.
+        if (f.wrap == Wrap::clamp && ((i == 0 && x < -1e-9) || (i == f.width - 1 && x > 1e-9) ||
+                                      (j == 0 && y < -1e-9) || (j == f.height - 1 && y > 1e-9))) {
+          out[f.index(i, j) * K + k] = 0.0;
+          continue;
+        }
+        const double e =
+            bisect_horizon(geometry, o, dx[std::size_t(k)], dy[std::size_t(k)], iterations, s.search_radius)
+                .elevation;
+        out[f.index(i, j) * K + k] = e;
+      }
+    }
+  });
+}
+
+}  // namespace
+
+ReliefHorizons trace_relief_horizons(const HeightField& field, const ReliefReferenceSettings& s, bool down,
+                                     const RunControl& rc, int iterations) {
+  ReliefHorizons h;
+  trace_up(field, s, rc, iterations, h.up);
+  if (down) {
+    HeightField inverted = field;
+    for (float& z : inverted.z) z = -z;
+    trace_up(inverted, s, rc, iterations, h.down);
+    for (double& d : h.down) d = -d;
+  }
+  return h;
+}
+
+nlohmann::json relief_reference_record(const ReliefReferenceSettings& s) {
+  return {{"directions", s.directions},
+          {"search_radius", s.search_radius},
+          {"azimuth_convention", s.compass ? "compass" : "hfbake"}};
+}
+
+void add_reference_relief(const HeightField& field, const std::vector<const LayerSet*>& methods,
+                          LayerSet& reference, const RunControl& rc) {
+  static const char* const kLayers[] = {"svf", "openness_positive", "openness_negative", "horizon_deg"};
+  for (const char* l : kLayers)
+    if (reference.find(l)) return;
+  const LayerSet* relief = nullptr;
+  nlohmann::json params;
+  for (const LayerSet* m : methods) {
+    std::string method;
+    for (const auto& [key, value] : m->attributes) {
+      if (key == "hfbake:method") method = value;
+      if (key == "hfbake:parameters") params = nlohmann::json::parse(value, nullptr, false);
+    }
+    if (method == "relief" && params.is_object()) {
+      relief = m;
+      break;
+    }
+  }
+  if (!relief) return;
+  ReliefReferenceSettings s;
+  s.directions = params.value("directions", s.directions);
+  s.search_radius = params.value("search_radius", s.search_radius * field.texel_size);
+  s.compass = params.value("azimuth_convention", std::string("hfbake")) == "compass";
+  const int K = s.directions;
+  const ReliefHorizons h = trace_relief_horizons(field, s, relief->find("openness_negative") != nullptr, rc);
+  const std::size_t N = field.texel_count();
+  for (const char* name : kLayers) {
+    const Layer* ml = relief->find(name);
+    if (!ml) continue;
+    std::vector<float> data(N * std::size_t(ml->channel_count()));
+    for (std::size_t t = 0; t < N; ++t) {
+      double sum_sin = 0, sum_up = 0, sum_down = 0;
+      for (int k = 0; k < K; ++k) {
+        const double up = h.up[t * K + k];
+        sum_sin += std::sin(std::max(up, 0.0));
+        sum_up += up;
+        if (!h.down.empty()) sum_down += h.down[t * K + k];
+      }
+      const std::string n = name;
+      if (n == "svf") data[t] = float(1 - sum_sin / K);
+      if (n == "openness_positive") data[t] = float(90 - sum_up / K * kDegPerRad);
+      if (n == "openness_negative") data[t] = float(90 + sum_down / K * kDegPerRad);
+      if (n == "horizon_deg" && ml->channel_count() == K)
+        for (int k = 0; k < K; ++k) data[t * K + k] = float(h.up[t * K + k] * kDegPerRad);
+    }
+    reference.layers.push_back({name, ml->channels, std::move(data)});
+  }
+  reference.attributes.emplace_back(kReliefReferenceAttribute, relief_reference_record(s).dump());
+}
+
+}  // namespace hfbake
