@@ -19,7 +19,13 @@
 //               "brute": every visible band of those points; "near N": with near_radius N texels
 // lsao brute - own cols is the line offset (the sweep's lines pass up to one texel beside the texel, whose
 // result is blended from two of them), own cols - own tri the profile's missed kinks (row and diagonal
-// crossings), own tri the slab estimator's own error.
+// crossings), own tri the slab estimator's own error; "near R" must be 0 (the near field covers the radius:
+// hbao's integral exactly).
+// Measured (2026-12-02, rmse): rough lsao 0.061, brute 0.060, own cols 0.061, own tri 0.015 (so the kinks,
+// not the offset nor the hull); terraces 0.016 / 0.015 / 0.017 / 0.0025; fractal 0.0075 / 0.0062 / 0.0068 /
+// 0.0030. lsao tri near 4 (the default): rough 0.010, terraces 0.0062, fractal 0.0034, craters 0.0010; its
+// brute force at near 2: rough 0.012, fractal 0.0011, craters 0.0002 (the rest on gentle fields is the
+// hull's merging). hsao tri: rough 0.043 (bilinear 0.074), fractal 0.0026 (0.0088).
 #include <cmath>
 #include <cstdio>
 #include <cstring>
