@@ -27,6 +27,8 @@ TEST(AoSchemas, ValidEntries) {
           R"({"method": "hbao", "estimator": "largest_occluder", "tangent": -0.85, "occluders": "all", "radius": 4})",
           R"({"method": "hbao", "tangent": "normal", "steps": 64, "max_distance": 100, "layers": ["ao"]})",
           R"({"method": "hsao", "radius": 16, "falloff": "linear", "steps": 32, "normal_rays": 0})",
+          R"({"method": "hsao", "radius": 16, "surface": "triangles"})",
+          R"({"method": "hsao", "radius": 16, "surface": "bilinear", "steps": 8})",
           R"({"method": "vo", "radius": 8, "box_height": 4, "fade": 2, "depth_layers": 1})",
       }) {
     const auto v = check(nlohmann::json::parse(text));
@@ -47,6 +49,7 @@ TEST(AoSchemas, InvalidEntries) {
            Case{R"({"method": "hbao", "layers": ["horizon"]})", "/bake/0/layers/0"},
            Case{R"({"method": "hsao"})", "/bake/0"},
            Case{R"({"method": "hsao", "radius": 4, "falloff": "rational"})", "/bake/0/falloff"},
+           Case{R"({"method": "hsao", "radius": 4, "surface": "quads"})", "/bake/0/surface"},
            Case{R"({"method": "vo", "radius": 4, "depth_layers": 3})", "/bake/0/depth_layers"},
            Case{R"({"method": "vo", "radius": 4, "falloff": "step"})", "/bake/0"},
        }) {

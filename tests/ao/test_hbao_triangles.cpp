@@ -1,9 +1,5 @@
 // hbao on the reference's triangulated surface (surface "triangles", segment estimator) against independent
-// slice integrals of the same surface: the profile along each direction rebuilt here by sorting every
-// column, row and diagonal crossing and interpolating inside the containing triangle, then
-//   step falloff: the largest occluded elevation found by bisection (a ray at elevation e is occluded iff the
-//                 profile rises above it within horizontal distance R cos e);
-//   other falloffs: a dense midpoint rule over elevation, each ray's first hit found against every segment.
+// slice integrals of the same surface (ao_truth.hpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,91 +7,14 @@
 #include <limits>
 #include <vector>
 
-#include "../p1/p1_truth.hpp"
 #include "ao_scenes.hpp"
+#include "ao_truth.hpp"
 #include "field/procedural.hpp"
 #include "methods/ao/farfield.hpp"
 #include "methods/ao/hbao.hpp"
 
 namespace hfbake {
 namespace {
-
-struct Profile {
-  std::vector<double> t, z;  // horizontal distance (texels; t[0] = 0 the receiver) and height
-};
-
-// The reference's surface (two triangles per quad): truth::tri_height (tests/p1/p1_truth.hpp).
-using truth::tri_height;
-
-Profile profile(const HeightField& f, int i, int j, double dx, double dy, double reach) {
-  Profile p;
-  p.t = {0.0};
-  auto crossings = [&](double start, double d) {
-    if (std::abs(d) < 1e-12) return;
-    for (int k = 1;; ++k) {
-      const double tt = ((d > 0 ? std::floor(start) + k : std::ceil(start) - k) - start) / d;
-      if (tt > reach) break;
-      p.t.push_back(tt);
-    }
-  };
-  crossings(i, dx);
-  crossings(j, dy);
-  crossings(i + j, dx + dy);
-  p.t.push_back(reach);
-  std::sort(p.t.begin(), p.t.end());
-  p.t.erase(std::unique(p.t.begin(), p.t.end(), [](double a, double b) { return b - a < 1e-9; }), p.t.end());
-  for (double t : p.t) p.z.push_back(tri_height(f, i + t * dx, j + t * dy));
-  p.z[0] = f.z[f.index(i, j)];
-  return p;
-}
-
-// Cosine-weighted occluded measure of one slice (integral of rho w(e) over elevation), step falloff.
-double exact_step(const Profile& p, double nt, double nz, double R) {
-  auto H = [&](double S) {  // the highest slope of the profile within horizontal distance S
-    double h = -std::numeric_limits<double>::infinity();
-    for (std::size_t k = 1; k < p.t.size(); ++k) {
-      if (p.t[k] <= S) {
-        h = std::max(h, (p.z[k] - p.z[0]) / p.t[k]);
-      } else {
-        const double a = (S - p.t[k - 1]) / (p.t[k] - p.t[k - 1]);
-        if (S > 0) h = std::max(h, (p.z[k - 1] + a * (p.z[k] - p.z[k - 1]) - p.z[0]) / S);
-        break;
-      }
-    }
-    return h;
-  };
-  double lo = std::atan2(-nt, nz), hi = kPi / 2 - 1e-12;
-  const double tangent = lo;
-  if (H(R * std::cos(lo)) < std::tan(lo)) return 0.0;
-  for (int it = 0; it < 200 && hi - lo > 1e-13; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (H(R * std::cos(mid)) >= std::tan(mid) ? lo : hi) = mid;
-  }
-  // integral over [tangent, lo] of (nt cos e + nz sin e) cos e
-  auto P = [&](double e) { return nt * (e / 2 + std::sin(2 * e) / 4) + nz * std::sin(e) * std::sin(e) / 2; };
-  return P(lo) - P(tangent);
-}
-
-// Any falloff: midpoint rule over elevation, the first hit of each ray against every segment.
-double dense(const Profile& p, double nt, double nz, const Falloff& rho, int n) {
-  const double tangent = std::atan2(-nt, nz), h = (kPi / 2 - tangent) / n;
-  double sum = 0;
-  for (int q = 0; q < n; ++q) {
-    const double e = tangent + (q + 0.5) * h, c = std::cos(e), s = std::sin(e);
-    double d = INFINITY;
-    for (std::size_t k = 1; k < p.t.size() && !std::isfinite(d); ++k) {
-      // Ray (c, s) u against the segment from (t[k-1], dz[k-1]) to (t[k], dz[k]).
-      const double ah = p.t[k - 1], av = p.z[k - 1] - p.z[0], bh = p.t[k], bv = p.z[k] - p.z[0];
-      const double fa = av * c - ah * s, fb = bv * c - bh * s;  // > 0: above the ray
-      if (fb >= 0 && fa <= 0) {
-        const double w = fa == fb ? 0.0 : -fa / (fb - fa);
-        d = std::hypot(ah + w * (bh - ah), av + w * (bv - av));
-      }
-    }
-    if (std::isfinite(d)) sum += rho(d) * std::max(0.0, nt * c + nz * s) * c;
-  }
-  return sum * h;
-}
 
 struct Case {
   HeightField field;
@@ -114,15 +33,7 @@ Case fractal_case() {
 }
 
 double independent(const Case& c, int i, int j, int K, const Falloff& rho, double reach, bool step) {
-  const Vec3 n = c.normals[c.field.index(i, j)].d();
-  double sum = 0;
-  for (int k = 0; k < K; ++k) {
-    const double phi = 2 * kPi * k / K, dx = std::cos(phi), dy = std::sin(phi);
-    const Profile p = profile(c.field, i, j, dx, dy, reach);
-    const double nt = n.x * dx + n.y * dy;
-    sum += step ? exact_step(p, nt, n.z, rho.radius) : dense(p, nt, n.z, rho, 20000);
-  }
-  return 2 * sum / K;
+  return ao_truth::occluded(c.field, c.normals[c.field.index(i, j)].d(), i, j, K, rho, reach, step);
 }
 
 HbaoSettings triangles(int K, const Falloff& rho, double reach) {

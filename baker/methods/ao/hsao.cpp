@@ -11,6 +11,7 @@
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/obscurance_params.hpp"
 #include "methods/ao/slice_integral.hpp"
+#include "methods/ao/triangle_profile.hpp"
 
 namespace hfbake {
 namespace {
@@ -46,6 +47,8 @@ HsaoSums hsao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const H
 
   HsaoTexel out;
   Vec3 bent{0, 0, 0};
+  const bool triangles = s.surface == HsaoSurface::triangles;
+  const double ts = field.texel_size, z0 = field.z[field.index(i, j)];
   for (int d = d0; d < d1; ++d) {
     const double theta = 2 * kPi * d / s.directions;
     const Vec3 T = t1 * std::cos(theta) + t2 * std::sin(theta);
@@ -53,11 +56,9 @@ HsaoSums hsao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const H
     Vec3 h = T;
     double elev = 0, occl = 0;  // current horizon elevation above the tangent plane; 2 * band integrals
     SliceVec dir = open_direction(up, 0, kPi / 2);
-    for (int k = 1; k <= s.steps; ++k) {
-      const Vec3 q = p + h * (k * step);
-      if (!surf.inside(q.x, q.y)) break;
-      const double hq = surf.height(q.x, q.y);
-      if (!(q.z < hq)) continue;
+    // The march point q (on ray h) is below the surface, whose height there is hq: deflect the ray towards
+    // the surface point above q (or the highest point of its column within R). True when it deflected.
+    auto deflect = [&](const Vec3& q, double hq) {
       Vec3 v = Vec3{q.x, q.y, hq} - p;
       if (!(length(v) < R)) {
         // The surface point I is beyond R, but the terrain is a solid: the column between Q and I is
@@ -65,18 +66,51 @@ HsaoSums hsao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const H
         // paper's rule "deflect only if |I - P| < R", which stalls on a wall taller than R allows).
         const Vec3 qv = q - p;
         const double z2 = R * R - qv.x * qv.x - qv.y * qv.y;
-        if (!(dot(qv, qv) < R * R) || !(z2 > 0)) continue;
+        if (!(dot(qv, qv) < R * R) || !(z2 > 0)) return false;
         v = Vec3{qv.x, qv.y, std::sqrt(z2) * (1 - 1e-12)};
       }
       const double along = dot(v, T), up_n = dot(v, n);
-      if (!(along > 0)) continue;
+      if (!(along > 0)) return false;
       const double e = std::atan2(up_n, along);
-      if (!(e > elev)) continue;
+      if (!(e > elev)) return false;
       occl += 2 * band_occlusion(s.falloff, Weighting::cosine, up, elev, e, along);
       const SliceVec b = band_direction(s.falloff, up, elev, e, along);
       dir.h -= b.h, dir.v -= b.v;
       elev = e;
       h = normalize(T * along + n * up_n);
+      return true;
+    };
+    if (triangles) {
+      // Every vertex of the triangulated surface under the ray's ground track (triangle_profile.hpp): the
+      // surface and the ray are both linear between them, so the ray is below the surface somewhere iff it
+      // is at a vertex. After a deflection the new ray goes on from the same distance from p.
+      double searched = 0;                            // distance from p along the rays already searched
+      for (int turns = 0; turns < 100000; ++turns) {  // each turn raises elev (bounded: a guard only)
+        const double ground = std::hypot(h.x, h.y);   // horizontal run per unit of ray
+        if (!(ground > 1e-9)) break;
+        const double gx = h.x / ground, gy = h.y / ground;
+        const double t_begin = searched * ground / ts;
+        const double t_end = profile_end(field, i, j, gx, gy, R * ground / ts);
+        if (!(t_end > t_begin)) break;
+        bool deflected = false;
+        triangle_profile_span(field, i, j, gx, gy, t_begin, t_end, [&](double t, double z) {
+          const double run = t * ts, along_ray = run / ground;
+          const Vec3 q = p + h * along_ray;
+          if (!(q.z < z) || !deflect(q, z)) return true;
+          searched = along_ray;
+          deflected = true;
+          return false;
+        });
+        if (!deflected) break;
+      }
+    } else {
+      for (int k = 1; k <= s.steps; ++k) {
+        const Vec3 q = p + h * (k * step);
+        if (!surf.inside(q.x, q.y)) break;
+        const double hq = surf.height(q.x, q.y);
+        if (!(q.z < hq)) continue;
+        deflect(q, hq);
+      }
     }
     out.horizon_occlusion += occl / s.directions;
     bent += T * dir.h + n * dir.v;
@@ -85,6 +119,26 @@ HsaoSums hsao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const H
     for (int r = 0; r < s.normal_rays; ++r) {
       const double z2 = H2 + (r + 0.5) * (1 - H2) / s.normal_rays;
       const Vec3 ray = T * std::sqrt(std::max(0.0, 1 - z2)) + n * std::sqrt(z2);
+      if (triangles) {
+        // The first vertex above the ray; the hit lies on the straight piece before it.
+        const double ground = std::hypot(ray.x, ray.y);
+        if (!(ground > 1e-9)) continue;
+        const double gx = ray.x / ground, gy = ray.y / ground;
+        const double t_end = profile_end(field, i, j, gx, gy, R * ground / ts);
+        if (!(t_end > 0)) continue;
+        double t0 = 0, gap0 = z0 - p.z;  // the previous vertex and the surface minus the ray there
+        triangle_profile_span(field, i, j, gx, gy, 0.0, t_end, [&](double t, double z) {
+          const double gap = z - (p.z + ray.z * (t * ts / ground));
+          if (gap > 0) {
+            const double th = t0 + (t - t0) * (-gap0 / (gap - gap0));
+            out.normal_occlusion += (1 - H2) * s.falloff(th * ts / ground) / (s.normal_rays * s.directions);
+            return false;
+          }
+          t0 = t, gap0 = gap;
+          return true;
+        });
+        continue;
+      }
       for (int k = 1; k <= s.steps; ++k) {
         const Vec3 q = p + ray * (k * step);
         if (!surf.inside(q.x, q.y)) break;
@@ -161,6 +215,14 @@ HsaoSettings read_hsao_settings(Params& in, const FieldShape& field) {
       s.falloff.kind != FalloffKind::smooth)
     in.fail("falloff", "hsao searches within the radius: use \"step\", \"linear\" or \"smooth\"");
   s.directions = in.integer("directions", 16, 1, 4096);
+  // The reference's triangulated surface by default (as hbao); a march given its steps is the stepped
+  // bilinear one.
+  const bool stepped = in.has("steps");
+  const bool triangles =
+      in.choice("surface", stepped ? "bilinear" : "triangles", {"bilinear", "triangles"}) == "triangles";
+  s.surface = triangles ? HsaoSurface::triangles : HsaoSurface::bilinear;
+  if (triangles && stepped)
+    in.fail("surface", "\"triangles\" visits every vertex under each ray: no \"steps\"");
   s.steps = in.integer(
       "steps", std::max(1, int(std::min(65536.0, std::ceil(s.falloff.radius / field.texel_size)))), 1, 65536);
   s.normal_rays = in.integer("normal_rays", 2, 0, 64);

@@ -15,6 +15,13 @@
 // digest 4.1 / errata 7), each marched N_s steps to R and weighing (1 - H_i^2) rho(d) / N_n. On a height
 // field with n = up the (n, T) planes are vertical slices without overhangs: every ray above the exact slice
 // horizon is open, so the sampled term is zero up to the horizon search's sampling.
+// Surface (HsaoSurface; issue 19 item 3): the paper's march samples a depth buffer at N_s steps; on a height
+// field the bilinear surface between steps misses the triangulated surface's peaks (rough nightly field:
+// +6.9 % too open against the Embree reference). `triangles` (the job's default) tests every ray at every
+// vertex of the triangulated surface under its ground track (triangle_profile_span), where ray and surface,
+// both linear between vertices, are compared exactly; a deflected horizon ray resumes at the same distance
+// from the receiver, and a normal ray's hit is where the surface crosses it on the piece before the first
+// vertex above it.
 #pragma once
 
 #include <vector>
@@ -28,10 +35,17 @@
 
 namespace hfbake {
 
+// Where the rays are tested against the terrain: at N_s equal steps on the bilinear surface (the paper's
+// depth-buffer march), or at every vertex of the reference's triangulated surface under the ray's ground
+// track (triangle_profile.hpp: every column, row and diagonal crossing), where the ray and the surface,
+// both linear between vertices, are exactly compared.
+enum class HsaoSurface { bilinear, triangles };
+
 struct HsaoSettings {
   Falloff falloff;  // step (binary R), linear or smooth; falloff.radius = R (world units)
   int directions = 16;
-  int steps = 32;
+  HsaoSurface surface = HsaoSurface::bilinear;  // the job's default: triangles (read_hsao_settings)
+  int steps = 32;                               // bilinear only
   int normal_rays = 2;
 };
 

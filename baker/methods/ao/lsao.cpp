@@ -6,14 +6,55 @@
 
 #include "core/azimuth.hpp"
 #include "core/direction_blocks.hpp"
+#include "field/triangulation.hpp"
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/lsao_chain_hull.hpp"
 #include "methods/ao/obscurance_params.hpp"
 #include "methods/ao/slice_integral.hpp"
+#include "methods/ao/triangle_profile.hpp"
 #include "sweep/sweep_lines.hpp"
 
 namespace hfbake {
 namespace {
+
+// The vertices of the triangulated surface (field/triangulation.hpp) on the segment between two consecutive
+// line samples A = (xa, ya) and B (one column or row apart): where it crosses a row, a column or a quad's
+// diagonal (x + y integer), strictly between them, as visit(w, height) in increasing w (A + w (B - A)).
+// The samples themselves lie on cell edges, where the triangulated and bilinear surfaces agree.
+template <class Visit>
+void line_crossings(const HeightField& f, double xa, double ya, double xb, double yb, Visit&& visit) {
+  double w[6], x[6], y[6];
+  int count = 0;
+  // Family g(x, y) = cx x + cy y: every integer m strictly between g(A) and g(B).
+  auto family = [&](double cx, double cy) {
+    const double ga = cx * xa + cy * ya, gb = cx * xb + cy * yb;
+    const double lo = std::min(ga, gb), hi = std::max(ga, gb);
+    for (double m = std::floor(lo) + 1; m < hi && count < 6; m += 1) {
+      const double t = (m - ga) / (gb - ga);
+      if (!(t > 1e-9 && t < 1 - 1e-9)) continue;
+      w[count] = t;
+      // Exactly on the family's line.
+      x[count] = cy == 0 ? m : xa + t * (xb - xa);
+      y[count] = cx == 0 ? m : cy != 0 && cx != 0 ? m - x[count] : ya + t * (yb - ya);
+      ++count;
+    }
+  };
+  family(1, 0);
+  family(0, 1);
+  family(1, 1);
+  for (int a = 1; a < count; ++a)  // insertion sort by w (at most a few)
+    for (int b = a; b > 0 && w[b] < w[b - 1]; --b) {
+      std::swap(w[b], w[b - 1]);
+      std::swap(x[b], x[b - 1]);
+      std::swap(y[b], y[b - 1]);
+    }
+  for (int c = 0; c < count; ++c) {
+    const double fx = std::floor(x[c]), fy = std::floor(y[c]);
+    const int ii = int(fx), jj = int(fy);
+    visit(w[c],
+          facet_height(x[c] - fx, y[c] - fy, [&](int di, int dj) { return double(f.at(ii + di, jj + dj)); }));
+  }
+}
 
 // Per receiver sample, two channels: the value for the texel centre below the sample on its column
 // (channel 0, floor v) and for the one above (channel 1, floor v + 1), each at the texel's own height and
@@ -61,31 +102,96 @@ struct LsaoWorker {
                : normal_at(*field, int(ti % std::size_t(field->width)), int(ti / std::size_t(field->width)));
   }
 
+  // The near field of texel ti (LsaoOptions::near_radius): its own ray towards the line's azimuth over
+  // every column, row and diagonal crossing of the triangulated surface up to `near` texels (the field's
+  // border on clamp fields), each vertex a band of the chain at its own distance.
+  void near_field(std::size_t ti, double near, TangentChain& chain) const {
+    const HeightField& fd = *field;
+    const int i = int(ti % std::size_t(fd.width)), j = int(ti / std::size_t(fd.width));
+    const double dx = line_dx, dy = line_dy, ts = fd.texel_size, z0 = double(fd.z[ti]);
+    const double t_end = profile_end(fd, i, j, dx, dy, near);
+    if (t_end > 1e-9)
+      triangle_profile(fd, i, j, dx, dy, t_end,
+                       [&](double t, double z) { chain.add(t * ts, z - z0, t * ts); });
+  }
+  double line_dx = 1, line_dy = 0;  // the current line's unit direction towards its azimuth
+
+  // The line's terrain points (receiver tangent), walk order; group: count + 1 entries (see receiver_line).
+  std::vector<ChainPoint> points;
+  std::vector<int> group;
+  void line_points(const SweepLine& line, bool crossings) {
+    points.clear();
+    group.clear();
+    points.reserve(std::size_t(crossings ? 4 : 1) * std::size_t(line.count));
+    group.reserve(std::size_t(line.count) + 1);
+    for (int n = 0; n < line.count; ++n) {
+      group.push_back(int(points.size()));
+      if (!line.is_terrain(n)) continue;
+      if (crossings && n > 0 && line.is_terrain(n - 1))
+        line_crossings(*field, line.x(n - 1), line.y(n - 1), line.x(n), line.y(n), [&](double w, double z) {
+          points.push_back({line.s(n - 1) + w * line.step, z, 0, 0, 0, n});
+        });
+      const double s = line.s(n), z = double(line.z[n]);
+      points.push_back({s, z, s, z, z, n});
+    }
+    group.push_back(int(points.size()));
+  }
+
   // LsaoTangent::receiver (lsao_chain_hull.hpp): every texel a receiver at its own height and tangent.
   void receiver_line(const SweepLine& line, float* out) {
+    line_dx = line.dir->dx, line_dy = line.dir->dy;
     const OcclusionFunction& f = options->occlusion;
     const int C = bent ? 6 : 2;
     const bool use_brute = options->estimator != LsaoEstimator::hull;
     const Weighting weighting =
         f.weighting == ObscuranceWeighting::cosine ? Weighting::cosine : Weighting::uniform;
     const double support = f.rho.support(1e-4), tol = options->rho_tolerance;
+    // The near field (texels): marched from each texel itself; the hull's points nearer than it left out.
+    const double near = std::min(options->near_radius, support / field->texel_size);
+    const double near_world = near > 0 ? near * field->texel_size : 0.0;
+    // The line's terrain points in walk order: its samples and (surface triangles) the crossings between
+    // them; group[n]: the first point of sample n's group (the crossings before it, then itself).
+    const bool triangles = options->surface == LsaoSurface::triangles;
+    line_points(line, triangles);
+    // The hull's merge test compares rho at the points it merges. A step is flat inside R, so it merged
+    // every point there, and the chain lost the points near R that a receiver farther on still has inside
+    // it (measured: most of the hull's error with segments). With triangles it is judged on the linear
+    // falloff of the same radius: merged points then lie within `tol` R of each other.
+    const Falloff merge_rho =
+        triangles && f.rho.kind == FalloffKind::step ? Falloff{FalloffKind::linear, f.rho.radius} : f.rho;
     // Falloffs that end: the hull holds the current block of W samples, `window` the previous one.
-    const int W = use_brute ? 0 : chain_window(f.rho, line.step);
+    // With segments the window reaches two samples beyond the support (the segment that crosses it).
+    const int W =
+        use_brute
+            ? 0
+            : chain_window(triangles ? Falloff{f.rho.kind, f.rho.radius + 2 * line.step} : f.rho, line.step);
+    const std::size_t cap = points.size();
     chain_hull.clear();
-    chain_hull.reserve(std::size_t(W > 0 ? std::min(W, line.count) : line.count));
+    chain_hull.reserve(W > 0 ? std::min(cap, std::size_t(group[std::min(W, line.count)])) : cap);
     window.clear();
-    window.reserve(std::size_t(W > 0 ? std::min(W, line.count) : 0));
+    window.reserve(W > 0 ? std::min(cap, std::size_t(group[std::min(W, line.count)])) : 0);
     terrain.clear();
-    if (use_brute) terrain.reserve(std::size_t(line.count));
+    if (use_brute) terrain.reserve(cap);
     std::uint64_t tests = 0;
     for (int n = 0; n < line.count; ++n) {
       const SlicePoint p{line.s(n), double(line.z[n])};
+      double z_low = p.z;  // the lowest receiver at this sample
       if (W > 0) {
         if (n > 0 && n % W == 0) {  // a new block: the one before becomes the window's far part
-          window.build(line.z, n - W, n, line.inside_begin, line.inside_end, line.step, f.rho, tol);
+          window.build(points.data() + group[n - W], std::size_t(group[n] - group[n - W]), p.s, merge_rho,
+                       tol);
           chain_hull.clear();
         }
         window.drop_before(n - W);
+      }
+      // The crossings between sample n - 1 and n: behind receiver n.
+      const int crossings_end = group[n + 1] - (line.is_terrain(n) ? 1 : 0);
+      for (int q = group[n]; q < crossings_end; ++q) {
+        const SlicePoint c{points[std::size_t(q)].s, points[std::size_t(q)].z};
+        if (use_brute)
+          terrain.push_back(c);
+        else
+          chain_hull.push(c);
       }
       if (n >= line.first_receiver) {
         float* o = out + C * (n - line.first_receiver);
@@ -103,14 +209,17 @@ struct LsaoWorker {
           // The texel's height carried to the line along its own tangent plane (as the fixed tangent does).
           const double minor_slope = -(line.dir->x_major ? nv.y : nv.x) / nv.z * field->texel_size;
           const SlicePoint t{p.s, double(field->z[ti]) + (c == 0 ? frac : frac - 1.0) * minor_slope};
+          z_low = std::min(z_low, t.z);
           const SliceFrame frame = slice_frame(nv.x * line.dir->dx + nv.y * line.dir->dy, nv.z);
           TangentChain chain(f.rho, weighting, frame);
           chain.want_direction = bent;
+          chain.segments = triangles;
+          if (near > 0) near_field(ti, near, chain);
           if (use_brute) {
-            brute_chain(terrain.data(), terrain.size(), t, chain);
+            brute_chain(terrain.data(), terrain.size(), t, chain, near_world);
           } else {
-            chain_hull.query(t, support, chain);
-            window.query(t, support, chain);  // farther than the whole current block
+            chain_hull.query(t, support, chain, near_world);
+            window.query(t, support, chain, near_world);  // farther than the whole current block
           }
           // The cosine measure scales with the normal's length in the slice (slice_integral.hpp).
           o[c] = float(weighting == Weighting::cosine ? chain.length * chain.sum : chain.sum);
@@ -123,7 +232,9 @@ struct LsaoWorker {
           }
         }
       }
-      if (!use_brute) tests += chain_hull.prune(p, f.rho, tol);
+      // Merges are judged from the lowest of the sample and its receivers (a point hidden seen from a
+      // height is hidden from every point above it, not below).
+      if (!use_brute) tests += chain_hull.prune(triangles ? SlicePoint{p.s, z_low} : p, merge_rho, tol);
       if (line.is_terrain(n)) {
         if (use_brute)
           terrain.push_back(p);
@@ -345,6 +456,16 @@ LsaoOptions read_lsao_options(Params& in) {
     o.tangent = LsaoTangent::fixed;
     o.occlusion.sin_t = tangent.get<double>();
     in.resolve("tangent", o.occlusion.sin_t);
+  }
+  // The receiver tangent's surface: the triangulated one by default (the crossings between the lines'
+  // samples, segments, and a near field marched from each texel); "bilinear": the line samples alone, as
+  // before issue 19's surface work, bit for bit.
+  for (const char* key : {"surface", "near_radius"})
+    if (in.has(key) && o.tangent != LsaoTangent::receiver) in.fail(key, "applies only to tangent \"normal\"");
+  if (o.tangent == LsaoTangent::receiver) {
+    const bool triangles = in.choice("surface", "triangles", {"bilinear", "triangles"}) == "triangles";
+    o.surface = triangles ? LsaoSurface::triangles : LsaoSurface::bilinear;
+    o.near_radius = in.number("near_radius", triangles ? kLsaoNearRadius : 0.0, 0, 64);
   }
   o.directions = in.integer("directions", 16, 1, 4096);
   in.layers({"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});

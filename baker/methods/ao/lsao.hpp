@@ -12,6 +12,17 @@
 // Sampling: the sweep's lines step one texel column (row) at a time and interpolate heights along that column
 // only, so axis and diagonal directions sample texel centres exactly (P3 §5.2's box pattern for K = 8, n = 1)
 // and other directions interpolate between two texels of one column.
+// Surface (receiver tangent, LsaoSurface; issue 19 item 3): the column samples lie on cell edges of the
+// reference's triangulated surface, but its kinks between them (row and diagonal crossings) are not samples,
+// and on rough ground they carry most of the peaks. Measured against hbao on the triangulated surface (the
+// exact slice integral), nightly fields, K = 16, step R = 8 (tests/ao/bench_lsao_surface.cpp): each texel's
+// own ray over the column crossings only is as far off as the sweep (rmse 0.061 rough, 0.017 terraces), and
+// over every crossing 4x closer (0.015, 0.0025, slab estimator): the missed kinks, not the line offset nor
+// the hull, were the excess. With `triangles` (default) the line's hull also holds those crossings
+// (line_crossings: heights from field/triangulation.hpp), a rising point's band meets the segment from the
+// point before it (TangentChain::segments) and each texel marches its own ray over every crossing up to
+// near_radius texels (triangle_profile.hpp), where the line's offset from the texel matters most; its
+// cost per texel-direction is fixed whatever the radius. `bilinear`: the column samples alone, as before.
 //
 // Output: obscurance = 1 - clamp(mean_k value_k, 0, 1) (P3 leaves the mapping open, digest §9.1). With
 // cosine weighting and rho = 1 this converges to the contract's cosine-weighted AO (fixed tangent: of an
@@ -43,11 +54,23 @@ enum class LsaoTangent {
              // that misses gentle terrain's occlusion; with falloff none and -1 the exact horizon AO)
 };
 
+// What a line's hull holds (receiver tangent): its samples (one per column, on the cell edges) alone, or
+// also every vertex of the triangulated surface between them (where it crosses a row or a quad's diagonal:
+// the kinks the samples miss, which on rough ground hide most of the peaks; tests/ao/bench_lsao_surface).
+enum class LsaoSurface { bilinear, triangles };
+
+// The job's default near radius (texels) with surface triangles (measured: tests/ao/bench_lsao_surface).
+inline constexpr double kLsaoNearRadius = 4;
+
 struct LsaoOptions {
   int directions = 16;          // K
   OcclusionFunction occlusion;  // falloff, weighting; sin_t: the fixed tangent (LsaoTangent::fixed)
   LsaoTangent tangent = LsaoTangent::receiver;
   double rho_tolerance = 0.1;  // receiver: the chain hull's merge tolerance in rho (lsao_chain_hull.hpp)
+  // receiver: texels (0: none) within which each texel marches its own ray over the triangulated surface
+  // (triangle_profile.hpp) instead of reading the line's hull (see the file comment).
+  double near_radius = kLsaoNearRadius;
+  LsaoSurface surface = LsaoSurface::triangles;  // receiver only
   LsaoEstimator estimator = LsaoEstimator::hull;
   int wrap_periods = 1;  // repeat fields: warm-up periods of the sweep
   // true: each texel is a receiver at its own height (LsaoTangent::receiver always is) (the line's hull

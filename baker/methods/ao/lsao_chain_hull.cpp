@@ -51,15 +51,27 @@ double chain_band(const Falloff& rho, Weighting w, const SliceFrame& s, double a
 }  // namespace
 
 void TangentChain::add(double hs, double hz, double x) {
+  const SliceVec from = prev, at{hs, hz};
+  prev = at;
   if (!(hz > slope_max * hs)) return;
   const double e = std::atan2(hz, hs);
   if (!(e > e_max)) return;  // rounding at the same elevation
   // The band's rays meet a vertical slab at horizontal distance x (hbao's slab estimator, exact for the
-  // falloff); the cosine measure doubled.
-  const double c = chain_band(rho, weighting, frame, e_max, e, x);
+  // falloff), or the segment from the previous point; the cosine measure doubled.
+  const bool exact = segments && (rho.kind == FalloffKind::none || rho.kind == FalloffKind::step);
+  if (segments && !exact) {
+    // The slab moved to where the band's middle ray meets the segment (within it).
+    const double em = 0.5 * (std::max(e_max, frame.tangent) + e), ce = std::cos(em), se = std::sin(em);
+    const double dh = at.h - from.h, dv = at.v - from.v, den = ce * dv - se * dh;
+    const double t = den > 0 ? (from.h * dv - from.v * dh) / den * ce : at.h;
+    x = std::clamp(t, from.h, at.h);
+  }
+  const double c = exact ? segment_band_occlusion(rho, weighting, frame, e_max, e, from, at)
+                         : chain_band(rho, weighting, frame, e_max, e, x);
   sum += weighting == Weighting::cosine ? 2 * c : c;
   if (want_direction) {
-    const SliceVec b = band_direction(rho, frame, e_max, e, x);
+    const SliceVec b = exact ? segment_band_direction(rho, frame, e_max, e, from, at)
+                             : band_direction(rho, frame, e_max, e, x);
     direction.h += b.h, direction.v += b.v;
   }
   e_max = e;
@@ -81,16 +93,23 @@ void merge(ChainPoint& b, const ChainPoint& a) {
 
 // Walks points[0], points[stride], ... (nearest first, `count` of them) for receiver p; zmax_of(k): the
 // highest height of point k and everything after it.
+// Points (and merged near ends) nearer than `near` are left out: the caller has marched them.
 template <class ZMax>
 void walk(const ChainPoint* points, std::ptrdiff_t count, std::ptrdiff_t stride, SlicePoint p, double support,
-          TangentChain& chain, const ZMax& zmax_of) {
+          double near, TangentChain& chain, const ZMax& zmax_of) {
   for (std::ptrdiff_t k = 0; k < count; ++k) {
     const ChainPoint& q = points[k * stride];
     // Nothing from here on is nearer than q's near end nor higher than zmax: stop when that cannot rise.
     const double nearest = p.s - q.near_s;
-    if (nearest > support || !(zmax_of(k) - p.z > chain.slope_max * nearest)) break;
+    if (!(zmax_of(k) - p.z > chain.slope_max * nearest)) break;
     const double hs = p.s - q.s;
-    if (q.near_s > q.s) {
+    if (nearest > support) {
+      // With segments the first point beyond the support ends the segment that crosses it.
+      if (chain.segments && hs >= near) chain.add(nearest, q.near_z - p.z, nearest);
+      break;
+    }
+    if (hs < near) continue;
+    if (q.near_s > q.s && nearest >= near) {
       const double e_before = chain.e_max;
       chain.add(nearest, q.near_z - p.z, nearest);
       // A rising merged stretch is counted at its middle; otherwise the rays meet q's own face.
@@ -117,10 +136,10 @@ std::size_t ChainHull::prune(SlicePoint p, const Falloff& rho, double tolerance)
   return tests;
 }
 
-void ChainHull::query(SlicePoint p, double support, TangentChain& chain) const {
+void ChainHull::query(SlicePoint p, double support, TangentChain& chain, double near) const {
   if (stack_.empty()) return;
   const ChainPoint* top = &stack_.back();
-  walk(top, std::ptrdiff_t(stack_.size()), -1, p, support, chain,
+  walk(top, std::ptrdiff_t(stack_.size()), -1, p, support, near, chain,
        [&](std::ptrdiff_t k) { return top[-k].zmax; });
 }
 
@@ -136,13 +155,12 @@ void WindowHull::clear() {
   pops_.clear();
 }
 
-void WindowHull::build(const float* z, int begin, int end, int inside_begin, int inside_end, double step,
-                       const Falloff& rho, double tolerance) {
+void WindowHull::build(const ChainPoint* points, std::size_t count, double s_end, const Falloff& rho,
+                       double tolerance) {
   clear();
-  const double s_end = end * step;
-  for (int i = std::min(end, inside_end); i-- > std::max(begin, inside_begin);) {
-    const double zi = double(z[i]);
-    ChainPoint q{i * step, zi, i * step, zi, zi, i};
+  for (std::size_t k = count; k-- > 0;) {
+    const double si = points[k].s, zi = points[k].z;
+    ChainPoint q{si, zi, si, zi, zi, points[k].index};
     // zmax: the running maximum over the insertions (the back vertex is always the latest insertion).
     const double before = hull_.empty() ? zi : hull_.back().zmax;
     // Extended on the left: the leftmost vertex a merges into q when it lies on or below the segment from q
@@ -176,16 +194,17 @@ void WindowHull::drop_before(int first) {
   }
 }
 
-void WindowHull::query(SlicePoint p, double support, TangentChain& chain) const {
+void WindowHull::query(SlicePoint p, double support, TangentChain& chain, double near) const {
   if (hull_.empty()) return;
   // The last insertion's zmax covers every vertex left.
   const double zmax = hull_.back().zmax;
-  walk(hull_.data(), std::ptrdiff_t(hull_.size()), 1, p, support, chain,
+  walk(hull_.data(), std::ptrdiff_t(hull_.size()), 1, p, support, near, chain,
        [&](std::ptrdiff_t) { return zmax; });
 }
 
-void brute_chain(const SlicePoint* pts, std::size_t count, SlicePoint p, TangentChain& chain) {
-  for (std::size_t q = count; q-- > 0;) chain.add(p.s - pts[q].s, pts[q].z - p.z, p.s - pts[q].s);
+void brute_chain(const SlicePoint* pts, std::size_t count, SlicePoint p, TangentChain& chain, double near) {
+  for (std::size_t q = count; q-- > 0;)
+    if (p.s - pts[q].s >= near) chain.add(p.s - pts[q].s, pts[q].z - p.z, p.s - pts[q].s);
 }
 
 }  // namespace hfbake

@@ -58,6 +58,14 @@ struct TangentChain {
   SliceVec direction;           // that sum, for the unit in-slice normal (bent normals)
 
   // `slice`: the receiver's normal in the slice (n.D, n.z), any positive length.
+  // Segments (when set): a rising point's band meets the straight piece of profile from the point added
+  // before it (the receiver first) instead of a vertical slab at x. Falloffs none and step:
+  // segment_band_occlusion's closed form, exact when the points are the profile's consecutive vertices (as
+  // hbao's segment estimator); other falloffs (whose segment integral needs Gauss-Legendre): the slab's
+  // closed form at the horizontal distance where the band's middle ray meets the segment.
+  bool segments = false;
+  SliceVec prev;  // the point added last, relative to the receiver
+
   TangentChain(const Falloff& f, Weighting w, const SliceFrame& slice);
   // A point at (hs > 0, hz) from the receiver standing for the profile's stretch at horizontal distances
   // around x: adds the band from the chain's elevation up to its own, if it rises above it.
@@ -86,8 +94,9 @@ class ChainHull {
     stack_.push_back({p.s, p.z, p.s, p.z, std::max(below, p.z), 0});
   }
   std::size_t size() const { return stack_.size(); }
-  // Adds the chain of receiver p (not necessarily a sample), without popping; support: the falloff's.
-  void query(SlicePoint p, double support, TangentChain& chain) const;
+  // Adds the chain of receiver p (not necessarily a sample), without popping; support: the falloff's. Points
+  // nearer than `near` (world units along the line) are left out (lsao's near field marched them).
+  void query(SlicePoint p, double support, TangentChain& chain, double near = 0) const;
 
  private:
   std::vector<ChainPoint> stack_;
@@ -98,12 +107,11 @@ class WindowHull {
  public:
   void reserve(std::size_t n);
   void clear();
-  // Builds the hull of the line's samples [begin, end) that are terrain (in [inside_begin, inside_end));
-  // sample i at s = i * step, height z[i]; merges judged from the nearest receiver (s = end * step).
-  void build(const float* z, int begin, int end, int inside_begin, int inside_end, double step,
-             const Falloff& rho, double tolerance);
+  // Builds the hull of the block's terrain points[0..count) (walk order: s increasing; index: the sample
+  // whose group the point belongs to, for drop_before); merges judged from the nearest receiver at s_end.
+  void build(const ChainPoint* points, std::size_t count, double s_end, const Falloff& rho, double tolerance);
   void drop_before(int first);  // undoes the samples before the window's start
-  void query(SlicePoint p, double support, TangentChain& chain) const;
+  void query(SlicePoint p, double support, TangentChain& chain, double near = 0) const;
 
  private:
   std::vector<ChainPoint> hull_;    // right to left: hull_[0] the block's last terrain sample
@@ -113,7 +121,8 @@ class WindowHull {
 
 // Brute force for receiver p over every earlier sample pts[0..count) (in walk order): the band sum over
 // every visible sample, each at its own distance (what the hull's chain approximates). O(M): tests and
-// measurements.
-void brute_chain(const SlicePoint* pts, std::size_t count, SlicePoint p, TangentChain& chain);
+// measurements. Samples nearer than `near` are left out (as ChainHull::query).
+void brute_chain(const SlicePoint* pts, std::size_t count, SlicePoint p, TangentChain& chain,
+                 double near = 0);
 
 }  // namespace hfbake

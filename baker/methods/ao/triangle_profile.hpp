@@ -24,19 +24,29 @@ inline double profile_end(const HeightField& f, int i, int j, double dx, double 
 
 // The profile of the triangulated surface (two triangles per quad, split along (i+1, j)-(i, j+1)) along the
 // ray from texel (i, j) towards (dx, dy) (unit, texel units): visits every column, row and diagonal crossing
-// with t in (0, t_end] in increasing t (ties in any order), then the point at t_end, as visit(t, height).
-// Heights are linear along the triangle edge each crossing lies on.
+// with t in (t_begin, t_end] in increasing t (ties in any order), then the point at t_end, as
+// visit(t, height) -> bool (false: stop there). Heights are linear along the triangle edge each crossing lies
+// on.
 template <class Visit>
-void triangle_profile(const HeightField& f, int i, int j, double dx, double dy, double t_end, Visit&& visit) {
+void triangle_profile_span(const HeightField& f, int i, int j, double dx, double dy, double t_begin,
+                           double t_end, Visit&& visit) {
   struct Progression {
     double inv = 0;  // t between crossings (infinite: never)
     int k = 1;       // next crossing number
     double next() const { return k * inv; }
+    // The first crossing beyond t_begin (k = 1 from the start).
+    void start(double t_begin) {
+      if (!(t_begin > 0) || !std::isfinite(inv)) return;
+      k = int(std::floor(t_begin / inv)) + 1;
+      while (k > 1 && (k - 1) * inv > t_begin) --k;
+      while (k * inv <= t_begin) ++k;
+    }
   };
   const double ds = dx + dy;
   Progression col{std::abs(dx) > 1e-12 ? 1 / std::abs(dx) : INFINITY};
   Progression row{std::abs(dy) > 1e-12 ? 1 / std::abs(dy) : INFINITY};
   Progression dia{std::abs(ds) > 1e-12 ? 1 / std::abs(ds) : INFINITY};
+  col.start(t_begin), row.start(t_begin), dia.start(t_begin);
   const int sx = dx > 0 ? 1 : -1, sy = dy > 0 ? 1 : -1, sd = ds > 0 ? 1 : -1;
   auto lerp = [](double a, double b, double w) { return a + (b - a) * w; };
   for (;;) {
@@ -47,17 +57,17 @@ void triangle_profile(const HeightField& f, int i, int j, double dx, double dy, 
       const int c = i + sx * col.k++;
       const double y = j + t * dy, fy = std::floor(y);
       const int jj = int(fy);
-      visit(t, lerp(f.at(c, jj), f.at(c, jj + 1), y - fy));
+      if (!visit(t, lerp(f.at(c, jj), f.at(c, jj + 1), y - fy))) return;
     } else if (t == tr) {  // y = j + sy k
       const int r = j + sy * row.k++;
       const double x = i + t * dx, fx = std::floor(x);
       const int ii = int(fx);
-      visit(t, lerp(f.at(ii, r), f.at(ii + 1, r), x - fx));
+      if (!visit(t, lerp(f.at(ii, r), f.at(ii + 1, r), x - fx))) return;
     } else {  // x + y = i + j + sd k: on the edge from (s - jj, jj) to (s - jj - 1, jj + 1)
       const int sum = i + j + sd * dia.k++;
       const double y = j + t * dy, fy = std::floor(y);
       const int jj = int(fy);
-      visit(t, lerp(f.at(sum - jj, jj), f.at(sum - jj - 1, jj + 1), y - fy));
+      if (!visit(t, lerp(f.at(sum - jj, jj), f.at(sum - jj - 1, jj + 1), y - fy))) return;
     }
   }
   // The end of the reach, inside its triangle.
@@ -66,6 +76,15 @@ void triangle_profile(const HeightField& f, int i, int j, double dx, double dy, 
   const int ii = int(fx), jj = int(fy);
   const double u = x - fx, v = y - fy;
   visit(t_end, facet_height(u, v, [&](int di, int dj) { return double(f.at(ii + di, jj + dj)); }));
+}
+
+// The whole profile, t in (0, t_end]: visit(t, height) at every vertex (triangle_profile_span from 0).
+template <class Visit>
+void triangle_profile(const HeightField& f, int i, int j, double dx, double dy, double t_end, Visit&& visit) {
+  triangle_profile_span(f, i, j, dx, dy, 0.0, t_end, [&](double t, double z) {
+    visit(t, z);
+    return true;
+  });
 }
 
 }  // namespace hfbake
