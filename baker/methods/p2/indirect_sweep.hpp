@@ -41,6 +41,12 @@ struct IndirectSweepSpec {
   // terrain is exactly P1's; with S > 1 it is the finer line's, so the split can differ from P1's by the
   // sub-sample horizon change).
   int supersampling = 1;
+  // Exact line profiles (facet senders only): between consecutive line samples the lines also carry a
+  // sample at every row and quad-diagonal crossing of the triangulation (edge_crossings), at the
+  // triangulated surface's height, so each line's terrain is the reference's surface along it exactly
+  // (with S > 1, the sub-samples as well); receivers stay the driver's samples. false: the terrain between
+  // two samples (or sub-samples) is their straight segment, missing the surface's row and diagonal kinks.
+  bool exact_profile = true;
   // P1's horizons at the texels of the directions swept (P1Result::horizon with horizon_by_direction: sin e,
   // [(k - k_begin) * texels + texel]).
   // When given, they split each texel's lobe between P1's sky and this terrain, so the two halves meet
