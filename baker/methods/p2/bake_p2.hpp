@@ -32,8 +32,9 @@
 // Parameters (schemas/methods/p2.schema.json): directions (K, default 64), bounces (default: the job's
 // "bounces"), visibility ("tree" or "naive": the same output, the naive march is for benchmarks and
 // checks), supersampling (S, default 1), senders ("facets", default, or "texels"), near_radius (texels,
-// default 4; 0 = off; facet senders only), wrap_periods, layers: indirect, total, direct (default: all
-// three), indirect_b1 .. indirect_b<bounces>.
+// default 4; 0 = off; facet senders only), line_profile ("exact", default, or "columns"; facet senders
+// only), wrap_periods, layers: indirect, total, direct (default: all three), indirect_b1 ..
+// indirect_b<bounces>.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -60,7 +61,11 @@ struct P2Params {
   bool facet_senders = true;
   // Texels gather their first near_radius texels exactly from their centres (facet senders only;
   // IndirectSweepSpec::near_radius); 0: every receiver gathers on its line (the method as published).
-  double near_radius = 4;           // (P1's exact near field then reaches as far: compute_p2)
+  double near_radius = 4;  // (P1's exact near field then reaches as far: compute_p2)
+  // The lines' terrain is the triangulated surface along them exactly (true, default: a sample at every
+  // row and diagonal bend between columns; facet senders only; IndirectSweepSpec::exact_profile), or
+  // straight between column samples (false, job key line_profile "columns": the method as published).
+  bool exact_profile = true;
   std::vector<std::string> layers;  // empty: indirect, total, direct
   // Keep each bounce's indirect apart (P2Result::indirect_b); bake_p2 keeps them only for indirect_b
   // layers (12 bytes a texel and bounce).

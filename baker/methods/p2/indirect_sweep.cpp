@@ -134,14 +134,18 @@ struct LineWorker {
   // The fine samples of one line (scratch h, xs, fx, fy; fine index of each driver sample in recv): the
   // driver's samples and, between consecutive ones, the S - 1 sub-samples and (exact profile) every row and
   // diagonal crossing of the triangulation, at the triangulated surface's heights. Returns their count.
-  // Positions xs in fine units (driver sample s at s * S).
+  // Positions xs in fine units (driver sample s at s * S). Every crossing is kept, also where the surface
+  // does not bend (coplanar facets): each piece between two points then lies on one facet (or along an
+  // edge), so a partly visible piece radiates its own facet's light. (Leaving the crossings without a
+  // bend out saves a quarter of p2's time on terraces, but the merged pieces' mean-and-trend radiance
+  // moved blocks' bias against the centre gather from -0.00013 to -0.00035: measure_p2_centre, K = 64.)
   int exact_samples(const SweepLine& line, int S) {
     const int n0 = line.count;
     const std::size_t cap = std::size_t(n0) * std::size_t(S + 3);
     if (xs.size() < cap) xs.resize(cap), fx.resize(cap), fy.resize(cap), h.resize(cap);
     if (recv.size() < std::size_t(n0)) recv.resize(std::size_t(n0));
     int n = 0;
-    double t[16];
+    double t[24];
     for (int s = 0; s < n0; ++s) {
       recv[s] = n;
       const double x0 = line.x(s), y0 = line.y(s);
@@ -415,6 +419,14 @@ void facet_segment_radiance(const HeightField& f, const Rgb* facet_exit, double 
   }
   *mean = m;
   *slope = m1 * 12.0f;  // / integral of (u - 1/2)^2 over [0, 1]
+}
+
+std::size_t indirect_line_scratch_bytes(int count, int supersampling, bool exact_profile) {
+  const std::size_t fine =
+      std::size_t(std::max(count, 1)) * std::size_t(supersampling + (exact_profile ? 3 : 0));
+  // h, inv_dist 8 + 8; L, seg_mean, seg_slope 36; exact: xs, fx, fy 24; recv 4 per driver sample; the hull
+  // tree 8 + 8 + 4 + 4 + 1 + its stack 24 and horizons 4; gather scratch 20; visible and starts 8.
+  return fine * (16 + 36 + (exact_profile ? 24 : 0) + 53 + 20 + 8) + std::size_t(count) * 4;
 }
 
 RunControl p2_sub_range(const RunControl& rc, double a, double span) {

@@ -71,6 +71,11 @@ struct IndirectSweepSpec {
   double near_radius = 0;
 };
 
+// Bytes one thread's line worker holds for a line of `count` samples (the memory estimate): per fine sample
+// (count * S, exact profiles count * (S + 3): at most a row and two diagonal crossings a step) its heights,
+// positions, radiance, the hull tree and the gather's scratch.
+std::size_t indirect_line_scratch_bytes(int count, int supersampling, bool exact_profile);
+
 // A RunControl reporting progress into [a, a + span) of the caller's.
 RunControl p2_sub_range(const RunControl& rc, double a, double span);
 
