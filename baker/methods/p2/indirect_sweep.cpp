@@ -223,7 +223,20 @@ struct LineWorker {
         }
       }
     if (gather) {  // the radiance of every segment, once per line
-      if (facets) {
+      if (exact) {
+        // Each piece between two points of an exact profile lies on one facet (or along an edge: both
+        // halves), so its radiance is that facet's: facet_segment_radiance of a single piece, without the
+        // search for crossings.
+        const double px = -line.dir->dy * 1e-6, py = line.dir->dx * 1e-6;
+        const Rgb* fe = spec->exit_facets->data();
+        for (int q = 0; q + 1 < n; ++q) {
+          const double mx = 0.5 * (fx[q] + fx[q + 1]), my = 0.5 * (fy[q] + fy[q + 1]);
+          const FacetRef a = facet_under(mx + px, my + py), b = facet_under(mx - px, my - py);
+          const Rgb va = facet_value(*field, fe, a);
+          seg_mean[q] = a == b ? va : (va + facet_value(*field, fe, b)) * 0.5f;
+          seg_slope[q] = Rgb{};
+        }
+      } else if (facets) {
         double x0, y0, x1, y1;
         fine_xy(0, &x0, &y0);
         for (int q = 0; q + 1 < n; ++q) {
