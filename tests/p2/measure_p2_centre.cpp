@@ -133,9 +133,14 @@ int main(int argc, char** argv) {
   if (std::string(argv[2]) != "-") {
     const Image img = read_image(argv[2], {});
     int c = -1, cs = -1;
-    for (int ch = 0; ch < img.info.channels; ++ch) {
-      if (img.info.channel_names[ch] == "indirect_b1.G") c = ch;
-      if (img.info.channel_names[ch] == "indirect_b1_stderr.G") cs = ch;
+    for (int ch = 0; ch < img.info.channels; ++ch) {  // one bounce: indirect is indirect_b1
+      const std::string& name = img.info.channel_names[ch];
+      if (name == "indirect_b1.G" || (c < 0 && name == "indirect.G")) c = ch;
+      if (name == "indirect_b1_stderr.G" || (cs < 0 && name == "indirect_stderr.G")) cs = ch;
+    }
+    if (c < 0 || cs < 0) {
+      std::fprintf(stderr, "%s: no indirect_b1 (or indirect) layer with its stderr\n", argv[2]);
+      return 1;
     }
     for (int j = 0; j < f.height; ++j)
       for (int i = 0; i < f.width; ++i) ref.push_back(img.at(i, j, c)), se.push_back(img.at(i, j, cs));

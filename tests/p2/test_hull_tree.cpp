@@ -20,15 +20,21 @@ struct LineCheck {
 };
 
 // Checks every receiver of the line; returns totals. Fails the test with the first difference.
-LineCheck check_line(const std::vector<double>& h, const std::string& what) {
+// x (optional): the samples' positions, pushed with push_at (empty: unit spacing, push).
+LineCheck check_line(const std::vector<double>& h, const std::string& what,
+                     const std::vector<double>& x = {}) {
   LineCheck c;
   HullTree tree;
   tree.reset(int(h.size()));
   std::vector<int> naive, from_tree, run_starts;
   std::vector<VisibleStretch> stretches;
+  const double* xs = x.empty() ? nullptr : x.data();
   for (int r = 0; r < int(h.size()); ++r) {
-    tree.push(h[r]);
-    naive_visible(h.data(), r, naive);
+    if (xs)
+      tree.push_at(x[r], h[r]);
+    else
+      tree.push(h[r]);
+    naive_visible(h.data(), r, naive, -1, xs);
     const auto hz = tree.horizons();
     // Horizons strictly increasing, each one visible, and every start of a visible run among them.
     for (std::size_t k = 1; k < hz.size(); ++k) EXPECT_LT(hz[k - 1], hz[k]) << what << " r=" << r;
@@ -41,7 +47,7 @@ LineCheck check_line(const std::vector<double>& h, const std::string& what) {
     for (int x : run_starts)
       EXPECT_TRUE(std::find(hz.begin(), hz.end(), x) != hz.end()) << what << " r=" << r << " run start " << x;
     // The stretches walked from the horizons are exactly the naive visible set.
-    visible_stretches(h.data(), r, hz, stretches);
+    visible_stretches(h.data(), r, hz, stretches, xs);
     from_tree.clear();
     for (const auto& s : stretches)
       for (int j = s.first; j <= s.last; ++j) from_tree.push_back(j);
@@ -224,6 +230,62 @@ TEST(HullTree, QueryBeyondTheTerrainMatchesNaive) {
     tree.push(h[T]);
     ASSERT_TRUE(std::equal(tree.horizons().begin(), tree.horizons().end(), fresh.horizons().begin(),
                            fresh.horizons().end()));
+  }
+}
+
+// Samples at any increasing positions (P2's exact line profiles: the columns and the row and diagonal
+// crossings between them, push_at): the tree against the naive march with the same positions.
+TEST(HullTree, LinesAtAnyPositionsMatchNaive) {
+  std::uint64_t s = 4242;
+  for (int t = 0; t < 80; ++t) {
+    const int n = 40 + int(lcg(s) % 300);
+    std::vector<double> x(n), h(n);
+    const int mode = t % 5;
+    double at = 0;
+    for (int i = 0; i < n; ++i) {
+      // Gaps: dyadic (exact ties possible), or continuous down to 1e-6 (a crossing next to a column).
+      const double gap =
+          mode < 3 ? 0.25 * double(1 + lcg(s) % 4) : std::pow(10.0, -6.0 * double(lcg(s) % 1000) / 1000);
+      at += i == 0 ? 0 : gap;
+      x[i] = at;
+      if (mode == 0) h[i] = double(lcg(s) % 3);                               // 3 levels: ties everywhere
+      if (mode == 1) h[i] = 2 * x[i];                                         // collinear, exact
+      if (mode == 2) h[i] = 2.5 * std::floor(x[i] / 3) - 0.5 * (lcg(s) % 2);  // steps
+      if (mode == 3) h[i] = double(lcg(s) % 1000000) / 1000.0;
+      if (mode == 4) h[i] = float(std::sin(x[i] * 0.37) * 20);  // smooth, float heights
+    }
+    check_line(h, "positions mode " + std::to_string(mode) + " #" + std::to_string(t), x);
+  }
+  // The unit positions as push_at: the same horizons as push.
+  std::vector<double> h(200), x(200);
+  for (int i = 0; i < 200; ++i) h[i] = double(lcg(s) % 7), x[i] = i;
+  HullTree a, b;
+  a.reset(200), b.reset(200);
+  for (int i = 0; i < 200; ++i) {
+    a.push(h[i]), b.push_at(x[i], h[i]);
+    ASSERT_TRUE(
+        std::equal(a.horizons().begin(), a.horizons().end(), b.horizons().begin(), b.horizons().end()));
+  }
+  // Queries beyond the terrain at a position.
+  std::vector<int> hz, naive;
+  for (int t = 0; t < 100; ++t) {
+    const int T = 1 + int(lcg(s) % 100);
+    std::vector<double> hx(T + 1), xx(T + 1);
+    for (int i = 0; i <= T; ++i)
+      xx[i] = (i ? xx[i - 1] : 0) + 0.25 * double(1 + lcg(s) % 4), hx[i] = double(lcg(s) % 4);
+    HullTree tree;
+    tree.reset(T);
+    for (int i = 0; i < T; ++i) tree.push_at(xx[i], hx[i]);
+    tree.query(xx[T], hx[T], hz);
+    naive_visible(hx.data(), T, naive, T, xx.data());
+    std::vector<int> a2, b2;
+    for (int c : hz)
+      if (c == 0 ||
+          !(visibility_slope(hx.data(), xx.data(), c - 1, T) > visibility_slope(hx.data(), xx.data(), c, T)))
+        a2.push_back(c);
+    for (std::size_t k = 0; k < naive.size(); ++k)
+      if (k == 0 || naive[k - 1] != naive[k] - 1) b2.push_back(naive[k]);
+    ASSERT_EQ(a2, b2) << "case " << t;
   }
 }
 

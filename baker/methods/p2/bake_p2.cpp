@@ -3,6 +3,7 @@
 #include "sweep/sweep_lines.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <string>
@@ -39,6 +40,7 @@ P2Params read_p2_params(Params& in, int job_bounces) {
   if (p.near_radius != 0 && p.near_radius < 1)
     in.fail("near_radius", "must be 0 (off) or a number in [1, 16]");
   p.facet_senders = in.choice("senders", "facets", {"facets", "texels"}) == "facets";
+  p.exact_profile = in.choice("line_profile", "exact", {"exact", "columns"}) == "exact";
   const int B = p.bounces >= 0 ? p.bounces : std::max(0, job_bounces);
   std::vector<std::string> known = {"indirect", "total", "direct"};
   for (int b = 1; b <= B; ++b) known.push_back("indirect_b" + std::to_string(b));
@@ -103,7 +105,13 @@ double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
   is.wrap_periods = p.wrap_periods;
   HeightField field;  // the sweep's plan needs only the shape
   static_cast<FieldShape&>(field) = shape;
-  double line_buffers = double(sweep_buffer_bytes(field, indirect_sweep_spec(is)));
+  // ... and each thread's line worker (its longest line: the repeat warm-up included).
+  const int longest =
+      std::max(shape.width, shape.height) * (shape.wrap == Wrap::repeat ? p.wrap_periods + 1 : 1);
+  double line_buffers =
+      double(sweep_buffer_bytes(field, indirect_sweep_spec(is))) +
+      double(tbb::this_task_arena::max_concurrency()) *
+          double(indirect_line_scratch_bytes(longest, p.supersampling, p.facet_senders && p.exact_profile));
   double block_horizons = 0;
   if (!kept) {
     block_horizons = 4.0 * largest * N;
@@ -176,6 +184,7 @@ P2BlockSums p2_bounce_block(const Scene& scene, const P2Params& params, int B, c
   spec.visibility = params.visibility;
   spec.wrap_periods = params.wrap_periods;
   spec.supersampling = params.supersampling;
+  spec.exact_profile = params.exact_profile;
   // P1's horizons of the block: kept from stage 0, or recomputed now (the same bits: p1_direction_sums of
   // the same block, as compute_p1 runs it).
   std::vector<float> recomputed;

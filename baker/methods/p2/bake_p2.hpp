@@ -18,22 +18,29 @@
 // lean towards it (less sky, more bounce light than the smoothed normal says): per-bounce field means
 // against the Embree reference on the rough furnace field (tests/p2), bounces 1-4: texel senders
 // +9.6/-4.2/-13.5/-21.8 %, facet senders with the near field +0.4/-0.5/-0.7/-1.3 %.
-// The receivers of the sweep sit on its lines, up to half a texel from the texel centres, and see the
-// terrain only at the lines' column crossings; the nearest terrain subtends the largest angles. So each
+// Each line carries the triangulated surface along it exactly (line_profile "exact", default): its column
+// samples and every row and diagonal crossing between them (indirect_sweep.hpp, exact_profile). With the
+// column samples alone ("columns", the paper's) a line takes the straight segment between two columns for
+// the surface and misses its bends; on stepped terrain those are a cliff's top edge and foot, and that was
+// the whole of the sweep's bias against the exact gather from the texel centres (terraces, K = 64,
+// measure_p2_centre: +0.00096 of a mean 0.039, now +0.00001; against the reference +4.1 % -> +1.5 %).
+// The receivers of the sweep sit on its lines, up to half a texel from the texel centres; the nearest
+// terrain subtends the largest angles. So each
 // texel gathers its first `near_radius` texels (default 4) itself, from its centre over every column, row
 // and diagonal crossing of P1's near stencil (each piece radiating its facet's light, both facets for a
 // piece along an edge), and the lines' receivers, through a hull tree that lags that far, gather only the
 // terrain beyond: their mean radiance fills the texel's lobe from the near field's horizon up to P1's.
-// Accuracy (closing notes of issue 5): the azimuthal error of a bounce falls about as 1/K; against the
-// reference what remains is the line sampling beyond the near field (raise `supersampling` or
-// `near_radius`) and the facets' light, evaluated at their right-angle corner (tests/p2/measure_p2_centre
-// splits the parts).
+// Accuracy (closing notes of issue 5 and 19): the azimuthal error of a bounce falls about as 1/K; against
+// the reference what remains is the receivers' place on the lines beyond the near field (raise
+// `near_radius`), K, and the facets' light, evaluated at their right-angle corner (tests/p2/
+// measure_p2_centre splits the parts; on terraces at K = 64 the exact centre gather itself is +1.5 %).
 //
 // Parameters (schemas/methods/p2.schema.json): directions (K, default 64), bounces (default: the job's
 // "bounces"), visibility ("tree" or "naive": the same output, the naive march is for benchmarks and
 // checks), supersampling (S, default 1), senders ("facets", default, or "texels"), near_radius (texels,
-// default 4; 0 = off; facet senders only), wrap_periods, layers: indirect, total, direct (default: all
-// three), indirect_b1 .. indirect_b<bounces>.
+// default 4; 0 = off; facet senders only), line_profile ("exact", default, or "columns"; facet senders
+// only), wrap_periods, layers: indirect, total, direct (default: all three), indirect_b1 ..
+// indirect_b<bounces>.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -60,7 +67,11 @@ struct P2Params {
   bool facet_senders = true;
   // Texels gather their first near_radius texels exactly from their centres (facet senders only;
   // IndirectSweepSpec::near_radius); 0: every receiver gathers on its line (the method as published).
-  double near_radius = 4;           // (P1's exact near field then reaches as far: compute_p2)
+  double near_radius = 4;  // (P1's exact near field then reaches as far: compute_p2)
+  // The lines' terrain is the triangulated surface along them exactly (true, default: a sample at every
+  // row and diagonal bend between columns; facet senders only; IndirectSweepSpec::exact_profile), or
+  // straight between column samples (false, job key line_profile "columns": the method as published).
+  bool exact_profile = true;
   std::vector<std::string> layers;  // empty: indirect, total, direct
   // Keep each bounce's indirect apart (P2Result::indirect_b); bake_p2 keeps them only for indirect_b
   // layers (12 bytes a texel and bounce).

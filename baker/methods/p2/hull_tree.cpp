@@ -7,6 +7,7 @@ namespace hfbake {
 void HullTree::reset(int capacity) {
   if (std::size_t(capacity) > h_.size()) {
     h_.resize(capacity);
+    x_.resize(capacity);
     first_child_.resize(capacity);
     next_sibling_.resize(capacity);
     permanent_.resize(capacity);
@@ -15,13 +16,16 @@ void HullTree::reset(int capacity) {
   }
   n_ = 0;
   prev_class_ = 1;
+  unit_ = true;
   iterations_ = 0;
   horizons_.clear();
 }
 
-void HullTree::push(double height) {
+void HullTree::push_at(double x, double height) {
   const int r = n_++;
   h_[r] = height;
+  x_[r] = x;
+  if (x != double(r)) unit_ = false;
   first_child_[r] = -1;
   next_sibling_[r] = -1;
   permanent_[r] = 0;
@@ -31,15 +35,18 @@ void HullTree::push(double height) {
     return;
   }
   const double* h = h_.data();
+  const double* xs = x_.data();
   // Eq. 1 for p_{r-1}, now that its successor is known: convex if 2 h_i >= h_{i-1} + h_{i+1}, else
   // concave. (P2's Eq. 1 lets a collinear triple inherit the previous class; with the strict tie rule a
   // collinear p_{r-1} after a concave stretch starts a visible run -- {0, 5, 1, 1, 1} seen from the last
   // sample -- so collinear triples count as convex here.) A convex sample after a concave one starts a
   // segment: a permanent leaf. Marked before the repair below, so the old root survives it even when all
-  // its children move away.
+  // its children move away. At any positions: convex if the slope into p_i is not below the slope out of
+  // it, (h_i - h_{i-1}) (x_{i+1} - x_i) >= (h_{i+1} - h_i) (x_i - x_{i-1}).
   if (r >= 2) {
     const int i = r - 1;
-    const double lhs = 2 * h[i], rhs = h[i - 1] + h[i + 1];
+    const double lhs = unit_ ? 2 * h[i] : (h[i] - h[i - 1]) * (xs[i + 1] - xs[i]);
+    const double rhs = unit_ ? h[i - 1] + h[i + 1] : (h[i + 1] - h[i]) * (xs[i] - xs[i - 1]);
     const int cls = lhs >= rhs ? 1 : 0;
     if (cls == 1 && prev_class_ == 0) permanent_[i] = 1;
     prev_class_ = cls;
@@ -62,12 +69,12 @@ void HullTree::push(double height) {
     horizons_.push_back(node);
   };
   stack_.clear();
-  stack_.push_back({r - 1, first_child_[r - 1], visibility_slope(h, r - 1, r)});
+  stack_.push_back({r - 1, first_child_[r - 1], visibility_slope(h, xs, r - 1, r)});
   while (!stack_.empty()) {
     Frame& f = stack_.back();
     if (f.child >= 0) {
       ++iterations_;
-      const double s = visibility_slope(h, f.child, r);
+      const double s = visibility_slope(h, xs, f.child, r);
       if (s > f.slope) {
         const int c = f.child;
         f.child = next_sibling_[c];
@@ -83,11 +90,12 @@ void HullTree::push(double height) {
   }
 }
 
-std::uint64_t HullTree::query(int index, double height, std::vector<int>& horizons) {
+std::uint64_t HullTree::query(double x, double height, std::vector<int>& horizons) {
   horizons.clear();
   if (n_ == 0) return 0;
   const double* h = h_.data();
-  auto slope = [&](int j) { return (h[j] - height) / double(index - j); };  // == visibility_slope
+  const double* xs = x_.data();
+  auto slope = [&](int j) { return (h[j] - height) / (x - xs[j]); };  // == visibility_slope
   std::uint64_t checks = 0;
   stack_.clear();
   stack_.push_back({n_ - 1, first_child_[n_ - 1], slope(n_ - 1)});
@@ -112,7 +120,7 @@ std::uint64_t HullTree::query(int index, double height, std::vector<int>& horizo
 }
 
 void visible_stretches(const double* h, int r, std::span<const int> horizons,
-                       std::vector<VisibleStretch>& out) {
+                       std::vector<VisibleStretch>& out, const double* x) {
   out.clear();
   const int m = int(horizons.size());
   for (int k = 0; k < m; ++k) {
@@ -122,9 +130,9 @@ void visible_stretches(const double* h, int r, std::span<const int> horizons,
       break;
     }
     const int next = horizons[k + 1];
-    const double limit = visibility_slope(h, next, r);
+    const double limit = visibility_slope(h, x, next, r);
     int j = start;
-    while (j + 1 < next && visibility_slope(h, j + 1, r) > limit) ++j;
+    while (j + 1 < next && visibility_slope(h, x, j + 1, r) > limit) ++j;
     out.push_back({start, j, limit});
   }
 }

@@ -2,10 +2,11 @@
 // for every sample R of a line, the local visibility horizons of R, i.e. the samples behind R that start
 // each visible stretch of the line, in time linear in the number of horizons (t <= 2m + n, P2 §6).
 //
-// A line is a sequence of samples p_0, p_1, ... at unit spacing (distance d_i = i, in steps) with heights
-// h_i (any unit; visibility depends only on the order of slopes). Seen from the receiver R = p_r, the
-// slope of an earlier sample p_j is
-//     s_r(j) = (h_j - h_r) / (r - j)          (computed in double exactly like this, see visibility_slope)
+// A line is a sequence of samples p_0, p_1, ... at unit spacing (distance d_i = i, in steps), or at any
+// increasing positions x_i (push_at: P2's exact line profiles, whose samples are the columns and the row and
+// diagonal crossings between them), with heights h_i (any unit; visibility depends only on the order of
+// slopes). Seen from the receiver R = p_r, the slope of an earlier sample p_j is
+//     s_r(j) = (h_j - h_r) / (x_r - x_j)      (computed in double exactly like this, see visibility_slope)
 // and p_j is VISIBLE from R when it strictly exceeds the slope of every sample between it and R:
 //     s_r(j) > max_{j < l < r} s_r(l)         (p_{r-1} is always visible).
 // A sample collinear with a nearer sample and R grazes it and is hidden (ties hide). Both this tree and
@@ -33,6 +34,11 @@ namespace hfbake {
 inline double visibility_slope(const double* h, int j, int r) {
   return (h[j] - h[r]) / double(r - j);
 }
+// The same for samples at positions x (increasing; x[j] = j gives the same bits as above, since
+// double(r) - double(j) is exact). x null: unit spacing.
+inline double visibility_slope(const double* h, const double* x, int j, int r) {
+  return (h[j] - h[r]) / (x ? x[r] - x[j] : double(r - j));
+}
 
 class HullTree {
  public:
@@ -40,20 +46,25 @@ class HullTree {
   void reset(int capacity);
 
   // Appends the next sample (its height) and updates the tree; afterwards horizons() are those of it.
-  void push(double height);
+  // push: at position size() (unit spacing); push_at: at position x, beyond every earlier one (a line is
+  // pushed one way or the other from its reset).
+  void push(double height) { push_at(double(n_), height); }
+  void push_at(double x, double height);
 
   int size() const { return n_; }
   const double* heights() const { return h_.data(); }
+  const double* positions() const { return x_.data(); }
 
   // The local horizons of the last pushed sample: sample indices, farthest first (strictly increasing).
   // Empty for the first sample of a line. The first one casts the global horizon (the largest slope).
   std::span<const int> horizons() const { return {horizons_.data(), horizons_.size()}; }
 
-  // The local horizons of a receiver that is not terrain: at index `index` >= size() (a gap of non-terrain
-  // samples may lie between it and the last pushed sample) with height `height`, seeing the pushed samples
-  // only. The same traversal as push() without changing the tree; the last pushed sample is always
-  // listed (it is visible; run_starts drops it when it does not start a run). Returns the checks made.
-  std::uint64_t query(int index, double height, std::vector<int>& horizons);
+  // The local horizons of a receiver that is not terrain: at position `x` beyond the last pushed sample
+  // (unit spacing: its index >= size(); a gap of non-terrain samples may lie between them) with height
+  // `height`, seeing the pushed samples only. The same traversal as push() without changing the tree; the
+  // last pushed sample is always listed (it is visible; run_starts drops it when it does not start a
+  // run). Returns the checks made.
+  std::uint64_t query(double x, double height, std::vector<int>& horizons);
 
   // Convexity checks performed (P2's iterations t), summed over the line so far (push only).
   std::uint64_t iterations() const { return iterations_; }
@@ -64,13 +75,14 @@ class HullTree {
     int child;     // the next child to test (-1: none left)
     double slope;  // the parent's slope seen from the root
   };
-  std::vector<double> h_;
+  std::vector<double> h_, x_;
   std::vector<int> first_child_, next_sibling_;
   std::vector<std::uint8_t> permanent_;
   std::vector<Frame> stack_;
   std::vector<int> horizons_;
   int n_ = 0;
   int prev_class_ = 1;  // class of the last classified sample: 1 convex, 0 concave
+  bool unit_ = true;    // every sample so far at x_i = i (Eq. 1 in its unit-spacing form)
   std::uint64_t iterations_ = 0;
 };
 
@@ -83,8 +95,9 @@ struct VisibleStretch {
 };
 
 // Walks from each horizon towards R while the samples stay above the next horizon (P2 §10.1, method 3).
-// `out` is cleared and filled nearest-last. Cost: the number of visible samples.
+// `out` is cleared and filled nearest-last. Cost: the number of visible samples. x: the samples'
+// positions (null: unit spacing).
 void visible_stretches(const double* h, int r, std::span<const int> horizons,
-                       std::vector<VisibleStretch>& out);
+                       std::vector<VisibleStretch>& out, const double* x = nullptr);
 
 }  // namespace hfbake

@@ -22,12 +22,16 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
 
 Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrain_end,
                     std::span<const int> horizons, double inv_step, const WedgeWeights& w, double* weight,
-                    const double* inv_dist, GatherScratch* scratch) {
+                    const double* inv_dist, GatherScratch* scratch, const double* x) {
   GatherScratch local;
   GatherScratch& sc = scratch ? *scratch : local;
   const int m = int(horizons.size());
   const double t_n = w.t_n;
   const double hr = h[r];
+  const double xr = x ? x[r] : 0;
+  if (x) inv_dist = nullptr;
+  // The distance from sample j to the receiver (positions) and its world-slope factor.
+  auto dist = [&](int j) { return x ? xr - x[j] : double(r - j); };
   if (weight) *weight = 0;
   if (m == 0) return {};
   // The visible stretches tile the elevations from the global horizon down to the tangent plane: each
@@ -39,7 +43,7 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
   Rgb* LI = sc.L.data();
   int M = 0;  // intervals so far; T[M] is the current upper boundary
   {
-    const double t0 = visibility_slope(h, horizons[0], r) * inv_step;
+    const double t0 = visibility_slope(h, x, horizons[0], r) * inv_step;
     if (!(t0 > t_n)) return {};  // everything lies below the tangent plane
     T[0] = float(t0);
   }
@@ -47,15 +51,15 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
     int j = horizons[k];
     const bool last = k + 1 == m;
     const int end = last ? terrain_end : horizons[k + 1];
-    const double limit = last ? -std::numeric_limits<double>::infinity() : visibility_slope(h, end, r);
+    const double limit = last ? -std::numeric_limits<double>::infinity() : visibility_slope(h, x, end, r);
     // Fully visible segments j -> j+1. (The test s_next > limit by multiplication: the same as the
     // division up to rounding at exact ties, where the segment's weight is zero anyway.)
     bool done = false;
     while (j + 1 < end) {
-      const int d = r - j - 1;
+      const double d = dist(j + 1);
       const double dz = h[j + 1] - hr;
-      if (!(dz > limit * double(d))) break;
-      const double t_next = dz * (inv_dist ? inv_dist[d] : inv_step / double(d));
+      if (!(dz > limit * d)) break;
+      const double t_next = dz * (inv_dist ? inv_dist[r - j - 1] : inv_step / d);
       LI[M] = L.mean[j];
       if (!(t_next > t_n)) {  // the segment crosses the tangent plane: nothing below it counts
         T[++M] = float(t_n);
@@ -73,10 +77,10 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
       break;
     }
     // The segment j -> j+1 is visible down to the next horizon's line of sight (slope `limit`):
-    // parameter u of the crossing, from h_j + u dh - h_r = limit (r - j - u).
+    // parameter u of the crossing, from h_j + u dh - h_r = limit (x_r - x_j - u dx) (unit spacing: dx = 1).
     const double dh = h[j + 1] - h[j];
-    const double den = dh + limit;
-    double u = den < 0 ? (limit * double(r - j) - (h[j] - hr)) / den : 1.0;
+    const double den = x ? dh + limit * (x[j + 1] - x[j]) : dh + limit;
+    double u = den < 0 ? (limit * dist(j) - (h[j] - hr)) / den : 1.0;
     u = std::clamp(u, 0.0, 1.0);
     LI[M] = L.mean[j] + L.slope[j] * float(0.5 * (u - 1));
     const double t_lim = limit * inv_step;
@@ -100,10 +104,11 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
   return {float(acc_r / kPi), float(acc_g / kPi), float(acc_b / kPi)};
 }
 
-void run_starts(const double* h, int r, std::span<const int> horizons, std::vector<int>& out) {
+void run_starts(const double* h, int r, std::span<const int> horizons, std::vector<int>& out,
+                const double* x) {
   out.clear();
   for (int c : horizons)
-    if (c == 0 || !(visibility_slope(h, c - 1, r) > visibility_slope(h, c, r))) out.push_back(c);
+    if (c == 0 || !(visibility_slope(h, x, c - 1, r) > visibility_slope(h, x, c, r))) out.push_back(c);
 }
 
 void run_starts_of_visible(std::span<const int> visible, std::vector<int>& out) {

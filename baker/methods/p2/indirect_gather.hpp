@@ -126,10 +126,12 @@ struct SegmentRadiance {
   bool has_crease = true;
 };
 
+// x (optional): the samples' positions in steps of 1 / inv_step world units (increasing; null: sample j at
+// j). Then inv_dist is not read: distances are x[r] - x[j].
 Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrain_end,
                     std::span<const int> horizons, double inv_step, const WedgeWeights& w,
                     double* weight = nullptr, const double* inv_dist = nullptr,
-                    GatherScratch* scratch = nullptr);
+                    GatherScratch* scratch = nullptr, const double* x = nullptr);
 
 // (F(e) - F(e_t)) / pi for the wedge of direction phi (cos_phi, sin_phi) of K, normal n, horizon elevation e
 // (radians): the part of the cosine lobe between the tangent plane and the horizon, in the form of P1's
@@ -152,7 +154,8 @@ inline double terrain_weight(Vec3 n, double cos_phi, double sin_phi, int K, doub
 
 // The horizons that start a visible run: the tree's root children minus a permanent leaf whose farther
 // neighbour is visible too (the only kind of redundant root child). Filters `horizons` into `out`.
-void run_starts(const double* h, int r, std::span<const int> horizons, std::vector<int>& out);
+void run_starts(const double* h, int r, std::span<const int> horizons, std::vector<int>& out,
+                const double* x = nullptr);
 
 // The same from the naive visible set (increasing indices).
 void run_starts_of_visible(std::span<const int> visible, std::vector<int>& out);

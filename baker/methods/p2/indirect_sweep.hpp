@@ -41,6 +41,12 @@ struct IndirectSweepSpec {
   // terrain is exactly P1's; with S > 1 it is the finer line's, so the split can differ from P1's by the
   // sub-sample horizon change).
   int supersampling = 1;
+  // Exact line profiles (facet senders only): between consecutive line samples the lines also carry a
+  // sample at every row and quad-diagonal crossing of the triangulation (edge_crossings), at the
+  // triangulated surface's height, so each line's terrain is the reference's surface along it exactly
+  // (with S > 1, the sub-samples as well); receivers stay the driver's samples. false: the terrain between
+  // two samples (or sub-samples) is their straight segment, missing the surface's row and diagonal kinks.
+  bool exact_profile = true;
   // P1's horizons at the texels of the directions swept (P1Result::horizon with horizon_by_direction: sin e,
   // [(k - k_begin) * texels + texel]).
   // When given, they split each texel's lobe between P1's sky and this terrain, so the two halves meet
@@ -64,6 +70,11 @@ struct IndirectSweepSpec {
   // where it is largest (tests/p2/measure_p2_centre).
   double near_radius = 0;
 };
+
+// Bytes one thread's line worker holds for a line of `count` samples (the memory estimate): per fine sample
+// (count * S, exact profiles count * (S + 3): at most a row and two diagonal crossings a step) its heights,
+// positions, radiance, the hull tree and the gather's scratch.
+std::size_t indirect_line_scratch_bytes(int count, int supersampling, bool exact_profile);
 
 // A RunControl reporting progress into [a, a + span) of the caller's.
 RunControl p2_sub_range(const RunControl& rc, double a, double span);

@@ -12,12 +12,14 @@
 namespace hfbake {
 
 // Indices of the samples visible from receiver r (0 <= r), increasing. `visible` is cleared first.
-// Only samples 0..terrain_end-1 are terrain (default: all samples before r).
-inline void naive_visible(const double* h, int r, std::vector<int>& visible, int terrain_end = -1) {
+// Only samples 0..terrain_end-1 are terrain (default: all samples before r). x: the samples' positions
+// (null: unit spacing).
+inline void naive_visible(const double* h, int r, std::vector<int>& visible, int terrain_end = -1,
+                          const double* x = nullptr) {
   visible.clear();
   double running = -std::numeric_limits<double>::infinity();
   for (int j = (terrain_end < 0 ? r : std::min(r, terrain_end)) - 1; j >= 0; --j) {
-    const double s = visibility_slope(h, j, r);
+    const double s = visibility_slope(h, x, j, r);
     if (s > running) {
       running = s;
       visible.push_back(j);
