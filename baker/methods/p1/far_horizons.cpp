@@ -175,7 +175,6 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
                       : std::numeric_limits<float>::quiet_NaN();
   }
   const std::size_t E = pat.pos.size();
-  const double v_prev = l - 1;  // line l - 1's minor coordinate is v_prev + pat.minor (unwrapped)
   const bool on_line = d.slope == 0 || d.slope == 1 || d.slope == -1;  // every texel on line l - 1
   const float* hb = prev_.data();
   if (!on_line) {
@@ -202,31 +201,6 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       band_max_[c] = m + slack;
     }
     band_max_[count - 1] = -inf;
-    // A bound per band that depends on where the texel's ray runs in the strip (o in [0, 1): 0 on line
-    // l - 1, 1 on line l): the strip's cross-section at any position is piecewise linear in o, its
-    // slope that of a triangle, z(u, j + 1) - z(u, j) on one of the band's two columns. So a ray's
-    // points in band c lie below prev + grad o and below cur + grad (1 - o), prev and cur the largest
-    // entries of lines l - 1 and l in the band (+inf where a line leaves the field there: no bound).
-    side_.resize(std::size_t(count));
-    auto zrow = [&](std::int64_t col, long long j) {
-      j = rep ? wrap_index(j, nv) : std::clamp<long long>(j, 0, nv - 1);
-      return Z[col + std::ptrdiff_t(j) * ms];
-    };
-    for (int c = 0; c + 1 < count; ++c) {
-      const int e0 = pat.first[c], e1 = pat.first[c + 1];
-      float mp = prev_[e0], mc = cur_[e0];
-      for (int e = e0 + 1; e <= e1; ++e) mp = std::max(mp, prev_[e]), mc = std::max(mc, cur_[e]);
-      bool off_p = false, off_c = false;
-      for (int e = e0; e <= e1; ++e) off_p = off_p || prev_[e] == -inf, off_c = off_c || cur_[e] == -inf;
-      const double va = v_prev + pat.minor[e0], vb = v_prev + pat.minor[e1];
-      const long long j0 = floor_int(std::min(va, vb)), j1 = (long long)std::ceil(std::max(va, vb) + 1);
-      const std::int64_t ca = pat.major_a[e0], cb = pat.major_a[e1];
-      float g = 0;
-      for (long long j = j0; j < j1; ++j)
-        g = std::max({g, std::fabs(zrow(ca, j + 1) - zrow(ca, j)), std::fabs(zrow(cb, j + 1) - zrow(cb, j))});
-      side_[c] = {off_p ? inf : mp + slack, off_c ? inf : mc + slack, g * (1 + 1e-6f)};
-    }
-    side_[count - 1] = {-inf, -inf, 0};
     block_max_.assign(std::size_t(count / kBlock + 1), -inf);
     for (int c = 0; c + 1 < count; ++c) {
       float& b = block_max_[std::size_t(c / kBlock)];
@@ -261,7 +235,6 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
     ++texels;
     // T's ray: minor coordinate r + dvp (p - n), major u(p) = u_start + su p.
     const int r = texel_r_[n];
-    const float off = float(r - (v_prev + pat.minor[pat.first[n]]));  // T's ray in the strip, [0, 1)
     bool any = false, found = false;
     double bdz = 0, brun = 1;
     if (beat_near) {  // the best point starts as the near field's, lowered by more than atan's error
@@ -344,10 +317,7 @@ void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
       const double x = h >= zt ? std::min(x1, hi) : std::max(x0, lo);
       return (double(h) - zt) * brun <= bdz * ((n - x) * step);
     };
-    auto band_lower = [&](int c) {
-      const BandSide& b = side_[c];
-      return lower(c, c + 1, std::min({band_max_[c], b.prev + b.grad * off, b.cur + b.grad * (1 - off)}));
-    };
+    auto band_lower = [&](int c) { return lower(c, c + 1, band_max_[c]); };
     auto block_lower = [&](int k) { return lower(k * kBlock, (k + 1) * kBlock, block_max_[k]); };
     if (lo > hi) continue;
     const double pq = hull_.position(q);

@@ -90,10 +90,6 @@ struct FarHorizonWorker {
   std::vector<int> texel_r_;                         // the strip's texel at each sample: minor coordinate
   std::vector<float> band_max_, block_max_;          // skip bounds: per band, per block of kBlock bands
   static constexpr int kBlock = 8;
-  struct BandSide {
-    float prev, cur, grad;  // per band: the largest entries of lines l - 1 and l, the cross-section slope
-  };
-  std::vector<BandSide> side_;
   int last_k_ = -1, last_line_ = 0, last_u_start_ = 0;  // whose profile cur_ holds after a call
   HullStackF hull_;
 
