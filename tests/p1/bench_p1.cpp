@@ -68,8 +68,8 @@ void BM_P1Bake(benchmark::State& state) {
   set_counters(state, double(s.field.texel_count()) * K);
 }
 
-// The sweep as compute_p1 runs its far field (p1_sweep_spec): the strip gather, no line heights, 8 directions a
-// batch.
+// The sweep as compute_p1 runs its far field (p1_sweep_spec): the strip gather, no line heights, 8 directions
+// a batch.
 SweepSpec strip_sweep_spec(int K) {
   P1Params p;
   p.directions = K;

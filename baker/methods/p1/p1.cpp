@@ -95,7 +95,8 @@ SweepSpec p1_sweep_spec(const P1Params& p) {
   spec.tile_strip = true;
   spec.tile_values = false;
   spec.zero_buffers = false;  // FarHorizonWorker writes every receiver
-  spec.sample_heights = false;  // ... from its own profiles of the field (LinePattern), not the line's heights
+  spec.sample_heights =
+      false;       // ... from its own profiles of the field (LinePattern), not the line's heights
   spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
   return spec;
 }
