@@ -246,7 +246,7 @@ SweepPlan plan_sweep(const HeightField& f, const SweepSpec& spec, const std::vec
   const std::size_t t_bytes = f.texel_count() * sizeof(float);
   bool any_y_major = false;
   for (const SweepDirection& d : dirs) any_y_major = any_y_major || !d.x_major;
-  plan.transposed = any_y_major && t_bytes <= spec.max_buffer_bytes / 4;
+  plan.transposed = spec.sample_heights && any_y_major && t_bytes <= spec.max_buffer_bytes / 4;
   plan.buffer_budget = spec.max_buffer_bytes - (plan.transposed ? t_bytes : 0);
   auto whole = [&](int k) {
     return std::size_t(dirs[k].lines()) * std::size_t(dirs[k].stride()) * C * sizeof(float);

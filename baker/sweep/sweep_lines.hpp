@@ -114,6 +114,10 @@ struct SweepSpec {
   bool zero_buffers =
       true;  // zero the result buffers first (off: the worker writes every receiver's C floats)
   bool trim_thin_lines = true;  // clamp, thin fields: trimmed lines (off: every line walks every column)
+  // Off: the lines are not sampled (SweepLine::z is null, inside_begin = 0, inside_end = count) and no
+  // transposed copy of the field is made, for line visitors that read the field themselves (P1's far
+  // field builds its own profiles with the row and diagonal crossings).
+  bool sample_heights = true;
 };
 
 // The lines of one direction (plain data; see the header comment for the geometry).
@@ -213,17 +217,23 @@ void sample_line(const HeightField& field, const SweepDirection& dir, int line, 
 // Line `line` of direction `dir`, sampled into z[0..dir.count) (z must hold dir.count floats and outlive the
 // returned line): what tests use to walk one line by hand. The driver hands each line visitor
 // sampled_line(field, line_direction(dir, line), line, ...): the same line, trimmed on thin fields.
-inline SweepLine sampled_line(const HeightField& field, const SweepDirection& dir, int line, float* z,
-                              const float* transposed = nullptr) {
+// unsampled_line: the same line without its heights (z null, every sample counted inside).
+inline SweepLine unsampled_line(const SweepDirection& dir, int line) {
   SweepLine l;
   l.dir = &dir;
   l.line = line;
   l.count = dir.count;
   l.first_receiver = dir.first_receiver;
-  l.z = z;
   l.step = dir.step;
   // A trimmed line's direction (line_direction) starts later along the walk than the full line.
   if (dir.span > 0) l.s_offset = dir.su > 0 ? dir.u_start : dir.n_major - 1 - dir.u_start;
+  l.inside_begin = 0, l.inside_end = dir.count;
+  return l;
+}
+inline SweepLine sampled_line(const HeightField& field, const SweepDirection& dir, int line, float* z,
+                              const float* transposed = nullptr) {
+  SweepLine l = unsampled_line(dir, line);
+  l.z = z;
   sample_line(field, dir, line, z, &l.inside_begin, &l.inside_end, transposed);
   return l;
 }
@@ -454,7 +464,7 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
     tbb::parallel_for(tbb::blocked_range<int>(0, first[nb], 4), [&](const tbb::blocked_range<int>& r) {
       rc.check();
       Worker& worker = workers.local();
-      std::vector<float>& z = heights.local();
+      float* z = spec.sample_heights ? heights.local().data() : nullptr;
       int b = int(std::upper_bound(first.begin(), first.end(), r.begin()) - first.begin()) - 1;
       for (int flat = r.begin(); flat < r.end(); ++flat) {
         while (flat >= first[b + 1]) ++b;
@@ -464,7 +474,8 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
         SweepDirection trimmed;
         const SweepDirection* ld = &dir;
         if (dir.span > 0) trimmed = line_direction(dir, l), ld = &trimmed;
-        const SweepLine line = sampled_line(field, *ld, l, z.data(), tz);
+        const SweepLine line =
+            spec.sample_heights ? sampled_line(field, *ld, l, z, tz) : unsampled_line(*ld, l);
         float* out = lines[b][p];
         if (spec.zero_buffers) std::fill_n(out, std::size_t(dir.stride()) * std::size_t(C), 0.0f);
         worker(static_cast<const SweepLine&>(line), out);

@@ -68,17 +68,12 @@ void BM_P1Bake(benchmark::State& state) {
   set_counters(state, double(s.field.texel_count()) * K);
 }
 
-// The sweep as compute_p1 runs its far field: the strip gather, FarHorizonWorker's channels, 8 directions a
-// batch.
+// The sweep as compute_p1 runs its far field (p1_sweep_spec): the strip gather, no line heights, 8 directions
+// a batch.
 SweepSpec strip_sweep_spec(int K) {
-  SweepSpec spec;
-  spec.directions = K;
-  spec.channels = p1::FarHorizonWorker::channels();
-  spec.tile_nearest = spec.tile_values = false;
-  spec.tile_strip = true;
-  spec.zero_buffers = false;
-  spec.batch = 8;
-  return spec;
+  P1Params p;
+  p.directions = K;
+  return p1_sweep_spec(p);
 }
 
 // P1's far field alone (the strip search, FarHorizonWorker, as compute_p1 runs it with near_radius 2) and

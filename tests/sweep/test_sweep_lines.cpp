@@ -261,6 +261,43 @@ TEST(SweepLines, DeterministicForAnyThreadCount) {
   }
 }
 
+// sample_heights off (P1's far field): the lines reach the visitor with the same geometry and results
+// slots, without heights; the gathered results are the same bits. Fails if the unsampled line loses a field
+// (its distances s(n), positions or receivers) or still carries heights.
+TEST(SweepLines, UnsampledLinesKeepTheirGeometry) {
+  struct GeometryWorker {
+    bool expect_heights = true;
+    void operator()(const SweepLine& line, float* out) const {
+      EXPECT_EQ(line.z != nullptr, expect_heights);
+      for (int n = line.first_receiver; n < line.count; ++n) {
+        float* o = out + std::size_t(n - line.first_receiver) * 3;
+        o[0] = float(line.x(n)), o[1] = float(line.y(n)), o[2] = float(line.s(n));
+      }
+    }
+  };
+  for (Wrap wrap : {Wrap::clamp, Wrap::repeat})
+    for (int height : {48, 3}) {  // 64 x 3: thin, trimmed lines
+      const HeightField f = test_field(64, height, wrap);
+      auto run = [&](bool sample) {
+        SweepSpec spec;
+        spec.directions = 13;
+        spec.channels = 3;
+        spec.sample_heights = sample;
+        std::vector<float> acc(f.texel_count() * 13 * 9);  // per texel and direction: lo, hi, strip
+        sweep_lines(
+            f, spec, RunControl{}, [&] { return GeometryWorker{sample}; },
+            [&](int k, int i, int j, const TexelTaps& t) {
+              float* a = acc.data() + (f.index(i, j) * 13 + std::size_t(k)) * 9;
+              for (int c = 0; c < 3; ++c) a[c] = t.lo[c], a[3 + c] = t.hi[c], a[6 + c] = t.strip[c];
+            });
+        return acc;
+      };
+      const std::vector<float> sampled = run(true), unsampled = run(false);
+      ASSERT_FALSE(sampled.empty());
+      EXPECT_EQ(sampled, unsampled) << (wrap == Wrap::clamp ? "clamp " : "repeat ") << height;
+    }
+}
+
 TEST(SweepLines, CancelThrows) {
   const HeightField f = test_field(32, 32, Wrap::clamp);
   std::atomic<bool> cancel{true};

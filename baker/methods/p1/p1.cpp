@@ -95,6 +95,8 @@ SweepSpec p1_sweep_spec(const P1Params& p) {
   spec.tile_strip = true;
   spec.tile_values = false;
   spec.zero_buffers = false;  // FarHorizonWorker writes every receiver
+  spec.sample_heights =
+      false;       // ... from its own profiles of the field (LinePattern), not the line's heights
   spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
   return spec;
 }
@@ -445,6 +447,7 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
   if (!lights.empty()) {
     SweepSpec ls;
     ls.channels = p1::FarHorizonWorker::channels();
+    ls.sample_heights = false;
     ls.wrap_periods = p.wrap_periods;
     std::vector<double> elevation, radius;
     std::vector<Vec3> dir;
