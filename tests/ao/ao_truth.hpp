@@ -125,4 +125,20 @@ inline double occluded(const HeightField& f, Vec3 n, int i, int j, int K, const 
   return 2 * sum / K;
 }
 
+// Mean and rms of a - b over all entries (the benches' tables).
+struct Diff {
+  double mean = 0, rmse = 0;
+};
+inline Diff diff(const std::vector<float>& a, const std::vector<float>& b) {
+  Diff d;
+  for (std::size_t t = 0; t < a.size(); ++t) {
+    const double e = double(a[t]) - double(b[t]);
+    d.mean += e;
+    d.rmse += e * e;
+  }
+  d.mean /= double(a.size());
+  d.rmse = std::sqrt(d.rmse / double(a.size()));
+  return d;
+}
+
 }  // namespace hfbake::ao_truth

@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "ao_truth.hpp"
 #include "field/procedural.hpp"
 #include "field/triangulation.hpp"
 #include "methods/ao/hbao.hpp"
@@ -56,20 +57,8 @@ HeightField field_of(ProceduralKind kind, std::uint64_t seed, double amplitude =
   return make_procedural(spec, 1.0, Wrap::clamp);
 }
 
-struct Diff {
-  double mean = 0, rmse = 0;
-};
-Diff diff(const std::vector<float>& a, const std::vector<float>& b) {
-  Diff d;
-  for (std::size_t t = 0; t < a.size(); ++t) {
-    const double e = double(a[t]) - double(b[t]);
-    d.mean += e;
-    d.rmse += e * e;
-  }
-  d.mean /= double(a.size());
-  d.rmse = std::sqrt(d.rmse / double(a.size()));
-  return d;
-}
+using ao_truth::Diff;
+using ao_truth::diff;
 
 // The receiver-tangent band sum (lsao's TangentChain, slab estimator) over each texel's own ray: every
 // crossing of the triangulated surface, or (columns_only) only the column (x-major) / row (y-major) ones.

@@ -18,6 +18,7 @@
 #include <map>
 #include <string>
 
+#include "ao_truth.hpp"
 #include "field/procedural.hpp"
 #include "methods/ao/hbao.hpp"
 #include "methods/ao/lsao.hpp"
@@ -65,20 +66,8 @@ void TangentArgs(benchmark::internal::Benchmark* b) {
 }
 BENCHMARK(BM_LsaoTangent)->Apply(TangentArgs);
 
-struct Diff {
-  double mean = 0, rmse = 0;
-};
-Diff diff(const std::vector<float>& a, const std::vector<float>& b) {
-  Diff d;
-  for (std::size_t t = 0; t < a.size(); ++t) {
-    const double e = double(a[t]) - double(b[t]);
-    d.mean += e;
-    d.rmse += e * e;
-  }
-  d.mean /= double(a.size());
-  d.rmse = std::sqrt(d.rmse / double(a.size()));
-  return d;
-}
+using ao_truth::Diff;
+using ao_truth::diff;
 
 void measure() {
   struct Field {
