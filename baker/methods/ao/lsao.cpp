@@ -6,6 +6,7 @@
 
 #include "core/azimuth.hpp"
 #include "core/direction_blocks.hpp"
+#include "field/edge_crossings.hpp"
 #include "field/triangulation.hpp"
 #include "methods/ao/bake_ao.hpp"
 #include "methods/ao/lsao_chain_hull.hpp"
@@ -23,36 +24,20 @@ namespace {
 // The samples themselves lie on cell edges, where the triangulated and bilinear surfaces agree.
 template <class Visit>
 void line_crossings(const HeightField& f, double xa, double ya, double xb, double yb, Visit&& visit) {
-  double w[6], x[6], y[6];
-  int count = 0;
-  // Family g(x, y) = cx x + cy y: every integer m strictly between g(A) and g(B).
-  auto family = [&](double cx, double cy) {
-    const double ga = cx * xa + cy * ya, gb = cx * xb + cy * yb;
-    const double lo = std::min(ga, gb), hi = std::max(ga, gb);
-    for (double m = std::floor(lo) + 1; m < hi && count < 6; m += 1) {
-      const double t = (m - ga) / (gb - ga);
-      if (!(t > 1e-9 && t < 1 - 1e-9)) continue;
-      w[count] = t;
-      // Exactly on the family's line.
-      x[count] = cy == 0 ? m : xa + t * (xb - xa);
-      y[count] = cx == 0 ? m : cy != 0 && cx != 0 ? m - x[count] : ya + t * (yb - ya);
-      ++count;
-    }
-  };
-  family(1, 0);
-  family(0, 1);
-  family(1, 1);
-  for (int a = 1; a < count; ++a)  // insertion sort by w (at most a few)
-    for (int b = a; b > 0 && w[b] < w[b - 1]; --b) {
-      std::swap(w[b], w[b - 1]);
-      std::swap(x[b], x[b - 1]);
-      std::swap(y[b], y[b - 1]);
-    }
-  for (int c = 0; c < count; ++c) {
-    const double fx = std::floor(x[c]), fy = std::floor(y[c]);
+  EdgeCrossing c[kMaxEdgeCrossings];
+  const int count = edge_crossings(xa, ya, xb, yb, c);
+  for (int k = 0; k < count; ++k) {
+    const double t = c[k].t;
+    if (!(t > 1e-9 && t < 1 - 1e-9)) continue;
+    // Exactly on the edge's line.
+    const double m = c[k].m;
+    const double x = c[k].family == EdgeFamily::column ? m : xa + t * (xb - xa);
+    const double y = c[k].family == EdgeFamily::row        ? m
+                     : c[k].family == EdgeFamily::diagonal ? m - x
+                                                           : ya + t * (yb - ya);
+    const double fx = std::floor(x), fy = std::floor(y);
     const int ii = int(fx), jj = int(fy);
-    visit(w[c],
-          facet_height(x[c] - fx, y[c] - fy, [&](int di, int dj) { return double(f.at(ii + di, jj + dj)); }));
+    visit(t, facet_height(x - fx, y - fy, [&](int di, int dj) { return double(f.at(ii + di, jj + dj)); }));
   }
 }
 

@@ -11,6 +11,7 @@
 
 #include "core/azimuth.hpp"
 #include "core/direction_blocks.hpp"
+#include "field/edge_crossings.hpp"
 #include "field/triangulation.hpp"
 #include "methods/p1/fast_math.hpp"
 #include "methods/p1/horizon_sweep.hpp"
@@ -60,23 +61,12 @@ Rgb piece_radiance(const HeightField& f, const Rgb* facet_exit, double x, double
 
 constexpr double kMinGap = 1e-6;  // line parameter: the least gap between two points of an exact profile
 
-// The parameters in (0, 1), increasing, where the segment (x0, y0) -> (x1, y1) in texel coordinates crosses
-// a column, a row or a quad diagonal (x + y an integer: the reference's split, (i+1, j)-(i, j+1)): the kinks
-// of the triangulated surface along it. On a segment no longer than a texel along its major axis at most
-// 1 + 1 + 2 (the bound guards longer ones: at most 6). t must hold 6 values (callers may append more).
+// The parameters in (0, 1), increasing, where the segment (x0, y0) -> (x1, y1) crosses an edge of the
+// triangulation (field/edge_crossings.hpp). t must hold kMaxEdgeCrossings values (callers may append more).
 int edge_crossings(double x0, double y0, double x1, double y1, double* t) {
-  int n = 0;
-  auto cross = [&](double a0, double a1) {
-    const double d = a1 - a0;
-    if (!(d != 0)) return;
-    const double lo = d > 0 ? a0 : a1, hi = d > 0 ? a1 : a0;
-    for (int c = floor_int(lo) + 1; c < hi && n < 6; ++c) t[n++] = (c - a0) / d;
-  };
-  cross(x0, x1);
-  cross(y0, y1);
-  cross(x0 + y0, x1 + y1);
-  for (int a = 1; a < n; ++a)  // insertion sort of a handful of values
-    for (int b = a; b > 0 && t[b] < t[b - 1]; --b) std::swap(t[b], t[b - 1]);
+  EdgeCrossing c[kMaxEdgeCrossings];
+  const int n = edge_crossings(x0, y0, x1, y1, c);
+  for (int k = 0; k < n; ++k) t[k] = c[k].t;
   return n;
 }
 
