@@ -282,7 +282,6 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       }),
       units(double(H) * (1 + std::max(0, scene.bounces))),
       direct(N),
-      indirect(N),
       vis(want_vis ? N * kSh : 0),
       irr(want_irr ? N * kIrrChannels : 0) {
   azimuth_table(m, cphi, sphi);
@@ -779,6 +778,8 @@ void NlpBake::bounce_passes() {
     const nlp::Pyramid rp =
         nlp::build_pyramid(exitant.data(), 3, W, H, f.wrap, o.levels_per_octave, lu, /*half=*/true);
     std::vector<float>().swap(exitant);  // the pyramid's level 0 is a copy of it
+    // Allocated only now, after the pyramid's build (its largest moment): it is zero until this gather.
+    if (indirect.empty()) indirect.assign(N, Rgb{});
     // The last bounce adds straight into `indirect` (the same sum); the others keep their light for the
     // next bounce's exitant radiance.
     const bool last = bounce == scene.bounces;
@@ -823,6 +824,7 @@ void NlpBake::bounce_passes() {
       }
     }
   }
+  std::vector<Rgb>().swap(facet_exit);  // read by the gathers only; the layers are made without it
 }
 
 // The requested layers, in the order of NlpOptions::layers, and the metadata.
@@ -834,8 +836,8 @@ LayerSet NlpBake::layers() {
     if (name == "direct" || name == "indirect" || name == "total") {
       Layer& L = out.add(name, rgb_channels());
       for (std::size_t t = 0; t < N; ++t) {
-        const Rgb v =
-            name == "direct" ? direct[t] : (name == "indirect" ? indirect[t] : direct[t] + indirect[t]);
+        const Rgb ind = indirect.empty() ? Rgb{} : indirect[t];  // empty without bounces
+        const Rgb v = name == "direct" ? direct[t] : (name == "indirect" ? ind : direct[t] + ind);
         L.data[t * 3] = v.r, L.data[t * 3 + 1] = v.g, L.data[t * 3 + 2] = v.b;
       }
     } else if (name == "sh_visibility") {
@@ -877,13 +879,15 @@ double nlp_working_bytes(const FieldShape& field, const NlpOptions& o, int bounc
   double rgb_layers = 0;
   for (const char* name : {"direct", "indirect", "total"})
     if (std::find(o.layers.begin(), o.layers.end(), name) != o.layers.end()) rgb_layers += 12 * N;
-  // Always: the height pyramid, direct and indirect (RGB floats), with facet senders and bounces the two
-  // facets' exit radiance (RGB floats). While a bounce's radiance pyramid is
+  // Through the direct pass and the bounces: the height pyramid, direct (RGB floats) and, with facet
+  // senders and bounces, the two facets' exit radiance (RGB floats). While a bounce's radiance pyramid is
   // built: the exitant radiance, one level in float and its horizontal pass (12 bytes a texel each), the
-  // pyramid (binary16), and for all but the last bounce that bounce's light (12).
-  const double held = heights + 24 * N + (o.facet_senders && bounces > 0 ? 24 * N : 0);
+  // pyramid (binary16), and after the first bounce `indirect` (12). Its gather holds the pyramid, indirect
+  // and, for all but the last bounce, that bounce's light (12): never more than the build. At the end: the
+  // heights, direct and indirect beside the layers (the facets freed).
+  const double held = heights + 12 * N + (o.facet_senders && bounces > 0 ? 24 * N : 0);
   const double bounce = bounces > 0 ? radiance + 36 * N + (bounces > 1 ? 12 * N : 0) : 0;
-  return std::max(held, held + bounce - rgb_layers);
+  return std::max(heights + 24 * N, held + bounce - rgb_layers);
 }
 
 LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
