@@ -174,22 +174,37 @@ void load_surface_map(const Job& job, const std::string& pointer, const HeightFi
     return;
   }
   const std::string image = v["image"].get<std::string>();
-  const RgbImage rgb = read_rgb_image(job.resolve(image), v.value("colorspace", std::string()),
-                                      site(job, pointer + "/image"), site(job, pointer + "/colorspace"));
+  RgbImage rgb = read_rgb_image(job.resolve(image), v.value("colorspace", std::string()),
+                                site(job, pointer + "/image"), site(job, pointer + "/colorspace"));
   if (rgb.width != field.width || rgb.height != field.height)
     throw InputError(job.file.string(), pointer + "/image",
                      image + ": is " + std::to_string(rgb.width) + "x" + std::to_string(rgb.height) +
                          ", the height field is " + std::to_string(field.width) + "x" +
                          std::to_string(field.height));
   const float scale = v.value("scale", 1.0f);
-  for (std::size_t t = 0; t < texels.size(); ++t) {
-    const Rgb p = rgb.pixels[t];
+  std::vector<Rgb> pixels = std::move(rgb.pixels);  // scaled in place: no second full-size copy
+  for (std::size_t t = 0; t < pixels.size(); ++t) {
+    const Rgb p = pixels[t];
     if (!std::isfinite(p.r) || !std::isfinite(p.g) || !std::isfinite(p.b) || p.r < 0 || p.g < 0 || p.b < 0)
       throw InputError(job.file.string(), pointer + "/image",
                        image + ": pixel (" + std::to_string(t % std::size_t(field.width)) + ", " +
                            std::to_string(t / std::size_t(field.width)) + ") is negative or not finite");
-    texels[t] = p * scale;
+    pixels[t] = p * scale;
   }
+  texels = std::move(pixels);
+}
+
+void load_surface_map(const Job& job, const std::string& pointer, const HeightField& field, SurfaceMap& map) {
+  const nlohmann::json& v = job.doc.at(nlohmann::json::json_pointer(pointer));
+  if (v.is_number() || v.is_array()) {
+    const Rgb x = v.is_number() ? Rgb{v.get<float>(), v.get<float>(), v.get<float>()}
+                                : Rgb{v[0].get<float>(), v[1].get<float>(), v[2].get<float>()};
+    map.assign(field.texel_count(), x);
+    return;
+  }
+  std::vector<Rgb> texels(field.texel_count());
+  load_surface_map(job, pointer, field, texels);
+  map.assign(std::move(texels));
 }
 
 void load_lighting(const Job& job, Scene& scene) {

@@ -35,6 +35,8 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
 // "/surface/emission"): a number, [r, g, b], or {"image", "colorspace", "scale"} of the field's size.
 void load_surface_map(const Job& job, const std::string& pointer, const HeightField& field,
                       std::vector<Rgb>& texels);
+// The same into a SurfaceMap: a number or [r, g, b] is held once, an image per texel.
+void load_surface_map(const Job& job, const std::string& pointer, const HeightField& field, SurfaceMap& map);
 
 // The job's environment (absent: uniform radiance 1) and the lights that belong to it (the built-in
 // sky's sun) into scene.environment and scene.lights.

@@ -91,13 +91,15 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   // The process before any field: libraries, thread pools, Embree's device (measured: 140 MB for a 16^2
   // bake).
   constexpr double kProcess = 150.0 * (1 << 20);
-  // The scene: heights (decoded straight into the field), the normals and albedo only when read
-  // (scene_needs), the surface maps the job names.
+  // The scene: heights (decoded straight into the field), the normals only when read (scene_needs), the
+  // surface maps the job names.
   const SceneNeeds needs = scene_needs(job);
   const nlohmann::json surface = job.doc.value("surface", nlohmann::json::object());
   double scene_per_texel = 4;
   if (needs.normals) scene_per_texel += 12;
-  if (needs.albedo || surface.contains("albedo")) scene_per_texel += 12;
+  // An albedo image is held per texel (read even when no method reads it: validate checks it); a number
+  // or [r, g, b] is held once.
+  if (surface.contains("albedo") && surface["albedo"].is_object()) scene_per_texel += 12;
   if (surface.contains("emission")) scene_per_texel += 12;
   // Writing: a GeoTIFF band's plane (4 bytes a texel), a preview's RGB floats and bytes (15 bytes a pixel,
   // at most io/preview.hpp's 2048 px a side).
@@ -221,11 +223,10 @@ Scene load_scene(const Job& job, const std::function<void(double)>& progress) {
 
   const std::size_t n = scene.field.texel_count();
   const nlohmann::json surface = doc.value("surface", nlohmann::json::object());
-  if (needs.albedo || surface.contains("albedo")) {
+  if (surface.contains("albedo"))
+    load_surface_map(job, "/surface/albedo", scene.field, scene.surface.albedo);
+  else if (needs.albedo)
     scene.surface.albedo.assign(n, Rgb{0.5f, 0.5f, 0.5f});
-    if (surface.contains("albedo"))
-      load_surface_map(job, "/surface/albedo", scene.field, scene.surface.albedo);
-  }
   if (surface.contains("emission")) {
     scene.surface.emission.assign(n, Rgb{});
     load_surface_map(job, "/surface/emission", scene.field, scene.surface.emission);

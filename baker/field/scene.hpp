@@ -2,7 +2,9 @@
 // Built once per job by the job loader; methods read it and never modify it.
 #pragma once
 
+#include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "env/environment.hpp"
@@ -11,8 +13,34 @@
 
 namespace hfbake {
 
+// A surface property of every texel: one value held once (a number or [r, g, b] in the job: no bytes per
+// texel) or one value per texel, row-major like the field (an image). Empty: not loaded.
+class SurfaceMap {
+ public:
+  // All n texels have the value v.
+  void assign(std::size_t n, Rgb v) {
+    std::vector<Rgb>().swap(texels_);
+    uniform_ = v;
+    size_ = n;
+  }
+  // One value per texel.
+  void assign(std::vector<Rgb> texels) {
+    size_ = texels.size();
+    texels_ = std::move(texels);
+  }
+  Rgb operator[](std::size_t t) const { return texels_.empty() ? uniform_ : texels_[t]; }
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  std::size_t bytes() const { return texels_.size() * sizeof(Rgb); }
+
+ private:
+  std::vector<Rgb> texels_;  // empty: uniform_ everywhere
+  Rgb uniform_{};
+  std::size_t size_ = 0;
+};
+
 struct Surface {
-  std::vector<Rgb> albedo;    // per texel, row-major like the field (always filled; constant albedo repeated)
+  SurfaceMap albedo;          // loaded when a method or the reference reads it (or the job names an image)
   std::vector<Rgb> emission;  // per texel emitted radiance; empty = the surface emits nothing
 };
 

@@ -81,8 +81,9 @@ struct MethodInfo {
   LayerSet (*finish_stage_blocks)(const Scene& scene, const nlohmann::json& params, int stage,
                                   LayerSet&& previous, LayerSet&& sums, const RunControl& rc) = nullptr;
   // What the method reads from the Scene besides the heights and the lighting. The job loader builds
-  // Scene::normals and Scene::surface.albedo (12 bytes per texel each) only when a method of the job or
-  // the reference reads them; a method that does not must not touch them (they may be empty).
+  // Scene::normals (12 bytes per texel) and Scene::surface.albedo (12 bytes per texel from an image, a
+  // constant held once) only when a method of the job or the reference reads them; a method that does not
+  // must not touch them (they may be empty).
   bool reads_normals = true;
   bool reads_albedo = true;
   // Obscurance family: its falloff and radius define the quantity the reference's "obscurance" estimates.

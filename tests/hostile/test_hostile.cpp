@@ -577,6 +577,63 @@ TEST(MemoryEstimate, CountsTheEnvironmentImage) {
   fs::remove_all(dir);
 }
 
+std::vector<float> read_all_channels(const fs::path& p) {
+  auto in = OIIO::ImageInput::open(p.string());
+  if (!in) return {};
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<float> px(std::size_t(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
+  return px;
+}
+
+// A constant albedo (a number or [r, g, b]) is held once, not 12 bytes a texel (issue 15: a 16384^2 hbao
+// job with "albedo": 0.5 was charged, and held, 3 GiB for it): validate's scene part of a 2048^2 p2 job is
+// the fixed 150 MiB, the heights and the normals p2 reads, and p2 and the reference bake the same bits from
+// the constant as from an image holding it in every texel.
+TEST(MemoryEstimate, ConstantAlbedoIsHeldOnceAndBakesLikeAnImageOfIt) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("hfbake_albedo_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  json j = base_job();
+  j["height"]["procedural"]["size"] = {2048, 2048};
+  j["surface"] = {{"albedo", {0.3, 0.5, 0.7}}};
+  j["bake"] = {{{"method", "p2"}, {"directions", 4}}};
+  const HfbakeRun v = run_hfbake(dir, {"validate", write_job(dir, j, "big.json")});
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const std::size_t at = v.err.find("scene ");
+  ASSERT_NE(at, std::string::npos) << v.err;
+  const double scene_mib = std::stod(v.err.substr(at + 6));
+  const double texels_mib = 2048.0 * 2048.0 / (1 << 20);
+  EXPECT_LT(scene_mib, 150 + 16 * texels_mib + 1) << v.err;  // the heights and normals; was + 12 a texel
+
+  const int n = 48;
+  j["height"]["procedural"]["size"] = {n, n};
+  j["bounces"] = 1;
+  j["reference"] = {{"samples", 4}, {"seed", 1}};
+  j["output"] = {{"dir", "constant"}, {"previews", false}};
+  const HfbakeRun a = run_hfbake(dir, {"bake", write_job(dir, j, "constant.json"), "--no-cache", "--quiet"});
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  std::vector<float> albedo(std::size_t(n) * n * 3);
+  for (std::size_t t = 0; t < albedo.size(); t += 3)
+    albedo[t] = 0.3f, albedo[t + 1] = 0.5f, albedo[t + 2] = 0.7f;
+  write_image(dir / "albedo.exr", n, n, 3, albedo);
+  j["surface"] = {{"albedo", {{"image", "albedo.exr"}}}};
+  j["output"]["dir"] = "image";
+  const HfbakeRun b = run_hfbake(dir, {"bake", write_job(dir, j, "image.json"), "--no-cache", "--quiet"});
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  int compared = 0;
+  for (const auto& e : fs::directory_iterator(dir / "constant")) {
+    if (e.path().extension() != ".exr") continue;
+    const std::vector<float> x = read_all_channels(e.path()),
+                             y = read_all_channels(dir / "image" / e.path().filename());
+    ASSERT_FALSE(x.empty()) << e.path();
+    EXPECT_EQ(x, y) << e.path().filename();
+    ++compared;
+  }
+  EXPECT_GE(compared, 2);  // p2's layers and the reference's
+  fs::remove_all(dir);
+}
+
 }  // namespace
 
 namespace {
