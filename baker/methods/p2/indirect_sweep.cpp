@@ -60,6 +60,9 @@ Rgb piece_radiance(const HeightField& f, const Rgb* facet_exit, double x, double
 }
 
 constexpr double kMinGap = 1e-6;  // line parameter: the least gap between two points of an exact profile
+// Texel units on the minor axis: receivers farther than 1 + kReadMargin off a clamp field are never read
+// (the margin covers the rounding of the taps' line positions).
+constexpr double kReadMargin = 1e-6;
 
 // The parameters in (0, 1), increasing, where the segment (x0, y0) -> (x1, y1) crosses an edge of the
 // triangulation (field/edge_crossings.hpp). t must hold kMaxEdgeCrossings values (callers may append more).
@@ -265,6 +268,7 @@ struct LineWorker {
     // Exact near field at the texels: the receivers gather only the samples at least `lag` fine samples
     // (fine units of position) behind them (near_radius texels), from a tree that lags that far.
     const bool near = lag > 0;
+    const bool repeat = line.dir->repeat;
     int pushed = ib;  // the next terrain sample to push
     for (int s = 0; s < n0; ++s) {
       const int q = fine_of(s);
@@ -283,6 +287,13 @@ struct LineWorker {
       float* o = out + std::size_t(s - line.first_receiver) * kChannels;
       o[kRadianceR] = o[kRadianceG] = o[kRadianceB] = o[kTerrainWeight] = 0;
       o[kHorizonElevation] = -p1::kHalfPiF;  // nothing behind: P1's convention
+      // Beyond a clamp field's edge only the receivers within a texel of it are read (texel_taps: a texel
+      // blends the lines just below and above it on its column); the rest of the line's run off the field
+      // stays at the values above, unread.
+      if (!terrain && !repeat) {
+        const double v = line.dir->x_major ? line.y(s) : line.x(s);
+        if (v < -1 - kReadMargin || v > double(line.dir->n_minor) + kReadMargin) continue;
+      }
       const int r = q - ib;
       // The terrain samples gathered here, 0..terrain_end-1: all before the receiver, or with the near
       // field those at least `lag` behind it (what the lagging tree holds).
@@ -446,6 +457,7 @@ SweepSpec indirect_sweep_spec(const IndirectSweepSpec& spec) {
   for (int k = spec.k_begin; k < k1; ++k) ss.azimuths.push_back(azimuth(k, spec.directions));
   ss.channels = kChannels;
   ss.wrap_periods = spec.wrap_periods;
+  ss.zero_buffers = false;  // LineWorker writes every receiver's channels
   return ss;
 }
 
