@@ -22,7 +22,8 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
 
 Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrain_end,
                     std::span<const int> horizons, double inv_step, const WedgeWeights& w, double* weight,
-                    const double* inv_dist, GatherScratch* scratch, const double* x) {
+                    const double* inv_dist, GatherScratch* scratch, const double* x,
+                    const double* horizon_slopes) {
   GatherScratch local;
   GatherScratch& sc = scratch ? *scratch : local;
   const int m = int(horizons.size());
@@ -32,6 +33,10 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
   if (x) inv_dist = nullptr;
   // The distance from sample j to the receiver (positions) and its world-slope factor.
   auto dist = [&](int j) { return x ? xr - x[j] : double(r - j); };
+  // The slope of horizon k seen from r.
+  auto horizon_slope = [&](int k) {
+    return horizon_slopes ? horizon_slopes[k] : visibility_slope(h, x, horizons[k], r);
+  };
   if (weight) *weight = 0;
   if (m == 0) return {};
   // The visible stretches tile the elevations from the global horizon down to the tangent plane: each
@@ -43,7 +48,7 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
   Rgb* LI = sc.L.data();
   int M = 0;  // intervals so far; T[M] is the current upper boundary
   {
-    const double t0 = visibility_slope(h, x, horizons[0], r) * inv_step;
+    const double t0 = horizon_slope(0) * inv_step;
     if (!(t0 > t_n)) return {};  // everything lies below the tangent plane
     T[0] = float(t0);
   }
@@ -51,7 +56,7 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
     int j = horizons[k];
     const bool last = k + 1 == m;
     const int end = last ? terrain_end : horizons[k + 1];
-    const double limit = last ? -std::numeric_limits<double>::infinity() : visibility_slope(h, x, end, r);
+    const double limit = last ? -std::numeric_limits<double>::infinity() : horizon_slope(k + 1);
     // Fully visible segments j -> j+1. (The test s_next > limit by multiplication: the same as the
     // division up to rounding at exact ties, where the segment's weight is zero anyway.)
     bool done = false;
@@ -109,6 +114,16 @@ void run_starts(const double* h, int r, std::span<const int> horizons, std::vect
   out.clear();
   for (int c : horizons)
     if (c == 0 || !(visibility_slope(h, x, c - 1, r) > visibility_slope(h, x, c, r))) out.push_back(c);
+}
+
+int run_starts(const double* h, int r, const int* horizons, const double* slopes, int m, int* out,
+               double* out_slopes, const double* x) {
+  int n = 0;
+  for (int k = 0; k < m; ++k) {
+    const int c = horizons[k];
+    if (c == 0 || !(visibility_slope(h, x, c - 1, r) > slopes[k])) out[n] = c, out_slopes[n] = slopes[k], ++n;
+  }
+  return n;
 }
 
 void run_starts_of_visible(std::span<const int> visible, std::vector<int>& out) {

@@ -88,9 +88,10 @@ struct LineWorker {
   std::vector<Rgb> seg_mean, seg_slope;  // per segment q -> q+1 (SegmentRadiance)
   std::vector<double> inv_dist;          // inv_step / d
   double inv_dist_step = 0;
-  std::vector<double> xs, fx, fy;  // exact profiles: fine samples' positions and texel coordinates
-  std::vector<int> recv;           // exact profiles: the fine index of each driver sample
-  std::vector<int> visible, starts;
+  std::vector<double> xs, fx, fy;    // exact profiles: fine samples' positions and texel coordinates
+  std::vector<int> recv;             // exact profiles: the fine index of each driver sample
+  std::vector<int> visible, starts;  // per receiver: the tree's horizons, the run starts
+  std::vector<double> visible_slope, start_slope;  // their slopes seen from the receiver
   GatherScratch gather_scratch;
   P2SweepStats stats;
   // Each worker adds its counts to the caller's totals when the driver destroys it (integer sums: the
@@ -263,7 +264,13 @@ struct LineWorker {
     auto slope_to = [&](int j, int r) {
       return X ? (hh[j] - hh[r]) * inv_step / (X[r] - X[j]) : (hh[j] - hh[r]) * inv_dist[r - j];
     };
-    if (!naive) tree.reset(T);
+    if (!naive) {
+      tree.reset(T);
+      if (visible.size() < std::size_t(T)) {  // the tree's horizons and the run starts, with slopes
+        visible.resize(std::size_t(T)), visible_slope.resize(std::size_t(T));
+        starts.resize(std::size_t(T)), start_slope.resize(std::size_t(T));
+      }
+    }
     const std::uint64_t it0 = tree.iterations();
     // Exact near field at the texels: the receivers gather only the samples at least `lag` fine samples
     // (fine units of position) behind them (near_radius texels), from a tree that lags that far.
@@ -309,21 +316,31 @@ struct LineWorker {
         stats.receivers += 1;
         stats.naive_iterations += std::uint64_t(r);
       }
+      int ns = 0;                      // run starts
+      const double* slopes = nullptr;  // their slopes (null: the gather computes them)
       if (naive) {
         naive_visible(hh, r, visible, terrain_end, X);
         run_starts_of_visible(visible, starts);
+        ns = int(starts.size());
         if (terrain) stats.iterations += std::uint64_t(r);
-      } else if (near) {  // the tree holds the samples 0..terrain_end-1: what the receiver sees of them
-        tree.query(X ? X[r] : double(r), hh[r], visible);
-        run_starts(hh, r, visible, starts, X);
-      } else if (terrain) {
-        run_starts(hh, r, tree.horizons(), starts, X);
-        stats.horizons += tree.horizons().size();
-      } else {  // beyond a clamp field's border: sees the terrain, is not terrain itself
-        tree.query(X ? X[r] : double(r), hh[r], visible);
-        run_starts(hh, r, visible, starts, X);
+      } else {
+        if (near || !terrain) {
+          // near: the tree holds the samples 0..terrain_end-1, what the receiver sees of them; !terrain:
+          // beyond a clamp field's border, sees the terrain, is not terrain itself
+          std::uint64_t checks = 0;
+          const int m =
+              tree.query(X ? X[r] : double(r), hh[r], visible.data(), visible_slope.data(), &checks);
+          ns = run_starts(hh, r, visible.data(), visible_slope.data(), m, starts.data(), start_slope.data(),
+                          X);
+        } else {
+          const auto hz = tree.horizons();
+          ns = run_starts(hh, r, hz.data(), tree.horizon_slopes().data(), int(hz.size()), starts.data(),
+                          start_slope.data(), X);
+          stats.horizons += hz.size();
+        }
+        slopes = start_slope.data();
       }
-      if (terrain) stats.run_starts += starts.size();
+      if (terrain) stats.run_starts += std::uint64_t(ns);
       if (!gather) continue;
       const TexelPair t = line.height_taps(s, *field);
       const Vec3 nrm =
@@ -342,14 +359,14 @@ struct LineWorker {
       if (near)
         for (int j = std::max(0, terrain_end); j < std::min(r, T); ++j)
           wf.t_n = std::max(wf.t_n, slope_to(j, r));
-      const Rgb e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, wf, &weight,
-                                    X ? nullptr : inv_dist.data(), &gather_scratch, X);
+      const Rgb e = gather_segments(hh, seg, r, terrain_end, {starts.data(), std::size_t(ns)}, inv_step, wf,
+                                    &weight, X ? nullptr : inv_dist.data(), &gather_scratch, X, slopes);
       o[kRadianceR] = e.r;
       o[kRadianceG] = e.g;
       o[kRadianceB] = e.b;
       o[kTerrainWeight] = float(weight);
       // The global horizon's elevation exactly as P1's HorizonLineWorker computes it.
-      if (!spec->p1_sin_horizon && !starts.empty()) {  // (unused when P1's horizons split the lobe)
+      if (!spec->p1_sin_horizon && ns > 0) {  // (unused when P1's horizons split the lobe)
         const int c = starts.front();
         const double run = X ? X[r] - X[c] : double(r - c);
         o[kHorizonElevation] = p1::fast_elevation(float(hh[c] - hh[r]), float(run) * float(line.step / S));
