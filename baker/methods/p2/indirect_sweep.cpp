@@ -3,6 +3,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -381,18 +382,36 @@ struct LineWorker {
 struct NearPiece {
   p1::NearCrossing c;
   FacetRef a, b;  // the facets beside the piece (facets_beside), relative to the texel
+  // For texels whose stencil lies on the field (NearStencil::margin): the offsets of the edge's end points
+  // in the field's heights and of the facets in the facets' radiance, from the texel's own.
+  std::ptrdiff_t za = 0, zb = 0, fa = 0, fb = 0;
 };
 
-std::vector<NearPiece> near_pieces(double dx, double dy, double radius, double texel_size) {
-  std::vector<NearPiece> out;
+// P1's near stencil of one direction with its facets, and how far it reaches: texels at least `margin`
+// texels from every border read only heights and facets on the field, unwrapped and unclamped.
+struct NearStencil {
+  std::vector<NearPiece> pieces;
+  int margin = 0;
+};
+
+NearStencil near_stencil(const HeightField& f, double dx, double dy, double radius) {
+  NearStencil out;
   float px = 0, py = 0;
-  for (const p1::NearCrossing& c : p1::near_field_stencil(dx, dy, radius, texel_size)) {
+  int reach = 0;
+  auto cover = [&](int d) { reach = std::max(reach, std::abs(d)); };
+  const std::ptrdiff_t w = f.width;
+  for (const p1::NearCrossing& c : p1::near_field_stencil(dx, dy, radius, f.texel_size)) {
     NearPiece p;
     p.c = c;
     std::tie(p.a, p.b) = facets_beside(0.5 * (px + c.x), 0.5 * (py + c.y), dx, dy);
-    out.push_back(p);
+    p.za = c.ai + c.aj * w, p.zb = c.bi + c.bj * w;
+    p.fa = 2 * (p.a.i + p.a.j * w) + p.a.q, p.fb = 2 * (p.b.i + p.b.j * w) + p.b.q;
+    for (int d : {c.ai, c.aj, c.bi, c.bj, p.a.i, p.a.j, p.b.i, p.b.j}) cover(d);
+    cover(int(std::ceil(std::fabs(c.x))) + 1), cover(int(std::ceil(std::fabs(c.y))) + 1);
+    out.pieces.push_back(p);
     px = c.x, py = c.y;
   }
+  out.margin = reach;
   return out;
 }
 
@@ -404,20 +423,37 @@ struct NearInterval {
   double lo, hi;
   Rgb L;
 };
-void march_near(const HeightField& f, const std::vector<NearPiece>& pieces, const Rgb* exit_facets, int i,
-                int j, std::vector<NearInterval>& out) {
+void march_near(const HeightField& f, const NearStencil& st, const Rgb* exit_facets, int i, int j,
+                std::vector<NearInterval>& out) {
   out.clear();
-  const bool clamp = f.wrap == Wrap::clamp;
-  const double z0 = f.z[f.index(i, j)];
+  const std::size_t idx = f.index(i, j);
+  const double z0 = f.z[idx];
   double m = -std::numeric_limits<double>::infinity();
-  for (const NearPiece& p : pieces) {
+  auto slope_of = [&](const p1::NearCrossing& c, float za, float zb) {
+    return (double(za + (zb - za) * c.w) - z0) * c.inv_s;
+  };
+  const int g = st.margin;
+  if (i >= g && j >= g && i + g < f.width && j + g < f.height) {  // the whole stencil on the field
+    const float* z = f.z.data() + idx;
+    const Rgb* fe = exit_facets + 2 * idx;
+    for (const NearPiece& p : st.pieces) {
+      const double slope = slope_of(p.c, z[p.za], z[p.zb]);
+      if (slope > m) {
+        const Rgb La = fe[p.fa];
+        out.push_back({m, slope, p.a == p.b ? La : (La + fe[p.fb]) * 0.5f});
+        m = slope;
+      }
+    }
+    return;
+  }
+  const bool clamp = f.wrap == Wrap::clamp;
+  for (const NearPiece& p : st.pieces) {
     const p1::NearCrossing& c = p.c;
     const float px = float(i) + c.x, py = float(j) + c.y;
     if (clamp &&
         (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
       break;  // the terrain ends at the border
-    const float za = f.at(i + c.ai, j + c.aj), zb = f.at(i + c.bi, j + c.bj);
-    const double slope = (double(za + (zb - za) * c.w) - z0) * c.inv_s;
+    const double slope = slope_of(c, f.at(i + c.ai, j + c.aj), f.at(i + c.bi, j + c.bj));
     if (slope > m) {
       const Rgb La = facet_value(f, exit_facets, {i + p.a.i, j + p.a.j, p.a.q});
       const Rgb L =
@@ -427,6 +463,14 @@ void march_near(const HeightField& f, const std::vector<NearPiece>& pieces, cons
     }
   }
 }
+
+// Per thread of the texel visitor: the near intervals, and the facet normals of the last texel (the
+// visitor runs the directions of a batch texel by texel).
+struct NearScratch {
+  std::vector<NearInterval> intervals;
+  int fi = -1, fj = -1;
+  Vec3f fn[2];
+};
 
 }  // namespace
 
@@ -499,13 +543,13 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
   std::mutex totals_mutex;
   // Exact near field (IndirectSweepSpec::near_radius): P1's near stencil per direction, with facets.
   const bool near = spec.near_radius > 0 && spec.exit_facets && spec.p1_sin_horizon && spec.gather;
-  std::vector<std::vector<NearPiece>> pieces(near ? nb : 0);
+  std::vector<NearStencil> pieces(near ? nb : 0);
   for (int k = 0; k < int(pieces.size()); ++k) {
     const SweepDirection d = plan_direction(field, ss, k);
-    pieces[k] = near_pieces(d.dx, d.dy, spec.near_radius, field.texel_size);
+    pieces[k] = near_stencil(field, d.dx, d.dy, spec.near_radius);
   }
   // The visitor runs for one direction at a time on each thread (its scratch is per thread).
-  tbb::enumerable_thread_specific<std::vector<NearInterval>> near_scratch;
+  tbb::enumerable_thread_specific<NearScratch> near_scratch;
   // A texel's terrain part of direction k with the exact near field: the near intervals exactly (clipped to
   // each normal's tangent plane and to P1's horizon e), and above the near field up to e the mean radiance
   // the lines' receivers gathered from the far samples (terrain_weight minus the near intervals' weight:
@@ -513,7 +557,8 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
   // needs them, its two facets'.
   auto texel_near_far = [&](int k, int i, int j, std::size_t idx, const TexelTaps& t, double e, double se,
                             double ce) {
-    std::vector<NearInterval>& iv = near_scratch.local();
+    NearScratch& ns = near_scratch.local();
+    std::vector<NearInterval>& iv = ns.intervals;
     march_near(field, pieces[k], spec.exit_facets->data(), i, j, iv);
     const double top = ce > 0 ? se / ce : std::numeric_limits<double>::infinity();  // tan e
     const double wb = t.value(kTerrainWeight);
@@ -526,10 +571,17 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
       if (!(tw > 0)) return;
       const WedgeWeights w = WedgeWeights::make(n, cs[k], sn[k], wedge);
       double er = 0, eg = 0, eb = 0, wn = 0;
+      // The intervals tile the elevations, so an interval's lower bound is mostly the last one's upper
+      // bound: F there is reused (compared bit for bit; F is a plain function of its argument).
+      std::uint64_t last_t = std::bit_cast<std::uint64_t>(std::numeric_limits<double>::quiet_NaN());
+      double last_F = 0;
       for (const NearInterval& v : iv) {
         const double lo = std::max(v.lo, w.t_n), hi = std::min(v.hi, top);
         if (!(hi > lo)) continue;
-        const double d = w.F(hi) - w.F(lo);
+        const double F_lo = std::bit_cast<std::uint64_t>(lo) == last_t ? last_F : w.F(lo);
+        const double F_hi = w.F(hi);
+        last_t = std::bit_cast<std::uint64_t>(hi), last_F = F_hi;
+        const double d = F_hi - F_lo;
         er += v.L.r * d, eg += v.L.g * d, eb += v.L.b * d, wn += d;
       }
       er /= kPi, eg /= kPi, eb /= kPi, wn /= kPi;
@@ -540,9 +592,8 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
     };
     part(normals[idx].d(), acc.data() + idx * 3);
     if (facets) {
-      Vec3f fn[2];
-      facet_normals(field, i, j, fn);
-      for (int q = 0; q < 2; ++q) part(fn[q].d(), acc_f.data() + (2 * idx + q) * 3);
+      if (ns.fi != i || ns.fj != j) facet_normals(field, i, j, ns.fn), ns.fi = i, ns.fj = j;
+      for (int q = 0; q < 2; ++q) part(ns.fn[q].d(), acc_f.data() + (2 * idx + q) * 3);
     }
   };
   sweep_lines(
@@ -582,8 +633,9 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
           return;
         }
         if (facets) {  // the same mean terrain radiance over the facets' lobes
-          Vec3f fn[2];
-          facet_normals(field, i, j, fn);
+          NearScratch& ns = near_scratch.local();
+          if (ns.fi != i || ns.fj != j) facet_normals(field, i, j, ns.fn), ns.fi = i, ns.fj = j;
+          const Vec3f* fn = ns.fn;
           for (int q = 0; q < 2; ++q) {
             const std::size_t fi = 2 * idx + q;
             const double tf = terrain_weight(fn[q].d(), cs[k], sn[k], K, e, se, ce);
