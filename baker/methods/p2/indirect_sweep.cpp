@@ -150,7 +150,8 @@ struct LineWorker {
       const double x1 = line.x(s + 1), y1 = line.y(s + 1);
       int m = edge_crossings(x0, y0, x1, y1, t);
       for (int sub = 1; sub < S; ++sub) t[m++] = double(sub) / S;
-      std::sort(t, t + m);
+      for (int a = S > 1 ? 1 : m; a < m; ++a)  // insertion sort (the crossings come sorted)
+        for (int b = a; b > 0 && t[b] < t[b - 1]; --b) std::swap(t[b], t[b - 1]);
       double last = 0;
       for (int c = 0; c < m; ++c) {
         // Points within kMinGap of a sample or another point are that point already (to kMinGap times the
@@ -310,6 +311,8 @@ struct LineWorker {
         terrain_end = std::min(r, T);
       else if (!X)
         terrain_end = std::min(r - lag + 1, T);
+      else if (!naive)  // the samples pushed: those at least `lag` behind (all before r, since lag > 0)
+        terrain_end = pushed - ib;
       else
         terrain_end = int(std::upper_bound(X, X + std::max(0, std::min(r, T)), pos_q - lag) - X);
       if (terrain_end <= 0) continue;  // no (far) terrain behind this receiver
