@@ -503,8 +503,9 @@ std::size_t indirect_line_scratch_bytes(int count, int supersampling, bool exact
   const std::size_t fine =
       std::size_t(std::max(count, 1)) * std::size_t(supersampling + (exact_profile ? 3 : 0));
   // h, inv_dist 8 + 8; L, seg_mean, seg_slope 36; exact: xs, fx, fy 24; recv 4 per driver sample; the hull
-  // tree 8 + 8 + 4 + 4 + 1 + its stack 24 and horizons 4; gather scratch 20; visible and starts 8.
-  return fine * (16 + 36 + (exact_profile ? 24 : 0) + 53 + 20 + 8) + std::size_t(count) * 4;
+  // tree's nodes 32, its stack 16 and horizons with slopes 12; gather scratch 20; visible and starts with
+  // their slopes 24.
+  return fine * (16 + 36 + (exact_profile ? 24 : 0) + 60 + 20 + 24) + std::size_t(count) * 4;
 }
 
 RunControl p2_sub_range(const RunControl& rc, double a, double span) {
