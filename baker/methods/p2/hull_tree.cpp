@@ -110,7 +110,8 @@ int HullTree::query(double x, double height, int* horizons, double* slopes, std:
       }
     }
     const int p = f.parent;
-    if (f.child >= 0 || nd[p].permanent || p == last) horizons[m] = p, slopes[m] = f.slope, ++m;
+    horizons[m] = p, slopes[m] = f.slope;  // kept (counted) or overwritten by the next
+    m += (f.child >= 0) | (nd[p].permanent != 0) | (p == last);
     --top;
   }
   *checks += it;

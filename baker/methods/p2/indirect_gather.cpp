@@ -118,10 +118,14 @@ void run_starts(const double* h, int r, std::span<const int> horizons, std::vect
 
 int run_starts(const double* h, int r, const int* horizons, const double* slopes, int m, int* out,
                double* out_slopes, const double* x) {
+  // Written without a branch on the outcome (it is hard to predict): every horizon is stored, and the
+  // count moves past it when it is kept.
   int n = 0;
   for (int k = 0; k < m; ++k) {
     const int c = horizons[k];
-    if (c == 0 || !(visibility_slope(h, x, c - 1, r) > slopes[k])) out[n] = c, out_slopes[n] = slopes[k], ++n;
+    const bool keep = (c == 0) | !(visibility_slope(h, x, std::max(c - 1, 0), r) > slopes[k]);
+    out[n] = c, out_slopes[n] = slopes[k];
+    n += keep;
   }
   return n;
 }
