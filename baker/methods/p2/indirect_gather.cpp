@@ -20,19 +20,23 @@ Rgb gather_stretches(const double* h, const Rgb* L, int r, int terrain_end, std:
   return gather_segments(h, seg, r, terrain_end, horizons, inv_step, w, weight, inv_dist, scratch);
 }
 
-Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrain_end,
-                    std::span<const int> horizons, double inv_step, const WedgeWeights& w, double* weight,
-                    const double* inv_dist, GatherScratch* scratch, const double* x,
-                    const double* horizon_slopes) {
+namespace {
+// gather_segments for unit spacing (kX false, x null) or positions (kX true): the same operations, the
+// choice made once instead of at every visible sample.
+template <bool kX>
+Rgb gather_segments_impl(const double* h, const SegmentRadiance& L, int r, int terrain_end,
+                         std::span<const int> horizons, double inv_step, const WedgeWeights& w,
+                         double* weight, const double* inv_dist, GatherScratch* scratch, const double* x,
+                         const double* horizon_slopes) {
   GatherScratch local;
   GatherScratch& sc = scratch ? *scratch : local;
   const int m = int(horizons.size());
   const double t_n = w.t_n;
   const double hr = h[r];
-  const double xr = x ? x[r] : 0;
-  if (x) inv_dist = nullptr;
+  const double xr = kX ? x[r] : 0;
+  if (kX) inv_dist = nullptr;
   // The distance from sample j to the receiver (positions) and its world-slope factor.
-  auto dist = [&](int j) { return x ? xr - x[j] : double(r - j); };
+  auto dist = [&](int j) { return kX ? xr - x[j] : double(r - j); };
   // The slope of horizon k seen from r.
   auto horizon_slope = [&](int k) {
     return horizon_slopes ? horizon_slopes[k] : visibility_slope(h, x, horizons[k], r);
@@ -84,7 +88,7 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
     // The segment j -> j+1 is visible down to the next horizon's line of sight (slope `limit`):
     // parameter u of the crossing, from h_j + u dh - h_r = limit (x_r - x_j - u dx) (unit spacing: dx = 1).
     const double dh = h[j + 1] - h[j];
-    const double den = x ? dh + limit * (x[j + 1] - x[j]) : dh + limit;
+    const double den = kX ? dh + limit * (x[j + 1] - x[j]) : dh + limit;
     double u = den < 0 ? (limit * dist(j) - (h[j] - hr)) / den : 1.0;
     u = std::clamp(u, 0.0, 1.0);
     LI[M] = L.mean[j] + L.slope[j] * float(0.5 * (u - 1));
@@ -107,6 +111,18 @@ Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrai
   }
   if (weight) *weight = (double(F[0]) - double(F[M])) / kPi;  // T[M]: t_n (no crease: the lowest far slope)
   return {float(acc_r / kPi), float(acc_g / kPi), float(acc_b / kPi)};
+}
+
+}  // namespace
+
+Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrain_end,
+                    std::span<const int> horizons, double inv_step, const WedgeWeights& w, double* weight,
+                    const double* inv_dist, GatherScratch* scratch, const double* x,
+                    const double* horizon_slopes) {
+  return x ? gather_segments_impl<true>(h, L, r, terrain_end, horizons, inv_step, w, weight, inv_dist,
+                                        scratch, x, horizon_slopes)
+           : gather_segments_impl<false>(h, L, r, terrain_end, horizons, inv_step, w, weight, inv_dist,
+                                         scratch, nullptr, horizon_slopes);
 }
 
 void run_starts(const double* h, int r, std::span<const int> horizons, std::vector<int>& out,
