@@ -56,32 +56,44 @@ void HullTree::push_at(double x, double height) {
   Frame* st = stack_.data();
   int top = 0, tail = -1, nh = 0;
   std::uint64_t it = 0;
+  auto append = [&](int p, double slope) {  // the root's next child
+    if (tail < 0)
+      nd[r].first_child = p;
+    else
+      nd[tail].next_sibling = p;
+    nd[p].next_sibling = -1;
+    tail = p;
+    hz[nh] = p, hs[nh] = slope, ++nh;
+  };
   st[0] = {r - 1, nd[r - 1].first_child, (nd[r - 1].h - height) / (x - nd[r - 1].x)};
   while (top >= 0) {
     Frame& f = st[top];
     if (f.child >= 0) {
       ++it;
-      const Node& c = nd[f.child];
+      const int ci = f.child;
+      const Node& c = nd[ci];
       const double s = (c.h - height) / (x - c.x);
-      if (s > f.slope) {
-        const int ci = f.child;
+      if (s > f.slope) {  // c leaves its parent for the root (deeper)
         f.child = c.next_sibling;
-        st[++top] = {ci, c.first_child, s};
+        // The scan of c's children starts with its farthest, g. Mostly g stays (then so do the rest): c is
+        // the root's next child at once, without a frame of its own. The same steps as with one.
+        const int g = c.first_child;
+        if (g >= 0) {
+          ++it;
+          const double sg = (nd[g].h - height) / (x - nd[g].x);
+          if (sg > s) {  // g moves too: c's scan goes on after g, and g's own children are scanned
+            st[++top] = {ci, nd[g].next_sibling, s};
+            st[++top] = {g, nd[g].first_child, sg};
+            continue;
+          }
+        }
+        if (g >= 0 || c.permanent) append(ci, s);
         continue;
       }
     }
     const int p = f.parent;
     nd[p].first_child = f.child;
-    const bool keep = f.child >= 0 || nd[p].permanent;
-    if (keep) {  // the root's next child
-      if (tail < 0)
-        nd[r].first_child = p;
-      else
-        nd[tail].next_sibling = p;
-      nd[p].next_sibling = -1;
-      tail = p;
-      hz[nh] = p, hs[nh] = f.slope, ++nh;
-    }
+    if (f.child >= 0 || nd[p].permanent) append(p, f.slope);
     --top;
   }
   nh_ = nh;
@@ -100,12 +112,23 @@ int HullTree::query(double x, double height, int* horizons, double* slopes, std:
     Frame& f = st[top];
     if (f.child >= 0) {
       ++it;
-      const Node& c = nd[f.child];
+      const int ci = f.child;
+      const Node& c = nd[ci];
       const double s = (c.h - height) / (x - c.x);
       if (s > f.slope) {
-        const int ci = f.child;
         f.child = c.next_sibling;
-        st[++top] = {ci, c.first_child, s};
+        const int g = c.first_child;  // as in push_at: c listed at once when its farthest child stays
+        if (g >= 0) {
+          ++it;
+          const double sg = (nd[g].h - height) / (x - nd[g].x);
+          if (sg > s) {
+            st[++top] = {ci, nd[g].next_sibling, s};
+            st[++top] = {g, nd[g].first_child, sg};
+            continue;
+          }
+        }
+        horizons[m] = ci, slopes[m] = s;
+        m += (g >= 0) | (c.permanent != 0) | (ci == last);
         continue;
       }
     }
