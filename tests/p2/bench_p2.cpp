@@ -7,8 +7,14 @@
 //   BM_P2HorizonsKeptOrRecomputed: compute_p2 (p1's direct light, then one bounce, facet senders) on a 512^2
 //     fractal, K = 32, with p1's horizons kept from the direct-light sweep (1) or recomputed per direction
 //     block in the bounce (0, p2_keeps_horizons); the same bits, the second pays p1's horizon sweep again.
+//   BM_P2Bounce: one bounce of p2's defaults (facet senders, near_radius 4, exact line profiles, P1's
+//     horizons kept), fractal (0) or terraces (9), N^2 texels, K directions, one thread; stage 0 (P1's
+//     direct light) is made once outside the timing. items = texel-directions (counter texdir/s). The
+//     fourth argument 0 skips the bounce: what the process spends besides it (for instruction counts,
+//     valgrind --tool=cachegrind, which count the whole process).
 // Run: build-p2/tests/p2/bench_p2 --benchmark_filter=Line
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 
 #include <vector>
 
@@ -119,7 +125,36 @@ void BM_P2HorizonsKeptOrRecomputed(benchmark::State& state) {
   state.SetLabel(state.range(0) ? "kept" : "recomputed");
 }
 
+// args: kind (ProceduralKind), N, K, run the bounce (1) or not (0)
+void BM_P2Bounce(benchmark::State& state) {
+  const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  Scene s;
+  s.field = field(int(state.range(0)), int(state.range(1)));
+  s.normals = compute_normals(s.field);
+  s.surface.albedo.assign(s.field.texel_count(), Rgb{0.5f, 0.5f, 0.5f});
+  s.environment = make_uniform_environment({1, 1, 1});
+  s.bounces = 1;
+  P2Params p;
+  p.directions = int(state.range(2));
+  p.bounces = 1;
+  const P2State stage0 = p2_stage0(s, p, RunControl{});
+  for (auto _ : state) {
+    if (!state.range(3)) continue;
+    P2State st = stage0;
+    p2_bounce(s, p, 1, st, RunControl{});
+    benchmark::DoNotOptimize(st.indirect.data());
+  }
+  const double td = double(state.iterations()) * double(s.field.texel_count()) * double(p.directions);
+  state.counters["texdir/s"] = benchmark::Counter(td, benchmark::Counter::kIsRate);
+  state.SetLabel(procedural_kind_name(ProceduralKind(state.range(0))));
+}
+
 BENCHMARK(BM_LineTree)->DenseRange(0, 3);
+BENCHMARK(BM_P2Bounce)
+    ->ArgsProduct({{0, 9}, {256, 512}, {16, 64}, {1}})
+    ->ArgsProduct({{0, 9}, {256}, {16}, {0}})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_P2HorizonsKeptOrRecomputed)
     ->DenseRange(0, 1)
     ->Iterations(1)

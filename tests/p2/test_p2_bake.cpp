@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <utility>
 
 #include "core/error.hpp"
 #include "env/environment.hpp"
@@ -17,6 +18,7 @@
 #include "methods/p2/bake_p2.hpp"
 #include "methods/p2/indirect_gather.hpp"
 #include "reference/bake_reference.hpp"
+#include "sweep/sweep_lines.hpp"
 
 namespace hfbake {
 namespace {
@@ -609,6 +611,47 @@ TEST(P2Bake, HorizonsKeptOnlyWhileSmall) {
   kept.keep_horizons = 1;
   const double saved = p2_working_bytes(shape(1024), kept) - p2_working_bytes(shape(1024), forced);
   EXPECT_GT(saved, 4.0 * 56 * 1024 * 1024 * 0.9);
+}
+
+// p2's line worker leaves unread the receivers of a clamp field's lines that lie more than a texel (plus
+// kReadMargin, 1e-6) off the field on the minor axis (indirect_sweep.cpp). That holds only while the
+// driver's texel taps read no such receiver: every receiver slot holds its own minor coordinate (NaN where
+// no receiver is), and every tap a texel reads must lie within a texel of the field. Square, thin (trimmed
+// lines) and non-unit fields, directions of every octant.
+TEST(P2Bake, TexelTapsReadOnlyReceiversNearTheField) {
+  for (const auto& [w, h] : {std::pair{48, 48}, std::pair{97, 13}, std::pair{13, 97}, std::pair{40, 29}}) {
+    ProceduralSpec ps;
+    ps.kind = ProceduralKind::fractal;
+    ps.width = w, ps.height = h;
+    const HeightField f = make_procedural(ps, 0.7, Wrap::clamp);
+    IndirectSweepSpec is;
+    is.directions = 37;
+    const SweepSpec spec = indirect_sweep_spec(is);
+    for (int k = 0; k < is.directions; ++k) {
+      const SweepDirection d = plan_direction(f, spec, k);
+      const std::size_t stride = std::size_t(d.stride());
+      std::vector<float> buffer(std::size_t(d.lines()) * stride, std::nanf(""));
+      for (int l = d.line_begin; l < d.line_end; ++l)
+        for (int u = 0; u < d.n_major; ++u) {
+          const int slot = line_slot(d, l, u);
+          if (slot >= 0 && std::size_t(slot) < stride)
+            buffer[std::size_t(l - d.line_begin) * stride + std::size_t(slot)] =
+                float(l + double(u) * d.slope);
+        }
+      int bad = 0;
+      for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+          const TexelTaps t = texel_taps(d, buffer.data(), 1, i, j);
+          for (const float* tap : {t.lo, t.w_hi > 0 ? t.hi : t.lo}) {
+            const float v = tap[0];
+            if (!(v > -1.0f - 1e-5f && v < float(d.n_minor) + 1e-5f) && bad++ < 3)
+              ADD_FAILURE() << w << "x" << h << " k=" << k << " texel (" << i << ", " << j
+                            << ") reads v=" << v;
+          }
+        }
+      EXPECT_EQ(bad, 0) << w << "x" << h << " k=" << k;
+    }
+  }
 }
 
 TEST(P2Bake, SameBitsForAnyThreadCount) {

@@ -5,37 +5,29 @@
 namespace hfbake {
 
 void HullTree::reset(int capacity) {
-  if (std::size_t(capacity) > h_.size()) {
-    h_.resize(capacity);
-    x_.resize(capacity);
-    first_child_.resize(capacity);
-    next_sibling_.resize(capacity);
-    permanent_.resize(capacity);
-    stack_.reserve(capacity + 1);
-    horizons_.reserve(capacity + 1);
+  if (std::size_t(capacity) > nodes_.size()) {
+    nodes_.resize(capacity);
+    stack_.resize(std::size_t(capacity) + 1);
+    horizons_.resize(capacity);
+    horizon_slopes_.resize(capacity);
   }
   n_ = 0;
+  nh_ = 0;
   prev_class_ = 1;
   unit_ = true;
   iterations_ = 0;
-  horizons_.clear();
 }
 
 void HullTree::push_at(double x, double height) {
   const int r = n_++;
-  h_[r] = height;
-  x_[r] = x;
+  Node* nd = nodes_.data();
+  nd[r] = {height, x, -1, -1, 0, 0};
   if (x != double(r)) unit_ = false;
-  first_child_[r] = -1;
-  next_sibling_[r] = -1;
-  permanent_[r] = 0;
-  horizons_.clear();
+  nh_ = 0;
   if (r == 0) {  // p_0 starts the first convex section: a permanent leaf
-    permanent_[0] = 1;
+    nd[0].permanent = 1;
     return;
   }
-  const double* h = h_.data();
-  const double* xs = x_.data();
   // Eq. 1 for p_{r-1}, now that its successor is known: convex if 2 h_i >= h_{i-1} + h_{i+1}, else
   // concave. (P2's Eq. 1 lets a collinear triple inherit the previous class; with the strict tie rule a
   // collinear p_{r-1} after a concave stretch starts a visible run -- {0, 5, 1, 1, 1} seen from the last
@@ -44,11 +36,11 @@ void HullTree::push_at(double x, double height) {
   // its children move away. At any positions: convex if the slope into p_i is not below the slope out of
   // it, (h_i - h_{i-1}) (x_{i+1} - x_i) >= (h_{i+1} - h_i) (x_i - x_{i-1}).
   if (r >= 2) {
-    const int i = r - 1;
-    const double lhs = unit_ ? 2 * h[i] : (h[i] - h[i - 1]) * (xs[i + 1] - xs[i]);
-    const double rhs = unit_ ? h[i - 1] + h[i + 1] : (h[i + 1] - h[i]) * (xs[i] - xs[i - 1]);
+    const Node &a = nd[r - 2], &b = nd[r - 1];
+    const double lhs = unit_ ? 2 * b.h : (b.h - a.h) * (x - b.x);
+    const double rhs = unit_ ? a.h + height : (height - b.h) * (b.x - a.x);
     const int cls = lhs >= rhs ? 1 : 0;
-    if (cls == 1 && prev_class_ == 0) permanent_[i] = 1;
+    if (cls == 1 && prev_class_ == 0) nd[r - 1].permanent = 1;
     prev_class_ = cls;
   }
 
@@ -58,64 +50,102 @@ void HullTree::push_at(double x, double height) {
   // (deeper); the scan of P goes on with P's next child (wider) and stops at the first child that passes,
   // since children are ordered by their angle from P. P stays a root child while it keeps a child or is
   // permanent. Emitting nodes in post-order gives the root's children farthest first.
-  int tail = -1;
-  auto append = [&](int node) {
+  // Slopes are visibility_slope's: (h_j - h_r) / (x_r - x_j).
+  int* hz = horizons_.data();
+  double* hs = horizon_slopes_.data();
+  Frame* st = stack_.data();
+  int top = 0, tail = -1, nh = 0;
+  std::uint64_t it = 0;
+  auto append = [&](int p, double slope) {  // the root's next child
     if (tail < 0)
-      first_child_[r] = node;
+      nd[r].first_child = p;
     else
-      next_sibling_[tail] = node;
-    next_sibling_[node] = -1;
-    tail = node;
-    horizons_.push_back(node);
+      nd[tail].next_sibling = p;
+    nd[p].next_sibling = -1;
+    tail = p;
+    hz[nh] = p, hs[nh] = slope, ++nh;
   };
-  stack_.clear();
-  stack_.push_back({r - 1, first_child_[r - 1], visibility_slope(h, xs, r - 1, r)});
-  while (!stack_.empty()) {
-    Frame& f = stack_.back();
+  st[0] = {r - 1, nd[r - 1].first_child, (nd[r - 1].h - height) / (x - nd[r - 1].x)};
+  while (top >= 0) {
+    Frame& f = st[top];
     if (f.child >= 0) {
-      ++iterations_;
-      const double s = visibility_slope(h, xs, f.child, r);
-      if (s > f.slope) {
-        const int c = f.child;
-        f.child = next_sibling_[c];
-        stack_.push_back({c, first_child_[c], s});
+      ++it;
+      const int ci = f.child;
+      const Node& c = nd[ci];
+      const double s = (c.h - height) / (x - c.x);
+      if (s > f.slope) {  // c leaves its parent for the root (deeper)
+        f.child = c.next_sibling;
+        // The scan of c's children starts with its farthest, g. Mostly g stays (then so do the rest): c is
+        // the root's next child at once, without a frame of its own. The same steps as with one.
+        const int g = c.first_child;
+        if (g >= 0) {
+          ++it;
+          const double sg = (nd[g].h - height) / (x - nd[g].x);
+          if (sg > s) {  // g moves too: c's scan goes on after g, and g's own children are scanned
+            st[++top] = {ci, nd[g].next_sibling, s};
+            st[++top] = {g, nd[g].first_child, sg};
+            continue;
+          }
+        }
+        if (g >= 0 || c.permanent) append(ci, s);
         continue;
       }
     }
     const int p = f.parent;
-    first_child_[p] = f.child;
-    const bool keep = f.child >= 0 || permanent_[p];
-    stack_.pop_back();
-    if (keep) append(p);
+    nd[p].first_child = f.child;
+    if (f.child >= 0 || nd[p].permanent) append(p, f.slope);
+    --top;
   }
+  nh_ = nh;
+  iterations_ += it;
+}
+
+int HullTree::query(double x, double height, int* horizons, double* slopes, std::uint64_t* checks) {
+  if (n_ == 0) return 0;
+  const Node* nd = nodes_.data();
+  const int last = n_ - 1;
+  Frame* st = stack_.data();
+  int top = 0, m = 0;
+  std::uint64_t it = 0;
+  st[0] = {last, nd[last].first_child, (nd[last].h - height) / (x - nd[last].x)};  // == visibility_slope
+  while (top >= 0) {
+    Frame& f = st[top];
+    if (f.child >= 0) {
+      ++it;
+      const int ci = f.child;
+      const Node& c = nd[ci];
+      const double s = (c.h - height) / (x - c.x);
+      if (s > f.slope) {
+        f.child = c.next_sibling;
+        const int g = c.first_child;  // as in push_at: c listed at once when its farthest child stays
+        if (g >= 0) {
+          ++it;
+          const double sg = (nd[g].h - height) / (x - nd[g].x);
+          if (sg > s) {
+            st[++top] = {ci, nd[g].next_sibling, s};
+            st[++top] = {g, nd[g].first_child, sg};
+            continue;
+          }
+        }
+        horizons[m] = ci, slopes[m] = s;
+        m += (g >= 0) | (c.permanent != 0) | (ci == last);
+        continue;
+      }
+    }
+    const int p = f.parent;
+    horizons[m] = p, slopes[m] = f.slope;  // kept (counted) or overwritten by the next
+    m += (f.child >= 0) | (nd[p].permanent != 0) | (p == last);
+    --top;
+  }
+  *checks += it;
+  return m;
 }
 
 std::uint64_t HullTree::query(double x, double height, std::vector<int>& horizons) {
-  horizons.clear();
-  if (n_ == 0) return 0;
-  const double* h = h_.data();
-  const double* xs = x_.data();
-  auto slope = [&](int j) { return (h[j] - height) / (x - xs[j]); };  // == visibility_slope
+  horizons.resize(std::size_t(n_));
+  std::vector<double> slopes(static_cast<std::size_t>(n_));
   std::uint64_t checks = 0;
-  stack_.clear();
-  stack_.push_back({n_ - 1, first_child_[n_ - 1], slope(n_ - 1)});
-  while (!stack_.empty()) {
-    Frame& f = stack_.back();
-    if (f.child >= 0) {
-      ++checks;
-      const double s = slope(f.child);
-      if (s > f.slope) {
-        const int c = f.child;
-        f.child = next_sibling_[c];
-        stack_.push_back({c, first_child_[c], s});
-        continue;
-      }
-    }
-    const int p = f.parent;
-    const bool keep = f.child >= 0 || permanent_[p] || p == n_ - 1;
-    stack_.pop_back();
-    if (keep) horizons.push_back(p);
-  }
+  horizons.resize(std::size_t(query(x, height, horizons.data(), slopes.data(), &checks)));
   return checks;
 }
 

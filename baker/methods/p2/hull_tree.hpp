@@ -52,12 +52,12 @@ class HullTree {
   void push_at(double x, double height);
 
   int size() const { return n_; }
-  const double* heights() const { return h_.data(); }
-  const double* positions() const { return x_.data(); }
 
   // The local horizons of the last pushed sample: sample indices, farthest first (strictly increasing).
   // Empty for the first sample of a line. The first one casts the global horizon (the largest slope).
-  std::span<const int> horizons() const { return {horizons_.data(), horizons_.size()}; }
+  std::span<const int> horizons() const { return {horizons_.data(), std::size_t(nh_)}; }
+  // Their slopes seen from the last pushed sample, the same numbers visibility_slope gives.
+  std::span<const double> horizon_slopes() const { return {horizon_slopes_.data(), std::size_t(nh_)}; }
 
   // The local horizons of a receiver that is not terrain: at position `x` beyond the last pushed sample
   // (unit spacing: its index >= size(); a gap of non-terrain samples may lie between them) with height
@@ -65,21 +65,32 @@ class HullTree {
   // last pushed sample is always listed (it is visible; run_starts drops it when it does not start a
   // run). Returns the checks made.
   std::uint64_t query(double x, double height, std::vector<int>& horizons);
+  // The same into horizons[0..m) and their slopes seen from the receiver (visibility_slope's numbers) into
+  // slopes[0..m), both with room for size() entries; returns m and adds the checks made to *checks.
+  int query(double x, double height, int* horizons, double* slopes, std::uint64_t* checks);
 
   // Convexity checks performed (P2's iterations t), summed over the line so far (push only).
   std::uint64_t iterations() const { return iterations_; }
 
  private:
+  // One sample, everything a traversal reads of it in one place.
+  struct Node {
+    double h, x;       // height and position
+    int first_child;   // farthest child (-1: none)
+    int next_sibling;  // the next nearer child of its parent (-1: none)
+    int permanent;     // a segment start (never deleted when orphaned)
+    int pad;
+  };
   struct Frame {
     int parent;    // the node whose children are being scanned
     int child;     // the next child to test (-1: none left)
     double slope;  // the parent's slope seen from the root
   };
-  std::vector<double> h_, x_;
-  std::vector<int> first_child_, next_sibling_;
-  std::vector<std::uint8_t> permanent_;
-  std::vector<Frame> stack_;
+  std::vector<Node> nodes_;
+  std::vector<Frame> stack_;  // capacity + 1 frames (the deepest chain)
   std::vector<int> horizons_;
+  std::vector<double> horizon_slopes_;
+  int nh_ = 0;  // horizons of the last pushed sample
   int n_ = 0;
   int prev_class_ = 1;  // class of the last classified sample: 1 convex, 0 concave
   bool unit_ = true;    // every sample so far at x_i = i (Eq. 1 in its unit-spacing form)

@@ -128,10 +128,13 @@ struct SegmentRadiance {
 
 // x (optional): the samples' positions in steps of 1 / inv_step world units (increasing; null: sample j at
 // j). Then inv_dist is not read: distances are x[r] - x[j].
+// horizon_slopes (optional): visibility_slope(h, x, horizons[k], r) for every k (the hull tree's numbers,
+// run_starts' out_slopes), read instead of computed again.
 Rgb gather_segments(const double* h, const SegmentRadiance& L, int r, int terrain_end,
                     std::span<const int> horizons, double inv_step, const WedgeWeights& w,
                     double* weight = nullptr, const double* inv_dist = nullptr,
-                    GatherScratch* scratch = nullptr, const double* x = nullptr);
+                    GatherScratch* scratch = nullptr, const double* x = nullptr,
+                    const double* horizon_slopes = nullptr);
 
 // (F(e) - F(e_t)) / pi for the wedge of direction phi (cos_phi, sin_phi) of K, normal n, horizon elevation e
 // (radians): the part of the cosine lobe between the tangent plane and the horizon, in the form of P1's
@@ -156,6 +159,11 @@ inline double terrain_weight(Vec3 n, double cos_phi, double sin_phi, int K, doub
 // neighbour is visible too (the only kind of redundant root child). Filters `horizons` into `out`.
 void run_starts(const double* h, int r, std::span<const int> horizons, std::vector<int>& out,
                 const double* x = nullptr);
+// The same from the horizons' slopes seen from r (HullTree::horizon_slopes, HullTree::query): the kept
+// horizons to out and their slopes to out_slopes (room for m each); returns their count. One slope is
+// computed per horizon (its farther neighbour's) instead of two.
+int run_starts(const double* h, int r, const int* horizons, const double* slopes, int m, int* out,
+               double* out_slopes, const double* x = nullptr);
 
 // The same from the naive visible set (increasing indices).
 void run_starts_of_visible(std::span<const int> visible, std::vector<int>& out);

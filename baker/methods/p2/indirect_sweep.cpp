@@ -3,6 +3,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -60,6 +61,9 @@ Rgb piece_radiance(const HeightField& f, const Rgb* facet_exit, double x, double
 }
 
 constexpr double kMinGap = 1e-6;  // line parameter: the least gap between two points of an exact profile
+// Texel units on the minor axis: receivers farther than 1 + kReadMargin off a clamp field are never read
+// (the margin covers the rounding of the taps' line positions).
+constexpr double kReadMargin = 1e-6;
 
 // The parameters in (0, 1), increasing, where the segment (x0, y0) -> (x1, y1) crosses an edge of the
 // triangulation (field/edge_crossings.hpp). t must hold kMaxEdgeCrossings values (callers may append more).
@@ -85,9 +89,10 @@ struct LineWorker {
   std::vector<Rgb> seg_mean, seg_slope;  // per segment q -> q+1 (SegmentRadiance)
   std::vector<double> inv_dist;          // inv_step / d
   double inv_dist_step = 0;
-  std::vector<double> xs, fx, fy;  // exact profiles: fine samples' positions and texel coordinates
-  std::vector<int> recv;           // exact profiles: the fine index of each driver sample
-  std::vector<int> visible, starts;
+  std::vector<double> xs, fx, fy;    // exact profiles: fine samples' positions and texel coordinates
+  std::vector<int> recv;             // exact profiles: the fine index of each driver sample
+  std::vector<int> visible, starts;  // per receiver: the tree's horizons, the run starts
+  std::vector<double> visible_slope, start_slope;  // their slopes seen from the receiver
   GatherScratch gather_scratch;
   P2SweepStats stats;
   // Each worker adds its counts to the caller's totals when the driver destroys it (integer sums: the
@@ -145,7 +150,8 @@ struct LineWorker {
       const double x1 = line.x(s + 1), y1 = line.y(s + 1);
       int m = edge_crossings(x0, y0, x1, y1, t);
       for (int sub = 1; sub < S; ++sub) t[m++] = double(sub) / S;
-      std::sort(t, t + m);
+      for (int a = S > 1 ? 1 : m; a < m; ++a)  // insertion sort (the crossings come sorted)
+        for (int b = a; b > 0 && t[b] < t[b - 1]; --b) std::swap(t[b], t[b - 1]);
       double last = 0;
       for (int c = 0; c < m; ++c) {
         // Points within kMinGap of a sample or another point are that point already (to kMinGap times the
@@ -260,11 +266,18 @@ struct LineWorker {
     auto slope_to = [&](int j, int r) {
       return X ? (hh[j] - hh[r]) * inv_step / (X[r] - X[j]) : (hh[j] - hh[r]) * inv_dist[r - j];
     };
-    if (!naive) tree.reset(T);
+    if (!naive) {
+      tree.reset(T);
+      if (visible.size() < std::size_t(T)) {  // the tree's horizons and the run starts, with slopes
+        visible.resize(std::size_t(T)), visible_slope.resize(std::size_t(T));
+        starts.resize(std::size_t(T)), start_slope.resize(std::size_t(T));
+      }
+    }
     const std::uint64_t it0 = tree.iterations();
     // Exact near field at the texels: the receivers gather only the samples at least `lag` fine samples
     // (fine units of position) behind them (near_radius texels), from a tree that lags that far.
     const bool near = lag > 0;
+    const bool repeat = line.dir->repeat;
     int pushed = ib;  // the next terrain sample to push
     for (int s = 0; s < n0; ++s) {
       const int q = fine_of(s);
@@ -283,6 +296,13 @@ struct LineWorker {
       float* o = out + std::size_t(s - line.first_receiver) * kChannels;
       o[kRadianceR] = o[kRadianceG] = o[kRadianceB] = o[kTerrainWeight] = 0;
       o[kHorizonElevation] = -p1::kHalfPiF;  // nothing behind: P1's convention
+      // Beyond a clamp field's edge only the receivers within a texel of it are read (texel_taps: a texel
+      // blends the lines just below and above it on its column); the rest of the line's run off the field
+      // stays at the values above, unread.
+      if (!terrain && !repeat) {
+        const double v = line.dir->x_major ? line.y(s) : line.x(s);
+        if (v < -1 - kReadMargin || v > double(line.dir->n_minor) + kReadMargin) continue;
+      }
       const int r = q - ib;
       // The terrain samples gathered here, 0..terrain_end-1: all before the receiver, or with the near
       // field those at least `lag` behind it (what the lagging tree holds).
@@ -291,6 +311,8 @@ struct LineWorker {
         terrain_end = std::min(r, T);
       else if (!X)
         terrain_end = std::min(r - lag + 1, T);
+      else if (!naive)  // the samples pushed: those at least `lag` behind (all before r, since lag > 0)
+        terrain_end = pushed - ib;
       else
         terrain_end = int(std::upper_bound(X, X + std::max(0, std::min(r, T)), pos_q - lag) - X);
       if (terrain_end <= 0) continue;  // no (far) terrain behind this receiver
@@ -298,21 +320,31 @@ struct LineWorker {
         stats.receivers += 1;
         stats.naive_iterations += std::uint64_t(r);
       }
+      int ns = 0;                      // run starts
+      const double* slopes = nullptr;  // their slopes (null: the gather computes them)
       if (naive) {
         naive_visible(hh, r, visible, terrain_end, X);
         run_starts_of_visible(visible, starts);
+        ns = int(starts.size());
         if (terrain) stats.iterations += std::uint64_t(r);
-      } else if (near) {  // the tree holds the samples 0..terrain_end-1: what the receiver sees of them
-        tree.query(X ? X[r] : double(r), hh[r], visible);
-        run_starts(hh, r, visible, starts, X);
-      } else if (terrain) {
-        run_starts(hh, r, tree.horizons(), starts, X);
-        stats.horizons += tree.horizons().size();
-      } else {  // beyond a clamp field's border: sees the terrain, is not terrain itself
-        tree.query(X ? X[r] : double(r), hh[r], visible);
-        run_starts(hh, r, visible, starts, X);
+      } else {
+        if (near || !terrain) {
+          // near: the tree holds the samples 0..terrain_end-1, what the receiver sees of them; !terrain:
+          // beyond a clamp field's border, sees the terrain, is not terrain itself
+          std::uint64_t checks = 0;
+          const int m =
+              tree.query(X ? X[r] : double(r), hh[r], visible.data(), visible_slope.data(), &checks);
+          ns = run_starts(hh, r, visible.data(), visible_slope.data(), m, starts.data(), start_slope.data(),
+                          X);
+        } else {
+          const auto hz = tree.horizons();
+          ns = run_starts(hh, r, hz.data(), tree.horizon_slopes().data(), int(hz.size()), starts.data(),
+                          start_slope.data(), X);
+          stats.horizons += hz.size();
+        }
+        slopes = start_slope.data();
       }
-      if (terrain) stats.run_starts += starts.size();
+      if (terrain) stats.run_starts += std::uint64_t(ns);
       if (!gather) continue;
       const TexelPair t = line.height_taps(s, *field);
       const Vec3 nrm =
@@ -331,14 +363,14 @@ struct LineWorker {
       if (near)
         for (int j = std::max(0, terrain_end); j < std::min(r, T); ++j)
           wf.t_n = std::max(wf.t_n, slope_to(j, r));
-      const Rgb e = gather_segments(hh, seg, r, terrain_end, starts, inv_step, wf, &weight,
-                                    X ? nullptr : inv_dist.data(), &gather_scratch, X);
+      const Rgb e = gather_segments(hh, seg, r, terrain_end, {starts.data(), std::size_t(ns)}, inv_step, wf,
+                                    &weight, X ? nullptr : inv_dist.data(), &gather_scratch, X, slopes);
       o[kRadianceR] = e.r;
       o[kRadianceG] = e.g;
       o[kRadianceB] = e.b;
       o[kTerrainWeight] = float(weight);
       // The global horizon's elevation exactly as P1's HorizonLineWorker computes it.
-      if (!spec->p1_sin_horizon && !starts.empty()) {  // (unused when P1's horizons split the lobe)
+      if (!spec->p1_sin_horizon && ns > 0) {  // (unused when P1's horizons split the lobe)
         const int c = starts.front();
         const double run = X ? X[r] - X[c] : double(r - c);
         o[kHorizonElevation] = p1::fast_elevation(float(hh[c] - hh[r]), float(run) * float(line.step / S));
@@ -353,18 +385,36 @@ struct LineWorker {
 struct NearPiece {
   p1::NearCrossing c;
   FacetRef a, b;  // the facets beside the piece (facets_beside), relative to the texel
+  // For texels whose stencil lies on the field (NearStencil::margin): the offsets of the edge's end points
+  // in the field's heights and of the facets in the facets' radiance, from the texel's own.
+  std::ptrdiff_t za = 0, zb = 0, fa = 0, fb = 0;
 };
 
-std::vector<NearPiece> near_pieces(double dx, double dy, double radius, double texel_size) {
-  std::vector<NearPiece> out;
+// P1's near stencil of one direction with its facets, and how far it reaches: texels at least `margin`
+// texels from every border read only heights and facets on the field, unwrapped and unclamped.
+struct NearStencil {
+  std::vector<NearPiece> pieces;
+  int margin = 0;
+};
+
+NearStencil near_stencil(const HeightField& f, double dx, double dy, double radius) {
+  NearStencil out;
   float px = 0, py = 0;
-  for (const p1::NearCrossing& c : p1::near_field_stencil(dx, dy, radius, texel_size)) {
+  int reach = 0;
+  auto cover = [&](int d) { reach = std::max(reach, std::abs(d)); };
+  const std::ptrdiff_t w = f.width;
+  for (const p1::NearCrossing& c : p1::near_field_stencil(dx, dy, radius, f.texel_size)) {
     NearPiece p;
     p.c = c;
     std::tie(p.a, p.b) = facets_beside(0.5 * (px + c.x), 0.5 * (py + c.y), dx, dy);
-    out.push_back(p);
+    p.za = c.ai + c.aj * w, p.zb = c.bi + c.bj * w;
+    p.fa = 2 * (p.a.i + p.a.j * w) + p.a.q, p.fb = 2 * (p.b.i + p.b.j * w) + p.b.q;
+    for (int d : {c.ai, c.aj, c.bi, c.bj, p.a.i, p.a.j, p.b.i, p.b.j}) cover(d);
+    cover(int(std::ceil(std::fabs(c.x))) + 1), cover(int(std::ceil(std::fabs(c.y))) + 1);
+    out.pieces.push_back(p);
     px = c.x, py = c.y;
   }
+  out.margin = reach;
   return out;
 }
 
@@ -376,20 +426,37 @@ struct NearInterval {
   double lo, hi;
   Rgb L;
 };
-void march_near(const HeightField& f, const std::vector<NearPiece>& pieces, const Rgb* exit_facets, int i,
-                int j, std::vector<NearInterval>& out) {
+void march_near(const HeightField& f, const NearStencil& st, const Rgb* exit_facets, int i, int j,
+                std::vector<NearInterval>& out) {
   out.clear();
-  const bool clamp = f.wrap == Wrap::clamp;
-  const double z0 = f.z[f.index(i, j)];
+  const std::size_t idx = f.index(i, j);
+  const double z0 = f.z[idx];
   double m = -std::numeric_limits<double>::infinity();
-  for (const NearPiece& p : pieces) {
+  auto slope_of = [&](const p1::NearCrossing& c, float za, float zb) {
+    return (double(za + (zb - za) * c.w) - z0) * c.inv_s;
+  };
+  const int g = st.margin;
+  if (i >= g && j >= g && i + g < f.width && j + g < f.height) {  // the whole stencil on the field
+    const float* z = f.z.data() + idx;
+    const Rgb* fe = exit_facets + 2 * idx;
+    for (const NearPiece& p : st.pieces) {
+      const double slope = slope_of(p.c, z[p.za], z[p.zb]);
+      if (slope > m) {
+        const Rgb La = fe[p.fa];
+        out.push_back({m, slope, p.a == p.b ? La : (La + fe[p.fb]) * 0.5f});
+        m = slope;
+      }
+    }
+    return;
+  }
+  const bool clamp = f.wrap == Wrap::clamp;
+  for (const NearPiece& p : st.pieces) {
     const p1::NearCrossing& c = p.c;
     const float px = float(i) + c.x, py = float(j) + c.y;
     if (clamp &&
         (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
       break;  // the terrain ends at the border
-    const float za = f.at(i + c.ai, j + c.aj), zb = f.at(i + c.bi, j + c.bj);
-    const double slope = (double(za + (zb - za) * c.w) - z0) * c.inv_s;
+    const double slope = slope_of(c, f.at(i + c.ai, j + c.aj), f.at(i + c.bi, j + c.bj));
     if (slope > m) {
       const Rgb La = facet_value(f, exit_facets, {i + p.a.i, j + p.a.j, p.a.q});
       const Rgb L =
@@ -399,6 +466,14 @@ void march_near(const HeightField& f, const std::vector<NearPiece>& pieces, cons
     }
   }
 }
+
+// Per thread of the texel visitor: the near intervals, and the facet normals of the last texel (the
+// visitor runs the directions of a batch texel by texel).
+struct NearScratch {
+  std::vector<NearInterval> intervals;
+  int fi = -1, fj = -1;
+  Vec3f fn[2];
+};
 
 }  // namespace
 
@@ -428,8 +503,9 @@ std::size_t indirect_line_scratch_bytes(int count, int supersampling, bool exact
   const std::size_t fine =
       std::size_t(std::max(count, 1)) * std::size_t(supersampling + (exact_profile ? 3 : 0));
   // h, inv_dist 8 + 8; L, seg_mean, seg_slope 36; exact: xs, fx, fy 24; recv 4 per driver sample; the hull
-  // tree 8 + 8 + 4 + 4 + 1 + its stack 24 and horizons 4; gather scratch 20; visible and starts 8.
-  return fine * (16 + 36 + (exact_profile ? 24 : 0) + 53 + 20 + 8) + std::size_t(count) * 4;
+  // tree's nodes 32, its stack 16 and horizons with slopes 12; gather scratch 20; visible and starts with
+  // their slopes 24.
+  return fine * (16 + 36 + (exact_profile ? 24 : 0) + 60 + 20 + 24) + std::size_t(count) * 4;
 }
 
 RunControl p2_sub_range(const RunControl& rc, double a, double span) {
@@ -446,6 +522,7 @@ SweepSpec indirect_sweep_spec(const IndirectSweepSpec& spec) {
   for (int k = spec.k_begin; k < k1; ++k) ss.azimuths.push_back(azimuth(k, spec.directions));
   ss.channels = kChannels;
   ss.wrap_periods = spec.wrap_periods;
+  ss.zero_buffers = false;  // LineWorker writes every receiver's channels
   return ss;
 }
 
@@ -470,13 +547,13 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
   std::mutex totals_mutex;
   // Exact near field (IndirectSweepSpec::near_radius): P1's near stencil per direction, with facets.
   const bool near = spec.near_radius > 0 && spec.exit_facets && spec.p1_sin_horizon && spec.gather;
-  std::vector<std::vector<NearPiece>> pieces(near ? nb : 0);
+  std::vector<NearStencil> pieces(near ? nb : 0);
   for (int k = 0; k < int(pieces.size()); ++k) {
     const SweepDirection d = plan_direction(field, ss, k);
-    pieces[k] = near_pieces(d.dx, d.dy, spec.near_radius, field.texel_size);
+    pieces[k] = near_stencil(field, d.dx, d.dy, spec.near_radius);
   }
   // The visitor runs for one direction at a time on each thread (its scratch is per thread).
-  tbb::enumerable_thread_specific<std::vector<NearInterval>> near_scratch;
+  tbb::enumerable_thread_specific<NearScratch> near_scratch;
   // A texel's terrain part of direction k with the exact near field: the near intervals exactly (clipped to
   // each normal's tangent plane and to P1's horizon e), and above the near field up to e the mean radiance
   // the lines' receivers gathered from the far samples (terrain_weight minus the near intervals' weight:
@@ -484,7 +561,8 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
   // needs them, its two facets'.
   auto texel_near_far = [&](int k, int i, int j, std::size_t idx, const TexelTaps& t, double e, double se,
                             double ce) {
-    std::vector<NearInterval>& iv = near_scratch.local();
+    NearScratch& ns = near_scratch.local();
+    std::vector<NearInterval>& iv = ns.intervals;
     march_near(field, pieces[k], spec.exit_facets->data(), i, j, iv);
     const double top = ce > 0 ? se / ce : std::numeric_limits<double>::infinity();  // tan e
     const double wb = t.value(kTerrainWeight);
@@ -497,10 +575,17 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
       if (!(tw > 0)) return;
       const WedgeWeights w = WedgeWeights::make(n, cs[k], sn[k], wedge);
       double er = 0, eg = 0, eb = 0, wn = 0;
+      // The intervals tile the elevations, so an interval's lower bound is mostly the last one's upper
+      // bound: F there is reused (compared bit for bit; F is a plain function of its argument).
+      std::uint64_t last_t = std::bit_cast<std::uint64_t>(std::numeric_limits<double>::quiet_NaN());
+      double last_F = 0;
       for (const NearInterval& v : iv) {
         const double lo = std::max(v.lo, w.t_n), hi = std::min(v.hi, top);
         if (!(hi > lo)) continue;
-        const double d = w.F(hi) - w.F(lo);
+        const double F_lo = std::bit_cast<std::uint64_t>(lo) == last_t ? last_F : w.F(lo);
+        const double F_hi = w.F(hi);
+        last_t = std::bit_cast<std::uint64_t>(hi), last_F = F_hi;
+        const double d = F_hi - F_lo;
         er += v.L.r * d, eg += v.L.g * d, eb += v.L.b * d, wn += d;
       }
       er /= kPi, eg /= kPi, eb /= kPi, wn /= kPi;
@@ -511,9 +596,8 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
     };
     part(normals[idx].d(), acc.data() + idx * 3);
     if (facets) {
-      Vec3f fn[2];
-      facet_normals(field, i, j, fn);
-      for (int q = 0; q < 2; ++q) part(fn[q].d(), acc_f.data() + (2 * idx + q) * 3);
+      if (ns.fi != i || ns.fj != j) facet_normals(field, i, j, ns.fn), ns.fi = i, ns.fj = j;
+      for (int q = 0; q < 2; ++q) part(ns.fn[q].d(), acc_f.data() + (2 * idx + q) * 3);
     }
   };
   sweep_lines(
@@ -553,8 +637,9 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
           return;
         }
         if (facets) {  // the same mean terrain radiance over the facets' lobes
-          Vec3f fn[2];
-          facet_normals(field, i, j, fn);
+          NearScratch& ns = near_scratch.local();
+          if (ns.fi != i || ns.fj != j) facet_normals(field, i, j, ns.fn), ns.fi = i, ns.fj = j;
+          const Vec3f* fn = ns.fn;
           for (int q = 0; q < 2; ++q) {
             const std::size_t fi = 2 * idx + q;
             const double tf = terrain_weight(fn[q].d(), cs[k], sn[k], K, e, se, ce);
