@@ -11,6 +11,7 @@
 #include <sys/time.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "exr_pixels.hpp"
 
 #include <OpenImageIO/imageio.h>
 #include <cmath>
@@ -577,15 +578,6 @@ TEST(MemoryEstimate, CountsTheEnvironmentImage) {
   fs::remove_all(dir);
 }
 
-std::vector<float> read_all_channels(const fs::path& p) {
-  auto in = OIIO::ImageInput::open(p.string());
-  if (!in) return {};
-  const OIIO::ImageSpec& spec = in->spec();
-  std::vector<float> px(std::size_t(spec.width) * spec.height * spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
-  return px;
-}
-
 // A constant albedo (a number or [r, g, b]) is held once, not 12 bytes a texel (issue 15: a 16384^2 hbao
 // job with "albedo": 0.5 was charged, and held, 3 GiB for it): validate's scene part of a 2048^2 p2 job is
 // the fixed 150 MiB, the heights and the normals p2 reads, and p2 and the reference bake the same bits from
@@ -624,8 +616,7 @@ TEST(MemoryEstimate, ConstantAlbedoIsHeldOnceAndBakesLikeAnImageOfIt) {
   int compared = 0;
   for (const auto& e : fs::directory_iterator(dir / "constant")) {
     if (e.path().extension() != ".exr") continue;
-    const std::vector<float> x = read_all_channels(e.path()),
-                             y = read_all_channels(dir / "image" / e.path().filename());
+    const std::vector<float> x = exr_pixels(e.path()), y = exr_pixels(dir / "image" / e.path().filename());
     ASSERT_FALSE(x.empty()) << e.path();
     EXPECT_EQ(x, y) << e.path().filename();
     ++compared;

@@ -8,6 +8,7 @@
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "exr_pixels.hpp"
 
 #include <OpenImageIO/imageio.h>
 #include <sys/stat.h>
@@ -77,15 +78,6 @@ json bake_summary(const fs::path& dir, const std::string& job, const fs::path& o
   return s["jobs"][0]["methods"]["reference"].value("bands", json::object());
 }
 
-std::vector<float> pixels(const fs::path& exr) {
-  auto in = OIIO::ImageInput::open(exr.string());
-  if (!in) return {};
-  const OIIO::ImageSpec& spec = in->spec();
-  std::vector<float> px(std::size_t(spec.width) * spec.height * spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
-  return px;
-}
-
 // Bit-identical floats (NaN-safe: compared as bytes).
 ::testing::AssertionResult same_bits(const std::vector<float>& a, const std::vector<float>& b) {
   if (a.empty() || a.size() != b.size())
@@ -115,7 +107,7 @@ class ReferenceResume : public ::testing::Test {
     }
     const json whole = bake_summary(dir_, "seed1.json", dir_ / "whole");
     EXPECT_EQ(whole.value("traced", -1), kBands);
-    truth_ = pixels(dir_ / "whole" / "r.reference.exr");
+    truth_ = exr_pixels(dir_ / "whole" / "r.reference.exr");
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
   void SetUp() override {
@@ -137,11 +129,11 @@ TEST_F(ReferenceResume, AKilledReferenceResumesWithTheSameBitsAndTracesFewerBand
   const json bands = bake_summary(dir_, "seed1.json", out);
   EXPECT_EQ(bands.value("resumed", -1), int(left));
   EXPECT_EQ(bands.value("traced", -1), kBands - int(left));
-  EXPECT_TRUE(same_bits(pixels(out / "r.reference.exr"), truth_));
+  EXPECT_TRUE(same_bits(exr_pixels(out / "r.reference.exr"), truth_));
   EXPECT_EQ(stages_in(out), 0);  // the killed bake's stage and its checkpoints are gone
   // The next bake starts afresh (nothing left to resume) and still gives the same bits.
   EXPECT_EQ(bake_summary(dir_, "seed1.json", out).value("resumed", -1), 0);
-  EXPECT_TRUE(same_bits(pixels(out / "r.reference.exr"), truth_));
+  EXPECT_TRUE(same_bits(exr_pixels(out / "r.reference.exr"), truth_));
 }
 
 TEST_F(ReferenceResume, DamagedCheckpointsAreTracedAgain) {
@@ -165,7 +157,7 @@ TEST_F(ReferenceResume, DamagedCheckpointsAreTracedAgain) {
   const json bands = bake_summary(dir_, "seed1.json", out);
   EXPECT_EQ(bands.value("resumed", -1), int(files.size()) - 3);
   EXPECT_EQ(bands.value("traced", -1), kBands - (int(files.size()) - 3));
-  EXPECT_TRUE(same_bits(pixels(out / "r.reference.exr"), truth_));
+  EXPECT_TRUE(same_bits(exr_pixels(out / "r.reference.exr"), truth_));
   EXPECT_EQ(stages_in(out), 0);
 }
 
@@ -178,7 +170,7 @@ TEST_F(ReferenceResume, AnotherJobsCheckpointsAreNotTaken) {
   const json bands = bake_summary(dir_, "seed1.json", out);
   EXPECT_EQ(bands.value("resumed", -1), 0);
   EXPECT_EQ(bands.value("traced", -1), kBands);
-  EXPECT_TRUE(same_bits(pixels(out / "r.reference.exr"), truth_));
+  EXPECT_TRUE(same_bits(exr_pixels(out / "r.reference.exr"), truth_));
   EXPECT_EQ(stages_in(out), 0);
 }
 

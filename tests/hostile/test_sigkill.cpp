@@ -11,6 +11,7 @@
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "exr_pixels.hpp"
 
 #include <OpenImageIO/imageio.h>
 #include <chrono>
@@ -164,15 +165,6 @@ TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBak
 // band files in the dead bake's stage, which the next bake adopts. They are never taken for outputs, the
 // next bake succeeds, resumes from them with the bits of an uninterrupted bake, and leaves no stage (nor
 // checkpoint) behind.
-std::vector<float> exr_pixels(const fs::path& exr) {
-  auto in = OIIO::ImageInput::open(exr.string());
-  if (!in) return {};
-  const OIIO::ImageSpec& spec = in->spec();
-  std::vector<float> px(std::size_t(spec.width) * spec.height * spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
-  return px;
-}
-
 TEST(SigKill, TwentyKilledReferenceBakesResumeAndLeaveNothingALaterBakeOrCompareReads) {
   const fs::path dir =
       fs::temp_directory_path() / ("hfbake_sigkill_ref_" + std::to_string(std::random_device{}()));
