@@ -34,11 +34,13 @@
 //            on the noise's fixed 256x256 window at the origin, so it is the same for every field size.
 #include "field/procedural.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 namespace hfbake {
@@ -61,50 +63,67 @@ double quintic(double t) {
   return t * t * t * (t * (t * 6 - 15) + 10);
 }
 
-// Periodic value noise with `cells` lattice cells across the unit square, u, v in [0, 1).
-// 64-bit cell counts: a long thin field doubles its long side's count past int's range (size [2, 100000]).
-double value_noise(std::uint64_t seed, int octave, std::int64_t cells_x, std::int64_t cells_y, double u,
-                   double v) {
-  const double x = u * double(cells_x), y = v * double(cells_y);
-  const double fx = std::floor(x), fy = std::floor(y);
-  const std::int64_t x0 = std::int64_t(fx), y0 = std::int64_t(fy);
-  const double tx = quintic(x - fx), ty = quintic(y - fy);
-  auto lattice = [&](std::int64_t xi, std::int64_t yi) {
-    xi = ((xi % cells_x) + cells_x) % cells_x;
-    yi = ((yi % cells_y) + cells_y) % cells_y;
-    return 2.0 * hash01(seed, xi, yi, octave) - 1.0;
-  };
-  const double a = lattice(x0, y0), b = lattice(x0 + 1, y0);
-  const double c = lattice(x0, y0 + 1), d = lattice(x0 + 1, y0 + 1);
-  return (a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty;
+// One periodic lattice value in [-1, 1): octave `octave`'s value at lattice point (xi, yi), the lattice
+// repeating every cells_x x cells_y points.
+double lattice_value(std::uint64_t seed, int octave, std::int64_t xi, std::int64_t yi, std::int64_t cells_x,
+                     std::int64_t cells_y) {
+  xi = ((xi % cells_x) + cells_x) % cells_x;
+  yi = ((yi % cells_y) + cells_y) % cells_y;
+  return 2.0 * hash01(seed, xi, yi, octave) - 1.0;
 }
 
-// Octaves of the periodic value noise, from `feature` texels down to one texel (at most `octaves`):
-// each octave's value is shape(noise) and its amplitude half the last one's.
+// One row j of octaves of periodic value noise (quintic-weighted bilinear blend of the lattice values,
+// `cells` lattice cells across the unit square; 64-bit counts: a long thin field doubles its long side's
+// count past int's range, size [2, 100000]), from `feature` texels down to one texel (at most `octaves`):
+// each octave adds amplitude * shape(noise) and the amplitude halves. out[i] for i in [0, width): each
+// texel's octaves are summed in order, as a texel-by-texel evaluation would (tests/field compares the
+// bits); the lattice values are hashed once per row and octave, not four times per texel.
 template <class Shape>
-double octave_sum(const ProceduralSpec& s, double feature, double amp, int i, int j, int octaves,
-                  Shape shape) {
-  const double u = double(i) / s.width, v = double(j) / s.height;
+void octave_sum_row(const ProceduralSpec& s, double feature, double amp, int j, int octaves, Shape shape,
+                    double* out) {
+  std::fill(out, out + s.width, 0.0);
+  const double v = double(j) / s.height;
   std::int64_t cx = std::max<std::int64_t>(1, std::llround(s.width / feature));
   std::int64_t cy = std::max<std::int64_t>(1, std::llround(s.height / feature));
-  double h = 0, a = amp;
+  double a = amp;
   const std::int64_t max_cells = std::max(s.width, s.height);
   for (int octave = 0; octave < octaves && std::min(cx, cy) <= max_cells; ++octave) {
-    h += a * shape(value_noise(s.seed, octave, cx, cy, u, v));
+    const double y = v * double(cy), fy = std::floor(y);
+    const std::int64_t y0 = std::int64_t(fy);
+    const double ty = quintic(y - fy);
+    // The cell's four corners, kept while the row stays in it; x0 never falls along a row.
+    std::int64_t cell = std::numeric_limits<std::int64_t>::min();
+    double c00 = 0, c10 = 0, c01 = 0, c11 = 0;
+    for (int i = 0; i < s.width; ++i) {
+      const double x = (double(i) / s.width) * double(cx), fx = std::floor(x);
+      const std::int64_t x0 = std::int64_t(fx);
+      if (x0 != cell) {
+        if (x0 == cell + 1) {
+          c00 = c10;
+          c01 = c11;
+        } else {
+          c00 = lattice_value(s.seed, octave, x0, y0, cx, cy);
+          c01 = lattice_value(s.seed, octave, x0, y0 + 1, cx, cy);
+        }
+        c10 = lattice_value(s.seed, octave, x0 + 1, y0, cx, cy);
+        c11 = lattice_value(s.seed, octave, x0 + 1, y0 + 1, cx, cy);
+        cell = x0;
+      }
+      const double tx = quintic(x - fx);
+      out[i] += a * shape((c00 + (c10 - c00) * tx) * (1 - ty) + (c01 + (c11 - c01) * tx) * ty);
+    }
     a *= 0.5;
     cx *= 2;
     cy *= 2;
   }
-  return h;
 }
 
-double fractal(const ProceduralSpec& s, double feature, double amp, int i, int j, int octaves = 16) {
-  return octave_sum(s, feature, amp, i, j, octaves, [](double n) { return n; });
+double identity_shape(double n) {
+  return n;
 }
 
-double ridges(const ProceduralSpec& s, double feature, double amp, int i, int j) {
-  return octave_sum(s, feature, amp, i, j, 16,
-                    [](double n) { return (1 - std::abs(n)) * (1 - std::abs(n)); });
+double ridge_shape(double n) {
+  return (1 - std::abs(n)) * (1 - std::abs(n));
 }
 
 double craters(const ProceduralSpec& s, double feature, double amp, int i, int j) {
@@ -301,51 +320,61 @@ HeightField make_procedural(const ProceduralSpec& s, double texel_size, Wrap wra
   const double ax = std::cos(s.aspect_deg * deg), ay = std::sin(s.aspect_deg * deg);
 
   // Each texel is a pure function of (spec, i, j): rows in parallel, the same heights for any thread count.
-  tbb::parallel_for(0, s.height, [&](int j) {
-    for (int i = 0; i < s.width; ++i) {
-      double h = 0;  // in texel units
-      switch (s.kind) {
-        case ProceduralKind::fractal:
-          h = fractal(s, feature, amp, i, j);
-          break;
-        case ProceduralKind::bricks:
-          h = bricks(s, feature, amp, i, j);
-          break;
-        case ProceduralKind::sines:
-          h = sines(feature, amp, i, j);
-          break;
-        case ProceduralKind::blocks:
-          h = blocks(s, feature, amp, i, j);
-          break;
-        case ProceduralKind::flat:
-          h = 0;
-          break;
-        case ProceduralKind::slope:
-          h = -tan_a * ((i - cx) * ax + (j - cy) * ay);
-          break;
-        case ProceduralKind::trench:
-          h = tan_a * std::abs(i - cx);
-          break;
-        case ProceduralKind::pit:
-          h = std::hypot(i - cx, j - cy) < radius ? -depth : 0.0;
-          break;
-        case ProceduralKind::cone:
-          h = -tan_a * std::hypot(i - cx, j - cy);
-          break;
-        case ProceduralKind::terraces:
-          h = step * std::floor(fractal(s, feature, amp, i, j, 3) / step);
-          break;
-        case ProceduralKind::craters:
-          h = craters(s, feature, amp, i, j);
-          break;
-        case ProceduralKind::ridges:
-          h = ridges(s, feature, amp, i, j);
-          break;
-        case ProceduralKind::rough:
-          h = rough * rough_noise(s.seed, i, j);
-          break;
+  const bool fbm = s.kind == ProceduralKind::fractal || s.kind == ProceduralKind::terraces ||
+                   s.kind == ProceduralKind::ridges;
+  tbb::parallel_for(tbb::blocked_range<int>(0, s.height), [&](const tbb::blocked_range<int>& rows) {
+    std::vector<double> row(fbm ? std::size_t(s.width) : 0);  // once per range of rows, not per row
+    for (int j = rows.begin(); j != rows.end(); ++j) {
+      if (s.kind == ProceduralKind::fractal)
+        octave_sum_row(s, feature, amp, j, 16, identity_shape, row.data());
+      if (s.kind == ProceduralKind::terraces)
+        octave_sum_row(s, feature, amp, j, 3, identity_shape, row.data());
+      if (s.kind == ProceduralKind::ridges) octave_sum_row(s, feature, amp, j, 16, ridge_shape, row.data());
+      for (int i = 0; i < s.width; ++i) {
+        double h = 0;  // in texel units
+        switch (s.kind) {
+          case ProceduralKind::fractal:
+            h = row[std::size_t(i)];
+            break;
+          case ProceduralKind::bricks:
+            h = bricks(s, feature, amp, i, j);
+            break;
+          case ProceduralKind::sines:
+            h = sines(feature, amp, i, j);
+            break;
+          case ProceduralKind::blocks:
+            h = blocks(s, feature, amp, i, j);
+            break;
+          case ProceduralKind::flat:
+            h = 0;
+            break;
+          case ProceduralKind::slope:
+            h = -tan_a * ((i - cx) * ax + (j - cy) * ay);
+            break;
+          case ProceduralKind::trench:
+            h = tan_a * std::abs(i - cx);
+            break;
+          case ProceduralKind::pit:
+            h = std::hypot(i - cx, j - cy) < radius ? -depth : 0.0;
+            break;
+          case ProceduralKind::cone:
+            h = -tan_a * std::hypot(i - cx, j - cy);
+            break;
+          case ProceduralKind::terraces:
+            h = step * std::floor(row[std::size_t(i)] / step);
+            break;
+          case ProceduralKind::craters:
+            h = craters(s, feature, amp, i, j);
+            break;
+          case ProceduralKind::ridges:
+            h = row[std::size_t(i)];
+            break;
+          case ProceduralKind::rough:
+            h = rough * rough_noise(s.seed, i, j);
+            break;
+        }
+        f.z[f.index(i, j)] = float(h * texel_size);
       }
-      f.z[f.index(i, j)] = float(h * texel_size);
     }
   });
   return f;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "field/procedural.hpp"
@@ -185,6 +186,95 @@ TEST(Procedural, RidgesHaveSharpCrests) {
   };
   EXPECT_LT(min_second_difference(r), 1.5 * min_second_difference(f));
   EXPECT_GT(max_second_difference(f), 0.0);
+}
+
+// The fBm kinds' definition, texel by texel, written out from procedural.cpp's header: splitmix64-hashed
+// lattice values in [-1, 1), periodic in the octave's cell counts, quintic-weighted bilinear blend, octaves
+// from width / feature cells doubling until a cell is below a texel, amplitudes halving. make_procedural
+// walks rows and hashes each lattice value once per row; it must give these values to the bit.
+namespace oracle {
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+double lattice(std::uint64_t seed, std::int64_t xi, std::int64_t yi, int octave, std::int64_t nx,
+               std::int64_t ny) {
+  xi = ((xi % nx) + nx) % nx;
+  yi = ((yi % ny) + ny) % ny;
+  const std::uint64_t h =
+      mix(seed ^ mix(std::uint64_t(xi) ^ mix(std::uint64_t(yi) ^ mix(std::uint64_t(octave)))));
+  return 2.0 * (double(h >> 11) * (1.0 / 9007199254740992.0)) - 1.0;
+}
+double quintic(double t) {
+  return t * t * t * (t * (t * 6 - 15) + 10);
+}
+template <class Shape>
+double fbm(const ProceduralSpec& s, double feature, double amp, int i, int j, int octaves, Shape shape) {
+  const double u = double(i) / s.width, v = double(j) / s.height;
+  std::int64_t nx = std::max<std::int64_t>(1, std::llround(s.width / feature));
+  std::int64_t ny = std::max<std::int64_t>(1, std::llround(s.height / feature));
+  double h = 0, a = amp;
+  for (int o = 0; o < octaves && std::min(nx, ny) <= std::max(s.width, s.height); ++o) {
+    const double x = u * double(nx), y = v * double(ny);
+    const double fx = std::floor(x), fy = std::floor(y);
+    const auto x0 = std::int64_t(fx), y0 = std::int64_t(fy);
+    const double tx = quintic(x - fx), ty = quintic(y - fy);
+    const double l00 = lattice(s.seed, x0, y0, o, nx, ny), l10 = lattice(s.seed, x0 + 1, y0, o, nx, ny);
+    const double l01 = lattice(s.seed, x0, y0 + 1, o, nx, ny),
+                 l11 = lattice(s.seed, x0 + 1, y0 + 1, o, nx, ny);
+    h += a * shape((l00 + (l10 - l00) * tx) * (1 - ty) + (l01 + (l11 - l01) * tx) * ty);
+    a *= 0.5;
+    nx *= 2;
+    ny *= 2;
+  }
+  return h;
+}
+}  // namespace oracle
+
+TEST(Procedural, FbmKindsEqualTheirPerTexelDefinitionToTheBit) {
+  struct Case {
+    ProceduralKind kind;
+    int w, h;
+    double feature, amplitude, step;
+  };
+  const Case cases[] = {
+      {ProceduralKind::fractal, 97, 64, 0, 0, 0},    {ProceduralKind::fractal, 256, 256, 0, 0, 0},
+      {ProceduralKind::fractal, 300, 7, 13.5, 4, 0}, {ProceduralKind::fractal, 3, 200, 0, 0, 0},
+      {ProceduralKind::ridges, 130, 90, 0, 0, 0},    {ProceduralKind::ridges, 64, 64, 5, 2, 0},
+      {ProceduralKind::terraces, 128, 100, 0, 0, 0}, {ProceduralKind::terraces, 80, 80, 30, 9, 1.5}};
+  for (const Case& c : cases) {
+    ProceduralSpec s;
+    s.kind = c.kind;
+    s.width = c.w;
+    s.height = c.h;
+    s.seed = 11;
+    s.feature_size = c.feature;
+    s.amplitude = c.amplitude;
+    s.step = c.step;
+    const double texel = 0.75;
+    const HeightField f = make_procedural(s, texel, Wrap::clamp);
+    const double size = std::min(c.w, c.h);
+    double feature = c.feature > 0 ? c.feature : size / 2;
+    double amp = c.amplitude > 0 ? c.amplitude : (c.kind == ProceduralKind::terraces ? size / 16 : size / 8);
+    const double step = c.step > 0 ? c.step : amp / 3;
+    std::int64_t mismatches = 0;
+    for (int j = 0; j < c.h; ++j) {
+      for (int i = 0; i < c.w; ++i) {
+        double z = 0;
+        if (c.kind == ProceduralKind::ridges)
+          z = oracle::fbm(s, feature, amp, i, j, 16,
+                          [](double n) { return (1 - std::abs(n)) * (1 - std::abs(n)); });
+        else if (c.kind == ProceduralKind::terraces)
+          z = step * std::floor(oracle::fbm(s, feature, amp, i, j, 3, [](double n) { return n; }) / step);
+        else
+          z = oracle::fbm(s, feature, amp, i, j, 16, [](double n) { return n; });
+        mismatches += f.z[f.index(i, j)] != float(z * texel);
+      }
+    }
+    EXPECT_EQ(mismatches, 0) << procedural_kind_name(c.kind) << " " << c.w << "x" << c.h;
+  }
 }
 
 }  // namespace
