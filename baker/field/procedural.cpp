@@ -150,22 +150,40 @@ double craters(const ProceduralSpec& s, double feature, double amp, int i, int j
   return h;
 }
 
-// Bilinear lattice noise in [-1, 1) with `cell` texels between lattice points, not periodic.
-double lattice_bilinear(std::uint64_t seed, int octave, int cell, int i, int j) {
-  const double x = double(i) / cell, y = double(j) / cell;
-  const std::int64_t x0 = std::int64_t(std::floor(x)), y0 = std::int64_t(std::floor(y));
-  const double tx = x - double(x0), ty = y - double(y0);
-  auto at = [&](std::int64_t a, std::int64_t b) { return 2.0 * hash01(seed, a, b, 100 + octave) - 1.0; };
-  const double a = at(x0, y0), b = at(x0 + 1, y0), c = at(x0, y0 + 1), d = at(x0 + 1, y0 + 1);
-  return (a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty;
-}
-
-double rough_noise(std::uint64_t seed, int i, int j) {
-  double h = 0, a = 1;
+// One row j of rough's noise: octaves of bilinear lattice noise in [-1, 1) (not periodic) with cells of
+// 64 texels down to 1, each octave 0.7 times the last. out[i] for i in [0, width), each texel's octaves
+// summed in order (tests/field compares the bits with the texel-by-texel definition); the lattice values
+// are hashed once per row and octave.
+void rough_noise_row(std::uint64_t seed, int j, int width, double* out) {
+  std::fill(out, out + width, 0.0);
+  double a = 1;
   int octave = 0;
-  for (int cell = 64; cell >= 1; cell /= 2, a *= 0.7, ++octave)
-    h += a * lattice_bilinear(seed, octave, cell, i, j);
-  return h;
+  for (int cell = 64; cell >= 1; cell /= 2, a *= 0.7, ++octave) {
+    const double y = double(j) / cell;
+    const std::int64_t y0 = std::int64_t(std::floor(y));
+    const double ty = y - double(y0);
+    auto at = [&](std::int64_t p, std::int64_t q) { return 2.0 * hash01(seed, p, q, 100 + octave) - 1.0; };
+    std::int64_t cell_x = std::numeric_limits<std::int64_t>::min();
+    double c00 = 0, c10 = 0, c01 = 0, c11 = 0;
+    for (int i = 0; i < width; ++i) {
+      const double x = double(i) / cell;
+      const std::int64_t x0 = std::int64_t(std::floor(x));
+      if (x0 != cell_x) {
+        if (x0 == cell_x + 1) {
+          c00 = c10;
+          c01 = c11;
+        } else {
+          c00 = at(x0, y0);
+          c01 = at(x0, y0 + 1);
+        }
+        c10 = at(x0 + 1, y0);
+        c11 = at(x0 + 1, y0 + 1);
+        cell_x = x0;
+      }
+      const double tx = x - double(x0);
+      out[i] += a * ((c00 + (c10 - c00) * tx) * (1 - ty) + (c01 + (c11 - c01) * tx) * ty);
+    }
+  }
 }
 
 // The factor that makes the median forward difference of rough_noise tan(angle_deg), from its fixed
@@ -173,8 +191,7 @@ double rough_noise(std::uint64_t seed, int i, int j) {
 double rough_scale(std::uint64_t seed, double angle_deg) {
   constexpr int n = 256;
   std::vector<double> z(std::size_t(n) * n);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) z[std::size_t(j) * n + i] = rough_noise(seed, i, j);
+  for (int j = 0; j < n; ++j) rough_noise_row(seed, j, n, &z[std::size_t(j) * n]);
   std::vector<double> diffs;
   diffs.reserve(std::size_t(n) * (n - 1));
   for (int j = 0; j < n; ++j)
@@ -320,16 +337,17 @@ HeightField make_procedural(const ProceduralSpec& s, double texel_size, Wrap wra
   const double ax = std::cos(s.aspect_deg * deg), ay = std::sin(s.aspect_deg * deg);
 
   // Each texel is a pure function of (spec, i, j): rows in parallel, the same heights for any thread count.
-  const bool fbm = s.kind == ProceduralKind::fractal || s.kind == ProceduralKind::terraces ||
-                   s.kind == ProceduralKind::ridges;
+  const bool by_rows = s.kind == ProceduralKind::fractal || s.kind == ProceduralKind::terraces ||
+                       s.kind == ProceduralKind::ridges || s.kind == ProceduralKind::rough;
   tbb::parallel_for(tbb::blocked_range<int>(0, s.height), [&](const tbb::blocked_range<int>& rows) {
-    std::vector<double> row(fbm ? std::size_t(s.width) : 0);  // once per range of rows, not per row
+    std::vector<double> row(by_rows ? std::size_t(s.width) : 0);  // once per range of rows, not per row
     for (int j = rows.begin(); j != rows.end(); ++j) {
       if (s.kind == ProceduralKind::fractal)
         octave_sum_row(s, feature, amp, j, 16, identity_shape, row.data());
       if (s.kind == ProceduralKind::terraces)
         octave_sum_row(s, feature, amp, j, 3, identity_shape, row.data());
       if (s.kind == ProceduralKind::ridges) octave_sum_row(s, feature, amp, j, 16, ridge_shape, row.data());
+      if (s.kind == ProceduralKind::rough) rough_noise_row(s.seed, j, s.width, row.data());
       for (int i = 0; i < s.width; ++i) {
         double h = 0;  // in texel units
         switch (s.kind) {
@@ -370,7 +388,7 @@ HeightField make_procedural(const ProceduralSpec& s, double texel_size, Wrap wra
             h = row[std::size_t(i)];
             break;
           case ProceduralKind::rough:
-            h = rough * rough_noise(s.seed, i, j);
+            h = rough * row[std::size_t(i)];
             break;
         }
         f.z[f.index(i, j)] = float(h * texel_size);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <tuple>
 #include <vector>
 
 #include "field/procedural.hpp"
@@ -231,7 +232,52 @@ double fbm(const ProceduralSpec& s, double feature, double amp, int i, int j, in
   }
   return h;
 }
+// rough: bilinear (not periodic) lattice noise, cells of 64 texels down to 1, each octave 0.7 times the
+// last, scaled so that the median forward difference over the 256x256 window at the origin is tan(angle).
+double rough_noise(std::uint64_t seed, int i, int j) {
+  double h = 0, a = 1;
+  int o = 0;
+  for (int cell = 64; cell >= 1; cell /= 2, a *= 0.7, ++o) {
+    const double x = double(i) / cell, y = double(j) / cell;
+    const auto x0 = std::int64_t(std::floor(x)), y0 = std::int64_t(std::floor(y));
+    const double tx = x - double(x0), ty = y - double(y0);
+    auto at = [&](std::int64_t p, std::int64_t q) {
+      const std::uint64_t u =
+          mix(seed ^ mix(std::uint64_t(p) ^ mix(std::uint64_t(q) ^ mix(std::uint64_t(100 + o)))));
+      return 2.0 * (double(u >> 11) * (1.0 / 9007199254740992.0)) - 1.0;
+    };
+    const double l00 = at(x0, y0), l10 = at(x0 + 1, y0), l01 = at(x0, y0 + 1), l11 = at(x0 + 1, y0 + 1);
+    h += a * ((l00 + (l10 - l00) * tx) * (1 - ty) + (l01 + (l11 - l01) * tx) * ty);
+  }
+  return h;
+}
+double rough_scale(std::uint64_t seed, double angle_deg) {
+  std::vector<double> d;
+  for (int j = 0; j < 256; ++j)
+    for (int i = 0; i + 1 < 256; ++i)
+      d.push_back(std::abs(rough_noise(seed, i + 1, j) - rough_noise(seed, i, j)));
+  std::sort(d.begin(), d.end());
+  return std::tan(angle_deg * 3.14159265358979323846 / 180) / d[d.size() / 2];
+}
 }  // namespace oracle
+
+TEST(Procedural, RoughEqualsItsPerTexelDefinitionToTheBit) {
+  for (const auto& [w, h, angle] : {std::tuple{120, 77, 70.0}, std::tuple{300, 5, 40.0}}) {
+    ProceduralSpec s;
+    s.kind = ProceduralKind::rough;
+    s.width = w;
+    s.height = h;
+    s.seed = 3;
+    s.angle_deg = angle;
+    const HeightField f = make_procedural(s, 1.0, Wrap::clamp);
+    const double scale = oracle::rough_scale(s.seed, angle);
+    std::int64_t mismatches = 0;
+    for (int j = 0; j < h; ++j)
+      for (int i = 0; i < w; ++i)
+        mismatches += f.z[f.index(i, j)] != float(scale * oracle::rough_noise(s.seed, i, j));
+    EXPECT_EQ(mismatches, 0) << w << "x" << h;
+  }
+}
 
 TEST(Procedural, FbmKindsEqualTheirPerTexelDefinitionToTheBit) {
   struct Case {
