@@ -227,7 +227,8 @@ void OutputStage::write_layers(const std::string& stem, const LayerSet& layers) 
   const std::string exr = job_.name + "." + stem + ".exr";
   ExrOptions options;
   options.float_pixels = job_.output.float_pixels;
-  options.compression = job_.output.compression;
+  options.compression =
+      job_.output.compression.empty() ? default_exr_compression(layers) : job_.output.compression;
   // Tiles of 256 once a field is larger than a preview: OpenImageIO's cache (oiiotool, iv) and Nuke then read
   // what they show, not the whole file (a 512^2 crop of a 16384^2 scanline EXR: 9.6 s and 1.25 GB; tiled:
   // 0.55 s, 0.14 GB), for 0.2 % more bytes. Smaller fields stay scanline files, as before.

@@ -38,6 +38,13 @@ fs::path temporary_sibling(const fs::path& file) {
   return file.parent_path() / name;
 }
 
+std::string default_exr_compression(const LayerSet& layers) {
+  for (const Layer& layer : layers.layers)
+    if (layer.name == "horizon" || layer.name == "horizon_distance" || layer.name == "horizon_deg")
+      return "piz";
+  return "zip";
+}
+
 namespace {
 
 Imf::Compression compression_of(const std::string& name, const fs::path& file) {

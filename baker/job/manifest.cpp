@@ -319,7 +319,7 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
     job.output.dir = job.base_dir / "out" / job.name;
   job.output.dir = job.output.dir.lexically_normal();
   job.output.float_pixels = output.value("pixel_type", "half") == "float";
-  job.output.compression = output.value("compression", "zip");
+  job.output.compression = output.value("compression", "");  // "": by the file's layers
   job.output.previews = output.value("previews", false);
   job.output.geotiff = output.value("geotiff", false);
   job.output.preview_display = output.value("preview_display", "");

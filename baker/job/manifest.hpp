@@ -27,7 +27,7 @@ struct BakeEntry {
 struct OutputOptions {
   std::filesystem::path dir;  // absolute
   bool float_pixels = false;  // half by default
-  std::string compression = "zip";
+  std::string compression;    // EXR compression; empty: default_exr_compression of each file's layers
   bool previews = false;
   bool geotiff = false;  // also <name>.<stem>.<layer>.tif: float32 Cloud-Optimised GeoTIFFs
   std::string preview_display, preview_view;  // empty: the OCIO config's defaults

@@ -536,3 +536,31 @@ TEST_F(Cli, MemoryLimitRefusalAllocatesNothing) {
 
 }  // namespace
 }  // namespace hfbake
+
+namespace {
+
+std::string exr_compression(const fs::path& file) {
+  auto in = OIIO::ImageInput::open(file.string());
+  if (!in) return "cannot open " + file.string();
+  return in->spec().get_string_attribute("compression");
+}
+
+}  // namespace
+
+TEST_F(Cli, ExrCompressionDefaultsToPizForHorizonStacksAndZipOtherwise) {
+  const nlohmann::json field = {{"procedural", {{"kind", "fractal"}, {"size", {32, 24}}}}};
+  const auto bake = [&](const std::string& name, const nlohmann::json& layers,
+                        const std::string& compression) {
+    nlohmann::json j = job(field, {{{"method", "p1"}, {"directions", 8}, {"layers", layers}}});
+    j["name"] = name;
+    if (!compression.empty()) j["output"]["compression"] = compression;
+    const Result r = hfbake("bake " + write_job(name + ".json", j).string());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return exr_compression(dir_ / "out" / (name + ".p1.exr"));
+  };
+  EXPECT_EQ(bake("scalars", {"ao", "vsky"}, ""), "zip");
+  EXPECT_EQ(bake("stack", {"ao", "horizon"}, ""), "piz");
+  EXPECT_EQ(bake("distances", {"horizon_distance"}, ""), "piz");
+  EXPECT_EQ(bake("asked", {"ao", "horizon"}, "zip"), "zip");  // a compression the job names is kept
+  EXPECT_EQ(bake("asked_none", {"ao"}, "none"), "none");
+}
