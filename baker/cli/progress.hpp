@@ -5,6 +5,8 @@
 #include <time.h>
 
 #include <chrono>
+#include <cstdio>
+#include <map>
 #include <mutex>
 #include <string>
 
@@ -26,10 +28,17 @@ inline double process_cpu_seconds() {
 class Progress {
  public:
   enum class Mode { quiet, lines, bar };
-  explicit Progress(Mode mode) : mode_(mode) {}
+  using Clock = std::chrono::steady_clock::time_point (*)();
+  // Lines go to `out`; `clock` is the time the lines' elapsed and remaining times are read from (both for
+  // tests; the program uses stderr and the steady clock).
+  explicit Progress(Mode mode, std::FILE* out = stderr, Clock clock = &std::chrono::steady_clock::now)
+      : mode_(mode), out_(out), clock_(clock) {}
   static Mode detect(bool quiet);  // quiet, else bar on a terminal, else lines
 
-  // A step of a job begins ("demo", "p1"); fraction updates follow; end() prints its time.
+  // A step of a job begins ("demo", "p1"); fraction updates follow; end() prints its time. In lines mode
+  // (a log, a farm's output file) a line "<job>: <step> P% (<elapsed>, about <left> left)" comes at every
+  // quarter, and at the next whole percent once a minute has passed since the step's last line, so an
+  // hour-long step shows it is alive and when it will end.
   void begin(const std::string& job, const std::string& step);
   void update(const std::string& job, const std::string& step, double fraction);
   void end(const std::string& job, const std::string& step, double seconds);
@@ -40,11 +49,17 @@ class Progress {
 
  private:
   void clear_bar_locked();
+  void line_locked(const std::string& job, const std::string& step, double fraction);
   Mode mode_;
+  std::FILE* out_;
+  Clock clock_;
+  struct StepLines {  // lines mode: one step's start, its last line and that line's percent
+    std::chrono::steady_clock::time_point start, last;
+    int percent = 0;
+  };
+  std::map<std::string, StepLines> steps_;  // by "<job>/<step>": jobs may bake side by side
   std::mutex mutex_;
   std::chrono::steady_clock::time_point last_draw_{};
-  int last_line_percent_ = -1;
-  std::string last_line_key_;
   bool bar_visible_ = false;
 };
 
