@@ -103,7 +103,12 @@ TEST(ShVisibilityReference, AddedForTheMethodsThatBakeIt) {
   add_reference_sh_visibility(f, {&method}, reference, {}, 16);
   EXPECT_FALSE(reference.find("sh_visibility"));  // nobody baked it
   std::vector<std::string> names;
-  for (int i = 0; i < 16; ++i) names.push_back("c" + std::to_string(i));
+  for (int i = 0; i < 16; ++i) {
+    // Appended, not "c" + to_string(i): GCC 12's -Wrestrict misfires on that operator+ (GCC bug 105329).
+    std::string name = "c";
+    name += std::to_string(i);
+    names.push_back(name);
+  }
   method.add("sh_visibility", names);
   add_reference_sh_visibility(f, {&method}, reference, {}, 16);
   ASSERT_TRUE(reference.find("sh_visibility"));
