@@ -95,6 +95,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/page_buffer.hpp"
 #include "core/run_control.hpp"
 #include "field/height_field.hpp"
 
@@ -445,12 +446,12 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
 
   // Result storage, grown to the largest batch's need; lines[b][p]: where relative line p of direction
   // k0 + b lives.
-  std::unique_ptr<float[]> storage;
+  PageBuffer<float> storage;  // huge pages where the kernel gives them: fewer first-touch faults
   std::size_t storage_floats = 0;
   auto reserve = [&](std::size_t floats) {
     if (floats <= storage_floats) return;
     storage.reset();
-    storage.reset(new float[floats]);
+    storage = make_page_buffer<float>(floats);
     storage_floats = floats;
   };
   std::vector<std::vector<float*>> lines(std::size_t(std::max(1, spec.batch)));
