@@ -68,7 +68,7 @@ void Progress::update(const std::string& job, const std::string& step, double fr
     line_locked(job, step, fraction);
     return;
   }
-  const auto now = std::chrono::steady_clock::now();
+  const auto now = clock_();
   if (now - last_draw_ < std::chrono::milliseconds(100) && fraction < 1) return;
   last_draw_ = now;
   constexpr int width = 30;

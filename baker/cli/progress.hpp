@@ -29,8 +29,8 @@ class Progress {
  public:
   enum class Mode { quiet, lines, bar };
   using Clock = std::chrono::steady_clock::time_point (*)();
-  // Lines go to `out`; `clock` is the time the lines' elapsed and remaining times are read from (both for
-  // tests; the program uses stderr and the steady clock).
+  // Everything goes to `out`; `clock` is what the bar's redraw interval and the lines' elapsed and remaining
+  // times are read from (both for tests; the program uses stderr and the steady clock).
   explicit Progress(Mode mode, std::FILE* out = stderr, Clock clock = &std::chrono::steady_clock::now)
       : mode_(mode), out_(out), clock_(clock) {}
   static Mode detect(bool quiet);  // quiet, else bar on a terminal, else lines

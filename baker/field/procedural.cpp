@@ -41,6 +41,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace hfbake {
@@ -72,6 +73,41 @@ double lattice_value(std::uint64_t seed, int octave, std::int64_t xi, std::int64
   return 2.0 * hash01(seed, xi, yi, octave) - 1.0;
 }
 
+// Adds a * shape(n) to out[i] for i in [0, width): n is the bilinear blend, with weights tx(i) and ty, of the
+// four lattice values around texel i of the row: columns x0(i) and x0(i) + 1 of lattice rows y0 and y0 + 1,
+// where column(i) = {x0(i), tx(i)} and x0 never falls along a row. at(xi, dy) is the value at column xi of
+// row y0 + dy; each is read once per row (the texel-by-texel definition reads four per texel; tests/field
+// compares the bits).
+template <class Column, class At, class Shape>
+void add_lattice_row(int width, double a, double ty, Column column, At at, Shape shape, double* out) {
+  std::int64_t cell = std::numeric_limits<std::int64_t>::min();
+  double c00 = 0, c10 = 0, c01 = 0, c11 = 0;
+  for (int i = 0; i < width; ++i) {
+    const auto [x0, tx] = column(i);
+    if (x0 != cell) {
+      if (x0 == cell + 1) {  // the next cell along the row: its left corners are the last one's right ones
+        c00 = c10;
+        c01 = c11;
+      } else {
+        c00 = at(x0, 0);
+        c01 = at(x0, 1);
+      }
+      c10 = at(x0 + 1, 0);
+      c11 = at(x0 + 1, 1);
+      cell = x0;
+    }
+    out[i] += a * shape((c00 + (c10 - c00) * tx) * (1 - ty) + (c01 + (c11 - c01) * tx) * ty);
+  }
+}
+
+double identity_shape(double n) {
+  return n;
+}
+
+double ridge_shape(double n) {
+  return (1 - std::abs(n)) * (1 - std::abs(n));
+}
+
 // One row j of octaves of periodic value noise (quintic-weighted bilinear blend of the lattice values,
 // `cells` lattice cells across the unit square; 64-bit counts: a long thin field doubles its long side's
 // count past int's range, size [2, 100000]), from `feature` texels down to one texel (at most `octaves`):
@@ -91,39 +127,18 @@ void octave_sum_row(const ProceduralSpec& s, double feature, double amp, int j, 
     const double y = v * double(cy), fy = std::floor(y);
     const std::int64_t y0 = std::int64_t(fy);
     const double ty = quintic(y - fy);
-    // The cell's four corners, kept while the row stays in it; x0 never falls along a row.
-    std::int64_t cell = std::numeric_limits<std::int64_t>::min();
-    double c00 = 0, c10 = 0, c01 = 0, c11 = 0;
-    for (int i = 0; i < s.width; ++i) {
+    const auto column = [&](int i) {
       const double x = (double(i) / s.width) * double(cx), fx = std::floor(x);
-      const std::int64_t x0 = std::int64_t(fx);
-      if (x0 != cell) {
-        if (x0 == cell + 1) {
-          c00 = c10;
-          c01 = c11;
-        } else {
-          c00 = lattice_value(s.seed, octave, x0, y0, cx, cy);
-          c01 = lattice_value(s.seed, octave, x0, y0 + 1, cx, cy);
-        }
-        c10 = lattice_value(s.seed, octave, x0 + 1, y0, cx, cy);
-        c11 = lattice_value(s.seed, octave, x0 + 1, y0 + 1, cx, cy);
-        cell = x0;
-      }
-      const double tx = quintic(x - fx);
-      out[i] += a * shape((c00 + (c10 - c00) * tx) * (1 - ty) + (c01 + (c11 - c01) * tx) * ty);
-    }
+      return std::pair{std::int64_t(fx), quintic(x - fx)};
+    };
+    const auto at = [&](std::int64_t xi, int dy) {
+      return lattice_value(s.seed, octave, xi, y0 + dy, cx, cy);
+    };
+    add_lattice_row(s.width, a, ty, column, at, shape, out);
     a *= 0.5;
     cx *= 2;
     cy *= 2;
   }
-}
-
-double identity_shape(double n) {
-  return n;
-}
-
-double ridge_shape(double n) {
-  return (1 - std::abs(n)) * (1 - std::abs(n));
 }
 
 double craters(const ProceduralSpec& s, double feature, double amp, int i, int j) {
@@ -162,27 +177,15 @@ void rough_noise_row(std::uint64_t seed, int j, int width, double* out) {
     const double y = double(j) / cell;
     const std::int64_t y0 = std::int64_t(std::floor(y));
     const double ty = y - double(y0);
-    auto at = [&](std::int64_t p, std::int64_t q) { return 2.0 * hash01(seed, p, q, 100 + octave) - 1.0; };
-    std::int64_t cell_x = std::numeric_limits<std::int64_t>::min();
-    double c00 = 0, c10 = 0, c01 = 0, c11 = 0;
-    for (int i = 0; i < width; ++i) {
+    const auto column = [&](int i) {
       const double x = double(i) / cell;
       const std::int64_t x0 = std::int64_t(std::floor(x));
-      if (x0 != cell_x) {
-        if (x0 == cell_x + 1) {
-          c00 = c10;
-          c01 = c11;
-        } else {
-          c00 = at(x0, y0);
-          c01 = at(x0, y0 + 1);
-        }
-        c10 = at(x0 + 1, y0);
-        c11 = at(x0 + 1, y0 + 1);
-        cell_x = x0;
-      }
-      const double tx = x - double(x0);
-      out[i] += a * ((c00 + (c10 - c00) * tx) * (1 - ty) + (c01 + (c11 - c01) * tx) * ty);
-    }
+      return std::pair{x0, x - double(x0)};
+    };
+    const auto at = [&](std::int64_t xi, int dy) {
+      return 2.0 * hash01(seed, xi, y0 + dy, 100 + octave) - 1.0;
+    };
+    add_lattice_row(width, a, ty, column, at, identity_shape, out);
   }
 }
 
@@ -337,17 +340,17 @@ HeightField make_procedural(const ProceduralSpec& s, double texel_size, Wrap wra
   const double ax = std::cos(s.aspect_deg * deg), ay = std::sin(s.aspect_deg * deg);
 
   // Each texel is a pure function of (spec, i, j): rows in parallel, the same heights for any thread count.
-  const bool by_rows = s.kind == ProceduralKind::fractal || s.kind == ProceduralKind::terraces ||
-                       s.kind == ProceduralKind::ridges || s.kind == ProceduralKind::rough;
+  // The kinds made a row at a time: their noise, before the kind's own scale or steps (the others: nothing).
+  const auto noise_row = [&](int j, double* out) {
+    if (s.kind == ProceduralKind::fractal) octave_sum_row(s, feature, amp, j, 16, identity_shape, out);
+    if (s.kind == ProceduralKind::terraces) octave_sum_row(s, feature, amp, j, 3, identity_shape, out);
+    if (s.kind == ProceduralKind::ridges) octave_sum_row(s, feature, amp, j, 16, ridge_shape, out);
+    if (s.kind == ProceduralKind::rough) rough_noise_row(s.seed, j, s.width, out);
+  };
   tbb::parallel_for(tbb::blocked_range<int>(0, s.height), [&](const tbb::blocked_range<int>& rows) {
-    std::vector<double> row(by_rows ? std::size_t(s.width) : 0);  // once per range of rows, not per row
+    std::vector<double> row(std::size_t(s.width));  // once per range of rows, not per row
     for (int j = rows.begin(); j != rows.end(); ++j) {
-      if (s.kind == ProceduralKind::fractal)
-        octave_sum_row(s, feature, amp, j, 16, identity_shape, row.data());
-      if (s.kind == ProceduralKind::terraces)
-        octave_sum_row(s, feature, amp, j, 3, identity_shape, row.data());
-      if (s.kind == ProceduralKind::ridges) octave_sum_row(s, feature, amp, j, 16, ridge_shape, row.data());
-      if (s.kind == ProceduralKind::rough) rough_noise_row(s.seed, j, s.width, row.data());
+      noise_row(j, row.data());
       for (int i = 0; i < s.width; ++i) {
         double h = 0;  // in texel units
         switch (s.kind) {
