@@ -159,6 +159,44 @@ TEST(HullStack, QueryMatchesMarchForPointsBeyondTheHull) {
   }
 }
 
+TEST(HullStack, GallopingQueryFromAnyHintFindsTheSteepestVertex) {
+  // query_index_near (FarHorizonWorker's query, from the last texel's vertex) against a linear scan for the
+  // steepest vertex, from every hint and beyond both ends, on random hulls with fractional positions.
+  std::uint64_t x = 777;
+  auto rnd = [&] {
+    x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+    return double(x >> 11) / 9007199254740992.0;
+  };
+  long checked = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    p1::HullStackF hull;
+    const int n = 1 + int(rnd() * 80);
+    hull.reset(n);
+    std::vector<double> pos(n);
+    std::vector<float> z(n);
+    double p = 0;
+    for (int m = 0; m < n; ++m) {
+      p += 0.05 + rnd();
+      pos[m] = p, z[m] = float(rnd() * 10);
+      hull.add(p, z[m]);
+    }
+    for (int q = 0; q < 4; ++q) {
+      const double at = p + 0.5 + rnd() * 5;
+      const float zq = float(rnd() * 14 - 2);
+      double best = -1e300;
+      for (int m = 0; m < n; ++m) best = std::max(best, (double(z[m]) - zq) / (at - pos[m]));
+      const int by_search = hull.query_index(at, zq);
+      for (int hint = -2; hint <= hull.size() + 1; ++hint) {
+        const int i = hull.query_index_near(at, zq, hint);
+        ASSERT_EQ(i, by_search) << "trial " << trial << " hint " << hint;
+        ASSERT_NEAR((double(hull.height(i)) - zq) / (at - hull.position(i)), best, 1e-12);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 10000);
+}
+
 TEST(FastMath, AtanAndSincosAccuracy) {
   double e_atan = 0, e_sin = 0, e_cos = 0;
   for (int i = -200000; i <= 200000; ++i) {

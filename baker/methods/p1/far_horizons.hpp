@@ -94,6 +94,8 @@ struct FarHorizonWorker {
   HullStackF hull_;
 
   const LinePattern& pattern(const SweepDirection& dir);
+  template <bool repeat>
+  void search(const SweepLine& line, float* out);
   void profile(const LinePattern& pat, const SweepDirection& dir, int line, std::vector<float>& out) const;
 };
 
