@@ -92,7 +92,9 @@ struct Sequence2 {
   }
   Point2 operator()(std::uint32_t i) const {
     const std::uint32_t s = owen_scramble(i, index_seed);  // shuffles the order, keeps 2^m prefixes nets
-    return {to_unit(owen_scramble(sobol_dim0(s), seed_u)), to_unit(owen_scramble(sobol_dim1(s), seed_v))};
+    // owen_scramble(sobol_dim0(s), seed_u), whose two bit reversals cancel: reverse(reverse(s)) = s.
+    const std::uint32_t u = reverse_bits(nested_permutation(s, seed_u));
+    return {to_unit(u), to_unit(owen_scramble(sobol_dim1(s), seed_v))};
   }
 };
 

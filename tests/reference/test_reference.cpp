@@ -124,6 +124,20 @@ TEST(Sampling, PrefixesAreNets) {
   }
 }
 
+TEST(Sampling, SequenceIsTheScrambledSobolPairAsDefined) {
+  // Sequence2's point k, written out from its definition (scrambled index, each Sobol dimension scrambled
+  // with its own seed): the sampler may take shortcuts, never other bits.
+  for (std::uint64_t stream : {3ull, 4242ull, 987654321ull}) {
+    const auto seq = reference::Sequence2::make(stream);
+    for (std::uint32_t k : {0u, 1u, 2u, 7u, 31u, 32u, 1000u, 65535u, 123456789u, 4294967295u}) {
+      const std::uint32_t s = reference::owen_scramble(k, seq.index_seed);
+      const auto p = seq(k);
+      ASSERT_EQ(p.u, reference::to_unit(reference::owen_scramble(reference::sobol_dim0(s), seq.seed_u))) << k;
+      ASSERT_EQ(p.v, reference::to_unit(reference::owen_scramble(reference::sobol_dim1(s), seq.seed_v))) << k;
+    }
+  }
+}
+
 TEST(Geometry, SurfaceSplitAndSkirt) {
   HeightField f;
   f.width = f.height = 2;
