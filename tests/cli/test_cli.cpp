@@ -75,6 +75,26 @@ TEST_F(Cli, VersionAndHelp) {
   EXPECT_EQ(r.exit_code, 0);
 }
 
+TEST_F(Cli, VersionNamesTheRevisionItWasBuiltFrom) {
+  // --version (and reports, EXR headers) carry "+g<revision>" of the source tree the binary was built from,
+  // written at build time: a revision taken when CMake configured stayed behind after every later commit.
+  // (Built and tested from the same tree: the build runs just before the tests.)
+  auto first_line = [](const std::string& cmd, std::string& line) {  // false: the command failed
+    std::FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return false;
+    char buf[256] = {};
+    const bool read = std::fgets(buf, sizeof buf, p) != nullptr;
+    line = buf;
+    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+    return pclose(p) == 0 && read;
+  };
+  std::string rev, version;
+  if (!first_line("git -C " HFBAKE_SOURCE_DIR " rev-parse --short HEAD 2>/dev/null", rev))
+    GTEST_SKIP() << "the source is not a git checkout";
+  ASSERT_TRUE(first_line(HFBAKE_BINARY " --version", version));
+  EXPECT_NE(version.find("+g" + rev), std::string::npos) << version << " (HEAD is " << rev << ")";
+}
+
 TEST_F(Cli, MalformedJson) {
   const fs::path p = dir_ / "bad.json";
   std::ofstream(p) << "{\"version\": 1,,}";
