@@ -1,6 +1,6 @@
 #!/bin/bash
 # Shards + merge give the bits of a single-machine bake, for shard counts below, at and above the direction
-# blocks; missing, truncated and foreign shards are refused naming the shard (exit 2); a re-run shard is kept.
+# blocks, and with one shard on glibc's baseline (SSE2) math functions; missing, truncated and foreign shards are refused naming the shard (exit 2); a re-run shard is kept.
 set -u
 H=$1 W=$2
 . "$(dirname "$0")/common.sh"
@@ -34,6 +34,16 @@ for N in 1 3 11; do
   same_outputs whole "s$N"
   echo "ok: $N shards merge to the bake's bits"
 done
+
+# A farm of mixed machines: glibc picks its math functions' variants (sinf, atanf, sincos, ...) by CPU, FMA
+# and AVX2 ones on this machine, SSE2 ones on machines without them. One shard baked with the SSE2 variants
+# (forced by glibc's tunable) and the others with this machine's: the merge must still be the bake's bits.
+SSE2_MATH="glibc.cpu.hwcaps=-AVX2_Usable,-FMA_Usable,-AVX512F_Usable,-AVX2,-FMA,-AVX512F"
+GLIBC_TUNABLES=$SSE2_MATH "$H" bake job.json --no-cache --quiet --out mixed --shard 0/3 || fail "SSE2-math shard"
+for i in 1 2; do "$H" bake job.json --no-cache --quiet --out mixed --shard "$i/3" || fail "bake --shard $i/3"; done
+"$H" merge job.json --no-cache --quiet --out mixed || fail "merge of mixed-math shards"
+same_outputs whole mixed
+echo "ok: a shard baked with glibc's SSE2 math merges with FMA/AVX2 ones to the bake's bits"
 
 # A re-run of a complete shard keeps it (idempotent), and the merge is the same again.
 before=$(stat -c %Y%N s3/shards/farm.shard-1-of-3.hfshard)
