@@ -1,7 +1,9 @@
 // Where a segment in texel coordinates crosses the edges of the triangulated surface
 // (field/triangulation.hpp): the columns (x integer), the rows (y integer) and the quads' diagonals (x + y
-// integer, the split (i+1, j)-(i, j+1)) -- the kinks of the surface's height along the segment. Read by p2's
-// exact line profiles and facet segments and by lsao's line crossings.
+// integer, the split (i+1, j)-(i, j+1)) -- the kinks of the surface's height along the segment. Read by p1's
+// line patterns (far_horizons.cpp LinePattern, and HorizonLineWorker's terrain points), p2's exact line
+// profiles and facet segments and lsao's line crossings. (p1's per-texel search walks the same crossings
+// band by band inline, its hot loop; tests/p1 checks it against the exact march.)
 #pragma once
 
 #include <utility>

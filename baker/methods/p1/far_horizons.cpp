@@ -1,5 +1,7 @@
 #include "methods/p1/far_horizons.hpp"
 
+#include "field/edge_crossings.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -34,11 +36,6 @@ void LinePattern::build(const HeightField& f, const SweepDirection& d) {
     w.push_back(float(wb));
     minor.push_back(m);
   };
-  struct Crossing {
-    double t;
-    int ua, va, ub, vb;
-    double wb, m;
-  };
   for (int n = 0; n < d.count; ++n) {
     first[n] = std::int32_t(pos.size());
     const int u = d.u(n);
@@ -50,33 +47,28 @@ void LinePattern::build(const HeightField& f, const SweepDirection& d) {
     if (n + 1 >= d.count) break;
     const int u1 = d.u(n + 1);
     const double x1 = double(u1) * d.slope;
-    Crossing c[3];
-    int m = 0;
-    if (x1 != x) {  // rows: integers strictly between x and x1 (at most one, |slope| <= 1)
-      const int kr = x1 > x ? floor_int(x) + 1 : -floor_int(-x) - 1;
-      if (x1 > x ? kr < x1 : kr > x1) {
-        const double tp = (kr - x) / (x1 - x), uc = u + d.su * tp;
-        const int fu = floor_int(uc);
-        c[m++] = {tp, fu, kr, fu + 1, kr, uc - fu, double(kr)};
-      }
-    }
-    const double w0 = u + x, w1 = u1 + x1;
-    if (w1 != w0)  // diagonals u + v = integer strictly between (at most two)
-      for (int kd = w1 > w0 ? floor_int(w0) + 1 : -floor_int(-w0) - 1; w1 > w0 ? kd < w1 : kd > w1;
-           kd += w1 > w0 ? 1 : -1) {
-        const double tp = (kd - w0) / (w1 - w0), uc = u + d.su * tp, vc = kd - uc;
-        const int fv = floor_int(vc), cu = kd - fv - 1;  // edge (cu + 1, fv)-(cu, fv + 1) of cell (cu, fv)
-        c[m++] = {tp, cu + 1, fv, cu, fv + 1, vc - fv, vc};
-      }
-    std::sort(c, c + m, [](const Crossing& a, const Crossing& b) { return a.t < b.t; });
+    // The step's crossings with the triangulation's edges (field/edge_crossings.hpp, in field coordinates):
+    // the minor axis' integers (at most one, |slope| <= 1) and the diagonals u + v = integer (at most two);
+    // the major axis' integers are the samples themselves.
+    EdgeCrossing c[kMaxEdgeCrossings];
+    const int m = d.x_major ? edge_crossings(u, x, u1, x1, c) : edge_crossings(x, u, x1, u1, c);
     // Positions increase by at least kMinGap (the hull's precondition, with room for rounding): a crossing
     // nearer a sample (u * slope an integer up to rounding) or another crossing is that point already, to
     // kMinGap times the surface's slope, and is left out. Two vertices 1e-15 apart, float heights one ulp
     // apart, made the hull non-concave and its binary search miss the steepest vertex.
     for (int i = 0; i < m; ++i) {
       const double p = n + c[i].t;
-      if (p > pos.back() + kMinGap && p < double(n + 1) - kMinGap)
-        push(p, c[i].ua, c[i].va, c[i].ub, c[i].vb, c[i].wb, c[i].m);
+      if (!(p > pos.back() + kMinGap && p < double(n + 1) - kMinGap)) continue;
+      const double uc = u + d.su * c[i].t;
+      if (c[i].family == EdgeFamily::diagonal) {  // edge (cu + 1, fv)-(cu, fv + 1) of cell (cu, fv)
+        const int kd = c[i].m;
+        const double vc = kd - uc;
+        const int fv = floor_int(vc), cu = kd - fv - 1;
+        push(p, cu + 1, fv, cu, fv + 1, vc - fv, vc);
+      } else {  // minor coordinate kr: the edge between the texels either side of uc on that row
+        const int kr = c[i].m, fu = floor_int(uc);
+        push(p, fu, kr, fu + 1, kr, uc - fu, double(kr));
+      }
     }
   }
   first[d.count] = std::int32_t(pos.size());

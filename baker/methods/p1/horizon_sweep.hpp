@@ -22,6 +22,7 @@
 #include <limits>
 #include <vector>
 
+#include "field/edge_crossings.hpp"
 #include "methods/p1/fast_math.hpp"
 #include "methods/p1/hull_stack.hpp"
 #include "sweep/sweep_lines.hpp"
@@ -110,44 +111,31 @@ struct HorizonLineWorker {
       vv = vv < 0 ? 0 : (vv >= nv ? nv - 1 : vv);
       return Z[uu * su_stride + vv * sv_stride];
     };
-    // Per step the minor coordinate v moves by dv = su * slope and w = u + v by dw = su * (1 + slope).
-    const double dv = d.su * d.slope, dw = d.su * (1 + d.slope);
-    const double inv_dv = dv != 0 ? 1 / dv : 0, inv_dw = dw != 0 ? 1 / dw : 0;
     for (int n = line.inside_begin; n < line.inside_end; ++n) {
       pos.push_back(n), z.push_back(line.z[n]);
       if (n + 1 >= line.inside_end) break;
-      const int u0 = d.u(n);
-      const double v0 = d.v(line.line, n), v1 = v0 + dv, w0 = u0 + v0, w1 = w0 + dw;
-      double cs[3];
-      float cz[3];
-      int m = 0;
-      // Row crossings: v integer strictly between v0 and v1 (at most one: |slope| <= 1).
-      if (dv != 0) {
-        const int k = dv > 0 ? floor_int(v0) + 1 : -floor_int(-v0) - 1;  // the next integer beyond v0
-        if (dv > 0 ? k < v1 : k > v1) {
-          const double t = (k - v0) * inv_dv;  // fraction of the step
-          const double u = u0 + d.su * t;
+      const int u0 = d.u(n), u1 = d.u(n + 1);
+      const double v0 = d.v(line.line, n), v1 = d.v(line.line, n + 1);
+      // The step's crossings with the triangulation's edges (field/edge_crossings.hpp, field coordinates):
+      // the minor axis' integers and the diagonals; the major axis' integers are the samples.
+      EdgeCrossing e[kMaxEdgeCrossings];
+      const int m = d.x_major ? edge_crossings(u0, v0, u1, v1, e) : edge_crossings(v0, u0, v1, u1, e);
+      double cs[kMaxEdgeCrossings];
+      float cz[kMaxEdgeCrossings];
+      for (int c = 0; c < m; ++c) {
+        const double u = u0 + d.su * e[c].t;
+        float a, b;
+        double w;
+        if (e[c].family ==
+            EdgeFamily::diagonal) {  // the cell (cu, fv): its diagonal runs (cu+1, fv)-(cu, fv+1)
+          const double v = e[c].m - u;
+          const int fv = floor_int(v), cu = e[c].m - fv - 1;
+          a = at(cu + 1, fv), b = at(cu, fv + 1), w = v - fv;
+        } else {  // a row of the minor axis
           const int fu = floor_int(u);
-          const float a = at(fu, k), b = at(fu + 1, k);
-          cs[m] = n + t, cz[m] = float(a + (b - a) * (u - fu)), ++m;
+          a = at(fu, e[c].m), b = at(fu + 1, e[c].m), w = u - fu;
         }
-      }
-      // Diagonal crossings: u + v integer strictly between w0 and w1 (at most two).
-      if (dw != 0) {
-        for (int k = dw > 0 ? floor_int(w0) + 1 : -floor_int(-w0) - 1; dw > 0 ? k < w1 : k > w1;
-             k += dw > 0 ? 1 : -1) {
-          const double t = (k - w0) * inv_dw;
-          const double u = u0 + d.su * t, v = k - u;
-          const int fv = floor_int(v);
-          const int cu = k - fv - 1;  // the cell (cu, fv): its diagonal runs (cu+1, fv)-(cu, fv+1)
-          const float a = at(cu + 1, fv), b = at(cu, fv + 1);
-          cs[m] = n + t, cz[m] = float(a + (b - a) * (v - fv)), ++m;
-        }
-      }
-      if (m > 1 && cs[1] < cs[0]) std::swap(cs[0], cs[1]), std::swap(cz[0], cz[1]);
-      if (m > 2) {
-        if (cs[2] < cs[1]) std::swap(cs[1], cs[2]), std::swap(cz[1], cz[2]);
-        if (cs[1] < cs[0]) std::swap(cs[0], cs[1]), std::swap(cz[0], cz[1]);
+        cs[c] = n + e[c].t, cz[c] = float(a + (b - a) * w);
       }
       // A crossing on or below the chord of its neighbours (a valley kink) is never on the upper hull:
       // left out (it is inside the hull of the points kept, so no horizon changes).
