@@ -83,18 +83,7 @@ class BasicHullStack {
 
   // The stack index of query(s, z)'s caster (the stack must not be empty); the stack's points from the
   // bottom (farthest) up are position(0), height(0) .. position(size() - 1), height(size() - 1).
-  int query_index(Pos s, float z) const {
-    // First index t such that vertex t + 1 is not steeper than vertex t (seen from (s, z)).
-    int lo = 0, hi = size_ - 1;
-    while (lo < hi) {
-      const int m = (lo + hi) / 2;
-      if (steeper_than_next(s, z, m))  // the maximum is at or before m
-        hi = m;
-      else
-        lo = m + 1;
-    }
-    return lo;
-  }
+  int query_index(Pos s, float z) const { return first_steeper(s, z, 0, size_ - 1); }
   // query_index(s, z) found by galloping from `hint` (any index; the last query's for a neighbouring point,
   // whose caster is usually a few vertices away): the same index, in O(log d) probes for a distance d
   // instead of O(log size()). The predicate "vertex m at least as steep as m + 1" is false then true along
@@ -123,14 +112,7 @@ class BasicHullStack {
         lo = h + step + 1;
       }
     }
-    while (lo < hi) {
-      const int m = (lo + hi) / 2;
-      if (steeper_than_next(m))
-        hi = m;
-      else
-        lo = m + 1;
-    }
-    return lo;
+    return first_steeper(s, z, lo, hi);
   }
   Pos position(int i) const { return s_[i]; }
   float height(int i) const { return z_[i]; }
@@ -142,6 +124,18 @@ class BasicHullStack {
     const double dza = double(z_[m]) - z, dsa = double(s - s_[m]);
     const double dzb = double(z_[m + 1]) - z, dsb = double(s - s_[m + 1]);
     return dza * dsb >= dzb * dsa;
+  }
+  // The first index t in [lo, hi] with steeper_than_next(t) (hi when none before it), by bisection: the
+  // caster's vertex when the answer is known to lie in [lo, hi].
+  int first_steeper(Pos s, float z, int lo, int hi) const {
+    while (lo < hi) {
+      const int m = (lo + hi) / 2;
+      if (steeper_than_next(s, z, m))  // the maximum is at or before m
+        hi = m;
+      else
+        lo = m + 1;
+    }
+    return lo;
   }
   std::vector<Pos> s_;
   std::vector<float> z_;
