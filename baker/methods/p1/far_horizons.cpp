@@ -59,16 +59,8 @@ void LinePattern::build(const HeightField& f, const SweepDirection& d) {
     for (int i = 0; i < m; ++i) {
       const double p = n + c[i].t;
       if (!(p > pos.back() + kMinGap && p < double(n + 1) - kMinGap)) continue;
-      const double uc = u + d.su * c[i].t;
-      if (c[i].family == EdgeFamily::diagonal) {  // edge (cu + 1, fv)-(cu, fv + 1) of cell (cu, fv)
-        const int kd = c[i].m;
-        const double vc = kd - uc;
-        const int fv = floor_int(vc), cu = kd - fv - 1;
-        push(p, cu + 1, fv, cu, fv + 1, vc - fv, vc);
-      } else {  // minor coordinate kr: the edge between the texels either side of uc on that row
-        const int kr = c[i].m, fu = floor_int(uc);
-        push(p, fu, kr, fu + 1, kr, uc - fu, double(kr));
-      }
+      const LineEdge g = line_edge(c[i], u + d.su * c[i].t);
+      push(p, g.ua, g.va, g.ub, g.vb, g.w, g.v);
     }
   }
   first[d.count] = std::int32_t(pos.size());

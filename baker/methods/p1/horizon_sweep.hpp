@@ -47,6 +47,25 @@ inline int far_lag(double radius, double step) {
   return std::max(1, int(std::ceil(radius / step - 1e-9)));
 }
 
+// The triangulation's edge that a line's step crosses at `e` (edge_crossings in field coordinates; the
+// major axis' integers are the line's samples, so e is a minor-axis integer or a diagonal), u the major
+// coordinate of the crossing: its texels (ua, va) and (ub, vb) in (major, minor) coordinates, the weight w of
+// b, and the crossing's minor coordinate v. Diagonal u + v = m: the edge (cu + 1, fv)-(cu, fv + 1) of cell
+// (cu, fv), the field's split.
+struct LineEdge {
+  int ua, va, ub, vb;
+  double w, v;
+};
+inline LineEdge line_edge(const EdgeCrossing& e, double u) {
+  if (e.family == EdgeFamily::diagonal) {
+    const double v = e.m - u;
+    const int fv = floor_int(v), cu = e.m - fv - 1;
+    return {cu + 1, fv, cu, fv + 1, v - fv, v};
+  }
+  const int fu = floor_int(u);
+  return {fu, e.m, fu + 1, e.m, u - fu, double(e.m)};
+}
+
 struct HorizonLineWorker {
   HullStack stack;
   double far_radius = 0;  // world units; 0: every sample casts (Algorithm 1), else only those >= it behind
@@ -123,19 +142,9 @@ struct HorizonLineWorker {
       double cs[kMaxEdgeCrossings];
       float cz[kMaxEdgeCrossings];
       for (int c = 0; c < m; ++c) {
-        const double u = u0 + d.su * e[c].t;
-        float a, b;
-        double w;
-        if (e[c].family ==
-            EdgeFamily::diagonal) {  // the cell (cu, fv): its diagonal runs (cu+1, fv)-(cu, fv+1)
-          const double v = e[c].m - u;
-          const int fv = floor_int(v), cu = e[c].m - fv - 1;
-          a = at(cu + 1, fv), b = at(cu, fv + 1), w = v - fv;
-        } else {  // a row of the minor axis
-          const int fu = floor_int(u);
-          a = at(fu, e[c].m), b = at(fu + 1, e[c].m), w = u - fu;
-        }
-        cs[c] = n + e[c].t, cz[c] = float(a + (b - a) * w);
+        const LineEdge g = line_edge(e[c], u0 + d.su * e[c].t);
+        const float a = at(g.ua, g.va), b = at(g.ub, g.vb);
+        cs[c] = n + e[c].t, cz[c] = float(a + (b - a) * g.w);
       }
       // A crossing on or below the chord of its neighbours (a valley kink) is never on the upper hull:
       // left out (it is inside the hull of the points kept, so no horizon changes).

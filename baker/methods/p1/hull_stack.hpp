@@ -90,13 +90,13 @@ class BasicHullStack {
   // the stack, so any search for its first true index gives the binary search's answer.
   int query_index_near(Pos s, float z, int hint) const {
     const int last = size_ - 1;
-    auto steeper_than_next = [&](int m) { return this->steeper_than_next(s, z, m); };
+    auto steeper = [&](int m) { return steeper_than_next(s, z, m); };
     const int h = hint < 0 ? 0 : (hint > last ? last : hint);
-    int lo = 0, hi = last;                    // the answer is in [lo, hi]
-    if (h == last || steeper_than_next(h)) {  // at or before h: probe h - 1, h - 2, h - 4, ...
+    int lo = 0, hi = last;          // the answer is in [lo, hi]
+    if (h == last || steeper(h)) {  // at or before h: probe h - 1, h - 2, h - 4, ...
       hi = h;
       for (int step = 1; h - step >= 0; step *= 2) {
-        if (!steeper_than_next(h - step)) {
+        if (!steeper(h - step)) {
           lo = h - step + 1;
           break;
         }
@@ -105,7 +105,7 @@ class BasicHullStack {
     } else {  // after h: probe h + 1, h + 2, h + 4, ... (the predicate holds at `last`)
       lo = h + 1;
       for (int step = 1; h + step < last; step *= 2) {
-        if (steeper_than_next(h + step)) {
+        if (steeper(h + step)) {
           hi = h + step;
           break;
         }
