@@ -1,6 +1,7 @@
 #!/bin/bash
 # Shards + merge give the bits of a single-machine bake, for shard counts below, at and above the direction
-# blocks, and with one shard on glibc's baseline (SSE2) math functions; missing, truncated and foreign shards are refused naming the shard (exit 2); a re-run shard is kept.
+# blocks, and with one shard on glibc's baseline (SSE2) math functions; missing, truncated and foreign shards
+# are refused naming the shard (exit 2); a re-run shard is kept.
 set -u
 H=$1 W=$2
 . "$(dirname "$0")/common.sh"
