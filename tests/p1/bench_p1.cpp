@@ -2,6 +2,8 @@
 // its parts, on the smooth built-in fractal (field 0) and rough fBm, 60 degrees at the texel scale (field 1),
 // at 256², 512² and 1024², K = 16 and 64:
 //   BM_P1Bake     compute_p1: ao + direct under a uniform sky (the issue 17 job's layers), everything
+//   BM_P1Tolerance compute_p1 (ao + vsky) at horizon_tolerance = arg * 1e-4, with its ao error against
+//                 tolerance 0 (counters ao_err_mean, ao_err_max)
 //   BM_FarField   the sweep, FarHorizonWorker's strip search (starting from each texel's near field, as
 //                 compute_p1 runs it) and the strip gather; counter bands/texel: bands searched per texel
 //   BM_NearField  the near field alone: near_slopes_row over every row, per direction
@@ -13,11 +15,14 @@
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "methods/p1/far_horizons.hpp"
 #include "methods/p1/horizon_sweep.hpp"
@@ -66,6 +71,35 @@ void BM_P1Bake(benchmark::State& state) {
     benchmark::DoNotOptimize(r.ao.data());
   }
   set_counters(state, double(s.field.texel_count()) * K);
+}
+
+// The accuracy dial: compute_p1 for ao + vsky (the speed job's layers) at horizon_tolerance = range(3) *
+// 1e-4, one thread; with the mean and max |ao - ao at tolerance 0| as counters.
+void BM_P1Tolerance(benchmark::State& state) {
+  const int kind = int(state.range(0)), size = int(state.range(1)), K = int(state.range(2));
+  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
+  Scene s;
+  s.field = field_of(kind, size);
+  P1Params p;
+  p.directions = K;
+  p.ao = p.vsky = true;
+  p.direct = false;
+  const std::vector<float> exact = compute_p1(s, p, RunControl{}).ao;
+  p.horizon_tolerance = double(state.range(3)) * 1e-4;
+  std::vector<float> ao;
+  for (auto _ : state) {
+    P1Result r = compute_p1(s, p, RunControl{});
+    benchmark::DoNotOptimize(r.ao.data());
+    ao = std::move(r.ao);
+  }
+  set_counters(state, double(s.field.texel_count()) * K);
+  double sum = 0, worst = 0;
+  for (std::size_t t = 0; t < ao.size(); ++t) {
+    const double e = std::fabs(double(ao[t]) - exact[t]);
+    sum += e, worst = std::max(worst, e);
+  }
+  state.counters["ao_err_mean"] = sum / double(std::max<std::size_t>(1, ao.size()));
+  state.counters["ao_err_max"] = worst;
 }
 
 // The sweep as compute_p1 runs its far field (p1_sweep_spec): the strip gather, no line heights, 8 directions
@@ -217,6 +251,11 @@ void BakeArgs(benchmark::internal::Benchmark* b) {
 }
 
 BENCHMARK(BM_P1Bake)->Apply(BakeArgs)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+void ToleranceArgs(benchmark::internal::Benchmark* b) {
+  for (int kind : {0, 1})
+    for (int tol : {0, 10, 30, 100, 300, 1000}) b->Args({kind, 1024, 64, tol});
+}
+BENCHMARK(BM_P1Tolerance)->Apply(ToleranceArgs)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 BENCHMARK(BM_FarField)->Apply(PartArgs)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 BENCHMARK(BM_NearField)->Apply(PartArgs)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 BENCHMARK(BM_Gather)->Apply(PartArgs)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();

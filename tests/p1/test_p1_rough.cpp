@@ -25,9 +25,10 @@ Scene make_scene(HeightField f) {
   return s;
 }
 
-P1Result horizons(const Scene& s, int K) {
+P1Result horizons(const Scene& s, int K, double tolerance = 0) {
   P1Params p;
   p.directions = K;
+  p.horizon_tolerance = tolerance;
   p.horizon = true;
   p.vsky = p.direct = false;
   return compute_p1(s, p, RunControl{});
@@ -123,6 +124,54 @@ TEST(P1Rough, HorizonsMatchTheExactMarchOnStepsAndSmoothFields) {
       EXPECT_LE(a.max, 0.02) << c.name << " K=" << K;
       EXPECT_LE(std::fabs(a.ao_bias), 0.001) << c.name << " K=" << K;
     }
+}
+
+// The accuracy dial: at tolerance tau every horizon (the border ring and every direction included) lies
+// within tau of the exact march's and never above it (to float rounding), on rough, stepped and smooth
+// fields; larger tolerances must actually be used (some horizons differ).
+TEST(P1Tolerance, EveryHorizonWithinTheToleranceOfTheExactMarch) {
+  struct Case {
+    const char* name;
+    HeightField field;
+  };
+  const Case cases[] = {{"rough70", truth::rough_field(61, 57, 70, 0.7, 32)},
+                        {"rough65 gain .6", truth::rough_field(48, 40, 65, 0.6, 31)},
+                        {"terraces 25deg", truth::step_field(58, 63, 3, 25, 5, 9)},
+                        {"steps 40deg", truth::step_field(64, 50, 7, 40, 2, 6)},
+                        {"fractal", truth::procedural(ProceduralKind::fractal, 60, 60, Wrap::clamp)}};
+  constexpr double kRounding = 2e-5;  // float heights and the atan / sincos approximations
+  for (const Case& c : cases) {
+    const Scene s = make_scene(c.field);
+    const HeightField& f = s.field;
+    const int K = 19;  // mostly off the axes and diagonals
+    SweepSpec spec;
+    spec.directions = K;
+    std::vector<SweepDirection> dirs;
+    for (int k = 0; k < K; ++k) dirs.push_back(plan_direction(f, spec, k));
+    std::vector<float> exact(f.texel_count() * K), h(K);
+    for (int j = 0; j < f.height; ++j)
+      for (int i = 0; i < f.width; ++i) {
+        truth::exact_horizons(f, dirs, i, j, h.data());
+        std::copy(h.begin(), h.end(), exact.begin() + std::ptrdiff_t(f.index(i, j) * K));
+      }
+    for (double tau : {0.0, 1e-3, 1e-2, 0.05}) {
+      const P1Result r = horizons(s, K, tau);
+      double below = 0, above = 0;
+      long differ = 0;
+      for (std::size_t q = 0; q < exact.size(); ++q) {
+        below = std::max(below, double(exact[q]) - r.horizon[q]);
+        above = std::max(above, double(r.horizon[q]) - exact[q]);
+        differ += std::fabs(double(r.horizon[q]) - exact[q]) > kRounding;
+      }
+      std::printf(
+          "[tolerance] %-15s tau %.0e: exact - p1 at most %.2g, p1 - exact at most %.2g, %ld differ\n",
+          c.name, tau, below, above, differ);
+      EXPECT_LE(below, tau + kRounding) << c.name << " tau " << tau;
+      EXPECT_LE(above, kRounding) << c.name << " tau " << tau;
+      if (tau == 0) EXPECT_EQ(differ, 0) << c.name;
+      if (tau >= 1e-2) EXPECT_GT(differ, 0) << c.name << ": the tolerance was not used";
+    }
+  }
 }
 
 // A 4 m step along a column (x >= 32 high): on the triangulated surface the cell between the foot column

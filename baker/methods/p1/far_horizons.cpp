@@ -206,6 +206,7 @@ void FarHorizonWorker::search(const SweepLine& line, float* out) {
   const double dvp = d.su * d.slope;                      // a ray's minor coordinate per step
   const double dws = d.su + dvp;                          // ... and its u + v per step
   const double inv_dvp = dvp != 0 ? 1 / dvp : 0, inv_dws = dws != 0 ? 1 / dws : 0;
+  const double tol = tolerance;
   std::size_t fed = 0;
   int hint = -1;   // the band of the last texel's far caster: the next texel's is usually in or near it
   int q_prev = 0;  // the last texel's hull vertex: the next one's is usually a few vertices away
@@ -306,14 +307,16 @@ void FarHorizonWorker::search(const SweepLine& line, float* out) {
       const double p1 = hull_.position(j + 1), h1 = hull_.height(j + 1);
       return h0 + (h1 - h0) * (x - p0) / (p1 - p0);
     };
-    auto beaten = [&](double x, double hx) {  // the bound at x is no steeper than the best point
-      return any && (hx - zt) * brun <= bdz * ((n - x) * step);
+    // The bound at x is no steeper than the best point plus the tolerance (bdz + tol * brun over brun).
+    auto beaten = [&](double x, double hx) {
+      return any && (hx - zt) * brun <= (bdz + tol * brun) * ((n - x) * step);
     };
-    // Nothing in positions [x0, x1] (clipped to the far field) that is at most h high beats the best.
+    // Nothing in positions [x0, x1] (clipped to the far field) that is at most h high beats the best by
+    // more than the tolerance.
     auto lower = [&](double x0, double x1, float h) {
       if (!any) return false;
       const double x = h >= zt ? std::min(x1, hi) : std::max(x0, lo);
-      return (double(h) - zt) * brun <= bdz * ((n - x) * step);
+      return (double(h) - zt) * brun <= (bdz + tol * brun) * ((n - x) * step);
     };
     auto band_lower = [&](int c) { return lower(c, c + 1, band_max_[c]); };
     auto block_lower = [&](int k) { return lower(k * kBlock, (k + 1) * kBlock, block_max_[k]); };

@@ -27,7 +27,10 @@
 //    exact march (tests/p1/p1_truth.hpp) finds. Axis and diagonal directions (slope 0, +-1) have every
 //    texel on a line: T's ray is line l - 1, whose own lagging hull gives the caster exactly (step 1 only).
 // The search is provably complete; its cost is the band count, which grows with how far the bound's peak
-// lies above the ray's (the surface's relief across one texel).
+// lies above the ray's (the surface's relief across one texel). With a tolerance tau > 0 every "is beaten"
+// test of steps 2 and 3 (and of the skip bounds) compares with the best slope plus tau instead, so the
+// search stops as soon as nothing left can beat the best point by more than tau: the result is within tau
+// of the exact slope, found by the same proof.
 #pragma once
 
 #include <cstdint>
@@ -73,6 +76,10 @@ struct FarHorizonWorker {
   // starts from the near field's slope and prunes everything below it. A texel's max(near, far) keeps its
   // bits: the start is lowered by 1e-6 (1 + m^2) in slope (about 1e-6 rad), more than fast_atan's error.
   bool beat_near = false;
+  // The certified accuracy dial (P1Params::horizon_tolerance), a slope: the search stops once no unexamined
+  // point can be steeper than the best one found by more than this. sin(atan(m)) is 1-Lipschitz in m, so
+  // every texel's sin h is within the tolerance of (and never above) the exact one; 0: exact.
+  double tolerance = 0;
 
   static constexpr int channels() { return 2; }
   void operator()(const SweepLine& line, float* out);

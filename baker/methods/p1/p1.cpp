@@ -49,6 +49,7 @@ p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
   p1::FarHorizonWorker w;
   w.far_radius = p.near_radius * f.texel_size;
   w.field = &f;
+  w.tolerance = p.horizon_tolerance;
   w.beat_near = true;  // the near field is marched from each texel anyway: its slope prunes the far search
   return w;
 }
@@ -71,6 +72,7 @@ P1Params read_p1_params(Params& in) {
   p.horizon_bins = in.integer("horizon_bins", p.horizon_bins, 2, 65536);
   p.wrap_periods = in.integer("wrap_periods", p.wrap_periods, 1, 16);
   p.near_radius = in.number("near_radius", p.near_radius, 1, 64);
+  p.horizon_tolerance = in.number("horizon_tolerance", p.horizon_tolerance, 0, 0.5);
   p.far_crossings = in.boolean("far_crossings", p.far_crossings);
   p.lights = in.boolean("lights", p.lights);
   const std::vector<std::string> layers = in.layers(p1_layer_names(), {"ao", "vsky", "direct"});

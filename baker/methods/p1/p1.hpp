@@ -42,6 +42,9 @@ struct P1Params {
   int wrap_periods = 1;    // repeat mode warm-up (see SweepSpec)
   // Texels: horizons marched exactly from each texel center this far (horizon_sweep.hpp).
   double near_radius = 2;
+  // The far field's certified accuracy (far_horizons.hpp): every horizon's sine within this of the exact
+  // one, never above it; 0: exact (docs/methods.md, p1, for the speed it buys).
+  double horizon_tolerance = 0;
   bool far_crossings = true;  // no longer used (the far field is exact: far_horizons.hpp); read for old jobs
   bool ao = true, vsky = true, direct = true;
   bool horizon = false, horizon_distance = false, bent_normal = false;
