@@ -459,8 +459,8 @@ TEST_F(Cli, EveryExampleJobValidates) {
 namespace hfbake {
 namespace {
 
-// Issue 20: x/job.json and y/job.json, both named "t", baked with one --out land in DIR/job/ with the same
-// names; one used to replace the other's outputs (or the bake failed). Both are refused up front.
+// x/job.json and y/job.json, both named "t", baked with one --out land in DIR/job/ with the same
+// names, so one would replace the other's outputs. Both are refused up front.
 TEST_F(Cli, JobsWhoseOutputsCollideAreRefusedUpFront) {
   fs::create_directories(dir_ / "x");
   fs::create_directories(dir_ / "y");
@@ -529,7 +529,7 @@ namespace hfbake {
 namespace {
 
 // Heights of +-3e38 used to bake "ok" (and gave NaN in p1's ao): products of height differences overflow
-// float. validate and bake refuse them, naming the first such texel (issue 20).
+// float. validate and bake refuse them, naming the first such texel.
 TEST_F(Cli, HeightsBeyondFloatSafeRangeAreRefused) {
   std::vector<float> z(16 * 16);
   for (std::size_t t = 0; t < z.size(); ++t) z[t] = (t % 2 ? -3e38f : 3e38f);

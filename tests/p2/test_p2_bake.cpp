@@ -436,7 +436,7 @@ TEST(P2Bake, NearFieldCoveringTheFieldIsTheExactCentreGather) {
   EXPECT_LT(worst, 2e-5);
 }
 
-// Stepped terrain (issue 19 item 2): P2 at its defaults against the brute-force gather from every texel
+// Stepped terrain: P2 at its defaults against the brute-force gather from every texel
 // centre over the triangulated surface (centre_gather above), with the same senders: every facet's exit
 // radiance from P1's facet direct light (albedo 0.5, the built-in sky and sun at 35 degrees). Terraces with
 // cliffs 2.5 texels high, one bounce. Lines that see the terrain only at their column samples take the
