@@ -352,6 +352,7 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
     const std::size_t errors_before = suite_errors.size();
     if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
       jobs.insert(jobs.end(), suite->jobs.begin(), suite->jobs.end());
+      for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
       if (!quiet) std::fprintf(stderr, "hfbake: %s: suite of %zu jobs\n", file.c_str(), suite->jobs.size());
     } else if (suite_errors.size() == errors_before) {
       jobs.push_back(file);  // not a suite: a job
@@ -403,6 +404,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   for (const fs::path& file : options.jobs) {
     if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
       if (options.out) suite->output_dir = fs::absolute(*options.out / suite->name);
+      for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
       for (const fs::path& job : suite->jobs)
         inputs.push_back({job, suite->output_dir / job.stem(), int(suites.size())});
       suites.push_back(std::move(*suite));

@@ -36,7 +36,7 @@ struct BakeOptions {
 // when the text is not a size.
 std::optional<std::size_t> parse_memory_size(const std::string& text);
 
-// Exit status per the contract: 0 all baked and thresholds held, 1 a threshold or baseline regressed,
+// Exit status (docs/contract.md): 0 all baked and thresholds held, 1 a threshold or baseline regressed,
 // 2 bad input or a failed job, 128 + the signal when interrupted (`cancel` was set: 130 SIGINT, 143 SIGTERM,
 // 129 SIGHUP).
 int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel);

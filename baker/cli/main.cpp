@@ -1,4 +1,4 @@
-// hfbake: bakes ambient occlusion and lighting for height fields. See README.md and the contract.
+// hfbake: bakes ambient occlusion and lighting for height fields. See README.md and docs/.
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
 

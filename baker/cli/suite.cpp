@@ -120,8 +120,26 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
                          : base / "out" / suite.name;
   suite.output_dir = suite.output_dir.lexically_normal();
   std::set<fs::path> seen;
+  std::set<fs::path> skipped;  // jobs whose "needs" are missing, even when another entry lists them too
+  for (const nlohmann::json& entry : doc["jobs"])
+    if (entry.is_object())
+      for (const nlohmann::json& need : entry["needs"])
+        if (!fs::exists(base / need.get<std::string>())) {
+          const std::string pattern = (base / entry["job"].get<std::string>()).string();
+          glob_t g{};
+          if (glob(pattern.c_str(), 0, nullptr, &g) == 0)
+            for (std::size_t k = 0; k < g.gl_pathc; ++k)
+              if (skipped.insert(fs::path(g.gl_pathv[k]).lexically_normal()).second)
+                suite.skipped.push_back(fs::path(g.gl_pathv[k]).lexically_normal().string() + ": skipped: " +
+                                        (base / need.get<std::string>()).lexically_normal().string() +
+                                        " is not on this machine");
+          globfree(&g);
+          break;
+        }
   for (std::size_t i = 0; i < doc["jobs"].size(); ++i) {
-    const std::string pattern = (base / doc["jobs"][i].get<std::string>()).string();
+    const nlohmann::json& entry = doc["jobs"][i];
+    const std::string pattern =
+        (base / (entry.is_object() ? entry["job"] : entry).get<std::string>()).string();
     glob_t g{};
     const int rc = glob(pattern.c_str(), 0, nullptr, &g);
     if (rc != 0) {
@@ -129,12 +147,16 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
     } else {
       for (std::size_t k = 0; k < g.gl_pathc; ++k) {  // glob sorts its matches
         const fs::path p = fs::path(g.gl_pathv[k]).lexically_normal();
-        if (seen.insert(p).second) suite.jobs.push_back(p);
+        if (!skipped.count(p) && seen.insert(p).second) suite.jobs.push_back(p);
       }
     }
     globfree(&g);
   }
   if (errors.size() != errors_before) return std::nullopt;
+  if (suite.jobs.empty()) {
+    errors.push_back(file.string() + ": /jobs: every job is skipped (" + suite.skipped.front() + ")");
+    return std::nullopt;
+  }
   return suite;
 }
 
@@ -150,6 +172,7 @@ std::vector<fs::path> write_suite_reports(const Suite& suite, const std::vector<
     for (const fs::path& p : o.outputs) j["outputs"].push_back(p.string());
     doc["jobs"].push_back(std::move(j));
   }
+  doc["skipped"] = suite.skipped;
   const std::vector<fs::path> files = {suite.output_dir / "suite.json", suite.output_dir / "index.html",
                                        suite.output_dir / "junit.xml"};
   write_atomically(files[0], doc.dump(2) + "\n");

@@ -16,6 +16,9 @@ struct Suite {
   std::string name;
   std::filesystem::path output_dir;         // absolute; every job writes to output_dir/<job file stem>/
   std::vector<std::filesystem::path> jobs;  // expanded, sorted within each glob, duplicates removed
+  // Jobs left out because a file they need (the entry's "needs") is not on this machine: one line each,
+  // "<job>: skipped: <file> is not on this machine", for the caller to print as a notice.
+  std::vector<std::string> skipped;
 };
 
 // nullopt when `file` is not a suite (or is not JSON at all: the job loader reports that).

@@ -19,7 +19,7 @@ struct Layer {
   int channel_count() const { return int(channels.size()); }
 };
 
-// Layer channel suffix sets used across hfbake (see the contract and README).
+// Layer channel suffix sets used across hfbake (see docs/contract.md).
 inline std::vector<std::string> mono_channels() {
   return {"Y"};
 }

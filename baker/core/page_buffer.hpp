@@ -35,7 +35,7 @@ PageBuffer<T> make_page_buffer(std::size_t n) {
       (bytes + kHuge - 1) / kHuge * kHuge;  // aligned_alloc: a multiple of the alignment
   void* p = std::aligned_alloc(kHuge, rounded);
   if (!p) throw std::bad_alloc();
-  madvise(p, rounded, MADV_HUGEPAGE);  // advice only: where it is refused, 4 KiB pages as before
+  madvise(p, rounded, MADV_HUGEPAGE);  // advice only: where it is refused, the usual 4 KiB pages
   return PageBuffer<T>(static_cast<T*>(p));
 }
 

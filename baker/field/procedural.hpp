@@ -19,7 +19,7 @@ enum class ProceduralKind {
   trench,
   pit,
   cone,
-  // Hard terrain (issue 19): the shapes users bring that the P2 fields do not have.
+  // Hard terrain: the shapes users bring that the P2 fields do not have.
   terraces,
   craters,
   ridges,

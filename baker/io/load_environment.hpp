@@ -1,4 +1,4 @@
-// Builds the job's distant lighting from its `environment` object (see the contract and
+// Builds the job's distant lighting from its `environment` object (see docs/environment.md and
 // schemas/environment.schema.json): uniform, cubemap (6 files), cross, latlong or the built-in sky, with
 // colorspace, intensity and rotation_deg. Image conventions: env/env_mapping.hpp.
 #pragma once

@@ -1,6 +1,6 @@
 // Engine-ready textures: chosen layers as linear 8- or 16-bit integer images (PNG, TIFF, TGA), channel
 // packs (R/G/B/A from named layers), normal maps of direction layers (0.5 + 0.5 n, world or tangent space,
-// OpenGL or DirectX green), and optional edge padding for atlases. README "Textures for game engines".
+// OpenGL or DirectX green), and optional edge padding for atlases. docs/textures.md.
 #pragma once
 
 #include <cstdint>

@@ -43,7 +43,7 @@ struct MethodInfo {
   LayerSet (*bake)(const Scene& scene, const nlohmann::json& params, const RunControl& rc) = nullptr;
   // Bytes held at the method's peak besides its output layers (4 bytes per texel and channel), from the
   // resolved parameters and the field's shape: its per-texel arrays and its sweeps' line buffers. What
-  // the memory estimate adds for it (cli/scene_loader.hpp); the README's table says how close it is.
+  // the memory estimate adds for it (cli/scene_loader.hpp); docs/large-fields.md says how close it is.
   double (*working_bytes)(const nlohmann::json& resolved, const MethodContext& context) = nullptr;
   // What a user lowers to make the method fit a memory budget, for the refusal message ("its directions
   // (...)").
@@ -90,7 +90,7 @@ struct MethodInfo {
   bool falloff_defines_obscurance = false;
 };
 
-// Every method, in the order the README lists them.
+// Every method, in the order docs/methods/README.md lists them.
 std::span<const MethodInfo> method_table();
 // nullptr when no method has that name.
 const MethodInfo* find_method(std::string_view name);

@@ -1,4 +1,4 @@
-// The height field as an Embree 3 scene: the contract's surface, closed into a solid.
+// The height field as an Embree 3 scene: the surface of docs/contract.md, closed into a solid.
 //
 // Surface: a vertex at every texel center, two triangles per quad split along the diagonal from texel
 // (i+1, j) to (i, j+1) (Embree's grid and quad split), as RTC_GEOMETRY_TYPE_GRID (default) or as a triangle

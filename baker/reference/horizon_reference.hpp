@@ -1,4 +1,4 @@
-// Reference horizons: the horizon of every texel in the K azimuths of the contract (phi_k = 2 pi k / K),
+// Reference horizons: the horizon of every texel in the K azimuths of docs/contract.md (phi_k = 2 pi k / K),
 // found by casting rays against the Embree surface (embree_field.hpp), independently of any sweep.
 //
 // From a point of a height field, visibility along an azimuth is monotone in elevation: a ray that hits

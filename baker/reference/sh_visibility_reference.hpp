@@ -8,7 +8,7 @@
 // The elevation integral is Gauss-Legendre on [h, pi/2] (the integrand is a trigonometric polynomial of
 // degree at most 4 in e: 10 nodes are exact to rounding); the azimuth integral is the periodic trapezoid rule
 // over `azimuths` horizons phi_k = 2 pi k / azimuths (spectrally accurate where h is smooth, first order
-// across a jump of h: README, "The reference").
+// across a jump of h: docs/methods/reference.md).
 #pragma once
 
 #include <array>

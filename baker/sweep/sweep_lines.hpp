@@ -21,7 +21,7 @@
 //   methods/p1/horizon_sweep.hpp).
 // * Walk order: a line is walked towards phi_k + pi: sample n - 1 lies in direction phi_k from sample n.
 //   So the samples a visitor has already seen when it reaches sample n are exactly the terrain that sample
-//   n sees when it looks towards azimuth phi_k (the horizon direction k of the contract).
+//   n sees when it looks towards azimuth phi_k (the horizon direction k of docs/contract.md).
 // * Receivers, and how results reach texel centers (exact rule): a sample at (u, v) with
 //   f = v - floor(v) sends its result to texel (u, floor v) with weight 1 - f and to texel (u, floor v + 1)
 //   with weight f -- the transpose of its height interpolation. Equivalently, texel (u, v0) receives

@@ -4,7 +4,7 @@
 #   array_merge     a suite of 6 jobs (p1, hbao, lsao, farfield, hsao, vo, nlp, references) x 2 shards as one
 #                   array of 12 tasks + merge (hfbake slurm --wait): bit-identical to hfbake bake of the suite
 #   big_job         one 256^2 job with p1, hbao and a reference as 4 shards + merge: bit-identical (the 2048^2
-#                   job of the same kind is measured by farm-bench, not tested: see the README)
+#                   job of the same kind is measured by farm-bench, not tested: see docs/cluster.md)
 #   p2_stages       p2 with 2 bounces, K = 16, as 3 staged shards (3 stage arrays chained by afterok, each
 #                   stage's 8 direction blocks across the 3 tasks, then the merge): bit-identical to hfbake bake
 #   deleted_shard   after hfbake slurm, a deleted shard makes the merge job fail naming it

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs each libFuzzer harness of a -DHFBAKE_FUZZ=ON build for a bounded time under ASan + UBSan, starting
-# from its seed corpus (tests/fuzz/corpus/<name>, the job files in jobs/, every regression input), and fails
+# from its seed corpus (tests/fuzz/corpus/<name>, the job files in jobs/, bench/, tests/accuracy/ and tests/nightly/fields/, every regression input), and fails
 # on any finding (a crash, an uncaught exception, UB, a leak, a timeout, more than the RSS limit, a
 # multi-line error message). New corpus entries go to a scratch folder, never into the source tree.
 #   tests/fuzz/run_fuzzers.sh BUILD_DIR SECONDS [NAME ...]      (names: job height_image environment report)
@@ -26,7 +26,7 @@ for name in "${names[@]}"; do
   mkdir -p "$scratch/$name/corpus"
   seeds=("$root/tests/fuzz/corpus/$name")
   [ -d "$root/tests/fuzz/regressions/$name" ] && seeds+=("$root/tests/fuzz/regressions/$name")
-  [ "$name" = job ] && seeds+=("$root/jobs" "$root/jobs/nightly")
+  [ "$name" = job ] && seeds+=("$root/jobs" "$root/jobs/examples" "$root/bench" "$root/tests/accuracy" "$root/tests/nightly/fields")
   echo "run_fuzzers: fuzz_$name for $seconds s"
   if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 \
       LSAN_OPTIONS=suppressions=$root/tests/sanitizers/lsan.supp \

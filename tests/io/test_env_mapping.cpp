@@ -56,7 +56,7 @@ TEST(EnvMapping, LatLongAgreesWithOpenExr) {
 }
 
 TEST(EnvMapping, LatLongLandmarks) {
-  // The README's table: center column +x, a quarter from the left +y, top row the zenith.
+  // The table of docs/environment.md: center column +x, a quarter from the left +y, top row the zenith.
   const int w = 360, h = 180;
   double u, v;
   latlong_pixel_of({1, 0, 0}, w, h, u, v);

@@ -133,7 +133,7 @@ json write_cube(const TempFolder& dir, const std::vector<std::vector<float>>& fa
 }
 
 TEST(LoadEnvironment, CubeFacePatchLandsAtTheDocumentedDirection) {
-  // README table, per face: the world direction it looks at, image right, image up. The patch covers
+  // docs/environment.md's table, per face: the world direction it looks at, image right, image up. The patch covers
   // a, b in [0.25, 0.75] (right, up) of the face; its light centroid is the solid-angle-weighted mean of
   // normalize(center + a right + b up) over that square, integrated here on a fine grid.
   const struct {

@@ -101,7 +101,7 @@ TEST_F(Manifest, UnknownMethod) {
                       "\"lsao\", \"nlp\", \"p1\", \"p2\", \"relief\", \"vo\")");
 }
 
-// Enum errors list the allowed values (issue 14), in the job schema and in a method's own schema.
+// Enum errors list the allowed values, in the job schema and in a method's own schema.
 TEST_F(Manifest, EnumErrorsListTheAllowedValues) {
   auto e = errors(minimal("", R"([{"method": "hbao", "falloff": "gauss"}])"));
   ASSERT_EQ(e.size(), 1u);
@@ -154,7 +154,7 @@ TEST_F(Manifest, UnreadableFile) {
 namespace hfbake {
 namespace {
 
-// Hostile job files (issue 20): each is one line naming the file (and the pointer where there is one),
+// Hostile job files: each is one line naming the file (and the pointer where there is one),
 // never a crash, a hang or an absurd allocation.
 TEST_F(Manifest, HostileFilesAreOneLineErrors) {
   const std::string x = (dir_ / "x.json").string();
@@ -185,7 +185,7 @@ TEST_F(Manifest, HostileFilesAreOneLineErrors) {
   EXPECT_EQ(huge[0].rfind(x + ": /bake/0/directions: ", 0), 0u) << huge[0];
 }
 
-// Values a user could mistype into nonsense are refused with the key's range (issue 20).
+// Values a user could mistype into nonsense are refused with the key's range.
 TEST_F(Manifest, RangesForValuesAUserCouldMistype) {
   auto first = [&](const std::string& text) {
     const auto e = errors(text);

@@ -6,10 +6,10 @@ reference is traced once) and reads the report.json files: per method.layer and 
 bias relative to the reference mean (bent normals and horizons: the mean angle error in degrees).
 
   tests/nightly/accuracy_table.py --hfbake build/baker/cli/hfbake [--vs OLD_HFBAKE] --out /tmp/acc \
-      jobs/nightly/fields/{fractal,blocks,terraces,craters,ridges,rough,dem}.json
+      tests/nightly/fields/{fractal,blocks,terraces,craters,ridges,rough,dem}.json
 
 A column per job, named after its file: dem.json is the lidar DEM (a 160^2 window of
-../shared/data/TM1_564_146.tif read through jobs/nightly/data/dem_400_300_160.vrt); without that folder the
+../shared/data/TM1_564_146.tif read through tests/nightly/data/dem_400_300_160.vrt); without that folder the
 job cannot load and its column is left out with a note.
 """
 import argparse

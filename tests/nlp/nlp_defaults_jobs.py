@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Writes the jobs behind nlp's README, "Defaults" (issue 19 item 1): nlp alone on each nightly field (and a
+"""Writes the jobs behind the accuracy table of docs/methods/nlp.md: nlp alone on each nightly field (and a
 128^2 crop of the lidar DEM of ../shared/data when gdal_translate and the file are there), in the nightly
-setting (sky + sun, albedo 0.5, 256-sample reference) and in the issue's (uniform sky (0.6, 0.7, 1.0), albedo
-0.6, 512-sample reference), 4-texel border cropped; two entries, the previous defaults (preset "previous")
-and the defaults, each at m = 8, 16, 32, 64.
+setting (sky + sun, albedo 0.5, 256-sample reference) and in a uniform one (uniform sky (0.6, 0.7, 1.0), albedo
+0.6, 512-sample reference), 4-texel border cropped; two entries, the paper-shading preset of baker/methods/nlp/README.md
+("previous") and the defaults, each at m = 8, 16, 32, 64.
 
   python3 tests/nlp/nlp_defaults_jobs.py OUT_DIR
   for j in OUT_DIR/*.json; do build/baker/cli/hfbake bake $j --cache OUT_DIR/cache; done

@@ -149,7 +149,7 @@ TEST(NlpBake, EmittingTrenchWallsExactCosine) {
   }
 }
 
-// A single straight cliff (issue 19): flat ground at height 0, a step of height h between columns c and c + 1
+// A single straight cliff: flat ground at height 0, a step of height h between columns c and c + 1
 // (the triangulated surface makes the face one plane, tilted t = atan h), flat again at h beyond; uniform sky
 // L = 1, albedo rho, one bounce. A receiver on the low ground D texels from the foot sees only the sky and
 // the face. The face sees the sky above the horizon in front of it (the low ground blocks the rest, the high

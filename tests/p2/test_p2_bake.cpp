@@ -300,7 +300,7 @@ TEST(P2Bake, VTrenchBouncesMatch2DRadiosity) {
 // receivers get exactly nothing (black sky, albedo 0, wall not emitting), while the ground between the
 // strip and the wall sees the strip's top and edge.
 // Per bounce against the Embree reference on a field rough at the texel scale (the white furnace of
-// jobs/p2_furnace.json: its finest octave is per-texel noise). The reference shades every hit with its
+// tests/accuracy/p2_furnace.json: its finest octave is per-texel noise). The reference shades every hit with its
 // facet's normal; with facet senders P2 does too, and each bounce's field mean agrees within a few %.
 // Texel senders (the smoothed normal, as published) miss by 10-20 %: the facets a receiver sees lean
 // towards it, so they see less sky and more of the terrain's light than their texels' normals say.
@@ -436,7 +436,7 @@ TEST(P2Bake, NearFieldCoveringTheFieldIsTheExactCentreGather) {
   EXPECT_LT(worst, 2e-5);
 }
 
-// Stepped terrain (issue 19 item 2): P2 at its defaults against the brute-force gather from every texel
+// Stepped terrain: P2 at its defaults against the brute-force gather from every texel
 // centre over the triangulated surface (centre_gather above), with the same senders: every facet's exit
 // radiance from P1's facet direct light (albedo 0.5, the built-in sky and sun at 35 degrees). Terraces with
 // cliffs 2.5 texels high, one bounce. Lines that see the terrain only at their column samples take the

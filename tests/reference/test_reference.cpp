@@ -69,7 +69,7 @@ Value at(const LayerSet& l, const std::string& name, int i, int j, int c = 0) {
         << "estimate " << v_.v << " +- " << v_.se << ", truth " << (truth); \
   } while (0)
 
-// Height on the contract's triangulation (split from (i+1, j) to (i, j+1)), an independent evaluation.
+// Height on the triangulation of docs/contract.md (split from (i+1, j) to (i, j+1)), an independent evaluation.
 double triangulated_height(const HeightField& f, double x, double y) {
   const int i = std::clamp(int(std::floor(x)), 0, f.width - 2),
             j = std::clamp(int(std::floor(y)), 0, f.height - 2);
@@ -645,9 +645,9 @@ TEST(Reference, ObscuranceStepIsAoLimitedToRadius) {
   EXPECT_WITHIN_3SE(at(r, "obscurance", 16, 16), 1.0, 1e-6);
 }
 
-// Issue 14: the reference's ao must not depend on what else the job asks of it. With an obscurance method
-// and no path tracing, ao used to be counted from rays shortened to the falloff radius (it equalled the
-// obscurance). Every combination of bounces 0/1, with/without an obscurance method and default/explicit
+// The reference's ao must not depend on what else the job asks of it. With an obscurance method
+// and no path tracing, ao must not be counted from rays shortened to the falloff radius (it would equal
+// the obscurance). Every combination of bounces 0/1, with/without an obscurance method and default/explicit
 // reference layers must give the ao of an ao-only reference.
 TEST(Reference, AoIsTheSameWhateverElseTheJobTraces) {
   ProceduralSpec p = spec_of(ProceduralKind::fractal, 24);

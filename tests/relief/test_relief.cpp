@@ -1,6 +1,6 @@
 // relief's quantities against independent truth: closed forms on planes and on a step (the triangulation
 // represents both exactly), and on the 1 m lidar DEM a brute-force ray sampling written here from the
-// contract's triangulation (the split from (i+1, j) to (i, j+1)) with 512 samples per texel of distance.
+// reference's triangulation (docs/contract.md: the split from (i+1, j) to (i, j+1)) with 512 samples per texel of distance.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 
@@ -114,7 +114,7 @@ TEST(Relief, RepeatFieldsSeeAcrossTheSeam) {
 
 // --- the lidar DEM against dense sampling -------------------------------------------------------------
 
-// The contract's triangulated surface at continuous texel coordinates, written out here: quad (i, j), the
+// The triangulated surface of docs/contract.md at continuous texel coordinates, written out here: quad (i, j), the
 // lower triangle (i, j), (i+1, j), (i, j+1) when fx + fy <= 1, else the upper (i+1, j+1), (i, j+1), (i+1, j).
 double surface(const std::vector<float>& z, int w, double x, double y) {
   const int i = int(std::floor(x)), j = int(std::floor(y));

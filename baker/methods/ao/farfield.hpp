@@ -6,7 +6,7 @@
 //    and m1 = max (z - s) (world units). The virtual point of an interval is the corner of these two
 //    supporting lines, (s*, z*) = (m0 - m1, m0): a single sample returns itself, and an interval holding
 //    a vertical wall returns exactly the wall's top (for the rising 45-degree line z - s; P4's descending
-//    line z + s would put it at the far end of the plateau behind the wall, see the report / digest 2.7).
+//    line z + s would put it at the far end of the plateau behind the wall).
 // 2. The 1D max pyramid: level n holds intervals of B0 2^n samples, parents the max of their children.
 // 3. Prefix sums of (m0, m1, count) across lines for every interval of every level, so that the mean over
 //    the lines inside the receiver's sector at that distance costs O(1) (P4 §7; optionally two half
@@ -15,7 +15,7 @@
 //    aligned interval at least `near_field` texels away (P4 §9: 1.5 B0), then outwards the largest aligned
 //    pyramid interval no longer than growth x its distance (O(log N) intervals), each virtual point a
 //    slab if it rises above the horizon so far; the slabs' bands come from SlabTable (P4's table L).
-// Result: obscurance = 1 - (2/K) sum_k sum_slabs band, the contract's cosine-weighted obscurance.
+// Result: obscurance = 1 - (2/K) sum_k sum_slabs band, the cosine-weighted obscurance of docs/contract.md.
 #pragma once
 
 #include <cstdint>

@@ -2,7 +2,7 @@
 //
 // Per receiver and per azimuthal direction, march outward in equal steps (bilinear heights) up to a reach.
 // Estimator "slab" (default): every sample that rises above the running horizon is a visible vertical slab
-// (P4's slab model, digest 2.7); the elevations between the previous horizon maximum and the new one are
+// (P4's slab model, Timonen 2013, each slab a vertical half-line on a height field); the elevations between the previous horizon maximum and the new one are
 // occluded by it, weighted by rho(x / cos e) (exact distance of each ray to the slab) and by the cosine
 // (contract obscurance) or uniform (HBAO) weighting. With falloff none and cosine weighting this is P1's
 // Eq. 5 AO of the sampled horizons; it converges to the exact integral as K grows and the step shrinks.
@@ -41,7 +41,7 @@ struct MarchDirection {
   double weight = 1;
   double step = 0;
 };
-// phi_k = 2 pi k / K from +x towards +y, equal weights (the contract's direction set).
+// phi_k = 2 pi k / K from +x towards +y, equal weights (the direction set of docs/contract.md).
 std::vector<MarchDirection> uniform_directions(int count);
 
 enum class HorizonEstimator { slab, segment, largest_occluder };

@@ -9,13 +9,12 @@
 // with sin e(h) = h.z / |h| and W the elevation weight: W(x) = x (uniform: P3's HBAO estimator, the
 // solid-angle measure of the slice below e) or W(x) = x |x| (cosine: the cosine-weighted slice measure
 // sin^2 e of an upward normal, signed so that it stays strictly increasing below the horizontal; what the
-// contract's cosine-weighted obscurance converges to for rho = 1). With no occluder the value is Wt.
+// cosine-weighted obscurance of docs/contract.md converges to for rho = 1). With no occluder the value is Wt.
 //
 // The hull keeps the candidates: before a receiver reads the top of the stack, the top is popped while the
 // second-to-last point casts more obscurance on the receiver AND is higher in elevation (P3 §3, Alg. 1;
 // the elevation test stops popping at the receiver's global horizon). Amortised O(1) per sample: M pushes,
-// at most M pops per line. The result is not always the exact largest occluder (P3 §3 "degenerate case",
-// digest 1.3.5): a point popped for one receiver can be the largest visible occluder of a later one.
+// at most M pops per line. The result is not always the exact largest occluder (P3 §3 "degenerate case"): a point popped for one receiver can be the largest visible occluder of a later one.
 #pragma once
 
 #include <cmath>

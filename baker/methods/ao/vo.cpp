@@ -28,7 +28,7 @@ struct Domain {
 };
 
 // Summed-area table with C channels over the padded domain: S(x, y) = sum of the values of texels
-// [0, x) x [0, y); box sums are exact up to double rounding (the digest's precision advice: double).
+// [0, x) x [0, y); box sums are exact up to double rounding (double: differences of large prefix sums lose float precision).
 template <int C>
 struct Sat {
   int w = 0, h = 0;
@@ -214,7 +214,7 @@ MethodInfo vo_method() {
   m.summary = "volumetric obscurance (ALSVO): the occupied fraction of a tangent-space box per texel";
   m.read = [](Params& in, const MethodContext& c) { read_vo_settings(in, c.field); };
   m.bake = bake_vo;
-  // The occupancy's summed-area tables (measured: 44 bytes a texel at 2048^2, README "Memory").
+  // The occupancy's summed-area tables (measured: 44 bytes a texel at 2048^2, docs/large-fields.md).
   m.memory_knob = "a smaller field (its summed-area tables take 44 bytes a texel whatever its parameters)";
   m.working_bytes = [](const nlohmann::json&, const MethodContext& c) {
     return 44.0 * double(c.field.width) * double(c.field.height);

@@ -1,4 +1,4 @@
-// NLP/SH multiresolution global illumination (issue 6): Nowrouzezahrai & Snyder, "Fast Global Illumination
+// NLP/SH multiresolution global illumination: Nowrouzezahrai & Snyder, "Fast Global Illumination
 // on Dynamic Height Fields" (EGSR 2009, NS09), offline. Per texel and azimuth a horizon march over a B-spline
 // height pyramid gives the visibility and indirect radiance along that azimuth in the normalized Legendre
 // basis; wedge matrices turn the m azimuths into order-4 SH visibility V and indirect radiance U; shading is
@@ -28,8 +28,8 @@ struct NlpOptions {
   int light_level_offset = 4;       // o_v for directional lights' visibility (>= level_offset)
   bool light_horizon_knots = true;  // lights: max over the knot angles instead of the B-spline curve
   // Visibility V: the same choice (default the knots; NS09 Eq. 16's B-spline curve lowers sharp peaks).
-  // The defaults below (issue 19 item 1: knots, exact cosines, facet senders, near_spacing 0.5) are the
-  // README's measured choice; NS09's behaviour is the preset in the README ("nlp", "Presets").
+  // The defaults below (knots, exact cosines, facet senders, near_spacing 0.5) are the most accurate
+  // measured (docs/methods/nlp.md); NS09's behaviour is a preset in baker/methods/nlp/README.md.
   bool visibility_horizon_knots = true;
   int light_directions = 3;  // azimuths across a directional light's disk (NS09 §9: 3)
   int subsample = 1;         // 1, or 2: V and U on a 2x2-subsampled grid, shading at full resolution
@@ -45,7 +45,7 @@ struct NlpOptions {
   bool exact_direct_cosine = true;
   // Senders of indirect light: true = every texel's two facets of the triangulated surface radiate the
   // light of their own normals, and the stretch a casting-set step reveals radiates from its middle, its
-  // facet's light (issue 19: on terraces a cliff face radiated the bright treads at its ends); false = NS09,
+  // facet's light (with texel-centre senders a cliff face radiates the bright treads at its ends); false = NS09,
   // the radiance pyramid of texel-centre light read at the casting-set point.
   bool facet_senders = true;
   // > 0: the march samples the unfiltered field at most this many texels apart between knots and each knot

@@ -9,7 +9,7 @@
 //     has a positive constant.
 //   - direction (x, y, z) = (sin theta cos phi, sin theta sin phi, cos theta): world frame, +z up, phi from
 //   +x
-//     towards +y (the contract's azimuth).
+//     towards +y (the azimuth of docs/contract.md).
 //   Y0 = 0.282095
 //   Y1 = 0.488603 y,  Y2 = 0.488603 z,  Y3 = 0.488603 x
 //   Y4 = 1.092548 xy, Y5 = 1.092548 yz, Y6 = 0.315392 (3z^2 - 1), Y7 = 1.092548 xz, Y8 = 0.546274 (x^2 - y^2)

@@ -30,7 +30,7 @@
 // and diagonal crossing of P1's near stencil (each piece radiating its facet's light, both facets for a
 // piece along an edge), and the lines' receivers, through a hull tree that lags that far, gather only the
 // terrain beyond: their mean radiance fills the texel's lobe from the near field's horizon up to P1's.
-// Accuracy (closing notes of issue 5 and 19): the azimuthal error of a bounce falls about as 1/K; against
+// Accuracy (docs/methods/p2.md): the azimuthal error of a bounce falls about as 1/K; against
 // the reference what remains is the receivers' place on the lines beyond the near field (raise
 // `near_radius`), K, and the facets' light, evaluated at their right-angle corner (tests/p2/
 // measure_p2_centre splits the parts; on terraces at K = 64 the exact centre gather itself is +1.5 %).

@@ -1,7 +1,7 @@
 // relief: the relief-visualisation quantities GIS users know from RVT, SAGA and GRASS, from horizons
 // limited to a search radius (radius_horizon.hpp): sky-view factor, positive and negative openness
 // (Yokoyama et al. 2002), and horizon elevation angles in degrees, with azimuths in hfbake's convention or
-// in compass terms. Definitions: README "GIS relief quantities".
+// in compass terms. Definitions: docs/gis.md, "Relief quantities".
 #pragma once
 
 #include <nlohmann/json.hpp>
