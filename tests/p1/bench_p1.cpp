@@ -1,7 +1,7 @@
 // P1 throughput in texel-directions per second of CPU time (process CPU: all threads), the whole bake and
 // its parts, on the smooth built-in fractal (field 0) and rough fBm, 60 degrees at the texel scale (field 1),
 // at 256², 512² and 1024², K = 16 and 64:
-//   BM_P1Bake     compute_p1: ao + direct under a uniform sky (the issue 17 job's layers), everything
+//   BM_P1Bake     compute_p1: ao + direct under a uniform sky (bench/p1_speed_1024.json's layers), everything
 //   BM_P1Tolerance compute_p1 (ao + vsky) at horizon_tolerance = arg * 1e-4, with its ao error against
 //                 tolerance 0 (counters ao_err_mean, ao_err_max)
 //   BM_FarField   the sweep, FarHorizonWorker's strip search (starting from each texel's near field, as
@@ -9,7 +9,7 @@
 //   BM_NearField  the near field alone: near_slopes_row over every row, per direction
 //   BM_Gather     the sweep driver and the strip gather alone (a line worker that only writes "none")
 // plus the hull stack alone and the brute-force march for scale. Args: field, size, K (BM_P1Bake: and
-// threads). For the README's table:
+// threads). For docs/performance.md:
 //   build/tests/p1/bench_p1 --benchmark_filter='BM_P1Bake/0/' --benchmark_repetitions=3
 //       --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>

@@ -136,7 +136,7 @@ inline double march_tri(const HeightField& f, int i, int j, double dx, double dy
 // Rough fBm at the texel scale (like a rough DSM): value noise (bilinear lattice, hashed) from `largest`
 // texels down to 1 texel, each octave's amplitude `gain` times the last, then scaled so that the median
 // forward difference |z(i+1, j) - z(i, j)| is tan(slope_deg) (texel size 1): slope_deg 60-80 gives the
-// rough fields of issue 19.
+// rough fields of tests/p1/test_p1_rough.cpp.
 inline HeightField rough_field(int w, int h, double slope_deg, double gain, std::uint64_t seed,
                                int largest = 64) {
   HeightField f;

@@ -116,7 +116,7 @@ TEST(P1Analytic, TrenchFloor) {
                 K, ao, std::cos(A), max_ao, max_h / kDeg);
     // The floor is a crease: a far caster on the wall behind the texel is transferred from a tap on the
     // other wall (it lies above the texel's plane there, its caster below the texel's ray): the known
-    // residual of the far-field transfer (about 0.5 % of ao here; issue 4 closing note).
+    // residual of the far-field transfer (about 0.5 % of ao here).
     EXPECT_LE(max_ao, 5e-3);
   }
 }
@@ -537,9 +537,9 @@ TEST(BakeP1, LayersAndErrors) {
 // A directional light's own sweep direction is at any azimuth, not one of the K: its shadows against the
 // exact march over the triangulated surface (truth::march_tri) on a field rough at the texel scale. The
 // slopes 2/3, 1/2, 3/4, 1/3, 3/5 and 2/5 put some columns' u * slope on an integer up to rounding: there
-// the strip search once looked forever for a texel the rounding had moved to the next strip (stop 23's
-// hang: a 67x53 fractal with a light at [0.3, 0.2, 1]), and row and diagonal crossings 1e-15 from a column
-// made the strip's hull non-concave, so its binary search missed the caster (the light at [-0.4, 0.3]).
+// a texel the rounding moves to the next strip must not make the strip search look for it forever (a 67x53
+// fractal with a light at [0.3, 0.2, 1]), and row and diagonal crossings 1e-15 from a column must not make
+// the strip's hull non-concave, or its binary search misses the caster (the light at [-0.4, 0.3]).
 // With horizon_tolerance tau a light's own horizon may lie up to tau (in sine) below the exact one: a texel
 // is then lit or shadowed as the exact march says unless the sun's sine lies within tau below the exact
 // horizon's.

@@ -1,8 +1,8 @@
-// P1's horizons against independent truth on terrain rough at the texel scale and on steps (issue 19 item
-// 0): the exact march over the reference's triangulated surface from every texel centre (truth::march_tri,
-// every column, row and diagonal crossing; no hull, no sweep), and closed forms at the foot and the top of
-// a step along a column. Directions that are not multiples of 45 degrees are where the sweep's lines miss
-// the texel centres, so K = 16 and 24 have most of theirs off the diagonals.
+// P1's horizons against independent truth on terrain rough at the texel scale and on steps: the exact march
+// over the reference's triangulated surface from every texel centre (truth::march_tri, every column, row and
+// diagonal crossing; no hull, no sweep), and closed forms at the foot and the top of a step along a column.
+// Directions that are not multiples of 45 degrees are where the sweep's lines miss the texel centres, so K =
+// 16 and 24 have most of theirs off the diagonals.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -92,9 +92,8 @@ TEST(P1Rough, HorizonsMatchTheExactMarchOnRoughFields) {
       std::printf(
           "[rough] %-16s K=%2d |sin h - exact|: p99 %.2g max %.2g (45deg %.2g, others %.2g); ao bias %+.2g\n",
           c.name, K, a.p99, a.max, a.max_axes, a.max_other, a.ao_bias);
-      // Issue 19's aims, every texel (the border ring too) and every direction. Before issue 19 (a lifted
-      // blend of the two lines' casters): p99 0.1-0.3, max 1.0-1.2; after the first ray search (stop 21):
-      // p99 <= 0.0005 but max 0.5-0.96. The strip search is exact: measured max 2e-6 (float heights).
+      // Every texel (the border ring too) and every direction. The strip search is exact: measured max
+      // 2e-6 (float heights); a blend of the two lines' casters gives p99 0.1-0.3, max 1.0-1.2 here.
       EXPECT_LE(a.p99, 0.005) << c.name << " K=" << K;
       EXPECT_LE(a.max, 0.02) << c.name << " K=" << K;
       EXPECT_LE(std::fabs(a.ao_bias), 0.001) << c.name << " K=" << K;
@@ -119,7 +118,6 @@ TEST(P1Rough, HorizonsMatchTheExactMarchOnStepsAndSmoothFields) {
           "[steps] %-16s K=%2d |sin h - exact|: p99 %.2g max %.2g (inside the border ring %.2g; 45deg %.2g, "
           "others %.2g); ao bias %+.2g\n",
           c.name, K, a.p99, a.max, a.max_inner, a.max_axes, a.max_other, a.ao_bias);
-      // Before (stop 21): max 0.04-0.10 inside the border ring, more on it (one line on the field).
       EXPECT_LE(a.p99, 0.005) << c.name << " K=" << K;
       EXPECT_LE(a.max, 0.02) << c.name << " K=" << K;
       EXPECT_LE(std::fabs(a.ao_bias), 0.001) << c.name << " K=" << K;

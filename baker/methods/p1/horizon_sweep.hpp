@@ -10,10 +10,9 @@
 //   triangulated surface, which agrees with the bilinear one on cell edges). The crossings are the same
 //   for every texel of a direction (near_field_stencil), so this is a fixed stencil per direction.
 // * far field (distance >= R): HorizonLineWorker's hull stack lags R behind each receiver (the steepest
-//   caster among the line's points at least R away). Before issue 19 compute_p1 lifted each tap's caster
-//   by the tap's height above the texel's plane and blended the two taps: wrong on terrain rough at the
-//   texel scale (the neighbour line's caster is not on the texel's ray). compute_p1 now runs
-//   FarHorizonWorker (far_horizons.hpp): the texel's own ray, searched exactly within its strip's hull.
+//   caster among the line's points at least R away). A neighbour line's caster is not on the texel's ray
+//   (on terrain rough at the texel scale it can be far off), so compute_p1 runs FarHorizonWorker
+//   (far_horizons.hpp) instead: the texel's own ray, searched exactly within its strip's hull.
 // With far_radius = 0 the worker gives each receiver its overall caster, as Algorithm 1.
 #pragma once
 
