@@ -1,0 +1,70 @@
+"""The array API against `hfbake bake`: the same field and parameters give the same bits."""
+
+import numpy as np
+import pytest
+
+import hfbake
+from conftest import assert_same_bits, cli_bake, terrain
+
+# (method, parameters, field keys): small fields and direction counts; a per-direction layer, colour and
+# vector layers and a repeat field among them.
+CASES = [
+    ("p1", {"directions": 16, "layers": ["ao", "vsky", "horizon", "bent_normal"]}, {}),
+    ("p1", {"directions": 8, "layers": ["ao", "horizon_distance"]}, {"wrap": "repeat", "texel_size": 0.5}),
+    ("p2", {"directions": 8, "bounces": 1}, {}),
+    ("nlp", {"directions": 8, "layers": ["direct", "total"]}, {}),
+    ("hbao", {"directions": 8, "radius": 6.0, "layers": ["obscurance", "ao", "bent_normal"]}, {}),
+    ("lsao", {"directions": 8, "radius": 6.0}, {"wrap": "repeat"}),
+    ("farfield", {"directions": 8, "radius": 10.0}, {}),
+    ("hsao", {"directions": 8, "radius": 6.0}, {}),
+    ("vo", {"radius": 4.0}, {"height_scale": 2.0}),
+    ("relief", {"directions": 16, "search_radius": 10.0,
+                "layers": ["svf", "openness_positive", "openness_negative", "horizon_deg"]}, {"texel_size": 2.0}),
+]
+
+
+@pytest.mark.parametrize("method,params,field", CASES, ids=[f"{c[0]}-{i}" for i, c in enumerate(CASES)])
+def test_same_bits_as_the_command(tmp_path, method, params, field):
+    heights = terrain(40, 32, seed=len(method))
+    mine = getattr(hfbake, method)(heights, **field, **params)
+    theirs = cli_bake(tmp_path, heights, {"method": method, **params}, height_keys=field)
+    assert_same_bits(mine, theirs)
+
+
+def test_every_method_is_covered():
+    assert {c[0] for c in CASES} == set(hfbake.methods)
+
+
+def test_per_direction_layers_are_k_h_w():
+    heights = terrain(24, 20)
+    out = hfbake.p1(heights, directions=12, layers=["horizon", "ao"])
+    assert out["horizon"].shape == (12, 20, 24)
+    assert out["ao"].shape == (20, 24)
+
+
+def test_same_bits_for_any_thread_count():
+    heights = terrain(48, 40, seed=7)
+    one = hfbake.p1(heights, directions=16, threads=1)
+    two = hfbake.p1(heights, directions=16, threads=2)
+    for name in one:
+        assert np.array_equal(one[name].view(np.uint32), two[name].view(np.uint32))
+
+
+def test_other_dtypes_and_layouts_are_the_float32_field():
+    heights = terrain(30, 26, seed=3)
+    ref = hfbake.hbao(heights, directions=8)
+    for variant in (heights.astype(np.float64), np.asfortranarray(heights), heights.T.copy().T):
+        out = hfbake.hbao(variant, directions=8)
+        assert np.array_equal(out["obscurance"], ref["obscurance"])
+    assert heights.flags.c_contiguous  # the caller's array is untouched
+
+
+def test_progress_is_reported_on_the_calling_thread():
+    import threading
+
+    seen = []
+    caller = threading.get_ident()
+    hfbake.p1(terrain(128, 128), directions=32, progress=lambda f: seen.append((f, threading.get_ident())))
+    assert seen, "progress was never called"
+    assert all(0.0 <= f <= 1.0 and t == caller for f, t in seen)
+    assert seen[-1][0] == 1.0
