@@ -36,6 +36,7 @@ namespace py = pybind11;
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+namespace hfbake {
 namespace {
 
 // One problem of an input, as the CLI prints it: "<file>: <pointer>: <message>".
@@ -74,20 +75,24 @@ std::string array_pointer(const std::string& pointer) {
   return pointer;
 }
 
-// Raises hfbake.InputError (a ValueError) for `problems` (the first one is the exception's own; every line is
-// in its `lines`).
-[[noreturn]] void raise_input_error(const std::vector<Problem>& problems) {
+// Sets hfbake.InputError (a ValueError) as the Python error for `problems` (the first one is the exception's
+// own; every line is in its `lines`).
+void set_input_error(const std::vector<Problem>& problems) {
   const py::object type = py::module_::import("hfbake").attr("InputError");
   py::list lines;
-  for (const Problem& p : problems)
-    lines.append(InputError(p.file, p.pointer, p.message).line());
+  for (const Problem& p : problems) lines.append(InputError(p.file, p.pointer, p.message).line());
   const Problem& first = problems.front();
   const py::object error = type(first.message, first.pointer, first.file, lines);
   PyErr_SetObject(type.ptr(), error.ptr());
+}
+
+[[noreturn]] void raise_input_error(const std::vector<Problem>& problems) {
+  set_input_error(problems);
   throw py::error_already_set();
 }
 
-[[noreturn]] void raise_lines(const std::vector<std::string>& lines, const std::string& file, bool array_api) {
+[[noreturn]] void raise_lines(const std::vector<std::string>& lines, const std::string& file,
+                              bool array_api) {
   std::vector<Problem> problems;
   for (const std::string& l : lines) {
     Problem p = split_line(l, file);
@@ -149,7 +154,8 @@ py::array layer_array(Layer&& layer, int width, int height) {
   const float* src = layer.data.data();
   const std::size_t texels = std::size_t(w) * std::size_t(h);
   for (std::size_t t = 0; t < texels; ++t)
-    for (py::ssize_t k = 0; k < c; ++k) dst[std::size_t(k) * texels + t] = src[t * std::size_t(c) + std::size_t(k)];
+    for (py::ssize_t k = 0; k < c; ++k)
+      dst[std::size_t(k) * texels + t] = src[t * std::size_t(c) + std::size_t(k)];
   return out;
 }
 
@@ -164,8 +170,8 @@ py::dict layers_dict(LayerSet&& set) {
 
 // How a bake runs under Python: `work` on a thread of its own with the GIL released, in a TBB arena of
 // `threads` (0: all cores); the calling thread wakes every 50 ms to deliver the progress fraction to
-// `progress` (on the calling thread, when it changed), to poll `cancel.is_set()` and Python's signal handlers.
-// Ctrl-C (or an exception from `progress`) cancels the bake, waits for it to stop and raises that
+// `progress` (on the calling thread, when it changed), to poll `cancel.is_set()` and Python's signal
+// handlers. Ctrl-C (or an exception from `progress`) cancels the bake, waits for it to stop and raises that
 // exception; a set `cancel` raises hfbake.Cancelled. Nothing the bake made is kept then.
 struct Runner {
   int threads = 0;
@@ -241,10 +247,11 @@ json array_job_document(const std::string& method, int width, int height, const 
                         const py::dict& height_keys, const py::dict& job_keys) {
   // A side below 2 is refused by complete_scene with the CLI's message; the procedural schema's minimum
   // would name /height/procedural/size instead.
-  json doc = {{"version", 1},
-              {"name", method},
-              {"height", {{"procedural", {{"kind", "flat"}, {"size", {std::max(width, 2), std::max(height, 2)}}}}}},
-              {"bake", json::array()}};
+  json doc = {
+      {"version", 1},
+      {"name", method},
+      {"height", {{"procedural", {{"kind", "flat"}, {"size", {std::max(width, 2), std::max(height, 2)}}}}}},
+      {"bake", json::array()}};
   for (auto [k, v] : height_keys) {
     const std::string key = py::str(k).cast<std::string>();
     doc["height"][key] = to_json(v, "/" + key);
@@ -263,8 +270,8 @@ json array_job_document(const std::string& method, int width, int height, const 
 }
 
 py::dict bake_array(const std::string& method, py::array heights, const py::dict& entry_keys,
-                    const py::dict& height_keys, const py::dict& job_keys, int threads,
-                    py::object progress, py::object cancel, std::optional<std::size_t> memory_limit) {
+                    const py::dict& height_keys, const py::dict& job_keys, int threads, py::object progress,
+                    py::object cancel, std::optional<std::size_t> memory_limit) {
   if (!find_method(method)) raise_input_error({{"", "/method", "unknown method \"" + method + "\""}});
   if (heights.ndim() != 2)
     raise_input_error({{"", "/heights",
@@ -273,9 +280,10 @@ py::dict bake_array(const std::string& method, py::array heights, const py::dict
   const py::module_ numpy = py::module_::import("numpy");
   if (!numpy.attr("issubdtype")(heights.dtype(), numpy.attr("number")).cast<bool>() ||
       numpy.attr("issubdtype")(heights.dtype(), numpy.attr("complexfloating")).cast<bool>())
-    raise_input_error({{"", "/heights",
-                        "must hold real numbers (float32 is used as is; other types are converted); it holds " +
-                            py::str(heights.dtype()).cast<std::string>()}});
+    raise_input_error(
+        {{"", "/heights",
+          "must hold real numbers (float32 is used as is; other types are converted); it holds " +
+              py::str(heights.dtype()).cast<std::string>()}});
   // float32 and C-contiguous: read in place; anything else converted once by numpy first.
   const auto z = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(heights);
   const int height = int(heights.shape(0)), width = int(heights.shape(1));
@@ -392,7 +400,8 @@ py::tuple bake_job_api(py::handle job_arg, const std::string& out, int threads, 
   outcome.file = job.file.string();
   outcome.name = job.name;
   std::map<std::string, LayerSet> kept;
-  runner.run([&] { bake_job(job, quiet, runner.cancelled, outcome, cache ? &*cache : nullptr, options, &kept); });
+  runner.run(
+      [&] { bake_job(job, quiet, runner.cancelled, outcome, cache ? &*cache : nullptr, options, &kept); });
   py::dict layers;
   for (auto& [stem, set] : kept) layers[py::str(stem)] = layers_dict(std::move(set));
   json summary = {{"file", outcome.file},
@@ -406,15 +415,17 @@ py::tuple bake_job_api(py::handle job_arg, const std::string& out, int threads, 
 }
 
 }  // namespace
+}  // namespace hfbake
 
 PYBIND11_MODULE(_hfbake, m) {
+  using namespace hfbake;
   m.doc() = "hfbake's C++ core (the package hfbake wraps it)";
   m.attr("__version__") = hfbake_version();
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const InputError& e) {
-      raise_input_error({{e.file(), e.where(), e.what()}});
+      set_input_error({{e.file(), e.where(), e.what()}});
     } catch (const Cancelled&) {
       const py::object type = py::module_::import("hfbake").attr("Cancelled");
       PyErr_SetString(type.ptr(), "the bake was cancelled; nothing was kept");
@@ -431,11 +442,10 @@ PYBIND11_MODULE(_hfbake, m) {
     return std::string();
   });
   m.def("bake_array", &bake_array, py::arg("method"), py::arg("heights"), py::arg("entry_keys"),
-        py::arg("height_keys"), py::arg("job_keys"),
-        py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
-        py::arg("memory_limit") = std::nullopt);
+        py::arg("height_keys"), py::arg("job_keys"), py::arg("threads") = 0, py::arg("progress") = py::none(),
+        py::arg("cancel") = py::none(), py::arg("memory_limit") = std::nullopt);
   m.def("validate", &validate_job, py::arg("job"), py::arg("memory_limit") = std::nullopt);
   m.def("bake_job", &bake_job_api, py::arg("job"), py::arg("out"), py::arg("threads") = 0,
-        py::arg("progress") = py::none(), py::arg("cancel") = py::none(), py::arg("memory_limit") = std::nullopt,
-        py::arg("cache") = true);
+        py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
+        py::arg("memory_limit") = std::nullopt, py::arg("cache") = true);
 }

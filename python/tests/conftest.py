@@ -32,7 +32,8 @@ def write_exr(path, heights):
     out = OpenImageIO.ImageOutput.create(str(path))
     spec = OpenImageIO.ImageSpec(heights.shape[1], heights.shape[0], 1, "float")
     assert out.open(str(path), spec), OpenImageIO.geterror()
-    assert out.write_image(np.ascontiguousarray(heights, dtype=np.float32))
+    # (H, W, 1): OpenImageIO 2.4 misreads a 2-D array's strides.
+    assert out.write_image(np.ascontiguousarray(heights, dtype=np.float32).reshape(*heights.shape, 1))
     out.close()
 
 

@@ -13,7 +13,7 @@ CASES = [
     ("p1", {"directions": 8, "layers": ["ao", "horizon_distance"]}, {"wrap": "repeat", "texel_size": 0.5}),
     ("p2", {"directions": 8, "bounces": 1}, {}),
     ("nlp", {"directions": 8, "layers": ["direct", "total"]}, {}),
-    ("hbao", {"directions": 8, "radius": 6.0, "layers": ["obscurance", "ao", "bent_normal"]}, {}),
+    ("hbao", {"directions": 8, "falloff": "none", "layers": ["obscurance", "ao", "bent_normal"]}, {}),
     ("lsao", {"directions": 8, "radius": 6.0}, {"wrap": "repeat"}),
     ("farfield", {"directions": 8, "radius": 10.0}, {}),
     ("hsao", {"directions": 8, "radius": 6.0}, {}),
