@@ -28,6 +28,7 @@ if [ "$mode" = test ]; then
   packages+=(clang libclang-rt-14-dev)  # the libFuzzer harnesses (tests/fuzz): clang and its libFuzzer
   packages+=(python3)  # tests/hostile/random_jobs.py: random valid jobs baked under a time limit
   packages+=(python3-pytest python3-openimageio python3-gdal)  # the Python module's tests (python/tests)
+  packages+=(qgis python3-qgis)  # the QGIS provider's test runs qgis_process (about 5 minutes to install)
 fi
 
 missing=()

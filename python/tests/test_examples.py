@@ -47,7 +47,7 @@ def test_gdal_relief_example(tmp_path):
     for name in ("svf", "openness_positive", "openness_negative"):
         ds = gdal.Open(str(tmp_path / "py" / f"{name}.tif"))
         assert ds.GetGeoTransform() == (500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0)
-        assert "32633" in ds.GetProjection() or "UTM zone 33N" in ds.GetProjection()
+        assert gdal.osr.SpatialReference(wkt=ds.GetProjection()).GetAuthorityCode(None) == "32633"
         values = ds.GetRasterBand(1).ReadAsArray()
         assert values[7, 9] == -9999.0
         values[7, 9] = exr[f"{name}.Y"][7, 9]
