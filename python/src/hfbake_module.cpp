@@ -240,6 +240,11 @@ struct Runner {
   }
 };
 
+// `threads`: 0 (all cores) or a count.
+void check_threads(int threads) {
+  if (threads < 0) raise_input_error({{"", "/threads", "must be at least 1 (or None: all cores)"}});
+}
+
 // The job document the array API bakes: the placeholder field is a procedural one of the array's size (the
 // loader's checks and the memory estimate need a size before the heights; its heights are never made), the
 // height keys, the job's keys and one bake entry of the method's keys.
@@ -301,6 +306,7 @@ py::dict bake_array(const std::string& method, py::array heights, const py::dict
     raise_input_error({{"", array_pointer(e.where()), e.what()}});
   }
 
+  check_threads(threads);
   Runner runner;
   runner.threads = threads;
   runner.progress = std::move(progress);
@@ -382,6 +388,7 @@ py::tuple bake_job_api(py::handle job_arg, const std::string& out, int threads, 
   std::optional<ReferenceCache> cache;
   if (use_cache)
     if (const auto dir = default_reference_cache_dir()) cache.emplace(*dir);
+  check_threads(threads);
   Runner runner;
   runner.threads = threads;
   runner.progress = std::move(progress);

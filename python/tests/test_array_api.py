@@ -68,3 +68,18 @@ def test_progress_is_reported_on_the_calling_thread():
     assert seen, "progress was never called"
     assert all(0.0 <= f <= 1.0 and t == caller for f, t in seen)
     assert seen[-1][0] == 1.0
+
+
+def test_the_stubs_name_every_method():
+    import ast
+    import pathlib
+
+    stub = pathlib.Path(hfbake.__file__).with_name("__init__.pyi")
+    names = {node.name for node in ast.parse(stub.read_text()).body if isinstance(node, ast.FunctionDef)}
+    assert set(hfbake.methods) | {"validate", "bake"} <= names
+
+
+def test_help_lists_the_method_keys():
+    assert "directions" in hfbake.p1.__doc__ and "search_radius" in hfbake.relief.__doc__
+    with pytest.raises(hfbake.InputError):
+        hfbake.hbao(terrain(8, 8), threads=-2)
