@@ -14,7 +14,7 @@ keys (texel_size, wrap, height_scale, height_offset, nodata, nodata_value) and t
 layers (horizon, horizon_distance, horizon_deg) as (K, H, W), colours and vectors as (H, W, C).
 
 Jobs: validate(job) and bake(job, out=None) take a job file's path or a dict of one and do what
-`hfbake validate` and `hfbake bake` do.
+`hfbake validate` and `hfbake bake` do; compare(now, baseline) is `hfbake compare`.
 
 Bad input raises InputError (a ValueError) with the command line's message and the JSON pointer of the
 value; a bake stopped by `cancel` raises Cancelled, one stopped by Ctrl-C KeyboardInterrupt.
@@ -157,3 +157,15 @@ def _bake_job(job, out, threads, progress, cancel, memory_limit, cache):
             with open(path) as f:
                 report["report"] = _json.load(f)
     return layers, report
+
+
+def compare(now, baseline, *, tolerances=(), allow_different_job=False, update_baseline=False):
+    """Compares a bake's report.json (or every report.json under a folder) with a baseline, as
+    `hfbake compare NOW BASELINE` does (`tolerances`: "METRIC=REL[,ABS]" strings, as --tolerance).
+
+    Returns {"regression": bool, "comparisons": [...] (what --json writes), "text": the command's tables,
+    "baseline_updated": bool}. Raises InputError for bad input and for a baseline of another job (unless
+    allow_different_job)."""
+    result = _hfbake.compare(_os.fspath(now), _os.fspath(baseline), list(tolerances), allow_different_job,
+                             update_baseline)
+    return _json.loads(result)

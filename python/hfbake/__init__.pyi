@@ -222,3 +222,11 @@ def bake(
     memory_limit: Optional[int] = ...,
     cache: bool = ...,
 ) -> tuple[dict[str, Layers], dict[str, Any]]: ...
+def compare(
+    now: Union[str, os.PathLike],
+    baseline: Union[str, os.PathLike],
+    *,
+    tolerances: Sequence[str] = ...,
+    allow_different_job: bool = ...,
+    update_baseline: bool = ...,
+) -> dict[str, Any]: ...

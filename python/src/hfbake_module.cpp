@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "cli/bake_command.hpp"
+#include "cli/compare_command.hpp"
 #include "cli/method_dispatch.hpp"
 #include "cli/outputs.hpp"
 #include "cli/reference_cache.hpp"
@@ -421,6 +422,30 @@ py::tuple bake_job_api(py::handle job_arg, const std::string& out, int threads, 
   return py::make_tuple(layers, summary.dump());
 }
 
+// compare(now, baseline): `hfbake compare NOW BASELINE` without printing; the result as JSON text.
+std::string compare_api(const std::string& now, const std::string& baseline,
+                        const std::vector<std::string>& tolerances, bool allow_different_job,
+                        bool update_baseline) {
+  CompareOptions options;
+  options.now = now;
+  options.baseline = baseline;
+  options.tolerances = tolerances;
+  options.allow_different_job = allow_different_job;
+  options.update_baseline = update_baseline;
+  options.quiet = true;
+  const CompareResult r = compare_reports(options);
+  if (!r.refusals.empty()) {
+    std::vector<Problem> problems;
+    for (const std::string& line : r.refusals) problems.push_back({"", "", line});
+    raise_input_error(problems);
+  }
+  return json{{"regression", r.regression},
+              {"comparisons", r.comparisons},
+              {"text", r.text},
+              {"baseline_updated", r.baseline_updated}}
+      .dump();
+}
+
 }  // namespace
 }  // namespace hfbake
 
@@ -451,6 +476,8 @@ PYBIND11_MODULE(_hfbake, m) {
   m.def("bake_array", &bake_array, py::arg("method"), py::arg("heights"), py::arg("entry_keys"),
         py::arg("height_keys"), py::arg("job_keys"), py::arg("threads") = 0, py::arg("progress") = py::none(),
         py::arg("cancel") = py::none(), py::arg("memory_limit") = std::nullopt);
+  m.def("compare", &compare_api, py::arg("now"), py::arg("baseline"), py::arg("tolerances"),
+        py::arg("allow_different_job"), py::arg("update_baseline"));
   m.def("validate", &validate_job, py::arg("job"), py::arg("memory_limit") = std::nullopt);
   m.def("bake_job", &bake_job_api, py::arg("job"), py::arg("out"), py::arg("threads") = 0,
         py::arg("progress") = py::none(), py::arg("cancel") = py::none(),

@@ -1,7 +1,9 @@
 """hfbake.validate and hfbake.bake on jobs, against `hfbake validate` and `hfbake bake`."""
 
 import json
+import os
 import pathlib
+import subprocess
 
 import numpy as np
 import pytest
@@ -69,3 +71,29 @@ def test_bake_reports_progress(tmp_path):
     seen = []
     hfbake.bake(job, progress=seen.append)
     assert seen and seen[-1] == 1.0 and all(0 <= f <= 1 for f in seen)
+
+
+def test_compare_gives_the_commands_comparison(tmp_path):
+    doc = {"version": 1, "name": "c", "height": {"procedural": {"kind": "fractal", "size": [24, 24]}},
+           "bake": [{"method": "p1", "directions": 8, "layers": ["ao"]}],
+           "reference": {"samples": 16, "layers": ["ao"]}}
+    job = tmp_path / "job.json"
+    job.write_text(json.dumps(doc))
+    layers, report = hfbake.bake(job, tmp_path / "base", cache=False)
+    assert "reference" in layers and report["report"]["methods"]
+    run_cli("bake", job, "--out", tmp_path / "now", "--quiet", "--no-cache")
+    same = hfbake.compare(tmp_path / "now" / "report.json", tmp_path / "base" / "report.json")
+    assert same["regression"] is False
+    result = run_cli("compare", tmp_path / "now" / "report.json", tmp_path / "base" / "report.json", "--json",
+                     tmp_path / "cmp.json", "--quiet")
+    assert json.loads((tmp_path / "cmp.json").read_text())["comparisons"] == same["comparisons"]
+    assert result.returncode == 0
+    # A regression: the command's values broken on purpose (HFBAKE_TEST_BREAK) against the same baseline.
+    env = dict(os.environ, HFBAKE_TEST_BREAK="p1")
+    subprocess.run([os.environ["HFBAKE_EXE"], "bake", str(job), "--out", str(tmp_path / "broken"), "--quiet",
+                    "--no-cache"], env=env, capture_output=True)
+    worse = hfbake.compare(tmp_path / "broken" / "report.json", tmp_path / "base" / "report.json")
+    assert worse["regression"] is True and "p1" in worse["text"]
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.compare(tmp_path / "now", tmp_path / "missing")
+    assert caught.value.message.startswith("no such baseline")
