@@ -59,10 +59,11 @@ def _method_keys(name):
     return [k for k in schema.get("properties", {}) if k != "method"]
 
 
-def _bake_array(method, heights, threads, progress, cancel, memory_limit, params):
-    # A method's own key wins over a job key of the same name (p2's bounces, hbao's surface).
+def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_keys, params):
+    # A method's own key wins over a job key of the same name (p1's lights, p2's bounces, hbao's surface);
+    # `job` gives the job's.
     own = set(_method_keys(method))
-    entry, height, job = {}, {}, {}
+    entry, height, job = {}, {}, dict(job_keys or {})
     for key, value in params.items():
         if value is None:
             continue
@@ -92,7 +93,8 @@ def _method_doc(name):
     lines.append("")
     lines.append("Field and lighting keys: texel_size (default 1), wrap ('clamp' or 'repeat'), height_scale, "
                  "height_offset, nodata ('error' or 'fill'), nodata_value; environment, lights, bounces, "
-                 "surface as in a job file.")
+                 "surface as in a job file. job: a dict of those job keys, for a name the method's own key "
+                 "takes (p1's lights, p2's bounces, the obscurance methods' surface).")
     lines.append("threads: worker threads (default: all cores; the bits do not depend on it). progress: called "
                  "with the fraction done (0..1) on the calling thread. cancel: an object with is_set() "
                  "(threading.Event) polled while baking: Cancelled is raised when it is set. memory_limit: "
@@ -104,14 +106,14 @@ def _method_doc(name):
 def _make_method(name):
     keys = _method_keys(name)
 
-    def bake(heights, *, threads=None, progress=None, cancel=None, memory_limit=None, **params):
-        return _bake_array(name, heights, threads, progress, cancel, memory_limit, params)
+    def bake(heights, *, job=None, threads=None, progress=None, cancel=None, memory_limit=None, **params):
+        return _bake_array(name, heights, threads, progress, cancel, memory_limit, job, params)
 
     P = _inspect.Parameter
     parameters = [P("heights", P.POSITIONAL_OR_KEYWORD)]
     for key in keys + [k for k in _HEIGHT_KEYS + _JOB_KEYS if k not in keys]:
         parameters.append(P(key, P.KEYWORD_ONLY, default=None))
-    for key in ("threads", "progress", "cancel", "memory_limit"):
+    for key in ("job", "threads", "progress", "cancel", "memory_limit"):
         parameters.append(P(key, P.KEYWORD_ONLY, default=None))
     bake.__signature__ = _inspect.Signature(parameters)
     bake.__name__ = bake.__qualname__ = name

@@ -83,3 +83,13 @@ def test_help_lists_the_method_keys():
     assert "directions" in hfbake.p1.__doc__ and "search_radius" in hfbake.relief.__doc__
     with pytest.raises(hfbake.InputError):
         hfbake.hbao(terrain(8, 8), threads=-2)
+
+
+def test_job_keys_a_method_key_shadows(tmp_path):
+    heights = terrain(32, 24, seed=9)
+    sun = [{"directional": {"direction": [0.3, 0.2, 0.9], "irradiance": 2.0}}]
+    params = {"directions": 16, "lights": True, "layers": ["direct"]}
+    mine = hfbake.p1(heights, job={"lights": sun}, **params)
+    theirs = cli_bake(tmp_path, heights, {"method": "p1", **params}, job_keys={"lights": sun})
+    assert_same_bits(mine, theirs)
+    assert not np.array_equal(mine["direct"], hfbake.p1(heights, **params)["direct"])

@@ -97,3 +97,17 @@ def test_compare_gives_the_commands_comparison(tmp_path):
     with pytest.raises(hfbake.InputError) as caught:
         hfbake.compare(tmp_path / "now", tmp_path / "missing")
     assert caught.value.message.startswith("no such baseline")
+
+
+def test_a_cancelled_bake_raises_and_leaves_nothing(tmp_path):
+    import threading
+
+    doc = {"version": 1, "name": "c", "height": {"procedural": {"kind": "fractal", "size": [1024, 1024]}},
+           "bake": [{"method": "hbao", "directions": 4}, {"method": "p1", "directions": 256}]}
+    stop = threading.Event()
+    timer = threading.Timer(0.5, stop.set)
+    timer.start()
+    with pytest.raises(hfbake.Cancelled):
+        hfbake.bake(doc, tmp_path / "out", cancel=stop, threads=1)
+    timer.cancel()
+    assert [p for p in tmp_path.rglob("*")] == []
