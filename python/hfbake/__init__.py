@@ -81,8 +81,8 @@ def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_ke
 def _method_doc(name):
     schema = _json.loads(_hfbake.method_schema(name) or "{}")
     lines = [_hfbake.method_summary(name) or schema.get("description", ""), ""]
-    lines.append("heights: a 2-D array (rows, columns) of heights in world units; float32 C-contiguous "
-                 "arrays are read in place, others converted.")
+    lines.append("heights: a 2-D array (rows, columns) of heights in world units; a C-contiguous float32 "
+                 "array is taken as it is, others are converted first (the bake holds one copy).")
     lines.append("Returns a dict layer name -> float32 array: (H, W), (K, H, W) per direction, or (H, W, C).")
     lines.append("")
     lines.append("Method keys (absent or None: the job's default):")
