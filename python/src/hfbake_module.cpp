@@ -103,7 +103,8 @@ void set_input_error(const std::vector<Problem>& problems) {
   raise_input_error(problems);
 }
 
-// A keyword argument's value as JSON (what a job file would hold); numpy scalars by their item().
+// A keyword argument's value as JSON (what a job file would hold); numpy scalars by their item(), numpy
+// arrays as lists.
 json to_json(py::handle value, const std::string& pointer) {
   if (value.is_none()) return nullptr;
   if (py::isinstance<py::bool_>(value)) return value.cast<bool>();
@@ -134,6 +135,7 @@ json to_json(py::handle value, const std::string& pointer) {
   }
   if (py::isinstance(value, py::module_::import("numpy").attr("generic")))
     return to_json(value.attr("item")(), pointer);
+  if (py::isinstance<py::array>(value)) return to_json(value.attr("tolist")(), pointer);
   throw InputError("", pointer,
                    "a " + py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>() +
                        " is not a value a job holds (a number, string, bool, list or dict)");

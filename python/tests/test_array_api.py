@@ -93,3 +93,12 @@ def test_job_keys_a_method_key_shadows(tmp_path):
     theirs = cli_bake(tmp_path, heights, {"method": "p1", **params}, job_keys={"lights": sun})
     assert_same_bits(mine, theirs)
     assert not np.array_equal(mine["direct"], hfbake.p1(heights, **params)["direct"])
+
+
+def test_numpy_values_are_the_job_values():
+    heights = terrain(24, 24, seed=2)
+    plain = hfbake.relief(heights, directions=8, search_radius=5.0, layers=["svf", "horizon_deg"])
+    numpy = hfbake.relief(heights, directions=np.int64(8), search_radius=np.float32(5.0),
+                          layers=np.array(["svf", "horizon_deg"]))
+    for name in plain:
+        assert np.array_equal(plain[name], numpy[name])
