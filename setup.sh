@@ -7,6 +7,8 @@
 #                     and then builds the libFuzzer harnesses with clang (FUZZ_BUILD_DIR, default build-fuzz)
 #                     and runs each for FUZZ_SECONDS (default 60) under ASan + UBSan (tests/fuzz/run_fuzzers.sh)
 #   ./setup.sh build  only installs and builds
+#   ./setup.sh install  builds, then installs hfbake and the Python module hfbake (cmake --install: the
+#                     module into the system Python's dist-packages)
 # Environment: BUILD_DIR (default build), ASAN_BUILD_DIR (default build-asan), JOBS (parallel build jobs,
 # default: cores), SANITIZE=0 to skip the sanitized run of `test`, FUZZ=0 to skip the fuzzers.
 set -euo pipefail
@@ -19,11 +21,14 @@ packages=(build-essential cmake pkg-config git
   libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev openimageio-tools libopencolorio-dev
   nlohmann-json3-dev libvalijson-dev libcli11-dev libgtest-dev libbenchmark-dev
   libgdal-dev gdal-bin)  # gdal-bin: gdalinfo / gdal_translate, the truth of the GeoTIFF tests
+packages+=(python3-dev pybind11-dev python3-numpy)  # the Python module (python/)
 packages+=(slurm-wlm munge)  # the farm's integration tests start a one-node Slurm (tests/farm)
 if [ "$mode" = test ]; then
   packages+=(chromium)  # the HTML report test renders the page in headless Chromium
   packages+=(clang libclang-rt-14-dev)  # the libFuzzer harnesses (tests/fuzz): clang and its libFuzzer
   packages+=(python3)  # tests/hostile/random_jobs.py: random valid jobs baked under a time limit
+  packages+=(python3-pytest python3-openimageio python3-gdal)  # the Python module's tests (python/tests)
+  packages+=(qgis python3-qgis)  # the QGIS provider's test runs qgis_process (about 5 minutes to install)
 fi
 
 missing=()
@@ -45,6 +50,12 @@ cmake --build "$build_dir" -j "$jobs"
 
 case "$mode" in
   build) ;;
+  install)
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    $sudo cmake --install "$build_dir"
+    /usr/bin/python3 -c "import hfbake; print('hfbake', hfbake.__version__, 'for Python:', hfbake.__file__)"
+    ;;
   demo)
     "$build_dir/baker/cli/hfbake" bake jobs/demo.json --out out/demo --summary out/demo-summary.json
     echo
@@ -58,7 +69,7 @@ case "$mode" in
       asan_dir=${ASAN_BUILD_DIR:-build-asan}
       echo "setup: AddressSanitizer + UndefinedBehaviorSanitizer build in $asan_dir"
       cmake -S . -B "$asan_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHFBAKE_SANITIZE=address,undefined \
-        -DHFBAKE_BUILD_BENCHMARKS=OFF >/dev/null
+        -DHFBAKE_BUILD_BENCHMARKS=OFF -DHFBAKE_BUILD_PYTHON=OFF >/dev/null
       cmake --build "$asan_dir" -j "$jobs"
       # Any finding fails the test that made it (UBSan halts on error, like ASan). Left out, because they
       # cannot run usefully under the sanitizers: see README.md, "Sanitizers".
@@ -71,13 +82,13 @@ case "$mode" in
       fuzz_dir=${FUZZ_BUILD_DIR:-build-fuzz}
       echo "setup: libFuzzer harnesses (clang, ASan + UBSan) in $fuzz_dir, ${FUZZ_SECONDS:-60} s each"
       cmake -S . -B "$fuzz_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DHFBAKE_FUZZ=ON \
-        -DHFBAKE_BUILD_TESTS=OFF -DHFBAKE_BUILD_BENCHMARKS=OFF >/dev/null
+        -DHFBAKE_BUILD_TESTS=OFF -DHFBAKE_BUILD_BENCHMARKS=OFF -DHFBAKE_BUILD_PYTHON=OFF >/dev/null
       cmake --build "$fuzz_dir" -j "$jobs" --target fuzz_job fuzz_height_image fuzz_environment fuzz_report
       tests/fuzz/run_fuzzers.sh "$fuzz_dir" "${FUZZ_SECONDS:-60}"
     fi
     ;;
   *)
-    echo "usage: $0 [build|demo|test]" >&2
+    echo "usage: $0 [build|demo|test|install]" >&2
     exit 2
     ;;
 esac

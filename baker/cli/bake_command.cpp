@@ -54,8 +54,7 @@ std::string gib(std::size_t bytes) {
   return buf;
 }
 
-// Refuses a job that cannot fit in memory, before anything is allocated (validate and bake alike). Returns
-// the estimate.
+// "scene 35 MiB, p1 12 MiB": an estimate's parts for messages.
 std::string memory_parts_text(const std::vector<MemoryPart>& parts) {
   std::string t;
   for (const MemoryPart& p : parts) t += (t.empty() ? "" : ", ") + p.name + " " + gib(p.bytes);
@@ -71,9 +70,10 @@ std::string largest_part_knob(const std::vector<MemoryPart>& parts) {
   return "; the largest part, " + largest->name + ", shrinks with " + largest->knob;
 }
 
-std::size_t check_memory(const Job& job, std::optional<std::size_t> limit,
-                         std::string* parts_text = nullptr) {
-  const FieldSize size = probe_field_size(job);
+}  // namespace
+
+std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::size_t> limit,
+                             std::string* parts_text) {
   const std::size_t have = limit ? *limit : available_memory_bytes();
   // The heights alone first: the estimate plans the sweeps, whose plan is itself about a byte per 128 texels
   // (a 1000000^2 field: 8 GB just to estimate), so a size far beyond the budget (its heights alone over four
@@ -98,6 +98,8 @@ std::size_t check_memory(const Job& job, std::optional<std::size_t> limit,
   return need;
 }
 
+namespace {
+
 // `params`: the resolved parameters (every default filled in), what the bake used.
 void add_common_attributes(LayerSet& layers, const Job& job, const std::string& job_hash,
                            const std::string& method, const nlohmann::json& params, double seconds) {
@@ -109,11 +111,13 @@ void add_common_attributes(LayerSet& layers, const Job& job, const std::string& 
   layers.attributes.emplace_back("hfbake:wall_seconds", std::to_string(seconds));
 }
 
-// Bakes one valid job. Throws InputError (bad input), Cancelled, or anything else (a failed job).
+}  // namespace
+
 void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
-              const ReferenceCache* cache, const BakeOptions& options) {
-  check_memory(job, options.memory_limit);
+              const ReferenceCache* cache, const BakeOptions& options,
+              std::map<std::string, LayerSet>* kept) {
   const FieldSize size = probe_field_size(job);
+  check_job_memory(job, size, options.memory_limit);
 
   check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
   if (options.shard) {
@@ -153,6 +157,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     progress.end(job.name, entry.stem, seconds);
     add_common_attributes(layers, job, job_hash, entry.method, entry.resolved, seconds);
     stage.write_layers(entry.stem, layers);
+    if (kept) (*kept)[entry.stem] = job.has_reference ? layers : std::move(layers);
     outcome.methods[entry.stem] = {
         {"method", entry.method}, {"seconds", seconds}, {"cpu_seconds", cpu_seconds}};
     if (job.has_reference) report.methods.push_back({entry.stem, entry.method, seconds, std::move(layers)});
@@ -210,6 +215,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     add_reference_relief(scene.field, method_layers, reference, rc);
     add_common_attributes(reference, job, job_hash, "reference", job.reference_resolved, seconds);
     stage.write_layers("reference", reference);
+    if (kept) (*kept)["reference"] = reference;
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};
     if (resume)
       outcome.methods["reference"]["bands"] = {{"resumed", resume->bands_resumed},
@@ -238,6 +244,8 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   outcome.outputs = stage.commit();
   for (const fs::path& p : outcome.outputs) progress.message(job.name + ": wrote " + p.string());
 }
+
+namespace {
 
 void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
   if (quiet) return;
@@ -371,7 +379,7 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
     try {
       const FieldSize size = probe_field_size(*load.job);
       std::string parts;
-      const std::size_t need = check_memory(*load.job, memory_limit, &parts);
+      const std::size_t need = check_job_memory(*load.job, size, memory_limit, &parts);
       // Everything bake refuses about the inputs, refused here first: the same loader reads every image
       // (NaN heights without nodata, environment aspect ratios, channel names, map sizes).
       load_scene(*load.job);

@@ -3,11 +3,18 @@
 
 #include <atomic>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "cli/job_outcome.hpp"
+#include "cli/progress.hpp"
+#include "cli/reference_cache.hpp"
+#include "cli/scene_loader.hpp"
+#include "core/layers.hpp"
 #include "farm/shard_plan.hpp"
+#include "job/manifest.hpp"
 
 namespace hfbake {
 
@@ -35,6 +42,21 @@ struct BakeOptions {
 // "512M", "8G", "1.5GiB", "2000000000": bytes (binary multiples K, M, G, T, optionally "iB" or "B"); nullopt
 // when the text is not a size.
 std::optional<std::size_t> parse_memory_size(const std::string& text);
+
+// Refuses a job that cannot fit in `limit` bytes (default: the machine's available memory) before anything is
+// allocated: an InputError at /height naming the estimate's parts and what shrinks the largest. Returns the
+// estimate (cli/scene_loader.hpp estimate_peak_bytes); `parts_text` (optional) receives its parts.
+std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::size_t> limit,
+                             std::string* parts_text = nullptr);
+
+// Bakes one job that resolve_job accepted, as `hfbake bake` does: the memory check, the scene, each method,
+// the reference and its report, the outputs staged and moved into job.output.dir whole. Fills `outcome`
+// (seconds, metrics, outputs; a regressed threshold sets its status). `kept` (optional) receives the layers
+// as written, by stem, the reference's as "reference". Throws InputError (bad input), Cancelled, or anything
+// else (a failed job).
+void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
+              const ReferenceCache* cache, const BakeOptions& options,
+              std::map<std::string, LayerSet>* kept = nullptr);
 
 // Exit status (docs/contract.md): 0 all baked and thresholds held, 1 a threshold or baseline regressed,
 // 2 bad input or a failed job, 128 + the signal when interrupted (`cancel` was set: 130 SIGINT, 143 SIGTERM,

@@ -45,95 +45,96 @@ std::map<std::string, fs::path> reports_under(const fs::path& dir) {
 
 }  // namespace
 
-int run_compare(const CompareOptions& o) {
+CompareResult compare_reports(const CompareOptions& o) {
   BaselineOptions rule = BaselineOptions::defaults();
   for (const std::string& t : o.tolerances) {
     const std::string problem = parse_tolerance(t, rule);
-    if (!problem.empty()) {
-      std::fprintf(stderr, "hfbake: error: command line: --tolerance: %s\n", problem.c_str());
-      return 2;
-    }
+    if (!problem.empty()) throw InputError("command line", "--tolerance", problem);
   }
-  try {
-    std::error_code ec;
-    if (!fs::exists(o.now, ec)) throw InputError(o.now.string(), "", "no such file or folder");
-    const bool folders = fs::is_directory(o.now);
-    if (!fs::exists(o.baseline, ec) && !o.update_baseline)
-      throw InputError(
-          o.baseline.string(), "",
-          "no such baseline (create it deliberately with hfbake compare NEW BASELINE --update-baseline)");
-    if (fs::exists(o.baseline, ec) && fs::is_directory(o.baseline) != folders)
-      throw InputError(o.baseline.string(), "",
-                       folders ? "is not a folder (NEW is one)" : "is a folder (NEW is a file)");
+  std::error_code ec;
+  if (!fs::exists(o.now, ec)) throw InputError(o.now.string(), "", "no such file or folder");
+  const bool folders = fs::is_directory(o.now);
+  if (!fs::exists(o.baseline, ec) && !o.update_baseline)
+    throw InputError(
+        o.baseline.string(), "",
+        "no such baseline (create it deliberately with hfbake compare NEW BASELINE --update-baseline)");
+  if (fs::exists(o.baseline, ec) && fs::is_directory(o.baseline) != folders)
+    throw InputError(o.baseline.string(), "",
+                     folders ? "is not a folder (NEW is one)" : "is a folder (NEW is a file)");
 
-    // Pairs (label, new file, baseline file); a missing side is an empty path.
-    std::vector<std::tuple<std::string, fs::path, fs::path>> pairs;
-    if (folders) {
-      const auto now = reports_under(o.now);
-      const auto old = fs::exists(o.baseline) ? reports_under(o.baseline) : std::map<std::string, fs::path>{};
-      if (now.empty()) throw InputError(o.now.string(), "", "no report.json under this folder");
-      for (const auto& [rel, p] : now) pairs.emplace_back(rel, p, old.count(rel) ? old.at(rel) : fs::path());
-      for (const auto& [rel, p] : old)
-        if (!now.count(rel)) pairs.emplace_back(rel, fs::path(), p);
-    } else {
-      pairs.emplace_back("", o.now, fs::exists(o.baseline) ? o.baseline : fs::path());
+  // Pairs (label, new file, baseline file); a missing side is an empty path.
+  std::vector<std::tuple<std::string, fs::path, fs::path>> pairs;
+  if (folders) {
+    const auto now = reports_under(o.now);
+    const auto old = fs::exists(o.baseline) ? reports_under(o.baseline) : std::map<std::string, fs::path>{};
+    if (now.empty()) throw InputError(o.now.string(), "", "no report.json under this folder");
+    for (const auto& [rel, p] : now) pairs.emplace_back(rel, p, old.count(rel) ? old.at(rel) : fs::path());
+    for (const auto& [rel, p] : old)
+      if (!now.count(rel)) pairs.emplace_back(rel, fs::path(), p);
+  } else {
+    pairs.emplace_back("", o.now, fs::exists(o.baseline) ? o.baseline : fs::path());
+  }
+
+  CompareResult r;
+  for (const auto& [label, now_file, old_file] : pairs) {
+    if (now_file.empty()) {  // a whole report went missing
+      r.regression = true;
+      r.text += label + ": MISSING (in the baseline, not in " + o.now.string() + ")\n";
+      r.comparisons.push_back({{"label", label}, {"regression", true}, {"missing_report", true}});
+      continue;
     }
-
-    bool regression = false, refused = false;
-    nlohmann::json out = nlohmann::json::array();
+    if (old_file.empty()) {
+      r.text += label + (label.empty() ? "" : ": ") + "new report (no baseline yet)\n";
+      r.comparisons.push_back({{"label", label}, {"regression", false}, {"new_report", true}});
+      continue;
+    }
+    BaselineComparison c;
+    try {
+      c = compare_to_baseline(read_json(now_file), read_json(old_file), rule);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(now_file.string() + " vs " + old_file.string(), "", e.what());
+    }
+    c.label = label;
+    if (!c.job_differences.empty()) {
+      const std::string why = another_job_message(c.job_differences);
+      if (!o.allow_different_job) {
+        r.refusals.push_back(old_file.string() + ": " + why + " (compare anyway with --allow-different-job)");
+        continue;
+      }
+      r.text += "note: " + old_file.string() + ": " + why + " (allowed by --allow-different-job)\n";
+    }
+    r.regression = r.regression || c.regression();
+    r.text += comparison_table(c, o.all);
+    r.comparisons.push_back(comparison_json(c));
+  }
+  if (!r.refusals.empty()) return r;  // neither --json nor --update-baseline: the comparison did not happen
+  if (o.json) {
+    std::ofstream j(*o.json);
+    j << nlohmann::json{{"regression", r.regression}, {"comparisons", r.comparisons}}.dump(2) << "\n";
+    if (!j) throw InputError(o.json->string(), "--json", "cannot write file");
+  }
+  if (o.update_baseline) {
     for (const auto& [label, now_file, old_file] : pairs) {
-      if (now_file.empty()) {  // a whole report went missing
-        regression = true;
-        if (!o.quiet) std::printf("%s: MISSING (in the baseline, not in %s)\n", label.c_str(), o.now.c_str());
-        out.push_back({{"label", label}, {"regression", true}, {"missing_report", true}});
-        continue;
+      if (now_file.empty()) {
+        fs::remove(old_file);
+      } else {
+        copy_atomically(now_file, folders ? o.baseline / label : o.baseline);
       }
-      if (old_file.empty()) {
-        if (!o.quiet)
-          std::printf("%s%snew report (no baseline yet)\n", label.c_str(), label.empty() ? "" : ": ");
-        out.push_back({{"label", label}, {"regression", false}, {"new_report", true}});
-        continue;
-      }
-      BaselineComparison c;
-      try {
-        c = compare_to_baseline(read_json(now_file), read_json(old_file), rule);
-      } catch (const std::invalid_argument& e) {
-        throw InputError(now_file.string() + " vs " + old_file.string(), "", e.what());
-      }
-      c.label = label;
-      if (!c.job_differences.empty()) {
-        const std::string why = another_job_message(c.job_differences);
-        if (!o.allow_different_job) {
-          std::fprintf(stderr, "hfbake: error: %s: %s (compare anyway with --allow-different-job)\n",
-                       old_file.c_str(), why.c_str());
-          refused = true;
-          continue;
-        }
-        if (!o.quiet)
-          std::printf("note: %s: %s (allowed by --allow-different-job)\n", old_file.c_str(), why.c_str());
-      }
-      regression = regression || c.regression();
-      if (!o.quiet) std::printf("%s", comparison_table(c, o.all).c_str());
-      out.push_back(comparison_json(c));
     }
-    if (refused) return 2;  // neither --json nor --update-baseline: the comparison did not happen
-    if (o.json) {
-      std::ofstream j(*o.json);
-      j << nlohmann::json{{"regression", regression}, {"comparisons", out}}.dump(2) << "\n";
-      if (!j) throw InputError(o.json->string(), "--json", "cannot write file");
-    }
-    if (o.update_baseline) {
-      for (const auto& [label, now_file, old_file] : pairs) {
-        if (now_file.empty()) {
-          fs::remove(old_file);
-        } else {
-          copy_atomically(now_file, folders ? o.baseline / label : o.baseline);
-        }
-      }
-      if (!o.quiet) std::printf("baseline updated: %s\n", o.baseline.c_str());
-      return 0;
-    }
-    return regression ? 1 : 0;
+    r.text += "baseline updated: " + o.baseline.string() + "\n";
+    r.baseline_updated = true;
+  }
+  return r;
+}
+
+int run_compare(const CompareOptions& o) {
+  try {
+    const CompareResult r = compare_reports(o);
+    if (!o.quiet) std::printf("%s", r.text.c_str());
+    for (const std::string& line : r.refusals) std::fprintf(stderr, "hfbake: error: %s\n", line.c_str());
+    if (!r.refusals.empty()) return 2;
+    if (r.baseline_updated) return 0;
+    return r.regression ? 1 : 0;
   } catch (const InputError& e) {
     std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
     return 2;

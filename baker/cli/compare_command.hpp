@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,6 +21,21 @@ struct CompareOptions {
   std::optional<std::filesystem::path> json;  // write the comparison as JSON
   bool quiet = false;
 };
+
+// What a comparison found: the --json document's "comparisons" and "regression", the reports refused as
+// another job's (one line each, "<baseline>: <why> (...)": then nothing was written or updated), the text
+// the command prints (tables, notes) and whether the baseline was updated.
+struct CompareResult {
+  nlohmann::json comparisons = nlohmann::json::array();
+  bool regression = false;
+  std::vector<std::string> refusals;
+  std::string text;
+  bool baseline_updated = false;
+};
+
+// The comparison (and --json, --update-baseline) without printing. Throws InputError for bad input
+// (a --tolerance, a missing file, a report that is not one), std::filesystem_error for an I/O failure.
+CompareResult compare_reports(const CompareOptions& options);
 
 // 0 nothing regressed (or the baseline was updated), 1 a regression, 2 bad input (a baseline of another
 // job included: then nothing is updated).

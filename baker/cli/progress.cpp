@@ -61,8 +61,9 @@ void Progress::line_locked(const std::string& job, const std::string& step, doub
 }
 
 void Progress::update(const std::string& job, const std::string& step, double fraction) {
-  if (mode_ == Mode::quiet) return;
   fraction = fraction < 0 ? 0 : (fraction > 1 ? 1 : fraction);
+  if (observer_) observer_(job, step, fraction);
+  if (mode_ == Mode::quiet) return;
   std::lock_guard lock(mutex_);
   if (mode_ == Mode::lines) {
     line_locked(job, step, fraction);

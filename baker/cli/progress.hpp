@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
@@ -42,6 +43,10 @@ class Progress {
   void begin(const std::string& job, const std::string& step);
   void update(const std::string& job, const std::string& step, double fraction);
   void end(const std::string& job, const std::string& step, double seconds);
+  // Called by every update() with the step's fraction, in any mode, from the thread that reports (the
+  // Python module's progress callback); it must be thread-safe.
+  using Observer = std::function<void(const std::string& job, const std::string& step, double fraction)>;
+  void set_observer(Observer observer) { observer_ = std::move(observer); }
   // A one-off message (e.g. "wrote out/demo/demo.p1.exr"), printed above the bar.
   void message(const std::string& text);
   // An error line "hfbake: error: <line>": printed even when quiet.
@@ -51,6 +56,7 @@ class Progress {
   void clear_bar_locked();
   void line_locked(const std::string& job, const std::string& step, double fraction);
   Mode mode_;
+  Observer observer_;
   std::FILE* out_;
   Clock clock_;
   struct StepLines {  // lines mode: one step's start, its last line and that line's percent

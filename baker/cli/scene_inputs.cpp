@@ -131,7 +131,13 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
   field.texel_size = texel_size;
   field.wrap = wrap;
   field.z = std::move(plane.values);
+  apply_height_nodata(job, image, field, georeference, file_nodata);
+  return field;
+}
 
+void apply_height_nodata(const Job& job, const std::string& source, HeightField& field,
+                         Georeference& georeference, std::optional<double> file_nodata) {
+  const nlohmann::json& h = job.doc["height"];
   // The file's NoData value (a NaN one is caught as NaN) and the job's nodata_value both mark holes.
   const std::optional<float> nodata = nodata_value(h);
   const bool file_value = file_nodata && !std::isnan(*file_nodata);
@@ -142,13 +148,13 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
       if (z == v) z = std::numeric_limits<float>::quiet_NaN(), ++file_holes;
   }
   const NodataScan scan = scan_nodata(field, nodata);
-  if (scan.count == 0) return field;
+  if (scan.count == 0) return;
   if (h.value("nodata", "error") != "fill") {
     const float first = field.z[field.index(scan.first_i, scan.first_j)];
     std::string what = std::isnan(first) ? "NaN" : std::isinf(first) ? "infinite" : "nodata_value";
     if (file_value && std::isnan(first)) what = "NaN or the file's NoData value (" + num(*file_nodata) + ")";
     throw InputError(job.file.string(), "/height/image",
-                     image + ": texel (" + std::to_string(scan.first_i) + ", " +
+                     source + ": texel (" + std::to_string(scan.first_i) + ", " +
                          std::to_string(scan.first_j) + ") is " + what + " (" + std::to_string(scan.count) +
                          " of " + std::to_string(field.texel_count()) +
                          " texels have no valid height); set \"nodata\": \"fill\" to fill the holes");
@@ -157,8 +163,7 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
   for (std::size_t t = 0; t < field.z.size(); ++t)
     georeference.holes[t] = !std::isfinite(field.z[t]) || (nodata && field.z[t] == *nodata);
   if (!fill_nodata(field, nodata))
-    throw InputError(job.file.string(), "/height/image", image + ": no texel has a valid height");
-  return field;
+    throw InputError(job.file.string(), "/height/image", source + ": no texel has a valid height");
 }
 
 void load_surface_map(const Job& job, const std::string& pointer, const HeightField& field,

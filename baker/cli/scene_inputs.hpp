@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <optional>
+#include <string>
 
 #include "cli/scene_loader.hpp"
 
@@ -30,6 +31,13 @@ std::optional<double> image_texel_size(const Job& job);
 // each.
 HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference,
                              const std::function<void(double)>& progress = {});
+
+// The nodata rule of a height field from `source` (an image's name as the job gives it, or "heights" for
+// an array handed in by the Python module): NaN/Inf texels, texels equal to height.nodata_value or to
+// `file_nodata` are an InputError at /height/image naming the count and the first texel, unless
+// height.nodata is "fill": then they are filled (field/nodata.hpp) and marked in georeference.holes.
+void apply_height_nodata(const Job& job, const std::string& source, HeightField& field,
+                         Georeference& georeference, std::optional<double> file_nodata = std::nullopt);
 
 // Fills `texels` (already sized to the field) from the surface key at `pointer` ("/surface/albedo" or
 // "/surface/emission"): a number, [r, g, b], or {"image", "colorspace", "scale"} of the field's size.

@@ -186,18 +186,24 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
 }
 
 Scene load_scene(const Job& job, const std::function<void(double)>& progress) {
-  Scene scene;
-  scene.name = job.name;
-  const nlohmann::json& doc = job.doc;
-  const nlohmann::json& h = doc["height"];
+  const nlohmann::json& h = job.doc["height"];
   const double texel = job_texel_size(job);
   const Wrap wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
-  scene.georeference.geotransform = local_geotransform(texel);
-  if (h.contains("procedural")) {
-    scene.field = make_procedural(procedural_spec(h["procedural"]), texel, wrap);
-  } else {
-    scene.field = load_image_field(job, texel, wrap, scene.georeference, progress);
-  }
+  Georeference georeference;
+  georeference.geotransform = local_geotransform(texel);
+  HeightField field = h.contains("procedural")
+                          ? make_procedural(procedural_spec(h["procedural"]), texel, wrap)
+                          : load_image_field(job, texel, wrap, georeference, progress);
+  return complete_scene(job, std::move(field), std::move(georeference));
+}
+
+Scene complete_scene(const Job& job, HeightField field, Georeference georeference) {
+  Scene scene;
+  scene.name = job.name;
+  scene.field = std::move(field);
+  scene.georeference = std::move(georeference);
+  const nlohmann::json& doc = job.doc;
+  const nlohmann::json& h = doc["height"];
   const double scale = h.value("height_scale", 1.0), offset = h.value("height_offset", 0.0);
   if (scale != 1.0 || offset != 0.0)
     for (float& z : scene.field.z) z = float(z * scale + offset);

@@ -55,4 +55,9 @@ SceneNeeds scene_needs(const Job& job);
 // fraction of the height image read so far, while it is read.
 Scene load_scene(const Job& job, const std::function<void(double)>& progress = {});
 
+// The rest of load_scene once the heights are read (as stored, nodata handled, `georeference` filled):
+// height_scale and height_offset, the checks on the field's size and heights, the normals and surface maps
+// scene_needs asks for, the lighting and the bounces. The Python module hands its arrays in here.
+Scene complete_scene(const Job& job, HeightField field, Georeference georeference);
+
 }  // namespace hfbake

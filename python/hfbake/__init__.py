@@ -1,0 +1,173 @@
+"""hfbake: ambient occlusion, sky visibility, horizons and lighting baked from height fields.
+
+Arrays in, arrays out::
+
+    import numpy as np, hfbake
+    heights = np.load("dem.npy").astype(np.float32)        # (rows, columns), world units
+    out = hfbake.relief(heights, texel_size=2.0, layers=["svf", "openness_pos"])
+    out["svf"]                                              # (rows, columns) float32
+
+One function per method (p1, p2, nlp, hbao, lsao, farfield, hsao, vo, relief) takes the method's job keys as
+keyword arguments, with the same names, defaults and checks as a job file's bake entry, plus the height
+keys (texel_size, wrap, height_scale, height_offset, nodata, nodata_value) and the job's lighting keys
+(environment, lights, bounces, surface). It returns a dict of layers: one channel as (H, W), per-direction
+layers (horizon, horizon_distance, horizon_deg) as (K, H, W), colours and vectors as (H, W, C).
+
+Jobs: validate(job) and bake(job, out=None) take a job file's path or a dict of one and do what
+`hfbake validate` and `hfbake bake` do; compare(now, baseline) is `hfbake compare`.
+
+Bad input raises InputError (a ValueError) with the command line's message and the JSON pointer of the
+value; a bake stopped by `cancel` raises Cancelled, one stopped by Ctrl-C KeyboardInterrupt.
+"""
+
+import inspect as _inspect
+import json as _json
+import os as _os
+import tempfile as _tempfile
+
+
+class InputError(ValueError):
+    """Bad input: a value the caller can fix.
+
+    message: what is wrong (the command line's message); pointer: the JSON pointer of the value
+    ("/directions" for a keyword argument, "/bake/0/directions" in a job); file: the job file ("" for
+    arrays); lines: every problem found, each as the command line prints it ("<file>: <pointer>: <what>").
+    """
+
+    def __init__(self, message, pointer="", file="", lines=None):
+        self.message = message
+        self.pointer = pointer
+        self.file = file
+        self.lines = list(lines) if lines is not None else [message]
+        super().__init__(self.lines[0] if len(self.lines) == 1 else "\n".join(self.lines))
+
+
+class Cancelled(RuntimeError):
+    """A bake stopped because its `cancel` event was set; nothing it made is kept."""
+
+
+from . import _hfbake  # noqa: E402  (the exceptions above are what it raises)
+
+__version__ = _hfbake.__version__
+
+_HEIGHT_KEYS = ("texel_size", "wrap", "height_scale", "height_offset", "nodata", "nodata_value")
+_JOB_KEYS = ("environment", "lights", "bounces", "surface")
+
+
+def _method_keys(name):
+    schema = _json.loads(_hfbake.method_schema(name) or "{}")
+    return [k for k in schema.get("properties", {}) if k != "method"]
+
+
+def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_keys, params):
+    # A method's own key wins over a job key of the same name (p1's lights, p2's bounces, hbao's surface);
+    # `job` gives the job's.
+    own = set(_method_keys(method))
+    entry, height, job = {}, {}, dict(job_keys or {})
+    for key, value in params.items():
+        if value is None:
+            continue
+        if key in own:
+            entry[key] = value
+        elif key in _HEIGHT_KEYS:
+            height[key] = value
+        elif key in _JOB_KEYS:
+            job[key] = value
+        else:
+            entry[key] = value  # refused by the method's schema as the job file would be
+    return _hfbake.bake_array(method, heights, entry, height, job, threads or 0, progress, cancel, memory_limit)
+
+
+def _method_doc(name):
+    schema = _json.loads(_hfbake.method_schema(name) or "{}")
+    lines = [_hfbake.method_summary(name) or schema.get("description", ""), ""]
+    lines.append("heights: a 2-D array (rows, columns) of heights in world units; a C-contiguous float32 "
+                 "array is taken as it is, others are converted first (the bake holds one copy).")
+    lines.append("Returns a dict layer name -> float32 array: (H, W), (K, H, W) per direction, or (H, W, C).")
+    lines.append("")
+    lines.append("Method keys (absent or None: the job's default):")
+    for key, spec in schema.get("properties", {}).items():
+        if key == "method":
+            continue
+        lines.append(f"  {key}: {spec.get('description', '')}")
+    lines.append("")
+    lines.append("Field and lighting keys: texel_size (default 1), wrap ('clamp' or 'repeat'), height_scale, "
+                 "height_offset, nodata ('error' or 'fill'), nodata_value; environment, lights, bounces, "
+                 "surface as in a job file. job: a dict of those job keys, for a name the method's own key "
+                 "takes (p1's lights, p2's bounces, the obscurance methods' surface).")
+    lines.append("threads: worker threads (default: all cores; the bits do not depend on it). progress: called "
+                 "with the fraction done (0..1) on the calling thread. cancel: an object with is_set() "
+                 "(threading.Event) polled while baking: Cancelled is raised when it is set. memory_limit: "
+                 "bytes the memory estimate must fit (default: the available memory).")
+    lines.append("Raises InputError (a ValueError) with the command line's message for bad input.")
+    return "\n".join(lines)
+
+
+def _make_method(name):
+    keys = _method_keys(name)
+
+    def bake(heights, *, job=None, threads=None, progress=None, cancel=None, memory_limit=None, **params):
+        return _bake_array(name, heights, threads, progress, cancel, memory_limit, job, params)
+
+    P = _inspect.Parameter
+    parameters = [P("heights", P.POSITIONAL_OR_KEYWORD)]
+    for key in keys + [k for k in _HEIGHT_KEYS + _JOB_KEYS if k not in keys]:
+        parameters.append(P(key, P.KEYWORD_ONLY, default=None))
+    for key in ("job", "threads", "progress", "cancel", "memory_limit"):
+        parameters.append(P(key, P.KEYWORD_ONLY, default=None))
+    bake.__signature__ = _inspect.Signature(parameters)
+    bake.__name__ = bake.__qualname__ = name
+    bake.__doc__ = _method_doc(name)
+    return bake
+
+
+methods = tuple(_hfbake.method_names())
+for _name in methods:
+    globals()[_name] = _make_method(_name)
+del _name
+
+
+def validate(job, *, memory_limit=None):
+    """Checks a job (a path to a job file, or a dict of one) as `hfbake validate` does: the schema, every
+    method's and the reference's parameters, the memory estimate, the inputs loaded. Returns
+    {"name", "width", "height", "memory_bytes", "memory_parts"}; raises InputError listing every problem."""
+    return _hfbake.validate(job, memory_limit)
+
+
+def bake(job, out=None, *, threads=None, progress=None, cancel=None, memory_limit=None, cache=True):
+    """Bakes a job (a path to a job file, or a dict of one; relative paths in a dict resolve against the
+    current folder) as `hfbake bake --out OUT` does, writing its outputs into `out` (a folder; None: a
+    temporary one, removed afterwards).
+
+    Returns (layers, report): layers[stem][layer] as arrays (the values as baked, before the EXR's pixel
+    type), the reference's under "reference"; report: status ("ok" or "regressed" when a threshold failed),
+    errors, per-method seconds and metrics, the output files, and report.json's content under "report" when
+    the job has a reference. `cache`: use the reference cache (~/.cache/hfbake) as the command does."""
+    if out is None:
+        with _tempfile.TemporaryDirectory(prefix="hfbake-") as tmp:
+            layers, report = _bake_job(job, tmp, threads, progress, cancel, memory_limit, cache)
+            report["outputs"] = []
+            return layers, report
+    return _bake_job(job, _os.fspath(out), threads, progress, cancel, memory_limit, cache)
+
+
+def _bake_job(job, out, threads, progress, cancel, memory_limit, cache):
+    layers, summary = _hfbake.bake_job(job, out, threads or 0, progress, cancel, memory_limit, cache)
+    report = _json.loads(summary)
+    for path in report["outputs"]:
+        if _os.path.basename(path) == "report.json":
+            with open(path) as f:
+                report["report"] = _json.load(f)
+    return layers, report
+
+
+def compare(now, baseline, *, tolerances=(), allow_different_job=False, update_baseline=False):
+    """Compares a bake's report.json (or every report.json under a folder) with a baseline, as
+    `hfbake compare NOW BASELINE` does (`tolerances`: "METRIC=REL[,ABS]" strings, as --tolerance).
+
+    Returns {"regression": bool, "comparisons": [...] (what --json writes), "text": the command's tables,
+    "baseline_updated": bool}. Raises InputError for bad input and for a baseline of another job (unless
+    allow_different_job)."""
+    result = _hfbake.compare(_os.fspath(now), _os.fspath(baseline), list(tolerances), allow_different_job,
+                             update_baseline)
+    return _json.loads(result)

@@ -1,0 +1,127 @@
+"""The algorithms: a raster layer's band in, one float32 GeoTIFF out (the input's CRS and geotransform,
+NoData -9999 where the input had none), baked by the Python module hfbake with the job keys' names and
+checks; a bad value fails the algorithm with hfbake's message."""
+
+import numpy as np
+from osgeo import gdal
+from qgis.core import (
+    QgsProcessingAlgorithm,
+    QgsProcessingException,
+    QgsProcessingParameterBand,
+    QgsProcessingParameterNumber,
+    QgsProcessingParameterRasterDestination,
+    QgsProcessingParameterRasterLayer,
+)
+
+import hfbake
+
+
+class _Bake(QgsProcessingAlgorithm):
+    """One product: `method` baked with its `layer` (for per-direction layers: all directions, one band
+    each); `radius_key` names the method's distance key, if it has one."""
+
+    key = name_text = method = layer = ""
+    radius_key = None
+    default_directions = 16
+    help_text = ""
+
+    def name(self):
+        return self.key
+
+    def displayName(self):  # noqa: N802
+        return self.name_text
+
+    def shortHelpString(self):  # noqa: N802
+        return self.help_text
+
+    def createInstance(self):  # noqa: N802
+        return type(self)()
+
+    def initAlgorithm(self, config=None):  # noqa: N802
+        self.addParameter(QgsProcessingParameterRasterLayer("INPUT", "Elevation (projected CRS, heights in its unit)"))
+        self.addParameter(QgsProcessingParameterBand("BAND", "Band", 1, "INPUT"))
+        self.addParameter(QgsProcessingParameterNumber("DIRECTIONS", "Directions", QgsProcessingParameterNumber.Integer,
+                                                       self.default_directions, minValue=1, maxValue=4096))
+        if self.radius_key:
+            self.addParameter(QgsProcessingParameterNumber(
+                "RADIUS", "Radius (map units; 0: the method's default)", QgsProcessingParameterNumber.Double, 0.0,
+                minValue=0.0))
+        self.addParameter(QgsProcessingParameterRasterDestination("OUTPUT", self.name_text))
+
+    def processAlgorithm(self, parameters, context, feedback):  # noqa: N802
+        layer = self.parameterAsRasterLayer(parameters, "INPUT", context)
+        band_index = self.parameterAsInt(parameters, "BAND", context)
+        output = self.parameterAsOutputLayer(parameters, "OUTPUT", context)
+        dem = gdal.Open(layer.source())
+        band = dem.GetRasterBand(band_index)
+        heights = band.ReadAsArray().astype(np.float32)
+        geotransform = dem.GetGeoTransform()
+        nodata = band.GetNoDataValue()
+        keys = {"directions": self.parameterAsInt(parameters, "DIRECTIONS", context), "layers": [self.layer]}
+        if self.radius_key:
+            radius = self.parameterAsDouble(parameters, "RADIUS", context)
+            if radius > 0:
+                keys[self.radius_key] = radius
+        if nodata is not None:
+            keys.update(nodata="fill", nodata_value=nodata)
+
+        class Stop:  # the Cancel button, polled by hfbake while it bakes
+            def is_set(self):
+                return feedback.isCanceled()
+
+        try:
+            values = getattr(hfbake, self.method)(
+                heights, texel_size=abs(geotransform[1]), progress=lambda f: feedback.setProgress(100 * f),
+                cancel=Stop(), **keys)[self.layer]
+        except hfbake.InputError as e:
+            raise QgsProcessingException(f"{self.method}: {e}")
+        except hfbake.Cancelled:
+            return {}
+        planes = values if values.ndim == 3 else values[np.newaxis]
+        holes = heights == nodata if nodata is not None else np.isnan(heights)
+        out = gdal.GetDriverByName("GTiff").Create(output, dem.RasterXSize, dem.RasterYSize, planes.shape[0],
+                                                   gdal.GDT_Float32, options=["COMPRESS=DEFLATE", "TILED=YES"])
+        out.SetGeoTransform(geotransform)
+        out.SetProjection(dem.GetProjection())
+        for k, plane in enumerate(planes):
+            b = out.GetRasterBand(k + 1)
+            b.SetNoDataValue(-9999.0)
+            b.WriteArray(np.where(holes, np.float32(-9999.0), plane))
+        out = None
+        return {"OUTPUT": output}
+
+
+class SkyViewFactor(_Bake):
+    key, name_text, method, layer, radius_key = "svf", "Sky-view factor", "relief", "svf", "search_radius"
+    help_text = "Fraction of the sky hemisphere visible from each texel (relief's svf)."
+
+
+class PositiveOpenness(_Bake):
+    key, name_text, method, layer = "openness_positive", "Positive openness", "relief", "openness_positive"
+    radius_key = "search_radius"
+    help_text = "Mean zenith angle to the horizon, in degrees (relief's openness_positive)."
+
+
+class NegativeOpenness(_Bake):
+    key, name_text, method, layer = "openness_negative", "Negative openness", "relief", "openness_negative"
+    radius_key = "search_radius"
+    help_text = "Mean nadir angle to the horizon below, in degrees (relief's openness_negative)."
+
+
+class Horizons(_Bake):
+    key, name_text, method, layer, radius_key = "horizons", "Horizon angles", "relief", "horizon_deg", "search_radius"
+    help_text = "The horizon's elevation in degrees in each direction, one band per direction (relief's horizon_deg)."
+
+
+class AmbientOcclusion(_Bake):
+    key, name_text, method, layer = "ao", "Ambient occlusion", "p1", "ao"
+    default_directions = 64
+    help_text = "Cosine-weighted visible sky from exact horizons (p1's ao)."
+
+
+class Hbao(_Bake):
+    key, name_text, method, layer, radius_key = "hbao", "Ambient obscurance (HBAO)", "hbao", "obscurance", "radius"
+    help_text = "Horizon-based ambient obscurance within a radius (hbao's obscurance)."
+
+
+ALGORITHMS = [SkyViewFactor, PositiveOpenness, NegativeOpenness, Horizons, AmbientOcclusion, Hbao]

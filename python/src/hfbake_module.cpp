@@ -1,0 +1,487 @@
+// The Python module hfbake._hfbake: numpy heights in, numpy layers out, through the same job loader,
+// method-table readers, memory estimate and scene checks as `hfbake bake`. The package hfbake
+// (python/hfbake/__init__.py) wraps it in one function per method and defines the exceptions it raises.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli/bake_command.hpp"
+#include "cli/compare_command.hpp"
+#include "cli/method_dispatch.hpp"
+#include "cli/outputs.hpp"
+#include "cli/reference_cache.hpp"
+#include "cli/scene_inputs.hpp"
+#include "cli/scene_loader.hpp"
+#include "cli/version.hpp"
+#include "core/error.hpp"
+#include "field/georeference.hpp"
+#include "job/embedded_schemas.hpp"
+#include "job/manifest.hpp"
+#include "methods/method_table.hpp"
+
+namespace py = pybind11;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace hfbake {
+namespace {
+
+// One problem of an input, as the CLI prints it: "<file>: <pointer>: <message>".
+struct Problem {
+  std::string file, pointer, message;
+};
+
+// Splits a line of JobLoad::errors or resolve_job ("<file>: <pointer>: <message>", `file` known).
+Problem split_line(const std::string& line, const std::string& file) {
+  Problem p;
+  std::string rest = line;
+  if (!file.empty() && rest.rfind(file + ": ", 0) == 0) {
+    p.file = file;
+    rest = rest.substr(file.size() + 2);
+  }
+  const std::size_t colon = rest.find(": ");
+  if (!rest.empty() && rest[0] == '/' && colon != std::string::npos) {
+    p.pointer = rest.substr(0, colon);
+    p.message = rest.substr(colon + 2);
+  } else {
+    p.message = rest;
+  }
+  return p;
+}
+
+// The pointers of the job the array API builds, as the caller named them: its keyword arguments
+// (/bake/0/<key> and /height/<key> are /<key>), the array itself (/height/image is /heights).
+std::string array_pointer(const std::string& pointer) {
+  for (const char* prefix : {"/bake/0", "/height"})
+    if (pointer.rfind(prefix, 0) == 0) {
+      const std::string rest = pointer.substr(std::strlen(prefix));
+      if (rest.empty() || rest == "/image" || rest == "/procedural" || rest.rfind("/procedural/", 0) == 0)
+        return std::string(prefix) == "/height" ? "/heights" : rest;
+      return rest;
+    }
+  return pointer;
+}
+
+// Sets hfbake.InputError (a ValueError) as the Python error for `problems` (the first one is the exception's
+// own; every line is in its `lines`).
+void set_input_error(const std::vector<Problem>& problems) {
+  const py::object type = py::module_::import("hfbake").attr("InputError");
+  py::list lines;
+  for (const Problem& p : problems) lines.append(InputError(p.file, p.pointer, p.message).line());
+  const Problem& first = problems.front();
+  const py::object error = type(first.message, first.pointer, first.file, lines);
+  PyErr_SetObject(type.ptr(), error.ptr());
+}
+
+[[noreturn]] void raise_input_error(const std::vector<Problem>& problems) {
+  set_input_error(problems);
+  throw py::error_already_set();
+}
+
+[[noreturn]] void raise_lines(const std::vector<std::string>& lines, const std::string& file,
+                              bool array_api) {
+  std::vector<Problem> problems;
+  for (const std::string& l : lines) {
+    Problem p = split_line(l, file);
+    if (array_api) p.file.clear(), p.pointer = array_pointer(p.pointer);
+    problems.push_back(std::move(p));
+  }
+  raise_input_error(problems);
+}
+
+// A keyword argument's value as JSON (what a job file would hold); numpy scalars by their item(), numpy
+// arrays as lists.
+json to_json(py::handle value, const std::string& pointer) {
+  if (value.is_none()) return nullptr;
+  if (py::isinstance<py::bool_>(value)) return value.cast<bool>();
+  if (py::isinstance<py::int_>(value)) {
+    try {
+      return value.cast<long long>();
+    } catch (const py::cast_error&) {
+      return value.cast<double>();
+    }
+  }
+  if (py::isinstance<py::float_>(value)) return value.cast<double>();
+  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
+  if (py::isinstance(value, py::module_::import("os").attr("PathLike")))
+    return py::str(py::module_::import("os").attr("fspath")(value)).cast<std::string>();
+  if (py::isinstance<py::dict>(value)) {
+    json out = json::object();
+    for (auto [k, v] : value.cast<py::dict>()) {
+      const std::string key = py::str(k).cast<std::string>();
+      out[key] = to_json(v, pointer + "/" + key);
+    }
+    return out;
+  }
+  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+    json out = json::array();
+    std::size_t k = 0;
+    for (py::handle v : value) out.push_back(to_json(v, pointer + "/" + std::to_string(k++)));
+    return out;
+  }
+  if (py::isinstance(value, py::module_::import("numpy").attr("generic")))
+    return to_json(value.attr("item")(), pointer);
+  if (py::isinstance<py::array>(value)) return to_json(value.attr("tolist")(), pointer);
+  throw InputError("", pointer,
+                   "a " + py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>() +
+                       " is not a value a job holds (a number, string, bool, list or dict)");
+}
+
+// A layer as numpy: one channel (H, W); per-direction channels "000".."K-1" (horizon, horizon_distance,
+// horizon_deg) (K, H, W); others (rgb, xyz, sh) (H, W, C). One- and C-channel layers hand their storage over.
+py::array layer_array(Layer&& layer, int width, int height) {
+  const py::ssize_t w = width, h = height, c = layer.channel_count();
+  const bool per_direction = c > 1 && layer.channels.front() == "000";
+  if (!per_direction) {
+    auto* data = new std::vector<float>(std::move(layer.data));
+    py::capsule owner(data, [](void* p) { delete static_cast<std::vector<float>*>(p); });
+    if (c == 1) return py::array_t<float>({h, w}, data->data(), owner);
+    return py::array_t<float>({h, w, c}, data->data(), owner);
+  }
+  py::array_t<float> out({c, h, w});
+  float* dst = out.mutable_data();
+  const float* src = layer.data.data();
+  const std::size_t texels = std::size_t(w) * std::size_t(h);
+  for (std::size_t t = 0; t < texels; ++t)
+    for (py::ssize_t k = 0; k < c; ++k)
+      dst[std::size_t(k) * texels + t] = src[t * std::size_t(c) + std::size_t(k)];
+  return out;
+}
+
+py::dict layers_dict(LayerSet&& set) {
+  py::dict out;
+  for (Layer& l : set.layers) {
+    const std::string name = l.name;
+    out[py::str(name)] = layer_array(std::move(l), set.width, set.height);
+  }
+  return out;
+}
+
+// How a bake runs under Python: `work` on a thread of its own with the GIL released, in a TBB arena of
+// `threads` (0: all cores); the calling thread wakes every 50 ms to deliver the progress fraction to
+// `progress` (on the calling thread, when it changed), to poll `cancel.is_set()` and Python's signal
+// handlers. Ctrl-C (or an exception from `progress`) cancels the bake, waits for it to stop and raises that
+// exception; a set `cancel` raises hfbake.Cancelled. Nothing the bake made is kept then.
+struct Runner {
+  int threads = 0;
+  py::object progress = py::none(), cancel = py::none();
+  std::atomic<bool> cancelled{false};
+  std::atomic<double> fraction{-1.0};
+
+  RunControl control() {
+    RunControl rc;
+    rc.cancel = &cancelled;
+    rc.progress = [this](double f) { fraction.store(f, std::memory_order_relaxed); };
+    return rc;
+  }
+
+  template <class Work>
+  void run(Work&& work) {
+    std::mutex mutex;
+    std::condition_variable cv;
+    bool done = false;
+    std::exception_ptr error;
+    std::thread worker([&] {
+      try {
+        tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+        arena.execute([&] { work(); });
+      } catch (...) {
+        error = std::current_exception();
+      }
+      std::lock_guard lock(mutex);
+      done = true;
+      cv.notify_all();
+    });
+    bool python_error = false;  // the error indicator holds the exception to raise
+    double delivered = -1;
+    for (;;) {
+      {
+        py::gil_scoped_release release;
+        std::unique_lock lock(mutex);
+        if (cv.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; })) break;
+      }
+      if (python_error) continue;
+      if (PyErr_CheckSignals() != 0) {
+        python_error = true;
+        cancelled = true;
+        continue;
+      }
+      try {
+        if (!cancel.is_none() && cancel.attr("is_set")().cast<bool>()) cancelled = true;
+        const double f = fraction.load(std::memory_order_relaxed);
+        if (!progress.is_none() && f >= 0 && f != delivered) {
+          delivered = f;
+          progress(f);
+        }
+      } catch (py::error_already_set& e) {
+        e.restore();
+        python_error = true;
+        cancelled = true;
+      }
+    }
+    {
+      py::gil_scoped_release release;
+      worker.join();
+    }
+    if (python_error) throw py::error_already_set();
+    if (error) std::rethrow_exception(error);
+    if (!progress.is_none() && delivered != 1.0) progress(1.0);
+  }
+};
+
+// `threads`: 0 (all cores) or a count.
+void check_threads(int threads) {
+  if (threads < 0) raise_input_error({{"", "/threads", "must be at least 1 (or None: all cores)"}});
+}
+
+// The job document the array API bakes: the placeholder field is a procedural one of the array's size (the
+// loader's checks and the memory estimate need a size before the heights; its heights are never made), the
+// height keys, the job's keys and one bake entry of the method's keys.
+json array_job_document(const std::string& method, int width, int height, const py::dict& entry_keys,
+                        const py::dict& height_keys, const py::dict& job_keys) {
+  // A side below 2 is refused by complete_scene with the CLI's message; the procedural schema's minimum
+  // would name /height/procedural/size instead.
+  json doc = {
+      {"version", 1},
+      {"name", method},
+      {"height", {{"procedural", {{"kind", "flat"}, {"size", {std::max(width, 2), std::max(height, 2)}}}}}},
+      {"bake", json::array()}};
+  for (auto [k, v] : height_keys) {
+    const std::string key = py::str(k).cast<std::string>();
+    doc["height"][key] = to_json(v, "/" + key);
+  }
+  for (auto [k, v] : job_keys) {
+    const std::string key = py::str(k).cast<std::string>();
+    doc[key] = to_json(v, "/" + key);
+  }
+  json entry = {{"method", method}};
+  for (auto [k, v] : entry_keys) {
+    const std::string key = py::str(k).cast<std::string>();
+    entry[key] = to_json(v, "/" + key);
+  }
+  doc["bake"].push_back(std::move(entry));
+  return doc;
+}
+
+py::dict bake_array(const std::string& method, py::array heights, const py::dict& entry_keys,
+                    const py::dict& height_keys, const py::dict& job_keys, int threads, py::object progress,
+                    py::object cancel, std::optional<std::size_t> memory_limit) {
+  if (!find_method(method)) raise_input_error({{"", "/method", "unknown method \"" + method + "\""}});
+  if (heights.ndim() != 2)
+    raise_input_error({{"", "/heights",
+                        "must be a 2-D array (rows, columns) of heights; it has " +
+                            std::to_string(heights.ndim()) + " dimensions"}});
+  const py::module_ numpy = py::module_::import("numpy");
+  if (!numpy.attr("issubdtype")(heights.dtype(), numpy.attr("number")).cast<bool>() ||
+      numpy.attr("issubdtype")(heights.dtype(), numpy.attr("complexfloating")).cast<bool>())
+    raise_input_error(
+        {{"", "/heights",
+          "must hold real numbers (float32 is used as is; other types are converted); it holds " +
+              py::str(heights.dtype()).cast<std::string>()}});
+  // float32 and C-contiguous: read in place; anything else converted once by numpy first.
+  const auto z = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(heights);
+  const int height = int(heights.shape(0)), width = int(heights.shape(1));
+
+  const std::string file = method + "()";
+  JobLoad load = load_job_document(
+      array_job_document(method, width, height, entry_keys, height_keys, job_keys), file, std::nullopt);
+  if (load.job) load.errors = resolve_job(*load.job);
+  if (!load.errors.empty()) raise_lines(load.errors, file, true);
+  Job& job = *load.job;
+  job.file.clear();  // messages name the keyword arguments, not a file
+  try {
+    check_job_memory(job, {width, height}, memory_limit);
+  } catch (const InputError& e) {
+    raise_input_error({{"", array_pointer(e.where()), e.what()}});
+  }
+
+  check_threads(threads);
+  Runner runner;
+  runner.threads = threads;
+  runner.progress = std::move(progress);
+  runner.cancel = std::move(cancel);
+  LayerSet layers;
+  std::optional<InputError> input_error;
+  runner.run([&] {
+    try {
+      HeightField field;
+      field.width = width;
+      field.height = height;
+      field.texel_size = job_texel_size(job);
+      field.wrap = job.doc["height"].value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
+      field.z.assign(z.data(), z.data() + std::size_t(width) * std::size_t(height));
+      Georeference georeference;
+      georeference.geotransform = local_geotransform(field.texel_size);
+      apply_height_nodata(job, "heights", field, georeference);
+      const Scene scene = complete_scene(job, std::move(field), std::move(georeference));
+      layers = run_method(job.bakes.front(), scene, runner.control());
+      check_layers_finite(job.bakes.front().stem, layers);  // what bake refuses to write
+    } catch (const InputError& e) {
+      input_error.emplace(e);
+    }
+  });
+  if (input_error) raise_input_error({{"", array_pointer(input_error->where()), input_error->what()}});
+  return layers_dict(std::move(layers));
+}
+
+// A job from a path (str or os.PathLike) or a dict (relative paths resolve against the current folder; `name`
+// stands for its file in messages), loaded and resolved as `hfbake validate` does. Raises hfbake.InputError
+// with every problem.
+Job load_resolved_job(py::handle job, const std::optional<std::string>& out) {
+  const py::module_ os = py::module_::import("os");
+  JobLoad load;
+  std::string file;
+  const std::optional<fs::path> out_dir = out ? std::optional<fs::path>(*out) : std::nullopt;
+  if (py::isinstance<py::dict>(job)) {
+    file = "<dict>";
+    load = load_job_document(to_json(job, ""), fs::current_path() / file, out_dir);
+    file = (fs::current_path() / file).string();
+  } else if (py::isinstance<py::str>(job) || py::isinstance(job, os.attr("PathLike"))) {
+    file = py::str(os.attr("fspath")(job)).cast<std::string>();
+    load = load_job(file, out_dir);
+  } else {
+    raise_input_error({{"", "", "a job is a path to a job file or a dict of one"}});
+  }
+  if (load.job) load.errors = resolve_job(*load.job);
+  if (!load.errors.empty()) raise_lines(load.errors, file, false);
+  return std::move(*load.job);
+}
+
+// validate(job): the checks of `hfbake validate` (schema, every reader, the memory estimate, the scene's
+// inputs loaded); returns the size and the estimate.
+py::dict validate_job(py::handle job_arg, std::optional<std::size_t> memory_limit) {
+  const Job job = load_resolved_job(job_arg, std::nullopt);
+  const FieldSize size = probe_field_size(job);
+  std::string parts;
+  const std::size_t need = check_job_memory(job, size, memory_limit, &parts);
+  {
+    py::gil_scoped_release release;
+    load_scene(job);
+  }
+  py::dict out;
+  out["name"] = job.name;
+  out["width"] = size.width;
+  out["height"] = size.height;
+  out["memory_bytes"] = need;
+  out["memory_parts"] = parts;
+  return out;
+}
+
+// bake(job, out): `hfbake bake --out out` of one job; returns (layers by stem, outcome as JSON text).
+py::tuple bake_job_api(py::handle job_arg, const std::string& out, int threads, py::object progress,
+                       py::object cancel, std::optional<std::size_t> memory_limit, bool use_cache) {
+  const Job job = load_resolved_job(job_arg, out);
+  BakeOptions options;
+  options.memory_limit = memory_limit;
+  options.quiet = true;
+  std::optional<ReferenceCache> cache;
+  if (use_cache)
+    if (const auto dir = default_reference_cache_dir()) cache.emplace(*dir);
+  check_threads(threads);
+  Runner runner;
+  runner.threads = threads;
+  runner.progress = std::move(progress);
+  runner.cancel = std::move(cancel);
+  // Progress: the fraction of the job's steps (the scene, each method, the reference) done.
+  const double steps = 1.0 + double(job.bakes.size()) + (job.has_reference ? 1.0 : 0.0);
+  std::map<std::string, int> step_index = {{"load", 0}};
+  for (std::size_t i = 0; i < job.bakes.size(); ++i) step_index[job.bakes[i].stem] = int(i) + 1;
+  step_index["reference"] = int(job.bakes.size()) + 1;
+  Progress quiet(Progress::Mode::quiet);
+  quiet.set_observer([&](const std::string&, const std::string& step, double f) {
+    const auto it = step_index.find(step);
+    if (it != step_index.end()) runner.fraction.store((it->second + f) / steps, std::memory_order_relaxed);
+  });
+  JobOutcome outcome;
+  outcome.file = job.file.string();
+  outcome.name = job.name;
+  std::map<std::string, LayerSet> kept;
+  runner.run(
+      [&] { bake_job(job, quiet, runner.cancelled, outcome, cache ? &*cache : nullptr, options, &kept); });
+  py::dict layers;
+  for (auto& [stem, set] : kept) layers[py::str(stem)] = layers_dict(std::move(set));
+  json summary = {{"file", outcome.file},
+                  {"name", outcome.name},
+                  {"status", job_status_name(outcome.status)},
+                  {"errors", outcome.errors},
+                  {"methods", outcome.methods}};
+  summary["outputs"] = json::array();
+  for (const fs::path& p : outcome.outputs) summary["outputs"].push_back(fs::absolute(p).string());
+  return py::make_tuple(layers, summary.dump());
+}
+
+// compare(now, baseline): `hfbake compare NOW BASELINE` without printing; the result as JSON text.
+std::string compare_api(const std::string& now, const std::string& baseline,
+                        const std::vector<std::string>& tolerances, bool allow_different_job,
+                        bool update_baseline) {
+  CompareOptions options;
+  options.now = now;
+  options.baseline = baseline;
+  options.tolerances = tolerances;
+  options.allow_different_job = allow_different_job;
+  options.update_baseline = update_baseline;
+  options.quiet = true;
+  const CompareResult r = compare_reports(options);
+  if (!r.refusals.empty()) {
+    std::vector<Problem> problems;
+    for (const std::string& line : r.refusals) problems.push_back({"", "", line});
+    raise_input_error(problems);
+  }
+  return json{{"regression", r.regression},
+              {"comparisons", r.comparisons},
+              {"text", r.text},
+              {"baseline_updated", r.baseline_updated}}
+      .dump();
+}
+
+}  // namespace
+}  // namespace hfbake
+
+PYBIND11_MODULE(_hfbake, m) {
+  using namespace hfbake;
+  m.doc() = "hfbake's C++ core (the package hfbake wraps it)";
+  m.attr("__version__") = hfbake_version();
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      set_input_error({{e.file(), e.where(), e.what()}});
+    } catch (const Cancelled&) {
+      const py::object type = py::module_::import("hfbake").attr("Cancelled");
+      PyErr_SetString(type.ptr(), "the bake was cancelled; nothing was kept");
+    }
+  });
+  m.def("method_names", &method_names);
+  m.def("method_summary", [](const std::string& name) {
+    const MethodInfo* info = find_method(name);
+    return std::string(info ? info->summary : "");
+  });
+  m.def("method_schema", [](const std::string& name) {
+    for (const EmbeddedSchema& s : embedded_schemas())
+      if (s.path == "methods/" + name + ".schema.json") return std::string(s.text);
+    return std::string();
+  });
+  m.def("bake_array", &bake_array, py::arg("method"), py::arg("heights"), py::arg("entry_keys"),
+        py::arg("height_keys"), py::arg("job_keys"), py::arg("threads") = 0, py::arg("progress") = py::none(),
+        py::arg("cancel") = py::none(), py::arg("memory_limit") = std::nullopt);
+  m.def("compare", &compare_api, py::arg("now"), py::arg("baseline"), py::arg("tolerances"),
+        py::arg("allow_different_job"), py::arg("update_baseline"));
+  m.def("validate", &validate_job, py::arg("job"), py::arg("memory_limit") = std::nullopt);
+  m.def("bake_job", &bake_job_api, py::arg("job"), py::arg("out"), py::arg("threads") = 0,
+        py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
+        py::arg("memory_limit") = std::nullopt, py::arg("cache") = true);
+}

@@ -1,0 +1,107 @@
+"""The array API against `hfbake bake`: the same field and parameters give the same bits."""
+
+import numpy as np
+import pytest
+
+import hfbake
+from conftest import assert_same_bits, cli_bake, terrain
+
+# (method, parameters, field keys): small fields and direction counts; a per-direction layer, colour and
+# vector layers and a repeat field among them.
+CASES = [
+    ("p1", {"directions": 16, "layers": ["ao", "vsky", "horizon", "bent_normal"]}, {}),
+    ("p1", {"directions": 8, "layers": ["ao", "horizon_distance"]}, {"wrap": "repeat", "texel_size": 0.5}),
+    ("p2", {"directions": 8, "bounces": 1}, {}),
+    ("nlp", {"directions": 8, "layers": ["direct", "total"]}, {}),
+    ("hbao", {"directions": 8, "falloff": "none", "layers": ["obscurance", "ao", "bent_normal"]}, {}),
+    ("lsao", {"directions": 8, "radius": 6.0}, {"wrap": "repeat"}),
+    ("farfield", {"directions": 8, "radius": 10.0}, {}),
+    ("hsao", {"directions": 8, "radius": 6.0}, {}),
+    ("vo", {"radius": 4.0}, {"height_scale": 2.0}),
+    ("relief", {"directions": 16, "search_radius": 10.0,
+                "layers": ["svf", "openness_positive", "openness_negative", "horizon_deg"]}, {"texel_size": 2.0}),
+]
+
+
+@pytest.mark.parametrize("method,params,field", CASES, ids=[f"{c[0]}-{i}" for i, c in enumerate(CASES)])
+def test_same_bits_as_the_command(tmp_path, method, params, field):
+    heights = terrain(40, 32, seed=len(method))
+    mine = getattr(hfbake, method)(heights, **field, **params)
+    theirs = cli_bake(tmp_path, heights, {"method": method, **params}, height_keys=field)
+    assert_same_bits(mine, theirs)
+
+
+def test_every_method_is_covered():
+    assert {c[0] for c in CASES} == set(hfbake.methods)
+
+
+def test_per_direction_layers_are_k_h_w():
+    heights = terrain(24, 20)
+    out = hfbake.p1(heights, directions=12, layers=["horizon", "ao"])
+    assert out["horizon"].shape == (12, 20, 24)
+    assert out["ao"].shape == (20, 24)
+
+
+def test_same_bits_for_any_thread_count():
+    heights = terrain(48, 40, seed=7)
+    one = hfbake.p1(heights, directions=16, threads=1)
+    two = hfbake.p1(heights, directions=16, threads=2)
+    for name in one:
+        assert np.array_equal(one[name].view(np.uint32), two[name].view(np.uint32))
+
+
+def test_other_dtypes_and_layouts_are_the_float32_field():
+    heights = terrain(30, 26, seed=3)
+    ref = hfbake.hbao(heights, directions=8)
+    for variant in (heights.astype(np.float64), np.asfortranarray(heights), heights.T.copy().T):
+        out = hfbake.hbao(variant, directions=8)
+        assert np.array_equal(out["obscurance"], ref["obscurance"])
+    assert heights.flags.c_contiguous  # the caller's array is untouched
+
+
+def test_progress_is_reported_on_the_calling_thread():
+    import threading
+
+    seen = []
+    caller = threading.get_ident()
+    hfbake.p1(terrain(256, 256), directions=32, threads=1,
+              progress=lambda f: seen.append((f, threading.get_ident())))
+    assert seen, "progress was never called"
+    assert all(0.0 <= f <= 1.0 and t == caller for f, t in seen)
+    assert seen[-1][0] == 1.0
+    assert any(f < 1.0 for f, _ in seen), "no progress while baking"  # the bake takes well over 50 ms
+    assert [f for f, _ in seen] == sorted(f for f, _ in seen)
+
+
+def test_the_stubs_name_every_method():
+    import ast
+    import pathlib
+
+    stub = pathlib.Path(hfbake.__file__).with_name("__init__.pyi")
+    names = {node.name for node in ast.parse(stub.read_text()).body if isinstance(node, ast.FunctionDef)}
+    assert set(hfbake.methods) | {"validate", "bake"} <= names
+
+
+def test_help_lists_the_method_keys():
+    assert "directions" in hfbake.p1.__doc__ and "search_radius" in hfbake.relief.__doc__
+    with pytest.raises(hfbake.InputError):
+        hfbake.hbao(terrain(8, 8), threads=-2)
+
+
+def test_job_keys_a_method_key_shadows(tmp_path):
+    heights = terrain(32, 24, seed=9)
+    sun = [{"directional": {"direction": [0.3, 0.2, 0.9], "irradiance": 2.0}}]
+    params = {"directions": 16, "lights": True, "layers": ["direct"]}
+    mine = hfbake.p1(heights, job={"lights": sun}, **params)
+    theirs = cli_bake(tmp_path, heights, {"method": "p1", **params}, job_keys={"lights": sun})
+    assert_same_bits(mine, theirs)
+    assert not np.array_equal(mine["direct"], hfbake.p1(heights, **params)["direct"])
+
+
+def test_numpy_values_are_the_job_values():
+    heights = terrain(24, 24, seed=2)
+    plain = hfbake.relief(heights, directions=8, search_radius=5.0, layers=["svf", "horizon_deg"])
+    numpy = hfbake.relief(heights, directions=np.int64(8), search_radius=np.float32(5.0),
+                          layers=np.array(["svf", "horizon_deg"]))
+    for name in plain:
+        assert np.array_equal(plain[name], numpy[name])

@@ -1,0 +1,116 @@
+"""Bad input raises hfbake.InputError (a ValueError) with the message `hfbake validate` prints for the same
+job, its pointer relative to the keyword arguments; a cancelled bake raises and returns nothing."""
+
+import threading
+
+import numpy as np
+import pytest
+
+import hfbake
+from conftest import cli_errors, terrain, write_job
+
+
+def cli_problem(tmp_path, heights, entry, height_keys=None):
+    """(pointer, message) of the first line `hfbake validate` prints for the job."""
+    lines = cli_errors(write_job(tmp_path, heights, entry, height_keys))
+    assert lines
+    file, pointer, message = lines[0].split(": ", 2)
+    assert file.endswith("job.json")
+    return pointer, message
+
+
+@pytest.mark.parametrize(
+    "entry",
+    [
+        {"method": "p1", "directions": "many"},  # a wrong type
+        {"method": "p1", "directions": 0},  # out of the schema's range
+        {"method": "p1", "directions": 2.5},  # not an integer
+        {"method": "p1", "layers": ["ao", "sky"]},  # an unknown layer
+        {"method": "p1", "layers": []},  # no layer
+        {"method": "hbao", "radius": -1.0},
+        {"method": "relief", "directions": 4, "search_radius": 1e9},  # a rule only the reader knows
+        {"method": "p1", "direktions": 16},  # an unknown key
+    ],
+    ids=["type", "range", "integer", "layer", "no-layer", "hbao-radius", "relief-radius", "unknown-key"],
+)
+def test_bad_parameters_raise_the_commands_message(tmp_path, entry):
+    heights = terrain(16, 16)
+    pointer, message = cli_problem(tmp_path, heights, entry)
+    kwargs = {k: v for k, v in entry.items() if k != "method"}
+    with pytest.raises(hfbake.InputError) as caught:
+        getattr(hfbake, entry["method"])(heights, **kwargs)
+    assert isinstance(caught.value, ValueError)
+    assert caught.value.message == message
+    assert pointer.startswith("/bake/0")
+    assert caught.value.pointer == pointer[len("/bake/0"):]
+    assert str(caught.value) == f"{caught.value.pointer}: {message}"
+
+
+def test_a_bad_field_key_raises_the_commands_message(tmp_path):
+    heights = terrain(16, 16)
+    pointer, message = cli_problem(tmp_path, heights, {"method": "p1"}, {"wrap": "mirror"})
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.p1(heights, wrap="mirror")
+    assert (caught.value.pointer, caught.value.message) == (pointer[len("/height"):], message)
+
+
+def test_a_nan_height_raises_the_commands_message(tmp_path):
+    heights = terrain(16, 12)
+    heights[5, 3] = np.nan
+    pointer, message = cli_problem(tmp_path, heights, {"method": "p1"})
+    assert pointer == "/height/image" and message.startswith("h.exr: texel (3, 5) is NaN")
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.p1(heights)
+    assert caught.value.pointer == "/heights"
+    assert caught.value.message == "heights: " + message[len("h.exr: "):]
+    # nodata="fill" fills it, as the job key does.
+    assert np.isfinite(hfbake.p1(heights, nodata="fill")["ao"]).all()
+
+
+def test_a_field_below_two_texels_raises_the_commands_message(tmp_path):
+    heights = terrain(16, 1)
+    pointer, message = cli_problem(tmp_path, heights, {"method": "p1"})
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.p1(heights)
+    assert (caught.value.pointer, caught.value.message) == (pointer.replace("/height", "/heights"), message)
+
+
+def test_arrays_that_are_no_height_field():
+    with pytest.raises(hfbake.InputError, match="2-D"):
+        hfbake.p1(np.zeros((4, 4, 2), np.float32))
+    with pytest.raises(hfbake.InputError, match="real numbers"):
+        hfbake.p1(np.array([["a", "b"], ["c", "d"]]))
+
+
+def test_the_memory_estimate_is_checked_before_baking():
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.p1(terrain(64, 64), memory_limit=1 << 20)
+    assert caught.value.pointer == "/heights"
+    assert "needs about" in caught.value.message and "--memory-limit" in caught.value.message
+
+
+def test_a_set_cancel_event_stops_the_bake():
+    stop = threading.Event()
+    timer = threading.Timer(0.1, stop.set)
+    timer.start()
+    with pytest.raises(hfbake.Cancelled):
+        hfbake.p1(terrain(1024, 1024), directions=256, cancel=stop, threads=1)
+    timer.cancel()
+
+
+def test_ctrl_c_raises_keyboard_interrupt():
+    import _thread
+
+    timer = threading.Timer(0.1, _thread.interrupt_main)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        hfbake.p1(terrain(1024, 1024), directions=256, threads=1)
+    timer.cancel()
+
+
+def test_an_exception_in_the_progress_callback_stops_the_bake():
+    def fail(fraction):
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        hfbake.p1(terrain(512, 512), directions=128, progress=fail, threads=1)

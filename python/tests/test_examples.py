@@ -1,0 +1,89 @@
+"""The examples run as a user runs them, their outputs checked against the command's."""
+
+import json
+import pathlib
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import SOURCE_DIR, OpenImageIO, read_exr, run_cli, terrain
+
+gdal = pytest.importorskip("osgeo.gdal")
+
+
+def write_geotiff(path, heights, nodata=None):
+    gdal.UseExceptions()
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), heights.shape[1], heights.shape[0], 1, gdal.GDT_Float32)
+    ds.SetGeoTransform((500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0))
+    srs = gdal.osr.SpatialReference()
+    srs.ImportFromEPSG(32633)
+    ds.SetProjection(srs.ExportToWkt())
+    band = ds.GetRasterBand(1)
+    if nodata is not None:
+        band.SetNoDataValue(nodata)
+    band.WriteArray(heights)
+    ds = None
+
+
+def test_gdal_relief_example(tmp_path):
+    heights = terrain(48, 40, seed=11) * 10
+    heights[7, 9] = -32768.0  # a hole
+    dem = tmp_path / "dem.tif"
+    write_geotiff(dem, heights, nodata=-32768.0)
+    script = SOURCE_DIR / "python" / "examples" / "gdal_relief.py"
+    subprocess.run([sys.executable, str(script), str(dem), str(tmp_path / "py"), "--directions", "16",
+                    "--radius", "30"], check=True)
+
+    job = {"version": 1, "name": "t", "height": {"image": "dem.tif", "nodata": "fill"},
+           "bake": [{"method": "relief", "directions": 16, "search_radius": 30.0,
+                     "layers": ["svf", "openness_positive", "openness_negative"]}],
+           "output": {"pixel_type": "float"}}
+    (tmp_path / "job.json").write_text(json.dumps(job))
+    run_cli("bake", tmp_path / "job.json", "--out", tmp_path / "cli", "--quiet", "--no-cache")
+    exr = read_exr(tmp_path / "cli" / "t.relief.exr")
+
+    for name in ("svf", "openness_positive", "openness_negative"):
+        ds = gdal.Open(str(tmp_path / "py" / f"{name}.tif"))
+        assert ds.GetGeoTransform() == (500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0)
+        assert gdal.osr.SpatialReference(wkt=ds.GetProjection()).GetAuthorityCode(None) == "32633"
+        values = ds.GetRasterBand(1).ReadAsArray()
+        assert values[7, 9] == -9999.0
+        values[7, 9] = exr[f"{name}.Y"][7, 9]
+        assert np.array_equal(values.view(np.uint32), exr[f"{name}.Y"].view(np.uint32)), name
+
+
+def read_png(path):
+    inp = OpenImageIO.ImageInput.open(str(path))
+    spec = inp.spec()
+    pixels = inp.read_image("uint16").reshape(spec.height, spec.width, spec.nchannels)
+    inp.close()
+    return pixels
+
+
+def test_texture_from_image_example(tmp_path):
+    levels = np.round((terrain(32, 32, seed=17) + 12.0) / 24.0 * 65535.0).clip(0, 65535).astype(np.uint16)
+    image = tmp_path / "height.png"
+    out = OpenImageIO.ImageOutput.create(str(image))
+    out.open(str(image), OpenImageIO.ImageSpec(32, 32, 1, "uint16"))
+    out.write_image(levels.reshape(32, 32, 1))
+    out.close()
+    script = SOURCE_DIR / "python" / "examples" / "texture_from_image.py"
+    subprocess.run([sys.executable, str(script), str(image), str(tmp_path / "rock"), "--height-scale", "8",
+                    "--directions", "16"], check=True)
+
+    job = {"version": 1, "name": "t", "height": {"image": "height.png", "height_scale": 8.0, "wrap": "repeat"},
+           "bake": [{"method": "p1", "directions": 16, "layers": ["ao", "bent_normal"]}],
+           "output": {"pixel_type": "float"}}
+    (tmp_path / "job.json").write_text(json.dumps(job))
+    run_cli("bake", tmp_path / "job.json", "--out", tmp_path / "cli", "--quiet", "--no-cache")
+    exr = read_exr(tmp_path / "cli" / "t.p1.exr")
+
+    def quantized(v):
+        return np.round(np.clip(v, 0.0, 1.0) * 65535.0).astype(np.uint16)
+
+    assert np.array_equal(read_png(tmp_path / "rock_ao.png")[:, :, 0], quantized(exr["ao.Y"]))
+    normal = read_png(tmp_path / "rock_bent_normal.png")
+    for c, axis in enumerate("XYZ"):
+        assert np.array_equal(normal[:, :, c], quantized(0.5 + 0.5 * exr[f"bent_normal.{axis}"])), axis

@@ -1,0 +1,70 @@
+"""The QGIS Processing provider (python/qgis_provider) run headless through qgis_process: its GeoTIFFs hold
+the command's values, with the input's CRS and geotransform."""
+
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from conftest import SOURCE_DIR, read_exr, run_cli, terrain
+from test_examples import write_geotiff
+
+gdal = pytest.importorskip("osgeo.gdal")
+
+# Debian's /usr/bin/qgis_process wraps qgis_process.bin with QGIS_OPTS from /etc/default/qgis, an option
+# (--noversioncheck) that qgis_process 3.22 refuses: the binary itself when it is there.
+QGIS_PROCESS = next((p for p in ("/usr/bin/qgis_process.bin", shutil.which("qgis_process")) if p and
+                     os.path.exists(p)), None)
+pytestmark = pytest.mark.skipif(QGIS_PROCESS is None, reason="qgis_process is not installed (Debian qgis)")
+
+# (algorithm, parameters, method, entry keys, layer)
+ALGORITHMS = [
+    ("svf", {"DIRECTIONS": 16, "RADIUS": 30}, "relief", {"directions": 16, "search_radius": 30.0}, "svf"),
+    ("openness_negative", {"DIRECTIONS": 16, "RADIUS": 30}, "relief", {"directions": 16, "search_radius": 30.0},
+     "openness_negative"),
+    ("horizons", {"DIRECTIONS": 8, "RADIUS": 0}, "relief", {"directions": 8}, "horizon_deg"),
+    ("ao", {"DIRECTIONS": 16}, "p1", {"directions": 16}, "ao"),
+    ("hbao", {"DIRECTIONS": 8, "RADIUS": 6}, "hbao", {"directions": 8, "radius": 6.0}, "obscurance"),
+]
+
+
+@pytest.fixture(scope="module")
+def qgis_env(tmp_path_factory):
+    home = tmp_path_factory.mktemp("qgis-home")
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen", HOME=str(home), XDG_RUNTIME_DIR=str(home),
+               QGIS_PLUGINPATH=str(SOURCE_DIR / "python" / "qgis_provider"))
+    result = subprocess.run([QGIS_PROCESS, "plugins", "enable", "hfbake_provider"], env=env,
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout + result.stderr
+    return env
+
+
+@pytest.mark.parametrize("algorithm,params,method,entry,layer", ALGORITHMS, ids=[a[0] for a in ALGORITHMS])
+def test_algorithm_writes_the_commands_values(tmp_path, qgis_env, algorithm, params, method, entry, layer):
+    dem = tmp_path / "dem.tif"
+    write_geotiff(dem, terrain(40, 32, seed=13) * 10)
+    out = tmp_path / f"{algorithm}.tif"
+    args = [f"{k}={v}" for k, v in {"INPUT": dem, "BAND": 1, **params, "OUTPUT": out}.items()]
+    result = subprocess.run([QGIS_PROCESS, "run", f"hfbake:{algorithm}", "--", *args], env=qgis_env,
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout + result.stderr
+
+    job = {"version": 1, "name": "t", "height": {"image": "dem.tif"},
+           "bake": [{"method": method, **entry, "layers": [layer]}], "output": {"pixel_type": "float"}}
+    (tmp_path / "job.json").write_text(json.dumps(job))
+    run_cli("bake", tmp_path / "job.json", "--out", tmp_path / "cli", "--quiet", "--no-cache")
+    exr = read_exr(tmp_path / "cli" / f"t.{method}.exr")
+    expected = [exr[f"{layer}.Y"]] if f"{layer}.Y" in exr else [
+        exr[f"{layer}.{k:03d}"] for k in range(entry["directions"])]
+
+    ds = gdal.Open(str(out))
+    assert ds.GetGeoTransform() == (500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0)
+    assert gdal.osr.SpatialReference(wkt=ds.GetProjection()).GetAuthorityCode(None) == "32633"
+    assert ds.RasterCount == len(expected)
+    for k, plane in enumerate(expected):
+        values = ds.GetRasterBand(k + 1).ReadAsArray()
+        assert np.array_equal(values.view(np.uint32), plane.view(np.uint32)), f"{algorithm} band {k + 1}"
