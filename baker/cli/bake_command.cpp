@@ -130,6 +130,9 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();
   const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
+  const HeightsReport heights = describe_heights(job, scene);
+  progress.message(job.name + ": " + heights.line);
+  if (!heights.warning.empty()) progress.message("warning: " + job.name + ": " + heights.warning);
   stage.set_georeference(scene.georeference);
   const std::string job_hash = job_content_hash(job);
   progress.end(job.name, "load", seconds_since(t_load));
@@ -373,10 +376,14 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
       const std::size_t need = check_memory(*load.job, memory_limit, &parts);
       // Everything bake refuses about the inputs, refused here first: the same loader reads every image
       // (NaN heights without nodata, environment aspect ratios, channel names, map sizes).
-      load_scene(*load.job);
+      const Scene scene = load_scene(*load.job);
+      const HeightsReport heights = describe_heights(*load.job, scene);
+      if (!heights.warning.empty())
+        std::fprintf(stderr, "hfbake: warning: %s: %s\n", file.c_str(), heights.warning.c_str());
       if (!quiet)
-        std::fprintf(stderr, "hfbake: %s: valid (%dx%d, about %s to bake: %s)\n", file.c_str(), size.width,
-                     size.height, gib(need).c_str(), parts.c_str());
+        std::fprintf(stderr, "hfbake: %s: %s\nhfbake: %s: valid (%dx%d, about %s to bake: %s)\n",
+                     file.c_str(), heights.line.c_str(), file.c_str(), size.width, size.height,
+                     gib(need).c_str(), parts.c_str());
     } catch (const InputError& e) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
       exit_code = 2;

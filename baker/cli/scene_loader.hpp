@@ -50,6 +50,17 @@ struct SceneNeeds {
 };
 SceneNeeds scene_needs(const Job& job);
 
+// What validate and bake say about the heights: `line` names the reader, the field's size, the texel size
+// and the height range in world units; `warning` (empty: none) when the relief is implausible for the
+// field's extent E (its longer side in world units): zero, under 1 % of E (the bake comes out nearly
+// unoccluded: an integer image meant as 0..1, or a missing height_scale) or over 4 E (steeper than terrain:
+// integers taken as metres that are not, or a wrong texel_size). docs/heights.md states the rule.
+struct HeightsReport {
+  std::string line;
+  std::string warning;
+};
+HeightsReport describe_heights(const Job& job, const Scene& scene);
+
 // The job's Scene. Scene::normals and the constant albedo are filled only when scene_needs says a method
 // reads them (an albedo map the job names is always read, so validate checks it). `progress` (optional): the
 // fraction of the height image read so far, while it is read.
