@@ -4,6 +4,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
 #include "cli/test_break.hpp"
+#include "cli/texture_plan.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
@@ -109,6 +111,25 @@ void add_common_attributes(LayerSet& layers, const Job& job, const std::string& 
   layers.attributes.emplace_back("hfbake:wall_seconds", std::to_string(seconds));
 }
 
+// The height field's own layers for textures (kHeightStem): "normal", the unit surface normal of each texel
+// (the scene's when it holds them).
+LayerSet height_layers(const Scene& scene) {
+  LayerSet set;
+  set.width = scene.field.width;
+  set.height = scene.field.height;
+  const std::vector<Vec3f> computed =
+      scene.normals.empty() ? compute_normals(scene.field) : std::vector<Vec3f>();
+  const std::vector<Vec3f>& normals = scene.normals.empty() ? computed : scene.normals;
+  std::vector<float> data(normals.size() * 3);
+  for (std::size_t t = 0; t < normals.size(); ++t) {
+    data[3 * t] = normals[t].x;
+    data[3 * t + 1] = normals[t].y;
+    data[3 * t + 2] = normals[t].z;
+  }
+  set.adopt("normal", xyz_channels(), std::move(data));
+  return set;
+}
+
 // Bakes one valid job. Throws InputError (bad input), Cancelled, or anything else (a failed job).
 void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
               const ReferenceCache* cache, const BakeOptions& options) {
@@ -136,6 +157,13 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   stage.set_georeference(scene.georeference);
   const std::string job_hash = job_content_hash(job);
   progress.end(job.name, "load", seconds_since(t_load));
+  auto tell = [&](const std::vector<std::string>& notices) {
+    for (const std::string& n : notices) progress.message(job.name + ": " + n);
+  };
+  const std::vector<PlannedTexture> textures = plan_textures(job);
+  if (std::any_of(textures.begin(), textures.end(),
+                  [](const PlannedTexture& t) { return t.stem == kHeightStem; }))
+    tell(stage.write_textures(kHeightStem, height_layers(scene)));
 
   ReportInputs report;
   for (const BakeEntry& entry : job.bakes) {
@@ -155,7 +183,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
                        ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
     progress.end(job.name, entry.stem, seconds);
     add_common_attributes(layers, job, job_hash, entry.method, entry.resolved, seconds);
-    stage.write_layers(entry.stem, layers);
+    tell(stage.write_layers(entry.stem, layers));
     outcome.methods[entry.stem] = {
         {"method", entry.method}, {"seconds", seconds}, {"cpu_seconds", cpu_seconds}};
     if (job.has_reference) report.methods.push_back({entry.stem, entry.method, seconds, std::move(layers)});
@@ -212,7 +240,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     add_reference_sh_visibility(scene.field, method_layers, reference, rc);
     add_reference_relief(scene.field, method_layers, reference, rc);
     add_common_attributes(reference, job, job_hash, "reference", job.reference_resolved, seconds);
-    stage.write_layers("reference", reference);
+    tell(stage.write_layers("reference", reference));
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};
     if (resume)
       outcome.methods["reference"]["bands"] = {{"resumed", resume->bands_resumed},
