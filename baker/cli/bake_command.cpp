@@ -285,10 +285,13 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
         else
           std::fprintf(stderr, "  (reference cache %s)", c.c_str());
       }
+      // The error beyond the reference's noise (rmse includes that noise).
       if (m.contains("metrics"))
         for (auto& [layer, metrics] : m["metrics"].items())
-          if (metrics.contains("rmse"))
-            std::fprintf(stderr, "  %s rmse %.4g", layer.c_str(), metrics["rmse"].get<double>());
+          if (metrics.contains("excess_rmse"))
+            std::fprintf(stderr, "  %s excess %.2g (rmse %.2g, reference noise %.2g)", layer.c_str(),
+                         metrics["excess_rmse"].get<double>(), metrics.value("rmse", 0.0),
+                         metrics.value("noise_rmse", 0.0));
       std::fprintf(stderr, "\n");
     }
     if (!o.outputs.empty())
