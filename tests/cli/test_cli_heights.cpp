@@ -120,7 +120,8 @@ TEST_F(CliHeights, IntegerImagesBakeLikeAFloatImageOfTheSameWorldHeights) {
     const double scale = relief / c.top;
     write_image(c.file, stored, c.type);
     write_image(std::string(c.file) + ".exr", world(stored, scale), OIIO::TypeDesc::FLOAT);
-    const std::string stem = std::string(c.file).replace(std::string(c.file).find('.'), 1, "_");
+    std::string stem = c.file;  // h16.png -> h16_png
+    std::replace(stem.begin(), stem.end(), '.', '_');
     const Result a = hfbake("bake " + write_job(stem, {{"image", c.file}, {"height_scale", scale}}).string());
     ASSERT_EQ(a.exit_code, 0) << a.err;
     const Result b = hfbake("bake --quiet " +

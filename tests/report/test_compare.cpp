@@ -281,7 +281,9 @@ TEST(Report, HtmlSaysWhatWasCheckedAndShowsAngles) {
       build_report(spec, {{"p1", "p1", 8.39025, {{"method", "p1"}}, &f.method}}, f.reference);
   HtmlInputs in;
   in.report = none.doc;
-  in.methods = {{"p1", "p1", nullptr}};
+  HtmlMethod p1;
+  p1.stem = p1.method = "p1";
+  in.methods = {p1};
   const std::string page = report_html(in);
   EXPECT_NE(page.find("No thresholds set and no baseline: nothing was checked"), std::string::npos);
   EXPECT_EQ(page.find("PASSED"), std::string::npos);
