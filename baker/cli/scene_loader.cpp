@@ -228,14 +228,15 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
                   "needs H / 65535, an 8-bit one H / 255)"
                 : "height_scale (world units per stored unit)";
   if (relief == 0) {
-    report.warning = "the field is flat (every height is " + num(s.world_min) +
-                     "): every method bakes it unoccluded";
+    report.warning =
+        "the field is flat (every height is " + num(s.world_min) + "): every method bakes it unoccluded";
   } else if (relief < 0.01 * extent) {
-    report.warning = "the relief (" + num(relief) + " world units) is " + num(100 * relief / extent) +
-                     " % of the field's " + num(extent) +
-                     "-unit side: nearly flat, the bake will be close to unoccluded; if the heights are meant "
-                     "higher, set " +
-                     scale_hint;
+    report.warning =
+        "the relief (" + num(relief) + " world units) is " + num(100 * relief / extent) +
+        " % of the field's " + num(extent) +
+        "-unit side: nearly flat, the bake will be close to unoccluded; if the heights are meant "
+        "higher, set " +
+        scale_hint;
   } else if (relief > 4 * extent) {
     report.warning = "the relief (" + num(relief) + " world units) is " + num(relief / extent) +
                      " times the field's " + num(extent) + "-unit side: steeper than any terrain; check " +
