@@ -1,14 +1,21 @@
 #!/usr/bin/env bash
 # hfbake setup on Debian bookworm: installs what is missing (apt-get, idempotent), builds, then
-#   ./setup.sh demo   bakes jobs/demo.json and prints where the outputs went
-#   ./setup.sh test   runs the whole test suite through CTest, then builds the AddressSanitizer +
-#                     UndefinedBehaviorSanitizer variant (ASAN_BUILD_DIR, default build-asan) and runs the
-#                     test suite again under it (see "Sanitizers" in README.md for what it leaves out)
-#                     and then builds the libFuzzer harnesses with clang (FUZZ_BUILD_DIR, default build-fuzz)
-#                     and runs each for FUZZ_SECONDS (default 60) under ASan + UBSan (tests/fuzz/run_fuzzers.sh)
-#   ./setup.sh build  only installs and builds
-#   ./setup.sh install  builds, then installs hfbake and the Python module hfbake (cmake --install: the
-#                     module into the system Python's dist-packages)
+#   ./setup.sh demo            installs only what hfbake needs to build and run, builds only the hfbake
+#                              executable, bakes jobs/demo.json and prints where the outputs went
+#   ./setup.sh install [PREFIX] as demo's build plus the Python module, then `cmake --install` into PREFIX
+#                              (default /usr/local; sudo when it is not writable): PREFIX/bin/hfbake,
+#                              PREFIX/share/hfbake/{schemas, hfbake.ocio}, PREFIX/share/doc/hfbake
+#                              (docs/install.md); the Python module hfbake into Debian's system Python
+#                              (/usr/lib/python3/dist-packages, docs/python.md)
+#   ./setup.sh package         as demo's build, then a Debian package through CPack (build/hfbake_*.deb)
+#   ./setup.sh build           everything a developer builds: hfbake, the tests and the benchmarks
+#   ./setup.sh test            as build, plus the test-only packages (Slurm and munge for the farm tests,
+#                              chromium, clang, python3); runs the whole test suite through CTest, then builds
+#                              the AddressSanitizer + UndefinedBehaviorSanitizer variant (ASAN_BUILD_DIR, default
+#                              build-asan) and runs the test suite again under it (docs/development.md
+#                              "Sanitizers" says what it leaves out), then builds the libFuzzer harnesses with
+#                              clang (FUZZ_BUILD_DIR, default build-fuzz) and runs each for FUZZ_SECONDS
+#                              (default 60) under ASan + UBSan (tests/fuzz/run_fuzzers.sh)
 # Environment: BUILD_DIR (default build), ASAN_BUILD_DIR (default build-asan), JOBS (parallel build jobs,
 # default: cores), SANITIZE=0 to skip the sanitized run of `test`, FUZZ=0 to skip the fuzzers.
 set -euo pipefail
@@ -17,19 +24,39 @@ mode=${1:-build}
 build_dir=${BUILD_DIR:-build}
 jobs=${JOBS:-$(nproc)}
 
+case "$mode" in
+  demo | install | package | build | test) ;;
+  *)
+    echo "usage: $0 demo | install [PREFIX] | package | build | test" >&2
+    exit 2
+    ;;
+esac
+
+# What compiling and running hfbake needs (the -dev packages pull in the shared libraries it runs with).
 packages=(build-essential cmake pkg-config git
-  libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev openimageio-tools libopencolorio-dev
-  nlohmann-json3-dev libvalijson-dev libcli11-dev libgtest-dev libbenchmark-dev
-  libgdal-dev gdal-bin)  # gdal-bin: gdalinfo / gdal_translate, the truth of the GeoTIFF tests
-packages+=(python3-dev pybind11-dev python3-numpy)  # the Python module (python/)
-packages+=(slurm-wlm munge)  # the farm's integration tests start a one-node Slurm (tests/farm)
-if [ "$mode" = test ]; then
-  packages+=(chromium)  # the HTML report test renders the page in headless Chromium
-  packages+=(clang libclang-rt-14-dev)  # the libFuzzer harnesses (tests/fuzz): clang and its libFuzzer
-  packages+=(python3)  # tests/hostile/random_jobs.py: random valid jobs baked under a time limit
-  packages+=(python3-pytest python3-openimageio python3-gdal)  # the Python module's tests (python/tests)
-  packages+=(qgis python3-qgis)  # the QGIS provider's test runs qgis_process (about 5 minutes to install)
+  libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev libopencolorio-dev
+  nlohmann-json3-dev libvalijson-dev libcli11-dev libgdal-dev)
+# A developer's build: the test and benchmark frameworks, GDAL's and OpenImageIO's tools (the truth of the
+# GeoTIFF and texture tests).
+if [ "$mode" = build ] || [ "$mode" = test ]; then
+  packages+=(libgtest-dev libbenchmark-dev gdal-bin openimageio-tools)
 fi
+# The Python module (python/): pybind11 and numpy for Debian's system Python.
+if [ "$mode" = install ] || [ "$mode" = build ] || [ "$mode" = test ]; then
+  packages+=(python3-dev pybind11-dev python3-numpy)
+fi
+if [ "$mode" = test ]; then
+  packages+=(slurm-wlm munge)               # the farm's integration tests start a one-node Slurm (tests/farm)
+  packages+=(chromium)                      # the HTML report test renders the page in headless Chromium
+  packages+=(clang libclang-rt-14-dev)      # the libFuzzer harnesses (tests/fuzz): clang and its libFuzzer
+  packages+=(python3)                       # tests/hostile/random_jobs.py: random valid jobs baked under a time limit
+  packages+=(python3-pytest python3-openimageio python3-gdal)  # the Python module's tests (python/tests)
+  packages+=(qgis python3-qgis)             # the QGIS provider's test runs qgis_process (about 5 minutes to install)
+fi
+
+sudo_if_needed() {
+  if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
+}
 
 missing=()
 for p in "${packages[@]}"; do
@@ -37,31 +64,54 @@ for p in "${packages[@]}"; do
 done
 if [ ${#missing[@]} -gt 0 ]; then
   echo "setup: installing ${missing[*]}"
-  sudo=""
-  [ "$(id -u)" -eq 0 ] || sudo="sudo"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  sudo_if_needed apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive sudo_if_needed apt-get install -y -qq --no-install-recommends "${missing[@]}"
 else
   echo "setup: all ${#packages[@]} packages present"
 fi
 
-cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build_dir" -j "$jobs"
+# The executable alone (demo, install, package), or everything with the tests and benchmarks. The options
+# are given every time: a build folder configured by one mode is reconfigured by the next.
+if [ "$mode" = build ] || [ "$mode" = test ]; then
+  cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DHFBAKE_BUILD_TESTS=ON -DHFBAKE_BUILD_BENCHMARKS=ON \
+    >/dev/null
+  cmake --build "$build_dir" -j "$jobs"
+else
+  prefix=${2:-/usr/local}
+  python=OFF
+  targets=(hfbake)
+  if [ "$mode" = install ]; then
+    python=ON
+    targets+=(_hfbake)
+  fi
+  cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DHFBAKE_BUILD_TESTS=OFF -DHFBAKE_BUILD_BENCHMARKS=OFF \
+    -DHFBAKE_BUILD_PYTHON=$python -DCMAKE_INSTALL_PREFIX="$prefix" >/dev/null
+  cmake --build "$build_dir" -j "$jobs" --target "${targets[@]}"
+fi
 
 case "$mode" in
   build) ;;
-  install)
-    sudo=""
-    [ "$(id -u)" -eq 0 ] || sudo="sudo"
-    $sudo cmake --install "$build_dir"
-    /usr/bin/python3 -c "import hfbake; print('hfbake', hfbake.__version__, 'for Python:', hfbake.__file__)"
-    ;;
   demo)
     "$build_dir/baker/cli/hfbake" bake jobs/demo.json --out out/demo --summary out/demo-summary.json
     echo
     echo "demo outputs:"
     ls -l out/demo
     echo "summary: $(pwd)/out/demo-summary.json"
+    echo "hfbake is at $(pwd)/$build_dir/baker/cli/hfbake; ./setup.sh install puts it on PATH"
+    ;;
+  install)
+    mkdir -p "$prefix" 2>/dev/null || true
+    if [ -w "$prefix" ]; then cmake --install "$build_dir"; else sudo_if_needed cmake --install "$build_dir"; fi
+    echo "setup: installed $prefix/bin/hfbake ($("$prefix/bin/hfbake" --version))"
+    /usr/bin/python3 -c "import hfbake; print('setup: Python module hfbake', hfbake.__version__, 'at', hfbake.__file__)"
+    case ":$PATH:" in
+      *":$prefix/bin:"*) ;;
+      *) echo "setup: $prefix/bin is not on PATH: export PATH=\"$prefix/bin:\$PATH\"" ;;
+    esac
+    ;;
+  package)
+    (cd "$build_dir" && cpack -G DEB >/dev/null)
+    echo "setup: $(ls "$build_dir"/hfbake_*.deb)"
     ;;
   test)
     ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
@@ -72,7 +122,7 @@ case "$mode" in
         -DHFBAKE_BUILD_BENCHMARKS=OFF -DHFBAKE_BUILD_PYTHON=OFF >/dev/null
       cmake --build "$asan_dir" -j "$jobs"
       # Any finding fails the test that made it (UBSan halts on error, like ASan). Left out, because they
-      # cannot run usefully under the sanitizers: see README.md, "Sanitizers".
+      # cannot run usefully under the sanitizers: docs/development.md, "Sanitizers".
       ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1 \
         LSAN_OPTIONS=suppressions=$(pwd)/tests/sanitizers/lsan.supp \
         UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
@@ -86,9 +136,5 @@ case "$mode" in
       cmake --build "$fuzz_dir" -j "$jobs" --target fuzz_job fuzz_height_image fuzz_environment fuzz_report
       tests/fuzz/run_fuzzers.sh "$fuzz_dir" "${FUZZ_SECONDS:-60}"
     fi
-    ;;
-  *)
-    echo "usage: $0 [build|demo|test|install]" >&2
-    exit 2
     ;;
 esac

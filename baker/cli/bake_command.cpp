@@ -4,6 +4,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
 #include "cli/test_break.hpp"
+#include "cli/texture_plan.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
@@ -111,6 +113,25 @@ void add_common_attributes(LayerSet& layers, const Job& job, const std::string& 
   layers.attributes.emplace_back("hfbake:wall_seconds", std::to_string(seconds));
 }
 
+// The height field's own layers for textures (kHeightStem): "normal", the unit surface normal of each texel
+// (the scene's when it holds them).
+LayerSet height_layers(const Scene& scene) {
+  LayerSet set;
+  set.width = scene.field.width;
+  set.height = scene.field.height;
+  const std::vector<Vec3f> computed =
+      scene.normals.empty() ? compute_normals(scene.field) : std::vector<Vec3f>();
+  const std::vector<Vec3f>& normals = scene.normals.empty() ? computed : scene.normals;
+  std::vector<float> data(normals.size() * 3);
+  for (std::size_t t = 0; t < normals.size(); ++t) {
+    data[3 * t] = normals[t].x;
+    data[3 * t + 1] = normals[t].y;
+    data[3 * t + 2] = normals[t].z;
+  }
+  set.adopt("normal", xyz_channels(), std::move(data));
+  return set;
+}
+
 }  // namespace
 
 void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
@@ -134,9 +155,19 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();
   const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
+  const HeightsReport heights = describe_heights(job, scene);
+  progress.message(job.name + ": " + heights.line);
+  if (!heights.warning.empty()) progress.message("warning: " + job.name + ": " + heights.warning);
   stage.set_georeference(scene.georeference);
   const std::string job_hash = job_content_hash(job);
   progress.end(job.name, "load", seconds_since(t_load));
+  auto tell = [&](const std::vector<std::string>& notices) {
+    for (const std::string& n : notices) progress.message(job.name + ": " + n);
+  };
+  const std::vector<PlannedTexture> textures = plan_textures(job);
+  if (std::any_of(textures.begin(), textures.end(),
+                  [](const PlannedTexture& t) { return t.stem == kHeightStem; }))
+    tell(stage.write_textures(kHeightStem, height_layers(scene)));
 
   ReportInputs report;
   for (const BakeEntry& entry : job.bakes) {
@@ -156,7 +187,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
                        ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
     progress.end(job.name, entry.stem, seconds);
     add_common_attributes(layers, job, job_hash, entry.method, entry.resolved, seconds);
-    stage.write_layers(entry.stem, layers);
+    tell(stage.write_layers(entry.stem, layers));
     if (kept) (*kept)[entry.stem] = job.has_reference ? layers : std::move(layers);
     outcome.methods[entry.stem] = {
         {"method", entry.method}, {"seconds", seconds}, {"cpu_seconds", cpu_seconds}};
@@ -214,7 +245,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     add_reference_sh_visibility(scene.field, method_layers, reference, rc);
     add_reference_relief(scene.field, method_layers, reference, rc);
     add_common_attributes(reference, job, job_hash, "reference", job.reference_resolved, seconds);
-    stage.write_layers("reference", reference);
+    tell(stage.write_layers("reference", reference));
     if (kept) (*kept)["reference"] = reference;
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};
     if (resume)
@@ -262,10 +293,13 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
         else
           std::fprintf(stderr, "  (reference cache %s)", c.c_str());
       }
+      // The error beyond the reference's noise (rmse includes that noise).
       if (m.contains("metrics"))
         for (auto& [layer, metrics] : m["metrics"].items())
-          if (metrics.contains("rmse"))
-            std::fprintf(stderr, "  %s rmse %.4g", layer.c_str(), metrics["rmse"].get<double>());
+          if (metrics.contains("excess_rmse"))
+            std::fprintf(stderr, "  %s excess %.2g (rmse %.2g, reference noise %.2g)", layer.c_str(),
+                         metrics["excess_rmse"].get<double>(), metrics.value("rmse", 0.0),
+                         metrics.value("noise_rmse", 0.0));
       std::fprintf(stderr, "\n");
     }
     if (!o.outputs.empty())
@@ -382,10 +416,14 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
       const std::size_t need = check_job_memory(*load.job, size, memory_limit, &parts);
       // Everything bake refuses about the inputs, refused here first: the same loader reads every image
       // (NaN heights without nodata, environment aspect ratios, channel names, map sizes).
-      load_scene(*load.job);
+      const Scene scene = load_scene(*load.job);
+      const HeightsReport heights = describe_heights(*load.job, scene);
+      if (!heights.warning.empty())
+        std::fprintf(stderr, "hfbake: warning: %s: %s\n", file.c_str(), heights.warning.c_str());
       if (!quiet)
-        std::fprintf(stderr, "hfbake: %s: valid (%dx%d, about %s to bake: %s)\n", file.c_str(), size.width,
-                     size.height, gib(need).c_str(), parts.c_str());
+        std::fprintf(stderr, "hfbake: %s: %s\nhfbake: %s: valid (%dx%d, about %s to bake: %s)\n",
+                     file.c_str(), heights.line.c_str(), file.c_str(), size.width, size.height,
+                     gib(need).c_str(), parts.c_str());
     } catch (const InputError& e) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
       exit_code = 2;

@@ -11,6 +11,7 @@
 
 #include "cli/bake_command.hpp"
 #include "cli/compare_command.hpp"
+#include "cli/init_command.hpp"
 #include "cli/slurm_command.hpp"
 #include "cli/version.hpp"
 #include "io/exr_output.hpp"
@@ -124,6 +125,9 @@ int main(int argc, char** argv) {
   slurm_cmd->add_option("--threads", slurm.threads, "Threads per task (--cpus-per-task; default 1)")
       ->check(CLI::Range(1, 4096));
   slurm_cmd->add_flag("--quiet", slurm.quiet, "As bake's --quiet");
+  slurm_cmd->add_flag(
+      "--dry-run", slurm.dry_run,
+      "Print the two sbatch scripts and the sbatch commands to stdout; write and submit nothing");
 
   hfbake::CompareOptions compare;
   std::string compare_json;
@@ -147,6 +151,21 @@ int main(int argc, char** argv) {
   compare_cmd->add_option("--json", compare_json, "Also write the comparison as JSON to FILE");
   compare_cmd->add_flag("--quiet", compare.quiet, "Print only errors");
 
+  hfbake::InitOptions init;
+  std::string init_height, init_out;
+  std::vector<std::string> preset_names;
+  for (const hfbake::InitPreset& p : hfbake::init_presets()) preset_names.push_back(p.name);
+  CLI::App* init_cmd = app.add_subcommand(
+      "init",
+      "Write a job to edit for a height file: texel size and height range read from it, a preset's bake");
+  init_cmd->add_option("height_file", init_height, "The height image or georeferenced raster")->required();
+  init_cmd->add_option("--preset", init.preset, "What the job bakes")
+      ->required()
+      ->check(CLI::IsMember(preset_names));
+  init_cmd->add_option("--out", init_out, "The job file to write (default: <height file's stem>.json here)");
+  init_cmd->add_flag("--force", init.force, "Write over an existing job file");
+  app.footer("\n" + hfbake::methods_and_presets_help());
+
   CLI::App* validate_cmd = app.add_subcommand("validate", "Check jobs against the schema and their files");
   validate_cmd->add_option("jobs", validate_jobs, "Job files (JSON)")->required();
   validate_cmd->add_flag("--quiet", validate_quiet, "Print only problems");
@@ -166,6 +185,11 @@ int main(int argc, char** argv) {
     return hfbake::run_validate(
         files, validate_quiet,
         validate_memory_limit.empty() ? std::nullopt : hfbake::parse_memory_size(validate_memory_limit));
+  }
+  if (app.got_subcommand(init_cmd)) {
+    init.height_file = init_height;
+    if (!init_out.empty()) init.out = init_out;
+    return hfbake::run_init(init);
   }
   if (app.got_subcommand(compare_cmd)) {
     if (!compare_json.empty()) compare.json = compare_json;

@@ -222,7 +222,30 @@ void check_layers_finite(const std::string& stem, const LayerSet& layers) {
   }
 }
 
-void OutputStage::write_layers(const std::string& stem, const LayerSet& layers) {
+namespace {
+
+std::string short_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2g", v);
+  return buf;
+}
+
+// "textures/x.p1.direct.png: 73.2 % of its values were above 1 and clipped (largest 3.7); "exposure": 0.27
+// would bring 99 % of them into range" (the exposure that maps the 99th percentile, or the largest value
+// when under 1 % clip, to 1).
+std::string clipping_notice(const std::string& file, const TextureClipping& c, double exposure) {
+  char share[32];
+  std::snprintf(share, sizeof share, "%.1f", 100.0 * double(c.clipped) / double(c.values));
+  const bool few = double(c.clipped) <= 0.01 * double(c.values);
+  const double suggested = exposure / (few ? c.largest : c.p99);
+  return "warning: " + file + ": " + share + " % of its values were above 1 and clipped to 1 (largest " +
+         short_number(c.largest) + "); \"exposure\": " + short_number(suggested) + " would bring " +
+         (few ? "all" : "99 %") + " of them into range";
+}
+
+}  // namespace
+
+std::vector<std::string> OutputStage::write_layers(const std::string& stem, const LayerSet& layers) {
   check_layers_finite(stem, layers);  // before anything is written: no output holds a NaN or an Inf
   const std::string exr = job_.name + "." + stem + ".exr";
   ExrOptions options;
@@ -237,8 +260,8 @@ void OutputStage::write_layers(const std::string& stem, const LayerSet& layers) 
   write_exr(stage_ / exr, layers, options);
   staged_.push_back(exr);
   if (job_.output.geotiff) write_geotiffs(stem, layers);
-  write_textures(stem, layers);
-  if (!job_.output.previews) return;
+  std::vector<std::string> notices = write_textures(stem, layers);
+  if (!job_.output.previews) return notices;
   PreviewOptions preview;
   preview.display = job_.output.preview_display;
   preview.view = job_.output.preview_view;
@@ -246,10 +269,11 @@ void OutputStage::write_layers(const std::string& stem, const LayerSet& layers) 
     // Previews of what a person can look at: scalars and colours, not per-direction or SH stacks.
     if (layer.channel_count() != 1 && layer.channel_count() != 3) continue;
     if (layer.name.size() > 7 && layer.name.compare(layer.name.size() - 7, 7, "_stderr") == 0) continue;
-    const std::string png = job_.name + "." + stem + "." + layer.name + ".png";
+    const std::string png = job_.name + "." + stem + "." + layer.name + ".preview.png";
     write_preview(stage_ / png, layers, layer, preview);
     staged_.push_back(png);
   }
+  return notices;
 }
 
 void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers) {
@@ -267,7 +291,8 @@ void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers
   }
 }
 
-void OutputStage::write_textures(const std::string& stem, const LayerSet& layers) {
+std::vector<std::string> OutputStage::write_textures(const std::string& stem, const LayerSet& layers) {
+  std::vector<std::string> notices;
   for (PlannedTexture& t : plan_textures(job_)) {
     if (t.stem != stem) continue;
     for (std::size_t c = 0; c < t.spec.channels.size(); ++c) {  // suffix -> the layer's channel index
@@ -282,9 +307,12 @@ void OutputStage::write_textures(const std::string& stem, const LayerSet& layers
       s.channel = int(at - layer->channels.begin());
     }
     std::filesystem::create_directories((stage_ / t.file).parent_path());
-    write_texture(stage_ / t.file, layers, t.spec);
+    const TextureClipping clipped = write_texture(stage_ / t.file, layers, t.spec);
     staged_.push_back(t.file);
+    if (!t.note.empty()) notices.push_back(t.note);
+    if (clipped.clipped > 0) notices.push_back(clipping_notice(t.file, clipped, t.spec.exposure));
   }
+  return notices;
 }
 
 void OutputStage::write_text(const std::string& filename, const std::string& text) {

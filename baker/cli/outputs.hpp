@@ -63,9 +63,13 @@ class OutputStage {
 
   // The input's georeferencing and holes, for the GeoTIFF outputs (default: none, pixel size 1).
   void set_georeference(const Georeference& georeference) { georeference_ = georeference; }
-  // Writes <name>.<stem>.exr (and previews and GeoTIFFs when the job asks for them) into the stage, after
-  // check_layers_finite.
-  void write_layers(const std::string& stem, const LayerSet& layers);
+  // Writes <name>.<stem>.exr (and previews <name>.<stem>.<layer>.preview.png, GeoTIFFs and textures when
+  // the job asks for them) into the stage, after check_layers_finite. Returns the notices for the user, one
+  // line each (a texture whose values were clipped, padding left out).
+  [[nodiscard]] std::vector<std::string> write_layers(const std::string& stem, const LayerSet& layers);
+  // Writes output.textures of `stem` (a bake output, or kHeightStem with the field's "normal" layer);
+  // returns the notices as write_layers.
+  [[nodiscard]] std::vector<std::string> write_textures(const std::string& stem, const LayerSet& layers);
   // Writes a text file (report.json, ...) into the stage.
   void write_text(const std::string& filename, const std::string& text);
   // Moves every staged file to its final place (each rename is atomic) and returns the final paths.
@@ -80,8 +84,7 @@ class OutputStage {
   const Job& job_;
   std::filesystem::path stage_;
   void write_geotiffs(const std::string& stem, const LayerSet& layers);
-  void write_textures(const std::string& stem, const LayerSet& layers);  // output.textures of this stem
-  std::vector<std::filesystem::path> staged_;                            // file names relative to the stage
+  std::vector<std::filesystem::path> staged_;  // file names relative to the stage
   std::vector<std::filesystem::path> stale_removed_;
   Georeference georeference_;
   bool created_dir_ = false;  // the output folder did not exist before this job

@@ -92,7 +92,7 @@ std::optional<double> image_texel_size(const Job& job) {
 }
 
 HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference,
-                             const std::function<void(double)>& progress) {
+                             HeightSource& source, const std::function<void(double)>& progress) {
   const nlohmann::json& h = job.doc["height"];
   const std::string image = h["image"].get<std::string>();
   const ChannelSelector channel = channel_selector(h.contains("channel") ? h["channel"] : nlohmann::json());
@@ -116,15 +116,22 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
                        job.resolve(image).string() + ": has no such band (it has " +
                            std::to_string(geo->bands) + ": " + names + ")");
     plane = read_georaster_band(job.resolve(image), band, site(job, "/height/image"), progress);
+    source.reader = "GDAL";
+    source.format = geo->driver;
     file_nodata = geo->nodata[band];
     georeference.from_file = geo->has_geotransform;
     georeference.crs_wkt = geo->crs_wkt;
     georeference.crs_name = geo->crs_name;
     if (geo->has_geotransform) georeference.geotransform = geo->geotransform;
   } else {
+    const ImageInfo info = probe_image(job.resolve(image), site(job, "/height/image"));
     plane = read_image_channel(job.resolve(image), channel, site(job, "/height/image"),
                                site(job, "/height/channel"), progress);
+    source.reader = "OpenImageIO";
+    source.format = info.format;
   }
+  source.sample_type = plane.sample_type;
+  source.integer = plane.integer;
   HeightField field;
   field.width = plane.width;
   field.height = plane.height;

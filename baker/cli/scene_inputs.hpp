@@ -26,11 +26,12 @@ std::optional<double> image_texel_size(const Job& job);
 // caller), with nodata handling: NaN/Inf texels (and texels equal to height.nodata_value or to the file's
 // NoData value) are an error naming the count and the first texel, unless height.nodata is "fill".
 // Georeferenced rasters are read through GDAL (io/georaster_input.hpp); `georeference` receives their
-// CRS and geotransform, and the holes that were filled (for every input). The chosen channel is decoded
+// CRS and geotransform, and the holes that were filled (for every input); `source` the reader, format and
+// sample type. Integer samples are the stored integers through either reader. The chosen channel is decoded
 // straight into the field's heights, a band of rows at a time, with `progress` (the fraction read) after
 // each.
 HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference,
-                             const std::function<void(double)>& progress = {});
+                             HeightSource& source, const std::function<void(double)>& progress = {});
 
 // The nodata rule of a height field from `source` (an image's name as the job gives it, or "heights" for
 // an array handed in by the Python module): NaN/Inf texels, texels equal to height.nodata_value or to

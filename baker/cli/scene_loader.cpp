@@ -185,28 +185,108 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   return std::size_t(scene + peak);
 }
 
+namespace {
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+}  // namespace
+
+HeightsReport describe_heights(const Job& job, const Scene& scene) {
+  const HeightSource& s = scene.height_source;
+  const HeightField& f = scene.field;
+  const double texel = f.texel_size;
+  std::string line = "heights: ";
+  const nlohmann::json& h = job.doc["height"];
+  if (s.reader == "procedural") {
+    line += "procedural " + s.format;
+  } else {
+    line += h["image"].get<std::string>() + " through " + s.reader + " (" + s.format + ", " + s.sample_type +
+            (s.integer ? " integers as stored" : "") + ")";
+  }
+  line += "; " + std::to_string(f.width) + "x" + std::to_string(f.height) + " texels of " + num(texel) +
+          " (" + num(f.width * texel) + " x " + num(f.height * texel) + " world units)";
+  const bool transformed = s.scale != 1 || s.offset != 0;
+  if (transformed) {
+    line += "; stored " + num(s.stored_min) + " .. " + num(s.stored_max) + " x height_scale " + num(s.scale);
+    if (s.offset != 0) line += " + height_offset " + num(s.offset);
+    line += " ->";
+  } else {
+    line += ";";
+  }
+  const double relief = s.world_max - s.world_min;
+  line += " heights " + num(s.world_min) + " .. " + num(s.world_max) + " world units (relief " + num(relief) +
+          ")";
+
+  HeightsReport report{line, {}};
+  const double extent = std::max(f.width, f.height) * texel;
+  const std::string scale_hint =
+      s.integer ? "height_scale (world units per stored integer: a 16-bit image meant as 0..1 of a height H "
+                  "needs H / 65535, an 8-bit one H / 255)"
+                : "height_scale (world units per stored unit)";
+  if (relief == 0) {
+    report.warning =
+        "the field is flat (every height is " + num(s.world_min) + "): every method bakes it unoccluded";
+  } else if (relief < 0.01 * extent) {
+    report.warning =
+        "the relief (" + num(relief) + " world units) is " + num(100 * relief / extent) +
+        " % of the field's " + num(extent) +
+        "-unit side: nearly flat, the bake will be close to unoccluded; if the heights are meant "
+        "higher, set " +
+        scale_hint;
+  } else if (relief > 4 * extent) {
+    report.warning = "the relief (" + num(relief) + " world units) is " + num(relief / extent) +
+                     " times the field's " + num(extent) + "-unit side: steeper than any terrain; check " +
+                     scale_hint + " and texel_size";
+  }
+  return report;
+}
+
 Scene load_scene(const Job& job, const std::function<void(double)>& progress) {
   const nlohmann::json& h = job.doc["height"];
   const double texel = job_texel_size(job);
   const Wrap wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
   Georeference georeference;
   georeference.geotransform = local_geotransform(texel);
-  HeightField field = h.contains("procedural")
-                          ? make_procedural(procedural_spec(h["procedural"]), texel, wrap)
-                          : load_image_field(job, texel, wrap, georeference, progress);
-  return complete_scene(job, std::move(field), std::move(georeference));
+  HeightSource source;
+  HeightField field;
+  if (h.contains("procedural")) {
+    field = make_procedural(procedural_spec(h["procedural"]), texel, wrap);
+    source.reader = "procedural";
+    source.format = h["procedural"]["kind"].get<std::string>();
+  } else {
+    field = load_image_field(job, texel, wrap, georeference, source, progress);
+  }
+  return complete_scene(job, std::move(field), std::move(georeference), std::move(source));
 }
 
-Scene complete_scene(const Job& job, HeightField field, Georeference georeference) {
+Scene complete_scene(const Job& job, HeightField field, Georeference georeference, HeightSource read_by) {
   Scene scene;
   scene.name = job.name;
   scene.field = std::move(field);
   scene.georeference = std::move(georeference);
+  scene.height_source = std::move(read_by);
+  HeightSource& source = scene.height_source;
   const nlohmann::json& doc = job.doc;
   const nlohmann::json& h = doc["height"];
   const double scale = h.value("height_scale", 1.0), offset = h.value("height_offset", 0.0);
+  source.scale = scale;
+  source.offset = offset;
+  if (!scene.field.z.empty()) {
+    const auto [lo, hi] = std::minmax_element(scene.field.z.begin(), scene.field.z.end());
+    source.stored_min = *lo;
+    source.stored_max = *hi;
+  }
   if (scale != 1.0 || offset != 0.0)
     for (float& z : scene.field.z) z = float(z * scale + offset);
+  if (!scene.field.z.empty()) {
+    const auto [lo, hi] = std::minmax_element(scene.field.z.begin(), scene.field.z.end());
+    source.world_min = *lo;
+    source.world_max = *hi;
+  }
   if (scene.field.width < 2 || scene.field.height < 2)
     throw InputError(job.file.string(), "/height",
                      "the field is " + std::to_string(scene.field.width) + "x" +

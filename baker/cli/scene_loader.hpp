@@ -50,6 +50,17 @@ struct SceneNeeds {
 };
 SceneNeeds scene_needs(const Job& job);
 
+// What validate and bake say about the heights: `line` names the reader, the field's size, the texel size
+// and the height range in world units; `warning` (empty: none) when the relief is implausible for the
+// field's extent E (its longer side in world units): zero, under 1 % of E (the bake comes out nearly
+// unoccluded: an integer image meant as 0..1, or a missing height_scale) or over 4 E (steeper than terrain:
+// integers taken as metres that are not, or a wrong texel_size). docs/heights.md states the rule.
+struct HeightsReport {
+  std::string line;
+  std::string warning;
+};
+HeightsReport describe_heights(const Job& job, const Scene& scene);
+
 // The job's Scene. Scene::normals and the constant albedo are filled only when scene_needs says a method
 // reads them (an albedo map the job names is always read, so validate checks it). `progress` (optional): the
 // fraction of the height image read so far, while it is read.
@@ -57,7 +68,8 @@ Scene load_scene(const Job& job, const std::function<void(double)>& progress = {
 
 // The rest of load_scene once the heights are read (as stored, nodata handled, `georeference` filled):
 // height_scale and height_offset, the checks on the field's size and heights, the normals and surface maps
-// scene_needs asks for, the lighting and the bounces. The Python module hands its arrays in here.
-Scene complete_scene(const Job& job, HeightField field, Georeference georeference);
+// scene_needs asks for, the lighting and the bounces. The Python module hands its arrays in here. `read_by`:
+// the reader that gave the heights (Scene::height_source; its ranges are filled in here).
+Scene complete_scene(const Job& job, HeightField field, Georeference georeference, HeightSource read_by = {});
 
 }  // namespace hfbake

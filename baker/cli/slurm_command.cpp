@@ -253,6 +253,36 @@ int run_slurm(const SlurmOptions& o) {
   merge << " --threads \"${SLURM_CPUS_PER_TASK:-" << o.threads << "}\"" << bake_flags(o)
         << (o.quiet ? " --quiet" : "") << "\n";
 
+  // The sbatch command of stage `stage`'s array (tasks `list`) after job `after` (empty: none), and of the
+  // merge: what is run below, and what --dry-run prints.
+  auto array_command = [&](const std::vector<int>& list, const std::string& after, int stage) {
+    std::string cmd = "sbatch --parsable --array=" + array_list(list);
+    if (!after.empty()) cmd += " --dependency=afterok:" + after + " --kill-on-invalid-dep=yes";
+    cmd.append(1, ' ').append(quoted((dir / "bake.sbatch").string()));
+    if (stage > 0) cmd.append(1, ' ').append(std::to_string(stage));
+    return cmd;
+  };
+  auto merge_command = [&](const std::string& after) {
+    std::string cmd = "sbatch --parsable";
+    if (!after.empty()) cmd += " --dependency=afterok:" + after + " --kill-on-invalid-dep=yes";
+    if (o.wait) cmd += " --wait";
+    return cmd.append(1, ' ').append(quoted((dir / "merge.sbatch").string()));
+  };
+  if (o.dry_run) {
+    std::printf("# ---- %s\n%s\n# ---- %s\n%s\n# ---- the submissions (job ids in <>)\n",
+                (dir / "bake.sbatch").c_str(), bake.str().c_str(), (dir / "merge.sbatch").c_str(),
+                merge.str().c_str());
+    std::string after;
+    for (int stage = 0; stage < stage_count; ++stage) {
+      const std::vector<int>& list = submit[std::size_t(stage)];
+      if (list.empty()) continue;
+      std::printf("%s\n", array_command(list, after, stage).c_str());
+      after = "<stage " + std::to_string(stage) + " array>";
+    }
+    std::printf("%s\n", merge_command(after).c_str());
+    return 0;
+  }
+
   try {
     write_file(dir / "bake.sbatch", bake.str());
     write_file(dir / "merge.sbatch", merge.str());
@@ -267,11 +297,7 @@ int run_slurm(const SlurmOptions& o) {
     const std::vector<int>& list = submit[std::size_t(stage)];
     if (list.empty()) continue;
     std::string out;
-    std::string cmd = "sbatch --parsable --array=" + array_list(list);
-    if (!array_id.empty()) cmd += " --dependency=afterok:" + array_id + " --kill-on-invalid-dep=yes";
-    cmd.append(1, ' ').append(quoted((dir / "bake.sbatch").string()));
-    if (stage > 0) cmd.append(1, ' ').append(std::to_string(stage));
-    cmd += " 2>&1";
+    const std::string cmd = array_command(list, array_id, stage) + " 2>&1";
     if (run_capture(cmd, &out) != 0)
       return fail((dir / "bake.sbatch").string() + ": sbatch failed: " + one_line(out));
     array_id = out.substr(0, out.find_first_of(";\n"));
@@ -281,10 +307,7 @@ int run_slurm(const SlurmOptions& o) {
   }
   if (array_id.empty() && !o.quiet)
     std::fprintf(stderr, "hfbake: every shard is complete; submitting the merge only\n");
-  std::string cmd = "sbatch --parsable";
-  if (!array_id.empty()) cmd += " --dependency=afterok:" + array_id + " --kill-on-invalid-dep=yes";
-  if (o.wait) cmd += " --wait";
-  cmd.append(1, ' ').append(quoted((dir / "merge.sbatch").string())).append(" 2>&1");
+  const std::string cmd = merge_command(array_id) + " 2>&1";
   std::string out;
   const int status = run_capture(cmd, &out);
   const std::string merge_id = out.substr(0, out.find_first_of(";\n"));

@@ -16,15 +16,17 @@ struct SlurmOptions {
   int shards = 1;
   std::string partition, time, mem;  // empty: Slurm's default (mem: the method table's estimate)
   std::vector<std::string> sbatch_args;
-  bool wait = false;    // wait for the merge and exit with its status
-  bool resume = false;  // submit only the tasks whose shard file is not complete
+  bool wait = false;     // wait for the merge and exit with its status
+  bool resume = false;   // submit only the tasks whose shard file is not complete
+  bool dry_run = false;  // print the scripts and the sbatch commands to stdout; write and submit nothing
   // bake's options, passed on to every task and the merge.
   std::optional<std::filesystem::path> out, cache;
   bool no_cache = false, quiet = false;
   int threads = 1;  // per task: --cpus-per-task and the tasks' --threads
 };
 
-// 0 submitted (with wait: the merge's exit status), 2 bad input or a failed submission.
+// 0 submitted (with wait: the merge's exit status; with dry_run: printed), 2 bad input or a failed
+// submission.
 int run_slurm(const SlurmOptions& options);
 
 }  // namespace hfbake

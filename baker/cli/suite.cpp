@@ -67,7 +67,7 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
     << "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:4px 8px;text-align:left}"
     << ".ok{color:#070}.bad{color:#b00;font-weight:bold}</style></head><body>\n";
   h << "<h1>Suite " << html_escape(suite.name) << "</h1>\n<p>hfbake " << hfbake_version() << ", "
-    << outcomes.size() << " jobs, " << seconds << " s</p>\n";
+    << outcomes.size() << " jobs, " << seconds_text(seconds) << " s</p>\n";
   h << "<table><tr><th>job</th><th>status</th><th>time "
        "(s)</th><th>reference</th><th>report</th><th>errors</th>"
     << "</tr>\n";
@@ -78,12 +78,13 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
       if (p.filename() == "report.html" || (report.empty() && p.filename() == "report.json"))
         report = fs::relative(p, suite.output_dir).string();
     h << "<tr><td>" << html_escape(o.name.empty() ? o.file : o.name) << "</td><td class=\""
-      << (ok ? "ok" : "bad") << "\">" << job_status_name(o.status) << "</td><td>" << o.seconds << "</td><td>";
+      << (ok ? "ok" : "bad") << "\">" << job_status_name(o.status) << "</td><td>" << seconds_text(o.seconds)
+      << "</td><td>";
     if (o.methods.contains("reference")) {  // computed, or from the reference cache (cli/reference_cache.hpp)
       const nlohmann::json& r = o.methods["reference"];
-      h << r.value("seconds", 0.0) << " s";
+      h << seconds_text(r.value("seconds", 0.0)) << " s";
       if (r.value("cache", "") == "hit")
-        h << " (cache hit, " << r.value("cache_saved_seconds", 0.0) << " s saved)";
+        h << " (cache hit, " << seconds_text(r.value("cache_saved_seconds", 0.0)) << " s saved)";
     }
     h << "</td><td>";
     if (!report.empty()) h << "<a href=\"" << html_escape(report) << "\">" << html_escape(report) << "</a>";

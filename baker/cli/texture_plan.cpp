@@ -28,6 +28,7 @@ std::vector<OutputLayers> job_outputs(const Job& job) {
   };
   for (const BakeEntry& e : job.bakes) add(e.stem, e.method, e.resolved);
   if (job.has_reference) add("reference", "reference", job.reference_resolved);
+  outs.push_back({kHeightStem, kHeightStem, {{"normal", 3}}});
   return outs;
 }
 
@@ -58,10 +59,15 @@ Channel read_channel(const nlohmann::json& v, const std::string& pointer) {
   return c;
 }
 
+// Direction layers, written as normal maps: the bent normal of a bake, the height field's normal.
+bool is_direction_layer(const std::string& layer) {
+  return layer == "bent_normal" || layer == "normal";
+}
+
 }  // namespace
 
 std::vector<std::string> layer_suffixes(const std::string& layer, int channels) {
-  if (layer == "bent_normal") return xyz_channels();
+  if (is_direction_layer(layer)) return xyz_channels();
   if (channels == 1) return mono_channels();
   if (channels == 3) return rgb_channels();
   return indexed_channels(channels);
@@ -85,8 +91,10 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
     };
     TextureSpec base;
     base.bits = t.value("bits", 8);
-    base.padding = t.value("padding", 0);
+    const int padding = t.value("padding", 0);
+    base.padding = repeat ? 0 : padding;
     base.repeat = repeat;
+    base.exposure = t.value("exposure", 1.0);
     base.transfer = t.value("transfer", "linear") == "srgb" ? Transfer::srgb : Transfer::linear;
     const std::string format = t.value("format", "png");
     if (format == "tga" && base.bits == 16)
@@ -107,7 +115,7 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
         c.layer = name;
         c.pointer = p + "/layers/" + std::to_string(k);
         contents.push_back({name, {c}, true});
-        has_direction = has_direction || name == "bent_normal";
+        has_direction = has_direction || is_direction_layer(name);
       }
     } else {
       Content pack{t["pack"].get<std::string>(), {}, false};
@@ -123,7 +131,10 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
       contents.push_back(pack);
     }
     if (!has_direction && (t.contains("space") || t.contains("y")))
-      fail(t.contains("space") ? "space" : "y", "applies to bent_normal, which this entry does not write");
+      fail(t.contains("space") ? "space" : "y",
+           "applies to bent_normal and normal, which this entry does not write");
+    if (has_direction && t.contains("exposure"))
+      fail("exposure", "applies to values (light maps), not to normal maps");
     base.space = t.value("space", "tangent") == "world" ? NormalSpace::world : NormalSpace::tangent;
     if (base.space == NormalSpace::world && t.contains("y"))
       fail("y",
@@ -131,7 +142,8 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
            "\"space\": \"tangent\"");
     base.green = t.value("y", "opengl") == "directx" ? GreenAxis::directx : GreenAxis::opengl;
     if (has_direction && base.transfer == Transfer::srgb)
-      fail("transfer", "bent_normal is a direction: normal maps are encoded 0.5 + 0.5 n, never sRGB");
+      fail("transfer",
+           "bent_normal and normal are directions: normal maps are encoded 0.5 + 0.5 n, never sRGB");
 
     // Which outputs: those "methods" names (stem or method), else every bake entry writing all the layers.
     std::vector<const OutputLayers*> targets;
@@ -182,6 +194,9 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
         pt.stem = o->stem;
         pt.file = "textures/" + job.name + "." + o->stem + "." + c.label + "." + format;
         pt.spec = base;
+        if (repeat && padding > 0)
+          pt.note = pt.file + ": no padding added (the field repeats: the texture keeps its " +
+                    "size and tiles as it is)";
         for (const Channel& ch : c.channels) {
           if (ch.layer.empty()) {
             pt.spec.channels.push_back({"", 0, ch.constant});
@@ -201,7 +216,7 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
               pt.spec.channels.push_back({ch.layer, 0, 0});
               pt.suffixes.push_back(suffixes[k]);
             }
-            pt.spec.normal_map = ch.layer == "bent_normal";
+            pt.spec.normal_map = is_direction_layer(ch.layer);
             continue;
           }
           std::string suffix = ch.suffix;

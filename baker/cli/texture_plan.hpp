@@ -1,5 +1,6 @@
 // The textures a job's "output.textures" asks for: which file each bake output gets, from which layers and
-// channels, in which encoding (io/texture_output.hpp writes them). Checked by resolve_job against the
+// channels, in which encoding (io/texture_output.hpp writes them; docs/textures.md). On a repeat field no
+// padding is added: the texture keeps the field's size and tiles as it is. Checked by resolve_job against the
 // methods' resolved layers, so validate refuses what bake could not write.
 #pragma once
 
@@ -16,7 +17,12 @@ struct PlannedTexture {
   std::string file;  // relative to output.dir: "textures/<name>.<stem>.<layer or pack>.<ext>"
   TextureSpec spec;  // TextureSource::channel is still unset; `suffixes` names the channels
   std::vector<std::string> suffixes;  // per channel: the layer channel's suffix ("Y", "R", "X", ...)
+  std::string note;  // what the user should know about it (padding left out on a repeat field), or ""
 };
+
+// The output stem of what the height field itself gives textures: its "normal" layer (3 channels X, Y, Z:
+// the unit surface normal, field/normals.hpp), written as textures/<name>.height.normal.<ext>.
+inline constexpr const char* kHeightStem = "height";
 
 // Every texture of the job, in the order of output.textures and, within one entry, of its layers and of
 // the bake entries. Needs the resolved layers (resolve_job). Bad entries -> InputError naming the job file

@@ -44,6 +44,18 @@ struct Surface {
   std::vector<Rgb> emission;  // per texel emitted radiance; empty = the surface emits nothing
 };
 
+// Where the heights came from and what they span, for the line validate and bake print about them
+// (cli/scene_loader.hpp describe_heights).
+struct HeightSource {
+  std::string reader;       // "OpenImageIO", "GDAL", "procedural" or "numpy" (the Python module)
+  std::string format;       // the reader's format or driver ("png", "GTiff", ...) or the procedural kind
+  std::string sample_type;  // the stored samples: "uint8", "uint16", "float", ... (empty: procedural)
+  bool integer = false;     // integer samples, taken as the stored integers
+  double stored_min = 0, stored_max = 0;  // the heights as read, before height_scale and height_offset
+  double scale = 1, offset = 0;           // height_scale and height_offset
+  double world_min = 0, world_max = 0;    // the heights baked, in world units
+};
+
 struct Scene {
   std::string name;  // the job's name
   HeightField field;
@@ -53,6 +65,7 @@ struct Scene {
   std::vector<DirectionalLight> lights;  // the job's lights plus the built-in sky's sun
   int bounces = 1;
   Georeference georeference;  // the input's CRS, geotransform and holes (for GeoTIFF outputs)
+  HeightSource height_source;
 };
 
 }  // namespace hfbake

@@ -16,8 +16,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Drivers for image formats OpenImageIO reads as well: without georeferencing they stay with it (its
-// integer-to-[0, 1] convention, its channel names), as before hfbake read rasters through GDAL.
+// Drivers for image formats OpenImageIO reads as well: without georeferencing they stay with it (its channel
+// names). Both readers give an integer band's stored integers (io/image_input.hpp read_image_channel).
 bool asset_driver(const std::string& driver) {
   static const char* const names[] = {"GTiff", "PNG", "JPEG", "BMP", "GIF", "PNM", "EXR", "WEBP", "TGA"};
   return std::find(std::begin(names), std::end(names), driver) != std::end(names);
@@ -77,6 +77,9 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
   plane.width = ds->GetRasterXSize();
   plane.height = ds->GetRasterYSize();
   plane.values.resize(std::size_t(plane.width) * std::size_t(plane.height));
+  const GDALDataType type = b->GetRasterDataType();
+  plane.sample_type = GDALGetDataTypeName(type);
+  plane.integer = GDALDataTypeIsInteger(type) != 0;
   int block_x = 0, block_y = 0;
   b->GetBlockSize(&block_x, &block_y);
   block_y = std::clamp(block_y, 1, plane.height);

@@ -227,6 +227,7 @@ ImageInfo info_of(const OIIO::ImageSpec& spec, const OIIO::ImageInput& in) {
   info.float_data =
       base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::DOUBLE;
   info.format = in.format_name();
+  for (int c = 0; c < info.channels; ++c) info.sample_types.push_back(spec.channelformat(c).c_str());
   return info;
 }
 
@@ -254,11 +255,54 @@ ImageInfo probe_image(const fs::path& file, const InputSite& site) {
 
 namespace {
 
+// How integer samples become floats: normalised as OpenImageIO does (255 -> 1 for 8 bits, 65535 -> 1 for
+// 16 bits: colours), or as the stored integers (heights).
+enum class IntegerSamples { normalised, stored };
+
+// An integer type's samples as floats, the integers themselves: n samples of `type` at src.
+template <class T>
+void stored_to_float(const void* src, std::size_t n, float* dst) {
+  const T* s = static_cast<const T*>(src);
+  for (std::size_t i = 0; i < n; ++i) dst[i] = float(s[i]);
+}
+
+bool integer_to_float(OIIO::TypeDesc type, const void* src, std::size_t n, float* dst) {
+  switch (type.basetype) {
+    case OIIO::TypeDesc::UINT8:
+      stored_to_float<std::uint8_t>(src, n, dst);
+      return true;
+    case OIIO::TypeDesc::INT8:
+      stored_to_float<std::int8_t>(src, n, dst);
+      return true;
+    case OIIO::TypeDesc::UINT16:
+      stored_to_float<std::uint16_t>(src, n, dst);
+      return true;
+    case OIIO::TypeDesc::INT16:
+      stored_to_float<std::int16_t>(src, n, dst);
+      return true;
+    case OIIO::TypeDesc::UINT32:
+      stored_to_float<std::uint32_t>(src, n, dst);
+      return true;
+    case OIIO::TypeDesc::INT32:
+      stored_to_float<std::int32_t>(src, n, dst);
+      return true;
+    case OIIO::TypeDesc::UINT64:
+      stored_to_float<std::uint64_t>(src, n, dst);
+      return true;
+    case OIIO::TypeDesc::INT64:
+      stored_to_float<std::int64_t>(src, n, dst);
+      return true;
+    default:
+      return false;
+  }
+}
+
 // Decodes channels [chbegin, chend) (clamped to the image's) as floats, interleaved, a band of rows at a time
 // straight into the result (bands of whole tile rows for a tiled file, else of about 4 MiB of floats and at
-// least 16 rows), reporting progress per band; info describes the whole file.
+// least 16 rows), reporting progress per band; info describes the whole file. With IntegerSamples::stored,
+// a band of one integer channel is decoded in its own type into a scratch band, then converted.
 Image read_channels(const fs::path& file, const InputSite& site, int chbegin, int chend,
-                    const ReadProgress& progress = {}) {
+                    IntegerSamples integers, const ReadProgress& progress = {}) {
   auto in = open_input(file, site);
   const OIIO::ImageSpec spec = in->spec();
   check_spec(spec, file, site);
@@ -270,14 +314,22 @@ Image read_channels(const fs::path& file, const InputSite& site, int chbegin, in
   image.pixels.resize(row * std::size_t(spec.height));
   const int band = spec.tile_width > 0 ? std::max(1, spec.tile_height)
                                        : std::max(16, int((std::size_t(4) << 20) / (4 * row)));
+  const OIIO::TypeDesc stored = spec.channelformat(chbegin);
+  const bool as_stored = integers == IntegerSamples::stored && chend - chbegin == 1 &&
+                         stored.basetype != OIIO::TypeDesc::FLOAT &&
+                         stored.basetype != OIIO::TypeDesc::HALF && stored.basetype != OIIO::TypeDesc::DOUBLE;
+  const OIIO::TypeDesc read_type = as_stored ? stored : OIIO::TypeDesc::FLOAT;
+  std::vector<unsigned char> scratch;
+  if (as_stored) scratch.resize(std::size_t(band) * row * stored.size());
   for (int y0 = 0; y0 < spec.height; y0 += band) {
     const int y1 = std::min(spec.height, y0 + band);
-    float* dst = image.pixels.data() + std::size_t(y0) * row;
-    const bool ok = spec.tile_width > 0
-                        ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y0, spec.y + y1, spec.z,
-                                         spec.z + 1, chbegin, chend, OIIO::TypeDesc::FLOAT, dst)
-                        : in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, spec.z, chbegin, chend,
-                                             OIIO::TypeDesc::FLOAT, dst);
+    float* out = image.pixels.data() + std::size_t(y0) * row;
+    void* dst = as_stored ? static_cast<void*>(scratch.data()) : static_cast<void*>(out);
+    const bool ok =
+        spec.tile_width > 0
+            ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y0, spec.y + y1, spec.z, spec.z + 1,
+                             chbegin, chend, read_type, dst)
+            : in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, spec.z, chbegin, chend, read_type, dst);
     // Some readers report a short file only through the error state.
     if (!ok || in->has_error()) {
       std::string err = in->geterror();
@@ -286,6 +338,8 @@ Image read_channels(const fs::path& file, const InputSite& site, int chbegin, in
            "cannot decode the image (corrupt or truncated?) at row " + std::to_string(y0) + ": " +
                first_line(err));
     }
+    if (as_stored && !integer_to_float(stored, scratch.data(), std::size_t(y1 - y0) * row, out))
+      fail(site, file, std::string("cannot decode the image: unsupported sample type ") + stored.c_str());
     if (progress) progress(double(y1) / spec.height);
   }
   in->close();
@@ -295,7 +349,7 @@ Image read_channels(const fs::path& file, const InputSite& site, int chbegin, in
 }  // namespace
 
 Image read_image(const fs::path& file, const InputSite& site) {
-  return read_channels(file, site, 0, 1 << 30);
+  return read_channels(file, site, 0, 1 << 30, IntegerSamples::normalised);
 }
 
 ChannelSelector channel_selector(const nlohmann::json& value) {
@@ -326,17 +380,21 @@ Plane read_image_channel(const fs::path& file, const ChannelSelector& channel, c
                          const InputSite& channel_site, const ReadProgress& progress) {
   // The channel is checked on the header before anything is decoded or allocated.
   const int c = find_channel(probe_image(file, site), channel, file, channel_site);
-  Image image = read_channels(file, site, c, c + 1, progress);
+  Image image = read_channels(file, site, c, c + 1, IntegerSamples::stored, progress);
   Plane plane;
   plane.width = image.info.width;
   plane.height = image.info.height;
   plane.values = std::move(image.pixels);
+  const std::string& type = image.info.sample_types[std::size_t(c)];
+  plane.sample_type = type;
+  plane.integer = type != "half" && type != "float" && type != "double";
   return plane;
 }
 
 RgbImage read_rgb_image(const fs::path& file, const std::string& colorspace, const InputSite& site,
                         const InputSite& colorspace_site) {
-  Image image = read_channels(file, site, 0, 3);  // at most the first three channels
+  Image image =
+      read_channels(file, site, 0, 3, IntegerSamples::normalised);  // at most the first three channels
   const int w = image.info.width, h = image.info.height;
   const int nc = std::min(image.info.channels, 3);
   const std::size_t n = std::size_t(w) * h;

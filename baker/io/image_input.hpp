@@ -25,6 +25,7 @@ struct ImageInfo {
   std::vector<std::string> channel_names;
   bool float_data = false;  // half/float/double samples (EXR, HDR, float TIFF); else integer (8/16-bit)
   std::string format;       // OpenImageIO's format name ("openexr", "png", "tiff", ...)
+  std::vector<std::string> sample_types;  // each channel's stored type: "uint8", "uint16", "half", ...
 };
 ImageInfo probe_image(const std::filesystem::path& file, const InputSite& site);
 
@@ -51,18 +52,23 @@ ChannelSelector channel_selector(const nlohmann::json& value);
 int find_channel(const ImageInfo& info, const ChannelSelector& channel, const std::filesystem::path& file,
                  const InputSite& channel_site);
 
-// One channel as a width x height plane (row-major, row 0 = first stored row).
+// One channel as a width x height plane (row-major, row 0 = first stored row), with the type its samples
+// were stored in.
 struct Plane {
   int width = 0, height = 0;
   std::vector<float> values;
+  std::string sample_type;  // the reader's name for it: "uint16" (OpenImageIO), "UInt16" (GDAL), ...
+  bool integer = false;     // integer samples (values are the stored integers)
 };
 
 // The progress of a long read: the fraction of the rows decoded so far, after each band of rows.
 using ReadProgress = std::function<void(double)>;
 
 // Decodes the one channel straight into the plane, a band of scanlines (or a row of tiles) at a time: the
-// plane is the only full-size buffer (a 16384^2 16-bit PNG: 1 GiB of floats, nothing beside it). Values as
-// read_image gives them (integers normalised to [0, 1]).
+// plane is the only full-size buffer (a 16384^2 16-bit PNG: 1 GiB of floats, nothing beside it). Values
+// as stored: an integer channel gives its integers (a 16-bit PNG 0..65535, an 8-bit one 0..255), not
+// OpenImageIO's [0, 1], so heights read here agree with GDAL's reading of the same file
+// (docs/heights.md); float channels as read_image gives them.
 Plane read_image_channel(const std::filesystem::path& file, const ChannelSelector& channel,
                          const InputSite& site, const InputSite& channel_site,
                          const ReadProgress& progress = {});

@@ -27,16 +27,60 @@ int source_index(int x, int n, int padding, bool repeat) {
 
 }  // namespace
 
+namespace {
+
+// One channel's source: a layer's channel (data, stride) or a constant.
+struct Tap {
+  const float* data = nullptr;
+  int stride = 0;
+  float constant = 0;
+};
+
+// The clipping of the layers' values (the field's texels, not the padding) times the exposure: two passes,
+// the second a histogram of 4096 bins up to the largest value for the 99th percentile (the upper edge of the
+// bin that reaches it), so nothing of the field's size is allocated.
+TextureClipping clipping(const std::vector<Tap>& taps, std::size_t n, double exposure) {
+  TextureClipping c;
+  for (const Tap& t : taps) {
+    if (!t.data) continue;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v = double(t.data[i * std::size_t(t.stride)]) * exposure;
+      if (!std::isfinite(v)) continue;
+      ++c.values;
+      if (v > 1) ++c.clipped;
+      c.largest = std::max(c.largest, v);
+    }
+  }
+  if (c.clipped == 0) return c;
+  constexpr int kBins = 4096;
+  std::vector<std::size_t> bins(kBins, 0);
+  for (const Tap& t : taps) {
+    if (!t.data) continue;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v = double(t.data[i * std::size_t(t.stride)]) * exposure;
+      if (!std::isfinite(v)) continue;
+      ++bins[std::size_t(std::clamp(v / c.largest * kBins, 0.0, kBins - 1.0))];
+    }
+  }
+  const double want = 0.99 * double(c.values);
+  double seen = 0;
+  for (int b = 0; b < kBins; ++b) {
+    seen += double(bins[b]);
+    if (seen >= want) {
+      c.p99 = c.largest * (b + 1) / kBins;
+      break;
+    }
+  }
+  return c;
+}
+
+}  // namespace
+
 TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
   const int nc = int(spec.channels.size());
   if (nc != 1 && nc != 3 && nc != 4) throw std::logic_error("texture_pixels: 1, 3 or 4 channels");
   if (spec.bits != 8 && spec.bits != 16) throw std::logic_error("texture_pixels: 8 or 16 bits");
   if (spec.normal_map && nc != 3) throw std::logic_error("texture_pixels: a normal map has 3 channels");
-  struct Tap {
-    const float* data = nullptr;
-    int stride = 0;
-    float constant = 0;
-  };
   std::vector<Tap> taps(nc);
   const std::size_t n = std::size_t(layers.width) * std::size_t(layers.height);
   for (int c = 0; c < nc; ++c) {
@@ -74,6 +118,7 @@ TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
           out.values.data() + (std::size_t(y) * std::size_t(out.width) + std::size_t(x)) * nc;
       for (int c = 0; c < nc; ++c) {
         double v = taps[c].data ? double(taps[c].data[src * std::size_t(taps[c].stride)]) : taps[c].constant;
+        if (!spec.normal_map && taps[c].data) v *= spec.exposure;
         // 0 encodes as 0.5, an exact rounding tie (127.5, 32767.5): float noise of a bake (a flat field's
         // bent normal has |y| ~ 1e-9) would pick either side of it, so components within 1e-6 of 0 are 0.
         if (spec.normal_map)
@@ -85,10 +130,11 @@ TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
       }
     }
   }
+  if (!spec.normal_map) out.clipping = clipping(taps, n, spec.exposure);
   return out;
 }
 
-void write_texture(const fs::path& file, const LayerSet& layers, const TextureSpec& spec) {
+TextureClipping write_texture(const fs::path& file, const LayerSet& layers, const TextureSpec& spec) {
   const TexturePixels px = texture_pixels(layers, spec);
   const std::string ext = file.extension().string();
   if (spec.bits == 16 && ext == ".tga") throw std::logic_error("write_texture: TGA holds 8 bits");
@@ -122,6 +168,7 @@ void write_texture(const fs::path& file, const LayerSet& layers, const TextureSp
     fs::remove(tmp, ignored);
     throw InputError(file.string(), "", "cannot move the texture into place: " + ec.message());
   }
+  return px.clipping;
 }
 
 }  // namespace hfbake

@@ -37,24 +37,38 @@ struct TextureSpec {
   NormalSpace space = NormalSpace::tangent;
   GreenAxis green = GreenAxis::opengl;
   Transfer transfer = Transfer::linear;  // srgb: the sRGB encoding curve (IEC 61966-2-1) before quantising
-  int bits = 8;                          // 8 or 16
+  // Multiplies every value read from a layer before the transfer curve and the clamp to [0, 1] (light
+  // maps: brings radiance above 1 into range); not normal maps or constants.
+  double exposure = 1;
+  int bits = 8;  // 8 or 16
   // Texels added on every side: (width + 2 p) x (height + 2 p). A padding texel repeats the nearest edge
   // texel (clamp fields) or the texel one period away (repeat fields: the tile continues).
   int padding = 0;
   bool repeat = false;
 };
 
+// How many of a texture's values read from layers (not normal maps, not constants) were above 1 after the
+// exposure, and so clipped to 1: what a light map loses silently otherwise.
+struct TextureClipping {
+  std::size_t clipped = 0, values = 0;
+  double largest = 0;  // the largest value after the exposure
+  double p99 = 0;      // the 99th percentile of the values after the exposure (computed when any clipped)
+};
+
 // The texture's size and its quantised values, interleaved, rows top first: round(v * (2^bits - 1)) of
-// each channel's value v clamped to [0, 1] (NaN -> 0), after the normal-map encoding or the transfer curve.
+// each channel's value v (times the exposure) clamped to [0, 1] (NaN -> 0), after the normal-map encoding
+// or the transfer curve.
 struct TexturePixels {
   int width = 0, height = 0, channels = 0;
   std::vector<std::uint16_t> values;
+  TextureClipping clipping;
 };
 TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec);
 
 // Writes the texture to `file`; the format follows the extension (.png, .tif, .tga). 16 bits need PNG or
-// TIFF. sRGB-encoded files are tagged sRGB; linear ones carry no colour tag. Failure -> InputError naming
-// the file.
-void write_texture(const std::filesystem::path& file, const LayerSet& layers, const TextureSpec& spec);
+// TIFF. sRGB-encoded files are tagged sRGB; linear ones carry no colour tag. Returns what was clipped.
+// Failure -> InputError naming the file.
+TextureClipping write_texture(const std::filesystem::path& file, const LayerSet& layers,
+                              const TextureSpec& spec);
 
 }  // namespace hfbake

@@ -78,6 +78,19 @@ bool relief_comparable(const nlohmann::json& params, const LayerSet& reference) 
   return true;
 }
 
+// A bent normal baked with a falloff (a radius-limited search: the obscurance family's default with a
+// radius) averages the directions open within that radius; the reference's bent normal averages its ao
+// rays, which have no distance limit. The two are different quantities.
+std::string bent_normal_limit(const nlohmann::json& params) {
+  if (!params.is_object()) return "";
+  const bool has_radius = params.contains("radius") && params["radius"].is_number();
+  const std::string falloff = params.value("falloff", std::string(has_radius ? "step" : "none"));
+  if (falloff == "none") return "";
+  return "radius-limited (falloff " + falloff +
+         (has_radius ? ", radius " + number(params["radius"].get<double>()) : std::string()) +
+         "); the reference's bent normal has no distance limit";
+}
+
 bool is_relief_layer(const std::string& name) {
   return name == "svf" || name == "openness_positive" || name == "openness_negative" || name == "horizon_deg";
 }
@@ -128,6 +141,7 @@ ReportOutcome build_report(const ReportSpec& spec, const std::vector<ReportMetho
                          {"parameters", m.parameters.is_object() ? m.parameters : nlohmann::json::object()}};
     jm["layers"] = nlohmann::json::object();
     jm["not_compared"] = nlohmann::json::array();
+    jm["not_compared_reasons"] = nlohmann::json::object();
     out.metrics_by_method[m.stem] = nlohmann::json::object();
     if (m.layers) {
       if (m.layers->width != width || m.layers->height != height)
@@ -136,10 +150,21 @@ ReportOutcome build_report(const ReportSpec& spec, const std::vector<ReportMetho
                                     std::to_string(width) + "x" + std::to_string(height));
       for (const Layer& l : m.layers->layers) {
         const Layer* r = reference.find(l.name);
-        if (!r || ends_with(l.name, "_stderr") || r->channel_count() != l.channel_count() ||
-            (l.name == "obscurance" && !obscurance_comparable(m.parameters, reference)) ||
-            (is_relief_layer(l.name) && !relief_comparable(m.parameters, reference))) {
+        std::string reason;
+        if (!r || ends_with(l.name, "_stderr"))
+          reason = "the reference has no layer of this name";
+        else if (r->channel_count() != l.channel_count())
+          reason = "the reference's has " + std::to_string(r->channel_count()) + " channels, this " +
+                   std::to_string(l.channel_count());
+        else if (l.name == "obscurance" && !obscurance_comparable(m.parameters, reference))
+          reason = "baked with another falloff, radius or weighting than the reference's obscurance";
+        else if (is_relief_layer(l.name) && !relief_comparable(m.parameters, reference))
+          reason = "baked with other directions, search radius or azimuth convention than the reference's";
+        else if (l.name == "bent_normal")
+          reason = bent_normal_limit(m.parameters);
+        if (!reason.empty()) {
           jm["not_compared"].push_back(l.name);
+          jm["not_compared_reasons"][l.name] = reason;
           continue;
         }
         const LayerMetrics metrics =

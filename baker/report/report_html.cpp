@@ -141,6 +141,12 @@ const char* const kPalette[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff
 
 }  // namespace
 
+std::string seconds_text(double seconds) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, seconds >= 100 ? "%.0f" : "%.3g", seconds);
+  return buf;
+}
+
 void diverging_colour(double t, std::uint8_t rgb[3]) {
   // Blue (59, 76, 192) - light grey (221, 221, 221) - red (180, 4, 38): the ends of Moreland's cool-warm map.
   static const double lo[3] = {59, 76, 192}, mid[3] = {221, 221, 221}, hi[3] = {180, 4, 38};
@@ -287,7 +293,10 @@ namespace {
 // --- the page's sections, in page order -------------------------------------------------------------------
 
 // Styles, title and the verdict.
-void write_head(std::ostringstream& h, const std::string& name, bool passed) {
+// The page's verdict: what was checked and how it went.
+enum class Verdict { passed, failed, unchecked };
+
+void write_head(std::ostringstream& h, const std::string& name, Verdict verdict) {
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
     << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
     << "<title>hfbake report: " << html_escape(name) << "</title>\n<style>\n"
@@ -297,7 +306,7 @@ void write_head(std::ostringstream& h, const std::string& name, bool passed) {
     << "text-align:right;font-variant-numeric:tabular-nums}th{background:#f3f3f3}td:first-child,th:first-"
        "child"
     << "{text-align:left}\n.bad{color:#b00;font-weight:bold;background:#fdecea}.ok{color:#070;font-weight:"
-       "bold}\n"
+       "bold}.none{color:#555;font-weight:bold}\n"
     << ".meta td{text-align:left}.figs{display:flex;flex-wrap:wrap;gap:14px;align-items:flex-start}\n"
     << "figure{margin:0}figure img{image-rendering:pixelated;border:1px solid #999;display:block}\n"
     << "figcaption{font-size:90%;margin-top:3px}.legend{width:256px;font-size:80%}\n"
@@ -307,9 +316,12 @@ void write_head(std::ostringstream& h, const std::string& name, bool passed) {
        "gap:12px}\n"
     << "</style></head>\n<body>\n";
   h << "<h1>hfbake report: " << html_escape(name) << "</h1>\n";
-  h << "<p class=\"" << (passed ? "ok" : "bad") << "\" id=\"verdict\">"
-    << (passed ? "PASSED: every threshold held" : "FAILED: a threshold or the baseline regressed")
-    << "</p>\n";
+  const char* cls = verdict == Verdict::failed ? "bad" : verdict == Verdict::passed ? "ok" : "none";
+  const char* text = verdict == Verdict::failed   ? "FAILED: a threshold or the baseline regressed"
+                     : verdict == Verdict::passed ? "PASSED: every threshold held"
+                                                  : "No thresholds set and no baseline: nothing was checked "
+                                                    "(report.thresholds, report.baseline)";
+  h << "<p class=\"" << cls << "\" id=\"verdict\">" << text << "</p>\n";
 }
 
 // Job, version, field size, compared region, reference.
@@ -340,10 +352,11 @@ void write_job_table(std::ostringstream& h, const nlohmann::json& r, const HtmlI
 
 void write_summary(std::ostringstream& h, const HtmlInputs& in, const nlohmann::json& methods,
                    const std::set<std::string>& failed) {
-  // Summary: one row per method and layer.
-  h << "<h2>Summary</h2>\n<table class=\"summary\"><tr><th>method</th><th>time "
-       "(s)</th><th>layer</th><th>rmse</th>"
-    << "<th>rel_mae</th><th>excess_rmse</th><th>p99</th><th>psnr (dB)</th></tr>\n";
+  // Summary: one row per method and layer, the error beyond the reference's noise first.
+  h << "<h2>Summary</h2>\n<p>excess_rmse: the method's error beyond the reference's own noise, "
+       "sqrt(max(rmse<sup>2</sup> &minus; noise<sup>2</sup>, 0)); rmse includes that noise.</p>\n"
+       "<table class=\"summary\"><tr><th>method</th><th>time (s)</th><th>layer</th><th>excess_rmse</th>"
+    << "<th>rmse</th><th>noise</th><th>rel_mae</th><th>p99</th><th>psnr (dB)</th></tr>\n";
   // In bake order (the inputs), then anything the report has that the inputs do not name.
   std::vector<std::string> order;
   for (const HtmlMethod& hm : in.methods)
@@ -353,20 +366,34 @@ void write_summary(std::ostringstream& h, const HtmlInputs& in, const nlohmann::
   for (const std::string& stem : order) {
     const nlohmann::json& m = methods[stem];
     const nlohmann::json& layers = sub(m, "layers");
+    const std::string seconds = m.contains("seconds") && m["seconds"].is_number()
+                                    ? seconds_text(m["seconds"].get<double>())
+                                    : "&ndash;";
     if (layers.empty())
-      h << "<tr><td>" << html_escape(stem) << "</td><td>" << json_num(m, "seconds", 3)
-        << "</td><td colspan=\"6\">no layer "
+      h << "<tr><td>" << html_escape(stem) << "</td><td>" << seconds << "</td><td colspan=\"7\">no layer "
         << "compared</td></tr>\n";
     for (auto& [layer, mm] : layers.items()) {
-      h << "<tr><td>" << html_escape(stem) << "</td><td>" << json_num(m, "seconds", 3) << "</td><td>"
-        << html_escape(layer) << "</td>";
-      for (const char* k : {"rmse", "rel_mae", "excess_rmse", "p99", "psnr"})
+      h << "<tr><td>" << html_escape(stem) << "</td><td>" << seconds << "</td><td>" << html_escape(layer)
+        << "</td>";
+      for (const char* k : {"excess_rmse", "rmse", "noise_rmse", "rel_mae", "p99", "psnr"})
         h << "<td" << (failed.count(stem + "." + layer + "." + k) ? " class=\"bad\"" : "") << ">"
           << json_num(mm, k) << "</td>";
       h << "</tr>\n";
     }
   }
   h << "</table>\n";
+  // Directions: the angle between the method's and the reference's unit vectors per texel.
+  std::ostringstream angles;
+  for (const std::string& stem : order)
+    for (auto& [layer, mm] : sub(methods[stem], "layers").items())
+      if (mm.contains("angle_mean_deg"))
+        angles << "<tr><td>" << html_escape(stem) << "</td><td>" << html_escape(layer) << "</td><td>"
+               << json_num(mm, "angle_mean_deg", 3) << "</td><td>" << json_num(mm, "angle_p99_deg", 3)
+               << "</td><td>" << json_num(mm, "angle_max_deg", 3) << "</td></tr>\n";
+  if (!angles.str().empty())
+    h << "<h3>Directions</h3>\n<table class=\"angles\"><tr><th>method</th><th>layer</th><th>mean angle "
+         "(&deg;)</th><th>p99 angle (&deg;)</th><th>max angle (&deg;)</th></tr>\n"
+      << angles.str() << "</table>\n";
 }
 
 void write_thresholds(std::ostringstream& h, const nlohmann::json& r) {
@@ -529,9 +556,16 @@ void write_method(std::ostringstream& h, const HtmlInputs& in, const HtmlMethod&
   h << metrics_table(hm.stem, m.value("layers", none), failed);
   const auto not_compared = m.value("not_compared", nlohmann::json::array());
   if (!not_compared.empty()) {
-    h << "<p>Not compared (no reference layer of the same name):";
-    for (const auto& n : not_compared) h << " <code>" << html_escape(n.get<std::string>()) << "</code>";
-    h << "</p>\n";
+    const nlohmann::json reasons = m.value("not_compared_reasons", none);
+    h << "<p>Not compared:</p>\n<ul class=\"not-compared\">";
+    for (const auto& n : not_compared) {
+      const std::string layer = n.get<std::string>();
+      h << "<li><code>" << html_escape(layer) << "</code>";
+      if (reasons.contains(layer) && reasons[layer].is_string())
+        h << ": " << html_escape(reasons[layer].get<std::string>());
+      h << "</li>";
+    }
+    h << "</ul>\n";
   }
   if (!hm.layers || !in.reference) return;
   if (hm.layers->width != in.reference->width || hm.layers->height != in.reference->height) return;
@@ -572,7 +606,11 @@ std::string report_html(const HtmlInputs& in) {
       failed.insert(reg.value("key", std::string()));
 
   std::ostringstream h;
-  write_head(h, name, r.value("passed", true));
+  const bool checked = !r.value("thresholds", nlohmann::json::array()).empty() || r.contains("baseline");
+  write_head(h, name,
+             !r.value("passed", true) ? Verdict::failed
+             : checked                ? Verdict::passed
+                                      : Verdict::unchecked);
   write_job_table(h, r, in);
   write_summary(h, in, methods, failed);
   write_thresholds(h, r);

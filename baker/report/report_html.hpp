@@ -51,6 +51,10 @@ struct PlotSeries {
 std::string svg_line_plot(const std::string& title, const std::string& x_label, const std::string& y_label,
                           const std::vector<PlotSeries>& series, bool log_x, bool log_y);
 
+// A duration in seconds as a person reads it: three significant digits, whole seconds from 100 s
+// ("0.0421", "8.39", "125").
+std::string seconds_text(double seconds);
+
 // The diverging colour scale of error images: -1 blue, 0 light grey, +1 red (clamped).
 void diverging_colour(double t, std::uint8_t rgb[3]);
 

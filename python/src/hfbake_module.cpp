@@ -327,7 +327,11 @@ py::dict bake_array(const std::string& method, py::array heights, const py::dict
       Georeference georeference;
       georeference.geotransform = local_geotransform(field.texel_size);
       apply_height_nodata(job, "heights", field, georeference);
-      const Scene scene = complete_scene(job, std::move(field), std::move(georeference));
+      HeightSource read_by;
+      read_by.reader = "numpy";
+      read_by.format = "array";
+      read_by.sample_type = "float";
+      const Scene scene = complete_scene(job, std::move(field), std::move(georeference), read_by);
       layers = run_method(job.bakes.front(), scene, runner.control());
       check_layers_finite(job.bakes.front().stem, layers);  // what bake refuses to write
     } catch (const InputError& e) {

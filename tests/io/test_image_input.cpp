@@ -79,6 +79,34 @@ TEST(ImageInput, IntegerImagesAreNormalised) {
   EXPECT_NEAR(b.pixels[1], 0.5f, 1.0f / 65535);
 }
 
+// A height channel's integer samples are the stored integers, whatever the integer type and format (the
+// rule GDAL follows too); float channels are as stored. The truth: the integers written.
+TEST(ImageInput, HeightChannelsGiveStoredIntegers) {
+  TempFolder dir;
+  struct Case {
+    const char* name;
+    OIIO::TypeDesc type;
+    std::vector<float> written;  // the samples as OpenImageIO's normalised floats
+    std::vector<float> stored;   // the integers they are stored as
+    const char* sample_type;
+  };
+  const std::vector<Case> cases = {
+      {"u8.png", OIIO::TypeDesc::UINT8, {0.0f, 51 / 255.0f, 1.0f}, {0, 51, 255}, "uint8"},
+      {"u16.png", OIIO::TypeDesc::UINT16, {0.0f, 1234 / 65535.0f, 1.0f}, {0, 1234, 65535}, "uint16"},
+      {"u16.tif", OIIO::TypeDesc::UINT16, {0.0f, 40000 / 65535.0f, 1.0f}, {0, 40000, 65535}, "uint16"},
+      {"u8.tif", OIIO::TypeDesc::UINT8, {0.0f, 7 / 255.0f, 1.0f}, {0, 7, 255}, "uint8"},
+      {"i16.tif", OIIO::TypeDesc::INT16, {-1.0f, 0.0f, 300 / 32767.0f}, {-32767, 0, 300}, "int16"},
+      {"f.exr", OIIO::TypeDesc::FLOAT, {-2.5f, 0.0f, 812.25f}, {-2.5f, 0.0f, 812.25f}, "float"},
+  };
+  for (const Case& c : cases) {
+    write_test_image(dir / c.name, 3, 1, 1, c.written, c.type);
+    const Plane p = read_image_channel(dir / c.name, 0, kSite, kChannelSite);
+    EXPECT_EQ(p.values, c.stored) << c.name;
+    EXPECT_EQ(p.sample_type, c.sample_type) << c.name;
+    EXPECT_EQ(p.integer, c.type != OIIO::TypeDesc::FLOAT) << c.name;
+  }
+}
+
 TEST(ImageInput, MissingFile) {
   TempFolder dir;
   const fs::path f = dir / "nope.exr";
@@ -283,10 +311,11 @@ TEST(ImageInput, BandedChannelReadEqualsTheWholeImageRead) {
     const std::vector<float> truth = oiio_whole_channel(dir / name, 1);
     ASSERT_EQ(p.values.size(), truth.size());
     std::size_t differ = 0;
-    for (std::size_t t = 0; t < truth.size(); ++t) differ += p.values[t] != truth[t];
+    // OpenImageIO's [0, 1] reading times 65535: the stored integers.
+    for (std::size_t t = 0; t < truth.size(); ++t) differ += p.values[t] != std::round(truth[t] * 65535.f);
     EXPECT_EQ(differ, 0u) << name;
     // Spot check against the written 16-bit value (an independent quantization of the input).
-    EXPECT_FLOAT_EQ(p.values[1000], std::round(px[1000 * 3 + 1] * 65535.f) / 65535.f) << name;
+    EXPECT_FLOAT_EQ(p.values[1000], std::round(px[1000 * 3 + 1] * 65535.f)) << name;
     ASSERT_FALSE(fractions.empty()) << name;
     EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end())) << name;
     EXPECT_EQ(fractions.back(), 1.0) << name;

@@ -5,7 +5,9 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -139,6 +141,135 @@ TEST(TextureCli, FlatFieldIsHalfHalfOneInBothTangentConventions) {
   }
 }
 
+// The height field's own normal map: the slope's normal in closed form is the truth, in both tangent
+// conventions, whatever the methods bake (p1 here writes no bent_normal).
+TEST(TextureCli, HeightNormalMapIsTheFieldsNormal) {
+  TempFolder dir;
+  const fs::path out = dir / "out";
+  json j =
+      job(out, json::array({{{"layers", {"normal"}}, {"bits", 16}},
+                            {{"layers", {"normal"}}, {"y", "directx"}, {"format", "tif"}, {"bits", 16}}}));
+  j["bake"][0]["layers"] = {"ao"};
+  const auto r = run_hfbake(dir.path(), "bake --quiet " + write(dir, "j.json", j).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Pixels gl = read(out / "textures" / "slope.height.normal.png");
+  const Pixels dx = read(out / "textures" / "slope.height.normal.tif");
+  ASSERT_EQ(gl.channels, 3);
+  ASSERT_EQ(gl.width, 33);
+  ASSERT_EQ(dx.values.size(), gl.values.size());
+  const double ny = std::sin(30 * kPi / 180), nz = std::cos(30 * kPi / 180);
+  for (const std::size_t texel : {std::size_t(0), std::size_t(16 * 33 + 16), std::size_t(33 * 33 - 1)}) {
+    const std::size_t t = texel * 3;
+    EXPECT_NEAR(gl.values[t + 0], 0.5, 1e-4);
+    EXPECT_NEAR(gl.values[t + 1], 0.5 - 0.5 * ny, 1e-4);  // OpenGL: G = image up, the slope faces +y (down)
+    EXPECT_NEAR(gl.values[t + 2], 0.5 + 0.5 * nz, 1e-4);
+    EXPECT_NEAR(dx.values[t + 1], 0.5 + 0.5 * ny, 1e-4);  // DirectX: G = image down
+  }
+}
+
+// A repeat tile's textures keep the field's size with padding asked for (no 2 p border that would end the
+// tiling), and they tile: across the wrap seam the texture steps no more than between neighbours inside.
+TEST(TextureCli, RepeatTileTexturesKeepTheirSizeAndTile) {
+  TempFolder dir;
+  const json tile = {
+      {"kind", "fractal"}, {"size", {64, 48}}, {"seed", 3}, {"amplitude", 12}, {"feature_size", 16}};
+  auto tiled_job = [&](const fs::path& out, const json& textures) {
+    json j = job(out, textures, tile);
+    j["height"]["wrap"] = "repeat";
+    return j;
+  };
+  const fs::path padded = dir / "padded", plain = dir / "plain";
+  const auto r = run_hfbake(
+      dir.path(),
+      "bake " + write(dir, "a.json", tiled_job(padded, json::array({{{"layers", {"ao"}}, {"padding", 8}}})))
+                    .string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("textures/slope.p1.ao.png: no padding added (the field repeats"), std::string::npos)
+      << r.err;
+  const auto q = run_hfbake(
+      dir.path(),
+      "bake --quiet " + write(dir, "b.json", tiled_job(plain, json::array({{{"layers", {"ao"}}}}))).string());
+  ASSERT_EQ(q.exit_code, 0) << q.err;
+  const Pixels a = read(padded / "textures" / "slope.p1.ao.png");
+  const Pixels b = read(plain / "textures" / "slope.p1.ao.png");
+  ASSERT_EQ(a.width, 64);
+  ASSERT_EQ(a.height, 48);
+  EXPECT_EQ(a.values, b.values);
+  // The seam: column 63 next to column 0 and row 47 next to row 0, against the largest step inside.
+  auto at = [&](int x, int y) { return double(a.values[std::size_t(y) * 64 + x]); };
+  double inside = 0, seam = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      if (x + 1 < 64) inside = std::max(inside, std::abs(at(x + 1, y) - at(x, y)));
+      if (y + 1 < 48) inside = std::max(inside, std::abs(at(x, y + 1) - at(x, y)));
+    }
+  for (int y = 0; y < 48; ++y) seam = std::max(seam, std::abs(at(63, y) - at(0, y)));
+  for (int x = 0; x < 64; ++x) seam = std::max(seam, std::abs(at(x, 47) - at(x, 0)));
+  EXPECT_GT(inside, 0.01);  // the field has relief
+  EXPECT_LE(seam, inside);
+}
+
+// A light map whose values exceed 1 is written clipped only with a warning giving the clipped share (the
+// EXR's values are the truth); "exposure" scales the values first and, when they fit, nothing is said.
+TEST(TextureCli, LightMapAboveOneIsNotClippedSilently) {
+  TempFolder dir;
+  auto lit = [&](const fs::path& out, const json& texture) {
+    json j = job(out, json::array({texture}));
+    j["bake"][0]["layers"] = {"direct"};
+    j["lights"] = {{{"directional", {{"direction", {0.2, 0.5, 1}}, {"irradiance", 12}}}}};
+    return j;
+  };
+  const fs::path hot = dir / "hot";
+  auto r = run_hfbake(
+      dir.path(), "bake " + write(dir, "a.json", lit(hot, {{"layers", {"direct"}}, {"bits", 16}})).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Pixels exr = read(hot / "slope.p1.exr", "direct.");
+  ASSERT_EQ(exr.channels, 3);
+  std::size_t above = 0;
+  float largest = 0;
+  for (const float v : exr.values) {
+    above += v > 1;
+    largest = std::max(largest, v);
+  }
+  ASSERT_GT(above, 0u) << "the light must be strong enough to clip";
+  char share[32];
+  std::snprintf(share, sizeof share, "%.1f %%", 100.0 * double(above) / double(exr.values.size()));
+  EXPECT_NE(r.err.find("warning: textures/slope.p1.direct.png: " + std::string(share) +
+                       " of its values were above 1 and clipped to 1"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("\"exposure\": "), std::string::npos) << r.err;
+
+  // With an exposure that fits the largest value: the texture is exposure x the EXR, and no warning.
+  const double exposure = 0.9 / largest;
+  const fs::path fitted = dir / "fitted";
+  r = run_hfbake(dir.path(),
+                 "bake " + write(dir, "b.json",
+                                 lit(fitted, {{"layers", {"direct"}}, {"bits", 16}, {"exposure", exposure}}))
+                               .string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("clipped"), std::string::npos) << r.err;
+  const Pixels png = read(fitted / "textures" / "slope.p1.direct.png");
+  const Pixels exr2 = read(fitted / "slope.p1.exr", "direct.");
+  ASSERT_EQ(png.values.size(), exr2.values.size());
+  for (std::size_t i = 0; i < png.values.size(); ++i)
+    ASSERT_EQ(std::lround(png.values[i] * 65535), std::lround(double(exr2.values[i]) * exposure * 65535))
+        << i;
+}
+
+// Previews (display-encoded, for looking at) and textures (data) never share a file name.
+TEST(TextureCli, PreviewsAndTexturesHaveDistinctNames) {
+  TempFolder dir;
+  const fs::path out = dir / "out";
+  json j = job(out, json::array({{{"layers", {"ao"}}}}));
+  j["output"]["previews"] = true;
+  const auto r = run_hfbake(dir.path(), "bake --quiet " + write(dir, "j.json", j).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / "slope.p1.ao.preview.png"));
+  EXPECT_TRUE(fs::exists(out / "textures" / "slope.p1.ao.png"));
+  EXPECT_FALSE(fs::exists(out / "slope.p1.ao.png"));
+}
+
 TEST(TextureCli, BadTextureEntriesAreOneLineErrorsAtTheirPointer) {
   const struct {
     json texture;
@@ -155,6 +286,8 @@ TEST(TextureCli, BadTextureEntriesAreOneLineErrorsAtTheirPointer) {
        "/output/textures/0/channels/R",
        "has no channel"},
       {{{"layers", {"ao"}}, {"bits", 12}}, "/output/textures/0/bits", ""},
+      {{{"layers", {"normal"}}, {"exposure", 2}}, "/output/textures/0/exposure", "not to normal maps"},
+      {{{"layers", {"ao"}}, {"exposure", 0}}, "/output/textures/0/exposure", ""},
       {{{"layers", {"ao"}}, {"pack", "x"}}, "/output/textures/0", ""},
   };
   for (const auto& c : cases) {

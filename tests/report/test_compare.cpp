@@ -9,6 +9,7 @@
 #include "job/schema_validation.hpp"
 #include "report/compare.hpp"
 #include "report/report_document.hpp"
+#include "report/report_html.hpp"
 
 namespace hfbake {
 namespace {
@@ -230,6 +231,71 @@ TEST(Report, ObscurancesBakedWithOtherSettingsThanTheReferenceAreNotCompared) {
       EXPECT_NEAR(m["layers"]["obscurance"]["mae"].get<double>(), 0.3, 1e-6);
     }
   }
+}
+
+// The reference's bent normal averages ao rays without a distance limit: a bent normal baked with a falloff
+// (a radius-limited search) is another quantity, listed under not_compared with the reason; one without a
+// falloff is scored, its angles in the report.
+TEST(Report, RadiusLimitedBentNormalsAreNotComparedWithTheirReason) {
+  LayerSet reference;
+  reference.width = reference.height = 4;
+  reference.add("bent_normal", xyz_channels()).data.assign(48, 0.0f);
+  for (std::size_t t = 0; t < 16; ++t) reference.find("bent_normal")->data[3 * t + 2] = 1;
+  LayerSet method = reference;
+  const std::vector<std::pair<nlohmann::json, bool>> cases = {
+      {{{"method", "p1"}}, true},
+      {{{"method", "hbao"}}, true},  // no radius: falloff none
+      {{{"method", "hbao"}, {"radius", 8}}, false},
+      {{{"method", "lsao"}, {"radius", 8}, {"falloff", "smooth"}}, false},
+      {{{"method", "hbao"}, {"falloff", "none"}}, true},
+  };
+  for (const auto& [params, comparable] : cases) {
+    const ReportOutcome out = build_report(ReportSpec{}, {{"m", "m", 1.0, params, &method}}, reference);
+    const nlohmann::json& m = out.doc["methods"]["m"];
+    EXPECT_EQ(m["layers"].contains("bent_normal"), comparable) << params.dump();
+    if (comparable) {
+      EXPECT_NEAR(m["layers"]["bent_normal"]["angle_mean_deg"].get<double>(), 0.0, 1e-6);
+    } else {
+      EXPECT_EQ(m["not_compared"], nlohmann::json::array({"bent_normal"}));
+      EXPECT_NE(m["not_compared_reasons"]["bent_normal"].get<std::string>().find("radius-limited"),
+                std::string::npos);
+    }
+    EXPECT_TRUE(validate_against_schema(out.doc, "report.schema.json").empty()) << out.doc.dump(2);
+  }
+}
+
+// report.html: the verdict says when nothing was checked; excess_rmse leads the summary; bent-normal angles
+// and the reasons for not comparing a layer are on the page.
+TEST(Report, HtmlSaysWhatWasCheckedAndShowsAngles) {
+  Fixture f;
+  f.reference.add("bent_normal", xyz_channels()).data.assign(192, 0.0f);
+  f.method.add("bent_normal", xyz_channels()).data.assign(192, 0.0f);
+  for (std::size_t t = 0; t < 64; ++t) {
+    f.reference.find("bent_normal")->data[3 * t + 2] = 1;
+    f.method.find("bent_normal")->data[3 * t + 0] = float(std::sin(0.1));  // 0.1 rad from the reference
+    f.method.find("bent_normal")->data[3 * t + 2] = float(std::cos(0.1));
+  }
+  ReportSpec spec;
+  spec.job_name = "t";
+  const ReportOutcome none =
+      build_report(spec, {{"p1", "p1", 8.39025, {{"method", "p1"}}, &f.method}}, f.reference);
+  HtmlInputs in;
+  in.report = none.doc;
+  HtmlMethod p1;
+  p1.stem = p1.method = "p1";
+  in.methods = {p1};
+  const std::string page = report_html(in);
+  EXPECT_NE(page.find("No thresholds set and no baseline: nothing was checked"), std::string::npos);
+  EXPECT_EQ(page.find("PASSED"), std::string::npos);
+  EXPECT_NE(page.find("<th>layer</th><th>excess_rmse</th><th>rmse</th>"), std::string::npos);
+  EXPECT_NE(page.find("<td>8.39</td>"), std::string::npos);                  // seconds rounded for people
+  const std::string angle = "<td>p1</td><td>bent_normal</td><td>5.73</td>";  // 0.1 rad
+  EXPECT_NE(page.find(angle), std::string::npos) << page.substr(page.find("Directions"), 400);
+  EXPECT_NE(page.find("<code>horizon</code>: the reference has no layer of this name"), std::string::npos);
+
+  spec.thresholds = {{"p1.ao.mae", 0.06}};
+  in.report = build_report(spec, {{"p1", "p1", 1.0, {{"method", "p1"}}, &f.method}}, f.reference).doc;
+  EXPECT_NE(report_html(in).find("PASSED: every threshold held"), std::string::npos);
 }
 
 TEST(Report, ReliefLayersAreComparedOnlyWithTheReferencesSettings) {

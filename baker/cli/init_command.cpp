@@ -1,0 +1,246 @@
+#include "cli/init_command.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <system_error>
+#include <vector>
+
+#include "cli/method_dispatch.hpp"
+#include "cli/scene_loader.hpp"
+#include "core/error.hpp"
+#include "job/embedded_schemas.hpp"
+#include "job/manifest.hpp"
+#include "methods/method_table.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+using nlohmann::json;
+using ordered = nlohmann::ordered_json;
+
+namespace {
+
+constexpr InitPreset kPresets[] = {
+    {"game-ao",
+     "a tiling game texture: p1's ao and bent normals as 16-bit PNG textures (tangent space, OpenGL)"},
+    {"gis-relief",
+     "a DEM: relief's sky-view factor and openness and p1's ao as GeoTIFFs georeferenced like the input"},
+    {"reference-check", "p1 against the path-traced reference: report.html and an excess-error threshold"},
+};
+
+// Four significant digits, as a number a person edits.
+double round4(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return std::strtod(buf, nullptr);
+}
+
+// The height file's stem as a job name (the schema's pattern: letters, digits, _ . -, not starting with . or
+// -).
+std::string job_name(const fs::path& file) {
+  std::string name = file.stem().string();
+  for (char& c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '.' && c != '-') c = '_';
+  if (name.empty() || name[0] == '.' || name[0] == '-') name.insert(name.begin(), '_');
+  if (name.size() > 128) name.resize(128);
+  return name;
+}
+
+// Problems with the input found by the job loader, as its lines.
+struct InitRefused {
+  std::vector<std::string> lines;
+};
+
+// What the presets need to know of the heights.
+struct HeightsFound {
+  Scene scene;
+  bool georeferenced = false;  // the file's geotransform gives the texel size
+  bool holes = false;          // NaN or NoData texels (filled)
+};
+
+// The height file read as a bake reads it: through a job that names only it.
+HeightsFound read_heights(const std::string& image, const fs::path& job_file) {
+  const json probe = {{"version", 1},
+                      {"name", "init"},
+                      {"height", {{"image", image}, {"nodata", "fill"}}},
+                      {"bake", {{{"method", "p1"}}}}};
+  JobLoad load = load_job_document(probe, job_file, std::nullopt);
+  if (!load.job) throw InitRefused{load.errors};
+  HeightsFound found;
+  found.scene = load_scene(*load.job);
+  found.georeferenced = found.scene.georeference.from_file;
+  found.holes = !found.scene.georeference.holes.empty();
+  return found;
+}
+
+// World units per stored unit for an image without georeferencing whose stored relief r is implausible for
+// the field's extent E at 1 unit per stored unit (under 1 % of E or over 4 E, describe_heights' rule): the
+// scale that makes the relief E / 10; else 1. A georeferenced raster's heights are data: kept.
+double suggested_height_scale(const HeightsFound& h) {
+  const HeightSource& s = h.scene.height_source;
+  const double relief = s.stored_max - s.stored_min;
+  const double extent = std::max(h.scene.field.width, h.scene.field.height) * h.scene.field.texel_size;
+  if (h.georeferenced || relief <= 0 || (relief >= 0.01 * extent && relief <= 4 * extent)) return 1;
+  return round4(0.1 * extent / relief);
+}
+
+// The job in the order a person reads it: version, name, description, height, bake, the rest.
+ordered preset_job(const std::string& preset, const std::string& name, const std::string& image,
+                   const HeightsFound& h, double scale) {
+  const HeightField& f = h.scene.field;
+  ordered height = {{"image", image}};
+  std::string notes;
+  if (!h.georeferenced) {
+    height["texel_size"] = 1.0;
+    notes += "texel_size: world units between texels (1: the map's size in texels; set the real size). ";
+  } else {
+    notes += "texel_size: the raster's pixel size (from the file). ";
+  }
+  if (scale != 1) {
+    height["height_scale"] = scale;
+    notes += "height_scale " + json(scale).dump() +
+             " makes the relief a tenth of the field's side: set your map's real height per stored unit "
+             "(docs/heights.md). ";
+  } else {
+    notes += "Heights are the stored values x height_scale (docs/heights.md). ";
+  }
+  if (h.holes) {
+    height["nodata"] = "fill";
+    notes += "nodata fill: the file's holes are filled from their neighbours. ";
+  }
+  ordered job = {{"version", 1}, {"name", name}, {"description", ""}, {"height", nullptr}};
+  ordered output = {{"dir", "out/" + name}, {"previews", true}};
+  if (preset == "game-ao") {
+    height["wrap"] = "repeat";
+    notes += "wrap repeat: the map tiles (set clamp if it does not). ";
+    job["bake"] = {{{"method", "p1"}, {"directions", 32}, {"layers", {"ao", "bent_normal"}}}};
+    output["textures"] = {
+        {{"layers", {"ao"}}, {"bits", 16}, {"format", "png"}},
+        {{"layers", {"bent_normal"}}, {"space", "tangent"}, {"y", "opengl"}, {"format", "png"}}};
+    notes += "Textures in out/" + name + "/textures (y: directx for Unreal).";
+  } else if (preset == "gis-relief") {
+    const double radius = 10 * f.texel_size;
+    job["bake"] = {{{"method", "relief"}, {"directions", 16}, {"search_radius", radius}},
+                   {{"method", "p1"}, {"directions", 32}, {"layers", {"ao", "vsky"}}}};
+    output["geotiff"] = true;
+    notes += "relief search_radius: 10 texels (world units). GeoTIFFs in out/" + name + ".";
+  } else {
+    job["bake"] = {{{"method", "p1"}, {"directions", 32}, {"layers", {"ao"}}}};
+    job["reference"] = {{"samples", 64}, {"seed", 1}};
+    job["report"] = {{"thresholds", {{"p1.ao.excess_rmse", 0.01}}}};
+    notes += "The reference path-traces every texel (";
+    notes +=
+        std::to_string(f.width) + "x" + std::to_string(f.height) +
+        "): fewer samples or a smaller field for a quick check. The threshold fails the bake (exit 1) when "
+        "p1's ao error beyond the reference's noise exceeds it.";
+  }
+  job["description"] = "hfbake init --preset " + preset + ". " + notes;
+  job["height"] = height;
+  job["output"] = output;
+  return job;
+}
+
+// The layers a method writes, from its schema: the enum of "layers", else the schema's description of them.
+std::string method_layers(const std::string& method) {
+  for (const EmbeddedSchema& s : embedded_schemas()) {
+    if (s.path != "methods/" + method + ".schema.json") continue;
+    const json schema = json::parse(s.text);
+    const json layers = schema["properties"].value("layers", json::object());
+    const json items = layers.value("items", json::object());
+    if (items.contains("enum")) {
+      std::string out;
+      for (const json& l : items["enum"]) out += (out.empty() ? "" : ", ") + l.get<std::string>();
+      return out;
+    }
+    std::string text = layers.value("description", std::string());
+    const std::string lead = "Layers to write: ";
+    if (text.rfind(lead, 0) == 0) text = text.substr(lead.size());
+    // The first sentence: up to a full stop before a capital (not "indirect_b1 .. indirect_b<n>").
+    for (std::size_t i = 0; i + 2 < text.size(); ++i)
+      if (text[i] == '.' && text[i + 1] == ' ' && std::isupper(static_cast<unsigned char>(text[i + 2]))) {
+        text.resize(i);
+        break;
+      }
+    if (!text.empty() && text.back() == '.') text.pop_back();
+    return text;
+  }
+  return "";
+}
+
+}  // namespace
+
+std::span<const InitPreset> init_presets() {
+  return kPresets;
+}
+
+std::string methods_and_presets_help() {
+  // `name` padded to `width` columns (at least one space after it).
+  auto column = [](const std::string& name, std::size_t width) {
+    return name + std::string(name.size() < width ? width - name.size() : 1, ' ');
+  };
+  std::string out = "Methods (bake entries; the layers each writes):\n";
+  for (const MethodInfo& m : method_table()) {
+    out += "  " + column(m.name, 10) + m.summary + "\n";
+    out += "            layers: " + method_layers(m.name) + "\n";
+  }
+  out += "\nPresets (hfbake init HEIGHT_FILE --preset NAME):\n";
+  for (const InitPreset& p : kPresets) out += "  " + column(p.name, 17) + p.summary + "\n";
+  out += "\nhfbake COMMAND --help for a command's options; docs/ for the manual.\n";
+  return out;
+}
+
+int run_init(const InitOptions& options) {
+  auto refuse = [](const std::string& line) {
+    std::fprintf(stderr, "hfbake: error: %s\n", line.c_str());
+    return 2;
+  };
+  const fs::path& height = options.height_file;
+  std::error_code ec;
+  if (!fs::is_regular_file(height, ec))
+    return refuse(height.string() + ": " + (fs::exists(height, ec) ? "not a file" : "no such file"));
+  const fs::path job_file = options.out ? *options.out : fs::path(job_name(height) + ".json");
+  if (fs::exists(job_file, ec) && !options.force)
+    return refuse(job_file.string() + ": exists (--force writes over it)");
+  const fs::path job_dir = fs::absolute(job_file).parent_path();
+  if (!fs::is_directory(job_dir, ec)) return refuse(job_file.string() + ": its folder does not exist");
+  std::string image = fs::relative(fs::absolute(height), job_dir, ec).generic_string();
+  if (ec || image.empty()) image = fs::absolute(height).generic_string();
+
+  try {
+    HeightsFound found = read_heights(image, job_file);
+    const double scale = suggested_height_scale(found);
+    const ordered doc = preset_job(options.preset, job_name(height), image, found, scale);
+    // The job as validate checks it, before anything is written.
+    JobLoad load = load_job_document(json::parse(doc.dump()), job_file, std::nullopt);
+    if (load.job) load.errors = resolve_job(*load.job);
+    if (!load.job || !load.errors.empty()) {
+      for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+      return 1;  // a preset that does not validate is hfbake's fault, not the input's
+    }
+    std::ofstream out(job_file);
+    out << doc.dump(2) << "\n";
+    out.close();
+    if (!out) return refuse(job_file.string() + ": cannot write it");
+    HeightSource& s = found.scene.height_source;
+    s.scale = scale;
+    s.world_min = s.stored_min * scale;
+    s.world_max = s.stored_max * scale;
+    const HeightsReport heights = describe_heights(*load.job, found.scene);
+    std::fprintf(stderr, "hfbake: wrote %s (preset %s)\nhfbake: %s\n", job_file.c_str(),
+                 options.preset.c_str(), heights.line.c_str());
+    if (!heights.warning.empty()) std::fprintf(stderr, "hfbake: warning: %s\n", heights.warning.c_str());
+    std::fprintf(stderr, "hfbake: edit it, then: hfbake validate %s && hfbake bake %s\n", job_file.c_str(),
+                 job_file.c_str());
+    return 0;
+  } catch (const InputError& e) {
+    return refuse(e.line());
+  } catch (const InitRefused& e) {
+    for (const std::string& line : e.lines) refuse(line);
+    return 2;
+  }
+}
+
+}  // namespace hfbake

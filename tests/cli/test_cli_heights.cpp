@@ -1,0 +1,197 @@
+// Heights in world units whatever the file: an integer image's samples are its stored integers through
+// OpenImageIO and GDAL alike, times height_scale (docs/heights.md). The truth: a float EXR holding the world
+// heights the job states, baked by the same method, must give the same pixels; and the line validate and bake
+// print names the reader and the range.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "run_hfbake.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using hfbake::cli_test::Result;
+
+constexpr int kSide = 48;
+
+class CliHeights : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("hfbake_test_cli_heights_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Result hfbake(const std::string& args) { return hfbake::cli_test::run_hfbake(dir_, args); }
+
+  // A job baking `height` with p1 (ao) into out_<name>.
+  fs::path write_job(const std::string& name, const nlohmann::json& height) {
+    const nlohmann::json j = {{"version", 1},
+                              {"name", name},
+                              {"height", height},
+                              {"bake", {{{"method", "p1"}, {"directions", 8}}}},
+                              {"output", {{"dir", "out_" + name}}}};
+    const fs::path p = dir_ / (name + ".json");
+    std::ofstream(p) << j.dump(2);
+    return p;
+  }
+
+  // Writes `values` (one channel) as `type`; integer types get the values as their stored integers.
+  void write_image(const std::string& name, const std::vector<float>& values, OIIO::TypeDesc type) {
+    const fs::path p = dir_ / name;
+    auto out = OIIO::ImageOutput::create(p.string());
+    ASSERT_TRUE(out) << name;
+    OIIO::ImageSpec spec(kSide, kSide, 1, type);
+    ASSERT_TRUE(out->open(p.string(), spec)) << name;
+    bool ok = false;
+    if (type == OIIO::TypeDesc::UINT16) {
+      std::vector<std::uint16_t> v(values.begin(), values.end());
+      ok = out->write_image(type, v.data());
+    } else if (type == OIIO::TypeDesc::UINT8) {
+      std::vector<std::uint8_t> v(values.begin(), values.end());
+      ok = out->write_image(type, v.data());
+    } else {
+      ok = out->write_image(OIIO::TypeDesc::FLOAT, values.data());
+    }
+    ASSERT_TRUE(ok && out->close()) << name;
+  }
+
+  // The ao channel of a bake's EXR.
+  std::vector<float> ao(const std::string& name) {
+    const fs::path p = dir_ / ("out_" + name) / (name + ".p1.exr");
+    auto in = OIIO::ImageInput::open(p.string());
+    if (!in) return {};
+    const OIIO::ImageSpec& spec = in->spec();
+    int c = 0;
+    for (int k = 0; k < spec.nchannels; ++k)
+      if (spec.channelnames[k] == "ao") c = k;
+    std::vector<float> v(std::size_t(spec.width) * spec.height);
+    if (!in->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, v.data())) return {};
+    return v;
+  }
+
+  fs::path dir_;
+};
+
+// Integer heights spanning exactly [0, top]: a bump and a ridge, so the bake has something to occlude.
+std::vector<float> integer_heights(float top) {
+  std::vector<double> v(std::size_t(kSide) * kSide);
+  for (int j = 0; j < kSide; ++j)
+    for (int i = 0; i < kSide; ++i) {
+      const double x = (i - 20.0) / 7.0, y = (j - 26.0) / 9.0;
+      v[std::size_t(j) * kSide + i] = 0.7 * std::exp(-(x * x + y * y)) + 0.15 * std::sin(0.4 * i + 0.2 * j);
+    }
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  const double a = *lo, b = *hi;
+  std::vector<float> out(v.size());
+  for (std::size_t t = 0; t < v.size(); ++t) out[t] = float(std::round(top * (v[t] - a) / (b - a)));
+  return out;
+}
+
+// The world heights hfbake makes of stored heights and a scale: float(stored * scale).
+std::vector<float> world(const std::vector<float>& stored, double scale) {
+  std::vector<float> w(stored.size());
+  for (std::size_t t = 0; t < stored.size(); ++t) w[t] = float(double(stored[t]) * scale);
+  return w;
+}
+
+TEST_F(CliHeights, IntegerImagesBakeLikeAFloatImageOfTheSameWorldHeights) {
+  const double relief = 12.0;  // world units over a 48-unit field
+  struct Case {
+    const char* file;
+    OIIO::TypeDesc type;
+    float top;
+  };
+  for (const Case& c :
+       {Case{"h16.png", OIIO::TypeDesc::UINT16, 65535}, Case{"h8.png", OIIO::TypeDesc::UINT8, 255},
+        Case{"h16.tif", OIIO::TypeDesc::UINT16, 65535}}) {
+    SCOPED_TRACE(c.file);
+    const std::vector<float> stored = integer_heights(c.top);
+    const double scale = relief / c.top;
+    write_image(c.file, stored, c.type);
+    write_image(std::string(c.file) + ".exr", world(stored, scale), OIIO::TypeDesc::FLOAT);
+    std::string stem = c.file;  // h16.png -> h16_png
+    std::replace(stem.begin(), stem.end(), '.', '_');
+    const Result a = hfbake("bake " + write_job(stem, {{"image", c.file}, {"height_scale", scale}}).string());
+    ASSERT_EQ(a.exit_code, 0) << a.err;
+    const Result b = hfbake("bake --quiet " +
+                            write_job(stem + "_exr", {{"image", std::string(c.file) + ".exr"}}).string());
+    ASSERT_EQ(b.exit_code, 0) << b.err;
+    const std::vector<float> from_integers = ao(stem), from_floats = ao(stem + "_exr");
+    ASSERT_EQ(from_integers.size(), std::size_t(kSide) * kSide);
+    EXPECT_EQ(from_integers, from_floats);
+    // The bake is not all white: the heights were not scaled to [0, 1] on the way.
+    float lowest = 1;
+    for (const float v : from_integers) lowest = std::min(lowest, v);
+    EXPECT_LT(lowest, 0.9f);
+    // The bake's line names the reader, the sample type and the range in world units.
+    const std::string type = c.type == OIIO::TypeDesc::UINT16 ? "uint16" : "uint8";
+    const std::string format = std::string(c.file).ends_with(".png") ? "png" : "tiff";
+    EXPECT_NE(a.err.find("heights: " + std::string(c.file) + " through OpenImageIO (" + format + ", " + type +
+                         " integers as stored); 48x48 texels of 1 (48 x 48 world units); stored 0 .. "),
+              std::string::npos)
+        << a.err;
+    EXPECT_NE(a.err.find(" -> heights 0 .. 12 world units (relief 12)"), std::string::npos) << a.err;
+    EXPECT_EQ(a.err.find("warning"), std::string::npos) << a.err;
+  }
+}
+
+// GDAL (a PNG with georeferencing beside it in an .aux.xml) and OpenImageIO (the same PNG without) read the
+// same integers: the same bake.
+TEST_F(CliHeights, GdalAndOpenImageIoAgreeOnIntegerHeights) {
+  const std::vector<float> stored = integer_heights(65535);
+  write_image("plain.png", stored, OIIO::TypeDesc::UINT16);
+  write_image("geo.png", stored, OIIO::TypeDesc::UINT16);
+  std::ofstream(dir_ / "geo.png.aux.xml")
+      << "<PAMDataset>\n  <GeoTransform>0, 1, 0, 48, 0, -1</GeoTransform>\n</PAMDataset>\n";
+  const double scale = 10.0 / 65535;
+  const Result a =
+      hfbake("bake " + write_job("plain", {{"image", "plain.png"}, {"height_scale", scale}}).string());
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const Result b =
+      hfbake("bake " + write_job("geo", {{"image", "geo.png"}, {"height_scale", scale}}).string());
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_NE(a.err.find("through OpenImageIO (png, uint16 integers as stored)"), std::string::npos) << a.err;
+  EXPECT_NE(b.err.find("through GDAL (PNG, UInt16 integers as stored)"), std::string::npos) << b.err;
+  const std::vector<float> x = ao("plain"), y = ao("geo");
+  ASSERT_EQ(x.size(), std::size_t(kSide) * kSide);
+  EXPECT_EQ(x, y);
+}
+
+// Without height_scale, a 16-bit image's integers are world units: validate states the range and warns that
+// the relief is implausible; a float image of [0, 1] heights over a 48-unit field is warned nearly flat.
+TEST_F(CliHeights, ValidateStatesTheRangeAndWarnsOnImplausibleRelief) {
+  write_image("raw16.png", integer_heights(65535), OIIO::TypeDesc::UINT16);
+  Result r = hfbake("validate " + write_job("raw16", {{"image", "raw16.png"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("; heights 0 .. 65535 world units (relief 65535)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("hfbake: warning: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("times the field's 48-unit side: steeper than any terrain"), std::string::npos)
+      << r.err;
+
+  std::vector<float> unit = integer_heights(65535);
+  for (float& v : unit) v /= 65535;
+  write_image("unit.exr", unit, OIIO::TypeDesc::FLOAT);
+  r = hfbake("validate " + write_job("unit", {{"image", "unit.exr"}, {"texel_size", 100}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("through OpenImageIO (openexr, float)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("nearly flat"), std::string::npos) << r.err;
+
+  // A plausible field: no warning, and --quiet prints nothing.
+  r = hfbake("validate --quiet " +
+             write_job("fine", {{"image", "raw16.png"}, {"height_scale", 20.0 / 65535}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+}
+
+}  // namespace

@@ -1,0 +1,138 @@
+// hfbake init: each preset's job validates and bakes, for an image and for a georeferenced raster; its
+// texel size and heights come from the file; --help lists the methods, their layers and the presets.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "run_hfbake.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using hfbake::cli_test::Result;
+
+class CliInit : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("hfbake_test_cli_init_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  Result run(const std::string& args) { return hfbake::cli_test::run_hfbake(dir_, args); }
+  nlohmann::json read_json(const fs::path& p) {
+    std::ifstream in(p);
+    return nlohmann::json::parse(in);
+  }
+  fs::path dir_;
+};
+
+// A 32^2 16-bit height map: a bump from 0 up to nearly 65535. Returns the largest stored value.
+int write_png16(const fs::path& p) {
+  const int n = 32;
+  std::vector<std::uint16_t> v(std::size_t(n) * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double x = (i - 15.5) / 6, y = (j - 15.5) / 6;
+      v[std::size_t(j) * n + i] = std::uint16_t(std::lround(65535 * std::exp(-(x * x + y * y))));
+    }
+  auto out = OIIO::ImageOutput::create(p.string());
+  const bool ok = out && out->open(p.string(), OIIO::ImageSpec(n, n, 1, OIIO::TypeDesc::UINT16)) &&
+                  out->write_image(OIIO::TypeDesc::UINT16, v.data()) && out->close();
+  EXPECT_TRUE(ok) << p;
+  EXPECT_EQ(*std::min_element(v.begin(), v.end()), 0);
+  return *std::max_element(v.begin(), v.end());
+}
+
+TEST_F(CliInit, EveryPresetValidatesAndBakes) {
+  const int top = write_png16(dir_ / "rock.png");
+  // A georeferenced copy (2-unit pixels, from an .aux.xml): its texel size comes from the file.
+  fs::copy_file(dir_ / "rock.png", dir_ / "dem.png");
+  std::ofstream(dir_ / "dem.png.aux.xml")
+      << "<PAMDataset>\n  <GeoTransform>1000, 2, 0, 5000, 0, -2</GeoTransform>\n</PAMDataset>\n";
+  for (const char* preset : {"game-ao", "gis-relief", "reference-check"}) {
+    for (const char* file : {"rock.png", "dem.png"}) {
+      SCOPED_TRACE(std::string(preset) + " " + file);
+      const std::string job = std::string(preset) + "_" + file + ".json";
+      const Result init =
+          run("init " + (dir_ / file).string() + " --preset " + preset + " --out " + (dir_ / job).string());
+      ASSERT_EQ(init.exit_code, 0) << init.err;
+      EXPECT_NE(init.err.find("hfbake: wrote "), std::string::npos) << init.err;
+      const nlohmann::json j = read_json(dir_ / job);
+      if (std::string(file) == "dem.png") {
+        EXPECT_FALSE(j["height"].contains("texel_size")) << j.dump();    // the raster's own 2
+        EXPECT_FALSE(j["height"].contains("height_scale")) << j.dump();  // a raster's heights are data
+        EXPECT_NE(init.err.find("32x32 texels of 2 (64 x 64 world units)"), std::string::npos) << init.err;
+      } else {
+        // 0..top over a 32-unit field is implausible: the scale that makes the relief a tenth of the side
+        // (to the four digits written).
+        EXPECT_EQ(j["height"]["texel_size"], 1.0);
+        ASSERT_TRUE(j["height"].contains("height_scale")) << j.dump();
+        EXPECT_NEAR(j["height"]["height_scale"].get<double>() * top, 3.2, 3.2 * 5e-4);
+        EXPECT_NE(init.err.find("stored 0 .. " + std::to_string(top) + " x height_scale"), std::string::npos)
+            << init.err;
+      }
+      const Result v = run("validate --quiet " + (dir_ / job).string());
+      EXPECT_EQ(v.exit_code, 0) << v.err;
+      const Result b = run("bake --quiet --no-cache " + (dir_ / job).string());
+      EXPECT_EQ(b.exit_code, 0) << b.err;
+      // The outputs the preset promises, in out/<stem> beside the job.
+      const std::string stem = fs::path(file).stem().string();
+      const fs::path out = dir_ / "out" / stem;
+      const fs::path promised = std::string(preset) == "game-ao" ? out / "textures" / (stem + ".p1.ao.png")
+                                : std::string(preset) == "gis-relief" ? out / (stem + ".relief.svf.tif")
+                                                                      : out / "report.html";
+      EXPECT_TRUE(fs::exists(promised)) << promised;
+      fs::remove_all(dir_ / "out");
+    }
+  }
+}
+
+TEST_F(CliInit, BadInputIsOneLineAndWritesNothing) {
+  Result r =
+      run("init " + (dir_ / "nope.png").string() + " --preset game-ao --out " + (dir_ / "a.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_EQ(r.error_lines()[0], "hfbake: error: " + (dir_ / "nope.png").string() + ": no such file");
+  EXPECT_FALSE(fs::exists(dir_ / "a.json"));
+
+  std::ofstream(dir_ / "junk.png") << "not an image";
+  r = run("init " + (dir_ / "junk.png").string() + " --preset game-ao --out " + (dir_ / "a.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("junk.png: cannot read the image"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "a.json"));
+
+  write_png16(dir_ / "h.png");
+  std::ofstream(dir_ / "kept.json") << "{}";
+  r = run("init " + (dir_ / "h.png").string() + " --preset game-ao --out " + (dir_ / "kept.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("kept.json: exists (--force writes over it)"), std::string::npos) << r.err;
+  r = run("init " + (dir_ / "h.png").string() + " --preset unknown");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST_F(CliInit, HelpListsMethodsLayersAndPresets) {
+  // --help prints to stdout.
+  const std::string cmd = std::string(HFBAKE_BINARY) + " --help > " + (dir_ / "help.txt").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream in(dir_ / "help.txt");
+  const std::string help((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* s :
+       {"init", "p1 ", "relief ", "layers: ao, vsky, direct, horizon, horizon_distance, bent_normal",
+        "layers: svf, openness_positive, openness_negative, horizon_deg", "game-ao", "gis-relief",
+        "reference-check"})
+    EXPECT_NE(help.find(s), std::string::npos) << s << "\n" << help;
+}
+
+}  // namespace
