@@ -1,0 +1,116 @@
+#include "terrain/point_horizon.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "core/vec.hpp"
+
+namespace hfbake {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The surface height at (x, y) clamped into the field (a crossing computed a rounding error outside it).
+double height_at(const HeightField& f, double x, double y) {
+  x = std::clamp(x, 0.0, double(f.width - 1));
+  y = std::clamp(y, 0.0, double(f.height - 1));
+  const double fx = std::floor(x), fy = std::floor(y);
+  const int i = int(fx), j = int(fy);
+  return facet_height(x - fx, y - fy, [&](int di, int dj) { return double(f.at(i + di, j + dj)); });
+}
+
+// The crossings of origin + d * rate with the integers, in increasing d > 0: d_m = (c_m - origin) / rate.
+struct Crossings {
+  double origin = 0, rate = 0, first = 0;
+  long m = 0;
+  Crossings(double o, double r) : origin(o), rate(r) {
+    if (r > 0) first = std::floor(o) + 1;
+    if (r < 0) first = std::ceil(o) - 1;
+  }
+  double next() const {
+    if (rate == 0) return kInf;
+    const double c = first + (rate > 0 ? double(m) : -double(m));
+    return (c - origin) / rate;
+  }
+};
+
+// Distance along the ray at which origin + d * rate leaves [0, n - 1].
+double exit_distance(double origin, double rate, int n) {
+  if (rate > 0) return (n - 1 - origin) / rate;
+  if (rate < 0) return origin / -rate;
+  return kInf;
+}
+
+HorizonRay march(const HeightField& f, const PointHorizonQuery& q, double z_surface, double azimuth) {
+  HorizonRay ray;
+  ray.azimuth_deg = azimuth * 180 / kPi;
+  const double vx = std::sin(azimuth) / q.frame.east_per_x, vy = std::cos(azimuth) / q.frame.north_per_y;
+  const double c = q.curvature ? q.curvature->coefficient(azimuth) : 0;
+  const double z0 = z_surface + q.observer_height;
+  const double d_end = std::min(exit_distance(q.x, vx, f.width), exit_distance(q.y, vy, f.height));
+  if (!(d_end > 0)) return ray;
+  double best = -kInf;  // tangent of the elevation
+  auto consider = [&](double d, double z) {
+    const double slope = (z - c * d * d - z0) / d;
+    if (slope > best) {
+      best = slope;
+      ray.found = true;
+      ray.distance = d, ray.x = q.x + d * vx, ray.y = q.y + d * vy, ray.z = z;
+    }
+  };
+  double d_prev = 0, z_prev = z_surface;  // the last point visited; z_prev NaN: a hole behind
+  auto visit = [&](double d) {
+    const double z = height_at(f, q.x + d * vx, q.y + d * vy);
+    if (!std::isfinite(z)) {
+      d_prev = d, z_prev = z;
+      return;
+    }
+    if (c > 0 && std::isfinite(z_prev) && d > d_prev) {
+      const double b = (z - z_prev) / (d - d_prev), a = z_prev - b * d_prev;
+      if (a < z0) {
+        const double d_star = std::sqrt((z0 - a) / c);
+        if (d_star > d_prev && d_star < d) consider(d_star, a + b * d_star);
+      }
+    }
+    consider(d, z);
+    d_prev = d, z_prev = z;
+  };
+  Crossings cx(q.x, vx), cy(q.y, vy), cd(q.x + q.y, vx + vy);
+  for (;;) {
+    const double d = std::min({cx.next(), cy.next(), cd.next()});
+    if (!(d < d_end)) break;
+    if (d > 0) visit(d);
+    // A vertex is a column, row and diagonal crossing at once: every sequence at d advances.
+    if (cx.next() <= d) ++cx.m;
+    if (cy.next() <= d) ++cy.m;
+    if (cd.next() <= d) ++cd.m;
+  }
+  visit(d_end);
+  if (ray.found) ray.elevation_deg = std::atan(best) * 180 / kPi;
+  return ray;
+}
+
+}  // namespace
+
+std::optional<double> surface_height(const HeightField& field, double x, double y) {
+  if (!(x >= 0 && y >= 0 && x <= field.width - 1 && y <= field.height - 1)) return std::nullopt;
+  const double z = height_at(field, x, y);
+  if (!std::isfinite(z)) return std::nullopt;
+  return z;
+}
+
+std::vector<HorizonRay> point_horizon(const HeightField& field, const PointHorizonQuery& query) {
+  const std::optional<double> z = surface_height(field, query.x, query.y);
+  if (!z) throw std::invalid_argument("point_horizon: the point has no surface height");
+  if (query.directions < 1) throw std::invalid_argument("point_horizon: directions must be >= 1");
+  std::vector<HorizonRay> rays;
+  rays.reserve(std::size_t(query.directions));
+  for (int k = 0; k < query.directions; ++k)
+    rays.push_back(march(field, query, *z, 2 * kPi * k / query.directions));
+  return rays;
+}
+
+}  // namespace hfbake
