@@ -47,7 +47,11 @@ double exit_distance(double origin, double rate, int n) {
 HorizonRay march(const HeightField& f, const PointHorizonQuery& q, double z_surface, double azimuth) {
   HorizonRay ray;
   ray.azimuth_deg = azimuth * 180 / kPi;
-  const double vx = std::sin(azimuth) / q.frame.east_per_x, vy = std::cos(azimuth) / q.frame.north_per_y;
+  // sin and cos of multiples of 90° are 1e-16 off zero: snapped, so that a ray along a border row or
+  // column stays on the field.
+  auto snap = [](double v) { return std::abs(v) < 1e-12 ? 0.0 : v; };
+  const double vx = snap(std::sin(azimuth)) / q.frame.east_per_x;
+  const double vy = snap(std::cos(azimuth)) / q.frame.north_per_y;
   const double c = q.curvature ? q.curvature->coefficient(azimuth) : 0;
   const double z0 = z_surface + q.observer_height;
   const double d_end = std::min(exit_distance(q.x, vx, f.width), exit_distance(q.y, vy, f.height));
@@ -70,7 +74,12 @@ HorizonRay march(const HeightField& f, const PointHorizonQuery& q, double z_surf
     }
     if (c > 0 && std::isfinite(z_prev) && d > d_prev) {
       const double b = (z - z_prev) / (d - d_prev), a = z_prev - b * d_prev;
-      if (a < z0) {
+      if (d_prev == 0 && a >= z0 && b > best) {
+        // An eye on the surface: the slope b - c d of the first piece is highest as d -> 0, the facet's
+        // own slope, cast by the surface at the point itself.
+        best = b, ray.found = true;
+        ray.distance = 0, ray.x = q.x, ray.y = q.y, ray.z = z_prev;
+      } else if (a < z0) {
         const double d_star = std::sqrt((z0 - a) / c);
         if (d_star > d_prev && d_star < d) consider(d_star, a + b * d_star);
       }

@@ -42,9 +42,10 @@ std::optional<double> surface_height(const HeightField& field, double x, double 
 // between its crossings of texel columns, rows and diagonals; the elevation of a point at horizontal
 // distance d is atan((z(d) - c d^2 - z0) / d) with c the curvature coefficient (0 on a flat Earth), whose
 // maxima lie at those crossings, at the border, or (c > 0) where the slope's derivative vanishes inside a
-// piece, d* = sqrt((z0 - a) / c) for the piece's line z = a + b d: all of them are evaluated, so the result
-// is exact on the surface. Pieces touching a non-finite height are holes: nothing casts there. The point
-// must have a surface_height.
+// piece, d* = sqrt((z0 - a) / c) for the piece's line z = a + b d, or (an eye on the surface, c > 0) as
+// d -> 0 on the first piece, where the facet's own slope b casts (distance 0): all of them are evaluated, so
+// the result is exact on the surface. Pieces touching a non-finite height are holes: nothing casts there. The
+// point must have a surface_height.
 std::vector<HorizonRay> point_horizon(const HeightField& field, const PointHorizonQuery& query);
 
 }  // namespace hfbake
