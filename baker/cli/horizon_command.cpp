@@ -49,6 +49,7 @@ struct Profile {
   std::optional<EarthCurvature> curvature;
   std::string crs_name, unit;
   bool geographic = false;
+  double convergence = 0;  // radians: true north's azimuth in the grid
   std::vector<HorizonRay> rays;
 };
 
@@ -77,7 +78,9 @@ std::string to_json(const HorizonOptions& o, const Profile& p) {
   doc["crs"] = p.crs_name;
   doc["point"] = {{"x", p.map_x}, {"y", p.map_y}, {"surface_z", p.surface}, {"observer_z", p.observer}};
   doc["distance_unit"] = p.unit;
-  doc["azimuth"] = "compass: degrees clockwise from north (the raster's north)";
+  doc["azimuth"] = p.crs_name.empty() ? "compass: degrees clockwise from the raster's north (no CRS)"
+                                      : "compass: degrees clockwise from true north";
+  doc["grid_convergence_deg"] = p.convergence * 180 / kPi;
   if (p.curvature)
     doc["curvature"] = {{"refraction", p.curvature->refraction},
                         {"meridian_radius", p.curvature->meridian_radius},
@@ -178,6 +181,11 @@ Profile compute(const HorizonOptions& o) {
                g[5] * rad * ellipsoid.meridian_radius(lat)};
   } else {
     q.frame = {g[1], g[5]};
+    if (!info->crs_wkt.empty()) {
+      const std::optional<double> gamma = grid_convergence(info->crs_wkt, xy[0], xy[1]);
+      if (!gamma) fail("--at", "PROJ cannot find true north at " + where + " in " + info->crs_name);
+      q.frame.convergence = *gamma;
+    }
     if (earth && o.curvature.value_or(false)) {
       const auto lonlat = crs_to_lonlat(info->crs_wkt, xy[0], xy[1]);
       if (!lonlat) fail("--at", "PROJ cannot find the latitude of " + where + " in " + info->crs_name);
@@ -189,6 +197,7 @@ Profile compute(const HorizonOptions& o) {
   if (o.curvature.value_or(info->geographic))
     q.curvature = EarthCurvature::at(ellipsoid, lat, o.refraction.value_or(kDefaultRefraction));
   p.curvature = q.curvature;
+  p.convergence = q.frame.convergence;
   p.rays = point_horizon(field, q);
   return p;
 }

@@ -2,6 +2,7 @@
 
 #include <ogr_spatialref.h>
 
+#include <cmath>
 #include <memory>
 
 #include "io/gdal_session.hpp"
@@ -62,6 +63,22 @@ std::optional<std::array<double, 2>> crs_to_lonlat(const std::string& wkt, doubl
   if (!geog) return std::nullopt;
   geog->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   return transform(from, *geog, x, y);
+}
+
+std::optional<double> grid_convergence(const std::string& wkt, double x, double y) {
+  GdalSession session;
+  OGRSpatialReference crs;
+  if (!read_crs(wkt, crs)) return std::nullopt;
+  if (crs.IsGeographic()) return 0.0;
+  std::unique_ptr<OGRSpatialReference> geog(crs.CloneGeogCS());
+  if (!geog) return std::nullopt;
+  geog->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  const auto lonlat = transform(crs, *geog, x, y);
+  if (!lonlat) return std::nullopt;
+  // A step of 1e-4° (11 m) north along the meridian, back in the grid.
+  const auto north = transform(*geog, crs, (*lonlat)[0], (*lonlat)[1] + 1e-4);
+  if (!north) return std::nullopt;
+  return std::atan2((*north)[0] - x, (*north)[1] - y);
 }
 
 }  // namespace hfbake

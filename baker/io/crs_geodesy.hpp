@@ -24,4 +24,8 @@ std::optional<std::array<double, 2>> lonlat_to_crs(const std::string& wkt, doubl
 // The CRS's (x, y) to longitude/latitude (degrees) on the CRS's own datum; nullopt when PROJ cannot.
 std::optional<std::array<double, 2>> crs_to_lonlat(const std::string& wkt, double x, double y);
 
+// The meridian convergence at the CRS point (x, y): the azimuth of true north in the grid, radians clockwise
+// from the grid's +y (0 for a geographic CRS); nullopt when PROJ cannot transform the point.
+std::optional<double> grid_convergence(const std::string& wkt, double x, double y);
+
 }  // namespace hfbake

@@ -50,8 +50,9 @@ HorizonRay march(const HeightField& f, const PointHorizonQuery& q, double z_surf
   // sin and cos of multiples of 90° are 1e-16 off zero: snapped, so that a ray along a border row or
   // column stays on the field.
   auto snap = [](double v) { return std::abs(v) < 1e-12 ? 0.0 : v; };
-  const double vx = snap(std::sin(azimuth)) / q.frame.east_per_x;
-  const double vy = snap(std::cos(azimuth)) / q.frame.north_per_y;
+  const double grid_azimuth = azimuth + q.frame.convergence;
+  const double vx = snap(std::sin(grid_azimuth)) / q.frame.east_per_x;
+  const double vy = snap(std::cos(grid_azimuth)) / q.frame.north_per_y;
   const double c = q.curvature ? q.curvature->coefficient(azimuth) : 0;
   const double z0 = z_surface + q.observer_height;
   const double d_end = std::min(exit_distance(q.x, vx, f.width), exit_distance(q.y, vy, f.height));

@@ -16,6 +16,9 @@ namespace hfbake {
 // geographic raster's are not).
 struct GroundFrame {
   double east_per_x = 1, north_per_y = -1;
+  // The grid's azimuth of true north at the point (radians, clockwise from the grid's north: a projection's
+  // meridian convergence); the ray reported at compass azimuth A walks the grid towards A + convergence.
+  double convergence = 0;
 };
 
 struct PointHorizonQuery {
