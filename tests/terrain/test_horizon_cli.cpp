@@ -7,6 +7,7 @@
 #include <ogr_spatialref.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <array>
@@ -282,6 +283,48 @@ TEST(HorizonCli, LidarTileProjectedAndGeographicAgree) {
               diffs[diffs.size() / 2], diffs[diffs.size() * 9 / 10], diffs.back());
   EXPECT_LT(diffs[diffs.size() / 2], 0.015);
   EXPECT_LT(diffs.back(), 0.1);
+  fs::remove_all(dir);
+}
+
+// --format json: the same rays as the CSV, with the point, the curvature and the grid convergence.
+TEST(HorizonCli, JsonCarriesTheCsvsRays) {
+  const fs::path dir = temp_dir("json");
+  const fs::path dem = dir / "dem.tif";
+  write_dem(dem, 40, 30, {600000, 5, 0, 5100000, 0, -5}, 32633,
+            [](int i, int j) { return 0.3 * i + 0.1 * j * j; });
+  const std::string args =
+      dem.string() + " --at 600100,5099950 --directions 12 --observer-height 1.5 --curvature";
+  const std::vector<Row> csv = horizon(dir, args);
+  const fs::path out = dir / "horizon.json";
+  ASSERT_EQ(run_hfbake(dir, "horizon " + args + " --format json --out " + out.string()).exit_code, 0);
+  std::ifstream in(out);
+  const nlohmann::json doc = nlohmann::json::parse(in);
+  ASSERT_EQ(doc["rays"].size(), csv.size());
+  EXPECT_NEAR(doc["point"]["observer_z"].get<double>() - doc["point"]["surface_z"].get<double>(), 1.5, 1e-9);
+  EXPECT_NEAR(doc["curvature"]["refraction"].get<double>(), 0.13, 1e-12);
+  // The meridian convergence at the point (UTM 33N, 100 km east of its central meridian: -0.93°),
+  // against a step north through OGR's own transforms.
+  OGRSpatialReference utm, geo;
+  utm.importFromEPSG(32633);
+  utm.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  geo.importFromEPSG(4326);
+  geo.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  std::unique_ptr<OGRCoordinateTransformation> to_geo(OGRCreateCoordinateTransformation(&utm, &geo));
+  std::unique_ptr<OGRCoordinateTransformation> to_utm(OGRCreateCoordinateTransformation(&geo, &utm));
+  double x = 600100, y = 5099950;
+  ASSERT_TRUE(to_geo->Transform(1, &x, &y));
+  y += 0.01;
+  ASSERT_TRUE(to_utm->Transform(1, &x, &y));
+  EXPECT_NEAR(doc["grid_convergence_deg"].get<double>(), std::atan2(x - 600100, y - 5099950) * kDeg, 1e-3);
+  for (std::size_t k = 0; k < csv.size(); ++k) {
+    const nlohmann::json& ray = doc["rays"][k];
+    EXPECT_NEAR(ray["azimuth_deg"].get<double>(), csv[k].azimuth, 1e-6);
+    ASSERT_EQ(csv[k].found, !ray["elevation_deg"].is_null()) << k;
+    if (!csv[k].found) continue;
+    EXPECT_NEAR(ray["elevation_deg"].get<double>(), csv[k].elevation, 1e-6);
+    EXPECT_NEAR(ray["distance"].get<double>(), csv[k].distance, 1e-4);
+    EXPECT_NEAR(ray["caster"][0].get<double>(), csv[k].x, 1e-3);
+  }
   fs::remove_all(dir);
 }
 
