@@ -13,13 +13,19 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// The surface height at (x, y) clamped into the field (a crossing computed a rounding error outside it).
+// The surface height at (x, y) clamped into the field (a crossing computed a rounding error outside it):
+// the facet's barycentric sum over the corners with a weight, so that a point on an edge or a vertex next to
+// a NoData texel has its height (NaN only where a weighted corner is not finite).
 double height_at(const HeightField& f, double x, double y) {
   x = std::clamp(x, 0.0, double(f.width - 1));
   y = std::clamp(y, 0.0, double(f.height - 1));
   const double fx = std::floor(x), fy = std::floor(y);
   const int i = int(fx), j = int(fy);
-  return facet_height(x - fx, y - fy, [&](int di, int dj) { return double(f.at(i + di, j + dj)); });
+  const FacetWeights w = facet_weights(x - fx, y - fy);
+  double z = 0;
+  for (int c = 0; c < 3; ++c)
+    if (w.w[c] != 0) z += w.w[c] * double(f.at(i + w.di[c], j + w.dj[c]));
+  return z;
 }
 
 // The crossings of origin + d * rate with the integers, in increasing d > 0: d_m = (c_m - origin) / rate.

@@ -247,6 +247,9 @@ TEST(PointHorizon, HolesCastNothingAndTheBorderLooksOut) {
   ASSERT_TRUE(rays[1].found);
   EXPECT_NEAR(rays[1].elevation_deg, std::atan(50.0 / 15) * kDeg, 1e-10);  // the wall's column, past the hole
   EXPECT_FALSE(surface_height(f, 24.5, 3).has_value());
+  EXPECT_FALSE(surface_height(f, 23.5, 3.2).has_value());  // a facet with a NoData corner
+  EXPECT_EQ(surface_height(f, 23, 3.5).value_or(-1), 0);   // on the edge beside it: the surface is there
+  EXPECT_EQ(surface_height(f, 25, 3).value_or(-1), 50);    // a vertex next to the hole
   EXPECT_FALSE(surface_height(f, -0.01, 3).has_value());
   EXPECT_TRUE(surface_height(f, 29, 29).has_value());
 }
