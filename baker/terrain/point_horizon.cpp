@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/vec.hpp"
+#include "field/edge_crossings.hpp"
 
 namespace hfbake {
 
@@ -27,21 +28,6 @@ double height_at(const HeightField& f, double x, double y) {
     if (w.w[c] != 0) z += w.w[c] * double(f.at(i + w.di[c], j + w.dj[c]));
   return z;
 }
-
-// The crossings of origin + d * rate with the integers, in increasing d > 0: d_m = (c_m - origin) / rate.
-struct Crossings {
-  double origin = 0, rate = 0, first = 0;
-  long m = 0;
-  Crossings(double o, double r) : origin(o), rate(r) {
-    if (r > 0) first = std::floor(o) + 1;
-    if (r < 0) first = std::ceil(o) - 1;
-  }
-  double next() const {
-    if (rate == 0) return kInf;
-    const double c = first + (rate > 0 ? double(m) : -double(m));
-    return (c - origin) / rate;
-  }
-};
 
 // Distance along the ray at which origin + d * rate leaves [0, n - 1].
 double exit_distance(double origin, double rate, int n) {
@@ -94,15 +80,22 @@ HorizonRay march(const HeightField& f, const PointHorizonQuery& q, double z_surf
     consider(d, z);
     d_prev = d, z_prev = z;
   };
-  Crossings cx(q.x, vx), cy(q.y, vy), cd(q.x + q.y, vx + vy);
-  for (;;) {
-    const double d = std::min({cx.next(), cy.next(), cd.next()});
-    if (!(d < d_end)) break;
-    if (d > 0) visit(d);
-    // A vertex is a column, row and diagonal crossing at once: every sequence at d advances.
-    if (cx.next() <= d) ++cx.m;
-    if (cy.next() <= d) ++cy.m;
-    if (cd.next() <= d) ++cd.m;
+  // The ray in steps of one texel along its major axis, from one column (row) to the next; each step's
+  // crossings from field/edge_crossings.hpp, then its end (on a column or row: not one of them).
+  const bool along_x = std::abs(vx) >= std::abs(vy);
+  const double major0 = along_x ? q.x : q.y, rate = along_x ? vx : vy;
+  double d0 = 0, x0 = q.x, y0 = q.y;
+  for (long m = 1;; ++m) {
+    const double edge = rate > 0 ? std::floor(major0) + double(m) : std::ceil(major0) - double(m);
+    const double d1 = std::min((edge - major0) / rate, d_end);
+    double x1 = q.x + d1 * vx, y1 = q.y + d1 * vy;
+    if (d1 < d_end) (along_x ? x1 : y1) = edge;  // exactly on the column (row)
+    EdgeCrossing crossings[kMaxEdgeCrossings];
+    const int n = edge_crossings(x0, y0, x1, y1, crossings);
+    for (int e = 0; e < n; ++e) visit(d0 + crossings[e].t * (d1 - d0));
+    if (d1 >= d_end) break;
+    visit(d1);
+    d0 = d1, x0 = x1, y0 = y1;
   }
   visit(d_end);
   if (ray.found) ray.elevation_deg = std::atan(best) * 180 / kPi;
