@@ -142,29 +142,17 @@ Profile compute(const HorizonOptions& o) {
   }
   p.map_x = xy[0], p.map_y = xy[1];
 
-  Plane plane = read_georaster_band(o.dem, o.band, InputSite{"", ""});
-  HeightField field;
-  field.width = plane.width, field.height = plane.height, field.wrap = Wrap::clamp;
-  field.z = std::move(plane.values);
-  if (const std::optional<double> nodata = info->nodata[std::size_t(o.band)]; nodata && !std::isnan(*nodata))
-    for (float& z : field.z)
-      if (z == float(*nodata)) z = std::nanf("");
-
   PointHorizonQuery q;
   q.x = (xy[0] - g[0]) / g[1] - 0.5;
   q.y = (xy[1] - g[3]) / g[5] - 0.5;
   q.observer_height = o.observer_height;
   q.directions = o.directions;
-  const double x0 = g[0] + 0.5 * g[1], x1 = g[0] + (field.width - 0.5) * g[1];
-  const double y0 = g[3] + 0.5 * g[5], y1 = g[3] + (field.height - 0.5) * g[5];
+  const double x0 = g[0] + 0.5 * g[1], x1 = g[0] + (info->width - 0.5) * g[1];
+  const double y0 = g[3] + 0.5 * g[5], y1 = g[3] + (info->height - 0.5) * g[5];
   const std::string where = num(xy[0]) + "," + num(xy[1]);
-  const std::optional<double> z = surface_height(field, q.x, q.y);
-  if (!z && !(q.x >= 0 && q.y >= 0 && q.x <= field.width - 1 && q.y <= field.height - 1))
+  if (!(q.x >= 0 && q.y >= 0 && q.x <= info->width - 1 && q.y <= info->height - 1))
     fail("--at", where + " is outside the surface: its texel centres span x " + num(std::min(x0, x1)) + ".." +
                      num(std::max(x0, x1)) + ", y " + num(std::min(y0, y1)) + ".." + num(std::max(y0, y1)));
-  if (!z) fail("--at", where + " is on NoData (a texel around it has no height)");
-  p.surface = *z;
-  p.observer = *z + o.observer_height;
 
   // The ground frame and, with curvature, the Earth's radii at the point.
   std::optional<CrsEarth> earth = info->crs_wkt.empty() ? std::nullopt : crs_earth(info->crs_wkt);
@@ -198,6 +186,19 @@ Profile compute(const HorizonOptions& o) {
     q.curvature = EarthCurvature::at(ellipsoid, lat, o.refraction.value_or(kDefaultRefraction));
   p.curvature = q.curvature;
   p.convergence = q.frame.convergence;
+
+  // The heights, once every argument is checked.
+  Plane plane = read_georaster_band(o.dem, o.band, InputSite{"", ""});
+  HeightField field;
+  field.width = plane.width, field.height = plane.height, field.wrap = Wrap::clamp;
+  field.z = std::move(plane.values);
+  if (const std::optional<double> nodata = info->nodata[std::size_t(o.band)]; nodata && !std::isnan(*nodata))
+    for (float& z : field.z)
+      if (z == float(*nodata)) z = std::nanf("");
+  const std::optional<double> z = surface_height(field, q.x, q.y);
+  if (!z) fail("--at", where + " is on NoData (a texel around it has no height)");
+  p.surface = *z;
+  p.observer = *z + o.observer_height;
   p.rays = point_horizon(field, q);
   return p;
 }
