@@ -12,6 +12,8 @@
 #include "core/vec.hpp"
 #include "io/crs_geodesy.hpp"
 #include "io/georaster_input.hpp"
+#include "io/preview.hpp"
+#include "terrain/horizon_plot.hpp"
 #include "terrain/point_horizon.hpp"
 
 namespace hfbake {
@@ -109,6 +111,7 @@ Profile compute(const HorizonOptions& o) {
   };
   if (o.format != "csv" && o.format != "json") fail("--format", "is " + o.format + ", not csv or json");
   if (!(o.directions >= 1 && o.directions <= 1000000)) fail("--directions", "must be in [1, 1000000]");
+  if (!(o.plot_size >= 64 && o.plot_size <= 8192)) fail("--plot-size", "must be in [64, 8192]");
   if (!(std::isfinite(o.observer_height) && o.observer_height >= 0))
     fail("--observer-height", "must be a finite height >= 0");
   if (o.refraction && !(std::isfinite(*o.refraction) && *o.refraction > -1 && *o.refraction < 1))
@@ -209,6 +212,14 @@ int run_horizon(const HorizonOptions& o) {
   try {
     const Profile p = compute(o);
     const std::string text = o.format == "json" ? to_json(o, p) : to_csv(p);
+    if (!o.plot.empty()) {
+      PolarPlotGeometry geometry;
+      geometry.size = o.plot_size;
+      const std::string png = encode_png(o.plot_size, o.plot_size, 3, horizon_polar_plot(p.rays, geometry));
+      std::ofstream file(o.plot, std::ios::binary);
+      file << png;
+      if (!file.good()) throw InputError(o.plot, "--plot", "cannot write the file");
+    }
     if (o.out.empty()) {
       std::fputs(text.c_str(), stdout);
       return 0;

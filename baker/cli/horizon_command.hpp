@@ -16,6 +16,8 @@ struct HorizonOptions {
   int band = 0;                // 0-based
   std::string format = "csv";  // "csv" or "json"
   std::string out;             // empty: stdout
+  std::string plot;            // a polar plot PNG as well; empty: none
+  int plot_size = 512;
   // Earth curvature: nullopt = the default (on for a geographic CRS, off for a projected one).
   std::optional<bool> curvature;
   std::optional<double> refraction;  // k; default kDefaultRefraction

@@ -171,6 +171,10 @@ int main(int argc, char** argv) {
   horizon_cmd->add_option("--band", horizon.band, "Band of the heights, 0-based (default 0)");
   horizon_cmd->add_option("--format", horizon.format, "csv (default) or json");
   horizon_cmd->add_option("--out", horizon.out, "Write to FILE instead of standard output");
+  horizon_cmd->add_option("--plot", horizon.plot,
+                          "Also write a polar plot PNG: seen from above, north up, the zenith at the centre");
+  horizon_cmd->add_option("--plot-size", horizon.plot_size,
+                          "The plot's width and height in pixels (default 512)");
   bool curvature_on = false, curvature_off = false;
   horizon_cmd->add_flag("--curvature", curvature_on,
                         "Lower each point by d^2 (1 - k) / (2 R) (the default for a geographic CRS)");

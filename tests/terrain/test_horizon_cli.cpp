@@ -106,6 +106,7 @@ TEST(HorizonCli, BadInputIsOneLineAndExit2) {
       {"--at 1011", "--at: is \"1011\", not X,Y"},
       {"--at 1021,1981 --directions 0", "--directions: must be in [1, 1000000]"},
       {"--at 1021,1981 --format xml", "--format: is xml, not csv or json"},
+      {"--at 1021,1981 --plot x.png --plot-size 10", "--plot-size: must be in [64, 8192]"},
       {"--at 1021,1981 --band 1", "--band: is 1 but the raster has 1 band(s)"},
       {"--at 1021,1981 --refraction 0.2", "--refraction: applies with Earth curvature only"},
       {"--at 15,46 --lonlat", "--at: "},
@@ -296,7 +297,19 @@ TEST(HorizonCli, JsonCarriesTheCsvsRays) {
       dem.string() + " --at 600100,5099950 --directions 12 --observer-height 1.5 --curvature";
   const std::vector<Row> csv = horizon(dir, args);
   const fs::path out = dir / "horizon.json";
-  ASSERT_EQ(run_hfbake(dir, "horizon " + args + " --format json --out " + out.string()).exit_code, 0);
+  const fs::path plot = dir / "plot.png";
+  ASSERT_EQ(run_hfbake(dir, "horizon " + args + " --format json --out " + out.string() + " --plot " +
+                                plot.string() + " --plot-size 128")
+                .exit_code,
+            0);
+  {  // the plot: a 128 x 128 RGB PNG (its pixels are tests/terrain/test_point_horizon's)
+    GDALAllRegister();
+    std::unique_ptr<GDALDataset> png(GDALDataset::Open(plot.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
+    ASSERT_TRUE(png);
+    EXPECT_EQ(png->GetRasterXSize(), 128);
+    EXPECT_EQ(png->GetRasterYSize(), 128);
+    EXPECT_EQ(png->GetRasterCount(), 3);
+  }
   std::ifstream in(out);
   const nlohmann::json doc = nlohmann::json::parse(in);
   ASSERT_EQ(doc["rays"].size(), csv.size());

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "../p1/p1_truth.hpp"
+#include "terrain/horizon_plot.hpp"
 #include "terrain/point_horizon.hpp"
 
 namespace hfbake {
@@ -252,6 +253,36 @@ TEST(PointHorizon, HolesCastNothingAndTheBorderLooksOut) {
   EXPECT_EQ(surface_height(f, 25, 3).value_or(-1), 50);    // a vertex next to the hole
   EXPECT_FALSE(surface_height(f, -0.01, 3).has_value());
   EXPECT_TRUE(surface_height(f, 29, 29).has_value());
+}
+
+// The polar plot of a profile: 45° east, -5° at the other three compass points, linear in between (cyclic).
+// Terrain below the profile, sky above, white outside the -22.5° circle.
+TEST(PointHorizon, PolarPlotShowsTheProfile) {
+  std::vector<HorizonRay> rays(4);
+  for (int k = 0; k < 4; ++k)
+    rays[k].azimuth_deg = 90.0 * k, rays[k].found = true, rays[k].elevation_deg = -5;
+  rays[1].elevation_deg = 45;
+  EXPECT_DOUBLE_EQ(profile_elevation(rays, 45), 20);
+  EXPECT_DOUBLE_EQ(profile_elevation(rays, 315), -5);
+  EXPECT_DOUBLE_EQ(profile_elevation(rays, -45), -5);
+  PolarPlotGeometry g;
+  g.size = 200;
+  const std::vector<std::uint8_t> px = horizon_polar_plot(rays, g);
+  ASSERT_EQ(px.size(), 200u * 200u * 3u);
+  auto pixel_at = [&](double azimuth_deg, double e) {  // the pixel where (A, e) is drawn
+    const double r = (90 - e) / 90 * g.horizon_radius(), a = azimuth_deg / kDeg;
+    const int x = int(std::floor(100 + r * std::sin(a) + 0.3)),
+              y = int(std::floor(100 - r * std::cos(a) + 0.3));
+    return &px[(std::size_t(y) * 200 + x) * 3];
+  };
+  auto is_sky = [](const std::uint8_t* p) { return p[2] == 240; };
+  auto is_ground = [](const std::uint8_t* p) { return p[0] == 150 && p[2] == 80; };
+  EXPECT_TRUE(is_ground(pixel_at(80, 35)));
+  EXPECT_TRUE(is_sky(pixel_at(80, 44)));  // the profile is at 39.4° there
+  EXPECT_TRUE(is_sky(pixel_at(350, 5)));
+  EXPECT_TRUE(is_ground(pixel_at(340, -10)));
+  EXPECT_TRUE(is_sky(pixel_at(200, -2)));
+  EXPECT_EQ(px[0], 255);  // a corner: outside the -22.5° circle
 }
 
 }  // namespace
