@@ -11,6 +11,7 @@
 
 #include "cli/bake_command.hpp"
 #include "cli/compare_command.hpp"
+#include "cli/horizon_command.hpp"
 #include "cli/init_command.hpp"
 #include "cli/slurm_command.hpp"
 #include "cli/version.hpp"
@@ -173,12 +174,49 @@ int main(int argc, char** argv) {
   validate_cmd->add_option("--memory-limit", validate_memory_limit, "As bake's --memory-limit")
       ->check(memory_size);
 
+  // hfbake horizon: the horizon profile at a point of a DEM.
+  hfbake::HorizonOptions horizon;
+  CLI::App* horizon_cmd =
+      app.add_subcommand("horizon", "Print the exact horizon profile at a point of a georeferenced DEM");
+  horizon_cmd->add_option("dem", horizon.dem, "The DEM (a raster GDAL reads, with a geotransform)")
+      ->required();
+  horizon_cmd->add_option("--at", horizon.at, "X,Y in the raster's CRS (LON,LAT in WGS 84 with --lonlat)")
+      ->required();
+  horizon_cmd->add_flag("--lonlat", horizon.lonlat, "--at is longitude,latitude in WGS 84 degrees");
+  horizon_cmd->add_option("--observer-height", horizon.observer_height,
+                          "Eye height above the surface, in the heights' unit (default 0)");
+  horizon_cmd->add_option("--directions", horizon.directions,
+                          "K compass azimuths 360 k / K, clockwise from north (default 360)");
+  horizon_cmd->add_option("--band", horizon.band, "Band of the heights, 0-based (default 0)");
+  horizon_cmd->add_option("--format", horizon.format, "csv (default) or json");
+  horizon_cmd->add_option("--out", horizon.out, "Write to FILE instead of standard output");
+  horizon_cmd->add_option("--plot", horizon.plot,
+                          "Also write a polar plot PNG: seen from above, north up, the zenith at the centre");
+  horizon_cmd->add_option("--plot-size", horizon.plot_size,
+                          "The plot's width and height in pixels (default 512)");
+  bool curvature_on = false, curvature_off = false;
+  horizon_cmd->add_flag("--curvature", curvature_on,
+                        "Lower each point by d^2 (1 - k) / (2 R) (the default for a geographic CRS)");
+  horizon_cmd->add_flag("--no-curvature", curvature_off, "A flat Earth (the default for a projected CRS)");
+  double refraction = 0;
+  CLI::Option* refraction_opt = horizon_cmd->add_option(
+      "--refraction", refraction, "Refraction coefficient k with curvature (default 0.13, Gauss's)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     std::fprintf(stderr, "hfbake: error: command line: %s\n", e.what());
     return 2;
+  }
+  if (app.got_subcommand(horizon_cmd)) {
+    if (curvature_on && curvature_off) {
+      std::fprintf(stderr, "hfbake: error: command line: --curvature and --no-curvature together\n");
+      return 2;
+    }
+    if (curvature_on || curvature_off) horizon.curvature = curvature_on;
+    if (refraction_opt->count() > 0) horizon.refraction = refraction;
+    return hfbake::run_horizon(horizon);
   }
   if (app.got_subcommand(validate_cmd)) {
     std::vector<std::filesystem::path> files(validate_jobs.begin(), validate_jobs.end());

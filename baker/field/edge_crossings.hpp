@@ -2,8 +2,8 @@
 // (field/triangulation.hpp): the columns (x integer), the rows (y integer) and the quads' diagonals (x + y
 // integer, the split (i+1, j)-(i, j+1)) -- the kinks of the surface's height along the segment. Read by p1's
 // line patterns (far_horizons.cpp LinePattern, and HorizonLineWorker's terrain points), p2's exact line
-// profiles and facet segments and lsao's line crossings. (p1's per-texel search walks the same crossings
-// band by band inline, its hot loop; tests/p1 checks it against the exact march.)
+// profiles and facet segments, lsao's line crossings and terrain/point_horizon's rays. (p1's per-texel search
+// walks the same crossings band by band inline, its hot loop; tests/p1 checks it against the exact march.)
 #pragma once
 
 #include <utility>

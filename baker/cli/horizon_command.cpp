@@ -1,0 +1,237 @@
+#include "cli/horizon_command.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/vec.hpp"
+#include "io/crs_geodesy.hpp"
+#include "io/georaster_input.hpp"
+#include "io/preview.hpp"
+#include "terrain/horizon_plot.hpp"
+#include "terrain/point_horizon.hpp"
+
+namespace hfbake {
+
+namespace {
+
+std::string num(double v, const char* format = "%.10g") {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+// "X,Y" as two finite numbers.
+std::optional<std::array<double, 2>> parse_pair(const std::string& text) {
+  const auto comma = text.find(',');
+  if (comma == std::string::npos) return std::nullopt;
+  double v[2];
+  const std::string parts[2] = {text.substr(0, comma), text.substr(comma + 1)};
+  for (int p = 0; p < 2; ++p) {
+    std::size_t used = 0;
+    try {
+      v[p] = std::stod(parts[p], &used);
+    } catch (const std::exception&) {
+      return std::nullopt;
+    }
+    while (used < parts[p].size() && parts[p][used] == ' ') ++used;
+    if (used != parts[p].size() || !std::isfinite(v[p])) return std::nullopt;
+  }
+  return std::array<double, 2>{v[0], v[1]};
+}
+
+struct Profile {
+  std::array<double, 6> g{};
+  double map_x = 0, map_y = 0, surface = 0, observer = 0;
+  std::optional<EarthCurvature> curvature;
+  std::string crs_name, unit;
+  bool geographic = false;
+  double convergence = 0;  // radians: true north's azimuth in the grid
+  std::vector<HorizonRay> rays;
+};
+
+std::string to_csv(const Profile& p) {
+  std::string s = "azimuth_deg,elevation_deg,distance,caster_x,caster_y,caster_z\n";
+  for (const HorizonRay& r : p.rays) {
+    s += num(r.azimuth_deg, "%.6f");
+    if (r.found) {
+      const double cx = p.g[0] + (r.x + 0.5) * p.g[1], cy = p.g[3] + (r.y + 0.5) * p.g[5];
+      for (const std::string& field :
+           {num(r.elevation_deg, "%.6f"), num(r.distance, "%.4f"), num(cx), num(cy), num(r.z, "%.4f")}) {
+        s += ',';
+        s += field;
+      }
+    } else {
+      s += ",,,,,";
+    }
+    s += "\n";
+  }
+  return s;
+}
+
+std::string to_json(const HorizonOptions& o, const Profile& p) {
+  nlohmann::json doc;
+  doc["dem"] = o.dem;
+  doc["crs"] = p.crs_name;
+  doc["point"] = {{"x", p.map_x}, {"y", p.map_y}, {"surface_z", p.surface}, {"observer_z", p.observer}};
+  doc["distance_unit"] = p.unit;
+  doc["azimuth"] = p.crs_name.empty() ? "compass: degrees clockwise from the raster's north (no CRS)"
+                                      : "compass: degrees clockwise from true north";
+  doc["grid_convergence_deg"] = p.convergence * 180 / kPi;
+  if (p.curvature)
+    doc["curvature"] = {{"refraction", p.curvature->refraction},
+                        {"meridian_radius", p.curvature->meridian_radius},
+                        {"normal_radius", p.curvature->normal_radius}};
+  else
+    doc["curvature"] = nullptr;
+  nlohmann::json rays = nlohmann::json::array();
+  for (const HorizonRay& r : p.rays) {
+    nlohmann::json ray = {{"azimuth_deg", r.azimuth_deg}};
+    if (r.found) {
+      ray["elevation_deg"] = r.elevation_deg;
+      ray["distance"] = r.distance;
+      ray["caster"] = {p.g[0] + (r.x + 0.5) * p.g[1], p.g[3] + (r.y + 0.5) * p.g[5], r.z};
+    } else {
+      ray["elevation_deg"] = nullptr;
+    }
+    rays.push_back(std::move(ray));
+  }
+  doc["rays"] = std::move(rays);
+  return doc.dump(1) + "\n";
+}
+
+Profile compute(const HorizonOptions& o) {
+  auto fail = [&](const std::string& where, const std::string& what) {
+    throw InputError(o.dem, where, what);
+  };
+  if (o.format != "csv" && o.format != "json") fail("--format", "is " + o.format + ", not csv or json");
+  if (!(o.directions >= 1 && o.directions <= 1000000)) fail("--directions", "must be in [1, 1000000]");
+  if (!(o.plot_size >= 64 && o.plot_size <= 8192)) fail("--plot-size", "must be in [64, 8192]");
+  if (!(std::isfinite(o.observer_height) && o.observer_height >= 0))
+    fail("--observer-height", "must be a finite height >= 0");
+  if (o.refraction && !(std::isfinite(*o.refraction) && *o.refraction > -1 && *o.refraction < 1))
+    fail("--refraction", "must be in (-1, 1)");
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(o.dem, ec)) fail("", "no such file");
+  const std::optional<GeoRasterInfo> info = probe_georaster(o.dem);
+  if (!info)
+    fail("", "not a raster GDAL reads with georeferencing (a geotransform): --at needs map coordinates");
+  if (!info->has_geotransform) fail("", "has no geotransform: --at needs map coordinates");
+  Profile p;
+  p.g = info->geotransform;
+  const auto& g = p.g;
+  if (g[2] != 0 || g[4] != 0) fail("", "is rotated or sheared; warp it north-up first (gdalwarp)");
+  if (o.band < 0 || o.band >= info->bands)
+    fail("--band", "is " + std::to_string(o.band) + " but the raster has " + std::to_string(info->bands) +
+                       " band(s) (0-based)");
+  p.crs_name = info->crs_name;
+  p.geographic = info->geographic;
+  p.unit = info->geographic ? "metre" : info->linear_unit;
+
+  const std::optional<std::array<double, 2>> at = parse_pair(o.at);
+  if (!at) fail("--at", "is \"" + o.at + "\", not X,Y (two numbers)");
+  std::array<double, 2> xy = *at;
+  if (o.lonlat) {
+    if (info->crs_wkt.empty()) fail("--lonlat", "the raster has no CRS to transform longitude/latitude into");
+    if (std::abs((*at)[1]) > 90) fail("--at", "latitude " + num((*at)[1]) + " is outside [-90, 90]");
+    const auto moved = lonlat_to_crs(info->crs_wkt, (*at)[0], (*at)[1]);
+    if (!moved) fail("--at", "PROJ cannot transform " + o.at + " (WGS 84) into " + info->crs_name);
+    xy = *moved;
+  }
+  p.map_x = xy[0], p.map_y = xy[1];
+
+  PointHorizonQuery q;
+  q.x = (xy[0] - g[0]) / g[1] - 0.5;
+  q.y = (xy[1] - g[3]) / g[5] - 0.5;
+  q.observer_height = o.observer_height;
+  q.directions = o.directions;
+  const double x0 = g[0] + 0.5 * g[1], x1 = g[0] + (info->width - 0.5) * g[1];
+  const double y0 = g[3] + 0.5 * g[5], y1 = g[3] + (info->height - 0.5) * g[5];
+  const std::string where = num(xy[0]) + "," + num(xy[1]);
+  if (!(q.x >= 0 && q.y >= 0 && q.x <= info->width - 1 && q.y <= info->height - 1))
+    fail("--at", where + " is outside the surface: its texel centres span x " + num(std::min(x0, x1)) + ".." +
+                     num(std::max(x0, x1)) + ", y " + num(std::min(y0, y1)) + ".." + num(std::max(y0, y1)));
+
+  // The ground frame and, with curvature, the Earth's radii at the point.
+  std::optional<CrsEarth> earth = info->crs_wkt.empty() ? std::nullopt : crs_earth(info->crs_wkt);
+  Ellipsoid ellipsoid;  // a sphere of the mean radius when the CRS names no ellipsoid
+  double lat = 0;
+  if (earth)
+    ellipsoid = {earth->semi_major / earth->metres_per_unit, earth->semi_minor / earth->metres_per_unit};
+  if (info->geographic) {
+    if (!earth) fail("", "has a geographic CRS without an ellipsoid GDAL can read");
+    lat = xy[1] * kPi / 180;
+    if (!(std::abs(xy[1]) < 89.9)) fail("--at", "latitude " + num(xy[1]) + " is too near a pole");
+    const double rad = kPi / 180;
+    q.frame = {g[1] * rad * ellipsoid.prime_vertical_radius(lat) * std::cos(lat),
+               g[5] * rad * ellipsoid.meridian_radius(lat)};
+  } else {
+    q.frame = {g[1], g[5]};
+    if (!info->crs_wkt.empty()) {
+      const std::optional<double> gamma = grid_convergence(info->crs_wkt, xy[0], xy[1]);
+      if (!gamma) fail("--at", "PROJ cannot find true north at " + where + " in " + info->crs_name);
+      q.frame.convergence = *gamma;
+    }
+    if (earth && o.curvature.value_or(false)) {
+      const auto lonlat = crs_to_lonlat(info->crs_wkt, xy[0], xy[1]);
+      if (!lonlat) fail("--at", "PROJ cannot find the latitude of " + where + " in " + info->crs_name);
+      lat = (*lonlat)[1] * kPi / 180;
+    }
+  }
+  if (o.refraction && !o.curvature.value_or(info->geographic))
+    fail("--refraction", "applies with Earth curvature only (--curvature)");
+  if (o.curvature.value_or(info->geographic))
+    q.curvature = EarthCurvature::at(ellipsoid, lat, o.refraction.value_or(kDefaultRefraction));
+  p.curvature = q.curvature;
+  p.convergence = q.frame.convergence;
+
+  // The heights, once every argument is checked.
+  Plane plane = read_georaster_band(o.dem, o.band, InputSite{"", ""});
+  HeightField field;
+  field.width = plane.width, field.height = plane.height, field.wrap = Wrap::clamp;
+  field.z = std::move(plane.values);
+  if (const std::optional<double> nodata = info->nodata[std::size_t(o.band)]; nodata && !std::isnan(*nodata))
+    for (float& z : field.z)
+      if (z == float(*nodata)) z = std::nanf("");
+  const std::optional<double> z = surface_height(field, q.x, q.y);
+  if (!z) fail("--at", where + " is on NoData (a texel around it has no height)");
+  p.surface = *z;
+  p.observer = *z + o.observer_height;
+  p.rays = point_horizon(field, q);
+  return p;
+}
+
+}  // namespace
+
+int run_horizon(const HorizonOptions& o) {
+  try {
+    const Profile p = compute(o);
+    const std::string text = o.format == "json" ? to_json(o, p) : to_csv(p);
+    if (!o.plot.empty()) {
+      PolarPlotGeometry geometry;
+      geometry.size = o.plot_size;
+      const std::string png = encode_png(o.plot_size, o.plot_size, 3, horizon_polar_plot(p.rays, geometry));
+      std::ofstream file(o.plot, std::ios::binary);
+      file << png;
+      if (!file.good()) throw InputError(o.plot, "--plot", "cannot write the file");
+    }
+    if (o.out.empty()) {
+      std::fputs(text.c_str(), stdout);
+      return 0;
+    }
+    std::ofstream file(o.out, std::ios::binary);
+    file << text;
+    if (!file.good()) throw InputError(o.out, "--out", "cannot write the file");
+    return 0;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
+    return 2;
+  }
+}
+
+}  // namespace hfbake

@@ -1,0 +1,84 @@
+#include "io/crs_geodesy.hpp"
+
+#include <ogr_spatialref.h>
+
+#include <cmath>
+#include <memory>
+
+#include "io/gdal_session.hpp"
+
+namespace hfbake {
+
+namespace {
+
+struct TransformDeleter {
+  void operator()(OGRCoordinateTransformation* t) const { OGRCoordinateTransformation::DestroyCT(t); }
+};
+
+std::optional<std::array<double, 2>> transform(const OGRSpatialReference& from, const OGRSpatialReference& to,
+                                               double x, double y) {
+  std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> ct(
+      OGRCreateCoordinateTransformation(&from, &to));
+  if (!ct || !ct->Transform(1, &x, &y)) return std::nullopt;
+  return std::array<double, 2>{x, y};
+}
+
+// The CRS in traditional GIS axis order (x = easting or longitude), as hfbake's geotransforms are.
+bool read_crs(const std::string& wkt, OGRSpatialReference& srs) {
+  srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  return !wkt.empty() && srs.importFromWkt(wkt.c_str()) == OGRERR_NONE;
+}
+
+}  // namespace
+
+std::optional<CrsEarth> crs_earth(const std::string& wkt) {
+  GdalSession session;
+  OGRSpatialReference srs;
+  if (!read_crs(wkt, srs)) return std::nullopt;
+  OGRErr e1 = OGRERR_NONE, e2 = OGRERR_NONE;
+  CrsEarth earth;
+  earth.semi_major = srs.GetSemiMajor(&e1);
+  earth.semi_minor = srs.GetSemiMinor(&e2);
+  if (e1 != OGRERR_NONE || e2 != OGRERR_NONE || !(earth.semi_major > 0) || !(earth.semi_minor > 0))
+    return std::nullopt;
+  earth.geographic = srs.IsGeographic() != 0;
+  if (srs.IsProjected()) earth.metres_per_unit = srs.GetLinearUnits();
+  return earth;
+}
+
+std::optional<std::array<double, 2>> lonlat_to_crs(const std::string& wkt, double lon, double lat) {
+  GdalSession session;
+  OGRSpatialReference to, wgs84;
+  if (!read_crs(wkt, to)) return std::nullopt;
+  wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  if (wgs84.importFromEPSG(4326) != OGRERR_NONE) return std::nullopt;
+  return transform(wgs84, to, lon, lat);
+}
+
+std::optional<std::array<double, 2>> crs_to_lonlat(const std::string& wkt, double x, double y) {
+  GdalSession session;
+  OGRSpatialReference from;
+  if (!read_crs(wkt, from)) return std::nullopt;
+  std::unique_ptr<OGRSpatialReference> geog(from.CloneGeogCS());
+  if (!geog) return std::nullopt;
+  geog->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  return transform(from, *geog, x, y);
+}
+
+std::optional<double> grid_convergence(const std::string& wkt, double x, double y) {
+  GdalSession session;
+  OGRSpatialReference crs;
+  if (!read_crs(wkt, crs)) return std::nullopt;
+  if (crs.IsGeographic()) return 0.0;
+  std::unique_ptr<OGRSpatialReference> geog(crs.CloneGeogCS());
+  if (!geog) return std::nullopt;
+  geog->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  const auto lonlat = transform(crs, *geog, x, y);
+  if (!lonlat) return std::nullopt;
+  // A step of 1e-4° (11 m) north along the meridian, back in the grid.
+  const auto north = transform(*geog, crs, (*lonlat)[0], (*lonlat)[1] + 1e-4);
+  if (!north) return std::nullopt;
+  return std::atan2((*north)[0] - x, (*north)[1] - y);
+}
+
+}  // namespace hfbake
