@@ -122,12 +122,16 @@ std::vector<fs::path> remove_stale_shard_files(const fs::path& dir) {
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
     const auto tmp = name.rfind(".hfshard.tmp-");
-    // <shard>.tmp-<owner>-XXXXXX (core/safe_file TempFile)
-    if (tmp == std::string::npos || name.size() < tmp + 13 + 7 || name[name.size() - 7] != '-') continue;
-    // The owner part read as a staging folder's, so by the same rule.
-    const std::optional<StageOwner> owner = parse_stage_name(
-        std::string(".hfbake-staging-x-") + name.substr(tmp + 13, name.size() - 7 - tmp - 13));
-    if (!owner || !it->is_regular_file(ec) || !stage_owner_is_gone(*owner)) continue;
+    if (tmp == std::string::npos || !it->is_regular_file(ec)) continue;
+    // <shard>.tmp-<owner>-XXXXXX (core/safe_file TempFile), or <shard>.tmp-<owner>; the owner read as a
+    // staging folder's, so by the same rule.
+    const std::string owner = name.substr(tmp + 13);
+    auto gone = [](const std::string& o) {
+      const std::optional<StageOwner> parsed = parse_stage_name(".hfbake-staging-x-" + o);
+      return parsed && stage_owner_is_gone(*parsed);
+    };
+    const bool suffixed = owner.size() > 7 && owner[owner.size() - 7] == '-';
+    if (!(suffixed && gone(owner.substr(0, owner.size() - 7))) && !gone(owner)) continue;
     std::error_code remove_ec;
     fs::remove(it->path(), remove_ec);
     if (!remove_ec) removed.push_back(it->path());
