@@ -185,7 +185,7 @@ ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : 
         const std::uint64_t channels = l.at("channels").size(), floats = l.at("floats").get<std::uint64_t>(),
                             offset = l.at("offset").get<std::uint64_t>();
         if (!l.at("name").is_string() || l.at("name").get_ref<const std::string&>().empty() ||
-            channels == 0 || !l.at("checksum").is_string())
+            !l.at("channels").is_array() || channels == 0 || !l.at("checksum").is_string())
           throw damaged("a layer without a name, channels or checksum");
         for (const auto& c : l.at("channels"))
           if (!c.is_string()) throw damaged("a layer's channel without a name");
