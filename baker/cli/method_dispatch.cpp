@@ -71,15 +71,17 @@ void check_output_folder(const Job& job) {
   fs::path p = job.output.dir;
   while (!p.empty() && !fs::exists(fs::symlink_status(p, ec)) && p.has_parent_path() && p != p.parent_path())
     p = p.parent_path();
+  // As OutputStage says it: "cannot create" a folder still to be made, "cannot write into" one there.
+  const std::string what =
+      (p == job.output.dir ? "cannot write into " : "cannot create ") + job.output.dir.string();
   const bool exists = fs::exists(p, ec);
   if (!exists || !fs::is_directory(p, ec))
     throw InputError(job.file.string(), "/output/dir",
-                     "cannot write into " + job.output.dir.string() + ": " + p.string() +
-                         (exists ? " is not a folder" : " does not exist"));
+                     what + ": " + p.string() + (exists ? " is not a folder" : " does not exist"));
   if (access(p.c_str(), W_OK | X_OK) != 0)
-    throw InputError(job.file.string(), "/output/dir",
-                     "cannot write into " + job.output.dir.string() + ": " + p.string() + ": " +
-                         std::error_code(errno, std::generic_category()).message());
+    throw InputError(
+        job.file.string(), "/output/dir",
+        what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
 }
 
 }  // namespace
