@@ -370,6 +370,9 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
     } catch (const InputError& e) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
       exit_code = 2;
+    } catch (const std::exception& e) {  // std::bad_alloc reading an input: one line, as bake says it
+      std::fprintf(stderr, "hfbake: error: %s\n", printable(file.string() + ": " + e.what()).c_str());
+      exit_code = 2;
     }
   }
   return exit_code;

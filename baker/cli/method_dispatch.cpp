@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <filesystem>
+#include <new>
 
 #include "cli/scene_loader.hpp"
 #include "cli/texture_plan.hpp"
@@ -84,9 +85,26 @@ void check_output_folder(const Job& job) {
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
 }
 
+std::vector<std::string> resolve_job_checks(Job& job);
+
 }  // namespace
 
 std::vector<std::string> resolve_job(Job& job) {
+  // Whatever escapes the checks is one line too (std::bad_alloc included), never an abort.
+  try {
+    return resolve_job_checks(job);
+  } catch (const InputError& e) {
+    return {e.line()};
+  } catch (const std::bad_alloc&) {
+    return {printable(job.file.string() + ": not enough memory to check the job")};
+  } catch (const std::exception& e) {
+    return {printable(job.file.string() + ": cannot check the job: " + e.what())};
+  }
+}
+
+namespace {
+
+std::vector<std::string> resolve_job_checks(Job& job) {
   std::vector<std::string> errors;
   const std::string file = job.file.string();
   MethodContext context;
@@ -121,6 +139,8 @@ std::vector<std::string> resolve_job(Job& job) {
   }
   return errors;
 }
+
+}  // namespace
 
 LayerSet run_method(const BakeEntry& entry, const Scene& scene, const RunControl& rc) {
   const MethodInfo* m = find_method(entry.method);
