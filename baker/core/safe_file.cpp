@@ -16,15 +16,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The process's umask, read once (umask(2) can only be read by setting it).
-mode_t process_umask() {
-  static const mode_t mask = [] {
-    const mode_t m = umask(022);
-    umask(m);
-    return m;
-  }();
-  return mask;
-}
+// The process's umask, read once before main (umask(2) can only be read by setting it: done while no other
+// thread creates files).
+const mode_t kProcessUmask = [] {
+  const mode_t m = umask(022);
+  umask(m);
+  return m;
+}();
 
 std::system_error system_error(int err, const std::string& what) {
   return std::system_error(err, std::generic_category(), what);
@@ -142,7 +140,7 @@ TempFile::TempFile(const fs::path& final, const std::string& tag) : final_(final
   fd_ = mkostemp(name.data(), O_CLOEXEC);
   if (fd_ < 0) throw system_error(errno, "cannot create a temporary file beside " + final.string());
   tmp_ = name;
-  fchmod(fd_, 0666 & ~process_umask());
+  fchmod(fd_, 0666 & ~kProcessUmask);
 }
 
 TempFile::~TempFile() {
