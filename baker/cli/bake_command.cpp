@@ -27,6 +27,7 @@
 #include "cli/texture_plan.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "job/content_hash.hpp"
 #include "job/manifest.hpp"
 #include "reference/horizon_reference.hpp"
@@ -149,7 +150,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   // hfbake merge: every shard checked before anything is written; the layers come from them.
   std::optional<MergedShards> merged;
   if (options.merge) merged.emplace(job, size.width, size.height);
-  OutputStage stage(job);
+  OutputStage stage(job, options.overwrite);
   for (const fs::path& p : stage.stale_removed())
     progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
   progress.begin(job.name, "load");
@@ -332,23 +333,12 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
     for (const fs::path& p : o.outputs) j["outputs"].push_back(fs::absolute(p).string());
     doc["jobs"].push_back(std::move(j));
   }
-  // Atomic like every other output: a temporary beside the file, then rename.
-  const fs::path tmp = file.string() + ".tmp-" + std::to_string(getpid());
-  bool written = false;
-  {
-    std::ofstream out(tmp);
-    if (out) {
-      out << doc.dump(2) << "\n";
-      out.close();
-      written = bool(out);
-    }
-  }
-  std::error_code ec;
-  if (written) fs::rename(tmp, file, ec);
-  if (!written || ec) {  // a full disk or a read-only folder: no temporary is left behind
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw InputError(file.string(), "--summary", "cannot write file" + (ec ? ": " + ec.message() : ""));
+  // Atomic like every other output: a temporary of its own beside the file, then rename (a full disk or a
+  // read-only folder leaves no temporary behind).
+  try {
+    write_file_atomically(file, doc.dump(2) + "\n");
+  } catch (const std::system_error& e) {
+    throw InputError(file.string(), "--summary", "cannot write file: " + e.code().message());
   }
 }
 
@@ -427,6 +417,9 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
     } catch (const InputError& e) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
       exit_code = 2;
+    } catch (const std::exception& e) {  // std::bad_alloc reading an input: one line, as bake says it
+      std::fprintf(stderr, "hfbake: error: %s\n", printable(file.string() + ": " + e.what()).c_str());
+      exit_code = 2;
     }
   }
   return exit_code;
@@ -448,13 +441,14 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   std::vector<std::string> suite_errors;
   int exit_code = 0;
   for (const fs::path& file : options.jobs) {
+    const std::size_t errors_before = suite_errors.size();
     if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
       if (options.out) suite->output_dir = fs::absolute(*options.out / suite->name);
       for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
       for (const fs::path& job : suite->jobs)
         inputs.push_back({job, suite->output_dir / job.stem(), int(suites.size())});
       suites.push_back(std::move(*suite));
-    } else {
+    } else if (suite_errors.size() == errors_before) {  // not a suite: a job
       inputs.push_back({file, std::nullopt, -1});
     }
   }

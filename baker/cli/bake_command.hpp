@@ -37,6 +37,9 @@ struct BakeOptions {
   std::optional<ShardId> shard;
   int stage = 0;  // --stage S (with --shard): stage S of the staged methods (p2's bounce S)
   bool merge = false;
+  // --overwrite: replace outputs of the same job name that another job file baked into the folder
+  // (docs/output_folders.md).
+  bool overwrite = false;
 };
 
 // "512M", "8G", "1.5GiB", "2000000000": bytes (binary multiples K, M, G, T, optionally "iB" or "B"); nullopt

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "job/manifest.hpp"
 #include "report/baseline_compare.hpp"
 
@@ -23,9 +24,14 @@ nlohmann::json read_json(const fs::path& file) {
 
 void copy_atomically(const fs::path& from, const fs::path& to) {
   if (to.has_parent_path()) fs::create_directories(to.parent_path());
-  const fs::path tmp = to.string() + ".tmp-" + std::to_string(getpid());
-  fs::copy_file(from, tmp, fs::copy_options::overwrite_existing);
-  fs::rename(tmp, to);
+  std::string why;
+  const int fd = open_regular_file(from, why);
+  if (fd < 0) throw std::runtime_error(from.string() + ": " + why);
+  std::string bytes;
+  char buf[1 << 16];
+  for (ssize_t n; (n = read(fd, buf, sizeof buf)) > 0;) bytes.append(buf, std::size_t(n));
+  close(fd);
+  write_file_atomically(to, bytes);
 }
 
 // Every report.json under `dir`, by path relative to it. A bake's staging folders (.hfbake-staging-*: what a

@@ -52,6 +52,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 4096));
   bake_cmd->add_option("--out", out, "Output folder, replacing each job's output.dir");
   bake_cmd->add_flag("--quiet", bake.quiet, "No progress output (errors are still printed)");
+  bake_cmd->add_flag(
+      "--overwrite", bake.overwrite,
+      "Replace outputs of the same job name that another job file baked into the output folder");
   bake_cmd->add_option("--summary", summary, "Write a machine-readable JSON summary to FILE");
   std::string cache_dir;
   bake_cmd->add_option("--cache", cache_dir,
@@ -95,6 +98,7 @@ int main(int argc, char** argv) {
   merge_cmd->add_option("--out", merge_out,
                         "Output folder, as bake's --out (the shards are in <out>/shards)");
   merge_cmd->add_flag("--quiet", merge.quiet, "No progress output (errors are still printed)");
+  merge_cmd->add_flag("--overwrite", merge.overwrite, "As bake's --overwrite");
   merge_cmd->add_option("--summary", merge_summary, "Write a machine-readable JSON summary to FILE");
   merge_cmd->add_option("--cache", merge_cache, "Reference cache folder, as bake's");
   merge_cmd->add_flag("--no-cache", merge.no_cache, "Do not read or write the reference cache");

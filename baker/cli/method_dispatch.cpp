@@ -1,10 +1,19 @@
 #include "cli/method_dispatch.hpp"
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <filesystem>
+#include <new>
+
 #include "cli/scene_loader.hpp"
 #include "cli/texture_plan.hpp"
 #include "core/error.hpp"
+#include "report/compare.hpp"
 
 namespace hfbake {
+namespace fs = std::filesystem;
 
 MethodContext job_method_context(const Job& job) {
   MethodContext c;
@@ -18,7 +27,84 @@ MethodContext job_method_context(const Job& job) {
   return c;
 }
 
+namespace {
+
+// What the report makes of report.crop and report.thresholds, checked before anything is baked: a crop
+// that leaves a texel of the field, thresholds "<stem>.<layer>.<metric>" of a bake entry of the job and a
+// metric the report computes (the layer is known only once the reference has been compared).
+void check_report_settings(const Job& job, const MethodContext& context) {
+  if (!job.doc.contains("report")) return;
+  const nlohmann::json& report = job.doc["report"];
+  const std::string file = job.file.string();
+  if (report.contains("crop")) {
+    const int crop = report["crop"].get<int>();
+    const CompareRegion r = crop_region(context.field.width, context.field.height, crop);
+    if (r.x1 <= r.x0 || r.y1 <= r.y0)
+      throw InputError(file, "/report/crop",
+                       std::to_string(crop) + " leaves no texel of the " +
+                           std::to_string(context.field.width) + "x" + std::to_string(context.field.height) +
+                           " field");
+  }
+  if (!report.contains("thresholds")) return;
+  int count = 0;
+  const char* const* names = metric_names(count);
+  for (const auto& [key, limit] : report["thresholds"].items()) {
+    const std::string where = "/report/thresholds/" + key;
+    const auto first = key.find('.'), last = key.rfind('.');
+    if (first == std::string::npos || last == first)
+      throw InputError(file, where, "not of the form <stem>.<layer>.<metric>");
+    const std::string stem = key.substr(0, first), metric = key.substr(last + 1);
+    if (std::none_of(job.bakes.begin(), job.bakes.end(),
+                     [&](const BakeEntry& e) { return e.stem == stem; })) {
+      std::string stems;
+      for (const BakeEntry& e : job.bakes) stems += (stems.empty() ? "" : ", ") + e.stem;
+      throw InputError(file, where, "the job has no bake entry \"" + stem + "\" (its stems: " + stems + ")");
+    }
+    if (std::none_of(names, names + count, [&](const char* n) { return metric == n; }))
+      throw InputError(file, where, "unknown metric \"" + metric + "\"");
+  }
+}
+
+// The output folder bake will create or write into: it, or its nearest existing ancestor, must be a folder
+// this process may write into.
+void check_output_folder(const Job& job) {
+  std::error_code ec;
+  fs::path p = job.output.dir;
+  while (!p.empty() && !fs::exists(fs::symlink_status(p, ec)) && p.has_parent_path() && p != p.parent_path())
+    p = p.parent_path();
+  // As OutputStage says it: "cannot create" a folder still to be made, "cannot write into" one there.
+  const std::string what =
+      (p == job.output.dir ? "cannot write into " : "cannot create ") + job.output.dir.string();
+  const bool exists = fs::exists(p, ec);
+  if (!exists || !fs::is_directory(p, ec))
+    throw InputError(job.file.string(), "/output/dir",
+                     what + ": " + p.string() + (exists ? " is not a folder" : " does not exist"));
+  if (access(p.c_str(), W_OK | X_OK) != 0)
+    throw InputError(
+        job.file.string(), "/output/dir",
+        what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
+}
+
+std::vector<std::string> resolve_job_checks(Job& job);
+
+}  // namespace
+
 std::vector<std::string> resolve_job(Job& job) {
+  // Whatever escapes the checks is one line too (std::bad_alloc included), never an abort.
+  try {
+    return resolve_job_checks(job);
+  } catch (const InputError& e) {
+    return {e.line()};
+  } catch (const std::bad_alloc&) {
+    return {printable(job.file.string() + ": not enough memory to check the job")};
+  } catch (const std::exception& e) {
+    return {printable(job.file.string() + ": cannot check the job: " + e.what())};
+  }
+}
+
+namespace {
+
+std::vector<std::string> resolve_job_checks(Job& job) {
   std::vector<std::string> errors;
   const std::string file = job.file.string();
   MethodContext context;
@@ -45,12 +131,16 @@ std::vector<std::string> resolve_job(Job& job) {
   if (errors.empty()) {
     try {
       plan_textures(job);  // output.textures against the resolved layers
+      check_report_settings(job, context);
+      check_output_folder(job);
     } catch (const InputError& e) {
       errors.push_back(e.line());
     }
   }
   return errors;
 }
+
+}  // namespace
 
 LayerSet run_method(const BakeEntry& entry, const Scene& scene, const RunControl& rc) {
   const MethodInfo* m = find_method(entry.method);

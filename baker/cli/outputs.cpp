@@ -15,6 +15,7 @@
 
 #include "cli/texture_plan.hpp"
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "io/exr_output.hpp"
 #include "io/geotiff_output.hpp"
 #include "io/preview.hpp"
@@ -139,10 +140,9 @@ std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
   std::error_code ec;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::optional<StageOwner> owner = parse_stage_name(it->path().filename().string());
-    if (!owner || !it->is_directory(ec) || !stage_owner_is_gone(*owner)) continue;
-    std::error_code remove_ec;
-    fs::remove_all(it->path(), remove_ec);
-    if (!remove_ec) removed.push_back(it->path());
+    // A link named like a stage is no stage: removed itself, its target untouched (remove_tree).
+    if (!owner || !stage_owner_is_gone(*owner)) continue;
+    if (remove_tree(it->path())) removed.push_back(it->path());
   }
   return removed;
 }
@@ -156,12 +156,15 @@ int adopt_stale_checkpoints(const fs::path& dir, const std::string& job_name, co
   std::error_code ec;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::optional<StageOwner> owner = parse_stage_name(it->path().filename().string());
-    if (!owner || owner->job != job_name || !it->is_directory(ec) || !stage_owner_is_gone(*owner)) continue;
+    // The stage and its checkpoint folder must be folders themselves: files are never taken through a link.
+    if (!owner || owner->job != job_name || !is_real_directory(it->path()) || !stage_owner_is_gone(*owner))
+      continue;
     const fs::path from = stage_checkpoint_dir(it->path());
+    if (!is_real_directory(from)) continue;
     std::error_code walk;
     for (fs::directory_iterator f(from, walk), fend; !walk && f != fend; f.increment(walk)) {
       // Whole band files only (a killed writer's temporary is left to be removed with its stage).
-      if (f->path().extension() != ".hfckpt" || !f->is_regular_file(walk)) continue;
+      if (f->path().extension() != ".hfckpt" || !f->is_regular_file(walk) || f->is_symlink(walk)) continue;
       std::error_code move;
       fs::create_directories(into, move);
       if (fs::exists(into / f->path().filename(), move)) continue;
@@ -172,7 +175,22 @@ int adopt_stale_checkpoints(const fs::path& dir, const std::string& job_name, co
   return moved;
 }
 
-OutputStage::OutputStage(const Job& job) : job_(job) {
+namespace {
+
+// <dir>/.hfbake-<name>.job: the job file whose outputs of that name the folder holds.
+fs::path owner_record(const Job& job) {
+  return job.output.dir / (".hfbake-" + job.name + ".job");
+}
+
+std::string job_identity(const Job& job) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(fs::absolute(job.file), ec);
+  return (ec ? fs::absolute(job.file) : p).string();
+}
+
+}  // namespace
+
+OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   std::error_code ec;
   created_dir_ = !fs::exists(job.output.dir, ec);
   fs::create_directories(job.output.dir, ec);
@@ -180,10 +198,35 @@ OutputStage::OutputStage(const Job& job) : job_(job) {
     throw InputError(job.file.string(), "/output/dir",
                      "cannot create " + job.output.dir.string() + ": " +
                          (ec ? ec.message() : std::string("not a folder")));
+  // One writer per job name and folder (docs/output_folders.md).
+  lock_ = std::make_unique<FolderLock>(job.output.dir / (".hfbake-" + job.name + ".lock"));
+  if (!lock_->held()) {
+    if (created_dir_) fs::remove(job.output.dir, ec);
+    throw InputError(job.file.string(), "/output/dir",
+                     "another hfbake process (" + lock_->holder() + ") is baking job " + job.name + " into " +
+                         job.output.dir.string() +
+                         " now: wait for it, or give this job another name or folder");
+  }
+  {
+    std::string why, recorded;
+    const int fd = open_regular_file(owner_record(job), why);
+    if (fd >= 0) {
+      char buf[4096];
+      const ssize_t n = read(fd, buf, sizeof buf);
+      close(fd);
+      if (n > 0) recorded.assign(buf, std::size_t(n));
+    }
+    if (!recorded.empty() && recorded != job_identity(job) && !overwrite)
+      throw InputError(job.file.string(), "/name",
+                       "the outputs of job " + job.name + " in " + job.output.dir.string() +
+                           " were baked from " + recorded +
+                           ": give this job another name or output folder, or bake with --overwrite");
+  }
   // Hidden, per process (id and start time), host and job: concurrent jobs and concurrent hfbake processes
-  // never share a stage, and a later bake can tell when its owner is gone.
+  // never share a stage, and a later bake can tell when its owner is gone. A name already there (a link
+  // included) is removed, never followed, and the folder made afresh.
   stage_ = job.output.dir / stage_name(job.name);
-  fs::remove_all(stage_, ec);
+  remove_tree(stage_);
   if (!fs::create_directory(stage_, ec) || ec)
     throw InputError(job.file.string(), "/output/dir",
                      "cannot write into " + job.output.dir.string() + ": " + ec.message());
@@ -195,7 +238,8 @@ OutputStage::OutputStage(const Job& job) : job_(job) {
 
 OutputStage::~OutputStage() {
   std::error_code ec;
-  fs::remove_all(stage_, ec);
+  remove_tree(stage_);
+  lock_.reset();
   // A job that failed or was stopped leaves no empty output folder behind it (only if it made the folder,
   // and only while it is empty: another job's stage or outputs keep it).
   if (created_dir_ && !committed_) fs::remove(job_.output.dir, ec);
@@ -205,19 +249,26 @@ void check_layers_finite(const std::string& stem, const LayerSet& layers) {
   for (const Layer& layer : layers.layers) {
     // horizon_distance is +inf where nothing lies behind the texel (documented); NaN is never a result.
     const bool plus_inf_allowed = layer.name == "horizon_distance";
+    // Fractions of the sky (README, outputs): in [0, 1], up to a quadrature's error (p1 with 4 directions
+    // on a 16x16 fractal reaches an ao of 1.0019); beyond 5 % the inputs left the methods' range.
+    const bool fraction =
+        layer.name == "ao" || layer.name == "vsky" || layer.name == "obscurance" || layer.name == "svf";
+    constexpr float kRounding = 0.05f;
     const std::size_t nc = layer.channels.size();
     for (std::size_t k = 0; k < layer.data.size(); ++k) {
       const float v = layer.data[k];
-      if (std::isfinite(v) || (plus_inf_allowed && v > 0)) continue;
+      if (fraction ? (v >= -kRounding && v <= 1 + kRounding)
+                   : (std::isfinite(v) || (plus_inf_allowed && v > 0)))
+        continue;
       const std::size_t texel = k / nc;
       char value[32];
       std::snprintf(value, sizeof value, "%g", double(v));
-      throw std::runtime_error(stem + ": layer " + layer.name + ": texel (" +
-                               std::to_string(texel % std::size_t(layers.width)) + ", " +
-                               std::to_string(texel / std::size_t(layers.width)) + ") channel " + layer.name +
-                               "." + layer.channels[k % nc] + " is " + value +
-                               "; nothing of this job was written (a non-finite result is a bug or an input "
-                               "beyond the method's range: please report it)");
+      throw std::runtime_error(
+          stem + ": layer " + layer.name + ": texel (" + std::to_string(texel % std::size_t(layers.width)) +
+          ", " + std::to_string(texel / std::size_t(layers.width)) + ") channel " + layer.name + "." +
+          layer.channels[k % nc] + " is " + value + (fraction ? ", outside [0, 1]" : "") +
+          "; nothing of this job was written (such a result is a bug or an input "
+          "beyond the method's range: please report it)");
     }
   }
 }
@@ -325,13 +376,27 @@ void OutputStage::write_text(const std::string& filename, const std::string& tex
 
 std::vector<fs::path> OutputStage::commit() {
   std::vector<fs::path> final_paths;
+  for (const fs::path& name : staged_) {  // textures/: made here, never a link to elsewhere
+    if (!name.has_parent_path()) continue;
+    const fs::path folder = (job_.output.dir / name).parent_path();
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (!is_real_directory(folder))
+      throw InputError(
+          folder.string(), "",
+          "is not a folder (a link?): outputs are written inside " + job_.output.dir.string() + " only");
+  }
   for (const fs::path& name : staged_) {
     const fs::path target = job_.output.dir / name;
     std::error_code ec;
-    if (name.has_parent_path()) fs::create_directories(target.parent_path(), ec);  // textures/
     fs::rename(stage_ / name, target, ec);  // same folder tree: an atomic replace
     if (ec) throw InputError(target.string(), "", "cannot move into place: " + ec.message());
     final_paths.push_back(target);
+  }
+  try {
+    write_file_atomically(owner_record(job_), job_identity(job_));
+  } catch (const std::system_error& e) {
+    throw InputError(owner_record(job_).string(), "", std::string("cannot write: ") + e.code().message());
   }
   staged_.clear();
   committed_ = true;

@@ -3,11 +3,13 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/layers.hpp"
+#include "core/safe_file.hpp"
 #include "field/georeference.hpp"
 #include "job/manifest.hpp"
 
@@ -47,14 +49,19 @@ int adopt_stale_checkpoints(const std::filesystem::path& dir, const std::string&
 std::string azimuth_convention(const Georeference& geo);
 
 // Throws (a failed job, naming the stem, the layer, the first texel and its channel) when a layer holds a
-// NaN or an infinity (+inf is allowed in horizon_distance, where nothing lies behind the texel).
+// NaN or an infinity (+inf is allowed in horizon_distance, where nothing lies behind the texel), or when a
+// fraction of the sky (ao, vsky, obscurance, svf) lies outside [0, 1] by more than a quadrature's error
+// (0.05).
 void check_layers_finite(const std::string& stem, const LayerSet& layers);
 
 class OutputStage {
  public:
   // Creates the output folder and the staging folder in it, after removing the stale staging folders of
-  // dead processes there; InputError naming /output/dir if impossible.
-  explicit OutputStage(const Job& job);
+  // dead processes there; InputError naming /output/dir if impossible. One folder, one owner per job name
+  // (docs/output_folders.md): the lock <dir>/.hfbake-<name>.lock is held from here to destruction (another
+  // process holding it: InputError), and outputs of <name> that <dir>/.hfbake-<name>.job records as baked
+  // from another job file are refused (InputError) unless `overwrite`.
+  explicit OutputStage(const Job& job, bool overwrite = false);
   // Removes the staging folder and anything left in it, and the output folder when this job made it and
   // did not commit (it is then empty unless another job writes there).
   ~OutputStage();
@@ -72,7 +79,8 @@ class OutputStage {
   [[nodiscard]] std::vector<std::string> write_textures(const std::string& stem, const LayerSet& layers);
   // Writes a text file (report.json, ...) into the stage.
   void write_text(const std::string& filename, const std::string& text);
-  // Moves every staged file to its final place (each rename is atomic) and returns the final paths.
+  // Moves every staged file to its final place (each rename is atomic; a folder on the way that is a link
+  // is refused) and records the job file as the outputs' owner; returns the final paths.
   std::vector<std::filesystem::path> commit();
   // The stale staging folders the constructor removed (to tell the user).
   const std::vector<std::filesystem::path>& stale_removed() const { return stale_removed_; }
@@ -82,6 +90,7 @@ class OutputStage {
 
  private:
   const Job& job_;
+  std::unique_ptr<FolderLock> lock_;
   std::filesystem::path stage_;
   void write_geotiffs(const std::string& stem, const LayerSet& layers);
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <system_error>
 
+#include "core/safe_file.hpp"
 #include "job/content_hash.hpp"
 #include "reference/bake_reference.hpp"
 
@@ -172,7 +173,6 @@ CacheLookup ReferenceCache::load(const std::string& key, Entry& out, int expect_
 }
 
 std::string ReferenceCache::store(const std::string& key, const LayerSet& layers, double seconds) const {
-  static std::atomic<unsigned> counter{0};
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) return "cannot create " + dir_.string() + ": " + ec.message();
@@ -189,25 +189,14 @@ std::string ReferenceCache::store(const std::string& key, const LayerSet& layers
   for (const auto& [k, v] : layers.attributes) header["attributes"].push_back({k, v});
 
   const fs::path file = entry_path(key);
-  const fs::path tmp =
-      file.string() + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(counter.fetch_add(1));
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out.write(kMagic, sizeof kMagic - 1);
-    out << header.dump() << '\n';
-    for (const Layer& l : layers.layers)
-      out.write(reinterpret_cast<const char*>(l.data.data()), std::streamsize(l.data.size() * sizeof(float)));
-    out.close();
-    if (!out) {
-      fs::remove(tmp, ec);
-      return "cannot write " + tmp.string();
-    }
-  }
-  fs::rename(tmp, file, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    return "cannot rename into " + file.string() + ": " + ec.message();
+  try {
+    TempFile tmp(file);
+    bool ok = tmp.write(kMagic, sizeof kMagic - 1) && tmp.write(header.dump() + "\n");
+    for (const Layer& l : layers.layers) ok = ok && tmp.write(l.data.data(), l.data.size() * sizeof(float));
+    if (!ok) return "cannot write " + tmp.path().string();
+    tmp.commit();
+  } catch (const std::system_error& e) {
+    return e.what();
   }
   return "";
 }

@@ -15,6 +15,7 @@
 #include <string_view>
 
 #include "cli/reference_cache.hpp"
+#include "core/safe_file.hpp"
 #include "farm/build_id.hpp"
 #include "job/content_hash.hpp"
 
@@ -104,31 +105,19 @@ bool ReferenceCheckpoint::load(int band, std::span<float> values) const {
 }
 
 std::string ReferenceCheckpoint::store(int band, std::span<const float> values) const {
-  static std::atomic<unsigned> counter{0};
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) return "cannot create " + dir_.string() + ": " + ec.message();
   const fs::path file = band_path(band);
-  const fs::path tmp =
-      file.string() + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(counter.fetch_add(1));
   const std::string header = header_bytes(key_, band, values.size());
   const std::uint64_t sum = checksum(header, values.data(), values.size());
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out.write(header.data(), std::streamsize(header.size()));
-    out.write(reinterpret_cast<const char*>(values.data()), std::streamsize(values.size_bytes()));
-    out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
-    out.close();
-    if (!out) {
-      fs::remove(tmp, ec);
-      return "cannot write " + tmp.string();
-    }
-  }
-  fs::rename(tmp, file, ec);  // complete or absent
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    return "cannot rename into " + file.string() + ": " + ec.message();
+  try {  // complete or absent
+    TempFile tmp(file);
+    if (!tmp.write(header) || !tmp.write(values.data(), values.size_bytes()) || !tmp.write(&sum, sizeof sum))
+      return "cannot write " + tmp.path().string();
+    tmp.commit();
+  } catch (const std::system_error& e) {
+    return e.what();
   }
   return "";
 }

@@ -57,6 +57,12 @@ std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
   if (!(std::abs(sx - sy) <= 1e-9 * std::max(sx, sy)))
     fail("/height/image", file + ": has non-square pixels (" + num(sx) + " x " + num(sy) +
                               "); hfbake needs square texels: resample it first, e.g. gdalwarp -tr S S");
+  // The file's pixel size becomes the texel size: the range job.schema.json gives texel_size.
+  if (!(sx >= 1e-6 && sx <= 1e6))
+    fail("/height/image", file + ": has a pixel size of " + num(sx) +
+                              (info->linear_unit.empty() ? "" : " " + info->linear_unit) +
+                              "; a texel size must lie in [1e-6, 1e6] (beyond, world positions lose float "
+                              "precision): give the raster another geotransform (gdal_edit.py -tr)");
   if (h.contains("texel_size") && h["texel_size"].is_number()) {
     const double t = h["texel_size"].get<double>();
     if (!(std::abs(t - sx) <= 1e-9 * sx)) {
@@ -194,14 +200,24 @@ void load_surface_map(const Job& job, const std::string& pointer, const HeightFi
                          ", the height field is " + std::to_string(field.width) + "x" +
                          std::to_string(field.height));
   const float scale = v.value("scale", 1.0f);
+  // An albedo is a reflectance: [0, 1], as a number albedo (job.schema.json albedo_rgb), after the scale.
+  const bool reflectance = pointer == "/surface/albedo";
   std::vector<Rgb> pixels = std::move(rgb.pixels);  // scaled in place: no second full-size copy
   for (std::size_t t = 0; t < pixels.size(); ++t) {
     const Rgb p = pixels[t];
+    const std::string where = image + ": pixel (" + std::to_string(t % std::size_t(field.width)) + ", " +
+                              std::to_string(t / std::size_t(field.width)) + ")";
     if (!std::isfinite(p.r) || !std::isfinite(p.g) || !std::isfinite(p.b) || p.r < 0 || p.g < 0 || p.b < 0)
-      throw InputError(job.file.string(), pointer + "/image",
-                       image + ": pixel (" + std::to_string(t % std::size_t(field.width)) + ", " +
-                           std::to_string(t / std::size_t(field.width)) + ") is negative or not finite");
+      throw InputError(job.file.string(), pointer + "/image", where + " is negative or not finite");
     pixels[t] = p * scale;
+    const Rgb s = pixels[t];
+    if (reflectance && (s.r > 1 || s.g > 1 || s.b > 1)) {
+      char value[96];
+      std::snprintf(value, sizeof value, " is (%g, %g, %g) after the scale", double(s.r), double(s.g),
+                    double(s.b));
+      throw InputError(job.file.string(), pointer + "/image",
+                       where + value + "; an albedo lies in [0, 1] (a reflectance)");
+    }
   }
   texels = std::move(pixels);
 }

@@ -122,11 +122,16 @@ std::vector<fs::path> remove_stale_shard_files(const fs::path& dir) {
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
     const auto tmp = name.rfind(".hfshard.tmp-");
-    if (tmp == std::string::npos) continue;
-    // The owner part read as a staging folder's, so by the same rule.
-    const std::optional<StageOwner> owner =
-        parse_stage_name(std::string(".hfbake-staging-x-") + name.substr(tmp + 13));
-    if (!owner || !it->is_regular_file(ec) || !stage_owner_is_gone(*owner)) continue;
+    if (tmp == std::string::npos || !it->is_regular_file(ec)) continue;
+    // <shard>.tmp-<owner>-XXXXXX (core/safe_file TempFile), or <shard>.tmp-<owner>; the owner read as a
+    // staging folder's, so by the same rule.
+    const std::string owner = name.substr(tmp + 13);
+    auto gone = [](const std::string& o) {
+      const std::optional<StageOwner> parsed = parse_stage_name(".hfbake-staging-x-" + o);
+      return parsed && stage_owner_is_gone(*parsed);
+    };
+    const bool suffixed = owner.size() > 7 && owner[owner.size() - 7] == '-';
+    if (!(suffixed && gone(owner.substr(0, owner.size() - 7))) && !gone(owner)) continue;
     std::error_code remove_ec;
     fs::remove(it->path(), remove_ec);
     if (!remove_ec) removed.push_back(it->path());
@@ -319,11 +324,27 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
     const ShardId id{i, count_};
     readers_.emplace_back(shard_path(job, id), identity_of(job, id, width, height));
     // The parts must be those this hfbake's plan gives the shard.
+    // In the writer's order: each entry whole or its blocks, then the reference's rows.
     const ShardWork w = shard_work(job, height, id);
-    std::size_t expect = w.row_end > w.row_begin ? 1 : 0;
-    for (const ShardWork::Entry& e : w.entries)
-      expect += e.whole ? 1 : std::size_t(e.block_end - e.block_begin);
-    if (readers_.back().parts().size() != expect)
+    std::vector<ShardPart> expect;
+    auto part = [&](int entry, const char* kind, int block, int row_begin, int row_end) {
+      ShardPart p;
+      p.entry = entry, p.kind = kind, p.block = block, p.row_begin = row_begin, p.row_end = row_end;
+      expect.push_back(std::move(p));
+    };
+    for (const ShardWork::Entry& e : w.entries) {
+      if (e.whole) part(e.entry, "whole", 0, 0, 0);
+      for (int b = e.block_begin; !e.whole && b < e.block_end; ++b) part(e.entry, "block", b, 0, 0);
+    }
+    if (w.row_end > w.row_begin) part(-1, "rows", 0, w.row_begin, w.row_end);
+    const std::vector<ShardPart>& parts = readers_.back().parts();
+    bool same = parts.size() == expect.size();
+    for (std::size_t p = 0; same && p < parts.size(); ++p) {
+      const ShardPart &a = parts[p], &b = expect[p];
+      same = a.entry == b.entry && a.kind == b.kind && (a.kind != "block" || a.block == b.block) &&
+             (a.kind != "rows" || (a.row_begin == b.row_begin && a.row_end == b.row_end));
+    }
+    if (!same)
       throw InputError(
           readers_.back().file().string(), "",
           "shard " + shard_id_text(id) + " holds other parts than this job's plan: bake it again");

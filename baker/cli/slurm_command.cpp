@@ -12,6 +12,7 @@
 #include "cli/scene_loader.hpp"
 #include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
+#include "core/safe_file.hpp"
 #include "farm/shard_file.hpp"
 #include "job/content_hash.hpp"
 
@@ -92,15 +93,11 @@ std::string bake_flags(const SlurmOptions& o) {
 
 void write_file(const fs::path& file, const std::string& text) {
   fs::create_directories(file.parent_path());
-  const fs::path tmp = file.string() + ".tmp-" + std::to_string(getpid());
-  {
-    std::ofstream out(tmp);
-    out << text;
-    if (!out) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  fs::permissions(tmp, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+  TempFile tmp(file);
+  if (!tmp.write(text)) throw std::runtime_error("cannot write " + tmp.path().string());
+  fs::permissions(tmp.path(), fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
                   fs::perm_options::add);
-  fs::rename(tmp, file);
+  tmp.commit();
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "cli/version.hpp"
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "job/manifest.hpp"
 #include "job/schema_validation.hpp"
 #include "report/report_html.hpp"
@@ -20,14 +21,11 @@ namespace fs = std::filesystem;
 namespace {
 
 void write_atomically(const fs::path& file, const std::string& text) {
-  const fs::path tmp = file.string() + ".tmp-" + std::to_string(getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    out.close();
-    if (!out) throw InputError(file.string(), "", "cannot write file");
+  try {
+    write_file_atomically(file, text);
+  } catch (const std::system_error& e) {
+    throw InputError(file.string(), "", "cannot write file: " + e.code().message());
   }
-  fs::rename(tmp, file);
 }
 
 std::string junit_xml(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds) {
@@ -96,6 +94,16 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
   return h.str();
 }
 
+// Whether `file` reads as a suite (a JSON object with "suite"); unreadable files are left to the job loader.
+bool is_suite_file(const fs::path& file) {
+  try {
+    const nlohmann::json doc = read_json_file(file);
+    return doc.is_object() && doc.contains("suite");
+  } catch (const InputError&) {
+    return false;
+  }
+}
+
 }  // namespace
 
 std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& errors) {
@@ -148,6 +156,11 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
     } else {
       for (std::size_t k = 0; k < g.gl_pathc; ++k) {  // glob sorts its matches
         const fs::path p = fs::path(g.gl_pathv[k]).lexically_normal();
+        if (is_suite_file(p)) {  // itself, or another suite: a suite holds jobs
+          errors.push_back(file.string() + ": /jobs/" + std::to_string(i) + ": " + p.string() +
+                           " is a suite, not a job (a suite lists jobs only)");
+          continue;
+        }
         if (!skipped.count(p) && seen.insert(p).second) suite.jobs.push_back(p);
       }
     }

@@ -1,5 +1,6 @@
 #include "farm/shard_file.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstring>
@@ -16,6 +17,8 @@ namespace {
 constexpr char kMagic[] = "hfbake shard 1\n";
 constexpr char kEnd[] = "hfbake shard end";  // 16 bytes, then the header offset (8 bytes)
 constexpr std::size_t kTrailer = 16 + 8;
+// A header lists parts and layers by name: far less than this, whatever the job.
+constexpr std::uint64_t kMaxShardHeaderBytes = 64u << 20;
 
 std::string host_name() {
   char buf[256] = {};
@@ -35,19 +38,16 @@ ShardWriter::ShardWriter(fs::path final_path, ShardIdentity identity, std::strin
     : final_(std::move(final_path)), identity_(std::move(identity)) {
   fs::create_directories(final_.parent_path());
   if (owner.empty()) owner = std::to_string(getpid()) + "@" + host_name();
-  tmp_ = final_.string() + ".tmp-" + owner;
-  out_.open(tmp_, std::ios::binary | std::ios::trunc);
-  if (!out_) throw std::runtime_error("cannot write " + tmp_.string());
-  out_.write(kMagic, sizeof kMagic - 1);
+  try {
+    out_ = std::make_unique<TempFile>(final_, owner);
+  } catch (const std::system_error& e) {
+    throw std::runtime_error(e.what());
+  }
+  ok_ = out_->write(kMagic, sizeof kMagic - 1);
   offset_ = sizeof kMagic - 1;
 }
 
-ShardWriter::~ShardWriter() {
-  if (committed_) return;
-  out_.close();
-  std::error_code ec;
-  fs::remove(tmp_, ec);
-}
+ShardWriter::~ShardWriter() = default;  // the TempFile removes itself unless committed
 
 void ShardWriter::add(ShardPart part, const LayerSet& layers) {
   part.width = layers.width, part.height = layers.height;
@@ -58,11 +58,11 @@ void ShardWriter::add(ShardPart part, const LayerSet& layers) {
                            {"offset", offset_},
                            {"floats", l.data.size()},
                            {"checksum", bytes_checksum(l.data.data(), l.data.size())}});
-    out_.write(reinterpret_cast<const char*>(l.data.data()), std::streamsize(l.data.size() * sizeof(float)));
+    ok_ = ok_ && out_->write(l.data.data(), l.data.size() * sizeof(float));
     offset_ += l.data.size() * sizeof(float);
   }
   part.attributes = layers.attributes;
-  if (!out_) throw std::runtime_error("cannot write " + tmp_.string());
+  if (!ok_) throw std::runtime_error("cannot write " + out_->path().string());
   parts_.push_back(std::move(part));
 }
 
@@ -88,16 +88,24 @@ void ShardWriter::commit() {
                                {"attributes", a}});
   }
   const std::string text = header.dump() + "\n";
-  out_.write(text.data(), std::streamsize(text.size()));
   unsigned char off[8];
   for (int b = 0; b < 8; ++b) off[b] = static_cast<unsigned char>(offset_ >> (8 * b));
-  out_.write(kEnd, 16);
-  out_.write(reinterpret_cast<const char*>(off), 8);
-  out_.flush();
-  if (!out_) throw std::runtime_error("cannot write " + tmp_.string());
-  out_.close();
-  fs::rename(tmp_, final_);
-  committed_ = true;
+  ok_ = ok_ && out_->write(text) && out_->write(kEnd, 16) && out_->write(off, 8);
+  if (!ok_) throw std::runtime_error("cannot write " + out_->path().string());
+  try {
+    out_->commit();
+  } catch (const std::system_error& e) {
+    throw std::runtime_error(e.what());
+  }
+}
+
+ShardReader::ShardReader(ShardReader&& other) noexcept
+    : file_(std::move(other.file_)), fd_(other.fd_), parts_(std::move(other.parts_)) {
+  other.fd_ = -1;
+}
+
+ShardReader::~ShardReader() {
+  if (fd_ >= 0) close(fd_);
 }
 
 ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : file_(file) {
@@ -106,27 +114,31 @@ ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : 
   const std::string redo =
       expected.redo.empty() ? "bake it with --shard " + shard_id_text(expected.id) : expected.redo;
   std::error_code ec;
-  if (!fs::exists(file, ec)) throw InputError(name, "", which + " is missing (" + redo + ")");
-  const std::uintmax_t size = fs::file_size(file, ec);
-  in_.open(file, std::ios::binary);
-  if (ec || !in_) throw InputError(name, "", "cannot read " + which);
+  if (!fs::exists(fs::symlink_status(file, ec)))
+    throw InputError(name, "", which + " is missing (" + redo + ")");
+  std::string why;
+  fd_ = open_regular_file(file, why);
+  if (fd_ < 0) throw InputError(name, "", "cannot read " + which + ": " + why);
+  struct stat st {};
+  if (fstat(fd_, &st) != 0) throw InputError(name, "", "cannot read " + which);
+  const std::uint64_t size = std::uint64_t(st.st_size);
   auto damaged = [&](const std::string& why) {
     return InputError(name, "", which + " is truncated or damaged (" + why + "): " + redo);
   };
   char magic[sizeof kMagic - 1];
-  if (size < sizeof magic + kTrailer || !in_.read(magic, sizeof magic) ||
+  if (size < sizeof magic + kTrailer || !read_at(fd_, magic, sizeof magic, 0) ||
       std::memcmp(magic, kMagic, sizeof magic) != 0)
     throw damaged("no shard header");
   char trailer[kTrailer];
-  in_.seekg(std::streamoff(size - kTrailer));
-  if (!in_.read(trailer, kTrailer) || std::memcmp(trailer, kEnd, 16) != 0) throw damaged("no end marker");
+  if (!read_at(fd_, trailer, kTrailer, size - kTrailer) || std::memcmp(trailer, kEnd, 16) != 0)
+    throw damaged("no end marker");
   std::uint64_t header_at = 0;
   for (int b = 0; b < 8; ++b)
     header_at |= std::uint64_t(static_cast<unsigned char>(trailer[16 + b])) << (8 * b);
   if (header_at < sizeof magic || header_at >= size - kTrailer) throw damaged("bad header offset");
+  if (size - kTrailer - header_at > kMaxShardHeaderBytes) throw damaged("a header beyond any shard's");
   std::string text(std::size_t(size - kTrailer - header_at), '\0');
-  in_.seekg(std::streamoff(header_at));
-  if (!in_.read(text.data(), std::streamsize(text.size()))) throw damaged("unreadable header");
+  if (!read_at(fd_, text.data(), text.size(), header_at)) throw damaged("unreadable header");
   nlohmann::json h;
   try {
     h = nlohmann::json::parse(text);
@@ -142,6 +154,9 @@ ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : 
     if (h.at("shard") != expected.id.index || h.at("shards") != expected.id.count ||
         h.at("width") != expected.width || h.at("height") != expected.height)
       throw damaged("header of another shard or field size");
+    // Every claim against the job's field and the file's bytes: a part is the whole field (or its rows
+    // [row_begin, row_end) for the reference), each layer width * height * channels floats inside the data.
+    const std::uint64_t W = std::uint64_t(expected.width), H = std::uint64_t(expected.height);
     for (const auto& p : h.at("parts")) {
       ShardPart part;
       part.entry = p.at("entry");
@@ -151,10 +166,34 @@ ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : 
       part.seconds = p.at("seconds"), part.cpu_seconds = p.at("cpu_seconds");
       part.width = p.at("width"), part.height = p.at("height");
       part.layers = p.at("layers");
-      for (const auto& l : part.layers)
-        if (l.at("offset").get<std::uint64_t>() + l.at("floats").get<std::uint64_t>() * sizeof(float) >
-            header_at)
+      const bool rows = part.kind == "rows";
+      if (!rows && part.kind != "whole" && part.kind != "block" && part.kind != "stage" &&
+          part.kind != "stage-block")
+        throw damaged("a part of unknown kind");
+      if (part.entry < -1 || part.block < 0 || !(part.seconds >= 0) || !(part.cpu_seconds >= 0))
+        throw damaged("a part of no entry");
+      if (rows && !(part.row_begin >= 0 && part.row_begin < part.row_end &&
+                    std::uint64_t(part.row_end) <= H && part.height == part.row_end - part.row_begin))
+        throw damaged("rows outside the field");
+      if (std::uint64_t(part.width) != W || (!rows && std::uint64_t(part.height) != H))
+        throw damaged("a part of another size than the field's " + std::to_string(W) + "x" +
+                      std::to_string(H));
+      const std::uint64_t texels = W * std::uint64_t(part.height);
+      if (texels == 0) throw damaged("a part of no texels");
+      if (!part.layers.is_array()) throw damaged("a part without layers");
+      for (const auto& l : part.layers) {
+        const std::uint64_t channels = l.at("channels").size(), floats = l.at("floats").get<std::uint64_t>(),
+                            offset = l.at("offset").get<std::uint64_t>();
+        if (!l.at("name").is_string() || l.at("name").get_ref<const std::string&>().empty() ||
+            !l.at("channels").is_array() || channels == 0 || !l.at("checksum").is_string())
+          throw damaged("a layer without a name, channels or checksum");
+        for (const auto& c : l.at("channels"))
+          if (!c.is_string()) throw damaged("a layer's channel without a name");
+        if (channels > header_at / 4 / texels || floats != texels * channels)
+          throw damaged("layer " + l.at("name").get<std::string>() + " of another size than the part's");
+        if (offset < sizeof magic || offset > header_at || floats > (header_at - offset) / sizeof(float))
           throw damaged("a layer beyond the data");
+      }
       for (const auto& a : p.at("attributes")) part.attributes.emplace_back(a.at(0), a.at(1));
       parts_.push_back(std::move(part));
     }
@@ -171,9 +210,9 @@ LayerSet ShardReader::load(std::size_t i) {
     Layer& layer = out.add(l.at("name").get<std::string>(), l.at("channels").get<std::vector<std::string>>());
     if (layer.data.size() != l.at("floats").get<std::size_t>())
       throw InputError(file_.string(), "", "layer " + layer.name + " has the wrong size");
-    in_.seekg(std::streamoff(l.at("offset").get<std::uint64_t>()));
-    in_.read(reinterpret_cast<char*>(layer.data.data()), std::streamsize(layer.data.size() * sizeof(float)));
-    if (!in_ || bytes_checksum(layer.data.data(), layer.data.size()) != l.at("checksum").get<std::string>())
+    if (!read_at(fd_, layer.data.data(), layer.data.size() * sizeof(float),
+                 l.at("offset").get<std::uint64_t>()) ||
+        bytes_checksum(layer.data.data(), layer.data.size()) != l.at("checksum").get<std::string>())
       throw InputError(file_.string(), "",
                        "shard data damaged (checksum of " + layer.name + "): bake the shard again");
   }

@@ -7,16 +7,21 @@
 // trailer: "hfbake shard end" and the header's offset as 8 little-endian bytes. A file is written under a
 // temporary name beside its final one and renamed when complete, so a shard file is whole or absent; the
 // trailer and each part's checksum catch a file truncated or damaged afterwards.
+//
+// A shard file is read as untrusted input: only a regular file is opened (never blocking on a FIFO), and
+// every part's claims (its kind, size, rows, layers' channels, floats and offsets) must match the job's
+// field and lie inside the file before anything is allocated from them.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "core/layers.hpp"
+#include "core/safe_file.hpp"
 #include "farm/shard_plan.hpp"
 
 namespace hfbake {
@@ -44,8 +49,8 @@ struct ShardPart {
 
 class ShardWriter {
  public:
-  // Opens a temporary file beside `final_path` (creating its folder), named <final>.tmp-<owner> (default
-  // owner: <pid>@<host>); std::runtime_error if impossible.
+  // Opens a temporary file of its own beside `final_path` (creating its folder), named
+  // <final>.tmp-<owner>-XXXXXX (default owner: <pid>@<host>); std::runtime_error if impossible.
   ShardWriter(std::filesystem::path final_path, ShardIdentity identity, std::string owner = "");
   ~ShardWriter();  // removes the temporary file unless committed
   ShardWriter(const ShardWriter&) = delete;
@@ -56,12 +61,12 @@ class ShardWriter {
   void commit();
 
  private:
-  std::filesystem::path final_, tmp_;
+  std::filesystem::path final_;
   ShardIdentity identity_;
-  std::ofstream out_;
+  std::unique_ptr<TempFile> out_;
+  bool ok_ = true;  // every write so far succeeded
   std::uint64_t offset_ = 0;
   std::vector<ShardPart> parts_;
-  bool committed_ = false;
 };
 
 class ShardReader {
@@ -69,6 +74,10 @@ class ShardReader {
   // Reads the header. Throws InputError naming the file: missing, truncated or damaged, of another job
   // (job hash or name), another hfbake version, or another shard than `expected`.
   ShardReader(const std::filesystem::path& file, const ShardIdentity& expected);
+  ~ShardReader();
+  ShardReader(ShardReader&& other) noexcept;
+  ShardReader& operator=(ShardReader&&) = delete;
+  ShardReader(const ShardReader&) = delete;
   const std::vector<ShardPart>& parts() const { return parts_; }
   // Loads part i's layers and attributes; InputError naming the file when a checksum fails.
   LayerSet load(std::size_t i);
@@ -76,7 +85,7 @@ class ShardReader {
 
  private:
   std::filesystem::path file_;
-  std::ifstream in_;
+  int fd_ = -1;
   std::vector<ShardPart> parts_;
 };
 

@@ -1,5 +1,7 @@
 #include "io/image_input.hpp"
 
+#include <unistd.h>
+
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -297,12 +299,48 @@ bool integer_to_float(OIIO::TypeDesc type, const void* src, std::size_t n, float
   }
 }
 
+// The image libraries' own printing while an image is decoded (libpng's default error handler writes
+// "libpng error: IDAT: Read error" to stderr before OpenImageIO reports the failure): stderr goes to a
+// temporary file for the scope, and only hfbake's own lines (another thread's progress) are printed after.
+// What the library meant is in hfbake's one-line error (OpenImageIO's geterror()).
+class LibraryStderr {
+ public:
+  LibraryStderr() {
+    std::fflush(stderr);
+    captured_ = std::tmpfile();
+    saved_ = captured_ ? dup(STDERR_FILENO) : -1;
+    if (saved_ >= 0 && dup2(fileno(captured_), STDERR_FILENO) < 0) {
+      close(saved_);
+      saved_ = -1;
+    }
+  }
+  ~LibraryStderr() {
+    if (saved_ >= 0) {
+      std::fflush(stderr);
+      dup2(saved_, STDERR_FILENO);
+      close(saved_);
+      std::rewind(captured_);
+      char line[4096];
+      while (std::fgets(line, sizeof line, captured_))
+        if (std::strncmp(line, "hfbake", 6) == 0) std::fputs(line, stderr);
+    }
+    if (captured_) std::fclose(captured_);
+  }
+  LibraryStderr(const LibraryStderr&) = delete;
+  LibraryStderr& operator=(const LibraryStderr&) = delete;
+
+ private:
+  std::FILE* captured_ = nullptr;
+  int saved_ = -1;
+};
+
 // Decodes channels [chbegin, chend) (clamped to the image's) as floats, interleaved, a band of rows at a time
 // straight into the result (bands of whole tile rows for a tiled file, else of about 4 MiB of floats and at
 // least 16 rows), reporting progress per band; info describes the whole file. With IntegerSamples::stored,
 // a band of one integer channel is decoded in its own type into a scratch band, then converted.
 Image read_channels(const fs::path& file, const InputSite& site, int chbegin, int chend,
                     IntegerSamples integers, const ReadProgress& progress = {}) {
+  const LibraryStderr quiet;
   auto in = open_input(file, site);
   const OIIO::ImageSpec spec = in->spec();
   check_spec(spec, file, site);

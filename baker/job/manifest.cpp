@@ -124,7 +124,16 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& file)
     return p;
   };
   auto element = [&] {
-    if (!frames.empty() && frames.back().array) ++frames.back().index;
+    if (!frames.empty() && frames.back().array && std::size_t(++frames.back().index) >= kMaxJsonArrayItems)
+      throw InputError(file, pointer(frames.size() - 1),
+                       "an array of more than " + std::to_string(kMaxJsonArrayItems) +
+                           " items; hfbake's JSON files hold at most " + std::to_string(kMaxJsonArrayItems));
+  };
+  auto bounded_string = [&](const std::string& s, const std::string& where) {
+    if (s.size() > kMaxJsonStringBytes)
+      throw InputError(file, where,
+                       "a string of " + std::to_string(s.size()) +
+                           " bytes; hfbake's JSON files hold at most " + std::to_string(kMaxJsonStringBytes));
   };
   using Event = nlohmann::json::parse_event_t;
   const nlohmann::json::parser_callback_t callback = [&](int, Event event, nlohmann::json& parsed) {
@@ -145,12 +154,14 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& file)
         if (!frames.empty()) {
           Frame& f = frames.back();
           f.key = parsed.get<std::string>();
+          bounded_string(f.key, pointer(frames.size() - 1));
           if (!f.keys.insert(f.key).second && duplicate.empty())
             duplicate = pointer(frames.size() - 1) + "/" + f.key;
         }
         break;
       case Event::value:
         element();
+        if (parsed.is_string()) bounded_string(parsed.get_ref<const std::string&>(), pointer(frames.size()));
         break;
     }
     return true;
@@ -198,15 +209,17 @@ nlohmann::json read_json_file(const fs::path& file) {
 }
 
 JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_override) {
-  nlohmann::json doc;
+  JobLoad result;
   try {
-    doc = read_json_file(file);
+    return load_job_document(read_json_file(file), file, out_override);
   } catch (const InputError& e) {
-    JobLoad result;
     result.errors.push_back(e.line());
-    return result;
+  } catch (const std::bad_alloc&) {
+    result.errors.push_back(printable(file.string() + ": not enough memory to read the job"));
+  } catch (const std::exception& e) {
+    result.errors.push_back(printable(file.string() + ": cannot read the job: " + e.what()));
   }
-  return load_job_document(std::move(doc), file, out_override);
+  return result;
 }
 
 JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
@@ -220,6 +233,7 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
   // A numeric parameter given as a list expands into one bake entry per value (a sweep).
   SweepExpansion sweep = expand_parameter_sweeps(doc);
   for (const std::string& e : sweep.errors) result.errors.push_back(printable(fname + ": " + e));
+  if (sweep.too_many) return result;
   doc = std::move(sweep.doc);
   // The document against job.schema.json, and each bake entry against its method's own schema
   // (schemas/methods/<method>.schema.json: adding a method adds a schema file, not a line here or in

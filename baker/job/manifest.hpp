@@ -76,10 +76,14 @@ std::vector<std::pair<std::string, std::string>> job_input_files(const nlohmann:
 // crash, a hang or an absurd allocation.
 inline constexpr int kMaxJsonDepth = 64;
 inline constexpr std::uintmax_t kMaxJsonFileBytes = 16u << 20;
+// Every string (value or key) and every array of such a file: a schema's "pattern" is matched by a
+// recursive std::regex whose stack grows with the string, and work grows with the items.
+inline constexpr std::size_t kMaxJsonStringBytes = 4096;
+inline constexpr std::size_t kMaxJsonArrayItems = 4096;
 
 // Parses JSON text; errors (InputError naming `file`) as "line L, column C: <what>": malformed text, numbers
-// beyond double's range, nesting deeper than kMaxJsonDepth, and a key given twice in one object (its
-// pointer).
+// beyond double's range, nesting deeper than kMaxJsonDepth; as the JSON pointer: a key given twice in one
+// object, a string longer than kMaxJsonStringBytes, an array longer than kMaxJsonArrayItems.
 nlohmann::json parse_json_text(const std::string& text, const std::string& file);
 
 // Reads and parses a JSON file: a regular file (not a FIFO, device or folder) of at most kMaxJsonFileBytes.

@@ -97,15 +97,34 @@ SweepExpansion expand_parameter_sweeps(const nlohmann::json& doc) {
   r.doc = doc;
   if (!doc.is_object() || !doc.contains("bake") || !doc["bake"].is_array()) return r;
   const nlohmann::json& bake = doc["bake"];
-  nlohmann::json expanded = nlohmann::json::array();
-  for (std::size_t i = 0; i < bake.size(); ++i) {
-    const nlohmann::json& e = bake[i];
-    const std::string ptr = "/bake/" + std::to_string(i);
+  auto swept_keys = [](const nlohmann::json& e) {
     std::vector<std::string> swept;
     if (e.is_object() && e.contains("method") && e["method"].is_string())
       for (const auto& [key, value] : e.items())
         if (key != "method" && all_numbers(value) && sweepable(e["method"].get<std::string>(), key))
           swept.push_back(key);
+    return swept;
+  };
+  // The count first: entries, each sweep as many runs as it lists values.
+  std::size_t runs = 0;
+  for (std::size_t i = 0; i < bake.size(); ++i) {
+    const std::vector<std::string> swept = swept_keys(bake[i]);
+    const std::size_t n = swept.size() == 1 ? bake[i][swept.front()].size() : 1;
+    if (runs + n > kMaxBakeEntries) {
+      const std::string where = "/bake/" + std::to_string(i) + (swept.size() == 1 ? "/" + swept.front() : "");
+      r.errors.push_back(where + ": the job would bake " + std::to_string(runs + n) + "+ entries" +
+                         (swept.size() == 1 ? " with this sweep" : "") + "; a job bakes at most " +
+                         std::to_string(kMaxBakeEntries) + " (sweeps expanded)");
+      r.too_many = true;
+      return r;
+    }
+    runs += n;
+  }
+  nlohmann::json expanded = nlohmann::json::array();
+  for (std::size_t i = 0; i < bake.size(); ++i) {
+    const nlohmann::json& e = bake[i];
+    const std::string ptr = "/bake/" + std::to_string(i);
+    const std::vector<std::string> swept = swept_keys(e);
     if (swept.size() > 1) {
       std::string names;
       for (const std::string& s : swept) names += (names.empty() ? "" : ", ") + s;

@@ -23,10 +23,15 @@ struct SweepOrigin {
   nlohmann::json value;         // the value of this run
 };
 
+// The bake entries of a job once its sweeps are expanded (job.schema.json "bake" maxItems): counted before
+// anything is expanded, so a small file cannot ask for unbounded work.
+inline constexpr std::size_t kMaxBakeEntries = 256;
+
 struct SweepExpansion {
   nlohmann::json doc;                // the job with every sweep expanded (unchanged when there is none)
   std::vector<SweepOrigin> origins;  // one per bake entry of `doc`
   std::vector<std::string> errors;   // "<JSON pointer>: <what is wrong>", pointers into the original file
+  bool too_many = false;             // beyond kMaxBakeEntries: nothing expanded, `errors` says where
 };
 
 // Expands every sweep of doc["bake"]. Documents that are not jobs pass through unchanged (the schema

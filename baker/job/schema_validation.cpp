@@ -19,17 +19,35 @@
 namespace hfbake {
 namespace {
 
-const nlohmann::json& schema_document(const std::string& path) {
-  // Parsed once per process; the schemas are immutable, so the cache only grows (thread-safe via a
-  // function-local static built from all files at once).
-  static const std::map<std::string, nlohmann::json> docs = [] {
-    std::map<std::string, nlohmann::json> m;
-    for (const EmbeddedSchema& s : embedded_schemas())
-      m.emplace(std::string(s.path), nlohmann::json::parse(s.text.begin(), s.text.end()));
+// Removes "uniqueItems" from a schema: valijson reports every equal pair (n^2 / 2 lines for one value
+// listed n times); hfbake checks it itself, once per value (unique_items_violations).
+void drop_unique_items(nlohmann::json& node) {
+  if (node.is_object()) {
+    node.erase("uniqueItems");
+    for (auto& [key, child] : node.items())
+      if (key != "enum" && key != "const" && key != "default") drop_unique_items(child);
+  } else if (node.is_array()) {
+    for (auto& child : node) drop_unique_items(child);
+  }
+}
+
+// The embedded schemas, parsed once per process (immutable; thread-safe via a function-local static):
+// as written (`as_written`), or as valijson reads them (without "uniqueItems").
+const nlohmann::json& schema_document(const std::string& path, bool as_written = true) {
+  using Docs = std::map<std::string, nlohmann::json>;
+  static const std::pair<Docs, Docs> docs = [] {
+    std::pair<Docs, Docs> m;
+    for (const EmbeddedSchema& s : embedded_schemas()) {
+      nlohmann::json doc = nlohmann::json::parse(s.text.begin(), s.text.end());
+      m.first.emplace(std::string(s.path), doc);
+      drop_unique_items(doc);
+      m.second.emplace(std::string(s.path), std::move(doc));
+    }
     return m;
   }();
-  auto it = docs.find(path);
-  if (it == docs.end()) throw std::logic_error("hfbake: no embedded schema " + path);
+  const Docs& d = as_written ? docs.first : docs.second;
+  auto it = d.find(path);
+  if (it == d.end()) throw std::logic_error("hfbake: no embedded schema " + path);
   return it->second;
 }
 
@@ -162,29 +180,32 @@ const nlohmann::json* follow_ref(const nlohmann::json* node, std::string& doc_pa
   return node;
 }
 
-// The "enum" the schema gives the value at `pointer`, walking properties and items (and $ref); the
-// branches of allOf/if-then are searched too. nullptr when none is found.
-const nlohmann::json* enum_at(const nlohmann::json* node, std::string doc_path,
-                              const std::vector<std::string>& tokens, std::size_t k) {
+// The value of `keyword` ("enum", "maxLength", "uniqueItems") the schema gives the value at the pointer
+// `tokens`, walking properties and items (and $ref); the branches of allOf/anyOf/oneOf and if-then are
+// searched too. nullptr when none is found.
+const nlohmann::json* keyword_at(const nlohmann::json* node, std::string doc_path,
+                                 const std::vector<std::string>& tokens, std::size_t k, const char* keyword) {
   node = follow_ref(node, doc_path);
   if (!node || !node->is_object()) return nullptr;
-  if (k == tokens.size()) return node->contains("enum") ? &(*node)["enum"] : nullptr;
-  const std::string& t = tokens[k];
-  if (node->contains("properties") && (*node)["properties"].contains(t))
-    if (const auto* e = enum_at(&(*node)["properties"][t], doc_path, tokens, k + 1)) return e;
-  if (node->contains("items") && !t.empty() && std::all_of(t.begin(), t.end(), ::isdigit))
-    if (const auto* e = enum_at(&(*node)["items"], doc_path, tokens, k + 1)) return e;
+  if (k == tokens.size() && node->contains(keyword)) return &(*node)[keyword];
+  if (k < tokens.size()) {
+    const std::string& t = tokens[k];
+    if (node->contains("properties") && (*node)["properties"].contains(t))
+      if (const auto* e = keyword_at(&(*node)["properties"][t], doc_path, tokens, k + 1, keyword)) return e;
+    if (node->contains("items") && !t.empty() && std::all_of(t.begin(), t.end(), ::isdigit))
+      if (const auto* e = keyword_at(&(*node)["items"], doc_path, tokens, k + 1, keyword)) return e;
+  }
   for (const char* branch : {"allOf", "anyOf", "oneOf"})
     if (node->contains(branch))
       for (const auto& b : (*node)[branch]) {
-        if (const auto* e = enum_at(&b, doc_path, tokens, k)) return e;
+        if (const auto* e = keyword_at(&b, doc_path, tokens, k, keyword)) return e;
         if (b.contains("then"))
-          if (const auto* e = enum_at(&b["then"], doc_path, tokens, k)) return e;
+          if (const auto* e = keyword_at(&b["then"], doc_path, tokens, k, keyword)) return e;
       }
   return nullptr;
 }
 
-std::string allowed_values(const std::string& schema_path, const std::string& pointer) {
+std::vector<std::string> pointer_tokens(const std::string& pointer) {
   std::vector<std::string> tokens;
   for (std::size_t a = 1; a <= pointer.size() && !pointer.empty();) {
     const std::size_t b = pointer.find('/', a);
@@ -192,7 +213,70 @@ std::string allowed_values(const std::string& schema_path, const std::string& po
     if (b == std::string::npos) break;
     a = b + 1;
   }
-  const nlohmann::json* e = enum_at(&schema_document(schema_path), schema_path, tokens, 0);
+  return tokens;
+}
+
+// Strings longer than the schema's "maxLength" for them, checked before valijson matches any "pattern"
+// (std::regex recurses once per character).
+void overlong_strings(const nlohmann::json& value, const std::string& schema_path,
+                      std::vector<std::string>& tokens, std::vector<SchemaViolation>& out) {
+  if (value.is_string()) {
+    const nlohmann::json* limit =
+        keyword_at(&schema_document(schema_path), schema_path, tokens, 0, "maxLength");
+    const std::size_t n = value.get_ref<const std::string&>().size();
+    if (limit && limit->is_number_unsigned() && n > limit->get<std::size_t>()) {
+      std::string pointer;
+      for (const std::string& t : tokens) pointer += "/" + t;
+      out.push_back({pointer, "must be at most " + limit->dump() + " characters long (it has " +
+                                  std::to_string(n) + ")"});
+    }
+  } else if (value.is_object() || value.is_array()) {
+    std::size_t index = 0;
+    for (const auto& [key, child] : value.items()) {
+      tokens.push_back(value.is_array() ? std::to_string(index++) : key);
+      overlong_strings(child, schema_path, tokens, out);
+      tokens.pop_back();
+    }
+  }
+}
+
+// Arrays whose schema says "uniqueItems": one line per value listed more than once, at its second place.
+void repeated_items(const nlohmann::json& value, const std::string& schema_path,
+                    std::vector<std::string>& tokens, std::vector<SchemaViolation>& out) {
+  if (!value.is_object() && !value.is_array()) return;
+  std::string pointer;
+  for (const std::string& t : tokens) pointer += "/" + t;
+  if (value.is_array()) {
+    const nlohmann::json* unique =
+        keyword_at(&schema_document(schema_path), schema_path, tokens, 0, "uniqueItems");
+    if (unique && *unique == true) {
+      std::map<std::string, std::vector<std::size_t>> places;
+      std::vector<std::string> order;
+      for (std::size_t i = 0; i < value.size(); ++i) {
+        std::vector<std::size_t>& p = places[value[i].dump()];
+        if (p.size() == 1) order.push_back(value[i].dump());
+        p.push_back(i);
+      }
+      for (const std::string& v : order) {
+        const std::vector<std::size_t>& p = places[v];
+        const std::string shown = v.size() > 64 ? v.substr(0, 61) + "..." : v;
+        out.push_back({pointer + "/" + std::to_string(p[1]),
+                       shown + " is listed " + std::to_string(p.size()) + " times (first as item " +
+                           std::to_string(p[0]) + "); each may be listed once"});
+      }
+    }
+  }
+  std::size_t index = 0;
+  for (const auto& [key, child] : value.items()) {
+    tokens.push_back(value.is_array() ? std::to_string(index++) : key);
+    repeated_items(child, schema_path, tokens, out);
+    tokens.pop_back();
+  }
+}
+
+std::string allowed_values(const std::string& schema_path, const std::string& pointer) {
+  const std::vector<std::string> tokens = pointer_tokens(pointer);
+  const nlohmann::json* e = keyword_at(&schema_document(schema_path), schema_path, tokens, 0, "enum");
   if (!e || !e->is_array()) return "";
   std::string list;
   for (std::size_t i = 0; i < e->size(); ++i) list += (i ? ", " : "") + (*e)[i].dump();
@@ -204,14 +288,20 @@ std::string allowed_values(const std::string& schema_path, const std::string& po
 std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
                                                      const std::string& schema_path) {
   using Adapter = valijson::adapters::NlohmannJsonAdapter;
+  {
+    std::vector<std::string> tokens;
+    std::vector<SchemaViolation> overlong;
+    overlong_strings(doc, schema_path, tokens, overlong);
+    if (!overlong.empty()) return overlong;
+  }
   // Parsing the schema is cheap (a few KB); keep it per call so there is no shared mutable state.
   valijson::Schema schema;
   valijson::SchemaParser parser;
-  const Adapter schema_adapter(schema_document(schema_path));
+  const Adapter schema_adapter(schema_document(schema_path, false));
   parser.populateSchema(
       schema_adapter, schema,
       [](const std::string& uri) -> const nlohmann::json* {
-        return &schema_document(resolve_schema_uri(uri));
+        return &schema_document(resolve_schema_uri(uri), false);
       },
       [](const nlohmann::json*) {});
 
@@ -221,6 +311,10 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
   validator.validate(schema, target, &results);
 
   std::vector<SchemaViolation> out;
+  {
+    std::vector<std::string> tokens;
+    repeated_items(doc, schema_path, tokens, out);
+  }
   valijson::ValidationResults::Error error;
   std::vector<std::pair<std::string, std::string>> raw;
   while (results.popError(error)) raw.emplace_back(pointer_of(error.context), error.description);
@@ -245,12 +339,15 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
     return v.message == "wrong type" ||
            v.message.rfind("failed to match expected value set by 'const'", 0) == 0;
   };
+  // When every branch says only that (a string where a number or a constant is expected), one of them.
   std::vector<SchemaViolation> kept;
   for (const SchemaViolation& v : out) {
     const bool other = std::any_of(out.begin(), out.end(), [&](const SchemaViolation& o) {
       return &o != &v && o.pointer == v.pointer && !says_nothing(o);
     });
-    if (!(says_nothing(v) && other)) kept.push_back(v);
+    const bool said = std::any_of(kept.begin(), kept.end(),
+                                  [&](const SchemaViolation& o) { return o.pointer == v.pointer; });
+    if (!(says_nothing(v) && (other || said))) kept.push_back(v);
   }
   return kept;
 }

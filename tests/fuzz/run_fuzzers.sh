@@ -3,7 +3,7 @@
 # from its seed corpus (tests/fuzz/corpus/<name>, the job files in jobs/, bench/, tests/accuracy/ and tests/nightly/fields/, every regression input), and fails
 # on any finding (a crash, an uncaught exception, UB, a leak, a timeout, more than the RSS limit, a
 # multi-line error message). New corpus entries go to a scratch folder, never into the source tree.
-#   tests/fuzz/run_fuzzers.sh BUILD_DIR SECONDS [NAME ...]      (names: job height_image environment report)
+#   tests/fuzz/run_fuzzers.sh BUILD_DIR SECONDS [NAME ...]      (names: job height_image environment report shard)
 # FUZZ_TIMEOUT (default 60 s): an input slower than this is a finding. OpenEXR allocates and clears an
 # attribute's declared size (up to 2 GiB) before it notices a short file: under ASan on a loaded machine such
 # an input takes seconds (tens at nice 19 beside other work).
@@ -17,7 +17,7 @@ build=${1:?usage: run_fuzzers.sh BUILD_DIR SECONDS [NAME ...]}
 seconds=${2:?seconds per fuzzer}
 shift 2
 names=("$@")
-[ ${#names[@]} -gt 0 ] || names=(job height_image environment report)
+[ ${#names[@]} -gt 0 ] || names=(job height_image environment report shard)
 scratch=$(mktemp -d "${TMPDIR:-/tmp}/hfbake-fuzz.XXXXXX")
 status=0
 for name in "${names[@]}"; do

@@ -59,5 +59,20 @@ TEST(FiniteOutputs, HorizonDistanceMayBePlusInfinityOnly) {
       << failure(s);
 }
 
+// A fraction of the sky beyond [0, 1] by more than a quadrature's error: ao up to 1.026 came out of a field
+// of 1e-9 m texels; 1.0019 is what p1 with 4 directions gives on a small fractal.
+TEST(FiniteOutputs, FractionsOfTheSkyStayInZeroOne) {
+  LayerSet s = layers_5x4();
+  s.layers[0].data[6] = 1.0019f;
+  s.layers[0].data[7] = -0.01f;
+  EXPECT_EQ(failure(s), "");
+  s.layers[0].data[8] = 1.06f;
+  EXPECT_EQ(failure(s).rfind("p1: layer ao: texel (3, 1) channel ao.Y is 1.06, outside [0, 1]", 0), 0u)
+      << failure(s);
+  LayerSet t = layers_5x4();
+  for (float& v : t.layers[1].data) v = 7.0f;  // direct is light, not a fraction
+  EXPECT_EQ(failure(t), "");
+}
+
 }  // namespace
 }  // namespace hfbake

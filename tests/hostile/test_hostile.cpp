@@ -183,6 +183,92 @@ std::vector<Case> cases() {
     j["description"] = std::string(17u << 20, 'x');
     return both(write_job(d, j), "", "may be at most 16777216");
   });
+  // --- bounds: sizes a small file can ask for ----------------------------------------------------------
+  // A pattern is matched by std::regex, which recursed once per character (30 000: SIGSEGV).
+  add("LongJobName30000", [](const fs::path& d) {
+    json j = base_job();
+    j["name"] = std::string(30000, 'a');
+    return both(write_job(d, j), "/name", "a string of 30000 bytes; hfbake's JSON files hold at most 4096");
+  });
+  add("LongJobName4000", [](const fs::path& d) {  // within the file's bound: the schema's maxLength first
+    json j = base_job();
+    j["name"] = std::string(4000, 'a');
+    return both(write_job(d, j), "/name", "must be at most 128 characters long");
+  });
+  add("LongPackName4000", [](const fs::path& d) {
+    json j = base_job();
+    j["output"]["textures"] = {{{"pack", std::string(4000, 'p')}, {"channels", {{"R", "ao"}}}}};
+    return both(write_job(d, j), "/output/textures/0/pack", "must be at most 128 characters long");
+  });
+  add("LongSuiteName30000", [](const fs::path& d) {
+    write_job(d, base_job());
+    const json suite = {{"version", 1}, {"suite", std::string(30000, 's')}, {"jobs", {"job.json"}}};
+    const std::string file = write_job(d, suite, "suite.json");
+    return CaseSetup{{"validate", file}, file, "/suite", "a string of 30000 bytes", true};
+  });
+  add("LongKey30000", [](const fs::path& d) {
+    json j = base_job();
+    j["output"][std::string(30000, 'k')] = 1;
+    return both(write_job(d, j), "/output", "a string of 30000 bytes");
+  });
+  // Each equal pair was a line: 1000 x "ao" printed 499 500 lines (10 000: 8 GB, then std::bad_alloc).
+  add("LayerListed1000Times", [](const fs::path& d) {
+    json j = base_job();
+    j["bake"][0]["layers"] = std::vector<std::string>(1000, "ao");
+    return both(write_job(d, j), "/bake/0/layers/1", "\"ao\" is listed 1000 times");
+  });
+  add("LayerListed10000Times", [](const fs::path& d) {
+    json j = base_job();
+    j["bake"][0]["layers"] = std::vector<std::string>(10000, "ao");
+    return both(write_job(d, j), "/bake/0/layers", "an array of more than 4096 items");
+  });
+  add(
+      "TwoLayersListedTwiceEach",
+      [](const fs::path& d) {
+        json j = base_job();
+        j["bake"][0]["layers"] = {"ao", "vsky", "ao", "vsky", "ao"};
+        return both(write_job(d, j), "/bake/0/layers/2", "\"ao\" is listed 3 times");
+      },
+      2, 2);
+  add("MillionBakeEntries", [](const fs::path& d) {
+    std::string t = base_job().dump();
+    std::string entries;
+    for (int i = 0; i < 1000000; ++i) entries += "{\"method\":\"p1\"},";
+    entries.pop_back();
+    t.replace(t.find("[{\"directions\""), std::string("[{\"directions\":4,\"method\":\"p1\"}]").size(),
+              "[" + entries + "]");
+    return both(write_text(d, t), "/bake", "an array of more than 4096 items");
+  });
+  add("BakeEntries300", [](const fs::path& d) {
+    json j = base_job();
+    j["bake"] = std::vector<json>(300, {{"method", "p1"}, {"directions", 4}});
+    return both(write_job(d, j), "/bake/256", "a job bakes at most 256");
+  });
+  add("SweepOf65535Values", [](const fs::path& d) {
+    json j = base_job();
+    std::vector<int> k(65535);
+    for (int i = 0; i < 65535; ++i) k[std::size_t(i)] = i + 1;
+    j["bake"][0]["directions"] = k;
+    return both(write_job(d, j), "/bake/0/directions", "an array of more than 4096 items");
+  });
+  add("SweepOf4000Values", [](const fs::path& d) {
+    json j = base_job();
+    std::vector<int> k(4000);
+    for (int i = 0; i < 4000; ++i) k[std::size_t(i)] = i + 1;
+    j["bake"][0]["directions"] = k;
+    return both(write_job(d, j), "/bake/0/directions", "the job would bake 4000+ entries with this sweep");
+  });
+  // A value that fits no alternative (a number or "from_file") is one line, not one per alternative.
+  add("TexelSizeOfWrongType", [](const fs::path& d) {
+    json j = base_job();
+    j["height"]["texel_size"] = "big";
+    return both(write_job(d, j), "/height/texel_size", "");
+  });
+  add("SuiteIncludingItself", [](const fs::path& d) {
+    const json suite = {{"version", 1}, {"suite", "s"}, {"jobs", {"suite.json"}}};
+    const std::string file = write_job(d, suite, "suite.json");
+    return CaseSetup{{"validate", file}, file, "/jobs/0", "is a suite, not a job", true};
+  });
   add("DevZeroAsJob", [](const fs::path&) {
     return CaseSetup{{"validate", "/dev/zero"}, "/dev/zero", "", "not a regular file"};
   });
@@ -311,6 +397,38 @@ std::vector<Case> cases() {
     j["surface"] = {{"emission", {{"image", "glow.exr"}}}};
     return both(write_job(d, j), "/surface/emission/image", "is negative or not finite");
   });
+  add("ReportCropLeavesNoTexel", [](const fs::path& d) {
+    json j = base_job();
+    j["report"] = {{"crop", 8}};
+    return both(write_job(d, j), "/report/crop", "8 leaves no texel of the 16x16 field");
+  });
+  add("ThresholdOfNoBakeEntry", [](const fs::path& d) {
+    json j = base_job();
+    j["report"] = {{"thresholds", {{"p2.indirect.mae", 0.1}}}};
+    return both(write_job(d, j), "/report/thresholds/p2.indirect.mae", "the job has no bake entry \"p2\"");
+  });
+  add("OutputFolderInsideAFile", [](const fs::path& d) {
+    std::ofstream(d / "file") << "x";
+    json j = base_job();
+    j["output"]["dir"] = "file/out";
+    return both(write_job(d, j), "/output/dir", "is not a folder");
+  });
+  // A raster's pixel size becomes the texel size: the range the job's texel_size has (a GeoTIFF of 1e-9 m
+  // pixels baked ao up to 1.026).
+  add("RasterPixelsOf1em9", [](const fs::path& d) {
+    std::string grid = "ncols 16\nnrows 16\nxllcorner 0\nyllcorner 0\ncellsize 1e-9\n";
+    for (int k = 0; k < 16 * 16; ++k) grid += std::to_string(k % 11) + (k % 16 == 15 ? "\n" : " ");
+    write_text(d, grid, "h.asc");
+    json j = base_job();
+    j["height"] = {{"image", "h.asc"}};
+    return both(write_job(d, j), "/height/image", "has a pixel size of 1e-09");
+  });
+  add("AlbedoMapOfFive", [](const fs::path& d) {  // the image holds what the number may not
+    write_image(d / "a.exr", 16, 16, 3, std::vector<float>(16 * 16 * 3, 5.0f));
+    json j = base_job();
+    j["surface"] = {{"albedo", {{"image", "a.exr"}}}};
+    return both(write_job(d, j), "/surface/albedo/image", "pixel (0, 0) is (5, 5, 5) after the scale");
+  });
   add("AlbedoMapOfAnotherSize", [](const fs::path& d) {
     write_image(d / "a.exr", 8, 8, 3, std::vector<float>(8 * 8 * 3, 0.5f));
     json j = base_job();
@@ -413,6 +531,10 @@ TEST_P(Hostile, OneLineErrorExitCodeAndNothingNewInTheOutputFolder) {
     EXPECT_EQ(listing(dir_ / "out"), before) << "the output folder changed";
     EXPECT_EQ(r.err.find("AddressSanitizer"), std::string::npos) << r.err;
     EXPECT_EQ(r.err.find("runtime error"), std::string::npos) << r.err;
+    if (args.front() == "validate") {  // nothing but hfbake's lines (no image library printing its own)
+      std::istringstream in(r.err);
+      for (std::string l; std::getline(in, l);) EXPECT_EQ(l.rfind("hfbake: ", 0), 0u) << l;
+    }
   }
   // Nothing half-written beside the job either (temporaries of the summary, the cache, ...).
   for (const auto& p : listing(dir_)) EXPECT_EQ(p.find(".tmp-"), std::string::npos) << p;

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <string>
@@ -71,6 +72,16 @@ std::vector<fs::path> visible_files(const fs::path& dir) {
     return ::testing::AssertionSuccess();
   }
   if (ext == ".html") return ::testing::AssertionSuccess();
+  // The folder's owner files (docs/output_folders.md): a lock, whatever a killed holder left in it, and the
+  // record of the job file whose outputs these are, written whole or not at all.
+  if (p.filename().string().rfind(".hfbake-", 0) == 0 && ext == ".lock") return ::testing::AssertionSuccess();
+  if (p.filename().string().rfind(".hfbake-", 0) == 0 && ext == ".job") {
+    std::ifstream in(p);
+    const std::string owner{std::istreambuf_iterator<char>(in), {}};
+    if (owner.empty() || owner.front() != '/' || !fs::exists(owner))
+      return ::testing::AssertionFailure() << p << " does not name a job file: " << owner;
+    return ::testing::AssertionSuccess();
+  }
   return ::testing::AssertionFailure() << p << " is not an output hfbake writes";
 }
 

@@ -1,0 +1,177 @@
+#include "core/safe_file.hpp"
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <system_error>
+#include <vector>
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+// The process's umask, read once before main (umask(2) can only be read by setting it: done while no other
+// thread creates files).
+const mode_t kProcessUmask = [] {
+  const mode_t m = umask(022);
+  umask(m);
+  return m;
+}();
+
+std::system_error system_error(int err, const std::string& what) {
+  return std::system_error(err, std::generic_category(), what);
+}
+
+// Removes the entry `name` of the folder `dir` (a descriptor), recursing into it only when it is a folder
+// itself (opened with O_NOFOLLOW | O_DIRECTORY).
+bool remove_entry(int dir, const char* name) {
+  if (unlinkat(dir, name, 0) == 0 || errno == ENOENT) return true;
+  if (errno != EISDIR && errno != EPERM) return false;
+  const int sub = openat(dir, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (sub < 0) return false;
+  bool ok = true;
+  std::vector<std::string> names;
+  if (DIR* d = fdopendir(dup(sub))) {
+    while (const dirent* e = readdir(d))
+      if (std::strcmp(e->d_name, ".") != 0 && std::strcmp(e->d_name, "..") != 0)
+        names.emplace_back(e->d_name);
+    closedir(d);
+  } else {
+    ok = false;
+  }
+  for (const std::string& n : names) ok = remove_entry(sub, n.c_str()) && ok;
+  close(sub);
+  return (unlinkat(dir, name, AT_REMOVEDIR) == 0 || errno == ENOENT) && ok;
+}
+
+std::string host_name() {
+  char buf[256] = {};
+  if (gethostname(buf, sizeof buf - 1) != 0) return "localhost";
+  return buf;
+}
+
+}  // namespace
+
+bool is_real_directory(const fs::path& path) {
+  struct stat st {};
+  return lstat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+bool remove_tree(const fs::path& path) {
+  const fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  const int dir = open(parent.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir < 0) return errno == ENOENT;
+  const bool ok = remove_entry(dir, path.filename().c_str());
+  close(dir);
+  return ok;
+}
+
+FolderLock::FolderLock(const fs::path& path) : path_(path) {
+  // The file locked must still be the one at `path` (a holder that finished removed it, and the next one
+  // made another): else lock again.
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    const int fd = open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd < 0) {
+      holder_ = std::error_code(errno, std::generic_category()).message();
+      return;
+    }
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      char buf[300] = {};
+      const ssize_t n = pread(fd, buf, sizeof buf - 1, 0);
+      holder_ = n > 0 ? std::string(buf, std::size_t(n)) : "another process";
+      close(fd);
+      return;
+    }
+    struct stat held {
+    }, now{};
+    if (fstat(fd, &held) == 0 && lstat(path.c_str(), &now) == 0 && held.st_ino == now.st_ino &&
+        held.st_dev == now.st_dev) {
+      const std::string me = std::to_string(getpid()) + "@" + host_name();
+      if (ftruncate(fd, 0) == 0 && pwrite(fd, me.data(), me.size(), 0) < 0) holder_.clear();
+      fd_ = fd;
+      return;
+    }
+    close(fd);
+  }
+  holder_ = "the lock file keeps changing";
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ < 0) return;
+  unlink(path_.c_str());  // while held: a process waiting on this file locks again (see the constructor)
+  close(fd_);
+}
+
+int open_regular_file(const fs::path& path, std::string& why) {
+  const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+  if (fd < 0) {
+    why = std::error_code(errno, std::generic_category()).message();
+    return -1;
+  }
+  struct stat st {};
+  if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    why = "not a regular file";
+    close(fd);
+    return -1;
+  }
+  fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+  return fd;
+}
+
+bool read_at(int fd, void* data, std::size_t n, std::uint64_t offset) {
+  char* p = static_cast<char*>(data);
+  while (n > 0) {
+    const ssize_t got = pread(fd, p, n, off_t(offset));
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) return false;
+    p += got, n -= std::size_t(got), offset += std::uint64_t(got);
+  }
+  return true;
+}
+
+TempFile::TempFile(const fs::path& final, const std::string& tag) : final_(final) {
+  std::string name = final.string() + ".tmp-" + (tag.empty() ? std::to_string(getpid()) : tag) + "-XXXXXX";
+  fd_ = mkostemp(name.data(), O_CLOEXEC);
+  if (fd_ < 0) throw system_error(errno, "cannot create a temporary file beside " + final.string());
+  tmp_ = name;
+  fchmod(fd_, 0666 & ~kProcessUmask);
+}
+
+TempFile::~TempFile() {
+  if (fd_ >= 0) close(fd_);
+  if (!committed_ && !tmp_.empty()) unlink(tmp_.c_str());
+}
+
+bool TempFile::write(const void* data, std::size_t n) {
+  const char* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t put = ::write(fd_, p, n);
+    if (put < 0 && errno == EINTR) continue;
+    if (put <= 0) return false;
+    p += put, n -= std::size_t(put);
+  }
+  return true;
+}
+
+void TempFile::commit() {
+  const int fd = fd_;
+  fd_ = -1;
+  if (close(fd) != 0) throw system_error(errno, "cannot write " + tmp_.string());
+  if (rename(tmp_.c_str(), final_.c_str()) != 0)
+    throw system_error(errno, "cannot rename into " + final_.string());
+  committed_ = true;
+}
+
+void write_file_atomically(const fs::path& final, std::string_view bytes) {
+  TempFile tmp(final);
+  if (!tmp.write(bytes)) throw system_error(errno ? errno : EIO, "cannot write " + final.string());
+  tmp.commit();
+}
+
+}  // namespace hfbake

@@ -1,0 +1,73 @@
+// Files whose names another user or process could have planted: opened without blocking and only when
+// regular, created under names nobody else holds (O_CREAT | O_EXCL never opens an existing name, a symbolic
+// link included), and moved into place by rename(2), which replaces a link instead of following it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace hfbake {
+
+// Opens `path` read-only with O_NONBLOCK (a FIFO or a device never blocks the open) and returns the
+// descriptor when it is a regular file (fstat; O_NONBLOCK cleared again). Otherwise -1 and `why` says
+// what it is ("not a regular file", or the error).
+int open_regular_file(const std::filesystem::path& path, std::string& why);
+
+// Reads exactly `n` bytes at `offset`; false on a short read or an error.
+bool read_at(int fd, void* data, std::size_t n, std::uint64_t offset);
+
+// A new file beside `final`, named "<final>.tmp-<tag>-XXXXXX" (mkostemp: created by this call, mode as
+// an ordinary file under the umask). Removed by the destructor unless committed. Errors: std::system_error.
+class TempFile {
+ public:
+  explicit TempFile(const std::filesystem::path& final, const std::string& tag = "");
+  ~TempFile();
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  // Appends all `n` bytes; false on an error (a full disk).
+  bool write(const void* data, std::size_t n);
+  bool write(std::string_view s) { return write(s.data(), s.size()); }
+  // Closes the file (a failed close is an error: NFS reports write errors there) and renames it onto
+  // `final` (a link there is replaced, not followed).
+  void commit();
+  const std::filesystem::path& path() const { return tmp_; }
+
+ private:
+  std::filesystem::path final_, tmp_;
+  int fd_ = -1;
+  bool committed_ = false;
+};
+
+// `bytes` as the whole content of `final`, through a TempFile. Errors: std::system_error.
+void write_file_atomically(const std::filesystem::path& final, std::string_view bytes);
+
+// True when `path` is a folder itself (lstat: a link to one is not).
+bool is_real_directory(const std::filesystem::path& path);
+
+// Removes `path` and, when it is a folder itself, everything in it: each entry opened relative to its
+// folder (openat, O_NOFOLLOW), so a link anywhere in the tree is removed, never what it points to. False
+// when something could not be removed (what could, is).
+bool remove_tree(const std::filesystem::path& path);
+
+// An exclusive flock(2) on `path` (created if missing, never through a link), held until destruction,
+// which removes the file. Taken without waiting: `held()` is false when another process holds it.
+class FolderLock {
+ public:
+  explicit FolderLock(const std::filesystem::path& path);
+  ~FolderLock();
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+  bool held() const { return fd_ >= 0; }
+  // When not held: what the holder wrote into the file ("<pid>@<host>"), or the error.
+  const std::string& holder() const { return holder_; }
+
+ private:
+  std::filesystem::path path_;
+  int fd_ = -1;
+  std::string holder_;
+};
+
+}  // namespace hfbake

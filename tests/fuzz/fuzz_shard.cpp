@@ -1,0 +1,33 @@
+// libFuzzer harness: a shard file (farm/shard_file.hpp) as `hfbake merge` and `bake --shard` read it, for a
+// 16x16 job named "t": the header against the job's identity and field, then every part's layers. A file
+// that is not such a shard is an InputError with one line naming it; anything else (an uncaught exception, a
+// crash, UB, an allocation beyond the file's own size) is a finding.
+#include <cstdint>
+#include <string>
+
+#include "core/error.hpp"
+#include "farm/shard_file.hpp"
+#include "fuzz_support.hpp"
+
+using namespace hfbake;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::filesystem::path file = fuzz::write_scratch("t.shard-0-of-1.hfshard", data, size);
+  ShardIdentity identity;
+  identity.job_name = "t";
+  identity.job_hash = "0123456789abcdef";
+  identity.version = "fuzz";
+  identity.id = {0, 1};
+  identity.width = 16, identity.height = 16;
+  try {
+    ShardReader reader(file, identity);
+    for (std::size_t i = 0; i < reader.parts().size(); ++i) {
+      const LayerSet layers = reader.load(i);
+      if (std::uint64_t(layers.width) * std::uint64_t(layers.height) > 16 * 16)
+        fuzz::finding("a part larger than the field was loaded");
+    }
+  } catch (const InputError& e) {
+    fuzz::check_error_line(e.line(), file.string());
+  }
+  return 0;
+}

@@ -1,0 +1,326 @@
+// Files and names hfbake does not own, against the hfbake binary: the farm's shard files with forged claims
+// or a FIFO in their place; links planted at the temporary names and staging folders hfbake uses; two
+// processes writing one job name into one folder. Each must end in one error line (or a documented
+// behaviour: docs/output_folders.md), with nothing written outside the folder asked for and nothing lost.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct Outcome {
+  int exit_code = 0;
+  std::string err;
+  std::vector<std::string> error_lines() const {
+    std::vector<std::string> lines;
+    std::istringstream in(err);
+    for (std::string l; std::getline(in, l);)
+      if (l.rfind("hfbake: error: ", 0) == 0) lines.push_back(l.substr(15));
+    return lines;
+  }
+};
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Starts `hfbake args` in `dir` (stderr to err_name); `in_child` runs in the child before exec (it knows
+// the process id hfbake will have). A hang is killed by SIGALRM after 120 s.
+pid_t start(const fs::path& dir, const std::vector<std::string>& args, const std::string& err_name,
+            const std::function<void()>& in_child = {}) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (!freopen((dir / err_name).c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout)) _exit(126);
+    if (chdir(dir.c_str()) != 0) _exit(126);
+    if (in_child) in_child();
+    alarm(120);
+    std::vector<char*> argv{const_cast<char*>("hfbake")};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(HFBAKE_BINARY, argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+Outcome finish(pid_t pid, const fs::path& dir, const std::string& err_name) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  Outcome r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+  r.err = read_text(dir / err_name);
+  return r;
+}
+
+Outcome hfbake(const fs::path& dir, const std::vector<std::string>& args,
+               const std::function<void()>& in_child = {}) {
+  return finish(start(dir, args, "stderr.txt", in_child), dir, "stderr.txt");
+}
+
+json base_job(const std::string& out = "out") {
+  return {{"version", 1},
+          {"name", "t"},
+          {"height", {{"procedural", {{"kind", "fractal"}, {"size", {16, 16}}}}}},
+          {"bake", {{{"method", "p1"}, {"directions", 4}}}},
+          {"output", {{"dir", out}}}};
+}
+
+std::string write_job(const fs::path& dir, const json& j, const std::string& name = "job.json") {
+  std::ofstream(dir / name) << j.dump(2);
+  return (dir / name).string();
+}
+
+class Untrusted : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("hfbake_untrusted_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_ / "outside");
+    std::ofstream(dir_ / "outside" / "victim") << "keep";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  // The folder outside the outputs is as the test made it.
+  void expect_outside_untouched() {
+    EXPECT_EQ(read_text(dir_ / "outside" / "victim"), "keep");
+    int n = 0;
+    for (const auto& e : fs::recursive_directory_iterator(dir_ / "outside")) n += e.is_regular_file();
+    EXPECT_EQ(n, outside_files_);
+  }
+  fs::path dir_;
+  int outside_files_ = 1;
+};
+
+// --- the farm's files -----------------------------------------------------------------------------------
+
+// The shard's header: the JSON between the data and the 24-byte trailer.
+json shard_header(const std::string& bytes, std::uint64_t& at) {
+  at = 0;
+  for (int b = 0; b < 8; ++b)
+    at |= std::uint64_t(static_cast<unsigned char>(bytes[bytes.size() - 8 + b])) << (8 * b);
+  return json::parse(bytes.substr(at, bytes.size() - 24 - at));
+}
+
+void forge_part_size(const fs::path& shard, long long width, long long height) {
+  std::string bytes = read_text(shard);
+  std::uint64_t at = 0;
+  json h = shard_header(bytes, at);
+  for (json& p : h["parts"]) {
+    p["width"] = width, p["height"] = height;
+    for (json& l : p["layers"]) l["floats"] = width * height * (long long)l["channels"].size();
+  }
+  const std::string trailer = bytes.substr(bytes.size() - 24);
+  bytes = bytes.substr(0, at) + h.dump() + "\n" + trailer;
+  std::ofstream(shard, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+TEST_F(Untrusted, ShardPartsClaimingAnotherSizeAreRefusedByTheMerge) {
+  const std::string job = write_job(dir_, base_job());
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path shard = dir_ / "out" / "shards" / "t.shard-0-of-1.hfshard";
+  ASSERT_TRUE(fs::is_regular_file(shard));
+  const std::string genuine = read_text(shard);
+  // 1x1 made the merge read past its buffers (SIGSEGV); 100000 x 100000 allocate 40 GB a layer.
+  for (const auto& [w, h] : std::vector<std::pair<long long, long long>>{{1, 1}, {100000, 100000}, {16, 1}}) {
+    SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+    std::ofstream(shard, std::ios::binary | std::ios::trunc) << genuine;
+    forge_part_size(shard, w, h);
+    const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_EQ(lines[0].rfind(shard.string() + ": ", 0), 0u) << lines[0];
+    EXPECT_NE(lines[0].find("of another size than the field's 16x16"), std::string::npos) << lines[0];
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "t.p1.exr"));
+  }
+  std::ofstream(shard, std::ios::binary | std::ios::trunc) << genuine;
+  const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+TEST_F(Untrusted, AFifoWhereAShardBelongsNeverBlocks) {
+  const std::string job = write_job(dir_, base_job());
+  fs::create_directories(dir_ / "out" / "shards");
+  const fs::path shard = dir_ / "out" / "shards" / "t.shard-0-of-1.hfshard";
+  ASSERT_EQ(mkfifo(shard.c_str(), 0600), 0);
+  const Outcome merge = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+  EXPECT_EQ(merge.exit_code, 2) << merge.err;
+  const auto lines = merge.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << merge.err;
+  EXPECT_NE(lines[0].find(shard.string() + ": cannot read shard 0/1: not a regular file"), std::string::npos)
+      << lines[0];
+  // bake --shard takes the FIFO for an incomplete shard and puts its file in its place.
+  const Outcome bake = hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"});
+  EXPECT_EQ(bake.exit_code, 0) << bake.err;
+  EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(shard)));
+}
+
+// --- temporary names and staging folders ------------------------------------------------------------------
+
+// Links at every name hfbake used to derive from its process id: --summary's, the suite's suite.json's, the
+// reference cache entry's and compare --update-baseline's temporaries. hfbake's own temporaries are new
+// files; the links are left alone and never written through.
+TEST_F(Untrusted, LinksAtPredictableTemporaryNamesAreNotFollowed) {
+  json j = base_job();
+  j["reference"] = {{"samples", 4}, {"seed", 1}};
+  fs::create_directories(dir_ / "jobs");
+  write_job(dir_ / "jobs", j);
+  const json suite = {
+      {"version", 1}, {"suite", "s"}, {"jobs", {"jobs/job.json"}}, {"output", {{"dir", "suite_out"}}}};
+  const std::string suite_file = write_job(dir_, suite, "suite.json");
+  fs::create_directories(dir_ / "suite_out");
+  fs::create_directories(dir_ / "cache");
+  const fs::path victim = dir_ / "outside" / "victim";
+  const std::vector<std::string> args = {"bake",
+                                         suite_file,
+                                         "--cache",
+                                         (dir_ / "cache").string(),
+                                         "--quiet",
+                                         "--summary",
+                                         (dir_ / "summary.json").string()};
+  // A first bake names the reference's cache entry; it is removed so that the second writes it again.
+  ASSERT_EQ(hfbake(dir_, args).exit_code, 0);
+  std::string entry;
+  for (const auto& e : fs::recursive_directory_iterator(dir_ / "cache"))
+    if (e.path().extension() == ".hfref") entry = e.path().string();
+  ASSERT_FALSE(entry.empty());
+  fs::remove(entry);
+  auto plant = [&, victim, entry] {
+    const std::string pid = std::to_string(getpid());
+    fs::create_symlink(victim, dir_ / ("summary.json.tmp-" + pid));
+    fs::create_symlink(victim, dir_ / "suite_out" / ("suite.json.tmp-" + pid));
+    for (int k = 0; k < 4; ++k) fs::create_symlink(victim, entry + ".tmp-" + pid + "-" + std::to_string(k));
+  };
+  const Outcome r = hfbake(dir_, args, plant);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(json::parse(read_text(dir_ / "summary.json")).is_object());
+  EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(entry)));
+  EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(dir_ / "suite_out" / "suite.json")));
+  expect_outside_untouched();
+
+  // compare --update-baseline: the baseline's temporary.
+  fs::create_directories(dir_ / "base");
+  const fs::path report = dir_ / "suite_out" / "job" / "report.json";
+  ASSERT_TRUE(fs::exists(report));
+  fs::copy_file(report, dir_ / "base" / "report.json");
+  const Outcome c = hfbake(
+      dir_,
+      {"compare", report.string(), (dir_ / "base" / "report.json").string(), "--update-baseline", "--quiet"},
+      [&, victim] {
+        fs::create_symlink(victim, dir_ / "base" / ("report.json.tmp-" + std::to_string(getpid())));
+      });
+  EXPECT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(dir_ / "base" / "report.json")));
+  expect_outside_untouched();
+}
+
+// A process id that no longer runs (reaped).
+pid_t dead_pid() {
+  const pid_t pid = fork();
+  if (pid == 0) _exit(0);
+  waitpid(pid, nullptr, 0);
+  return pid;
+}
+
+std::string host() {
+  char h[256] = {};
+  gethostname(h, sizeof h - 1);
+  return h;
+}
+
+// A dead owner's staging folder that is a link, or whose checkpoint folder is: the next bake took every
+// *.hfckpt out of the link's target and deleted it with the stage. Now the links are removed, their targets
+// untouched.
+TEST_F(Untrusted, StagingFoldersThatAreLinksAreRemovedNotFollowed) {
+  fs::create_directories(dir_ / "outside" / "reference-checkpoint");
+  std::ofstream(dir_ / "outside" / "reference-checkpoint" / "band-0.hfckpt") << "someone's data";
+  std::ofstream(dir_ / "outside" / "band-1.hfckpt") << "someone else's";
+  outside_files_ = 3;
+  fs::create_directories(dir_ / "out");
+  const std::string pid = std::to_string(dead_pid());
+  const fs::path stage_link = dir_ / "out" / (".hfbake-staging-t-" + pid + "+1@" + host());
+  fs::create_symlink(dir_ / "outside", stage_link);
+  const fs::path stage = dir_ / "out" / (".hfbake-staging-t-" + pid + "+2@" + host());
+  fs::create_directories(stage);
+  fs::create_directory_symlink(dir_ / "outside", stage / "reference-checkpoint");
+  json j = base_job();
+  j["reference"] = {{"samples", 4}, {"seed", 1}};
+  const Outcome r = hfbake(dir_, {"bake", write_job(dir_, j), "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(fs::symlink_status(stage_link)));
+  EXPECT_FALSE(fs::exists(fs::symlink_status(stage)));
+  expect_outside_untouched();
+}
+
+// out/textures as a link: the textures would land in its target.
+TEST_F(Untrusted, ATexturesFolderThatIsALinkIsRefused) {
+  fs::create_directories(dir_ / "out");
+  fs::create_directory_symlink(dir_ / "outside", dir_ / "out" / "textures");
+  json j = base_job();
+  j["output"]["textures"] = {{{"layers", {"ao"}}}};
+  const Outcome r = hfbake(dir_, {"bake", write_job(dir_, j), "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_NE(lines[0].find("textures: is not a folder (a link?)"), std::string::npos) << lines[0];
+  expect_outside_untouched();
+}
+
+// --- one folder, one owner ----------------------------------------------------------------------------
+
+// Two processes bake different job files with the same name into one folder, 20 times: one bakes (exit
+// 0), the other is refused with one line (exit 2: the folder is locked by the first, or holds the first's
+// outputs); the winner's outputs are never replaced. --overwrite lets a job take the name over.
+TEST_F(Untrusted, TwoJobsOfOneNameInOneFolderNeverReplaceEachOther) {
+  json a = base_job("../out"), b = base_job("../out");
+  b["height"]["procedural"]["seed"] = 5;
+  fs::create_directories(dir_ / "a");
+  fs::create_directories(dir_ / "b");
+  const std::string ja = write_job(dir_ / "a", a), jb = write_job(dir_ / "b", b);
+  for (int run = 0; run < 20; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(dir_ / "out");
+    const pid_t pa = start(dir_, {"bake", ja, "--no-cache", "--quiet"}, "a.txt");
+    const pid_t pb = start(dir_, {"bake", jb, "--no-cache", "--quiet"}, "b.txt");
+    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
+    ASSERT_TRUE((ra.exit_code == 0 && rb.exit_code == 2) || (ra.exit_code == 2 && rb.exit_code == 0))
+        << ra.err << rb.err;
+    const Outcome& lost = ra.exit_code == 2 ? ra : rb;
+    const std::string& winner = ra.exit_code == 0 ? ja : jb;
+    const auto lines = lost.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << lost.err;
+    EXPECT_TRUE(lines[0].find("another hfbake process") != std::string::npos ||
+                lines[0].find("were baked from " + winner) != std::string::npos)
+        << lines[0];
+    EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(winner).string());
+    auto in = OIIO::ImageInput::open((dir_ / "out" / "t.p1.exr").string());
+    ASSERT_TRUE(in);
+    for (const auto& e : fs::directory_iterator(dir_ / "out"))
+      EXPECT_EQ(e.path().filename().string().rfind(".hfbake-staging-", 0), std::string::npos) << e.path();
+  }
+  // The same job again replaces its own outputs; the other only with --overwrite.
+  const std::string owner = read_text(dir_ / "out" / ".hfbake-t.job");
+  const std::string other = owner == fs::weakly_canonical(ja).string() ? jb : ja;
+  EXPECT_EQ(hfbake(dir_, {"bake", owner, "--no-cache", "--quiet"}).exit_code, 0);
+  EXPECT_EQ(hfbake(dir_, {"bake", other, "--no-cache", "--quiet"}).exit_code, 2);
+  EXPECT_EQ(hfbake(dir_, {"bake", other, "--no-cache", "--quiet", "--overwrite"}).exit_code, 0);
+  EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(other).string());
+}
+
+}  // namespace
