@@ -133,7 +133,8 @@ case "$mode" in
       echo "setup: libFuzzer harnesses (clang, ASan + UBSan) in $fuzz_dir, ${FUZZ_SECONDS:-60} s each"
       cmake -S . -B "$fuzz_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DHFBAKE_FUZZ=ON \
         -DHFBAKE_BUILD_TESTS=OFF -DHFBAKE_BUILD_BENCHMARKS=OFF -DHFBAKE_BUILD_PYTHON=OFF >/dev/null
-      cmake --build "$fuzz_dir" -j "$jobs" --target fuzz_job fuzz_height_image fuzz_environment fuzz_report
+      cmake --build "$fuzz_dir" -j "$jobs" --target fuzz_job fuzz_height_image fuzz_environment fuzz_report \
+        fuzz_shard
       tests/fuzz/run_fuzzers.sh "$fuzz_dir" "${FUZZ_SECONDS:-60}"
     fi
     ;;
