@@ -1,4 +1,4 @@
-// Where does the horizon methods' openness bias against the reference come from? (issue 7)
+// Where does the horizon methods' openness bias against the reference come from?
 //
 //   build-ao/tests/ao/ao_bench_obscurance_bias [crop interior] [samples] [K]
 //

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""The obscurance cost/accuracy table of a frontier or budget job (issue 7).
+"""The obscurance cost/accuracy table of a frontier or budget job (tests/accuracy/obscurance_*.json).
 
-    hfbake bake jobs/obscurance_frontier.json --threads 2 --summary S.json
+    hfbake bake tests/accuracy/obscurance_frontier.json --threads 2 --summary S.json
     python3 tests/ao/frontier_table.py out/obscurance_frontier/report.json S.json
 
 Per run: the swept parameters, obscurance excess_rmse / bias / rmse against the reference, wall seconds and

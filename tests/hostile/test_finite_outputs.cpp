@@ -1,4 +1,4 @@
-// Every output layer is checked finite before anything is written (issue 20): a NaN or an infinity fails the
+// Every output layer is checked finite before anything is written: a NaN or an infinity fails the
 // job with a line naming the method, the layer, the first texel and its channel; horizon_distance may be
 // +inf (nothing behind the texel) and nothing else may.
 #include <gtest/gtest.h>

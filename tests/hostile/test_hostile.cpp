@@ -1,4 +1,4 @@
-// Issue 20's bad-input corpus, case by case, against the hfbake binary: each case is an input a user, a
+// The bad-input corpus, case by case, against the hfbake binary: each case is an input a user, a
 // script or a damaged disk can hand hfbake, with what must happen: the exit code, one line
 // "hfbake: error: <file>: <JSON pointer>: <what>" naming the file and the pointer, and nothing new in the
 // output folder (no half-written file, no staging folder, no empty folder). A hang fails the case (each run
@@ -600,7 +600,7 @@ TEST(Staging, AStageWhoseProcessIdWasReusedIsRemovedAndALiveOwnersIsKept) {
 
 namespace {
 
-// Issue 20: two members of one suite whose outputs would be the same files (x/job.json and y/job.json, both
+// Two members of one suite whose outputs would be the same files (x/job.json and y/job.json, both
 // named "t", one output folder) are refused up front, naming both, in every one of 20 runs, and nothing is
 // written; two members with different names in that folder are baked side by side 20 times and neither
 // ever loses its outputs (each EXR is its own job's field: the two seeds give different files).
@@ -700,10 +700,10 @@ TEST(MemoryEstimate, CountsTheEnvironmentImage) {
   fs::remove_all(dir);
 }
 
-// A constant albedo (a number or [r, g, b]) is held once, not 12 bytes a texel (issue 15: a 16384^2 hbao
-// job with "albedo": 0.5 was charged, and held, 3 GiB for it): validate's scene part of a 2048^2 p2 job is
-// the fixed 150 MiB, the heights and the normals p2 reads, and p2 and the reference bake the same bits from
-// the constant as from an image holding it in every texel.
+// A constant albedo (a number or [r, g, b]) is held once, not 12 bytes a texel (a 16384^2 hbao
+// job with "albedo": 0.5 must not be charged, or hold, 3 GiB for it): validate's scene part of a 2048^2 p2
+// job is the fixed 150 MiB, the heights and the normals p2 reads, and p2 and the reference bake the same bits
+// from the constant as from an image holding it in every texel.
 TEST(MemoryEstimate, ConstantAlbedoIsHeldOnceAndBakesLikeAnImageOfIt) {
   const fs::path dir =
       fs::temp_directory_path() / ("hfbake_albedo_" + std::to_string(std::random_device{}()));
@@ -751,9 +751,9 @@ TEST(MemoryEstimate, ConstantAlbedoIsHeldOnceAndBakesLikeAnImageOfIt) {
 
 namespace {
 
-// Issue 20: a 70000 x 2 height image made the bake try to allocate 39 GB, and a 20000 x 2 field with lsao
-// took 9.5 GB and 161 s while 2 x 70000 took 0.4 s (the line sweeps walked every column of every line: work
-// and buffers grew with the long side squared). Both orientations of a 20000 x 2 image now validate with an
+// Thin fields: a 70000 x 2 height image must not make the bake allocate 39 GB, nor a 20000 x 2 field with
+// lsao take 9.5 GB and 161 s while 2 x 70000 takes 0.4 s (line sweeps that walk every column of every line
+// grow with the long side squared). Both orientations of a 20000 x 2 image validate with an
 // estimate near the fixed 150 MiB and bake (exit 0) in that memory: the Release build's peak stays within
 // the estimate (the sweep's own work count is tests/sweep SweepThin).
 TEST(ThinField, BothOrientationsOfA20000x2ImageBakeWithinTheEstimate) {

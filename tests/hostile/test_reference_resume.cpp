@@ -1,4 +1,4 @@
-// A long reference resumes after a SIGKILL (issue 20, item 7): the bake checkpoints every finished band of
+// A long reference resumes after a SIGKILL: the bake checkpoints every finished band of
 // rows into its staging folder, and the next bake of the same job into the same folder takes the killed
 // bake's bands instead of tracing them. Checked against independent truth, an uninterrupted bake of the same
 // job: the resumed reference has the same bits (every channel, float pixels), and the summary shows it

@@ -1,4 +1,4 @@
-// SIGKILL at random moments (issue 20: the OOM killer, a node failure): 20 bakes of one output folder, each
+// SIGKILL at random moments (the OOM killer, a node failure): 20 bakes of one output folder, each
 // killed at a random moment of its run. After every kill:
 //   - every file a later bake or `hfbake compare` reads as an output is whole: each EXR and PNG decodes,
 //     report.json parses, and `compare` on the folder reads no report but the committed one (never one in
