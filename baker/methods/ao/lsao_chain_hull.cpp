@@ -20,6 +20,8 @@ TangentChain::TangentChain(const Falloff& f, Weighting w, const SliceFrame& slic
     : rho(f), weighting(w), e_max(slice.tangent), slope_max(-slice.nt / slice.nz) {
   length = std::hypot(slice.nt, slice.nz);
   frame = {slice.nt / length, slice.nz / length, slice.tangent};
+  degree_ = slab_degree(f);
+  c_max_ = frame.nz, s_max_ = -frame.nt;  // the tangent's elevation
 }
 
 namespace {
@@ -54,6 +56,7 @@ void TangentChain::add(double hs, double hz, double x) {
   const SliceVec from = prev, at{hs, hz};
   prev = at;
   if (!(hz > slope_max * hs)) return;
+  if (degree_ >= 0) return add_closed(hs, hz, x, from, at);
   const double e = std::atan2(hz, hs);
   if (!(e > e_max)) return;  // rounding at the same elevation
   // The band's rays meet a vertical slab at horizontal distance x (hbao's slab estimator, exact for the
@@ -69,6 +72,7 @@ void TangentChain::add(double hs, double hz, double x) {
   const double c = exact ? segment_band_occlusion(rho, weighting, frame, e_max, e, from, at)
                          : chain_band(rho, weighting, frame, e_max, e, x);
   sum += weighting == Weighting::cosine ? 2 * c : c;
+  ++bands;
   if (want_direction) {
     const SliceVec b = exact ? segment_band_direction(rho, frame, e_max, e, from, at)
                              : band_direction(rho, frame, e_max, e, x);
@@ -76,6 +80,68 @@ void TangentChain::add(double hs, double hz, double x) {
   }
   e_max = e;
   slope_max = hz / hs;
+}
+
+// The closed forms of slice_integral.hpp (slab_primitives): the same integrals as band_occlusion,
+// band_direction and (segments inside the radius) segment_band_occlusion, each band end evaluated once.
+void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, SliceVec at) {
+  const double r = std::sqrt(hs * hs + hz * hz), c = hs / r, sn = hz / r;
+  const double e = std::atan2(hz, hs);
+  if (!(e > e_max)) return;  // rounding at the same elevation
+  const bool exact = segments && (rho.kind == FalloffKind::none || rho.kind == FalloffKind::step);
+  const bool radius = rho.kind != FalloffKind::none;
+  if (!have_max_) {
+    at_max_ = slab_primitives(frame, weighting, e_max, s_max_, c_max_, degree_, want_direction);
+    have_max_ = true;
+  }
+  const SlabPrimitives at_e = slab_primitives(frame, weighting, e, sn, c, degree_, want_direction);
+  double occ = 0;
+  SliceVec dir;
+  if (exact && radius && !(from.h * from.h + from.v * from.v < rho.radius * rho.radius && r < rho.radius)) {
+    // A segment that leaves the step's radius: its part inside (segment_band_occlusion's support).
+    occ = segment_band_occlusion(rho, weighting, frame, e_max, e, from, at);
+    if (want_direction) dir = segment_band_direction(rho, frame, e_max, e, from, at);
+  } else {
+    if (segments && !exact) {
+      // The slab moved to where the band's middle ray meets the segment (within it); the middle ray's
+      // direction is the sum of the ends' unit vectors (the distance below does not depend on its length).
+      const double ce = c_max_ + c, se = s_max_ + sn;
+      const double dh = at.h - from.h, dv = at.v - from.v, den = ce * dv - se * dh;
+      const double t = den > 0 ? (from.h * dv - from.v * dh) / den * ce : at.h;
+      x = std::clamp(t, from.h, at.h);
+    }
+    if (exact) x = 0;  // inside the radius: rho = 1 along the segment
+    double coef[3];
+    slab_coefficients(rho, x, coef);
+    const double q = radius ? x / rho.radius : 0.0;
+    if (q < 1) {
+      // rho(x / cos e) > 0 only where cos e > q: the band clipped to [-acos q, acos q].
+      const SlabPrimitives* lo = &at_max_;
+      const SlabPrimitives* hi = &at_e;
+      SlabPrimitives clip_lo, clip_hi;
+      const bool lo_out = radius && e_max < 0 && c_max_ < q, hi_out = radius && e > 0 && c < q;
+      const double ec = lo_out || hi_out ? std::acos(q) : 0.0, sc = std::sqrt(std::max(0.0, 1 - q * q));
+      if (lo_out)
+        clip_lo = slab_primitives(frame, weighting, -ec, -sc, q, degree_, want_direction), lo = &clip_lo;
+      if (hi_out)
+        clip_hi = slab_primitives(frame, weighting, ec, sc, q, degree_, want_direction), hi = &clip_hi;
+      if ((hi_out ? ec : e) > (lo_out ? -ec : e_max)) {
+        for (int k = 0; k <= degree_; ++k) occ += coef[k] * (hi->occ[k] - lo->occ[k]);
+        if (want_direction)
+          for (int k = 0; k <= degree_; ++k) {
+            dir.h += coef[k] * (hi->h[k] - lo->h[k]);
+            dir.v += coef[k] * (hi->v[k] - lo->v[k]);
+          }
+      }
+    }
+  }
+  sum += weighting == Weighting::cosine ? 2 * occ : occ;
+  ++bands;
+  if (want_direction) direction.h += dir.h, direction.v += dir.v;
+  e_max = e;
+  slope_max = hz / hs;
+  c_max_ = c, s_max_ = sn;
+  at_max_ = at_e;
 }
 
 namespace {
@@ -99,6 +165,7 @@ void walk(const ChainPoint* points, std::ptrdiff_t count, std::ptrdiff_t stride,
           double near, TangentChain& chain, const ZMax& zmax_of) {
   for (std::ptrdiff_t k = 0; k < count; ++k) {
     const ChainPoint& q = points[k * stride];
+    ++chain.walked;
     // Nothing from here on is nearer than q's near end nor higher than zmax: stop when that cannot rise.
     const double nearest = p.s - q.near_s;
     if (!(zmax_of(k) - p.z > chain.slope_max * nearest)) break;

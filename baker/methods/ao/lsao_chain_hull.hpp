@@ -65,11 +65,22 @@ struct TangentChain {
   // closed form at the horizontal distance where the band's middle ray meets the segment.
   bool segments = false;
   SliceVec prev;  // the point added last, relative to the receiver
+  // Work counters (LsaoStats): hull points walked by queries, bands added.
+  unsigned walked = 0, bands = 0;
 
   TangentChain(const Falloff& f, Weighting w, const SliceFrame& slice);
   // A point at (hs > 0, hz) from the receiver standing for the profile's stretch at horizontal distances
   // around x: adds the band from the chain's elevation up to its own, if it rises above it.
   void add(double hs, double hz, double x);
+
+ private:
+  // Falloffs with closed forms (slab_degree >= 0): the bands are adjacent, so each band's lower end is the
+  // last one's upper end, e_max, whose cosine, sine and antiderivatives (slab_primitives) are kept.
+  int degree_ = -1;
+  double c_max_ = 1, s_max_ = 0;
+  bool have_max_ = false;
+  SlabPrimitives at_max_;
+  void add_closed(double hs, double hz, double x, SliceVec from, SliceVec at);
 };
 
 // A hull point: its position; the nearest sample merged into it (near_s >= s; itself when none): the near end
