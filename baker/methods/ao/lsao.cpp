@@ -132,6 +132,7 @@ struct LsaoWorker {
     const Weighting weighting =
         f.weighting == ObscuranceWeighting::cosine ? Weighting::cosine : Weighting::uniform;
     const double support = f.rho.support(1e-4), tol = options->rho_tolerance;
+    const double coalesce = options->band_tolerance;
     // The near field (texels): marched from each texel itself; the hull's points nearer than it left out.
     const double near = std::min(options->near_radius, support / field->texel_size);
     const double near_world = near > 0 ? near * field->texel_size : 0.0;
@@ -200,6 +201,7 @@ struct LsaoWorker {
           TangentChain chain(f.rho, weighting, frame);
           chain.want_direction = bent;
           chain.segments = triangles;
+          chain.coalesce = triangles ? coalesce : 0.0;
           if (near > 0) near_field(ti, near, chain);
           if (use_brute) {
             brute_chain(terrain.data(), terrain.size(), t, chain, near_world);
@@ -207,6 +209,7 @@ struct LsaoWorker {
             chain_hull.query(t, support, chain, near_world);
             window.query(t, support, chain, near_world);  // farther than the whole current block
           }
+          chain.finish();
           ++queries, walked += chain.walked, bands += chain.bands;
           // The cosine measure scales with the normal's length in the slice (slice_integral.hpp).
           o[c] = float(weighting == Weighting::cosine ? chain.length * chain.sum : chain.sum);

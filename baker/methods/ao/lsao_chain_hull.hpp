@@ -72,6 +72,11 @@ struct TangentChain {
   // A point at (hs > 0, hz) from the receiver standing for the profile's stretch at horizontal distances
   // around x: adds the band from the chain's elevation up to its own, if it rises above it.
   void add(double hs, double hz, double x);
+  // Coalescing (segments only; 0: off): a rising point whose band's rho is within `coalesce` of the pending
+  // band's first is added to it (falloffs none and step inside the radius: always, the bands then add
+  // exactly). finish() integrates what is pending: call it before reading sum and direction.
+  double coalesce = 0;
+  void finish();
 
  private:
   // Falloffs with closed forms (slab_degree >= 0): the bands are adjacent, so each band's lower end is the
@@ -80,7 +85,12 @@ struct TangentChain {
   double c_max_ = 1, s_max_ = 0;
   bool have_max_ = false;
   SlabPrimitives at_max_;
+  // The pending band's top point (relative to the receiver, its cosine and sine) and the distances of its
+  // first and last points' bands.
+  bool pending_ = false;
+  double pend_hs_ = 0, pend_hz_ = 0, pend_c_ = 1, pend_s_ = 0, pend_x0_ = 0, pend_x1_ = 0;
   void add_closed(double hs, double hz, double x, SliceVec from, SliceVec at);
+  void commit(double e, double c, double sn, const SlabPrimitives* at_e);
 };
 
 // A hull point: its position; the nearest sample merged into it (near_s >= s; itself when none): the near end
