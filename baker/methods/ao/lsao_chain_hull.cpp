@@ -204,9 +204,11 @@ void walk(const ChainPoint* points, std::ptrdiff_t count, std::ptrdiff_t stride,
   for (std::ptrdiff_t k = 0; k < count; ++k) {
     const ChainPoint& q = points[k * stride];
     ++chain.walked;
-    // Nothing from here on is nearer than q's near end nor higher than zmax: stop when that cannot rise.
+    // Nothing from here on is nearer than q's near end nor higher than zmax: stop when that cannot rise
+    // (a point at distance d rises when it is higher than slope_max d: with the horizon still below the
+    // horizontal, lower points farther on can).
     const double nearest = p.s - q.near_s;
-    if (!(zmax_of(k) - p.z > chain.slope_max * nearest)) break;
+    if (chain.slope_max >= 0 && !(zmax_of(k) - p.z > chain.slope_max * nearest)) break;
     const double hs = p.s - q.s;
     if (nearest > support) {
       // With segments the first point beyond the support ends the segment that crosses it.
@@ -250,6 +252,7 @@ void ChainHull::query(SlicePoint p, double support, TangentChain& chain, double 
 
 void WindowHull::reserve(std::size_t n) {
   hull_.reserve(n);
+  prefix_.reserve(n);
   popped_.reserve(n);
   pops_.reserve(n);
 }
@@ -263,11 +266,14 @@ void WindowHull::clear() {
 void WindowHull::build(const ChainPoint* points, std::size_t count, double s_end, const Falloff& rho,
                        double tolerance) {
   clear();
+  // zmax of a vertex: the highest of the block's points at or beyond its near end (prefix_), which bounds it,
+  // its near end and every vertex farther on, whatever drop_before later removes or restores.
+  prefix_.resize(count);
+  double highest = -INFINITY;
+  for (std::size_t k = 0; k < count; ++k) prefix_[k] = highest = std::max(highest, points[k].z);
   for (std::size_t k = count; k-- > 0;) {
     const double si = points[k].s, zi = points[k].z;
-    ChainPoint q{si, zi, si, zi, zi, points[k].index};
-    // zmax: the running maximum over the insertions (the back vertex is always the latest insertion).
-    const double before = hull_.empty() ? zi : hull_.back().zmax;
+    ChainPoint q{si, zi, si, zi, prefix_[k], points[k].index};
     // Extended on the left: the leftmost vertex a merges into q when it lies on or below the segment from q
     // to the vertex after it (so q or that vertex hides it from every receiver beyond the block) and rho at
     // q is within the tolerance of rho at a's near end, seen from the nearest receiver.
@@ -278,11 +284,11 @@ void WindowHull::build(const ChainPoint* points, std::size_t count, double s_end
       const bool below = (a.s - q.s) * (c.z - q.z) - (a.z - q.z) * (c.s - q.s) >= 0;
       if (!below || rho(s_end - q.s) < rho(s_end - a.near_s) - tolerance) break;
       merge(q, a);
+      q.zmax = std::max(q.zmax, a.zmax);  // a's near end is q's now
       popped_.push_back(a);
       hull_.pop_back();
       ++popped;
     }
-    q.zmax = std::max(q.zmax, before);
     hull_.push_back(q);
     pops_.push_back(popped);
   }
@@ -301,10 +307,9 @@ void WindowHull::drop_before(int first) {
 
 void WindowHull::query(SlicePoint p, double support, TangentChain& chain, double near) const {
   if (hull_.empty()) return;
-  // The last insertion's zmax covers every vertex left.
-  const double zmax = hull_.back().zmax;
-  walk(hull_.data(), std::ptrdiff_t(hull_.size()), 1, p, support, near, chain,
-       [&](std::ptrdiff_t) { return zmax; });
+  const ChainPoint* h = hull_.data();
+  walk(h, std::ptrdiff_t(hull_.size()), 1, p, support, near, chain,
+       [&](std::ptrdiff_t k) { return h[k].zmax; });
 }
 
 void brute_chain(const SlicePoint* pts, std::size_t count, SlicePoint p, TangentChain& chain, double near) {

@@ -138,6 +138,7 @@ class WindowHull {
   std::vector<ChainPoint> hull_;    // right to left: hull_[0] the block's last terrain sample
   std::vector<ChainPoint> popped_;  // undo log: the vertices each insertion removed, in order
   std::vector<int> pops_;           // per insertion (right to left): how many it removed
+  std::vector<double> prefix_;      // build: the highest of points[0..k]
 };
 
 // Brute force for receiver p over every earlier sample pts[0..count) (in walk order): the band sum over
