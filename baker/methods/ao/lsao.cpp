@@ -55,6 +55,7 @@ struct LsaoWorker {
   const std::vector<Vec3f>* normals = nullptr;  // empty: recomputed per tap (normal_at)
   std::atomic<std::uint64_t>* samples = nullptr;
   std::atomic<std::uint64_t>* iterations = nullptr;
+  std::atomic<std::uint64_t>* work = nullptr;  // LsaoStats queries, walked, bands
   ObscuranceHull hull;
   std::vector<SlicePoint> terrain;  // brute force only: the terrain samples seen so far
 
@@ -131,6 +132,7 @@ struct LsaoWorker {
     const Weighting weighting =
         f.weighting == ObscuranceWeighting::cosine ? Weighting::cosine : Weighting::uniform;
     const double support = f.rho.support(1e-4), tol = options->rho_tolerance;
+    const double coalesce = options->band_tolerance;
     // The near field (texels): marched from each texel itself; the hull's points nearer than it left out.
     const double near = std::min(options->near_radius, support / field->texel_size);
     const double near_world = near > 0 ? near * field->texel_size : 0.0;
@@ -157,7 +159,7 @@ struct LsaoWorker {
     window.reserve(W > 0 ? std::min(cap, std::size_t(group[std::min(W, line.count)])) : 0);
     terrain.clear();
     if (use_brute) terrain.reserve(cap);
-    std::uint64_t tests = 0;
+    std::uint64_t tests = 0, queries = 0, walked = 0, bands = 0;
     for (int n = 0; n < line.count; ++n) {
       const SlicePoint p{line.s(n), double(line.z[n])};
       double z_low = p.z;  // the lowest receiver at this sample
@@ -199,6 +201,7 @@ struct LsaoWorker {
           TangentChain chain(f.rho, weighting, frame);
           chain.want_direction = bent;
           chain.segments = triangles;
+          chain.coalesce = triangles ? coalesce : 0.0;
           if (near > 0) near_field(ti, near, chain);
           if (use_brute) {
             brute_chain(terrain.data(), terrain.size(), t, chain, near_world);
@@ -206,6 +209,8 @@ struct LsaoWorker {
             chain_hull.query(t, support, chain, near_world);
             window.query(t, support, chain, near_world);  // farther than the whole current block
           }
+          chain.finish();
+          ++queries, walked += chain.walked, bands += chain.bands;
           // The cosine measure scales with the normal's length in the slice (slice_integral.hpp).
           o[c] = float(weighting == Weighting::cosine ? chain.length * chain.sum : chain.sum);
           if (bent) {
@@ -229,6 +234,7 @@ struct LsaoWorker {
     }
     *samples += std::uint64_t(line.count);
     *iterations += tests;
+    work[0] += queries, work[1] += walked, work[2] += bands;
   }
 
   void operator()(const SweepLine& line, float* out) {
@@ -316,7 +322,7 @@ void lsao_sweep(const HeightField& field, const LsaoOptions& options, const RunC
   const int swept = spec.azimuths.empty() ? K : int(spec.azimuths.size());
   std::vector<SweepDirection> dirs(static_cast<std::size_t>(swept));
   for (int k = 0; k < swept; ++k) dirs[std::size_t(k)] = plan_direction(field, spec, k);
-  std::atomic<std::uint64_t> samples{0}, iterations{0};
+  std::atomic<std::uint64_t> samples{0}, iterations{0}, work[3] = {0, 0, 0};
   const std::vector<Vec3f> normals =
       texel_receivers && lsao_holds_normals(field) ? compute_normals(field) : std::vector<Vec3f>();
   sweep_lines(
@@ -328,6 +334,7 @@ void lsao_sweep(const HeightField& field, const LsaoOptions& options, const RunC
         w.normals = &normals;
         w.samples = &samples;
         w.iterations = &iterations;
+        w.work = work;
         w.bent = want_bent;
         return w;
       },
@@ -363,6 +370,7 @@ void lsao_sweep(const HeightField& field, const LsaoOptions& options, const RunC
   if (stats) {
     stats->samples = samples;
     stats->iterations = iterations;
+    stats->queries = work[0], stats->walked = work[1], stats->bands = work[2];
   }
 }
 

@@ -20,6 +20,8 @@ TangentChain::TangentChain(const Falloff& f, Weighting w, const SliceFrame& slic
     : rho(f), weighting(w), e_max(slice.tangent), slope_max(-slice.nt / slice.nz) {
   length = std::hypot(slice.nt, slice.nz);
   frame = {slice.nt / length, slice.nz / length, slice.tangent};
+  degree_ = slab_degree(f);
+  c_max_ = frame.nz, s_max_ = -frame.nt;  // the tangent's elevation
 }
 
 namespace {
@@ -54,6 +56,7 @@ void TangentChain::add(double hs, double hz, double x) {
   const SliceVec from = prev, at{hs, hz};
   prev = at;
   if (!(hz > slope_max * hs)) return;
+  if (degree_ >= 0) return add_closed(hs, hz, x, from, at);
   const double e = std::atan2(hz, hs);
   if (!(e > e_max)) return;  // rounding at the same elevation
   // The band's rays meet a vertical slab at horizontal distance x (hbao's slab estimator, exact for the
@@ -69,6 +72,7 @@ void TangentChain::add(double hs, double hz, double x) {
   const double c = exact ? segment_band_occlusion(rho, weighting, frame, e_max, e, from, at)
                          : chain_band(rho, weighting, frame, e_max, e, x);
   sum += weighting == Weighting::cosine ? 2 * c : c;
+  ++bands;
   if (want_direction) {
     const SliceVec b = exact ? segment_band_direction(rho, frame, e_max, e, from, at)
                              : band_direction(rho, frame, e_max, e, x);
@@ -76,6 +80,106 @@ void TangentChain::add(double hs, double hz, double x) {
   }
   e_max = e;
   slope_max = hz / hs;
+}
+
+// The closed forms of slice_integral.hpp (slab_primitives): the same integrals as band_occlusion,
+// band_direction and (segments inside the radius) segment_band_occlusion, each band end evaluated once.
+// Coalescing (segments, `coalesce` > 0): consecutive rising points whose bands would be weighted alike are
+// held as one pending band from e_max up to the last of them, integrated once at the next band or finish().
+void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, SliceVec at) {
+  const double r = std::sqrt(hs * hs + hz * hz), c = hs / r, sn = hz / r;
+  const bool exact = segments && (rho.kind == FalloffKind::none || rho.kind == FalloffKind::step);
+  const bool radius = rho.kind != FalloffKind::none;
+  if (exact && radius && !(from.h * from.h + from.v * from.v < rho.radius * rho.radius && r < rho.radius)) {
+    // A segment that leaves the step's radius: its part inside (segment_band_occlusion's support).
+    finish();
+    const double e = std::atan2(hz, hs);
+    if (!(e > e_max)) return;  // rounding at the same elevation
+    sum += weighting == Weighting::cosine
+               ? 2 * segment_band_occlusion(rho, weighting, frame, e_max, e, from, at)
+               : segment_band_occlusion(rho, weighting, frame, e_max, e, from, at);
+    if (want_direction) {
+      const SliceVec b = segment_band_direction(rho, frame, e_max, e, from, at);
+      direction.h += b.h, direction.v += b.v;
+    }
+    ++bands;
+    commit(e, c, sn, nullptr);
+    slope_max = hz / hs;
+    return;
+  }
+  if (exact) {
+    x = 0;  // inside the radius: rho = 1 along the segment, bands add exactly
+  } else if (segments) {
+    // The slab moved to where the band's middle ray meets the segment (within it); the middle ray's
+    // direction is the sum of the ends' unit vectors (the distance below does not depend on its length).
+    const double ce = (pending_ ? pend_c_ : c_max_) + c, se = (pending_ ? pend_s_ : s_max_) + sn;
+    const double dh = at.h - from.h, dv = at.v - from.v, den = ce * dv - se * dh;
+    const double t = den > 0 ? (from.h * dv - from.v * dh) / den * ce : at.h;
+    x = std::clamp(t, from.h, at.h);
+  }
+  slope_max = hz / hs;
+  if (pending_ && coalesce > 0 && (exact || std::abs(rho(x) - rho(pend_x0_)) <= coalesce)) {
+    pend_hs_ = hs, pend_hz_ = hz, pend_c_ = c, pend_s_ = sn, pend_x1_ = x;
+    return;
+  }
+  finish();
+  pending_ = true;
+  pend_hs_ = hs, pend_hz_ = hz, pend_c_ = c, pend_s_ = sn, pend_x0_ = pend_x1_ = x;
+  if (!(coalesce > 0)) finish();
+}
+
+void TangentChain::commit(double e, double c, double sn, const SlabPrimitives* at_e) {
+  e_max = e;
+  c_max_ = c, s_max_ = sn;
+  if (at_e)
+    at_max_ = *at_e;
+  else
+    have_max_ = false;
+}
+
+void TangentChain::finish() {
+  if (!pending_) return;
+  pending_ = false;
+  const double e = std::atan2(pend_hz_, pend_hs_), c = pend_c_, sn = pend_s_;
+  if (!(e > e_max)) return;  // rounding at the same elevation
+  if (!have_max_) {
+    at_max_ = slab_primitives(frame, weighting, e_max, s_max_, c_max_, degree_, want_direction);
+    have_max_ = true;
+  }
+  const SlabPrimitives at_e = slab_primitives(frame, weighting, e, sn, c, degree_, want_direction);
+  // A coalesced band: its rays meet the profile between its first and last points' distances.
+  const double x = 0.5 * (pend_x0_ + pend_x1_);
+  const bool radius = rho.kind != FalloffKind::none;
+  double occ = 0;
+  SliceVec dir;
+  double coef[3];
+  slab_coefficients(rho, x, coef);
+  const double q = radius ? x / rho.radius : 0.0;
+  if (q < 1) {
+    // rho(x / cos e) > 0 only where cos e > q: the band clipped to [-acos q, acos q].
+    const SlabPrimitives* lo = &at_max_;
+    const SlabPrimitives* hi = &at_e;
+    SlabPrimitives clip_lo, clip_hi;
+    const bool lo_out = radius && e_max < 0 && c_max_ < q, hi_out = radius && e > 0 && c < q;
+    const double ec = lo_out || hi_out ? std::acos(q) : 0.0;
+    const double sc = lo_out || hi_out ? std::sqrt(std::max(0.0, 1 - q * q)) : 0.0;
+    if (lo_out)
+      clip_lo = slab_primitives(frame, weighting, -ec, -sc, q, degree_, want_direction), lo = &clip_lo;
+    if (hi_out)
+      clip_hi = slab_primitives(frame, weighting, ec, sc, q, degree_, want_direction), hi = &clip_hi;
+    if ((hi_out ? ec : e) > (lo_out ? -ec : e_max)) {
+      for (int k = 0; k <= degree_; ++k) occ += coef[k] * (hi->occ[k] - lo->occ[k]);
+      if (want_direction)
+        for (int k = 0; k <= degree_; ++k) {
+          dir.h += coef[k] * (hi->h[k] - lo->h[k]);
+          dir.v += coef[k] * (hi->v[k] - lo->v[k]);
+        }
+    }
+  }
+  sum += weighting == Weighting::cosine ? 2 * occ : occ;
+  ++bands;
+  if (want_direction) direction.h += dir.h, direction.v += dir.v;
+  commit(e, c, sn, &at_e);
 }
 
 namespace {
@@ -99,9 +203,12 @@ void walk(const ChainPoint* points, std::ptrdiff_t count, std::ptrdiff_t stride,
           double near, TangentChain& chain, const ZMax& zmax_of) {
   for (std::ptrdiff_t k = 0; k < count; ++k) {
     const ChainPoint& q = points[k * stride];
-    // Nothing from here on is nearer than q's near end nor higher than zmax: stop when that cannot rise.
+    ++chain.walked;
+    // Nothing from here on is nearer than q's near end nor higher than zmax: stop when that cannot rise
+    // (a point at distance d rises when it is higher than slope_max d: with the horizon still below the
+    // horizontal, lower points farther on can).
     const double nearest = p.s - q.near_s;
-    if (!(zmax_of(k) - p.z > chain.slope_max * nearest)) break;
+    if (chain.slope_max >= 0 && !(zmax_of(k) - p.z > chain.slope_max * nearest)) break;
     const double hs = p.s - q.s;
     if (nearest > support) {
       // With segments the first point beyond the support ends the segment that crosses it.
@@ -110,10 +217,10 @@ void walk(const ChainPoint* points, std::ptrdiff_t count, std::ptrdiff_t stride,
     }
     if (hs < near) continue;
     if (q.near_s > q.s && nearest >= near) {
-      const double e_before = chain.e_max;
+      const double slope_before = chain.slope_max;
       chain.add(nearest, q.near_z - p.z, nearest);
       // A rising merged stretch is counted at its middle; otherwise the rays meet q's own face.
-      chain.add(hs, q.z - p.z, chain.e_max > e_before ? 0.5 * (hs + nearest) : hs);
+      chain.add(hs, q.z - p.z, chain.slope_max > slope_before ? 0.5 * (hs + nearest) : hs);
     } else {
       chain.add(hs, q.z - p.z, hs);
     }
@@ -145,6 +252,7 @@ void ChainHull::query(SlicePoint p, double support, TangentChain& chain, double 
 
 void WindowHull::reserve(std::size_t n) {
   hull_.reserve(n);
+  prefix_.reserve(n);
   popped_.reserve(n);
   pops_.reserve(n);
 }
@@ -158,11 +266,14 @@ void WindowHull::clear() {
 void WindowHull::build(const ChainPoint* points, std::size_t count, double s_end, const Falloff& rho,
                        double tolerance) {
   clear();
+  // zmax of a vertex: the highest of the block's points at or beyond its near end (prefix_), which bounds it,
+  // its near end and every vertex farther on, whatever drop_before later removes or restores.
+  prefix_.resize(count);
+  double highest = -INFINITY;
+  for (std::size_t k = 0; k < count; ++k) prefix_[k] = highest = std::max(highest, points[k].z);
   for (std::size_t k = count; k-- > 0;) {
     const double si = points[k].s, zi = points[k].z;
-    ChainPoint q{si, zi, si, zi, zi, points[k].index};
-    // zmax: the running maximum over the insertions (the back vertex is always the latest insertion).
-    const double before = hull_.empty() ? zi : hull_.back().zmax;
+    ChainPoint q{si, zi, si, zi, prefix_[k], points[k].index};
     // Extended on the left: the leftmost vertex a merges into q when it lies on or below the segment from q
     // to the vertex after it (so q or that vertex hides it from every receiver beyond the block) and rho at
     // q is within the tolerance of rho at a's near end, seen from the nearest receiver.
@@ -173,11 +284,11 @@ void WindowHull::build(const ChainPoint* points, std::size_t count, double s_end
       const bool below = (a.s - q.s) * (c.z - q.z) - (a.z - q.z) * (c.s - q.s) >= 0;
       if (!below || rho(s_end - q.s) < rho(s_end - a.near_s) - tolerance) break;
       merge(q, a);
+      q.zmax = std::max(q.zmax, a.zmax);  // a's near end is q's now
       popped_.push_back(a);
       hull_.pop_back();
       ++popped;
     }
-    q.zmax = std::max(q.zmax, before);
     hull_.push_back(q);
     pops_.push_back(popped);
   }
@@ -196,10 +307,9 @@ void WindowHull::drop_before(int first) {
 
 void WindowHull::query(SlicePoint p, double support, TangentChain& chain, double near) const {
   if (hull_.empty()) return;
-  // The last insertion's zmax covers every vertex left.
-  const double zmax = hull_.back().zmax;
-  walk(hull_.data(), std::ptrdiff_t(hull_.size()), 1, p, support, near, chain,
-       [&](std::ptrdiff_t) { return zmax; });
+  const ChainPoint* h = hull_.data();
+  walk(h, std::ptrdiff_t(hull_.size()), 1, p, support, near, chain,
+       [&](std::ptrdiff_t k) { return h[k].zmax; });
 }
 
 void brute_chain(const SlicePoint* pts, std::size_t count, SlicePoint p, TangentChain& chain, double near) {

@@ -65,11 +65,32 @@ struct TangentChain {
   // closed form at the horizontal distance where the band's middle ray meets the segment.
   bool segments = false;
   SliceVec prev;  // the point added last, relative to the receiver
+  // Work counters (LsaoStats): hull points walked by queries, bands added.
+  unsigned walked = 0, bands = 0;
 
   TangentChain(const Falloff& f, Weighting w, const SliceFrame& slice);
   // A point at (hs > 0, hz) from the receiver standing for the profile's stretch at horizontal distances
   // around x: adds the band from the chain's elevation up to its own, if it rises above it.
   void add(double hs, double hz, double x);
+  // Coalescing (segments only; 0: off): a rising point whose band's rho is within `coalesce` of the pending
+  // band's first is added to it (falloffs none and step inside the radius: always, the bands then add
+  // exactly). finish() integrates what is pending: call it before reading sum and direction.
+  double coalesce = 0;
+  void finish();
+
+ private:
+  // Falloffs with closed forms (slab_degree >= 0): the bands are adjacent, so each band's lower end is the
+  // last one's upper end, e_max, whose cosine, sine and antiderivatives (slab_primitives) are kept.
+  int degree_ = -1;
+  double c_max_ = 1, s_max_ = 0;
+  bool have_max_ = false;
+  SlabPrimitives at_max_;
+  // The pending band's top point (relative to the receiver, its cosine and sine) and the distances of its
+  // first and last points' bands.
+  bool pending_ = false;
+  double pend_hs_ = 0, pend_hz_ = 0, pend_c_ = 1, pend_s_ = 0, pend_x0_ = 0, pend_x1_ = 0;
+  void add_closed(double hs, double hz, double x, SliceVec from, SliceVec at);
+  void commit(double e, double c, double sn, const SlabPrimitives* at_e);
 };
 
 // A hull point: its position; the nearest sample merged into it (near_s >= s; itself when none): the near end
@@ -117,6 +138,7 @@ class WindowHull {
   std::vector<ChainPoint> hull_;    // right to left: hull_[0] the block's last terrain sample
   std::vector<ChainPoint> popped_;  // undo log: the vertices each insertion removed, in order
   std::vector<int> pops_;           // per insertion (right to left): how many it removed
+  std::vector<double> prefix_;      // build: the highest of points[0..k]
 };
 
 // Brute force for receiver p over every earlier sample pts[0..count) (in walk order): the band sum over

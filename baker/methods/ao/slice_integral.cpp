@@ -133,6 +133,59 @@ SliceVec band_direction(const Falloff& f, const SliceFrame& s, double a, double 
           gauss([&](double e) { return weight(e) * std::sin(e); }, lo, hi)};
 }
 
+int slab_degree(const Falloff& f) {
+  switch (f.kind) {
+    case FalloffKind::none:
+    case FalloffKind::step:
+      return 0;
+    case FalloffKind::linear:
+      return 1;
+    case FalloffKind::smooth:
+      return 2;
+    default:
+      return -1;
+  }
+}
+
+void slab_coefficients(const Falloff& f, double x, double coef[3]) {
+  const double q = f.kind == FalloffKind::none ? 0.0 : x / f.radius;
+  coef[0] = 1;
+  coef[1] = f.kind == FalloffKind::linear ? -q : f.kind == FalloffKind::smooth ? -2 * q : 0.0;
+  coef[2] = f.kind == FalloffKind::smooth ? q * q : 0.0;
+}
+
+SlabPrimitives slab_primitives(const SliceFrame& s, Weighting w, double e, double sn, double c, int degree,
+                               bool direction) {
+  SlabPrimitives p;
+  const double nt = s.nt, nz = s.nz, sc = sn * c;
+  // Cosine weight (nt cos e + nz sin e) cos e: sec^0, sec^1, sec^2.
+  const double cos0 = nt * (0.5 * e + 0.5 * sc) + nz * 0.5 * sn * sn;
+  const double cos1 = nt * sn - nz * c;
+  const double log_c = degree >= 2 ? std::log(c) : 0.0;
+  // log(sec e + tan e): the uniform measure's and the direction's sec^2 terms.
+  const double log_sec_tan =
+      degree >= 2 && (direction || w == Weighting::uniform) ? std::log1p(sn) - log_c : 0.0;
+  if (w == Weighting::cosine) {
+    p.occ[0] = cos0;
+    p.occ[1] = cos1;
+    p.occ[2] = nt * e - nz * log_c;
+  } else {
+    p.occ[0] = sn;
+    p.occ[1] = e;
+    p.occ[2] = log_sec_tan;
+  }
+  if (direction) {
+    const double c3 = c * c * c, s3 = sn * sn * sn;
+    p.h[0] = nt * (sn - s3 / 3) - nz * c3 / 3;
+    p.h[1] = cos0;
+    p.h[2] = cos1;
+    p.v[0] = -nt * c3 / 3 + nz * s3 / 3;
+    p.v[1] = nt * 0.5 * sn * sn + nz * (0.5 * e - 0.5 * sc);
+    p.v[2] = -nt * c + nz * (log_sec_tan - sn);
+  }
+  return p;
+}
+
 namespace {
 
 // The elevations of [a, b] (clipped to the tangent and the zenith) whose rays can meet the segment within

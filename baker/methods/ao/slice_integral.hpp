@@ -44,4 +44,21 @@ double segment_band_occlusion(const Falloff& f, Weighting w, const SliceFrame& s
 SliceVec segment_band_direction(const Falloff& f, const SliceFrame& s, double a, double b, SliceVec A,
                                 SliceVec B);
 
+// The closed forms behind band_occlusion and band_direction for falloffs none, step, linear and smooth:
+// inside the radius rho(x / cos e) = sum_k coef[k] sec^k e (q = x / R: step 1; linear 1 - q sec e; smooth (1
+// - q sec e)^2), so a band's integral is sum_k coef[k] (P_k(hi) - P_k(lo)) with P_k an antiderivative of
+// weight(e) sec^k e (and, for the direction, of the cosine weight times (cos e, sin e) sec^k e). A chain of
+// adjacent bands evaluates each end once (lsao_chain_hull.hpp).
+struct SlabPrimitives {
+  double occ[3] = {0, 0, 0};                  // the weighting's measure
+  double h[3] = {0, 0, 0}, v[3] = {0, 0, 0};  // the cosine-weighted direction (band_direction)
+};
+// The falloff's degree in sec e (0 none and step, 1 linear, 2 smooth; -1: no closed form) and its
+// coefficients for a slab at horizontal distance x < R (none: coef {1}).
+int slab_degree(const Falloff& f);
+void slab_coefficients(const Falloff& f, double x, double coef[3]);
+// P_k at elevation e in [s.tangent, pi/2) given sin e and cos e (> 0), for k <= degree; direction: also h, v.
+SlabPrimitives slab_primitives(const SliceFrame& s, Weighting w, double e, double sin_e, double cos_e,
+                               int degree, bool direction);
+
 }  // namespace hfbake
