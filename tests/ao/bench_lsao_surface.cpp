@@ -1,12 +1,12 @@
-// Where lsao's and hsao's excess over hbao comes from on the nightly fields (issue 19 item 3): a
+// Where lsao's and hsao's excess over hbao comes from on the nightly fields: a
 // decomposition against hbao on the reference's triangulated surface (surface "triangles", segment
-// estimator: the exact slice integral of that surface at the same K), per field of jobs/nightly/fields (96^2,
-// K = 16, step falloff R = 8 as the nightly jobs bake them).
+// estimator: the exact slice integral of that surface at the same K), per field of tests/nightly/fields
+// (96^2, K = 16, step falloff R = 8 as the nightly jobs bake them).
 //
 //   build/tests/ao/ao_bench_lsao_surface [--radius R] [--falloff step|smooth]
 //
 // Columns, each the mean / rmse of (variant - hbao triangles) in obscurance:
-//   lsao        the method as it baked before issue 19's surface work (surface bilinear: the sweep lines'
+//   lsao        surface bilinear (the sweep lines'
 //               column samples, chain hull, two taps)
 //   lsao brute  the same line samples, every visible band (no hull merging)
 //   own cols    each texel's own ray, the receiver-tangent band sum over the column crossings only (where
@@ -98,7 +98,7 @@ void measure(const Falloff& rho) {
     const char* name;
     HeightField f;
   };
-  // The nightly fields (jobs/nightly/fields/*.json).
+  // The nightly fields (tests/nightly/fields/*.json).
   const Field fields[] = {
       {"fractal", field_of(ProceduralKind::fractal, 7)},
       {"blocks", field_of(ProceduralKind::blocks, 5)},

@@ -1,4 +1,4 @@
-// lsao's tangent strategies (issue 19 item 3): cost and a decomposition of the error.
+// lsao's tangent strategies: cost and a decomposition of the error.
 //
 //   build/tests/ao/ao_bench_lsao_tangent [google-benchmark flags]   texel-directions per CPU-second, one
 //       thread, 512^2 fractal, K = 16: the receiver tangent and P3's fixed tangent, step and smooth falloffs

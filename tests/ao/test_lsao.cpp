@@ -1,4 +1,4 @@
-// LSAO (P3) on the shared sweep: closed-form scenes (digest 0.3), planes, and the hull against the brute
+// LSAO (P3) on the shared sweep: closed-form scenes (ao_scenes.hpp), planes, and the hull against the brute
 // force over the same line samples (P3's reference) on the four P2 test surfaces.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// lsao's receiver tangent (issue 19 item 3, lsao_chain_hull.hpp): closed forms (planes, the wall and the pit
+// lsao's receiver tangent (lsao_chain_hull.hpp): closed forms (planes, the wall and the pit
 // with every falloff), the brute-force hbao march as a cross-check on gentle and rough fields, the hull
 // against the brute force over the same line samples, and determinism across thread counts.
 #include <gtest/gtest.h>
@@ -47,7 +47,7 @@ double tolerance(const Falloff& rho, double want) {
 }
 
 // A plane, level or tilted, occludes nothing seen from its own tangent: every direction gives 0 (P3's fixed
-// tangent gives Wt < 0 per direction and needs the clamp, digest 0.3 C).
+// tangent gives Wt < 0 per direction and needs the clamp).
 TEST(LsaoTangent, PlanesAreOpen) {
   for (double angle : {0.0, 25.0, 60.0}) {
     ProceduralSpec s;
@@ -67,7 +67,7 @@ TEST(LsaoTangent, PlanesAreOpen) {
   }
 }
 
-// The infinite wall (digest 0.3 B) in front of a level texel, K = 8: axes and diagonals sample texel centres,
+// The infinite wall in front of a level texel, K = 8: axes and diagonals sample texel centres,
 // so the sweep meets the wall's top edge exactly and the obscurance is the closed form's discrete-K sum
 // (every ray below the top hits the vertical face at x / cos e, weighted by rho there), for every falloff:
 // the chain has one band per direction, and the windows of the falloffs that end must keep the wall exactly

@@ -1,4 +1,4 @@
-// lsao and hsao on the reference's triangulated surface (issue 19 item 3) against independent slice
+// lsao and hsao on the reference's triangulated surface against independent slice
 // integrals of that surface (ao_truth.hpp: profiles rebuilt from sorted crossings, the step falloff's
 // occluded elevations found by bisection), on the nightly suite's hard fields (96^2, K = 16, step R = 8).
 // lsao's slices are vertical at the same azimuths as the truth's; hsao's planes turn with the normal, so
@@ -24,7 +24,7 @@ HeightField nightly_field(ProceduralKind kind) {
   ProceduralSpec spec;
   spec.kind = kind;
   spec.width = spec.height = 96;
-  switch (kind) {  // jobs/nightly/fields/*.json
+  switch (kind) {  // tests/nightly/fields/*.json
     case ProceduralKind::rough:
       spec.seed = 3, spec.angle_deg = 70;
       break;

@@ -1,6 +1,7 @@
-// Entry points of the obscurance family (docs/methods/obscurance.md). Each returns a LayerSet of the field's size with the
-// layer names of docs/contract.md ("obscurance", "ao", "bent_normal", ...); params is the schema-validated bake entry
-// (schemas/methods/<method>.schema.json). Their lines of the method table (methods/method_table.hpp) below.
+// Entry points of the obscurance family (docs/methods/obscurance.md). Each returns a LayerSet of the field's
+// size with the layer names of docs/contract.md ("obscurance", "ao", "bent_normal", ...); params is the
+// schema-validated bake entry (schemas/methods/<method>.schema.json). Their lines of the method table
+// (methods/method_table.hpp) below.
 #pragma once
 
 #include <nlohmann/json.hpp>

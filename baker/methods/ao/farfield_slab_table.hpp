@@ -1,6 +1,7 @@
 // The slab integral of far-field ambient obscurance (P4 Eq. 3, the table L), for an orthographic height
-// field where every slab is a vertical half-line going down (P4, Timonen 2013, on an orthographic height field): in the slice of azimuth D, rays
-// at elevations in [a, b] that hit a slab at horizontal distance x (world units) are occluded with weight
+// field where every slab is a vertical half-line going down (P4, Timonen 2013, on an orthographic height
+// field): in the slice of azimuth D, rays at elevations in [a, b] that hit a slab at horizontal distance x
+// (world units) are occluded with weight
 //     band(a, b, x) = integral_a^b rho(x / cos e) max(0, nt cos e + nz sin e) cos e de
 // (nt, nz) = (n.D, n.z), the receiver normal in the slice. The obscurance of K equally weighted slices is
 // 1 - (2/K) sum_k sum_slabs band. Splitting at the tangent elevation t = atan2(-nt, nz):

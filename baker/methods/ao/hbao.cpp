@@ -224,7 +224,8 @@ HbaoSettings read_hbao_settings(Params& in, const FieldShape& field) {
   s.weighting = read_weighting(in, true);
   s.directions = uniform_directions(in.integer("directions", 16, 1, 4096));
   // The reference's triangulated surface by default (on rough ground the bilinear march is several times
-  // further from the reference: docs/methods/obscurance.md); a march given a step is the stepped bilinear one.
+  // further from the reference: docs/methods/obscurance.md); a march given a step is the stepped bilinear
+  // one.
   const bool stepped = in.has("step") || in.has("steps");
   const bool triangles =
       in.choice("surface", stepped ? "bilinear" : "triangles", {"bilinear", "triangles"}) == "triangles";

@@ -2,14 +2,14 @@
 //
 // Per receiver and per azimuthal direction, march outward in equal steps (bilinear heights) up to a reach.
 // Estimator "slab" (default): every sample that rises above the running horizon is a visible vertical slab
-// (P4's slab model, Timonen 2013, each slab a vertical half-line on a height field); the elevations between the previous horizon maximum and the new one are
-// occluded by it, weighted by rho(x / cos e) (exact distance of each ray to the slab) and by the cosine
-// (contract obscurance) or uniform (HBAO) weighting. With falloff none and cosine weighting this is P1's
-// Eq. 5 AO of the sampled horizons; it converges to the exact integral as K grows and the step shrinks.
-// Estimator "largest_occluder": P3's Eq. 1 with one occluder per direction, the visible sample that casts the
-// largest sinT + max(0, sin h - sinT) rho(|h|) (the brute-force reference of P3 Fig. 7).
-// Estimator "segment": like slab, but a band's rays meet the straight piece of profile between the previous
-// sample and the new horizon sample (slice_integral.hpp), not a vertical slab at the new one.
+// (P4's slab model, Timonen 2013, each slab a vertical half-line on a height field); the elevations between
+// the previous horizon maximum and the new one are occluded by it, weighted by rho(x / cos e) (exact distance
+// of each ray to the slab) and by the cosine (contract obscurance) or uniform (HBAO) weighting. With falloff
+// none and cosine weighting this is P1's Eq. 5 AO of the sampled horizons; it converges to the exact integral
+// as K grows and the step shrinks. Estimator "largest_occluder": P3's Eq. 1 with one occluder per direction,
+// the visible sample that casts the largest sinT + max(0, sin h - sinT) rho(|h|) (the brute-force reference
+// of P3 Fig. 7). Estimator "segment": like slab, but a band's rays meet the straight piece of profile between
+// the previous sample and the new horizon sample (slice_integral.hpp), not a vertical slab at the new one.
 // Surface "triangles": instead of equal steps on the bilinear surface, the march visits every vertex of the
 // profile of the reference's triangulated surface (two triangles per quad split along (i+1, j)-(i, j+1)):
 // every column, row and diagonal crossing, plus the end of the reach. With the segment estimator the slice

@@ -36,7 +36,7 @@ HsaoSums hsao_texel_sums(const HeightField& field, Vec3 n, int i, int j, const H
   const DepthSurface surf{field, 1.0 / field.texel_size};
   const double R = s.falloff.radius, step = R / s.steps;
   // Lift the receiver by a tiny offset along n so the flat ground around it does not count as "below"
-  // (the offline replacement of the paper's staircase offset, digest 4.7).
+  // (the offline replacement of the paper's staircase offset).
   const Vec3 p = field.position(i, j) + n * (1e-4 * field.texel_size);
   // Tangent frame: t1 = +x projected onto the tangent plane (n = up: t1 = +x, t2 = +y).
   Vec3 t1 = Vec3{1, 0, 0} - n * n.x;

@@ -1,4 +1,4 @@
-// hsao: horizon-split ambient occlusion (Dimitrov, Bavoil, Sainz, I3D 2008; digest section 4) on a height
+// hsao: horizon-split ambient occlusion (Dimitrov, Bavoil, Sainz, I3D 2008) on a height
 // field.
 //
 // Around the receiver's normal n, N_d directions T_i in the tangent plane (T_0 = the projection of +x, so
@@ -12,10 +12,10 @@
 // occluded by a slab through I parallel to -n, at tangential distance x, and adds 2 * integral_a^b rho(x /
 // cos e) sin e cos e de (= H_b^2 - H_a^2 with rho = 1: the paper's Eq. 6, T = H^2). Above the horizon: N_n
 // normal rays per direction, stratified in cosine measure over [H_i^2, 1] (the corrected distribution,
-// digest 4.1 / errata 7), each marched N_s steps to R and weighing (1 - H_i^2) rho(d) / N_n. On a height
+// the paper's Sec. 4.1), each marched N_s steps to R and weighing (1 - H_i^2) rho(d) / N_n. On a height
 // field with n = up the (n, T) planes are vertical slices without overhangs: every ray above the exact slice
 // horizon is open, so the sampled term is zero up to the horizon search's sampling.
-// Surface (HsaoSurface; issue 19 item 3): the paper's march samples a depth buffer at N_s steps; on a height
+// Surface (HsaoSurface): the paper's march samples a depth buffer at N_s steps; on a height
 // field the bilinear surface between steps misses the triangulated surface's peaks (rough nightly field:
 // +6.9 % too open against the Embree reference). `triangles` (the job's default) tests every ray at every
 // vertex of the triangulated surface under its ground track (triangle_profile_span), where ray and surface,

@@ -451,8 +451,7 @@ LsaoOptions read_lsao_options(Params& in) {
     in.resolve("tangent", o.occlusion.sin_t);
   }
   // The receiver tangent's surface: the triangulated one by default (the crossings between the lines'
-  // samples, segments, and a near field marched from each texel); "bilinear": the line samples alone, as
-  // before issue 19's surface work, bit for bit.
+  // samples, segments, and a near field marched from each texel); "bilinear": the line samples alone.
   for (const char* key : {"surface", "near_radius"})
     if (in.has(key) && o.tangent != LsaoTangent::receiver) in.fail(key, "applies only to tangent \"normal\"");
   if (o.tangent == LsaoTangent::receiver) {

@@ -1,8 +1,9 @@
 // Line-sweep ambient obscurance (P3, Timonen 2013) on the shared line sweep (baker/sweep): per azimuth
 // phi_k = 2 pi k / K one sweep whose lines carry a hull of occluders, and the sweep brings the per-sample
-// values back to the texel centres by its documented two-tap rule. O(K) per texel whatever the radius.
+// values back to the texel centres by its documented two-tap rule. The sweep is O(K) per texel whatever the
+// radius; the walk of a texel's visible chain grows with the radius (docs/performance-lsao.md).
 // Two tangent strategies (LsaoTangent):
-// * receiver (default, issue 19): each texel's own tangent plane per direction; the slice's value is the
+// * receiver (default): each texel's own tangent plane per direction; the slice's value is the
 //   contract's measure of the bands between that tangent and the horizon, each weighted by the falloff where
 //   its rays meet the terrain (hbao's slab integral), over the visible chain of a per-line chain hull
 //   (lsao_chain_hull.hpp). Exact on planes, walls and pits for every falloff.
@@ -12,7 +13,7 @@
 // Sampling: the sweep's lines step one texel column (row) at a time and interpolate heights along that column
 // only, so axis and diagonal directions sample texel centres exactly (P3 §5.2's box pattern for K = 8, n = 1)
 // and other directions interpolate between two texels of one column.
-// Surface (receiver tangent, LsaoSurface; issue 19 item 3): the column samples lie on cell edges of the
+// Surface (receiver tangent, LsaoSurface): the column samples lie on cell edges of the
 // reference's triangulated surface, but its kinks between them (row and diagonal crossings) are not samples,
 // and on rough ground they carry most of the peaks. Measured against hbao on the triangulated surface (the
 // exact slice integral), nightly fields, K = 16, step R = 8 (tests/ao/bench_lsao_surface.cpp): each texel's
@@ -21,10 +22,10 @@
 // the hull, were the excess. With `triangles` (default) the line's hull also holds those crossings
 // (line_crossings: heights from field/triangulation.hpp), a rising point's band meets the segment from the
 // point before it (TangentChain::segments) and each texel marches its own ray over every crossing up to
-// near_radius texels (triangle_profile.hpp), where the line's offset from the texel matters most; its
-// cost per texel-direction is fixed whatever the radius. `bilinear`: the column samples alone, as before.
+// near_radius texels (triangle_profile.hpp), where the line's offset from the texel matters most; that near
+// field's cost per texel-direction is fixed whatever the radius. `bilinear`: the column samples alone.
 //
-// Output: obscurance = 1 - clamp(mean_k value_k, 0, 1) (P3 leaves the mapping open, digest §9.1). With
+// Output: obscurance = 1 - clamp(mean_k value_k, 0, 1) (P3 leaves the mapping open). With
 // cosine weighting and rho = 1 this converges to the contract's cosine-weighted AO (fixed tangent: of an
 // upward normal, sin^2 of the horizon elevation); with uniform weighting to HBAO's solid-angle estimator.
 #pragma once

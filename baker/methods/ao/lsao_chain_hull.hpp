@@ -1,11 +1,11 @@
-// lsao's receiver-tangent strategy for a field seen from above (issue 19 item 3): per line a hull of the
+// lsao's receiver-tangent strategy for a field seen from above: per line a hull of the
 // visible chain's points, walked from each texel with its own tangent, the chain's bands summed as hbao's
 // slab estimator sums them.
 //
 // Why: P3's fixed tangent (sin t = -0.85, strategy 3) is a screen-space choice: an occluder counts only once
 // it lifts that tangent past the horizontal, so the gentle occluders of terrain count for nothing (gentle
 // craters, smooth R = 32: 98 % of the occlusion missing). Here the tangent of a texel towards direction D is
-// its own (P3 strategy 1, digest §2: t = atan2(-n.D, n.z)); the obscurance of the slice is the contract's
+// its own (P3 strategy 1: t = atan2(-n.D, n.z)); the obscurance of the slice is the contract's
 // cosine-weighted (or uniform) measure of the bands between that tangent and the horizon, each band weighted
 // by rho at the distance where its rays meet the terrain (band_occlusion: a vertical slab at the point's
 // horizontal distance, hbao's estimator), scaled by the normal's length in the slice. A single largest

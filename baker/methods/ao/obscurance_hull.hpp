@@ -14,7 +14,8 @@
 // The hull keeps the candidates: before a receiver reads the top of the stack, the top is popped while the
 // second-to-last point casts more obscurance on the receiver AND is higher in elevation (P3 §3, Alg. 1;
 // the elevation test stops popping at the receiver's global horizon). Amortised O(1) per sample: M pushes,
-// at most M pops per line. The result is not always the exact largest occluder (P3 §3 "degenerate case"): a point popped for one receiver can be the largest visible occluder of a later one.
+// at most M pops per line. The result is not always the exact largest occluder (P3 §3 "degenerate case"): a
+// point popped for one receiver can be the largest visible occluder of a later one.
 #pragma once
 
 #include <cmath>

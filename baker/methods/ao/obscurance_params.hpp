@@ -15,7 +15,8 @@
 namespace hfbake {
 
 // How directions are weighted in the occluded measure: cosine = (1/pi) * integral of rho (n.w) dw (the
-// obscurance of docs/contract.md); uniform = (1/2pi) * solid angle above the tangent plane (HBAO's sin h - sin t).
+// obscurance of docs/contract.md); uniform = (1/2pi) * solid angle above the tangent plane (HBAO's sin h -
+// sin t).
 enum class Weighting { cosine, uniform };
 
 // "falloff" and "radius" (read_falloff, falloff.hpp) from a bare JSON object (tests, direct API use).

@@ -2,8 +2,8 @@
 //
 // In the slice of azimuth direction D (towards the occluders), a direction at elevation e is
 // w(e) = (cos e * D, sin e); the receiver normal projects to (nt, nz) = (n.D, n.z). With the solid angle
-// dw = cos e de dphi, the cosine-weighted occluded measure (docs/contract.md) of a band [a, b] of elevations whose
-// rays all hit a vertical slab at horizontal distance x (P4's slab model, Timonen 2013) is
+// dw = cos e de dphi, the cosine-weighted occluded measure (docs/contract.md) of a band [a, b] of elevations
+// whose rays all hit a vertical slab at horizontal distance x (P4's slab model, Timonen 2013) is
 //     C = integral_a^b rho(x / cos e) max(0, nt cos e + nz sin e) cos e de
 // and the obscurance of K equally weighted slices is 1 - (2/K) sum_k sum_bands C. The uniform (solid-angle,
 // HBAO) measure is U = integral over [max(a, t), b] of rho(x / cos e) cos e de with t the tangent elevation,

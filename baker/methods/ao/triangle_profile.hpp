@@ -1,6 +1,6 @@
 // The reference's surface along one slice: the height field's triangulation (two triangles per quad, split
-// along (i+1, j)-(i, j+1), the reference's surface, docs/contract.md) cut by a vertical plane is a polyline with a
-// vertex at every column, row and diagonal crossing. Marching those vertices (with the segment band
+// along (i+1, j)-(i, j+1), the reference's surface, docs/contract.md) cut by a vertical plane is a polyline
+// with a vertex at every column, row and diagonal crossing. Marching those vertices (with the segment band
 // integrals of slice_integral.hpp) gives the exact slice integral of that surface.
 #pragma once
 

@@ -28,7 +28,8 @@ struct Domain {
 };
 
 // Summed-area table with C channels over the padded domain: S(x, y) = sum of the values of texels
-// [0, x) x [0, y); box sums are exact up to double rounding (double: differences of large prefix sums lose float precision).
+// [0, x) x [0, y); box sums are exact up to double rounding (double: differences of large prefix sums lose
+// float precision).
 template <int C>
 struct Sat {
   int w = 0, h = 0;

@@ -4,8 +4,8 @@
 // Footprint: the (2b + 1)^2 texels around the receiver (b = radius / texel_size, rounded), clipped at clamped
 // borders (the counts renormalise), wrapped on repeating fields. The field's texels are split into height
 // layers adaptively: a texel goes to the upper child of its layer when it lies above its layer's mean over
-// its own footprint (the thesis' §4.4), `levels` times (4 leaf layers = 2 splits, the paper's choice). Per leaf
-// layer a summed-area table of (x, y, z, count) gives the layer's mean position m_i in the receiver's
+// its own footprint (the thesis' §4.4), `levels` times (4 leaf layers = 2 splits, the paper's choice). Per
+// leaf layer a summed-area table of (x, y, z, count) gives the layer's mean position m_i in the receiver's
 // footprint; its offset along the normal, delta_i = (m_i - p).n, goes through the response f (0 below the
 // tangent plane, a ramp to 1 at the box height h, a linear fade to 0 over F above it: the thesis' shader,
 // App. A.2); the occlusion is sum_i f(delta_i) n_i / sum_i n_i and the output obscurance is 1 - occlusion.
