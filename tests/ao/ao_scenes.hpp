@@ -1,4 +1,4 @@
-// Closed-form test scenes of the obscurance digest (section 0.3) as height fields, and their expected
+// Closed-form test scenes as height fields, and their expected
 // values computed here independently of the code under test.
 #pragma once
 

@@ -1,4 +1,4 @@
-// One table of every method of this folder on the closed-form scenes of the digest (section 0.3), with the
+// One table of every method of this folder on the closed-form scenes (ao_scenes.hpp), with the
 // tolerance each must meet; printed for the closing note. Truths come from ao_scenes.hpp (independent
 // quadrature of the closed forms), never from the code under test.
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
-// Far-field ambient obscurance (P4): the slab table against direct integration, the closed-form scenes of
-// the digest (section 0.3: pit and wall with and without falloff, flat and tilted planes), and the
+// Far-field ambient obscurance (P4): the slab table against direct integration, the closed-form scenes
+// (ao_scenes.hpp: pit and wall with and without falloff, flat and tilted planes), and the
 // far-field approximation (virtual points, pyramid, sector averaging) against the exact march.
 #include <gtest/gtest.h>
 
@@ -113,7 +113,7 @@ TEST(Farfield, PitClosedForm) {
       }
     }
   }
-  EXPECT_NEAR(pit_closed_form(1, 1, 1), 0.212318, 1e-6);  // the digest's table
+  EXPECT_NEAR(pit_closed_form(1, 1, 1), 0.212318, 1e-6);  // the closed form, evaluated independently
   EXPECT_NEAR(pit_closed_form(1, 1, 4), 0.372294, 1e-6);
 }
 

@@ -1,5 +1,5 @@
-// hsao against the closed-form scenes (digest 0.3) and the height-field fact that the sampled term above the
-// horizon vanishes for an upward normal (digest 4.7).
+// hsao against the closed-form scenes and the height-field fact that the sampled term above the
+// horizon vanishes for an upward normal.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,6 +1,5 @@
 // hsao with tilted normals, where the (n, T) planes are not vertical and the rays above the horizon matter,
-// against an independent brute-force cosine-weighted ray march with the same binary radius (digest 4.7 test
-// 3).
+// against an independent brute-force cosine-weighted ray march with the same binary radius.
 #include <gtest/gtest.h>
 
 #include <cmath>

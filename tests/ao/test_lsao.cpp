@@ -112,7 +112,7 @@ TEST(Lsao, PlanesAreOpen) {
     const HeightField f = make_procedural(s, 1.0, Wrap::clamp);
     for (auto w : {ObscuranceWeighting::uniform, ObscuranceWeighting::cosine}) {
       // With rho = 1 and sin t = -1 opposite directions cancel exactly (sin e and -sin e); with a falloff
-      // the fixed tangent makes every direction <= 0 on a plane (digest 0.3 C), clamped to open.
+      // the fixed tangent makes every direction <= 0 on a plane, clamped to open.
       // (Texels next to a clamp border: a direction with no sample behind gives the no-occluder value Wt.)
       LsaoOptions o = options(16, FalloffKind::none, 0, -1.0, w);
       const auto mean = lsao_mean_occlusion(f, o, RunControl{});

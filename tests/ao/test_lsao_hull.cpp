@@ -81,7 +81,7 @@ TEST(LsaoHull, WithoutFalloffItIsTheGlobalHorizon) {
 }
 
 // Closed form: a pit floor (depth D) ending in a vertical wall at distance R from the receiver. With rho=1
-// and uniform weighting the receiver's value is sin e, e = atan(D / R); cosine gives sin^2 e (digest 0.3 A).
+// and uniform weighting the receiver's value is sin e, e = atan(D / R); cosine gives sin^2 e.
 TEST(LsaoHull, WallOfAPit) {
   std::vector<SlicePoint> pts;
   for (int i = 0; i <= 10; ++i) pts.push_back({double(i), 0.0});     // the rim plateau

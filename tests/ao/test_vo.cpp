@@ -87,7 +87,7 @@ TEST(Vo, PlanesAreOpenWithEveryLayering) {
 
 // Pit of radius 8, depth 6, receiver at the floor's centre, footprint half-width 12: the footprint's ground
 // fraction g is occluded at f(6); brute force g f(D), one layer f(g D) (the halo), adaptive layers separate
-// the rim from the floor and match brute force (digest 3.7 test 3).
+// the rim from the floor and match brute force.
 TEST(Vo, PitClosedForm) {
   const HeightField f = test::make_pit(49, 8, 6);
   int ground = 0, count = 0;
