@@ -5,8 +5,8 @@ bakes them: image in (OpenImageIO), hfbake.p1 on a repeat field, 16-bit PNGs out
     texture_from_image.py HEIGHT.png OUT_PREFIX [--height-scale S] [--directions K]
 
 Writes OUT_PREFIX_ao.png (16-bit grey, ao) and OUT_PREFIX_bent_normal.png (16-bit RGB, 0.5 + 0.5 n). The
-heights are the image's first channel as OpenImageIO reads it (0..1 for integer images) times
---height-scale, in texels.
+heights are the image's first channel as stored (an integer image's integers, as `hfbake bake` reads them:
+docs/heights.md) times --height-scale, in texels: a 16-bit map spanning H texels of height takes H / 65535.
 
 Inside Blender the image comes from bpy instead of OpenImageIO:
 
@@ -46,7 +46,8 @@ def main():
     if inp is None:
         raise SystemExit(oiio.geterror())
     spec = inp.spec()
-    heights = inp.read_image("float").reshape(spec.height, spec.width, spec.nchannels)[:, :, 0].copy()
+    stored = inp.read_image(spec.format)  # integers as stored, not scaled to 0..1
+    heights = np.asarray(stored).reshape(spec.height, spec.width, spec.nchannels)[:, :, 0].astype(np.float32)
     inp.close()
 
     layers = hfbake.p1(heights, height_scale=args.height_scale, wrap="repeat", directions=args.directions,

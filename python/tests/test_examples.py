@@ -62,6 +62,9 @@ def read_png(path):
     return pixels
 
 
+SCALE = 24.0 / 65535.0  # the 16-bit levels back to the 24 texels of relief they span
+
+
 def test_texture_from_image_example(tmp_path):
     levels = np.round((terrain(32, 32, seed=17) + 12.0) / 24.0 * 65535.0).clip(0, 65535).astype(np.uint16)
     image = tmp_path / "height.png"
@@ -70,10 +73,10 @@ def test_texture_from_image_example(tmp_path):
     out.write_image(levels.reshape(32, 32, 1))
     out.close()
     script = SOURCE_DIR / "python" / "examples" / "texture_from_image.py"
-    subprocess.run([sys.executable, str(script), str(image), str(tmp_path / "rock"), "--height-scale", "8",
+    subprocess.run([sys.executable, str(script), str(image), str(tmp_path / "rock"), "--height-scale", repr(SCALE),
                     "--directions", "16"], check=True)
 
-    job = {"version": 1, "name": "t", "height": {"image": "height.png", "height_scale": 8.0, "wrap": "repeat"},
+    job = {"version": 1, "name": "t", "height": {"image": "height.png", "height_scale": SCALE, "wrap": "repeat"},
            "bake": [{"method": "p1", "directions": 16, "layers": ["ao", "bent_normal"]}],
            "output": {"pixel_type": "float"}}
     (tmp_path / "job.json").write_text(json.dumps(job))
