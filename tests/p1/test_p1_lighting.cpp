@@ -575,8 +575,9 @@ void lights_shadow_as_the_exact_march(double tau) {
         if (std::fabs(r.direct_at(idx).r - want) > 1e-5 * (1 + want)) ++wrong;
       }
     EXPECT_EQ(wrong, 0) << "light [" << v.x << ", " << v.y << ", " << v.z << "] tolerance " << tau;
-    EXPECT_GT(lit, 100);
-    EXPECT_GT(shadowed, 100);
+    // Both outcomes well represented (fewer with a tolerance: the texels it leaves open are not counted).
+    EXPECT_GT(lit, tau > 0 ? 50 : 100);
+    EXPECT_GT(shadowed, tau > 0 ? 50 : 100);
   }
 }
 
