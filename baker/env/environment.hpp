@@ -23,7 +23,8 @@ struct DirectionalLight {
 // rotation already applied. Either uniform, or a world-frame lat-long image:
 //   row r covers polar angle theta in [pi r / height, pi (r + 1) / height) measured from +z,
 //   column c covers azimuth phi in [2 pi c / width, 2 pi (c + 1) / width) measured from +x towards +y,
-//   width == 2 * height. (How the EXR lat-long / cube / cross conventions map into this: docs/environment.md.)
+//   width == 2 * height. (How the EXR lat-long / cube / cross conventions map into this:
+//   docs/environment.md.)
 // levels[0] is full resolution; levels[m] is a 2x box reduction of levels[m - 1] (for filtered lookups),
 // solid-angle weighted. A uniform environment also carries a small constant lat-long (16 x 8), so code that
 // integrates texel by texel works for both kinds; `uniform` lets methods take a fast path.

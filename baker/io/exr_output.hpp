@@ -34,8 +34,8 @@ void write_exr(const std::filesystem::path& file, const LayerSet& layers, const 
 
 // The compression a job gets when its output names none: "piz" for a file holding a per-direction stack
 // (horizon, horizon_distance, horizon_deg: many channels of smooth float data, where PIZ writes about twice
-// as fast as ZIP in half and three times in float, and smaller in float; docs/large-fields.md, "EXR outputs"), "zip" for
-// the rest (lossless, the smallest half files of scalars and colours).
+// as fast as ZIP in half and three times in float, and smaller in float; docs/large-fields.md, "EXR
+// outputs"), "zip" for the rest (lossless, the smallest half files of scalars and colours).
 std::string default_exr_compression(const LayerSet& layers);
 
 // Starts (or resizes) OpenEXR's process-wide thread pool to `threads` workers (0: none, everything in the

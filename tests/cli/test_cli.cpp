@@ -433,14 +433,16 @@ TEST_F(Cli, EveryExampleJobValidates) {
   std::string files;
   int count = 0;
   const fs::path root(HFBAKE_SOURCE_DIR);
-  for (const fs::path dir : {root / "jobs", root / "jobs" / "examples", root / "bench", root / "tests" / "accuracy"})
+  for (const fs::path dir :
+       {root / "jobs", root / "jobs" / "examples", root / "bench", root / "tests" / "accuracy"})
     for (const auto& e : fs::directory_iterator(dir))
       if (e.path().extension() == ".json") {
         // The lidar job reads the DEM beside the repository (../shared/data), which a checkout may not
         // have: such a job is left out, saying so, rather than failing the others.
         std::ifstream in(e.path());
         const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
-        const std::string image = doc.is_object() ? doc.value("/height/image"_json_pointer, std::string()) : "";
+        const std::string image =
+            doc.is_object() ? doc.value("/height/image"_json_pointer, std::string()) : "";
         if (image.find("shared/data/") != std::string::npos && !fs::exists(e.path().parent_path() / image)) {
           std::printf("skipping %s: %s is not on this machine\n", e.path().filename().c_str(), image.c_str());
           continue;

@@ -1,7 +1,7 @@
-// The environment tables of docs/environment.md end to end (the hfbake binary): a bright patch a few degrees above the
-// horizon in the image region docs/environment.md says looks north on a north-up raster (world -y) lights the
-// 20-degree slope that faces north and not the one that faces south (whose plane hides everything below
-// 20 degrees to the north), for a lat-long, a cube map and a cross. The truth is geometry: only the
+// The environment tables of docs/environment.md end to end (the hfbake binary): a bright patch a few degrees
+// above the horizon in the image region docs/environment.md says looks north on a north-up raster (world -y)
+// lights the 20-degree slope that faces north and not the one that faces south (whose plane hides everything
+// below 20 degrees to the north), for a lat-long, a cube map and a cross. The truth is geometry: only the
 // slope facing the patch can see it.
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

@@ -133,9 +133,9 @@ json write_cube(const TempFolder& dir, const std::vector<std::vector<float>>& fa
 }
 
 TEST(LoadEnvironment, CubeFacePatchLandsAtTheDocumentedDirection) {
-  // docs/environment.md's table, per face: the world direction it looks at, image right, image up. The patch covers
-  // a, b in [0.25, 0.75] (right, up) of the face; its light centroid is the solid-angle-weighted mean of
-  // normalize(center + a right + b up) over that square, integrated here on a fine grid.
+  // docs/environment.md's table, per face: the world direction it looks at, image right, image up. The patch
+  // covers a, b in [0.25, 0.75] (right, up) of the face; its light centroid is the solid-angle-weighted mean
+  // of normalize(center + a right + b up) over that square, integrated here on a fine grid.
   const struct {
     int face;
     Vec3 center, right, up;

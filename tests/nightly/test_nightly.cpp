@@ -216,7 +216,8 @@ TEST_F(Nightly, NightlyJobsAreValid) {
   // repository (../shared/data, through tests/nightly/data/dem_400_300_160.vrt), which a checkout may not
   // have: the suite's "needs" entry then skips it with a notice, and the suite stays valid.
   const fs::path nightly = fs::path(HFBAKE_SOURCE_DIR) / "tests" / "nightly";
-  const bool have_dem = fs::exists(fs::path(HFBAKE_SOURCE_DIR) / ".." / "shared" / "data" / "TM1_564_146.tif");
+  const bool have_dem =
+      fs::exists(fs::path(HFBAKE_SOURCE_DIR) / ".." / "shared" / "data" / "TM1_564_146.tif");
   const Result r = hfbake("validate " + (nightly / "suite.json").string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find(have_dem ? "suite of 12 jobs" : "suite of 11 jobs"), std::string::npos) << r.err;
@@ -238,8 +239,7 @@ TEST_F(Nightly, SuiteSkipsAJobWhoseDataIsMissing) {
   const nlohmann::json suite = {
       {"version", 1},
       {"suite", "s"},
-      {"jobs",
-       {"fields/*.json", {{"job", "fields/b.json"}, {"needs", {"present.bin", "absent/data.tif"}}}}},
+      {"jobs", {"fields/*.json", {{"job", "fields/b.json"}, {"needs", {"present.bin", "absent/data.tif"}}}}},
       {"output", {{"dir", "out"}}}};
   std::ofstream(dir / "suite.json") << suite.dump();
   Result r = hfbake("validate " + (dir / "suite.json").string());

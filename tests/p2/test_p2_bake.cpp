@@ -300,8 +300,8 @@ TEST(P2Bake, VTrenchBouncesMatch2DRadiosity) {
 // receivers get exactly nothing (black sky, albedo 0, wall not emitting), while the ground between the
 // strip and the wall sees the strip's top and edge.
 // Per bounce against the Embree reference on a field rough at the texel scale (the white furnace of
-// tests/accuracy/p2_furnace.json: its finest octave is per-texel noise). The reference shades every hit with its
-// facet's normal; with facet senders P2 does too, and each bounce's field mean agrees within a few %.
+// tests/accuracy/p2_furnace.json: its finest octave is per-texel noise). The reference shades every hit with
+// its facet's normal; with facet senders P2 does too, and each bounce's field mean agrees within a few %.
 // Texel senders (the smoothed normal, as published) miss by 10-20 %: the facets a receiver sees lean
 // towards it, so they see less sky and more of the terrain's light than their texels' normals say.
 TEST(P2Bake, BouncesOnARoughFieldMatchTheReference) {

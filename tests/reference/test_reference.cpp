@@ -69,7 +69,8 @@ Value at(const LayerSet& l, const std::string& name, int i, int j, int c = 0) {
         << "estimate " << v_.v << " +- " << v_.se << ", truth " << (truth); \
   } while (0)
 
-// Height on the triangulation of docs/contract.md (split from (i+1, j) to (i, j+1)), an independent evaluation.
+// Height on the triangulation of docs/contract.md (split from (i+1, j) to (i, j+1)), an independent
+// evaluation.
 double triangulated_height(const HeightField& f, double x, double y) {
   const int i = std::clamp(int(std::floor(x)), 0, f.width - 2),
             j = std::clamp(int(std::floor(y)), 0, f.height - 2);

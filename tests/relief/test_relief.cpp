@@ -1,6 +1,7 @@
 // relief's quantities against independent truth: closed forms on planes and on a step (the triangulation
 // represents both exactly), and on the 1 m lidar DEM a brute-force ray sampling written here from the
-// reference's triangulation (docs/contract.md: the split from (i+1, j) to (i, j+1)) with 512 samples per texel of distance.
+// reference's triangulation (docs/contract.md: the split from (i+1, j) to (i, j+1)) with 512 samples per
+// texel of distance.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 
@@ -114,8 +115,9 @@ TEST(Relief, RepeatFieldsSeeAcrossTheSeam) {
 
 // --- the lidar DEM against dense sampling -------------------------------------------------------------
 
-// The triangulated surface of docs/contract.md at continuous texel coordinates, written out here: quad (i, j), the
-// lower triangle (i, j), (i+1, j), (i, j+1) when fx + fy <= 1, else the upper (i+1, j+1), (i, j+1), (i+1, j).
+// The triangulated surface of docs/contract.md at continuous texel coordinates, written out here: quad (i,
+// j), the lower triangle (i, j), (i+1, j), (i, j+1) when fx + fy <= 1, else the upper (i+1, j+1), (i, j+1),
+// (i+1, j).
 double surface(const std::vector<float>& z, int w, double x, double y) {
   const int i = int(std::floor(x)), j = int(std::floor(y));
   const double fx = x - i, fy = y - j;

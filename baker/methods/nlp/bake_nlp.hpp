@@ -45,8 +45,8 @@ struct NlpOptions {
   bool exact_direct_cosine = true;
   // Senders of indirect light: true = every texel's two facets of the triangulated surface radiate the
   // light of their own normals, and the stretch a casting-set step reveals radiates from its middle, its
-  // facet's light (with texel-centre senders a cliff face radiates the bright treads at its ends); false = NS09,
-  // the radiance pyramid of texel-centre light read at the casting-set point.
+  // facet's light (with texel-centre senders a cliff face radiates the bright treads at its ends); false =
+  // NS09, the radiance pyramid of texel-centre light read at the casting-set point.
   bool facet_senders = true;
   // > 0: the march samples the unfiltered field at most this many texels apart between knots and each knot
   // keeps the steepest sample (MarchSetup::near_spacing); 0 = NS09, one sample a knot.
