@@ -8,19 +8,23 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
 namespace hfbake_test {
 
 // `hfbake args...` with stderr to `err` and stdout to /dev/null; in `cwd` when given; with `alarm_seconds`, a
-// hang ends in SIGALRM instead of stalling the suite.
+// hang ends in SIGALRM instead of stalling the suite; `in_child` runs in the child just before exec (it knows
+// the process id hfbake will have).
 inline pid_t start_hfbake(const std::vector<std::string>& args, const std::filesystem::path& err,
-                          const std::filesystem::path& cwd = {}, unsigned alarm_seconds = 0) {
+                          const std::filesystem::path& cwd = {}, unsigned alarm_seconds = 0,
+                          const std::function<void()>& in_child = {}) {
   const pid_t pid = fork();
   if (pid == 0) {
     if (!freopen(err.c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout)) _exit(126);
     if (!cwd.empty() && chdir(cwd.c_str()) != 0) _exit(126);
+    if (in_child) in_child();
     if (alarm_seconds) alarm(alarm_seconds);
     std::vector<char*> argv{const_cast<char*>("hfbake")};
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "child_process.hpp"
+
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -46,19 +48,7 @@ std::string read_text(const fs::path& p) {
 // the process id hfbake will have). A hang is killed by SIGALRM after 120 s.
 pid_t start(const fs::path& dir, const std::vector<std::string>& args, const std::string& err_name,
             const std::function<void()>& in_child = {}) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    if (!freopen((dir / err_name).c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout)) _exit(126);
-    if (chdir(dir.c_str()) != 0) _exit(126);
-    if (in_child) in_child();
-    alarm(120);
-    std::vector<char*> argv{const_cast<char*>("hfbake")};
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(HFBAKE_BINARY, argv.data());
-    _exit(127);
-  }
-  return pid;
+  return hfbake_test::start_hfbake(args, dir / err_name, dir, 120, in_child);
 }
 
 Outcome finish(pid_t pid, const fs::path& dir, const std::string& err_name) {
