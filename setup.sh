@@ -124,7 +124,7 @@ case "$mode" in
       # Any finding fails the test that made it (UBSan halts on error, like ASan). Left out, because they
       # cannot run usefully under the sanitizers: docs/development.md, "Sanitizers".
       ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1 \
-        LSAN_OPTIONS=suppressions=$(pwd)/tests/sanitizers/lsan.supp \
+        LSAN_OPTIONS=suppressions=$(pwd)/tests/sanitizers/lsan.supp:print_suppressions=0 \
         UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
         ctest --test-dir "$asan_dir" --output-on-failure -j "$jobs" -LE integration
     fi
