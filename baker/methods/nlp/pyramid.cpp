@@ -1,5 +1,7 @@
 #include "methods/nlp/pyramid.hpp"
 
+#include <Imath/half.h>
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -118,12 +120,10 @@ float half_to_float(std::uint16_t h) {
 }
 
 std::uint16_t float_to_half(float f) {
-  // GCC's _Float16 conversion rounds to nearest even; saturate first so nothing becomes infinite.
+  // Imath's conversion rounds to nearest even (IEEE 754 binary16, as every compiler's own half type);
+  // saturate first so nothing becomes infinite.
   constexpr float kMax = 65504.0f;
-  const _Float16 h = _Float16(std::clamp(f, -kMax, kMax));
-  std::uint16_t bits;
-  std::memcpy(&bits, &h, 2);
-  return bits;
+  return Imath::half(std::clamp(f, -kMax, kMax)).bits();
 }
 
 namespace {
