@@ -101,6 +101,10 @@ struct ChainPoint {
   double near_s = 0, near_z = 0;
   double zmax = 0;
   int index = 0;  // WindowHull: the sample index
+  // The highest of z and near_z over the point's block of its hull: the stack positions
+  // [i + 1 - lowbit(i + 1), i] of its position i (a Fenwick tree's ranges, so a query passes over a block
+  // that cannot rise in one test: O(log) blocks cover the rest of a walk).
+  double bmax = 0;
 };
 
 // One line's hull. Reuse one per thread (clear() keeps the capacity).
@@ -110,10 +114,7 @@ class ChainHull {
   void clear() { stack_.clear(); }
   // Prunes the top for receiver p (a line sample); returns the loop tests.
   std::size_t prune(SlicePoint p, const Falloff& rho, double tolerance);
-  void push(SlicePoint p) {
-    const double below = stack_.empty() ? p.z : stack_.back().zmax;
-    stack_.push_back({p.s, p.z, p.s, p.z, std::max(below, p.z), 0});
-  }
+  void push(SlicePoint p);
   std::size_t size() const { return stack_.size(); }
   // Adds the chain of receiver p (not necessarily a sample), without popping; support: the falloff's. Points
   // nearer than `near` (world units along the line) are left out (lsao's near field marched them).
