@@ -53,10 +53,8 @@ double chain_band(const Falloff& rho, Weighting w, const SliceFrame& s, double a
 
 }  // namespace
 
-void TangentChain::add(double hs, double hz, double x) {
-  const SliceVec from = prev, at{hs, hz};
-  prev = at;
-  if (!(hz > slope_max * hs)) return;
+void TangentChain::rise(double hs, double hz, double x, SliceVec from) {
+  const SliceVec at{hs, hz};
   if (degree_ >= 0) return add_closed(hs, hz, x, from, at);
   const double e = std::atan2(hz, hs);
   if (!(e > e_max)) return;  // rounding at the same elevation
@@ -87,9 +85,50 @@ void TangentChain::add(double hs, double hz, double x) {
 // band_direction and (segments inside the radius) segment_band_occlusion, each band end evaluated once.
 // Coalescing (segments, `coalesce` > 0): consecutive rising points whose bands would be weighted alike are
 // held as one pending band from e_max up to the last of them, integrated once at the next band or finish().
+namespace {
+
+// The unit vector towards (h, v).
+SliceVec unit(double h, double v) {
+  const double r = std::sqrt(h * h + v * v);
+  return {h / r, v / r};
+}
+
+// Where the band from elevation (ca, sa) (unit) up to point `at` meets the segment from `from` to `at`:
+// the horizontal distance at which its middle ray (the sum of the ends' unit vectors; the distance does not
+// depend on its length) crosses the segment, within it.
+double middle_ray_distance(double ca, double sa, SliceVec at_unit, SliceVec from, SliceVec at) {
+  const double ce = ca + at_unit.h, se = sa + at_unit.v;
+  const double dh = at.h - from.h, dv = at.v - from.v, den = ce * dv - se * dh;
+  const double t = den > 0 ? (from.h * dv - from.v * dh) / den * ce : at.h;
+  return std::clamp(t, from.h, at.h);
+}
+
+}  // namespace
+
+void TangentChain::resolve() {
+  if (!lazy_) return;
+  lazy_ = false;
+  const SliceVec u = unit(pend_hs_, pend_hz_), b = unit(before_.h, before_.v);
+  pend_c_ = u.h, pend_s_ = u.v;
+  pend_x1_ = middle_ray_distance(b.h, b.v, u, pend_from_, {pend_hs_, pend_hz_});
+}
+
 void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, SliceVec at) {
-  const double r = std::sqrt(hs * hs + hz * hz), c = hs / r, sn = hz / r;
   const bool exact = segments && (rho.kind == FalloffKind::none || rho.kind == FalloffKind::step);
+  if (pending_ && segments && !exact && coalesce > 0 && from.h >= pend_x0_) {
+    // The band's distance lies in [from.h, hs], beyond pend_x0_: rho there is within `coalesce` of
+    // rho(pend_x0_) when it is at hs (the test below, which add_closed's own then passes too).
+    if (hs <= checked_ || rho_x0_ - rho(hs) <= coalesce) {
+      checked_ = std::max(checked_, hs);
+      slope_max = hz / hs;
+      before_ = {pend_hs_, pend_hz_};
+      pend_hs_ = hs, pend_hz_ = hz, pend_from_ = from;
+      lazy_ = true;
+      return;
+    }
+  }
+  resolve();
+  const double r = std::sqrt(hs * hs + hz * hz), c = hs / r, sn = hz / r;
   const bool radius = rho.kind != FalloffKind::none;
   if (exact && radius && !(from.h * from.h + from.v * from.v < rho.radius * rho.radius && r < rho.radius)) {
     // A segment that leaves the step's radius: its part inside (segment_band_occlusion's support).
@@ -111,12 +150,9 @@ void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, Sli
   if (exact) {
     x = 0;  // inside the radius: rho = 1 along the segment, bands add exactly
   } else if (segments) {
-    // The slab moved to where the band's middle ray meets the segment (within it); the middle ray's
-    // direction is the sum of the ends' unit vectors (the distance below does not depend on its length).
-    const double ce = (pending_ ? pend_c_ : c_max_) + c, se = (pending_ ? pend_s_ : s_max_) + sn;
-    const double dh = at.h - from.h, dv = at.v - from.v, den = ce * dv - se * dh;
-    const double t = den > 0 ? (from.h * dv - from.v * dh) / den * ce : at.h;
-    x = std::clamp(t, from.h, at.h);
+    // The slab moved to where the band's middle ray meets the segment (within it).
+    x = pending_ ? middle_ray_distance(pend_c_, pend_s_, {c, sn}, from, at)
+                 : middle_ray_distance(c_max_, s_max_, {c, sn}, from, at);
   }
   slope_max = hz / hs;
   if (pending_ && coalesce > 0 && (exact || std::abs(rho(x) - rho(pend_x0_)) <= coalesce)) {
@@ -126,6 +162,7 @@ void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, Sli
   finish();
   pending_ = true;
   pend_hs_ = hs, pend_hz_ = hz, pend_c_ = c, pend_s_ = sn, pend_x0_ = pend_x1_ = x;
+  rho_x0_ = rho(x), checked_ = x;
   if (!(coalesce > 0)) finish();
 }
 
@@ -140,6 +177,7 @@ void TangentChain::commit(double e, double c, double sn, const SlabPrimitives* a
 
 void TangentChain::finish() {
   if (!pending_) return;
+  resolve();
   pending_ = false;
   const double e = std::atan2(pend_hz_, pend_hs_), c = pend_c_, sn = pend_s_;
   if (!(e > e_max)) return;  // rounding at the same elevation

@@ -71,7 +71,11 @@ struct TangentChain {
   TangentChain(const Falloff& f, Weighting w, const SliceFrame& slice);
   // A point at (hs > 0, hz) from the receiver standing for the profile's stretch at horizontal distances
   // around x: adds the band from the chain's elevation up to its own, if it rises above it.
-  void add(double hs, double hz, double x);
+  void add(double hs, double hz, double x) {
+    const SliceVec from = prev;
+    prev = {hs, hz};
+    if (hz > slope_max * hs) rise(hs, hz, x, from);
+  }
   // Coalescing (segments only; 0: off): a rising point whose band's rho is within `coalesce` of the pending
   // band's first is added to it (falloffs none and step inside the radius: always, the bands then add
   // exactly). finish() integrates what is pending: call it before reading sum and direction.
@@ -89,7 +93,17 @@ struct TangentChain {
   // first and last points' bands.
   bool pending_ = false;
   double pend_hs_ = 0, pend_hz_ = 0, pend_c_ = 1, pend_s_ = 0, pend_x0_ = 0, pend_x1_ = 0;
+  // A pending band's later points whose band ends all lie where rho is within `coalesce` of rho(pend_x0_)
+  // (rho is monotone, so whatever distance their middle ray meets) are held without their unit vectors and
+  // distances: `lazy_` until resolve() finds the top's from the top, the point before it (before_) and the
+  // segment's start (pend_from_), as add_closed would have. rho_x0_: rho(pend_x0_); checked_: the farthest
+  // distance whose rho was found within `coalesce` of it.
+  bool lazy_ = false;
+  double rho_x0_ = 0, checked_ = 0;
+  SliceVec before_, pend_from_;
+  void rise(double hs, double hz, double x, SliceVec from);
   void add_closed(double hs, double hz, double x, SliceVec from, SliceVec at);
+  void resolve();
   void commit(double e, double c, double sn, const SlabPrimitives* at_e);
 };
 
