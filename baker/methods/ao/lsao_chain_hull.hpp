@@ -65,7 +65,7 @@ struct TangentChain {
   // closed form at the horizontal distance where the band's middle ray meets the segment.
   bool segments = false;
   SliceVec prev;  // the point added last, relative to the receiver
-  // Work counters (LsaoStats): hull points walked by queries, bands added.
+  // Work counters (LsaoStats): the walks' steps over the hulls (a skipped block one step), bands added.
   unsigned walked = 0, bands = 0;
 
   TangentChain(const Falloff& f, Weighting w, const SliceFrame& slice);
