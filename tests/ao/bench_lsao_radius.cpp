@@ -7,8 +7,8 @@
 // Args {field size, radius in texels}, R = 4 ... 1024 at 256^2 and 512^2 (a clamp field: beyond the field's
 // size the radius reaches no farther). One thread (texel-directions per CPU-second hold on a loaded
 // machine; the sweep parallelises over lines). Counters: texel_dirs_per_s (texels x K / CPU time), and per
-// texel-direction query the hull points its walks visited (walked) and the bands it added (bands, near field
-// included): the work that must stay flat as R grows.
+// texel-direction query the steps its walks over the hulls took (walked; a skipped block of points one step)
+// and the bands it added (bands, near field included): the work that must stay flat as R grows.
 #include <benchmark/benchmark.h>
 
 #include <tbb/global_control.h>

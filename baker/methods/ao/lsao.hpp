@@ -88,8 +88,8 @@ struct LsaoOptions {
 struct LsaoStats {
   std::uint64_t samples = 0;     // line samples swept (receivers and warm-up, over all directions)
   std::uint64_t iterations = 0;  // hull loop tests (P3: between samples and 2 x samples)
-  // Receiver tangent: texel-direction queries, the hull points their walks visited and the bands they added
-  // (near field included).
+  // Receiver tangent: texel-direction queries, the steps their walks over the hulls took (a skipped block of
+  // points one step) and the bands they added (near field included).
   std::uint64_t queries = 0, walked = 0, bands = 0;
 };
 

@@ -1,6 +1,7 @@
 #include "methods/ao/lsao_chain_hull.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace hfbake {
@@ -52,10 +53,8 @@ double chain_band(const Falloff& rho, Weighting w, const SliceFrame& s, double a
 
 }  // namespace
 
-void TangentChain::add(double hs, double hz, double x) {
-  const SliceVec from = prev, at{hs, hz};
-  prev = at;
-  if (!(hz > slope_max * hs)) return;
+void TangentChain::rise(double hs, double hz, double x, SliceVec from) {
+  const SliceVec at{hs, hz};
   if (degree_ >= 0) return add_closed(hs, hz, x, from, at);
   const double e = std::atan2(hz, hs);
   if (!(e > e_max)) return;  // rounding at the same elevation
@@ -86,9 +85,50 @@ void TangentChain::add(double hs, double hz, double x) {
 // band_direction and (segments inside the radius) segment_band_occlusion, each band end evaluated once.
 // Coalescing (segments, `coalesce` > 0): consecutive rising points whose bands would be weighted alike are
 // held as one pending band from e_max up to the last of them, integrated once at the next band or finish().
+namespace {
+
+// The unit vector towards (h, v).
+SliceVec unit(double h, double v) {
+  const double r = std::sqrt(h * h + v * v);
+  return {h / r, v / r};
+}
+
+// Where the band from elevation (ca, sa) (unit) up to point `at` meets the segment from `from` to `at`:
+// the horizontal distance at which its middle ray (the sum of the ends' unit vectors; the distance does not
+// depend on its length) crosses the segment, within it.
+double middle_ray_distance(double ca, double sa, SliceVec at_unit, SliceVec from, SliceVec at) {
+  const double ce = ca + at_unit.h, se = sa + at_unit.v;
+  const double dh = at.h - from.h, dv = at.v - from.v, den = ce * dv - se * dh;
+  const double t = den > 0 ? (from.h * dv - from.v * dh) / den * ce : at.h;
+  return std::clamp(t, from.h, at.h);
+}
+
+}  // namespace
+
+void TangentChain::resolve() {
+  if (!lazy_) return;
+  lazy_ = false;
+  const SliceVec u = unit(pend_hs_, pend_hz_), b = unit(before_.h, before_.v);
+  pend_c_ = u.h, pend_s_ = u.v;
+  pend_x1_ = middle_ray_distance(b.h, b.v, u, pend_from_, {pend_hs_, pend_hz_});
+}
+
 void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, SliceVec at) {
-  const double r = std::sqrt(hs * hs + hz * hz), c = hs / r, sn = hz / r;
   const bool exact = segments && (rho.kind == FalloffKind::none || rho.kind == FalloffKind::step);
+  if (pending_ && segments && !exact && coalesce > 0 && from.h >= pend_x0_) {
+    // The band's distance lies in [from.h, hs], beyond pend_x0_: rho there is within `coalesce` of
+    // rho(pend_x0_) when it is at hs (the test below, which add_closed's own then passes too).
+    if (hs <= checked_ || rho_x0_ - rho(hs) <= coalesce) {
+      checked_ = std::max(checked_, hs);
+      slope_max = hz / hs;
+      before_ = {pend_hs_, pend_hz_};
+      pend_hs_ = hs, pend_hz_ = hz, pend_from_ = from;
+      lazy_ = true;
+      return;
+    }
+  }
+  resolve();
+  const double r = std::sqrt(hs * hs + hz * hz), c = hs / r, sn = hz / r;
   const bool radius = rho.kind != FalloffKind::none;
   if (exact && radius && !(from.h * from.h + from.v * from.v < rho.radius * rho.radius && r < rho.radius)) {
     // A segment that leaves the step's radius: its part inside (segment_band_occlusion's support).
@@ -110,12 +150,9 @@ void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, Sli
   if (exact) {
     x = 0;  // inside the radius: rho = 1 along the segment, bands add exactly
   } else if (segments) {
-    // The slab moved to where the band's middle ray meets the segment (within it); the middle ray's
-    // direction is the sum of the ends' unit vectors (the distance below does not depend on its length).
-    const double ce = (pending_ ? pend_c_ : c_max_) + c, se = (pending_ ? pend_s_ : s_max_) + sn;
-    const double dh = at.h - from.h, dv = at.v - from.v, den = ce * dv - se * dh;
-    const double t = den > 0 ? (from.h * dv - from.v * dh) / den * ce : at.h;
-    x = std::clamp(t, from.h, at.h);
+    // The slab moved to where the band's middle ray meets the segment (within it).
+    x = pending_ ? middle_ray_distance(pend_c_, pend_s_, {c, sn}, from, at)
+                 : middle_ray_distance(c_max_, s_max_, {c, sn}, from, at);
   }
   slope_max = hz / hs;
   if (pending_ && coalesce > 0 && (exact || std::abs(rho(x) - rho(pend_x0_)) <= coalesce)) {
@@ -125,6 +162,7 @@ void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, Sli
   finish();
   pending_ = true;
   pend_hs_ = hs, pend_hz_ = hz, pend_c_ = c, pend_s_ = sn, pend_x0_ = pend_x1_ = x;
+  rho_x0_ = rho(x), checked_ = x;
   if (!(coalesce > 0)) finish();
 }
 
@@ -139,6 +177,7 @@ void TangentChain::commit(double e, double c, double sn, const SlabPrimitives* a
 
 void TangentChain::finish() {
   if (!pending_) return;
+  resolve();
   pending_ = false;
   const double e = std::atan2(pend_hz_, pend_hs_), c = pend_c_, sn = pend_s_;
   if (!(e > e_max)) return;  // rounding at the same elevation
@@ -195,27 +234,76 @@ void merge(ChainPoint& b, const ChainPoint& a) {
   b.zmax = std::max(b.zmax, a.near_z);
 }
 
-// Walks points[0], points[stride], ... (nearest first, `count` of them) for receiver p; zmax_of(k): the
-// highest height of point k and everything after it.
+// The block of a hull held as a stack whose positions 0 .. i are farthest first or nearest first: positions
+// [i + 1 - block_span(i), i] (the ranges of a Fenwick tree; a block's summary depends only on the positions
+// at or below its own, which pushes and pops above it leave as they are).
+std::size_t block_span(std::size_t i) {
+  return (i + 1) & ~i;
+}
+
+// Sets points[i].bmax from the point itself and the summaries of the blocks that tile the rest of its block.
+void summarise_block(ChainPoint* points, std::size_t i) {
+  double m = std::max(points[i].z, points[i].near_z);
+  const std::ptrdiff_t first = std::ptrdiff_t(i + 1 - block_span(i));
+  for (std::ptrdiff_t j = std::ptrdiff_t(i) - 1; j >= first; j -= std::ptrdiff_t(block_span(std::size_t(j))))
+    m = std::max(m, points[j].bmax);
+  points[i].bmax = m;
+}
+
+// Walks hull.point(0), hull.point(1), ... (nearest first, `count` of them) for receiver p; hull.zmax(k): the
+// highest height of point k and everything after it; hull.block(k, &bmax): how many points from k on form a
+// block (bmax: the highest of their heights and near ends), 1 when none larger starts at k.
 // Points (and merged near ends) nearer than `near` are left out: the caller has marched them.
-template <class ZMax>
-void walk(const ChainPoint* points, std::ptrdiff_t count, std::ptrdiff_t stride, SlicePoint p, double support,
-          double near, TangentChain& chain, const ZMax& zmax_of) {
-  for (std::ptrdiff_t k = 0; k < count; ++k) {
-    const ChainPoint& q = points[k * stride];
+template <class Hull>
+void walk(const Hull& hull, std::ptrdiff_t count, SlicePoint p, double support, double near,
+          TangentChain& chain) {
+  // Nothing from point k on is nearer than its near end nor higher than zmax: the walk ends when that cannot
+  // rise (a point at distance d rises when it is higher than slope_max d: with the horizon still below the
+  // horizontal, lower points farther on can). Once true it stays true farther on while nothing rises.
+  auto ends = [&](std::ptrdiff_t k) {
+    return chain.slope_max >= 0 && !(hull.zmax(k) - p.z > chain.slope_max * (p.s - hull.point(k).near_s));
+  };
+  // A point not rising changes only the segment's start (TangentChain::prev): its own position.
+  auto passed = [&](std::ptrdiff_t k) { chain.prev = {p.s - hull.point(k).s, hull.point(k).z - p.z}; };
+  for (std::ptrdiff_t k = 0; k < count;) {
+    const ChainPoint& q = hull.point(k);
     ++chain.walked;
-    // Nothing from here on is nearer than q's near end nor higher than zmax: stop when that cannot rise
-    // (a point at distance d rises when it is higher than slope_max d: with the horizon still below the
-    // horizontal, lower points farther on can).
-    const double nearest = p.s - q.near_s;
-    if (chain.slope_max >= 0 && !(zmax_of(k) - p.z > chain.slope_max * nearest)) break;
-    const double hs = p.s - q.s;
+    if (ends(k)) break;
+    const double nearest = p.s - q.near_s, hs = p.s - q.s;
     if (nearest > support) {
       // With segments the first point beyond the support ends the segment that crosses it.
       if (chain.segments && hs >= near) chain.add(nearest, q.near_z - p.z, nearest);
       break;
     }
-    if (hs < near) continue;
+    if (hs < near) {
+      ++k;
+      continue;
+    }
+    // The block from q on, all within the support, is passed over in one test when none of its points can
+    // rise: below slope_max times its nearest distance (or, with the horizon below the horizontal, its
+    // farthest). The same comparisons as the points' own (TangentChain::add), so the sum is the same.
+    double bmax = 0;
+    const std::ptrdiff_t len = hull.block(k, &bmax);
+    if (len > 1) {
+      const std::ptrdiff_t last = k + len - 1;
+      const ChainPoint& far = hull.point(last);
+      const double bound = chain.slope_max * (chain.slope_max >= 0 ? nearest : p.s - far.s);
+      if (p.s - far.near_s <= support && !(bmax - p.z > bound)) {
+        if (ends(last)) {
+          // The walk ends inside the block: at its first point m where it ends (a binary search).
+          std::ptrdiff_t lo = k, hi = last;  // ends(hi), not ends(lo)
+          while (hi - lo > 1) {
+            const std::ptrdiff_t mid = lo + (hi - lo) / 2;
+            (ends(mid) ? hi : lo) = mid;
+          }
+          passed(hi - 1);
+          break;
+        }
+        passed(last);
+        k += len;
+        continue;
+      }
+    }
     if (q.near_s > q.s && nearest >= near) {
       const double slope_before = chain.slope_max;
       chain.add(nearest, q.near_z - p.z, nearest);
@@ -224,13 +312,45 @@ void walk(const ChainPoint* points, std::ptrdiff_t count, std::ptrdiff_t stride,
     } else {
       chain.add(hs, q.z - p.z, hs);
     }
+    ++k;
   }
 }
+
+// The chain hull's stack walked from its top: walk position k is stack position n - 1 - k, whose block
+// reaches farther (downwards).
+struct StackFromTop {
+  const ChainPoint* top;
+  const ChainPoint& point(std::ptrdiff_t k) const { return top[-k]; }
+  double zmax(std::ptrdiff_t k) const { return top[-k].zmax; }
+  std::size_t size = 0;
+  std::ptrdiff_t block(std::ptrdiff_t k, double* bmax) const {
+    *bmax = top[-k].bmax;
+    return std::ptrdiff_t(block_span(size - 1 - std::size_t(k)));
+  }
+};
+
+// The window's hull walked from position 0 (nearest) up: the block starting at k is the one ending at
+// k + 2^a - 1 with 2^(a + 1) dividing k (any a at k = 0), the largest that fits.
+struct StackFromBottom {
+  const ChainPoint* points;
+  std::size_t size = 0;
+  const ChainPoint& point(std::ptrdiff_t k) const { return points[k]; }
+  double zmax(std::ptrdiff_t k) const { return points[k].zmax; }
+  std::ptrdiff_t block(std::ptrdiff_t k, double* bmax) const {
+    const std::size_t start = std::size_t(k), rest = size - start;
+    std::size_t len = start == 0 ? std::bit_floor(rest) : (start & ~(start - 1)) / 2;
+    while (len > rest) len /= 2;
+    if (len == 0) return 1;
+    *bmax = points[start + len - 1].bmax;
+    return std::ptrdiff_t(len);
+  }
+};
 
 }  // namespace
 
 std::size_t ChainHull::prune(SlicePoint p, const Falloff& rho, double tolerance) {
-  std::size_t n = stack_.size(), tests = 0;
+  const std::size_t before = stack_.size();
+  std::size_t n = before, tests = 0;
   while (n >= 2) {
     const ChainPoint& a = stack_[n - 1];
     ChainPoint& b = stack_[n - 2];
@@ -240,14 +360,19 @@ std::size_t ChainHull::prune(SlicePoint p, const Falloff& rho, double tolerance)
     stack_.pop_back();
     --n;
   }
+  if (n < before) summarise_block(stack_.data(), n - 1);  // the top took the merged points' near end
   return tests;
+}
+
+void ChainHull::push(SlicePoint p) {
+  const double below = stack_.empty() ? p.z : stack_.back().zmax;
+  stack_.push_back({p.s, p.z, p.s, p.z, std::max(below, p.z), 0});
+  summarise_block(stack_.data(), stack_.size() - 1);
 }
 
 void ChainHull::query(SlicePoint p, double support, TangentChain& chain, double near) const {
   if (stack_.empty()) return;
-  const ChainPoint* top = &stack_.back();
-  walk(top, std::ptrdiff_t(stack_.size()), -1, p, support, near, chain,
-       [&](std::ptrdiff_t k) { return top[-k].zmax; });
+  walk(StackFromTop{&stack_.back(), stack_.size()}, std::ptrdiff_t(stack_.size()), p, support, near, chain);
 }
 
 void WindowHull::reserve(std::size_t n) {
@@ -290,6 +415,7 @@ void WindowHull::build(const ChainPoint* points, std::size_t count, double s_end
       ++popped;
     }
     hull_.push_back(q);
+    summarise_block(hull_.data(), hull_.size() - 1);
     pops_.push_back(popped);
   }
 }
@@ -307,9 +433,7 @@ void WindowHull::drop_before(int first) {
 
 void WindowHull::query(SlicePoint p, double support, TangentChain& chain, double near) const {
   if (hull_.empty()) return;
-  const ChainPoint* h = hull_.data();
-  walk(h, std::ptrdiff_t(hull_.size()), 1, p, support, near, chain,
-       [&](std::ptrdiff_t k) { return h[k].zmax; });
+  walk(StackFromBottom{hull_.data(), hull_.size()}, std::ptrdiff_t(hull_.size()), p, support, near, chain);
 }
 
 void brute_chain(const SlicePoint* pts, std::size_t count, SlicePoint p, TangentChain& chain, double near) {

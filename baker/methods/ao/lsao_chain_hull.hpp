@@ -65,13 +65,17 @@ struct TangentChain {
   // closed form at the horizontal distance where the band's middle ray meets the segment.
   bool segments = false;
   SliceVec prev;  // the point added last, relative to the receiver
-  // Work counters (LsaoStats): hull points walked by queries, bands added.
+  // Work counters (LsaoStats): the walks' steps over the hulls (a skipped block one step), bands added.
   unsigned walked = 0, bands = 0;
 
   TangentChain(const Falloff& f, Weighting w, const SliceFrame& slice);
   // A point at (hs > 0, hz) from the receiver standing for the profile's stretch at horizontal distances
   // around x: adds the band from the chain's elevation up to its own, if it rises above it.
-  void add(double hs, double hz, double x);
+  void add(double hs, double hz, double x) {
+    const SliceVec from = prev;
+    prev = {hs, hz};
+    if (hz > slope_max * hs) rise(hs, hz, x, from);
+  }
   // Coalescing (segments only; 0: off): a rising point whose band's rho is within `coalesce` of the pending
   // band's first is added to it (falloffs none and step inside the radius: always, the bands then add
   // exactly). finish() integrates what is pending: call it before reading sum and direction.
@@ -89,7 +93,17 @@ struct TangentChain {
   // first and last points' bands.
   bool pending_ = false;
   double pend_hs_ = 0, pend_hz_ = 0, pend_c_ = 1, pend_s_ = 0, pend_x0_ = 0, pend_x1_ = 0;
+  // A pending band's later points whose band ends all lie where rho is within `coalesce` of rho(pend_x0_)
+  // (rho is monotone, so whatever distance their middle ray meets) are held without their unit vectors and
+  // distances: `lazy_` until resolve() finds the top's from the top, the point before it (before_) and the
+  // segment's start (pend_from_), as add_closed would have. rho_x0_: rho(pend_x0_); checked_: the farthest
+  // distance whose rho was found within `coalesce` of it.
+  bool lazy_ = false;
+  double rho_x0_ = 0, checked_ = 0;
+  SliceVec before_, pend_from_;
+  void rise(double hs, double hz, double x, SliceVec from);
   void add_closed(double hs, double hz, double x, SliceVec from, SliceVec at);
+  void resolve();
   void commit(double e, double c, double sn, const SlabPrimitives* at_e);
 };
 
@@ -101,6 +115,10 @@ struct ChainPoint {
   double near_s = 0, near_z = 0;
   double zmax = 0;
   int index = 0;  // WindowHull: the sample index
+  // The highest of z and near_z over the point's block of its hull: the stack positions
+  // [i + 1 - lowbit(i + 1), i] of its position i (a Fenwick tree's ranges, so a query passes over a block
+  // that cannot rise in one test: O(log) blocks cover the rest of a walk).
+  double bmax = 0;
 };
 
 // One line's hull. Reuse one per thread (clear() keeps the capacity).
@@ -110,10 +128,7 @@ class ChainHull {
   void clear() { stack_.clear(); }
   // Prunes the top for receiver p (a line sample); returns the loop tests.
   std::size_t prune(SlicePoint p, const Falloff& rho, double tolerance);
-  void push(SlicePoint p) {
-    const double below = stack_.empty() ? p.z : stack_.back().zmax;
-    stack_.push_back({p.s, p.z, p.s, p.z, std::max(below, p.z), 0});
-  }
+  void push(SlicePoint p);
   std::size_t size() const { return stack_.size(); }
   // Adds the chain of receiver p (not necessarily a sample), without popping; support: the falloff's. Points
   // nearer than `near` (world units along the line) are left out (lsao's near field marched them).
