@@ -118,12 +118,29 @@ float half_to_float(std::uint16_t h) {
 }
 
 std::uint16_t float_to_half(float f) {
-  // GCC's _Float16 conversion rounds to nearest even; saturate first so nothing becomes infinite.
+  // IEEE 754 binary32 to binary16, rounding to nearest even, saturated first so nothing becomes infinite
+  // (written out rather than _Float16, which clang before 15 does not support on x86).
   constexpr float kMax = 65504.0f;
-  const _Float16 h = _Float16(std::clamp(f, -kMax, kMax));
-  std::uint16_t bits;
-  std::memcpy(&bits, &h, 2);
-  return bits;
+  f = std::clamp(f, -kMax, kMax);
+  std::uint32_t x;
+  std::memcpy(&x, &f, 4);
+  const std::uint16_t sign = std::uint16_t((x >> 16) & 0x8000u);
+  x &= 0x7fffffffu;
+  if (x > 0x7f800000u) return std::uint16_t(sign | 0x7e00u);  // NaN
+  if (x >= 0x38800000u) {                                     // >= 2^-14: a normal half
+    std::uint32_t h = (x - 0x38000000u) >> 13;                // exponent rebiased, 10 mantissa bits
+    const std::uint32_t rest = x & 0x1fffu;
+    if (rest > 0x1000u || (rest == 0x1000u && (h & 1u))) ++h;  // a carry moves into the exponent
+    return std::uint16_t(sign | h);
+  }
+  if (x <= 0x33000000u) return sign;  // at most 2^-25: zero (2^-25 ties to even)
+  // A subnormal half: the value in units of 2^-24 is m 2^(e - 126), m the 24-bit significand.
+  const std::uint32_t e = x >> 23, m = (x & 0x7fffffu) | 0x800000u;
+  const std::uint32_t shift = 126u - e;  // 14 .. 23
+  std::uint32_t h = m >> shift;
+  const std::uint32_t rest = m & ((1u << shift) - 1u), half = 1u << (shift - 1u);
+  if (rest > half || (rest == half && (h & 1u))) ++h;
+  return std::uint16_t(sign | h);
 }
 
 namespace {
