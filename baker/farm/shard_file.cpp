@@ -109,6 +109,17 @@ ShardReader::~ShardReader() {
 }
 
 ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : file_(file) {
+  try {
+    read_header(expected);
+  } catch (...) {  // the destructor does not run for a constructor that throws
+    if (fd_ >= 0) close(fd_);
+    fd_ = -1;
+    throw;
+  }
+}
+
+void ShardReader::read_header(const ShardIdentity& expected) {
+  const fs::path& file = file_;
   const std::string name = file.string();
   const std::string which = expected.what.empty() ? "shard " + shard_id_text(expected.id) : expected.what;
   const std::string redo =
