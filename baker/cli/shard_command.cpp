@@ -47,6 +47,24 @@ LayerSet rows_of(const LayerSet& all, int r0, int r1) {
   return out;
 }
 
+// A part's layers as the header lists them: (name, channels); a per-block layer "<name>@<k>" by its name
+// before the '@' (its channels are its block's directions).
+std::vector<std::pair<std::string, std::size_t>> layout_of(const ShardPart& part) {
+  std::vector<std::pair<std::string, std::size_t>> out;
+  for (const auto& l : part.layers) {
+    const std::string n = l.at("name").get<std::string>();
+    const std::size_t at = n.find('@');
+    out.emplace_back(n.substr(0, at), at == std::string::npos ? l.at("channels").size() : 0);
+  }
+  return out;
+}
+
+std::string layout_text(const std::vector<std::pair<std::string, std::size_t>>& layout) {
+  std::string s;
+  for (const auto& [name, channels] : layout) s += (s.empty() ? "" : ", ") + name;
+  return s.empty() ? "none" : s;
+}
+
 }  // namespace
 
 std::string shard_version() {
@@ -348,6 +366,35 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
       throw InputError(
           readers_.back().file().string(), "",
           "shard " + shard_id_text(id) + " holds other parts than this job's plan: bake it again");
+    // The parts' layers must be the plan's too: a whole entry's are its resolved layers with their channels;
+    // the direction blocks of an entry (and the reference's row bands) all have one layout, the first
+    // one's, each layer once, whose layers the method's finish_blocks then takes by name and size.
+    for (const ShardPart& part : parts) {
+      const auto layout = layout_of(part);
+      const std::string where =
+          part.entry < 0 ? std::string("/reference") : job.bakes[std::size_t(part.entry)].pointer;
+      auto refuse = [&](const std::string& want) {
+        throw InputError(readers_.back().file().string(), "",
+                         "shard " + shard_id_text(id) + ": the part of " + where + " holds layers (" +
+                             layout_text(layout) + ") other than this job's plan (" + want +
+                             "): bake it again");
+      };
+      if (part.kind == "whole") {
+        const nlohmann::json& resolved = job.bakes[std::size_t(part.entry)].resolved;
+        std::vector<std::pair<std::string, std::size_t>> want;
+        for (const auto& l : resolved.at("layers")) {
+          const std::string n = l.get<std::string>();
+          want.emplace_back(n, std::size_t(layer_channel_count(n, resolved)));
+        }
+        if (layout != want) refuse(layout_text(want));
+        continue;
+      }
+      std::set<std::string> names;
+      for (const auto& l : layout)
+        if (!names.insert(l.first).second) refuse("each layer once");
+      const auto [first, inserted] = part_layouts_.emplace(part.entry, layout);
+      if (!inserted && first->second != layout) refuse(layout_text(first->second));
+    }
   }
 }
 
@@ -366,7 +413,13 @@ LayerSet MergedShards::method(int entry, const Scene& scene, const RunControl& r
     }
   if (B == 0 || total.layers.empty())
     throw InputError(job_.file.string(), e.pointer, "no shard holds " + e.stem);
-  return find_method(e.method)->finish_blocks(scene, e.params, std::move(total), rc);
+  try {
+    return find_method(e.method)->finish_blocks(scene, e.params, std::move(total), rc);
+  } catch (const InputError& x) {
+    if (!x.file().empty()) throw;
+    // The blocks' layers (take_block_layer, place_block_layers): the shards are what is wrong.
+    throw InputError((job_.output.dir / "shards").string(), e.pointer, x.what());
+  }
 }
 
 LayerSet MergedShards::reference() {

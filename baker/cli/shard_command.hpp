@@ -7,6 +7,8 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli/job_outcome.hpp"
 #include "cli/progress.hpp"
@@ -82,6 +84,8 @@ class MergedShards {
   int count_ = 0, height_ = 0;
   std::vector<ShardReader> readers_;
   std::map<int, StageSources> stages_;  // staged entries: the last stage's files
+  // Per entry (-1: the reference) the layers of its first block or row band: (name, channels).
+  std::map<int, std::vector<std::pair<std::string, std::size_t>>> part_layouts_;
 };
 
 }  // namespace hfbake

@@ -6,6 +6,13 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/layers.hpp"
 
 namespace hfbake {
 
@@ -76,5 +83,52 @@ class FloatBlocks {
   int K_, first_end_;
   bool multi_ = false;
 };
+
+// The merged blocks' layer `name`, moved out of `sums`: it must be there with `per_texel` floats for each of
+// sums' texels (a "#2f" layer: two a double). The layers come from the farm's shard files, which a merge
+// reads as untrusted input: a layer missing or of another size is an InputError without a file (the merge
+// names the shards), never a read past its end.
+inline std::vector<float> take_block_layer(LayerSet& sums, const std::string& name, std::size_t per_texel) {
+  Layer* l = sums.find(name);
+  const std::size_t texels = std::size_t(sums.width) * std::size_t(sums.height);
+  if (!l || l->channels.size() != per_texel || l->data.size() != per_texel * texels)
+    throw InputError("", "",
+                     "the direction blocks hold " + std::string(l ? "another size of" : "no") + " layer " +
+                         name + " (" + std::to_string(per_texel) +
+                         " values a texel): not this job's blocks, bake them again");
+  return std::move(l->data);
+}
+
+// The per-block layers "<prefix>@<k0>" of merged blocks (p1's and p2's horizons: block data that is placed,
+// never added), each handed to `place(layer, k0)` with its channels directions k0, k0 + 1, ... of K. Together
+// they must cover the K directions exactly once, each layer one direction block (the shards' files are
+// untrusted: InputError without a file, as take_block_layer).
+template <class Place>
+void place_block_layers(const LayerSet& sums, const std::string& prefix, int K, Place&& place) {
+  const std::string head = prefix + "@";
+  std::vector<char> covered(std::size_t(std::max(K, 0)), 0);
+  auto refuse = [&](const std::string& why) {
+    throw InputError("", "", "the direction blocks' " + prefix + " layers " + why + ": bake them again");
+  };
+  for (const Layer& l : sums.layers) {
+    if (l.name.rfind(head, 0) != 0) continue;
+    const std::string digits = l.name.substr(head.size());
+    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos)
+      refuse("are misnamed (" + l.name + ")");
+    const int k0 = std::stoi(digits), n = l.channel_count();
+    const std::size_t texels = std::size_t(sums.width) * std::size_t(sums.height);
+    bool a_block = false;  // [k0, k0 + n) is one of the K directions' blocks
+    for (int b = 0; b < direction_block_count(K) && !a_block; ++b)
+      a_block = direction_block_begin(b, K) == k0 && direction_block_begin(b + 1, K) == k0 + n;
+    if (!a_block || l.data.size() != std::size_t(n) * texels)
+      refuse("are not of this job's direction blocks");
+    for (int k = k0; k < k0 + n; ++k) {
+      if (covered[std::size_t(k)]) refuse("overlap");
+      covered[std::size_t(k)] = 1;
+    }
+    place(l, k0);
+  }
+  if (std::count(covered.begin(), covered.end(), 1) != K) refuse("do not cover the directions");
+}
 
 }  // namespace hfbake

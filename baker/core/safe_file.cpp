@@ -82,8 +82,10 @@ FolderLock::FolderLock(const fs::path& path) : path_(path) {
       return;
     }
     if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      // The holder writes its name just after it locked: give it up to 0.2 s to appear.
       char buf[300] = {};
-      const ssize_t n = pread(fd, buf, sizeof buf - 1, 0);
+      ssize_t n = 0;
+      for (int wait = 0; wait < 40 && (n = pread(fd, buf, sizeof buf - 1, 0)) <= 0; ++wait) usleep(5000);
       holder_ = n > 0 ? std::string(buf, std::size_t(n)) : "another process";
       close(fd);
       return;

@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <climits>
 #include <cstring>
 #include <system_error>
 
@@ -109,6 +110,17 @@ ShardReader::~ShardReader() {
 }
 
 ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : file_(file) {
+  try {
+    read_header(expected);
+  } catch (...) {  // the destructor does not run for a constructor that throws
+    if (fd_ >= 0) close(fd_);
+    fd_ = -1;
+    throw;
+  }
+}
+
+void ShardReader::read_header(const ShardIdentity& expected) {
+  const fs::path& file = file_;
   const std::string name = file.string();
   const std::string which = expected.what.empty() ? "shard " + shard_id_text(expected.id) : expected.what;
   const std::string redo =
@@ -139,6 +151,16 @@ ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : 
   if (size - kTrailer - header_at > kMaxShardHeaderBytes) throw damaged("a header beyond any shard's");
   std::string text(std::size_t(size - kTrailer - header_at), '\0');
   if (!read_at(fd_, text.data(), text.size(), header_at)) throw damaged("unreadable header");
+  // An integer of the header within [lo, hi]: a float or an integer out of range is damage (converting
+  // it would be undefined).
+  auto whole_number = [&](const nlohmann::json& in, const char* key, std::int64_t lo, std::int64_t hi) {
+    const nlohmann::json& v = in.at(key);
+    const bool fits = v.is_number_unsigned()  ? v.get<std::uint64_t>() <= std::uint64_t(hi)
+                      : v.is_number_integer() ? v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi
+                                              : false;
+    if (!fits) throw damaged(std::string("a part's ") + key + " that is no whole number in range");
+    return v.get<std::int64_t>();
+  };
   nlohmann::json h;
   try {
     h = nlohmann::json::parse(text);
@@ -159,12 +181,14 @@ ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : 
     const std::uint64_t W = std::uint64_t(expected.width), H = std::uint64_t(expected.height);
     for (const auto& p : h.at("parts")) {
       ShardPart part;
-      part.entry = p.at("entry");
+      part.entry = int(whole_number(p, "entry", -1, INT_MAX));
       part.kind = p.at("kind");
-      part.block = p.at("block");
-      part.row_begin = p.at("row_begin"), part.row_end = p.at("row_end");
+      part.block = int(whole_number(p, "block", 0, INT_MAX));
+      part.row_begin = int(whole_number(p, "row_begin", 0, INT_MAX));
+      part.row_end = int(whole_number(p, "row_end", 0, INT_MAX));
       part.seconds = p.at("seconds"), part.cpu_seconds = p.at("cpu_seconds");
-      part.width = p.at("width"), part.height = p.at("height");
+      part.width = int(whole_number(p, "width", 0, INT_MAX));
+      part.height = int(whole_number(p, "height", 0, INT_MAX));
       part.layers = p.at("layers");
       const bool rows = part.kind == "rows";
       if (!rows && part.kind != "whole" && part.kind != "block" && part.kind != "stage" &&
@@ -182,8 +206,9 @@ ShardReader::ShardReader(const fs::path& file, const ShardIdentity& expected) : 
       if (texels == 0) throw damaged("a part of no texels");
       if (!part.layers.is_array()) throw damaged("a part without layers");
       for (const auto& l : part.layers) {
-        const std::uint64_t channels = l.at("channels").size(), floats = l.at("floats").get<std::uint64_t>(),
-                            offset = l.at("offset").get<std::uint64_t>();
+        const std::uint64_t channels = l.at("channels").size(),
+                            floats = std::uint64_t(whole_number(l, "floats", 0, INT64_MAX)),
+                            offset = std::uint64_t(whole_number(l, "offset", 0, INT64_MAX));
         if (!l.at("name").is_string() || l.at("name").get_ref<const std::string&>().empty() ||
             !l.at("channels").is_array() || channels == 0 || !l.at("checksum").is_string())
           throw damaged("a layer without a name, channels or checksum");

@@ -84,6 +84,7 @@ class ShardReader {
   const std::filesystem::path& file() const { return file_; }
 
  private:
+  void read_header(const ShardIdentity& expected);  // opens file_ into fd_ and reads the parts
   std::filesystem::path file_;
   int fd_ = -1;
   std::vector<ShardPart> parts_;

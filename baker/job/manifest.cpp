@@ -243,6 +243,7 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
   for (std::size_t i = 0; doc.contains("bake") && doc["bake"].is_array() && i < doc["bake"].size(); ++i) {
     const nlohmann::json& entry = doc["bake"][i];
     if (!entry.is_object() || !entry.contains("method") || !entry["method"].is_string()) continue;
+    if (std::find(sweep.refused.begin(), sweep.refused.end(), i) != sweep.refused.end()) continue;
     const std::string method = entry["method"].get<std::string>();
     const std::string at = "/bake/" + std::to_string(i);
     if (std::find(methods.begin(), methods.end(), method) == methods.end()) {

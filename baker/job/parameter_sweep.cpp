@@ -129,6 +129,7 @@ SweepExpansion expand_parameter_sweeps(const nlohmann::json& doc) {
       std::string names;
       for (const std::string& s : swept) names += (names.empty() ? "" : ", ") + s;
       r.errors.push_back(ptr + ": sweep one parameter per bake entry (lists given for " + names + ")");
+      r.refused.push_back(expanded.size());
     }
     if (swept.size() != 1) {
       expanded.push_back(e);

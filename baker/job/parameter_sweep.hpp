@@ -32,6 +32,9 @@ struct SweepExpansion {
   std::vector<SweepOrigin> origins;  // one per bake entry of `doc`
   std::vector<std::string> errors;   // "<JSON pointer>: <what is wrong>", pointers into the original file
   bool too_many = false;             // beyond kMaxBakeEntries: nothing expanded, `errors` says where
+  // Entries of `doc` left as written because their sweep is refused (`errors` says why): their lists are
+  // not checked against the method's schema as well.
+  std::vector<std::size_t> refused;
 };
 
 // Expands every sweep of doc["bake"]. Documents that are not jobs pass through unchanged (the schema

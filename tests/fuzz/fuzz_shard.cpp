@@ -1,7 +1,10 @@
 // libFuzzer harness: a shard file (farm/shard_file.hpp) as `hfbake merge` and `bake --shard` read it, for a
 // 16x16 job named "t": the header against the job's identity and field, then every part's layers. A file
 // that is not such a shard is an InputError with one line naming it; anything else (an uncaught exception, a
-// crash, UB, an allocation beyond the file's own size) is a finding.
+// crash, UB, an allocation beyond the file's own size, a descriptor left open) is a finding.
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cstdint>
 #include <string>
 
@@ -11,8 +14,16 @@
 
 using namespace hfbake;
 
+// The lowest free file descriptor: it grows when a read leaves a descriptor open.
+int lowest_free_fd() {
+  const int fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+  if (fd >= 0) close(fd);
+  return fd;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::filesystem::path file = fuzz::write_scratch("t.shard-0-of-1.hfshard", data, size);
+  const int free_fd = lowest_free_fd();
   ShardIdentity identity;
   identity.job_name = "t";
   identity.job_hash = "0123456789abcdef";
@@ -29,5 +40,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const InputError& e) {
     fuzz::check_error_line(e.line(), file.string());
   }
+  if (lowest_free_fd() != free_fd) fuzz::finding("the shard file was left open");
   return 0;
 }

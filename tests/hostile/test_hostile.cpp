@@ -258,6 +258,12 @@ std::vector<Case> cases() {
     j["bake"][0]["directions"] = k;
     return both(write_job(d, j), "/bake/0/directions", "the job would bake 4000+ entries with this sweep");
   });
+  // Two parameters swept in one entry: the refusal alone, not also a type error per list.
+  add("SweepOfTwoParameters", [](const fs::path& d) {
+    json j = base_job();
+    j["bake"] = {{{"method", "hbao"}, {"radius", {1, 2}}, {"directions", {4, 8}}}};
+    return both(write_job(d, j), "/bake/0", "sweep one parameter per bake entry");
+  });
   // A value that fits no alternative (a number or "from_file") is one line, not one per alternative.
   add("TexelSizeOfWrongType", [](const fs::path& d) {
     json j = base_job();

@@ -144,6 +144,51 @@ TEST_F(Untrusted, ShardPartsClaimingAnotherSizeAreRefusedByTheMerge) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// Rewrites every part's layer list in the header (checksums stay right: they cover the data, not the names).
+void forge_layers(const fs::path& shard, const std::function<void(json&)>& edit) {
+  std::string bytes = read_text(shard);
+  std::uint64_t at = 0;
+  json h = shard_header(bytes, at);
+  for (json& p : h["parts"]) edit(p["layers"]);
+  const std::string trailer = bytes.substr(bytes.size() - 24);
+  bytes = bytes.substr(0, at) + h.dump() + "\n" + trailer;
+  std::ofstream(shard, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// Layers renamed, dropped or duplicated in a shard's header: a whole entry's (nlp) must be its resolved
+// layers, a direction block's (p1, hbao: the raw sums its finish reads by name) must be there with their
+// sizes. Each made the merge read through a missing layer (SIGSEGV) or write the renamed layers.
+TEST_F(Untrusted, ShardLayersOtherThanThePlanAreRefusedByTheMerge) {
+  const std::vector<std::pair<std::string, std::function<void(json&)>>> forgeries = {
+      {"renamed", [](json& l) { l[0]["name"] = "bogus"; }},
+      {"dropped", [](json& l) { l.erase(l.size() - 1); }},
+      {"duplicated", [](json& l) { l[l.size() - 1]["name"] = l[0]["name"]; }}};
+  for (const std::string method : {"nlp", "p1", "hbao"}) {
+    json j = base_job();
+    j["bake"] = {{{"method", method}}};
+    const std::string job = write_job(dir_, j);
+    fs::remove_all(dir_ / "out");
+    ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"}).exit_code, 0);
+    const fs::path shard = dir_ / "out" / "shards" / "t.shard-0-of-1.hfshard";
+    const std::string genuine = read_text(shard);
+    for (const auto& [what, edit] : forgeries) {
+      SCOPED_TRACE(method + ", " + what);
+      std::ofstream(shard, std::ios::binary | std::ios::trunc) << genuine;
+      forge_layers(shard, edit);
+      const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+      EXPECT_EQ(r.exit_code, 2) << r.err;
+      const auto lines = r.error_lines();
+      ASSERT_EQ(lines.size(), 1u) << r.err;
+      EXPECT_EQ(lines[0].rfind((dir_ / "out" / "shards").string(), 0), 0u) << lines[0];
+      EXPECT_NE(lines[0].find("/bake/0"), std::string::npos) << lines[0];
+      EXPECT_NE(lines[0].find("bake "), std::string::npos) << lines[0];  // what to do
+      EXPECT_FALSE(fs::exists(dir_ / "out" / ("t." + method + ".exr")));
+    }
+    std::ofstream(shard, std::ios::binary | std::ios::trunc) << genuine;
+    EXPECT_EQ(hfbake(dir_, {"merge", job, "--no-cache", "--quiet"}).exit_code, 0) << method;
+  }
+}
+
 TEST_F(Untrusted, AFifoWhereAShardBelongsNeverBlocks) {
   const std::string job = write_job(dir_, base_job());
   fs::create_directories(dir_ / "out" / "shards");
@@ -293,10 +338,17 @@ TEST_F(Untrusted, TwoJobsOfOneNameInOneFolderNeverReplaceEachOther) {
         << ra.err << rb.err;
     const Outcome& lost = ra.exit_code == 2 ? ra : rb;
     const std::string& winner = ra.exit_code == 0 ? ja : jb;
+    const pid_t winner_pid = ra.exit_code == 0 ? pa : pb;
     const auto lines = lost.error_lines();
     ASSERT_EQ(lines.size(), 1u) << lost.err;
-    EXPECT_TRUE(lines[0].find("another hfbake process") != std::string::npos ||
-                lines[0].find("were baked from " + winner) != std::string::npos)
+    // The loser names the folder and who owns it: the running holder (<pid>@<host>), or the job file whose
+    // finished outputs are there.
+    const std::string folder = fs::weakly_canonical(dir_ / "out").string();
+    EXPECT_NE(
+        lines[0].find(" into " + folder + " now") == std::string::npos
+            ? lines[0].find(" in " + folder + " were baked from " + fs::weakly_canonical(winner).string())
+            : lines[0].find("another hfbake process (" + std::to_string(winner_pid) + "@" + host() + ")"),
+        std::string::npos)
         << lines[0];
     EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(winner).string());
     auto in = OIIO::ImageInput::open((dir_ / "out" / "t.p1.exr").string());

@@ -429,6 +429,19 @@ TEST(NlpPyramid, HalfConversions) {
       ASSERT_EQ(nlp::float_to_half(f), h) << h;
     }
   }
+  // Every float between two neighbouring finite halves (their midpoint, just either side of it, and a
+  // spread in between) goes to the nearer, a tie to the even one: against the table of half values.
+  for (std::uint32_t h = 0; h < 0x7bff; ++h) {
+    const double a = nlp::half_to_float(std::uint16_t(h)), b = nlp::half_to_float(std::uint16_t(h + 1));
+    const double mid = 0.5 * (a + b);
+    const std::uint16_t even = (h & 1) ? std::uint16_t(h + 1) : std::uint16_t(h);
+    ASSERT_EQ(nlp::float_to_half(float(mid)), even) << h;
+    ASSERT_EQ(nlp::float_to_half(-float(mid)), even | 0x8000) << h;
+    ASSERT_EQ(nlp::float_to_half(std::nextafter(float(mid), 0.0f)), h) << h;
+    ASSERT_EQ(nlp::float_to_half(std::nextafter(float(mid), 1e30f)), h + 1) << h;
+    for (double t : {0.1, 0.37, 0.63, 0.9})
+      ASSERT_EQ(nlp::float_to_half(float(a + t * (b - a))), t < 0.5 ? h : h + 1) << h << " " << t;
+  }
 }
 
 // A half pyramid reads what the float one does to within half's relative rounding (2^-11 of the largest

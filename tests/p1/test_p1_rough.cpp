@@ -166,8 +166,12 @@ TEST(P1Tolerance, EveryHorizonWithinTheToleranceOfTheExactMarch) {
           c.name, tau, below, above, differ);
       EXPECT_LE(below, tau + kRounding) << c.name << " tau " << tau;
       EXPECT_LE(above, kRounding) << c.name << " tau " << tau;
-      if (tau == 0) EXPECT_EQ(differ, 0) << c.name;
-      if (tau >= 1e-2) EXPECT_GT(differ, 0) << c.name << ": the tolerance was not used";
+      if (tau == 0) {
+        EXPECT_EQ(differ, 0) << c.name;
+      }
+      if (tau >= 1e-2) {
+        EXPECT_GT(differ, 0) << c.name << ": the tolerance was not used";
+      }
     }
   }
 }

@@ -324,9 +324,10 @@ LayerSet hbao_finish_blocks(const Scene& scene, const nlohmann::json& params, La
   const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<float> obsc(field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);
-  const Layer* bs = sums.find("bent#2f");
-  hbao_field_finish(field, s, sums.find("occluded#2f")->data.data(), bs ? bs->data.data() : nullptr,
-                    obsc.data(), bent.empty() ? nullptr : bent.data());
+  const std::vector<float> occluded = take_block_layer(sums, "occluded#2f", 2);
+  const std::vector<float> bs = bent.empty() ? std::vector<float>() : take_block_layer(sums, "bent#2f", 6);
+  hbao_field_finish(field, s, occluded.data(), bs.empty() ? nullptr : bs.data(), obsc.data(),
+                    bent.empty() ? nullptr : bent.data());
   sums = LayerSet();
   return hbao_layers(field, s, layers, std::move(obsc), std::move(bent));
 }

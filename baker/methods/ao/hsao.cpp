@@ -278,8 +278,10 @@ LayerSet hsao_finish_blocks(const Scene& scene, const nlohmann::json& params, La
   const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
   std::vector<float> obsc(field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);
-  const float* ts = sums.find("sums#2f")->data.data();
-  const float* bs = sums.find("bent#2f")->data.data();
+  const std::vector<float> t_sums = take_block_layer(sums, "sums#2f", 4);
+  const std::vector<float> b_sums = take_block_layer(sums, "bent#2f", 6);
+  const float* ts = t_sums.data();
+  const float* bs = b_sums.data();
   tbb::parallel_for(0, field.height, [&](int j) {
     for (int i = 0; i < field.width; ++i) {
       const std::size_t idx = field.index(i, j);

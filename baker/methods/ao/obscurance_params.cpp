@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/direction_blocks.hpp"
 #include "core/error.hpp"
 
 namespace hfbake {
@@ -58,8 +59,8 @@ BlockSums block_sum_layers(int width, int height, bool bent) {
 }
 
 void take_block_sums(LayerSet&& sums, bool bent, std::vector<float>* sum, std::vector<float>* bent_xyz) {
-  *sum = std::move(sums.find("sum")->data);
-  if (bent) *bent_xyz = std::move(sums.find("bent")->data);
+  *sum = take_block_layer(sums, "sum", 1);
+  if (bent) *bent_xyz = take_block_layer(sums, "bent", 3);
   sums = LayerSet();
 }
 

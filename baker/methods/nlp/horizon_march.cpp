@@ -302,7 +302,7 @@ void row_knot_max(const RowMarch& r, int cnt, float* out) {
     const float* __restrict om = r.omega.data() + std::size_t(k) * r.stride;
     for (int t = 0; t < cnt; ++t) {
       const float v = om[t], cur = o[t];
-      o[t] = (k < n[t]) & (v > cur) ? v : cur;
+      o[t] = ((k < n[t]) & (v > cur)) ? v : cur;
     }
   }
   for (int t = 0; t < cnt; ++t) out[t] = fast_atan(out[t]);

@@ -49,12 +49,13 @@ void p1_sums_to_layers(P1Sums& s, LayerSet& out) {
   put("fao", s.fao), put("fdr", s.fdr), put("fdg", s.fdg), put("fdb", s.fdb);
 }
 
-void p1_sums_from_layers(LayerSet& sums, P1Sums& s) {
-  auto take = [&](const char* name, std::vector<float>& v) {
-    if (Layer* l = sums.find(name)) v = std::move(l->data);
+void p1_sums_from_layers(LayerSet& sums, const P1SumsShape& shape, P1Sums& s) {
+  auto take = [&](const char* name, std::size_t per_texel, std::vector<float>& v) {
+    if (per_texel > 0) v = take_block_layer(sums, name, per_texel);
   };
-  take("ao", s.ao), take("vsky", s.vsky), take("rgb", s.rgb), take("bent", s.bent);
-  take("fao", s.fao), take("fdr", s.fdr), take("fdg", s.fdg), take("fdb", s.fdb);
+  take("ao", shape.ao, s.ao), take("vsky", shape.vsky, s.vsky), take("rgb", shape.rgb, s.rgb);
+  take("bent", shape.bent, s.bent), take("fao", shape.fao, s.fao);
+  take("fdr", shape.fd, s.fdr), take("fdg", shape.fd, s.fdg), take("fdb", shape.fd, s.fdb);
 }
 
 LayerSet bake_p1(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
@@ -90,19 +91,18 @@ LayerSet p1_finish_blocks(const Scene& scene, const nlohmann::json& params, Laye
   const std::size_t N = scene.field.texel_count();
   P1Sums s;
   s.k_begin = 0, s.k_end = K;
-  p1_sums_from_layers(sums, s);
+  p1_sums_from_layers(sums, p1_sums_shape(scene, p), s);
   // The blocks' horizons into [texel * K + k].
   auto place = [&](const std::string& name, std::vector<float>& all) {
-    for (const Layer& l : sums.layers) {
-      if (l.name.rfind(name + "@", 0) != 0) continue;
-      if (all.empty()) all.assign(N * std::size_t(K), 0.0f);
-      const int k0 = std::stoi(l.name.substr(name.size() + 1)), n = l.channel_count();
+    all.assign(N * std::size_t(K), 0.0f);
+    place_block_layers(sums, name, K, [&](const Layer& l, int k0) {
+      const int n = l.channel_count();
       for (std::size_t t = 0; t < N; ++t)
-        for (int c = 0; c < n; ++c) all[t * K + k0 + c] = l.data[t * n + c];
-    }
+        for (int c = 0; c < n; ++c) all[t * K + std::size_t(k0 + c)] = l.data[t * std::size_t(n) + c];
+    });
   };
-  place("horizon", s.horizon);
-  place("horizon_distance", s.horizon_distance);
+  if (p.horizon) place("horizon", s.horizon);
+  if (p.horizon_distance) place("horizon_distance", s.horizon_distance);
   sums = LayerSet();
   return p1_layers(p1_finish(scene, p, std::move(s), rc), in);
 }

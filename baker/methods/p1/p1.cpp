@@ -135,6 +135,19 @@ double disk_fraction_above(double elevation, double horizon, double radius) {
   return (std::acos(-x) + x * std::sqrt(1 - x * x)) / kPi;
 }
 
+P1SumsShape p1_sums_shape(const Scene& scene, const P1Params& p) {
+  const bool uniform_env = scene.environment.uniform || scene.environment.levels.empty();
+  const bool facets = p.direct && p.facet_direct;
+  P1SumsShape s;
+  s.ao = p.ao || (p.direct && uniform_env) ? 1 : 0;
+  s.vsky = p.vsky ? 1 : 0;
+  s.rgb = p.direct && !uniform_env ? 3 : 0;
+  s.bent = p.bent_normal ? 3 : 0;
+  s.fao = facets && uniform_env ? 2 : 0;
+  s.fd = facets && !uniform_env ? 2 : 0;
+  return s;
+}
+
 P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
                          float* horizon_out, float* distance_out) {
   const HeightField& f = scene.field;
@@ -146,7 +159,8 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
 
   const Environment& env = scene.environment;
   const bool uniform_env = env.uniform || env.levels.empty();
-  const bool need_ao = p.ao || (p.direct && uniform_env);
+  const P1SumsShape shape = p1_sums_shape(scene, p);
+  const bool need_ao = shape.ao > 0;
   std::optional<p1::LightingTables> tables;
   std::optional<p1::SwathProfiles> profiles;
   if (p.direct && !uniform_env) {
@@ -161,16 +175,14 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
   // below). The normals are not held: each thread recomputes a tile's (normal_at) when the sweep hands it
   // a tile, and keeps them while the batch's directions visit that tile.
   std::vector<float>&ao_sum = r.ao, &vsky_sum = r.vsky, &rgb_sum = r.rgb, &bent_sum = r.bent;
-  ao_sum.assign(need_ao ? N : 0, 0.0f), vsky_sum.assign(p.vsky ? N : 0, 0.0f);
-  rgb_sum.assign(p.direct && !uniform_env ? 3 * N : 0, 0.0f);  // [3 * texel + c]
-  bent_sum.assign(p.bent_normal ? 3 * N : 0, 0.0f);            // [3 * texel + c]
+  ao_sum.assign(shape.ao * N, 0.0f), vsky_sum.assign(shape.vsky * N, 0.0f);
+  rgb_sum.assign(shape.rgb * N, 0.0f);    // [3 * texel + c]
+  bent_sum.assign(shape.bent * N, 0.0f);  // [3 * texel + c]
   // The facets' direct-light sums, [q * N + texel] (facet q of P1Result::direct_facets).
   const bool facets = p.direct && p.facet_direct;
-  const std::size_t NF = facets ? 2 * N : 0;
   std::vector<float>&fao = r.fao, &fdr = r.fdr, &fdg = r.fdg, &fdb = r.fdb;
-  fao.assign(facets && uniform_env ? NF : 0, 0.0f);
-  fdr.assign(facets && !uniform_env ? NF : 0, 0.0f), fdg.assign(fdr.size(), 0.0f),
-      fdb.assign(fdr.size(), 0.0f);
+  fao.assign(shape.fao * N, 0.0f);
+  fdr.assign(shape.fd * N, 0.0f), fdg.assign(fdr.size(), 0.0f), fdb.assign(fdr.size(), 0.0f);
   constexpr int kTileTexels = 32 * 32;  // sweep_lines_tiled's tiles
   struct TileNormals {
     int i0 = -1, j0 = -1;

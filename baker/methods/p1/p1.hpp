@@ -108,15 +108,22 @@ struct P1Sums {
   // [(k - k_begin) * N + texel]), n = k_end - k_begin; p1_finish wants all K in P1Result's layout.
   std::vector<float> horizon, horizon_distance;
 };
+// Floats a texel of each sum p1_direction_sums keeps for these parameters and this scene's environment
+// (0: not kept); the facet sums' [q * N + texel] count 2.
+struct P1SumsShape {
+  std::size_t ao = 0, vsky = 0, rgb = 0, bent = 0, fao = 0, fd = 0;  // fd: each of fdr, fdg, fdb
+};
+P1SumsShape p1_sums_shape(const Scene& scene, const P1Params& params);
 // Directions [k_begin, k_end) of params.directions. horizon_out / distance_out (optional, N * K floats in
 // P1Result's layout): write the horizons there instead of into the returned sums.
 P1Sums p1_direction_sums(const Scene& scene, const P1Params& params, int k_begin, int k_end,
                          const RunControl& rc, float* horizon_out = nullptr, float* distance_out = nullptr);
 // The farm's form of the sums: each non-empty one moved into `out` as the float layer of its name ("ao",
 // "vsky", "rgb", "bent", "fao", "fdr", "fdg", "fdb"; channels from its size per texel of out's field), and
-// back (the layers' data moved out). The horizons are not touched.
+// back (the layers' data moved out): every sum of `shape` must be there with its size, else an InputError
+// (core/direction_blocks.hpp take_block_layer). The horizons are not touched.
 void p1_sums_to_layers(P1Sums& s, LayerSet& out);
-void p1_sums_from_layers(LayerSet& sums, P1Sums& s);
+void p1_sums_from_layers(LayerSet& sums, const P1SumsShape& shape, P1Sums& s);
 // total += block, elementwise (the horizons are not touched); total.k_end = block.k_end.
 void p1_add_sums(P1Sums& total, const P1Sums& block);
 P1Result p1_finish(const Scene& scene, const P1Params& params, P1Sums&& sums, const RunControl& rc);

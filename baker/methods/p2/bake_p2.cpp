@@ -460,19 +460,12 @@ P1Result p1_of_block_layers(const Scene& scene, const P2Params& p, LayerSet&& su
   const P1Params p1 = p2_direct_params(p, p2_keeps_horizons(scene.field, p, scene.bounces));
   P1Sums s;
   s.k_begin = 0, s.k_end = K;
-  p1_sums_from_layers(sums, s);
+  p1_sums_from_layers(sums, p1_sums_shape(scene, p1), s);
   if (p1.horizon) {  // the blocks' horizons into [k * N + texel]
     s.horizon.assign(N * std::size_t(K), 0.0f);
-    int placed = 0;
-    for (const Layer& l : sums.layers) {
-      if (l.name.rfind("horizon@", 0) != 0) continue;
-      const std::size_t k0 = std::size_t(std::stoi(l.name.substr(8)));
-      if (k0 * N + l.data.size() > s.horizon.size())
-        throw std::runtime_error("p2 stage 0: horizons of another K");
-      std::copy(l.data.begin(), l.data.end(), s.horizon.begin() + std::ptrdiff_t(k0 * N));
-      placed += l.channel_count();
-    }
-    if (placed != K) throw std::runtime_error("p2 stage 0: the blocks' horizons do not cover the directions");
+    place_block_layers(sums, "horizon", K, [&](const Layer& l, int k0) {
+      std::copy(l.data.begin(), l.data.end(), s.horizon.begin() + std::ptrdiff_t(std::size_t(k0) * N));
+    });
   }
   sums = LayerSet();
   return p1_finish(scene, p1, std::move(s), rc);
