@@ -35,11 +35,11 @@ esac
 # What compiling and running hfbake needs (the -dev packages pull in the shared libraries it runs with).
 packages=(build-essential cmake pkg-config git
   libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev libopencolorio-dev
-  nlohmann-json3-dev libvalijson-dev libcli11-dev libgdal-dev)
+  nlohmann-json3-dev libcli11-dev libgdal-dev)
 # A developer's build: the test and benchmark frameworks, GDAL's and OpenImageIO's tools (the truth of the
-# GeoTIFF and texture tests).
+# GeoTIFF and texture tests), and valijson installed as a package.
 if [ "$mode" = build ] || [ "$mode" = test ]; then
-  packages+=(libgtest-dev libbenchmark-dev gdal-bin openimageio-tools)
+  packages+=(libgtest-dev libbenchmark-dev gdal-bin openimageio-tools libvalijson-dev)
 fi
 # The Python module (python/): pybind11 and numpy for Debian's system Python.
 if [ "$mode" = install ] || [ "$mode" = build ] || [ "$mode" = test ]; then
@@ -70,11 +70,29 @@ else
   echo "setup: all ${#packages[@]} packages present"
 fi
 
+# valijson is headers only, and hfbake uses its nlohmann-json adapter alone; but Debian's libvalijson-dev
+# depends on every JSON library valijson has an adapter for (Qt 5, Poco, yaml-cpp, jsoncpp, ...: about 110
+# packages on a bare system). Without the package, demo, install and package unpack its headers into the build
+# folder (apt-get download, dpkg-deb -x) and build against those.
+valijson=()
+if ! dpkg-query -W -f='${Status}' libvalijson-dev 2>/dev/null | grep -q "install ok installed"; then
+  mkdir -p "$build_dir/valijson"
+  valijson_root=$(cd "$build_dir/valijson" && pwd)
+  if [ ! -f "$valijson_root/usr/include/valijson/schema_parser.hpp" ]; then
+    (cd "$valijson_root" && rm -f libvalijson-dev_*.deb &&
+      { apt-get download -qq libvalijson-dev 2>/dev/null ||
+        { sudo_if_needed apt-get update -qq && apt-get download -qq libvalijson-dev; }; } &&
+      dpkg-deb -x libvalijson-dev_*.deb .)
+    echo "setup: valijson's headers unpacked into $valijson_root/usr/include"
+  fi
+  valijson=(-DVALIJSON_INCLUDE_DIR="$valijson_root/usr/include")
+fi
+
 # The executable alone (demo, install, package), or everything with the tests and benchmarks. The options
 # are given every time: a build folder configured by one mode is reconfigured by the next.
 if [ "$mode" = build ] || [ "$mode" = test ]; then
   cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DHFBAKE_BUILD_TESTS=ON -DHFBAKE_BUILD_BENCHMARKS=ON \
-    >/dev/null
+    "${valijson[@]}" >/dev/null
   cmake --build "$build_dir" -j "$jobs"
 else
   prefix=${2:-/usr/local}
@@ -85,7 +103,7 @@ else
     targets+=(_hfbake)
   fi
   cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DHFBAKE_BUILD_TESTS=OFF -DHFBAKE_BUILD_BENCHMARKS=OFF \
-    -DHFBAKE_BUILD_PYTHON=$python -DCMAKE_INSTALL_PREFIX="$prefix" >/dev/null
+    -DHFBAKE_BUILD_PYTHON=$python -DCMAKE_INSTALL_PREFIX="$prefix" "${valijson[@]}" >/dev/null
   cmake --build "$build_dir" -j "$jobs" --target "${targets[@]}"
 fi
 

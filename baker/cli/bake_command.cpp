@@ -267,6 +267,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
                                                  : "");
     for (auto& [stem, metrics] : r.metrics_by_method.items())
       if (outcome.methods.contains(stem)) outcome.methods[stem]["metrics"] = metrics;
+    if (r.report.contains("baseline")) outcome.baseline = r.report["baseline"];
     for (const std::string& failure : r.threshold_failures) {
       outcome.errors.push_back(job.file.string() + ": /report/thresholds: " + failure);
       outcome.status = JobStatus::threshold_failed;
@@ -556,7 +557,9 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     for (std::size_t i = 0; i < inputs.size(); ++i)
       if (inputs[i].suite == int(s)) members.push_back(outcomes[i]);
     try {
-      for (const fs::path& p : write_suite_reports(suites[s], members, total_seconds))
+      const SuiteReports written = write_suite_reports(suites[s], members, total_seconds);
+      for (const std::string& w : written.warnings) std::fprintf(stderr, "hfbake: warning: %s\n", w.c_str());
+      for (const fs::path& p : written.files)
         progress.message("suite " + suites[s].name + ": wrote " + p.string());
     } catch (const std::exception& e) {
       progress.error(suites[s].file.string() + ": cannot write the suite reports: " + e.what());

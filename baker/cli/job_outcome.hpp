@@ -32,6 +32,9 @@ struct JobOutcome {
   std::vector<std::string> errors;
   std::vector<std::filesystem::path> outputs;
   nlohmann::json methods = nlohmann::json::object();  // stem -> {method, seconds, metrics, cache}
+  // The report's comparison with the job's report.baseline ({file, rel_tolerance, abs_tolerance,
+  // regressions}: report.schema.json's "baseline"); null when the job names no baseline or wrote no report.
+  nlohmann::json baseline;
   double seconds = 0;
 };
 

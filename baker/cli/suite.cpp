@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -58,7 +60,60 @@ std::string junit_xml(const Suite& suite, const std::vector<JobOutcome>& outcome
   return x.str();
 }
 
-std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds) {
+std::string job_key(const JobOutcome& o) {
+  return fs::path(o.file).stem().string();
+}
+
+// A metric for people: four significant digits.
+std::string metric_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+// The comparison with the job's baseline, for a table cell.
+std::string baseline_cell(const nlohmann::json& b) {
+  if (b.is_null()) return "&ndash;";
+  const nlohmann::json& regressions = b["regressions"];
+  const std::string file = html_escape(b.value("file", ""));
+  if (regressions.empty()) return "<span class=\"ok\">held</span> against " + file;
+  std::ostringstream c;
+  c << "<span class=\"bad\">" << regressions.size() << " regressed</span> against " << file;
+  std::size_t shown = 0;
+  for (const nlohmann::json& r : regressions) {
+    if (++shown > 5) {
+      c << "<br>and " << regressions.size() - 5 << " more (report.json: /baseline)";
+      break;
+    }
+    c << "<br>" << html_escape(r.value("key", "")) << ": " << html_escape(metric_text(r.value("value", 0.0)))
+      << " (baseline " << html_escape(metric_text(r.value("baseline", 0.0))) << ")";
+  }
+  return c.str();
+}
+
+// The job's result in each run of `history`, oldest first: its status, the run's time and the job's seconds
+// in the tooltip; a dot where the job was not in that run.
+std::string history_cell(const nlohmann::json& history, const std::string& key) {
+  std::ostringstream c;
+  for (const nlohmann::json& run : history["runs"]) {
+    const std::string when = html_escape(run.value("finished", ""));
+    if (!run["jobs"].contains(key)) {
+      c << "<span title=\"" << when << ": not in this run\">&middot;</span> ";
+      continue;
+    }
+    const nlohmann::json& j = run["jobs"][key];
+    const std::string status = j.value("status", "");
+    c << "<span class=\"" << (status == "ok" ? "ok" : "bad") << "\" title=\"" << when << ", "
+      << seconds_text(j.value("seconds", 0.0)) << " s";
+    if (j.contains("baseline_regressions"))
+      c << ", " << j["baseline_regressions"].get<int>() << " baseline regressions";
+    c << "\">" << html_escape(status) << "</span> ";
+  }
+  return c.str();
+}
+
+std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds,
+                       const nlohmann::json& history) {
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>hfbake suite "
     << html_escape(suite.name) << "</title>\n<style>body{font-family:sans-serif;margin:2em}"
@@ -66,9 +121,8 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
     << ".ok{color:#070}.bad{color:#b00;font-weight:bold}</style></head><body>\n";
   h << "<h1>Suite " << html_escape(suite.name) << "</h1>\n<p>hfbake " << hfbake_version() << ", "
     << outcomes.size() << " jobs, " << seconds_text(seconds) << " s</p>\n";
-  h << "<table><tr><th>job</th><th>status</th><th>time "
-       "(s)</th><th>reference</th><th>report</th><th>errors</th>"
-    << "</tr>\n";
+  h << "<table><tr><th>job</th><th>status</th><th>time (s)</th><th>reference</th><th>baseline</th><th>last "
+    << history["runs"].size() << " runs (oldest first)</th><th>report</th><th>errors</th></tr>\n";
   for (const JobOutcome& o : outcomes) {
     const bool ok = o.status == JobStatus::ok;
     std::string report;
@@ -84,7 +138,8 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
       if (r.value("cache", "") == "hit")
         h << " (cache hit, " << seconds_text(r.value("cache_saved_seconds", 0.0)) << " s saved)";
     }
-    h << "</td><td>";
+    h << "</td><td>" << baseline_cell(o.baseline) << "</td><td>" << history_cell(history, job_key(o))
+      << "</td><td>";
     if (!report.empty()) h << "<a href=\"" << html_escape(report) << "\">" << html_escape(report) << "</a>";
     h << "</td><td>";
     for (const std::string& e : o.errors) h << html_escape(e) << "<br>";
@@ -174,25 +229,82 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
   return suite;
 }
 
-std::vector<fs::path> write_suite_reports(const Suite& suite, const std::vector<JobOutcome>& outcomes,
-                                          double seconds) {
+nlohmann::json suite_history_run(const std::vector<JobOutcome>& outcomes, double seconds,
+                                 const std::string& finished) {
+  nlohmann::json run = {{"finished", finished}, {"hfbake_version", hfbake_version()}, {"seconds", seconds}};
+  run["jobs"] = nlohmann::json::object();
+  for (const JobOutcome& o : outcomes) {
+    nlohmann::json j = {{"status", job_status_name(o.status)}, {"seconds", o.seconds}};
+    if (!o.baseline.is_null()) j["baseline_regressions"] = o.baseline["regressions"].size();
+    run["jobs"][job_key(o)] = std::move(j);
+  }
+  return run;
+}
+
+nlohmann::json append_suite_history(const nlohmann::json& history, nlohmann::json run, bool& dropped) {
+  auto is_run = [](const nlohmann::json& r) {
+    if (!r.is_object() || !r.contains("finished") || !r["finished"].is_string() || !r.contains("jobs") ||
+        !r["jobs"].is_object())
+      return false;
+    for (const auto& [key, j] : r["jobs"].items())
+      if (!j.is_object() || !j.contains("status") || !j["status"].is_string() ||
+          (j.contains("seconds") && !j["seconds"].is_number()) ||
+          (j.contains("baseline_regressions") && !j["baseline_regressions"].is_number_integer()))
+        return false;
+    return true;
+  };
+  dropped = !(history.is_object() && history.contains("runs") && history["runs"].is_array() &&
+              std::all_of(history["runs"].begin(), history["runs"].end(), is_run));
+  nlohmann::json runs = dropped ? nlohmann::json::array() : history["runs"];
+  runs.push_back(std::move(run));
+  if (runs.size() > kSuiteHistoryRuns) runs.erase(runs.begin(), runs.end() - kSuiteHistoryRuns);
+  return {{"runs", std::move(runs)}};
+}
+
+SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcome>& outcomes,
+                                 double seconds) {
   fs::create_directories(suite.output_dir);
   nlohmann::json doc = {{"suite", suite.name}, {"hfbake_version", hfbake_version()}, {"seconds", seconds}};
   doc["jobs"] = nlohmann::json::array();
   for (const JobOutcome& o : outcomes) {
     nlohmann::json j = {{"file", o.file},       {"name", o.name},     {"status", job_status_name(o.status)},
                         {"seconds", o.seconds}, {"errors", o.errors}, {"methods", o.methods}};
+    if (!o.baseline.is_null()) j["baseline"] = o.baseline;
     j["outputs"] = nlohmann::json::array();
     for (const fs::path& p : o.outputs) j["outputs"].push_back(p.string());
     doc["jobs"].push_back(std::move(j));
   }
   doc["skipped"] = suite.skipped;
-  const std::vector<fs::path> files = {suite.output_dir / "suite.json", suite.output_dir / "index.html",
-                                       suite.output_dir / "junit.xml"};
-  write_atomically(files[0], doc.dump(2) + "\n");
-  write_atomically(files[1], index_html(suite, outcomes, seconds));
-  write_atomically(files[2], junit_xml(suite, outcomes, seconds));
-  return files;
+
+  SuiteReports written;
+  const fs::path history_file = suite.output_dir / "history.json";
+  nlohmann::json previous = {{"runs", nlohmann::json::array()}};
+  bool dropped = false;
+  if (fs::exists(history_file)) {
+    try {
+      previous = read_json_file(history_file);
+    } catch (const InputError&) {
+      previous = nullptr;  // dropped below, with a warning
+    }
+  }
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char finished[32];
+  std::strftime(finished, sizeof finished, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  const nlohmann::json history =
+      append_suite_history(previous, suite_history_run(outcomes, seconds, finished), dropped);
+  if (dropped)
+    written.warnings.push_back(history_file.string() +
+                               ": not a suite history (history.json); starting it afresh with this run");
+
+  written.files = {suite.output_dir / "suite.json", history_file, suite.output_dir / "index.html",
+                   suite.output_dir / "junit.xml"};
+  write_atomically(written.files[0], doc.dump(2) + "\n");
+  write_atomically(written.files[1], history.dump(2) + "\n");
+  write_atomically(written.files[2], index_html(suite, outcomes, seconds, history));
+  write_atomically(written.files[3], junit_xml(suite, outcomes, seconds));
+  return written;
 }
 
 }  // namespace hfbake

@@ -2,7 +2,9 @@
 // A file given to `hfbake bake` is a suite when it has a "suite" key (schema: schemas/suite.schema.json).
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,10 +27,28 @@ struct Suite {
 // Problems with a suite file are appended to `errors` as one-line messages.
 std::optional<Suite> load_suite(const std::filesystem::path& file, std::vector<std::string>& errors);
 
-// suite.json (per job: status, outputs, metrics), index.html linking every report, junit.xml.
-// Written atomically into suite.output_dir; returns the paths written.
-std::vector<std::filesystem::path> write_suite_reports(const Suite& suite,
-                                                       const std::vector<JobOutcome>& outcomes,
-                                                       double seconds);
+// How many runs history.json keeps (the newest; the index shows them per job).
+inline constexpr std::size_t kSuiteHistoryRuns = 10;
+
+// One run of the suite as history.json records it: {"finished": UTC "YYYY-MM-DDTHH:MM:SSZ", "hfbake_version",
+// "seconds", "jobs": {<job file stem>: {"status", "seconds", "baseline_regressions" (only when the job names
+// a baseline)}}}.
+nlohmann::json suite_history_run(const std::vector<JobOutcome>& outcomes, double seconds,
+                                 const std::string& finished);
+
+// `history` (history.json's document, {"runs": [...]}, oldest first) with `run` appended, keeping the newest
+// kSuiteHistoryRuns runs. A document of another shape (damaged or hand-edited) is dropped: the result starts
+// afresh with `run`, and `dropped` says so.
+nlohmann::json append_suite_history(const nlohmann::json& history, nlohmann::json run, bool& dropped);
+
+struct SuiteReports {
+  std::vector<std::filesystem::path> files;  // written
+  std::vector<std::string> warnings;         // one line each, for the caller to print
+};
+
+// suite.json (per job: status, outputs, metrics, the comparison with the job's baseline), history.json (the
+// last kSuiteHistoryRuns runs), index.html (per job: status, time, reference, the baseline comparison, the
+// last runs' results and a link to the report), junit.xml. Written atomically into suite.output_dir.
+SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds);
 
 }  // namespace hfbake

@@ -99,6 +99,10 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
     const std::string format = t.value("format", "png");
     if (format == "tga" && base.bits == 16)
       fail("bits", "TGA holds 8 bits per channel; write 16 bits as \"png\" or \"tif\"");
+    if (format == "exr" && t.contains("bits"))
+      fail("bits", "an \"exr\" texture is half float; \"bits\" applies to png, tif and tga");
+    if (format == "exr" && base.transfer == Transfer::srgb)
+      fail("transfer", "an \"exr\" texture holds linear values; \"srgb\" applies to png, tif and tga");
 
     // What one file of this entry holds: a label (layer or pack name) and its channels.
     struct Content {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <memory>
 
-#include "io/gdal_session.hpp"
+#include "io/gdal_quiet.hpp"
 
 namespace hfbake {
 
@@ -32,7 +32,7 @@ bool read_crs(const std::string& wkt, OGRSpatialReference& srs) {
 }  // namespace
 
 std::optional<CrsEarth> crs_earth(const std::string& wkt) {
-  GdalSession session;
+  GdalQuiet gdal;
   OGRSpatialReference srs;
   if (!read_crs(wkt, srs)) return std::nullopt;
   OGRErr e1 = OGRERR_NONE, e2 = OGRERR_NONE;
@@ -47,7 +47,7 @@ std::optional<CrsEarth> crs_earth(const std::string& wkt) {
 }
 
 std::optional<std::array<double, 2>> lonlat_to_crs(const std::string& wkt, double lon, double lat) {
-  GdalSession session;
+  GdalQuiet gdal;
   OGRSpatialReference to, wgs84;
   if (!read_crs(wkt, to)) return std::nullopt;
   wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
@@ -56,7 +56,7 @@ std::optional<std::array<double, 2>> lonlat_to_crs(const std::string& wkt, doubl
 }
 
 std::optional<std::array<double, 2>> crs_to_lonlat(const std::string& wkt, double x, double y) {
-  GdalSession session;
+  GdalQuiet gdal;
   OGRSpatialReference from;
   if (!read_crs(wkt, from)) return std::nullopt;
   std::unique_ptr<OGRSpatialReference> geog(from.CloneGeogCS());
@@ -66,7 +66,7 @@ std::optional<std::array<double, 2>> crs_to_lonlat(const std::string& wkt, doubl
 }
 
 std::optional<double> grid_convergence(const std::string& wkt, double x, double y) {
-  GdalSession session;
+  GdalQuiet gdal;
   OGRSpatialReference crs;
   if (!read_crs(wkt, crs)) return std::nullopt;
   if (crs.IsGeographic()) return 0.0;

@@ -9,7 +9,7 @@
 #include <mutex>
 
 #include "core/error.hpp"
-#include "io/gdal_session.hpp"
+#include "io/gdal_quiet.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -28,7 +28,7 @@ bool asset_driver(const std::string& driver) {
 std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) return std::nullopt;  // the OpenImageIO path names the problem
-  GdalSession session;
+  GdalQuiet gdal;
   std::unique_ptr<GDALDataset> ds(
       GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!ds || ds->GetRasterCount() < 1) return std::nullopt;
@@ -64,12 +64,12 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
 
 Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
                           const ReadProgress& progress) {
-  GdalSession session;
+  GdalQuiet gdal;
   std::unique_ptr<GDALDataset> ds(
       GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!ds)
     throw InputError(site.job_file, site.pointer,
-                     file.string() + ": cannot read the raster: " + session.error());
+                     file.string() + ": cannot read the raster: " + gdal.error());
   GDALRasterBand* b = ds->GetRasterBand(band + 1);
   if (!b)
     throw InputError(site.job_file, site.pointer, file.string() + ": has no band " + std::to_string(band));
@@ -92,7 +92,7 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
         CE_None)
       throw InputError(site.job_file, site.pointer,
                        file.string() + ": cannot decode the raster (corrupt or truncated?) at row " +
-                           std::to_string(y0) + ": " + session.error());
+                           std::to_string(y0) + ": " + gdal.error());
     ds->FlushCache();  // read-only: drops the cached blocks (of every band: pixel-interleaved files cache
                        // all)
     if (progress) progress(double(y0 + n) / plane.height);

@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
-#include "io/gdal_session.hpp"
+#include "io/gdal_quiet.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -31,12 +31,12 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
   const bool holes = geo.holes.size() == n;
   auto fail = [&](const std::string& what) { throw InputError(file.string(), "", what); };
 
-  GdalSession session;
+  GdalQuiet gdal;
   GDALDriver* mem_driver = GetGDALDriverManager()->GetDriverByName("MEM");
   GDALDriver* cog_driver = GetGDALDriverManager()->GetDriverByName("COG");
   if (!mem_driver || !cog_driver) fail("GDAL has no MEM or COG driver");
   DatasetPtr mem(mem_driver->Create("", w, h, nc, GDT_Float32, nullptr));
-  if (!mem) fail("cannot make the raster in memory: " + session.error());
+  if (!mem) fail("cannot make the raster in memory: " + gdal.error());
 
   std::vector<float> plane(n);
   for (int c = 0; c < nc; ++c) {
@@ -44,7 +44,7 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
       plane[t] = holes && geo.holes[t] ? kGeoTiffNodata : layer.data[t * std::size_t(nc) + std::size_t(c)];
     GDALRasterBand* band = mem->GetRasterBand(c + 1);
     if (band->RasterIO(GF_Write, 0, 0, w, h, plane.data(), w, h, GDT_Float32, 0, 0, nullptr) != CE_None)
-      fail("cannot fill the raster: " + session.error());
+      fail("cannot fill the raster: " + gdal.error());
     band->SetDescription((layer.name + "." + layer.channels[std::size_t(c)]).c_str());
     if (holes) band->SetNoDataValue(kGeoTiffNodata);
   }
@@ -68,13 +68,13 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
   if (!out) {
     std::error_code ec;
     fs::remove(tmp, ec);
-    fail("cannot write the GeoTIFF: " + session.error());
+    fail("cannot write the GeoTIFF: " + gdal.error());
   }
   out.reset();  // flushes and closes
   if (CPLGetLastErrorType() >= CE_Failure) {
     std::error_code ec;
     fs::remove(tmp, ec);
-    fail("cannot write the GeoTIFF: " + session.error());
+    fail("cannot write the GeoTIFF: " + gdal.error());
   }
   std::error_code ec;
   fs::rename(tmp, file, ec);

@@ -76,11 +76,13 @@ TextureClipping clipping(const std::vector<Tap>& taps, std::size_t n, double exp
 
 }  // namespace
 
-TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
+namespace {
+
+// Each channel's source in `layers` (checked against the spec's shape).
+std::vector<Tap> texture_taps(const LayerSet& layers, const TextureSpec& spec) {
   const int nc = int(spec.channels.size());
-  if (nc != 1 && nc != 3 && nc != 4) throw std::logic_error("texture_pixels: 1, 3 or 4 channels");
-  if (spec.bits != 8 && spec.bits != 16) throw std::logic_error("texture_pixels: 8 or 16 bits");
-  if (spec.normal_map && nc != 3) throw std::logic_error("texture_pixels: a normal map has 3 channels");
+  if (nc != 1 && nc != 3 && nc != 4) throw std::logic_error("texture: 1, 3 or 4 channels");
+  if (spec.normal_map && nc != 3) throw std::logic_error("texture: a normal map has 3 channels");
   std::vector<Tap> taps(nc);
   const std::size_t n = std::size_t(layers.width) * std::size_t(layers.height);
   for (int c = 0; c < nc; ++c) {
@@ -92,51 +94,121 @@ TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
     const Layer* layer = layers.find(s.layer);
     if (!layer || s.channel < 0 || s.channel >= layer->channel_count() ||
         layer->data.size() != n * std::size_t(layer->channel_count()))
-      throw std::logic_error("texture_pixels: no channel " + std::to_string(s.channel) + " in layer " +
-                             s.layer);
+      throw std::logic_error("texture: no channel " + std::to_string(s.channel) + " in layer " + s.layer);
     taps[c] = {layer->data.data() + s.channel, layer->channel_count(), 0};
   }
-  const int p = spec.padding;
-  TexturePixels out;
-  out.width = layers.width + 2 * p;
-  out.height = layers.height + 2 * p;
-  out.channels = nc;
-  out.values.resize(std::size_t(out.width) * std::size_t(out.height) * std::size_t(nc));
-  const double top = spec.bits == 8 ? 255.0 : 65535.0;
+  return taps;
+}
+
+// Calls emit(i, c, v) for every value of the (padded) texture, rows top first, i the texel's index: v is the
+// channel's value times the exposure, or a normal map's 0.5 + 0.5 n; neither the transfer curve nor the
+// clamp.
+template <class Emit>
+void for_each_texture_value(const LayerSet& layers, const TextureSpec& spec, const std::vector<Tap>& taps,
+                            Emit&& emit) {
+  const int nc = int(taps.size()), p = spec.padding;
+  const int width = layers.width + 2 * p, height = layers.height + 2 * p;
   // The sign of each channel in the chosen frame (normal maps): tangent space with OpenGL's green looks
   // along image up, -y.
   const double sign[3] = {
       1,
       spec.normal_map && spec.space == NormalSpace::tangent && spec.green == GreenAxis::opengl ? -1.0 : 1.0,
       1};
-  for (int y = 0; y < out.height; ++y) {
+  for (int y = 0; y < height; ++y) {
     const int sy = source_index(y, layers.height, p, spec.repeat);
-    for (int x = 0; x < out.width; ++x) {
+    for (int x = 0; x < width; ++x) {
       const int sx = source_index(x, layers.width, p, spec.repeat);
       const std::size_t src = std::size_t(sy) * std::size_t(layers.width) + std::size_t(sx);
-      std::uint16_t* dst =
-          out.values.data() + (std::size_t(y) * std::size_t(out.width) + std::size_t(x)) * nc;
+      const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
       for (int c = 0; c < nc; ++c) {
         double v = taps[c].data ? double(taps[c].data[src * std::size_t(taps[c].stride)]) : taps[c].constant;
         if (!spec.normal_map && taps[c].data) v *= spec.exposure;
         // 0 encodes as 0.5, an exact rounding tie (127.5, 32767.5): float noise of a bake (a flat field's
         // bent normal has |y| ~ 1e-9) would pick either side of it, so components within 1e-6 of 0 are 0.
-        if (spec.normal_map)
-          v = 0.5 + 0.5 * sign[c] * (std::abs(v) < 1e-6 ? 0.0 : v);
-        else if (spec.transfer == Transfer::srgb && std::isfinite(v))
-          v = srgb_encode(std::clamp(v, 0.0, 1.0));
-        v = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 0.0;
-        dst[c] = std::uint16_t(std::round(v * top));
+        if (spec.normal_map) v = 0.5 + 0.5 * sign[c] * (std::abs(v) < 1e-6 ? 0.0 : v);
+        emit(i, c, v);
       }
     }
   }
-  if (!spec.normal_map) out.clipping = clipping(taps, n, spec.exposure);
+}
+
+}  // namespace
+
+TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
+  if (spec.bits != 8 && spec.bits != 16) throw std::logic_error("texture_pixels: 8 or 16 bits");
+  const std::vector<Tap> taps = texture_taps(layers, spec);
+  const int nc = int(taps.size());
+  TexturePixels out;
+  out.width = layers.width + 2 * spec.padding;
+  out.height = layers.height + 2 * spec.padding;
+  out.channels = nc;
+  out.values.resize(std::size_t(out.width) * std::size_t(out.height) * std::size_t(nc));
+  const double top = spec.bits == 8 ? 255.0 : 65535.0;
+  for_each_texture_value(layers, spec, taps, [&](std::size_t i, int c, double v) {
+    if (!spec.normal_map && spec.transfer == Transfer::srgb && std::isfinite(v))
+      v = srgb_encode(std::clamp(v, 0.0, 1.0));
+    v = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 0.0;
+    out.values[i * nc + c] = std::uint16_t(std::round(v * top));
+  });
+  if (!spec.normal_map)
+    out.clipping = clipping(taps, std::size_t(layers.width) * std::size_t(layers.height), spec.exposure);
   return out;
 }
 
+TextureValues texture_values(const LayerSet& layers, const TextureSpec& spec) {
+  const std::vector<Tap> taps = texture_taps(layers, spec);
+  const int nc = int(taps.size());
+  TextureValues out;
+  out.width = layers.width + 2 * spec.padding;
+  out.height = layers.height + 2 * spec.padding;
+  out.channels = nc;
+  out.values.resize(std::size_t(out.width) * std::size_t(out.height) * std::size_t(nc));
+  for_each_texture_value(layers, spec, taps, [&](std::size_t i, int c, double v) {
+    out.values[i * nc + c] = std::isfinite(v) ? float(v) : 0.0f;
+  });
+  return out;
+}
+
+namespace {
+
+// A half-float OpenEXR texture: the values as they are (texture_values), ZIP-compressed; Y, RGB or RGBA.
+void write_exr_texture(const fs::path& tmp, const fs::path& file, const LayerSet& layers,
+                       const TextureSpec& spec) {
+  const TextureValues v = texture_values(layers, spec);
+  OIIO::ImageSpec ispec(v.width, v.height, v.channels, OIIO::TypeDesc::HALF);
+  ispec.channelnames = v.channels == 1   ? std::vector<std::string>{"Y"}
+                       : v.channels == 3 ? std::vector<std::string>{"R", "G", "B"}
+                                         : std::vector<std::string>{"R", "G", "B", "A"};
+  ispec.alpha_channel = v.channels == 4 ? 3 : -1;
+  ispec.attribute("compression", "zip");
+  auto out = OIIO::ImageOutput::create("exr");
+  if (!out || !out->open(tmp.string(), ispec) || !out->write_image(OIIO::TypeDesc::FLOAT, v.values.data()) ||
+      !out->close()) {
+    std::string err = out ? out->geterror() : OIIO::geterror();
+    if (const auto nl = err.find('\n'); nl != std::string::npos) err.resize(nl);
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw InputError(file.string(), "", "cannot write the texture: " + err);
+  }
+}
+
+}  // namespace
+
 TextureClipping write_texture(const fs::path& file, const LayerSet& layers, const TextureSpec& spec) {
-  const TexturePixels px = texture_pixels(layers, spec);
   const std::string ext = file.extension().string();
+  if (ext == ".exr") {
+    const fs::path tmp = temporary_sibling(file).string() + ext;
+    write_exr_texture(tmp, file, layers, spec);
+    std::error_code ec;
+    fs::rename(tmp, file, ec);
+    if (ec) {
+      std::error_code ignored;
+      fs::remove(tmp, ignored);
+      throw InputError(file.string(), "", "cannot move the texture into place: " + ec.message());
+    }
+    return {};  // nothing clipped
+  }
+  const TexturePixels px = texture_pixels(layers, spec);
   if (spec.bits == 16 && ext == ".tga") throw std::logic_error("write_texture: TGA holds 8 bits");
   const OIIO::TypeDesc type = spec.bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16;
   OIIO::ImageSpec ispec(px.width, px.height, px.channels, type);

@@ -1,4 +1,5 @@
-// Engine-ready textures: chosen layers as linear 8- or 16-bit integer images (PNG, TIFF, TGA), channel
+// Engine-ready textures: chosen layers as linear 8- or 16-bit integer images (PNG, TIFF, TGA) or half-float
+// OpenEXR (values above 1 kept: light maps as HDR), channel
 // packs (R/G/B/A from named layers), normal maps of direction layers (0.5 + 0.5 n, world or tangent space,
 // OpenGL or DirectX green), and optional edge padding for atlases. docs/textures.md.
 #pragma once
@@ -65,8 +66,18 @@ struct TexturePixels {
 };
 TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec);
 
-// Writes the texture to `file`; the format follows the extension (.png, .tif, .tga). 16 bits need PNG or
-// TIFF. sRGB-encoded files are tagged sRGB; linear ones carry no colour tag. Returns what was clipped.
+// The texture's size and its values as a half-float EXR texture holds them, interleaved, rows top first: each
+// channel's value times the exposure (a normal map: 0.5 + 0.5 n), neither curved nor clamped (NaN -> 0).
+// `bits` and `transfer` do not apply.
+struct TextureValues {
+  int width = 0, height = 0, channels = 0;
+  std::vector<float> values;
+};
+TextureValues texture_values(const LayerSet& layers, const TextureSpec& spec);
+
+// Writes the texture to `file`; the format follows the extension (.png, .tif, .tga: texture_pixels; .exr:
+// half float, texture_values, channels Y, RGB or RGBA). 16 bits need PNG or TIFF. sRGB-encoded files are
+// tagged sRGB; linear ones carry no colour tag. Returns what was clipped (nothing for .exr).
 // Failure -> InputError naming the file.
 TextureClipping write_texture(const std::filesystem::path& file, const LayerSet& layers,
                               const TextureSpec& spec);

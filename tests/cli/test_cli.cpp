@@ -433,7 +433,7 @@ TEST_F(Cli, EveryExampleJobValidates) {
   std::string files;
   int count = 0;
   const fs::path root(HFBAKE_SOURCE_DIR);
-  for (const fs::path dir :
+  for (const fs::path& dir :
        {root / "jobs", root / "jobs" / "examples", root / "bench", root / "tests" / "accuracy"})
     for (const auto& e : fs::directory_iterator(dir))
       if (e.path().extension() == ".json") {

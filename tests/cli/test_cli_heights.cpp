@@ -60,6 +60,9 @@ class CliHeights : public ::testing::Test {
     } else if (type == OIIO::TypeDesc::UINT8) {
       std::vector<std::uint8_t> v(values.begin(), values.end());
       ok = out->write_image(type, v.data());
+    } else if (type == OIIO::TypeDesc::INT16) {
+      std::vector<std::int16_t> v(values.begin(), values.end());
+      ok = out->write_image(type, v.data());
     } else {
       ok = out->write_image(OIIO::TypeDesc::FLOAT, values.data());
     }
@@ -146,26 +149,57 @@ TEST_F(CliHeights, IntegerImagesBakeLikeAFloatImageOfTheSameWorldHeights) {
   }
 }
 
-// GDAL (a PNG with georeferencing beside it in an .aux.xml) and OpenImageIO (the same PNG without) read the
-// same integers: the same bake.
-TEST_F(CliHeights, GdalAndOpenImageIoAgreeOnIntegerHeights) {
-  const std::vector<float> stored = integer_heights(65535);
-  write_image("plain.png", stored, OIIO::TypeDesc::UINT16);
-  write_image("geo.png", stored, OIIO::TypeDesc::UINT16);
-  std::ofstream(dir_ / "geo.png.aux.xml")
-      << "<PAMDataset>\n  <GeoTransform>0, 1, 0, 48, 0, -1</GeoTransform>\n</PAMDataset>\n";
-  const double scale = 10.0 / 65535;
-  const Result a =
-      hfbake("bake " + write_job("plain", {{"image", "plain.png"}, {"height_scale", scale}}).string());
-  ASSERT_EQ(a.exit_code, 0) << a.err;
-  const Result b =
-      hfbake("bake " + write_job("geo", {{"image", "geo.png"}, {"height_scale", scale}}).string());
-  ASSERT_EQ(b.exit_code, 0) << b.err;
-  EXPECT_NE(a.err.find("through OpenImageIO (png, uint16 integers as stored)"), std::string::npos) << a.err;
-  EXPECT_NE(b.err.find("through GDAL (PNG, UInt16 integers as stored)"), std::string::npos) << b.err;
-  const std::vector<float> x = ao("plain"), y = ao("geo");
-  ASSERT_EQ(x.size(), std::size_t(kSide) * kSide);
-  EXPECT_EQ(x, y);
+// GDAL (the image with georeferencing beside it in an .aux.xml) and OpenImageIO (the same image without) read
+// the same integers for every integer type the format holds (PNG: uint8, uint16; TIFF: uint8, uint16, int16):
+// the same bake as a float EXR of the world heights the job states.
+TEST_F(CliHeights, GdalAndOpenImageIoAgreeOnEveryIntegerType) {
+  const double relief = 10.0;
+  struct Case {
+    const char* ext;
+    OIIO::TypeDesc type;
+    float top, offset;  // stored integers: offset .. offset + top
+    const char *oiio, *gdal;
+  };
+  for (const Case& c : {Case{"png", OIIO::TypeDesc::UINT8, 255, 0, "png, uint8", "PNG, Byte"},
+                        Case{"png", OIIO::TypeDesc::UINT16, 65535, 0, "png, uint16", "PNG, UInt16"},
+                        Case{"tif", OIIO::TypeDesc::UINT8, 255, 0, "tiff, uint8", "GTiff, Byte"},
+                        Case{"tif", OIIO::TypeDesc::UINT16, 65535, 0, "tiff, uint16", "GTiff, UInt16"},
+                        Case{"tif", OIIO::TypeDesc::INT16, 65535, -32768, "tiff, int16", "GTiff, Int16"}}) {
+    const std::string type = c.type.c_str(), name = type + "_" + c.ext;
+    SCOPED_TRACE(name);
+    std::vector<float> stored = integer_heights(c.top);
+    for (float& v : stored) v += c.offset;
+    const double scale = relief / c.top;
+    const std::string plain = "plain_" + name + "." + c.ext, geo = "geo_" + name + "." + c.ext;
+    write_image(plain, stored, c.type);
+    write_image(geo, stored, c.type);
+    write_image(name + ".exr", world(stored, scale), OIIO::TypeDesc::FLOAT);
+    std::ofstream(dir_ / (geo + ".aux.xml"))
+        << "<PAMDataset>\n  <GeoTransform>0, 1, 0, 48, 0, -1</GeoTransform>\n</PAMDataset>\n";
+    const Result a =
+        hfbake("bake " + write_job("plain_" + name, {{"image", plain}, {"height_scale", scale}}).string());
+    ASSERT_EQ(a.exit_code, 0) << a.err;
+    const Result b =
+        hfbake("bake " + write_job("geo_" + name, {{"image", geo}, {"height_scale", scale}}).string());
+    ASSERT_EQ(b.exit_code, 0) << b.err;
+    const Result f = hfbake("bake --quiet " + write_job("exr_" + name, {{"image", name + ".exr"}}).string());
+    ASSERT_EQ(f.exit_code, 0) << f.err;
+    EXPECT_NE(a.err.find("through OpenImageIO (" + std::string(c.oiio) + " integers as stored)"),
+              std::string::npos)
+        << a.err;
+    EXPECT_NE(b.err.find("through GDAL (" + std::string(c.gdal) + " integers as stored)"), std::string::npos)
+        << b.err;
+    // The stored range as integers, whatever the reader.
+    char range[96];
+    std::snprintf(range, sizeof range, "stored %.0f .. %.0f", c.offset, c.offset + c.top);
+    EXPECT_NE(a.err.find(range), std::string::npos) << a.err;
+    EXPECT_NE(b.err.find(range), std::string::npos) << b.err;
+    const std::vector<float> x = ao("plain_" + name), y = ao("geo_" + name), z = ao("exr_" + name);
+    ASSERT_EQ(x.size(), std::size_t(kSide) * kSide);
+    EXPECT_EQ(x, z);
+    EXPECT_EQ(y, z);
+    EXPECT_LT(*std::min_element(z.begin(), z.end()), 0.9f);  // not a flattened field
+  }
 }
 
 // Without height_scale, a 16-bit image's integers are world units: validate states the range and warns that

@@ -210,7 +210,8 @@ TEST(TextureCli, RepeatTileTexturesKeepTheirSizeAndTile) {
 }
 
 // A light map whose values exceed 1 is written clipped only with a warning giving the clipped share (the
-// EXR's values are the truth); "exposure" scales the values first and, when they fit, nothing is said.
+// EXR's values are the truth); "exposure" scales the values first and, when they fit, nothing is said; an
+// "exr" texture keeps them as half floats.
 TEST(TextureCli, LightMapAboveOneIsNotClippedSilently) {
   TempFolder dir;
   auto lit = [&](const fs::path& out, const json& texture) {
@@ -255,6 +256,42 @@ TEST(TextureCli, LightMapAboveOneIsNotClippedSilently) {
   for (std::size_t i = 0; i < png.values.size(); ++i)
     ASSERT_EQ(std::lround(png.values[i] * 65535), std::lround(double(exr2.values[i]) * exposure * 65535))
         << i;
+
+  // An "exr" texture keeps the light above 1: half floats of the EXR's values (within half's rounding,
+  // 2^-11 relative), nothing clipped and nothing to warn about.
+  const fs::path hdr = dir / "hdr";
+  r = run_hfbake(
+      dir.path(),
+      "bake " + write(dir, "c.json", lit(hdr, {{"layers", {"direct"}}, {"format", "exr"}})).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("clipped"), std::string::npos) << r.err;
+  const Pixels tex = read(hdr / "textures" / "slope.p1.direct.exr");
+  EXPECT_EQ(tex.type, OIIO::TypeDesc::HALF);
+  ASSERT_EQ(tex.channels, 3);
+  ASSERT_EQ(tex.values.size(), exr.values.size());
+  float tex_largest = 0;
+  for (std::size_t i = 0; i < tex.values.size(); ++i) {
+    ASSERT_NEAR(tex.values[i], exr.values[i], std::abs(exr.values[i]) * 0x1p-11 + 1e-7) << i;
+    tex_largest = std::max(tex_largest, tex.values[i]);
+  }
+  EXPECT_GT(tex_largest, 1.0f);
+  // bits and the sRGB curve do not apply to it: refused before baking, at their pointers.
+  r = run_hfbake(
+      dir.path(),
+      "validate " +
+          write(dir, "d.json", lit(hdr, {{"layers", {"direct"}}, {"format", "exr"}, {"bits", 16}})).string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("/output/textures/0/bits: an \"exr\" texture is half float"), std::string::npos)
+      << r.err;
+  r = run_hfbake(
+      dir.path(),
+      "validate " +
+          write(dir, "e.json", lit(hdr, {{"layers", {"direct"}}, {"format", "exr"}, {"transfer", "srgb"}}))
+              .string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("/output/textures/0/transfer: an \"exr\" texture holds linear values"),
+            std::string::npos)
+      << r.err;
 }
 
 // Previews (display-encoded, for looking at) and textures (data) never share a file name.

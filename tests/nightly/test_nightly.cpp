@@ -185,6 +185,8 @@ TEST_F(Nightly, BaselineCompareAndABrokenMethod) {
   EXPECT_TRUE(nlohmann::json::parse(read_file(dir_ / "cmp.json"))["regression"].get<bool>());
 }
 
+// A suite run twice, the second time with p1 broken: exit 1, JUnit failures, the folders compare, and the
+// suite's index shows each job's comparison with its baseline and its last results.
 TEST_F(Nightly, SuiteWithABrokenMethodExitsOneAndFoldersCompare) {
   // Thresholds the code holds (p1 with 16 directions: rmse about 0.015 against a 256-sample reference);
   // broken on purpose, p1's error grows by 0.05.
@@ -192,14 +194,24 @@ TEST_F(Nightly, SuiteWithABrokenMethodExitsOneAndFoldersCompare) {
   std::ofstream(dir_ / "suite.json") << R"({"version": 1, "suite": "mini", "jobs": ["a.json", "b.json"],
       "output": {"dir": "suite_out"}})";
   const std::string bake = "bake " + (dir_ / "suite.json").string() + " --no-cache --quiet";
+  const fs::path out = dir_ / "suite_out", base = dir_ / "suite_baseline";
+  // Nine earlier runs in the suite's history: after two more, the oldest has made way (10 are kept).
+  nlohmann::json runs = nlohmann::json::array();
+  for (int k = 1; k <= 9; ++k)
+    runs.push_back({{"finished", "2000-01-0" + std::to_string(k) + "T00:00:00Z"},
+                    {"jobs", {{"a", {{"status", "ok"}, {"seconds", 1.0}}}}}});
+  fs::create_directories(out);
+  std::ofstream(out / "history.json") << nlohmann::json{{"runs", runs}}.dump();
   Result r = hfbake(bake);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const fs::path out = dir_ / "suite_out", base = dir_ / "suite_baseline";
   ASSERT_EQ(hfbake("compare " + out.string() + " " + base.string() + " --update-baseline --quiet").exit_code,
             0);
   EXPECT_TRUE(fs::exists(base / "a" / "report.json"));
   EXPECT_TRUE(fs::exists(base / "b" / "report.json"));
 
+  // Job a names its baseline; b names none.
+  write_job("a", {{"thresholds", {{"p1-directions16.ao.rmse", 0.03}}},
+                  {"baseline", "suite_baseline/a/report.json"}});
   r = hfbake(bake, "HFBAKE_TEST_BREAK=p1");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   const std::string junit = read_file(out / "junit.xml");
@@ -208,6 +220,57 @@ TEST_F(Nightly, SuiteWithABrokenMethodExitsOneAndFoldersCompare) {
   r = hfbake("compare " + out.string() + " " + base.string());
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.out.find("a/report.json: REGRESSION"), std::string::npos) << r.out;
+
+  // The suite's reports carry a's comparison with its baseline, as a's report.json has it.
+  const nlohmann::json a_report = nlohmann::json::parse(read_file(out / "a" / "report.json"));
+  const nlohmann::json& regressions = a_report["baseline"]["regressions"];
+  ASSERT_FALSE(regressions.empty());
+  const nlohmann::json summary = nlohmann::json::parse(read_file(out / "suite.json"));
+  ASSERT_EQ(summary["jobs"].size(), 2u);
+  EXPECT_EQ(summary["jobs"][0]["baseline"]["regressions"], regressions);
+  EXPECT_FALSE(summary["jobs"][1].contains("baseline"));
+  // The history: the newest 10 runs, oldest first; this run's a regressed against its baseline.
+  const nlohmann::json history = nlohmann::json::parse(read_file(out / "history.json"));
+  ASSERT_EQ(history["runs"].size(), 10u);
+  EXPECT_EQ(history["runs"][0]["finished"], "2000-01-02T00:00:00Z");
+  const nlohmann::json &previous = history["runs"][8]["jobs"], last = history["runs"][9]["jobs"];
+  EXPECT_EQ(previous["a"]["status"], "ok");
+  EXPECT_EQ(previous["b"]["status"], "ok");
+  EXPECT_FALSE(previous["a"].contains("baseline_regressions"));
+  EXPECT_EQ(last["a"]["status"], "regressed");
+  EXPECT_EQ(last["a"]["baseline_regressions"], regressions.size());
+  EXPECT_EQ(last["b"]["status"], "regressed");
+  EXPECT_FALSE(last["b"].contains("baseline_regressions"));
+  // The index: per job, the baseline comparison (a: the regressed metrics; b: none) and the last 10 results.
+  const std::string index = read_file(out / "index.html");
+  const std::size_t row_a = index.find("<tr><td>a</td>"), row_b = index.find("<tr><td>b</td>");
+  ASSERT_NE(row_a, std::string::npos) << index;
+  ASSERT_NE(row_b, std::string::npos) << index;
+  const std::string a_row = index.substr(row_a, index.find("</tr>", row_a) - row_a),
+                    b_row = index.substr(row_b, index.find("</tr>", row_b) - row_b);
+  EXPECT_NE(index.find("last 10 runs"), std::string::npos);
+  EXPECT_NE(a_row.find(std::to_string(regressions.size()) +
+                       " regressed</span> against suite_baseline/a/report.json"),
+            std::string::npos)
+      << a_row;
+  EXPECT_NE(a_row.find(regressions[0]["key"].get<std::string>()), std::string::npos) << a_row;
+  EXPECT_NE(b_row.find("<td>&ndash;</td>"), std::string::npos) << b_row;
+  auto count = [](const std::string& text, const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count(a_row, ">ok</span>"), 9u) << a_row;  // 8 seeded runs and the first bake
+  EXPECT_EQ(count(a_row, ">regressed</span>"), 1u) << a_row;
+  EXPECT_EQ(count(b_row, ">ok</span>"), 1u) << b_row;
+  EXPECT_EQ(count(b_row, "not in this run"), 8u) << b_row;
+
+  // A damaged history is started afresh, with a warning.
+  std::ofstream(out / "history.json") << "{\"runs\": [";
+  r = hfbake(bake, "HFBAKE_TEST_BREAK=p1");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("history.json: not a suite history"), std::string::npos) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(read_file(out / "history.json"))["runs"].size(), 1u);
 }
 
 TEST_F(Nightly, NightlyJobsAreValid) {

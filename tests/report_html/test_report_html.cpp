@@ -334,16 +334,19 @@ std::string find_chromium() {
   return "";
 }
 
+// Headless, offline, no profile of its own: the page alone (the user data folder follows the last flag).
+const char* const kChromiumFlags =
+    " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking"
+    " --disable-component-update --disable-sync --disable-extensions --hide-scrollbars"
+    " --virtual-time-budget=5000 --enable-logging=stderr --v=0 --user-data-dir=";
+
 TEST(ReportHtml, RendersInHeadlessChromium) {
   const std::string chromium = find_chromium();
   if (chromium.empty()) GTEST_SKIP() << "chromium is not installed (./setup.sh test installs it)";
   TempDir tmp;
   const fs::path page = tmp.path() / "report.html";
   std::ofstream(page) << Fixture().html();
-  const std::string flags =
-      " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking"
-      " --disable-component-update --disable-sync --disable-extensions --hide-scrollbars"
-      " --virtual-time-budget=5000 --enable-logging=stderr --v=0 --user-data-dir=";
+  const std::string flags = kChromiumFlags;
 
   // One browser run: the DOM after load (the page's own check records how many images decoded) and a
   // screenshot, kept in the build folder.
@@ -383,6 +386,67 @@ TEST(ReportHtml, RendersInHeadlessChromium) {
     colours.insert(px[i] << 16 | px[i + 1] << 8 | px[i + 2]);
   EXPECT_GT(colours.size(), 200u);
   std::printf("screenshot: %s (%dx%d, %zu colours)\n", shot.c_str(), w, h, colours.size());
+}
+
+// The bent normal's angles as a browser shows them: a method whose bent normal leans 5 degrees from the
+// reference's on the left half of the field and 15 degrees on the right (mean 10, p99 and max 15), and a
+// radius-limited bent normal listed as not compared, with the reason.
+TEST(ReportHtml, BentNormalAnglesInHeadlessChromium) {
+  const std::string chromium = find_chromium();
+  if (chromium.empty()) GTEST_SKIP() << "chromium is not installed (./setup.sh test installs it)";
+  const int w = 32, h = 24;
+  const double kDeg = 3.14159265358979323846 / 180.0;
+  LayerSet reference, leaning, limited;
+  for (LayerSet* s : {&reference, &leaning, &limited}) s->width = w, s->height = h;
+  Layer& up = reference.add("bent_normal", xyz_channels());
+  Layer& lean = leaning.add("bent_normal", xyz_channels());
+  limited.add("bent_normal", xyz_channels());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t t = (std::size_t(y) * w + x) * 3;
+      const double a = (x < w / 2 ? 5.0 : 15.0) * kDeg, turn = 0.7 * y;  // leaning in any azimuth
+      up.data[t + 2] = 1.0f;
+      lean.data[t] = float(std::sin(a) * std::cos(turn));
+      lean.data[t + 1] = float(std::sin(a) * std::sin(turn));
+      lean.data[t + 2] = float(std::cos(a));
+    }
+  limited.layers[0].data = lean.data;
+  ReportSpec spec;
+  spec.hfbake_version = "0.1.0-test";
+  spec.job_name = "bent_fixture";
+  spec.job_file = "jobs/bent_fixture.json";
+  spec.job_hash = "0123456789abcdef";
+  spec.reference_parameters = {{"samples", 64}, {"seed", 1}};
+  const std::vector<ReportMethodInput> inputs = {
+      {"p1", "p1", 0.1, {{"method", "p1"}, {"directions", 16}}, &leaning},
+      {"hbao", "hbao", 0.1, {{"method", "hbao"}, {"radius", 8}}, &limited}};
+  HtmlInputs in;
+  in.report = build_report(spec, inputs, reference).doc;
+  in.methods = {{"p1", "p1", &leaning, "", 0, -1}, {"hbao", "hbao", &limited, "", 0, -1}};
+  in.reference = &reference;
+  TempDir tmp;
+  const fs::path page = tmp.path() / "report.html", dom = tmp.path() / "dom.html",
+                 log = tmp.path() / "chromium.log";
+  std::ofstream(page) << report_html(in);
+  ASSERT_EQ(run("timeout 120 " + chromium + kChromiumFlags + (tmp.path() / "profile").string() +
+                " --dump-dom file://" + page.string() + " >" + dom.string() + " 2>" + log.string()),
+            0)
+      << read_file(log);
+  const std::string text = read_file(dom);
+  // The row of the directions table, as the browser's DOM has it.
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(
+      text, m,
+      std::regex(
+          R"re(<tr><td>p1</td><td>bent_normal</td><td>([0-9.]+)</td><td>([0-9.]+)</td><td>([0-9.]+)</td></tr>)re")))
+      << text.substr(0, 2000);
+  EXPECT_NEAR(std::stod(m[1]), 10.0, 0.01);
+  EXPECT_NEAR(std::stod(m[2]), 15.0, 0.01);
+  EXPECT_NEAR(std::stod(m[3]), 15.0, 0.01);
+  EXPECT_NE(text.find("mean angle"), std::string::npos);
+  // The radius-limited bent normal is not scored against the unlimited reference: no row, and the reason.
+  EXPECT_EQ(text.find("<tr><td>hbao</td><td>bent_normal</td>"), std::string::npos);
+  EXPECT_NE(text.find("radius-limited"), std::string::npos) << text.substr(0, 2000);
 }
 
 }  // namespace

@@ -10,17 +10,17 @@
 
 namespace hfbake {
 
-class GdalSession {
+class GdalQuiet {
  public:
-  GdalSession() {
+  GdalQuiet() {
     static std::once_flag once;
     std::call_once(once, [] { GDALAllRegister(); });
     CPLErrorReset();
     CPLPushErrorHandler(CPLQuietErrorHandler);
   }
-  ~GdalSession() { CPLPopErrorHandler(); }
-  GdalSession(const GdalSession&) = delete;
-  GdalSession& operator=(const GdalSession&) = delete;
+  ~GdalQuiet() { CPLPopErrorHandler(); }
+  GdalQuiet(const GdalQuiet&) = delete;
+  GdalQuiet& operator=(const GdalQuiet&) = delete;
 
   // GDAL's last message (first line), or "unknown error".
   std::string error() const {
