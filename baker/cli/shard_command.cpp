@@ -112,8 +112,8 @@ LayerSet StageSources::load(const Scene& scene, const RunControl& rc) {
   LayerSet total;
   for (ShardReader& r : blocks_) add_direction_block(total, r.load(0));  // in block order
   const BakeEntry& e = job_.bakes[std::size_t(entry_)];
-  return find_method(e.method)->finish_stage_blocks(scene, e.params, stage_, std::move(state),
-                                                    std::move(total), rc);
+  const MethodConfig& c = entry_config(e);
+  return c.method->finish_stage_blocks(scene, c, stage_, std::move(state), std::move(total), rc);
 }
 
 std::vector<fs::path> remove_stale_shard_files(const fs::path& dir) {
@@ -233,8 +233,9 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
     LayerSet prev;
     if (stage > 0) prev = last_of_entry ? std::move(state) : LayerSet(state);
     const LayerSet out =
-        item.block < 0 ? m->bake_stage(scene, entry.params, stage, std::move(prev), rc)
-                       : m->bake_stage_block(scene, entry.params, stage, item.block, std::move(prev), rc);
+        item.block < 0
+            ? m->bake_stage(scene, entry_config(entry), stage, std::move(prev), rc)
+            : m->bake_stage_block(scene, entry_config(entry), stage, item.block, std::move(prev), rc);
     if (last_of_entry) state_entry = -1, state = LayerSet();
     part.seconds = seconds + seconds_since(t0), part.cpu_seconds = cpu + process_cpu_seconds() - cpu0;
     progress.end(job.name, step, part.seconds);
@@ -270,7 +271,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
       ShardPart part;
       part.entry = e.entry, part.kind = "block", part.block = b;
       run(entry.stem + "#" + std::to_string(b), part,
-          [&](const RunControl& rc) { return m->bake_block(scene, entry.params, b, rc); });
+          [&](const RunControl& rc) { return m->bake_block(scene, entry_config(entry), b, rc); });
     }
   }
   if (work.row_end > work.row_begin) {
@@ -283,7 +284,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
             cached.layers.width == size.width && cached.layers.height == size.height)
           return rows_of(cached.layers, work.row_begin, work.row_end);
       }
-      ReferenceOptions o = job_reference_options(job, scene);
+      ReferenceOptions o = job_reference_options(job);
       o.row_begin = work.row_begin, o.row_end = work.row_end;
       return bake_reference(scene, o, rc);
     });
@@ -355,7 +356,7 @@ LayerSet MergedShards::method(int entry, const Scene& scene, const RunControl& r
   const BakeEntry& e = job_.bakes[std::size_t(entry)];
   const int B = entry_direction_blocks(e);
   if (auto st = stages_.find(entry); st != stages_.end())
-    return find_method(e.method)->finish_stages(scene, e.params, st->second.load(scene, rc), rc);
+    return entry_config(e).method->finish_stages(scene, entry_config(e), st->second.load(scene, rc), rc);
   LayerSet total;
   for (ShardReader& r : readers_)
     for (std::size_t p = 0; p < r.parts().size(); ++p) {
@@ -366,7 +367,7 @@ LayerSet MergedShards::method(int entry, const Scene& scene, const RunControl& r
     }
   if (B == 0 || total.layers.empty())
     throw InputError(job_.file.string(), e.pointer, "no shard holds " + e.stem);
-  return find_method(e.method)->finish_blocks(scene, e.params, std::move(total), rc);
+  return entry_config(e).method->finish_blocks(scene, entry_config(e), std::move(total), rc);
 }
 
 LayerSet MergedShards::reference() {
