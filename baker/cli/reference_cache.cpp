@@ -15,7 +15,6 @@
 #include <nlohmann/json.hpp>
 #include <system_error>
 
-#include "cli/method_dispatch.hpp"
 #include "core/safe_file.hpp"
 #include "job/content_hash.hpp"
 #include "reference/bake_reference.hpp"
@@ -66,7 +65,11 @@ std::string reference_cache_key(const Job& job) {
   // key.
   nlohmann::json falloffs = nlohmann::json::array();
   std::vector<const MethodConfig*> entries;
-  for (const BakeEntry& e : job.bakes) entries.push_back(&entry_config(e));
+  for (const BakeEntry& e : job.bakes) {
+    if (!e.config)
+      throw std::logic_error("reference_cache_key: bake entry " + e.pointer + " was not resolved");
+    entries.push_back(e.config.get());
+  }
   if (const int b = reference_falloff_entry(job.doc.value("reference", nlohmann::json::object()), entries);
       b >= 0) {
     const MethodConfig& e = *entries[std::size_t(b)];
