@@ -187,7 +187,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
       progress.message(job.name + ": " + entry.stem +
                        ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
     progress.end(job.name, entry.stem, seconds);
-    add_common_attributes(layers, job, job_hash, entry.method, entry.resolved, seconds);
+    add_common_attributes(layers, job, job_hash, entry.method, entry_config(entry).resolved, seconds);
     tell(stage.write_layers(entry.stem, layers));
     if (kept) (*kept)[entry.stem] = job.has_reference ? layers : std::move(layers);
     outcome.methods[entry.stem] = {
@@ -218,7 +218,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     std::optional<ReferenceResume> resume;
     std::string checkpoint_problem;
     auto trace = [&] {
-      const ReferenceOptions options = job_reference_options(job, scene);
+      const ReferenceOptions& options = job_reference_options(job);
       const ReferenceCheckpoint checkpoint(stage.checkpoint_dir(),
                                            reference_checkpoint_key(job, options, size.width, size.height));
       resume = checkpoint.resume(&checkpoint_problem);
@@ -244,8 +244,14 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     // Not cached: cheap beside the tracing.
     add_reference_horizons(scene.field, method_layers, reference, rc);
     add_reference_sh_visibility(scene.field, method_layers, reference, rc);
-    add_reference_relief(scene.field, method_layers, reference, rc);
-    add_common_attributes(reference, job, job_hash, "reference", job.reference_resolved, seconds);
+    // The first relief entry's layers, traced with its settings.
+    for (std::size_t i = 0; i < job.bakes.size(); ++i)
+      if (const MethodConfig& c = entry_config(job.bakes[i]); c.holds<ReliefSettings>()) {
+        add_reference_relief(scene.field, c.get<ReliefSettings>(), report.methods[i].layers, reference, rc);
+        break;
+      }
+    add_common_attributes(reference, job, job_hash, "reference", job_reference_options(job).resolved,
+                          seconds);
     tell(stage.write_layers("reference", reference));
     if (kept) (*kept)["reference"] = reference;
     outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};

@@ -116,14 +116,18 @@ std::vector<std::string> resolve_job_checks(Job& job) {
   }
   for (BakeEntry& entry : job.bakes) {
     try {
-      entry.resolved = resolve_method_params(entry.params, context, file, entry.pointer);
+      entry.config =
+          std::make_shared<const MethodConfig>(resolve_method(entry.params, context, file, entry.pointer));
     } catch (const InputError& e) {
       errors.push_back(e.line());
     }
   }
   if (job.has_reference && errors.empty()) {
     try {
-      job.reference_resolved = read_reference_options(job.doc, context, file).resolved;
+      std::vector<const MethodConfig*> entries;
+      for (const BakeEntry& entry : job.bakes) entries.push_back(entry.config.get());
+      job.reference_options = std::make_shared<const ReferenceOptions>(read_reference_options(
+          job.doc.value("reference", nlohmann::json::object()), entries, context, file));
     } catch (const InputError& e) {
       errors.push_back(e.line());
     }
@@ -142,17 +146,20 @@ std::vector<std::string> resolve_job_checks(Job& job) {
 
 }  // namespace
 
-LayerSet run_method(const BakeEntry& entry, const Scene& scene, const RunControl& rc) {
-  const MethodInfo* m = find_method(entry.method);
-  if (!m) throw InputError("", entry.pointer + "/method", "unknown method \"" + entry.method + "\"");
-  return m->bake(scene, entry.params, rc);
+const MethodConfig& entry_config(const BakeEntry& entry) {
+  if (!entry.config)
+    throw std::logic_error("bake entry " + entry.pointer + " was not resolved (resolve_job)");
+  return *entry.config;
 }
 
-ReferenceOptions job_reference_options(const Job& job, const Scene& scene) {
-  MethodContext c;
-  c.field = scene.field;
-  c.bounces = scene.bounces;
-  return read_reference_options(job.doc, c, job.file.string());
+LayerSet run_method(const BakeEntry& entry, const Scene& scene, const RunControl& rc) {
+  const MethodConfig& config = entry_config(entry);
+  return config.method->bake(scene, config, rc);
+}
+
+const ReferenceOptions& job_reference_options(const Job& job) {
+  if (!job.reference_options) throw std::logic_error("the job's reference was not resolved (resolve_job)");
+  return *job.reference_options;
 }
 
 }  // namespace hfbake

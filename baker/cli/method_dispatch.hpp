@@ -18,14 +18,17 @@ namespace hfbake {
 // the procedural spec or the image header) and the job's bounces.
 MethodContext job_method_context(const Job& job);
 
-// Reads every bake entry's parameters and the reference's with their full checks, filling
-// BakeEntry::resolved and Job::reference_resolved. Returns every problem as one line
-// "<file>: <JSON pointer>: <what>" (empty: the job is good to bake).
+// Reads every bake entry's parameters and the reference's with their full checks, once: each entry's
+// method reader fills BakeEntry::config, the reference's reader (given those configs) Job::reference_options.
+// Returns every problem as one line "<file>: <JSON pointer>: <what>" (empty: the job is good to bake).
 std::vector<std::string> resolve_job(Job& job);
 
+// A resolved entry's config (std::logic_error before resolve_job).
+const MethodConfig& entry_config(const BakeEntry& entry);
+// Bakes a resolved entry from its config.
 LayerSet run_method(const BakeEntry& entry, const Scene& scene, const RunControl& rc);
 
-// The reference's options for a loaded scene (the same reader resolve_job ran).
-ReferenceOptions job_reference_options(const Job& job, const Scene& scene);
+// The reference's options resolve_job read (std::logic_error before it, or without a reference).
+const ReferenceOptions& job_reference_options(const Job& job);
 
 }  // namespace hfbake

@@ -64,17 +64,23 @@ std::string reference_cache_key(const Job& job) {
   // (reference_falloff_entry): adding a method, another obscurance entry or sweeping directions keeps the
   // key.
   nlohmann::json falloffs = nlohmann::json::array();
-  if (const int b = reference_falloff_entry(job.doc); b >= 0) {
-    const auto& e = job.doc["bake"][b];
-    nlohmann::json f = nlohmann::json::object();
-    for (const char* key : {"falloff", "radius"})
-      if (e.contains(key)) f[key] = e[key];
-    falloffs.push_back({{"method", e.value("method", "")}, {"falloff", f}});
+  std::vector<const MethodConfig*> entries;
+  for (const BakeEntry& e : job.bakes) {
+    if (!e.config)
+      throw std::logic_error("reference_cache_key: bake entry " + e.pointer + " was not resolved");
+    entries.push_back(e.config.get());
+  }
+  if (const int b = reference_falloff_entry(job.doc.value("reference", nlohmann::json::object()), entries);
+      b >= 0) {
+    const MethodConfig& e = *entries[std::size_t(b)];
+    falloffs.push_back(
+        {{"method", e.method->name},
+         {"falloff",
+          {{"falloff", falloff_kind_name(e.obscurance->kind)}, {"radius", e.obscurance->radius}}}});
   }
   determining["bake_falloffs"] = std::move(falloffs);
   // Which layers it traces (without "layers", the ones the job's methods are scored against).
-  if (job.reference_resolved.is_object() && job.reference_resolved.contains("layers"))
-    determining["reference_layers"] = job.reference_resolved["layers"];
+  if (job.reference_options) determining["reference_layers"] = job.reference_options->layers;
   h.add(determining.dump());  // objects are key-sorted: a canonical form
   for (const auto& [pointer, path] : job_input_files(job.doc)) {
     h.add("\n" + pointer + "\n");

@@ -10,6 +10,8 @@
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
+#include "methods/method_table.hpp"
+#include "reference/bake_reference.hpp"
 #include "report/baseline_compare.hpp"
 #include "report/report_document.hpp"
 
@@ -74,9 +76,8 @@ ReportResult write_report(const Job& job, const std::string& job_hash, const Rep
   spec.job_hash = job_hash;
   spec.job_scene = job_scene(job);
   // Resolved: every default filled in (what the reference used).
-  spec.reference_parameters = job.reference_resolved.is_object()
-                                  ? job.reference_resolved
-                                  : job.doc.value("reference", nlohmann::json::object());
+  spec.reference_parameters = job.reference_options ? job.reference_options->resolved
+                                                    : job.doc.value("reference", nlohmann::json::object());
   spec.reference_seconds = inputs.reference_seconds;
   spec.crop = options.value("crop", 0);
   spec.thresholds = options.value("thresholds", nlohmann::json::object());
@@ -87,7 +88,7 @@ ReportResult write_report(const Job& job, const std::string& job_hash, const Rep
   for (const MethodLayers& m : inputs.methods) {
     nlohmann::json params = nlohmann::json::object();
     for (const BakeEntry& e : job.bakes)
-      if (e.stem == m.stem) params = e.resolved.is_object() ? e.resolved : e.params;
+      if (e.stem == m.stem) params = e.config ? e.config->resolved : e.params;
     methods.push_back({m.stem, m.method, m.seconds, params, &m.layers});
   }
 

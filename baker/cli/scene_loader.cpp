@@ -9,6 +9,7 @@
 #include "field/procedural.hpp"
 #include "io/load_environment.hpp"
 #include "methods/method_table.hpp"
+#include "reference/bake_reference.hpp"
 #include "reference/embree_field.hpp"
 
 namespace hfbake {
@@ -120,33 +121,30 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   double added_per_texel = 0;
   bool sh_visibility_added = false, relief_added = false;
   for (const BakeEntry& e : job.bakes) {
-    // The method table's reader (resolve_job has usually run it already).
-    const nlohmann::json r = e.resolved.is_object()
-                                 ? e.resolved
-                                 : resolve_method_params(e.params, context, job.file.string(), e.pointer);
-    const MethodInfo* m = find_method(e.method);
+    // The entry's config (read by resolve_job; here only for a job not resolved yet).
+    const MethodConfig r =
+        e.config ? *e.config : resolve_method(e.params, context, job.file.string(), e.pointer);
+    const MethodInfo* m = r.method;
     int channels = 0;
-    for (const auto& l : r.value("layers", nlohmann::json::array()))
-      channels += layer_channel_count(l.get<std::string>(), r);
+    for (const std::string& l : r.layers) channels += layer_channel_count(l, r.directions);
     const double layers = 4.0 * channels * texels;
-    const double working = m && m->working_bytes ? m->working_bytes(r, context) : 0.0;
+    const double working = m->working_bytes ? m->working_bytes(r, context) : 0.0;
     // Its EXR: each half channel converted a band of at most 256 rows at a time (io/exr_output.cpp).
     const double exr_band = 2.0 * channels * std::min(texels, 256.0 * size.width);
     peak = std::max(peak, kept + layers + std::max({working, writing, exr_band}));
     if (job.has_reference) kept += layers;
-    if (parts) parts->push_back({e.stem, std::size_t(layers + working), m ? m->memory_knob : ""});
-    for (const auto& l : r.value("layers", nlohmann::json::array()))
+    if (parts) parts->push_back({e.stem, std::size_t(layers + working), m->memory_knob});
+    for (const std::string& l : r.layers)
       if ((l == "horizon" || l == "horizon_distance") && horizon_channels == 0)
-        horizon_channels = 2 * layer_channel_count(l.get<std::string>(), r);
-    for (const auto& l : r.value("layers", nlohmann::json::array()))
+        horizon_channels = 2 * layer_channel_count(l, r.directions);
+    for (const std::string& l : r.layers)
       if (l == "sh_visibility" && !sh_visibility_added) {
         added_per_texel += 4.0 * 16;
         sh_visibility_added = true;
       }
     if (e.method == "relief" && !relief_added) {
-      for (const auto& l : r.value("layers", nlohmann::json::array()))
-        added_per_texel += 4.0 * layer_channel_count(l.get<std::string>(), r);
-      added_per_texel += 16.0 * r.value("directions", 16);
+      for (const std::string& l : r.layers) added_per_texel += 4.0 * layer_channel_count(l, r.directions);
+      added_per_texel += 16.0 * r.directions;
       relief_added = true;
     }
   }
@@ -155,11 +153,11 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     // Its layers (value and standard error, 8 bytes a texel and channel) and Embree's geometry and BVH of
     // the triangulated field (reference/embree_field.hpp: 60 to 260 bytes a texel by reference.geometry).
     int channels = 0;
-    for (const auto& l : job.reference_resolved.value("layers", nlohmann::json::array()))
-      channels += layer_channel_count(l.get<std::string>(), job.reference_resolved);
+    if (job.reference_options)
+      for (const std::string& l : job.reference_options->layers) channels += layer_channel_count(l, 0);
     if (channels == 0) channels = 5;  // not resolved yet: ao, vsky, direct
     const double embree = reference::embree_bytes_per_texel(
-        reference::geometry_kind(job.reference_resolved.value("geometry", std::string("quads"))));
+        job.reference_options ? job.reference_options->geometry : reference::GeometryKind::quads);
     reference = (8.0 * channels + embree + 4.0 * horizon_channels + added_per_texel) * texels;
     peak = std::max(peak, kept + reference + writing);
   }

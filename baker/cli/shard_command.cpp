@@ -130,8 +130,8 @@ LayerSet StageSources::load(const Scene& scene, const RunControl& rc) {
   LayerSet total;
   for (ShardReader& r : blocks_) add_direction_block(total, r.load(0));  // in block order
   const BakeEntry& e = job_.bakes[std::size_t(entry_)];
-  return find_method(e.method)->finish_stage_blocks(scene, e.params, stage_, std::move(state),
-                                                    std::move(total), rc);
+  const MethodConfig& c = entry_config(e);
+  return c.method->finish_stage_blocks(scene, c, stage_, std::move(state), std::move(total), rc);
 }
 
 std::vector<fs::path> remove_stale_shard_files(const fs::path& dir) {
@@ -251,8 +251,9 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
     LayerSet prev;
     if (stage > 0) prev = last_of_entry ? std::move(state) : LayerSet(state);
     const LayerSet out =
-        item.block < 0 ? m->bake_stage(scene, entry.params, stage, std::move(prev), rc)
-                       : m->bake_stage_block(scene, entry.params, stage, item.block, std::move(prev), rc);
+        item.block < 0
+            ? m->bake_stage(scene, entry_config(entry), stage, std::move(prev), rc)
+            : m->bake_stage_block(scene, entry_config(entry), stage, item.block, std::move(prev), rc);
     if (last_of_entry) state_entry = -1, state = LayerSet();
     part.seconds = seconds + seconds_since(t0), part.cpu_seconds = cpu + process_cpu_seconds() - cpu0;
     progress.end(job.name, step, part.seconds);
@@ -288,7 +289,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
       ShardPart part;
       part.entry = e.entry, part.kind = "block", part.block = b;
       run(entry.stem + "#" + std::to_string(b), part,
-          [&](const RunControl& rc) { return m->bake_block(scene, entry.params, b, rc); });
+          [&](const RunControl& rc) { return m->bake_block(scene, entry_config(entry), b, rc); });
     }
   }
   if (work.row_end > work.row_begin) {
@@ -301,7 +302,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
             cached.layers.width == size.width && cached.layers.height == size.height)
           return rows_of(cached.layers, work.row_begin, work.row_end);
       }
-      ReferenceOptions o = job_reference_options(job, scene);
+      ReferenceOptions o = job_reference_options(job);
       o.row_begin = work.row_begin, o.row_end = work.row_end;
       return bake_reference(scene, o, rc);
     });
@@ -380,12 +381,10 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
                              "): bake it again");
       };
       if (part.kind == "whole") {
-        const nlohmann::json& resolved = job.bakes[std::size_t(part.entry)].resolved;
+        const MethodConfig& config = entry_config(job.bakes[std::size_t(part.entry)]);
         std::vector<std::pair<std::string, std::size_t>> want;
-        for (const auto& l : resolved.at("layers")) {
-          const std::string n = l.get<std::string>();
-          want.emplace_back(n, std::size_t(layer_channel_count(n, resolved)));
-        }
+        for (const std::string& n : config.layers)
+          want.emplace_back(n, std::size_t(layer_channel_count(n, config.directions)));
         if (layout != want) refuse(layout_text(want));
         continue;
       }
@@ -402,7 +401,7 @@ LayerSet MergedShards::method(int entry, const Scene& scene, const RunControl& r
   const BakeEntry& e = job_.bakes[std::size_t(entry)];
   const int B = entry_direction_blocks(e);
   if (auto st = stages_.find(entry); st != stages_.end())
-    return find_method(e.method)->finish_stages(scene, e.params, st->second.load(scene, rc), rc);
+    return entry_config(e).method->finish_stages(scene, entry_config(e), st->second.load(scene, rc), rc);
   LayerSet total;
   for (ShardReader& r : readers_)
     for (std::size_t p = 0; p < r.parts().size(); ++p) {
@@ -414,7 +413,7 @@ LayerSet MergedShards::method(int entry, const Scene& scene, const RunControl& r
   if (B == 0 || total.layers.empty())
     throw InputError(job_.file.string(), e.pointer, "no shard holds " + e.stem);
   try {
-    return find_method(e.method)->finish_blocks(scene, e.params, std::move(total), rc);
+    return entry_config(e).method->finish_blocks(scene, entry_config(e), std::move(total), rc);
   } catch (const InputError& x) {
     if (!x.file().empty()) throw;
     // The blocks' layers (take_block_layer, place_block_layers): the shards are what is wrong.

@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "job/params.hpp"
 #include "methods/method_table.hpp"
+#include "reference/bake_reference.hpp"
 
 namespace hfbake {
 
@@ -20,14 +21,17 @@ struct OutputLayers {
 
 std::vector<OutputLayers> job_outputs(const Job& job) {
   std::vector<OutputLayers> outs;
-  auto add = [&](const std::string& stem, const std::string& method, const nlohmann::json& resolved) {
+  auto add = [&](const std::string& stem, const std::string& method, const std::vector<std::string>& layers,
+                 int directions) {
     OutputLayers o{stem, method, {}};
-    for (const auto& l : resolved.value("layers", nlohmann::json::array()))
-      o.channels[l.get<std::string>()] = layer_channel_count(l.get<std::string>(), resolved);
+    for (const std::string& l : layers) o.channels[l] = layer_channel_count(l, directions);
     outs.push_back(std::move(o));
   };
-  for (const BakeEntry& e : job.bakes) add(e.stem, e.method, e.resolved);
-  if (job.has_reference) add("reference", "reference", job.reference_resolved);
+  const std::vector<std::string> none;
+  for (const BakeEntry& e : job.bakes)
+    add(e.stem, e.method, e.config ? e.config->layers : none, e.config ? e.config->directions : 0);
+  if (job.has_reference)
+    add("reference", "reference", job.reference_options ? job.reference_options->layers : none, 0);
   outs.push_back({kHeightStem, kHeightStem, {{"normal", 3}}});
   return outs;
 }

@@ -24,32 +24,25 @@ std::string shard_id_text(ShardId id) {
   return std::to_string(id.index) + "/" + std::to_string(id.count);
 }
 
-static int entry_directions_or_zero(const BakeEntry& e) {
-  return e.resolved.is_object() && e.resolved.contains("directions") &&
-                 e.resolved["directions"].is_number_integer()
-             ? e.resolved["directions"].get<int>()
-             : 0;
-}
-
 int entry_direction_blocks(const BakeEntry& entry) {
-  const MethodInfo* m = find_method(entry.method);
-  if (!m || !m->bake_block || !m->finish_blocks) return 0;
-  const int K = entry_directions_or_zero(entry);
+  if (!entry.config) return 0;
+  const MethodInfo* m = entry.config->method;
+  if (!m->bake_block || !m->finish_blocks) return 0;
+  const int K = entry.config->directions;
   return K > 0 ? direction_block_count(K) : 0;
 }
 
 int entry_stages(const BakeEntry& entry) {
-  const MethodInfo* m = find_method(entry.method);
-  return m && m->stages && m->bake_stage && m->finish_stages && entry.resolved.is_object()
-             ? m->stages(entry.resolved)
-             : 0;
+  if (!entry.config) return 0;
+  const MethodInfo* m = entry.config->method;
+  return m->stages && m->bake_stage && m->finish_stages ? m->stages(*entry.config) : 0;
 }
 
 int entry_stage_blocks(const BakeEntry& entry, int stage) {
-  const MethodInfo* m = find_method(entry.method);
-  if (!m || !m->stage_blocks || !m->bake_stage_block || !m->finish_stage_blocks || entry_stages(entry) == 0)
-    return 0;
-  return m->stage_blocks(entry.resolved, stage);
+  if (entry_stages(entry) == 0) return 0;
+  const MethodInfo* m = entry.config->method;
+  if (!m->stage_blocks || !m->bake_stage_block || !m->finish_stage_blocks) return 0;
+  return m->stage_blocks(*entry.config, stage);
 }
 
 std::vector<StageItem> stage_work(const Job& job, ShardId id, int stage) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -9,14 +10,17 @@
 
 namespace hfbake {
 
+struct MethodConfig;      // methods/method_table.hpp
+struct ReferenceOptions;  // reference/bake_reference.hpp
+
 struct BakeEntry {
   std::string method;     // "p1", "lsao", ...
   std::string stem;       // output stem: "p1", or "p1-2" when the method appears more than once
   std::string pointer;    // "/bake/<i>", for error messages
   nlohmann::json params;  // the bake[i] object as written (schema-validated)
-  // Every parameter the bake uses, defaults included, "method" and "layers" too: filled by the method
-  // table's reader after loading (cli/method_dispatch.hpp resolve_job); empty before.
-  nlohmann::json resolved;
+  // The entry's parameters read once by its method's reader (cli/method_dispatch.hpp resolve_job), what
+  // every step of the bake hands the method; null before.
+  std::shared_ptr<const MethodConfig> config;
   // Parameter sweeps (job/parameter_sweep.hpp): "directions": [16, 32] is two entries sharing sweep_group
   // (the index of the entry in the file), sweep_parameter "directions" and sweep_value 16, then 32.
   std::string sweep_parameter;  // "" when the entry is not part of a sweep
@@ -40,8 +44,9 @@ struct Job {
   std::string name;
   std::vector<BakeEntry> bakes;
   bool has_reference = false;
-  // The reference's options with every default filled in (resolve_job), "layers" included.
-  nlohmann::json reference_resolved;
+  // The reference's options read once (resolve_job), with every default filled in; null before, or
+  // without a reference.
+  std::shared_ptr<const ReferenceOptions> reference_options;
   OutputOptions output;
 
   std::filesystem::path resolve(const std::string& relative) const { return base_dir / relative; }

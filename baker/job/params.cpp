@@ -110,7 +110,25 @@ std::vector<std::string> Params::layers(const std::vector<std::string>& known,
     if (out.empty()) fail("layers", "must name at least one layer");
   }
   resolved_["layers"] = out;
+  layers_ = out;
   return out;
+}
+
+double Params::number_that(const char* key, bool (*ok)(double), const std::string& what) {
+  const auto& v = raw(key);
+  if (!v.is_number() || !ok(v.get<double>())) fail(key, what);
+  const double x = v.get<double>();
+  resolved_[key] = x;
+  return x;
+}
+
+std::optional<double> Params::word_or_number(const char* key, const char* word, double lo, double hi,
+                                             const std::string& what) const {
+  const auto& v = raw(key);
+  if (v.is_string() && v.get<std::string>() == word) return std::nullopt;
+  if (!v.is_number() || !std::isfinite(v.get<double>()) || !(v.get<double>() >= lo && v.get<double>() <= hi))
+    fail(key, what);
+  return v.get<double>();
 }
 
 }  // namespace hfbake

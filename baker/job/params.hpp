@@ -3,13 +3,15 @@
 // must be ..."), and it records every value a method reads, defaults included: resolved() is what the bake
 // actually used (written to the EXR metadata and report.json as the method's parameters).
 //
-// Methods read their keys with the typed getters below, at load time (validate and bake both run them
-// before any bake starts: methods/method_table.hpp) and again when they bake. A method that derives a value
-// (a default that depends on other keys, the layer list) records it with resolve().
+// A method's reader (methods/method_table.hpp) reads its keys with the typed getters below once per bake
+// entry, when the job is resolved (validate and bake alike), into the method's typed config; nothing reads
+// the entry again. A method that derives a value (a default that depends on other keys) records it with
+// resolve().
 #pragma once
 
 #include <initializer_list>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,10 +39,18 @@ class Params {
   // one; `defaults` when absent. Recorded as resolved "layers".
   std::vector<std::string> layers(const std::vector<std::string>& known,
                                   const std::vector<std::string>& defaults);
+  // A number for which ok(x) holds (anything else fails with `what`); has(key) must hold. Recorded.
+  double number_that(const char* key, bool (*ok)(double), const std::string& what);
+  // A value that is either the word `word` (nullopt) or a finite number in [lo, hi]; anything else fails
+  // with `what`. has(key) must hold; nothing is recorded.
+  std::optional<double> word_or_number(const char* key, const char* word, double lo, double hi,
+                                       const std::string& what) const;
 
   // Records a value the method derived (it replaces what a getter recorded under that key).
   void resolve(const char* key, nlohmann::json value) { resolved_[key] = std::move(value); }
   const nlohmann::json& resolved() const { return resolved_; }
+  // The layers layers() returned (empty when the reader never called it).
+  const std::vector<std::string>& resolved_layers() const { return layers_; }
 
   // Throws InputError(file, pointer + "/" + key, what). key may be empty (the object itself).
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
@@ -52,6 +62,7 @@ class Params {
   const nlohmann::json& object_;
   std::string file_, pointer_;
   nlohmann::json resolved_ = nlohmann::json::object();
+  std::vector<std::string> layers_;
 };
 
 // "a", "b" or "c": for messages that list allowed values.

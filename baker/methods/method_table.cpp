@@ -32,23 +32,44 @@ std::vector<std::string> method_names() {
   return names;
 }
 
-nlohmann::json resolve_method_params(const nlohmann::json& entry, const MethodContext& context,
-                                     const std::string& file, const std::string& pointer) {
+MethodConfig resolve_method(const nlohmann::json& entry, const MethodContext& context,
+                            const std::string& file, const std::string& pointer) {
   const std::string name = entry.is_object() ? entry.value("method", "") : "";
   const MethodInfo* m = find_method(name);
   if (!m)
     throw InputError(file, pointer + "/method",
                      "unknown method \"" + name + "\" (one of " + quoted_list(method_names()) + ")");
   Params in(entry, file, pointer);
-  m->read(in, context);
-  nlohmann::json resolved = in.resolved();
-  resolved["method"] = name;
-  return resolved;
+  MethodConfig config = m->read(in, context);
+  config.method = m;
+  config.layers = in.resolved_layers();
+  config.resolved = in.resolved();
+  config.resolved["method"] = name;
+  return config;
 }
 
-int layer_channel_count(const std::string& layer, const nlohmann::json& resolved) {
-  if (layer == "horizon" || layer == "horizon_distance" || layer == "horizon_deg")
-    return resolved.value("directions", 64);
+MethodConfig read_method_config(std::string_view name, const nlohmann::json& params,
+                                const MethodContext& context) {
+  nlohmann::json entry = params.is_object() ? params : nlohmann::json::object();
+  entry["method"] = std::string(name);
+  return resolve_method(entry, context, "", "");
+}
+
+MethodContext scene_method_context(const Scene& scene) {
+  MethodContext c;
+  c.field = scene.field;
+  c.bounces = scene.bounces;
+  return c;
+}
+
+LayerSet bake_method(std::string_view name, const Scene& scene, const nlohmann::json& params,
+                     const RunControl& rc) {
+  const MethodConfig config = read_method_config(name, params, scene_method_context(scene));
+  return config.method->bake(scene, config, rc);
+}
+
+int layer_channel_count(const std::string& layer, int directions) {
+  if (layer == "horizon" || layer == "horizon_distance" || layer == "horizon_deg") return directions;
   if (layer == "sh_visibility") return 16;
   if (layer == "sh_irradiance") return 48;
   if (layer == "bent_normal" || layer == "direct" || layer == "indirect" || layer == "total" ||

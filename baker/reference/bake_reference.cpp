@@ -592,23 +592,19 @@ std::vector<std::string> reference_layer_names(int bounces) {
   return names;
 }
 
-int reference_falloff_entry(const nlohmann::json& job_doc) {
-  const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
-  if (ref.contains("falloff") || ref.contains("radius")) return -1;
-  if (!job_doc.contains("bake") || !job_doc["bake"].is_array()) return -1;
-  const auto& bake = job_doc["bake"];
-  for (std::size_t b = 0; b < bake.size(); ++b) {
-    if (!bake[b].is_object() || !(bake[b].contains("falloff") || bake[b].contains("radius"))) continue;
-    const MethodInfo* m = find_method(bake[b].value("method", ""));
-    if (m && m->falloff_defines_obscurance) return int(b);
-  }
+int reference_falloff_entry(const nlohmann::json& reference,
+                            const std::vector<const MethodConfig*>& entries) {
+  if (reference.is_object() && (reference.contains("falloff") || reference.contains("radius"))) return -1;
+  for (std::size_t b = 0; b < entries.size(); ++b)
+    if (entries[b]->obscurance) return int(b);
   return -1;
 }
 
-ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const MethodContext& context,
-                                        const std::string& file) {
+ReferenceOptions read_reference_options(const nlohmann::json& reference,
+                                        const std::vector<const MethodConfig*>& entries,
+                                        const MethodContext& context, const std::string& file) {
   ReferenceOptions o;
-  const nlohmann::json ref = job_doc.value("reference", nlohmann::json::object());
+  const nlohmann::json ref = reference.is_object() ? reference : nlohmann::json::object();
   Params in(ref, file, "/reference");
   o.samples = in.integer("samples", 256, 1, 1 << 24);
   o.replicates = in.integer("replicates", 8, 2, 64);
@@ -634,23 +630,18 @@ ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const Met
   if (in.has("falloff") || in.has("radius")) {
     o.falloff = read_falloff(in);
     have_falloff = true;
-  } else if (const int b = reference_falloff_entry(job_doc); b >= 0) {
-    Params entry(job_doc["bake"][b], file, "/bake/" + std::to_string(b));
-    o.falloff = read_falloff(entry);
+  } else if (const int b = reference_falloff_entry(ref, entries); b >= 0) {
+    o.falloff = *entries[std::size_t(b)]->obscurance;
     have_falloff = true;
   }
 
   const std::vector<std::string> known = reference_layer_names(context.bounces);
   if (in.has("layers")) {
     o.layers = in.layers(known, {});
-  } else if (job_doc.contains("bake") && job_doc["bake"].is_array() && !job_doc["bake"].empty()) {
-    // Only what some method of the job is scored against: the reference layers its resolved layers name.
+  } else if (!entries.empty()) {
+    // Only what some method of the job is scored against: the reference layers its layers name.
     std::set<std::string> scored;
-    const auto& bake = job_doc["bake"];
-    for (std::size_t b = 0; b < bake.size(); ++b) {
-      const nlohmann::json r = resolve_method_params(bake[b], context, file, "/bake/" + std::to_string(b));
-      for (const auto& l : r.value("layers", nlohmann::json::array())) scored.insert(l.get<std::string>());
-    }
+    for (const MethodConfig* e : entries) scored.insert(e->layers.begin(), e->layers.end());
     for (const std::string& l : known)
       if (scored.count(l) && (l != "obscurance" || have_falloff)) o.layers.push_back(l);
     if (o.layers.empty()) o.layers = {"ao"};  // nothing comparable: the cheapest layer, for the report's page
@@ -665,11 +656,19 @@ ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const Met
   return o;
 }
 
+ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const MethodContext& context,
+                                        const std::string& file) {
+  std::vector<MethodConfig> configs;
+  if (job_doc.contains("bake") && job_doc["bake"].is_array())
+    for (std::size_t b = 0; b < job_doc["bake"].size(); ++b)
+      configs.push_back(resolve_method(job_doc["bake"][b], context, file, "/bake/" + std::to_string(b)));
+  std::vector<const MethodConfig*> entries;
+  for (const MethodConfig& c : configs) entries.push_back(&c);
+  return read_reference_options(job_doc.value("reference", nlohmann::json::object()), entries, context, file);
+}
+
 ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc) {
-  MethodContext c;
-  c.field = scene.field;
-  c.bounces = scene.bounces;
-  return read_reference_options(job_doc, c, "");
+  return read_reference_options(job_doc, scene_method_context(scene), "");
 }
 
 LayerSet bake_reference(const Scene& scene, const nlohmann::json& job_doc, const RunControl& rc) {

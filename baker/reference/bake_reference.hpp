@@ -90,19 +90,25 @@ struct ReferenceOptions {
 // The reference layers this scene can produce ("indirect_b1".."indirect_b<bounces>" included).
 std::vector<std::string> reference_layer_names(int bounces);
 
-// Reads job_doc["reference"] (and the job's obscurance-family entries for the falloff, when the
-// reference gives none), with every check: InputError naming `file` and a "/reference/..." pointer. Without
-// "layers", the reference traces only the layers some bake entry is scored against (its resolved layers
-// that the reference can produce); a reference-only job traces ao, vsky, [obscurance,] direct, indirect,
-// total. parse_reference_options: the same for a loaded scene (its shape and bounces), without a file name.
+// Reads the job's "reference" object (`reference`; null or absent keys: the defaults) with every check:
+// InputError naming `file` and a "/reference/..." pointer. What it takes from the bake entries comes from
+// their configs (`entries`, in the job's order): without its own "layers", the reference traces only the
+// layers some entry is scored against (its layers that the reference can produce; a job without entries
+// traces ao, vsky, [obscurance,] direct, indirect, total), and without its own falloff or radius, its
+// obscurance is that of reference_falloff_entry.
+ReferenceOptions read_reference_options(const nlohmann::json& reference,
+                                        const std::vector<const MethodConfig*>& entries,
+                                        const MethodContext& context, const std::string& file);
+// The same from a whole job document (its entries read by their methods' readers here): code and tests
+// that hold one. parse_reference_options: for a loaded scene (its shape and bounces), without a file name.
 ReferenceOptions read_reference_options(const nlohmann::json& job_doc, const MethodContext& context,
                                         const std::string& file);
 ReferenceOptions parse_reference_options(const Scene& scene, const nlohmann::json& job_doc);
 
-// The bake entry whose falloff and radius the reference's obscurance uses: the first obscurance-family
-// entry (hbao, lsao, farfield, hsao, vo) with a falloff or radius, when the reference has none of its own;
-// else -1. Nothing else of the bake list reaches the reference (the reference cache keys on exactly this).
-int reference_falloff_entry(const nlohmann::json& job_doc);
+// The entry whose falloff and radius the reference's obscurance uses: the first obscurance-family entry
+// that writes a falloff or radius (MethodConfig::obscurance), when the reference has none of its own; else
+// -1. Nothing else of the bake list reaches the reference (the reference cache keys on exactly this).
+int reference_falloff_entry(const nlohmann::json& reference, const std::vector<const MethodConfig*>& entries);
 
 // Resuming a reference that was killed: the traced rows are cut into bands of options.tile_size rows (band b:
 // rows row_begin + b * tile_size ..., the last one shorter), and each texel's samples depend on (seed, texel)

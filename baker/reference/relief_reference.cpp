@@ -76,29 +76,16 @@ nlohmann::json relief_reference_record(const ReliefReferenceSettings& s) {
           {"azimuth_convention", s.compass ? "compass" : "hfbake"}};
 }
 
-void add_reference_relief(const HeightField& field, const std::vector<const LayerSet*>& methods,
-                          LayerSet& reference, const RunControl& rc) {
+void add_reference_relief(const HeightField& field, const ReliefSettings& settings,
+                          const LayerSet& relief_layers, LayerSet& reference, const RunControl& rc) {
   static const char* const kLayers[] = {"svf", "openness_positive", "openness_negative", "horizon_deg"};
   for (const char* l : kLayers)
     if (reference.find(l)) return;
-  const LayerSet* relief = nullptr;
-  nlohmann::json params;
-  for (const LayerSet* m : methods) {
-    std::string method;
-    for (const auto& [key, value] : m->attributes) {
-      if (key == "hfbake:method") method = value;
-      if (key == "hfbake:parameters") params = nlohmann::json::parse(value, nullptr, false);
-    }
-    if (method == "relief" && params.is_object()) {
-      relief = m;
-      break;
-    }
-  }
-  if (!relief) return;
+  const LayerSet* relief = &relief_layers;
   ReliefReferenceSettings s;
-  s.directions = params.value("directions", s.directions);
-  s.search_radius = params.value("search_radius", s.search_radius * field.texel_size);
-  s.compass = params.value("azimuth_convention", std::string("hfbake")) == "compass";
+  s.directions = settings.directions;
+  s.search_radius = settings.search_radius;
+  s.compass = settings.compass;
   const int K = s.directions;
   const ReliefHorizons h = trace_relief_horizons(field, s, relief->find("openness_negative") != nullptr, rc);
   const std::size_t N = field.texel_count();

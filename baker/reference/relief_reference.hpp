@@ -16,6 +16,7 @@
 #include "core/layers.hpp"
 #include "core/run_control.hpp"
 #include "field/height_field.hpp"
+#include "methods/relief/relief.hpp"
 
 namespace hfbake {
 
@@ -37,10 +38,10 @@ ReliefHorizons trace_relief_horizons(const HeightField& field, const ReliefRefer
 inline constexpr const char* kReliefReferenceAttribute = "hfbake:relief_reference";
 nlohmann::json relief_reference_record(const ReliefReferenceSettings& s);
 
-// Adds svf, openness_positive, openness_negative and horizon_deg (those the first relief entry of `methods`
-// bakes, with its parameters: its "hfbake:method" and "hfbake:parameters" attributes) to a reference's
-// layers, and the record. Nothing when no method is relief or the reference has them already.
-void add_reference_relief(const HeightField& field, const std::vector<const LayerSet*>& methods,
-                          LayerSet& reference, const RunControl& rc);
+// Adds svf, openness_positive, openness_negative and horizon_deg (those the first relief entry bakes:
+// `relief`, its layers `relief_layers`) to a reference's layers, with relief's directions, search radius
+// and azimuth convention, and the record. Nothing when the reference has them already.
+void add_reference_relief(const HeightField& field, const ReliefSettings& relief,
+                          const LayerSet& relief_layers, LayerSet& reference, const RunControl& rc);
 
 }  // namespace hfbake

@@ -11,6 +11,12 @@
 namespace hfbake {
 namespace {
 
+// The shared falloff rule (read_falloff) on a bare object.
+Falloff parse_falloff(const nlohmann::json& params) {
+  Params in(params);
+  return read_falloff(in);
+}
+
 // An entry as the job loader checks it: against its method's schema, pointers as in a job's first entry.
 std::vector<SchemaViolation> check(const nlohmann::json& entry) {
   std::vector<SchemaViolation> v =

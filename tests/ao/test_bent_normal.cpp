@@ -138,7 +138,7 @@ Scene scene_of(HeightField f) {
 TEST(BakeAo, LayersAndErrors) {
   const Scene scene = scene_of(test::make_pit(21, 5, 4));
   const RunControl rc;
-  const LayerSet a = bake_hbao(scene, {{"method", "hbao"}, {"directions", 8}}, rc);
+  const LayerSet a = bake_method("hbao", scene, {{"method", "hbao"}, {"directions", 8}}, rc);
   ASSERT_NE(a.find("ao"), nullptr);
   ASSERT_NE(a.find("obscurance"), nullptr);
   ASSERT_NE(a.find("bent_normal"), nullptr);
@@ -148,28 +148,33 @@ TEST(BakeAo, LayersAndErrors) {
   // The centre of the pit is darker than the ground.
   EXPECT_LT(a.find("ao")->data[scene.field.index(10, 10)], a.find("ao")->data[scene.field.index(0, 0)]);
   // With a falloff there is no "ao" layer (it is unlimited AO by definition).
-  const LayerSet b = bake_hbao(scene, {{"method", "hbao"}, {"radius", 4}, {"falloff", "smooth"}}, rc);
+  const LayerSet b =
+      bake_method("hbao", scene, {{"method", "hbao"}, {"radius", 4}, {"falloff", "smooth"}}, rc);
   EXPECT_EQ(b.find("ao"), nullptr);
-  EXPECT_THROW(bake_hbao(scene, {{"method", "hbao"}, {"radius", 4}, {"layers", {"ao"}}}, rc), InputError);
-  EXPECT_THROW(bake_hbao(scene, {{"method", "hbao"}, {"tangent", -0.5}}, rc), InputError);
-  const LayerSet c = bake_hsao(scene, {{"method", "hsao"}, {"radius", 6}, {"layers", {"obscurance"}}}, rc);
+  EXPECT_THROW(bake_method("hbao", scene, {{"method", "hbao"}, {"radius", 4}, {"layers", {"ao"}}}, rc),
+               InputError);
+  EXPECT_THROW(bake_method("hbao", scene, {{"method", "hbao"}, {"tangent", -0.5}}, rc), InputError);
+  const LayerSet c =
+      bake_method("hsao", scene, {{"method", "hsao"}, {"radius", 6}, {"layers", {"obscurance"}}}, rc);
   ASSERT_EQ(c.layers.size(), 1u);
-  EXPECT_THROW(bake_hsao(scene, {{"method", "hsao"}}, rc), InputError);
-  const LayerSet d = bake_vo(scene, {{"method", "vo"}, {"radius", 3}}, rc);
+  EXPECT_THROW(bake_method("hsao", scene, {{"method", "hsao"}}, rc), InputError);
+  const LayerSet d = bake_method("vo", scene, {{"method", "vo"}, {"radius", 3}}, rc);
   ASSERT_NE(d.find("obscurance"), nullptr);
-  EXPECT_THROW(bake_vo(scene, {{"method", "vo"}, {"radius", 3}, {"depth_layers", 3}}, rc), InputError);
+  EXPECT_THROW(bake_method("vo", scene, {{"method", "vo"}, {"radius", 3}, {"depth_layers", 3}}, rc),
+               InputError);
 }
 
 TEST(BakeAo, DeterministicAndCancellable) {
   const Scene scene = scene_of(test::make_pit(31, 8, 6));
   const nlohmann::json p = {{"method", "hbao"}, {"directions", 8}, {"radius", 6}, {"falloff", "rational"}};
-  EXPECT_EQ(bake_hbao(scene, p, {}).layers[0].data, bake_hbao(scene, p, {}).layers[0].data);
+  EXPECT_EQ(bake_method("hbao", scene, p, {}).layers[0].data,
+            bake_method("hbao", scene, p, {}).layers[0].data);
   std::atomic<bool> cancel{true};
   RunControl rc;
   rc.cancel = &cancel;
-  EXPECT_THROW(bake_hbao(scene, p, rc), Cancelled);
-  EXPECT_THROW(bake_hsao(scene, {{"method", "hsao"}, {"radius", 6}}, rc), Cancelled);
-  EXPECT_THROW(bake_vo(scene, {{"method", "vo"}, {"radius", 6}}, rc), Cancelled);
+  EXPECT_THROW(bake_method("hbao", scene, p, rc), Cancelled);
+  EXPECT_THROW(bake_method("hsao", scene, {{"method", "hsao"}, {"radius", 6}}, rc), Cancelled);
+  EXPECT_THROW(bake_method("vo", scene, {{"method", "vo"}, {"radius", 6}}, rc), Cancelled);
 }
 
 }  // namespace

@@ -79,8 +79,10 @@ Scene small_scene() {
 
 TEST(LsaoFarfieldEntry, LayersSizesAndErrors) {
   const Scene sc = small_scene();
-  using Bake = LayerSet (*)(const Scene&, const nlohmann::json&, const RunControl&);
-  for (Bake bake : {Bake(bake_lsao), Bake(bake_farfield)}) {
+  for (const char* method : {"lsao", "farfield"}) {
+    auto bake = [&](const Scene& scene, const nlohmann::json& p, const RunControl& rc) {
+      return bake_method(method, scene, p, rc);
+    };
     const nlohmann::json params = {{"directions", 8}, {"radius", 4.0}, {"falloff", "rational"}};
     const LayerSet a = bake(sc, params, RunControl{});
     EXPECT_EQ(a.width, 48);
@@ -125,7 +127,7 @@ TEST(LsaoFarfieldEntry, LayersSizesAndErrors) {
     rc.cancel = &cancel;
     EXPECT_THROW(bake(sc, params, rc), Cancelled);
   }
-  EXPECT_THROW(bake_farfield(sc, {{"weighting", "uniform"}}, RunControl{}), InputError);
+  EXPECT_THROW(bake_method("farfield", sc, {{"weighting", "uniform"}}, RunControl{}), InputError);
 }
 
 }  // namespace

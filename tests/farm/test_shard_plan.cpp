@@ -13,6 +13,7 @@
 #include "farm/merge_blocks.hpp"
 #include "farm/shard_file.hpp"
 #include "farm/shard_plan.hpp"
+#include "methods/method_table.hpp"
 
 namespace hfbake {
 namespace {
@@ -37,19 +38,25 @@ TEST(ShardPlan, DirectionBlocksPartitionTheDirections) {
   }
 }
 
+// A bake entry resolved by its method's reader (a 64² field of unit texels).
+BakeEntry entry(const char* method, const nlohmann::json& params) {
+  MethodContext context;
+  context.field.width = context.field.height = 64;
+  context.field.texel_size = 1;
+  BakeEntry e;
+  e.method = method;
+  e.config = std::make_shared<const MethodConfig>(read_method_config(method, params, context));
+  return e;
+}
+
 Job three_entry_job() {
   Job job;
   job.name = "j";
   job.output.dir = "/tmp/x";
   job.has_reference = true;
-  BakeEntry p1, vo, hbao, lsao, farfield, hsao;
-  p1.method = "p1", p1.resolved = {{"directions", 16}};
-  vo.method = "vo", vo.resolved = {{"directions", 16}};  // runs whole
-  hbao.method = "hbao", hbao.resolved = {{"directions", 5}};
-  lsao.method = "lsao", lsao.resolved = {{"directions", 12}};
-  farfield.method = "farfield", farfield.resolved = {{"directions", 3}};
-  hsao.method = "hsao", hsao.resolved = {{"directions", 64}};
-  job.bakes = {p1, vo, hbao, lsao, farfield, hsao};
+  job.bakes = {entry("p1", {{"directions", 16}}),      entry("vo", {{"radius", 2}}),  // vo runs whole
+               entry("hbao", {{"directions", 5}}),     entry("lsao", {{"directions", 12}}),
+               entry("farfield", {{"directions", 3}}), entry("hsao", {{"directions", 64}, {"radius", 2}})};
   return job;
 }
 
@@ -86,11 +93,8 @@ TEST(ShardPlan, EveryStageBlockIsInExactlyOneShard) {
   Job job;
   job.name = "j";
   job.output.dir = "/tmp/x";
-  BakeEntry a, b, c;
-  a.method = "p2", a.resolved = {{"directions", 16}, {"bounces", 2}};
-  b.method = "p1", b.resolved = {{"directions", 8}};
-  c.method = "p2", c.resolved = {{"directions", 5}, {"bounces", 1}};
-  job.bakes = {a, b, c};
+  job.bakes = {entry("p2", {{"directions", 16}, {"bounces", 2}}), entry("p1", {{"directions", 8}}),
+               entry("p2", {{"directions", 5}, {"bounces", 1}})};
   ASSERT_EQ(job_stages(job), 3);
   EXPECT_EQ(entry_stage_blocks(job.bakes[0], 0), 8);
   EXPECT_EQ(entry_stage_blocks(job.bakes[0], 1), 8);

@@ -3,6 +3,7 @@
 // code cannot get past it either).
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -43,6 +44,12 @@ MethodContext context() {
   c.field.width = c.field.height = 64;
   c.bounces = 2;
   return c;
+}
+
+// The record of what the entry's reader read (MethodConfig::resolved).
+nlohmann::json resolved_params(const nlohmann::json& entry, const MethodContext& c, const std::string& file,
+                               const std::string& pointer) {
+  return resolve_method(entry, c, file, pointer).resolved;
 }
 
 // The smallest valid entry of each method (hsao and vo need a radius).
@@ -103,7 +110,7 @@ TEST(MethodTable, EveryDocumentedConstraintIsEnforcedByTheReader) {
   for (const MethodInfo& m : method_table()) {
     const nlohmann::json schema = read_json(kSchemas + "methods/" + m.name + ".schema.json");
     const nlohmann::json base = base_entry(m.name);
-    ASSERT_NO_THROW(resolve_method_params(base, context(), "job.json", "/bake/3")) << m.name;
+    ASSERT_NO_THROW(resolved_params(base, context(), "job.json", "/bake/3")) << m.name;
     for (auto& [key, raw] : schema["properties"].items()) {
       if (key == "method") continue;
       const nlohmann::json p = property_schema(raw);
@@ -112,7 +119,7 @@ TEST(MethodTable, EveryDocumentedConstraintIsEnforcedByTheReader) {
         e[key] = value;
         SCOPED_TRACE(std::string(m.name) + "." + key + " = " + value.dump() + " (" + rule + ")");
         try {
-          resolve_method_params(e, context(), "job.json", "/bake/3");
+          resolved_params(e, context(), "job.json", "/bake/3");
           ADD_FAILURE() << "accepted";
         } catch (const InputError& err) {
           EXPECT_EQ(err.file(), "job.json");
@@ -129,35 +136,33 @@ TEST(MethodTable, EveryDocumentedConstraintIsEnforcedByTheReader) {
 }
 
 TEST(MethodTable, ResolvedParametersHoldTheDefaults) {
-  const nlohmann::json p1 = resolve_method_params({{"method", "p1"}}, context(), "", "/bake/0");
+  const nlohmann::json p1 = resolved_params({{"method", "p1"}}, context(), "", "/bake/0");
   EXPECT_EQ(p1["directions"], 64);
   EXPECT_EQ(p1["normal_bins"], 0);
   EXPECT_EQ(p1["layers"], nlohmann::json({"ao", "vsky", "direct"}));
-  const nlohmann::json p2 = resolve_method_params({{"method", "p2"}}, context(), "", "/bake/0");
+  const nlohmann::json p2 = resolved_params({{"method", "p2"}}, context(), "", "/bake/0");
   EXPECT_EQ(p2["near_radius"], 4.0);
   EXPECT_EQ(p2["bounces"], 2);  // the job's
   EXPECT_EQ(p2["senders"], "facets");
-  const nlohmann::json hbao =
-      resolve_method_params({{"method", "hbao"}, {"radius", 3}}, context(), "", "/bake/0");
+  const nlohmann::json hbao = resolved_params({{"method", "hbao"}, {"radius", 3}}, context(), "", "/bake/0");
   EXPECT_EQ(hbao["falloff"], "step");
   EXPECT_EQ(hbao["surface"], "triangles");  // the reference's surface
   EXPECT_EQ(hbao["estimator"], "segment");  // its exact slice integral
   const nlohmann::json stepped =
-      resolve_method_params({{"method", "hbao"}, {"radius", 3}, {"step", 0.5}}, context(), "", "/bake/0");
+      resolved_params({{"method", "hbao"}, {"radius", 3}, {"step", 0.5}}, context(), "", "/bake/0");
   EXPECT_EQ(stepped["surface"], "bilinear");  // a step means the stepped march
   EXPECT_EQ(stepped["estimator"], "slab");
-  EXPECT_EQ(resolve_method_params({{"method", "farfield"}}, context(), "", "/bake/0")["surface"],
-            "triangles");
+  EXPECT_EQ(resolved_params({{"method", "farfield"}}, context(), "", "/bake/0")["surface"], "triangles");
   EXPECT_EQ(hbao["max_distance"], 3.0);  // the step falloff's support
   EXPECT_EQ(hbao["layers"], nlohmann::json({"obscurance", "bent_normal"}));
-  const nlohmann::json plain = resolve_method_params({{"method", "hbao"}}, context(), "", "/bake/0");
+  const nlohmann::json plain = resolved_params({{"method", "hbao"}}, context(), "", "/bake/0");
   EXPECT_EQ(plain["layers"], nlohmann::json({"obscurance", "bent_normal", "ao"}));  // falloff none: ao too
 }
 
 TEST(MethodTable, RulesTheSchemaCannotExpress) {
   auto where = [](nlohmann::json e) {
     try {
-      resolve_method_params(e, context(), "j.json", "/bake/1");
+      resolved_params(e, context(), "j.json", "/bake/1");
     } catch (const InputError& err) {
       return err.where();
     }
@@ -181,6 +186,26 @@ TEST(MethodTable, RulesTheSchemaCannotExpress) {
   EXPECT_EQ(where({{"method", "farfield"}, {"weighting", "uniform"}}), "/bake/1/weighting");
   EXPECT_EQ(where({{"method", "p1"}, {"layers", {"ao", "ao"}}}), "/bake/1/layers/1");
   EXPECT_EQ(where({{"method", "warp"}}), "/bake/1/method");
+}
+
+// A method receives its typed config (MethodConfig) and reads the job's JSON only through its reader's
+// Params getters: no file of a method's folder names the JSON library, reads a value raw or reads the
+// reader's record back.
+TEST(MethodTable, NoMethodFileReadsJson) {
+  namespace fs = std::filesystem;
+  int files = 0;
+  for (const auto& f : fs::recursive_directory_iterator(std::string(HFBAKE_SOURCE_DIR) + "/baker/methods")) {
+    if (!f.is_regular_file() || f.path().parent_path().filename() == "methods") continue;  // the table
+    const std::string ext = f.path().extension().string();
+    if (ext != ".cpp" && ext != ".hpp") continue;
+    std::ifstream in(f.path());
+    std::stringstream text;
+    text << in.rdbuf();
+    for (const char* forbidden : {"nlohmann", "json::", ".raw(", "resolved()"})
+      EXPECT_EQ(text.str().find(forbidden), std::string::npos) << f.path() << " has " << forbidden;
+    ++files;
+  }
+  EXPECT_GT(files, 40);
 }
 
 }  // namespace

@@ -382,7 +382,7 @@ TEST(NlpBake, ShIrradianceAtTheNormalIsTotal) {
 
 TEST(NlpBake, UnknownLayerIsAnInputError) {
   nlohmann::json p = {{"method", "nlp"}, {"layers", {"direct", "ao"}}};
-  EXPECT_THROW(parse_nlp_options(p), InputError);
+  EXPECT_THROW(read_method_config("nlp", p, {}), InputError);
 }
 
 TEST(NlpPyramid, LevelZeroIsTheFieldAndLevelsKeepTheMean) {

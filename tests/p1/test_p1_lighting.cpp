@@ -510,28 +510,28 @@ TEST(P1, HorizonDistanceOnAPit) {
 TEST(BakeP1, LayersAndErrors) {
   const Scene s = make_scene(shape(ProceduralKind::flat, 9));
   nlohmann::json e = {{"method", "p1"}, {"directions", 8}};
-  LayerSet l = bake_p1(s, e, RunControl{});
+  LayerSet l = bake_method("p1", s, e, RunControl{});
   ASSERT_EQ(l.layers.size(), 3u);
   EXPECT_NE(l.find("ao"), nullptr);
   EXPECT_NE(l.find("vsky"), nullptr);
   ASSERT_NE(l.find("direct"), nullptr);
   EXPECT_EQ(l.find("direct")->channel_count(), 3);
   e["layers"] = {"horizon", "bent_normal", "horizon_distance"};
-  l = bake_p1(s, e, RunControl{});
+  l = bake_method("p1", s, e, RunControl{});
   ASSERT_EQ(l.layers.size(), 3u);
   EXPECT_EQ(l.layers[0].name, "horizon");
   EXPECT_EQ(l.layers[0].channel_count(), 8);
   EXPECT_EQ(l.layers[0].data.size(), 81u * 8);
   e["layers"] = {"ao", "obscurance"};
   try {
-    bake_p1(s, e, RunControl{});
+    bake_method("p1", s, e, RunControl{});
     FAIL();
   } catch (const InputError& err) {
     EXPECT_EQ(err.where(), "/layers/1");
   }
   e.erase("layers");
   e["normal_bins"] = 16;
-  EXPECT_THROW(bake_p1(s, e, RunControl{}), InputError);
+  EXPECT_THROW(bake_method("p1", s, e, RunControl{}), InputError);
 }
 
 // A directional light's own sweep direction is at any azimuth, not one of the K: its shadows against the

@@ -671,27 +671,31 @@ TEST(P2Bake, SameBitsForAnyThreadCount) {
 
 TEST(P2Bake, LayersAndParameters) {
   const Scene s = make_scene(procedural(ProceduralKind::sines, 24, Wrap::clamp), {1, 1, 1}, 0.5f, 0, 2);
-  const LayerSet def = bake_p2(s, {{"method", "p2"}, {"directions", 4}}, RunControl{});
+  const LayerSet def = bake_method("p2", s, {{"method", "p2"}, {"directions", 4}}, RunControl{});
   ASSERT_EQ(def.layers.size(), 3u);
   EXPECT_EQ(def.layers[0].name, "indirect");
   EXPECT_EQ(def.layers[1].name, "total");
   EXPECT_EQ(def.layers[2].name, "direct");
-  const LayerSet b = bake_p2(
-      s, {{"method", "p2"}, {"directions", 4}, {"layers", {"indirect_b1", "indirect_b2", "indirect"}}},
+  const LayerSet b = bake_method(
+      "p2", s, {{"method", "p2"}, {"directions", 4}, {"layers", {"indirect_b1", "indirect_b2", "indirect"}}},
       RunControl{});
   ASSERT_EQ(b.layers.size(), 3u);
   for (std::size_t i = 0; i < b.layers[2].data.size(); ++i)
     ASSERT_NEAR(b.layers[2].data[i], b.layers[0].data[i] + b.layers[1].data[i], 1e-6);
-  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"layers", {"indirect_b3"}}}, RunControl{}), InputError);
-  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"layers", {"ao"}}}, RunControl{}), InputError);
-  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"visibility", "fast"}}, RunControl{}), InputError);
-  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"senders", "vertices"}}, RunControl{}), InputError);
-  EXPECT_THROW(bake_p2(s, {{"method", "p2"}, {"near_radius", 0.5}}, RunControl{}), InputError);
-  EXPECT_EQ(parse_p2_params({{"method", "p2"}}).near_radius, 4.0);
-  EXPECT_TRUE(parse_p2_params({{"method", "p2"}}).facet_senders);
-  EXPECT_FALSE(parse_p2_params({{"method", "p2"}, {"senders", "texels"}}).facet_senders);
-  EXPECT_EQ(parse_p2_params({{"method", "p2"}, {"near_radius", 0}}).near_radius, 0.0);
-  const LayerSet none = bake_p2(s, {{"method", "p2"}, {"directions", 4}, {"bounces", 0}}, RunControl{});
+  EXPECT_THROW(bake_method("p2", s, {{"method", "p2"}, {"layers", {"indirect_b3"}}}, RunControl{}),
+               InputError);
+  EXPECT_THROW(bake_method("p2", s, {{"method", "p2"}, {"layers", {"ao"}}}, RunControl{}), InputError);
+  EXPECT_THROW(bake_method("p2", s, {{"method", "p2"}, {"visibility", "fast"}}, RunControl{}), InputError);
+  EXPECT_THROW(bake_method("p2", s, {{"method", "p2"}, {"senders", "vertices"}}, RunControl{}), InputError);
+  EXPECT_THROW(bake_method("p2", s, {{"method", "p2"}, {"near_radius", 0.5}}, RunControl{}), InputError);
+  EXPECT_EQ(read_method_config("p2", {{"method", "p2"}}, {}).get<P2Params>().near_radius, 4.0);
+  EXPECT_TRUE(read_method_config("p2", {{"method", "p2"}}, {}).get<P2Params>().facet_senders);
+  EXPECT_FALSE(
+      read_method_config("p2", {{"method", "p2"}, {"senders", "texels"}}, {}).get<P2Params>().facet_senders);
+  EXPECT_EQ(read_method_config("p2", {{"method", "p2"}, {"near_radius", 0}}, {}).get<P2Params>().near_radius,
+            0.0);
+  const LayerSet none =
+      bake_method("p2", s, {{"method", "p2"}, {"directions", 4}, {"bounces", 0}}, RunControl{});
   for (float v : none.layers[0].data) ASSERT_EQ(v, 0.0f);
 }
 

@@ -75,16 +75,16 @@ TEST(ReliefReference, AddedForTheFirstReliefEntryWithItsSettings) {
   const HeightField f = make_procedural(p, 1.0, Wrap::clamp);
   LayerSet relief;
   relief.width = relief.height = 9;
-  relief.attributes = {
-      {"hfbake:method", "relief"},
-      {"hfbake:parameters",
-       R"({"method": "relief", "directions": 4, "search_radius": 3.0, "azimuth_convention": "compass"})"}};
+  ReliefSettings settings;
+  settings.directions = 4;
+  settings.search_radius = 3.0;
+  settings.compass = true;
   relief.add("svf", {"Y"});
   relief.add("openness_negative", {"Y"});
   relief.add("horizon_deg", indexed_channels(4));
   LayerSet reference;
   reference.width = reference.height = 9;
-  add_reference_relief(f, {&relief}, reference, {});
+  add_reference_relief(f, settings, relief, reference, {});
   ASSERT_TRUE(reference.find("svf") && reference.find("openness_negative") && reference.find("horizon_deg"));
   EXPECT_FALSE(reference.find("openness_positive"));  // not baked
   for (std::size_t t = 0; t < 81; ++t) {  // flat ground: svf 1, openness 90, horizons 0 (borders included)

@@ -13,6 +13,7 @@
 #include <random>
 
 #include "cli/reference_cache.hpp"
+#include "methods/method_table.hpp"
 
 namespace hfbake {
 namespace {
@@ -48,6 +49,18 @@ class Cache : public ::testing::Test {
     j.base_dir = dir_;
     j.doc = doc;
     j.name = doc.value("name", "t");
+    // Its entries resolved by their methods' readers, as resolve_job does (a 64² field).
+    MethodContext context;
+    context.field.width = context.field.height = 64;
+    context.field.texel_size = 1;
+    for (std::size_t b = 0; b < doc["bake"].size(); ++b) {
+      BakeEntry e;
+      e.method = doc["bake"][b]["method"];
+      e.pointer = "/bake/" + std::to_string(b);
+      e.params = doc["bake"][b];
+      e.config = std::make_shared<const MethodConfig>(resolve_method(e.params, context, "j.json", e.pointer));
+      j.bakes.push_back(std::move(e));
+    }
     return j;
   }
 

@@ -79,11 +79,9 @@ inline Falloff read_falloff(Params& in) {
                                      {"none", "step", "linear", "smooth", "exponential", "rational"});
   parse_falloff_kind(kind, f.kind);
   if (has_radius) {
-    const auto& r = in.raw("radius");
-    if (!r.is_number() || !(r.get<double>() > 0) || !(r.get<double>() <= 1e9))
-      in.fail("radius", "must be a positive number up to 1e9 (world units)");
-    f.radius = r.get<double>();
-    in.resolve("radius", f.radius);
+    f.radius = in.number_that(
+        "radius", [](double r) { return r > 0 && r <= 1e9; },
+        "must be a positive number up to 1e9 (world units)");
   }
   if (f.kind == FalloffKind::none && has_radius)
     in.fail("radius", "has no effect with falloff \"none\" (use \"step\" for AO limited to a radius)");

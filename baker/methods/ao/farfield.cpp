@@ -454,10 +454,9 @@ FarfieldOptions read_farfield_options(Params& in) {
   return o;
 }
 
-LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  Params in(params);
-  const FarfieldOptions o = read_farfield_options(in);
-  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+LayerSet bake_farfield(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
+  const FarfieldOptions& o = config.get<FarfieldOptions>();
+  const std::vector<std::string>& layers = config.layers;
   // The sums are the layers: accumulated in float and finished in place, handed on without a copy.
   std::vector<float> light(scene.field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * scene.field.texel_count() : 0);
@@ -470,21 +469,19 @@ LayerSet bake_farfield(const Scene& scene, const nlohmann::json& params, const R
 namespace {
 
 // Farm blocks: "sum" and, with bent_normal, "bent" (farfield_block_sums; merged by float addition).
-LayerSet farfield_bake_block(const Scene& scene, const nlohmann::json& params, int block,
+LayerSet farfield_bake_block(const Scene& scene, const MethodConfig& config, int block,
                              const RunControl& rc) {
-  Params in(params);
-  const FarfieldOptions o = read_farfield_options(in);
-  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  const FarfieldOptions& o = config.get<FarfieldOptions>();
+  const std::vector<std::string>& layers = config.layers;
   BlockSums out = block_sum_layers(scene.field.width, scene.field.height, wants(layers, "bent_normal"));
   farfield_block_sums(scene.field, o, block, rc, out.sum, out.bent);
   return std::move(out.set);
 }
 
-LayerSet farfield_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+LayerSet farfield_finish_blocks(const Scene& scene, const MethodConfig& config, LayerSet&& sums,
                                 const RunControl&) {
-  Params in(params);
-  const FarfieldOptions o = read_farfield_options(in);
-  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  const FarfieldOptions& o = config.get<FarfieldOptions>();
+  const std::vector<std::string>& layers = config.layers;
   std::vector<float> light, bent;
   take_block_sums(std::move(sums), wants(layers, "bent_normal"), &light, &bent);
   farfield_finish(scene.field, scene.normals, o, light.data(), bent.empty() ? nullptr : bent.data());
@@ -500,20 +497,20 @@ MethodInfo farfield_method() {
   m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
   m.summary = "P4's far-field obscurance: an exact near field, prefiltered far-field slabs beyond it";
-  m.read = [](Params& in, const MethodContext&) { read_farfield_options(in); };
+  m.read = [](Params& in, const MethodContext&) {
+    const FarfieldOptions o = read_farfield_options(in);
+    MethodConfig config = method_config(o, o.directions);
+    config.obscurance = written_falloff(in, o.rho);
+    return config;
+  };
   m.bake = bake_farfield;
   // The sums are its layers (float, finished in place; the bent normals interleaved): beyond them only the
   // obscurance's 4 bytes a texel when the job asks for bent_normal alone, and the largest direction's scan
   // (farfield_working_bytes: its prefix sums over lines of the interval pyramid).
   m.memory_knob = "its layers (bent_normal: 12 bytes a texel) and its radius (the far field's scan)";
-  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
-    FarfieldOptions o;  // what the scan's plan reads (the resolved near_field may be the -1 of its default)
-    o.rho = parse_falloff(r);
-    o.directions = r.value("directions", o.directions);
-    o.interval = r.value("interval", o.interval);
-    o.growth = r.value("growth", o.growth);
-    o.sector_average = r.value("sector_average", o.sector_average);
-    const auto layers = r.value("layers", std::vector<std::string>{});
+  m.working_bytes = [](const MethodConfig& config, const MethodContext& c) {
+    const FarfieldOptions& o = config.get<FarfieldOptions>();
+    const std::vector<std::string>& layers = config.layers;
     // The farm's block partial sums (FloatBlocks) when a block holds more than one direction.
     const double partial =
         FloatBlocks(o.directions).needs_partial() ? (wants(layers, "bent_normal") ? 16.0 : 4.0) : 0.0;
@@ -525,7 +522,6 @@ MethodInfo farfield_method() {
   m.division_note = "partial sums over disjoint direction sets";
   m.bake_block = farfield_bake_block;
   m.finish_blocks = farfield_finish_blocks;
-  m.falloff_defines_obscurance = true;
   return m;
 }
 

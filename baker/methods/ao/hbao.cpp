@@ -238,17 +238,14 @@ HbaoSettings read_hbao_settings(Params& in, const FieldShape& field) {
                                          : HorizonEstimator::largest_occluder;
   const bool largest = s.estimator == HorizonEstimator::largest_occluder;
   if (in.has("tangent")) {
-    const auto& t = in.raw("tangent");
-    if (t == "normal")
-      s.real_tangent = true;
-    else if (t.is_number() && t.get<double>() >= -1 && t.get<double>() <= 0)
-      s.sin_tangent = t.get<double>();
-    else
-      in.fail("tangent", "must be \"normal\" or a number in [-1, 0] (sin of the fixed tangent)");
+    const std::optional<double> t = in.word_or_number(
+        "tangent", "normal", -1, 0, "must be \"normal\" or a number in [-1, 0] (sin of the fixed tangent)");
+    s.real_tangent = !t;
+    if (t) s.sin_tangent = *t;
     if (!largest) in.fail("tangent", "applies only to estimator \"largest_occluder\"");
   }
-  if (largest)
-    in.resolve("tangent", s.real_tangent ? nlohmann::json("normal") : nlohmann::json(s.sin_tangent));
+  if (largest && s.real_tangent) in.resolve("tangent", "normal");
+  if (largest && !s.real_tangent) in.resolve("tangent", s.sin_tangent);
   if (in.has("occluders") && !largest) in.fail("occluders", "applies only to estimator \"largest_occluder\"");
   const std::string occluders = in.choice("occluders", "visible", {"visible", "all"});
   s.visible_only = occluders == "visible";
@@ -287,11 +284,10 @@ LayerSet hbao_layers(const HeightField& field, const HbaoSettings& s, const std:
 
 }  // namespace
 
-LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+LayerSet bake_hbao(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
   const HeightField& field = scene.field;
-  Params in(params);
-  const HbaoSettings s = read_hbao_settings(in, field);
-  const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  const HbaoSettings& s = config.get<HbaoSettings>();
+  const std::vector<std::string>& layers = config.layers;
   std::vector<float> obsc(field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);  // [3 * texel + c]
   hbao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
@@ -301,11 +297,10 @@ LayerSet bake_hbao(const Scene& scene, const nlohmann::json& params, const RunCo
 namespace {
 
 // Farm blocks: "occluded#2f" and, with bent_normal, "bent#2f" (the raw sums: HbaoSums, as hi/lo pairs).
-LayerSet hbao_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
+LayerSet hbao_bake_block(const Scene& scene, const MethodConfig& config, int block, const RunControl& rc) {
   const HeightField& field = scene.field;
-  Params in(params);
-  const HbaoSettings s = read_hbao_settings(in, field);
-  const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  const HbaoSettings& s = config.get<HbaoSettings>();
+  const std::vector<std::string>& layers = config.layers;
   LayerSet out;
   out.width = field.width, out.height = field.height;
   float* occluded = out.add("occluded#2f", {"hi", "lo"}).data.data();
@@ -316,12 +311,11 @@ LayerSet hbao_bake_block(const Scene& scene, const nlohmann::json& params, int b
   return out;
 }
 
-LayerSet hbao_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+LayerSet hbao_finish_blocks(const Scene& scene, const MethodConfig& config, LayerSet&& sums,
                             const RunControl&) {
   const HeightField& field = scene.field;
-  Params in(params);
-  const HbaoSettings s = read_hbao_settings(in, field);
-  const std::vector<std::string> layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  const HbaoSettings& s = config.get<HbaoSettings>();
+  const std::vector<std::string>& layers = config.layers;
   std::vector<float> obsc(field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);
   const std::vector<float> occluded = take_block_layer(sums, "occluded#2f", 2);
@@ -340,17 +334,21 @@ MethodInfo hbao_method() {
   m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
   m.summary = "brute-force horizon march per texel and direction (the obscurance family's baseline)";
-  m.read = [](Params& in, const MethodContext& c) { read_hbao_settings(in, c.field); };
+  m.read = [](Params& in, const MethodContext& c) {
+    const HbaoSettings s = read_hbao_settings(in, c.field);
+    MethodConfig config = method_config(s, int(s.directions.size()));
+    config.obscurance = written_falloff(in, s.falloff);
+    return config;
+  };
   m.bake = bake_hbao;
   // Nothing beyond its layers (the bent normals are written interleaved, as their layer).
   m.memory_knob = "its layers (bent_normal: 12 bytes a texel)";
-  m.working_bytes = [](const nlohmann::json&, const MethodContext&) { return 0.0; };
+  m.working_bytes = [](const MethodConfig&, const MethodContext&) { return 0.0; };
 
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets (texel tiles would need a halo of the reach)";
   m.bake_block = hbao_bake_block;
   m.finish_blocks = hbao_finish_blocks;
-  m.falloff_defines_obscurance = true;
   return m;
 }
 

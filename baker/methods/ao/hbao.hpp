@@ -99,7 +99,8 @@ void hbao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
 // field (its diagonal when clamped, one period when it repeats).
 double default_reach(const FieldShape& field, const Falloff& f);
 
-// Reads and checks an hbao bake entry (schemas/methods/hbao.schema.json); the layers are in.resolved().
+// Reads and checks an hbao bake entry (schemas/methods/hbao.schema.json); the layers are the reader's
+// (Params::layers).
 HbaoSettings read_hbao_settings(Params& in, const FieldShape& field);
 
 }  // namespace hfbake

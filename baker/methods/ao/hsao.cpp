@@ -230,11 +230,10 @@ HsaoSettings read_hsao_settings(Params& in, const FieldShape& field) {
   return s;
 }
 
-LayerSet bake_hsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+LayerSet bake_hsao(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
   const HeightField& field = scene.field;
-  Params in(params);
-  const HsaoSettings s = read_hsao_settings(in, field);
-  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  const HsaoSettings& s = config.get<HsaoSettings>();
+  const std::vector<std::string>& layers = config.layers;
   std::vector<float> obsc(field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);  // [3 * texel + c]
   hsao_field(field, scene.normals, s, rc, obsc.data(), bent.empty() ? nullptr : bent.data());
@@ -245,10 +244,9 @@ namespace {
 
 // Farm blocks: "sums#2f" (horizon hi, lo, normal hi, lo) and "bent#2f" (X hi, lo, ...): HsaoSums of block
 // `block` per texel, normals from the heights (normal_at, as hsao_field without held normals).
-LayerSet hsao_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
+LayerSet hsao_bake_block(const Scene& scene, const MethodConfig& config, int block, const RunControl& rc) {
   const HeightField& field = scene.field;
-  Params in(params);
-  const HsaoSettings s = read_hsao_settings(in, field);
+  const HsaoSettings& s = config.get<HsaoSettings>();
   LayerSet out;
   out.width = field.width, out.height = field.height;
   float* sums = out.add("sums#2f", {"T.hi", "T.lo", "N.hi", "N.lo"}).data.data();
@@ -270,12 +268,10 @@ LayerSet hsao_bake_block(const Scene& scene, const nlohmann::json& params, int b
   return out;
 }
 
-LayerSet hsao_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+LayerSet hsao_finish_blocks(const Scene& scene, const MethodConfig& config, LayerSet&& sums,
                             const RunControl&) {
   const HeightField& field = scene.field;
-  Params in(params);
-  read_hsao_settings(in, field);
-  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  const std::vector<std::string>& layers = config.layers;
   std::vector<float> obsc(field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * field.texel_count() : 0);
   const std::vector<float> t_sums = take_block_layer(sums, "sums#2f", 4);
@@ -304,17 +300,21 @@ MethodInfo hsao_method() {
   m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
   m.summary = "horizon-split obscurance: a near-field march per direction plus normal-split rays";
-  m.read = [](Params& in, const MethodContext& c) { read_hsao_settings(in, c.field); };
+  m.read = [](Params& in, const MethodContext& c) {
+    const HsaoSettings s = read_hsao_settings(in, c.field);
+    MethodConfig config = method_config(s, s.directions);
+    config.obscurance = written_falloff(in, s.falloff);
+    return config;
+  };
   m.bake = bake_hsao;
   // Nothing beyond its layers (the bent normals are written interleaved, as their layer).
   m.memory_knob = "its layers (bent_normal: 12 bytes a texel)";
-  m.working_bytes = [](const nlohmann::json&, const MethodContext&) { return 0.0; };
+  m.working_bytes = [](const MethodConfig&, const MethodContext&) { return 0.0; };
 
   m.division = WorkDivision::directions;
   m.division_note = "partial sums over disjoint direction sets";
   m.bake_block = hsao_bake_block;
   m.finish_blocks = hsao_finish_blocks;
-  m.falloff_defines_obscurance = true;
   return m;
 }
 

@@ -439,15 +439,17 @@ LsaoOptions read_lsao_options(Params& in) {
                                                                          : ObscuranceWeighting::cosine;
   // "normal" (default): each texel's own tangent, the visible chain's bands; a number: P3's fixed tangent sin
   // t.
-  const nlohmann::json tangent = in.has("tangent") ? in.raw("tangent") : nlohmann::json("normal");
-  if (tangent == "normal") {
+  const std::optional<double> tangent =
+      in.has("tangent")
+          ? in.word_or_number("tangent", "normal", -1.0, 0.0,
+                              "must be \"normal\" or a number in [-1, 0] (sin of P3's fixed tangent)")
+          : std::nullopt;
+  if (!tangent) {
     o.tangent = LsaoTangent::receiver;
     in.resolve("tangent", "normal");
   } else {
-    if (!tangent.is_number() || !(tangent.get<double>() >= -1.0 && tangent.get<double>() <= 0.0))
-      in.fail("tangent", "must be \"normal\" or a number in [-1, 0] (sin of P3's fixed tangent)");
     o.tangent = LsaoTangent::fixed;
-    o.occlusion.sin_t = tangent.get<double>();
+    o.occlusion.sin_t = *tangent;
     in.resolve("tangent", o.occlusion.sin_t);
   }
   // The receiver tangent's surface: the triangulated one by default (the crossings between the lines'
@@ -464,10 +466,9 @@ LsaoOptions read_lsao_options(Params& in) {
   return o;
 }
 
-LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  Params in(params);
-  const LsaoOptions o = read_lsao_options(in);
-  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+LayerSet bake_lsao(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
+  const LsaoOptions& o = config.get<LsaoOptions>();
+  const std::vector<std::string>& layers = config.layers;
   // The sums are the layers: accumulated in float and finished in place, handed on without a copy.
   std::vector<float> light(scene.field.texel_count());
   std::vector<float> bent(wants(layers, "bent_normal") ? 3 * scene.field.texel_count() : 0);
@@ -479,20 +480,18 @@ LayerSet bake_lsao(const Scene& scene, const nlohmann::json& params, const RunCo
 namespace {
 
 // Farm blocks: "sum" and, with bent_normal, "bent" (lsao_block_sums; merged by float addition).
-LayerSet lsao_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
-  Params in(params);
-  const LsaoOptions o = read_lsao_options(in);
-  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+LayerSet lsao_bake_block(const Scene& scene, const MethodConfig& config, int block, const RunControl& rc) {
+  const LsaoOptions& o = config.get<LsaoOptions>();
+  const std::vector<std::string>& layers = config.layers;
   BlockSums out = block_sum_layers(scene.field.width, scene.field.height, wants(layers, "bent_normal"));
   lsao_block_sums(scene.field, o, block, rc, out.sum, out.bent);
   return std::move(out.set);
 }
 
-LayerSet lsao_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+LayerSet lsao_finish_blocks(const Scene& scene, const MethodConfig& config, LayerSet&& sums,
                             const RunControl&) {
-  Params in(params);
-  const LsaoOptions o = read_lsao_options(in);
-  const auto layers = in.resolved()["layers"].get<std::vector<std::string>>();
+  const LsaoOptions& o = config.get<LsaoOptions>();
+  const std::vector<std::string>& layers = config.layers;
   std::vector<float> light, bent;
   take_block_sums(std::move(sums), wants(layers, "bent_normal"), &light, &bent);
   lsao_finish(scene.field, o, light.data(), bent.empty() ? nullptr : bent.data());
@@ -508,19 +507,24 @@ MethodInfo lsao_method() {
   m.reads_normals = false;  // its own, only for texel receivers
   m.reads_albedo = false;
   m.summary = "P3's line-sweep obscurance: one hull of occluders per sweep line and direction";
-  m.read = [](Params& in, const MethodContext&) { read_lsao_options(in); };
+  m.read = [](Params& in, const MethodContext&) {
+    const LsaoOptions o = read_lsao_options(in);
+    MethodConfig config = method_config(o, o.directions);
+    config.obscurance = written_falloff(in, o.occlusion.rho);
+    return config;
+  };
   m.bake = bake_lsao;
   // The sums are its layers (float, finished in place; the bent normals interleaved): beyond them the
   // obscurance's 4 bytes a texel when the job asks for bent_normal alone, the normals (12) up to 8192^2
   // texels (lsao_holds_normals), and the sweep's line buffers
   // (bounded by SweepSpec::max_buffer_bytes; sweep_buffer_bytes of lsao's spec).
   m.memory_knob = "its layers (bent_normal: 12 bytes a texel)";
-  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
-    const auto layers = r.value("layers", std::vector<std::string>{});
+  m.working_bytes = [](const MethodConfig& config, const MethodContext& c) {
+    const std::vector<std::string>& layers = config.layers;
     const bool bent = wants(layers, "bent_normal");
     const double texels = double(c.field.width) * double(c.field.height);
     SweepSpec spec;
-    spec.directions = std::max(1, r.value("directions", 16));
+    spec.directions = std::max(1, config.get<LsaoOptions>().directions);
     spec.channels = bent ? 6 : 2;
     HeightField field;  // the sweep's plan needs only the shape
     static_cast<FieldShape&>(field) = c.field;
@@ -535,7 +539,6 @@ MethodInfo lsao_method() {
   m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";
   m.bake_block = lsao_bake_block;
   m.finish_blocks = lsao_finish_blocks;
-  m.falloff_defines_obscurance = true;
   return m;
 }
 

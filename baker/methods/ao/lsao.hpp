@@ -122,7 +122,8 @@ std::vector<double> lsao_mean_occlusion(const HeightField& field, const LsaoOpti
 std::vector<float> lsao_obscurance(const HeightField& field, const LsaoOptions& options, const RunControl& rc,
                                    LsaoStats* stats = nullptr, std::vector<Vec3f>* bent_normal = nullptr);
 
-// Reads and checks an lsao bake entry (schemas/methods/lsao.schema.json); the layers are in.resolved().
+// Reads and checks an lsao bake entry (schemas/methods/lsao.schema.json); the layers are the reader's
+// (Params::layers).
 LsaoOptions read_lsao_options(Params& in);
 
 }  // namespace hfbake

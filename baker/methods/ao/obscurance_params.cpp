@@ -8,9 +8,9 @@
 
 namespace hfbake {
 
-Falloff parse_falloff(const nlohmann::json& params) {
-  Params in(params);
-  return read_falloff(in);
+std::optional<Falloff> written_falloff(const Params& in, const Falloff& f) {
+  if (in.has("falloff") || in.has("radius")) return f;
+  return std::nullopt;
 }
 
 Weighting read_weighting(Params& in, bool allow_uniform) {

@@ -2,10 +2,9 @@
 // weighting, layers. Parsed once into plain values; errors are InputError with the key as "where".
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/layers.hpp"
 #include "core/vec.hpp"
@@ -19,8 +18,9 @@ namespace hfbake {
 // sin t).
 enum class Weighting { cosine, uniform };
 
-// "falloff" and "radius" (read_falloff, falloff.hpp) from a bare JSON object (tests, direct API use).
-Falloff parse_falloff(const nlohmann::json& params);
+// The falloff an obscurance entry writes (MethodConfig::obscurance): `f` when the entry gives "falloff" or
+// "radius", else none.
+std::optional<Falloff> written_falloff(const Params& in, const Falloff& f);
 // "weighting": "cosine" (default) or "uniform"; `allow_uniform` false -> "uniform" is an InputError.
 Weighting read_weighting(Params& in, bool allow_uniform);
 

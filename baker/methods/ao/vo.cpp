@@ -191,10 +191,9 @@ VoSettings read_vo_settings(Params& in, const FieldShape& field) {
   return s;
 }
 
-LayerSet bake_vo(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
+LayerSet bake_vo(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
   const HeightField& field = scene.field;
-  Params in(params);
-  const VoSettings s = read_vo_settings(in, field);
+  const VoSettings& s = config.get<VoSettings>();
   LayerSet out;
   out.width = field.width;
   out.height = field.height;
@@ -213,11 +212,17 @@ MethodInfo vo_method() {
   m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
   m.summary = "volumetric obscurance (ALSVO): the occupied fraction of a tangent-space box per texel";
-  m.read = [](Params& in, const MethodContext& c) { read_vo_settings(in, c.field); };
+  m.read = [](Params& in, const MethodContext& c) {
+    const VoSettings s = read_vo_settings(in, c.field);
+    MethodConfig config = method_config(s);
+    // Its footprint's radius as a step falloff: what the reference's obscurance compares it against.
+    config.obscurance = Falloff{FalloffKind::step, s.radius};
+    return config;
+  };
   m.bake = bake_vo;
   // The occupancy's summed-area tables (measured: 44 bytes a texel at 2048^2, docs/large-fields.md).
   m.memory_knob = "a smaller field (its summed-area tables take 44 bytes a texel whatever its parameters)";
-  m.working_bytes = [](const nlohmann::json&, const MethodContext& c) {
+  m.working_bytes = [](const MethodConfig&, const MethodContext& c) {
     return 44.0 * double(c.field.width) * double(c.field.height);
   };
   m.division = WorkDivision::texel_tiles;
@@ -227,7 +232,6 @@ MethodInfo vo_method() {
   m.division_note =
       "whole, in one shard: tiles with a halo of the footprint would work, but their own summed-area tables "
       "round differently from the whole field's (not bit-identical), and the pass is cheap";
-  m.falloff_defines_obscurance = true;
   return m;
 }
 

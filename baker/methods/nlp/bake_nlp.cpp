@@ -66,11 +66,6 @@ NlpOptions read_nlp_options(Params& in) {
   return o;
 }
 
-NlpOptions parse_nlp_options(const nlohmann::json& p) {
-  Params in(p);
-  return read_nlp_options(in);
-}
-
 namespace {
 
 constexpr int kSh = sh::kCount;
@@ -890,22 +885,21 @@ double nlp_working_bytes(const FieldShape& field, const NlpOptions& o, int bounc
   return std::max(heights + 24 * N, held + bounce - rgb_layers);
 }
 
-LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  return bake_nlp(scene, parse_nlp_options(params), rc);
-}
-
 MethodInfo nlp_method() {
   MethodInfo m;
   m.name = "nlp";
   m.summary = "NLP/SH multiresolution global illumination (Nowrouzezahrai & Snyder 2009)";
-  m.read = [](Params& in, const MethodContext&) { read_nlp_options(in); };
-  m.bake = [](const Scene& s, const nlohmann::json& p, const RunControl& rc) { return bake_nlp(s, p, rc); };
+  m.read = [](Params& in, const MethodContext&) {
+    const NlpOptions o = read_nlp_options(in);
+    return method_config(o, o.directions);
+  };
+  m.bake = [](const Scene& s, const MethodConfig& c, const RunControl& rc) {
+    return bake_nlp(s, c.get<NlpOptions>(), rc);
+  };
   m.reads_normals = false;  // normal_at per row of receivers
   m.memory_knob = "its layers (sh_visibility and sh_irradiance: 64 and 192 bytes a texel)";
-  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
-    Params in(r);
-    const NlpOptions o = read_nlp_options(in);
-    return nlp_working_bytes(c.field, o, c.bounces);
+  m.working_bytes = [](const MethodConfig& config, const MethodContext& c) {
+    return nlp_working_bytes(c.field, config.get<NlpOptions>(), c.bounces);
   };
   m.division = WorkDivision::texel_tiles;
   m.division_note =

@@ -6,7 +6,6 @@
 // the texel normal. Directional lights use the restricted-extent visibility of NS09 §6.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -57,14 +56,11 @@ struct NlpOptions {
 // Every layer nlp can write.
 const std::vector<std::string>& nlp_layer_names();
 
-// params: the schema-validated bake entry (schemas/methods/nlp.schema.json). Throws InputError for an
-// unknown layer name.
-NlpOptions parse_nlp_options(const nlohmann::json& params);
-// The same with the job's reader (file and pointer in errors; resolved values recorded).
+// Reads the bake entry (schemas/methods/nlp.schema.json) with every check (file and pointer in errors;
+// resolved values recorded).
 NlpOptions read_nlp_options(Params& in);
 
 LayerSet bake_nlp(const Scene& scene, const NlpOptions& options, const RunControl& rc);
-LayerSet bake_nlp(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
 
 // Bytes bake_nlp holds at its peak beyond its layers (the height and radiance pyramids from their exact
 // sizes, direct and indirect, a bounce's exitant radiance): the method table's working_bytes.

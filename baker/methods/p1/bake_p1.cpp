@@ -8,13 +8,12 @@ namespace hfbake {
 namespace {
 
 // The layers of a P1Result, in the order the job lists them (moved, never copied).
-LayerSet p1_layers(P1Result&& r, const Params& in) {
+LayerSet p1_layers(P1Result&& r, const std::vector<std::string>& order) {
   LayerSet out;
   out.width = r.width;
   out.height = r.height;
   // Layers in the order the job lists them (default: ao, vsky, direct); compute_p1's arrays are the
   // layers' data already (moved, never copied).
-  const std::vector<std::string> order = in.resolved()["layers"].get<std::vector<std::string>>();
   for (const std::string& name : order) {
     if (name == "ao") {
       out.adopt("ao", mono_channels(), std::move(r.ao));
@@ -58,16 +57,14 @@ void p1_sums_from_layers(LayerSet& sums, const P1SumsShape& shape, P1Sums& s) {
   take("fdr", shape.fd, s.fdr), take("fdg", shape.fd, s.fdg), take("fdb", shape.fd, s.fdb);
 }
 
-LayerSet bake_p1(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  Params in(params);
-  const P1Params p = read_p1_params(in);
-  return p1_layers(compute_p1(scene, p, rc), in);
+LayerSet bake_p1(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
+  return p1_layers(compute_p1(scene, config.get<P1Params>(), rc), config.layers);
 }
 
 // Farm blocks: the raw sums as layers named after P1Sums' members; each block's horizons as
 // "horizon@<k_begin>" ("horizon_distance@<k_begin>"), kept apart and placed by p1_finish_blocks.
-LayerSet p1_bake_block(const Scene& scene, const nlohmann::json& params, int block, const RunControl& rc) {
-  const P1Params p = parse_p1_params(params);
+LayerSet p1_bake_block(const Scene& scene, const MethodConfig& config, int block, const RunControl& rc) {
+  const P1Params& p = config.get<P1Params>();
   const int K = p.directions;
   P1Sums s =
       p1_direction_sums(scene, p, direction_block_begin(block, K), direction_block_begin(block + 1, K), rc);
@@ -83,10 +80,9 @@ LayerSet p1_bake_block(const Scene& scene, const nlohmann::json& params, int blo
   return out;
 }
 
-LayerSet p1_finish_blocks(const Scene& scene, const nlohmann::json& params, LayerSet&& sums,
+LayerSet p1_finish_blocks(const Scene& scene, const MethodConfig& config, LayerSet&& sums,
                           const RunControl& rc) {
-  Params in(params);
-  const P1Params p = read_p1_params(in);
+  const P1Params& p = config.get<P1Params>();
   const int K = p.directions;
   const std::size_t N = scene.field.texel_count();
   P1Sums s;
@@ -104,7 +100,7 @@ LayerSet p1_finish_blocks(const Scene& scene, const nlohmann::json& params, Laye
   if (p.horizon) place("horizon", s.horizon);
   if (p.horizon_distance) place("horizon_distance", s.horizon_distance);
   sums = LayerSet();
-  return p1_layers(p1_finish(scene, p, std::move(s), rc), in);
+  return p1_layers(p1_finish(scene, p, std::move(s), rc), config.layers);
 }
 
 MethodInfo p1_method() {
@@ -113,12 +109,15 @@ MethodInfo p1_method() {
   m.reads_normals = false;  // recomputed per tile from the heights (normal_at)
   m.reads_albedo = false;
   m.summary = "exact horizons by the convex-hull stack on K line sweeps; ao, vsky, direct light from them";
-  m.read = [](Params& in, const MethodContext&) { read_p1_params(in); };
+  m.read = [](Params& in, const MethodContext&) {
+    const P1Params p = read_p1_params(in);
+    return method_config(p, p.directions);
+  };
   m.bake = bake_p1;
   // Beyond its layers (the accumulators become the layers): see p1_working_bytes.
   m.memory_knob = "its layers (horizon and horizon_distance: 4 bytes a texel per direction each)";
-  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
-    return p1_working_bytes(c.field, parse_p1_params(r));
+  m.working_bytes = [](const MethodConfig& config, const MethodContext& c) {
+    return p1_working_bytes(c.field, config.get<P1Params>());
   };
   m.division = WorkDivision::directions;
   m.bake_block = p1_bake_block;

@@ -122,11 +122,6 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p) {
          double(sweep_buffer_bytes(field, p1_sweep_spec(p))) + workers;
 }
 
-P1Params parse_p1_params(const nlohmann::json& e) {
-  Params in(e);
-  return read_p1_params(in);
-}
-
 double disk_fraction_above(double elevation, double horizon, double radius) {
   if (radius <= 0) return elevation > horizon ? 1.0 : 0.0;
   const double x = (elevation - horizon) / radius;

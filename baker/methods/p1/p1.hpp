@@ -22,8 +22,6 @@
 //   horizon = sin e_k per direction; horizon_distance = world distance to the caster (+inf: none).
 #pragma once
 
-#include <nlohmann/json.hpp>
-
 #include <string>
 #include <vector>
 
@@ -81,10 +79,8 @@ struct P1Result {
 // facet_normals (field/triangulation.hpp) gives the two normals of P1Result::direct_facets.
 
 // Reads the bake entry (schemas/methods/p1.schema.json) with every check (even normal_bins, unknown
-// layers), recording the resolved values in `in` (layers in the order written). parse_p1_params: the same
-// from a bare JSON object (errors without file or pointer).
+// layers), recording the resolved values in `in` (layers in the order written).
 P1Params read_p1_params(Params& in);
-P1Params parse_p1_params(const nlohmann::json& entry);
 // Every layer p1 can write.
 const std::vector<std::string>& p1_layer_names();
 

@@ -45,13 +45,11 @@ P2Params read_p2_params(Params& in, int job_bounces) {
   std::vector<std::string> known = {"indirect", "total", "direct"};
   for (int b = 1; b <= B; ++b) known.push_back("indirect_b" + std::to_string(b));
   p.layers = in.layers(known, {"indirect", "total", "direct"});
+  p.bounces = B;
   in.resolve("bounces", B);
+  p.keep_bounces = std::any_of(p.layers.begin(), p.layers.end(),
+                               [](const std::string& l) { return l.rfind("indirect_b", 0) == 0; });
   return p;
-}
-
-P2Params parse_p2_params(const nlohmann::json& e, int job_bounces) {
-  Params in(e);
-  return read_p2_params(in, job_bounces);
 }
 
 P1Params p2_direct_params(const P2Params& params, bool horizons) {
@@ -282,12 +280,9 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   return p2_result(std::move(s), scene.field.width, scene.field.height);
 }
 
-LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  P2Params p = parse_p2_params(params, scene.bounces);
-  p.keep_bounces = std::any_of(p.layers.begin(), p.layers.end(),
-                               [](const std::string& l) { return l.rfind("indirect_b", 0) == 0; });
-  const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
-  return p2_layers(p, B, compute_p2(scene, p, rc));
+LayerSet bake_p2(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
+  const P2Params& p = config.get<P2Params>();
+  return p2_layers(p, p.bounces, compute_p2(scene, p, rc));
 }
 
 LayerSet p2_layers(const P2Params& p, int B, const P2Result& r) {
@@ -338,13 +333,6 @@ std::vector<Rgb> rgb_of(const Layer* l) {
   std::vector<Rgb> v(l ? l->data.size() / 3 : 0);
   for (std::size_t i = 0; i < v.size(); ++i) v[i] = {l->data[3 * i], l->data[3 * i + 1], l->data[3 * i + 2]};
   return v;
-}
-
-P2Params stage_params(const Scene& scene, const nlohmann::json& params) {
-  P2Params p = parse_p2_params(params, scene.bounces);
-  p.keep_bounces = std::any_of(p.layers.begin(), p.layers.end(),
-                               [](const std::string& l) { return l.rfind("indirect_b", 0) == 0; });
-  return p;
 }
 
 LayerSet state_layers(P2State&& s, int width, int height, bool last) {
@@ -414,14 +402,14 @@ P2State stage_state_before(int stage, LayerSet&& previous) {
   return s;
 }
 
-int p2_stages(const nlohmann::json& resolved) {
-  return 1 + std::max(0, resolved.value("bounces", 0));
+int p2_stages(const MethodConfig& config) {
+  return 1 + config.get<P2Params>().bounces;
 }
 
-LayerSet p2_bake_stage(const Scene& scene, const nlohmann::json& params, int stage, LayerSet&& previous,
+LayerSet p2_bake_stage(const Scene& scene, const MethodConfig& config, int stage, LayerSet&& previous,
                        const RunControl& rc) {
-  const P2Params p = stage_params(scene, params);
-  const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
+  const P2Params& p = config.get<P2Params>();
+  const int B = p.bounces;
   P2State s = stage == 0 ? p2_stage0(scene, p, rc) : stage_state_before(stage, std::move(previous));
   if (stage > 0) p2_bounce(scene, p, B, s, rc);
   return state_layers(std::move(s), scene.field.width, scene.field.height, stage == B);
@@ -434,8 +422,8 @@ LayerSet p2_bake_stage(const Scene& scene, const nlohmann::json& params, int sta
 // Stage 0 (p1's direct light) divides by the same blocks: block b's P1Sums (p1_direction_sums) as layers
 // named after their members, its horizons (when kept) as "horizon@<k_begin>", added in float in block
 // order by the merge as compute_p1 adds them (p1_add_sums), then finished by p1_finish.
-int p2_stage_blocks(const nlohmann::json& resolved, int) {
-  return direction_block_count(resolved.value("directions", 64));
+int p2_stage_blocks(const MethodConfig& config, int) {
+  return direction_block_count(config.get<P2Params>().directions);
 }
 
 LayerSet p1_block_layers(const Scene& scene, const P2Params& p, int block, const RunControl& rc) {
@@ -479,10 +467,10 @@ std::uint64_t* stat_field(P2SweepStats& t, int i) {
   return f[i];
 }
 
-LayerSet p2_bake_stage_block(const Scene& scene, const nlohmann::json& params, int stage, int block,
+LayerSet p2_bake_stage_block(const Scene& scene, const MethodConfig& config, int stage, int block,
                              LayerSet&& previous, const RunControl& rc) {
-  const P2Params p = stage_params(scene, params);
-  const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
+  const P2Params& p = config.get<P2Params>();
+  const int B = p.bounces;
   if (stage == 0) return p1_block_layers(scene, p, block, rc);
   const P2State s = stage_state_before(stage, std::move(previous));
   P2BlockSums sums = p2_bounce_block(scene, p, B, s, block, rc);
@@ -508,10 +496,10 @@ LayerSet p2_bake_stage_block(const Scene& scene, const nlohmann::json& params, i
   return out;
 }
 
-LayerSet p2_finish_stage_blocks(const Scene& scene, const nlohmann::json& params, int stage,
+LayerSet p2_finish_stage_blocks(const Scene& scene, const MethodConfig& config, int stage,
                                 LayerSet&& previous, LayerSet&& sums, const RunControl& rc) {
-  const P2Params p = stage_params(scene, params);
-  const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
+  const P2Params& p = config.get<P2Params>();
+  const int B = p.bounces;
   if (stage == 0)
     return state_layers(p2_state_of_direct(scene, p, p1_of_block_layers(scene, p, std::move(sums), rc)),
                         scene.field.width, scene.field.height, B == 0);
@@ -540,11 +528,10 @@ LayerSet p2_finish_stage_blocks(const Scene& scene, const nlohmann::json& params
   return state_layers(std::move(s), scene.field.width, scene.field.height, stage == B);
 }
 
-LayerSet p2_finish_stages(const Scene& scene, const nlohmann::json& params, LayerSet&& last,
+LayerSet p2_finish_stages(const Scene& scene, const MethodConfig& config, LayerSet&& last,
                           const RunControl&) {
-  const P2Params p = stage_params(scene, params);
-  const int B = p.bounces >= 0 ? p.bounces : std::max(0, scene.bounces);
-  return p2_layers(p, B, p2_result(state_of(std::move(last)), scene.field.width, scene.field.height));
+  const P2Params& p = config.get<P2Params>();
+  return p2_layers(p, p.bounces, p2_result(state_of(std::move(last)), scene.field.width, scene.field.height));
 }
 
 }  // namespace
@@ -554,13 +541,16 @@ MethodInfo p2_method() {
   m.name = "p2";
   m.summary =
       "direct light from p1, then indirect bounces gathered over the exactly visible terrain (hull tree)";
-  m.read = [](Params& in, const MethodContext& c) { read_p2_params(in, c.bounces); };
+  m.read = [](Params& in, const MethodContext& c) {
+    const P2Params p = read_p2_params(in, c.bounces);
+    return method_config(p, p.directions);
+  };
   m.bake = bake_p2;
   m.memory_knob =
       "its directions (p1's horizons: 4 bytes a texel per direction, kept up to 1 GiB), its bounces and "
       "the indirect_b layers";
-  m.working_bytes = [](const nlohmann::json& r, const MethodContext& c) {
-    return p2_working_bytes(c.field, parse_p2_params(r, c.bounces));
+  m.working_bytes = [](const MethodConfig& config, const MethodContext& c) {
+    return p2_working_bytes(c.field, config.get<P2Params>());
   };
   m.division = WorkDivision::bounce_stages;
   m.stages = p2_stages;

@@ -43,8 +43,6 @@
 // indirect_b<bounces>.
 #pragma once
 
-#include <nlohmann/json.hpp>
-
 #include <vector>
 
 #include "core/layers.hpp"
@@ -89,11 +87,10 @@ struct P2Params {
 inline constexpr double kP2KeptHorizonBytes = double(1 << 30);
 bool p2_keeps_horizons(const FieldShape& field, const P2Params& params, int job_bounces);
 
-// Reads a bake entry; throws InputError("", "<key>", ...) for what the schema cannot express.
 // Reads the bake entry (schemas/methods/p2.schema.json) with every check; indirect_b<b> layers are known up
-// to the bounces it bakes (its own "bounces", else job_bounces).
+// to the bounces it bakes (its own "bounces", else job_bounces), which it sets as P2Params::bounces, and
+// keep_bounces follows the indirect_b layers.
 P2Params read_p2_params(Params& in, int job_bounces);
-P2Params parse_p2_params(const nlohmann::json& entry, int job_bounces = 64);
 
 struct P2Result {
   int width = 0, height = 0;
@@ -151,7 +148,7 @@ P1Params p2_horizon_params(const P2Params& params);
 // params with bounces resolved (>= 0).
 double p2_working_bytes(const FieldShape& field, const P2Params& params);
 
-LayerSet bake_p2(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+LayerSet bake_p2(const Scene& scene, const MethodConfig& config, const RunControl& rc);
 // bake_p2's layers of a result (B: the bounces baked).
 LayerSet p2_layers(const P2Params& params, int bounces, const P2Result& result);
 

@@ -97,9 +97,8 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
   return out;
 }
 
-LayerSet bake_relief(const Scene& scene, const nlohmann::json& params, const RunControl& rc) {
-  Params in(params);
-  return bake_relief(scene.field, read_relief_settings(in, scene.field), rc);
+LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
+  return bake_relief(scene.field, config.get<ReliefSettings>(), rc);
 }
 
 MethodInfo relief_method() {
@@ -107,10 +106,13 @@ MethodInfo relief_method() {
   m.name = "relief";
   m.summary =
       "GIS relief quantities from radius-limited horizons: sky-view factor, openness, horizons in degrees";
-  m.read = [](Params& in, const MethodContext& c) { read_relief_settings(in, c.field); };
+  m.read = [](Params& in, const MethodContext& c) {
+    const ReliefSettings s = read_relief_settings(in, c.field);
+    return method_config(s, s.directions);
+  };
   m.bake = bake_relief;
   m.memory_knob = "its layers (horizon_deg: 4 bytes a texel per direction)";
-  m.working_bytes = [](const nlohmann::json&, const MethodContext&) { return 0.0; };  // nothing per texel
+  m.working_bytes = [](const MethodConfig&, const MethodContext&) { return 0.0; };  // nothing per texel
   m.division = WorkDivision::texel_tiles;
   m.division_note = "texel tiles with a halo of search_radius (each texel's horizons are its own)";
   m.reads_normals = false;

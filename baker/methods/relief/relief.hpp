@@ -4,7 +4,6 @@
 // in compass terms. Definitions: docs/gis.md, "Relief quantities".
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "core/layers.hpp"
@@ -29,7 +28,7 @@ ReliefSettings read_relief_settings(Params& in, const FieldShape& field);
 // east = +x: (sin A, -cos A).
 void relief_direction(int k, int K, bool compass, double& dx, double& dy);
 
-LayerSet bake_relief(const Scene& scene, const nlohmann::json& params, const RunControl& rc);
+LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunControl& rc);
 // The same from the heights alone (tests).
 LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc);
 
