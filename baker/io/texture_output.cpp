@@ -132,17 +132,24 @@ void for_each_texture_value(const LayerSet& layers, const TextureSpec& spec, con
   }
 }
 
+// A texture of the layers' size plus the padding on each side, `nc` channels, its values zero.
+template <class Texture>
+Texture sized_texture(const LayerSet& layers, const TextureSpec& spec, int nc) {
+  Texture out;
+  out.width = layers.width + 2 * spec.padding;
+  out.height = layers.height + 2 * spec.padding;
+  out.channels = nc;
+  out.values.resize(std::size_t(out.width) * std::size_t(out.height) * std::size_t(nc));
+  return out;
+}
+
 }  // namespace
 
 TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
   if (spec.bits != 8 && spec.bits != 16) throw std::logic_error("texture_pixels: 8 or 16 bits");
   const std::vector<Tap> taps = texture_taps(layers, spec);
   const int nc = int(taps.size());
-  TexturePixels out;
-  out.width = layers.width + 2 * spec.padding;
-  out.height = layers.height + 2 * spec.padding;
-  out.channels = nc;
-  out.values.resize(std::size_t(out.width) * std::size_t(out.height) * std::size_t(nc));
+  TexturePixels out = sized_texture<TexturePixels>(layers, spec, nc);
   const double top = spec.bits == 8 ? 255.0 : 65535.0;
   for_each_texture_value(layers, spec, taps, [&](std::size_t i, int c, double v) {
     if (!spec.normal_map && spec.transfer == Transfer::srgb && std::isfinite(v))
@@ -158,11 +165,7 @@ TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
 TextureValues texture_values(const LayerSet& layers, const TextureSpec& spec) {
   const std::vector<Tap> taps = texture_taps(layers, spec);
   const int nc = int(taps.size());
-  TextureValues out;
-  out.width = layers.width + 2 * spec.padding;
-  out.height = layers.height + 2 * spec.padding;
-  out.channels = nc;
-  out.values.resize(std::size_t(out.width) * std::size_t(out.height) * std::size_t(nc));
+  TextureValues out = sized_texture<TextureValues>(layers, spec, nc);
   for_each_texture_value(layers, spec, taps, [&](std::size_t i, int c, double v) {
     out.values[i * nc + c] = std::isfinite(v) ? float(v) : 0.0f;
   });
