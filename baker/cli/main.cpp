@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
   bake_cmd->add_option("jobs", bake_jobs, "Job files (JSON)")->required()->check(CLI::ExistingFile);
   bake_cmd->add_option("--threads", threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(1, 4096));
-  bake_cmd->add_option("--out", out, "Output folder, replacing each job's output.dir");
+  bake_cmd->add_option("-o,--out", out, "Output folder, replacing each job's output.dir");
   bake_cmd->add_flag("--quiet", bake.quiet, "No progress output (errors are still printed)");
   bake_cmd->add_flag(
       "--overwrite", bake.overwrite,
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
   merge_cmd->add_option("jobs", merge_jobs, "Job files (JSON) or suites")
       ->required()
       ->check(CLI::ExistingFile);
-  merge_cmd->add_option("--out", merge_out,
+  merge_cmd->add_option("-o,--out", merge_out,
                         "Output folder, as bake's --out (the shards are in <out>/shards)");
   merge_cmd->add_flag("--quiet", merge.quiet, "No progress output (errors are still printed)");
   merge_cmd->add_flag("--overwrite", merge.overwrite, "As bake's --overwrite");
@@ -124,7 +124,7 @@ int main(int argc, char** argv) {
   slurm_cmd->add_option("--sbatch-arg", slurm.sbatch_args, "Any further sbatch option (repeatable)");
   slurm_cmd->add_flag("--wait", slurm.wait, "Wait for the merge and exit with its status");
   slurm_cmd->add_flag("--resume", slurm.resume, "Submit only the shards whose file is not complete");
-  slurm_cmd->add_option("--out", slurm_out, "As bake's --out");
+  slurm_cmd->add_option("-o,--out", slurm_out, "As bake's --out");
   slurm_cmd->add_option("--cache", slurm_cache, "As bake's --cache (a folder every node sees)");
   slurm_cmd->add_flag("--no-cache", slurm.no_cache, "As bake's --no-cache");
   slurm_cmd->add_option("--threads", slurm.threads, "Threads per task (--cpus-per-task; default 1)")
@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
   init_cmd->add_option("--preset", init.preset, "What the job bakes")
       ->required()
       ->check(CLI::IsMember(preset_names));
-  init_cmd->add_option("--out", init_out, "The job file to write (default: <height file's stem>.json here)");
+  init_cmd->add_option("-o,--out", init_out, "The job file to write (default: <height file's stem>.json here)");
   init_cmd->add_flag("--force", init.force, "Write over an existing job file");
   app.footer("\n" + hfbake::methods_and_presets_help());
 
@@ -193,7 +193,7 @@ int main(int argc, char** argv) {
                           "K compass azimuths 360 k / K, clockwise from north (default 360)");
   horizon_cmd->add_option("--band", horizon.band, "Band of the heights, 0-based (default 0)");
   horizon_cmd->add_option("--format", horizon.format, "csv (default) or json");
-  horizon_cmd->add_option("--out", horizon.out, "Write to FILE instead of standard output");
+  horizon_cmd->add_option("-o,--out", horizon.out, "Write to FILE instead of standard output");
   horizon_cmd->add_option("--plot", horizon.plot,
                           "Also write a polar plot PNG: seen from above, north up, the zenith at the centre");
   horizon_cmd->add_option("--plot-size", horizon.plot_size,
