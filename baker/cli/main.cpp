@@ -167,7 +167,8 @@ int main(int argc, char** argv) {
   init_cmd->add_option("--preset", init.preset, "What the job bakes")
       ->required()
       ->check(CLI::IsMember(preset_names));
-  init_cmd->add_option("-o,--out", init_out, "The job file to write (default: <height file's stem>.json here)");
+  init_cmd->add_option("-o,--out", init_out,
+                       "The job file to write (default: <height file's stem>.json here)");
   init_cmd->add_flag("--force", init.force, "Write over an existing job file");
   app.footer("\n" + hfbake::methods_and_presets_help());
 
