@@ -22,6 +22,17 @@
 
 namespace hfbake {
 namespace {
+
+// The report fields every fixture here shares: a test version, the job `name`, a 64-sample reference.
+ReportSpec fixture_spec(const std::string& name) {
+  ReportSpec spec;
+  spec.hfbake_version = "0.1.0-test";
+  spec.job_name = name;
+  spec.job_file = "jobs/" + name + ".json";
+  spec.job_hash = "0123456789abcdef";
+  spec.reference_parameters = {{"samples", 64}, {"seed", 1}};
+  return spec;
+}
 namespace fs = std::filesystem;
 
 std::string read_file(const fs::path& p) {
@@ -177,12 +188,7 @@ struct Fixture {
       inputs.push_back({stem, "p1", 0.1 * (r + 1), {{"method", "p1"}, {"directions", ks[r]}}, &runs[r]});
       methods.push_back({stem, "p1", &runs[r], "directions", double(ks[r]), 0});
     }
-    ReportSpec spec;
-    spec.hfbake_version = "0.1.0-test";
-    spec.job_name = "html_fixture";
-    spec.job_file = "jobs/html_fixture.json";
-    spec.job_hash = "0123456789abcdef";
-    spec.reference_parameters = {{"samples", 64}, {"seed", 1}};
+    ReportSpec spec = fixture_spec("html_fixture");
     spec.reference_seconds = 3.5;
     spec.thresholds = {{"p1-directions16.ao.rmse", 0.01}, {"p1-directions4.ao.rmse", 0.001}};  // one fails
     report = build_report(spec, inputs, reference).doc;
@@ -411,12 +417,7 @@ TEST(ReportHtml, BentNormalAnglesInHeadlessChromium) {
       lean.data[t + 2] = float(std::cos(a));
     }
   limited.layers[0].data = lean.data;
-  ReportSpec spec;
-  spec.hfbake_version = "0.1.0-test";
-  spec.job_name = "bent_fixture";
-  spec.job_file = "jobs/bent_fixture.json";
-  spec.job_hash = "0123456789abcdef";
-  spec.reference_parameters = {{"samples", 64}, {"seed", 1}};
+  const ReportSpec spec = fixture_spec("bent_fixture");
   const std::vector<ReportMethodInput> inputs = {
       {"p1", "p1", 0.1, {{"method", "p1"}, {"directions", 16}}, &leaning},
       {"hbao", "hbao", 0.1, {{"method", "hbao"}, {"radius", 8}}, &limited}};
