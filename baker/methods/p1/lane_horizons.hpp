@@ -1,0 +1,91 @@
+// P1's horizons by a lane search: every texel's exact horizon over its own ray on the reference's
+// triangulated surface (two triangles per quad, split along (i+1, j)-(i, j+1)), eight texels at a time.
+//
+// Translation invariance: the ray from any texel centre towards phi crosses the columns, rows and
+// diagonals of the triangulation at the same offsets from that texel (near_field_stencil lists them, with
+// their corner texels and weights), so texels (u, v), ..., (u, v + 7) adjacent on the minor axis (the axis
+// the direction moves less along) read their crossings from eight adjacent texels each. A field copy with
+// the minor axis contiguous (LaneLayout) turns every crossing into two 8-wide loads, a lerp and a slope:
+// the eight rays are searched in lockstep, the steepest crossing of each is the exact horizon.
+//
+// What makes it cheap is what is not evaluated: the rays are cut into blocks of 8 columns; a strip of
+// intercepts (the eight rays' lines and their neighbours) carries, per column, the highest texel any of
+// its crossings can use (a window of LaneLayout::window), and from it the highest over each block, each
+// 64 columns and all further columns. A block is evaluated only when its highest texel, seen from a lane
+// at the block's nearest crossing, could be steeper than that lane's best slope (plus the tolerance): the
+// bound is never below any crossing's slope, so skipping keeps the result exact, and the walk stops when
+// nothing further can beat any lane. With a tolerance tau > 0, a block or the rest is skipped unless it can
+// beat the best slope by more than tau: every slope is within tau of (and never above) the exact one.
+//
+// The arithmetic is the same per lane on every instruction set (adds, multiplies and compares, no
+// contraction), so results do not depend on the vector width.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "field/height_field.hpp"
+
+namespace hfbake::p1 {
+
+inline constexpr int kLanes = 8;
+inline constexpr int kLanePad = 16;      // texels of padding on each side of the minor axis
+inline constexpr float kOffField = -1e30f;  // the padding's height: never the steepest
+inline constexpr int kLaneWindow = 6;  // minor-axis texels a unit strip's per-column bound covers
+
+// The field with its minor axis contiguous: x_major (directions moving more along x) stores
+// [x * stride + kLanePad + y], else [y * stride + kLanePad + x]; kLanePad texels of kOffField on both sides.
+// window[at] is the highest of z[at .. at + kLaneWindow - 1] (the same major index).
+struct LaneLayout {
+  bool x_major = true;
+  int nmajor = 0, nminor = 0;
+  std::ptrdiff_t stride = 0;
+  std::vector<float> z, window;
+
+  void build(const HeightField& f, bool x_major);
+  std::size_t bytes() const { return (z.size() + window.size()) * sizeof(float); }
+};
+
+// One crossing of the ray from a texel with the triangulation: height (1 - w) z[a] + w z[b] at the index
+// offsets a, b (of the LaneLayout), seen at horizontal world distance 1 / inv_s.
+struct LaneCrossing {
+  std::int32_t a, b;
+  float w, inv_s;
+};
+
+// A direction's crossings in the lane layout, ordered by distance; first_at[n] is the first crossing at a
+// major distance >= n texels (n = 0 .. nmajor + 1).
+struct LaneDirection {
+  bool x_major = true;
+  int su = 1;      // the ray's step along the major axis (+1 or -1)
+  double g = 0;    // minor change per +1 of the major index along a ray's line
+  std::vector<LaneCrossing> crossings;
+  std::vector<float> major;  // each crossing's major distance (texels)
+  std::vector<std::int32_t> first_at;
+
+  void build(const HeightField& f, const LaneLayout& layout, double dx, double dy);
+};
+
+// A search's statistics (for measurements): groups of eight texels, blocks evaluated, crossings evaluated.
+struct LaneStats {
+  std::uint64_t groups = 0, blocks = 0, crossings = 0;
+  std::uint64_t by_block[33] = {}, lanes = 0;
+};
+
+// Per-thread scratch of the strips' bounds.
+struct LaneScratch {
+  std::vector<float> block, coarse, suffix;
+};
+
+// Number of strips (each holds at most one group of eight texels per major index) of a direction.
+int lane_strip_count(const LaneLayout& layout, const LaneDirection& d);
+
+// Searches the groups of strips [s0, s1): for every texel (i, j) of them, slope[f.index(i, j)] = the
+// steepest slope (rise / run) of any crossing of its ray (-inf: none on the field) and which[...] that
+// crossing's index in d.crossings (-1: none). Clamp fields only.
+void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
+                 float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
+                 LaneStats* stats = nullptr);
+
+}  // namespace hfbake::p1

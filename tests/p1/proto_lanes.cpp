@@ -1,0 +1,81 @@
+// Measurement: lane search speed and exactness (temporary driver).
+#include <chrono>
+#include <ctime>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "methods/p1/lane_horizons.hpp"
+#include "p1_truth.hpp"
+
+using namespace hfbake;
+static double cpu_now() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+int main(int argc, char** argv) {
+  const std::string kind = argc > 1 ? argv[1] : "fractal";
+  const int n = argc > 2 ? std::atoi(argv[2]) : 1024;
+  const int K = argc > 3 ? std::atoi(argv[3]) : 64;
+  const float tol = argc > 4 ? float(std::atof(argv[4])) : 0.0f;
+  const int checks = argc > 5 ? std::atoi(argv[5]) : 2000;
+  HeightField f;
+  if (kind == "rough")
+    f = truth::rough_field(n, n, 70, 0.6, 11);
+  else if (kind == "step")
+    f = truth::step_field(n, n, 20, 30, 3, 16);
+  else {
+    ProceduralKind pk;
+    parse_procedural_kind(kind, pk);
+    ProceduralSpec s;
+    s.kind = pk, s.width = n, s.height = n, s.seed = 7;
+    f = make_procedural(s, 1.0, Wrap::clamp);
+  }
+  SweepSpec spec;
+  spec.directions = K;
+  p1::LaneLayout L[2];
+  auto t0 = std::chrono::steady_clock::now();
+  L[0].build(f, true), L[1].build(f, false);
+  auto t1 = std::chrono::steady_clock::now();
+  std::vector<float> slope(f.texel_count());
+  std::vector<std::int32_t> which(f.texel_count());
+  p1::LaneScratch S;
+  p1::LaneStats st;
+  double search_s = 0, maxerr = 0;
+  std::uint64_t seed = 99;
+  for (int k = 0; k < K; ++k) {
+    const SweepDirection sd = plan_direction(f, spec, k);
+    const bool xm = std::fabs(sd.dx) >= std::fabs(sd.dy);
+    p1::LaneDirection d;
+    const double a = cpu_now();
+    d.build(f, L[xm ? 0 : 1], sd.dx, sd.dy);
+    p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope.data(),
+                    which.data(), &st);
+    const double b = cpu_now();
+    search_s += b - a;
+    for (int c = 0; c < checks / K + 1; ++c) {
+      seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+      const int i = int((seed >> 33) % n);
+      const int j = int((seed >> 13) % n);
+      const double e = truth::march_tri(f, i, j, sd.dx, sd.dy, 7);
+      const float m = slope[f.index(i, j)];
+      const double got = m == -std::numeric_limits<float>::infinity() ? truth::kNone : std::atan(double(m));
+      const double err = std::fabs(std::sin(got) - std::sin(e));
+      if (err > maxerr) maxerr = err;
+      if (err > 1e-5 + tol) std::printf("k %d texel %d %d: got %.7f exact %.7f\n", k, i, j, std::sin(got), std::sin(e));
+    }
+  }
+  const double td = double(f.texel_count()) * K;
+  std::printf("%s %d K=%d tol=%g: layouts %.3f s, search %.3f s = %.1f ns/texdir = %.1f M/s; max err %.2e\n",
+              kind.c_str(), n, K, tol, std::chrono::duration<double>(t1 - t0).count(), search_s, search_s / td * 1e9,
+              td / search_s * 1e-6, maxerr);
+  std::printf("per group: blocks %.2f crossings %.1f\n", double(st.blocks) / st.groups,
+              double(st.crossings) / st.groups);
+  std::uint64_t nb = 0;
+  for (int i = 0; i < 33; ++i) nb += st.by_block[i];
+  std::printf("lanes needing an evaluated block: %.2f of 8\n", double(st.lanes) / double(nb));
+  for (int i = 0; i < 33; ++i) std::printf("%d:%.2f ", i, double(st.by_block[i]) / st.groups);
+  std::printf("\n");
+}
