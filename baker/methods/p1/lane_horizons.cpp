@@ -205,6 +205,7 @@ void lane_search(const HeightField& f, const LaneLayout& L, const LaneDirection&
       // bound (row + o + lane) among crossings cn .. cf (nearest, farthest)?
       int last_lanes = 0;
       auto beats = [&](const float* row, int cn, int cf) {
+        ++st.tests;
         const __m128 inv_n = _mm_set1_ps(cr[cn].inv_s), inv_f = _mm_set1_ps(cr[cf].inv_s);
         auto half = [&](const float* bz, __m128 z, __m128 b) {
           const __m128 num = _mm_sub_ps(_mm_loadu_ps(bz), z);
@@ -304,7 +305,7 @@ void lane_search(const HeightField& f, const LaneLayout& L, const LaneDirection&
   if (stats) {
     for (int i = 0; i < 33; ++i) stats->by_block[i] += st.by_block[i];
     stats->groups += st.groups, stats->blocks += st.blocks, stats->crossings += st.crossings;
-    stats->lanes += st.lanes;
+    stats->lanes += st.lanes, stats->tests += st.tests;
   }
 }
 

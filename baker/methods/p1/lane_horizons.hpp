@@ -70,7 +70,7 @@ struct LaneDirection {
 // A search's statistics (for measurements): groups of eight texels, blocks evaluated, crossings evaluated.
 struct LaneStats {
   std::uint64_t groups = 0, blocks = 0, crossings = 0;
-  std::uint64_t by_block[33] = {}, lanes = 0;
+  std::uint64_t by_block[33] = {}, lanes = 0, tests = 0;
 };
 
 // Per-thread scratch of the strips' bounds.

@@ -1,5 +1,7 @@
 #include "methods/p1/p1.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -14,6 +16,7 @@
 #include "job/params.hpp"
 #include "methods/p1/far_horizons.hpp"
 #include "methods/p1/horizon_sweep.hpp"
+#include "methods/p1/lane_horizons.hpp"
 #include "methods/p1/lighting_table.hpp"
 
 namespace hfbake {
@@ -52,6 +55,79 @@ p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
   w.tolerance = p.horizon_tolerance;
   w.beat_near = true;  // the near field is marched from each texel anyway: its slope prunes the far search
   return w;
+}
+
+// The lane search (lane_horizons.hpp) for directions [k_begin, k_end) of a clamp field: per axis the
+// field's lane layout, per direction every texel's exact horizon (slope and caster), then
+// shade(k, base, w, NX, NY, NZ, FX, FY, FZ, e, dist) per run of at most 32 texels of a row. The directions are
+// visited by axis (x-major ones first), so one layout is held at a time.
+template <class Shade>
+void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
+                         bool facets, Shade& shade) {
+  const std::size_t N = f.texel_count();
+  const int K = p.directions;
+  std::vector<float> nx(N), ny(N), nz(N), fx(facets ? 2 * N : 0), fy(fx.size()), fz(fx.size());
+  tbb::parallel_for(0, f.height, [&](int j) {
+    for (int i = 0; i < f.width; ++i) {
+      const std::size_t at = f.index(i, j);
+      const Vec3f v = normal_at(f, i, j);
+      nx[at] = v.x, ny[at] = v.y, nz[at] = v.z;
+      if (facets) {
+        Vec3f fn[2];
+        facet_normals(f, i, j, fn);
+        for (std::size_t q = 0; q < 2; ++q) fx[q * N + at] = fn[q].x, fy[q * N + at] = fn[q].y, fz[q * N + at] = fn[q].z;
+      }
+    }
+  });
+  std::vector<float> slope(N);
+  std::vector<std::int32_t> which(N);
+  tbb::enumerable_thread_specific<p1::LaneScratch> scratch;
+  SweepSpec probe;
+  probe.directions = K;
+  const float tolerance = float(p.horizon_tolerance);
+  int done = 0;
+  for (int axis = 0; axis < 2; ++axis) {
+    std::vector<SweepDirection> dirs;
+    for (int k = k_begin; k < k_end; ++k) {
+      const SweepDirection sd = plan_direction(f, probe, k);
+      if ((std::fabs(sd.dx) >= std::fabs(sd.dy)) == (axis == 0)) dirs.push_back(sd);
+    }
+    if (dirs.empty()) continue;
+    p1::LaneLayout layout;
+    layout.build(f, axis == 0);
+    for (const SweepDirection& sd : dirs) {
+      rc.check();
+      const int k = sd.k;
+      p1::LaneDirection d;
+      d.build(f, layout, sd.dx, sd.dy);
+      tbb::parallel_for(tbb::blocked_range<int>(0, p1::lane_strip_count(layout, d), 2),
+                        [&](const tbb::blocked_range<int>& r) {
+                          p1::lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(),
+                                          slope.data(), which.data());
+                        });
+      tbb::parallel_for(0, f.height, [&](int j) {
+        constexpr int kRun = 32;
+        alignas(64) float e[kRun], dist[kRun];
+        for (int i0 = 0; i0 < f.width; i0 += kRun) {
+          const int w = std::min(kRun, f.width - i0);
+          const std::size_t base = f.index(i0, j);
+          for (int x = 0; x < w; ++x) e[x] = fast_atan(slope[base + x]);
+          if (p.horizon_distance)
+            for (int x = 0; x < w; ++x) {
+              const std::int32_t c = which[base + x];
+              const float m = slope[base + x];
+              dist[x] = c < 0 ? std::numeric_limits<float>::infinity()
+                              : std::sqrt(1 + m * m) / d.crossings[std::size_t(c)].inv_s;
+            }
+          const float* FX[2] = {facets ? fx.data() + base : nullptr, facets ? fx.data() + N + base : nullptr};
+          const float* FY[2] = {facets ? fy.data() + base : nullptr, facets ? fy.data() + N + base : nullptr};
+          const float* FZ[2] = {facets ? fz.data() + base : nullptr, facets ? fz.data() + N + base : nullptr};
+          shade(k, base, w, nx.data() + base, ny.data() + base, nz.data() + base, FX, FY, FZ, e, dist);
+        }
+      });
+      rc.report(double(++done) / double(k_end - k_begin));
+    }
+  }
 }
 
 }  // namespace
@@ -226,16 +302,112 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
     return near_slope(f, near[k].crossings, i, j, which);
   };
 
+  // The lighting of one row run of texels (base .. base + w - 1, at most 32) in direction k from their
+  // horizon elevations e (dist: the horizon_distance layer's values, or null), at the texels' normals (and
+  // the facets' normals FX[q], FY[q], FZ[q]).
+  const bool want_distance = p.horizon_distance;
+  auto shade_row = [&](int k, std::size_t base, int w, const float* NX, const float* NY, const float* NZ,
+                       const float* const* FX, const float* const* FY, const float* const* FZ, const float* e,
+                       const float* dist) {
+    constexpr int kMax = 32;
+    const float c = cs[k], s = sn[k];
+    alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax];
+    for (int x = 0; x < w; ++x) {
+      fast_sincos(e[x], se[x], ce[x]);
+      np_[x] = NX[x] * c + NY[x] * s;
+    }
+    if (p.vsky) {
+      float* v = vsky_sum.data() + base;
+      for (int x = 0; x < w; ++x) v[x] += se[x] > 0 ? se[x] : 0.0f;
+    }
+    // theta = the horizon's zenith angle, or where the normal's hemisphere ends if that is higher.
+    auto lobe = [&](const float* NZ) {
+      for (int x = 0; x < w; ++x) {
+        const float n_p = np_[x], n_z = NZ[x];
+        // Everything computed unconditionally, then selected: the loop stays branch-free (vectorises).
+        const bool open = se[x] * n_z + ce[x] * n_p >= 0;
+        const float inv_len = 1.0f / std::sqrt(n_p * n_p + n_z * n_z);
+        const float th_plane = kHalfPiF + fast_atan2_pos(n_p, n_z);
+        st[x] = open ? ce[x] : n_z * inv_len;
+        ct[x] = open ? se[x] : -n_p * inv_len;
+        th[x] = std::min(kHalfPiF - e[x], th_plane);  // (open <=> the horizon's angle is the smaller)
+      }
+    };
+    if (need_theta) {
+      lobe(NZ);
+      if (need_ao) {
+        float* a = ao_sum.data() + base;
+        for (int x = 0; x < w; ++x) a[x] += NZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
+      }
+      if (profiles) {
+        float* D = rgb_sum.data() + 3 * base;
+        for (int x = 0; x < w; ++x) {
+          const Rgb l = profiles->eval(k, th[x], st[x], ct[x], NZ[x], np_[x]);
+          D[3 * x] += l.r, D[3 * x + 1] += l.g, D[3 * x + 2] += l.b;
+        }
+      }
+      if (p.bent_normal) {
+        float* X = bent_sum.data() + 3 * base;
+        for (int x = 0; x < w; ++x) {
+          const float s3 = st[x] * st[x] * st[x], c3 = ct[x] * ct[x] * ct[x];
+          const float horiz = NZ[x] * s3 / 3 + np_[x] * (2.0f / 3 - ct[x] + c3 / 3);
+          const float vert = NZ[x] * (1 - c3) / 3 + np_[x] * s3 / 3;
+          X[3 * x] += horiz * c, X[3 * x + 1] += horiz * s, X[3 * x + 2] += vert;
+        }
+      }
+    }
+    if (tables) {
+      float* D = rgb_sum.data() + 3 * base;
+      for (int x = 0; x < w; ++x) {
+        const float len = std::sqrt(np_[x] * np_[x] + NZ[x] * NZ[x]);
+        const Rgb l = tables->lookup(k, fast_atan(np_[x] / NZ[x]), kHalfPiF - e[x]) * len;
+        D[3 * x] += l.r, D[3 * x + 1] += l.g, D[3 * x + 2] += l.b;
+      }
+    }
+    if (facets)  // the same horizons at the facets' normals (np_ and the lobe arrays are reused)
+      for (std::size_t q = 0; q < 2; ++q) {
+        const std::size_t fb = q * N + base;
+        const float *FXq = FX[q], *FYq = FY[q], *FZq = FZ[q];
+        for (int x = 0; x < w; ++x) np_[x] = FXq[x] * c + FYq[x] * s;
+        if (uniform_env || profiles) lobe(FZq);
+        if (uniform_env) {
+          float* a = fao.data() + fb;
+          for (int x = 0; x < w; ++x) a[x] += FZq[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
+        } else {
+          float *R = fdr.data() + fb, *G = fdg.data() + fb, *B = fdb.data() + fb;
+          for (int x = 0; x < w; ++x) {
+            Rgb l;
+            if (profiles) {
+              l = profiles->eval(k, th[x], st[x], ct[x], FZq[x], np_[x]);
+            } else {
+              const float len = std::sqrt(np_[x] * np_[x] + FZq[x] * FZq[x]);
+              l = tables->lookup(k, fast_atan(np_[x] / FZq[x]), kHalfPiF - e[x]) * len;
+            }
+            R[x] += l.r, G[x] += l.g, B[x] += l.b;
+          }
+        }
+      }
+    if (p.horizon)
+      for (int x = 0; x < w; ++x)
+        hz[p.horizon_by_direction ? std::size_t(k - k_begin + (KH == K ? k_begin : 0)) * N + base + x
+                                  : (base + x) * KH + (KH == K ? k : k - k_begin)] = se[x];
+    if (want_distance)
+      for (int x = 0; x < w; ++x) hd[(base + x) * KD + (KD == K ? k : k - k_begin)] = dist[x];
+  };
+
+  if (f.wrap == Wrap::clamp) {
+    lane_direction_sums(f, p, k_begin, k_end, rc, facets, shade_row);
+    return r;
+  }
+
   SweepSpec spec = p1_sweep_spec(p);
   for (int k = k_begin; k < k_end; ++k) spec.azimuths.push_back(azimuth(k, K));  // the same directions
-  const bool want_distance = p.horizon_distance;
   const RunControl& main_rc = rc;
   auto make_worker = [&] { return make_ray_worker(f, p); };
   sweep_lines_tiled(f, spec, main_rc, make_worker, [&](const SweepTile& t) {
     constexpr int kMax = 32;
     const int k = k_begin + t.k, w = t.width;
-    const float c = cs[k], s = sn[k];
-    alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax], e[kMax], en[kMax];
+    alignas(64) float e[kMax], en[kMax];
     const std::size_t plane = std::size_t(t.width) * t.height;
     const TileNormals& tn = normals_of(t);
     for (int y = 0; y < t.height; ++y) {
@@ -253,88 +425,7 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
           e[x] = std::max(en[x], p1::caster_elevation(fp.dz, fp.run));
         }
       }
-      const float* NX = tn.nx + y * w;
-      const float* NY = tn.ny + y * w;
-      const float* NZ = tn.nz + y * w;
-      for (int x = 0; x < w; ++x) {
-        fast_sincos(e[x], se[x], ce[x]);
-        np_[x] = NX[x] * c + NY[x] * s;
-      }
-      if (p.vsky) {
-        float* v = vsky_sum.data() + base;
-        for (int x = 0; x < w; ++x) v[x] += se[x] > 0 ? se[x] : 0.0f;
-      }
-      // theta = the horizon's zenith angle, or where the normal's hemisphere ends if that is higher.
-      auto lobe = [&](const float* NZ) {
-        for (int x = 0; x < w; ++x) {
-          const float n_p = np_[x], n_z = NZ[x];
-          // Everything computed unconditionally, then selected: the loop stays branch-free (vectorises).
-          const bool open = se[x] * n_z + ce[x] * n_p >= 0;
-          const float inv_len = 1.0f / std::sqrt(n_p * n_p + n_z * n_z);
-          const float th_plane = kHalfPiF + fast_atan2_pos(n_p, n_z);
-          st[x] = open ? ce[x] : n_z * inv_len;
-          ct[x] = open ? se[x] : -n_p * inv_len;
-          th[x] = std::min(kHalfPiF - e[x], th_plane);  // (open <=> the horizon's angle is the smaller)
-        }
-      };
-      if (need_theta) {
-        lobe(NZ);
-        if (need_ao) {
-          float* a = ao_sum.data() + base;
-          for (int x = 0; x < w; ++x) a[x] += NZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
-        }
-        if (profiles) {
-          float* D = rgb_sum.data() + 3 * base;
-          for (int x = 0; x < w; ++x) {
-            const Rgb l = profiles->eval(k, th[x], st[x], ct[x], NZ[x], np_[x]);
-            D[3 * x] += l.r, D[3 * x + 1] += l.g, D[3 * x + 2] += l.b;
-          }
-        }
-        if (p.bent_normal) {
-          float* X = bent_sum.data() + 3 * base;
-          for (int x = 0; x < w; ++x) {
-            const float s3 = st[x] * st[x] * st[x], c3 = ct[x] * ct[x] * ct[x];
-            const float horiz = NZ[x] * s3 / 3 + np_[x] * (2.0f / 3 - ct[x] + c3 / 3);
-            const float vert = NZ[x] * (1 - c3) / 3 + np_[x] * s3 / 3;
-            X[3 * x] += horiz * c, X[3 * x + 1] += horiz * s, X[3 * x + 2] += vert;
-          }
-        }
-      }
-      if (tables) {
-        float* D = rgb_sum.data() + 3 * base;
-        for (int x = 0; x < w; ++x) {
-          const float len = std::sqrt(np_[x] * np_[x] + NZ[x] * NZ[x]);
-          const Rgb l = tables->lookup(k, fast_atan(np_[x] / NZ[x]), kHalfPiF - e[x]) * len;
-          D[3 * x] += l.r, D[3 * x + 1] += l.g, D[3 * x + 2] += l.b;
-        }
-      }
-      if (facets)  // the same horizons at the facets' normals (np_ and the lobe arrays are reused)
-        for (std::size_t q = 0; q < 2; ++q) {
-          const std::size_t fb = q * N + base, ft = q * kTileTexels + std::size_t(y) * w;
-          const float *FX = tn.fx + ft, *FY = tn.fy + ft, *FZ = tn.fz + ft;
-          for (int x = 0; x < w; ++x) np_[x] = FX[x] * c + FY[x] * s;
-          if (uniform_env || profiles) lobe(FZ);
-          if (uniform_env) {
-            float* a = fao.data() + fb;
-            for (int x = 0; x < w; ++x) a[x] += FZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
-          } else {
-            float *R = fdr.data() + fb, *G = fdg.data() + fb, *B = fdb.data() + fb;
-            for (int x = 0; x < w; ++x) {
-              Rgb l;
-              if (profiles) {
-                l = profiles->eval(k, th[x], st[x], ct[x], FZ[x], np_[x]);
-              } else {
-                const float len = std::sqrt(np_[x] * np_[x] + FZ[x] * FZ[x]);
-                l = tables->lookup(k, fast_atan(np_[x] / FZ[x]), kHalfPiF - e[x]) * len;
-              }
-              R[x] += l.r, G[x] += l.g, B[x] += l.b;
-            }
-          }
-        }
-      if (p.horizon)
-        for (int x = 0; x < w; ++x)
-          hz[p.horizon_by_direction ? std::size_t(k - k_begin + (KH == K ? k_begin : 0)) * N + base + x
-                                    : (base + x) * KH + (KH == K ? k : k - k_begin)] = se[x];
+      float dist[kMax];
       if (want_distance) {  // the near crossing, or the far caster on the texel's own ray
         const std::size_t row = std::size_t(y) * w;
         for (int x = 0; x < w; ++x) {
@@ -342,15 +433,19 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
           const float near_m = near_slope_border(k, t.i0 + x, t.j0 + y, &which);
           const FarPick fp = far_pick(t.strip, plane, row + x);
           const float far_e = p1::caster_elevation(fp.dz, fp.run);
-          float d;
           if (which >= 0 && fast_atan(near_m) >= far_e)
-            d = std::sqrt(1 + near_m * near_m) /
-                near[k].crossings[which].inv_s;  // run 1 / inv_s, rise m * run
+            dist[x] = std::sqrt(1 + near_m * near_m) /
+                      near[k].crossings[which].inv_s;  // run 1 / inv_s, rise m * run
           else
-            d = fp.run == std::numeric_limits<float>::infinity() ? fp.run : std::hypot(fp.run, fp.dz);
-          hd[(base + x) * KD + (KD == K ? k : k - k_begin)] = d;
+            dist[x] =
+                fp.run == std::numeric_limits<float>::infinity() ? fp.run : std::hypot(fp.run, fp.dz);
         }
       }
+      const std::size_t ft = std::size_t(y) * w;
+      const float* FX[2] = {tn.fx + ft, tn.fx + kTileTexels + ft};
+      const float* FY[2] = {tn.fy + ft, tn.fy + kTileTexels + ft};
+      const float* FZ[2] = {tn.fz + ft, tn.fz + kTileTexels + ft};
+      shade_row(k, base, w, tn.nx + y * w, tn.ny + y * w, tn.nz + y * w, FX, FY, FZ, e, dist);
     }
   });
 
