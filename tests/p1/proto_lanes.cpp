@@ -1,6 +1,7 @@
 // Measurement: lane search speed and exactness (temporary driver).
 #include <chrono>
 #include <ctime>
+#include <cstring>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -43,7 +44,7 @@ int main(int argc, char** argv) {
   std::vector<std::int32_t> which(f.texel_count());
   p1::LaneScratch S;
   p1::LaneStats st;
-  double search_s = 0, maxerr = 0;
+  double search_s = 0, sse_s = 0, maxerr = 0;
   std::uint64_t seed = 99;
   for (int k = 0; k < K; ++k) {
     const SweepDirection sd = plan_direction(f, spec, k);
@@ -52,9 +53,17 @@ int main(int argc, char** argv) {
     const double a = cpu_now();
     d.build(f, L[xm ? 0 : 1], sd.dx, sd.dy);
     p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope.data(),
-                    which.data(), &st);
+                    which.data(), &st, p1::LaneIsa::avx2);
     const double b = cpu_now();
     search_s += b - a;
+    std::vector<float> slope2(slope.size());
+    std::vector<std::int32_t> which2(slope.size());
+    p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope2.data(),
+                    which2.data(), nullptr, p1::LaneIsa::sse2);
+    const double b2 = cpu_now();
+    sse_s += b2 - b;
+    if (std::memcmp(slope.data(), slope2.data(), slope.size() * 4) != 0 || which != which2)
+      std::printf("direction %d: AVX2 and SSE2 differ\n", k);
     for (int c = 0; c < checks / K + 1; ++c) {
       seed = seed * 6364136223846793005ull + 1442695040888963407ull;
       const int i = int((seed >> 33) % n);
@@ -71,11 +80,8 @@ int main(int argc, char** argv) {
   std::printf("%s %d K=%d tol=%g: layouts %.3f s, search %.3f s = %.1f ns/texdir = %.1f M/s; max err %.2e\n",
               kind.c_str(), n, K, tol, std::chrono::duration<double>(t1 - t0).count(), search_s, search_s / td * 1e9,
               td / search_s * 1e-6, maxerr);
+  std::printf("sse2: %.1f ns/texdir (avx2/sse2 %.3f)\n", sse_s / td * 1e9, search_s / sse_s);
   std::printf("per group: blocks %.2f crossings %.1f\n", double(st.blocks) / st.groups,
               double(st.crossings) / st.groups);
-  std::uint64_t nb = 0;
-  for (int i = 0; i < 33; ++i) nb += st.by_block[i];
-  std::printf("lanes needing an evaluated block: %.2f of 8\n", double(st.lanes) / double(nb));
-  for (int i = 0; i < 33; ++i) std::printf("%d:%.2f ", i, double(st.by_block[i]) / st.groups);
-  std::printf("\n");
+
 }

@@ -70,7 +70,6 @@ struct LaneDirection {
 // A search's statistics (for measurements): groups of eight texels, blocks evaluated, crossings evaluated.
 struct LaneStats {
   std::uint64_t groups = 0, blocks = 0, crossings = 0;
-  std::uint64_t by_block[33] = {}, lanes = 0, tests = 0;
 };
 
 // Per-thread scratch of the strips' bounds.
@@ -81,11 +80,19 @@ struct LaneScratch {
 // Number of strips (each holds at most one group of eight texels per major index) of a direction.
 int lane_strip_count(const LaneLayout& layout, const LaneDirection& d);
 
+// The instruction set a search runs on (the same bits on each): best = AVX2 where the processor has it.
+enum class LaneIsa { best, sse2, avx2 };
+bool lane_avx2_available();
+
 // Searches the groups of strips [s0, s1): for every texel (i, j) of them, slope[f.index(i, j)] = the
 // steepest slope (rise / run) of any crossing of its ray (-inf: none on the field) and which[...] that
 // crossing's index in d.crossings (-1: none). Clamp fields only.
 void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
                  float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
-                 LaneStats* stats = nullptr);
+                 LaneStats* stats = nullptr, LaneIsa isa = LaneIsa::best);
+// The AVX2 kernel (lane_horizons_avx2.cpp); call lane_search instead.
+void lane_search_avx2(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
+                      float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
+                      LaneStats* stats);
 
 }  // namespace hfbake::p1
