@@ -61,24 +61,39 @@ p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
 // field's lane layout, per direction every texel's exact horizon (slope and caster), then
 // shade(k, base, w, NX, NY, NZ, FX, FY, FZ, e, dist) per run of at most 32 texels of a row. The directions are
 // visited by axis (x-major ones first), so one layout is held at a time.
-template <class Shade>
-void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
-                         bool facets, Shade& shade) {
+// Every texel's normal (normal_at) and, for P2's facet sums, its two facets' (facet_normals, [q * N + texel]),
+// as the lane path's shading reads them: computed once per bake, shared by its direction blocks.
+struct FieldNormals {
+  std::vector<float> nx, ny, nz, fx, fy, fz;
+};
+FieldNormals field_normals(const HeightField& f, bool facets) {
   const std::size_t N = f.texel_count();
-  const int K = p.directions;
-  std::vector<float> nx(N), ny(N), nz(N), fx(facets ? 2 * N : 0), fy(fx.size()), fz(fx.size());
+  FieldNormals n;
+  n.nx.resize(N), n.ny.resize(N), n.nz.resize(N);
+  n.fx.resize(facets ? 2 * N : 0), n.fy.resize(n.fx.size()), n.fz.resize(n.fx.size());
   tbb::parallel_for(0, f.height, [&](int j) {
     for (int i = 0; i < f.width; ++i) {
       const std::size_t at = f.index(i, j);
       const Vec3f v = normal_at(f, i, j);
-      nx[at] = v.x, ny[at] = v.y, nz[at] = v.z;
+      n.nx[at] = v.x, n.ny[at] = v.y, n.nz[at] = v.z;
       if (facets) {
         Vec3f fn[2];
         facet_normals(f, i, j, fn);
-        for (std::size_t q = 0; q < 2; ++q) fx[q * N + at] = fn[q].x, fy[q * N + at] = fn[q].y, fz[q * N + at] = fn[q].z;
+        for (std::size_t q = 0; q < 2; ++q)
+          n.fx[q * N + at] = fn[q].x, n.fy[q * N + at] = fn[q].y, n.fz[q * N + at] = fn[q].z;
       }
     }
   });
+  return n;
+}
+
+template <class Shade>
+void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
+                         bool facets, const FieldNormals& normals, Shade& shade) {
+  const std::size_t N = f.texel_count();
+  const int K = p.directions;
+  const std::vector<float>&nx = normals.nx, &ny = normals.ny, &nz = normals.nz;
+  const std::vector<float>&fx = normals.fx, &fy = normals.fy, &fz = normals.fz;
   std::vector<float> slope(N);
   std::vector<std::int32_t> which(N);
   tbb::enumerable_thread_specific<p1::LaneScratch> scratch;
@@ -187,6 +202,14 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p) {
                   : p.ao   ? 4
                            : 0) +
                  (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) + (p.direct && p.facet_direct ? 24 : 0);
+  if (shape.wrap == Wrap::clamp) {
+    // The lane search (lane_directions_sums): the normals (and facets'), one direction's slopes and
+    // casters, and one axis' lane layout (heights and window maxima, padded on the minor axis).
+    per_texel += 12 + (p.direct && p.facet_direct ? 24 : 0) + 8;
+    const double layout = 2.0 * 4.0 * double(std::max(shape.width, shape.height)) *
+                          double(std::min(shape.width, shape.height) + 2 * p1::kLanePad);
+    return per_texel * double(shape.width) * double(shape.height) + layout;
+  }
   HeightField field;  // the sweep's plan needs only the shape
   static_cast<FieldShape&>(field) = shape;
   // Each thread's far-field worker: two direction patterns, the lines' heights, the hull (FarHorizonWorker).
@@ -219,8 +242,10 @@ P1SumsShape p1_sums_shape(const Scene& scene, const P1Params& p) {
   return s;
 }
 
-P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
-                         float* horizon_out, float* distance_out) {
+namespace {
+
+P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
+                      float* horizon_out, float* distance_out, const FieldNormals* normals) {
   const HeightField& f = scene.field;
   const std::size_t N = f.texel_count();
   const int K = p.directions;
@@ -396,7 +421,12 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
   };
 
   if (f.wrap == Wrap::clamp) {
-    lane_direction_sums(f, p, k_begin, k_end, rc, facets, shade_row);
+    if (normals) {
+      lane_direction_sums(f, p, k_begin, k_end, rc, facets, *normals, shade_row);
+    } else {
+      const FieldNormals own = field_normals(f, facets);
+      lane_direction_sums(f, p, k_begin, k_end, rc, facets, own, shade_row);
+    }
     return r;
   }
 
@@ -452,6 +482,13 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
   return r;
 }
 
+}  // namespace
+
+P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
+                         float* horizon_out, float* distance_out) {
+  return direction_sums(scene, p, k_begin, k_end, rc, horizon_out, distance_out, nullptr);
+}
+
 void p1_add_sums(P1Sums& total, const P1Sums& block) {
   auto add = [](std::vector<float>& t, const std::vector<float>& b) {
     for (std::size_t i = 0; i < t.size(); ++i) t[i] += b[i];
@@ -472,11 +509,14 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   // Direction blocks (core/direction_blocks.hpp): each summed from zero, the blocks added in order -- the
   // order `hfbake merge` adds the farm's shards in.
   P1Sums total;
+  std::optional<FieldNormals> normals;  // the lane path's, shared by the blocks
+  if (scene.field.wrap == Wrap::clamp) normals = field_normals(scene.field, p.direct && p.facet_direct);
   for (int b = 0; b < B; ++b) {
     const int k0 = direction_block_begin(b, K), k1 = direction_block_begin(b + 1, K);
-    P1Sums part = p1_direction_sums(
+    P1Sums part = direction_sums(
         scene, p, k0, k1, sub_progress(rc, (1 - lights_share) * k0 / K, (1 - lights_share) * (k1 - k0) / K),
-        horizon.empty() ? nullptr : horizon.data(), distance.empty() ? nullptr : distance.data());
+        horizon.empty() ? nullptr : horizon.data(), distance.empty() ? nullptr : distance.data(),
+        normals ? &*normals : nullptr);
     if (b == 0)
       total = std::move(part);
     else
