@@ -24,6 +24,7 @@ MethodContext job_method_context(const Job& job) {
   c.field.texel_size = job_texel_size(job);
   c.field.wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
   c.bounces = job_bounces(job);
+  c.uniform_environment = job_environment_uniform(job.doc);
   return c;
 }
 

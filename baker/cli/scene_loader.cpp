@@ -113,6 +113,7 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   context.field.wrap =
       job.doc["height"].value("wrap", std::string("clamp")) == "repeat" ? Wrap::repeat : Wrap::clamp;
   context.bounces = job_bounces(job);
+  context.uniform_environment = job_environment_uniform(job.doc);
   // Methods run one at a time; each one's layers are kept until the report when there is a reference.
   double kept = 0, peak = 0;
   int horizon_channels = 0;  // the reference adds horizon and horizon_distance for the first method's K

@@ -59,6 +59,7 @@ MethodContext scene_method_context(const Scene& scene) {
   MethodContext c;
   c.field = scene.field;
   c.bounces = scene.bounces;
+  c.uniform_environment = scene.environment.uniform || scene.environment.levels.empty();
   return c;
 }
 

@@ -117,7 +117,7 @@ MethodInfo p1_method() {
   // Beyond its layers (the accumulators become the layers): see p1_working_bytes.
   m.memory_knob = "its layers (horizon and horizon_distance: 4 bytes a texel per direction each)";
   m.working_bytes = [](const MethodConfig& config, const MethodContext& c) {
-    return p1_working_bytes(c.field, config.get<P1Params>());
+    return p1_working_bytes(c.field, config.get<P1Params>(), c.uniform_environment);
   };
   m.division = WorkDivision::directions;
   m.bake_block = p1_bake_block;

@@ -194,31 +194,43 @@ SweepSpec p1_sweep_spec(const P1Params& p) {
   return spec;
 }
 
-double p1_working_bytes(const FieldShape& shape, const P1Params& p) {
-  double per_texel = p.direct && !p.ao ? 4 : 0;  // the ao sum behind a uniform sky's direct
-  if (p.direct && p.facet_direct) per_texel += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
-  if (direction_block_count(p.directions) > 1)  // one direction block's sums beside the total (compute_p1)
-    per_texel += (p.direct ? 12
-                  : p.ao   ? 4
-                           : 0) +
-                 (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) + (p.direct && p.facet_direct ? 24 : 0);
-  if (shape.wrap == Wrap::clamp) {
-    // The lane search (lane_directions_sums): the normals (and facets'), one direction's slopes and
-    // casters, and one axis' lane layout (heights and window maxima, padded on the minor axis).
-    per_texel += 12 + (p.direct && p.facet_direct ? 24 : 0) + 8;
-    const double layout = 2.0 * 4.0 * double(std::max(shape.width, shape.height)) *
-                          double(std::min(shape.width, shape.height) + 2 * p1::kLanePad);
-    return per_texel * double(shape.width) * double(shape.height) + layout;
-  }
-  HeightField field;  // the sweep's plan needs only the shape
+double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform_environment) {
+  const bool facets = p.direct && p.facet_direct;
+  const double texels = double(shape.width) * double(shape.height);
+  HeightField field;  // the sweeps' plans need only the shape
   static_cast<FieldShape&>(field) = shape;
-  // Each thread's far-field worker: two direction patterns, the lines' heights, the hull (FarHorizonWorker).
   const int longest =
       std::max(shape.width, shape.height) * (shape.wrap == Wrap::repeat ? p.wrap_periods + 1 : 1);
   const double workers =
       double(tbb::this_task_arena::max_concurrency()) * double(p1::FarHorizonWorker::scratch_bytes(longest));
-  return per_texel * double(shape.width) * double(shape.height) +
-         double(sweep_buffer_bytes(field, p1_sweep_spec(p))) + workers;
+  if (shape.wrap == Wrap::clamp) {
+    // Bytes a texel: the sums (p1_sums_shape), the layers they become, and what the lane search holds.
+    const double sums = (p.ao || (p.direct && uniform_environment) ? 4 : 0) + (p.vsky ? 4 : 0) +
+                        (p.direct && !uniform_environment ? 12 : 0) + (p.bent_normal ? 12 : 0) +
+                        (facets ? (uniform_environment ? 8 : 24) : 0);
+    const double layers =
+        (p.ao ? 4 : 0) + (p.vsky ? 4 : 0) + (p.direct ? 12 : 0) + (p.bent_normal ? 12 : 0) + (facets ? 24 : 0);
+    const double normals = 12 + (facets ? 24 : 0);
+    const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
+    // While the directions are summed: the sums, a block's, the normals, one direction's slopes and casters,
+    // and one axis' lane layout (heights and window maxima, padded on the minor axis).
+    const double layout = 2.0 * 4.0 * double(std::max(shape.width, shape.height)) *
+                          double(std::min(shape.width, shape.height) + 2 * p1::kLanePad);
+    const double summing = (sums + block + normals + 8) * texels + layout;
+    // While they are finished: the layers, the sums that are not layers, the normals, the lights' sweeps.
+    const double finishing = (layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) + normals) * texels +
+                             double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
+    return std::max(summing, finishing) - layers * texels;
+  }
+  double per_texel = p.direct && !p.ao ? 4 : 0;  // the ao sum behind a uniform sky's direct
+  if (facets) per_texel += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
+  if (direction_block_count(p.directions) > 1)  // one direction block's sums beside the total (compute_p1)
+    per_texel += (p.direct ? 12
+                  : p.ao   ? 4
+                           : 0) +
+                 (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) + (facets ? 24 : 0);
+  // Each thread's far-field worker: two direction patterns, the lines' heights, the hull (FarHorizonWorker).
+  return per_texel * texels + double(sweep_buffer_bytes(field, p1_sweep_spec(p))) + workers;
 }
 
 double disk_fraction_above(double elevation, double horizon, double radius) {

@@ -127,7 +127,7 @@ P1Result p1_finish(const Scene& scene, const P1Params& params, P1Sums&& sums, co
 // Bytes compute_p1 holds at peak beyond the layers it returns, for the memory estimate: per texel the ao
 // sum behind direct from a uniform sky when ao is not requested and P2's facet sums, plus the sweep's
 // line buffers (sweep_buffer_bytes of p1_sweep_spec).
-double p1_working_bytes(const FieldShape& field, const P1Params& params);
+double p1_working_bytes(const FieldShape& field, const P1Params& params, bool uniform_environment = false);
 // The sweep compute_p1 runs for its K directions.
 SweepSpec p1_sweep_spec(const P1Params& params);
 
