@@ -8,17 +8,20 @@
 // the minor axis contiguous (LaneLayout) turns every crossing into two 8-wide loads, a lerp and a slope:
 // the eight rays are searched in lockstep, the steepest crossing of each is the exact horizon.
 //
-// What makes it cheap is what is not evaluated: the rays are cut into blocks of 8 columns; a strip of
-// intercepts (the eight rays' lines and their neighbours) carries, per column, the highest texel any of
-// its crossings can use (a window of LaneLayout::window), and from it the highest over each block, each
-// 64 columns and all further columns. A block is evaluated only when its highest texel, seen from a lane
-// at the block's nearest crossing, could be steeper than that lane's best slope (plus the tolerance): the
-// bound is never below any crossing's slope, so skipping keeps the result exact, and the walk stops when
-// nothing further can beat any lane. With a tolerance tau > 0, a block or the rest is skipped unless it can
-// beat the best slope by more than tau: every slope is within tau of (and never above) the exact one.
+// What makes it cheap is what is not evaluated. The rays are cut into blocks of 4 columns along the walk.
+// A unit strip of intercepts (the lines v - g u in [k, k + 1)) holds every ray of one lane of a group, and
+// per column the highest texel any crossing of such a ray can use (LaneLayout::window): from those, per
+// strip of eight lanes, the highest over each block, over 4, 16 and 64 blocks, and over all further
+// columns, one value per lane (an 8-wide load). A block is evaluated only when some lane's bound, seen
+// from that lane at the block's nearest crossing, could be steeper than the lane's best slope (plus the
+// tolerance): a bound is never below any crossing's slope, so skipping keeps the result exact, and the walk
+// stops when nothing further can beat any lane. The blocks of the previous group's casters (one column
+// behind on the same strip, whose casters are most often this group's) are evaluated first, so the best
+// slopes are high early and prune the most. With a tolerance tau > 0, a block or the rest is skipped unless
+// it can beat the best slope by more than tau: every slope is within tau of (and never above) the exact one.
 //
-// The arithmetic is the same per lane on every instruction set (adds, multiplies and compares, no
-// contraction), so results do not depend on the vector width.
+// The arithmetic is the same per lane on every instruction set (adds, multiplies, maxima and compares, no
+// fused multiply-add), so the SSE2 and AVX2 kernels (lane_kernel.inc) give the same bits.
 #pragma once
 
 #include <cstddef>

@@ -3,8 +3,9 @@
 // at every texel's normal. bake_p1 (bake_p1.hpp) is the CLI entry; P2 calls compute_p1 for direct light
 // and horizons from the same sweep.
 //
-// Per texel and direction k (phi_k = 2 pi k / K), with horizon elevation e_k (the larger of the exact
-// near-field march from the texel center and the exact far field of its strip, far_horizons.hpp), normal
+// Per texel and direction k (phi_k = 2 pi k / K), with horizon elevation e_k (exact on the triangulated
+// surface: on clamp fields the steepest crossing of the texel's ray by the lane search, lane_horizons.hpp; on
+// repeat fields the larger of the near-field march and the far field of its strip, far_horizons.hpp), normal
 // N, N_p = N.d_k, theta_k = min(pi/2 - e_k, pi/2 + atan(N_p / N_z)) (P1 Eq. 4 with the pi/2 the extracted
 // text drops: the horizon or where the normal's hemisphere ends):
 //   ao    = (1/K) sum_k [ N_z sin^2 theta_k + N_p (theta_k - sin theta_k cos theta_k) ]

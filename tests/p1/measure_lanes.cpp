@@ -1,4 +1,6 @@
-// Measurement: lane search speed and exactness (temporary driver).
+// The lane search alone (methods/p1/lane_horizons.hpp): usage measure_lanes [fractal|rough|step|<procedural kind>]
+// [size] [K] [tolerance] [checks]. Prints CPU per texel-direction (AVX2 and SSE2 kernels, checked to give the
+// same bits), groups evaluated, and the largest difference in sin h from the exact march at sampled texels.
 #include <chrono>
 #include <ctime>
 #include <cstring>
