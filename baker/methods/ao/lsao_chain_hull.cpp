@@ -289,14 +289,16 @@ void summarise_block(ChainPoint* points, std::size_t i, bool top_nearest) {
     const ChainPoint& b = points[j];
     m = std::max(m, b.bmax);
     for (int k = 0; k < 4; ++k) g[k] = std::max(g[k], b.bslope[k]);
-    at = std::max(at, b.lines_at + b.lines_m * (x0 - b.lines_s));
-    slope = std::max(slope, b.lines_m);
+    if (b.lines_at > -INFINITY) {  // a block of one unmerged point has no line
+      at = std::max(at, b.lines_at + b.lines_m * (x0 - b.lines_s));
+      slope = std::max(slope, b.lines_m);
+    }
     if (low > lo) link(points[low]);
     j = low;
   }
   q.bmax = m;
   for (int k = 0; k < 4; ++k) q.bslope[k] = g[k];
-  q.lines_s = x0, q.lines_at = at, q.lines_m = std::isfinite(slope) ? slope : 0.0;
+  q.lines_s = x0, q.lines_at = at, q.lines_m = at > -INFINITY ? slope : 0.0;
 }
 
 // An upper bound of the highest z + sigma s over a block (summary: ChainPoint::bmax and bslope) whose
