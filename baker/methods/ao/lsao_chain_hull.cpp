@@ -115,11 +115,17 @@ void TangentChain::resolve() {
 
 void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, SliceVec at) {
   const bool exact = segments && (rho.kind == FalloffKind::none || rho.kind == FalloffKind::step);
-  if (pending_ && segments && !exact && coalesce > 0 && lazy_fits(hs, from)) {
+  if (pending_ && segments && !exact && coalesce > 0 && from.h >= pend_x0_) {
     // The band's distance lies in [from.h, hs], beyond pend_x0_: rho there is within `coalesce` of
-    // rho(pend_x0_) when it is at hs (lazy_fits, which add_closed's own test below then passes too).
-    join_lazily(hs, hz, from);
-    return;
+    // rho(pend_x0_) when it is at hs (the test below, which add_closed's own then passes too).
+    if (hs <= checked_ || rho_x0_ - rho(hs) <= coalesce) {
+      checked_ = std::max(checked_, hs);
+      slope_max = hz / hs;
+      before_ = {pend_hs_, pend_hz_};
+      pend_hs_ = hs, pend_hz_ = hz, pend_from_ = from;
+      lazy_ = true;
+      return;
+    }
   }
   resolve();
   const double r = std::sqrt(hs * hs + hz * hz), c = hs / r, sn = hz / r;
@@ -158,16 +164,6 @@ void TangentChain::add_closed(double hs, double hz, double x, SliceVec from, Sli
   pend_hs_ = hs, pend_hz_ = hz, pend_c_ = c, pend_s_ = sn, pend_x0_ = pend_x1_ = x;
   rho_x0_ = rho(x), checked_ = x;
   if (!(coalesce > 0)) finish();
-}
-
-bool TangentChain::join_rising(SliceVec first, SliceVec before_last, SliceVec last) {
-  // add_closed's lazy path for each vertex: every segment starts beyond pend_x0_ once the first does, and rho
-  // is monotone, so its test at the farthest vertex holds for all.
-  if (!lazy_ || !(first.v > slope_max * first.h) || !lazy_fits(last.h, prev)) return false;
-  join_lazily(last.h, last.v, before_last);
-  before_ = before_last;
-  prev = last;
-  return true;
 }
 
 void TangentChain::commit(double e, double c, double sn, const SlabPrimitives* at_e) {
@@ -245,81 +241,18 @@ std::size_t block_span(std::size_t i) {
   return (i + 1) & ~i;
 }
 
-// The line through vertices (s0, z0) and (s1, z1), s0 > s1, as height a + m s; none (a = +inf: no block
-// holding it passes join_rising's test) when they share a distance.
-void line_through(double s0, double z0, double s1, double z1, double& a, double& m) {
-  if (!(s0 > s1)) {
-    a = INFINITY, m = 0;
-    return;
-  }
-  m = (z0 - z1) / (s0 - s1);
-  a = z0 - m * s0;
-}
-
-// Sets points[i].bmax and the rising-run bound (lines_*) from the point itself and the summaries of the
-// blocks that tile the rest of its block. top_nearest: the walk goes from the top of the stack down
-// (ChainHull), else from position 0 up (WindowHull); either way position i - 1 is i's neighbour in the block.
-void summarise_block(ChainPoint* points, std::size_t i, bool top_nearest) {
-  ChainPoint& q = points[i];
-  const std::size_t lo = i + 1 - block_span(i);
-  // The point's own lines: its near end to itself, and the link with position i - 1 (the nearer vertex is
-  // a point, the farther one its near end or itself).
-  if (q.near_s > q.s) line_through(q.near_s, q.near_z, q.s, q.z, q.inner_a, q.inner_m);
-  if (i > 0) {
-    const ChainPoint& o = points[i - 1];
-    if (top_nearest)
-      line_through(q.s, q.z, o.near_s, o.near_z, q.link_a, q.link_m);
-    else
-      line_through(o.s, o.z, q.near_s, q.near_z, q.link_a, q.link_m);
-  }
-  const double x0 = top_nearest ? q.near_s : points[lo].near_s;
-  double m = std::max(q.z, q.near_z);
-  double g[4];
-  for (int k = 0; k < 4; ++k)
-    g[k] = std::max(q.z + kBlockSlopes[k] * q.s, q.near_z + kBlockSlopes[k] * q.near_s);
-  double at = q.inner_a + q.inner_m * x0, slope = q.near_s > q.s ? q.inner_m : -INFINITY;
-  // The links inside the block: of every position but its lowest.
-  auto link = [&](const ChainPoint& r) {
-    at = std::max(at, r.link_a + r.link_m * x0);
-    slope = std::max(slope, r.link_m);
-  };
-  if (i > lo) link(q);
-  for (std::size_t j = i; j-- > lo;) {
-    const std::size_t low = j + 1 - block_span(j);
-    const ChainPoint& b = points[j];
-    m = std::max(m, b.bmax);
-    for (int k = 0; k < 4; ++k) g[k] = std::max(g[k], b.bslope[k]);
-    if (b.lines_at > -INFINITY) {  // a block of one unmerged point has no line
-      at = std::max(at, b.lines_at + b.lines_m * (x0 - b.lines_s));
-      slope = std::max(slope, b.lines_m);
-    }
-    if (low > lo) link(points[low]);
-    j = low;
-  }
-  q.bmax = m;
-  for (int k = 0; k < 4; ++k) q.bslope[k] = g[k];
-  q.lines_s = x0, q.lines_at = at, q.lines_m = at > -INFINITY ? slope : 0.0;
-}
-
-// An upper bound of the highest z + sigma s over a block (summary: ChainPoint::bmax and bslope) whose
-// points and near ends lie at s in [s_far, s_near]: the chord of the convex function between the slopes
-// bracketing sigma, beyond them its value at the last one plus its steepest growth.
-double block_height_bound(const ChainPoint& summary, double sigma, double s_far, double s_near) {
-  const double* k = kBlockSlopes;
-  const double g[5] = {summary.bslope[0], summary.bslope[1], summary.bmax, summary.bslope[2],
-                       summary.bslope[3]};
-  const double x[5] = {k[0], k[1], 0.0, k[2], k[3]};
-  if (sigma <= x[0]) return g[0] + (sigma - x[0]) * s_far;
-  if (sigma >= x[4]) return g[4] + (sigma - x[4]) * s_near;
-  int i = 0;
-  while (sigma > x[i + 1]) ++i;
-  const double t = (sigma - x[i]) / (x[i + 1] - x[i]);
-  return g[i] + t * (g[i + 1] - g[i]);
+// Sets points[i].bmax from the point itself and the summaries of the blocks that tile the rest of its block.
+void summarise_block(ChainPoint* points, std::size_t i) {
+  double m = std::max(points[i].z, points[i].near_z);
+  const std::ptrdiff_t first = std::ptrdiff_t(i + 1 - block_span(i));
+  for (std::ptrdiff_t j = std::ptrdiff_t(i) - 1; j >= first; j -= std::ptrdiff_t(block_span(std::size_t(j))))
+    m = std::max(m, points[j].bmax);
+  points[i].bmax = m;
 }
 
 // Walks hull.point(0), hull.point(1), ... (nearest first, `count` of them) for receiver p; hull.zmax(k): the
-// highest height of point k and everything after it; hull.block(k, &summary): how many points from k on form
-// a block (summary: the point holding its bmax and lines_*), 1 when none larger starts at k.
+// highest height of point k and everything after it; hull.block(k, &bmax): how many points from k on form a
+// block (bmax: the highest of their heights and near ends), 1 when none larger starts at k.
 // Points (and merged near ends) nearer than `near` are left out: the caller has marched them.
 template <class Hull>
 void walk(const Hull& hull, std::ptrdiff_t count, SlicePoint p, double support, double near,
@@ -349,16 +282,13 @@ void walk(const Hull& hull, std::ptrdiff_t count, SlicePoint p, double support, 
     // The block from q on, all within the support, is passed over in one test when none of its points can
     // rise: below slope_max times its nearest distance (or, with the horizon below the horizontal, its
     // farthest). The same comparisons as the points' own (TangentChain::add), so the sum is the same.
-    const ChainPoint* summary = nullptr;
-    const std::ptrdiff_t len = hull.block(k, &summary);
+    double bmax = 0;
+    const std::ptrdiff_t len = hull.block(k, &bmax);
     if (len > 1) {
       const std::ptrdiff_t last = k + len - 1;
       const ChainPoint& far = hull.point(last);
-      // No point of the block rises: z - pz <= slope_max (ps - s) for each, i.e. the highest z + slope_max s
-      // at most pz + slope_max ps (with a margin for the bound's rounding).
-      const double sigma = chain.slope_max;
-      const double highest = block_height_bound(*summary, sigma, far.s, q.near_s);
-      if (p.s - far.near_s <= support && highest - (p.z + sigma * p.s) < -1e-9 * (1 + std::abs(p.z))) {
+      const double bound = chain.slope_max * (chain.slope_max >= 0 ? nearest : p.s - far.s);
+      if (p.s - far.near_s <= support && !(bmax - p.z > bound)) {
         if (ends(last)) {
           // The walk ends inside the block: at its first point m where it ends (a binary search).
           std::ptrdiff_t lo = k, hi = last;  // ends(hi), not ends(lo)
@@ -372,21 +302,6 @@ void walk(const Hull& hull, std::ptrdiff_t count, SlicePoint p, double support, 
         passed(last);
         k += len;
         continue;
-      }
-      // A block whose every vertex rises above the one before it (the receiver above the bound of the lines
-      // through them) joins a lazily held band in one step when its first vertex rises and rho at its last is
-      // within the coalescing tolerance (TangentChain::join_rising): the same comparisons up to rounding.
-      if (chain.joining() && nearest >= near && p.s - far.s <= support &&
-          p.z > summary->lines_at + summary->lines_m * (p.s - summary->lines_s)) {
-        const bool q_merged = q.near_s > q.s, far_merged = far.near_s > far.s;
-        const ChainPoint& before = hull.point(last - 1);
-        const SliceVec first = q_merged ? SliceVec{nearest, q.near_z - p.z} : SliceVec{hs, q.z - p.z};
-        const SliceVec before_last = far_merged ? SliceVec{p.s - far.near_s, far.near_z - p.z}
-                                                : SliceVec{p.s - before.s, before.z - p.z};
-        if (chain.join_rising(first, before_last, {p.s - far.s, far.z - p.z})) {
-          k += len;
-          continue;
-        }
       }
     }
     if (q.near_s > q.s && nearest >= near) {
@@ -408,8 +323,8 @@ struct StackFromTop {
   const ChainPoint& point(std::ptrdiff_t k) const { return top[-k]; }
   double zmax(std::ptrdiff_t k) const { return top[-k].zmax; }
   std::size_t size = 0;
-  std::ptrdiff_t block(std::ptrdiff_t k, const ChainPoint** summary) const {
-    *summary = &top[-k];
+  std::ptrdiff_t block(std::ptrdiff_t k, double* bmax) const {
+    *bmax = top[-k].bmax;
     return std::ptrdiff_t(block_span(size - 1 - std::size_t(k)));
   }
 };
@@ -421,12 +336,12 @@ struct StackFromBottom {
   std::size_t size = 0;
   const ChainPoint& point(std::ptrdiff_t k) const { return points[k]; }
   double zmax(std::ptrdiff_t k) const { return points[k].zmax; }
-  std::ptrdiff_t block(std::ptrdiff_t k, const ChainPoint** summary) const {
+  std::ptrdiff_t block(std::ptrdiff_t k, double* bmax) const {
     const std::size_t start = std::size_t(k), rest = size - start;
     std::size_t len = start == 0 ? std::bit_floor(rest) : (start & ~(start - 1)) / 2;
     while (len > rest) len /= 2;
     if (len == 0) return 1;
-    *summary = &points[start + len - 1];
+    *bmax = points[start + len - 1].bmax;
     return std::ptrdiff_t(len);
   }
 };
@@ -445,14 +360,14 @@ std::size_t ChainHull::prune(SlicePoint p, const Falloff& rho, double tolerance)
     stack_.pop_back();
     --n;
   }
-  if (n < before) summarise_block(stack_.data(), n - 1, true);  // the top took the merged points' near end
+  if (n < before) summarise_block(stack_.data(), n - 1);  // the top took the merged points' near end
   return tests;
 }
 
 void ChainHull::push(SlicePoint p) {
   const double below = stack_.empty() ? p.z : stack_.back().zmax;
   stack_.push_back({p.s, p.z, p.s, p.z, std::max(below, p.z), 0});
-  summarise_block(stack_.data(), stack_.size() - 1, true);
+  summarise_block(stack_.data(), stack_.size() - 1);
 }
 
 void ChainHull::query(SlicePoint p, double support, TangentChain& chain, double near) const {
@@ -500,7 +415,7 @@ void WindowHull::build(const ChainPoint* points, std::size_t count, double s_end
       ++popped;
     }
     hull_.push_back(q);
-    summarise_block(hull_.data(), hull_.size() - 1, false);
+    summarise_block(hull_.data(), hull_.size() - 1);
     pops_.push_back(popped);
   }
 }

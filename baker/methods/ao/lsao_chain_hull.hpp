@@ -32,7 +32,6 @@
 #pragma once
 
 #include <algorithm>
-#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -75,23 +74,13 @@ struct TangentChain {
   void add(double hs, double hz, double x) {
     const SliceVec from = prev;
     prev = {hs, hz};
-    if (!(hz > slope_max * hs)) return;
-    if (lazy_ && lazy_fits(hs, from))
-      join_lazily(hs, hz, from);
-    else
-      rise(hs, hz, x, from);
+    if (hz > slope_max * hs) rise(hs, hz, x, from);
   }
   // Coalescing (segments only; 0: off): a rising point whose band's rho is within `coalesce` of the pending
   // band's first is added to it (falloffs none and step inside the radius: always, the bands then add
   // exactly). finish() integrates what is pending: call it before reading sum and direction.
   double coalesce = 0;
   void finish();
-  // A run of vertices v1 .. vm (m >= 2, nearest first, `before_last` = v(m-1)) of which the caller has shown
-  // each is higher seen from the receiver than the one before it: joins the pending band as add() would one
-  // by one, when the band holds its top lazily (resolve) and rho at vm is within `coalesce` of the band's
-  // first; false (nothing changed) otherwise. joining(): a lazily held band is pending.
-  bool joining() const { return lazy_; }
-  bool join_rising(SliceVec first, SliceVec before_last, SliceVec last);
 
  private:
   // Falloffs with closed forms (slab_degree >= 0): the bands are adjacent, so each band's lower end is the
@@ -112,28 +101,11 @@ struct TangentChain {
   bool lazy_ = false;
   double rho_x0_ = 0, checked_ = 0;
   SliceVec before_, pend_from_;
-  // A rising point joins a lazily held band when its segment starts beyond the band's first distance and rho
-  // at its own distance is within `coalesce` of rho there (whatever distance its band's middle ray meets,
-  // add_closed's own test then passes).
-  bool lazy_fits(double hs, SliceVec from) const {
-    return from.h >= pend_x0_ && (hs <= checked_ || rho_x0_ - rho(hs) <= coalesce);
-  }
-  void join_lazily(double hs, double hz, SliceVec from) {
-    checked_ = std::max(checked_, hs);
-    slope_max = hz / hs;
-    before_ = {pend_hs_, pend_hz_};
-    pend_hs_ = hs, pend_hz_ = hz, pend_from_ = from;
-    lazy_ = true;
-  }
   void rise(double hs, double hz, double x, SliceVec from);
   void add_closed(double hs, double hz, double x, SliceVec from, SliceVec at);
   void resolve();
   void commit(double e, double c, double sn, const SlabPrimitives* at_e);
 };
-
-// The horizon slopes at which each hull block keeps its highest z + slope s (ChainPoint::bslope), with 0
-// (bmax) between the second and third.
-inline constexpr double kBlockSlopes[4] = {-1.0, -0.25, 0.25, 1.0};
 
 // A hull point: its position; the nearest sample merged into it (near_s >= s; itself when none): the near end
 // of the stretch of profile it stands for; and zmax, the highest height of it, its near end and every point
@@ -147,20 +119,6 @@ struct ChainPoint {
   // [i + 1 - lowbit(i + 1), i] of its position i (a Fenwick tree's ranges, so a query passes over a block
   // that cannot rise in one test: O(log) blocks cover the rest of a walk).
   double bmax = 0;
-  // Over the same block, the highest z + sigma s of its points and near ends for each sigma of
-  // kBlockSlopes (bmax: sigma = 0): a point at s rises above a horizon of slope sigma seen from a receiver
-  // at (ps, pz) only if z + sigma s > pz + sigma ps, and the highest of z + sigma s is convex in sigma, so
-  // these bound it between them (the walk's test that a block cannot rise).
-  double bslope[4] = {0, 0, 0, 0};
-  // Rising runs: the lines through consecutive vertices of the walk (a point's near end, then the point;
-  // then the next farther point's near end or the point). inner: through the near end and the point (none:
-  // unmerged); link: through this point and its hull neighbour nearer to the top of the walk's order
-  // (ChainHull: the point below; WindowHull: the point before). Each as height a + m s.
-  double inner_a = -INFINITY, inner_m = 0, link_a = -INFINITY, link_m = 0;
-  // Over the same block as bmax, every line through two consecutive vertices inside it lies at or below
-  // lines_at + lines_m (s - lines_s) for s >= lines_s (the block's nearest vertex): a receiver at s above
-  // that sees each vertex of the block higher than the one before it (TangentChain::join_rising).
-  double lines_s = 0, lines_at = INFINITY, lines_m = 0;
 };
 
 // One line's hull. Reuse one per thread (clear() keeps the capacity).
