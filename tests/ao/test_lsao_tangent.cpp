@@ -13,6 +13,7 @@
 #include "field/procedural.hpp"
 #include "methods/ao/hbao.hpp"
 #include "methods/ao/lsao.hpp"
+#include "methods/ao/lsao_chain_hull.hpp"
 
 namespace hfbake {
 namespace {
@@ -254,6 +255,45 @@ TEST(LsaoTangent, CoalescedBandsKeepAccuracyAndFlattenTheWork) {
               bands[0][1], bands[1][0], bands[1][1]);
   EXPECT_GT(bands[0][1], 1.3 * bands[0][0]);  // the field's visible chain grows with the radius
   EXPECT_LT(bands[1][1], 1.2 * bands[1][0]);
+}
+
+// The walk's block steps (lsao_chain_hull.cpp: blocks that cannot rise passed over in one test) and its
+// lazily held bands against every point added one by one (brute_chain) over the same points, no merges: a
+// long rising run seen from its foot (z = c d^1.5 behind the receiver, each point higher seen from it than
+// the one before) and beyond it a lower, level stretch and one far peak that rises again. The sums agree to
+// rounding, and the walk takes fewer steps than half the 400 points (measured: 179).
+TEST(LsaoTangent, WalkBlocksAgainstEveryPointAddedOneByOne) {
+  std::vector<SlicePoint> pts;  // walk order of the line: farthest first
+  for (int d = 400; d >= 1; --d) {
+    const double z = d > 300 ? (d == 390 ? 400.0 : 10.0) : d > 150 ? 5.0 : 0.05 * std::pow(double(d), 1.5);
+    pts.push_back({-double(d), z});
+  }
+  const SlicePoint p{0, 0};
+  for (const double radius : {2000.0, 600.0}) {  // every point inside the support (brute_chain has none)
+    const Falloff rho{FalloffKind::smooth, radius};
+    ChainHull hull;
+    for (const SlicePoint& q : pts) hull.push(q);
+    auto chain = [&] {
+      TangentChain c(rho, Weighting::cosine, slice_frame(0.3, 1.0));
+      c.want_direction = true;
+      c.segments = true;
+      c.coalesce = 0.01;
+      return c;
+    };
+    TangentChain walked = chain(), each = chain();
+    hull.query(p, rho.support(1e-4), walked);
+    brute_chain(pts.data(), pts.size(), p, each);
+    walked.finish();
+    each.finish();
+    std::printf("R %4g: sum walked %.12f one by one %.12f, steps %u, bands %u %u\n", radius, walked.sum,
+                each.sum, walked.walked, walked.bands, each.bands);
+    EXPECT_NEAR(walked.sum, each.sum, 1e-12);
+    EXPECT_NEAR(walked.direction.h, each.direction.h, 1e-12);
+    EXPECT_NEAR(walked.direction.v, each.direction.v, 1e-12);
+    EXPECT_EQ(walked.bands, each.bands);
+    EXPECT_GT(each.sum, 0.0);
+    EXPECT_LT(walked.walked, 200u);
+  }
 }
 
 // Same bits for any thread count (lines run in parallel; sums in direction order), with the bent normal.
