@@ -4,6 +4,7 @@
 // every column, row and diagonal crossing of the triangulation from each texel centre (p1_truth.hpp); the
 // sky term against Liu & Jordan's (1 + cos beta) / 2 on planes.
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 
@@ -178,6 +179,28 @@ TEST(Sun, SkyOnPlanesIsLiuJordan) {
     const double expect = (1 + std::cos(std::atan(slope))) / 2 * diffuse_wh;
     for (float v : layer(out, "sky").data) ASSERT_NEAR(v, expect, 2e-4 * expect) << slope;
   }
+}
+
+TEST(Sun, DeterministicForAnyThreadCount) {
+  const HeightField f = truth::rough_field(48, 40, 50, 0.6, 7, 16);
+  const MethodConfig config = sun_config({{"latitude", 40.0},
+                                          {"longitude", 10.0},
+                                          {"start", "2026-03-01T06:00"},
+                                          {"end", "2026-03-01T18:00"},
+                                          {"utc_offset", 1},
+                                          {"step_minutes", 30},
+                                          {"directions", 8},
+                                          {"layers", {"irradiation", "sun_hours"}}},
+                                         f);
+  const Scene scene = scene_of(f);
+  auto run = [&](int threads) {
+    LayerSet out;
+    tbb::task_arena(threads).execute([&] { out = config.method->bake(scene, config, RunControl{}); });
+    return out;
+  };
+  const LayerSet a = run(1), b = run(2);
+  EXPECT_EQ(layer(a, "irradiation").data, layer(b, "irradiation").data);
+  EXPECT_EQ(layer(a, "sun_hours").data, layer(b, "sun_hours").data);
 }
 
 TEST(Sun, ReaderRefusals) {
