@@ -214,6 +214,8 @@ TEST(Sun, ReaderRefusals) {
   j = ok, j["end"] = "2026-06-20T00:00", refused(j);
   j = ok, j["start"] = "2026-02-30T00:00", refused(j);
   j = ok, j["start"] = "2026-06-21 00:00", refused(j);
+  j = ok, j["start"] = "2026-06-21T+1:00", refused(j);
+  j = ok, j["end"] = "2026-06-22T00:00:60", refused(j);
   j = ok, j["step_minutes"] = 7, refused(j);  // 1440 / 7 is not whole
   j = ok, j["latitude"] = 46.0, refused(j);   // without longitude
   // A field without a CRS needs the place: refused when the scene is known.

@@ -23,6 +23,10 @@ const std::vector<std::string>& sun_layer_names() {
 // A local date and time "YYYY-MM-DDTHH:MM" or "YYYY-MM-DDTHH:MM:SS" as the Julian date (UT) at `offset`
 // hours east of UTC; nullopt when it is not one.
 std::optional<double> parse_local_time(const std::string& s, double offset) {
+  const char* form = "dddd-dd-ddTdd:dd:dd";
+  if (s.size() != 16 && s.size() != 19) return std::nullopt;
+  for (std::size_t k = 0; k < s.size(); ++k)
+    if (form[k] == 'd' ? !(s[k] >= '0' && s[k] <= '9') : s[k] != form[k]) return std::nullopt;
   int y, mo, d, h, mi, n = 0;
   double sec = 0;
   if (s.size() == 16) {
