@@ -125,19 +125,25 @@ std::vector<SunStep> sun_steps(const SunConfig& c, double latitude, double longi
   return steps;
 }
 
-std::vector<SunStep> sun_steps(const SunConfig& c, const Scene& scene) {
+SunPlace sun_place(const SunConfig& c, const Scene& scene) {
   const Georeference& g = scene.georeference;
-  double lat, lon;
+  SunPlace p;
   if (c.latitude) {
-    lat = *c.latitude, lon = *c.longitude;
+    p.latitude = *c.latitude, p.longitude = *c.longitude;
   } else if (g.has_site) {
-    lat = g.site_latitude, lon = g.site_longitude;
+    p.latitude = g.site_latitude, p.longitude = g.site_longitude, p.from_crs = true;
   } else {
     throw InputError(c.file, c.pointer + "/latitude",
                      "required: the height field has no CRS that places it on the Earth");
   }
-  const double east_x = g.geotransform[1] < 0 ? -1 : 1, north_y = g.geotransform[5] < 0 ? -1 : 1;
-  return sun_steps(c, lat, lon, g.has_site ? g.site_convergence : 0.0, east_x, north_y);
+  p.convergence = g.has_site ? g.site_convergence : 0.0;
+  p.east_x = g.geotransform[1] < 0 ? -1 : 1, p.north_y = g.geotransform[5] < 0 ? -1 : 1;
+  return p;
+}
+
+std::vector<SunStep> sun_steps(const SunConfig& c, const Scene& scene) {
+  const SunPlace p = sun_place(c, scene);
+  return sun_steps(c, p.latitude, p.longitude, p.convergence, p.east_x, p.north_y);
 }
 
 double sun_beam(const SunConfig& c, const SunStep& s, double z, const Vec3& n) {
@@ -213,6 +219,13 @@ LayerSet bake_sun(const Scene& scene, const MethodConfig& config, const RunContr
   out.attributes.emplace_back("hfbake:sun:units",
                               "irradiation, beam, sky: Wh/m^2 over the time range; sun_hours: hours");
   out.attributes.emplace_back("hfbake:sun:steps", std::to_string(steps.size()) + " with the sun up");
+  const SunPlace place = sun_place(c, scene);
+  char where[200];
+  std::snprintf(where, sizeof where,
+                "latitude %.6f, longitude %.6f (%s); true north at grid azimuth %.4f deg", place.latitude,
+                place.longitude, place.from_crs ? "the field's centre, from its CRS" : "the job's",
+                place.convergence * 180 / kPi);
+  out.attributes.emplace_back("hfbake:sun:place", where);
   rc.report(1.0);
   return out;
 }

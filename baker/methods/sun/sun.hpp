@@ -49,8 +49,16 @@ struct SunStep {
 // azimuth `convergence` (radians clockwise from the grid's north).
 std::vector<SunStep> sun_steps(const SunConfig& c, double latitude, double longitude, double convergence,
                                double east_x, double north_y);
-// The steps for a scene: its place from the config or its georeference (InputError naming the entry when
-// neither gives one), its axes and north from the geotransform.
+// Where a scene lies and how its texel axes turn: its place from the config or its georeference
+// (InputError naming the entry when neither gives one), its axes and north from the geotransform.
+struct SunPlace {
+  double latitude = 0, longitude = 0;  // degrees
+  double convergence = 0;              // radians: true north's azimuth in the grid (clockwise from its north)
+  double east_x = 1, north_y = -1;     // +x points east (+1) or west; +y points north (+1) or south
+  bool from_crs = false;               // the place came from the field's CRS
+};
+SunPlace sun_place(const SunConfig& c, const Scene& scene);
+// The steps for a scene at its place.
 std::vector<SunStep> sun_steps(const SunConfig& c, const Scene& scene);
 
 // Beam irradiance (W/m^2) on a texel at height z (metres above sea level) with normal n at step s, when
