@@ -1,9 +1,9 @@
 // hfbake with georeferenced rasters, end to end (the binary): the pixel size of a GeoTIFF is the texel
-// size, its NoData value makes holes, geographic CRSs and non-square pixels are refused in one line, and
-// output.geotiff writes Cloud-Optimised GeoTIFFs georeferenced like the input, the sun method takes its place
-// and true north from the CRS. The truth is GDAL's own
-// tools (gdal_translate makes the variants, gdalinfo reads the outputs) and a bake of the same heights as
-// an EXR with the texel size given by hand.
+// size, its NoData value makes holes, geographic CRSs and non-square pixels are refused in one line,
+// output.geotiff writes Cloud-Optimised GeoTIFFs georeferenced like the input, and the sun method takes its
+// place and true north from the CRS. The truth is GDAL's own tools (gdal_translate makes the variants,
+// gdalinfo reads the outputs), OGR's transforms, and a bake of the same heights as an EXR with the texel
+// size given by hand.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 
