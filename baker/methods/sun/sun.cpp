@@ -116,6 +116,8 @@ std::vector<SunStep> sun_steps(const SunConfig& c, double latitude, double longi
     s.compass_azimuth = p.azimuth;
     const double grid = p.azimuth + convergence;  // clockwise from the grid's north
     s.azimuth = std::atan2(std::cos(grid) * north_y, std::sin(grid) * east_x);
+    s.direction = {std::cos(p.elevation) * std::cos(s.azimuth), std::cos(p.elevation) * std::sin(s.azimuth),
+                   std::sin(p.elevation)};
     s.g0 = c.solar_constant / (p.distance_au * p.distance_au);
     s.air_mass = sun::relative_air_mass(p.elevation);
     s.diffuse = sun::diffuse_horizontal(s.g0, p.elevation, c.linke_turbidity);
@@ -147,9 +149,7 @@ std::vector<SunStep> sun_steps(const SunConfig& c, const Scene& scene) {
 }
 
 double sun_beam(const SunConfig& c, const SunStep& s, double z, const Vec3& n) {
-  const double ce = std::cos(s.elevation);
-  const double cos_i =
-      n.x * ce * std::cos(s.azimuth) + n.y * ce * std::sin(s.azimuth) + n.z * std::sin(s.elevation);
+  const double cos_i = dot(n, s.direction);
   if (cos_i <= 0) return 0;
   return sun::beam_normal(s.g0, s.air_mass * sun::pressure_ratio(z), c.linke_turbidity) * cos_i;
 }
@@ -161,7 +161,10 @@ LayerSet bake_sun(const Scene& scene, const MethodConfig& config, const RunContr
   const std::vector<SunStep> steps = sun_steps(c, scene);
   const bool beam_wanted = wants(c, "irradiation") || wants(c, "beam") || wants(c, "sun_hours");
   const bool sky_wanted = wants(c, "irradiation") || wants(c, "sky");
-  const double sky_share = sky_wanted ? 1.0 / (1 + double(steps.size()) / double(c.directions)) : 0.0;
+  // Progress: the sky's K directions and the sun's sweeps, each about one direction of work.
+  const double sky_share = !sky_wanted    ? 0.0
+                           : !beam_wanted ? 1.0
+                                          : 1.0 / (1 + double(steps.size()) / double(c.directions));
 
   // Direct sun: per texel the beam irradiation (Wh/m^2) and the steps it is lit, summed in step order.
   std::vector<double> beam(beam_wanted ? N : 0);
@@ -184,8 +187,10 @@ LayerSet bake_sun(const Scene& scene, const MethodConfig& config, const RunContr
   // The sky: an isotropic sky of radiance 1 above the astronomical horizon, lit through p1's exact
   // lighting at each texel's normal, gives E / pi = the share F of the horizontal diffuse irradiance the
   // texel receives; its irradiation is F times the model's diffuse horizontal irradiation.
-  std::vector<float> sky;
-  if (sky_wanted) {
+  double diffuse_wh = 0;
+  for (const SunStep& s : steps) diffuse_wh += s.diffuse * s.hours;
+  std::vector<float> sky(sky_wanted ? N : 0);
+  if (sky_wanted && diffuse_wh > 0) {
     Scene upper;
     upper.field = f;
     upper.environment = make_latlong_environment(
@@ -195,9 +200,6 @@ LayerSet bake_sun(const Scene& scene, const MethodConfig& config, const RunContr
     p.direct = true;
     p.lights = false;
     P1Result r = compute_p1(upper, p, part_of(rc, 1 - sky_share, sky_share));
-    double diffuse_wh = 0;
-    for (const SunStep& s : steps) diffuse_wh += s.diffuse * s.hours;
-    sky.resize(N);
     for (std::size_t t = 0; t < N; ++t) sky[t] = float(double(r.direct[3 * t]) * diffuse_wh);
   }
 

@@ -38,6 +38,7 @@ SunConfig read_sun_config(Params& in);
 struct SunStep {
   double elevation = 0, azimuth = 0;  // radians; azimuth from +x towards +y (the texel frame)
   double compass_azimuth = 0;         // radians clockwise from true north
+  Vec3 direction;                     // unit, towards the sun, in the texel frame
   double g0 = 0;                      // extraterrestrial irradiance, W/m^2
   double air_mass = 0;                // relative optical air mass at sea level
   double diffuse = 0;                 // diffuse horizontal irradiance, W/m^2
