@@ -1,5 +1,6 @@
 #include "cli/scene_inputs.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -8,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "field/nodata.hpp"
+#include "io/crs_geodesy.hpp"
 #include "io/georaster_input.hpp"
 #include "io/image_input.hpp"
 #include "io/load_environment.hpp"
@@ -129,6 +131,18 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
     georeference.crs_wkt = geo->crs_wkt;
     georeference.crs_name = geo->crs_name;
     if (geo->has_geotransform) georeference.geotransform = geo->geotransform;
+    if (geo->has_geotransform && !geo->crs_wkt.empty()) {
+      const std::array<double, 6>& g = georeference.geotransform;
+      const double x = g[0] + 0.5 * geo->width * g[1] + 0.5 * geo->height * g[2];
+      const double y = g[3] + 0.5 * geo->width * g[4] + 0.5 * geo->height * g[5];
+      const auto lonlat = crs_to_lonlat(geo->crs_wkt, x, y);
+      const auto gamma = grid_convergence(geo->crs_wkt, x, y);
+      if (lonlat && gamma) {
+        georeference.has_site = true;
+        georeference.site_longitude = (*lonlat)[0], georeference.site_latitude = (*lonlat)[1];
+        georeference.site_convergence = *gamma;
+      }
+    }
   } else {
     const ImageInfo info = probe_image(job.resolve(image), site(job, "/height/image"));
     plane = read_image_channel(job.resolve(image), channel, site(job, "/height/image"),

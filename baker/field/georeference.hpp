@@ -19,6 +19,12 @@ struct Georeference {
   // GDAL's affine geotransform: X = g[0] + (i + 0.5) g[1] + (j + 0.5) g[2] at texel (i, j)'s centre, Y =
   // g[3] + (i + 0.5) g[4] + (j + 0.5) g[5]. hfbake accepts only g[2] = g[4] = 0 and |g[1]| = |g[5]|.
   std::array<double, 6> geotransform{0, 1, 0, 0, 0, -1};
+  // The field's centre on the Earth, when PROJ can place it (filled by the loader from the CRS): longitude
+  // and latitude in degrees on the CRS's datum, and the grid's azimuth of true north there (radians,
+  // clockwise from the grid's north: the meridian convergence). What the sun method takes its place and
+  // its north from.
+  bool has_site = false;
+  double site_longitude = 0, site_latitude = 0, site_convergence = 0;
   // One byte per texel (row-major like the field), 1 where the input had no valid height (NaN, Inf, the
   // file's NoData value or the job's nodata_value) and the hole was filled; empty when there was none.
   std::vector<std::uint8_t> holes;

@@ -90,6 +90,16 @@ std::string Params::choice(const char* key, const std::string& fallback,
   return x;
 }
 
+std::optional<std::string> Params::text(const char* key, std::size_t max_length) {
+  if (!has(key)) return std::nullopt;
+  const auto& v = raw(key);
+  if (!v.is_string() || v.get_ref<const std::string&>().size() > max_length)
+    fail(key, "must be a string of at most " + std::to_string(max_length) + " characters");
+  std::string s = v.get<std::string>();
+  resolved_[key] = s;
+  return s;
+}
+
 std::vector<std::string> Params::layers(const std::vector<std::string>& known,
                                         const std::vector<std::string>& defaults) {
   std::vector<std::string> out = defaults;

@@ -35,6 +35,8 @@ class Params {
   // One of `allowed` (the error lists them), or `fallback` when absent.
   std::string choice(const char* key, const std::string& fallback,
                      std::initializer_list<const char*> allowed);
+  // A string of at most max_length characters, or nullopt when absent (then nothing is recorded).
+  std::optional<std::string> text(const char* key, std::size_t max_length);
   // "layers": each must be in `known` (else the error lists what the method writes), none twice, at least
   // one; `defaults` when absent. Recorded as resolved "layers".
   std::vector<std::string> layers(const std::vector<std::string>& known,

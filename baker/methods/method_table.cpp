@@ -8,6 +8,7 @@
 #include "methods/p1/bake_p1.hpp"
 #include "methods/p2/bake_p2.hpp"
 #include "methods/relief/relief.hpp"
+#include "methods/sun/sun.hpp"
 
 namespace hfbake {
 
@@ -15,7 +16,7 @@ std::span<const MethodInfo> method_table() {
   // One line per method.
   static const std::vector<MethodInfo> table = {
       p1_method(),       p2_method(),   nlp_method(), hbao_method(),   lsao_method(),
-      farfield_method(), hsao_method(), vo_method(),  relief_method(),
+      farfield_method(), hsao_method(), vo_method(),  relief_method(), sun_method(),
   };
   return table;
 }

@@ -7,7 +7,7 @@ Arrays in, arrays out::
     out = hfbake.relief(heights, texel_size=2.0, layers=["svf", "openness_pos"])
     out["svf"]                                              # (rows, columns) float32
 
-One function per method (p1, p2, nlp, hbao, lsao, farfield, hsao, vo, relief) takes the method's job keys as
+One function per method (p1, p2, nlp, hbao, lsao, farfield, hsao, vo, relief, sun) takes the method's job keys as
 keyword arguments, with the same names, defaults and checks as a job file's bake entry, plus the height
 keys (texel_size, wrap, height_scale, height_offset, nodata, nodata_value) and the job's lighting keys
 (environment, lights, bounces, surface). It returns a dict of layers: one channel as (H, W), per-direction

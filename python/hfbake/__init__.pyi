@@ -220,6 +220,28 @@ def relief(
     **params: Any,
 ) -> Layers: ...
 
+def sun(
+    heights: Heights,
+    *,
+    texel_size: Optional[float] = ...,
+    wrap: Optional[str] = ...,
+    height_scale: Optional[float] = ...,
+    height_offset: Optional[float] = ...,
+    nodata: Optional[str] = ...,
+    nodata_value: Optional[float] = ...,
+    environment: Optional[Mapping[str, Any]] = ...,
+    lights: Optional[Sequence[Mapping[str, Any]]] = ...,
+    bounces: Optional[int] = ...,
+    surface: Optional[Mapping[str, Any]] = ...,
+    layers: Optional[Sequence[str]] = ...,
+    job: Optional[Mapping[str, Any]] = ...,
+    threads: Optional[int] = ...,
+    progress: Optional[Callable[[float], None]] = ...,
+    cancel: Optional[threading.Event] = ...,
+    memory_limit: Optional[int] = ...,
+    **params: Any,
+) -> Layers: ...
+
 def validate(job: Job, *, memory_limit: Optional[int] = ...) -> dict[str, Any]: ...
 def bake(
     job: Job,

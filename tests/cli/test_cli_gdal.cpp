@@ -1,8 +1,9 @@
 // hfbake with georeferenced rasters, end to end (the binary): the pixel size of a GeoTIFF is the texel
-// size, its NoData value makes holes, geographic CRSs and non-square pixels are refused in one line, and
-// output.geotiff writes Cloud-Optimised GeoTIFFs georeferenced like the input. The truth is GDAL's own
-// tools (gdal_translate makes the variants, gdalinfo reads the outputs) and a bake of the same heights as
-// an EXR with the texel size given by hand.
+// size, its NoData value makes holes, geographic CRSs and non-square pixels are refused in one line,
+// output.geotiff writes Cloud-Optimised GeoTIFFs georeferenced like the input, and the sun method takes its
+// place and true north from the CRS. The truth is GDAL's own tools (gdal_translate makes the variants,
+// gdalinfo reads the outputs), OGR's transforms, and a bake of the same heights as an EXR with the texel
+// size given by hand.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 
@@ -406,6 +407,77 @@ TEST_F(CliGdal, CompassTermsOfTheHorizonChannels) {
   EXPECT_NE(gdalinfo_json(tif)["metadata"][""]["HFBAKE_AZIMUTH_CONVENTION"].get<std::string>().find(
                 "north-up raster: +x = east, +y = south, compass azimuth = (90 + phi) mod 360"),
             std::string::npos);
+}
+
+TEST_F(CliGdal, SunTakesThePlaceAndTrueNorthFromTheCrs) {
+  // A flat DEM in D96/TM 100 km east of its central meridian (15 E), about 46 N: the sun method takes the
+  // centre's longitude and latitude and the grid's azimuth of true north there from the CRS. The truth is
+  // OGR's transform, called here: the centre to longitude/latitude, and a step north from it back into
+  // the grid, whose direction is true north's grid azimuth.
+  const int n = 17;
+  const double x0 = 600000, y0 = 110000;  // the raster's top-left corner
+  {
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    GDALDataset* ds = gtiff->Create((dir_ / "flat.tif").c_str(), n, n, 1, GDT_Float32, nullptr);
+    ASSERT_TRUE(ds);
+    double gt[6] = {x0, 2, 0, y0, 0, -2};
+    ds->SetGeoTransform(gt);
+    OGRSpatialReference srs;
+    srs.importFromEPSG(3794);
+    ds->SetSpatialRef(&srs);
+    std::vector<float> z(std::size_t(n) * n, 300.0f);
+    ASSERT_EQ(
+        ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, n, n, z.data(), n, n, GDT_Float32, 0, 0, nullptr),
+        CE_None);
+    GDALClose(ds);
+  }
+  const nlohmann::json j = {{"version", 1},
+                            {"name", "flat"},
+                            {"height", {{"image", "flat.tif"}}},
+                            {"bake",
+                             {{{"method", "sun"},
+                               {"start", "2026-06-21T11:00"},
+                               {"end", "2026-06-21T13:00"},
+                               {"utc_offset", 0},
+                               {"step_minutes", 30},
+                               {"layers", {"sun_hours"}}}}},
+                            {"output", {{"dir", "out"}}}};
+  std::ofstream(dir_ / "flat.json") << j.dump();
+  const Result r = hfbake("bake --quiet " + (dir_ / "flat.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto in = OIIO::ImageInput::open((dir_ / "out" / "flat.sun.exr").string());
+  ASSERT_TRUE(in);
+  const std::string place = in->spec().get_string_attribute("hfbake:sun:place");
+  double lat = 0, lon = 0, north = 0;
+  ASSERT_EQ(std::sscanf(place.c_str(), "latitude %lf, longitude %lf", &lat, &lon), 2) << place;
+  const auto at = place.find("true north at grid azimuth ");
+  ASSERT_NE(at, std::string::npos) << place;
+  ASSERT_EQ(std::sscanf(place.c_str() + at, "true north at grid azimuth %lf", &north), 1) << place;
+
+  OGRSpatialReference grid, geo;
+  grid.importFromEPSG(3794);
+  geo.CopyGeogCSFrom(&grid);
+  grid.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  geo.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  std::unique_ptr<OGRCoordinateTransformation> to_geo(OGRCreateCoordinateTransformation(&grid, &geo));
+  std::unique_ptr<OGRCoordinateTransformation> to_grid(OGRCreateCoordinateTransformation(&geo, &grid));
+  ASSERT_TRUE(to_geo && to_grid);
+  double x = x0 + n, y = y0 - n;  // the raster's centre (2 m pixels)
+  ASSERT_TRUE(to_geo->Transform(1, &x, &y));
+  EXPECT_NEAR(lon, x, 1e-5);
+  EXPECT_NEAR(lat, y, 1e-5);
+  double xn = x, yn = y + 0.01;  // 1.1 km north
+  ASSERT_TRUE(to_grid->Transform(1, &xn, &yn));
+  const double cx = x0 + n, cy = y0 - n;
+  const double expected = std::atan2(xn - cx, yn - cy) * 180 / M_PI;
+  EXPECT_NEAR(north, expected, 2e-3);
+  EXPECT_GT(std::abs(north), 0.5);  // 100 km from the central meridian at 46 N: about 1 degree
+  // Flat ground around noon: the sun is up and in front of every texel for the whole 2 hours.
+  const OIIO::ImageSpec& spec = in->spec();
+  ASSERT_EQ(spec.nchannels, 1);
+  std::vector<float> hours(std::size_t(spec.width) * spec.height);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, hours.data()));
+  for (float h : hours) ASSERT_EQ(h, 2.0f);
 }
 
 }  // namespace

@@ -57,6 +57,19 @@ def method(r, name):
     elif name == "relief":
         m["directions"] = r.choice([1, 4, 9, 16])
         m["search_radius"] = r.choice([0.5, 1, 3, 10, 100])
+    elif name == "sun":
+        minutes = r.choice([30, 120, 1440])
+        day = r.randint(1, 28)
+        m["latitude"] = r.choice([r.uniform(-89.9, 89.9), 0.0, 66.6, -89.9])
+        m["longitude"] = r.uniform(-180, 180)
+        m["start"] = f"2026-{r.randint(1, 12):02d}-{day:02d}T{r.randint(0, 21):02d}:00"
+        end_h = int(m["start"][11:13]) * 60 + minutes
+        m["end"] = f"2026-{m['start'][5:7]}-{day + end_h // 1440:02d}T{(end_h % 1440) // 60:02d}:{end_h % 60:02d}"
+        m["utc_offset"] = r.choice([-5, 0, 2, 5.5])
+        m["step_minutes"] = r.choice([10, 15, 30])
+        m["layers"] = r.sample(["irradiation", "beam", "sky", "sun_hours"], r.randint(1, 4))
+        if r.random() < 0.3:
+            m["directions"] = r.choice([1, 3, 16])
     else:
         m["radius"] = r.choice([0.3, 1, 2.5, 4, 8, 13, 40])
         if name != "vo":
@@ -101,6 +114,10 @@ def job(r, i):
         j["environment"] = {"sky": {"sun": {"elevation_deg": r.uniform(-5, 90), "azimuth_deg": r.uniform(0, 360)}}}
     if r.random() < 0.3:
         j["reference"] = {"samples": r.choice([4, 16]), "seed": r.randint(1, 9)}
+    # sun from a generator of its own, so the rest of every job is what the same seed always made
+    rs = random.Random(f"sun {i} {r.getstate()[1][:4]}")
+    if rs.random() < 0.25:
+        j["bake"].append(method(rs, "sun"))
     return j
 
 

@@ -56,6 +56,8 @@ nlohmann::json resolved_params(const nlohmann::json& entry, const MethodContext&
 nlohmann::json base_entry(const std::string& method) {
   nlohmann::json e = {{"method", method}};
   if (method == "hsao" || method == "vo") e["radius"] = 2;
+  if (method == "sun")
+    e.update({{"start", "2026-06-21T00:00"}, {"end", "2026-06-22T00:00"}, {"utc_offset", 0}});
   return e;
 }
 

@@ -1,6 +1,10 @@
 #include "methods/p1/bake_p1.hpp"
 
+#include <algorithm>
+
 #include "core/direction_blocks.hpp"
+#include "methods/p1/far_horizons.hpp"
+#include "methods/p1/horizon_sweep.hpp"
 #include "methods/p1/p1.hpp"
 
 namespace hfbake {
@@ -101,6 +105,35 @@ LayerSet p1_finish_blocks(const Scene& scene, const MethodConfig& config, LayerS
   if (p.horizon_distance) place("horizon_distance", s.horizon_distance);
   sums = LayerSet();
   return p1_layers(p1_finish(scene, p, std::move(s), rc), config.layers);
+}
+
+void p1_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
+                    const RunControl& rc, const HorizonVisitor& visit) {
+  if (azimuths.empty()) return;
+  SweepSpec spec;
+  spec.channels = p1::FarHorizonWorker::channels();
+  spec.sample_heights = false;  // the far-field worker builds its own profiles
+  spec.wrap_periods = p.wrap_periods;
+  spec.azimuths = azimuths;
+  std::vector<std::vector<p1::NearCrossing>> near;
+  near.reserve(azimuths.size());
+  for (std::size_t a = 0; a < azimuths.size(); ++a) {
+    const SweepDirection d = plan_direction(f, spec, int(a));
+    near.push_back(p1::near_field_stencil(d.dx, d.dy, p1::near_radius_of(d, p.near_radius), f.texel_size));
+  }
+  auto make_worker = [&] {
+    p1::FarHorizonWorker w;
+    w.far_radius = p.near_radius * f.texel_size;
+    w.field = &f;
+    w.tolerance = p.horizon_tolerance;
+    w.beat_near = true;
+    return w;
+  };
+  sweep_lines(f, spec, rc, make_worker, [&](int a, int i, int j, const TexelTaps& t) {
+    int which;
+    const float near_e = p1::fast_atan(p1::near_slope(f, near[std::size_t(a)], i, j, &which));
+    visit(a, i, j, std::max(near_e, p1::caster_elevation(t.strip[0], t.strip[1])));
+  });
 }
 
 MethodInfo p1_method() {

@@ -23,6 +23,7 @@
 //   horizon = sin e_k per direction; horizon_distance = world distance to the caster (+inf: none).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -131,6 +132,16 @@ P1Result p1_finish(const Scene& scene, const P1Params& params, P1Sums&& sums, co
 double p1_working_bytes(const FieldShape& field, const P1Params& params, bool uniform_environment = false);
 // The sweep compute_p1 runs for its K directions.
 SweepSpec p1_sweep_spec(const P1Params& params);
+
+// Each texel's horizon at arbitrary azimuths, exactly as p1 shadows its directional lights: a sweep of its
+// own per azimuth (radians from +x towards +y), the horizon the larger of the exact near field marched from
+// the texel centre (params.near_radius) and the exact far field on the texel's own ray
+// (params.horizon_tolerance). visit(a, i, j, elevation) runs once per azimuth index a and texel (elevation
+// in radians, -pi/2 where nothing lies behind), tiles in parallel and for one texel in ascending a, so
+// per-texel sums in the visitor's own storage are deterministic.
+using HorizonVisitor = std::function<void(int a, int i, int j, float elevation)>;
+void p1_horizons_at(const HeightField& field, const P1Params& params, const std::vector<double>& azimuths,
+                    const RunControl& rc, const HorizonVisitor& visit);
 
 // Fraction of a light disk of angular radius `radius` (radians) centred at elevation `elevation` that lies
 // above a horizon at elevation `horizon` (a straight horizon across the disk). radius 0: a step.
