@@ -17,9 +17,9 @@
 #include "cli/outputs.hpp"
 #include "cli/progress.hpp"
 #include "cli/reference_cache.hpp"
-#include "cli/reference_checkpoint.hpp"
 #include "cli/report_page.hpp"
 #include "cli/report_writer.hpp"
+#include "cli/result_source.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
@@ -133,6 +133,145 @@ LayerSet height_layers(const Scene& scene) {
   return set;
 }
 
+// One job's way through bake_job: where its progress and notices go, its staging folder, its outcome.
+struct JobRun {
+  const Job& job;
+  Progress& progress;
+  const std::atomic<bool>& cancel;
+  JobOutcome& outcome;
+  OutputStage& stage;
+  std::string job_hash;
+
+  void tell(const std::vector<std::string>& notices) const {
+    for (const std::string& n : notices) progress.message(job.name + ": " + n);
+  }
+  // A RunControl reporting `step`'s progress and stopping when the bake is cancelled.
+  RunControl control(const std::string& step) const {
+    if (cancel.load()) throw Cancelled();
+    RunControl rc;
+    rc.cancel = &cancel;
+    rc.progress = [this, step](double f) { progress.update(job.name, step, f); };
+    return rc;
+  }
+};
+
+// Load: the scene, the heights line, and the height field's own textures.
+Scene load_step(const JobRun& run) {
+  run.progress.begin(run.job.name, "load");
+  const auto t0 = std::chrono::steady_clock::now();
+  Scene scene = load_scene(run.job, [&](double f) { run.progress.update(run.job.name, "load", f); });
+  const HeightsReport heights = describe_heights(run.job, scene);
+  run.progress.message(run.job.name + ": " + heights.line);
+  if (!heights.warning.empty()) run.progress.message("warning: " + run.job.name + ": " + heights.warning);
+  run.stage.set_georeference(scene.georeference);
+  run.progress.end(run.job.name, "load", seconds_since(t0));
+  const std::vector<PlannedTexture> textures = plan_textures(run.job);
+  if (std::any_of(textures.begin(), textures.end(),
+                  [](const PlannedTexture& t) { return t.stem == kHeightStem; }))
+    run.tell(run.stage.write_textures(kHeightStem, height_layers(scene)));
+  return scene;
+}
+
+// Bake: each entry's layers from the source, staged; kept for the report when the job has a reference.
+void bake_step(const JobRun& run, ResultSource& source, ReportInputs& report,
+               std::map<std::string, LayerSet>* kept) {
+  const Job& job = run.job;
+  for (std::size_t index = 0; index < job.bakes.size(); ++index) {
+    const BakeEntry& entry = job.bakes[index];
+    const RunControl rc = run.control(entry.stem);
+    run.progress.begin(job.name, entry.stem);
+    SourcedLayers result = source.method(int(index), rc);
+    LayerSet& layers = result.layers;
+    if (apply_test_break(entry.method, entry.stem, layers))
+      run.progress.message(job.name + ": " + entry.stem +
+                           ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
+    run.progress.end(job.name, entry.stem, result.seconds);
+    add_common_attributes(layers, job, run.job_hash, entry.method, entry_config(entry).resolved,
+                          result.seconds);
+    run.tell(run.stage.write_layers(entry.stem, layers));
+    if (kept) (*kept)[entry.stem] = job.has_reference ? layers : std::move(layers);
+    run.outcome.methods[entry.stem] = {
+        {"method", entry.method}, {"seconds", result.seconds}, {"cpu_seconds", result.cpu_seconds}};
+    if (job.has_reference)
+      report.methods.push_back({entry.stem, entry.method, result.seconds, std::move(layers)});
+  }
+}
+
+// Reference: the cache's entry when it holds this job's reference, else the source's (then stored in the
+// cache; a damaged entry is recomputed and replaced); then the layers traced after the paths (horizons, SH
+// visibility, relief's), staged.
+SourcedLayers reference_step(const JobRun& run, ResultSource& source, const ReferenceCache* cache,
+                             FieldSize size, const Scene& scene, const ReportInputs& report,
+                             std::string* cache_note) {
+  const Job& job = run.job;
+  const RunControl rc = run.control("reference");
+  run.progress.begin(job.name, "reference");
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string cache_key;
+  ReferenceCache::Entry cached;
+  CacheLookup lookup = CacheLookup::miss;
+  if (cache) {
+    cache_key = reference_cache_key(job);
+    lookup = cache->load(cache_key, cached, size.width, size.height);
+    if (lookup == CacheLookup::corrupt)
+      run.progress.message(job.name + ": reference cache entry " + cache->entry_path(cache_key).string() +
+                           " was damaged: removed, computing the reference again");
+  }
+  SourcedLayers result;
+  if (lookup == CacheLookup::hit) {
+    result.layers = std::move(cached.layers);
+    result.seconds = seconds_since(t0);
+    *cache_note =
+        "read from the reference cache (computing it took " + std::to_string(cached.seconds) + " s)";
+  } else {
+    result = source.reference(rc);
+    run.tell(result.notices);
+  }
+  if (cache && lookup != CacheLookup::hit) {
+    const std::string problem = cache->store(cache_key, result.layers, result.seconds);
+    if (!problem.empty()) run.progress.message(job.name + ": reference cache: " + problem);
+  }
+  run.progress.end(job.name, "reference", result.seconds);
+  LayerSet& reference = result.layers;
+  std::vector<const LayerSet*> method_layers;
+  for (const MethodLayers& m : report.methods) method_layers.push_back(&m.layers);
+  // Not cached: cheap beside the tracing.
+  add_reference_horizons(scene.field, method_layers, reference, rc);
+  add_reference_sh_visibility(scene.field, method_layers, reference, rc);
+  // The first relief entry's layers, traced with its settings.
+  for (std::size_t i = 0; i < job.bakes.size(); ++i)
+    if (const MethodConfig& c = entry_config(job.bakes[i]); c.holds<ReliefSettings>()) {
+      add_reference_relief(scene.field, c.get<ReliefSettings>(), report.methods[i].layers, reference, rc);
+      break;
+    }
+  add_common_attributes(reference, job, run.job_hash, "reference", job_reference_options(job).resolved,
+                        result.seconds);
+  run.tell(run.stage.write_layers("reference", reference));
+  nlohmann::json& record = run.outcome.methods["reference"];
+  record = result.record;
+  record["method"] = "reference";
+  record["seconds"] = result.seconds;
+  if (cache) {
+    record["cache"] = lookup == CacheLookup::corrupt ? "rebuilt" : cache_lookup_name(lookup);
+    record["cache_key"] = cache_key;
+    if (lookup == CacheLookup::hit) record["cache_saved_seconds"] = cached.seconds;
+  }
+  return result;
+}
+
+// Report: report.json and report.html staged, the thresholds and the baseline into the outcome.
+void report_step(const JobRun& run, const ReportInputs& report, const std::string& cache_note) {
+  const ReportResult r = write_report(run.job, run.job_hash, report, run.stage);
+  write_report_page(run.job, report, r.report, run.stage, cache_note);
+  for (auto& [stem, metrics] : r.metrics_by_method.items())
+    if (run.outcome.methods.contains(stem)) run.outcome.methods[stem]["metrics"] = metrics;
+  if (r.report.contains("baseline")) run.outcome.baseline = r.report["baseline"];
+  for (const std::string& failure : r.threshold_failures) {
+    run.outcome.errors.push_back(run.job.file.string() + ": /report/thresholds: " + failure);
+    run.outcome.status = JobStatus::threshold_failed;
+  }
+}
+
 }  // namespace
 
 void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
@@ -140,144 +279,32 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
               std::map<std::string, LayerSet>* kept) {
   const FieldSize size = probe_field_size(job);
   check_job_memory(job, size, options.memory_limit);
-
   check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
   if (options.shard) {
     const fs::path made = bake_shard(job, *options.shard, progress, cancel, outcome, cache, options.stage);
     if (!made.empty()) outcome.outputs = {made};
     return;
   }
-  // hfbake merge: every shard checked before anything is written; the layers come from them.
-  std::optional<MergedShards> merged;
-  if (options.merge) merged.emplace(job, size.width, size.height);
+  // hfbake merge takes the results from the shards, every one checked before anything is written.
+  std::optional<MergedShards> shards;
+  if (options.merge) shards.emplace(job, size.width, size.height);
   OutputStage stage(job, options.overwrite);
   for (const fs::path& p : stage.stale_removed())
     progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
-  progress.begin(job.name, "load");
-  const auto t_load = std::chrono::steady_clock::now();
-  const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
-  const HeightsReport heights = describe_heights(job, scene);
-  progress.message(job.name + ": " + heights.line);
-  if (!heights.warning.empty()) progress.message("warning: " + job.name + ": " + heights.warning);
-  stage.set_georeference(scene.georeference);
-  const std::string job_hash = job_content_hash(job);
-  progress.end(job.name, "load", seconds_since(t_load));
-  auto tell = [&](const std::vector<std::string>& notices) {
-    for (const std::string& n : notices) progress.message(job.name + ": " + n);
-  };
-  const std::vector<PlannedTexture> textures = plan_textures(job);
-  if (std::any_of(textures.begin(), textures.end(),
-                  [](const PlannedTexture& t) { return t.stem == kHeightStem; }))
-    tell(stage.write_textures(kHeightStem, height_layers(scene)));
+  JobRun run{job, progress, cancel, outcome, stage, ""};
 
+  const Scene scene = load_step(run);
+  run.job_hash = job_content_hash(job);
+  ResultSource source = shards ? merged_results(*shards, scene) : computed_results(job, scene, stage, size);
   ReportInputs report;
-  for (const BakeEntry& entry : job.bakes) {
-    if (cancel.load()) throw Cancelled();
-    RunControl rc;
-    rc.cancel = &cancel;
-    rc.progress = [&](double f) { progress.update(job.name, entry.stem, f); };
-    progress.begin(job.name, entry.stem);
-    const auto t0 = std::chrono::steady_clock::now();
-    const double cpu0 = process_cpu_seconds();
-    const int index = int(&entry - job.bakes.data());
-    LayerSet layers = merged ? merged->method(index, scene, rc) : run_method(entry, scene, rc);
-    const double seconds = merged ? merged->seconds(index) : seconds_since(t0);
-    const double cpu_seconds = merged ? merged->cpu_seconds(index) : process_cpu_seconds() - cpu0;
-    if (apply_test_break(entry.method, entry.stem, layers))
-      progress.message(job.name + ": " + entry.stem +
-                       ": HFBAKE_TEST_BREAK is set: its values are broken on purpose");
-    progress.end(job.name, entry.stem, seconds);
-    add_common_attributes(layers, job, job_hash, entry.method, entry_config(entry).resolved, seconds);
-    tell(stage.write_layers(entry.stem, layers));
-    if (kept) (*kept)[entry.stem] = job.has_reference ? layers : std::move(layers);
-    outcome.methods[entry.stem] = {
-        {"method", entry.method}, {"seconds", seconds}, {"cpu_seconds", cpu_seconds}};
-    if (job.has_reference) report.methods.push_back({entry.stem, entry.method, seconds, std::move(layers)});
-  }
-
+  bake_step(run, source, report, kept);
   if (job.has_reference) {
-    if (cancel.load()) throw Cancelled();
-    RunControl rc;
-    rc.cancel = &cancel;
-    rc.progress = [&](double f) { progress.update(job.name, "reference", f); };
-    progress.begin(job.name, "reference");
-    const auto t0 = std::chrono::steady_clock::now();
-    // The reference cache: a hit skips the path tracing; a damaged entry is recomputed and replaced.
-    std::string cache_key;
-    ReferenceCache::Entry cached;
-    CacheLookup lookup = CacheLookup::miss;
-    if (cache) {
-      cache_key = reference_cache_key(job);
-      lookup = cache->load(cache_key, cached, size.width, size.height);
-      if (lookup == CacheLookup::corrupt)
-        progress.message(job.name + ": reference cache entry " + cache->entry_path(cache_key).string() +
-                         " was damaged: removed, computing the reference again");
-    }
-    // Traced here: each finished band is checkpointed into the stage, and the bands a killed bake of this
-    // job left (adopted by the stage) are taken instead of traced (cli/reference_checkpoint.hpp).
-    std::optional<ReferenceResume> resume;
-    std::string checkpoint_problem;
-    auto trace = [&] {
-      const ReferenceOptions& options = job_reference_options(job);
-      const ReferenceCheckpoint checkpoint(stage.checkpoint_dir(),
-                                           reference_checkpoint_key(job, options, size.width, size.height));
-      resume = checkpoint.resume(&checkpoint_problem);
-      return bake_reference(scene, options, rc, &*resume);
-    };
-    LayerSet reference = lookup == CacheLookup::hit ? std::move(cached.layers)
-                         : merged                   ? merged->reference()
-                                                    : trace();
-    if (!checkpoint_problem.empty())
-      progress.message(job.name + ": reference checkpoint: " + checkpoint_problem + " (a kill now loses it)");
-    if (resume && resume->bands_resumed > 0)
-      progress.message(job.name + ": reference: resumed " + std::to_string(resume->bands_resumed) + " of " +
-                       std::to_string(resume->bands_resumed + resume->bands_traced) +
-                       " bands from a killed bake's checkpoints");
-    const double seconds = merged && lookup != CacheLookup::hit ? merged->seconds(-1) : seconds_since(t0);
-    if (cache && lookup != CacheLookup::hit) {
-      const std::string problem = cache->store(cache_key, reference, seconds);
-      if (!problem.empty()) progress.message(job.name + ": reference cache: " + problem);
-    }
-    progress.end(job.name, "reference", seconds);
-    std::vector<const LayerSet*> method_layers;
-    for (const MethodLayers& m : report.methods) method_layers.push_back(&m.layers);
-    // Not cached: cheap beside the tracing.
-    add_reference_horizons(scene.field, method_layers, reference, rc);
-    add_reference_sh_visibility(scene.field, method_layers, reference, rc);
-    // The first relief entry's layers, traced with its settings.
-    for (std::size_t i = 0; i < job.bakes.size(); ++i)
-      if (const MethodConfig& c = entry_config(job.bakes[i]); c.holds<ReliefSettings>()) {
-        add_reference_relief(scene.field, c.get<ReliefSettings>(), report.methods[i].layers, reference, rc);
-        break;
-      }
-    add_common_attributes(reference, job, job_hash, "reference", job_reference_options(job).resolved,
-                          seconds);
-    tell(stage.write_layers("reference", reference));
-    if (kept) (*kept)["reference"] = reference;
-    outcome.methods["reference"] = {{"method", "reference"}, {"seconds", seconds}};
-    if (resume)
-      outcome.methods["reference"]["bands"] = {{"resumed", resume->bands_resumed},
-                                               {"traced", resume->bands_traced}};
-    if (cache) {
-      outcome.methods["reference"]["cache"] =
-          lookup == CacheLookup::corrupt ? "rebuilt" : cache_lookup_name(lookup);
-      outcome.methods["reference"]["cache_key"] = cache_key;
-      if (lookup == CacheLookup::hit) outcome.methods["reference"]["cache_saved_seconds"] = cached.seconds;
-    }
-    report.reference_seconds = seconds;
-    report.reference = std::move(reference);
-    const ReportResult r = write_report(job, job_hash, report, stage);
-    write_report_page(job, report, r.report, stage,
-                      lookup == CacheLookup::hit ? "read from the reference cache (computing it took " +
-                                                       std::to_string(cached.seconds) + " s)"
-                                                 : "");
-    for (auto& [stem, metrics] : r.metrics_by_method.items())
-      if (outcome.methods.contains(stem)) outcome.methods[stem]["metrics"] = metrics;
-    if (r.report.contains("baseline")) outcome.baseline = r.report["baseline"];
-    for (const std::string& failure : r.threshold_failures) {
-      outcome.errors.push_back(job.file.string() + ": /report/thresholds: " + failure);
-      outcome.status = JobStatus::threshold_failed;
-    }
+    std::string cache_note;
+    SourcedLayers reference = reference_step(run, source, cache, size, scene, report, &cache_note);
+    report.reference = std::move(reference.layers);
+    report.reference_seconds = reference.seconds;
+    if (kept) (*kept)["reference"] = report.reference;
+    report_step(run, report, cache_note);
   }
   if (cancel.load()) throw Cancelled();
   outcome.outputs = stage.commit();

@@ -33,6 +33,50 @@ extern "C" void on_stop_signal(int sig) {
   if (g_interrupted.exchange(true)) std::_Exit(128 + sig);
 }
 
+// The options of every command that bakes (bake, merge, slurm), one meaning and one help text each.
+struct RunOptions {
+  std::string out, cache;
+  bool no_cache = false, quiet = false;
+};
+
+void add_run_options(CLI::App* cmd, RunOptions& o) {
+  cmd->add_option("-o,--out", o.out,
+                  "Output folder, replacing each job's output.dir (the shards: <out>/shards)");
+  cmd->add_flag("--quiet", o.quiet, "No progress output (errors are still printed)");
+  cmd->add_option("--cache", o.cache,
+                  "Reference cache folder (default: $XDG_CACHE_HOME/hfbake/references or "
+                  "~/.cache/hfbake/references; on a cluster, a folder every node sees)");
+  cmd->add_flag("--no-cache", o.no_cache, "Always compute references; do not read or write the cache");
+}
+
+// The options of the commands that write a job's outputs here (bake, merge).
+struct JobOptions {
+  std::string summary;
+  bool overwrite = false;
+  int threads = 0;
+};
+
+void add_job_options(CLI::App* cmd, JobOptions& o) {
+  cmd->add_option("--threads", o.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  cmd->add_flag("--overwrite", o.overwrite,
+                "Replace outputs of the same job name that another job file baked into the output folder");
+  cmd->add_option("--summary", o.summary, "Write a machine-readable JSON summary to FILE");
+}
+
+// A baking command's BakeOptions from its option groups.
+hfbake::BakeOptions bake_options(const std::vector<std::string>& jobs, const RunOptions& run,
+                                 const JobOptions& job) {
+  hfbake::BakeOptions o;
+  o.jobs.assign(jobs.begin(), jobs.end());
+  if (!run.out.empty()) o.out = run.out;
+  if (!run.cache.empty()) o.cache = run.cache;
+  o.no_cache = run.no_cache;
+  o.quiet = run.quiet;
+  if (!job.summary.empty()) o.summary = job.summary;
+  o.overwrite = job.overwrite;
+  return o;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -40,28 +84,15 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   app.set_version_flag("--version", std::string("hfbake ") + hfbake::hfbake_version());
 
-  hfbake::BakeOptions bake;
-  int threads = 0;
   std::vector<std::string> bake_jobs, validate_jobs;
-  std::string out, summary;
   bool validate_quiet = false;
 
+  RunOptions bake_run;
+  JobOptions bake_writes;
   CLI::App* bake_cmd = app.add_subcommand("bake", "Bake every job (continues past a failed job)");
   bake_cmd->add_option("jobs", bake_jobs, "Job files (JSON)")->required()->check(CLI::ExistingFile);
-  bake_cmd->add_option("--threads", threads, "Worker threads (default: all cores)")
-      ->check(CLI::Range(1, 4096));
-  bake_cmd->add_option("-o,--out", out, "Output folder, replacing each job's output.dir");
-  bake_cmd->add_flag("--quiet", bake.quiet, "No progress output (errors are still printed)");
-  bake_cmd->add_flag(
-      "--overwrite", bake.overwrite,
-      "Replace outputs of the same job name that another job file baked into the output folder");
-  bake_cmd->add_option("--summary", summary, "Write a machine-readable JSON summary to FILE");
-  std::string cache_dir;
-  bake_cmd->add_option("--cache", cache_dir,
-                       "Reference cache folder (default: $XDG_CACHE_HOME/hfbake/references or "
-                       "~/.cache/hfbake/references)");
-  bake_cmd->add_flag("--no-cache", bake.no_cache,
-                     "Always compute references; do not read or write the cache");
+  add_run_options(bake_cmd, bake_run);
+  add_job_options(bake_cmd, bake_writes);
   const auto memory_size = CLI::Validator(
       [](std::string& text) {
         return hfbake::parse_memory_size(text) ? std::string()
@@ -86,29 +117,21 @@ int main(int argc, char** argv) {
           "stage S needs stage S - 1 of the same job)")
       ->check(CLI::Range(0, 64));
   // hfbake merge: the outputs of `bake` from a job's shards.
-  hfbake::BakeOptions merge;
   std::vector<std::string> merge_jobs;
-  std::string merge_out, merge_summary, merge_cache;
-  int merge_threads = 0;
+  RunOptions merge_run;
+  JobOptions merge_writes;
   CLI::App* merge_cmd = app.add_subcommand(
       "merge", "Write each job's outputs from its shards (bake --shard I/N): the same files bake writes");
   merge_cmd->add_option("jobs", merge_jobs, "Job files (JSON) or suites")
       ->required()
       ->check(CLI::ExistingFile);
-  merge_cmd->add_option("-o,--out", merge_out,
-                        "Output folder, as bake's --out (the shards are in <out>/shards)");
-  merge_cmd->add_flag("--quiet", merge.quiet, "No progress output (errors are still printed)");
-  merge_cmd->add_flag("--overwrite", merge.overwrite, "As bake's --overwrite");
-  merge_cmd->add_option("--summary", merge_summary, "Write a machine-readable JSON summary to FILE");
-  merge_cmd->add_option("--cache", merge_cache, "Reference cache folder, as bake's");
-  merge_cmd->add_flag("--no-cache", merge.no_cache, "Do not read or write the reference cache");
-  merge_cmd->add_option("--threads", merge_threads, "Worker threads (default: all cores)")
-      ->check(CLI::Range(1, 4096));
+  add_run_options(merge_cmd, merge_run);
+  add_job_options(merge_cmd, merge_writes);
 
   // hfbake slurm: shards as a Slurm job array, then the merge.
   hfbake::SlurmOptions slurm;
   std::vector<std::string> slurm_inputs;
-  std::string slurm_out, slurm_cache;
+  RunOptions slurm_run;
   CLI::App* slurm_cmd = app.add_subcommand(
       "slurm", "Bake on a Slurm cluster: one array task per job and shard, then a merge job (afterok)");
   slurm_cmd->add_option("jobs", slurm_inputs, "Job files (JSON) or suites")
@@ -124,12 +147,9 @@ int main(int argc, char** argv) {
   slurm_cmd->add_option("--sbatch-arg", slurm.sbatch_args, "Any further sbatch option (repeatable)");
   slurm_cmd->add_flag("--wait", slurm.wait, "Wait for the merge and exit with its status");
   slurm_cmd->add_flag("--resume", slurm.resume, "Submit only the shards whose file is not complete");
-  slurm_cmd->add_option("-o,--out", slurm_out, "As bake's --out");
-  slurm_cmd->add_option("--cache", slurm_cache, "As bake's --cache (a folder every node sees)");
-  slurm_cmd->add_flag("--no-cache", slurm.no_cache, "As bake's --no-cache");
+  add_run_options(slurm_cmd, slurm_run);
   slurm_cmd->add_option("--threads", slurm.threads, "Threads per task (--cpus-per-task; default 1)")
       ->check(CLI::Range(1, 4096));
-  slurm_cmd->add_flag("--quiet", slurm.quiet, "As bake's --quiet");
   slurm_cmd->add_flag(
       "--dry-run", slurm.dry_run,
       "Print the two sbatch scripts and the sbatch commands to stdout; write and submit nothing");
@@ -240,28 +260,21 @@ int main(int argc, char** argv) {
   }
   if (app.got_subcommand(slurm_cmd)) {
     slurm.inputs.assign(slurm_inputs.begin(), slurm_inputs.end());
-    if (!slurm_out.empty()) slurm.out = slurm_out;
-    if (!slurm_cache.empty()) slurm.cache = slurm_cache;
+    if (!slurm_run.out.empty()) slurm.out = slurm_run.out;
+    if (!slurm_run.cache.empty()) slurm.cache = slurm_run.cache;
+    slurm.no_cache = slurm_run.no_cache;
+    slurm.quiet = slurm_run.quiet;
     return hfbake::run_slurm(slurm);
   }
+  hfbake::BakeOptions bake;
+  int threads = 0;
   if (app.got_subcommand(merge_cmd)) {
-    merge.merge = true;
-    merge.jobs.assign(merge_jobs.begin(), merge_jobs.end());
-    if (!merge_out.empty()) merge.out = merge_out;
-    if (!merge_summary.empty()) merge.summary = merge_summary;
-    if (!merge_cache.empty()) merge.cache = merge_cache;
-    bake = std::move(merge);
-    threads = merge_threads;
-  } else if (!app.got_subcommand(bake_cmd)) {
-    std::fputs(app.help().c_str(), stdout);
-    return 2;
-  }
-
-  if (!bake.merge) {
-    bake.jobs.assign(bake_jobs.begin(), bake_jobs.end());
-    if (!out.empty()) bake.out = out;
-    if (!summary.empty()) bake.summary = summary;
-    if (!cache_dir.empty()) bake.cache = cache_dir;
+    bake = bake_options(merge_jobs, merge_run, merge_writes);
+    bake.merge = true;
+    threads = merge_writes.threads;
+  } else if (app.got_subcommand(bake_cmd)) {
+    bake = bake_options(bake_jobs, bake_run, bake_writes);
+    threads = bake_writes.threads;
     if (!memory_limit.empty()) bake.memory_limit = hfbake::parse_memory_size(memory_limit);
     bake.stage = stage;
     if (stage > 0 && shard.empty()) {
@@ -276,6 +289,9 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
+  } else {
+    std::fputs(app.help().c_str(), stdout);
+    return 2;
   }
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0)

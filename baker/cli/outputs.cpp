@@ -250,12 +250,12 @@ void check_layers_finite(const std::string& stem, const LayerSet& layers) {
   const bool broken = std::any_of(layers.attributes.begin(), layers.attributes.end(),
                                   [](const auto& a) { return a.first == "hfbake:test_break"; });
   for (const Layer& layer : layers.layers) {
-    // horizon_distance is +inf where nothing lies behind the texel (documented); NaN is never a result.
-    const bool plus_inf_allowed = layer.name == "horizon_distance";
+    // A distance is +inf where nothing lies behind the texel (documented); NaN is never a result.
+    const LayerKind* kind = find_layer_kind(layer.name);
+    const bool plus_inf_allowed = kind && kind->values == LayerValues::distance;
     // Fractions of the sky (README, outputs): in [0, 1], up to a quadrature's error (p1 with 4 directions
     // on a 16x16 fractal reaches an ao of 1.0019); beyond 5 % the inputs left the methods' range.
-    const bool fraction = !broken && (layer.name == "ao" || layer.name == "vsky" ||
-                                      layer.name == "obscurance" || layer.name == "svf");
+    const bool fraction = !broken && kind && kind->values == LayerValues::fraction;
     constexpr float kRounding = 0.05f;
     const std::size_t nc = layer.channels.size();
     for (std::size_t k = 0; k < layer.data.size(); ++k) {

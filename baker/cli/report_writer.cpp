@@ -7,11 +7,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "cli/method_dispatch.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
 #include "methods/method_table.hpp"
 #include "reference/bake_reference.hpp"
+#include "reference/relief_reference.hpp"
 #include "report/baseline_compare.hpp"
 #include "report/report_document.hpp"
 
@@ -66,6 +68,19 @@ void check_report_baseline(const Job& job, int width, int height) {
                          another_job_message(differences));
 }
 
+EntryReach entry_reach(const MethodConfig& config) {
+  EntryReach r;
+  const Falloff falloff = config.obscurance.value_or(Falloff{});
+  r.falloff = falloff_kind_name(falloff.kind);
+  r.radius = falloff.radius;
+  r.cosine_weighted = config.cosine_weighted;
+  if (config.holds<ReliefSettings>()) {
+    const ReliefSettings& s = config.get<ReliefSettings>();
+    r.search = relief_reference_record({s.directions, s.search_radius, s.compass});
+  }
+  return r;
+}
+
 ReportResult write_report(const Job& job, const std::string& job_hash, const ReportInputs& inputs,
                           OutputStage& stage) {
   const nlohmann::json options = job.doc.value("report", nlohmann::json::object());
@@ -86,10 +101,14 @@ ReportResult write_report(const Job& job, const std::string& job_hash, const Rep
 
   std::vector<ReportMethodInput> methods;
   for (const MethodLayers& m : inputs.methods) {
-    nlohmann::json params = nlohmann::json::object();
+    ReportMethodInput in{m.stem, m.method, m.seconds, nlohmann::json::object(), &m.layers, {}};
     for (const BakeEntry& e : job.bakes)
-      if (e.stem == m.stem) params = e.config ? e.config->resolved : e.params;
-    methods.push_back({m.stem, m.method, m.seconds, params, &m.layers});
+      if (e.stem == m.stem) {
+        const MethodConfig& config = entry_config(e);
+        in.parameters = config.resolved;
+        in.reach = entry_reach(config);
+      }
+    methods.push_back(std::move(in));
   }
 
   ReportOutcome outcome;

@@ -8,6 +8,8 @@
 #include "cli/outputs.hpp"
 #include "core/layers.hpp"
 #include "job/manifest.hpp"
+#include "methods/method_table.hpp"
+#include "report/report_document.hpp"
 
 namespace hfbake {
 
@@ -37,6 +39,10 @@ nlohmann::json job_scene(const Job& job);
 // this job's report will be (name, field size, crop, reference settings, scene: report/baseline_compare.hpp),
 // before anything is baked. Does nothing for a job without a reference or a baseline.
 void check_report_baseline(const Job& job, int width, int height);
+
+// What limits the reach of an entry's layers, from its config: the falloff it wrote (none when it gave
+// neither falloff nor radius), its weighting, and relief's search as the reference records it.
+EntryReach entry_reach(const MethodConfig& config);
 
 // Compares, writes report.json into the stage, and evaluates the job's thresholds.
 ReportResult write_report(const Job& job, const std::string& job_hash, const ReportInputs& inputs,

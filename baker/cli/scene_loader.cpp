@@ -116,9 +116,11 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   context.uniform_environment = job_environment_uniform(job.doc);
   // Methods run one at a time; each one's layers are kept until the report when there is a reference.
   double kept = 0, peak = 0;
-  int horizon_channels = 0;  // the reference adds horizon and horizon_distance for the first method's K
-  // ... and sh_visibility (16 floats a texel) and the first relief entry's layers, whose horizons (up and
-  // down, doubles) it holds while it computes them (reference/relief_reference.cpp).
+  // The reference adds the layers it traces after its paths (the layer table's LayerTrace): horizon and
+  // horizon_distance for the first entry's K that bakes one, sh_visibility, and the first relief entry's
+  // layers, whose horizons (up and down, doubles) it holds while it computes them
+  // (reference/relief_reference.cpp).
+  int horizon_channels = 0;
   double added_per_texel = 0;
   bool sh_visibility_added = false, relief_added = false;
   for (const BakeEntry& e : job.bakes) {
@@ -135,15 +137,20 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     peak = std::max(peak, kept + layers + std::max({working, writing, exr_band}));
     if (job.has_reference) kept += layers;
     if (parts) parts->push_back({e.stem, std::size_t(layers + working), m->memory_knob});
+    auto traced = [&](const std::string& l, LayerTrace t) {
+      const LayerKind* k = find_layer_kind(l);
+      return k && k->trace == t;
+    };
     for (const std::string& l : r.layers)
-      if ((l == "horizon" || l == "horizon_distance") && horizon_channels == 0)
+      if (traced(l, LayerTrace::horizons) && horizon_channels == 0)
         horizon_channels = 2 * layer_channel_count(l, r.directions);
     for (const std::string& l : r.layers)
-      if (l == "sh_visibility" && !sh_visibility_added) {
-        added_per_texel += 4.0 * 16;
+      if (traced(l, LayerTrace::sh_visibility) && !sh_visibility_added) {
+        added_per_texel += 4.0 * layer_channel_count(l, r.directions);
         sh_visibility_added = true;
       }
-    if (e.method == "relief" && !relief_added) {
+    if (!relief_added && std::any_of(r.layers.begin(), r.layers.end(),
+                                     [&](const std::string& l) { return traced(l, LayerTrace::relief); })) {
       for (const std::string& l : r.layers) added_per_texel += 4.0 * layer_channel_count(l, r.directions);
       added_per_texel += 16.0 * r.directions;
       relief_added = true;

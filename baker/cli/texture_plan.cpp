@@ -63,11 +63,6 @@ Channel read_channel(const nlohmann::json& v, const std::string& pointer) {
   return c;
 }
 
-// Direction layers, written as normal maps: the bent normal of a bake, the height field's normal.
-bool is_direction_layer(const std::string& layer) {
-  return layer == "bent_normal" || layer == "normal";
-}
-
 }  // namespace
 
 std::vector<std::string> layer_suffixes(const std::string& layer, int channels) {

@@ -40,7 +40,7 @@ fs::path temporary_sibling(const fs::path& file) {
 
 std::string default_exr_compression(const LayerSet& layers) {
   for (const Layer& layer : layers.layers)
-    if (layer.name == "horizon" || layer.name == "horizon_distance" || layer.name == "horizon_deg")
+    if (const LayerKind* k = find_layer_kind(layer.name); k && k->channels == LayerChannels::per_direction)
       return "piz";
   return "zip";
 }

@@ -80,7 +80,7 @@ void write_preview(const fs::path& file, const LayerSet& layers, const Layer& la
   const PreviewSize size = preview_size(layers.width, layers.height, options.max_size);
   const int w = size.width, h = size.height;
   std::vector<float> rgb = preview_rgb(layers, layer, size);
-  const bool direction = layer.name == "bent_normal";
+  const bool direction = is_direction_layer(layer.name);
   if (direction) {
     for (float& v : rgb) v = 0.5f + 0.5f * v;
   } else {

@@ -70,14 +70,4 @@ LayerSet bake_method(std::string_view name, const Scene& scene, const nlohmann::
   return config.method->bake(scene, config, rc);
 }
 
-int layer_channel_count(const std::string& layer, int directions) {
-  if (layer == "horizon" || layer == "horizon_distance" || layer == "horizon_deg") return directions;
-  if (layer == "sh_visibility") return 16;
-  if (layer == "sh_irradiance") return 48;
-  if (layer == "bent_normal" || layer == "direct" || layer == "indirect" || layer == "total" ||
-      layer.rfind("indirect_b", 0) == 0)
-    return 3;
-  return 1;
-}
-
 }  // namespace hfbake

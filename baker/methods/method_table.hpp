@@ -59,6 +59,8 @@ struct MethodConfig {
   // The falloff and radius the entry writes (an obscurance-family entry with "falloff" or "radius"): what
   // the reference's obscurance estimates when the reference gives none of its own.
   std::optional<Falloff> obscurance;
+  // How its obscurance weights directions: by the cosine (docs/contract.md) or uniformly (HBAO's).
+  bool cosine_weighted = true;
   // Every value the reader read, defaults included, "method" and "layers" too: the record written to the
   // EXR metadata and report.json (never read back).
   nlohmann::json resolved;
@@ -170,9 +172,5 @@ LayerSet bake_method(std::string_view name, const Scene& scene, const nlohmann::
                      const RunControl& rc);
 // The context a loaded scene gives a reader: its shape and bounces.
 MethodContext scene_method_context(const Scene& scene);
-
-// Channels an output layer has (horizon, horizon_distance and horizon_deg: one per direction of
-// `directions`; sh_*: 16 per colour).
-int layer_channel_count(const std::string& layer, int directions);
 
 }  // namespace hfbake

@@ -586,9 +586,13 @@ nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& opt
 }  // namespace
 
 std::vector<std::string> reference_layer_names(int bounces) {
-  std::vector<std::string> names = {"ao",       "vsky",  "obscurance",  "direct",
-                                    "indirect", "total", "bent_normal", "sh_irradiance"};
-  for (int b = 1; b <= bounces; ++b) names.push_back("indirect_b" + std::to_string(b));
+  std::vector<std::string> names;
+  for (const LayerKind& k : layer_kinds())
+    if (k.trace == LayerTrace::path_traced) {
+      if (!k.numbered) names.emplace_back(k.name);
+      for (int b = 1; k.numbered && b <= bounces; ++b)
+        names.push_back(std::string(k.name) + std::to_string(b));
+    }
   return names;
 }
 
@@ -642,8 +646,10 @@ ReferenceOptions read_reference_options(const nlohmann::json& reference,
     // Only what some method of the job is scored against: the reference layers its layers name.
     std::set<std::string> scored;
     for (const MethodConfig* e : entries) scored.insert(e->layers.begin(), e->layers.end());
+    // A layer scored against the reference's falloff needs one.
     for (const std::string& l : known)
-      if (scored.count(l) && (l != "obscurance" || have_falloff)) o.layers.push_back(l);
+      if (scored.count(l) && (find_layer_kind(l)->reach != LayerReach::falloff || have_falloff))
+        o.layers.push_back(l);
     if (o.layers.empty()) o.layers = {"ao"};  // nothing comparable: the cheapest layer, for the report's page
     in.resolve("layers", o.layers);
   } else {
@@ -728,7 +734,7 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
   std::vector<float*> value_data, stderr_data;
   auto channel_names = [](const Out& o) {
     if (o.name == "sh_irradiance") return reference::sh_irradiance_channels();  // 48: band 3 written as 0
-    return o.channels == 1 ? mono_channels() : o.name == "bent_normal" ? xyz_channels() : rgb_channels();
+    return o.channels == 1 ? mono_channels() : is_direction_layer(o.name) ? xyz_channels() : rgb_channels();
   };
   for (const Out& o : outs) value_data.push_back(result.add(o.name, channel_names(o)).data.data());
   for (const Out& o : outs)

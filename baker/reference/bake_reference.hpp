@@ -87,7 +87,8 @@ struct ReferenceOptions {
   nlohmann::json resolved = nlohmann::json::object();
 };
 
-// The reference layers this scene can produce ("indirect_b1".."indirect_b<bounces>" included).
+// The reference layers this scene's paths can trace: the layer table's LayerTrace::path_traced, in its order
+// (a numbered family as indirect_b1 .. indirect_b<bounces>).
 std::vector<std::string> reference_layer_names(int bounces);
 
 // Reads the job's "reference" object (`reference`; null or absent keys: the defaults) with every check:

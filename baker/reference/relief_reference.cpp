@@ -78,8 +78,11 @@ nlohmann::json relief_reference_record(const ReliefReferenceSettings& s) {
 
 void add_reference_relief(const HeightField& field, const ReliefSettings& settings,
                           const LayerSet& relief_layers, LayerSet& reference, const RunControl& rc) {
-  static const char* const kLayers[] = {"svf", "openness_positive", "openness_negative", "horizon_deg"};
-  for (const char* l : kLayers)
+  // relief's layers: those the layer table says this step computes.
+  std::vector<std::string> names;
+  for (const LayerKind& k : layer_kinds())
+    if (k.trace == LayerTrace::relief) names.emplace_back(k.name);
+  for (const std::string& l : names)
     if (reference.find(l)) return;
   const LayerSet* relief = &relief_layers;
   ReliefReferenceSettings s;
@@ -89,7 +92,7 @@ void add_reference_relief(const HeightField& field, const ReliefSettings& settin
   const int K = s.directions;
   const ReliefHorizons h = trace_relief_horizons(field, s, relief->find("openness_negative") != nullptr, rc);
   const std::size_t N = field.texel_count();
-  for (const char* name : kLayers) {
+  for (const std::string& name : names) {
     const Layer* ml = relief->find(name);
     if (!ml) continue;
     std::vector<float> data(N * std::size_t(ml->channel_count()));
@@ -101,7 +104,7 @@ void add_reference_relief(const HeightField& field, const ReliefSettings& settin
         sum_up += up;
         if (!h.down.empty()) sum_down += h.down[t * K + k];
       }
-      const std::string n = name;
+      const std::string& n = name;
       if (n == "svf") data[t] = float(1 - sum_sin / K);
       if (n == "openness_positive") data[t] = float(90 - sum_up / K * kDegPerRad);
       if (n == "openness_negative") data[t] = float(90 + sum_down / K * kDegPerRad);

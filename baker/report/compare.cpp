@@ -68,14 +68,6 @@ void add_angle_metrics(const Layer& method, const Layer& reference, int width, c
 
 }  // namespace
 
-bool is_direction_layer(const std::string& name) {
-  return name == "bent_normal";
-}
-
-bool is_elevation_layer(const std::string& name) {
-  return name == "horizon";
-}
-
 LayerMetrics compare_layer(const Layer& method, const Layer& reference, const Layer* stderr_layer, int width,
                            int height, const CompareRegion& region) {
   const int channels = method.channel_count();
@@ -138,9 +130,11 @@ LayerMetrics compare_layer(const Layer& method, const Layer& reference, const La
   if (sum_sq > 0 && peak > 0) out.psnr = 10.0 * std::log10(peak * peak / (sum_sq / n));
   out.noise_rmse = std::sqrt(sum_se_sq / n);
   out.excess_rmse = std::sqrt(std::max(out.rmse * out.rmse - out.noise_rmse * out.noise_rmse, 0.0));
-  if (channels == 3 && is_direction_layer(method.name))
+  const LayerKind* kind = find_layer_kind(method.name);
+  if (channels == 3 && kind && kind->score == LayerScore::directions)
     add_angle_metrics(method, reference, width, region, out);
-  if (is_elevation_layer(method.name)) add_elevation_metrics(method, reference, width, region, out);
+  if (kind && kind->score == LayerScore::elevations)
+    add_elevation_metrics(method, reference, width, region, out);
   return out;
 }
 

@@ -31,12 +31,6 @@ struct LayerMetrics {
   std::optional<double> angle_mean_deg, angle_p99_deg, angle_max_deg;
 };
 
-// Whether a layer of this name holds a direction (3 channels, compared by angle as well), or sines of
-// elevations (horizon: each channel's elevation error in degrees fills the angle metrics). Values that are
-// infinite on either side (horizon_distance where no caster was found) are left out of every metric.
-bool is_direction_layer(const std::string& name);
-bool is_elevation_layer(const std::string& name);
-
 // The region compared: texels [crop, width - crop) x [crop, height - crop).
 struct CompareRegion {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
@@ -48,6 +42,10 @@ CompareRegion crop_region(int width, int height, int crop);
 // Compares `method` against `reference` (same channel count; data of width x height texels). `stderr_layer`
 // (may be null) holds the reference's per-texel standard error with the same channels (or one channel,
 // shared by all). Throws std::invalid_argument on mismatched channel counts or sizes, or an empty region.
+// The layer table (core/layers.hpp) says what else is measured: the angle between unit vectors (a
+// direction layer), or each channel's elevation error in degrees (sines of elevations) in the angle
+// metrics. Values that are infinite on either side (horizon_distance where no caster was found) are left
+// out of every metric.
 LayerMetrics compare_layer(const Layer& method, const Layer& reference, const Layer* stderr_layer, int width,
                            int height, const CompareRegion& region);
 

@@ -45,54 +45,65 @@ nlohmann::json reference_layer_summary(const Layer& layer, const Layer* se, int 
   return j;
 }
 
+// The reference's record of how it was computed (its attribute `key`, a JSON object), or null.
+nlohmann::json reference_record(const LayerSet& reference, const char* key) {
+  nlohmann::json record;
+  for (const auto& [k, value] : reference.attributes)
+    if (k == key) record = nlohmann::json::parse(value, nullptr, false);
+  return record.is_object() ? record : nlohmann::json();
+}
+
 // The reference computes one obscurance (one falloff and radius, cosine-weighted; it records them in its
 // "hfbake:reference_setup" attribute). A method's obscurance is a different quantity when it was baked
 // with another falloff, radius or weighting, and comparing the two would report a false error.
-// Defaults follow the AO family: falloff "step" with a radius, "none" without; weighting "cosine".
-bool obscurance_comparable(const nlohmann::json& params, const LayerSet& reference) {
-  nlohmann::json setup;
-  for (const auto& [key, value] : reference.attributes)
-    if (key == "hfbake:reference_setup") setup = nlohmann::json::parse(value, nullptr, false);
-  if (!setup.is_object() || !setup.contains("falloff")) return true;  // nothing recorded to check against
-  if (!params.is_object()) return false;
-  if (params.value("weighting", std::string("cosine")) != "cosine") return false;
-  const bool has_radius = params.contains("radius") && params["radius"].is_number();
-  const std::string falloff = params.value("falloff", std::string(has_radius ? "step" : "none"));
-  if (falloff != setup["falloff"].get<std::string>()) return false;
-  if (falloff == "none") return true;
-  const double r = has_radius ? params["radius"].get<double>() : 0.0;
+bool obscurance_comparable(const EntryReach& reach, const LayerSet& reference) {
+  const nlohmann::json setup = reference_record(reference, "hfbake:reference_setup");
+  if (!setup.contains("falloff")) return true;  // nothing recorded to check against
+  if (!reach.cosine_weighted) return false;
+  if (reach.falloff != setup["falloff"].get<std::string>()) return false;
+  if (reach.falloff == "none") return true;
   const double rr = setup.value("radius", 0.0);
-  return std::abs(r - rr) <= 1e-9 * std::max(1.0, std::abs(rr));
+  return std::abs(reach.radius - rr) <= 1e-9 * std::max(1.0, std::abs(rr));
 }
 
 // relief's layers (svf, openness_*, horizon_deg) depend on its directions, search radius and azimuth
 // convention; the reference computes them for one relief entry and records its settings
 // ("hfbake:relief_reference"). Another entry's are a different quantity.
-bool relief_comparable(const nlohmann::json& params, const LayerSet& reference) {
-  nlohmann::json record;
-  for (const auto& [key, value] : reference.attributes)
-    if (key == "hfbake:relief_reference") record = nlohmann::json::parse(value, nullptr, false);
-  if (!record.is_object() || !params.is_object()) return false;
+bool search_comparable(const EntryReach& reach, const LayerSet& reference) {
+  const nlohmann::json record = reference_record(reference, "hfbake:relief_reference");
+  if (record.is_null() || !reach.search.is_object()) return false;
   for (const char* key : {"directions", "search_radius", "azimuth_convention"})
-    if (!params.contains(key) || !record.contains(key) || params[key] != record[key]) return false;
+    if (!reach.search.contains(key) || !record.contains(key) || reach.search[key] != record[key])
+      return false;
   return true;
 }
 
 // A bent normal baked with a falloff (a radius-limited search: the obscurance family's default with a
 // radius) averages the directions open within that radius; the reference's bent normal averages its ao
 // rays, which have no distance limit. The two are different quantities.
-std::string bent_normal_limit(const nlohmann::json& params) {
-  if (!params.is_object()) return "";
-  const bool has_radius = params.contains("radius") && params["radius"].is_number();
-  const std::string falloff = params.value("falloff", std::string(has_radius ? "step" : "none"));
-  if (falloff == "none") return "";
-  return "radius-limited (falloff " + falloff +
-         (has_radius ? ", radius " + number(params["radius"].get<double>()) : std::string()) +
+std::string falloff_limit(const EntryReach& reach) {
+  if (reach.falloff == "none") return "";
+  return "radius-limited (falloff " + reach.falloff + ", radius " + number(reach.radius) +
          "); the reference's bent normal has no distance limit";
 }
 
-bool is_relief_layer(const std::string& name) {
-  return name == "svf" || name == "openness_positive" || name == "openness_negative" || name == "horizon_deg";
+// Why a method's layer of this kind is not scored against the reference's (empty: it is).
+std::string reach_reason(const LayerKind* kind, const EntryReach& reach, const LayerSet& reference) {
+  switch (kind ? kind->reach : LayerReach::unlimited) {
+    case LayerReach::unlimited:
+      return "";
+    case LayerReach::falloff:
+      return obscurance_comparable(reach, reference)
+                 ? ""
+                 : "baked with another falloff, radius or weighting than the reference's obscurance";
+    case LayerReach::falloff_against_unlimited:
+      return falloff_limit(reach);
+    case LayerReach::search_radius:
+      return search_comparable(reach, reference)
+                 ? ""
+                 : "baked with other directions, search radius or azimuth convention than the reference's";
+  }
+  return "";
 }
 
 }  // namespace
@@ -153,15 +164,13 @@ ReportOutcome build_report(const ReportSpec& spec, const std::vector<ReportMetho
         std::string reason;
         if (!r || ends_with(l.name, "_stderr"))
           reason = "the reference has no layer of this name";
+        else if (const LayerKind* kind = find_layer_kind(l.name); !kind || kind->score == LayerScore::none)
+          reason = "a layer the report does not score";
         else if (r->channel_count() != l.channel_count())
           reason = "the reference's has " + std::to_string(r->channel_count()) + " channels, this " +
                    std::to_string(l.channel_count());
-        else if (l.name == "obscurance" && !obscurance_comparable(m.parameters, reference))
-          reason = "baked with another falloff, radius or weighting than the reference's obscurance";
-        else if (is_relief_layer(l.name) && !relief_comparable(m.parameters, reference))
-          reason = "baked with other directions, search radius or azimuth convention than the reference's";
-        else if (l.name == "bent_normal")
-          reason = bent_normal_limit(m.parameters);
+        else
+          reason = reach_reason(find_layer_kind(l.name), m.reach, reference);
         if (!reason.empty()) {
           jm["not_compared"].push_back(l.name);
           jm["not_compared_reasons"][l.name] = reason;

@@ -12,11 +12,23 @@
 
 namespace hfbake {
 
+// What limits the reach of an entry's layers (core/layers.hpp LayerReach), from its typed config: the report
+// scores a limited layer only against a reference layer limited the same way.
+struct EntryReach {
+  std::string falloff = "none";  // its obscurance's and bent normal's falloff (falloff_kind_name), and radius
+  double radius = 0;
+  bool cosine_weighted = true;  // its obscurance's weighting
+  // Its search settings as the reference records those it traced relief's layers with
+  // (reference/relief_reference.hpp relief_reference_record); null: none.
+  nlohmann::json search;
+};
+
 struct ReportMethodInput {
   std::string stem, method;  // output stem ("p1", "p1-2") and method name
   double seconds = 0;
-  nlohmann::json parameters;         // the bake entry as written
+  nlohmann::json parameters;         // the entry's resolved parameters, written to report.json
   const LayerSet* layers = nullptr;  // not owned
+  EntryReach reach = {};
 };
 
 struct ReportSpec {

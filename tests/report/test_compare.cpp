@@ -214,19 +214,18 @@ TEST(Report, ObscurancesBakedWithOtherSettingsThanTheReferenceAreNotCompared) {
   LayerSet method = reference;
   method.attributes.clear();
   method.find("obscurance")->data.assign(16, 0.5f);
-  const std::vector<std::pair<nlohmann::json, bool>> cases = {
-      {{{"method", "hbao"}, {"radius", 16}}, true},  // step is the default with a radius
-      {{{"method", "hbao"}, {"radius", 16}, {"falloff", "step"}, {"weighting", "cosine"}}, true},
-      {{{"method", "hbao"}, {"radius", 32}}, false},
-      {{{"method", "hbao"}, {"radius", 16}, {"falloff", "smooth"}}, false},
-      {{{"method", "hbao"}, {"radius", 16}, {"weighting", "uniform"}}, false},
-      {{{"method", "hbao"}}, false},  // no radius: falloff none, plain AO
+  const std::vector<std::pair<EntryReach, bool>> cases = {
+      {{"step", 16, true, {}}, true},    {{"step", 32, true, {}}, false},
+      {{"smooth", 16, true, {}}, false}, {{"step", 16, false, {}}, false},  // uniform weighting
+      {{"none", 0, true, {}}, false},                                       // plain AO
   };
-  for (const auto& [params, comparable] : cases) {
-    const ReportOutcome out = build_report(ReportSpec{}, {{"hbao", "hbao", 1.0, params, &method}}, reference);
+  for (const auto& [reach, comparable] : cases) {
+    const std::string what = reach.falloff + " " + std::to_string(reach.radius);
+    const ReportOutcome out =
+        build_report(ReportSpec{}, {{"hbao", "hbao", 1.0, {{"method", "hbao"}}, &method, reach}}, reference);
     const nlohmann::json& m = out.doc["methods"]["hbao"];
-    EXPECT_EQ(m["layers"].contains("obscurance"), comparable) << params.dump();
-    EXPECT_EQ(m["not_compared"].size(), comparable ? 0u : 1u) << params.dump();
+    EXPECT_EQ(m["layers"].contains("obscurance"), comparable) << what;
+    EXPECT_EQ(m["not_compared"].size(), comparable ? 0u : 1u) << what;
     if (comparable) {
       EXPECT_NEAR(m["layers"]["obscurance"]["mae"].get<double>(), 0.3, 1e-6);
     }
@@ -242,17 +241,16 @@ TEST(Report, RadiusLimitedBentNormalsAreNotComparedWithTheirReason) {
   reference.add("bent_normal", xyz_channels()).data.assign(48, 0.0f);
   for (std::size_t t = 0; t < 16; ++t) reference.find("bent_normal")->data[3 * t + 2] = 1;
   LayerSet method = reference;
-  const std::vector<std::pair<nlohmann::json, bool>> cases = {
-      {{{"method", "p1"}}, true},
-      {{{"method", "hbao"}}, true},  // no radius: falloff none
-      {{{"method", "hbao"}, {"radius", 8}}, false},
-      {{{"method", "lsao"}, {"radius", 8}, {"falloff", "smooth"}}, false},
-      {{{"method", "hbao"}, {"falloff", "none"}}, true},
+  const std::vector<std::pair<EntryReach, bool>> cases = {
+      {{}, true},  // no falloff
+      {{"step", 8, true, {}}, false},
+      {{"smooth", 8, true, {}}, false},
   };
-  for (const auto& [params, comparable] : cases) {
-    const ReportOutcome out = build_report(ReportSpec{}, {{"m", "m", 1.0, params, &method}}, reference);
+  for (const auto& [reach, comparable] : cases) {
+    const std::string what = reach.falloff;
+    const ReportOutcome out = build_report(ReportSpec{}, {{"m", "m", 1.0, {}, &method, reach}}, reference);
     const nlohmann::json& m = out.doc["methods"]["m"];
-    EXPECT_EQ(m["layers"].contains("bent_normal"), comparable) << params.dump();
+    EXPECT_EQ(m["layers"].contains("bent_normal"), comparable) << what;
     if (comparable) {
       EXPECT_NEAR(m["layers"]["bent_normal"]["angle_mean_deg"].get<double>(), 0.0, 1e-6);
     } else {
@@ -309,31 +307,34 @@ TEST(Report, ReliefLayersAreComparedOnlyWithTheReferencesSettings) {
   LayerSet method = reference;
   method.attributes.clear();
   method.find("svf")->data.assign(16, 0.8f);
-  const nlohmann::json same = {
-      {"method", "relief"}, {"directions", 8}, {"search_radius", 10.0}, {"azimuth_convention", "compass"}};
-  const std::vector<std::pair<nlohmann::json, bool>> cases = {
-      {same, true},
-      {{{"method", "relief"}, {"directions", 8}, {"search_radius", 10}, {"azimuth_convention", "compass"}},
-       true},  // an integer radius is the same number
-      {{{"method", "relief"}, {"directions", 16}, {"search_radius", 10.0}, {"azimuth_convention", "compass"}},
-       false},
-      {{{"method", "relief"}, {"directions", 8}, {"search_radius", 5.0}, {"azimuth_convention", "compass"}},
-       false},
-      {{{"method", "relief"}, {"directions", 8}, {"search_radius", 10.0}, {"azimuth_convention", "hfbake"}},
-       false},
+  auto search = [](const nlohmann::json& s) {
+    EntryReach r;
+    r.search = s;
+    return r;
   };
-  for (const auto& [params, comparable] : cases) {
+  const EntryReach same =
+      search({{"directions", 8}, {"search_radius", 10.0}, {"azimuth_convention", "compass"}});
+  const std::vector<std::pair<EntryReach, bool>> cases = {
+      {same, true},
+      {search({{"directions", 8}, {"search_radius", 10}, {"azimuth_convention", "compass"}}),
+       true},  // an integer radius is the same number
+      {search({{"directions", 16}, {"search_radius", 10.0}, {"azimuth_convention", "compass"}}), false},
+      {search({{"directions", 8}, {"search_radius", 5.0}, {"azimuth_convention", "compass"}}), false},
+      {search({{"directions", 8}, {"search_radius", 10.0}, {"azimuth_convention", "hfbake"}}), false},
+      {EntryReach{}, false},  // no search settings
+  };
+  for (const auto& [reach, comparable] : cases) {
     const ReportOutcome out =
-        build_report(ReportSpec{}, {{"relief", "relief", 1.0, params, &method}}, reference);
+        build_report(ReportSpec{}, {{"relief", "relief", 1.0, {}, &method, reach}}, reference);
     const nlohmann::json& m = out.doc["methods"]["relief"];
-    EXPECT_EQ(m["layers"].contains("svf"), comparable) << params.dump();
+    EXPECT_EQ(m["layers"].contains("svf"), comparable) << reach.search.dump();
     if (comparable) {
       EXPECT_NEAR(m["layers"]["svf"]["mae"].get<double>(), 0.1, 1e-6);
     }
   }
   // Without the record (a reference of another hfbake, or none traced): not compared.
   reference.attributes.clear();
-  EXPECT_FALSE(build_report(ReportSpec{}, {{"relief", "relief", 1.0, same, &method}}, reference)
+  EXPECT_FALSE(build_report(ReportSpec{}, {{"relief", "relief", 1.0, {}, &method, same}}, reference)
                    .doc["methods"]["relief"]["layers"]
                    .contains("svf"));
 }

@@ -420,7 +420,7 @@ TEST(ReportHtml, BentNormalAnglesInHeadlessChromium) {
   const ReportSpec spec = fixture_spec("bent_fixture");
   const std::vector<ReportMethodInput> inputs = {
       {"p1", "p1", 0.1, {{"method", "p1"}, {"directions", 16}}, &leaning},
-      {"hbao", "hbao", 0.1, {{"method", "hbao"}, {"radius", 8}}, &limited}};
+      {"hbao", "hbao", 0.1, {{"method", "hbao"}, {"radius", 8}}, &limited, {"step", 8, true, {}}}};
   HtmlInputs in;
   in.report = build_report(spec, inputs, reference).doc;
   in.methods = {{"p1", "p1", &leaning, "", 0, -1}, {"hbao", "hbao", &limited, "", 0, -1}};

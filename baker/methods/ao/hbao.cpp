@@ -338,6 +338,7 @@ MethodInfo hbao_method() {
     const HbaoSettings s = read_hbao_settings(in, c.field);
     MethodConfig config = method_config(s, int(s.directions.size()));
     config.obscurance = written_falloff(in, s.falloff);
+    config.cosine_weighted = s.weighting == Weighting::cosine;
     return config;
   };
   m.bake = bake_hbao;

@@ -511,6 +511,7 @@ MethodInfo lsao_method() {
     const LsaoOptions o = read_lsao_options(in);
     MethodConfig config = method_config(o, o.directions);
     config.obscurance = written_falloff(in, o.occlusion.rho);
+    config.cosine_weighted = o.occlusion.weighting == ObscuranceWeighting::cosine;
     return config;
   };
   m.bake = bake_lsao;
