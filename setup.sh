@@ -143,7 +143,7 @@ case "$mode" in
     echo "demo outputs:"
     ls -l out/demo
     echo "summary: $(pwd)/out/demo-summary.json"
-    echo "hfbake is at $(pwd)/$build_dir/baker/cli/hfbake; ./setup.sh install puts it on PATH"
+    echo "hfbake is at $(cd "$build_dir/baker/cli" && pwd)/hfbake; ./setup.sh install puts it on PATH"
     ;;
   install)
     mkdir -p "$prefix" 2>/dev/null || true
