@@ -33,13 +33,21 @@ case "$mode" in
 esac
 
 # What compiling and running hfbake needs (the -dev packages pull in the shared libraries it runs with).
-packages=(build-essential cmake pkg-config git
+packages=(g++ make cmake pkg-config git
   libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev libopencolorio-dev
-  nlohmann-json3-dev libcli11-dev libgdal-dev)
-# A developer's build: the test and benchmark frameworks, GDAL's and OpenImageIO's tools (the truth of the
-# GeoTIFF and texture tests), and valijson installed as a package.
+  nlohmann-json3-dev libcli11-dev)
+# A developer's build: GDAL's development package, the test and benchmark frameworks, GDAL's and
+# OpenImageIO's tools (the truth of the GeoTIFF and texture tests), and valijson installed as a package.
+# demo, install and package take GDAL's shared library alone and unpack the headers of libgdal-dev and
+# libvalijson-dev into the build folder (below).
 if [ "$mode" = build ] || [ "$mode" = test ]; then
-  packages+=(libgtest-dev libbenchmark-dev gdal-bin openimageio-tools libvalijson-dev)
+  packages+=(libgdal-dev libgtest-dev libbenchmark-dev gdal-bin openimageio-tools libvalijson-dev)
+else
+  packages+=(libgdal32)
+fi
+# CPack's Debian generator finds the package's dependencies with dpkg-shlibdeps.
+if [ "$mode" = package ]; then
+  packages+=(dpkg-dev)
 fi
 # The Python module (python/): pybind11 and numpy for Debian's system Python.
 if [ "$mode" = install ] || [ "$mode" = build ] || [ "$mode" = test ]; then
@@ -70,29 +78,48 @@ else
   echo "setup: all ${#packages[@]} packages present"
 fi
 
+# unpack_dev PACKAGE FILE: unpacks a Debian package's files into $build_dir/dev/PACKAGE (apt-get download,
+# dpkg-deb -x; nothing is installed) unless FILE is already there; prints that folder.
+unpack_dev() {
+  local root="$build_dir/dev/$1"
+  mkdir -p "$root"
+  root=$(cd "$root" && pwd)
+  if [ ! -e "$root/$2" ]; then
+    (cd "$root" && rm -f "$1"_*.deb &&
+      { apt-get download -qq "$1" 2>/dev/null ||
+        { sudo_if_needed apt-get update -qq && apt-get download -qq "$1"; }; } &&
+      dpkg-deb -x "$1"_*.deb .) >&2
+    echo "setup: $1 unpacked into $root" >&2
+  fi
+  echo "$root"
+}
+installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
+
 # valijson is headers only, and hfbake uses its nlohmann-json adapter alone; but Debian's libvalijson-dev
 # depends on every JSON library valijson has an adapter for (Qt 5, Poco, yaml-cpp, jsoncpp, ...: about 110
-# packages on a bare system). Without the package, demo, install and package unpack its headers into the build
-# folder (apt-get download, dpkg-deb -x) and build against those.
-valijson=()
-if ! dpkg-query -W -f='${Status}' libvalijson-dev 2>/dev/null | grep -q "install ok installed"; then
-  mkdir -p "$build_dir/valijson"
-  valijson_root=$(cd "$build_dir/valijson" && pwd)
-  if [ ! -f "$valijson_root/usr/include/valijson/schema_parser.hpp" ]; then
-    (cd "$valijson_root" && rm -f libvalijson-dev_*.deb &&
-      { apt-get download -qq libvalijson-dev 2>/dev/null ||
-        { sudo_if_needed apt-get update -qq && apt-get download -qq libvalijson-dev; }; } &&
-      dpkg-deb -x libvalijson-dev_*.deb .)
-    echo "setup: valijson's headers unpacked into $valijson_root/usr/include"
-  fi
-  valijson=(-DVALIJSON_INCLUDE_DIR="$valijson_root/usr/include")
+# packages on a bare system). libgdal-dev depends on the -dev packages of every format and database GDAL
+# reads (about 80 packages); hfbake needs only its headers and CMake files, and links the installed libgdal32.
+# Without the packages, hfbake builds against their unpacked files.
+dev_options=()
+if ! installed libvalijson-dev; then
+  root=$(unpack_dev libvalijson-dev usr/include/valijson/schema_parser.hpp)
+  dev_options+=(-DVALIJSON_INCLUDE_DIR="$root/usr/include")
+fi
+if ! installed libgdal-dev; then
+  root=$(unpack_dev libgdal-dev usr/include/gdal/gdal.h)
+  # The CMake files name the library in their own tree: point it at the installed one.
+  multiarch=$(gcc -print-multiarch)
+  for lib in /usr/lib/"$multiarch"/libgdal.so.*.*; do
+    ln -sf "$lib" "$root/usr/lib/$multiarch/"
+  done
+  dev_options+=(-DGDAL_DIR="$root/usr/lib/$multiarch/cmake/gdal")
 fi
 
 # The executable alone (demo, install, package), or everything with the tests and benchmarks. The options
 # are given every time: a build folder configured by one mode is reconfigured by the next.
 if [ "$mode" = build ] || [ "$mode" = test ]; then
   cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DHFBAKE_BUILD_TESTS=ON -DHFBAKE_BUILD_BENCHMARKS=ON \
-    "${valijson[@]}" >/dev/null
+    -DHFBAKE_UNITY_BUILD=OFF "${dev_options[@]}" >/dev/null
   cmake --build "$build_dir" -j "$jobs"
 else
   prefix=${2:-/usr/local}
@@ -103,7 +130,8 @@ else
     targets+=(_hfbake)
   fi
   cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DHFBAKE_BUILD_TESTS=OFF -DHFBAKE_BUILD_BENCHMARKS=OFF \
-    -DHFBAKE_BUILD_PYTHON=$python -DCMAKE_INSTALL_PREFIX="$prefix" "${valijson[@]}" >/dev/null
+    -DHFBAKE_BUILD_PYTHON=$python -DHFBAKE_UNITY_BUILD=ON -DCMAKE_INSTALL_PREFIX="$prefix" \
+    "${dev_options[@]}" >/dev/null
   cmake --build "$build_dir" -j "$jobs" --target "${targets[@]}"
 fi
 
@@ -115,7 +143,7 @@ case "$mode" in
     echo "demo outputs:"
     ls -l out/demo
     echo "summary: $(pwd)/out/demo-summary.json"
-    echo "hfbake is at $(pwd)/$build_dir/baker/cli/hfbake; ./setup.sh install puts it on PATH"
+    echo "hfbake is at $(cd "$build_dir/baker/cli" && pwd)/hfbake; ./setup.sh install puts it on PATH"
     ;;
   install)
     mkdir -p "$prefix" 2>/dev/null || true
@@ -140,7 +168,7 @@ case "$mode" in
       asan_dir=${ASAN_BUILD_DIR:-build-asan}
       echo "setup: AddressSanitizer + UndefinedBehaviorSanitizer build in $asan_dir"
       cmake -S . -B "$asan_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$sanitizer_flags" \
-        -DHFBAKE_SANITIZE=address,undefined \
+        -DHFBAKE_SANITIZE=address,undefined -DHFBAKE_UNITY_BUILD=ON \
         -DHFBAKE_BUILD_BENCHMARKS=OFF -DHFBAKE_BUILD_PYTHON=OFF >/dev/null
       cmake --build "$asan_dir" -j "$jobs"
       # Any finding fails the test that made it (UBSan halts on error, like ASan). Left out, because they

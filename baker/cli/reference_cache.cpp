@@ -26,7 +26,7 @@ namespace {
 
 // File layout: the magic line, one line of JSON (the header), then the payload: every layer's float data
 // in header order, little-endian float32 as in memory (hfbake builds only for little-endian machines).
-constexpr char kMagic[] = "hfbake reference cache 1\n";
+constexpr char kCacheMagic[] = "hfbake reference cache 1\n";
 // Bounds of an entry, checked before anything is allocated: the header line (layer names, attributes),
 // the field's sides (what Embree's grid and the sweeps support), the channels of one layer.
 constexpr std::size_t kMaxHeaderBytes = 1u << 20;
@@ -127,8 +127,8 @@ CacheLookup ReferenceCache::load(const std::string& key, Entry& out, int expect_
     return true;
   };
   try {
-    std::string magic(sizeof kMagic - 1, '\0');
-    if (!read_exactly(magic.data(), magic.size()) || magic != kMagic) return corrupt();
+    std::string magic(sizeof kCacheMagic - 1, '\0');
+    if (!read_exactly(magic.data(), magic.size()) || magic != kCacheMagic) return corrupt();
     // The header line, at most kMaxHeaderBytes: read a bounded prefix, keep up to the newline.
     std::string header_line;
     std::uint64_t offset = magic.size();
@@ -197,7 +197,7 @@ std::string ReferenceCache::store(const std::string& key, const LayerSet& layers
   const fs::path file = entry_path(key);
   try {
     TempFile tmp(file);
-    bool ok = tmp.write(kMagic, sizeof kMagic - 1) && tmp.write(header.dump() + "\n");
+    bool ok = tmp.write(kCacheMagic, sizeof kCacheMagic - 1) && tmp.write(header.dump() + "\n");
     for (const Layer& l : layers.layers) ok = ok && tmp.write(l.data.data(), l.data.size() * sizeof(float));
     if (!ok) return "cannot write " + tmp.path().string();
     tmp.commit();

@@ -27,15 +27,16 @@ namespace {
 // File layout: the magic line, the key (16 hex digits and a newline), the band (uint32) and the float count
 // (uint64), the floats, then the checksum (uint64: FNV-1a of everything before it). Little-endian, as in
 // memory (hfbake builds only for little-endian machines).
-constexpr char kMagic[] = "hfbake reference checkpoint 1\n";
-constexpr std::size_t kMagicBytes = sizeof kMagic - 1;
+constexpr char kCheckpointMagic[] = "hfbake reference checkpoint 1\n";
+constexpr std::size_t kCheckpointMagicBytes = sizeof kCheckpointMagic - 1;
 constexpr std::size_t kKeyBytes = 17;
-constexpr std::size_t kHeaderBytes = kMagicBytes + kKeyBytes + sizeof(std::uint32_t) + sizeof(std::uint64_t);
+constexpr std::size_t kHeaderBytes =
+    kCheckpointMagicBytes + kKeyBytes + sizeof(std::uint32_t) + sizeof(std::uint64_t);
 
 std::string header_bytes(const std::string& key, int band, std::size_t count) {
-  std::string h(kMagic, kMagicBytes);
+  std::string h(kCheckpointMagic, kCheckpointMagicBytes);
   h += key.substr(0, 16);
-  h.resize(kMagicBytes + 16, '0');
+  h.resize(kCheckpointMagicBytes + 16, '0');
   h += '\n';
   const std::uint32_t b = std::uint32_t(band);
   const std::uint64_t n = count;

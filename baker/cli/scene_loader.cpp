@@ -193,7 +193,8 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
 
 namespace {
 
-std::string num(double v) {
+// A number in at most 6 significant digits, as a person reads it: 2, 0.5, 1e-06.
+std::string short_num(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
@@ -213,19 +214,20 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
     line += h["image"].get<std::string>() + " through " + s.reader + " (" + s.format + ", " + s.sample_type +
             (s.integer ? " integers as stored" : "") + ")";
   }
-  line += "; " + std::to_string(f.width) + "x" + std::to_string(f.height) + " texels of " + num(texel) +
-          " (" + num(f.width * texel) + " x " + num(f.height * texel) + " world units)";
+  line += "; " + std::to_string(f.width) + "x" + std::to_string(f.height) + " texels of " + short_num(texel) +
+          " (" + short_num(f.width * texel) + " x " + short_num(f.height * texel) + " world units)";
   const bool transformed = s.scale != 1 || s.offset != 0;
   if (transformed) {
-    line += "; stored " + num(s.stored_min) + " .. " + num(s.stored_max) + " x height_scale " + num(s.scale);
-    if (s.offset != 0) line += " + height_offset " + num(s.offset);
+    line += "; stored " + short_num(s.stored_min) + " .. " + short_num(s.stored_max) + " x height_scale " +
+            short_num(s.scale);
+    if (s.offset != 0) line += " + height_offset " + short_num(s.offset);
     line += " ->";
   } else {
     line += ";";
   }
   const double relief = s.world_max - s.world_min;
-  line += " heights " + num(s.world_min) + " .. " + num(s.world_max) + " world units (relief " + num(relief) +
-          ")";
+  line += " heights " + short_num(s.world_min) + " .. " + short_num(s.world_max) + " world units (relief " +
+          short_num(relief) + ")";
 
   HeightsReport report{line, {}};
   const double extent = std::max(f.width, f.height) * texel;
@@ -234,19 +236,19 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
                   "needs H / 65535, an 8-bit one H / 255)"
                 : "height_scale (world units per stored unit)";
   if (relief == 0) {
-    report.warning =
-        "the field is flat (every height is " + num(s.world_min) + "): every method bakes it unoccluded";
+    report.warning = "the field is flat (every height is " + short_num(s.world_min) +
+                     "): every method bakes it unoccluded";
   } else if (relief < 0.01 * extent) {
     report.warning =
-        "the relief (" + num(relief) + " world units) is " + num(100 * relief / extent) +
-        " % of the field's " + num(extent) +
+        "the relief (" + short_num(relief) + " world units) is " + short_num(100 * relief / extent) +
+        " % of the field's " + short_num(extent) +
         "-unit side: nearly flat, the bake will be close to unoccluded; if the heights are meant "
         "higher, set " +
         scale_hint;
   } else if (relief > 4 * extent) {
-    report.warning = "the relief (" + num(relief) + " world units) is " + num(relief / extent) +
-                     " times the field's " + num(extent) + "-unit side: steeper than any terrain; check " +
-                     scale_hint + " and texel_size";
+    report.warning = "the relief (" + short_num(relief) + " world units) is " + short_num(relief / extent) +
+                     " times the field's " + short_num(extent) +
+                     "-unit side: steeper than any terrain; check " + scale_hint + " and texel_size";
   }
   return report;
 }

@@ -55,6 +55,7 @@ struct Rgb {
 };
 
 inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr double kHalfPi = kPi / 2;
 
 // floor(x) as an int for |x| < 2^31 without a libm call (baseline x86-64 has no rounding instruction).
 inline int floor_int(double x) {

@@ -14,8 +14,6 @@
 namespace hfbake {
 namespace {
 
-constexpr double kHalfPi = 0.5 * kPi;
-
 TEST(FarfieldSlabTable, MatchesDirectIntegration) {
   const Falloff falloffs[] = {{FalloffKind::none, 0},         {FalloffKind::step, 10},
                               {FalloffKind::linear, 10},      {FalloffKind::smooth, 10},

@@ -21,7 +21,6 @@
 namespace hfbake {
 namespace {
 
-constexpr double kHalfPi = 0.5 * kPi;
 constexpr float kNone = -std::numeric_limits<float>::infinity();
 
 // One direction's lines and interval pyramid with prefix sums across lines.

@@ -9,8 +9,6 @@
 namespace hfbake {
 namespace {
 
-constexpr double kHalfPi = 0.5 * kPi;
-
 double prim_a(double e) {  // integral of cos^2
   return 0.5 * e + 0.25 * std::sin(2.0 * e);
 }

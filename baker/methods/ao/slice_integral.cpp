@@ -8,8 +8,6 @@
 namespace hfbake {
 namespace {
 
-constexpr double kHalfPi = kPi / 2;
-
 // 8-point Gauss-Legendre on [-1, 1].
 constexpr double kNodes[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
 constexpr double kWeights[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
