@@ -20,6 +20,8 @@ CASES = [
     ("vo", {"radius": 4.0}, {"height_scale": 2.0}),
     ("relief", {"directions": 16, "search_radius": 10.0,
                 "layers": ["svf", "openness_positive", "openness_negative", "horizon_deg"]}, {"texel_size": 2.0}),
+    ("sun", {"start": "2026-06-21T08:00", "end": "2026-06-21T16:00", "utc_offset": 0, "step_minutes": 60,
+             "latitude": 46.0, "longitude": 15.0, "layers": ["irradiation", "sun_hours", "beam"]}, {}),
 ]
 
 

@@ -98,7 +98,7 @@ TEST_F(Manifest, UnknownMethod) {
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0], (dir_ / "x.json").string() +
                       ": /bake/0/method: unknown method \"magic\" (one of \"farfield\", \"hbao\", \"hsao\", "
-                      "\"lsao\", \"nlp\", \"p1\", \"p2\", \"relief\", \"vo\")");
+                      "\"lsao\", \"nlp\", \"p1\", \"p2\", \"relief\", \"sun\", \"vo\")");
 }
 
 // Enum errors list the allowed values, in the job schema and in a method's own schema.
