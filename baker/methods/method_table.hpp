@@ -36,7 +36,7 @@ enum class WorkDivision {
 // What a method's parameter reader may know before the heights are loaded.
 struct MethodContext {
   FieldShape field;
-  int bounces = 0;                 // the job's
+  int bounces = 0;                  // the job's
   bool uniform_environment = true;  // no sky, latlong, cubemap or cross (io/load_environment.cpp)
 };
 // Whether a job document's environment is uniform (the rule of io/load_environment.cpp).

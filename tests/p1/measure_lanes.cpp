@@ -1,11 +1,12 @@
-// The lane search alone (methods/p1/lane_horizons.hpp): usage measure_lanes [fractal|rough|step|<procedural kind>]
-// [size] [K] [tolerance] [checks]. Prints CPU per texel-direction (AVX2 and SSE2 kernels, checked to give the
-// same bits), groups evaluated, and the largest difference in sin h from the exact march at sampled texels.
+// The lane search alone (methods/p1/lane_horizons.hpp): usage measure_lanes [fractal|rough|step|<procedural
+// kind>] [size] [K] [tolerance] [checks]. Prints CPU per texel-direction (AVX2 and SSE2 kernels, checked to
+// give the same bits), groups evaluated, and the largest difference in sin h from the exact march at sampled
+// texels.
 #include <chrono>
-#include <ctime>
-#include <cstring>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <ctime>
 #include <string>
 
 #include "methods/p1/lane_horizons.hpp"
@@ -75,15 +76,15 @@ int main(int argc, char** argv) {
       const double got = m == -std::numeric_limits<float>::infinity() ? truth::kNone : std::atan(double(m));
       const double err = std::fabs(std::sin(got) - std::sin(e));
       if (err > maxerr) maxerr = err;
-      if (err > 1e-5 + tol) std::printf("k %d texel %d %d: got %.7f exact %.7f\n", k, i, j, std::sin(got), std::sin(e));
+      if (err > 1e-5 + tol)
+        std::printf("k %d texel %d %d: got %.7f exact %.7f\n", k, i, j, std::sin(got), std::sin(e));
     }
   }
   const double td = double(f.texel_count()) * K;
   std::printf("%s %d K=%d tol=%g: layouts %.3f s, search %.3f s = %.1f ns/texdir = %.1f M/s; max err %.2e\n",
-              kind.c_str(), n, K, tol, std::chrono::duration<double>(t1 - t0).count(), search_s, search_s / td * 1e9,
-              td / search_s * 1e-6, maxerr);
+              kind.c_str(), n, K, tol, std::chrono::duration<double>(t1 - t0).count(), search_s,
+              search_s / td * 1e9, td / search_s * 1e-6, maxerr);
   std::printf("sse2: %.1f ns/texdir (avx2/sse2 %.3f)\n", sse_s / td * 1e9, search_s / sse_s);
   std::printf("per group: blocks %.2f crossings %.1f\n", double(st.blocks) / st.groups,
               double(st.crossings) / st.groups);
-
 }

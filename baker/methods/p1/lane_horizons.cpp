@@ -14,7 +14,9 @@ namespace hfbake::p1 {
 
 namespace {
 
-inline float fmax_(float a, float b) { return a > b ? a : b; }
+inline float fmax_(float a, float b) {
+  return a > b ? a : b;
+}
 
 // Eight lanes as two SSE2 registers (every x86-64 has them).
 struct Sse2 {
@@ -73,7 +75,8 @@ void LaneLayout::build(const HeightField& f, bool xm) {
     float* w = window.data() + std::ptrdiff_t(u) * stride;
     for (std::ptrdiff_t i = 0; i < stride; ++i) {
       float m = kOffField;
-      for (std::ptrdiff_t t = i; t < std::min<std::ptrdiff_t>(stride, i + kLaneWindow); ++t) m = fmax_(m, r[t]);
+      for (std::ptrdiff_t t = i; t < std::min<std::ptrdiff_t>(stride, i + kLaneWindow); ++t)
+        m = fmax_(m, r[t]);
       w[i] = m;
     }
   }

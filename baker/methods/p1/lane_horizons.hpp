@@ -33,9 +33,9 @@
 namespace hfbake::p1 {
 
 inline constexpr int kLanes = 8;
-inline constexpr int kLanePad = 16;      // texels of padding on each side of the minor axis
+inline constexpr int kLanePad = 16;         // texels of padding on each side of the minor axis
 inline constexpr float kOffField = -1e30f;  // the padding's height: never the steepest
-inline constexpr int kLaneWindow = 6;  // minor-axis texels a unit strip's per-column bound covers
+inline constexpr int kLaneWindow = 6;       // minor-axis texels a unit strip's per-column bound covers
 
 // The field with its minor axis contiguous: x_major (directions moving more along x) stores
 // [x * stride + kLanePad + y], else [y * stride + kLanePad + x]; kLanePad texels of kOffField on both sides.
@@ -61,8 +61,8 @@ struct LaneCrossing {
 // major distance >= n texels (n = 0 .. nmajor + 1).
 struct LaneDirection {
   bool x_major = true;
-  int su = 1;      // the ray's step along the major axis (+1 or -1)
-  double g = 0;    // minor change per +1 of the major index along a ray's line
+  int su = 1;    // the ray's step along the major axis (+1 or -1)
+  double g = 0;  // minor change per +1 of the major index along a ray's line
   std::vector<LaneCrossing> crossings;
   std::vector<float> major;  // each crossing's major distance (texels)
   std::vector<std::int32_t> first_at;

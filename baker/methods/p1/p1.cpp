@@ -59,10 +59,10 @@ p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
 
 // The lane search (lane_horizons.hpp) for directions [k_begin, k_end) of a clamp field: per axis the
 // field's lane layout, per direction every texel's exact horizon (slope and caster), then
-// shade(k, base, w, NX, NY, NZ, FX, FY, FZ, e, dist) per run of at most 32 texels of a row. The directions are
-// visited by axis (x-major ones first), so one layout is held at a time.
-// Every texel's normal (normal_at) and, for P2's facet sums, its two facets' (facet_normals, [q * N + texel]),
-// as the lane path's shading reads them: computed once per bake, shared by its direction blocks.
+// shade(k, base, w, NX, NY, NZ, FX, FY, FZ, e, dist) per run of at most 32 texels of a row. The directions
+// are visited by axis (x-major ones first), so one layout is held at a time. Every texel's normal (normal_at)
+// and, for P2's facet sums, its two facets' (facet_normals, [q * N + texel]), as the lane path's shading
+// reads them: computed once per bake, shared by its direction blocks.
 struct FieldNormals {
   std::vector<float> nx, ny, nz, fx, fy, fz;
 };
@@ -88,8 +88,8 @@ FieldNormals field_normals(const HeightField& f, bool facets) {
 }
 
 template <class Shade>
-void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
-                         bool facets, const FieldNormals& normals, Shade& shade) {
+void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end,
+                         const RunControl& rc, bool facets, const FieldNormals& normals, Shade& shade) {
   const std::size_t N = f.texel_count();
   const int K = p.directions;
   const std::vector<float>&nx = normals.nx, &ny = normals.ny, &nz = normals.nz;
@@ -208,8 +208,8 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
     const double sums = (p.ao || (p.direct && uniform_environment) ? 4 : 0) + (p.vsky ? 4 : 0) +
                         (p.direct && !uniform_environment ? 12 : 0) + (p.bent_normal ? 12 : 0) +
                         (facets ? (uniform_environment ? 8 : 24) : 0);
-    const double layers =
-        (p.ao ? 4 : 0) + (p.vsky ? 4 : 0) + (p.direct ? 12 : 0) + (p.bent_normal ? 12 : 0) + (facets ? 24 : 0);
+    const double layers = (p.ao ? 4 : 0) + (p.vsky ? 4 : 0) + (p.direct ? 12 : 0) + (p.bent_normal ? 12 : 0) +
+                          (facets ? 24 : 0);
     const double normals = 12 + (facets ? 24 : 0);
     const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
     // While the directions are summed: the sums, a block's, the normals, one direction's slopes and casters,
@@ -218,13 +218,14 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
                           double(std::min(shape.width, shape.height) + 2 * p1::kLanePad);
     const double summing = (sums + block + normals + 8) * texels + layout;
     // While they are finished: the layers, the sums that are not layers, the normals, the lights' sweeps.
-    const double finishing = (layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) + normals) * texels +
-                             double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
+    const double finishing =
+        (layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) + normals) * texels +
+        double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
     return std::max(summing, finishing) - layers * texels;
   }
-  double per_texel = p.direct && !p.ao ? 4 : 0;  // the ao sum behind a uniform sky's direct
+  double per_texel = p.direct && !p.ao ? 4 : 0;    // the ao sum behind a uniform sky's direct
   if (facets) per_texel += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
-  if (direction_block_count(p.directions) > 1)  // one direction block's sums beside the total (compute_p1)
+  if (direction_block_count(p.directions) > 1)     // one direction block's sums beside the total (compute_p1)
     per_texel += (p.direct ? 12
                   : p.ao   ? 4
                            : 0) +
@@ -479,8 +480,7 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
             dist[x] = std::sqrt(1 + near_m * near_m) /
                       near[k].crossings[which].inv_s;  // run 1 / inv_s, rise m * run
           else
-            dist[x] =
-                fp.run == std::numeric_limits<float>::infinity() ? fp.run : std::hypot(fp.run, fp.dz);
+            dist[x] = fp.run == std::numeric_limits<float>::infinity() ? fp.run : std::hypot(fp.run, fp.dz);
         }
       }
       const std::size_t ft = std::size_t(y) * w;
