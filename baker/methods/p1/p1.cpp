@@ -328,17 +328,6 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
   const int KH = horizon_out ? K : nb, KD = distance_out ? K : nb;
   std::vector<float> cs, sn;
   azimuth_table(K, cs, sn);
-  // The near field of each direction of the block (horizon_sweep.hpp, near_stencil).
-  std::vector<p1::NearStencil> near(K);
-  {
-    SweepSpec probe;
-    probe.directions = K;
-    for (int k = k_begin; k < k_end; ++k)
-      near[k] = p1::near_stencil(f, plan_direction(f, probe, k), p.near_radius);
-  }
-  auto near_slope_border = [&](int k, int i, int j, int* which) {
-    return near_slope(f, near[k].crossings, i, j, which);
-  };
 
   // The lighting of one row run of texels (base .. base + w - 1, at most 32) in direction k from their
   // horizon elevations e (dist: the horizon_distance layer's values, or null), at the texels' normals (and
@@ -442,6 +431,18 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
     }
     return r;
   }
+
+  // The near field of each direction of the block (horizon_sweep.hpp, near_stencil).
+  std::vector<p1::NearStencil> near(K);
+  {
+    SweepSpec probe;
+    probe.directions = K;
+    for (int k = k_begin; k < k_end; ++k)
+      near[k] = p1::near_stencil(f, plan_direction(f, probe, k), p.near_radius);
+  }
+  auto near_slope_border = [&](int k, int i, int j, int* which) {
+    return near_slope(f, near[k].crossings, i, j, which);
+  };
 
   SweepSpec spec = p1_sweep_spec(p);
   for (int k = k_begin; k < k_end; ++k) spec.azimuths.push_back(azimuth(k, K));  // the same directions
