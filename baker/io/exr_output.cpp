@@ -101,20 +101,22 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
   const std::size_t texels = std::size_t(w) * std::size_t(h);
   std::vector<Channel> channels;
   for (const Layer& l : layers.layers) {
-    for (int c = 0; c < l.channel_count(); ++c) {
-      Channel ch{l.name + "." + l.channels[c], l.data.data() + c, std::size_t(l.channel_count()), true};
+    const std::size_t n = std::size_t(l.channel_count());
+    // A finite value beyond half's range (65504, e.g. horizon distances on a large DEM) would become
+    // infinite: such a channel is stored as float instead. The layer's values are read in their order
+    // (texel by texel, every channel), once.
+    std::vector<float> largest(n, 0.0f);
+    if (type == Imf::HALF)
+      for (std::size_t i = 0; i < texels; ++i)
+        for (std::size_t c = 0; c < n; ++c) {
+          const float v = std::abs(l.data[i * n + c]);
+          if (std::isfinite(v)) largest[c] = std::max(largest[c], v);
+        }
+    for (std::size_t c = 0; c < n; ++c) {
+      Channel ch{l.name + "." + l.channels[c], l.data.data() + c, n,
+                 type != Imf::HALF || largest[c] > float(HALF_MAX)};
       if (header.channels().findChannel(ch.name))
         throw std::logic_error("write_exr: duplicate channel " + ch.name);
-      if (type == Imf::HALF) {
-        // A finite value beyond half's range (65504, e.g. horizon distances on a large DEM) would become
-        // infinite: such a channel is stored as float instead.
-        float largest = 0;
-        for (std::size_t i = 0; i < texels; ++i) {
-          const float v = std::abs(ch.data[i * ch.stride]);
-          if (std::isfinite(v)) largest = std::max(largest, v);
-        }
-        ch.as_float = largest > float(HALF_MAX);
-      }
       header.channels().insert(ch.name, Imf::Channel(ch.as_float ? Imf::FLOAT : Imf::HALF));
       channels.push_back(std::move(ch));
     }
@@ -169,19 +171,30 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     for (int y0 = 0; y0 < h; y0 += band_rows) {
       const int rows = std::min(band_rows, h - y0);
       Imf::FrameBuffer frame;
+      const std::size_t first = std::size_t(y0) * w, count = std::size_t(rows) * w;
+      // The band's half channels, converted texel by texel (each layer's values in their order).
       std::size_t slot = 0;
-      for (const Channel& ch : channels) {
-        if (ch.as_float) {
-          frame.insert(ch.name, float_slice(ch));
-          continue;
+      for (std::size_t c0 = 0; c0 < channels.size();) {
+        const std::size_t stride = channels[c0].stride;  // a layer's channels are adjacent, stride of them
+        std::size_t layer_slot = slot;
+        for (std::size_t i = 0; i < count; ++i) {
+          const float* v = channels[c0].data + (first + i) * stride;
+          std::size_t s2 = layer_slot;
+          for (std::size_t c = 0; c < stride; ++c)
+            if (!channels[c0 + c].as_float) band[(s2++) * band_values + i] = half(v[c]);
         }
-        half* dst = band.data() + (slot++) * band_values;
-        const std::size_t first = std::size_t(y0) * w;
-        for (std::size_t i = 0; i < std::size_t(rows) * w; ++i)
-          dst[i] = half(ch.data[(first + i) * ch.stride]);
-        // The slice's base is where row 0 would be, so row y0 lands at the band's start.
-        char* base = (char*)dst - std::ptrdiff_t(sizeof(half)) * std::ptrdiff_t(first);
-        frame.insert(ch.name, Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(w)));
+        for (std::size_t c = 0; c < stride; ++c) {
+          const Channel& ch = channels[c0 + c];
+          if (ch.as_float) {
+            frame.insert(ch.name, float_slice(ch));
+            continue;
+          }
+          half* dst = band.data() + (slot++) * band_values;
+          // The slice's base is where row 0 would be, so row y0 lands at the band's start.
+          char* base = (char*)dst - std::ptrdiff_t(sizeof(half)) * std::ptrdiff_t(first);
+          frame.insert(ch.name, Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(w)));
+        }
+        c0 += stride;
       }
       if (tiled) {
         tiles->setFrameBuffer(frame);
