@@ -71,7 +71,7 @@ SweepDirection plan_direction(const HeightField& field, const SweepSpec& spec, i
     d.first_receiver = 0;
     d.u_start = d.su > 0 ? 0 : d.n_major - 1;
     // Thin fields: lines keep the columns around their run (header: trimmed lines).
-    if (spec.trim_thin_lines && d.slope != 0) {
+    if (spec.sampling.trim_thin && d.slope != 0) {
       const double need = std::ceil((d.n_minor + 2) / std::fabs(d.slope)) + 4;
       if (4 * need <= d.n_major) d.span = int(need);
     }
@@ -246,12 +246,12 @@ SweepPlan plan_sweep(const HeightField& f, const SweepSpec& spec, const std::vec
   const std::size_t t_bytes = f.texel_count() * sizeof(float);
   bool any_y_major = false;
   for (const SweepDirection& d : dirs) any_y_major = any_y_major || !d.x_major;
-  plan.transposed = spec.sample_heights && any_y_major && t_bytes <= spec.max_buffer_bytes / 4;
-  plan.buffer_budget = spec.max_buffer_bytes - (plan.transposed ? t_bytes : 0);
+  plan.transposed = spec.sampling.heights && any_y_major && t_bytes <= spec.buffers.max_bytes / 4;
+  plan.buffer_budget = spec.buffers.max_bytes - (plan.transposed ? t_bytes : 0);
   auto whole = [&](int k) {
     return std::size_t(dirs[k].lines()) * std::size_t(dirs[k].stride()) * C * sizeof(float);
   };
-  const int batch = std::max(1, spec.batch);
+  const int batch = std::max(1, spec.buffers.batch);
   for (int k0 = 0; k0 < K;) {
     SweepBatch b;
     b.k0 = k0;

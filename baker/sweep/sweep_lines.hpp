@@ -106,19 +106,27 @@ struct SweepSpec {
   std::vector<double> azimuths;  // if not empty: explicit azimuths (radians) instead; directions is ignored
   int channels = 1;              // floats each line visitor writes per receiver sample
   int wrap_periods = 1;          // repeat mode: warm-up length in whole periods of the major axis (>= 1)
-  int batch = 4;  // directions swept before each gather pass while their whole buffers fit (see Memory)
-  std::size_t max_buffer_bytes = std::size_t(256) << 20;  // bound on the driver's buffers (see Memory)
-  bool tile_nearest = true;  // sweep_lines_tiled: also fill SweepTile::nearest (off: nearest is null)
-  bool tile_taps = false;    // sweep_lines_tiled: also fill SweepTile::lo, hi, w_hi (both taps apart)
-  bool tile_values = true;   // sweep_lines_tiled: fill SweepTile::value (off: value is null)
-  bool tile_strip = false;   // sweep_lines_tiled: also fill SweepTile::strip (see strip_line)
-  bool zero_buffers =
-      true;  // zero the result buffers first (off: the worker writes every receiver's C floats)
-  bool trim_thin_lines = true;  // clamp, thin fields: trimmed lines (off: every line walks every column)
-  // Off: the lines are not sampled (SweepLine::z is null, inside_begin = 0, inside_end = count) and no
-  // transposed copy of the field is made, for line visitors that read the field themselves (P1's far
-  // field builds its own profiles with the row and diagonal crossings).
-  bool sample_heights = true;
+  // The lines themselves.
+  struct Sampling {
+    // Off: the lines are not sampled (SweepLine::z is null, inside_begin = 0, inside_end = count) and no
+    // transposed copy of the field is made, for line visitors that read the field themselves (P1's far
+    // field builds its own profiles with the row and diagonal crossings).
+    bool heights = true;
+    bool trim_thin = true;  // clamp, thin fields: trimmed lines (off: every line walks every column)
+  } sampling;
+  // What sweep_lines_tiled fills in each SweepTile (off: the field is null).
+  struct TileFields {
+    bool nearest = true;  // SweepTile::nearest
+    bool taps = false;    // SweepTile::lo, hi, w_hi (both taps apart)
+    bool values = true;   // SweepTile::value
+    bool strip = false;   // SweepTile::strip (see strip_line)
+  } tile;
+  // The driver's buffers (see Memory).
+  struct Buffers {
+    int batch = 4;  // directions swept before each gather pass while their whole buffers fit
+    std::size_t max_bytes = std::size_t(256) << 20;  // bound on the driver's buffers
+    bool zero = true;  // zero the result buffers first (off: the worker writes every receiver's C floats)
+  } buffers;
 };
 
 // The lines of one direction (plain data; see the header comment for the geometry).
@@ -321,23 +329,23 @@ void sweep_tile_lines(const SweepDirection& dir, int i0, int i1, int j0, int j1,
 
 // ---- Memory ---------------------------------------------------------------------------------------------
 // The driver keeps each direction's line results until the tiles that read them are gathered. Directions go
-// in batches of up to spec.batch whose whole result buffers (lines() * stride() * channels floats each) fit
-// the budget (max_buffer_bytes less the transposed copy below): all their lines, then every 32 x 32 tile
-// for each direction of the batch in ascending k. A direction whose whole buffer does not fit streams
+// in batches of up to spec.buffers.batch whose whole result buffers (lines() * stride() * channels floats
+// each) fit the budget (buffers.max_bytes less the transposed copy below): all their lines, then every 32 x
+// 32 tile for each direction of the batch in ascending k. A direction whose whole buffer does not fit streams
 // alone: its lines are computed in chunks (in parallel within a chunk) into a ring of `window` lines; after
 // each chunk, the tiles whose lines (sweep_tile_lines) are all computed are gathered, in order of their
 // last line, and lines that no tile still needs are overwritten. Repeat: the first `head` lines, which the
 // tiles across the seam (line n_minor - 1 next to line 0) read, are kept apart until those tiles are
 // gathered, last. head + window lines fit the budget whenever one tile's span of lines (about 34 + 32
 // |slope|) does; below that, one chunk is one line and the window is that span. y-major lines read a
-// transposed copy of the field (4 bytes a texel) only when it takes at most a quarter of max_buffer_bytes;
+// transposed copy of the field (4 bytes a texel) only when it takes at most a quarter of buffers.max_bytes;
 // otherwise they read the field in place (the same heights). The visitors get the same values whichever way.
 
 // Peak bytes the driver allocates for field and spec: result buffers (whole, or ring and head), the
 // transposed copy, each direction's line table and tile order, and per thread (this arena's
 // tbb::this_task_arena::max_concurrency()) one line's heights and sweep_lines_tiled's tile scratch. It runs
 // the driver's own plan, so the result buffers (the bulk) are exact; for fields whose direction buffers
-// exceed max_buffer_bytes it stays near max_buffer_bytes, independent of the field's height. Excludes what
+// exceed buffers.max_bytes it stays near it, independent of the field's height. Excludes what
 // workers and visitors allocate.
 std::size_t sweep_buffer_bytes(const HeightField& field, const SweepSpec& spec);
 
@@ -351,7 +359,7 @@ struct SweepTile {
   int channels = 1;
   const float* value = nullptr;
   const float* nearest = nullptr;
-  // With SweepSpec::tile_taps: the two taps apart (same layout) and the weight of hi per texel
+  // With SweepSpec::tile.taps: the two taps apart (same layout) and the weight of hi per texel
   // (w_hi[y * width + x]); value = lo * (1 - w_hi) + hi * w_hi. For visitors that correct each tap
   // before blending (P1 evaluates each tap's horizon caster from the texel's own height).
   const float* lo = nullptr;
@@ -359,7 +367,7 @@ struct SweepTile {
   const float* w_hi = nullptr;
   const float* off_lo = nullptr;  // signed offset (texels) along the minor axis from the texel to lo's sample
   const float* off_hi = nullptr;  // ... and to hi's sample (each [y * width + x])
-  // With SweepSpec::tile_strip: the result of the texel's strip (TexelTaps::strip, strip_line), same layout.
+  // With SweepSpec::tile.strip: the result of the texel's strip (TexelTaps::strip, strip_line), same layout.
   const float* strip = nullptr;
 };
 
@@ -454,7 +462,7 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
     storage = make_page_buffer<float>(floats);
     storage_floats = floats;
   };
-  std::vector<std::vector<float*>> lines(std::size_t(std::max(1, spec.batch)));
+  std::vector<std::vector<float*>> lines(std::size_t(std::max(1, spec.buffers.batch)));
   std::vector<const float* const*> tables(lines.size());
 
   // Relative lines [from[b], to[b]) of directions k0 + b, in parallel, each into lines[b][p].
@@ -465,7 +473,7 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
     tbb::parallel_for(tbb::blocked_range<int>(0, first[nb], 4), [&](const tbb::blocked_range<int>& r) {
       rc.check();
       Worker& worker = workers.local();
-      float* z = spec.sample_heights ? heights.local().data() : nullptr;
+      float* z = spec.sampling.heights ? heights.local().data() : nullptr;
       int b = int(std::upper_bound(first.begin(), first.end(), r.begin()) - first.begin()) - 1;
       for (int flat = r.begin(); flat < r.end(); ++flat) {
         while (flat >= first[b + 1]) ++b;
@@ -476,9 +484,9 @@ void sweep_lines_core(const HeightField& field, const SweepSpec& spec, const Run
         const SweepDirection* ld = &dir;
         if (dir.span > 0) trimmed = line_direction(dir, l), ld = &trimmed;
         const SweepLine line =
-            spec.sample_heights ? sampled_line(field, *ld, l, z, tz) : unsampled_line(*ld, l);
+            spec.sampling.heights ? sampled_line(field, *ld, l, z, tz) : unsampled_line(*ld, l);
         float* out = lines[b][p];
-        if (spec.zero_buffers) std::fill_n(out, std::size_t(dir.stride()) * std::size_t(C), 0.0f);
+        if (spec.buffers.zero) std::fill_n(out, std::size_t(dir.stride()) * std::size_t(C), 0.0f);
         worker(static_cast<const SweepLine&>(line), out);
       }
     });
@@ -586,20 +594,20 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
     tile.i0 = i0, tile.j0 = j0, tile.width = i1 - i0, tile.height = j1 - j0, tile.channels = C;
     const std::size_t plane = std::size_t(tile.width) * tile.height;
     float* value = tmp.data();
-    float* nearest = spec.tile_nearest ? tmp.data() + plane * C : nullptr;
-    float* lo = spec.tile_taps ? tmp.data() + 2 * plane * C : nullptr;
-    float* hi = spec.tile_taps ? tmp.data() + 3 * plane * C : nullptr;
-    float* w_hi = spec.tile_taps ? tmp.data() + 4 * plane * C : nullptr;
-    float* off_lo = spec.tile_taps ? w_hi + plane : nullptr;
-    float* off_hi = spec.tile_taps ? w_hi + 2 * plane : nullptr;
+    float* nearest = spec.tile.nearest ? tmp.data() + plane * C : nullptr;
+    float* lo = spec.tile.taps ? tmp.data() + 2 * plane * C : nullptr;
+    float* hi = spec.tile.taps ? tmp.data() + 3 * plane * C : nullptr;
+    float* w_hi = spec.tile.taps ? tmp.data() + 4 * plane * C : nullptr;
+    float* off_lo = spec.tile.taps ? w_hi + plane : nullptr;
+    float* off_hi = spec.tile.taps ? w_hi + 2 * plane : nullptr;
     tile.off_lo = off_lo, tile.off_hi = off_hi;
-    tile.value = spec.tile_values ? value : nullptr;
+    tile.value = spec.tile.values ? value : nullptr;
     tile.nearest = nearest;
     tile.lo = lo, tile.hi = hi, tile.w_hi = w_hi;
-    float* strip = spec.tile_strip ? tmp.data() + (4 * C + 3) * plane : nullptr;
+    float* strip = spec.tile.strip ? tmp.data() + (4 * C + 3) * plane : nullptr;
     tile.strip = strip;
     for (int b = 0; b < nb; ++b) {
-      if (strip && !spec.tile_values && !nearest && !lo) {
+      if (strip && !spec.tile.values && !nearest && !lo) {
         // Strips alone: one result per texel (its strip's line), without the taps' rules.
         detail::gather_strips(dirs[b], lines[b], C, i0, i1, j0, j1, strip);
         tile.k = k0 + b;
@@ -610,7 +618,7 @@ void sweep_lines_tiled(const HeightField& field, const SweepSpec& spec, const Ru
         for (int i = i0; i < i1; ++i) {
           const TexelTaps t = texel_taps(dirs[b], lines[b], C, i, j);
           const std::size_t at = std::size_t(j - j0) * tile.width + (i - i0);
-          if (spec.tile_values)
+          if (spec.tile.values)
             for (int c = 0; c < C; ++c) value[c * plane + at] = t.value(c);
           if (strip)
             for (int c = 0; c < C; ++c) strip[c * plane + at] = t.strip[c];

@@ -47,7 +47,7 @@ TEST(SweepLines, GatheredPositionsAreTexelCenters) {
       SweepSpec spec;
       spec.directions = K;
       spec.channels = 3;
-      spec.batch = 3;
+      spec.buffers.batch = 3;
       std::vector<int> visits(f.texel_count() * K, 0);
       sweep_lines(
           f, spec, RunControl{}, [] { return PositionWorker{}; },
@@ -261,7 +261,7 @@ TEST(SweepLines, DeterministicForAnyThreadCount) {
   }
 }
 
-// sample_heights off (P1's far field): the lines reach the visitor with the same geometry and results
+// sampling.heights off (P1's far field): the lines reach the visitor with the same geometry and results
 // slots, without heights; the gathered results are the same bits. Fails if the unsampled line loses a field
 // (its distances s(n), positions or receivers) or still carries heights.
 TEST(SweepLines, UnsampledLinesKeepTheirGeometry) {
@@ -282,7 +282,7 @@ TEST(SweepLines, UnsampledLinesKeepTheirGeometry) {
         SweepSpec spec;
         spec.directions = 13;
         spec.channels = 3;
-        spec.sample_heights = sample;
+        spec.sampling.heights = sample;
         std::vector<float> acc(f.texel_count() * 13 * 9);  // per texel and direction: lo, hi, strip
         sweep_lines(
             f, spec, RunControl{}, [&] { return GeometryWorker{sample}; },
@@ -320,7 +320,7 @@ TEST(SweepLines, ProgressReachesOne) {
   };
   SweepSpec spec;
   spec.directions = 10;
-  spec.batch = 4;
+  spec.buffers.batch = 4;
   sweep_lines(
       f, spec, rc, [] { return RunningMax{}; }, [](int, int, int, const TexelTaps&) {});
   EXPECT_EQ(calls.load(), 3);
@@ -355,9 +355,9 @@ struct TileRecord {
 
 TileRecord record_tiled(const HeightField& f, SweepSpec spec) {
   const int K = spec.azimuths.empty() ? spec.directions : int(spec.azimuths.size()), C = spec.channels;
-  spec.tile_taps = true;
-  spec.tile_nearest = true;
-  spec.zero_buffers = false;
+  spec.tile.taps = true;
+  spec.tile.nearest = true;
+  spec.buffers.zero = false;
   const std::size_t stride = std::size_t(4 * C + 3);
   TileRecord rec;
   rec.data.assign(f.texel_count() * K * stride, -7.0f);
@@ -426,8 +426,8 @@ TEST(SweepStream, WindowsGiveTheSameVisitorData) {
           if (set == 0) whole.directions = 1;
           if (set == 1) whole.directions = 37;
           if (set == 2) whole.azimuths = azimuths;
-          whole.batch = 8;
-          whole.max_buffer_bytes = std::size_t(1) << 40;
+          whole.buffers.batch = 8;
+          whole.buffers.max_bytes = std::size_t(1) << 40;
           ASSERT_FALSE(any_stream(f, whole));
           const TileRecord a = record_tiled(f, whole);
           const std::vector<float> ta = record_texels(f, whole);
@@ -439,7 +439,7 @@ TEST(SweepStream, WindowsGiveTheSameVisitorData) {
           }
           for (std::size_t bytes : {std::size_t(1), largest / 3}) {
             SweepSpec small = whole;
-            small.max_buffer_bytes = bytes;
+            small.buffers.max_bytes = bytes;
             ASSERT_TRUE(any_stream(f, small));
             const TileRecord b = record_tiled(f, small);
             const std::string what = std::string(wrap == Wrap::clamp ? "clamp " : "repeat ") +
@@ -522,8 +522,8 @@ TEST(SweepStream, BufferBytesBoundTheResultsAndStayFlatForTallFields) {
     SweepSpec spec;
     spec.directions = 16;
     spec.channels = 4;
-    spec.batch = 8;
-    spec.max_buffer_bytes = std::size_t(32) << 20;
+    spec.buffers.batch = 8;
+    spec.buffers.max_bytes = std::size_t(32) << 20;
     std::size_t previous = 0;
     for (int h : {4096, 16384}) {
       const HeightField f = test_field(48, h, wrap);
@@ -534,7 +534,7 @@ TEST(SweepStream, BufferBytesBoundTheResultsAndStayFlatForTallFields) {
       }
       const std::size_t bound = sweep_buffer_bytes(f, spec);
       // Within the budget plus the small parts (line tables, tile orders, per-thread heights and tiles).
-      EXPECT_LT(bound, spec.max_buffer_bytes + (std::size_t(2) << 20)) << h;
+      EXPECT_LT(bound, spec.buffers.max_bytes + (std::size_t(2) << 20)) << h;
       if (wrap == Wrap::clamp) {
         if (h == 16384) {
           EXPECT_LT(bound, whole / 16);  // the whole buffer: about 1.8 GB
@@ -559,7 +559,7 @@ TEST(SweepStream, BufferBytesBoundTheResultsAndStayFlatForTallFields) {
   }
 }
 
-// The strip gather (SweepSpec::tile_strip, what P1's far field reads): every texel of every direction gets
+// The strip gather (SweepSpec::tile.strip, what P1's far field reads): every texel of every direction gets
 // the result of the line just above it on its column, line l with l - 1 <= v0 - u * slope < l (checked in
 // long double from the direction's slope, not with strip_line), also on the clamp border rows where one
 // of its two lines runs off the field, and the same whether the lines stream or not.
@@ -582,9 +582,9 @@ TEST(SweepLines, StripGatherGivesEachTexelTheLineAboveIt) {
         SweepSpec spec;
         spec.directions = 37;
         spec.channels = 2;
-        spec.tile_strip = true;
-        spec.tile_values = spec.tile_nearest = false;
-        spec.max_buffer_bytes = budget;
+        spec.tile.strip = true;
+        spec.tile.values = spec.tile.nearest = false;
+        spec.buffers.max_bytes = budget;
         sweep_lines_tiled(
             f, spec, RunControl{}, [] { return LineColumnWorker{}; },
             [&](const SweepTile& t) {
@@ -631,7 +631,7 @@ struct SlopeWorker {
 std::vector<float> record_slopes(const HeightField& f, SweepSpec spec) {
   const int K = spec.azimuths.empty() ? spec.directions : int(spec.azimuths.size());
   spec.channels = 4;
-  spec.tile_taps = true;
+  spec.tile.taps = true;
   const std::size_t stride = 4 * 4 + 3;
   std::vector<float> data(f.texel_count() * K * stride, -7.0f);
   sweep_lines_tiled(
@@ -667,14 +667,14 @@ TEST(SweepThin, TrimmedLinesGiveTheSameBitsAsWholeLines) {
       const HeightField f = test_field(w, h, Wrap::clamp);
       SweepSpec spec;
       spec.azimuths = azimuths;
-      spec.max_buffer_bytes = budget;
+      spec.buffers.max_bytes = budget;
       int trimmed = 0;
       for (int k = 0; k < int(azimuths.size()); ++k) trimmed += plan_direction(f, spec, k).span > 0;
       if (w * h != 61 * 13) {
         EXPECT_GE(trimmed, 3) << w << "x" << h;
       }
       SweepSpec whole = spec;
-      whole.trim_thin_lines = false;
+      whole.sampling.trim_thin = false;
       const std::vector<float> a = record_slopes(f, whole), b = record_slopes(f, spec);
       ASSERT_EQ(a.size(), b.size());
       for (float v : b) ASSERT_NE(v, -7.0f);

@@ -518,7 +518,7 @@ MethodInfo lsao_method() {
   // The sums are its layers (float, finished in place; the bent normals interleaved): beyond them the
   // obscurance's 4 bytes a texel when the job asks for bent_normal alone, the normals (12) up to 8192^2
   // texels (lsao_holds_normals), and the sweep's line buffers
-  // (bounded by SweepSpec::max_buffer_bytes; sweep_buffer_bytes of lsao's spec).
+  // (bounded by SweepSpec::buffers.max_bytes; sweep_buffer_bytes of lsao's spec).
   m.memory_knob = "its layers (bent_normal: 12 bytes a texel)";
   m.working_bytes = [](const MethodConfig& config, const MethodContext& c) {
     const std::vector<std::string>& layers = config.layers;

@@ -1,10 +1,18 @@
 #include "methods/p1/bake_p1.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 
 #include "core/direction_blocks.hpp"
 #include "methods/p1/far_horizons.hpp"
+#include "methods/p1/fast_math.hpp"
 #include "methods/p1/horizon_sweep.hpp"
+#include "methods/p1/lane_horizons.hpp"
 #include "methods/p1/p1.hpp"
 
 namespace hfbake {
@@ -107,12 +115,54 @@ LayerSet p1_finish_blocks(const Scene& scene, const MethodConfig& config, LayerS
   return p1_layers(p1_finish(scene, p, std::move(s), rc), config.layers);
 }
 
+namespace {
+
+// Clamp fields: the lane search (lane_horizons.hpp) per azimuth, the azimuths of one lane layout's axis
+// at a time (x-major ones first), so one layout is held at a time.
+void lane_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
+                      const RunControl& rc, const HorizonVisitor& visit) {
+  const std::size_t N = f.texel_count();
+  SweepSpec probe;
+  probe.azimuths = azimuths;
+  std::vector<float> slope(N);
+  std::vector<std::int32_t> which(N);
+  tbb::enumerable_thread_specific<p1::LaneScratch> scratch;
+  int done = 0;
+  for (int axis = 0; axis < 2; ++axis) {
+    std::vector<SweepDirection> dirs;
+    for (std::size_t a = 0; a < azimuths.size(); ++a) {
+      const SweepDirection sd = plan_direction(f, probe, int(a));
+      if ((std::fabs(sd.dx) >= std::fabs(sd.dy)) == (axis == 0)) dirs.push_back(sd);
+    }
+    if (dirs.empty()) continue;
+    p1::LaneLayout layout;
+    layout.build(f, axis == 0);
+    for (const SweepDirection& sd : dirs) {
+      rc.check();
+      p1::LaneDirection d;
+      d.build(f, layout, sd.dx, sd.dy);
+      tbb::parallel_for(tbb::blocked_range<int>(0, p1::lane_strip_count(layout, d), 2),
+                        [&](const tbb::blocked_range<int>& r) {
+                          p1::lane_search(f, layout, d, r.begin(), r.end(), float(p.horizon_tolerance),
+                                          scratch.local(), slope.data(), which.data());
+                        });
+      tbb::parallel_for(0, f.height, [&](int j) {
+        for (int i = 0; i < f.width; ++i) visit(sd.k, i, j, p1::fast_atan(slope[f.index(i, j)]));
+      });
+      rc.report(double(++done) / double(azimuths.size()));
+    }
+  }
+}
+
+}  // namespace
+
 void p1_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
                     const RunControl& rc, const HorizonVisitor& visit) {
   if (azimuths.empty()) return;
+  if (f.wrap == Wrap::clamp) return lane_horizons_at(f, p, azimuths, rc, visit);
   SweepSpec spec;
   spec.channels = p1::FarHorizonWorker::channels();
-  spec.sample_heights = false;  // the far-field worker builds its own profiles
+  spec.sampling.heights = false;  // the far-field worker builds its own profiles
   spec.wrap_periods = p.wrap_periods;
   spec.azimuths = azimuths;
   std::vector<std::vector<p1::NearCrossing>> near;

@@ -67,7 +67,7 @@ struct LinePattern {
 
 // The sweep line visitor of P1's far field (see the header comment): on line l it writes, per receiver
 // (column), strip l's texel's far caster [dz, run] (world units; run +inf: none, or the strip has no
-// texel on the field there). compute_p1 reads them with SweepSpec::tile_strip.
+// texel on the field there). compute_p1 reads them with SweepSpec::tile.strip.
 struct FarHorizonWorker {
   const HeightField* field = nullptr;  // the field the sweep runs on
   double far_radius = 0;               // world units: the far field starts this far from the texel

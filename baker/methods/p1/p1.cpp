@@ -25,7 +25,6 @@ using p1::fast_atan;
 using p1::fast_atan2_pos;
 using p1::fast_sincos;
 using p1::kHalfPiF;
-using p1::near_radius_of;
 using p1::near_slope;
 
 namespace {
@@ -89,7 +88,7 @@ FieldNormals field_normals(const HeightField& f, bool facets) {
 
 template <class Shade>
 void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end,
-                         const RunControl& rc, bool facets, const FieldNormals& normals, Shade& shade) {
+                         const RunControl& rc, bool facets, const FieldNormals& normals, const Shade& shade) {
   const std::size_t N = f.texel_count();
   const int K = p.directions;
   const std::vector<float>&nx = normals.nx, &ny = normals.ny, &nz = normals.nz;
@@ -184,13 +183,14 @@ SweepSpec p1_sweep_spec(const P1Params& p) {
   spec.directions = p.directions;
   spec.channels = p1::FarHorizonWorker::channels();
   spec.wrap_periods = p.wrap_periods;
-  spec.tile_nearest = false;
-  spec.tile_strip = true;
-  spec.tile_values = false;
-  spec.zero_buffers = false;  // FarHorizonWorker writes every receiver
-  spec.sample_heights =
-      false;       // ... from its own profiles of the field (LinePattern), not the line's heights
-  spec.batch = 8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
+  spec.tile.nearest = false;
+  spec.tile.strip = true;
+  spec.tile.values = false;
+  spec.buffers.zero = false;  // FarHorizonWorker writes every receiver
+  spec.sampling.heights =
+      false;  // ... from its own profiles of the field (LinePattern), not the line's heights
+  spec.buffers.batch =
+      8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
   return spec;
 }
 
@@ -257,85 +257,85 @@ P1SumsShape p1_sums_shape(const Scene& scene, const P1Params& p) {
 
 namespace {
 
-P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
-                      float* horizon_out, float* distance_out, const FieldNormals* normals) {
-  const HeightField& f = scene.field;
-  const std::size_t N = f.texel_count();
-  const int K = p.directions;
-  const int nb = k_end - k_begin;  // the block's directions; the sweep's t.k counts from k_begin
+// A bake of directions [k_begin, k_end) in three phases: the block's sums, zero, shaped for the layers
+// asked for (zero_sums); the lighting of a row run of texels from their horizons (RowShading); and the
+// horizons themselves, by the lane search on clamp fields (lane_direction_sums) or the strip search on
+// repeat fields (strip_direction_sums), each handing RowShading its horizons a row run at a time.
+
+// The block's accumulators: only what the requested layers need, each the layer it becomes (p1_finish
+// finishes them in place); the horizon layers' own arrays when the caller gives none (own_horizon,
+// own_distance): [texel * nb + k - k_begin] ([(k - k_begin) * N + texel] by direction).
+P1Sums zero_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, bool own_horizon,
+                 bool own_distance) {
+  const std::size_t N = scene.field.texel_count();
+  const std::size_t nb = std::size_t(k_end - k_begin);
+  const P1SumsShape shape = p1_sums_shape(scene, p);
   P1Sums r;
   r.k_begin = k_begin, r.k_end = k_end;
+  r.ao.assign(shape.ao * N, 0.0f), r.vsky.assign(shape.vsky * N, 0.0f);
+  r.rgb.assign(shape.rgb * N, 0.0f);    // [3 * texel + c]
+  r.bent.assign(shape.bent * N, 0.0f);  // [3 * texel + c]
+  // The facets' direct-light sums, [q * N + texel] (facet q of P1Result::direct_facets).
+  r.fao.assign(shape.fao * N, 0.0f);
+  r.fdr.assign(shape.fd * N, 0.0f), r.fdg.assign(r.fdr.size(), 0.0f), r.fdb.assign(r.fdr.size(), 0.0f);
+  if (p.horizon && own_horizon) r.horizon.assign(N * nb, 0.0f);
+  if (p.horizon_distance && own_distance) r.horizon_distance.assign(N * nb, 0.0f);
+  return r;
+}
 
-  const Environment& env = scene.environment;
-  const bool uniform_env = env.uniform || env.levels.empty();
-  const P1SumsShape shape = p1_sums_shape(scene, p);
-  const bool need_ao = shape.ao > 0;
+// The lighting of one row run of texels (base .. base + w - 1, at most 32) in direction k from their
+// horizon elevations e (dist: the horizon_distance layer's values, or null), at the texels' normals (and
+// the facets' normals FX[q], FY[q], FZ[q]), added to the block's sums; the horizon layers' values written.
+// Called from many threads at once for disjoint texels.
+struct RowShading {
+  const P1Params& p;
+  std::size_t N;
+  int K, k_begin;
+  bool uniform_env, need_ao, need_theta, facets;
   std::optional<p1::LightingTables> tables;
   std::optional<p1::SwathProfiles> profiles;
-  if (p.direct && !uniform_env) {
-    if (p.normal_bins > 0)
-      tables = p1::build_lighting_tables(env, K, p.normal_bins, p.horizon_bins);
-    else
-      profiles = p1::build_swath_profiles(env, K);
+  std::vector<float> cs, sn;  // the azimuths' cosines and sines
+  std::vector<float>&ao_sum, &vsky_sum, &rgb_sum, &bent_sum, &fao, &fdr, &fdg, &fdb;
+  // The horizon layers: the caller's [texel * K + k] (by direction: [k * N + texel]) arrays, or the
+  // block's own (zero_sums); KH, KD their directions per texel.
+  float *hz, *hd;
+  int KH, KD;
+
+  RowShading(const Scene& scene, const P1Params& params, int k_begin_, int k_end, P1Sums& r,
+             float* horizon_out, float* distance_out)
+      : p(params),
+        N(scene.field.texel_count()),
+        K(params.directions),
+        k_begin(k_begin_),
+        ao_sum(r.ao),
+        vsky_sum(r.vsky),
+        rgb_sum(r.rgb),
+        bent_sum(r.bent),
+        fao(r.fao),
+        fdr(r.fdr),
+        fdg(r.fdg),
+        fdb(r.fdb),
+        hz(horizon_out ? horizon_out : r.horizon.data()),
+        hd(distance_out ? distance_out : r.horizon_distance.data()),
+        KH(horizon_out ? params.directions : k_end - k_begin_),
+        KD(distance_out ? params.directions : k_end - k_begin_) {
+    const Environment& env = scene.environment;
+    uniform_env = env.uniform || env.levels.empty();
+    need_ao = p1_sums_shape(scene, p).ao > 0;
+    facets = p.direct && p.facet_direct;
+    if (p.direct && !uniform_env) {
+      if (p.normal_bins > 0)
+        tables = p1::build_lighting_tables(env, K, p.normal_bins, p.horizon_bins);
+      else
+        profiles = p1::build_swath_profiles(env, K);
+    }
+    need_theta = need_ao || p.bent_normal || profiles;
+    azimuth_table(K, cs, sn);
   }
-  const bool need_theta = need_ao || p.bent_normal || profiles;
 
-  // Accumulators: only what the requested layers need, each the layer it becomes (finished in place
-  // below). The normals are not held: each thread recomputes a tile's (normal_at) when the sweep hands it
-  // a tile, and keeps them while the batch's directions visit that tile.
-  std::vector<float>&ao_sum = r.ao, &vsky_sum = r.vsky, &rgb_sum = r.rgb, &bent_sum = r.bent;
-  ao_sum.assign(shape.ao * N, 0.0f), vsky_sum.assign(shape.vsky * N, 0.0f);
-  rgb_sum.assign(shape.rgb * N, 0.0f);    // [3 * texel + c]
-  bent_sum.assign(shape.bent * N, 0.0f);  // [3 * texel + c]
-  // The facets' direct-light sums, [q * N + texel] (facet q of P1Result::direct_facets).
-  const bool facets = p.direct && p.facet_direct;
-  std::vector<float>&fao = r.fao, &fdr = r.fdr, &fdg = r.fdg, &fdb = r.fdb;
-  fao.assign(shape.fao * N, 0.0f);
-  fdr.assign(shape.fd * N, 0.0f), fdg.assign(fdr.size(), 0.0f), fdb.assign(fdr.size(), 0.0f);
-  constexpr int kTileTexels = 32 * 32;  // sweep_lines_tiled's tiles
-  struct TileNormals {
-    int i0 = -1, j0 = -1;
-    // [y * width + x]; the facets' [q * kTileTexels + y * width + x]
-    alignas(64) float nx[kTileTexels], ny[kTileTexels], nz[kTileTexels];
-    alignas(64) float fx[2 * kTileTexels], fy[2 * kTileTexels], fz[2 * kTileTexels];
-  };
-  tbb::enumerable_thread_specific<TileNormals> tile_normals;
-  auto normals_of = [&](const SweepTile& t) -> const TileNormals& {
-    TileNormals& n = tile_normals.local();
-    if (n.i0 == t.i0 && n.j0 == t.j0) return n;
-    n.i0 = t.i0, n.j0 = t.j0;
-    for (int y = 0; y < t.height; ++y)
-      for (int x = 0; x < t.width; ++x) {
-        const int at = y * t.width + x;
-        const Vec3f v = normal_at(f, t.i0 + x, t.j0 + y);
-        n.nx[at] = v.x, n.ny[at] = v.y, n.nz[at] = v.z;
-        if (facets) {
-          Vec3f fn[2];
-          facet_normals(f, t.i0 + x, t.j0 + y, fn);
-          for (int q = 0; q < 2; ++q)
-            n.fx[q * kTileTexels + at] = fn[q].x, n.fy[q * kTileTexels + at] = fn[q].y,
-                                   n.fz[q * kTileTexels + at] = fn[q].z;
-        }
-      }
-    return n;
-  };
-  // Horizons straight into the caller's [texel * K + k] (by direction: [k * N + texel]) arrays, else into
-  // the block's own, [texel * nb + k - k_begin] ([(k - k_begin) * N + texel]).
-  if (p.horizon && !horizon_out) r.horizon.assign(N * nb, 0.0f);
-  if (p.horizon_distance && !distance_out) r.horizon_distance.assign(N * nb, 0.0f);
-  float* const hz = horizon_out ? horizon_out : r.horizon.data();
-  float* const hd = distance_out ? distance_out : r.horizon_distance.data();
-  const int KH = horizon_out ? K : nb, KD = distance_out ? K : nb;
-  std::vector<float> cs, sn;
-  azimuth_table(K, cs, sn);
-
-  // The lighting of one row run of texels (base .. base + w - 1, at most 32) in direction k from their
-  // horizon elevations e (dist: the horizon_distance layer's values, or null), at the texels' normals (and
-  // the facets' normals FX[q], FY[q], FZ[q]).
-  const bool want_distance = p.horizon_distance;
-  auto shade_row = [&](int k, std::size_t base, int w, const float* NX, const float* NY, const float* NZ,
-                       const float* const* FX, const float* const* FY, const float* const* FZ, const float* e,
-                       const float* dist) {
+  void operator()(int k, std::size_t base, int w, const float* NX, const float* NY, const float* NZ,
+                  const float* const* FX, const float* const* FY, const float* const* FZ, const float* e,
+                  const float* dist) const {
     constexpr int kMax = 32;
     const float c = cs[k], s = sn[k];
     alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax];
@@ -418,20 +418,46 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
       for (int x = 0; x < w; ++x)
         hz[p.horizon_by_direction ? std::size_t(k - k_begin + (KH == K ? k_begin : 0)) * N + base + x
                                   : (base + x) * KH + (KH == K ? k : k - k_begin)] = se[x];
-    if (want_distance)
+    if (p.horizon_distance)
       for (int x = 0; x < w; ++x) hd[(base + x) * KD + (KD == K ? k : k - k_begin)] = dist[x];
-  };
-
-  if (f.wrap == Wrap::clamp) {
-    if (normals) {
-      lane_direction_sums(f, p, k_begin, k_end, rc, facets, *normals, shade_row);
-    } else {
-      const FieldNormals own = field_normals(f, facets);
-      lane_direction_sums(f, p, k_begin, k_end, rc, facets, own, shade_row);
-    }
-    return r;
   }
+};
 
+// The strip search's horizons (repeat fields): the near field by each direction's stencil from the texel
+// centre, the far field by the sweep's strips (far_horizons.hpp), shade(...) per row run of a sweep tile.
+template <class Shade>
+void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end,
+                          const RunControl& rc, bool facets, const Shade& shade) {
+  const int K = p.directions;
+  // The tile's normals, per thread: recomputed (normal_at) when the sweep hands the thread a new tile, kept
+  // while the batch's directions visit it.
+  constexpr int kTileTexels = 32 * 32;  // sweep_lines_tiled's tiles
+  struct TileNormals {
+    int i0 = -1, j0 = -1;
+    // [y * width + x]; the facets' [q * kTileTexels + y * width + x]
+    alignas(64) float nx[kTileTexels], ny[kTileTexels], nz[kTileTexels];
+    alignas(64) float fx[2 * kTileTexels], fy[2 * kTileTexels], fz[2 * kTileTexels];
+  };
+  tbb::enumerable_thread_specific<TileNormals> tile_normals;
+  auto normals_of = [&](const SweepTile& t) -> const TileNormals& {
+    TileNormals& n = tile_normals.local();
+    if (n.i0 == t.i0 && n.j0 == t.j0) return n;
+    n.i0 = t.i0, n.j0 = t.j0;
+    for (int y = 0; y < t.height; ++y)
+      for (int x = 0; x < t.width; ++x) {
+        const int at = y * t.width + x;
+        const Vec3f v = normal_at(f, t.i0 + x, t.j0 + y);
+        n.nx[at] = v.x, n.ny[at] = v.y, n.nz[at] = v.z;
+        if (facets) {
+          Vec3f fn[2];
+          facet_normals(f, t.i0 + x, t.j0 + y, fn);
+          for (int q = 0; q < 2; ++q)
+            n.fx[q * kTileTexels + at] = fn[q].x, n.fy[q * kTileTexels + at] = fn[q].y,
+                                   n.fz[q * kTileTexels + at] = fn[q].z;
+        }
+      }
+    return n;
+  };
   // The near field of each direction of the block (horizon_sweep.hpp, near_stencil).
   std::vector<p1::NearStencil> near(K);
   {
@@ -446,9 +472,8 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
 
   SweepSpec spec = p1_sweep_spec(p);
   for (int k = k_begin; k < k_end; ++k) spec.azimuths.push_back(azimuth(k, K));  // the same directions
-  const RunControl& main_rc = rc;
   auto make_worker = [&] { return make_ray_worker(f, p); };
-  sweep_lines_tiled(f, spec, main_rc, make_worker, [&](const SweepTile& t) {
+  sweep_lines_tiled(f, spec, rc, make_worker, [&](const SweepTile& t) {
     constexpr int kMax = 32;
     const int k = k_begin + t.k, w = t.width;
     alignas(64) float e[kMax], en[kMax];
@@ -470,7 +495,7 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
         }
       }
       float dist[kMax];
-      if (want_distance) {  // the near crossing, or the far caster on the texel's own ray
+      if (p.horizon_distance) {  // the near crossing, or the far caster on the texel's own ray
         const std::size_t row = std::size_t(y) * w;
         for (int x = 0; x < w; ++x) {
           int which;
@@ -488,10 +513,25 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
       const float* FX[2] = {tn.fx + ft, tn.fx + kTileTexels + ft};
       const float* FY[2] = {tn.fy + ft, tn.fy + kTileTexels + ft};
       const float* FZ[2] = {tn.fz + ft, tn.fz + kTileTexels + ft};
-      shade_row(k, base, w, tn.nx + y * w, tn.ny + y * w, tn.nz + y * w, FX, FY, FZ, e, dist);
+      shade(k, base, w, tn.nx + y * w, tn.ny + y * w, tn.nz + y * w, FX, FY, FZ, e, dist);
     }
   });
+}
 
+P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
+                      float* horizon_out, float* distance_out, const FieldNormals* normals) {
+  const HeightField& f = scene.field;
+  const bool facets = p.direct && p.facet_direct;
+  P1Sums r = zero_sums(scene, p, k_begin, k_end, !horizon_out, !distance_out);
+  const RowShading shade(scene, p, k_begin, k_end, r, horizon_out, distance_out);
+  if (f.wrap == Wrap::repeat) {
+    strip_direction_sums(f, p, k_begin, k_end, rc, facets, shade);
+  } else if (normals) {
+    lane_direction_sums(f, p, k_begin, k_end, rc, facets, *normals, shade);
+  } else {
+    const FieldNormals own = field_normals(f, facets);
+    lane_direction_sums(f, p, k_begin, k_end, rc, facets, own, shade);
+  }
   return r;
 }
 
@@ -600,43 +640,21 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
       }
     });
 
-  // Directional lights: one extra sweep direction per light, at its own azimuth.
+  // Directional lights: each texel's horizon at each light's azimuth (p1_horizons_at, as the K directions').
   if (!lights.empty()) {
-    SweepSpec ls;
-    ls.channels = p1::FarHorizonWorker::channels();
-    ls.sample_heights = false;
-    ls.wrap_periods = p.wrap_periods;
-    std::vector<double> elevation, radius;
+    std::vector<double> elevation, radius, azimuths;
     std::vector<Vec3> dir;
-    std::vector<SweepDirection> light_dirs;
-    std::vector<std::vector<p1::NearCrossing>> light_near;
     for (const DirectionalLight* l : lights) {
       const Vec3 d = normalize(l->direction);
       dir.push_back(d);
       elevation.push_back(std::asin(std::clamp(d.z, -1.0, 1.0)));
       radius.push_back(l->angular_diameter / 2);
-      ls.azimuths.push_back(std::hypot(d.x, d.y) > 1e-12 ? std::atan2(d.y, d.x) : 0.0);
+      azimuths.push_back(std::hypot(d.x, d.y) > 1e-12 ? std::atan2(d.y, d.x) : 0.0);
     }
-    for (std::size_t li = 0; li < lights.size(); ++li) {
-      light_dirs.push_back(plan_direction(f, ls, int(li)));
-      const SweepDirection& d = light_dirs.back();
-      light_near.push_back(
-          p1::near_field_stencil(d.dx, d.dy, near_radius_of(d, p.near_radius), f.texel_size));
-    }
-    auto make_worker = [&] { return make_ray_worker(f, p); };
-    auto near_slope_at = [&](const std::vector<p1::NearCrossing>& stencil, int i, int j, int* which) {
-      return near_slope(f, stencil, i, j, which);
-    };
-    sweep_lines(f, ls, rc, make_worker, [&](int li, int i, int j, const TexelTaps& t) {
+    p1_horizons_at(f, p, azimuths, rc, [&](int li, int i, int j, float horizon) {
       const std::size_t idx = f.index(i, j);
       const double ndl = dot(normal_at(f, i, j).d(), dir[li]);
       if (ndl <= 0 && !facets) return;
-      // The horizon in the light's azimuth as for the K directions: the exact near field from the texel
-      // center, the exact far field from its strip.
-      int which;
-      const float en = fast_atan(near_slope_at(light_near[li], i, j, &which));
-      const FarPick fp = far_pick(t.strip, 1, 0);
-      const float horizon = std::max(en, p1::caster_elevation(fp.dz, fp.run));
       const double frac = disk_fraction_above(elevation[li], horizon, radius[li]);
       if (frac <= 0) return;
       if (ndl > 0) {

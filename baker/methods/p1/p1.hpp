@@ -133,12 +133,14 @@ double p1_working_bytes(const FieldShape& field, const P1Params& params, bool un
 // The sweep compute_p1 runs for its K directions.
 SweepSpec p1_sweep_spec(const P1Params& params);
 
-// Each texel's horizon at arbitrary azimuths, exactly as p1 shadows its directional lights: a sweep of its
-// own per azimuth (radians from +x towards +y), the horizon the larger of the exact near field marched from
-// the texel centre (params.near_radius) and the exact far field on the texel's own ray
-// (params.horizon_tolerance). visit(a, i, j, elevation) runs once per azimuth index a and texel (elevation
-// in radians, -pi/2 where nothing lies behind), tiles in parallel and for one texel in ascending a, so
-// per-texel sums in the visitor's own storage are deterministic.
+// Each texel's horizon at arbitrary azimuths, exactly as p1 computes its K directions' (radians from +x
+// towards +y): on clamp fields the lane search's exact horizon over the texel's own ray; on repeat fields
+// the larger of the exact near field marched from the texel centre (params.near_radius) and the exact far
+// field on the texel's own ray, a sweep per azimuth (params.horizon_tolerance either way).
+// visit(a, i, j, elevation) runs once per azimuth index a and texel (elevation in radians, -pi/2 where
+// nothing lies behind), texels in parallel, and for one texel in a fixed order of a (clamp fields: the
+// azimuths nearer the x axis first, each group ascending; repeat fields: ascending), so per-texel sums in
+// the visitor's own storage are deterministic.
 using HorizonVisitor = std::function<void(int a, int i, int j, float elevation)>;
 void p1_horizons_at(const HeightField& field, const P1Params& params, const std::vector<double>& azimuths,
                     const RunControl& rc, const HorizonVisitor& visit);

@@ -522,7 +522,7 @@ SweepSpec indirect_sweep_spec(const IndirectSweepSpec& spec) {
   for (int k = spec.k_begin; k < k1; ++k) ss.azimuths.push_back(azimuth(k, spec.directions));
   ss.channels = kChannels;
   ss.wrap_periods = spec.wrap_periods;
-  ss.zero_buffers = false;  // LineWorker writes every receiver's channels
+  ss.buffers.zero = false;  // LineWorker writes every receiver's channels
   return ss;
 }
 
