@@ -90,6 +90,8 @@ struct RadianceRow {
   std::vector<float> run, prevF, nh, cur, prev, u;  // prev: 4 a receiver, u: 3 x 4
   std::vector<float> lim;                           // 2 n - 1: the receiver's curve points
   std::vector<float> hit;                           // 1: this point is in the receiver's casting set
+  std::vector<int> hits;                            // the receivers with hit 1, increasing
+  std::vector<float> rad;                           // 3 a hit: the radiance its stretch sends
   std::vector<unsigned char> any;
   explicit RadianceRow(int width)
       : run(std::size_t(width)),
@@ -100,6 +102,8 @@ struct RadianceRow {
         u(12 * std::size_t(width)),
         lim(std::size_t(width)),
         hit(std::size_t(width)),
+        hits(std::size_t(width)),
+        rad(3 * std::size_t(width)),
         any(std::size_t(width)) {}
 };
 
@@ -131,6 +135,17 @@ int curve_point(int cnt, int p, const float* __restrict w0, const float* __restr
     }
   }
   return hits;
+}
+
+// The receivers whose hit is 1, increasing, into out; returns their count. Branch-free: every receiver is
+// stored and the count moves past the kept ones (which receivers hit is hard to predict).
+int hit_list(int cnt, const float* __restrict hit, int* __restrict out) {
+  int n = 0;
+  for (int t = 0; t < cnt; ++t) {
+    out[n] = t;
+    n += hit[t] != 0 ? 1 : 0;
+  }
+  return n;
 }
 
 // Per-thread buffers: one row of receivers (heights per level, per-receiver outputs) and one march.
@@ -667,13 +682,16 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
           curve_point(cnt_row, p, w0, w1, w2, w3, q.lim.data(), q.cur.data(), q.run.data(), q.hit.data());
       const float* cur = q.cur.data();
       if (hits == 0) continue;
-      for (int t = 0; t < cnt_row; ++t) {
-        if (q.hit[t] == 0) continue;
+      const int nhit = hit_list(cnt_row, q.hit.data(), q.hits.data());
+      // The radiance of every hit's stretch first (the reads, independent of each other, overlap), then
+      // each hit's sums.
+      const int rl = ms.rlevel[k];
+      const nlp::PyramidLevel& L = rp.levels[rl];
+      for (int h = 0; h < nhit; ++h) {
+        const int t = q.hits[h];
         const int i = xs[t];
-        const float run = cur[t], dd = dist_p(p, t);
-        float rad[3] = {};
-        const int rl = ms.rlevel[k];
-        const nlp::PyramidLevel& L = rp.levels[rl];
+        const float dd = dist_p(p, t);
+        float* rad = &q.rad[3 * std::size_t(h)];
         if (facets) {
           // The stretch this step reveals lies between the previous curve point and this one: it radiates
           // from its middle, the light of the facet there (level 0) or the filtered facet light.
@@ -686,6 +704,11 @@ void NlpBake::radiance(const nlp::Pyramid& rp, Scratch& s, const int* xs, int cn
         } else {
           nlp::sample_level(rp, L, i + dd * cx, j + dd * cy, rad);
         }
+      }
+      for (int h = 0; h < nhit; ++h) {
+        const int t = q.hits[h];
+        const float run = cur[t];
+        const float* rad = &q.rad[3 * std::size_t(h)];
         float nu[4];
         const float srun = std::sin(run);
         nlp::occlusion4(srun, nu);
