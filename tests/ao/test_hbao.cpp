@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "ao_scenes.hpp"
+#include "field/procedural.hpp"
 #include "methods/ao/hbao.hpp"
 #include "methods/ao/slice_integral.hpp"
 
@@ -33,6 +34,27 @@ HbaoSettings settings(int K, Falloff f, Weighting w = Weighting::cosine, double 
 
 double occluded_at(const HeightField& f, int i, int j, const HbaoSettings& s) {
   return hbao_texel(f, compute_normals(f)[f.index(i, j)].d(), i, j, s).occluded;
+}
+
+// One or two directions on steep ridges (a 80 x 2 ridges field, texels 0.1 apart, 20 units of relief): the
+// estimate of a normal whose lobe lies mostly in one direction stays a share, in [0, 1].
+TEST(Hbao, FewDirectionsOnSteepRidgesStayInRange) {
+  for (std::uint64_t seed : {1, 2, 3, 4, 5}) {
+    ProceduralSpec spec;
+    spec.kind = ProceduralKind::ridges, spec.width = 80, spec.height = 2, spec.seed = seed;
+    HeightField f = make_procedural(spec, 0.1, Wrap::clamp);
+    for (float& z : f.z) z *= 20;
+    const auto normals = compute_normals(f);
+    for (int K : {1, 2})
+      for (FalloffKind k : {FalloffKind::none, FalloffKind::linear})
+        for (int j = 0; j < f.height; ++j)
+          for (int i = 0; i < f.width; ++i) {
+            const double o =
+                hbao_texel(f, normals[f.index(i, j)].d(), i, j, settings(K, falloff(k, 8.0))).occluded;
+            EXPECT_GE(o, 0.0) << seed << " K " << K << " texel " << i << " " << j;
+            EXPECT_LE(o, 1.0) << seed << " K " << K << " texel " << i << " " << j;
+          }
+  }
 }
 
 // The expectations themselves against tables computed by hand (guards the independent quadrature).

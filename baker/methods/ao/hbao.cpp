@@ -137,8 +137,10 @@ double hbao_weight_sum(const HbaoSettings& s) {
 
 HorizonTexel hbao_finish(const HbaoSums& sums, double weight_sum, Vec3 n, const HbaoSettings& s) {
   HorizonTexel t;
-  t.occluded = join_double(sums.occluded) / weight_sum;
-  if (s.estimator == HorizonEstimator::largest_occluder) t.occluded = std::clamp(t.occluded, 0.0, 1.0);
+  // The occluded share lies in [0, 1]; a sum over few directions (K = 1 or 2: one ray, or two opposite
+  // ones, stand for every azimuth) can estimate it outside on steep terrain, where one direction holds
+  // most of the normal's lobe. Such an estimate is taken to the nearer end.
+  t.occluded = std::clamp(join_double(sums.occluded) / weight_sum, 0.0, 1.0);
   const Vec3 bent{join_double(sums.bent[0]), join_double(sums.bent[1]), join_double(sums.bent[2])};
   t.bent_normal = length(bent) > 1e-12 ? normalize(bent) : n;
   return t;
