@@ -614,7 +614,7 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
       const Rgb d = env.uniform_radiance * (ao_sum[idx] * inv_k);
       r.direct[3 * idx] = d.r, r.direct[3 * idx + 1] = d.g, r.direct[3 * idx + 2] = d.b;
     }
-    if (p.ao) ao_sum[idx] *= inv_k;
+    if (p.ao) ao_sum[idx] = std::min(1.0f, ao_sum[idx] * inv_k);  // a share: a rounding above 1 is 1
     if (p.vsky) vsky_sum[idx] = 1.0f - vsky_sum[idx] * inv_k;
     if (p.bent_normal) {
       float* b = bent_sum.data() + 3 * idx;
