@@ -25,6 +25,7 @@
 #include "cli/suite.hpp"
 #include "cli/test_break.hpp"
 #include "cli/texture_plan.hpp"
+#include "cli/tile_command.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
@@ -278,6 +279,11 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
               const ReferenceCache* cache, const BakeOptions& options,
               std::map<std::string, LayerSet>* kept) {
   const FieldSize size = probe_field_size(job);
+  if (options.tiles) {  // the tiles' plan holds them to the budget, whatever the raster's size
+    bake_tiled(job, progress, cancel, outcome, options,
+               options.memory_limit ? *options.memory_limit : available_memory_bytes());
+    return;
+  }
   check_job_memory(job, size, options.memory_limit);
   check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
   if (options.shard) {

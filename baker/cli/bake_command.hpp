@@ -37,6 +37,10 @@ struct BakeOptions {
   std::optional<ShardId> shard;
   int stage = 0;  // --stage S (with --shard): stage S of the staged methods (p2's bounce S)
   bool merge = false;
+  // --tiles: bake a georeferenced raster in spatial tiles within the memory budget (cli/tile_command.hpp),
+  // the interiors' side from --tile-size when given.
+  bool tiles = false;
+  std::optional<int> tile_size;
   // --overwrite: replace outputs of the same job name that another job file baked into the folder
   // (docs/output_folders.md).
   bool overwrite = false;

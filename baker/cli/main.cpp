@@ -105,6 +105,16 @@ int main(int argc, char** argv) {
                    "Refuse a job whose memory estimate exceeds SIZE (default: the available memory)")
       ->check(memory_size);
 
+  bool tiles = false;
+  bake_cmd->add_flag(
+      "--tiles", tiles,
+      "Bake a georeferenced raster in spatial tiles within the memory budget, into Cloud-Optimised "
+      "GeoTIFFs only (docs/large-fields.md)");
+  int tile_size = 0;
+  bake_cmd
+      ->add_option("--tile-size", tile_size,
+                   "N: with --tiles, tiles of N^2 texels (default: from --memory-limit)")
+      ->check(CLI::Range(16, 1 << 20));
   std::string shard;
   bake_cmd->add_option(
       "--shard", shard,
@@ -277,6 +287,16 @@ int main(int argc, char** argv) {
     threads = bake_writes.threads;
     if (!memory_limit.empty()) bake.memory_limit = hfbake::parse_memory_size(memory_limit);
     bake.stage = stage;
+    bake.tiles = tiles;
+    if (tile_size > 0) bake.tile_size = tile_size;
+    if (tile_size > 0 && !tiles) {
+      std::fprintf(stderr, "hfbake: error: command line: --tile-size needs --tiles\n");
+      return 2;
+    }
+    if (tiles && !shard.empty()) {
+      std::fprintf(stderr, "hfbake: error: command line: --tiles and --shard do not combine\n");
+      return 2;
+    }
     if (stage > 0 && shard.empty()) {
       std::fprintf(stderr, "hfbake: error: command line: --stage needs --shard I/N\n");
       return 2;

@@ -1,0 +1,214 @@
+#include "cli/tile_command.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "cli/method_dispatch.hpp"
+#include "cli/outputs.hpp"
+#include "cli/scene_inputs.hpp"
+#include "cli/scene_loader.hpp"
+#include "cli/version.hpp"
+#include "core/error.hpp"
+#include "io/georaster_input.hpp"
+#include "io/geotiff_output.hpp"
+#include "methods/method_table.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+[[noreturn]] void refuse(const Job& job, const std::string& pointer, const std::string& what) {
+  throw InputError(job.file.string(), pointer, what);
+}
+
+// The halo of the job's entries: the largest of their reaches, in texels (check_tiled_job has made sure
+// each is bounded).
+int job_halo(const Job& job) {
+  const double texel = job_texel_size(job);
+  int halo = 0;
+  for (const BakeEntry& entry : job.bakes) {
+    const MethodConfig& config = entry_config(entry);
+    const std::optional<int> h = halo_texels(config.method->reach(config), texel);
+    if (!h) refuse(job, entry.pointer, "reads heights without a bound: it cannot be baked in tiles");
+    halo = std::max(halo, *h);
+  }
+  return halo;
+}
+
+// The heights of `window` as a field of its own (as stored: complete_scene applies scale and offset), after
+// the nodata rule of a tiled bake: a texel without a valid height is an error naming it in the raster.
+HeightField read_window(const Job& job, const GeoHeightBand& band, const RasterWindow& window) {
+  Plane plane = read_georaster_window(band.file, band.band, window.x0, window.y0, window.width, window.height,
+                                      {job.file.string(), "/height/image"});
+  const nlohmann::json& h = job.doc["height"];
+  // The job's and the file's NoData values; NaN (equal to nothing) when absent.
+  const float job_nodata = h.contains("nodata_value") ? h["nodata_value"].get<float>() : NAN;
+  const float file_nodata = band.nodata ? float(*band.nodata) : NAN;
+  for (std::size_t t = 0; t < plane.values.size(); ++t) {
+    const float z = plane.values[t];
+    if (std::isfinite(z) && z != job_nodata && z != file_nodata) continue;
+    const std::size_t i = std::size_t(window.x0) + t % std::size_t(window.width);
+    const std::size_t j = std::size_t(window.y0) + t / std::size_t(window.width);
+    refuse(job, "/height/image",
+           band.file.string() + ": texel (" + std::to_string(i) + ", " + std::to_string(j) +
+               ") has no valid height; a tiled bake does not fill holes: fill them first "
+               "(gdal_fillnodata.py) or bake the raster whole with \"nodata\": \"fill\"");
+  }
+  HeightField field;
+  field.width = window.width;
+  field.height = window.height;
+  field.texel_size = job_texel_size(job);
+  field.wrap = Wrap::clamp;
+  field.z = std::move(plane.values);
+  return field;
+}
+
+std::string tiles_text(const TilePlan& plan) {
+  return std::to_string(plan.columns * plan.rows) + " tiles (" + std::to_string(plan.columns) + " x " +
+         std::to_string(plan.rows) + ") of " + std::to_string(plan.tile) + "^2 texels with a halo of " +
+         std::to_string(plan.halo);
+}
+
+}  // namespace
+
+void check_tiled_job(const Job& job) {
+  const nlohmann::json& h = job.doc["height"];
+  if (!h.contains("image") || !georaster_height_band(job))
+    refuse(job, h.contains("image") ? "/height/image" : "/height",
+           "a tiled bake reads a georeferenced raster through GDAL (GeoTIFF, COG, VRT, ...): this job's "
+           "heights are not one");
+  if (h.value("wrap", "clamp") == "repeat")
+    refuse(job, "/height/wrap",
+           "a tiled bake bakes clamp fields only (a repeat field's tiles wrap around it)");
+  if (h.value("nodata", "error") == "fill")
+    refuse(job, "/height/nodata",
+           "a tiled bake does not fill holes (each tile would fill its own): fill them first "
+           "(gdal_fillnodata.py)");
+  const nlohmann::json surface = job.doc.value("surface", nlohmann::json::object());
+  for (const char* key : {"albedo", "emission"})
+    if (surface.contains(key) && surface[key].is_object())
+      refuse(job, std::string("/surface/") + key + "/image",
+             "a tiled bake takes a constant albedo and emission, not an image");
+  if (job.has_reference)
+    refuse(job, "/reference", "a tiled bake has no reference: bake a window of the raster whole to check it");
+  if (job.doc.contains("output") && job.doc["output"].contains("textures"))
+    refuse(job, "/output/textures", "a tiled bake writes GeoTIFFs only, no textures");
+  if (!job.output.geotiff)
+    refuse(job, "/output/geotiff", "a tiled bake writes Cloud-Optimised GeoTIFFs only: set it to true");
+  for (const BakeEntry& entry : job.bakes) {
+    const MethodConfig& config = entry_config(entry);
+    if (!config.method->reach)
+      refuse(job, entry.pointer + "/method",
+             entry.method +
+                 " reads heights from the whole field: a tiled bake takes the methods with a bounded reach "
+                 "(hbao with a radius or max_distance, relief)");
+  }
+  job_halo(job);
+}
+
+TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> tile_size) {
+  const std::optional<GeoHeightBand> band = georaster_height_band(job);
+  if (!band) refuse(job, "/height", "a tiled bake reads a georeferenced raster through GDAL");
+  const int halo = job_halo(job);
+  if (tile_size) return plan_tiles(band->width, band->height, *tile_size, halo);
+  const std::size_t tile_budget = budget > kTiledGdalCacheBytes ? budget - kTiledGdalCacheBytes : 0;
+  auto peak = [&job](int w, int h) { return estimate_peak_bytes(job, FieldSize{w, h}); };
+  const std::optional<int> side =
+      tile_side_for_budget(band->width, band->height, halo, tile_budget, 256, peak);
+  if (!side) {
+    const int s = std::min(256 + 2 * halo, std::max(band->width, band->height));
+    refuse(job, "/height",
+           "a tile of 256^2 texels with its halo of " + std::to_string(halo) + " needs about " +
+               std::to_string(peak(s, s) >> 20) + " MiB, more than the " + std::to_string(tile_budget >> 20) +
+               " MiB the memory budget leaves (--memory-limit)");
+  }
+  return plan_tiles(band->width, band->height, *side, halo);
+}
+
+void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
+                const BakeOptions& options, std::size_t budget) {
+  check_tiled_job(job);
+  const TilePlan plan = plan_job_tiles(job, budget, options.tile_size);
+  const GeoHeightBand band = *georaster_height_band(job);
+  GdalCacheLimit cache(kTiledGdalCacheBytes);
+  OutputStage stage(job, options.overwrite);
+  for (const fs::path& p : stage.stale_removed())
+    progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
+  stage.set_georeference(band.georeference);
+  progress.message(job.name + ": " + std::to_string(band.width) + "x" + std::to_string(band.height) + " in " +
+                   tiles_text(plan));
+
+  // One work file per entry and layer, made when the first tile gives its channels.
+  struct Output {
+    std::string file;  // <name>.<stem>.<layer>.tif
+    std::unique_ptr<TiledGeoTiff> writer;
+  };
+  std::map<std::pair<std::size_t, std::string>, Output> outputs;
+  std::vector<double> seconds(job.bakes.size(), 0.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  progress.begin(job.name, "tiles");
+  for (std::size_t k = 0; k < plan.tiles.size(); ++k) {
+    if (cancel.load()) throw Cancelled();
+    const Tile& tile = plan.tiles[k];
+    Georeference tile_geo;  // the tile's own: methods read the site (none of the tiled ones does)
+    tile_geo.geotransform = band.georeference.geotransform;
+    const Scene scene = complete_scene(job, read_window(job, band, tile.read), tile_geo, band.source);
+    const int ox = tile.interior.x0 - tile.read.x0, oy = tile.interior.y0 - tile.read.y0;
+    for (std::size_t e = 0; e < job.bakes.size(); ++e) {
+      const BakeEntry& entry = job.bakes[e];
+      const MethodConfig& config = entry_config(entry);
+      RunControl rc;
+      rc.cancel = &cancel;
+      rc.progress = [&](double f) {
+        progress.update(job.name, "tiles",
+                        (double(k) + (double(e) + f) / double(job.bakes.size())) / double(plan.tiles.size()));
+      };
+      const auto t1 = std::chrono::steady_clock::now();
+      LayerSet layers = config.method->bake(scene, config, rc);
+      seconds[e] += seconds_since(t1);
+      check_layers_finite(entry.stem, layers);
+      for (const Layer& layer : layers.layers) {
+        Output& out = outputs[{e, layer.name}];
+        if (!out.writer) {
+          out.file = job.name + "." + entry.stem + "." + layer.name + ".tif";
+          GeoTiffOptions tiff;
+          tiff.metadata = stage.geotiff_metadata({{"hfbake:version", hfbake_version()},
+                                                  {"hfbake:job", job.name},
+                                                  {"hfbake:method", entry.method},
+                                                  {"hfbake:parameters", config.resolved.dump()},
+                                                  {"hfbake:tiles", tiles_text(plan)}});
+          out.writer = std::make_unique<TiledGeoTiff>(stage.folder() / ("." + out.file + ".work"), plan.width,
+                                                      plan.height, layer.name, layer.channels,
+                                                      band.georeference, tiff);
+        }
+        const std::size_t nc = std::size_t(layer.channel_count());
+        const float* first =
+            layer.data.data() + (std::size_t(oy) * std::size_t(layers.width) + std::size_t(ox)) * nc;
+        out.writer->write(tile.interior.x0, tile.interior.y0, tile.interior.width, tile.interior.height,
+                          first, std::size_t(layers.width));
+      }
+    }
+  }
+  progress.end(job.name, "tiles", seconds_since(t0));
+  progress.begin(job.name, "cog");
+  const auto t2 = std::chrono::steady_clock::now();
+  for (auto& [key, out] : outputs) {
+    if (cancel.load()) throw Cancelled();
+    out.writer->finish(stage.folder() / out.file);
+    out.writer.reset();
+    stage.adopt(out.file);
+  }
+  progress.end(job.name, "cog", seconds_since(t2));
+  for (std::size_t e = 0; e < job.bakes.size(); ++e)
+    outcome.methods[job.bakes[e].stem] = {
+        {"method", job.bakes[e].method}, {"seconds", seconds[e]}, {"tiles", plan.columns * plan.rows}};
+  outcome.outputs = stage.commit();
+  for (const fs::path& p : outcome.outputs) progress.message(job.name + ": wrote " + p.string());
+}
+
+}  // namespace hfbake
