@@ -415,7 +415,8 @@ std::optional<std::size_t> parse_memory_size(const std::string& text) {
   return std::size_t(bytes);
 }
 
-int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<std::size_t> memory_limit) {
+int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<std::size_t> memory_limit,
+                 bool tiles, std::optional<int> tile_size) {
   int exit_code = 0;
   // A suite validates as the jobs it lists (as `bake` would run them).
   std::vector<fs::path> jobs;
@@ -442,6 +443,14 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
     }
     try {
       const FieldSize size = probe_field_size(*load.job);
+      if (tiles) {
+        const std::string plan =
+            validate_tiled(*load.job, memory_limit ? *memory_limit : available_memory_bytes(), tile_size);
+        if (!quiet)
+          std::fprintf(stderr, "hfbake: %s: valid (%dx%d in %s)\n", file.c_str(), size.width, size.height,
+                       plan.c_str());
+        continue;
+      }
       std::string parts;
       const std::size_t need = check_job_memory(*load.job, size, memory_limit, &parts);
       // Everything bake refuses about the inputs, refused here first: the same loader reads every image

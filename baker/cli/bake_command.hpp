@@ -71,7 +71,9 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
 int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel);
 
 // Schema and file checks without baking: 0 all valid, 2 otherwise. Prints one line per problem.
+// `tiles`: as a tiled bake (cli/tile_command.hpp validate_tiled) with tiles of `tile_size` when given.
 int run_validate(const std::vector<std::filesystem::path>& jobs, bool quiet,
-                 std::optional<std::size_t> memory_limit = std::nullopt);
+                 std::optional<std::size_t> memory_limit = std::nullopt, bool tiles = false,
+                 std::optional<int> tile_size = std::nullopt);
 
 }  // namespace hfbake

@@ -208,6 +208,12 @@ int main(int argc, char** argv) {
   std::string validate_memory_limit;
   validate_cmd->add_option("--memory-limit", validate_memory_limit, "As bake's --memory-limit")
       ->check(memory_size);
+  bool validate_tiles = false;
+  validate_cmd->add_flag("--tiles", validate_tiles,
+                         "As bake --tiles: the tile plan, every tile's heights read");
+  int validate_tile_size = 0;
+  validate_cmd->add_option("--tile-size", validate_tile_size, "As bake's --tile-size")
+      ->check(CLI::Range(16, 1 << 20));
 
   // hfbake horizon: the horizon profile at a point of a DEM.
   hfbake::HorizonOptions horizon;
@@ -257,7 +263,8 @@ int main(int argc, char** argv) {
     std::vector<std::filesystem::path> files(validate_jobs.begin(), validate_jobs.end());
     return hfbake::run_validate(
         files, validate_quiet,
-        validate_memory_limit.empty() ? std::nullopt : hfbake::parse_memory_size(validate_memory_limit));
+        validate_memory_limit.empty() ? std::nullopt : hfbake::parse_memory_size(validate_memory_limit),
+        validate_tiles, validate_tile_size > 0 ? std::optional<int>(validate_tile_size) : std::nullopt);
   }
   if (app.got_subcommand(init_cmd)) {
     init.height_file = init_height;

@@ -130,6 +130,15 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
   return plan_tiles(band->width, band->height, *side, halo);
 }
 
+std::string validate_tiled(const Job& job, std::size_t budget, std::optional<int> tile_size) {
+  check_tiled_job(job);
+  const TilePlan plan = plan_job_tiles(job, budget, tile_size);
+  const GeoHeightBand band = *georaster_height_band(job);
+  GdalCacheLimit cache(kTiledGdalCacheBytes);
+  for (const Tile& tile : plan.tiles) read_window(job, band, tile.interior);
+  return tiles_text(plan);
+}
+
 void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
                 const BakeOptions& options, std::size_t budget) {
   check_tiled_job(job);

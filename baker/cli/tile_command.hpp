@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstddef>
 #include <optional>
+#include <string>
 
 #include "cli/bake_command.hpp"
 #include "cli/job_outcome.hpp"
@@ -31,6 +32,11 @@ void check_tiled_job(const Job& job);
 // (cli/scene_loader.hpp estimate_peak_bytes) fits `budget` less kTiledGdalCacheBytes. InputError at
 // /height when not even a 256 side fits (naming the halo and the estimate).
 TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> tile_size);
+
+// What `validate --tiles` checks of a tiled bake: check_tiled_job, the plan, and every texel of the raster
+// read (a window at a time) under the tiled bake's nodata rule. Returns the plan in words ("16 tiles (4 x 4)
+// of 4864^2 texels with a halo of 6").
+std::string validate_tiled(const Job& job, std::size_t budget, std::optional<int> tile_size);
 
 // Bakes `job` in tiles (check_tiled_job first) into its output folder, staged like bake_job's outputs:
 // the COGs appear whole, or nothing does. `options`: the memory budget (--memory-limit, default the

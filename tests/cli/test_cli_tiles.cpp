@@ -215,16 +215,24 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
       {"reference", {{"image", "f.tif"}}, relief, {{"reference", {{"samples", 4}}}}, "/reference", ""},
       {"budget", {{"image", "f.tif"}}, relief, {}, "/height", "--memory-limit 100M"},
   };
-  for (const Case& c : cases) {
-    SCOPED_TRACE(c.name);
-    const fs::path job = write_job(c.name, c.height, c.bake, c.extra);
-    const Result r = hfbake("bake --quiet --tiles " + c.args + " " + job.string());
-    EXPECT_EQ(r.exit_code, 2) << r.err;
-    const std::vector<std::string> lines = r.error_lines();
-    ASSERT_EQ(lines.size(), 1u) << r.err;
-    EXPECT_NE(lines[0].find(job.string() + ": " + c.pointer + ":"), std::string::npos) << lines[0];
-    EXPECT_FALSE(fs::exists(dir_ / ("out_" + c.name))) << "a refused tiled bake made its output folder";
-  }
+  for (const Case& c : cases)
+    for (const char* command : {"validate", "bake"}) {
+      SCOPED_TRACE(c.name + " " + command);
+      const fs::path job = write_job(c.name, c.height, c.bake, c.extra);
+      const Result r = hfbake(std::string(command) + " --quiet --tiles " + c.args + " " + job.string());
+      EXPECT_EQ(r.exit_code, 2) << r.err;
+      const std::vector<std::string> lines = r.error_lines();
+      ASSERT_EQ(lines.size(), 1u) << r.err;
+      EXPECT_NE(lines[0].find(job.string() + ": " + c.pointer + ":"), std::string::npos) << lines[0];
+      EXPECT_FALSE(fs::exists(dir_ / ("out_" + c.name))) << "a refused tiled bake made its output folder";
+    }
+  // The same raster and method as a valid job: validate says so, with the halo of 3 m on 0.5 m texels.
+  const Result ok =
+      hfbake("validate --tiles --tile-size 16 " + write_job("ok", {{"image", "f.tif"}}, relief).string());
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_NE(ok.err.find("valid (40x30 in 6 tiles (3 x 2) of 16^2 texels with a halo of 8)"),
+            std::string::npos)
+      << ok.err;
 }
 
 // A hole in a tile: refused naming the texel in the raster's coordinates, nothing written.
@@ -232,12 +240,14 @@ TEST_F(CliTiles, HoleIsRefusedNamingTheRasterTexel) {
   write_heights(dir_ / "hole.tif", 64, 48, [](int i, int j) { return i == 50 && j == 40 ? NAN : 0.1 * i; });
   const fs::path job =
       write_job("hole", {{"image", "hole.tif"}}, {{{"method", "relief"}, {"search_radius", 2}}});
-  const Result r = hfbake("bake --quiet --tiles --tile-size 16 " + job.string());
-  EXPECT_EQ(r.exit_code, 2) << r.err;
-  const std::vector<std::string> lines = r.error_lines();
-  ASSERT_EQ(lines.size(), 1u) << r.err;
-  EXPECT_NE(lines[0].find("/height/image: "), std::string::npos) << lines[0];
-  EXPECT_NE(lines[0].find("texel (50, 40)"), std::string::npos) << lines[0];
+  for (const char* command : {"validate", "bake"}) {
+    const Result r = hfbake(std::string(command) + " --quiet --tiles --tile-size 16 " + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const std::vector<std::string> lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_NE(lines[0].find("/height/image: "), std::string::npos) << lines[0];
+    EXPECT_NE(lines[0].find("texel (50, 40)"), std::string::npos) << lines[0];
+  }
   EXPECT_FALSE(fs::exists(dir_ / "out_hole" / "hole.relief.svf.tif"));
 }
 
