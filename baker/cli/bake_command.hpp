@@ -41,6 +41,8 @@ struct BakeOptions {
   // the interiors' side from --tile-size when given.
   bool tiles = false;
   std::optional<int> tile_size;
+  // --tile-task I/N (with --tiles): bake only task I's tiles of N into <out>/tiles/, for merge --tiles.
+  std::optional<ShardId> tile_task;
   // --overwrite: replace outputs of the same job name that another job file baked into the folder
   // (docs/output_folders.md).
   bool overwrite = false;

@@ -115,6 +115,11 @@ int main(int argc, char** argv) {
       ->add_option("--tile-size", tile_size,
                    "N: with --tiles, tiles of N^2 texels (default: from --memory-limit)")
       ->check(CLI::Range(16, 1 << 20));
+  std::string tile_task;
+  bake_cmd->add_option(
+      "--tile-task", tile_task,
+      "I/N: with --tiles and --tile-size, bake only task I's tiles of N into <out>/tiles/ (see "
+      "merge --tiles)");
   std::string shard;
   bake_cmd->add_option(
       "--shard", shard,
@@ -137,6 +142,11 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   add_run_options(merge_cmd, merge_run);
   add_job_options(merge_cmd, merge_writes);
+  bool merge_tiles = false;
+  merge_cmd->add_flag("--tiles", merge_tiles, "Write the COGs of a tiled bake from its tile tasks' files");
+  int merge_tile_size = 0;
+  merge_cmd->add_option("--tile-size", merge_tile_size, "N: the tile tasks' --tile-size")
+      ->check(CLI::Range(16, 1 << 20));
 
   // hfbake slurm: shards as a Slurm job array, then the merge.
   hfbake::SlurmOptions slurm;
@@ -288,6 +298,12 @@ int main(int argc, char** argv) {
   if (app.got_subcommand(merge_cmd)) {
     bake = bake_options(merge_jobs, merge_run, merge_writes);
     bake.merge = true;
+    bake.tiles = merge_tiles;
+    if (merge_tile_size > 0) bake.tile_size = merge_tile_size;
+    if (merge_tiles != (merge_tile_size > 0)) {
+      std::fprintf(stderr, "hfbake: error: command line: merge --tiles needs --tile-size N (the tasks')\n");
+      return 2;
+    }
     threads = merge_writes.threads;
   } else if (app.got_subcommand(bake_cmd)) {
     bake = bake_options(bake_jobs, bake_run, bake_writes);
@@ -299,6 +315,16 @@ int main(int argc, char** argv) {
     if (tile_size > 0 && !tiles) {
       std::fprintf(stderr, "hfbake: error: command line: --tile-size needs --tiles\n");
       return 2;
+    }
+    if (!tile_task.empty()) {
+      bake.tile_task = hfbake::parse_shard_id(tile_task);
+      if (!bake.tile_task || !tiles || tile_size == 0) {
+        std::fprintf(stderr,
+                     "hfbake: error: command line: --tile-task %s: must be I/N with 0 <= I < N <= 4096, with "
+                     "--tiles and --tile-size\n",
+                     tile_task.c_str());
+        return 2;
+      }
     }
     if (tiles && !shard.empty()) {
       std::fprintf(stderr, "hfbake: error: command line: --tiles and --shard do not combine\n");

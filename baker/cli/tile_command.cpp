@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -13,6 +14,7 @@
 #include "cli/scene_loader.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "io/georaster_input.hpp"
 #include "io/geotiff_output.hpp"
 #include "methods/method_table.hpp"
@@ -72,6 +74,63 @@ std::string tiles_text(const TilePlan& plan) {
   return std::to_string(plan.columns * plan.rows) + " tiles (" + std::to_string(plan.columns) + " x " +
          std::to_string(plan.rows) + ") of " + std::to_string(plan.tile) + "^2 texels with a halo of " +
          std::to_string(plan.halo);
+}
+
+// Bakes tile `k` of the plan: the tile's heights as a field of their own, then each entry through the method
+// table; sink(entry index, its layers, the interior's offset in them) gets each entry's layers.
+template <class Sink>
+void bake_tile(const Job& job, const GeoHeightBand& band, const TilePlan& plan, std::size_t k,
+               const std::atomic<bool>& cancel, const std::function<void(double)>& progress,
+               std::vector<double>& seconds, Sink&& sink) {
+  if (cancel.load()) throw Cancelled();
+  const Tile& tile = plan.tiles[k];
+  Georeference tile_geo;  // none of the tiled methods reads the site
+  tile_geo.geotransform = band.georeference.geotransform;
+  const Scene scene = complete_scene(job, read_window(job, band, tile.read), tile_geo, band.source);
+  const int ox = tile.interior.x0 - tile.read.x0, oy = tile.interior.y0 - tile.read.y0;
+  for (std::size_t e = 0; e < job.bakes.size(); ++e) {
+    const BakeEntry& entry = job.bakes[e];
+    const MethodConfig& config = entry_config(entry);
+    RunControl rc;
+    rc.cancel = &cancel;
+    rc.progress = [&](double f) { progress((double(e) + f) / double(job.bakes.size())); };
+    const auto t0 = std::chrono::steady_clock::now();
+    LayerSet layers = config.method->bake(scene, config, rc);
+    seconds[e] += seconds_since(t0);
+    check_layers_finite(entry.stem, layers);
+    sink(e, layers, ox, oy);
+  }
+}
+
+// What a tile file of entry `e` must say it belongs to (its HFBAKE_TILE_OF item): the job, the plan and
+// the entry's resolved parameters.
+std::string tile_identity(const Job& job, const TilePlan& plan, std::size_t e) {
+  return job.name + "; " + tiles_text(plan) + "; " + job.bakes[e].stem + " " +
+         entry_config(job.bakes[e]).resolved.dump();
+}
+
+// <output dir>/tiles/<name>.tile-<k>.<stem>.<layer>.tif: tile k's interior of one layer, from a tile task.
+fs::path tile_file(const Job& job, std::size_t k, const std::string& stem, const std::string& layer) {
+  return job.output.dir / "tiles" /
+         (job.name + ".tile-" + std::to_string(k) + "." + stem + "." + layer + ".tif");
+}
+
+// GeoTIFF metadata of an output of entry `e`.
+GeoTiffOptions output_options(const Job& job, const OutputStage& stage, const TilePlan& plan, std::size_t e) {
+  GeoTiffOptions tiff;
+  tiff.metadata = stage.geotiff_metadata({{"hfbake:version", hfbake_version()},
+                                          {"hfbake:job", job.name},
+                                          {"hfbake:method", job.bakes[e].method},
+                                          {"hfbake:parameters", entry_config(job.bakes[e]).resolved.dump()},
+                                          {"hfbake:tiles", tiles_text(plan)}});
+  return tiff;
+}
+
+// The tiles of tile task `task`: [I T / N, (I + 1) T / N) of the plan's T.
+std::pair<std::size_t, std::size_t> task_tiles(const TilePlan& plan, ShardId task) {
+  const std::size_t t = plan.tiles.size();
+  return {t * std::size_t(task.index) / std::size_t(task.count),
+          t * std::size_t(task.index + 1) / std::size_t(task.count)};
 }
 
 }  // namespace
@@ -145,63 +204,133 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
   const TilePlan plan = plan_job_tiles(job, budget, options.tile_size);
   const GeoHeightBand band = *georaster_height_band(job);
   GdalCacheLimit cache(kTiledGdalCacheBytes);
+  std::vector<double> seconds(job.bakes.size(), 0.0);
+  const auto t0 = std::chrono::steady_clock::now();
+
+  if (options.tile_task) {  // a task's tiles, each layer's interior into its tile file
+    const auto [first, end] = task_tiles(plan, *options.tile_task);
+    progress.message(job.name + ": tiles " + std::to_string(first) + ".." + std::to_string(end) + " of " +
+                     tiles_text(plan));
+    const fs::path folder = job.output.dir / "tiles";
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (!is_real_directory(folder))
+      refuse(job, "/output/dir",
+             folder.string() + " is not a folder (a link?): outputs are written inside " +
+                 job.output.dir.string() + " only");
+    progress.begin(job.name, "tiles");
+    for (std::size_t k = first; k < end; ++k) {
+      const Tile& tile = plan.tiles[k];
+      bake_tile(
+          job, band, plan, k, cancel,
+          [&](double f) {
+            progress.update(job.name, "tiles", (double(k - first) + f) / double(end - first));
+          },
+          seconds,
+          [&](std::size_t e, const LayerSet& layers, int ox, int oy) {
+            Georeference geo = band.georeference;
+            geo.geotransform[0] += tile.interior.x0 * geo.geotransform[1];
+            geo.geotransform[3] += tile.interior.y0 * geo.geotransform[5];
+            GeoTiffOptions tiff;
+            tiff.metadata = {{"HFBAKE_TILE_OF", std::to_string(k) + " of " + tile_identity(job, plan, e)}};
+            for (const Layer& layer : layers.layers) {
+              const std::size_t nc = std::size_t(layer.channel_count());
+              LayerSet part;
+              part.width = tile.interior.width;
+              part.height = tile.interior.height;
+              std::vector<float> data(std::size_t(part.width) * std::size_t(part.height) * nc);
+              for (int j = 0; j < part.height; ++j) {
+                const float* row = layer.data.data() +
+                                   (std::size_t(oy + j) * std::size_t(layers.width) + std::size_t(ox)) * nc;
+                std::copy(row, row + std::size_t(part.width) * nc,
+                          data.begin() + std::ptrdiff_t(std::size_t(j) * std::size_t(part.width) * nc));
+              }
+              const Layer& l = part.adopt(layer.name, layer.channels, std::move(data));
+              write_geotiff(tile_file(job, k, job.bakes[e].stem, layer.name), part, l, geo, tiff);
+            }
+          });
+    }
+    progress.end(job.name, "tiles", seconds_since(t0));
+    for (std::size_t e = 0; e < job.bakes.size(); ++e)
+      outcome.methods[job.bakes[e].stem] = {
+          {"method", job.bakes[e].method}, {"seconds", seconds[e]}, {"tiles", end - first}};
+    return;
+  }
+
   OutputStage stage(job, options.overwrite);
   for (const fs::path& p : stage.stale_removed())
     progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
   stage.set_georeference(band.georeference);
   progress.message(job.name + ": " + std::to_string(band.width) + "x" + std::to_string(band.height) + " in " +
                    tiles_text(plan));
-
-  // One work file per entry and layer, made when the first tile gives its channels.
+  // One work file per entry and layer, made when the first tile gives its channels (or, merging, from the
+  // entry's layers).
   struct Output {
     std::string file;  // <name>.<stem>.<layer>.tif
     std::unique_ptr<TiledGeoTiff> writer;
   };
   std::map<std::pair<std::size_t, std::string>, Output> outputs;
-  std::vector<double> seconds(job.bakes.size(), 0.0);
-  const auto t0 = std::chrono::steady_clock::now();
+  auto output = [&](std::size_t e, const std::string& layer,
+                    const std::vector<std::string>& channels) -> Output& {
+    Output& out = outputs[{e, layer}];
+    if (!out.writer) {
+      out.file = job.name + "." + job.bakes[e].stem + "." + layer + ".tif";
+      out.writer = std::make_unique<TiledGeoTiff>(stage.folder() / ("." + out.file + ".work"), plan.width,
+                                                  plan.height, layer, channels, band.georeference,
+                                                  output_options(job, stage, plan, e));
+    }
+    return out;
+  };
   progress.begin(job.name, "tiles");
   for (std::size_t k = 0; k < plan.tiles.size(); ++k) {
-    if (cancel.load()) throw Cancelled();
     const Tile& tile = plan.tiles[k];
-    Georeference tile_geo;  // the tile's own: methods read the site (none of the tiled ones does)
-    tile_geo.geotransform = band.georeference.geotransform;
-    const Scene scene = complete_scene(job, read_window(job, band, tile.read), tile_geo, band.source);
-    const int ox = tile.interior.x0 - tile.read.x0, oy = tile.interior.y0 - tile.read.y0;
-    for (std::size_t e = 0; e < job.bakes.size(); ++e) {
-      const BakeEntry& entry = job.bakes[e];
-      const MethodConfig& config = entry_config(entry);
-      RunControl rc;
-      rc.cancel = &cancel;
-      rc.progress = [&](double f) {
-        progress.update(job.name, "tiles",
-                        (double(k) + (double(e) + f) / double(job.bakes.size())) / double(plan.tiles.size()));
-      };
-      const auto t1 = std::chrono::steady_clock::now();
-      LayerSet layers = config.method->bake(scene, config, rc);
-      seconds[e] += seconds_since(t1);
-      check_layers_finite(entry.stem, layers);
-      for (const Layer& layer : layers.layers) {
-        Output& out = outputs[{e, layer.name}];
-        if (!out.writer) {
-          out.file = job.name + "." + entry.stem + "." + layer.name + ".tif";
-          GeoTiffOptions tiff;
-          tiff.metadata = stage.geotiff_metadata({{"hfbake:version", hfbake_version()},
-                                                  {"hfbake:job", job.name},
-                                                  {"hfbake:method", entry.method},
-                                                  {"hfbake:parameters", config.resolved.dump()},
-                                                  {"hfbake:tiles", tiles_text(plan)}});
-          out.writer = std::make_unique<TiledGeoTiff>(stage.folder() / ("." + out.file + ".work"), plan.width,
-                                                      plan.height, layer.name, layer.channels,
-                                                      band.georeference, tiff);
+    auto tile_progress = [&](double f) {
+      progress.update(job.name, "tiles", (double(k) + f) / double(plan.tiles.size()));
+    };
+    if (options.merge) {  // the tile tasks' files, each checked against the plan before it is taken
+      if (cancel.load()) throw Cancelled();
+      for (std::size_t e = 0; e < job.bakes.size(); ++e) {
+        const MethodConfig& config = entry_config(job.bakes[e]);
+        for (const std::string& name : config.layers) {
+          const fs::path file = tile_file(job, k, job.bakes[e].stem, name);
+          const int nc = layer_channel_count(name, config.directions);
+          const std::string expected = std::to_string(k) + " of " + tile_identity(job, plan, e);
+          const std::optional<GeoRasterInfo> info = probe_georaster(file);
+          if (!info || georaster_metadata_item(file, "HFBAKE_TILE_OF") != expected ||
+              info->width != tile.interior.width || info->height != tile.interior.height || info->bands != nc)
+            throw InputError(file.string(), "",
+                             fs::exists(file) ? "is not tile " + std::to_string(k) + " of this job's plan (" +
+                                                    tiles_text(plan) + "): bake it again with --tile-task"
+                                              : "is missing: bake its tile task (bake --tiles --tile-task)");
+          std::vector<std::string> channels;
+          std::vector<float> texels(std::size_t(info->width) * std::size_t(info->height) * std::size_t(nc));
+          for (int c = 0; c < nc; ++c) {
+            const Plane plane =
+                read_georaster_window(file, c, 0, 0, info->width, info->height, {file.string(), ""});
+            for (std::size_t t = 0; t < plane.values.size(); ++t)
+              texels[t * std::size_t(nc) + std::size_t(c)] = plane.values[t];
+            const std::string& band_name = info->band_names[std::size_t(c)];
+            channels.push_back(band_name.substr(std::min(band_name.size(), name.size() + 1)));
+          }
+          output(e, name, channels)
+              .writer->write(tile.interior.x0, tile.interior.y0, tile.interior.width, tile.interior.height,
+                             texels.data(), std::size_t(tile.interior.width));
         }
-        const std::size_t nc = std::size_t(layer.channel_count());
-        const float* first =
-            layer.data.data() + (std::size_t(oy) * std::size_t(layers.width) + std::size_t(ox)) * nc;
-        out.writer->write(tile.interior.x0, tile.interior.y0, tile.interior.width, tile.interior.height,
-                          first, std::size_t(layers.width));
       }
+      tile_progress(1);
+      continue;
     }
+    bake_tile(job, band, plan, k, cancel, tile_progress, seconds,
+              [&](std::size_t e, const LayerSet& layers, int ox, int oy) {
+                for (const Layer& layer : layers.layers) {
+                  const std::size_t nc = std::size_t(layer.channel_count());
+                  const float* first = layer.data.data() +
+                                       (std::size_t(oy) * std::size_t(layers.width) + std::size_t(ox)) * nc;
+                  output(e, layer.name, layer.channels)
+                      .writer->write(tile.interior.x0, tile.interior.y0, tile.interior.width,
+                                     tile.interior.height, first, std::size_t(layers.width));
+                }
+              });
   }
   progress.end(job.name, "tiles", seconds_since(t0));
   progress.begin(job.name, "cog");
@@ -215,7 +344,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
   progress.end(job.name, "cog", seconds_since(t2));
   for (std::size_t e = 0; e < job.bakes.size(); ++e)
     outcome.methods[job.bakes[e].stem] = {
-        {"method", job.bakes[e].method}, {"seconds", seconds[e]}, {"tiles", plan.columns * plan.rows}};
+        {"method", job.bakes[e].method}, {"seconds", seconds[e]}, {"tiles", plan.tiles.size()}};
   outcome.outputs = stage.commit();
   for (const fs::path& p : outcome.outputs) progress.message(job.name + ": wrote " + p.string());
 }

@@ -100,6 +100,15 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
   return plane;
 }
 
+std::string georaster_metadata_item(const fs::path& file, const std::string& key) {
+  GdalQuiet gdal;
+  std::unique_ptr<GDALDataset> ds(
+      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!ds) return "";
+  const char* value = ds->GetMetadataItem(key.c_str());
+  return value ? value : "";
+}
+
 GdalCacheLimit::GdalCacheLimit(std::size_t bytes) : previous_(GDALGetCacheMax64()) {
   GDALSetCacheMax64(GIntBig(bytes));
 }

@@ -41,6 +41,10 @@ std::optional<GeoRasterInfo> probe_georaster(const std::filesystem::path& file);
 Plane read_georaster_band(const std::filesystem::path& file, int band, const InputSite& site,
                           const ReadProgress& progress = {});
 
+// The dataset metadata item `key` (GDAL's default domain) of a raster; "" when it has none or GDAL cannot
+// open it.
+std::string georaster_metadata_item(const std::filesystem::path& file, const std::string& key);
+
 // GDAL's block cache held to `bytes` while the object lives (the previous size restored after): what a tiled
 // bake budgets for it.
 class GdalCacheLimit {

@@ -191,6 +191,53 @@ TEST_F(CliTiles, TiledBakeEqualsWholeBakeOnTheLidarDem) {
   expect_tiles_equal_whole("dem.tif", bake, {64, 128});
 }
 
+// The farm's halves: tile tasks (--tile-task I/N, any order) and merge --tiles write the COGs of the
+// one-process tiled bake, bit for bit; a missing tile file or one of another plan is refused naming it, with
+// no COG written.
+TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
+  write_family(150, 97);
+  const nlohmann::json height = {{"image", "craters.tif"}};
+  Result r = hfbake("bake --quiet --tiles --tile-size 40 " + write_job("one", height, kBounded).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fs::path job = write_job("farm", height, kBounded);
+  for (const int i : {2, 0, 1}) {
+    r = hfbake("bake --quiet --tiles --tile-size 40 --tile-task " + std::to_string(i) + "/3 " + job.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif")) << "a tile task wrote an output";
+  // Another plan's tiles: refused, naming the first file that is not of this plan.
+  r = hfbake("merge --quiet --tiles --tile-size 50 " + job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("tiles/farm.tile-0."), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  // A missing tile file: refused, naming it.
+  const fs::path gone = dir_ / "out_farm" / "tiles" / "farm.tile-5.relief.svf.tif";
+  const fs::path kept = dir_ / "kept.tif";
+  fs::rename(gone, kept);
+  r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find(gone.string() + ": is missing"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  fs::rename(kept, gone);
+  r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::size_t compared = 0;
+  for (const auto& e : fs::directory_iterator(dir_ / "out_one")) {
+    if (e.path().extension() != ".tif") continue;
+    const std::string name = "farm" + e.path().filename().string().substr(3);  // one.<stem>.<layer>.tif
+    const Bands one = read_bands(e.path()), farm = read_bands(dir_ / "out_farm" / name);
+    ASSERT_FALSE(one.values.empty()) << e.path();
+    EXPECT_TRUE(one.values == farm.values) << name;
+    ++compared;
+  }
+  std::size_t merged = 0;
+  for (const auto& e : fs::directory_iterator(dir_ / "out_farm")) merged += e.path().extension() == ".tif";
+  EXPECT_GE(compared, 6u);  // relief's svf and horizon_deg, each hbao entry's obscurance and bent_normal, ...
+  EXPECT_EQ(merged, compared);
+}
+
 // Each refusal: exit 2, one error line naming the job file and `pointer`, and no output folder.
 TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
   write_heights(dir_ / "f.tif", 40, 30, [](int i, int j) { return 0.1 * i * j; });
