@@ -166,6 +166,11 @@ int main(int argc, char** argv) {
                         "sbatch --mem per task (default: the job's memory estimate + 20 %)");
   slurm_cmd->add_option("--sbatch-arg", slurm.sbatch_args, "Any further sbatch option (repeatable)");
   slurm_cmd->add_flag("--wait", slurm.wait, "Wait for the merge and exit with its status");
+  bool slurm_tiles = false;
+  slurm_cmd->add_flag("--tiles", slurm_tiles,
+                      "A tiled bake: --shards tile tasks (bake --tiles --tile-task), then merge --tiles");
+  slurm_cmd->add_option("--tile-size", slurm.tile_size, "N: with --tiles, tiles of N^2 texels")
+      ->check(CLI::Range(16, 1 << 20));
   slurm_cmd->add_flag("--resume", slurm.resume, "Submit only the shards whose file is not complete");
   add_run_options(slurm_cmd, slurm_run);
   slurm_cmd->add_option("--threads", slurm.threads, "Threads per task (--cpus-per-task; default 1)")
@@ -291,6 +296,11 @@ int main(int argc, char** argv) {
     if (!slurm_run.cache.empty()) slurm.cache = slurm_run.cache;
     slurm.no_cache = slurm_run.no_cache;
     slurm.quiet = slurm_run.quiet;
+    if (slurm_tiles != (slurm.tile_size > 0)) {
+      std::fprintf(stderr,
+                   "hfbake: error: command line: slurm --tiles needs --tile-size N (and only with it)\n");
+      return 2;
+    }
     return hfbake::run_slurm(slurm);
   }
   hfbake::BakeOptions bake;
