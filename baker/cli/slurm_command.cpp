@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "cli/method_dispatch.hpp"
@@ -140,7 +141,7 @@ int run_slurm(const SlurmOptions& o) {
       if (o.tile_size > 0) {  // a tiled bake's task holds one tile's read window at a time
         try {
           check_tiled_job(job);
-          const TilePlan plan = plan_job_tiles(job, 0, o.tile_size);
+          const TilePlan plan = plan_job_tiles(job, std::numeric_limits<std::size_t>::max(), o.tile_size);
           const FieldSize size = probe_field_size(job);
           const int w = std::min(size.width, o.tile_size + 2 * plan.halo);
           const int h = std::min(size.height, o.tile_size + 2 * plan.halo);

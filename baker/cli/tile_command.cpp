@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
@@ -174,18 +175,27 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
   const std::optional<GeoHeightBand> band = georaster_height_band(job);
   if (!band) refuse(job, "/height", "a tiled bake reads a georeferenced raster through GDAL");
   const int halo = job_halo(job);
-  if (tile_size) return plan_tiles(band->width, band->height, *tile_size, halo);
   const std::size_t tile_budget = budget > kTiledGdalCacheBytes ? budget - kTiledGdalCacheBytes : 0;
-  auto peak = [&job](int w, int h) { return estimate_peak_bytes(job, FieldSize{w, h}); };
-  const std::optional<int> side =
-      tile_side_for_budget(band->width, band->height, halo, tile_budget, 256, peak);
-  if (!side) {
-    const int s = std::min(256 + 2 * halo, std::max(band->width, band->height));
+  auto peak = [&](int side) {
+    const int w = int(std::min<std::int64_t>(band->width, std::int64_t(side) + 2 * std::int64_t(halo)));
+    const int h = int(std::min<std::int64_t>(band->height, std::int64_t(side) + 2 * std::int64_t(halo)));
+    return estimate_peak_bytes(job, FieldSize{w, h});
+  };
+  auto too_large = [&](int side, const std::string& knob) {
     refuse(job, "/height",
-           "a tile of 256^2 texels with its halo of " + std::to_string(halo) + " needs about " +
-               std::to_string(peak(s, s) >> 20) + " MiB, more than the " + std::to_string(tile_budget >> 20) +
-               " MiB the memory budget leaves (--memory-limit)");
+           "a tile of " + std::to_string(side) + "^2 texels with its halo of " + std::to_string(halo) +
+               " needs about " + std::to_string(peak(side) >> 20) + " MiB, more than the " +
+               std::to_string(tile_budget >> 20) + " MiB the memory budget leaves (" + knob + ")");
+  };
+  if (tile_size) {
+    if (peak(*tile_size) > tile_budget) too_large(*tile_size, "--memory-limit, or a smaller --tile-size");
+    return plan_tiles(band->width, band->height, *tile_size, halo);
   }
+  const std::optional<int> side =
+      tile_side_for_budget(band->width, band->height, halo, tile_budget, 256, [&job](int w, int h) {
+        return estimate_peak_bytes(job, FieldSize{w, h});
+      });
+  if (!side) too_large(256, "--memory-limit");
   return plan_tiles(band->width, band->height, *side, halo);
 }
 

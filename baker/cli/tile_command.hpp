@@ -28,9 +28,9 @@ inline constexpr std::size_t kTiledGdalCacheBytes = std::size_t(64) << 20;
 void check_tiled_job(const Job& job);
 
 // The job's tile plan: the halo covers the largest reach of its entries; the interiors' side is
-// `tile_size` when given, else the largest multiple of 256 whose read window's memory estimate
-// (cli/scene_loader.hpp estimate_peak_bytes) fits `budget` less kTiledGdalCacheBytes. InputError at
-// /height when not even a 256 side fits (naming the halo and the estimate).
+// `tile_size` when given, else the largest multiple of 256; either way its read window's memory estimate
+// (cli/scene_loader.hpp estimate_peak_bytes) must fit `budget` less kTiledGdalCacheBytes: InputError at
+// /height otherwise (naming the side, the halo and the estimate).
 TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> tile_size);
 
 // What `validate --tiles` checks of a tiled bake: check_tiled_job, the plan, and every texel of the raster

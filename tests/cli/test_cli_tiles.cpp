@@ -261,6 +261,7 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
       {"nogeotiff", {{"image", "f.tif"}}, relief, {{"output", {{"geotiff", false}}}}, "/output/geotiff", ""},
       {"reference", {{"image", "f.tif"}}, relief, {{"reference", {{"samples", 4}}}}, "/reference", ""},
       {"budget", {{"image", "f.tif"}}, relief, {}, "/height", "--memory-limit 100M"},
+      {"tile_size", {{"image", "f.tif"}}, relief, {}, "/height", "--tile-size 16 --memory-limit 100M"},
   };
   for (const Case& c : cases)
     for (const char* command : {"validate", "bake"}) {
