@@ -25,6 +25,7 @@
 #include "cli/suite.hpp"
 #include "cli/test_break.hpp"
 #include "cli/texture_plan.hpp"
+#include "cli/tile_command.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
@@ -278,6 +279,11 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
               const ReferenceCache* cache, const BakeOptions& options,
               std::map<std::string, LayerSet>* kept) {
   const FieldSize size = probe_field_size(job);
+  if (options.tiles) {  // the tiles' plan holds them to the budget, whatever the raster's size
+    bake_tiled(job, progress, cancel, outcome, options,
+               options.memory_limit ? *options.memory_limit : available_memory_bytes());
+    return;
+  }
   check_job_memory(job, size, options.memory_limit);
   check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
   if (options.shard) {
@@ -409,7 +415,8 @@ std::optional<std::size_t> parse_memory_size(const std::string& text) {
   return std::size_t(bytes);
 }
 
-int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<std::size_t> memory_limit) {
+int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<std::size_t> memory_limit,
+                 bool tiles, std::optional<int> tile_size) {
   int exit_code = 0;
   // A suite validates as the jobs it lists (as `bake` would run them).
   std::vector<fs::path> jobs;
@@ -436,6 +443,14 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
     }
     try {
       const FieldSize size = probe_field_size(*load.job);
+      if (tiles) {
+        const std::string plan =
+            validate_tiled(*load.job, memory_limit ? *memory_limit : available_memory_bytes(), tile_size);
+        if (!quiet)
+          std::fprintf(stderr, "hfbake: %s: valid (%dx%d in %s)\n", file.c_str(), size.width, size.height,
+                       plan.c_str());
+        continue;
+      }
       std::string parts;
       const std::size_t need = check_job_memory(*load.job, size, memory_limit, &parts);
       // Everything bake refuses about the inputs, refused here first: the same loader reads every image

@@ -37,6 +37,12 @@ struct BakeOptions {
   std::optional<ShardId> shard;
   int stage = 0;  // --stage S (with --shard): stage S of the staged methods (p2's bounce S)
   bool merge = false;
+  // --tiles: bake a georeferenced raster in spatial tiles within the memory budget (cli/tile_command.hpp),
+  // the interiors' side from --tile-size when given.
+  bool tiles = false;
+  std::optional<int> tile_size;
+  // --tile-task I/N (with --tiles): bake only task I's tiles of N into <out>/tiles/, for merge --tiles.
+  std::optional<ShardId> tile_task;
   // --overwrite: replace outputs of the same job name that another job file baked into the folder
   // (docs/output_folders.md).
   bool overwrite = false;
@@ -67,7 +73,9 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
 int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel);
 
 // Schema and file checks without baking: 0 all valid, 2 otherwise. Prints one line per problem.
+// `tiles`: as a tiled bake (cli/tile_command.hpp validate_tiled) with tiles of `tile_size` when given.
 int run_validate(const std::vector<std::filesystem::path>& jobs, bool quiet,
-                 std::optional<std::size_t> memory_limit = std::nullopt);
+                 std::optional<std::size_t> memory_limit = std::nullopt, bool tiles = false,
+                 std::optional<int> tile_size = std::nullopt);
 
 }  // namespace hfbake

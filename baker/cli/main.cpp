@@ -105,6 +105,21 @@ int main(int argc, char** argv) {
                    "Refuse a job whose memory estimate exceeds SIZE (default: the available memory)")
       ->check(memory_size);
 
+  bool tiles = false;
+  bake_cmd->add_flag(
+      "--tiles", tiles,
+      "Bake a georeferenced raster in spatial tiles within the memory budget, into Cloud-Optimised "
+      "GeoTIFFs only (docs/large-fields.md)");
+  int tile_size = 0;
+  bake_cmd
+      ->add_option("--tile-size", tile_size,
+                   "N: with --tiles, tiles of N^2 texels (default: from --memory-limit)")
+      ->check(CLI::Range(16, 1 << 20));
+  std::string tile_task;
+  bake_cmd->add_option(
+      "--tile-task", tile_task,
+      "I/N: with --tiles and --tile-size, bake only task I's tiles of N into <out>/tiles/ (see "
+      "merge --tiles)");
   std::string shard;
   bake_cmd->add_option(
       "--shard", shard,
@@ -127,6 +142,11 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   add_run_options(merge_cmd, merge_run);
   add_job_options(merge_cmd, merge_writes);
+  bool merge_tiles = false;
+  merge_cmd->add_flag("--tiles", merge_tiles, "Write the COGs of a tiled bake from its tile tasks' files");
+  int merge_tile_size = 0;
+  merge_cmd->add_option("--tile-size", merge_tile_size, "N: the tile tasks' --tile-size")
+      ->check(CLI::Range(16, 1 << 20));
 
   // hfbake slurm: shards as a Slurm job array, then the merge.
   hfbake::SlurmOptions slurm;
@@ -146,6 +166,11 @@ int main(int argc, char** argv) {
                         "sbatch --mem per task (default: the job's memory estimate + 20 %)");
   slurm_cmd->add_option("--sbatch-arg", slurm.sbatch_args, "Any further sbatch option (repeatable)");
   slurm_cmd->add_flag("--wait", slurm.wait, "Wait for the merge and exit with its status");
+  bool slurm_tiles = false;
+  slurm_cmd->add_flag("--tiles", slurm_tiles,
+                      "A tiled bake: --shards tile tasks (bake --tiles --tile-task), then merge --tiles");
+  slurm_cmd->add_option("--tile-size", slurm.tile_size, "N: with --tiles, tiles of N^2 texels")
+      ->check(CLI::Range(16, 1 << 20));
   slurm_cmd->add_flag("--resume", slurm.resume, "Submit only the shards whose file is not complete");
   add_run_options(slurm_cmd, slurm_run);
   slurm_cmd->add_option("--threads", slurm.threads, "Threads per task (--cpus-per-task; default 1)")
@@ -198,6 +223,12 @@ int main(int argc, char** argv) {
   std::string validate_memory_limit;
   validate_cmd->add_option("--memory-limit", validate_memory_limit, "As bake's --memory-limit")
       ->check(memory_size);
+  bool validate_tiles = false;
+  validate_cmd->add_flag("--tiles", validate_tiles,
+                         "As bake --tiles: the tile plan, every tile's heights read");
+  int validate_tile_size = 0;
+  validate_cmd->add_option("--tile-size", validate_tile_size, "As bake's --tile-size")
+      ->check(CLI::Range(16, 1 << 20));
 
   // hfbake horizon: the horizon profile at a point of a DEM.
   hfbake::HorizonOptions horizon;
@@ -247,7 +278,8 @@ int main(int argc, char** argv) {
     std::vector<std::filesystem::path> files(validate_jobs.begin(), validate_jobs.end());
     return hfbake::run_validate(
         files, validate_quiet,
-        validate_memory_limit.empty() ? std::nullopt : hfbake::parse_memory_size(validate_memory_limit));
+        validate_memory_limit.empty() ? std::nullopt : hfbake::parse_memory_size(validate_memory_limit),
+        validate_tiles, validate_tile_size > 0 ? std::optional<int>(validate_tile_size) : std::nullopt);
   }
   if (app.got_subcommand(init_cmd)) {
     init.height_file = init_height;
@@ -264,6 +296,11 @@ int main(int argc, char** argv) {
     if (!slurm_run.cache.empty()) slurm.cache = slurm_run.cache;
     slurm.no_cache = slurm_run.no_cache;
     slurm.quiet = slurm_run.quiet;
+    if (slurm_tiles != (slurm.tile_size > 0)) {
+      std::fprintf(stderr,
+                   "hfbake: error: command line: slurm --tiles needs --tile-size N (and only with it)\n");
+      return 2;
+    }
     return hfbake::run_slurm(slurm);
   }
   hfbake::BakeOptions bake;
@@ -271,12 +308,38 @@ int main(int argc, char** argv) {
   if (app.got_subcommand(merge_cmd)) {
     bake = bake_options(merge_jobs, merge_run, merge_writes);
     bake.merge = true;
+    bake.tiles = merge_tiles;
+    if (merge_tile_size > 0) bake.tile_size = merge_tile_size;
+    if (merge_tiles != (merge_tile_size > 0)) {
+      std::fprintf(stderr, "hfbake: error: command line: merge --tiles needs --tile-size N (the tasks')\n");
+      return 2;
+    }
     threads = merge_writes.threads;
   } else if (app.got_subcommand(bake_cmd)) {
     bake = bake_options(bake_jobs, bake_run, bake_writes);
     threads = bake_writes.threads;
     if (!memory_limit.empty()) bake.memory_limit = hfbake::parse_memory_size(memory_limit);
     bake.stage = stage;
+    bake.tiles = tiles;
+    if (tile_size > 0) bake.tile_size = tile_size;
+    if (tile_size > 0 && !tiles) {
+      std::fprintf(stderr, "hfbake: error: command line: --tile-size needs --tiles\n");
+      return 2;
+    }
+    if (!tile_task.empty()) {
+      bake.tile_task = hfbake::parse_shard_id(tile_task);
+      if (!bake.tile_task || !tiles || tile_size == 0) {
+        std::fprintf(stderr,
+                     "hfbake: error: command line: --tile-task %s: must be I/N with 0 <= I < N <= 4096, with "
+                     "--tiles and --tile-size\n",
+                     tile_task.c_str());
+        return 2;
+      }
+    }
+    if (tiles && !shard.empty()) {
+      std::fprintf(stderr, "hfbake: error: command line: --tiles and --shard do not combine\n");
+      return 2;
+    }
     if (stage > 0 && shard.empty()) {
       std::fprintf(stderr, "hfbake: error: command line: --stage needs --shard I/N\n");
       return 2;

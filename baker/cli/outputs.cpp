@@ -330,14 +330,21 @@ std::vector<std::string> OutputStage::write_layers(const std::string& stem, cons
   return notices;
 }
 
-void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers) {
-  GeoTiffOptions options;
-  for (const auto& [key, value] : layers.attributes) {
+std::vector<std::pair<std::string, std::string>> OutputStage::geotiff_metadata(
+    const std::vector<std::pair<std::string, std::string>>& attributes) const {
+  std::vector<std::pair<std::string, std::string>> metadata;
+  for (const auto& [key, value] : attributes) {
     std::string k = key;  // "hfbake:method" -> "HFBAKE_METHOD" (GDAL metadata names)
     for (char& c : k) c = c == ':' ? '_' : char(std::toupper(static_cast<unsigned char>(c)));
-    options.metadata.emplace_back(k, value);
+    metadata.emplace_back(k, value);
   }
-  options.metadata.emplace_back("HFBAKE_AZIMUTH_CONVENTION", azimuth_convention(georeference_));
+  metadata.emplace_back("HFBAKE_AZIMUTH_CONVENTION", azimuth_convention(georeference_));
+  return metadata;
+}
+
+void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers) {
+  GeoTiffOptions options;
+  options.metadata = geotiff_metadata(layers.attributes);
   for (const Layer& layer : layers.layers) {
     const std::string tif = job_.name + "." + stem + "." + layer.name + ".tif";
     write_geotiff(stage_ / tif, layers, layer, georeference_, options);

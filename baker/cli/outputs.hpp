@@ -79,6 +79,14 @@ class OutputStage {
   [[nodiscard]] std::vector<std::string> write_textures(const std::string& stem, const LayerSet& layers);
   // Writes a text file (report.json, ...) into the stage.
   void write_text(const std::string& filename, const std::string& text);
+  // The staging folder, for outputs written by parts (a tiled bake's GeoTIFFs, cli/tile_command.hpp): a
+  // file made there is an output once adopt() names it; anything else there is removed with the stage.
+  const std::filesystem::path& folder() const { return stage_; }
+  void adopt(const std::string& filename) { staged_.push_back(filename); }
+  // The metadata items of a GeoTIFF output whose layers have `attributes` (LayerSet::attributes): each
+  // "hfbake:key" as "HFBAKE_KEY", and the azimuth convention.
+  std::vector<std::pair<std::string, std::string>> geotiff_metadata(
+      const std::vector<std::pair<std::string, std::string>>& attributes) const;
   // Moves every staged file to its final place (each rename is atomic; a folder on the way that is a link
   // is refused) and records the job file as the outputs' owner; returns the final paths.
   std::vector<std::filesystem::path> commit();

@@ -99,51 +99,71 @@ std::optional<double> image_texel_size(const Job& job) {
   return std::nullopt;
 }
 
+std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
+  const nlohmann::json& h = job.doc["height"];
+  if (!h.contains("image")) return std::nullopt;
+  const std::string image = h["image"].get<std::string>();
+  const std::optional<GeoRasterInfo> geo = checked_georaster(job);
+  if (!geo) return std::nullopt;
+  const ChannelSelector channel = channel_selector(h.contains("channel") ? h["channel"] : nlohmann::json());
+  // Bands by index (0-based, like channels) or by description.
+  int band = -1;
+  std::string names;
+  for (int b = 0; b < geo->bands; ++b)
+    names += (b ? ", " : "") + (geo->band_names[b].empty() ? std::to_string(b) : geo->band_names[b]);
+  if (const int* index = std::get_if<int>(&channel)) {
+    if (*index < geo->bands) band = *index;
+  } else {
+    for (int b = 0; b < geo->bands && band < 0; ++b)
+      if (geo->band_names[b] == std::get<std::string>(channel)) band = b;
+  }
+  if (band < 0)
+    throw InputError(job.file.string(), "/height/channel",
+                     job.resolve(image).string() + ": has no such band (it has " +
+                         std::to_string(geo->bands) + ": " + names + ")");
+  GeoHeightBand out;
+  out.file = job.resolve(image);
+  out.band = band;
+  out.width = geo->width;
+  out.height = geo->height;
+  out.nodata = geo->nodata[band];
+  out.source.reader = "GDAL";
+  out.source.format = geo->driver;
+  Georeference& georeference = out.georeference;
+  georeference.geotransform = local_geotransform(job_texel_size(job));
+  georeference.from_file = geo->has_geotransform;
+  georeference.crs_wkt = geo->crs_wkt;
+  georeference.crs_name = geo->crs_name;
+  if (geo->has_geotransform) georeference.geotransform = geo->geotransform;
+  if (geo->has_geotransform && !geo->crs_wkt.empty()) {
+    const std::array<double, 6>& g = georeference.geotransform;
+    const double x = g[0] + 0.5 * geo->width * g[1] + 0.5 * geo->height * g[2];
+    const double y = g[3] + 0.5 * geo->width * g[4] + 0.5 * geo->height * g[5];
+    const auto lonlat = crs_to_lonlat(geo->crs_wkt, x, y);
+    const auto gamma = grid_convergence(geo->crs_wkt, x, y);
+    if (lonlat && gamma) {
+      georeference.has_site = true;
+      georeference.site_longitude = (*lonlat)[0], georeference.site_latitude = (*lonlat)[1];
+      georeference.site_convergence = *gamma;
+    }
+  }
+  return out;
+}
+
 HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference,
                              HeightSource& source, const std::function<void(double)>& progress) {
   const nlohmann::json& h = job.doc["height"];
   const std::string image = h["image"].get<std::string>();
-  const ChannelSelector channel = channel_selector(h.contains("channel") ? h["channel"] : nlohmann::json());
-  const std::optional<GeoRasterInfo> geo = checked_georaster(job);
   Plane plane;
   std::optional<double> file_nodata;
-  if (geo) {
-    // Bands by index (0-based, like channels) or by description.
-    int band = -1;
-    std::string names;
-    for (int b = 0; b < geo->bands; ++b)
-      names += (b ? ", " : "") + (geo->band_names[b].empty() ? std::to_string(b) : geo->band_names[b]);
-    if (const int* index = std::get_if<int>(&channel)) {
-      if (*index < geo->bands) band = *index;
-    } else {
-      for (int b = 0; b < geo->bands && band < 0; ++b)
-        if (geo->band_names[b] == std::get<std::string>(channel)) band = b;
-    }
-    if (band < 0)
-      throw InputError(job.file.string(), "/height/channel",
-                       job.resolve(image).string() + ": has no such band (it has " +
-                           std::to_string(geo->bands) + ": " + names + ")");
-    plane = read_georaster_band(job.resolve(image), band, site(job, "/height/image"), progress);
-    source.reader = "GDAL";
-    source.format = geo->driver;
-    file_nodata = geo->nodata[band];
-    georeference.from_file = geo->has_geotransform;
-    georeference.crs_wkt = geo->crs_wkt;
-    georeference.crs_name = geo->crs_name;
-    if (geo->has_geotransform) georeference.geotransform = geo->geotransform;
-    if (geo->has_geotransform && !geo->crs_wkt.empty()) {
-      const std::array<double, 6>& g = georeference.geotransform;
-      const double x = g[0] + 0.5 * geo->width * g[1] + 0.5 * geo->height * g[2];
-      const double y = g[3] + 0.5 * geo->width * g[4] + 0.5 * geo->height * g[5];
-      const auto lonlat = crs_to_lonlat(geo->crs_wkt, x, y);
-      const auto gamma = grid_convergence(geo->crs_wkt, x, y);
-      if (lonlat && gamma) {
-        georeference.has_site = true;
-        georeference.site_longitude = (*lonlat)[0], georeference.site_latitude = (*lonlat)[1];
-        georeference.site_convergence = *gamma;
-      }
-    }
+  if (std::optional<GeoHeightBand> geo = georaster_height_band(job)) {
+    plane = read_georaster_band(geo->file, geo->band, site(job, "/height/image"), progress);
+    source.reader = geo->source.reader;
+    source.format = geo->source.format;
+    file_nodata = geo->nodata;
+    georeference = std::move(geo->georeference);
   } else {
+    const ChannelSelector channel = channel_selector(h.contains("channel") ? h["channel"] : nlohmann::json());
     const ImageInfo info = probe_image(job.resolve(image), site(job, "/height/image"));
     plane = read_image_channel(job.resolve(image), channel, site(job, "/height/image"),
                                site(job, "/height/channel"), progress);

@@ -4,6 +4,7 @@
 // the JSON pointer and, where there is one, the image.
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -32,6 +33,20 @@ std::optional<double> image_texel_size(const Job& job);
 // each.
 HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference,
                              HeightSource& source, const std::function<void(double)>& progress = {});
+
+// The height band of a job whose heights are a georeferenced raster read through GDAL: the file, the band
+// (height.channel), its NoData value, the whole raster's georeference (CRS, geotransform, the field's
+// centre) and the reader, format and sample type. nullopt for an image OpenImageIO reads or a procedural
+// field. InputError at /height/channel for a band the raster lacks.
+struct GeoHeightBand {
+  std::filesystem::path file;
+  int band = 0;
+  int width = 0, height = 0;
+  std::optional<double> nodata;
+  Georeference georeference;
+  HeightSource source;
+};
+std::optional<GeoHeightBand> georaster_height_band(const Job& job);
 
 // The nodata rule of a height field from `source` (an image's name as the job gives it, or "heights" for
 // an array handed in by the Python module): NaN/Inf texels, texels equal to height.nodata_value or to

@@ -6,12 +6,14 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "cli/method_dispatch.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
+#include "cli/tile_command.hpp"
 #include "core/safe_file.hpp"
 #include "farm/shard_file.hpp"
 #include "job/content_hash.hpp"
@@ -136,7 +138,20 @@ int run_slurm(const SlurmOptions& o) {
         return 2;
       }
       const Job& job = *load.job;
-      need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
+      if (o.tile_size > 0) {  // a tiled bake's task holds one tile's read window at a time
+        try {
+          check_tiled_job(job);
+          const TilePlan plan = plan_job_tiles(job, std::numeric_limits<std::size_t>::max(), o.tile_size);
+          const FieldSize size = probe_field_size(job);
+          const int w = std::min(size.width, o.tile_size + 2 * plan.halo);
+          const int h = std::min(size.height, o.tile_size + 2 * plan.halo);
+          need_bytes = std::max(need_bytes, estimate_peak_bytes(job, {w, h}) + kTiledGdalCacheBytes);
+        } catch (const InputError& e) {
+          return fail(e.line());
+        }
+      } else {
+        need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
+      }
       const int stages = job_stages(job);
       std::vector<std::vector<StageItem>> items;
       for (int s = 0; s < o.shards; ++s)
@@ -168,6 +183,7 @@ int run_slurm(const SlurmOptions& o) {
   // Whether task t has work in stage `stage`, and (--resume) whether that work is not on disk yet.
   auto has_stage = [&](const Task& t, int stage) { return stage == 0 || !items_of(t, stage).empty(); };
   auto complete = [&](const Task& t, int stage) {
+    if (o.tile_size > 0) return false;  // tile tasks are re-run whole
     JobLoad load = load_job(t.job, t.out);
     if (!load.job || !resolve_job(*load.job).empty()) return false;
     const Job& job = *load.job;
@@ -231,7 +247,10 @@ int run_slurm(const SlurmOptions& o) {
   bake << " )\n"
        << "i=${SLURM_ARRAY_TASK_ID:?run me with sbatch --array}\n"
        << "STAGE=${1:-0}\n"
-       << "exec " << exe << " bake \"${JOBS[$i]}\" --shard \"${SHARDS[$i]}/$N\" --stage \"$STAGE\""
+       << "exec " << exe << " bake \"${JOBS[$i]}\" "
+       << (o.tile_size > 0
+               ? "--tiles --tile-size " + std::to_string(o.tile_size) + " --tile-task \"${SHARDS[$i]}/$N\""
+               : std::string("--shard \"${SHARDS[$i]}/$N\" --stage \"$STAGE\""))
        << " --out \"${OUTS[$i]}\""
        << " --threads \"${SLURM_CPUS_PER_TASK:-" << o.threads << "}\"" << bake_flags(o)
        << (o.quiet ? " --quiet" : "") << "\n";
@@ -247,6 +266,7 @@ int run_slurm(const SlurmOptions& o) {
         << "exec " << exe << " merge";
   for (const fs::path& f : o.inputs) merge << " " << quoted(f.string());
   if (o.out) merge << " --out " << quoted(o.out->string());
+  if (o.tile_size > 0) merge << " --tiles --tile-size " << o.tile_size;
   merge << " --threads \"${SLURM_CPUS_PER_TASK:-" << o.threads << "}\"" << bake_flags(o)
         << (o.quiet ? " --quiet" : "") << "\n";
 
@@ -313,7 +333,7 @@ int run_slurm(const SlurmOptions& o) {
     if (!o.quiet) std::fprintf(stderr, "hfbake: submitted the merge as job %s (afterok)\n", merge_id.c_str());
     return 0;
   }
-  if (status != 0) {
+  if (status != 0 && o.tile_size == 0) {
     // Name what is missing: the shards no task completed.
     for (const Task& t : tasks) {
       JobLoad load = load_job(t.job, t.out);
@@ -341,9 +361,10 @@ int run_slurm(const SlurmOptions& o) {
         if (missing) break;
       }
     }
+  }
+  if (status != 0)
     std::fprintf(stderr, "hfbake: error: %s: the merge job %s ended with status %d (log: %s)\n",
                  (dir / "merge.sbatch").c_str(), merge_id.c_str(), status, (dir / "logs").c_str());
-  }
   return status;
 }
 

@@ -23,6 +23,10 @@ struct SlurmOptions {
   std::optional<std::filesystem::path> out, cache;
   bool no_cache = false, quiet = false;
   int threads = 1;  // per task: --cpus-per-task and the tasks' --threads
+  // --tile-size S (with --tiles): a tiled bake (cli/tile_command.hpp), `shards` tile tasks (bake --tiles
+  // --tile-size S --tile-task I/N), then merge --tiles --tile-size S; each task's memory is the estimate of
+  // one tile's read window. 0: not tiled.
+  int tile_size = 0;
 };
 
 // 0 submitted (with wait: the merge's exit status; with dry_run: printed), 2 bad input or a failed

@@ -100,4 +100,53 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
   return plane;
 }
 
+std::string georaster_metadata_item(const fs::path& file, const std::string& key) {
+  GdalQuiet gdal;
+  std::unique_ptr<GDALDataset> ds(
+      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!ds) return "";
+  const char* value = ds->GetMetadataItem(key.c_str());
+  return value ? value : "";
+}
+
+GdalCacheLimit::GdalCacheLimit(std::size_t bytes) : previous_(GDALGetCacheMax64()) {
+  GDALSetCacheMax64(GIntBig(bytes));
+}
+
+GdalCacheLimit::~GdalCacheLimit() {
+  GDALSetCacheMax64(GIntBig(previous_));
+}
+
+Plane read_georaster_window(const fs::path& file, int band, int x0, int y0, int width, int height,
+                            const InputSite& site) {
+  GdalQuiet gdal;
+  std::unique_ptr<GDALDataset> ds(
+      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!ds)
+    throw InputError(site.job_file, site.pointer,
+                     file.string() + ": cannot read the raster: " + gdal.error());
+  GDALRasterBand* b = ds->GetRasterBand(band + 1);
+  if (!b)
+    throw InputError(site.job_file, site.pointer, file.string() + ": has no band " + std::to_string(band));
+  const std::string window = "columns " + std::to_string(x0) + ".." + std::to_string(x0 + width - 1) +
+                             ", rows " + std::to_string(y0) + ".." + std::to_string(y0 + height - 1);
+  if (width < 1 || height < 1 || x0 < 0 || y0 < 0 || x0 > ds->GetRasterXSize() - width ||
+      y0 > ds->GetRasterYSize() - height)
+    throw InputError(site.job_file, site.pointer, file.string() + ": has no " + window);
+  Plane plane;
+  plane.width = width;
+  plane.height = height;
+  plane.values.resize(std::size_t(width) * std::size_t(height));
+  const GDALDataType type = b->GetRasterDataType();
+  plane.sample_type = GDALGetDataTypeName(type);
+  plane.integer = GDALDataTypeIsInteger(type) != 0;
+  if (b->RasterIO(GF_Read, x0, y0, width, height, plane.values.data(), width, height, GDT_Float32, 0, 0,
+                  nullptr) != CE_None)
+    throw InputError(site.job_file, site.pointer,
+                     file.string() + ": cannot decode the raster (corrupt or truncated?) at " + window +
+                         ": " + gdal.error());
+  ds->FlushCache();
+  return plane;
+}
+
 }  // namespace hfbake

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -39,5 +40,29 @@ std::optional<GeoRasterInfo> probe_georaster(const std::filesystem::path& file);
 // truncated -> InputError at `site` naming the file.
 Plane read_georaster_band(const std::filesystem::path& file, int band, const InputSite& site,
                           const ReadProgress& progress = {});
+
+// The dataset metadata item `key` (GDAL's default domain) of a raster; "" when it has none or GDAL cannot
+// open it.
+std::string georaster_metadata_item(const std::filesystem::path& file, const std::string& key);
+
+// GDAL's block cache held to `bytes` while the object lives (the previous size restored after): what a tiled
+// bake budgets for it.
+class GdalCacheLimit {
+ public:
+  explicit GdalCacheLimit(std::size_t bytes);
+  ~GdalCacheLimit();
+  GdalCacheLimit(const GdalCacheLimit&) = delete;
+  GdalCacheLimit& operator=(const GdalCacheLimit&) = delete;
+
+ private:
+  long long previous_ = 0;
+};
+
+// Columns [x0, x0 + width) and rows [y0, y0 + height) of band `band` as float32, as read_georaster_band reads
+// the whole band (values as stored), in one RasterIO of the window: a tiled bake's reads (the window alone
+// is decoded: the blocks it touches), GDAL's block cache emptied after it. InputError at `site` naming the
+// file and the window for a window outside the raster or a failed decode.
+Plane read_georaster_window(const std::filesystem::path& file, int band, int x0, int y0, int width,
+                            int height, const InputSite& site);
 
 }  // namespace hfbake

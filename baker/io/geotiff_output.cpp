@@ -20,6 +20,53 @@ struct DatasetCloser {
 };
 using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
 
+// The CRS and geotransform of `geo` and the metadata of `options` on `ds`.
+template <class Fail>
+void set_georeference(GDALDataset& ds, const Georeference& geo, const GeoTiffOptions& options, Fail fail) {
+  std::array<double, 6> gt = geo.geotransform;
+  ds.SetGeoTransform(gt.data());
+  if (!geo.crs_wkt.empty()) {
+    OGRSpatialReference srs;
+    if (srs.importFromWkt(geo.crs_wkt.c_str()) != OGRERR_NONE) fail("cannot use the input's CRS");
+    srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+    ds.SetSpatialRef(&srs);
+  }
+  for (const auto& [key, value] : options.metadata) ds.SetMetadataItem(key.c_str(), value.c_str());
+}
+
+// `source` as the COG `file`: DEFLATE with the floating-point predictor, 512x512 blocks, average overviews,
+// written under a temporary name beside `file` and renamed into place. Failure -> InputError naming `file`.
+void copy_to_cog(const fs::path& file, GDALDataset& source) {
+  auto fail = [&](const std::string& what) { throw InputError(file.string(), "", what); };
+  GdalQuiet gdal;
+  GDALDriver* cog_driver = GetGDALDriverManager()->GetDriverByName("COG");
+  if (!cog_driver) fail("GDAL has no COG driver");
+  std::string tmp_name(1, '.');  // (built up in steps: GCC 12 warns falsely on "." + string)
+  tmp_name.append(file.filename().string()).append(".tmp-").append(std::to_string(getpid()));
+  const fs::path tmp = file.parent_path() / tmp_name;
+  const char* const cog_options[] = {"COMPRESS=DEFLATE",   "PREDICTOR=YES",    "BLOCKSIZE=512",
+                                     "RESAMPLING=AVERAGE", "BIGTIFF=IF_SAFER", nullptr};
+  DatasetPtr out(
+      cog_driver->CreateCopy(tmp.c_str(), &source, FALSE, const_cast<char**>(cog_options), nullptr, nullptr));
+  if (!out) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    fail("cannot write the GeoTIFF: " + gdal.error());
+  }
+  out.reset();  // flushes and closes
+  if (CPLGetLastErrorType() >= CE_Failure) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    fail("cannot write the GeoTIFF: " + gdal.error());
+  }
+  std::error_code ec;
+  fs::rename(tmp, file, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    fail("cannot move into place: " + ec.message());
+  }
+}
+
 }  // namespace
 
 void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& layer, const Georeference& geo,
@@ -48,40 +95,60 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
     band->SetDescription((layer.name + "." + layer.channels[std::size_t(c)]).c_str());
     if (holes) band->SetNoDataValue(kGeoTiffNodata);
   }
-  std::array<double, 6> gt = geo.geotransform;
-  mem->SetGeoTransform(gt.data());
-  if (!geo.crs_wkt.empty()) {
-    OGRSpatialReference srs;
-    if (srs.importFromWkt(geo.crs_wkt.c_str()) != OGRERR_NONE) fail("cannot use the input's CRS");
-    srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-    mem->SetSpatialRef(&srs);
-  }
-  for (const auto& [key, value] : options.metadata) mem->SetMetadataItem(key.c_str(), value.c_str());
+  set_georeference(*mem, geo, options, fail);
+  copy_to_cog(file, *mem);
+}
 
-  std::string tmp_name(1, '.');  // (built up in steps: GCC 12 warns falsely on "." + string)
-  tmp_name.append(file.filename().string()).append(".tmp-").append(std::to_string(getpid()));
-  const fs::path tmp = file.parent_path() / tmp_name;
-  const char* const cog_options[] = {"COMPRESS=DEFLATE",   "PREDICTOR=YES",    "BLOCKSIZE=512",
-                                     "RESAMPLING=AVERAGE", "BIGTIFF=IF_SAFER", nullptr};
-  DatasetPtr out(cog_driver->CreateCopy(tmp.c_str(), mem.get(), FALSE, const_cast<char**>(cog_options),
-                                        nullptr, nullptr));
-  if (!out) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    fail("cannot write the GeoTIFF: " + gdal.error());
-  }
-  out.reset();  // flushes and closes
-  if (CPLGetLastErrorType() >= CE_Failure) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    fail("cannot write the GeoTIFF: " + gdal.error());
-  }
+struct TiledGeoTiff::Dataset {
+  DatasetPtr ds;
+};
+
+TiledGeoTiff::TiledGeoTiff(const fs::path& work, int width, int height, const std::string& layer,
+                           const std::vector<std::string>& channels, const Georeference& geo,
+                           const GeoTiffOptions& options)
+    : dataset_(std::make_unique<Dataset>()), work_(work), channels_(int(channels.size())) {
+  auto fail = [&](const std::string& what) { throw InputError(work.string(), "", what); };
+  if (channels_ < 1 || width < 1 || height < 1) throw std::logic_error("TiledGeoTiff: empty raster");
+  GdalQuiet gdal;
+  GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
+  if (!driver) fail("GDAL has no GTiff driver");
+  const char* const create_options[] = {"TILED=YES",        "BLOCKXSIZE=256",  "BLOCKYSIZE=256",
+                                        "COMPRESS=DEFLATE", "ZLEVEL=1",        "PREDICTOR=3",
+                                        "BIGTIFF=YES",      "INTERLEAVE=BAND", nullptr};
+  dataset_->ds.reset(driver->Create(work.c_str(), width, height, channels_, GDT_Float32,
+                                    const_cast<char**>(create_options)));
+  if (!dataset_->ds) fail("cannot create the work file: " + gdal.error());
+  for (int c = 0; c < channels_; ++c)
+    dataset_->ds->GetRasterBand(c + 1)->SetDescription((layer + "." + channels[std::size_t(c)]).c_str());
+  set_georeference(*dataset_->ds, geo, options, fail);
+}
+
+TiledGeoTiff::~TiledGeoTiff() {
+  if (!dataset_->ds) return;
+  dataset_->ds.reset();
   std::error_code ec;
-  fs::rename(tmp, file, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    fail("cannot move into place: " + ec.message());
-  }
+  fs::remove(work_, ec);
+}
+
+void TiledGeoTiff::write(int x0, int y0, int width, int height, const float* texels, std::size_t stride) {
+  GdalQuiet gdal;
+  const GSpacing pixel = GSpacing(sizeof(float)) * channels_, line = pixel * GSpacing(stride);
+  for (int c = 0; c < channels_; ++c)
+    if (dataset_->ds->GetRasterBand(c + 1)->RasterIO(GF_Write, x0, y0, width, height,
+                                                     const_cast<float*>(texels + c), width, height,
+                                                     GDT_Float32, pixel, line, nullptr) != CE_None)
+      throw InputError(work_.string(), "", "cannot write: " + gdal.error());
+}
+
+void TiledGeoTiff::finish(const fs::path& file) {
+  GdalQuiet gdal;
+  dataset_->ds->FlushCache();
+  if (CPLGetLastErrorType() >= CE_Failure)
+    throw InputError(work_.string(), "", "cannot write: " + gdal.error());
+  copy_to_cog(file, *dataset_->ds);
+  dataset_->ds.reset();
+  std::error_code ec;
+  fs::remove(work_, ec);
 }
 
 }  // namespace hfbake

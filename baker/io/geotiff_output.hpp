@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,5 +29,34 @@ struct GeoTiffOptions {
 // temporary name beside `file` and renamed into place. Failure -> InputError naming the file.
 void write_geotiff(const std::filesystem::path& file, const LayerSet& layers, const Layer& layer,
                    const Georeference& geo, const GeoTiffOptions& options = {});
+
+// One layer as a COG written a window at a time, never whole in memory: what a tiled bake writes
+// (cli/tile_command.hpp). The windows go into a work file (a tiled BigTIFF, 256x256 blocks, DEFLATE), which
+// finish() copies into a COG as write_geotiff makes it (the same options, CRS, geotransform, band
+// descriptions and metadata); the work file is removed then or on destruction.
+class TiledGeoTiff {
+ public:
+  // `work`: the work file's path (created; InputError naming it when impossible); the raster is width x
+  // height with one float32 band per channel of `layer`.
+  TiledGeoTiff(const std::filesystem::path& work, int width, int height, const std::string& layer,
+               const std::vector<std::string>& channels, const Georeference& geo,
+               const GeoTiffOptions& options = {});
+  ~TiledGeoTiff();
+  TiledGeoTiff(const TiledGeoTiff&) = delete;
+  TiledGeoTiff& operator=(const TiledGeoTiff&) = delete;
+
+  // Writes columns [x0, x0 + width) and rows [y0, y0 + height) of the raster from `texels`: channel c of
+  // the window's texel (i, j) at texels[(j * stride + i) * channels + c] (a layer's interleaving; `stride`
+  // texels a row).
+  void write(int x0, int y0, int width, int height, const float* texels, std::size_t stride);
+  // The COG as `file` (under a temporary name beside it, renamed into place); the work file removed.
+  void finish(const std::filesystem::path& file);
+
+ private:
+  struct Dataset;
+  std::unique_ptr<Dataset> dataset_;
+  std::filesystem::path work_;
+  int channels_ = 0;
+};
 
 }  // namespace hfbake

@@ -114,6 +114,10 @@ struct MethodInfo {
   // (...)").
   const char* memory_knob = "a smaller field";
   WorkDivision division = WorkDivision::directions;
+  // How far from a texel, in world units, the bake reads heights (a march's length, a search radius): a
+  // tile whose halo covers it bakes the whole bake's texels (farm/tile_plan.hpp, cli/tile_command.hpp).
+  // Null: unbounded (the whole field), so the method is not baked in tiles.
+  double (*reach)(const MethodConfig& config) = nullptr;
   const char* division_note = "";  // how, and why not otherwise
   // The farm (baker/farm) for a method that divides by directions: bake_block gives the raw sums of
   // direction block `block` (core/direction_blocks.hpp, of the config's directions) as float layers; the

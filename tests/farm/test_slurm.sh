@@ -9,6 +9,9 @@
 #                   stage's 8 direction blocks across the 3 tasks, then the merge): bit-identical to hfbake bake
 #   deleted_shard   after hfbake slurm, a deleted shard makes the merge job fail naming it
 #   scancel_resume  a task cancelled (scancel) is resubmitted by hfbake slurm --resume: the same bits
+#   tiles           a 150 x 97 georeferenced raster (an ASCII grid) baked in tiles of 40 (relief, hbao) as 3
+#                   tile tasks + merge --tiles (hfbake slurm --tiles --wait): the COGs of bake --tiles, byte
+#                   for byte
 #   shared_cache    two bakes of one reference sharing a cache folder, as concurrent Slurm jobs: both
 #                   succeed and leave one valid entry (a third bake reads it: a hit, the same bits)
 set -u
@@ -147,6 +150,26 @@ shared_cache)
   "$H" bake a.json --cache "$W/cache" --out c3 --summary c3.json --quiet || fail "third bake"
   grep -q '"cache": "hit"' c3.json || fail "the entry was not valid: $(cat c3.json)"
   same_outputs c1/out-a c3
+  ;;
+tiles)
+  awk 'BEGIN { print "ncols 150\nnrows 97\nxllcorner 400000\nyllcorner 100000\ncellsize 0.5";
+               for (j = 0; j < 97; j++) { r = ""; for (i = 0; i < 150; i++) r = r sprintf(" %.4f", 3 * sin(0.21 * i) * cos(0.13 * j) + 0.02 * i); print r } }' >dem.asc
+  cat >tiles.json <<J
+{"version": 1, "name": "tiles", "height": {"image": "dem.asc"},
+ "bake": [{"method": "relief", "directions": 8, "search_radius": 4.5, "layers": ["svf", "horizon_deg"]},
+          {"method": "hbao", "directions": 8, "radius": 3, "falloff": "smooth"}],
+ "output": {"dir": "out-tiles", "geotiff": true}}
+J
+  "$H" bake tiles.json --tiles --tile-size 40 --quiet --out whole || fail "bake --tiles"
+  "$H" slurm tiles.json --tiles --tile-size 40 --shards 3 --out farm --quiet --wait || fail "hfbake slurm --tiles --wait exit $?"
+  grep -q -- "--tile-task" farm/slurm/bake.sbatch || fail "the tasks are not tile tasks"
+  grep -q -- "merge .* --tiles --tile-size 40" farm/slurm/merge.sbatch || fail "the merge is not merge --tiles"
+  n=0
+  for f in whole/*.tif; do
+    cmp -s "$f" "farm/$(basename "$f")" || fail "farm/$(basename "$f") differs from $f"
+    n=$((n + 1))
+  done
+  [ "$n" = 4 ] || fail "$n COGs, not 4"
   ;;
 *) fail "unknown case $CASE" ;;
 esac

@@ -5,6 +5,7 @@
 #include <ogr_spatialref.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -266,6 +267,90 @@ TEST(GeoRaster, TruncatedRasterIsAOneLineErrorNamingTheFile) {
     const std::string line = e.line();
     EXPECT_EQ(line.rfind("job.json: /height/image: " + file.string() + ": cannot ", 0), 0u) << line;
     EXPECT_EQ(line.find('\n'), std::string::npos) << line;
+  }
+}
+
+}  // namespace
+}  // namespace hfbake
+
+namespace hfbake {
+namespace {
+
+// Windows read one by one equal GDAL's whole read at their places, on strips and tiles; a window beyond the
+// raster is an InputError naming the file.
+TEST(GeoRaster, WindowReadEqualsGdalsWholeRead) {
+  TempFolder tmp;
+  for (const bool tiled : {false, true}) {
+    const fs::path file = tmp / (tiled ? "tiled.tif" : "strips.tif");
+    write_float_geotiff(file, 700, 613, tiled);
+    const std::vector<float> whole = gdal_whole_band(file);
+    for (const std::array<int, 4> w : {std::array<int, 4>{0, 0, 700, 613},
+                                       {1, 2, 3, 4},
+                                       {250, 255, 300, 7},
+                                       {699, 612, 1, 1},
+                                       {0, 300, 700, 313}}) {
+      const Plane p = read_georaster_window(file, 0, w[0], w[1], w[2], w[3], {"j", "/height/image"});
+      ASSERT_EQ(p.width, w[2]);
+      ASSERT_EQ(p.height, w[3]);
+      for (int j = 0; j < w[3]; ++j)
+        for (int i = 0; i < w[2]; ++i)
+          ASSERT_EQ(p.values[std::size_t(j) * std::size_t(w[2]) + std::size_t(i)],
+                    whole[std::size_t(w[1] + j) * 700 + std::size_t(w[0] + i)])
+              << file << " window at " << w[0] << ", " << w[1];
+    }
+    try {
+      read_georaster_window(file, 0, 650, 0, 51, 10, {"j.json", "/height/image"});
+      ADD_FAILURE() << "a window beyond the raster was read";
+    } catch (const InputError& e) {
+      EXPECT_NE(e.line().find(file.string()), std::string::npos) << e.line();
+    }
+  }
+}
+
+// A COG written a window at a time, in any order, with interleaved channels and a row stride wider than the
+// window: GDAL reads back every band as written, with the band names, CRS-less geotransform and metadata;
+// the work file is gone.
+TEST(GeoTiffOutput, WindowedCogHoldsEveryWindowAsWritten) {
+  TempFolder tmp;
+  const int w = 300, h = 170, nc = 3;
+  std::vector<float> truth(std::size_t(w) * h * nc);
+  for (std::size_t t = 0; t < truth.size(); ++t) truth[t] = float(std::sin(0.001 * double(t)) * 10);
+  Georeference geo;
+  geo.geotransform = local_geotransform(0.5);
+  GeoTiffOptions options;
+  options.metadata = {{"HFBAKE_METHOD", "relief"}};
+  {
+    TiledGeoTiff out(tmp / "work.tif", w, h, "bent", {"X", "Y", "Z"}, geo, options);
+    // Windows of 64 x 48 from the bottom right, each handed as a part of a 100-texel-wide buffer.
+    for (int y0 = (h - 1) / 48 * 48; y0 >= 0; y0 -= 48)
+      for (int x0 = (w - 1) / 64 * 64; x0 >= 0; x0 -= 64) {
+        const int ww = std::min(64, w - x0), wh = std::min(48, h - y0);
+        std::vector<float> buffer(std::size_t(100) * std::size_t(wh + 1) * nc, -1.0f);
+        for (int j = 0; j < wh; ++j)
+          for (int i = 0; i < ww; ++i)
+            for (int c = 0; c < nc; ++c)
+              buffer[((std::size_t(j) + 1) * 100 + std::size_t(i) + 5) * nc + std::size_t(c)] =
+                  truth[(std::size_t(y0 + j) * w + std::size_t(x0 + i)) * nc + std::size_t(c)];
+        out.write(x0, y0, ww, wh, buffer.data() + (100 + 5) * nc, 100);
+      }
+    out.finish(tmp / "bent.tif");
+  }
+  EXPECT_FALSE(fs::exists(tmp / "work.tif"));
+  std::unique_ptr<GDALDataset> ds(GDALDataset::Open((tmp / "bent.tif").c_str(), GDAL_OF_RASTER));
+  ASSERT_TRUE(ds);
+  ASSERT_EQ(ds->GetRasterCount(), nc);
+  EXPECT_STREQ(ds->GetMetadataItem("LAYOUT", "IMAGE_STRUCTURE"), "COG");
+  EXPECT_STREQ(ds->GetMetadataItem("HFBAKE_METHOD"), "relief");
+  double gt[6];
+  ds->GetGeoTransform(gt);
+  EXPECT_EQ(gt[1], 0.5);
+  for (int c = 0; c < nc; ++c) {
+    GDALRasterBand* b = ds->GetRasterBand(c + 1);
+    EXPECT_EQ(std::string(b->GetDescription()), std::string("bent.") + "XYZ"[c]);
+    std::vector<float> v(std::size_t(w) * h);
+    ASSERT_EQ(b->RasterIO(GF_Read, 0, 0, w, h, v.data(), w, h, GDT_Float32, 0, 0, nullptr), CE_None);
+    for (std::size_t t = 0; t < v.size(); ++t)
+      ASSERT_EQ(v[t], truth[t * nc + std::size_t(c)]) << "band " << c << " texel " << t;
   }
 }
 

@@ -349,6 +349,7 @@ MethodInfo hbao_method() {
   m.working_bytes = [](const MethodConfig&, const MethodContext&) { return 0.0; };
 
   m.division = WorkDivision::directions;
+  m.reach = [](const MethodConfig& c) { return c.get<HbaoSettings>().reach; };
   m.division_note = "partial sums over disjoint direction sets (texel tiles would need a halo of the reach)";
   m.bake_block = hbao_bake_block;
   m.finish_blocks = hbao_finish_blocks;

@@ -26,7 +26,9 @@ inline double profile_end(const HeightField& f, int i, int j, double dx, double 
 // ray from texel (i, j) towards (dx, dy) (unit, texel units): visits every column, row and diagonal crossing
 // with t in (t_begin, t_end] in increasing t (ties in any order), then the point at t_end, as
 // visit(t, height) -> bool (false: stop there). Heights are linear along the triangle edge each crossing lies
-// on.
+// on. Crossings are found from offsets to the texel, not from positions in the field, so a texel's profile
+// has the same bits wherever the texel lies (a tiled bake's texels are the whole bake's,
+// docs/large-fields.md).
 template <class Visit>
 void triangle_profile_span(const HeightField& f, int i, int j, double dx, double dy, double t_begin,
                            double t_end, Visit&& visit) {
@@ -55,25 +57,25 @@ void triangle_profile_span(const HeightField& f, int i, int j, double dx, double
     if (!(t < t_end - 1e-9)) break;
     if (t == tc) {  // x = i + sx k: on the edge between (c, floor y) and (c, floor y + 1)
       const int c = i + sx * col.k++;
-      const double y = j + t * dy, fy = std::floor(y);
-      const int jj = int(fy);
-      if (!visit(t, lerp(f.at(c, jj), f.at(c, jj + 1), y - fy))) return;
+      const double v = t * dy, fv = std::floor(v);
+      const int jj = j + int(fv);
+      if (!visit(t, lerp(f.at(c, jj), f.at(c, jj + 1), v - fv))) return;
     } else if (t == tr) {  // y = j + sy k
       const int r = j + sy * row.k++;
-      const double x = i + t * dx, fx = std::floor(x);
-      const int ii = int(fx);
-      if (!visit(t, lerp(f.at(ii, r), f.at(ii + 1, r), x - fx))) return;
+      const double u = t * dx, fu = std::floor(u);
+      const int ii = i + int(fu);
+      if (!visit(t, lerp(f.at(ii, r), f.at(ii + 1, r), u - fu))) return;
     } else {  // x + y = i + j + sd k: on the edge from (s - jj, jj) to (s - jj - 1, jj + 1)
       const int sum = i + j + sd * dia.k++;
-      const double y = j + t * dy, fy = std::floor(y);
-      const int jj = int(fy);
-      if (!visit(t, lerp(f.at(sum - jj, jj), f.at(sum - jj - 1, jj + 1), y - fy))) return;
+      const double v = t * dy, fv = std::floor(v);
+      const int jj = j + int(fv);
+      if (!visit(t, lerp(f.at(sum - jj, jj), f.at(sum - jj - 1, jj + 1), v - fv))) return;
     }
   }
   // The end of the reach, inside its triangle.
-  const double x = i + t_end * dx, y = j + t_end * dy;
+  const double x = t_end * dx, y = t_end * dy;
   const double fx = std::floor(x), fy = std::floor(y);
-  const int ii = int(fx), jj = int(fy);
+  const int ii = i + int(fx), jj = j + int(fy);
   const double u = x - fx, v = y - fy;
   visit(t_end, facet_height(u, v, [&](int di, int dj) { return double(f.at(ii + di, jj + dj)); }));
 }

@@ -36,11 +36,13 @@ HorizonPair march(const HeightField& field, int i, int j, double dx, double dy, 
   h.up = -std::numeric_limits<double>::infinity();
   h.down = std::numeric_limits<double>::infinity();
   const double inv_texel = 1 / field.texel_size;
+  // Offsets from the texel, not positions in the field: the same bits wherever the texel lies (a tile of a
+  // raster bakes the whole raster's texels, docs/large-fields.md).
   auto visit = [&](double t) {
-    const double x = i + t * dx, y = j + t * dy;
-    const double fx = std::floor(x), fy = std::floor(y);
-    const int ci = int(fx), cj = int(fy);
-    const double z = facet_height(x - fx, y - fy, [&](int di, int dj) { return height(ci + di, cj + dj); });
+    const double u = t * dx, v = t * dy;
+    const double fu = std::floor(u), fv = std::floor(v);
+    const int ci = i + int(fu), cj = j + int(fv);
+    const double z = facet_height(u - fu, v - fv, [&](int di, int dj) { return height(ci + di, cj + dj); });
     const double slope = (z - z0) / t * inv_texel;
     h.up = std::max(h.up, slope);
     h.down = std::min(h.down, slope);

@@ -114,6 +114,7 @@ MethodInfo relief_method() {
   m.memory_knob = "its layers (horizon_deg: 4 bytes a texel per direction)";
   m.working_bytes = [](const MethodConfig&, const MethodContext&) { return 0.0; };  // nothing per texel
   m.division = WorkDivision::texel_tiles;
+  m.reach = [](const MethodConfig& c) { return c.get<ReliefSettings>().search_radius; };
   m.division_note = "texel tiles with a halo of search_radius (each texel's horizons are its own)";
   m.reads_normals = false;
   m.reads_albedo = false;

@@ -1,0 +1,362 @@
+#include "cli/tile_command.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "cli/method_dispatch.hpp"
+#include "cli/outputs.hpp"
+#include "cli/scene_inputs.hpp"
+#include "cli/scene_loader.hpp"
+#include "cli/version.hpp"
+#include "core/error.hpp"
+#include "core/safe_file.hpp"
+#include "io/georaster_input.hpp"
+#include "io/geotiff_output.hpp"
+#include "methods/method_table.hpp"
+
+namespace hfbake {
+namespace fs = std::filesystem;
+
+namespace {
+
+[[noreturn]] void refuse(const Job& job, const std::string& pointer, const std::string& what) {
+  throw InputError(job.file.string(), pointer, what);
+}
+
+// The halo of the job's entries: the largest of their reaches, in texels (check_tiled_job has made sure
+// each is bounded).
+int job_halo(const Job& job) {
+  const double texel = job_texel_size(job);
+  int halo = 0;
+  for (const BakeEntry& entry : job.bakes) {
+    const MethodConfig& config = entry_config(entry);
+    const std::optional<int> h = halo_texels(config.method->reach(config), texel);
+    if (!h) refuse(job, entry.pointer, "reads heights without a bound: it cannot be baked in tiles");
+    halo = std::max(halo, *h);
+  }
+  return halo;
+}
+
+// The heights of `window` as a field of its own (as stored: complete_scene applies scale and offset), after
+// the nodata rule of a tiled bake: a texel without a valid height is an error naming it in the raster.
+HeightField read_window(const Job& job, const GeoHeightBand& band, const RasterWindow& window) {
+  Plane plane = read_georaster_window(band.file, band.band, window.x0, window.y0, window.width, window.height,
+                                      {job.file.string(), "/height/image"});
+  const nlohmann::json& h = job.doc["height"];
+  // The job's and the file's NoData values; NaN (equal to nothing) when absent.
+  const float job_nodata = h.contains("nodata_value") ? h["nodata_value"].get<float>() : NAN;
+  const float file_nodata = band.nodata ? float(*band.nodata) : NAN;
+  for (std::size_t t = 0; t < plane.values.size(); ++t) {
+    const float z = plane.values[t];
+    if (std::isfinite(z) && z != job_nodata && z != file_nodata) continue;
+    const std::size_t i = std::size_t(window.x0) + t % std::size_t(window.width);
+    const std::size_t j = std::size_t(window.y0) + t / std::size_t(window.width);
+    refuse(job, "/height/image",
+           band.file.string() + ": texel (" + std::to_string(i) + ", " + std::to_string(j) +
+               ") has no valid height; a tiled bake does not fill holes: fill them first "
+               "(gdal_fillnodata.py) or bake the raster whole with \"nodata\": \"fill\"");
+  }
+  HeightField field;
+  field.width = window.width;
+  field.height = window.height;
+  field.texel_size = job_texel_size(job);
+  field.wrap = Wrap::clamp;
+  field.z = std::move(plane.values);
+  return field;
+}
+
+std::string tiles_text(const TilePlan& plan) {
+  return std::to_string(plan.columns * plan.rows) + " tiles (" + std::to_string(plan.columns) + " x " +
+         std::to_string(plan.rows) + ") of " + std::to_string(plan.tile) + "^2 texels with a halo of " +
+         std::to_string(plan.halo);
+}
+
+// Bakes tile `k` of the plan: the tile's heights as a field of their own, then each entry through the method
+// table; sink(entry index, its layers, the interior's offset in them) gets each entry's layers.
+template <class Sink>
+void bake_tile(const Job& job, const GeoHeightBand& band, const TilePlan& plan, std::size_t k,
+               const std::atomic<bool>& cancel, const std::function<void(double)>& progress,
+               std::vector<double>& seconds, Sink&& sink) {
+  if (cancel.load()) throw Cancelled();
+  const Tile& tile = plan.tiles[k];
+  Georeference tile_geo;  // none of the tiled methods reads the site
+  tile_geo.geotransform = band.georeference.geotransform;
+  const Scene scene = complete_scene(job, read_window(job, band, tile.read), tile_geo, band.source);
+  const int ox = tile.interior.x0 - tile.read.x0, oy = tile.interior.y0 - tile.read.y0;
+  for (std::size_t e = 0; e < job.bakes.size(); ++e) {
+    const BakeEntry& entry = job.bakes[e];
+    const MethodConfig& config = entry_config(entry);
+    RunControl rc;
+    rc.cancel = &cancel;
+    rc.progress = [&](double f) { progress((double(e) + f) / double(job.bakes.size())); };
+    const auto t0 = std::chrono::steady_clock::now();
+    LayerSet layers = config.method->bake(scene, config, rc);
+    seconds[e] += seconds_since(t0);
+    check_layers_finite(entry.stem, layers);
+    sink(e, layers, ox, oy);
+  }
+}
+
+// What a tile file of entry `e` must say it belongs to (its HFBAKE_TILE_OF item): the job, the plan and
+// the entry's resolved parameters.
+std::string tile_identity(const Job& job, const TilePlan& plan, std::size_t e) {
+  return job.name + "; " + tiles_text(plan) + "; " + job.bakes[e].stem + " " +
+         entry_config(job.bakes[e]).resolved.dump();
+}
+
+// <output dir>/tiles/<name>.tile-<k>.<stem>.<layer>.tif: tile k's interior of one layer, from a tile task.
+fs::path tile_file(const Job& job, std::size_t k, const std::string& stem, const std::string& layer) {
+  return job.output.dir / "tiles" /
+         (job.name + ".tile-" + std::to_string(k) + "." + stem + "." + layer + ".tif");
+}
+
+// GeoTIFF metadata of an output of entry `e`.
+GeoTiffOptions output_options(const Job& job, const OutputStage& stage, const TilePlan& plan, std::size_t e) {
+  GeoTiffOptions tiff;
+  tiff.metadata = stage.geotiff_metadata({{"hfbake:version", hfbake_version()},
+                                          {"hfbake:job", job.name},
+                                          {"hfbake:method", job.bakes[e].method},
+                                          {"hfbake:parameters", entry_config(job.bakes[e]).resolved.dump()},
+                                          {"hfbake:tiles", tiles_text(plan)}});
+  return tiff;
+}
+
+// The tiles of tile task `task`: [I T / N, (I + 1) T / N) of the plan's T.
+std::pair<std::size_t, std::size_t> task_tiles(const TilePlan& plan, ShardId task) {
+  const std::size_t t = plan.tiles.size();
+  return {t * std::size_t(task.index) / std::size_t(task.count),
+          t * std::size_t(task.index + 1) / std::size_t(task.count)};
+}
+
+}  // namespace
+
+void check_tiled_job(const Job& job) {
+  const nlohmann::json& h = job.doc["height"];
+  if (!h.contains("image") || !georaster_height_band(job))
+    refuse(job, h.contains("image") ? "/height/image" : "/height",
+           "a tiled bake reads a georeferenced raster through GDAL (GeoTIFF, COG, VRT, ...): this job's "
+           "heights are not one");
+  if (h.value("wrap", "clamp") == "repeat")
+    refuse(job, "/height/wrap",
+           "a tiled bake bakes clamp fields only (a repeat field's tiles wrap around it)");
+  if (h.value("nodata", "error") == "fill")
+    refuse(job, "/height/nodata",
+           "a tiled bake does not fill holes (each tile would fill its own): fill them first "
+           "(gdal_fillnodata.py)");
+  const nlohmann::json surface = job.doc.value("surface", nlohmann::json::object());
+  for (const char* key : {"albedo", "emission"})
+    if (surface.contains(key) && surface[key].is_object())
+      refuse(job, std::string("/surface/") + key + "/image",
+             "a tiled bake takes a constant albedo and emission, not an image");
+  if (job.has_reference)
+    refuse(job, "/reference", "a tiled bake has no reference: bake a window of the raster whole to check it");
+  if (job.doc.contains("output") && job.doc["output"].contains("textures"))
+    refuse(job, "/output/textures", "a tiled bake writes GeoTIFFs only, no textures");
+  if (!job.output.geotiff)
+    refuse(job, "/output/geotiff", "a tiled bake writes Cloud-Optimised GeoTIFFs only: set it to true");
+  for (const BakeEntry& entry : job.bakes) {
+    const MethodConfig& config = entry_config(entry);
+    if (!config.method->reach)
+      refuse(job, entry.pointer + "/method",
+             entry.method +
+                 " reads heights from the whole field: a tiled bake takes the methods with a bounded reach "
+                 "(hbao with a radius or max_distance, relief)");
+  }
+  job_halo(job);
+}
+
+TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> tile_size) {
+  const std::optional<GeoHeightBand> band = georaster_height_band(job);
+  if (!band) refuse(job, "/height", "a tiled bake reads a georeferenced raster through GDAL");
+  const int halo = job_halo(job);
+  const std::size_t tile_budget = budget > kTiledGdalCacheBytes ? budget - kTiledGdalCacheBytes : 0;
+  auto peak = [&](int side) {
+    const int w = int(std::min<std::int64_t>(band->width, std::int64_t(side) + 2 * std::int64_t(halo)));
+    const int h = int(std::min<std::int64_t>(band->height, std::int64_t(side) + 2 * std::int64_t(halo)));
+    return estimate_peak_bytes(job, FieldSize{w, h});
+  };
+  auto too_large = [&](int side, const std::string& knob) {
+    refuse(job, "/height",
+           "a tile of " + std::to_string(side) + "^2 texels with its halo of " + std::to_string(halo) +
+               " needs about " + std::to_string(peak(side) >> 20) + " MiB, more than the " +
+               std::to_string(tile_budget >> 20) + " MiB the memory budget leaves (" + knob + ")");
+  };
+  if (tile_size) {
+    if (peak(*tile_size) > tile_budget) too_large(*tile_size, "--memory-limit, or a smaller --tile-size");
+    return plan_tiles(band->width, band->height, *tile_size, halo);
+  }
+  const std::optional<int> side =
+      tile_side_for_budget(band->width, band->height, halo, tile_budget, 256, [&job](int w, int h) {
+        return estimate_peak_bytes(job, FieldSize{w, h});
+      });
+  if (!side) too_large(256, "--memory-limit");
+  return plan_tiles(band->width, band->height, *side, halo);
+}
+
+std::string validate_tiled(const Job& job, std::size_t budget, std::optional<int> tile_size) {
+  check_tiled_job(job);
+  const TilePlan plan = plan_job_tiles(job, budget, tile_size);
+  const GeoHeightBand band = *georaster_height_band(job);
+  GdalCacheLimit cache(kTiledGdalCacheBytes);
+  for (const Tile& tile : plan.tiles) read_window(job, band, tile.interior);
+  return tiles_text(plan);
+}
+
+void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
+                const BakeOptions& options, std::size_t budget) {
+  check_tiled_job(job);
+  const TilePlan plan = plan_job_tiles(job, budget, options.tile_size);
+  const GeoHeightBand band = *georaster_height_band(job);
+  GdalCacheLimit cache(kTiledGdalCacheBytes);
+  std::vector<double> seconds(job.bakes.size(), 0.0);
+  const auto t0 = std::chrono::steady_clock::now();
+
+  if (options.tile_task) {  // a task's tiles, each layer's interior into its tile file
+    const auto [first, end] = task_tiles(plan, *options.tile_task);
+    progress.message(job.name + ": tiles " + std::to_string(first) + ".." + std::to_string(end) + " of " +
+                     tiles_text(plan));
+    const fs::path folder = job.output.dir / "tiles";
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (!is_real_directory(folder))
+      refuse(job, "/output/dir",
+             folder.string() + " is not a folder (a link?): outputs are written inside " +
+                 job.output.dir.string() + " only");
+    progress.begin(job.name, "tiles");
+    for (std::size_t k = first; k < end; ++k) {
+      const Tile& tile = plan.tiles[k];
+      bake_tile(
+          job, band, plan, k, cancel,
+          [&](double f) {
+            progress.update(job.name, "tiles", (double(k - first) + f) / double(end - first));
+          },
+          seconds,
+          [&](std::size_t e, const LayerSet& layers, int ox, int oy) {
+            Georeference geo = band.georeference;
+            geo.geotransform[0] += tile.interior.x0 * geo.geotransform[1];
+            geo.geotransform[3] += tile.interior.y0 * geo.geotransform[5];
+            GeoTiffOptions tiff;
+            tiff.metadata = {{"HFBAKE_TILE_OF", std::to_string(k) + " of " + tile_identity(job, plan, e)}};
+            for (const Layer& layer : layers.layers) {
+              const std::size_t nc = std::size_t(layer.channel_count());
+              LayerSet part;
+              part.width = tile.interior.width;
+              part.height = tile.interior.height;
+              std::vector<float> data(std::size_t(part.width) * std::size_t(part.height) * nc);
+              for (int j = 0; j < part.height; ++j) {
+                const float* row = layer.data.data() +
+                                   (std::size_t(oy + j) * std::size_t(layers.width) + std::size_t(ox)) * nc;
+                std::copy(row, row + std::size_t(part.width) * nc,
+                          data.begin() + std::ptrdiff_t(std::size_t(j) * std::size_t(part.width) * nc));
+              }
+              const Layer& l = part.adopt(layer.name, layer.channels, std::move(data));
+              write_geotiff(tile_file(job, k, job.bakes[e].stem, layer.name), part, l, geo, tiff);
+            }
+          });
+    }
+    progress.end(job.name, "tiles", seconds_since(t0));
+    for (std::size_t e = 0; e < job.bakes.size(); ++e)
+      outcome.methods[job.bakes[e].stem] = {
+          {"method", job.bakes[e].method}, {"seconds", seconds[e]}, {"tiles", end - first}};
+    return;
+  }
+
+  OutputStage stage(job, options.overwrite);
+  for (const fs::path& p : stage.stale_removed())
+    progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
+  stage.set_georeference(band.georeference);
+  progress.message(job.name + ": " + std::to_string(band.width) + "x" + std::to_string(band.height) + " in " +
+                   tiles_text(plan));
+  // One work file per entry and layer, made when the first tile gives its channels (or, merging, from the
+  // entry's layers).
+  struct Output {
+    std::string file;  // <name>.<stem>.<layer>.tif
+    std::unique_ptr<TiledGeoTiff> writer;
+  };
+  std::map<std::pair<std::size_t, std::string>, Output> outputs;
+  auto output = [&](std::size_t e, const std::string& layer,
+                    const std::vector<std::string>& channels) -> Output& {
+    Output& out = outputs[{e, layer}];
+    if (!out.writer) {
+      out.file = job.name + "." + job.bakes[e].stem + "." + layer + ".tif";
+      out.writer = std::make_unique<TiledGeoTiff>(stage.folder() / ("." + out.file + ".work"), plan.width,
+                                                  plan.height, layer, channels, band.georeference,
+                                                  output_options(job, stage, plan, e));
+    }
+    return out;
+  };
+  progress.begin(job.name, "tiles");
+  for (std::size_t k = 0; k < plan.tiles.size(); ++k) {
+    const Tile& tile = plan.tiles[k];
+    auto tile_progress = [&](double f) {
+      progress.update(job.name, "tiles", (double(k) + f) / double(plan.tiles.size()));
+    };
+    if (options.merge) {  // the tile tasks' files, each checked against the plan before it is taken
+      if (cancel.load()) throw Cancelled();
+      for (std::size_t e = 0; e < job.bakes.size(); ++e) {
+        const MethodConfig& config = entry_config(job.bakes[e]);
+        for (const std::string& name : config.layers) {
+          const fs::path file = tile_file(job, k, job.bakes[e].stem, name);
+          const int nc = layer_channel_count(name, config.directions);
+          const std::string expected = std::to_string(k) + " of " + tile_identity(job, plan, e);
+          const std::optional<GeoRasterInfo> info = probe_georaster(file);
+          if (!info || georaster_metadata_item(file, "HFBAKE_TILE_OF") != expected ||
+              info->width != tile.interior.width || info->height != tile.interior.height || info->bands != nc)
+            throw InputError(file.string(), "",
+                             fs::exists(file) ? "is not tile " + std::to_string(k) + " of this job's plan (" +
+                                                    tiles_text(plan) + "): bake it again with --tile-task"
+                                              : "is missing: bake its tile task (bake --tiles --tile-task)");
+          std::vector<std::string> channels;
+          std::vector<float> texels(std::size_t(info->width) * std::size_t(info->height) * std::size_t(nc));
+          for (int c = 0; c < nc; ++c) {
+            const Plane plane =
+                read_georaster_window(file, c, 0, 0, info->width, info->height, {file.string(), ""});
+            for (std::size_t t = 0; t < plane.values.size(); ++t)
+              texels[t * std::size_t(nc) + std::size_t(c)] = plane.values[t];
+            const std::string& band_name = info->band_names[std::size_t(c)];
+            channels.push_back(band_name.substr(std::min(band_name.size(), name.size() + 1)));
+          }
+          output(e, name, channels)
+              .writer->write(tile.interior.x0, tile.interior.y0, tile.interior.width, tile.interior.height,
+                             texels.data(), std::size_t(tile.interior.width));
+        }
+      }
+      tile_progress(1);
+      continue;
+    }
+    bake_tile(job, band, plan, k, cancel, tile_progress, seconds,
+              [&](std::size_t e, const LayerSet& layers, int ox, int oy) {
+                for (const Layer& layer : layers.layers) {
+                  const std::size_t nc = std::size_t(layer.channel_count());
+                  const float* first = layer.data.data() +
+                                       (std::size_t(oy) * std::size_t(layers.width) + std::size_t(ox)) * nc;
+                  output(e, layer.name, layer.channels)
+                      .writer->write(tile.interior.x0, tile.interior.y0, tile.interior.width,
+                                     tile.interior.height, first, std::size_t(layers.width));
+                }
+              });
+  }
+  progress.end(job.name, "tiles", seconds_since(t0));
+  progress.begin(job.name, "cog");
+  const auto t2 = std::chrono::steady_clock::now();
+  for (auto& [key, out] : outputs) {
+    if (cancel.load()) throw Cancelled();
+    out.writer->finish(stage.folder() / out.file);
+    out.writer.reset();
+    stage.adopt(out.file);
+  }
+  progress.end(job.name, "cog", seconds_since(t2));
+  for (std::size_t e = 0; e < job.bakes.size(); ++e)
+    outcome.methods[job.bakes[e].stem] = {
+        {"method", job.bakes[e].method}, {"seconds", seconds[e]}, {"tiles", plan.tiles.size()}};
+  outcome.outputs = stage.commit();
+  for (const fs::path& p : outcome.outputs) progress.message(job.name + ": wrote " + p.string());
+}
+
+}  // namespace hfbake

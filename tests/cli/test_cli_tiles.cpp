@@ -1,0 +1,302 @@
+// hfbake bake --tiles, end to end (the binary): on rasters that fit both ways, the tiled bake's COGs hold
+// the whole bake's texels bit for bit, for every method with a bounded reach, on a family of fields (sines,
+// terraces, craters, white noise, the lidar DEM when present) at tile sizes that cut them unevenly; and
+// what a tiled bake refuses is one line naming the job file and the key, with nothing written. The truth is
+// the whole bake of the same job (no tiles: one field in memory), read back with GDAL.
+#include <gdal_priv.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "run_hfbake.hpp"
+
+namespace {
+namespace fs = std::filesystem;
+using hfbake::cli_test::Result;
+
+const fs::path kDem = fs::path(HFBAKE_SHARED_DATA_DIR) / "TM1_564_146.tif";
+
+struct Bands {
+  int width = 0, height = 0;
+  std::vector<std::vector<float>> values;  // per band
+};
+
+Bands read_bands(const fs::path& file) {
+  Bands r;
+  std::unique_ptr<GDALDataset> ds(GDALDataset::Open(file.c_str(), GDAL_OF_RASTER));
+  if (!ds) return r;
+  r.width = ds->GetRasterXSize();
+  r.height = ds->GetRasterYSize();
+  for (int b = 1; b <= ds->GetRasterCount(); ++b) {
+    std::vector<float> v(std::size_t(r.width) * std::size_t(r.height));
+    if (ds->GetRasterBand(b)->RasterIO(GF_Read, 0, 0, r.width, r.height, v.data(), r.width, r.height,
+                                       GDT_Float32, 0, 0, nullptr) != CE_None)
+      return {};
+    r.values.push_back(std::move(v));
+  }
+  return r;
+}
+
+// A float32 GeoTIFF of heights z(i, j) with a 0.5 m north-up geotransform.
+template <class F>
+void write_heights(const fs::path& file, int width, int height, F z) {
+  GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
+  std::unique_ptr<GDALDataset> ds(driver->Create(file.c_str(), width, height, 1, GDT_Float32, nullptr));
+  std::vector<float> v(std::size_t(width) * std::size_t(height));
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) v[std::size_t(j) * std::size_t(width) + std::size_t(i)] = float(z(i, j));
+  double gt[6] = {400000, 0.5, 0, 100000, 0, -0.5};
+  ds->SetGeoTransform(gt);
+  ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, width, height, v.data(), width, height,
+                                           GDT_Float32, 0, 0, nullptr),
+            CE_None);
+}
+
+class CliTiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    GDALAllRegister();
+    dir_ = fs::temp_directory_path() / ("hfbake_test_cli_tiles_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    if (!dir_.empty()) fs::remove_all(dir_, ec);
+  }
+  Result hfbake(const std::string& args) { return hfbake::cli_test::run_hfbake(dir_, args); }
+
+  fs::path write_job(const std::string& name, const nlohmann::json& height, const nlohmann::json& bake,
+                     const nlohmann::json& extra = nlohmann::json::object()) {
+    nlohmann::json j = {{"version", 1},
+                        {"name", name},
+                        {"height", height},
+                        {"bake", bake},
+                        {"output", {{"dir", "out_" + name}, {"geotiff", true}}}};
+    if (extra.is_object()) j.update(extra, true);
+    const fs::path p = dir_ / (name + ".json");
+    std::ofstream(p) << j.dump(2);
+    return p;
+  }
+
+  // Bakes `image` whole and in tiles of each size with `bake`'s entries; every COG of the tiled bake must
+  // hold the whole bake's bits.
+  void expect_tiles_equal_whole(const std::string& image, const nlohmann::json& bake,
+                                const std::vector<int>& tile_sizes) {
+    const nlohmann::json height = {{"image", image}};
+    Result r = hfbake("bake --quiet --no-cache " + write_job("whole", height, bake).string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::vector<fs::path> cogs;
+    for (const auto& e : fs::directory_iterator(dir_ / "out_whole"))
+      if (e.path().extension() == ".tif") cogs.push_back(e.path().filename());
+    ASSERT_FALSE(cogs.empty());
+    for (const int tile : tile_sizes) {
+      const std::string name = "tiled" + std::to_string(tile);
+      r = hfbake("bake --quiet --tiles --tile-size " + std::to_string(tile) + " " +
+                 write_job(name, height, bake).string());
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      std::size_t written = 0;
+      for (const auto& e : fs::directory_iterator(dir_ / ("out_" + name)))
+        written += e.path().extension() == ".tif";
+      EXPECT_EQ(written, cogs.size()) << "a tiled bake writes the COGs and nothing else";
+      for (const fs::path& cog : cogs) {
+        std::string tiled_name = cog.string();
+        tiled_name.replace(0, 5, name);  // whole.<stem>.<layer>.tif -> tiledN.<stem>.<layer>.tif
+        const Bands whole = read_bands(dir_ / "out_whole" / cog);
+        const Bands tiled = read_bands(dir_ / ("out_" + name) / tiled_name);
+        ASSERT_EQ(tiled.width, whole.width) << tiled_name;
+        ASSERT_EQ(tiled.height, whole.height) << tiled_name;
+        ASSERT_EQ(tiled.values.size(), whole.values.size()) << tiled_name;
+        for (std::size_t b = 0; b < whole.values.size(); ++b) {
+          std::size_t differ = 0, first = 0;
+          for (std::size_t t = 0; t < whole.values[b].size(); ++t)
+            if (std::memcmp(&whole.values[b][t], &tiled.values[b][t], sizeof(float)) != 0 && differ++ == 0)
+              first = t;
+          EXPECT_EQ(differ, 0u) << image << " " << tiled_name << " band " << b + 1 << " tile " << tile
+                                << ": first at texel (" << first % std::size_t(whole.width) << ", "
+                                << first / std::size_t(whole.width) << "): " << whole.values[b][first]
+                                << " whole, " << tiled.values[b][first] << " tiled";
+        }
+      }
+    }
+  }
+
+  // The family: smooth sines, terraces (steps: the horizons' kinks), craters, white noise.
+  void write_family(int width, int height) {
+    write_heights(dir_ / "sines.tif", width, height,
+                  [](int i, int j) { return 3 * std::sin(0.21 * i) * std::cos(0.13 * j) + 0.02 * i; });
+    write_heights(dir_ / "terraces.tif", width, height,
+                  [](int i, int j) { return std::floor(0.1 * i + 0.07 * j) * 1.5; });
+    write_heights(dir_ / "craters.tif", width, height, [](int i, int j) {
+      const double r = std::hypot(std::fmod(i, 37.0) - 18, std::fmod(j, 29.0) - 14);
+      return r < 10 ? 0.04 * r * r : 4.0 - 0.1 * (r - 10);
+    });
+    std::mt19937 rng(11);
+    std::vector<float> noise(std::size_t(width) * std::size_t(height));
+    for (float& v : noise) v = std::uniform_real_distribution<float>(0, 2)(rng);
+    write_heights(dir_ / "noise.tif", width, height,
+                  [&](int i, int j) { return noise[std::size_t(j) * std::size_t(width) + std::size_t(i)]; });
+  }
+
+  fs::path dir_;
+};
+
+const nlohmann::json kBounded = {
+    {{"method", "relief"}, {"directions", 8}, {"search_radius", 4.5}, {"layers", {"svf", "horizon_deg"}}},
+    {{"method", "hbao"}, {"directions", 8}, {"radius", 3}, {"falloff", "smooth"}},
+    {{"method", "hbao"}, {"directions", 4}, {"max_distance", 2.5}, {"surface", "triangles"}}};
+
+TEST_F(CliTiles, TiledBakeEqualsWholeBakeOnAFamilyOfFields) {
+  write_family(150, 97);
+  for (const char* field : {"sines.tif", "terraces.tif", "craters.tif", "noise.tif"}) {
+    SCOPED_TRACE(field);
+    expect_tiles_equal_whole(field, kBounded, {16, 45, 100});
+  }
+}
+
+TEST_F(CliTiles, TiledBakeEqualsWholeBakeOnTheLidarDem) {
+  if (!fs::exists(kDem)) GTEST_SKIP() << "no real DEM at " << kDem << " (the shared data folder is absent)";
+  // A 300^2 window of the 1 m lidar DEM, georeferencing kept.
+  std::unique_ptr<GDALDataset> src(GDALDataset::Open(kDem.c_str(), GDAL_OF_RASTER));
+  ASSERT_TRUE(src);
+  GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
+  std::unique_ptr<GDALDataset> dst(
+      driver->Create((dir_ / "dem.tif").c_str(), 300, 300, 1, GDT_Float32, nullptr));
+  std::vector<float> v(300 * 300);
+  ASSERT_EQ(src->GetRasterBand(1)->RasterIO(GF_Read, 350, 350, 300, 300, v.data(), 300, 300, GDT_Float32, 0,
+                                            0, nullptr),
+            CE_None);
+  double gt[6];
+  src->GetGeoTransform(gt);
+  gt[0] += 350 * gt[1];
+  gt[3] += 350 * gt[5];
+  dst->SetGeoTransform(gt);
+  dst->SetProjection(src->GetProjectionRef());
+  ASSERT_EQ(dst->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 300, 300, v.data(), 300, 300, GDT_Float32, 0, 0,
+                                            nullptr),
+            CE_None);
+  dst.reset();
+  const nlohmann::json bake = {{{"method", "relief"},
+                                {"directions", 16},
+                                {"search_radius", 20},
+                                {"layers", {"svf", "openness_positive"}}},
+                               {{"method", "hbao"}, {"directions", 8}, {"radius", 8}, {"falloff", "smooth"}}};
+  expect_tiles_equal_whole("dem.tif", bake, {64, 128});
+}
+
+// The farm's halves: tile tasks (--tile-task I/N, any order) and merge --tiles write the COGs of the
+// one-process tiled bake, bit for bit; a missing tile file or one of another plan is refused naming it, with
+// no COG written.
+TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
+  write_family(150, 97);
+  const nlohmann::json height = {{"image", "craters.tif"}};
+  Result r = hfbake("bake --quiet --tiles --tile-size 40 " + write_job("one", height, kBounded).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fs::path job = write_job("farm", height, kBounded);
+  for (const int i : {2, 0, 1}) {
+    r = hfbake("bake --quiet --tiles --tile-size 40 --tile-task " + std::to_string(i) + "/3 " + job.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif")) << "a tile task wrote an output";
+  // Another plan's tiles: refused, naming the first file that is not of this plan.
+  r = hfbake("merge --quiet --tiles --tile-size 50 " + job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("tiles/farm.tile-0."), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  // A missing tile file: refused, naming it.
+  const fs::path gone = dir_ / "out_farm" / "tiles" / "farm.tile-5.relief.svf.tif";
+  const fs::path kept = dir_ / "kept.tif";
+  fs::rename(gone, kept);
+  r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find(gone.string() + ": is missing"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  fs::rename(kept, gone);
+  r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::size_t compared = 0;
+  for (const auto& e : fs::directory_iterator(dir_ / "out_one")) {
+    if (e.path().extension() != ".tif") continue;
+    const std::string name = "farm" + e.path().filename().string().substr(3);  // one.<stem>.<layer>.tif
+    const Bands one = read_bands(e.path()), farm = read_bands(dir_ / "out_farm" / name);
+    ASSERT_FALSE(one.values.empty()) << e.path();
+    EXPECT_TRUE(one.values == farm.values) << name;
+    ++compared;
+  }
+  std::size_t merged = 0;
+  for (const auto& e : fs::directory_iterator(dir_ / "out_farm")) merged += e.path().extension() == ".tif";
+  EXPECT_GE(compared, 6u);  // relief's svf and horizon_deg, each hbao entry's obscurance and bent_normal, ...
+  EXPECT_EQ(merged, compared);
+}
+
+// Each refusal: exit 2, one error line naming the job file and `pointer`, and no output folder.
+TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
+  write_heights(dir_ / "f.tif", 40, 30, [](int i, int j) { return 0.1 * i * j; });
+  const nlohmann::json relief = {{{"method", "relief"}, {"search_radius", 3}}};
+  struct Case {
+    std::string name;
+    nlohmann::json height, bake, extra;
+    std::string pointer, args;
+  };
+  const std::vector<Case> cases = {
+      {"p1", {{"image", "f.tif"}}, {{{"method", "p1"}, {"directions", 8}}}, {}, "/bake/0/method", ""},
+      {"unbounded",
+       {{"image", "f.tif"}},
+       {{{"method", "hbao"}, {"directions", 8}, {"max_distance", 1e6}}},
+       {},
+       "/bake/0",
+       ""},
+      {"procedural", {{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}, relief, {}, "/height", ""},
+      {"fill", {{"image", "f.tif"}, {"nodata", "fill"}}, relief, {}, "/height/nodata", ""},
+      {"repeat", {{"image", "f.tif"}, {"wrap", "repeat"}}, relief, {}, "/height/wrap", ""},
+      {"nogeotiff", {{"image", "f.tif"}}, relief, {{"output", {{"geotiff", false}}}}, "/output/geotiff", ""},
+      {"reference", {{"image", "f.tif"}}, relief, {{"reference", {{"samples", 4}}}}, "/reference", ""},
+      {"budget", {{"image", "f.tif"}}, relief, {}, "/height", "--memory-limit 100M"},
+      {"tile_size", {{"image", "f.tif"}}, relief, {}, "/height", "--tile-size 16 --memory-limit 100M"},
+  };
+  for (const Case& c : cases)
+    for (const char* command : {"validate", "bake"}) {
+      SCOPED_TRACE(c.name + " " + command);
+      const fs::path job = write_job(c.name, c.height, c.bake, c.extra);
+      const Result r = hfbake(std::string(command) + " --quiet --tiles " + c.args + " " + job.string());
+      EXPECT_EQ(r.exit_code, 2) << r.err;
+      const std::vector<std::string> lines = r.error_lines();
+      ASSERT_EQ(lines.size(), 1u) << r.err;
+      EXPECT_NE(lines[0].find(job.string() + ": " + c.pointer + ":"), std::string::npos) << lines[0];
+      EXPECT_FALSE(fs::exists(dir_ / ("out_" + c.name))) << "a refused tiled bake made its output folder";
+    }
+  // The same raster and method as a valid job: validate says so, with the halo of 3 m on 0.5 m texels.
+  const Result ok =
+      hfbake("validate --tiles --tile-size 16 " + write_job("ok", {{"image", "f.tif"}}, relief).string());
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_NE(ok.err.find("valid (40x30 in 6 tiles (3 x 2) of 16^2 texels with a halo of 8)"),
+            std::string::npos)
+      << ok.err;
+}
+
+// A hole in a tile: refused naming the texel in the raster's coordinates, nothing written.
+TEST_F(CliTiles, HoleIsRefusedNamingTheRasterTexel) {
+  write_heights(dir_ / "hole.tif", 64, 48, [](int i, int j) { return i == 50 && j == 40 ? NAN : 0.1 * i; });
+  const fs::path job =
+      write_job("hole", {{"image", "hole.tif"}}, {{{"method", "relief"}, {"search_radius", 2}}});
+  for (const char* command : {"validate", "bake"}) {
+    const Result r = hfbake(std::string(command) + " --quiet --tiles --tile-size 16 " + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const std::vector<std::string> lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_NE(lines[0].find("/height/image: "), std::string::npos) << lines[0];
+    EXPECT_NE(lines[0].find("texel (50, 40)"), std::string::npos) << lines[0];
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out_hole" / "hole.relief.svf.tif"));
+}
+
+}  // namespace
