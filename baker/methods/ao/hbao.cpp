@@ -135,7 +135,7 @@ double hbao_weight_sum(const HbaoSettings& s) {
   return wsum;
 }
 
-HorizonTexel hbao_finish(const HbaoSums& sums, double weight_sum, Vec3 n, const HbaoSettings& s) {
+HorizonTexel hbao_finish(const HbaoSums& sums, double weight_sum, Vec3 n, const HbaoSettings&) {
   HorizonTexel t;
   // The occluded share lies in [0, 1]; a sum over few directions (K = 1 or 2: one ray, or two opposite
   // ones, stand for every azimuth) can estimate it outside on steep terrain, where one direction holds
