@@ -47,6 +47,9 @@ HorizonPair march(const HeightField& field, int i, int j, double rx, double ry, 
     h.down = std::min(h.down, slope);
     if (c > 0) {  // the piece (t_prev, t): z = a + b t, highest at t* = sqrt((z0 - a) / c) inside it
       const double b = (z - z_prev) / (t - t_prev), a = z_prev - b * t_prev;
+      // The first piece starts at the receiver (a = z0): s = b - c t is highest as t -> 0, the facet's
+      // own slope.
+      if (t_prev == 0) h.up = std::max(h.up, b);
       if (a < z0) {
         const double ts = std::sqrt((z0 - a) / c);
         if (ts > t_prev && ts < t) h.up = std::max(h.up, b + (a - z0) / ts - c * ts);

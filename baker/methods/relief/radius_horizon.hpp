@@ -13,9 +13,10 @@ namespace hfbake {
 // coordinates, so rectangular texels dx x dy change only where along the ray they lie). With the Earth's
 // curvature c (Scene::curvature) the elevation's tangent is s(d) = (z(d) - z0) / d - c d. On a piece
 // z = a + b d, s is b + (a - z0) / d - c d: monotone when z0 <= a or c = 0, else highest at
-// d* = sqrt((z0 - a) / c) and never lowest inside. So the extremes lie at the crossings, at the search
-// radius, or (the highest) at d* inside a piece, and the march evaluates exactly those points: the result
-// is exact, not sampled.
+// d* = sqrt((z0 - a) / c) and never lowest inside; on the first piece (a = z0) s falls from the facet's
+// own slope b at d -> 0. So the extremes lie at the crossings, at the search radius, or (the highest) at d*
+// inside a piece or at d -> 0, and the march evaluates exactly those points: the result is exact, not
+// sampled.
 struct HorizonPair {
   double up = 0, down = 0;  // tangents of the highest and lowest elevation: max and min of s(d)
   bool any = false;  // false: no surface within the radius (a clamp border right behind); up = down = 0
