@@ -97,8 +97,10 @@ inline double tri_height(const HeightField& f, double x, double y) {
 // Steepest caster seen from the point (x0, y0) on the surface towards (dx, dy) over the crossings of the
 // chosen families (1: columns x = int, 2: rows y = int, 4: diagonals x + y = int) at distance >= smin
 // (texels along the ray), clamp field: *dz above the point, *run horizontal world distance; false: none.
+// curvature c > 0 lowers a point at horizontal distance d by c d^2 (the Earth's curvature).
 inline bool march_from(const HeightField& f, double x0, double y0, double dx, double dy, int families,
-                       double smin, double* dz_out, double* run_out, double smax = 1e300) {
+                       double smin, double* dz_out, double* run_out, double smax = 1e300,
+                       double curvature = 0) {
   const double z0 = tri_height(f, x0, y0);
   double best_num = 0, best_den = 0;  // best slope = num / den
   bool any = false;
@@ -108,7 +110,7 @@ inline bool march_from(const HeightField& f, double x0, double y0, double dx, do
     if (s < smin) return true;
     const double z =
         tri_height(f, std::clamp(x, 0.0, double(f.width - 1)), std::clamp(y, 0.0, double(f.height - 1)));
-    const double num = z - z0, den = s * f.texel_size;
+    const double den = s * f.texel_size, num = z - curvature * den * den - z0;
     if (!any || num * best_den > best_num * den) best_num = num, best_den = den, any = true;
     return true;
   };
@@ -128,9 +130,11 @@ inline bool march_from(const HeightField& f, double x0, double y0, double dx, do
 }
 
 // Steepest elevation from texel (i, j) (see march_from).
-inline double march_tri(const HeightField& f, int i, int j, double dx, double dy, int families) {
+inline double march_tri(const HeightField& f, int i, int j, double dx, double dy, int families,
+                        double curvature = 0) {
   double dz, run;
-  return march_from(f, i, j, dx, dy, families, 0, &dz, &run) ? std::atan2(dz, run) : truth::kNone;
+  return march_from(f, i, j, dx, dy, families, 0, &dz, &run, 1e300, curvature) ? std::atan2(dz, run)
+                                                                               : truth::kNone;
 }
 
 // Rough fBm at the texel scale (like a rough DSM): value noise (bilinear lattice, hashed) from `largest`

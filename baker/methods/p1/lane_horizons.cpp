@@ -60,19 +60,21 @@ void LaneLayout::build(const HeightField& f, bool xm) {
   nmajor = xm ? f.width : f.height;
   nminor = xm ? f.height : f.width;
   stride = nminor + 2 * kLanePad;
-  z.assign(std::size_t(nmajor) * std::size_t(stride), kOffField);
+  size = std::size_t(nmajor) * std::size_t(stride);
+  z = make_page_buffer<float>(size);
+  std::fill(z.get(), z.get() + size, kOffField);
   for (int j = 0; j < f.height; ++j) {
     const float* row = f.z.data() + std::size_t(j) * std::size_t(f.width);
     if (xm)
       for (int i = 0; i < f.width; ++i) z[std::size_t(i) * std::size_t(stride) + kLanePad + j] = row[i];
     else
-      std::copy(row, row + f.width, z.begin() + std::ptrdiff_t(j) * stride + kLanePad);
+      std::copy(row, row + f.width, z.get() + std::ptrdiff_t(j) * stride + kLanePad);
   }
   // window[at] = max z[at .. at + kLaneWindow - 1] within the major index's row (kOffField past its end).
-  window.assign(z.size(), kOffField);
+  window = make_page_buffer<float>(size);
   for (int u = 0; u < nmajor; ++u) {
-    const float* r = z.data() + std::ptrdiff_t(u) * stride;
-    float* w = window.data() + std::ptrdiff_t(u) * stride;
+    const float* r = z.get() + std::ptrdiff_t(u) * stride;
+    float* w = window.get() + std::ptrdiff_t(u) * stride;
     for (std::ptrdiff_t i = 0; i < stride; ++i) {
       float m = kOffField;
       for (std::ptrdiff_t t = i; t < std::min<std::ptrdiff_t>(stride, i + kLaneWindow); ++t)
@@ -82,7 +84,7 @@ void LaneLayout::build(const HeightField& f, bool xm) {
   }
 }
 
-void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, double dy) {
+void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, double dy, double curvature) {
   x_major = L.x_major;
   const double dmaj = x_major ? dx : dy, dmin = x_major ? dy : dx;
   su = dmaj >= 0 ? 1 : -1;
@@ -92,13 +94,15 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
   crossings.clear();
   crossings.reserve(cs.size());
   major.clear();
+  curved = curvature != 0;
   std::vector<double> n_c;
   n_c.reserve(cs.size());
   for (const NearCrossing& c : cs) {
     const int amaj = x_major ? c.ai : c.aj, amin = x_major ? c.aj : c.ai;
     const int bmaj = x_major ? c.bi : c.bj, bmin = x_major ? c.bj : c.bi;
     crossings.push_back({std::int32_t(std::ptrdiff_t(amaj) * L.stride + amin),
-                         std::int32_t(std::ptrdiff_t(bmaj) * L.stride + bmin), c.w, c.inv_s});
+                         std::int32_t(std::ptrdiff_t(bmaj) * L.stride + bmin), c.w, c.inv_s,
+                         float(curvature / double(c.inv_s))});
     n_c.push_back(std::fabs(double(x_major ? c.x : c.y)));
     major.push_back(float(n_c.back()));
   }
@@ -130,7 +134,7 @@ void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirec
   if (isa == LaneIsa::avx2)
     lane_search_avx2(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
   else
-    lane_search_kernel<Sse2>(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
+    lane_search_any<Sse2>(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
 }
 
 bool lane_avx2_available() {

@@ -28,6 +28,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/page_buffer.hpp"
 #include "field/height_field.hpp"
 
 namespace hfbake::p1 {
@@ -44,17 +45,21 @@ struct LaneLayout {
   bool x_major = true;
   int nmajor = 0, nminor = 0;
   std::ptrdiff_t stride = 0;
-  std::vector<float> z, window;
+  std::size_t size = 0;  // floats in z and in window: nmajor * stride
+  // On 2 MiB pages where the kernel gives them (core/page_buffer.hpp): a group's crossings read one
+  // row of the layout per column, nmajor rows a stride apart.
+  PageBuffer<float> z, window;
 
   void build(const HeightField& f, bool x_major);
-  std::size_t bytes() const { return (z.size() + window.size()) * sizeof(float); }
+  std::size_t bytes() const { return 2 * size * sizeof(float); }
 };
 
 // One crossing of the ray from a texel with the triangulation: height (1 - w) z[a] + w z[b] at the index
-// offsets a, b (of the LaneLayout), seen at horizontal world distance 1 / inv_s.
+// offsets a, b (of the LaneLayout), seen at horizontal world distance d = 1 / inv_s and lowered by the
+// Earth's curvature by drop d^2 (drop = c d, terrain/earth.hpp): its slope is (z - z0) inv_s - drop.
 struct LaneCrossing {
   std::int32_t a, b;
-  float w, inv_s;
+  float w, inv_s, drop;
 };
 
 // A direction's crossings in the lane layout, ordered by distance; first_at[n] is the first crossing at a
@@ -66,8 +71,11 @@ struct LaneDirection {
   std::vector<LaneCrossing> crossings;
   std::vector<float> major;  // each crossing's major distance (texels)
   std::vector<std::int32_t> first_at;
+  bool curved = false;  // some crossing's drop is not 0
 
-  void build(const HeightField& f, const LaneLayout& layout, double dx, double dy);
+  // curvature: c of the lowering c d^2 of a point at horizontal world distance d (terrain/earth.hpp
+  // EarthCurvature; 0: a flat Earth).
+  void build(const HeightField& f, const LaneLayout& layout, double dx, double dy, double curvature = 0);
 };
 
 // A search's statistics (for measurements): groups of eight texels, blocks evaluated, crossings evaluated.
