@@ -95,6 +95,10 @@ CurvatureOption job_curvature(const Job& job, bool geographic) {
   CurvatureOption o;
   o.on = h.value("curvature", geographic);
   o.refraction = h.value("refraction", kDefaultRefraction);
+  if (o.on && h.value("wrap", "clamp") == "repeat")
+    throw InputError(job.file.string(), h.contains("curvature") ? "/height/curvature" : "/height/wrap",
+                     "a repeating field has no place on the Earth: Earth curvature applies to clamp fields "
+                     "only");
   if (h.contains("refraction") && !o.on)
     throw InputError(job.file.string(), "/height/refraction",
                      std::string("applies with Earth curvature only, which is off for this field (") +

@@ -141,6 +141,9 @@ MethodInfo p1_method() {
   m.name = "p1";
   m.reads_normals = false;  // recomputed per tile from the heights (normal_at)
   m.reads_albedo = false;
+  // The lane search drops each crossing by the curvature (clamp fields; a repeating field has no
+  // curvature: cli/scene_loader job_curvature). Directional lights' shadows are flat (docs/gis.md).
+  m.applies_curvature = true;
   m.summary = "exact horizons by the convex-hull stack on K line sweeps; ao, vsky, direct light from them";
   m.read = [](Params& in, const MethodContext&) {
     const P1Params p = read_p1_params(in);

@@ -87,8 +87,9 @@ FieldNormals field_normals(const HeightField& f, bool facets) {
   return n;
 }
 
+// curvature: Scene::curvature, each crossing dropped by it (lane_horizons.hpp).
 template <class Shade>
-void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end,
+void lane_direction_sums(const HeightField& f, double curvature, const P1Params& p, int k_begin, int k_end,
                          const RunControl& rc, bool facets, const FieldNormals& normals, Shade& shade) {
   const std::size_t N = f.texel_count();
   const int K = p.directions;
@@ -114,7 +115,7 @@ void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, i
       rc.check();
       const int k = sd.k;
       p1::LaneDirection d;
-      d.build(f, layout, sd.dx, sd.dy);
+      d.build(f, layout, sd.dx, sd.dy, curvature);
       tbb::parallel_for(tbb::blocked_range<int>(0, p1::lane_strip_count(layout, d), 2),
                         [&](const tbb::blocked_range<int>& r) {
                           p1::lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(),
@@ -424,10 +425,10 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
 
   if (f.wrap == Wrap::clamp) {
     if (normals) {
-      lane_direction_sums(f, p, k_begin, k_end, rc, facets, *normals, shade_row);
+      lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, shade_row);
     } else {
       const FieldNormals own = field_normals(f, facets);
-      lane_direction_sums(f, p, k_begin, k_end, rc, facets, own, shade_row);
+      lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, own, shade_row);
     }
     return r;
   }
