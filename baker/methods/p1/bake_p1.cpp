@@ -144,9 +144,18 @@ MethodInfo p1_method() {
   // The lane search drops each crossing by the curvature (clamp fields; a repeating field has no
   // curvature: cli/scene_loader job_curvature). Directional lights' shadows are flat (docs/gis.md).
   m.applies_curvature = true;
+  m.rectangular_texels = true;  // the lane search; the reader refuses the rest
   m.summary = "exact horizons by the convex-hull stack on K line sweeps; ao, vsky, direct light from them";
-  m.read = [](Params& in, const MethodContext&) {
+  m.read = [](Params& in, const MethodContext& c) {
     const P1Params p = read_p1_params(in);
+    // Rectangular texels: the lane search only (clamp fields), without the directional lights' sweeps.
+    if (!c.field.square_texels() && c.field.wrap == Wrap::repeat)
+      in.fail("method", "bakes rectangular texels (a geographic raster) on clamp fields only");
+    if (!c.field.square_texels() && p.direct && p.lights)
+      in.fail("lights",
+              "is on (the default) with the direct layer, and p1's directional lights need square texels; "
+              "this field's are rectangles (a geographic raster): set \"lights\": false or leave \"direct\" "
+              "out of the layers");
     return method_config(p, p.directions);
   };
   m.bake = bake_p1;

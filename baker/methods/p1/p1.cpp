@@ -102,10 +102,23 @@ void lane_direction_sums(const HeightField& f, double curvature, const P1Params&
   probe.directions = K;
   const float tolerance = float(p.horizon_tolerance);
   int done = 0;
+  // Rectangular texels (dx x dy): the ray towards the world azimuth phi runs along the texel-space
+  // direction (cos phi / dx, sin phi / dy), normalised; its crossings are those of that direction on a
+  // field of unit texels, a texel-space distance s lying s * scale world units away (scale = the texel
+  // direction's world length), so each crossing's inv_s is divided by scale and its drop recomputed.
+  const bool square = f.square_texels();
+  HeightField unit;  // the field's shape with unit texels: what the crossings of a rectangular field use
+  unit.width = f.width, unit.height = f.height, unit.wrap = f.wrap, unit.texel_size = 1;
   for (int axis = 0; axis < 2; ++axis) {
     std::vector<SweepDirection> dirs;
     for (int k = k_begin; k < k_end; ++k) {
-      const SweepDirection sd = plan_direction(f, probe, k);
+      SweepDirection sd = plan_direction(f, probe, k);
+      if (!square) {
+        double tx = sd.dx / f.dx(), ty = sd.dy / f.dy();
+        const double n = std::hypot(tx, ty);
+        tx /= n, ty /= n;
+        sd.dx = std::fabs(tx) < 1e-12 ? 0.0 : tx, sd.dy = std::fabs(ty) < 1e-12 ? 0.0 : ty;
+      }
       if ((std::fabs(sd.dx) >= std::fabs(sd.dy)) == (axis == 0)) dirs.push_back(sd);
     }
     if (dirs.empty()) continue;
@@ -115,7 +128,17 @@ void lane_direction_sums(const HeightField& f, double curvature, const P1Params&
       rc.check();
       const int k = sd.k;
       p1::LaneDirection d;
-      d.build(f, layout, sd.dx, sd.dy, curvature);
+      if (square) {
+        d.build(f, layout, sd.dx, sd.dy, curvature);
+      } else {
+        d.build(unit, layout, sd.dx, sd.dy, 0.0);
+        const double scale = std::hypot(sd.dx * f.dx(), sd.dy * f.dy());
+        for (p1::LaneCrossing& c : d.crossings) {
+          c.inv_s = float(double(c.inv_s) / scale);
+          c.drop = float(curvature / double(c.inv_s));
+        }
+        d.curved = curvature != 0;
+      }
       tbb::parallel_for(tbb::blocked_range<int>(0, p1::lane_strip_count(layout, d), 2),
                         [&](const tbb::blocked_range<int>& r) {
                           p1::lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(),
