@@ -272,8 +272,7 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
           short_num(relief) + ")";
 
   if (scene.curvature > 0) {
-    const CurvatureOption o = job_curvature(job, scene.height_source.geographic);
-    line += "; Earth curvature on (refraction " + short_num(o.refraction) + ": a point 1 km away is " +
+    line += "; Earth curvature on (refraction " + short_num(scene.refraction) + ": a point 1 km away is " +
             short_num(scene.curvature * 1e6) + " m lower, c = " + short_num(scene.curvature) +
             " per world unit)";
   } else {
@@ -394,7 +393,9 @@ Scene complete_scene(const Job& job, HeightField field, Georeference georeferenc
     }
   }
   scene.bounces = job_bounces(job);
-  scene.curvature = curvature_coefficient(job_curvature(job, source.geographic), scene.georeference);
+  const CurvatureOption curvature = job_curvature(job, source.geographic);
+  scene.curvature = curvature_coefficient(curvature, scene.georeference);
+  scene.refraction = curvature.refraction;
   return scene;
 }
 
