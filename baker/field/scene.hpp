@@ -69,7 +69,7 @@ struct Scene {
   // receiver is lowered by curvature * d^2 (c = (1 - k) / (2 R) per world unit, terrain/earth.hpp; 0: a
   // flat Earth). Its slope seen from the receiver is (z - z0) / d - c d.
   double curvature = 0;
-  double refraction = 0;  // the coefficient k it was made with (for what validate and bake print)
+  double refraction = 0;      // the coefficient k it was made with (for what validate and bake print)
   Georeference georeference;  // the input's CRS, geotransform and holes (for GeoTIFF outputs)
   HeightSource height_source;
 };
