@@ -237,12 +237,13 @@ SourcedLayers reference_step(const JobRun& run, ResultSource& source, const Refe
   std::vector<const LayerSet*> method_layers;
   for (const MethodLayers& m : report.methods) method_layers.push_back(&m.layers);
   // Not cached: cheap beside the tracing.
-  add_reference_horizons(scene.field, method_layers, reference, rc);
+  add_reference_horizons(scene.field, method_layers, reference, rc, scene.curvature);
   add_reference_sh_visibility(scene.field, method_layers, reference, rc);
   // The first relief entry's layers, traced with its settings.
   for (std::size_t i = 0; i < job.bakes.size(); ++i)
     if (const MethodConfig& c = entry_config(job.bakes[i]); c.holds<ReliefSettings>()) {
-      add_reference_relief(scene.field, c.get<ReliefSettings>(), report.methods[i].layers, reference, rc);
+      add_reference_relief(scene.field, c.get<ReliefSettings>(), report.methods[i].layers, reference, rc,
+                           scene.curvature);
       break;
     }
   add_common_attributes(reference, job, run.job_hash, "reference", job_reference_options(job).resolved,

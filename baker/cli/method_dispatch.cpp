@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <new>
 
+#include "cli/scene_inputs.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/texture_plan.hpp"
 #include "core/error.hpp"
@@ -21,7 +22,10 @@ MethodContext job_method_context(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
   c.field.width = size.width;
   c.field.height = size.height;
-  c.field.texel_size = job_texel_size(job);
+  const std::array<double, 2> sides = job_texel_sides(job);
+  c.field.texel_size = sides[0];
+  if (sides[1] != sides[0]) c.field.texel_size_y = sides[1];
+  c.curvature = job_curvature(job, h.contains("image") && image_geographic(job)).on;
   c.field.wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
   c.bounces = job_bounces(job);
   c.uniform_environment = job_environment_uniform(job.doc);

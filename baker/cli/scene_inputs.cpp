@@ -13,6 +13,7 @@
 #include "io/georaster_input.hpp"
 #include "io/image_input.hpp"
 #include "io/load_environment.hpp"
+#include "terrain/earth.hpp"
 
 namespace hfbake {
 
@@ -34,9 +35,40 @@ std::optional<float> nodata_value(const nlohmann::json& h) {
   return h["nodata_value"].get<float>();
 }
 
+// A geographic raster's texel in metres in the local frame at its centre (terrain/earth.hpp
+// GeographicFrame), after the checks that frame needs: a CRS with an ellipsoid, no row beyond
+// kMaxFrameLatitude, an east-west scale error within kMaxFrameScaleError at the northern and southern rows.
+std::array<double, 2> geographic_texel(const Job& job, const GeoRasterInfo& info, const std::string& file) {
+  auto fail = [&](const std::string& what) {
+    throw InputError(job.file.string(), "/height/image", file + what);
+  };
+  const std::optional<CrsEarth> earth = crs_earth(info.crs_wkt);
+  if (!earth) fail(": has a geographic CRS (" + info.crs_name + ") without an ellipsoid GDAL can read");
+  const Ellipsoid e{earth->semi_major, earth->semi_minor};
+  const auto& g = info.geotransform;
+  constexpr double kRad = kPi / 180;
+  const double lat_a = g[3] + 0.5 * g[5], lat_b = g[3] + (info.height - 0.5) * g[5];
+  const double lat0 = g[3] + 0.5 * info.height * g[5];
+  if (!(std::max(std::abs(lat_a), std::abs(lat_b)) <= kMaxFrameLatitude))
+    fail(": its rows reach latitude " + num(std::abs(lat_a) > std::abs(lat_b) ? lat_a : lat_b) +
+         "; geographic DEMs are baked up to " + num(kMaxFrameLatitude) +
+         " degrees: reproject it (e.g. gdalwarp -t_srs EPSG:3413)");
+  const double error = std::max(std::abs(frame_scale_error(e, lat0 * kRad, lat_a * kRad)),
+                                std::abs(frame_scale_error(e, lat0 * kRad, lat_b * kRad)));
+  if (!(error <= kMaxFrameScaleError))
+    fail(": spans latitudes " + num(std::min(lat_a, lat_b)) + " to " + num(std::max(lat_a, lat_b)) +
+         ", too far for one local frame (its east-west scale is " + num(100 * error) +
+         " % off at the edge rows, at most " + num(100 * kMaxFrameScaleError) +
+         " % is baked): crop it (gdal_translate -projwin) or reproject it (gdalwarp -t_srs)");
+  const GeographicFrame frame = GeographicFrame::at(e, lat0 * kRad);
+  return {std::abs(g[1]) * frame.east_per_degree, std::abs(g[5]) * frame.north_per_degree};
+}
+
 // The height image's header through GDAL when it is a georeferenced raster (nullopt: an image for
-// OpenImageIO), after every check bake and validate make of its georeferencing: a geographic CRS, a
-// rotated or sheared geotransform, non-square pixels, a job texel_size that disagrees with the pixel size.
+// OpenImageIO), after every check bake and validate make of its georeferencing: a rotated or sheared
+// geotransform, non-square pixels of a projected CRS, a job texel_size that disagrees with the pixel size
+// (or any job texel_size for a geographic CRS, whose texels are the local frame's, in metres), a
+// geographic raster the local frame does not hold (geographic_texel).
 std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
   const std::string image = h["image"].get<std::string>();
@@ -46,15 +78,20 @@ std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
     throw InputError(job.file.string(), pointer, what);
   };
   const std::string file = job.resolve(image).string();
-  if (info->geographic)
-    fail("/height/image", file + ": has a geographic CRS (" + info->crs_name +
-                              ", coordinates in degrees); hfbake needs a projected CRS in the heights' unit: "
-                              "reproject it first, e.g. gdalwarp -t_srs EPSG:<UTM zone> in.tif out.tif");
+  if (info->geographic && !info->has_geotransform)
+    fail("/height/image", file + ": has a geographic CRS (" + info->crs_name + ") but no geotransform");
   if (!info->has_geotransform) return info;
   const auto& g = info->geotransform;
   if (g[2] != 0 || g[4] != 0)
     fail("/height/image", file + ": is rotated or sheared (geotransform " + num(g[2]) + ", " + num(g[4]) +
                               "); warp it north-up first (gdalwarp)");
+  if (info->geographic) {
+    if (h.contains("texel_size") && h["texel_size"].is_number())
+      fail("/height/texel_size", "is given, but " + image + " has a geographic CRS (" + info->crs_name +
+                                     "), whose texels are measured on its ellipsoid: leave texel_size out");
+    geographic_texel(job, *info, file);
+    return info;
+  }
   const double sx = std::abs(g[1]), sy = std::abs(g[5]);
   if (!(std::abs(sx - sy) <= 1e-9 * std::max(sx, sy)))
     fail("/height/image", file + ": has non-square pixels (" + num(sx) + " x " + num(sy) +
@@ -88,10 +125,13 @@ FieldSize probe_image_field_size(const Job& job) {
   return {info.width, info.height};
 }
 
-std::optional<double> image_texel_size(const Job& job) {
+std::optional<std::array<double, 2>> image_texel_size(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
   const std::optional<GeoRasterInfo> geo = checked_georaster(job);
-  if (geo && geo->has_geotransform) return std::abs(geo->geotransform[1]);
+  if (geo && geo->geographic)
+    return geographic_texel(job, *geo, job.resolve(h["image"].get<std::string>()).string());
+  if (geo && geo->has_geotransform)
+    return std::array<double, 2>{std::abs(geo->geotransform[1]), std::abs(geo->geotransform[1])};
   if (h.contains("texel_size") && h["texel_size"].is_string())
     throw InputError(job.file.string(), "/height/texel_size",
                      "is \"from_file\" but " + h["image"].get<std::string>() +
@@ -129,6 +169,7 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   out.nodata = geo->nodata[band];
   out.source.reader = "GDAL";
   out.source.format = geo->driver;
+  out.source.geographic = geo->geographic;
   Georeference& georeference = out.georeference;
   georeference.geotransform = local_geotransform(job_texel_size(job));
   georeference.from_file = geo->has_geotransform;
@@ -150,6 +191,11 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   return out;
 }
 
+bool image_geographic(const Job& job) {
+  const std::optional<GeoRasterInfo> geo = checked_georaster(job);
+  return geo && geo->geographic;
+}
+
 HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Georeference& georeference,
                              HeightSource& source, const std::function<void(double)>& progress) {
   const nlohmann::json& h = job.doc["height"];
@@ -160,6 +206,7 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
     plane = read_georaster_band(geo->file, geo->band, site(job, "/height/image"), progress);
     source.reader = geo->source.reader;
     source.format = geo->source.format;
+    source.geographic = geo->source.geographic;
     file_nodata = geo->nodata;
     georeference = std::move(geo->georeference);
   } else {

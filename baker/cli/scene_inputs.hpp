@@ -4,6 +4,7 @@
 // the JSON pointer and, where there is one, the image.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -14,14 +15,19 @@
 namespace hfbake {
 
 // The size of the height image from its header (nothing decoded). A georeferenced raster (read through
-// GDAL) is checked here already, so validate refuses what bake refuses: a geographic CRS, a rotated
-// geotransform, non-square pixels, a job texel_size other than the pixel size (InputError at /height/image
-// or /height/texel_size).
+// GDAL) is checked here already, so validate refuses what bake refuses: a rotated geotransform, non-square
+// pixels in a projected CRS, a job texel_size other than the pixel size, a geographic raster too near a pole
+// or spanning too much latitude for one local frame (InputError at /height/image or /height/texel_size).
 FieldSize probe_image_field_size(const Job& job);
 
-// The height image's pixel size when its file has a geotransform (what texel_size defaults to); nullopt
-// otherwise (InputError when the job's texel_size is "from_file" then).
-std::optional<double> image_texel_size(const Job& job);
+// The height image's texel sides (x, y) in world units when its file has a geotransform (what texel_size
+// defaults to): a projected raster's pixel size twice, a geographic raster's pixel in metres in the local
+// frame at its centre (docs/gis.md "Geographic DEMs"); nullopt otherwise (InputError when the job's
+// texel_size is "from_file" then).
+std::optional<std::array<double, 2>> image_texel_size(const Job& job);
+
+// Whether the height image is a raster in a geographic CRS (its Earth curvature's default).
+bool image_geographic(const Job& job);
 
 // The height image's chosen channel as a field (heights as stored: scale and offset are applied by the
 // caller), with nodata handling: NaN/Inf texels (and texels equal to height.nodata_value or to the file's

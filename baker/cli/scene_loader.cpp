@@ -7,10 +7,12 @@
 #include "cli/scene_inputs.hpp"
 #include "core/error.hpp"
 #include "field/procedural.hpp"
+#include "io/crs_geodesy.hpp"
 #include "io/load_environment.hpp"
 #include "methods/method_table.hpp"
 #include "reference/bake_reference.hpp"
 #include "reference/embree_field.hpp"
+#include "terrain/earth.hpp"
 
 namespace hfbake {
 
@@ -73,14 +75,49 @@ FieldSize probe_field_size(const Job& job) {
   return size;
 }
 
-double job_texel_size(const Job& job) {
+std::array<double, 2> job_texel_sides(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
   if (h.contains("image"))
-    if (const std::optional<double> from_file = image_texel_size(job)) return *from_file;
+    if (const std::optional<std::array<double, 2>> from_file = image_texel_size(job)) return *from_file;
   if (h.contains("texel_size") && h["texel_size"].is_string())
     throw InputError(job.file.string(), "/height/texel_size",
                      "is \"from_file\" but the field is procedural: give texel_size as a number");
-  return h.value("texel_size", 1.0);
+  const double t = h.value("texel_size", 1.0);
+  return {t, t};
+}
+
+double job_texel_size(const Job& job) {
+  return job_texel_sides(job)[0];
+}
+
+CurvatureOption job_curvature(const Job& job, bool geographic) {
+  const nlohmann::json& h = job.doc["height"];
+  CurvatureOption o;
+  o.on = h.value("curvature", geographic);
+  o.refraction = h.value("refraction", kDefaultRefraction);
+  if (o.on && h.value("wrap", "clamp") == "repeat")
+    throw InputError(job.file.string(), h.contains("curvature") ? "/height/curvature" : "/height/wrap",
+                     "a repeating field has no place on the Earth: Earth curvature applies to clamp fields "
+                     "only");
+  if (h.contains("refraction") && !o.on)
+    throw InputError(job.file.string(), "/height/refraction",
+                     std::string("applies with Earth curvature only, which is off for this field (") +
+                         (h.contains("curvature") ? "\"curvature\": false" : "a projected or local field") +
+                         "): set \"curvature\": true or leave refraction out");
+  return o;
+}
+
+double curvature_coefficient(const CurvatureOption& option, const Georeference& georeference) {
+  if (!option.on) return 0;
+  Ellipsoid ellipsoid;  // a sphere of the mean radius when the CRS names no ellipsoid
+  double metres_per_unit = 1;
+  if (const std::optional<CrsEarth> earth = crs_earth(georeference.crs_wkt)) {
+    ellipsoid = {earth->semi_major, earth->semi_minor};
+    metres_per_unit = earth->metres_per_unit;
+  }
+  const double lat = georeference.has_site ? georeference.site_latitude * kPi / 180 : 0.0;
+  // c per world unit: the radii in the CRS's linear unit (the heights' unit, docs/gis.md).
+  return EarthCurvature::at(ellipsoid, lat, option.refraction).mean_coefficient() * metres_per_unit;
 }
 
 int job_bounces(const Job& job) {
@@ -214,8 +251,13 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
     line += h["image"].get<std::string>() + " through " + s.reader + " (" + s.format + ", " + s.sample_type +
             (s.integer ? " integers as stored" : "") + ")";
   }
-  line += "; " + std::to_string(f.width) + "x" + std::to_string(f.height) + " texels of " + short_num(texel) +
-          " (" + short_num(f.width * texel) + " x " + short_num(f.height * texel) + " world units)";
+  line += "; " + std::to_string(f.width) + "x" + std::to_string(f.height) + " texels of " + short_num(texel);
+  if (!f.square_texels()) line += " x " + short_num(f.dy());
+  line += " (" + short_num(f.width * texel) + " x " + short_num(f.height * f.dy()) + " world units";
+  if (!f.square_texels())
+    line +=
+        ", a geographic raster in the local frame at latitude " + short_num(scene.georeference.site_latitude);
+  line += ")";
   const bool transformed = s.scale != 1 || s.offset != 0;
   if (transformed) {
     line += "; stored " + short_num(s.stored_min) + " .. " + short_num(s.stored_max) + " x height_scale " +
@@ -228,6 +270,16 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   const double relief = s.world_max - s.world_min;
   line += " heights " + short_num(s.world_min) + " .. " + short_num(s.world_max) + " world units (relief " +
           short_num(relief) + ")";
+
+  if (scene.curvature > 0) {
+    line += "; Earth curvature on (refraction " + short_num(scene.refraction) + ": a point 1 km away is " +
+            short_num(scene.curvature * 1e6) + " m lower, c = " + short_num(scene.curvature) +
+            " per world unit)";
+  } else {
+    line += "; Earth curvature off (flat";
+    line += scene.height_source.geographic ? "" : "; \"curvature\": true in height turns it on";
+    line += ")";
+  }
 
   HeightsReport report{line, {}};
   const double extent = std::max(f.width, f.height) * texel;
@@ -255,7 +307,8 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
 
 Scene load_scene(const Job& job, const std::function<void(double)>& progress) {
   const nlohmann::json& h = job.doc["height"];
-  const double texel = job_texel_size(job);
+  const std::array<double, 2> sides = job_texel_sides(job);
+  const double texel = sides[0];
   const Wrap wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
   Georeference georeference;
   georeference.geotransform = local_geotransform(texel);
@@ -267,6 +320,7 @@ Scene load_scene(const Job& job, const std::function<void(double)>& progress) {
     source.format = h["procedural"]["kind"].get<std::string>();
   } else {
     field = load_image_field(job, texel, wrap, georeference, source, progress);
+    if (sides[1] != sides[0]) field.texel_size_y = sides[1];
   }
   return complete_scene(job, std::move(field), std::move(georeference), std::move(source));
 }
@@ -339,6 +393,9 @@ Scene complete_scene(const Job& job, HeightField field, Georeference georeferenc
     }
   }
   scene.bounces = job_bounces(job);
+  const CurvatureOption curvature = job_curvature(job, source.geographic);
+  scene.curvature = curvature_coefficient(curvature, scene.georeference);
+  scene.refraction = curvature.refraction;
   return scene;
 }
 

@@ -2,6 +2,7 @@
 // the surface maps, the environment and the lights. All file reading of a bake happens here.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <functional>
 #include <string>
@@ -35,9 +36,24 @@ struct MemoryPart {
 };
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts = nullptr);
 
-// The job's texel size: a georeferenced height raster's pixel size (the job's texel_size, when given,
-// must agree with it), else height.texel_size (default 1). InputError for "from_file" without one.
+// The job's texel sides (x, y): a georeferenced height raster's pixel size (the job's texel_size, when
+// given, must agree with it; a geographic raster's pixel in metres in its local frame, docs/gis.md), else
+// height.texel_size (default 1) twice. InputError for "from_file" without one. job_texel_size: the x side.
+std::array<double, 2> job_texel_sides(const Job& job);
 double job_texel_size(const Job& job);
+
+// The job's Earth curvature (height.curvature, height.refraction), read once: on by default for a
+// geographic raster, off otherwise; refraction k (default 0.13, Gauss's coefficient, docs/gis.md "Earth
+// curvature") only with curvature on (InputError at /height/refraction otherwise).
+struct CurvatureOption {
+  bool on = false;
+  double refraction = 0.13;
+};
+CurvatureOption job_curvature(const Job& job, bool geographic);
+// The Scene's lowering coefficient c = (1 - k) / (2 R) per world unit (0: off): R = sqrt(M N) of the CRS's
+// ellipsoid at the field's centre latitude (a sphere of the mean radius at the equator without a CRS or a
+// site), in the CRS's linear unit.
+double curvature_coefficient(const CurvatureOption& option, const Georeference& georeference);
 
 // The job's "bounces" (default 1).
 int job_bounces(const Job& job);

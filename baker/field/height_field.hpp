@@ -16,11 +16,19 @@ enum class Wrap { clamp, repeat };
 // (methods/method_table.hpp).
 struct FieldShape {
   int width = 0, height = 0;
-  double texel_size = 1.0;
+  double texel_size = 1.0;    // world units between texel centres along x (columns)
+  double texel_size_y = 0.0;  // along y (rows); 0: texel_size (square texels)
   Wrap wrap = Wrap::clamp;
+
+  // The texel's sides in world units: a geographic DEM's texels are rectangles (docs/gis.md "Geographic
+  // DEMs"); every other field's are squares. Only the methods whose table entry says rectangular_texels,
+  // and the reference, accept rectangles.
+  double dx() const { return texel_size; }
+  double dy() const { return texel_size_y > 0 ? texel_size_y : texel_size; }
+  bool square_texels() const { return texel_size_y <= 0 || texel_size_y == texel_size; }
 };
 
-// Texel (i, j) has its center at world (i * texel_size, j * texel_size, z[j * width + i]).
+// Texel (i, j) has its center at world (i * dx(), j * dy(), z[j * width + i]).
 // Heights are world units (height_scale and height_offset already applied). i: column, j: row.
 struct HeightField : FieldShape {
   std::vector<float> z;
@@ -54,7 +62,7 @@ struct HeightField : FieldShape {
     return facet_height(tx, ty, [&](int di, int dj) { return at(i + di, j + dj); });
   }
 
-  Vec3 position(int i, int j) const { return {i * texel_size, j * texel_size, double(z[index(i, j)])}; }
+  Vec3 position(int i, int j) const { return {i * dx(), j * dy(), double(z[index(i, j)])}; }
 
  private:
   static int clampi(int v, int n) { return v < 0 ? 0 : (v >= n ? n - 1 : v); }

@@ -9,7 +9,7 @@ namespace hfbake {
 // diagonals (twice its projected-area-weighted normal), so the sum is exact for any plane. In clamp mode,
 // quads outside the field do not exist and are skipped; in repeat mode the field tiles.
 Vec3f normal_at(const HeightField& f, int i, int j) {
-  const double s = f.texel_size;
+  const double sx = f.dx(), sy = f.dy();
   const bool repeat = f.wrap == Wrap::repeat;
   Vec3 sum{0, 0, 0};
   for (int qj = j - 1; qj <= j; ++qj) {
@@ -17,9 +17,9 @@ Vec3f normal_at(const HeightField& f, int i, int j) {
       if (!repeat && (qi < 0 || qj < 0 || qi + 1 >= f.width || qj + 1 >= f.height)) continue;
       const double h00 = f.at(qi, qj), h10 = f.at(qi + 1, qj);
       const double h01 = f.at(qi, qj + 1), h11 = f.at(qi + 1, qj + 1);
-      // Diagonals d1 = P11 - P00 = (s, s, a), d2 = P01 - P10 = (-s, s, b); n = d1 x d2.
+      // Diagonals d1 = P11 - P00 = (sx, sy, a), d2 = P01 - P10 = (-sx, sy, b); n = d1 x d2.
       const double a = h11 - h00, b = h01 - h10;
-      sum += Vec3{s * (b - a), -s * (a + b), 2 * s * s};
+      sum += Vec3{sy * (b - a), -sx * (a + b), 2 * sx * sy};
     }
   }
   return Vec3f::from(normalize(sum));

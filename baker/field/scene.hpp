@@ -54,6 +54,7 @@ struct HeightSource {
   double stored_min = 0, stored_max = 0;  // the heights as read, before height_scale and height_offset
   double scale = 1, offset = 0;           // height_scale and height_offset
   double world_min = 0, world_max = 0;    // the heights baked, in world units
+  bool geographic = false;                // a raster in a geographic CRS, baked in its local frame
 };
 
 struct Scene {
@@ -64,6 +65,11 @@ struct Scene {
   Environment environment;
   std::vector<DirectionalLight> lights;  // the job's lights plus the built-in sky's sun
   int bounces = 1;
+  // The Earth's curvature as every horizon-based method sees it: a caster at horizontal distance d from a
+  // receiver is lowered by curvature * d^2 (c = (1 - k) / (2 R) per world unit, terrain/earth.hpp; 0: a
+  // flat Earth). Its slope seen from the receiver is (z - z0) / d - c d.
+  double curvature = 0;
+  double refraction = 0;      // the coefficient k it was made with (for what validate and bake print)
   Georeference georeference;  // the input's CRS, geotransform and holes (for GeoTIFF outputs)
   HeightSource height_source;
 };

@@ -1,6 +1,7 @@
 #include "methods/method_table.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 #include "core/error.hpp"
 #include "methods/ao/bake_ao.hpp"
@@ -33,6 +34,24 @@ std::vector<std::string> method_names() {
   return names;
 }
 
+namespace {
+
+// The methods that bake rectangular texels, and those that apply the Earth's curvature, for messages.
+std::vector<std::string> rectangular_methods() {
+  std::vector<std::string> names;
+  for (const MethodInfo& m : method_table())
+    if (m.rectangular_texels) names.emplace_back(m.name);
+  return names;
+}
+std::vector<std::string> curved_methods() {
+  std::vector<std::string> names;
+  for (const MethodInfo& m : method_table())
+    if (m.applies_curvature) names.emplace_back(m.name);
+  return names;
+}
+
+}  // namespace
+
 MethodConfig resolve_method(const nlohmann::json& entry, const MethodContext& context,
                             const std::string& file, const std::string& pointer) {
   const std::string name = entry.is_object() ? entry.value("method", "") : "";
@@ -40,6 +59,22 @@ MethodConfig resolve_method(const nlohmann::json& entry, const MethodContext& co
   if (!m)
     throw InputError(file, pointer + "/method",
                      "unknown method \"" + name + "\" (one of " + quoted_list(method_names()) + ")");
+  if (!context.field.square_texels() && !m->rectangular_texels) {
+    char sides[96];
+    std::snprintf(sides, sizeof sides, "%.6g x %.6g", context.field.dx(), context.field.dy());
+    throw InputError(
+        file, pointer + "/method",
+        name + " needs square texels and this field's are " + sides +
+            " world units (a geographic raster in its local frame): bake " +
+            quoted_list(rectangular_methods()) +
+            ", or reproject the raster to square texels (gdalwarp -t_srs EPSG:<UTM zone> -tr S S)");
+  }
+  if (context.curvature && !m->applies_curvature)
+    throw InputError(file, pointer + "/method",
+                     name +
+                         " bakes a flat Earth and the job's Earth curvature is on (height.curvature, on by "
+                         "default for a geographic raster): bake " +
+                         quoted_list(curved_methods()) + ", or set \"curvature\": false in height");
   Params in(entry, file, pointer);
   MethodConfig config = m->read(in, context);
   config.method = m;
@@ -59,6 +94,7 @@ MethodConfig read_method_config(std::string_view name, const nlohmann::json& par
 MethodContext scene_method_context(const Scene& scene) {
   MethodContext c;
   c.field = scene.field;
+  c.curvature = scene.curvature > 0;
   c.bounces = scene.bounces;
   c.uniform_environment = scene.environment.uniform || scene.environment.levels.empty();
   return c;

@@ -36,6 +36,7 @@ enum class WorkDivision {
 // What a method's parameter reader may know before the heights are loaded.
 struct MethodContext {
   FieldShape field;
+  bool curvature = false;           // the job's Earth curvature is on (Scene::curvature > 0)
   int bounces = 0;                  // the job's
   bool uniform_environment = true;  // no sky, latlong, cubemap or cross (io/load_environment.cpp)
 };
@@ -155,6 +156,11 @@ struct MethodInfo {
   // must not touch them (they may be empty).
   bool reads_normals = true;
   bool reads_albedo = true;
+  // Whether the method bakes rectangular texels (FieldShape::dx() != dy(): a geographic raster in its
+  // local frame) and lowers its casters by the Earth's curvature (Scene::curvature). resolve_method refuses
+  // an entry of a method without them on such a field, or with curvature on.
+  bool rectangular_texels = false;
+  bool applies_curvature = false;
 };
 
 // Every method, in the order docs/methods/README.md lists them.

@@ -243,7 +243,7 @@ struct Context {
   // point lies over (field/triangulation.hpp, the split of the geometry); outside the field (the skirt) the
   // nearest texel.
   void surface_at(Vec3 p, Rgb& albedo, Rgb& emission) const {
-    const double x = p.x / field.texel_size, y = p.y / field.texel_size;
+    const double x = p.x / field.dx(), y = p.y / field.dy();
     double fi = std::floor(x), fj = std::floor(y);
     double fx = x - fi, fy = y - fj;
     int i = int(fi), j = int(fj);
@@ -578,7 +578,7 @@ nlohmann::json reference_setup(const HeightField& f, const ReferenceOptions& opt
     setup["sh_irradiance_horizons"] = {{"azimuths", kShAzimuths}, {"bisections", kShIterations}};
   if (f.wrap == Wrap::repeat) {
     setup["repeat_tiles"] = options.repeat_tiles;
-    setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width, f.height) * f.texel_size;
+    setup["repeat_distance_bound"] = options.repeat_tiles * std::min(f.width * f.dx(), f.height * f.dy());
   }
   return setup;
 }

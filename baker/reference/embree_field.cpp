@@ -20,9 +20,10 @@ void check_device(RTCDevice device, const char* what) {
                              ")");
 }
 
-// The sheet: nx x ny vertices with vertex (i, j) at (x0 + i ts, y0 + j ts, height(i, j)).
+// The sheet: nx x ny vertices with vertex (i, j) at (i sx, j sy, height(i, j)).
 template <class HeightAt>
-RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, double ts, HeightAt height) {
+RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, double sx, double sy,
+                       HeightAt height) {
   // The texel centres, row-major: the vertices of every geometry kind.
   auto set_vertices = [&](RTCGeometry g) {
     float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -30,7 +31,7 @@ RTCGeometry make_sheet(RTCDevice device, GeometryKind kind, int nx, int ny, doub
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
         float* p = v + 3 * (std::size_t(j) * nx + i);
-        p[0] = float(i * ts), p[1] = float(j * ts), p[2] = height(i, j);
+        p[0] = float(i * sx), p[1] = float(j * sy), p[2] = height(i, j);
       }
   };
   if (kind == GeometryKind::grid) {
@@ -146,7 +147,7 @@ EmbreeField::EmbreeField(const HeightField& f, GeometryKind kind, int repeat_til
     throw std::invalid_argument("the reference needs a field of at least 2x2 texels");
   device_ = rtcNewDevice(nullptr);
   if (!device_) throw std::runtime_error("embree: cannot create a device");
-  const double ts = f.texel_size;
+  const double ts = std::min(f.dx(), f.dy()), sx = f.dx(), sy = f.dy();
   const auto [zmin_it, zmax_it] = std::minmax_element(f.z.begin(), f.z.end());
   const double zmin = *zmin_it, zmax = *zmax_it;
   z_bottom_ = zmin - (zmax - zmin) - ts;
@@ -159,27 +160,27 @@ EmbreeField::EmbreeField(const HeightField& f, GeometryKind kind, int repeat_til
 
   std::vector<std::array<float, 3>> ring;  // boundary of the whole surface, for the skirt
   if (!repeat) {
-    RTCGeometry sheet =
-        make_sheet(device_, kind, f.width, f.height, ts, [&](int i, int j) { return f.z[f.index(i, j)]; });
+    RTCGeometry sheet = make_sheet(device_, kind, f.width, f.height, sx, sy,
+                                   [&](int i, int j) { return f.z[f.index(i, j)]; });
     rtcAttachGeometry(scene_, sheet);
     rtcReleaseGeometry(sheet);
     const int W = f.width, H = f.height;
-    for (int i = 0; i < W - 1; ++i) ring.push_back({float(i * ts), 0.0f, f.z[f.index(i, 0)]});
+    for (int i = 0; i < W - 1; ++i) ring.push_back({float(i * sx), 0.0f, f.z[f.index(i, 0)]});
     for (int j = 0; j < H - 1; ++j)
-      ring.push_back({float((W - 1) * ts), float(j * ts), f.z[f.index(W - 1, j)]});
+      ring.push_back({float((W - 1) * sx), float(j * sy), f.z[f.index(W - 1, j)]});
     for (int i = W - 1; i > 0; --i)
-      ring.push_back({float(i * ts), float((H - 1) * ts), f.z[f.index(i, H - 1)]});
-    for (int j = H - 1; j > 0; --j) ring.push_back({0.0f, float(j * ts), f.z[f.index(0, j)]});
+      ring.push_back({float(i * sx), float((H - 1) * sy), f.z[f.index(i, H - 1)]});
+    for (int j = H - 1; j > 0; --j) ring.push_back({0.0f, float(j * sy), f.z[f.index(0, j)]});
   } else {
     tile_ = rtcNewScene(device_);
     rtcSetSceneFlags(tile_, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(tile_, RTC_BUILD_QUALITY_HIGH);
-    RTCGeometry sheet =
-        make_sheet(device_, kind, f.width + 1, f.height + 1, ts, [&](int i, int j) { return f.at(i, j); });
+    RTCGeometry sheet = make_sheet(device_, kind, f.width + 1, f.height + 1, sx, sy,
+                                   [&](int i, int j) { return f.at(i, j); });
     rtcAttachGeometry(tile_, sheet);
     rtcReleaseGeometry(sheet);
     rtcCommitScene(tile_);
-    const double tw = f.width * ts, th = f.height * ts;
+    const double tw = f.width * sx, th = f.height * sy;
     for (int ty = -T; ty <= T; ++ty)
       for (int tx = -T; tx <= T; ++tx) {
         RTCGeometry inst = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
@@ -192,10 +193,10 @@ EmbreeField::EmbreeField(const HeightField& f, GeometryKind kind, int repeat_til
       }
     // The block spans tile vertices [-T W, (T+1) W] x [-T H, (T+1) H].
     const int i0 = -T * f.width, i1 = (T + 1) * f.width, j0 = -T * f.height, j1 = (T + 1) * f.height;
-    for (int i = i0; i < i1; ++i) ring.push_back({float(i * ts), float(j0 * ts), f.at(i, j0)});
-    for (int j = j0; j < j1; ++j) ring.push_back({float(i1 * ts), float(j * ts), f.at(i1, j)});
-    for (int i = i1; i > i0; --i) ring.push_back({float(i * ts), float(j1 * ts), f.at(i, j1)});
-    for (int j = j1; j > j0; --j) ring.push_back({float(i0 * ts), float(j * ts), f.at(i0, j)});
+    for (int i = i0; i < i1; ++i) ring.push_back({float(i * sx), float(j0 * sy), f.at(i, j0)});
+    for (int j = j0; j < j1; ++j) ring.push_back({float(i1 * sx), float(j * sy), f.at(i1, j)});
+    for (int i = i1; i > i0; --i) ring.push_back({float(i * sx), float(j1 * sy), f.at(i, j1)});
+    for (int j = j1; j > j0; --j) ring.push_back({float(i0 * sx), float(j * sy), f.at(i0, j)});
   }
   RTCGeometry skirt = make_skirt(device_, ring, float(z_bottom_), kind == GeometryKind::quads && !repeat);
   rtcAttachGeometry(scene_, skirt);
@@ -204,7 +205,7 @@ EmbreeField::EmbreeField(const HeightField& f, GeometryKind kind, int repeat_til
   check_device(device_, "building the height-field scene");
 
   double max_coord = std::max(std::abs(zmin), std::abs(zmax));
-  max_coord = std::max(max_coord, (T + 1) * std::max(f.width, f.height) * ts);
+  max_coord = std::max(max_coord, (T + 1) * std::max(f.width * sx, f.height * sy));
   float_floor_ = 16 * double(FLT_EPSILON) * max_coord;
   epsilon_ = std::max(1e-3 * ts, float_floor_);
 }

@@ -28,16 +28,69 @@ RTCRayHit ray_from(const Vec3& o, double c, double s, double e) {
   return h;
 }
 
+// The first hit of the chain of chords of the parabola o + (d c, d s, d tan e + k d^2), d in [0, end]
+// (horizontal): the straight distance from o to the hit, or a negative value when nothing is hit.
+double curved_hit(const reference::EmbreeField& geometry, const Vec3& o, double c, double s, double e,
+                  double end, const CurvedRays& curved) {
+  const double k = curved.curvature, slope = std::tan(e);
+  auto at = [&](double d) { return Vec3{o.x + d * c, o.y + d * s, o.z + d * slope + k * d * d}; };
+  RTCIntersectContext context;
+  Vec3 a = o;
+  for (double d0 = 0; d0 < end;) {
+    const double d1 = std::min(end, d0 + curved.step);
+    const Vec3 b = at(d1);
+    const Vec3 v = b - a;
+    const double length = std::sqrt(dot(v, v));
+    RTCRayHit h = ray_from(a, 1, 0, 0);
+    h.ray.dir_x = float(v.x / length), h.ray.dir_y = float(v.y / length), h.ray.dir_z = float(v.z / length);
+    h.ray.tfar = float(length);
+    rtcInitIntersectContext(&context);
+    rtcIntersect1(geometry.scene(), &context, &h);
+    if (h.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+      const Vec3 p = a + v * (double(h.ray.tfar) / length);
+      const Vec3 r = p - o;
+      return std::sqrt(dot(r, r));
+    }
+    // Above every height and rising: nothing further is hit.
+    if (b.z > curved.z_top && slope + 2 * k * d1 >= 0) return -1;
+    a = b, d0 = d1;
+  }
+  return -1;
+}
+
 }  // namespace
 
+CurvedRays curved_rays(const HeightField& f, double curvature) {
+  CurvedRays r;
+  if (curvature == 0) return r;
+  r.curvature = curvature;
+  r.sagitta = 1e-4 * std::min(f.dx(), f.dy());
+  r.step = 2 * std::sqrt(r.sagitta / std::abs(curvature));
+  // The traced block: the field, or (repeat) the 3 x 3 tiles around it (EmbreeField's repeat_tiles 1).
+  const double tiles = f.wrap == Wrap::repeat ? 3 : 1;
+  r.reach = tiles * std::hypot(f.width * f.dx(), f.height * f.dy());
+  r.z_top = *std::max_element(f.z.begin(), f.z.end());
+  return r;
+}
+
 TexelHorizon bisect_horizon(const reference::EmbreeField& geometry, const Vec3& o, double c, double s,
-                            int iterations, double max_horizontal) {
+                            int iterations, double max_horizontal, const CurvedRays& curved) {
   // lo: an occluded elevation (straight down always is), hi: a free one (straight up).
   double lo = -kPi / 2, hi = kPi / 2, lo_distance = 0;
   const bool limited = max_horizontal < std::numeric_limits<double>::infinity();
   RTCIntersectContext context;
   for (int it = 0; it < iterations; ++it) {
     const double mid = 0.5 * (lo + hi);
+    if (curved.curvature != 0) {
+      const double d = curved_hit(geometry, o, c, s, mid, std::min(max_horizontal, curved.reach), curved);
+      if (d >= 0) {
+        lo = mid;
+        lo_distance = d;
+      } else {
+        hi = mid;
+      }
+      continue;
+    }
     RTCRayHit h = ray_from(o, c, s, mid);
     if (limited)  // the ray's length at which it is max_horizontal away horizontally
       h.ray.tfar = float(std::min(max_horizontal / std::max(std::cos(mid), 1e-30), 3.0e38));
@@ -54,11 +107,11 @@ TexelHorizon bisect_horizon(const reference::EmbreeField& geometry, const Vec3& 
 }
 
 double horizon_receiver_lift(const HeightField& f, const reference::EmbreeField& geometry) {
-  return std::max(1e-5 * f.texel_size, geometry.float_floor());
+  return std::max(1e-5 * std::min(f.dx(), f.dy()), geometry.float_floor());
 }
 
 ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool distance, const RunControl& rc,
-                                           int iterations) {
+                                           int iterations, double curvature) {
   ReferenceHorizons out;
   out.K = K;
   const std::size_t N = f.texel_count();
@@ -68,13 +121,15 @@ ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool dis
   std::vector<double> cos_phi, sin_phi;
   azimuth_table(K, cos_phi, sin_phi);
   const double lift = horizon_receiver_lift(f, geometry);
+  const CurvedRays curved = curved_rays(f, curvature);
   tbb::parallel_for(0, f.height, [&](int j) {
     rc.check();
     for (int i = 0; i < f.width; ++i) {
       const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
       const std::size_t t = f.index(i, j);
       for (int k = 0; k < K; ++k) {
-        const TexelHorizon h = bisect_horizon(geometry, o, cos_phi[k], sin_phi[k], iterations);
+        const TexelHorizon h = bisect_horizon(geometry, o, cos_phi[k], sin_phi[k], iterations,
+                                              std::numeric_limits<double>::infinity(), curved);
         out.sin_elevation[t * K + k] = float(std::sin(h.elevation));
         if (distance) out.distance[t * K + k] = float(h.distance);
       }
@@ -84,7 +139,7 @@ ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool dis
 }
 
 void add_reference_horizons(const HeightField& field, const std::vector<const LayerSet*>& methods,
-                            LayerSet& reference, const RunControl& rc) {
+                            LayerSet& reference, const RunControl& rc, double curvature) {
   if (reference.find("horizon") || reference.find("horizon_distance")) return;
   const Layer *horizon = nullptr, *distance = nullptr;
   for (const LayerSet* m : methods) {
@@ -95,7 +150,7 @@ void add_reference_horizons(const HeightField& field, const std::vector<const La
   const Layer& shape = horizon ? *horizon : *distance;
   const int K = shape.channel_count();
   const bool same_k = !horizon || !distance || distance->channel_count() == K;
-  ReferenceHorizons h = trace_reference_horizons(field, K, distance && same_k, rc);
+  ReferenceHorizons h = trace_reference_horizons(field, K, distance && same_k, rc, 40, curvature);
   if (horizon) reference.layers.push_back({"horizon", horizon->channels, std::move(h.sin_elevation)});
   if (distance && same_k)
     reference.layers.push_back({"horizon_distance", distance->channels, std::move(h.distance)});

@@ -9,6 +9,16 @@
 // elevation): `iterations` halvings (40: below 3e-12 rad, far below float). The distance is that of the
 // hit of the highest occluded ray: the world distance to the caster, as P1's horizon_distance. The skirt
 // counts as terrain, so looking out over a border the horizon is the border's edge.
+//
+// With the Earth's curvature c (Scene::curvature: a caster at horizontal distance d is lowered by c d^2),
+// lowering every caster by c d^2 is the same as raising the line of sight by c d^2 over the flat surface:
+// the ray of elevation e is the parabola z0 + d tan e + c d^2, traced as a chain of straight chords whose
+// vertices lie on it (CurvedRays). A chord of horizontal length L from d0 lies above the parabola by
+// |c| (d - d0) (d0 + L - d) at d: at most its sagitta |c| L^2 / 4 = CurvedRays::sagitta, and at most
+// |c| L (d - d0) <= |c| L d. So the chain sees a caster at distance d within min(sagitta / d, |c| L) radians
+// of the curved ray's elevation: with 1 m texels on the Earth (c = 6.8e-8 per metre, L = 77 m), 5e-6 rad
+// near the receiver and 1e-4 / d rad beyond. Visibility stays monotone in e (a higher parabola of one
+// azimuth is higher at every d), so the bisection holds.
 #pragma once
 
 #include <limits>
@@ -38,19 +48,29 @@ class EmbreeField;
 struct TexelHorizon {
   double elevation = 0, distance = 0;
 };
+// The curved rays of a field with curvature c per world unit (c = 0: straight rays): chords of horizontal
+// length step = 2 sqrt(sagitta / |c|), sagitta = 1e-4 of the shorter texel side, out to `reach` (the
+// horizontal extent of the traced geometry, beyond which nothing is hit); above z_top (the field's highest
+// point) a rising ray can hit nothing more.
+struct CurvedRays {
+  double curvature = 0, step = 0, reach = 0, z_top = 0, sagitta = 0;
+};
+CurvedRays curved_rays(const HeightField& field, double curvature);
 TexelHorizon bisect_horizon(const reference::EmbreeField& geometry, const Vec3& receiver, double c, double s,
-                            int iterations, double max_horizontal = std::numeric_limits<double>::infinity());
+                            int iterations, double max_horizontal = std::numeric_limits<double>::infinity(),
+                            const CurvedRays& curved = {});
 // The lift of a horizon receiver above its texel centre: max(1e-5 texel, the geometry's float floor).
 double horizon_receiver_lift(const HeightField& field, const reference::EmbreeField& geometry);
 
+// curvature: Scene::curvature (0: flat).
 ReferenceHorizons trace_reference_horizons(const HeightField& field, int K, bool distance,
-                                           const RunControl& rc, int iterations = 40);
+                                           const RunControl& rc, int iterations = 40, double curvature = 0);
 
 // Adds "horizon" (and "horizon_distance") to a reference's layers when one of `methods` bakes it: K is that
 // layer's channel count, the channel names are the method's. The first method's K wins: a method with
 // another K is left out of the comparison (report.json lists it under not_compared). Nothing is added when
 // no method bakes a horizon or the reference has the layer already.
 void add_reference_horizons(const HeightField& field, const std::vector<const LayerSet*>& methods,
-                            LayerSet& reference, const RunControl& rc);
+                            LayerSet& reference, const RunControl& rc, double curvature = 0);
 
 }  // namespace hfbake

@@ -16,13 +16,14 @@ constexpr double kDegPerRad = 180.0 / kPi;
 
 // The highest elevation within the radius along every direction, from every texel centre of f.
 void trace_up(const HeightField& f, const ReliefReferenceSettings& s, const RunControl& rc, int iterations,
-              std::vector<double>& out) {
+              double curvature, std::vector<double>& out) {
   const int K = s.directions;
   out.assign(f.texel_count() * std::size_t(K), 0.0);
   const reference::EmbreeField geometry(f, reference::GeometryKind::grid, 1);
   std::vector<double> dx(static_cast<std::size_t>(K)), dy(static_cast<std::size_t>(K));
   for (int k = 0; k < K; ++k) relief_direction(k, K, s.compass, dx[std::size_t(k)], dy[std::size_t(k)]);
   const double lift = horizon_receiver_lift(f, geometry);
+  const CurvedRays curved = curved_rays(f, curvature);
   tbb::parallel_for(0, f.height, [&](int j) {
     rc.check();
     for (int i = 0; i < f.width; ++i) {
@@ -31,7 +32,7 @@ void trace_up(const HeightField& f, const ReliefReferenceSettings& s, const RunC
       // border's triangles and the skirt).
       Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
       if (f.wrap == Wrap::clamp) {
-        const double nudge = 1e-4 * f.texel_size;
+        const double nudge = 1e-4 * std::min(f.dx(), f.dy());
         if (i == 0) o.x += nudge;
         if (i == f.width - 1) o.x -= nudge;
         if (j == 0) o.y += nudge;
@@ -46,9 +47,7 @@ void trace_up(const HeightField& f, const ReliefReferenceSettings& s, const RunC
           out[f.index(i, j) * K + k] = 0.0;
           continue;
         }
-        const double e =
-            bisect_horizon(geometry, o, dx[std::size_t(k)], dy[std::size_t(k)], iterations, s.search_radius)
-                .elevation;
+        const double e = bisect_horizon(geometry, o, x, y, iterations, s.search_radius, curved).elevation;
         out[f.index(i, j) * K + k] = e;
       }
     }
@@ -58,13 +57,14 @@ void trace_up(const HeightField& f, const ReliefReferenceSettings& s, const RunC
 }  // namespace
 
 ReliefHorizons trace_relief_horizons(const HeightField& field, const ReliefReferenceSettings& s, bool down,
-                                     const RunControl& rc, int iterations) {
+                                     const RunControl& rc, int iterations, double curvature) {
   ReliefHorizons h;
-  trace_up(field, s, rc, iterations, h.up);
+  trace_up(field, s, rc, iterations, curvature, h.up);
   if (down) {
+    // Upside down the casters are raised by c d^2: the curvature changes sign.
     HeightField inverted = field;
     for (float& z : inverted.z) z = -z;
-    trace_up(inverted, s, rc, iterations, h.down);
+    trace_up(inverted, s, rc, iterations, -curvature, h.down);
     for (double& d : h.down) d = -d;
   }
   return h;
@@ -77,7 +77,8 @@ nlohmann::json relief_reference_record(const ReliefReferenceSettings& s) {
 }
 
 void add_reference_relief(const HeightField& field, const ReliefSettings& settings,
-                          const LayerSet& relief_layers, LayerSet& reference, const RunControl& rc) {
+                          const LayerSet& relief_layers, LayerSet& reference, const RunControl& rc,
+                          double curvature) {
   // relief's layers: those the layer table says this step computes.
   std::vector<std::string> names;
   for (const LayerKind& k : layer_kinds())
@@ -90,7 +91,8 @@ void add_reference_relief(const HeightField& field, const ReliefSettings& settin
   s.search_radius = settings.search_radius;
   s.compass = settings.compass;
   const int K = s.directions;
-  const ReliefHorizons h = trace_relief_horizons(field, s, relief->find("openness_negative") != nullptr, rc);
+  const ReliefHorizons h =
+      trace_relief_horizons(field, s, relief->find("openness_negative") != nullptr, rc, 30, curvature);
   const std::size_t N = field.texel_count();
   for (const std::string& name : names) {
     const Layer* ml = relief->find(name);

@@ -30,8 +30,9 @@ struct ReliefReferenceSettings {
 struct ReliefHorizons {
   std::vector<double> up, down;
 };
+// curvature: Scene::curvature (0: flat), traced as horizon_reference.hpp's curved rays.
 ReliefHorizons trace_relief_horizons(const HeightField& field, const ReliefReferenceSettings& s, bool down,
-                                     const RunControl& rc, int iterations = 30);
+                                     const RunControl& rc, int iterations = 30, double curvature = 0);
 
 // The reference's record of the settings it used (attribute "hfbake:relief_reference"): the report compares a
 // relief entry's layers only when its resolved parameters are these.
@@ -42,6 +43,7 @@ nlohmann::json relief_reference_record(const ReliefReferenceSettings& s);
 // `relief`, its layers `relief_layers`) to a reference's layers, with relief's directions, search radius
 // and azimuth convention, and the record. Nothing when the reference has them already.
 void add_reference_relief(const HeightField& field, const ReliefSettings& relief,
-                          const LayerSet& relief_layers, LayerSet& reference, const RunControl& rc);
+                          const LayerSet& relief_layers, LayerSet& reference, const RunControl& rc,
+                          double curvature = 0);
 
 }  // namespace hfbake

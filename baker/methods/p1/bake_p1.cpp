@@ -120,7 +120,7 @@ namespace {
 // Clamp fields: the lane search (lane_horizons.hpp) per azimuth, the azimuths of one lane layout's axis
 // at a time (x-major ones first), so one layout is held at a time.
 void lane_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
-                      const RunControl& rc, const HorizonVisitor& visit) {
+                      const RunControl& rc, const HorizonVisitor& visit, double curvature) {
   const std::size_t N = f.texel_count();
   SweepSpec probe;
   probe.azimuths = azimuths;
@@ -131,7 +131,7 @@ void lane_horizons_at(const HeightField& f, const P1Params& p, const std::vector
   for (int axis = 0; axis < 2; ++axis) {
     std::vector<SweepDirection> dirs;
     for (std::size_t a = 0; a < azimuths.size(); ++a) {
-      const SweepDirection sd = plan_direction(f, probe, int(a));
+      const SweepDirection sd = p1::lane_plan(f, probe, int(a));
       if ((std::fabs(sd.dx) >= std::fabs(sd.dy)) == (axis == 0)) dirs.push_back(sd);
     }
     if (dirs.empty()) continue;
@@ -140,7 +140,7 @@ void lane_horizons_at(const HeightField& f, const P1Params& p, const std::vector
     for (const SweepDirection& sd : dirs) {
       rc.check();
       p1::LaneDirection d;
-      d.build(f, layout, sd.dx, sd.dy);
+      p1::build_lane_direction(d, f, layout, sd, curvature);
       tbb::parallel_for(tbb::blocked_range<int>(0, p1::lane_strip_count(layout, d), 2),
                         [&](const tbb::blocked_range<int>& r) {
                           p1::lane_search(f, layout, d, r.begin(), r.end(), float(p.horizon_tolerance),
@@ -157,9 +157,9 @@ void lane_horizons_at(const HeightField& f, const P1Params& p, const std::vector
 }  // namespace
 
 void p1_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
-                    const RunControl& rc, const HorizonVisitor& visit) {
+                    const RunControl& rc, const HorizonVisitor& visit, double curvature) {
   if (azimuths.empty()) return;
-  if (f.wrap == Wrap::clamp) return lane_horizons_at(f, p, azimuths, rc, visit);
+  if (f.wrap == Wrap::clamp) return lane_horizons_at(f, p, azimuths, rc, visit, curvature);
   SweepSpec spec;
   spec.channels = p1::FarHorizonWorker::channels();
   spec.sampling.heights = false;  // the far-field worker builds its own profiles
@@ -191,9 +191,21 @@ MethodInfo p1_method() {
   m.name = "p1";
   m.reads_normals = false;  // recomputed per tile from the heights (normal_at)
   m.reads_albedo = false;
+  // The lane search drops each crossing by the curvature (clamp fields; a repeating field has no
+  // curvature: cli/scene_loader job_curvature). Directional lights' shadows are flat (docs/gis.md).
+  m.applies_curvature = true;
+  m.rectangular_texels = true;  // the lane search; the reader refuses the rest
   m.summary = "exact horizons by the convex-hull stack on K line sweeps; ao, vsky, direct light from them";
-  m.read = [](Params& in, const MethodContext&) {
+  m.read = [](Params& in, const MethodContext& c) {
     const P1Params p = read_p1_params(in);
+    // Rectangular texels: the lane search only (clamp fields), without the directional lights' sweeps.
+    if (!c.field.square_texels() && c.field.wrap == Wrap::repeat)
+      in.fail("method", "bakes rectangular texels (a geographic raster) on clamp fields only");
+    if (!c.field.square_texels() && p.direct && p.lights)
+      in.fail("lights",
+              "is on (the default) with the direct layer, and p1's directional lights need square texels; "
+              "this field's are rectangles (a geographic raster): set \"lights\": false or leave \"direct\" "
+              "out of the layers");
     return method_config(p, p.directions);
   };
   m.bake = bake_p1;

@@ -122,6 +122,31 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
   }
 }
 
+SweepDirection lane_plan(const HeightField& f, const SweepSpec& spec, int k) {
+  SweepDirection sd = plan_direction(f, spec, k);
+  if (!f.square_texels()) {
+    double tx = sd.dx / f.dx(), ty = sd.dy / f.dy();
+    const double n = std::hypot(tx, ty);
+    tx /= n, ty /= n;
+    sd.dx = std::fabs(tx) < 1e-12 ? 0.0 : tx, sd.dy = std::fabs(ty) < 1e-12 ? 0.0 : ty;
+  }
+  return sd;
+}
+
+void build_lane_direction(LaneDirection& d, const HeightField& f, const LaneLayout& layout,
+                          const SweepDirection& sd, double curvature) {
+  if (f.square_texels()) return d.build(f, layout, sd.dx, sd.dy, curvature);
+  HeightField unit;  // the field's shape with unit texels
+  unit.width = f.width, unit.height = f.height, unit.wrap = f.wrap, unit.texel_size = 1;
+  d.build(unit, layout, sd.dx, sd.dy, 0.0);
+  const double scale = std::hypot(sd.dx * f.dx(), sd.dy * f.dy());
+  for (LaneCrossing& c : d.crossings) {
+    c.inv_s = float(double(c.inv_s) / scale);
+    c.drop = float(curvature / double(c.inv_s));
+  }
+  d.curved = curvature != 0;
+}
+
 int lane_strip_count(const LaneLayout& L, const LaneDirection& d) {
   const double span = double(L.nminor - 1) + std::fabs(d.g) * double(L.nmajor - 1);
   return int(std::floor(span / kLanes)) + 2;

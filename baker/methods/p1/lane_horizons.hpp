@@ -30,6 +30,7 @@
 
 #include "core/page_buffer.hpp"
 #include "field/height_field.hpp"
+#include "sweep/sweep_lines.hpp"
 
 namespace hfbake::p1 {
 
@@ -87,6 +88,15 @@ struct LaneStats {
 struct LaneScratch {
   std::vector<float> block, coarse, suffix;
 };
+
+// The lane search of a field with rectangular texels (dx x dy) runs each ray along its texel-space
+// direction: lane_plan is plan_direction's direction k of spec with (dx, dy) the normalised (cos phi / dx,
+// sin phi / dy) (plan_direction's own on square texels), and build_lane_direction builds its crossings on
+// unit texels, each crossing's inv_s divided by the direction's world length (a texel-space distance s lies
+// s * length world units away) and its drop recomputed (curvature: LaneDirection::build's).
+SweepDirection lane_plan(const HeightField& f, const SweepSpec& spec, int k);
+void build_lane_direction(LaneDirection& d, const HeightField& f, const LaneLayout& layout,
+                          const SweepDirection& sd, double curvature);
 
 // Number of strips (each holds at most one group of eight texels per major index) of a direction.
 int lane_strip_count(const LaneLayout& layout, const LaneDirection& d);

@@ -86,8 +86,9 @@ FieldNormals field_normals(const HeightField& f, bool facets) {
   return n;
 }
 
+// curvature: Scene::curvature, each crossing dropped by it (lane_horizons.hpp).
 template <class Shade>
-void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end,
+void lane_direction_sums(const HeightField& f, double curvature, const P1Params& p, int k_begin, int k_end,
                          const RunControl& rc, bool facets, const FieldNormals& normals, const Shade& shade) {
   const std::size_t N = f.texel_count();
   const int K = p.directions;
@@ -103,7 +104,7 @@ void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, i
   for (int axis = 0; axis < 2; ++axis) {
     std::vector<SweepDirection> dirs;
     for (int k = k_begin; k < k_end; ++k) {
-      const SweepDirection sd = plan_direction(f, probe, k);
+      const SweepDirection sd = p1::lane_plan(f, probe, k);
       if ((std::fabs(sd.dx) >= std::fabs(sd.dy)) == (axis == 0)) dirs.push_back(sd);
     }
     if (dirs.empty()) continue;
@@ -113,7 +114,7 @@ void lane_direction_sums(const HeightField& f, const P1Params& p, int k_begin, i
       rc.check();
       const int k = sd.k;
       p1::LaneDirection d;
-      d.build(f, layout, sd.dx, sd.dy);
+      p1::build_lane_direction(d, f, layout, sd, curvature);
       tbb::parallel_for(tbb::blocked_range<int>(0, p1::lane_strip_count(layout, d), 2),
                         [&](const tbb::blocked_range<int>& r) {
                           p1::lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(),
@@ -527,10 +528,10 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
   if (f.wrap == Wrap::repeat) {
     strip_direction_sums(f, p, k_begin, k_end, rc, facets, shade);
   } else if (normals) {
-    lane_direction_sums(f, p, k_begin, k_end, rc, facets, *normals, shade);
+    lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, shade);
   } else {
     const FieldNormals own = field_normals(f, facets);
-    lane_direction_sums(f, p, k_begin, k_end, rc, facets, own, shade);
+    lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, own, shade);
   }
   return r;
 }
@@ -651,26 +652,29 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
       radius.push_back(l->angular_diameter / 2);
       azimuths.push_back(std::hypot(d.x, d.y) > 1e-12 ? std::atan2(d.y, d.x) : 0.0);
     }
-    p1_horizons_at(f, p, azimuths, rc, [&](int li, int i, int j, float horizon) {
-      const std::size_t idx = f.index(i, j);
-      const double ndl = dot(normal_at(f, i, j).d(), dir[li]);
-      if (ndl <= 0 && !facets) return;
-      const double frac = disk_fraction_above(elevation[li], horizon, radius[li]);
-      if (frac <= 0) return;
-      if (ndl > 0) {
-        const Rgb add = lights[li]->irradiance * float(ndl * frac / kPi);
-        float* d = r.direct.data() + 3 * idx;
-        d[0] += add.r, d[1] += add.g, d[2] += add.b;
-      }
-      if (facets) {
-        Vec3f fn[2];
-        facet_normals(f, i, j, fn);
-        for (std::size_t q = 0; q < 2; ++q) {
-          const double fdl = fn[q].x * dir[li].x + fn[q].y * dir[li].y + fn[q].z * dir[li].z;
-          if (fdl > 0) direct_facets[2 * idx + q] += lights[li]->irradiance * float(fdl * frac / kPi);
-        }
-      }
-    });
+    p1_horizons_at(
+        f, p, azimuths, rc,
+        [&](int li, int i, int j, float horizon) {
+          const std::size_t idx = f.index(i, j);
+          const double ndl = dot(normal_at(f, i, j).d(), dir[li]);
+          if (ndl <= 0 && !facets) return;
+          const double frac = disk_fraction_above(elevation[li], horizon, radius[li]);
+          if (frac <= 0) return;
+          if (ndl > 0) {
+            const Rgb add = lights[li]->irradiance * float(ndl * frac / kPi);
+            float* d = r.direct.data() + 3 * idx;
+            d[0] += add.r, d[1] += add.g, d[2] += add.b;
+          }
+          if (facets) {
+            Vec3f fn[2];
+            facet_normals(f, i, j, fn);
+            for (std::size_t q = 0; q < 2; ++q) {
+              const double fdl = fn[q].x * dir[li].x + fn[q].y * dir[li].y + fn[q].z * dir[li].z;
+              if (fdl > 0) direct_facets[2 * idx + q] += lights[li]->irradiance * float(fdl * frac / kPi);
+            }
+          }
+        },
+        scene.curvature);
   }
   r.direct_facets = std::move(direct_facets);
   rc.report(1.0);

@@ -142,8 +142,9 @@ SweepSpec p1_sweep_spec(const P1Params& params);
 // azimuths nearer the x axis first, each group ascending; repeat fields: ascending), so per-texel sums in
 // the visitor's own storage are deterministic.
 using HorizonVisitor = std::function<void(int a, int i, int j, float elevation)>;
+// curvature: Scene::curvature (clamp fields; repeat fields are flat).
 void p1_horizons_at(const HeightField& field, const P1Params& params, const std::vector<double>& azimuths,
-                    const RunControl& rc, const HorizonVisitor& visit);
+                    const RunControl& rc, const HorizonVisitor& visit, double curvature = 0);
 
 // Fraction of a light disk of angular radius `radius` (radians) centred at elevation `elevation` that lies
 // above a horizon at elevation `horizon` (a straight horizon across the disk). radius 0: a step.

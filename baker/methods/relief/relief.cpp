@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "core/azimuth.hpp"
@@ -20,10 +21,11 @@ ReliefSettings read_relief_settings(Params& in, const FieldShape& field) {
   ReliefSettings s;
   s.directions = in.integer("directions", 16, 1, 4096);
   s.search_radius = in.number("search_radius", 10 * field.texel_size, 1e-12, 1e12);
-  if (s.search_radius < field.texel_size)
-    in.fail("search_radius", "is shorter than one texel (" + std::to_string(field.texel_size) +
+  const double shorter = std::min(field.dx(), field.dy());
+  if (s.search_radius < shorter)
+    in.fail("search_radius", "is shorter than one texel (" + std::to_string(shorter) +
                                  " world units): no surface point lies within it");
-  if (s.search_radius > 1e5 * field.texel_size)
+  if (s.search_radius > 1e5 * shorter)
     in.fail("search_radius", "is more than 100000 texels: the march's cost grows with it");
   s.compass = in.choice("azimuth_convention", "hfbake", {"hfbake", "compass"}) == "compass";
   s.layers = in.layers({"svf", "openness_positive", "openness_negative", "horizon_deg"},
@@ -42,7 +44,8 @@ void relief_direction(int k, int K, bool compass, double& dx, double& dy) {
   }
 }
 
-LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc) {
+LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc,
+                     double curvature) {
   const int w = field.width, h = field.height, K = s.directions;
   std::vector<double> dx(K), dy(K);
   for (int k = 0; k < K; ++k) relief_direction(k, K, s.compass, dx[k], dy[k]);
@@ -66,7 +69,7 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
       const std::size_t t = field.index(i, j);
       for (int k = 0; k < K; ++k) {
         // No surface within the radius (beyond a clamp border): level in both senses, open sky.
-        const HorizonPair hp = radius_horizon(field, i, j, dx[k], dy[k], s.search_radius);
+        const HorizonPair hp = radius_horizon(field, i, j, dx[k], dy[k], s.search_radius, curvature);
         const double up = std::atan(hp.up), down = std::atan(hp.down);
         sum_sin += std::sin(std::max(up, 0.0));
         sum_up += up;
@@ -88,17 +91,21 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
       s.compass ? "compass: direction k at azimuth 360 k / K clockwise from north; north = image top (-y), "
                   "east = image right (+x)"
                 : "hfbake: direction k at phi = 360 k / K from +x (image right) towards +y (image down)");
+  char c[32];
+  std::snprintf(c, sizeof c, "%.9g", curvature);
+  out.attributes.emplace_back("hfbake:curvature", c);
   out.attributes.emplace_back(
       "hfbake:relief:definitions",
       "beta_up/down(k): highest/lowest elevation angle of the triangulated surface within search_radius "
-      "along direction k (0 where no surface lies within it); svf = 1 - mean_k sin(max(beta_up, 0)); "
+      "along direction k (0 where no surface lies within it), each point lowered by hfbake:curvature times "
+      "its horizontal distance squared; svf = 1 - mean_k sin(max(beta_up, 0)); "
       "openness_positive = mean_k (90 - beta_up) deg; openness_negative = mean_k (90 + beta_down) deg; "
       "horizon_deg = beta_up per direction");
   return out;
 }
 
 LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
-  return bake_relief(scene.field, config.get<ReliefSettings>(), rc);
+  return bake_relief(scene.field, config.get<ReliefSettings>(), rc, scene.curvature);
 }
 
 MethodInfo relief_method() {
@@ -118,6 +125,8 @@ MethodInfo relief_method() {
   m.division_note = "texel tiles with a halo of search_radius (each texel's horizons are its own)";
   m.reads_normals = false;
   m.reads_albedo = false;
+  m.rectangular_texels = true;
+  m.applies_curvature = true;
   return m;
 }
 

@@ -23,14 +23,15 @@ struct ReliefSettings {
 
 ReliefSettings read_relief_settings(Params& in, const FieldShape& field);
 
-// The horizontal unit direction (texel axes: x = columns, y = rows) of direction k of K: hfbake's phi_k =
+// The horizontal unit direction (world axes: x = columns, y = rows) of direction k of K: hfbake's phi_k =
 // 2 pi k / K from +x towards +y; compass: azimuth A_k = 2 pi k / K clockwise from north = image up (-y), so
 // east = +x: (sin A, -cos A).
 void relief_direction(int k, int K, bool compass, double& dx, double& dy);
 
 LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunControl& rc);
-// The same from the heights alone (tests).
-LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc);
+// The same from the heights alone (tests), with the Earth's curvature c per world unit (Scene::curvature).
+LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc,
+                     double curvature = 0);
 
 MethodInfo relief_method();
 
