@@ -67,11 +67,11 @@ struct LsaoOptions {
   int directions = 16;          // K
   OcclusionFunction occlusion;  // falloff, weighting; sin_t: the fixed tangent (LsaoTangent::fixed)
   LsaoTangent tangent = LsaoTangent::receiver;
-  double rho_tolerance = 0.1;  // receiver: the chain hull's merge tolerance in rho (lsao_chain_hull.hpp)
+  double rho_tolerance = 0.05;  // receiver: the chain hull's merge tolerance in rho (lsao_chain_hull.hpp)
   // receiver, surface triangles: the chain's coalescing tolerance in rho (TangentChain::coalesce): adjacent
   // rising bands weighted within it are integrated as one, so a query adds no more bands at R = 512 than at
-  // R = 8 (test_lsao_tangent CoalescedBandsKeepAccuracyAndFlattenTheWork: 2.95 -> 1.66 a query; separate
-  // 3.11 -> 4.73), within 3 % of the separate bands' rmse against hbao's exact slice march (0.03: 22 %).
+  // R = 8 (test_lsao_tangent CoalescedBandsKeepAccuracyAndFlattenTheWork: 2.96 at R 8, 1.53 at R 512 a
+  // query; separate 3.12, 3.22), within 4 % of the separate bands' rmse against hbao's exact slice march.
   double band_tolerance = 0.01;
   // receiver: texels (0: none) within which each texel marches its own ray over the triangulated surface
   // (triangle_profile.hpp) instead of reading the line's hull (see the file comment).
