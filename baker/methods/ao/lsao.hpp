@@ -1,7 +1,7 @@
 // Line-sweep ambient obscurance (P3, Timonen 2013) on the shared line sweep (baker/sweep): per azimuth
 // phi_k = 2 pi k / K one sweep whose lines carry a hull of occluders, and the sweep brings the per-sample
 // values back to the texel centres by its documented two-tap rule. The sweep is O(K) per texel whatever the
-// radius; the walk of a texel's visible chain grows with the radius (docs/performance-lsao.md).
+// radius; the walk of a texel's visible chain grows slowly with it (docs/performance-lsao.md).
 // Two tangent strategies (LsaoTangent):
 // * receiver (default): each texel's own tangent plane per direction; the slice's value is the
 //   contract's measure of the bands between that tangent and the horizon, each weighted by the falloff where
