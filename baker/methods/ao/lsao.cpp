@@ -131,11 +131,12 @@ struct LsaoWorker {
     const bool use_brute = options->estimator != LsaoEstimator::hull;
     const Weighting weighting =
         f.weighting == ObscuranceWeighting::cosine ? Weighting::cosine : Weighting::uniform;
-    const double support = f.rho.support(1e-4), tol = options->rho_tolerance;
+    const double support = f.rho.support(1e-4);
     const double coalesce = options->band_tolerance;
     // The near field (texels): marched from each texel itself; the hull's points nearer than it left out.
     const double near = std::min(options->near_radius, support / field->texel_size);
     const double near_world = near > 0 ? near * field->texel_size : 0.0;
+    const double tol = near_world > 0 ? options->near_rho_tolerance : options->rho_tolerance;
     // The line's terrain points in walk order: its samples and (surface triangles) the crossings between
     // them; group[n]: the first point of sample n's group (the crossings before it, then itself).
     const bool triangles = options->surface == LsaoSurface::triangles;

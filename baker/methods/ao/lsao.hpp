@@ -67,7 +67,12 @@ struct LsaoOptions {
   int directions = 16;          // K
   OcclusionFunction occlusion;  // falloff, weighting; sin_t: the fixed tangent (LsaoTangent::fixed)
   LsaoTangent tangent = LsaoTangent::receiver;
-  double rho_tolerance = 0.05;  // receiver: the chain hull's merge tolerance in rho (lsao_chain_hull.hpp)
+  double rho_tolerance = 0.1;  // receiver: the chain hull's merge tolerance in rho (lsao_chain_hull.hpp)
+  // receiver with a near field (near_radius > 0): the hull's merges are judged from the near field's edge
+  // (lsao.cpp), where more of them hold; this finer tolerance keeps its rmse against hbao's exact slice march
+  // at or below that of merges judged from the adjacent sample at 0.1, at every radius
+  // (docs/performance-lsao.md).
+  double near_rho_tolerance = 0.05;
   // receiver, surface triangles: the chain's coalescing tolerance in rho (TangentChain::coalesce): adjacent
   // rising bands weighted within it are integrated as one, so a query adds no more bands at R = 512 than at
   // R = 8 (test_lsao_tangent CoalescedBandsKeepAccuracyAndFlattenTheWork: 2.96 at R 8, 1.53 at R 512 a
