@@ -89,7 +89,7 @@ int measure(double tolerance) {
     LsaoOptions o;
     o.directions = 16;
     o.occlusion.rho = rho;
-    if (tolerance > 0) o.rho_tolerance = tolerance;
+    if (tolerance > 0) o.near_rho_tolerance = tolerance;
     LsaoStats st;
     std::vector<Vec3f> bent;
     const std::vector<float> l = lsao_obscurance(f, o, RunControl{}, &st, &bent);

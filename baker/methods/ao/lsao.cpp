@@ -131,11 +131,12 @@ struct LsaoWorker {
     const bool use_brute = options->estimator != LsaoEstimator::hull;
     const Weighting weighting =
         f.weighting == ObscuranceWeighting::cosine ? Weighting::cosine : Weighting::uniform;
-    const double support = f.rho.support(1e-4), tol = options->rho_tolerance;
+    const double support = f.rho.support(1e-4);
     const double coalesce = options->band_tolerance;
     // The near field (texels): marched from each texel itself; the hull's points nearer than it left out.
     const double near = std::min(options->near_radius, support / field->texel_size);
     const double near_world = near > 0 ? near * field->texel_size : 0.0;
+    const double tol = near_world > 0 ? options->near_rho_tolerance : options->rho_tolerance;
     // The line's terrain points in walk order: its samples and (surface triangles) the crossings between
     // them; group[n]: the first point of sample n's group (the crossings before it, then itself).
     const bool triangles = options->surface == LsaoSurface::triangles;
@@ -160,6 +161,14 @@ struct LsaoWorker {
     terrain.clear();
     if (use_brute) terrain.reserve(cap);
     std::uint64_t tests = 0, queries = 0, walked = 0, bands = 0;
+    // With a near field the chain hull holds only the points at least `near_world` behind the receivers
+    // that read it (nearer ones are the near field's, marched by each texel), pushed once they are, each
+    // after a prune: its merges are judged from at least that distance, where the surface's small kinks
+    // between neighbouring samples no longer hide the point behind it, so a stretch of ground that every
+    // receiver farther on sees rising is held as few merged points, and a walk never steps over points it
+    // leaves out. `next`: the first of `points` not yet pushed (walk order), within the current block.
+    const bool delayed = !use_brute && near_world > 0;
+    int next = 0;
     for (int n = 0; n < line.count; ++n) {
       const SlicePoint p{line.s(n), double(line.z[n])};
       double z_low = p.z;  // the lowest receiver at this sample
@@ -168,12 +177,13 @@ struct LsaoWorker {
           window.build(points.data() + group[n - W], std::size_t(group[n] - group[n - W]), p.s, merge_rho,
                        tol);
           chain_hull.clear();
+          next = group[n];
         }
         window.drop_before(n - W);
       }
       // The crossings between sample n - 1 and n: behind receiver n.
       const int crossings_end = group[n + 1] - (line.is_terrain(n) ? 1 : 0);
-      for (int q = group[n]; q < crossings_end; ++q) {
+      for (int q = group[n]; q < crossings_end && !delayed; ++q) {
         const SlicePoint c{points[std::size_t(q)].s, points[std::size_t(q)].z};
         if (use_brute)
           terrain.push_back(c);
@@ -224,7 +234,18 @@ struct LsaoWorker {
       }
       // Merges are judged from the lowest of the sample and its receivers (a point hidden seen from a
       // height is hidden from every point above it, not below).
-      if (!use_brute) tests += chain_hull.prune(triangles ? SlicePoint{p.s, z_low} : p, merge_rho, tol);
+      const SlicePoint view = triangles ? SlicePoint{p.s, z_low} : p;
+      if (delayed) {
+        // The points the next sample's receivers read: at least near_world behind it, in this block.
+        const double reach = (n + 1 < line.count ? line.s(n + 1) : p.s + line.step) - near_world;
+        const int end = W > 0 ? group[std::min(line.count, (n / W + 1) * W)] : int(points.size());
+        for (; next < end && points[std::size_t(next)].s <= reach; ++next) {
+          tests += chain_hull.prune(view, merge_rho, tol);
+          chain_hull.push({points[std::size_t(next)].s, points[std::size_t(next)].z});
+        }
+        continue;
+      }
+      if (!use_brute) tests += chain_hull.prune(view, merge_rho, tol);
       if (line.is_terrain(n)) {
         if (use_brute)
           terrain.push_back(p);

@@ -17,7 +17,10 @@
 // at the nearest point a stands for by at most `tolerance` (the merged bands are then counted at the middle
 // of the distances they stand for). With falloff none or a step (inside the radius) this is the convex hull
 // of P1 and the sum telescopes to the exact horizon obscurance of the line samples; with a smooth falloff the
-// hull keeps about 1 / tolerance points per falloff range whatever the radius. A query walks from the top
+// hull keeps about 1 / tolerance points per falloff range whatever the radius. With a near field (lsao's
+// surface triangles) a point is pushed only once it lies the near radius behind the receivers, after a prune
+// from there (lsao.cpp): judged from the adjacent sample, the surface's small kinks, which no receiver
+// farther on sees, would decide them, and the hull would grow with the radius. A query walks from the top
 // outwards, adding each point that rises above the chain (a merged point: its near end at its own distance,
 // then the point itself, counted at the middle of the stretch when the near end rose), and stops where no
 // point farther on can rise (zmax) or beyond the falloff's support.
