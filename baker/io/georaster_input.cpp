@@ -23,6 +23,24 @@ bool asset_driver(const std::string& driver) {
   return std::find(std::begin(names), std::end(names), driver) != std::end(names);
 }
 
+// The raster, read-only, or an error naming the file and what GDAL said.
+std::unique_ptr<GDALDataset> open_raster(const fs::path& file, const InputSite& site, GdalQuiet& gdal) {
+  std::unique_ptr<GDALDataset> ds(
+      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!ds)
+    throw InputError(site.job_file, site.pointer,
+                     file.string() + ": cannot read the raster: " + gdal.error());
+  return ds;
+}
+
+// Band `band` (0-based) of ds, or an error naming the file.
+GDALRasterBand* band_of(GDALDataset& ds, const fs::path& file, int band, const InputSite& site) {
+  GDALRasterBand* b = ds.GetRasterBand(band + 1);
+  if (!b)
+    throw InputError(site.job_file, site.pointer, file.string() + ": has no band " + std::to_string(band));
+  return b;
+}
+
 }  // namespace
 
 std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
@@ -65,14 +83,8 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
 Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
                           const ReadProgress& progress) {
   GdalQuiet gdal;
-  std::unique_ptr<GDALDataset> ds(
-      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
-  if (!ds)
-    throw InputError(site.job_file, site.pointer,
-                     file.string() + ": cannot read the raster: " + gdal.error());
-  GDALRasterBand* b = ds->GetRasterBand(band + 1);
-  if (!b)
-    throw InputError(site.job_file, site.pointer, file.string() + ": has no band " + std::to_string(band));
+  const std::unique_ptr<GDALDataset> ds = open_raster(file, site, gdal);
+  GDALRasterBand* b = band_of(*ds, file, band, site);
   Plane plane;
   plane.width = ds->GetRasterXSize();
   plane.height = ds->GetRasterYSize();
@@ -120,14 +132,8 @@ GdalCacheLimit::~GdalCacheLimit() {
 Plane read_georaster_window(const fs::path& file, int band, int x0, int y0, int width, int height,
                             const InputSite& site) {
   GdalQuiet gdal;
-  std::unique_ptr<GDALDataset> ds(
-      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
-  if (!ds)
-    throw InputError(site.job_file, site.pointer,
-                     file.string() + ": cannot read the raster: " + gdal.error());
-  GDALRasterBand* b = ds->GetRasterBand(band + 1);
-  if (!b)
-    throw InputError(site.job_file, site.pointer, file.string() + ": has no band " + std::to_string(band));
+  const std::unique_ptr<GDALDataset> ds = open_raster(file, site, gdal);
+  GDALRasterBand* b = band_of(*ds, file, band, site);
   const std::string window = "columns " + std::to_string(x0) + ".." + std::to_string(x0 + width - 1) +
                              ", rows " + std::to_string(y0) + ".." + std::to_string(y0 + height - 1);
   if (width < 1 || height < 1 || x0 < 0 || y0 < 0 || x0 > ds->GetRasterXSize() - width ||

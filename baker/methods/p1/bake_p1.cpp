@@ -121,37 +121,19 @@ namespace {
 // at a time (x-major ones first), so one layout is held at a time.
 void lane_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
                       const RunControl& rc, const HorizonVisitor& visit, double curvature) {
-  const std::size_t N = f.texel_count();
   SweepSpec probe;
   probe.azimuths = azimuths;
-  std::vector<float> slope(N);
-  std::vector<std::int32_t> which(N);
-  tbb::enumerable_thread_specific<p1::LaneScratch> scratch;
+  std::vector<int> ks;
+  for (std::size_t a = 0; a < azimuths.size(); ++a) ks.push_back(int(a));
   int done = 0;
-  for (int axis = 0; axis < 2; ++axis) {
-    std::vector<SweepDirection> dirs;
-    for (std::size_t a = 0; a < azimuths.size(); ++a) {
-      const SweepDirection sd = p1::lane_plan(f, probe, int(a));
-      if ((std::fabs(sd.dx) >= std::fabs(sd.dy)) == (axis == 0)) dirs.push_back(sd);
-    }
-    if (dirs.empty()) continue;
-    p1::LaneLayout layout;
-    layout.build(f, axis == 0);
-    for (const SweepDirection& sd : dirs) {
-      rc.check();
-      p1::LaneDirection d;
-      p1::build_lane_direction(d, f, layout, sd, curvature);
-      tbb::parallel_for(tbb::blocked_range<int>(0, p1::lane_strip_count(layout, d), 2),
-                        [&](const tbb::blocked_range<int>& r) {
-                          p1::lane_search(f, layout, d, r.begin(), r.end(), float(p.horizon_tolerance),
-                                          scratch.local(), slope.data(), which.data());
-                        });
-      tbb::parallel_for(0, f.height, [&](int j) {
-        for (int i = 0; i < f.width; ++i) visit(sd.k, i, j, p1::fast_atan(slope[f.index(i, j)]));
+  p1::lane_directions(
+      f, probe, ks, curvature, float(p.horizon_tolerance), rc,
+      [&](const SweepDirection& sd, const p1::LaneDirection&, const float* slope, const std::int32_t*) {
+        tbb::parallel_for(0, f.height, [&](int j) {
+          for (int i = 0; i < f.width; ++i) visit(sd.k, i, j, p1::fast_atan(slope[f.index(i, j)]));
+        });
+        rc.report(double(++done) / double(azimuths.size()));
       });
-      rc.report(double(++done) / double(azimuths.size()));
-    }
-  }
 }
 
 }  // namespace

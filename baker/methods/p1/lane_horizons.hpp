@@ -24,11 +24,17 @@
 // fused multiply-add), so the SSE2 and AVX2 kernels (lane_kernel.inc) give the same bits.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include "core/page_buffer.hpp"
+#include "core/run_control.hpp"
 #include "field/height_field.hpp"
 #include "sweep/sweep_lines.hpp"
 
@@ -115,5 +121,39 @@ void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirec
 void lane_search_avx2(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
                       float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
                       LaneStats* stats);
+
+// Every texel's horizon in the directions ks of spec (lane_plan's rays), clamp fields: the directions of
+// one axis at a time (the x-major ones first, each group in the order of ks), so one LaneLayout is held at
+// a time; after each direction's search, done(sd, d, slope, which) with lane_search's slope and which of
+// every texel. rc.check() before each direction.
+template <class Done>
+void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vector<int>& ks,
+                     double curvature, float tolerance, const RunControl& rc, Done&& done) {
+  const std::size_t N = f.texel_count();
+  std::vector<float> slope(N);
+  std::vector<std::int32_t> which(N);
+  tbb::enumerable_thread_specific<LaneScratch> scratch;
+  for (int axis = 0; axis < 2; ++axis) {
+    std::vector<SweepDirection> dirs;
+    for (int k : ks) {
+      const SweepDirection sd = lane_plan(f, spec, k);
+      if ((std::fabs(sd.dx) >= std::fabs(sd.dy)) == (axis == 0)) dirs.push_back(sd);
+    }
+    if (dirs.empty()) continue;
+    LaneLayout layout;
+    layout.build(f, axis == 0);
+    for (const SweepDirection& sd : dirs) {
+      rc.check();
+      LaneDirection d;
+      build_lane_direction(d, f, layout, sd, curvature);
+      tbb::parallel_for(tbb::blocked_range<int>(0, lane_strip_count(layout, d), 2),
+                        [&](const tbb::blocked_range<int>& r) {
+                          lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(),
+                                      slope.data(), which.data());
+                        });
+      done(sd, d, static_cast<const float*>(slope.data()), static_cast<const std::int32_t*>(which.data()));
+    }
+  }
+}
 
 }  // namespace hfbake::p1

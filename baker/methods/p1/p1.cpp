@@ -94,55 +94,41 @@ void lane_direction_sums(const HeightField& f, double curvature, const P1Params&
   const int K = p.directions;
   const std::vector<float>&nx = normals.nx, &ny = normals.ny, &nz = normals.nz;
   const std::vector<float>&fx = normals.fx, &fy = normals.fy, &fz = normals.fz;
-  std::vector<float> slope(N);
-  std::vector<std::int32_t> which(N);
-  tbb::enumerable_thread_specific<p1::LaneScratch> scratch;
   SweepSpec probe;
   probe.directions = K;
-  const float tolerance = float(p.horizon_tolerance);
+  std::vector<int> ks;
+  for (int k = k_begin; k < k_end; ++k) ks.push_back(k);
   int done = 0;
-  for (int axis = 0; axis < 2; ++axis) {
-    std::vector<SweepDirection> dirs;
-    for (int k = k_begin; k < k_end; ++k) {
-      const SweepDirection sd = p1::lane_plan(f, probe, k);
-      if ((std::fabs(sd.dx) >= std::fabs(sd.dy)) == (axis == 0)) dirs.push_back(sd);
-    }
-    if (dirs.empty()) continue;
-    p1::LaneLayout layout;
-    layout.build(f, axis == 0);
-    for (const SweepDirection& sd : dirs) {
-      rc.check();
-      const int k = sd.k;
-      p1::LaneDirection d;
-      p1::build_lane_direction(d, f, layout, sd, curvature);
-      tbb::parallel_for(tbb::blocked_range<int>(0, p1::lane_strip_count(layout, d), 2),
-                        [&](const tbb::blocked_range<int>& r) {
-                          p1::lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(),
-                                          slope.data(), which.data());
+  p1::lane_directions(f, probe, ks, curvature, float(p.horizon_tolerance), rc,
+                      [&](const SweepDirection& sd, const p1::LaneDirection& d, const float* slope,
+                          const std::int32_t* which) {
+                        const int k = sd.k;
+                        tbb::parallel_for(0, f.height, [&](int j) {
+                          constexpr int kRun = 32;
+                          alignas(64) float e[kRun], dist[kRun];
+                          for (int i0 = 0; i0 < f.width; i0 += kRun) {
+                            const int w = std::min(kRun, f.width - i0);
+                            const std::size_t base = f.index(i0, j);
+                            for (int x = 0; x < w; ++x) e[x] = fast_atan(slope[base + x]);
+                            if (p.horizon_distance)
+                              for (int x = 0; x < w; ++x) {
+                                const std::int32_t c = which[base + x];
+                                const float m = slope[base + x];
+                                dist[x] = c < 0 ? std::numeric_limits<float>::infinity()
+                                                : std::sqrt(1 + m * m) / d.crossings[std::size_t(c)].inv_s;
+                              }
+                            const float* FX[2] = {facets ? fx.data() + base : nullptr,
+                                                  facets ? fx.data() + N + base : nullptr};
+                            const float* FY[2] = {facets ? fy.data() + base : nullptr,
+                                                  facets ? fy.data() + N + base : nullptr};
+                            const float* FZ[2] = {facets ? fz.data() + base : nullptr,
+                                                  facets ? fz.data() + N + base : nullptr};
+                            shade(k, base, w, nx.data() + base, ny.data() + base, nz.data() + base, FX, FY,
+                                  FZ, e, dist);
+                          }
                         });
-      tbb::parallel_for(0, f.height, [&](int j) {
-        constexpr int kRun = 32;
-        alignas(64) float e[kRun], dist[kRun];
-        for (int i0 = 0; i0 < f.width; i0 += kRun) {
-          const int w = std::min(kRun, f.width - i0);
-          const std::size_t base = f.index(i0, j);
-          for (int x = 0; x < w; ++x) e[x] = fast_atan(slope[base + x]);
-          if (p.horizon_distance)
-            for (int x = 0; x < w; ++x) {
-              const std::int32_t c = which[base + x];
-              const float m = slope[base + x];
-              dist[x] = c < 0 ? std::numeric_limits<float>::infinity()
-                              : std::sqrt(1 + m * m) / d.crossings[std::size_t(c)].inv_s;
-            }
-          const float* FX[2] = {facets ? fx.data() + base : nullptr, facets ? fx.data() + N + base : nullptr};
-          const float* FY[2] = {facets ? fy.data() + base : nullptr, facets ? fy.data() + N + base : nullptr};
-          const float* FZ[2] = {facets ? fz.data() + base : nullptr, facets ? fz.data() + N + base : nullptr};
-          shade(k, base, w, nx.data() + base, ny.data() + base, nz.data() + base, FX, FY, FZ, e, dist);
-        }
-      });
-      rc.report(double(++done) / double(k_end - k_begin));
-    }
-  }
+                        rc.report(double(++done) / double(k_end - k_begin));
+                      });
 }
 
 }  // namespace
