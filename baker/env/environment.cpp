@@ -58,12 +58,12 @@ Rgb sample_level(const Environment::Level& level, Vec3 dir) {
 // --- Environment ----------------------------------------------------------------------------------
 
 Rgb Environment::radiance(Vec3 dir) const {
-  if (uniform || levels.empty()) return uniform_radiance;
+  if (is_uniform()) return uniform_radiance;
   return sample_level(levels[0], dir);
 }
 
 Rgb Environment::radiance_filtered(Vec3 dir, double cone) const {
-  if (uniform || levels.empty()) return uniform_radiance;
+  if (is_uniform()) return uniform_radiance;
   // Level m has texels pi / height_m tall; pick the level whose texel spans the cone's diameter and
   // blend the two nearest levels (trilinear).
   const double texel0 = kPi / levels[0].height;
@@ -289,7 +289,7 @@ CubeView make_cube_view(const Environment& env, int size) {
     const Vec3 axis = CubeView::face_axis(f), u = CubeView::face_u(f), v = CubeView::face_v(f);
     for (int j = 0; j < size; ++j) {
       for (int i = 0; i < size; ++i) {
-        if (env.uniform || env.levels.empty()) {
+        if (env.is_uniform()) {
           face[std::size_t(j) * size + i] = env.uniform_radiance;
           continue;
         }

@@ -42,6 +42,9 @@ struct Environment {
   Rgb uniform_radiance{1, 1, 1};  // uniform: the radiance; lat-long: its mean over the sphere
   std::vector<Level> levels;
 
+  // Uniform in effect: flagged so, or without a lat-long to look up (the one test of it).
+  bool is_uniform() const { return uniform || levels.empty(); }
+
   // Radiance arriving from direction `dir` (unit, pointing away from the receiver), bilinear.
   Rgb radiance(Vec3 dir) const;
   // Radiance averaged over a cone of half-angle `cone` around `dir` (mip-mapped lookup).

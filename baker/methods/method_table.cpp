@@ -96,7 +96,7 @@ MethodContext scene_method_context(const Scene& scene) {
   c.field = scene.field;
   c.curvature = scene.curvature > 0;
   c.bounces = scene.bounces;
-  c.uniform_environment = scene.environment.uniform || scene.environment.levels.empty();
+  c.uniform_environment = scene.environment.is_uniform();
   return c;
 }
 

@@ -24,7 +24,7 @@ std::array<double, kShCoefficients> sh_basis(Vec3 d) {
 
 std::array<Rgb, kShCoefficients> project_sh(const Environment& env) {
   std::array<double, 3 * kShCoefficients> acc{};
-  if (env.uniform || env.levels.empty()) {
+  if (env.is_uniform()) {
     std::array<Rgb, kShCoefficients> c{};
     const float k = float(4 * kPi * 0.28209479177387814);
     c[0] = env.uniform_radiance * k;
@@ -50,7 +50,7 @@ std::array<Rgb, kShCoefficients> project_sh(const Environment& env) {
 }
 
 Environment band_limited_environment(const Environment& env) {
-  if (env.uniform || env.levels.empty()) return env;
+  if (env.is_uniform()) return env;
   const auto coeffs = project_sh(env);
   const Environment::Level& l0 = env.levels[0];
   std::vector<Rgb> texels(std::size_t(l0.width) * l0.height);

@@ -173,11 +173,12 @@ SweepSpec p1_sweep_spec(const P1Params& p) {
   spec.tile.nearest = false;
   spec.tile.strip = true;
   spec.tile.values = false;
-  spec.buffers.zero = false;  // FarHorizonWorker writes every receiver
-  spec.sampling.heights =
-      false;  // ... from its own profiles of the field (LinePattern), not the line's heights
-  spec.buffers.batch =
-      8;  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times
+  // FarHorizonWorker writes every receiver, from its own profiles of the field (LinePattern), not the
+  // line's heights.
+  spec.buffers.zero = false;
+  spec.sampling.heights = false;
+  // 8 directions per gather pass: the per-texel accumulators cross memory K / 8 times.
+  spec.buffers.batch = 8;
   return spec;
 }
 
@@ -230,7 +231,7 @@ double disk_fraction_above(double elevation, double horizon, double radius) {
 }
 
 P1SumsShape p1_sums_shape(const Scene& scene, const P1Params& p) {
-  const bool uniform_env = scene.environment.uniform || scene.environment.levels.empty();
+  const bool uniform_env = scene.environment.is_uniform();
   const bool facets = p.direct && p.facet_direct;
   P1SumsShape s;
   s.ao = p.ao || (p.direct && uniform_env) ? 1 : 0;
@@ -307,7 +308,7 @@ struct RowShading {
         KH(horizon_out ? params.directions : k_end - k_begin_),
         KD(distance_out ? params.directions : k_end - k_begin_) {
     const Environment& env = scene.environment;
-    uniform_env = env.uniform || env.levels.empty();
+    uniform_env = env.is_uniform();
     need_ao = p1_sums_shape(scene, p).ao > 0;
     facets = p.direct && p.facet_direct;
     if (p.direct && !uniform_env) {
@@ -578,7 +579,7 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
   r.horizon = std::move(sums.horizon);
   r.horizon_distance = std::move(sums.horizon_distance);
   const Environment& env = scene.environment;
-  const bool uniform_env = env.uniform || env.levels.empty();
+  const bool uniform_env = env.is_uniform();
   const bool facets = p.direct && p.facet_direct;
   const std::size_t NF = facets ? 2 * N : 0;
   std::vector<float>&ao_sum = sums.ao, &vsky_sum = sums.vsky, &rgb_sum = sums.rgb, &bent_sum = sums.bent;
