@@ -403,11 +403,17 @@ std::vector<fs::path> OutputStage::commit() {
     if (ec) throw InputError(target.string(), "", "cannot move into place: " + ec.message());
     final_paths.push_back(target);
   }
+  // The owner record is written in the stage and renamed into place like the outputs: a process killed
+  // here leaves its temporary inside its stage, which the next bake removes.
+  const fs::path record = owner_record(job_), staged_record = stage_ / record.filename();
   try {
-    write_file_atomically(owner_record(job_), job_identity(job_));
+    write_file_atomically(staged_record, job_identity(job_));
   } catch (const std::system_error& e) {
-    throw InputError(owner_record(job_).string(), "", std::string("cannot write: ") + e.code().message());
+    throw InputError(record.string(), "", std::string("cannot write: ") + e.code().message());
   }
+  std::error_code ec;
+  fs::rename(staged_record, record, ec);
+  if (ec) throw InputError(record.string(), "", "cannot move into place: " + ec.message());
   staged_.clear();
   committed_ = true;
   return final_paths;
