@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
+#include <stdexcept>
 
 #include "methods/p1/horizon_sweep.hpp"
 
@@ -95,6 +96,7 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
   crossings.reserve(cs.size());
   major.clear();
   curved = curvature != 0;
+  e_lo = 0, e_hi = 0;
   std::vector<double> n_c;
   n_c.reserve(cs.size());
   for (const NearCrossing& c : cs) {
@@ -103,9 +105,17 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
     crossings.push_back({std::int32_t(std::ptrdiff_t(amaj) * L.stride + amin),
                          std::int32_t(std::ptrdiff_t(bmaj) * L.stride + bmin), c.w, c.inv_s,
                          float(curvature / double(c.inv_s))});
+    for (const double e : {double(amin) - g * double(amaj), double(bmin) - g * double(bmaj)}) {
+      e_lo = std::min(e_lo, e);
+      e_hi = std::max(e_hi, e);
+    }
     n_c.push_back(std::fabs(double(x_major ? c.x : c.y)));
     major.push_back(float(n_c.back()));
   }
+  // The strips' bounds cover a column's texels with two windows (lane_kernel.inc): the rays' crossings
+  // read within e_hi - e_lo + 2 texels across their lines (about 2 + 2 |g|), never more than 2 kLaneWindow.
+  if (e_hi - e_lo > 2 * kLaneWindow - 2.01)
+    throw std::logic_error("lane search: a direction's crossings read too far from its rays");
   // first_at[n]: the first crossing at major distance >= n; first_at[nmajor + 2 + n] (the second half):
   // the first beyond n (distance > n), i.e. the end of the crossings on the field up to n.
   const int nn = L.nmajor + 2;

@@ -10,7 +10,8 @@
 //
 // What makes it cheap is what is not evaluated. The rays are cut into blocks of 4 columns along the walk.
 // A unit strip of intercepts (the lines v - g u in [k, k + 1)) holds every ray of one lane of a group, and
-// per column the highest texel any crossing of such a ray can use (LaneLayout::window): from those, per
+// per column the highest texel any crossing of such a ray can use (the texels within [e_lo, e_hi] of the
+// rays' lines, LaneDirection; the maximum of one or two LaneLayout::window values): from those, per
 // strip of eight lanes, the highest over each block, over 4, 16 and 64 blocks, and over all further
 // columns, one value per lane (an 8-wide load). A block is evaluated only when some lane's bound, seen
 // from that lane at the block's nearest crossing, could be steeper than the lane's best slope (plus the
@@ -43,7 +44,7 @@ namespace hfbake::p1 {
 inline constexpr int kLanes = 8;
 inline constexpr int kLanePad = 16;         // texels of padding on each side of the minor axis
 inline constexpr float kOffField = -1e30f;  // the padding's height: never the steepest
-inline constexpr int kLaneWindow = 6;       // minor-axis texels a unit strip's per-column bound covers
+inline constexpr int kLaneWindow = 3;       // minor-axis texels of LaneLayout::window's maxima
 
 // The field with its minor axis contiguous: x_major (directions moving more along x) stores
 // [x * stride + kLanePad + y], else [y * stride + kLanePad + x]; kLanePad texels of kOffField on both sides.
@@ -79,6 +80,9 @@ struct LaneDirection {
   std::vector<float> major;  // each crossing's major distance (texels)
   std::vector<std::int32_t> first_at;
   bool curved = false;  // some crossing's drop is not 0
+  // Where the texels the crossings read lie across a ray's line: for a ray of intercept c (the line
+  // v - g u = c) and a texel (U, V) one of its crossings reads, V - (c + g U) is in [e_lo, e_hi].
+  double e_lo = 0, e_hi = 0;
 
   // curvature: c of the lowering c d^2 of a point at horizontal world distance d (terrain/earth.hpp
   // EarthCurvature; 0: a flat Earth).
