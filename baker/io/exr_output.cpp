@@ -167,7 +167,11 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     std::size_t half_channels = 0;
     for (const Channel& ch : channels) half_channels += ch.as_float ? 0 : 1;
     const std::size_t band_values = std::size_t(w) * std::size_t(band_rows);
-    std::vector<half> band(band_values * half_channels);
+    // Channels a cache line apart beyond a multiple of 4 KiB: a texel's values go to every channel's band,
+    // and bands a power of two apart would all fall in one cache set (a 64-channel horizon layer's
+    // conversion was bound by those conflicts).
+    const std::size_t band_stride = (band_values + 2047) / 2048 * 2048 + 32;
+    std::vector<half> band(band_stride * half_channels);
     for (int y0 = 0; y0 < h; y0 += band_rows) {
       const int rows = std::min(band_rows, h - y0);
       Imf::FrameBuffer frame;
@@ -181,7 +185,7 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
           const float* v = channels[c0].data + (first + i) * stride;
           std::size_t s2 = layer_slot;
           for (std::size_t c = 0; c < stride; ++c)
-            if (!channels[c0 + c].as_float) band[(s2++) * band_values + i] = half(v[c]);
+            if (!channels[c0 + c].as_float) band[(s2++) * band_stride + i] = half(v[c]);
         }
         for (std::size_t c = 0; c < stride; ++c) {
           const Channel& ch = channels[c0 + c];
@@ -189,7 +193,7 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
             frame.insert(ch.name, float_slice(ch));
             continue;
           }
-          half* dst = band.data() + (slot++) * band_values;
+          half* dst = band.data() + (slot++) * band_stride;
           // The slice's base is where row 0 would be, so row y0 lands at the band's start.
           char* base = (char*)dst - std::ptrdiff_t(sizeof(half)) * std::ptrdiff_t(first);
           frame.insert(ch.name, Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(w)));
