@@ -94,9 +94,10 @@ struct LaneStats {
   std::uint64_t groups = 0, blocks = 0, crossings = 0;
 };
 
-// Per-thread scratch of the strips' bounds.
+// Per-thread scratch of the strips' bounds and the hinted blocks.
 struct LaneScratch {
   std::vector<float> block, coarse, suffix;
+  std::vector<std::int32_t> mark;  // per walk block: the group that tried it as a hint
 };
 
 // The lane search of a field with rectangular texels (dx x dy) runs each ray along its texel-space
