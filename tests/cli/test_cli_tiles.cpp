@@ -1,8 +1,9 @@
 // hfbake bake --tiles, end to end (the binary): on rasters that fit both ways, the tiled bake's COGs hold
-// the whole bake's texels bit for bit, for every method with a bounded reach, on a family of fields (sines,
-// terraces, craters, white noise, the lidar DEM when present) at tile sizes that cut them unevenly; and
-// what a tiled bake refuses is one line naming the job file and the key, with nothing written. The truth is
-// the whole bake of the same job (no tiles: one field in memory), read back with GDAL.
+// the whole bake's texels bit for bit, for every method with a bounded reach (relief's far field included:
+// the tiles walk the whole raster's coarse copy), on a family of fields (sines, terraces, craters, white
+// noise, the lidar DEM when present) at tile sizes that cut them unevenly; and what a tiled bake refuses is
+// one line naming the job file and the key, with nothing written. The truth is the whole bake of the same
+// job (no tiles: one field in memory), read back with GDAL.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 
@@ -187,8 +188,38 @@ TEST_F(CliTiles, TiledBakeEqualsWholeBakeOnTheLidarDem) {
                                 {"directions", 16},
                                 {"search_radius", 20},
                                 {"layers", {"svf", "openness_positive"}}},
-                               {{"method", "hbao"}, {"directions", 8}, {"radius", 8}, {"falloff", "smooth"}}};
+                               {{"method", "hbao"}, {"directions", 8}, {"radius", 8}, {"falloff", "smooth"}},
+                               {{"method", "relief"},
+                                {"directions", 16},
+                                {"search_radius", 150},
+                                {"far_field", {{"beyond", 20}, {"cell", 8}}},
+                                {"layers", {"svf", "horizon_deg"}}}};
   expect_tiles_equal_whole("dem.tif", bake, {64, 128});
+}
+
+// relief with a far field: the tiles' halo is the far field's distance, not the search radius, and every
+// tile walks the coarse copy of the whole raster, so its texels are the whole bake's bit for bit (the
+// whole bake coarsens the same raster the same way). Radius 40 m = 80 texels, exact within 4 m = 8.
+TEST_F(CliTiles, TiledBakeWithFarFieldEqualsWholeBake) {
+  write_family(150, 97);
+  const nlohmann::json bake = {{{"method", "relief"},
+                                {"directions", 8},
+                                {"search_radius", 40},
+                                {"far_field", {{"beyond", 4}, {"cell", 4}}},
+                                {"layers", {"svf", "openness_negative", "horizon_deg"}}},
+                               {{"method", "relief"},
+                                {"directions", 5},
+                                {"search_radius", 30},
+                                {"far_field", {{"beyond", 2.5}, {"cell", 8}}},
+                                {"layers", {"horizon_deg"}}}};
+  const Result plan = hfbake("validate --tiles --tile-size 45 " +
+                             write_job("plan", {{"image", "craters.tif"}}, bake).string());
+  ASSERT_EQ(plan.exit_code, 0) << plan.err;
+  EXPECT_NE(plan.err.find("with a halo of 10"), std::string::npos) << plan.err;
+  for (const char* field : {"sines.tif", "terraces.tif", "craters.tif", "noise.tif"}) {
+    SCOPED_TRACE(field);
+    expect_tiles_equal_whole(field, bake, {16, 45, 100});
+  }
 }
 
 // The farm's halves: tile tasks (--tile-task I/N, any order) and merge --tiles write the COGs of the

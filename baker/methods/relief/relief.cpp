@@ -142,7 +142,9 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
 }
 
 LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
-  return bake_relief(scene.field, config.get<ReliefSettings>(), rc, scene.curvature);
+  const ReliefSettings& s = config.get<ReliefSettings>();
+  const CoarseHeights* coarse = s.far_field ? scene.window.coarse_of(s.far_field->cell) : nullptr;
+  return bake_relief(scene.field, s, rc, scene.curvature, coarse, scene.window.x0, scene.window.y0);
 }
 
 MethodInfo relief_method() {
@@ -162,8 +164,17 @@ MethodInfo relief_method() {
     return s.far_field ? coarse_bytes(context.field.width, context.field.height, s.far_field->cell) : 0.0;
   };
   m.division = WorkDivision::texel_tiles;
-  m.reach = [](const MethodConfig& c) { return c.get<ReliefSettings>().search_radius; };
-  m.division_note = "texel tiles with a halo of search_radius (each texel's horizons are its own)";
+  m.reach = [](const MethodConfig& c) {
+    const ReliefSettings& s = c.get<ReliefSettings>();
+    return s.far_field ? s.far_field->beyond : s.search_radius;
+  };
+  m.far_cell = [](const MethodConfig& c) {
+    const ReliefSettings& s = c.get<ReliefSettings>();
+    return s.far_field ? s.far_field->cell : 0;
+  };
+  m.division_note =
+      "texel tiles with a halo of search_radius, or of far_field.beyond with the whole field's coarse copy "
+      "(each texel's horizons are its own)";
   m.reads_normals = false;
   m.reads_albedo = false;
   m.rectangular_texels = true;
