@@ -272,7 +272,16 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
 // Each refusal: exit 2, one error line naming the job file and `pointer`, and no output folder.
 TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
   write_heights(dir_ / "f.tif", 40, 30, [](int i, int j) { return 0.1 * i * j; });
+  // f.tif resampled to 12000^2: its coarse copy of cells of one texel, 8 bytes a cell, fills 1 GiB alone.
+  std::ofstream(dir_ / "big.vrt")
+      << "<VRTDataset rasterXSize=\"12000\" rasterYSize=\"12000\"><GeoTransform>400000, 0.5, 0, 100000, 0, "
+         "-0.5</GeoTransform><VRTRasterBand dataType=\"Float32\" band=\"1\"><SimpleSource><SourceFilename "
+         "relativeToVRT=\"1\">f.tif</SourceFilename><SourceBand>1</SourceBand><SrcRect xOff=\"0\" yOff=\"0\" "
+         "xSize=\"40\" ySize=\"30\"/><DstRect xOff=\"0\" yOff=\"0\" xSize=\"12000\" ySize=\"12000\"/>"
+         "</SimpleSource></VRTRasterBand></VRTDataset>\n";
   const nlohmann::json relief = {{{"method", "relief"}, {"search_radius", 3}}};
+  const nlohmann::json far = {
+      {{"method", "relief"}, {"search_radius", 3}, {"far_field", {{"beyond", 2}, {"cell", 1}}}}};
   struct Case {
     std::string name;
     nlohmann::json height, bake, extra;
@@ -293,6 +302,7 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
       {"reference", {{"image", "f.tif"}}, relief, {{"reference", {{"samples", 4}}}}, "/reference", ""},
       {"budget", {{"image", "f.tif"}}, relief, {}, "/height", "--memory-limit 100M"},
       {"tile_size", {{"image", "f.tif"}}, relief, {}, "/height", "--tile-size 16 --memory-limit 100M"},
+      {"coarse", {{"image", "big.vrt"}}, far, {}, "/height", "--memory-limit 1G"},
   };
   for (const Case& c : cases)
     for (const char* command : {"validate", "bake"}) {
@@ -305,6 +315,11 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
       EXPECT_NE(lines[0].find(job.string() + ": " + c.pointer + ":"), std::string::npos) << lines[0];
       EXPECT_FALSE(fs::exists(dir_ / ("out_" + c.name))) << "a refused tiled bake made its output folder";
     }
+  // The far field's coarse copy is what does not fit: 12000^2 cells of 8 bytes.
+  const Result coarse =
+      hfbake("validate --quiet --tiles --memory-limit 1G " + (dir_ / "coarse.json").string());
+  EXPECT_NE(coarse.err.find("coarse copies of the raster need about 1098 MiB"), std::string::npos)
+      << coarse.err;
   // The same raster and method as a valid job: validate says so, with the halo of 3 m on 0.5 m texels.
   const Result ok =
       hfbake("validate --tiles --tile-size 16 " + write_job("ok", {{"image", "f.tif"}}, relief).string());
