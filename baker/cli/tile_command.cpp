@@ -98,7 +98,10 @@ int strip_rows(int width, int height, std::size_t budget) {
 std::string tiles_text(const TilePlan& plan) {
   return std::to_string(plan.columns * plan.rows) + " tiles (" + std::to_string(plan.columns) + " x " +
          std::to_string(plan.rows) + ") of " + std::to_string(plan.tile) + "^2 texels with a halo of " +
-         std::to_string(plan.halo);
+         std::to_string(plan.halo) +
+         (plan.kept_bytes > 0 ? ", beside coarse copies of the raster of " +
+                                    std::to_string((plan.kept_bytes + (1 << 20) - 1) >> 20) + " MiB"
+                              : std::string());
 }
 
 // Bakes tile `k` of the plan: the tile's heights as a field of their own, then each entry through the method
@@ -248,14 +251,18 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
   };
   if (tile_size) {
     if (peak(*tile_size) > tile_budget) too_large(*tile_size, "--memory-limit, or a smaller --tile-size");
-    return plan_tiles(band->width, band->height, *tile_size, halo);
+    TilePlan plan = plan_tiles(band->width, band->height, *tile_size, halo);
+    plan.kept_bytes = coarse;
+    return plan;
   }
   const std::optional<int> side =
       tile_side_for_budget(band->width, band->height, halo, tile_budget, 256, [&job](int w, int h) {
         return estimate_peak_bytes(job, FieldSize{w, h});
       });
   if (!side) too_large(256, "--memory-limit");
-  return plan_tiles(band->width, band->height, *side, halo);
+  TilePlan plan = plan_tiles(band->width, band->height, *side, halo);
+  plan.kept_bytes = coarse;
+  return plan;
 }
 
 std::string validate_tiled(const Job& job, std::size_t budget, std::optional<int> tile_size) {
