@@ -71,23 +71,53 @@ HeightField read_window(const Job& job, const GeoHeightBand& band, const RasterW
   return field;
 }
 
+// The cell sides of the coarse copies of the whole raster the job's entries walk (MethodInfo::far_cell),
+// each once, and the bytes they hold.
+std::vector<int> job_far_cells(const Job& job) {
+  std::vector<int> cells;
+  for (const BakeEntry& entry : job.bakes) {
+    const MethodConfig& config = entry_config(entry);
+    const int cell = config.method->far_cell ? config.method->far_cell(config) : 0;
+    if (cell > 0 && std::find(cells.begin(), cells.end(), cell) == cells.end()) cells.push_back(cell);
+  }
+  return cells;
+}
+
+std::size_t coarse_copies_bytes(const Job& job, int width, int height) {
+  double bytes = 0;
+  for (const int cell : job_far_cells(job)) bytes += coarse_bytes(width, height, cell);
+  return std::size_t(bytes);
+}
+
+// The rows of a run read for the coarse copies: as many as `budget` holds, between 1 and 256.
+int strip_rows(int width, int height, std::size_t budget) {
+  return int(std::clamp<std::size_t>(budget / (sizeof(float) * std::size_t(width)), 1,
+                                     std::size_t(std::min(height, 256))));
+}
+
 std::string tiles_text(const TilePlan& plan) {
   return std::to_string(plan.columns * plan.rows) + " tiles (" + std::to_string(plan.columns) + " x " +
          std::to_string(plan.rows) + ") of " + std::to_string(plan.tile) + "^2 texels with a halo of " +
-         std::to_string(plan.halo);
+         std::to_string(plan.halo) +
+         (plan.kept_bytes > 0 ? ", beside coarse copies of the raster of " +
+                                    std::to_string((plan.kept_bytes + (1 << 20) - 1) >> 20) + " MiB"
+                              : std::string());
 }
 
 // Bakes tile `k` of the plan: the tile's heights as a field of their own, then each entry through the method
 // table; sink(entry index, its layers, the interior's offset in them) gets each entry's layers.
+// `coarse`: the raster's coarse copies (coarse_copies), handed to every tile.
 template <class Sink>
 void bake_tile(const Job& job, const GeoHeightBand& band, const TilePlan& plan, std::size_t k,
+               const std::vector<std::shared_ptr<const CoarseHeights>>& coarse,
                const std::atomic<bool>& cancel, const std::function<void(double)>& progress,
                std::vector<double>& seconds, Sink&& sink) {
   if (cancel.load()) throw Cancelled();
   const Tile& tile = plan.tiles[k];
   Georeference tile_geo;  // none of the tiled methods reads the site
   tile_geo.geotransform = band.georeference.geotransform;
-  const Scene scene = complete_scene(job, read_window(job, band, tile.read), tile_geo, band.source);
+  Scene scene = complete_scene(job, read_window(job, band, tile.read), tile_geo, band.source);
+  scene.window = {tile.read.x0, tile.read.y0, coarse};
   const int ox = tile.interior.x0 - tile.read.x0, oy = tile.interior.y0 - tile.read.y0;
   for (std::size_t e = 0; e < job.bakes.size(); ++e) {
     const BakeEntry& entry = job.bakes[e];
@@ -134,6 +164,27 @@ std::pair<std::size_t, std::size_t> task_tiles(const TilePlan& plan, ShardId tas
           t * std::size_t(task.index + 1) / std::size_t(task.count)};
 }
 
+// The raster's coarse copies the job's entries walk, from one pass of windowed reads of `rows` rows at a
+// time (never the whole raster in memory), under the tiled bake's nodata rule.
+std::vector<std::shared_ptr<const CoarseHeights>> coarse_copies(const Job& job, const GeoHeightBand& band,
+                                                                int rows, const std::atomic<bool>& cancel,
+                                                                const std::function<void(double)>& progress) {
+  std::vector<CoarseHeights> copies;
+  for (const int cell : job_far_cells(job))
+    copies.push_back(empty_coarse(band.width, band.height, cell, Wrap::clamp));
+  if (copies.empty()) return {};
+  for (int y = 0; y < band.height; y += rows) {
+    if (cancel.load()) throw Cancelled();
+    const int n = std::min(rows, band.height - y);
+    const HeightField strip = read_window(job, band, RasterWindow{0, y, band.width, n});
+    for (CoarseHeights& g : copies) add_coarse_rows(g, strip.z.data(), y, n);
+    progress(double(y + n) / band.height);
+  }
+  std::vector<std::shared_ptr<const CoarseHeights>> out;
+  for (CoarseHeights& g : copies) out.push_back(std::make_shared<const CoarseHeights>(std::move(g)));
+  return out;
+}
+
 }  // namespace
 
 void check_tiled_job(const Job& job) {
@@ -175,28 +226,43 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
   const std::optional<GeoHeightBand> band = georaster_height_band(job);
   if (!band) refuse(job, "/height", "a tiled bake reads a georeferenced raster through GDAL");
   const int halo = job_halo(job);
-  const std::size_t tile_budget = budget > kTiledGdalCacheBytes ? budget - kTiledGdalCacheBytes : 0;
+  // The coarse copies of the whole raster stay while tiling: the tiles get what they leave.
+  const std::size_t coarse = coarse_copies_bytes(job, band->width, band->height);
+  const std::size_t tile_budget =
+      budget > kTiledGdalCacheBytes + coarse ? budget - kTiledGdalCacheBytes - coarse : 0;
+  if (coarse > 0 && tile_budget == 0)
+    refuse(job, "/height",
+           "the far fields' coarse copies of the raster need about " + std::to_string(coarse >> 20) +
+               " MiB, more than the memory budget leaves (--memory-limit, or a larger far_field cell)");
   auto peak = [&](int side) {
     const int w = int(std::min<std::int64_t>(band->width, std::int64_t(side) + 2 * std::int64_t(halo)));
     const int h = int(std::min<std::int64_t>(band->height, std::int64_t(side) + 2 * std::int64_t(halo)));
     return estimate_peak_bytes(job, FieldSize{w, h});
   };
   auto too_large = [&](int side, const std::string& knob) {
-    refuse(job, "/height",
-           "a tile of " + std::to_string(side) + "^2 texels with its halo of " + std::to_string(halo) +
-               " needs about " + std::to_string(peak(side) >> 20) + " MiB, more than the " +
-               std::to_string(tile_budget >> 20) + " MiB the memory budget leaves (" + knob + ")");
+    refuse(
+        job, "/height",
+        "a tile of " + std::to_string(side) + "^2 texels with its halo of " + std::to_string(halo) +
+            " needs about " + std::to_string(peak(side) >> 20) + " MiB, more than the " +
+            std::to_string(tile_budget >> 20) + " MiB the memory budget leaves" +
+            (coarse > 0 ? " beside the far fields' coarse copies (" + std::to_string(coarse >> 20) + " MiB)"
+                        : std::string()) +
+            " (" + knob + ")");
   };
   if (tile_size) {
     if (peak(*tile_size) > tile_budget) too_large(*tile_size, "--memory-limit, or a smaller --tile-size");
-    return plan_tiles(band->width, band->height, *tile_size, halo);
+    TilePlan plan = plan_tiles(band->width, band->height, *tile_size, halo);
+    plan.kept_bytes = coarse;
+    return plan;
   }
   const std::optional<int> side =
       tile_side_for_budget(band->width, band->height, halo, tile_budget, 256, [&job](int w, int h) {
         return estimate_peak_bytes(job, FieldSize{w, h});
       });
   if (!side) too_large(256, "--memory-limit");
-  return plan_tiles(band->width, band->height, *side, halo);
+  TilePlan plan = plan_tiles(band->width, band->height, *side, halo);
+  plan.kept_bytes = coarse;
+  return plan;
 }
 
 std::string validate_tiled(const Job& job, std::size_t budget, std::optional<int> tile_size) {
@@ -216,6 +282,17 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
   GdalCacheLimit cache(kTiledGdalCacheBytes);
   std::vector<double> seconds(job.bakes.size(), 0.0);
   const auto t0 = std::chrono::steady_clock::now();
+  // The far fields' coarse copies of the whole raster, read in runs of rows within what the tiles will
+  // take (the plan left room for the copies beside them).
+  std::vector<std::shared_ptr<const CoarseHeights>> coarse;
+  if (!options.merge && !job_far_cells(job).empty()) {
+    const std::size_t left =
+        budget - kTiledGdalCacheBytes - coarse_copies_bytes(job, band.width, band.height);
+    progress.begin(job.name, "coarse copy");
+    coarse = coarse_copies(job, band, strip_rows(band.width, band.height, left), cancel,
+                           [&](double f) { progress.update(job.name, "coarse copy", f); });
+    progress.end(job.name, "coarse copy", seconds_since(t0));
+  }
 
   if (options.tile_task) {  // a task's tiles, each layer's interior into its tile file
     const auto [first, end] = task_tiles(plan, *options.tile_task);
@@ -232,7 +309,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
     for (std::size_t k = first; k < end; ++k) {
       const Tile& tile = plan.tiles[k];
       bake_tile(
-          job, band, plan, k, cancel,
+          job, band, plan, k, coarse, cancel,
           [&](double f) {
             progress.update(job.name, "tiles", (double(k - first) + f) / double(end - first));
           },
@@ -330,7 +407,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
       tile_progress(1);
       continue;
     }
-    bake_tile(job, band, plan, k, cancel, tile_progress, seconds,
+    bake_tile(job, band, plan, k, coarse, cancel, tile_progress, seconds,
               [&](std::size_t e, const LayerSet& layers, int ox, int oy) {
                 for (const Layer& layer : layers.layers) {
                   const std::size_t nc = std::size_t(layer.channel_count());

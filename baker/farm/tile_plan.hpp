@@ -27,7 +27,9 @@ struct TilePlan {
   int tile = 0;               // the interiors' side (those on the last column and row may be narrower)
   int halo = 0;               // texels read beyond an interior on each side
   int columns = 0, rows = 0;  // tiles across and down
-  std::vector<Tile> tiles;    // row-major: tile (c, r) is tiles[r * columns + c]
+  std::size_t kept_bytes =
+      0;                    // held beside every tile while tiling (far fields' coarse copies of the raster)
+  std::vector<Tile> tiles;  // row-major: tile (c, r) is tiles[r * columns + c]
 };
 
 // The halo that covers a reach of `reach` world units on texels of `texel_size`: ceil(reach / texel) + 2

@@ -3,11 +3,13 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "env/environment.hpp"
+#include "field/coarse_heights.hpp"
 #include "field/georeference.hpp"
 #include "field/height_field.hpp"
 
@@ -57,6 +59,22 @@ struct HeightSource {
   bool geographic = false;                // a raster in a geographic CRS, baked in its local frame
 };
 
+// Where the field lies in the raster it is cut from: a tile of a raster larger than memory
+// (cli/tile_command.hpp) is the window whose texel (0, 0) is the raster's (x0, y0), with the raster's
+// coarse copies (one per cell side a method walks, MethodInfo::far_cell). Default: the field is the whole
+// raster, and a method coarsens it itself.
+struct FieldWindow {
+  int x0 = 0, y0 = 0;
+  std::vector<std::shared_ptr<const CoarseHeights>> coarse;
+
+  // The raster's coarse copy of cells of `cell` texels; null when there is none.
+  const CoarseHeights* coarse_of(int cell) const {
+    for (const auto& g : coarse)
+      if (g->cell == cell) return g.get();
+    return nullptr;
+  }
+};
+
 struct Scene {
   std::string name;  // the job's name
   HeightField field;
@@ -72,6 +90,7 @@ struct Scene {
   double refraction = 0;      // the coefficient k it was made with (for what validate and bake print)
   Georeference georeference;  // the input's CRS, geotransform and holes (for GeoTIFF outputs)
   HeightSource height_source;
+  FieldWindow window;
 };
 
 }  // namespace hfbake

@@ -64,6 +64,15 @@ double Params::number(const char* key, double fallback, double lo, double hi) {
   return x;
 }
 
+bool Params::object(const char* key, const std::function<void(Params&)>& read) {
+  if (!has(key)) return false;
+  if (!raw(key).is_object()) fail(key, "must be an object");
+  Params inner(raw(key), file_, pointer_ + "/" + key);
+  read(inner);
+  resolved_[key] = inner.resolved_;
+  return true;
+}
+
 bool Params::boolean(const char* key, bool fallback) {
   bool x = fallback;
   if (has(key)) {

@@ -9,6 +9,7 @@
 // resolve().
 #pragma once
 
+#include <functional>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -47,6 +48,11 @@ class Params {
   // with `what`. has(key) must hold; nothing is recorded.
   std::optional<double> word_or_number(const char* key, const char* word, double lo, double hi,
                                        const std::string& what) const;
+
+  // A nested object: `read` reads it with a reader of its own (errors name pointer + "/" + key), whose
+  // record is then recorded here under key. Returns false, reading nothing, when absent; fails unless an
+  // object.
+  bool object(const char* key, const std::function<void(Params&)>& read);
 
   // Records a value the method derived (it replaces what a getter recorded under that key).
   void resolve(const char* key, nlohmann::json value) { resolved_[key] = std::move(value); }

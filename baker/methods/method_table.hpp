@@ -119,6 +119,10 @@ struct MethodInfo {
   // tile whose halo covers it bakes the whole bake's texels (farm/tile_plan.hpp, cli/tile_command.hpp).
   // Null: unbounded (the whole field), so the method is not baked in tiles.
   double (*reach)(const MethodConfig& config) = nullptr;
+  // The cell side, in texels, of the coarse copy of the whole field (field/coarse_heights.hpp) the bake
+  // walks beyond its reach (relief's far field); 0 or null: none. A tiled bake builds that copy once from
+  // the whole raster and hands it to every tile (Scene::window).
+  int (*far_cell)(const MethodConfig& config) = nullptr;
   const char* division_note = "";  // how, and why not otherwise
   // The farm (baker/farm) for a method that divides by directions: bake_block gives the raw sums of
   // direction block `block` (core/direction_blocks.hpp, of the config's directions) as float layers; the

@@ -1,8 +1,9 @@
 // hfbake bake --tiles, end to end (the binary): on rasters that fit both ways, the tiled bake's COGs hold
-// the whole bake's texels bit for bit, for every method with a bounded reach, on a family of fields (sines,
-// terraces, craters, white noise, the lidar DEM when present) at tile sizes that cut them unevenly; and
-// what a tiled bake refuses is one line naming the job file and the key, with nothing written. The truth is
-// the whole bake of the same job (no tiles: one field in memory), read back with GDAL.
+// the whole bake's texels bit for bit, for every method with a bounded reach (relief's far field included:
+// the tiles walk the whole raster's coarse copy), on a family of fields (sines, terraces, craters, white
+// noise, the lidar DEM when present) at tile sizes that cut them unevenly; and what a tiled bake refuses is
+// one line naming the job file and the key, with nothing written. The truth is the whole bake of the same
+// job (no tiles: one field in memory), read back with GDAL.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 
@@ -187,8 +188,40 @@ TEST_F(CliTiles, TiledBakeEqualsWholeBakeOnTheLidarDem) {
                                 {"directions", 16},
                                 {"search_radius", 20},
                                 {"layers", {"svf", "openness_positive"}}},
-                               {{"method", "hbao"}, {"directions", 8}, {"radius", 8}, {"falloff", "smooth"}}};
+                               {{"method", "hbao"}, {"directions", 8}, {"radius", 8}, {"falloff", "smooth"}},
+                               {{"method", "relief"},
+                                {"directions", 16},
+                                {"search_radius", 150},
+                                {"far_field", {{"beyond", 20}, {"cell", 8}}},
+                                {"layers", {"svf", "horizon_deg"}}}};
   expect_tiles_equal_whole("dem.tif", bake, {64, 128});
+}
+
+// relief with a far field: the tiles' halo is the far field's distance, not the search radius, and every
+// tile walks the coarse copy of the whole raster, so its texels are the whole bake's bit for bit (the
+// whole bake coarsens the same raster the same way). Radius 40 m = 80 texels, exact within 4 m = 8.
+TEST_F(CliTiles, TiledBakeWithFarFieldEqualsWholeBake) {
+  write_family(150, 97);
+  const nlohmann::json bake = {{{"method", "relief"},
+                                {"directions", 8},
+                                {"search_radius", 40},
+                                {"far_field", {{"beyond", 4}, {"cell", 4}}},
+                                {"layers", {"svf", "openness_negative", "horizon_deg"}}},
+                               {{"method", "relief"},
+                                {"directions", 5},
+                                {"search_radius", 30},
+                                {"far_field", {{"beyond", 2.5}, {"cell", 8}}},
+                                {"layers", {"horizon_deg"}}}};
+  const Result plan = hfbake("validate --tiles --tile-size 45 " +
+                             write_job("plan", {{"image", "craters.tif"}}, bake).string());
+  ASSERT_EQ(plan.exit_code, 0) << plan.err;
+  EXPECT_NE(plan.err.find("with a halo of 10, beside coarse copies of the raster of 1 MiB"),
+            std::string::npos)
+      << plan.err;
+  for (const char* field : {"sines.tif", "terraces.tif", "craters.tif", "noise.tif"}) {
+    SCOPED_TRACE(field);
+    expect_tiles_equal_whole(field, bake, {16, 45, 100});
+  }
 }
 
 // The farm's halves: tile tasks (--tile-task I/N, any order) and merge --tiles write the COGs of the
@@ -241,7 +274,16 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
 // Each refusal: exit 2, one error line naming the job file and `pointer`, and no output folder.
 TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
   write_heights(dir_ / "f.tif", 40, 30, [](int i, int j) { return 0.1 * i * j; });
+  // f.tif resampled to 12000^2: its coarse copy of cells of one texel, 8 bytes a cell, fills 1 GiB alone.
+  std::ofstream(dir_ / "big.vrt")
+      << "<VRTDataset rasterXSize=\"12000\" rasterYSize=\"12000\"><GeoTransform>400000, 0.5, 0, 100000, 0, "
+         "-0.5</GeoTransform><VRTRasterBand dataType=\"Float32\" band=\"1\"><SimpleSource><SourceFilename "
+         "relativeToVRT=\"1\">f.tif</SourceFilename><SourceBand>1</SourceBand><SrcRect xOff=\"0\" yOff=\"0\" "
+         "xSize=\"40\" ySize=\"30\"/><DstRect xOff=\"0\" yOff=\"0\" xSize=\"12000\" ySize=\"12000\"/>"
+         "</SimpleSource></VRTRasterBand></VRTDataset>\n";
   const nlohmann::json relief = {{{"method", "relief"}, {"search_radius", 3}}};
+  const nlohmann::json far = {
+      {{"method", "relief"}, {"search_radius", 3}, {"far_field", {{"beyond", 2}, {"cell", 1}}}}};
   struct Case {
     std::string name;
     nlohmann::json height, bake, extra;
@@ -262,6 +304,7 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
       {"reference", {{"image", "f.tif"}}, relief, {{"reference", {{"samples", 4}}}}, "/reference", ""},
       {"budget", {{"image", "f.tif"}}, relief, {}, "/height", "--memory-limit 100M"},
       {"tile_size", {{"image", "f.tif"}}, relief, {}, "/height", "--tile-size 16 --memory-limit 100M"},
+      {"coarse", {{"image", "big.vrt"}}, far, {}, "/height", "--memory-limit 1G"},
   };
   for (const Case& c : cases)
     for (const char* command : {"validate", "bake"}) {
@@ -274,6 +317,11 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
       EXPECT_NE(lines[0].find(job.string() + ": " + c.pointer + ":"), std::string::npos) << lines[0];
       EXPECT_FALSE(fs::exists(dir_ / ("out_" + c.name))) << "a refused tiled bake made its output folder";
     }
+  // The far field's coarse copy is what does not fit: 12000^2 cells of 8 bytes.
+  const Result coarse =
+      hfbake("validate --quiet --tiles --memory-limit 1G " + (dir_ / "coarse.json").string());
+  EXPECT_NE(coarse.err.find("coarse copies of the raster need about 1098 MiB"), std::string::npos)
+      << coarse.err;
   // The same raster and method as a valid job: validate says so, with the halo of 3 m on 0.5 m texels.
   const Result ok =
       hfbake("validate --tiles --tile-size 16 " + write_job("ok", {{"image", "f.tif"}}, relief).string());

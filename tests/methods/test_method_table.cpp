@@ -116,6 +116,27 @@ TEST(MethodTable, EveryDocumentedConstraintIsEnforcedByTheReader) {
     for (auto& [key, raw] : schema["properties"].items()) {
       if (key == "method") continue;
       const nlohmann::json p = property_schema(raw);
+      if (p.value("type", "") == "object") {  // a nested object: each of its keys, and not an object
+        for (auto& [inner, inner_raw] : p["properties"].items())
+          for (const auto& [value, rule] : refused_values(property_schema(inner_raw))) {
+            nlohmann::json e = base;
+            e[key] = {{inner, value}};
+            SCOPED_TRACE(std::string(m.name) + "." + key + "." + inner + " = " + value.dump() + " (" + rule +
+                         ")");
+            try {
+              resolved_params(e, context(), "job.json", "/bake/3");
+              ADD_FAILURE() << "accepted";
+            } catch (const InputError& err) {
+              EXPECT_EQ(err.where().rfind("/bake/3/" + key + "/" + inner, 0), 0u) << err.where();
+            }
+            ++checked;
+          }
+        nlohmann::json e = base;
+        e[key] = 7;
+        EXPECT_THROW(resolved_params(e, context(), "job.json", "/bake/3"), InputError)
+            << m.name << "." << key;
+        continue;
+      }
       for (const auto& [value, rule] : refused_values(p)) {
         nlohmann::json e = base;
         e[key] = value;

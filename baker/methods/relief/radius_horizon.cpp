@@ -74,11 +74,54 @@ HorizonPair march(const HeightField& field, int i, int j, double rx, double ry, 
   return h;
 }
 
-}  // namespace
+// The far field's walk over the cells of `g` from distance t0 to t1 along the ray (gi, gj) + t (rx, ry) in
+// the coarse copy's texel coordinates, folded into `h` (the exact march's result out to t0).
+void walk_far(const CoarseHeights& g, long gi, long gj, double rx, double ry, double t0, double t1, double z0,
+              double c, HorizonPair& h) {
+  const double C = g.cell;
+  const int sx = rx > 1e-15 ? 1 : rx < -1e-15 ? -1 : 0, sy = ry > 1e-15 ? 1 : ry < -1e-15 ? -1 : 0;
+  long cx = long(std::floor((double(gi) + t0 * rx) / C)), cy = long(std::floor((double(gj) + t0 * ry) / C));
+  if (g.wrap == Wrap::clamp) {  // the ray stays within [0, n - 1]: its cells are [0, cells)
+    cx = std::clamp(cx, 0L, long(g.columns) - 1);
+    cy = std::clamp(cy, 0L, long(g.rows) - 1);
+  }
+  // The distance at which the ray leaves cell c along an axis moving by s (from integers: the same bits
+  // for every window of the field).
+  auto leave = [&](long cell, int s, double rate, long origin) {
+    if (s == 0) return std::numeric_limits<double>::infinity();
+    return (double((cell + (s > 0 ? 1 : 0)) * g.cell) - double(origin)) / rate;
+  };
+  auto wrapped = [](long k, int n) { return int((k % n + n) % n); };
+  double next_x = leave(cx, sx, rx, gi), next_y = leave(cy, sy, ry, gj);
+  double up = -std::numeric_limits<double>::infinity(), up_floor = up;
+  double down = std::numeric_limits<double>::infinity(), down_ceiling = down;
+  for (double ta = t0;;) {
+    const double tb = std::min({next_x, next_y, t1});
+    const std::size_t k = g.wrap == Wrap::repeat ? g.index(wrapped(cx, g.columns), wrapped(cy, g.rows))
+                                                 : g.index(int(std::clamp(cx, 0L, long(g.columns) - 1)),
+                                                           int(std::clamp(cy, 0L, long(g.rows) - 1)));
+    const double hi = g.high[k], lo = g.low[k];
+    // The highest s any point of the cell on [ta, tb] can reach, and the lowest.
+    const double most = (hi - z0) / (hi >= z0 ? ta : tb) - c * ta;
+    const double least = (lo - z0) / (lo <= z0 ? ta : tb) - c * tb;
+    up = std::max(up, most);
+    up_floor = std::max(up_floor, least);
+    down = std::min(down, least);
+    down_ceiling = std::min(down_ceiling, most);
+    if (!(tb < t1)) break;
+    if (next_x <= tb) next_x = leave(cx += sx, sx, rx, gi);
+    if (next_y <= tb) next_y = leave(cy += sy, sy, ry, gj);
+    ta = tb;
+  }
+  const double near_up = h.up, near_down = h.down;
+  h.up = std::max(near_up, up);
+  h.up_slack = h.up - std::max(near_up, up_floor);
+  h.down = std::min(near_down, down);
+  h.down_slack = std::min(near_down, down_ceiling) - h.down;
+}
 
-HorizonPair radius_horizon(const HeightField& field, int i, int j, double ux, double uy, double radius,
-                           double curvature) {
-  const double rx = ux / field.dx(), ry = uy / field.dy();
+HorizonPair exact_horizon(const HeightField& field, int i, int j, double rx, double ry, double radius,
+                          double curvature) {
   double t_end = radius;
   const int reach_x = int(std::ceil(radius / field.dx())) + 1,
             reach_y = int(std::ceil(radius / field.dy())) + 1;
@@ -92,6 +135,23 @@ HorizonPair radius_horizon(const HeightField& field, int i, int j, double ux, do
     t_end = std::min({t_end, exit_t(i, rx, field.width), exit_t(j, ry, field.height)});
   return march(field, i, j, rx, ry, t_end, curvature,
                [&field](int a, int b) { return double(field.at(a, b)); });
+}
+
+}  // namespace
+
+HorizonPair radius_horizon(const HeightField& field, int i, int j, double ux, double uy, double radius,
+                           double curvature, const FarField& far) {
+  const double rx = ux / field.dx(), ry = uy / field.dy();
+  if (!far.coarse || !(far.beyond < radius)) return exact_horizon(field, i, j, rx, ry, radius, curvature);
+  HorizonPair h = exact_horizon(field, i, j, rx, ry, far.beyond, curvature);
+  const CoarseHeights& g = *far.coarse;
+  const long gi = long(i) + far.x0, gj = long(j) + far.y0;
+  double t_end = radius;
+  if (g.wrap == Wrap::clamp)
+    t_end = std::min({t_end, exit_t(double(gi), rx, g.width), exit_t(double(gj), ry, g.height)});
+  if (h.any && t_end > far.beyond)
+    walk_far(g, gi, gj, rx, ry, far.beyond, t_end, field.z[field.index(i, j)], curvature, h);
+  return h;
 }
 
 }  // namespace hfbake

@@ -3,6 +3,7 @@
 // horizontal search radius. What the GIS relief quantities (sky-view factor, openness) are made of.
 #pragma once
 
+#include "field/coarse_heights.hpp"
 #include "field/height_field.hpp"
 
 namespace hfbake {
@@ -20,11 +21,31 @@ namespace hfbake {
 struct HorizonPair {
   double up = 0, down = 0;  // tangents of the highest and lowest elevation: max and min of s(d)
   bool any = false;  // false: no surface within the radius (a clamp border right behind); up = down = 0
+  // With a far field: up may exceed the exact march's by at most up_slack, down fall below it by at most
+  // down_slack (both 0 for the exact march).
+  double up_slack = 0, down_slack = 0;
+};
+
+// The far field of a march (docs/gis.md, "Far field"): out to `beyond` world units the exact march above;
+// from there to the radius the ray walks the cells of `coarse` it crosses (a DDA in the coarse copy's texel
+// coordinates), each cell taken at the heights and distances that can only raise the highest elevation and
+// only lower the lowest: for a cell crossed over distances [ta, tb] with heights in [lo, hi], up is at
+// least (hi - z0) / (hi >= z0 ? ta : tb) - c ta and down at most (lo - z0) / (lo <= z0 ? ta : tb) - c tb.
+// So up is never below the exact march's and down never above it. The surface along the ray within a cell
+// lies between those two bounds, so the exact up is at least the largest lower bound of a cell (and the
+// exact down at most the smallest upper bound): up_slack and down_slack, never more than
+// (h + G L) / D + c L (h: the largest height range of a cell crossed; L: a cell's diagonal in world units;
+// G: the larger of the exact up + c radius and -down; D = beyond).
+struct FarField {
+  const CoarseHeights* coarse = nullptr;  // null: the exact march all the way
+  double beyond = 0;                      // world units marched exactly
+  int x0 = 0, y0 = 0;  // the field's texel (0, 0) in the coarse copy's field (a tile: its window's corner)
 };
 
 // radius: world units; curvature: c per world unit (0: flat). clamp fields end at their border (the border
-// point is the last one evaluated); repeat fields tile.
+// point is the last one evaluated; with a far field the border of the coarse copy's field); repeat fields
+// tile.
 HorizonPair radius_horizon(const HeightField& field, int i, int j, double ux, double uy, double radius,
-                           double curvature = 0);
+                           double curvature = 0, const FarField& far = {});
 
 }  // namespace hfbake

@@ -30,6 +30,20 @@ ReliefSettings read_relief_settings(Params& in, const FieldShape& field) {
   s.compass = in.choice("azimuth_convention", "hfbake", {"hfbake", "compass"}) == "compass";
   s.layers = in.layers({"svf", "openness_positive", "openness_negative", "horizon_deg"},
                        {"svf", "openness_positive", "openness_negative"});
+  in.object("far_field", [&](Params& far) {
+    ReliefFarField f;
+    f.beyond = far.number("beyond", 100 * shorter, 1e-12, 1e12);
+    f.cell = far.integer("cell", 8, 1, 4096);
+    if (f.beyond < shorter)
+      far.fail("beyond", "is shorter than one texel (" + std::to_string(shorter) + " world units)");
+    if (!(f.beyond < s.search_radius))
+      far.fail("beyond", "(" + std::to_string(f.beyond) + " world units) is not less than search_radius (" +
+                             std::to_string(s.search_radius) + "): the far field would never be walked");
+    if (field.wrap == Wrap::repeat && (field.width % f.cell != 0 || field.height % f.cell != 0))
+      far.fail("cell", "must divide the field's width and height (" + std::to_string(field.width) + " x " +
+                           std::to_string(field.height) + ") on a repeat field");
+    s.far_field = f;
+  });
   return s;
 }
 
@@ -45,8 +59,20 @@ void relief_direction(int k, int K, bool compass, double& dx, double& dy) {
 }
 
 LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc,
-                     double curvature) {
+                     double curvature, const CoarseHeights* coarse, int x0, int y0) {
   const int w = field.width, h = field.height, K = s.directions;
+  CoarseHeights own;
+  FarField far;
+  if (s.far_field) {
+    if (!coarse) {
+      own = coarse_heights(field, s.far_field->cell);
+      coarse = &own;
+    }
+    far = {coarse, s.far_field->beyond, x0, y0};
+  }
+  // The largest slack of a row's horizons (radius_horizon.hpp), one slot a row: the same bits for any
+  // thread count.
+  std::vector<double> row_slack(std::size_t(h), 0.0);
   std::vector<double> dx(K), dy(K);
   for (int k = 0; k < K; ++k) relief_direction(k, K, s.compass, dx[k], dy[k]);
   LayerSet out;
@@ -69,7 +95,8 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
       const std::size_t t = field.index(i, j);
       for (int k = 0; k < K; ++k) {
         // No surface within the radius (beyond a clamp border): level in both senses, open sky.
-        const HorizonPair hp = radius_horizon(field, i, j, dx[k], dy[k], s.search_radius, curvature);
+        const HorizonPair hp = radius_horizon(field, i, j, dx[k], dy[k], s.search_radius, curvature, far);
+        row_slack[std::size_t(j)] = std::max({row_slack[std::size_t(j)], hp.up_slack, hp.down_slack});
         const double up = std::atan(hp.up), down = std::atan(hp.down);
         sum_sin += std::sin(std::max(up, 0.0));
         sum_up += up;
@@ -101,11 +128,23 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
       "its horizontal distance squared; svf = 1 - mean_k sin(max(beta_up, 0)); "
       "openness_positive = mean_k (90 - beta_up) deg; openness_negative = mean_k (90 + beta_down) deg; "
       "horizon_deg = beta_up per direction");
+  if (s.far_field) {
+    char b[160];
+    std::snprintf(b, sizeof b, "beyond %.9g world units: coarse cells of %d texels (docs/gis.md, Far field)",
+                  s.far_field->beyond, s.far_field->cell);
+    out.attributes.emplace_back("hfbake:relief:far_field", b);
+    // Certified per bake: beta_up's tangent exceeds, and beta_down's falls below, the exact march's by at
+    // most this; svf by at most this, openness by at most atan of it.
+    std::snprintf(b, sizeof b, "%.6g", *std::max_element(row_slack.begin(), row_slack.end()));
+    out.attributes.emplace_back("hfbake:relief:far_field_bound", b);
+  }
   return out;
 }
 
 LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
-  return bake_relief(scene.field, config.get<ReliefSettings>(), rc, scene.curvature);
+  const ReliefSettings& s = config.get<ReliefSettings>();
+  const CoarseHeights* coarse = s.far_field ? scene.window.coarse_of(s.far_field->cell) : nullptr;
+  return bake_relief(scene.field, s, rc, scene.curvature, coarse, scene.window.x0, scene.window.y0);
 }
 
 MethodInfo relief_method() {
@@ -119,10 +158,23 @@ MethodInfo relief_method() {
   };
   m.bake = bake_relief;
   m.memory_knob = "its layers (horizon_deg: 4 bytes a texel per direction)";
-  m.working_bytes = [](const MethodConfig&, const MethodContext&) { return 0.0; };  // nothing per texel
+  // The far field's coarse copy of the field (nothing per texel otherwise).
+  m.working_bytes = [](const MethodConfig& c, const MethodContext& context) {
+    const ReliefSettings& s = c.get<ReliefSettings>();
+    return s.far_field ? coarse_bytes(context.field.width, context.field.height, s.far_field->cell) : 0.0;
+  };
   m.division = WorkDivision::texel_tiles;
-  m.reach = [](const MethodConfig& c) { return c.get<ReliefSettings>().search_radius; };
-  m.division_note = "texel tiles with a halo of search_radius (each texel's horizons are its own)";
+  m.reach = [](const MethodConfig& c) {
+    const ReliefSettings& s = c.get<ReliefSettings>();
+    return s.far_field ? s.far_field->beyond : s.search_radius;
+  };
+  m.far_cell = [](const MethodConfig& c) {
+    const ReliefSettings& s = c.get<ReliefSettings>();
+    return s.far_field ? s.far_field->cell : 0;
+  };
+  m.division_note =
+      "texel tiles with a halo of search_radius, or of far_field.beyond with the whole field's coarse copy "
+      "(each texel's horizons are its own)";
   m.reads_normals = false;
   m.reads_albedo = false;
   m.rectangular_texels = true;

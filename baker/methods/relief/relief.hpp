@@ -4,6 +4,7 @@
 // in compass terms. Definitions: docs/gis.md, "Relief quantities".
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "core/layers.hpp"
@@ -11,14 +12,23 @@
 #include "field/height_field.hpp"
 #include "field/scene.hpp"
 #include "methods/method_table.hpp"
+#include "methods/relief/radius_horizon.hpp"
 
 namespace hfbake {
+
+// The far field (radius_horizon.hpp FarField): exact out to `beyond`, coarse cells of `cell` texels from
+// there to the search radius.
+struct ReliefFarField {
+  double beyond = 100;  // world units (default: 100 texels)
+  int cell = 8;         // texels along a coarse cell's side
+};
 
 struct ReliefSettings {
   int directions = 16;
   double search_radius = 10;  // world units (default: 10 texels, RVT's 10 px)
   bool compass = false;       // direction k at compass azimuth 360 k / K (north = image top, east = right)
   std::vector<std::string> layers;
+  std::optional<ReliefFarField> far_field;  // none: the exact march out to the search radius
 };
 
 ReliefSettings read_relief_settings(Params& in, const FieldShape& field);
@@ -30,8 +40,10 @@ void relief_direction(int k, int K, bool compass, double& dx, double& dy);
 
 LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunControl& rc);
 // The same from the heights alone (tests), with the Earth's curvature c per world unit (Scene::curvature).
+// With a far field, `coarse` is the coarse copy of the field the window `field` is cut from, its texel
+// (0, 0) at (x0, y0) there (a tile of a raster); null: the copy of `field` itself, made here.
 LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc,
-                     double curvature = 0);
+                     double curvature = 0, const CoarseHeights* coarse = nullptr, int x0 = 0, int y0 = 0);
 
 MethodInfo relief_method();
 
