@@ -139,10 +139,9 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   // or [r, g, b] is held once.
   if (surface.contains("albedo") && surface["albedo"].is_object()) scene_per_texel += 12;
   if (surface.contains("emission")) scene_per_texel += 12;
-  // Writing: a GeoTIFF band's plane (4 bytes a texel), a preview's RGB floats and bytes (15 bytes a pixel,
-  // at most io/preview.hpp's 2048 px a side).
-  double writing = job.output.geotiff ? 4 * texels : 0;
-  if (job.output.previews) writing = std::max(writing, 15 * std::min(texels, 2048.0 * 2048.0));
+  // Writing: a preview's RGB floats and bytes (15 bytes a pixel, at most io/preview.hpp's 2048 px a side);
+  // a layer's GeoTIFF (per entry, below).
+  const double previews = job.output.previews ? 15 * std::min(texels, 2048.0 * 2048.0) : 0;
 
   MethodContext context;
   context.field.width = size.width;
@@ -165,9 +164,17 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const MethodConfig r =
         e.config ? *e.config : resolve_method(e.params, context, job.file.string(), e.pointer);
     const MethodInfo* m = r.method;
-    int channels = 0;
-    for (const std::string& l : r.layers) channels += layer_channel_count(l, r.directions);
+    int channels = 0, widest = 0;
+    for (const std::string& l : r.layers) {
+      channels += layer_channel_count(l, r.directions);
+      widest = std::max(widest, layer_channel_count(l, r.directions));
+    }
     const double layers = 4.0 * channels * texels;
+    // A layer's COG (io/geotiff_output.cpp): its copy in a GDAL memory raster (4 bytes a texel and channel),
+    // one band's plane (4 a texel) and what GDAL's COG driver holds while it compresses and builds the
+    // overviews (measured: about 5 bytes a texel and channel), for the widest layer.
+    const double geotiff = job.output.geotiff ? (4.0 + 9.0 * widest) * texels : 0;
+    const double writing = std::max(previews, geotiff);
     const double working = m->working_bytes ? m->working_bytes(r, context) : 0.0;
     // Its EXR: each half channel converted a band of at most 256 rows at a time (io/exr_output.cpp).
     const double exr_band = 2.0 * channels * std::min(texels, 256.0 * size.width);
@@ -204,7 +211,9 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double embree = reference::embree_bytes_per_texel(
         job.reference_options ? job.reference_options->geometry : reference::GeometryKind::quads);
     reference = (8.0 * channels + embree + 4.0 * horizon_channels + added_per_texel) * texels;
-    peak = std::max(peak, kept + reference + writing);
+    // Its widest layer's COG: direct (3 channels) or the horizons it traces.
+    const double geotiff = job.output.geotiff ? (4.0 + 9.0 * std::max(3, horizon_channels / 2)) * texels : 0;
+    peak = std::max(peak, kept + reference + std::max(previews, geotiff));
   }
   // The environment: the world lat-long kept through the bake (with the reference's sampling tables), and
   // its images while they are read, before any method runs (measured: 8192 x 4096 half EXR, 24 bytes a

@@ -9,6 +9,7 @@
 
 #include <ogr_spatialref.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include "run_hfbake.hpp"
@@ -646,6 +647,46 @@ TEST_F(CliGdal, SunTakesThePlaceAndTrueNorthFromTheCrs) {
   std::vector<float> hours(std::size_t(spec.width) * spec.height);
   ASSERT_TRUE(in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, hours.data()));
   for (float h : hours) ASSERT_EQ(h, 2.0f);
+}
+
+// The estimate `validate` prints holds what writing the COGs takes (a layer's copy in GDAL's memory raster
+// and the COG driver's own), within the +-25 % every estimate keeps: the peak resident size of the bake
+// (getrusage of the waited children, each bake larger than the one before) against "about N MiB to bake".
+TEST_F(CliGdal, TheMemoryEstimateHoldsTheGeoTiffsWriting) {
+  auto estimate_mib = [&](const fs::path& job) {
+    const Result v = hfbake("validate " + job.string());
+    EXPECT_EQ(v.exit_code, 0) << v.err;
+    const auto at = v.err.find("about ");
+    return at == std::string::npos ? -1.0 : std::stod(v.err.substr(at + 6));
+  };
+  auto job = [&](const std::string& name, const nlohmann::json& entry) {
+    const nlohmann::json j = {{"version", 1},
+                              {"name", name},
+                              {"height", {{"image", kDem.string()}}},
+                              {"bake", {entry}},
+                              {"output", {{"dir", "out_" + name}, {"geotiff", true}}}};
+    const fs::path p = dir_ / (name + ".json");
+    std::ofstream(p) << j.dump(2);
+    return p;
+  };
+  const std::vector<fs::path> jobs = {
+      job("svf", {{"method", "relief"}, {"directions", 16}, {"search_radius", 4}, {"layers", {"svf"}}}),
+      job("deg", {{"method", "relief"},
+                  {"directions", 16},
+                  {"search_radius", 4},
+                  {"layers", {"svf", "horizon_deg"}}}),
+      job("hz", {{"method", "p1"}, {"directions", 64}, {"layers", {"ao", "vsky", "horizon"}}})};
+  for (const fs::path& p : jobs) {
+    const double estimate = estimate_mib(p);
+    ASSERT_GT(estimate, 0) << p;
+    const Result r = hfbake("bake --quiet --no-cache " + p.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    rusage usage{};
+    getrusage(RUSAGE_CHILDREN, &usage);
+    const double peak = double(usage.ru_maxrss) / 1024.0;
+    EXPECT_GT(peak, 0.75 * estimate) << p << ": estimate " << estimate << " MiB, peak " << peak << " MiB";
+    EXPECT_LT(peak, 1.25 * estimate) << p << ": estimate " << estimate << " MiB, peak " << peak << " MiB";
+  }
 }
 
 }  // namespace
