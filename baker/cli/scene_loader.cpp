@@ -172,8 +172,9 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double layers = 4.0 * channels * texels;
     // A layer's COG (io/geotiff_output.cpp): its copy in a GDAL memory raster (4 bytes a texel and channel),
     // one band's plane (4 a texel) and what GDAL's COG driver holds while it compresses and builds the
-    // overviews (measured: about 5 bytes a texel and channel), for the widest layer.
-    const double geotiff = job.output.geotiff ? (4.0 + 9.0 * widest) * texels : 0;
+    // overviews (measured: about 5 bytes a texel and channel), for the widest layer; a tile of a tiled bake
+    // writes a band's plane at a time into its work files.
+    const double geotiff = !job.output.geotiff ? 0 : size.tile ? 4.0 * texels : (4.0 + 9.0 * widest) * texels;
     const double writing = std::max(previews, geotiff);
     const double working = m->working_bytes ? m->working_bytes(r, context) : 0.0;
     // Its EXR: each half channel converted a band of at most 256 rows at a time (io/exr_output.cpp).

@@ -15,6 +15,9 @@ namespace hfbake {
 
 struct FieldSize {
   int width = 0, height = 0;
+  // A tile of a tiled bake (cli/tile_command.hpp): its layers go into work GeoTIFFs a band at a time, not
+  // through a COG of their own.
+  bool tile = false;
 };
 
 // The longest side of a field (the procedural schema's maximum, and an image's): 2^20 texels.
