@@ -51,19 +51,18 @@ CoarseHeights empty_coarse(int width, int height, int cell, Wrap wrap) {
 }
 
 void add_coarse_rows(CoarseHeights& g, const float* z, int y0, int n) {
-  // One row's extremes per cell column first, then into the one or two cell rows that hold the row.
+  // One row's extremes per cell column first (cell c: texels c C .. (c + 1) C, the far border wrapping to
+  // column 0 on a repeat field's last cell), then into the one or two cell rows that hold the row.
   std::vector<float> hi(std::size_t(g.columns)), lo(std::size_t(g.columns));
   for (int r = 0; r < n; ++r) {
     const float* row = z + std::size_t(r) * std::size_t(g.width);
-    std::fill(hi.begin(), hi.end(), -std::numeric_limits<float>::infinity());
-    std::fill(lo.begin(), lo.end(), std::numeric_limits<float>::infinity());
-    for (int x = 0; x < g.width; ++x) {
-      int cx[2];
-      const int m = cells_of(x, g.cell, g.columns, g.wrap, cx);
-      for (int a = 0; a < m; ++a) {
-        hi[std::size_t(cx[a])] = std::max(hi[std::size_t(cx[a])], row[x]);
-        lo[std::size_t(cx[a])] = std::min(lo[std::size_t(cx[a])], row[x]);
-      }
+    for (int c = 0; c < g.columns; ++c) {
+      const int x0 = c * g.cell, x1 = std::min((c + 1) * g.cell, g.width - 1);
+      float h = row[x0], l = row[x0];
+      for (int x = x0 + 1; x <= x1; ++x) h = std::max(h, row[x]), l = std::min(l, row[x]);
+      if (g.wrap == Wrap::repeat && (c + 1) * g.cell == g.width)
+        h = std::max(h, row[0]), l = std::min(l, row[0]);
+      hi[std::size_t(c)] = h, lo[std::size_t(c)] = l;
     }
     int cy[2];
     const int m = cells_of(y0 + r, g.cell, g.rows, g.wrap, cy);
