@@ -139,9 +139,16 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   // or [r, g, b] is held once.
   if (surface.contains("albedo") && surface["albedo"].is_object()) scene_per_texel += 12;
   if (surface.contains("emission")) scene_per_texel += 12;
-  // Writing: a preview's RGB floats and bytes (15 bytes a pixel, at most io/preview.hpp's 2048 px a side);
-  // a layer's GeoTIFF (per entry, below).
+  // Writing a result whose widest layer has `widest` channels: a preview's RGB floats and bytes (15 bytes a
+  // pixel, at most io/preview.hpp's 2048 px a side), or a layer's COG (io/geotiff_output.cpp): its copy in a
+  // GDAL memory raster (4 bytes a texel and channel), one band's plane (4 a texel) and what GDAL's COG
+  // driver holds while it compresses and builds the overviews (measured: about 5 bytes a texel and
+  // channel). A tile of a tiled bake writes a band's plane at a time into its work files.
   const double previews = job.output.previews ? 15 * std::min(texels, 2048.0 * 2048.0) : 0;
+  auto writing = [&](int widest) {
+    const double geotiff = !job.output.geotiff ? 0 : size.tile ? 4.0 * texels : (4.0 + 9.0 * widest) * texels;
+    return std::max(previews, geotiff);
+  };
 
   MethodContext context;
   context.field.width = size.width;
@@ -170,16 +177,10 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
       widest = std::max(widest, layer_channel_count(l, r.directions));
     }
     const double layers = 4.0 * channels * texels;
-    // A layer's COG (io/geotiff_output.cpp): its copy in a GDAL memory raster (4 bytes a texel and channel),
-    // one band's plane (4 a texel) and what GDAL's COG driver holds while it compresses and builds the
-    // overviews (measured: about 5 bytes a texel and channel), for the widest layer; a tile of a tiled bake
-    // writes a band's plane at a time into its work files.
-    const double geotiff = !job.output.geotiff ? 0 : size.tile ? 4.0 * texels : (4.0 + 9.0 * widest) * texels;
-    const double writing = std::max(previews, geotiff);
     const double working = m->working_bytes ? m->working_bytes(r, context) : 0.0;
     // Its EXR: each half channel converted a band of at most 256 rows at a time (io/exr_output.cpp).
     const double exr_band = 2.0 * channels * std::min(texels, 256.0 * size.width);
-    peak = std::max(peak, kept + layers + std::max({working, writing, exr_band}));
+    peak = std::max(peak, kept + layers + std::max({working, writing(widest), exr_band}));
     if (job.has_reference) kept += layers;
     if (parts) parts->push_back({e.stem, std::size_t(layers + working), m->memory_knob});
     auto traced = [&](const std::string& l, LayerTrace t) {
@@ -212,9 +213,8 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double embree = reference::embree_bytes_per_texel(
         job.reference_options ? job.reference_options->geometry : reference::GeometryKind::quads);
     reference = (8.0 * channels + embree + 4.0 * horizon_channels + added_per_texel) * texels;
-    // Its widest layer's COG: direct (3 channels) or the horizons it traces.
-    const double geotiff = job.output.geotiff ? (4.0 + 9.0 * std::max(3, horizon_channels / 2)) * texels : 0;
-    peak = std::max(peak, kept + reference + std::max(previews, geotiff));
+    // Its widest layer: direct (3 channels) or the horizons it traces.
+    peak = std::max(peak, kept + reference + writing(std::max(3, horizon_channels / 2)));
   }
   // The environment: the world lat-long kept through the bake (with the reference's sampling tables), and
   // its images while they are read, before any method runs (measured: 8192 x 4096 half EXR, 24 bytes a
