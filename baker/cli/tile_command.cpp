@@ -37,7 +37,10 @@ int job_halo(const Job& job) {
   for (const BakeEntry& entry : job.bakes) {
     const MethodConfig& config = entry_config(entry);
     const std::optional<int> h = halo_texels(config.method->reach(config), texel);
-    if (!h) refuse(job, entry.pointer, "reads heights without a bound: it cannot be baked in tiles");
+    if (!h)
+      refuse(job, entry.pointer,
+             "reads heights without a bound: it cannot be baked in tiles (p1 needs a far_field; hbao a radius "
+             "of bounded support or a max_distance)");
     halo = std::max(halo, *h);
   }
   return halo;
@@ -217,7 +220,7 @@ void check_tiled_job(const Job& job) {
       refuse(job, entry.pointer + "/method",
              entry.method +
                  " reads heights from the whole field: a tiled bake takes the methods with a bounded reach "
-                 "(hbao with a radius or max_distance, relief)");
+                 "(relief, p1 with a far_field, hbao with a radius or max_distance)");
   }
   job_halo(job);
 }

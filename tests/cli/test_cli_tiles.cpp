@@ -224,6 +224,22 @@ TEST_F(CliTiles, TiledBakeWithFarFieldEqualsWholeBake) {
   }
 }
 
+// p1 with a far field: every tile's exact search over its window, beyond `beyond` the raster's coarse
+// copy's floor (methods/p1/far_floor.hpp), so the tiles are the whole bake's texels bit for bit.
+TEST_F(CliTiles, TiledP1WithFarFieldEqualsWholeBake) {
+  write_family(150, 97);
+  const nlohmann::json bake = {
+      {{"method", "p1"},
+       {"directions", 8},
+       {"far_field", {{"beyond", 6}, {"cell", 4}}},
+       {"layers", {"ao", "vsky", "horizon", "bent_normal"}}},
+      {{"method", "p1"}, {"directions", 5}, {"far_field", {{"beyond", 3.5}, {"cell", 8}}}, {"layers", {"vsky"}}}};
+  for (const char* field : {"sines.tif", "terraces.tif", "craters.tif", "noise.tif"}) {
+    SCOPED_TRACE(field);
+    expect_tiles_equal_whole(field, bake, {16, 45, 100});
+  }
+}
+
 // The farm's halves: tile tasks (--tile-task I/N, any order) and merge --tiles write the COGs of the
 // one-process tiled bake, bit for bit; a missing tile file or one of another plan is refused naming it, with
 // no COG written.
@@ -290,7 +306,8 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
     std::string pointer, args;
   };
   const std::vector<Case> cases = {
-      {"p1", {{"image", "f.tif"}}, {{{"method", "p1"}, {"directions", 8}}}, {}, "/bake/0/method", ""},
+      {"p1", {{"image", "f.tif"}}, {{{"method", "p1"}, {"directions", 8}}}, {}, "/bake/0", ""},
+      {"nlp", {{"image", "f.tif"}}, {{{"method", "nlp"}}}, {}, "/bake/0/method", ""},
       {"unbounded",
        {{"image", "f.tif"}},
        {{{"method", "hbao"}, {"directions", 8}, {"max_distance", 1e6}}},

@@ -206,7 +206,7 @@ TEST(ReliefFarField, BakedLayersStayWithinTheRecordedBound) {
       s.search_radius = 40;
       s.layers = {"svf", "openness_positive", "openness_negative", "horizon_deg"};
       const LayerSet exact = bake_relief(f, s, {}, c);
-      s.far_field = ReliefFarField{8, 8};
+      s.far_field = FarFieldSpec{8, 8};
       const LayerSet far = bake_relief(f, s, {}, c);
       const double bound = attribute(far, "hfbake:relief:far_field_bound");
       const double deg = std::atan(bound) * 180 / kPi;

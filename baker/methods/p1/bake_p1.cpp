@@ -7,6 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
 
 #include "core/direction_blocks.hpp"
 #include "methods/p1/far_horizons.hpp"
@@ -20,7 +23,7 @@ namespace hfbake {
 namespace {
 
 // The layers of a P1Result, in the order the job lists them (moved, never copied).
-LayerSet p1_layers(P1Result&& r, const std::vector<std::string>& order) {
+LayerSet p1_layers(P1Result&& r, const P1Params& p, const std::vector<std::string>& order) {
   LayerSet out;
   out.width = r.width;
   out.height = r.height;
@@ -44,6 +47,18 @@ LayerSet p1_layers(P1Result&& r, const std::vector<std::string>& order) {
   out.attributes.emplace_back("hfbake:p1:horizon",
                               "sin(elevation) per direction k, azimuth 2 pi k / K from +x towards +y; "
                               "horizon_distance: world units to the caster, inf where none");
+  if (p.far_field) {
+    char b[200];
+    std::snprintf(b, sizeof b,
+                  "beyond %.9g world units: a floor from coarse cells of %d texels (docs/methods/p1.md, Far "
+                  "field)",
+                  p.far_field->beyond, p.far_field->cell);
+    out.attributes.emplace_back("hfbake:p1:far_field", b);
+    // Certified per bake: every horizon's tangent (so its sine, and its elevation in radians) is at least
+    // the exact one's and exceeds it by at most this.
+    std::snprintf(b, sizeof b, "%.6g", r.far_field_bound.value_or(0.0));
+    out.attributes.emplace_back("hfbake:p1:far_field_bound", b);
+  }
   return out;
 }
 
@@ -70,7 +85,7 @@ void p1_sums_from_layers(LayerSet& sums, const P1SumsShape& shape, P1Sums& s) {
 }
 
 LayerSet bake_p1(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
-  return p1_layers(compute_p1(scene, config.get<P1Params>(), rc), config.layers);
+  return p1_layers(compute_p1(scene, config.get<P1Params>(), rc), config.get<P1Params>(), config.layers);
 }
 
 // Farm blocks: the raw sums as layers named after P1Sums' members; each block's horizons as
@@ -112,36 +127,61 @@ LayerSet p1_finish_blocks(const Scene& scene, const MethodConfig& config, LayerS
   if (p.horizon) place("horizon", s.horizon);
   if (p.horizon_distance) place("horizon_distance", s.horizon_distance);
   sums = LayerSet();
-  return p1_layers(p1_finish(scene, p, std::move(s), rc), config.layers);
+  return p1_layers(p1_finish(scene, p, std::move(s), rc), p, config.layers);
 }
 
 namespace {
 
 // Clamp fields: the lane search (lane_horizons.hpp) per azimuth, the azimuths of one lane layout's axis
 // at a time (x-major ones first), so one layout is held at a time.
-void lane_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
-                      const RunControl& rc, const HorizonVisitor& visit, double curvature) {
+// floor: raised to the far field's floor (far_floor.hpp), the largest slack left returned.
+double lane_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
+                        const RunControl& rc, const HorizonVisitor& visit, double curvature,
+                        const p1::FloorGrid* floor) {
   SweepSpec probe;
   probe.azimuths = azimuths;
   std::vector<int> ks;
   for (std::size_t a = 0; a < azimuths.size(); ++a) ks.push_back(int(a));
   int done = 0;
+  p1::DirectionFloor df;
+  std::vector<double> row_slack(floor ? std::size_t(f.height) : 0, 0.0);  // one slot a row: any thread count
   p1::lane_directions(
       f, probe, ks, curvature, float(p.horizon_tolerance), rc,
       [&](const SweepDirection& sd, const p1::LaneDirection&, const float* slope, const std::int32_t*) {
+        if (floor) p1::direction_floor(*floor, f.width, f.height, azimuths[std::size_t(sd.k)], df);
         tbb::parallel_for(0, f.height, [&](int j) {
-          for (int i = 0; i < f.width; ++i) visit(sd.k, i, j, p1::fast_atan(slope[f.index(i, j)]));
+          for (int i = 0; i < f.width; ++i) {
+            const std::size_t t = f.index(i, j);
+            float m = slope[t];
+            if (floor) {
+              const p1::FloorPick pick = p1::floor_at(*floor, df, i, j, f.z[t]);
+              if (pick.slope > m) {
+                row_slack[std::size_t(j)] =
+                    std::max(row_slack[std::size_t(j)], double(pick.slope) - std::max(m, pick.least));
+                m = pick.slope;
+              }
+            }
+            visit(sd.k, i, j, p1::fast_atan(m));
+          }
         });
         rc.report(double(++done) / double(azimuths.size()));
       });
+  return row_slack.empty() ? 0.0 : *std::max_element(row_slack.begin(), row_slack.end());
 }
 
 }  // namespace
 
 void p1_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
-                    const RunControl& rc, const HorizonVisitor& visit, double curvature) {
+                    const RunControl& rc, const HorizonVisitor& visit, double curvature,
+                    const p1::FloorGrid* floor, double* slack) {
+  if (slack) *slack = 0;
   if (azimuths.empty()) return;
-  if (f.wrap == Wrap::clamp) return lane_horizons_at(f, p, azimuths, rc, visit, curvature);
+  if (f.wrap == Wrap::clamp) {
+    const double s = lane_horizons_at(f, p, azimuths, rc, visit, curvature, floor);
+    if (slack) *slack = s;
+    return;
+  }
+  if (floor) throw std::logic_error("p1_horizons_at: a far field on a repeat field");
   SweepSpec spec;
   spec.channels = p1::FarHorizonWorker::channels();
   spec.sampling.heights = false;  // the far-field worker builds its own profiles
@@ -179,7 +219,7 @@ MethodInfo p1_method() {
   m.rectangular_texels = true;  // the lane search; the reader refuses the rest
   m.summary = "exact horizons by the convex-hull stack on K line sweeps; ao, vsky, direct light from them";
   m.read = [](Params& in, const MethodContext& c) {
-    const P1Params p = read_p1_params(in);
+    const P1Params p = read_p1_params(in, c.field);
     // Rectangular texels: the lane search only (clamp fields), without the directional lights' sweeps.
     if (!c.field.square_texels() && c.field.wrap == Wrap::repeat)
       in.fail("method", "bakes rectangular texels (a geographic raster) on clamp fields only");
@@ -197,6 +237,16 @@ MethodInfo p1_method() {
     return p1_working_bytes(c.field, config.get<P1Params>(), c.uniform_environment);
   };
   m.division = WorkDivision::directions;
+  // A far field bounds the heights p1 reads exactly: a tile with a halo of `beyond` and the raster's coarse
+  // copy bakes the whole bake's texels (far_floor.hpp).
+  m.reach = [](const MethodConfig& config) {
+    const P1Params& p = config.get<P1Params>();
+    return p.far_field ? p.far_field->beyond : std::numeric_limits<double>::infinity();
+  };
+  m.far_cell = [](const MethodConfig& config) {
+    const P1Params& p = config.get<P1Params>();
+    return p.far_field ? p.far_field->cell : 0;
+  };
   m.bake_block = p1_bake_block;
   m.finish_blocks = p1_finish_blocks;
   m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";

@@ -13,6 +13,7 @@
 #include "core/azimuth.hpp"
 #include "core/direction_blocks.hpp"
 #include "core/error.hpp"
+#include "field/coarse_heights.hpp"
 #include "job/params.hpp"
 #include "methods/p1/far_horizons.hpp"
 #include "methods/p1/horizon_sweep.hpp"
@@ -86,10 +87,12 @@ FieldNormals field_normals(const HeightField& f, bool facets) {
   return n;
 }
 
-// curvature: Scene::curvature, each crossing dropped by it (lane_horizons.hpp).
+// curvature: Scene::curvature, each crossing dropped by it (lane_horizons.hpp). floor: with a far field,
+// each horizon raised to the coarse copy's floor (far_floor.hpp); returns the largest slack it left.
 template <class Shade>
-void lane_direction_sums(const HeightField& f, double curvature, const P1Params& p, int k_begin, int k_end,
-                         const RunControl& rc, bool facets, const FieldNormals& normals, const Shade& shade) {
+double lane_direction_sums(const HeightField& f, double curvature, const P1Params& p, int k_begin, int k_end,
+                           const RunControl& rc, bool facets, const FieldNormals& normals,
+                           const p1::FloorGrid* floor, const Shade& shade) {
   const std::size_t N = f.texel_count();
   const int K = p.directions;
   const std::vector<float>&nx = normals.nx, &ny = normals.ny, &nz = normals.nz;
@@ -99,36 +102,45 @@ void lane_direction_sums(const HeightField& f, double curvature, const P1Params&
   std::vector<int> ks;
   for (int k = k_begin; k < k_end; ++k) ks.push_back(k);
   int done = 0;
-  p1::lane_directions(f, probe, ks, curvature, float(p.horizon_tolerance), rc,
-                      [&](const SweepDirection& sd, const p1::LaneDirection& d, const float* slope,
-                          const std::int32_t* which) {
-                        const int k = sd.k;
-                        tbb::parallel_for(0, f.height, [&](int j) {
-                          constexpr int kRun = 32;
-                          alignas(64) float e[kRun], dist[kRun];
-                          for (int i0 = 0; i0 < f.width; i0 += kRun) {
-                            const int w = std::min(kRun, f.width - i0);
-                            const std::size_t base = f.index(i0, j);
-                            for (int x = 0; x < w; ++x) e[x] = fast_atan(slope[base + x]);
-                            if (p.horizon_distance)
-                              for (int x = 0; x < w; ++x) {
-                                const std::int32_t c = which[base + x];
-                                const float m = slope[base + x];
-                                dist[x] = c < 0 ? std::numeric_limits<float>::infinity()
-                                                : std::sqrt(1 + m * m) / d.crossings[std::size_t(c)].inv_s;
-                              }
-                            const float* FX[2] = {facets ? fx.data() + base : nullptr,
-                                                  facets ? fx.data() + N + base : nullptr};
-                            const float* FY[2] = {facets ? fy.data() + base : nullptr,
-                                                  facets ? fy.data() + N + base : nullptr};
-                            const float* FZ[2] = {facets ? fz.data() + base : nullptr,
-                                                  facets ? fz.data() + N + base : nullptr};
-                            shade(k, base, w, nx.data() + base, ny.data() + base, nz.data() + base, FX, FY,
-                                  FZ, e, dist);
-                          }
-                        });
-                        rc.report(double(++done) / double(k_end - k_begin));
-                      });
+  p1::DirectionFloor df;
+  std::vector<double> row_slack(floor ? std::size_t(f.height) : 0, 0.0);  // one slot a row: any thread count
+  p1::lane_directions(
+      f, probe, ks, curvature, float(p.horizon_tolerance), rc,
+      [&](const SweepDirection& sd, const p1::LaneDirection& d, const float* slope, const std::int32_t* which) {
+        const int k = sd.k;
+        if (floor) p1::direction_floor(*floor, f.width, f.height, azimuth(k, K), df);
+        tbb::parallel_for(0, f.height, [&](int j) {
+          constexpr int kRun = 32;
+          alignas(64) float m[kRun], e[kRun], dist[kRun];
+          for (int i0 = 0; i0 < f.width; i0 += kRun) {
+            const int w = std::min(kRun, f.width - i0);
+            const std::size_t base = f.index(i0, j);
+            for (int x = 0; x < w; ++x) m[x] = slope[base + x];
+            if (p.horizon_distance)
+              for (int x = 0; x < w; ++x) {
+                const std::int32_t c = which[base + x];
+                dist[x] = c < 0 ? std::numeric_limits<float>::infinity()
+                                : std::sqrt(1 + m[x] * m[x]) / d.crossings[std::size_t(c)].inv_s;
+              }
+            if (floor)
+              for (int x = 0; x < w; ++x) {
+                const p1::FloorPick pick = p1::floor_at(*floor, df, i0 + x, j, f.z[base + x]);
+                if (!(pick.slope > m[x])) continue;
+                row_slack[std::size_t(j)] =
+                    std::max(row_slack[std::size_t(j)], double(pick.slope) - std::max(m[x], pick.least));
+                m[x] = pick.slope;
+                dist[x] = pick.distance;
+              }
+            for (int x = 0; x < w; ++x) e[x] = fast_atan(m[x]);
+            const float* FX[2] = {facets ? fx.data() + base : nullptr, facets ? fx.data() + N + base : nullptr};
+            const float* FY[2] = {facets ? fy.data() + base : nullptr, facets ? fy.data() + N + base : nullptr};
+            const float* FZ[2] = {facets ? fz.data() + base : nullptr, facets ? fz.data() + N + base : nullptr};
+            shade(k, base, w, nx.data() + base, ny.data() + base, nz.data() + base, FX, FY, FZ, e, dist);
+          }
+        });
+        rc.report(double(++done) / double(k_end - k_begin));
+      });
+  return row_slack.empty() ? 0.0 : *std::max_element(row_slack.begin(), row_slack.end());
 }
 
 }  // namespace
@@ -139,7 +151,7 @@ const std::vector<std::string>& p1_layer_names() {
   return names;
 }
 
-P1Params read_p1_params(Params& in) {
+P1Params read_p1_params(Params& in, const FieldShape& field) {
   P1Params p;
   p.directions = in.integer("directions", p.directions, 1, 4096);
   p.normal_bins = in.integer("normal_bins", p.normal_bins, 0, 1023);
@@ -162,6 +174,9 @@ P1Params read_p1_params(Params& in) {
   p.horizon = wants("horizon");
   p.horizon_distance = wants("horizon_distance");
   p.bent_normal = wants("bent_normal");
+  p.far_field = read_far_field(in, field);
+  if (p.far_field && field.wrap == Wrap::repeat)
+    in.fail("far_field", "needs a clamp field: a repeating field has no casters beyond its own period");
   return p;
 }
 
@@ -185,6 +200,11 @@ SweepSpec p1_sweep_spec(const P1Params& p) {
 double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform_environment) {
   const bool facets = p.direct && p.facet_direct;
   const double texels = double(shape.width) * double(shape.height);
+  // A far field: the field's own coarse copy (a tile's is the raster's, counted by the tile plan) and one
+  // direction's floor.
+  const double far = p.far_field ? coarse_bytes(shape.width, shape.height, p.far_field->cell) +
+                                       p1::floor_bytes(shape.width, shape.height, p.far_field->cell)
+                                 : 0.0;
   HeightField field;  // the sweeps' plans need only the shape
   static_cast<FieldShape&>(field) = shape;
   const int longest =
@@ -209,7 +229,7 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
     const double finishing =
         (layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) + normals) * texels +
         double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
-    return std::max(summing, finishing) - layers * texels;
+    return std::max(summing, finishing) - layers * texels + far;
   }
   double per_texel = p.direct && !p.ao ? 4 : 0;    // the ao sum behind a uniform sky's direct
   if (facets) per_texel += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
@@ -507,7 +527,8 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
 }
 
 P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
-                      float* horizon_out, float* distance_out, const FieldNormals* normals) {
+                      float* horizon_out, float* distance_out, const FieldNormals* normals,
+                      const p1::FloorGrid* floor) {
   const HeightField& f = scene.field;
   const bool facets = p.direct && p.facet_direct;
   P1Sums r = zero_sums(scene, p, k_begin, k_end, !horizon_out, !distance_out);
@@ -515,10 +536,10 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
   if (f.wrap == Wrap::repeat) {
     strip_direction_sums(f, p, k_begin, k_end, rc, facets, shade);
   } else if (normals) {
-    lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, shade);
+    r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, floor, shade);
   } else {
     const FieldNormals own = field_normals(f, facets);
-    lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, own, shade);
+    r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, own, floor, shade);
   }
   return r;
 }
@@ -527,7 +548,22 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
 
 P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
                          float* horizon_out, float* distance_out) {
-  return direction_sums(scene, p, k_begin, k_end, rc, horizon_out, distance_out, nullptr);
+  CoarseHeights own;
+  const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own);
+  return direction_sums(scene, p, k_begin, k_end, rc, horizon_out, distance_out, nullptr, floor.get());
+}
+
+std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params& p, CoarseHeights& own) {
+  if (!p.far_field) return nullptr;
+  const HeightField& f = scene.field;
+  if (f.wrap != Wrap::clamp) throw std::logic_error("p1_floor_grid: a far field on a repeat field");
+  const CoarseHeights* coarse = scene.window.coarse_of(p.far_field->cell);
+  if (!coarse) {
+    own = coarse_heights(f, p.far_field->cell);
+    coarse = &own;
+  }
+  return std::make_unique<p1::FloorGrid>(
+      p1::floor_grid(*coarse, scene.window.x0, scene.window.y0, f, p.far_field->beyond, scene.curvature));
 }
 
 void p1_add_sums(P1Sums& total, const P1Sums& block) {
@@ -537,6 +573,7 @@ void p1_add_sums(P1Sums& total, const P1Sums& block) {
   add(total.ao, block.ao), add(total.vsky, block.vsky), add(total.rgb, block.rgb),
       add(total.bent, block.bent);
   add(total.fao, block.fao), add(total.fdr, block.fdr), add(total.fdg, block.fdg), add(total.fdb, block.fdb);
+  total.far_slack = std::max(total.far_slack, block.far_slack);
   total.k_end = block.k_end;
 }
 
@@ -552,12 +589,14 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   P1Sums total;
   std::optional<FieldNormals> normals;  // the lane path's, shared by the blocks
   if (scene.field.wrap == Wrap::clamp) normals = field_normals(scene.field, p.direct && p.facet_direct);
+  CoarseHeights own;
+  const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own);
   for (int b = 0; b < B; ++b) {
     const int k0 = direction_block_begin(b, K), k1 = direction_block_begin(b + 1, K);
     P1Sums part = direction_sums(
         scene, p, k0, k1, sub_progress(rc, (1 - lights_share) * k0 / K, (1 - lights_share) * (k1 - k0) / K),
         horizon.empty() ? nullptr : horizon.data(), distance.empty() ? nullptr : distance.data(),
-        normals ? &*normals : nullptr);
+        normals ? &*normals : nullptr, floor.get());
     if (b == 0)
       total = std::move(part);
     else
@@ -578,6 +617,7 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
   r.directions = K;
   r.horizon = std::move(sums.horizon);
   r.horizon_distance = std::move(sums.horizon_distance);
+  double far_slack = sums.far_slack;
   const Environment& env = scene.environment;
   const bool uniform_env = env.is_uniform();
   const bool facets = p.direct && p.facet_direct;
@@ -629,6 +669,9 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
     });
 
   // Directional lights: each texel's horizon at each light's azimuth (p1_horizons_at, as the K directions').
+  CoarseHeights own;
+  const std::unique_ptr<p1::FloorGrid> floor = lights.empty() ? nullptr : p1_floor_grid(scene, p, own);
+  double light_slack = 0;
   if (!lights.empty()) {
     std::vector<double> elevation, radius, azimuths;
     std::vector<Vec3> dir;
@@ -661,9 +704,10 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
             }
           }
         },
-        scene.curvature);
+        scene.curvature, floor.get(), &light_slack);
   }
   r.direct_facets = std::move(direct_facets);
+  if (p.far_field) r.far_field_bound = std::max(far_slack, light_slack);
   rc.report(1.0);
   return r;
 }

@@ -24,13 +24,17 @@
 #pragma once
 
 #include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/layers.hpp"
 #include "core/run_control.hpp"
 #include "field/scene.hpp"
+#include "job/far_field.hpp"
 #include "job/params.hpp"
+#include "methods/p1/far_floor.hpp"
 #include "sweep/sweep_lines.hpp"
 
 namespace hfbake {
@@ -45,6 +49,10 @@ struct P1Params {
   // The far field's certified accuracy (far_horizons.hpp): every horizon's sine within this of the exact
   // one, never above it; 0: exact (docs/methods.md, p1, for the speed it buys).
   double horizon_tolerance = 0;
+  // Casters beyond far_field.beyond bounded from above by the coarse copy's floor (far_floor.hpp): every
+  // horizon at least the exact one and at most P1Result::far_field_bound above it; what makes p1 bake in
+  // tiles (docs/large-fields.md). Clamp fields. None: the exact search over the whole field.
+  std::optional<FarFieldSpec> far_field;
   bool far_crossings = true;  // no longer used (the far field is exact: far_horizons.hpp); read for old jobs
   bool ao = true, vsky = true, direct = true;
   bool horizon = false, horizon_distance = false, bent_normal = false;
@@ -69,6 +77,9 @@ struct P1Result {
   // angle at the texel (facet_normals): [2 * texel + 0] the triangle (i, j), (i+1, j), (i, j+1),
   // [2 * texel + 1] the triangle (i, j), (i-1, j), (i, j-1). Empty unless P1Params::facet_direct.
   std::vector<Rgb> direct_facets;
+  // With P1Params::far_field: the largest amount (in slope, rise over run) by which any horizon's tangent
+  // exceeds the exact one's (far_floor.hpp): a certified bound, each texel's sine and elevation within it.
+  std::optional<double> far_field_bound;
 
   Rgb direct_at(std::size_t texel) const {
     return {direct[3 * texel], direct[3 * texel + 1], direct[3 * texel + 2]};
@@ -82,7 +93,7 @@ struct P1Result {
 
 // Reads the bake entry (schemas/methods/p1.schema.json) with every check (even normal_bins, unknown
 // layers), recording the resolved values in `in` (layers in the order written).
-P1Params read_p1_params(Params& in);
+P1Params read_p1_params(Params& in, const FieldShape& field);
 // Every layer p1 can write.
 const std::vector<std::string>& p1_layer_names();
 
@@ -105,6 +116,7 @@ struct P1Sums {
   // The horizons of directions [k_begin, k_end): [texel * n + k - k_begin] (horizon_by_direction:
   // [(k - k_begin) * N + texel]), n = k_end - k_begin; p1_finish wants all K in P1Result's layout.
   std::vector<float> horizon, horizon_distance;
+  double far_slack = 0;  // with a far field: the largest slack of the floors the directions took
 };
 // Floats a texel of each sum p1_direction_sums keeps for these parameters and this scene's environment
 // (0: not kept); the facet sums' [q * N + texel] count 2.
@@ -143,8 +155,15 @@ SweepSpec p1_sweep_spec(const P1Params& params);
 // the visitor's own storage are deterministic.
 using HorizonVisitor = std::function<void(int a, int i, int j, float elevation)>;
 // curvature: Scene::curvature (clamp fields; repeat fields are flat).
+// floor: with P1Params::far_field, the coarse copy's floor (far_floor.hpp) each horizon is raised to, and
+// the largest slack it left stored in *slack (when given).
 void p1_horizons_at(const HeightField& field, const P1Params& params, const std::vector<double>& azimuths,
-                    const RunControl& rc, const HorizonVisitor& visit, double curvature = 0);
+                    const RunControl& rc, const HorizonVisitor& visit, double curvature = 0,
+                    const p1::FloorGrid* floor = nullptr, double* slack = nullptr);
+
+// With params.far_field: the scene's floor grid over its window's coarse copy (Scene::window) or, when the
+// scene has none, over a copy of its own field (held in `own`). Null without a far field.
+std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params& params, CoarseHeights& own);
 
 // Fraction of a light disk of angular radius `radius` (radians) centred at elevation `elevation` that lies
 // above a horizon at elevation `horizon` (a straight horizon across the disk). radius 0: a step.

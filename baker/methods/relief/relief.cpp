@@ -30,20 +30,7 @@ ReliefSettings read_relief_settings(Params& in, const FieldShape& field) {
   s.compass = in.choice("azimuth_convention", "hfbake", {"hfbake", "compass"}) == "compass";
   s.layers = in.layers({"svf", "openness_positive", "openness_negative", "horizon_deg"},
                        {"svf", "openness_positive", "openness_negative"});
-  in.object("far_field", [&](Params& far) {
-    ReliefFarField f;
-    f.beyond = far.number("beyond", 100 * shorter, 1e-12, 1e12);
-    f.cell = far.integer("cell", 8, 1, 4096);
-    if (f.beyond < shorter)
-      far.fail("beyond", "is shorter than one texel (" + std::to_string(shorter) + " world units)");
-    if (!(f.beyond < s.search_radius))
-      far.fail("beyond", "(" + std::to_string(f.beyond) + " world units) is not less than search_radius (" +
-                             std::to_string(s.search_radius) + "): the far field would never be walked");
-    if (field.wrap == Wrap::repeat && (field.width % f.cell != 0 || field.height % f.cell != 0))
-      far.fail("cell", "must divide the field's width and height (" + std::to_string(field.width) + " x " +
-                           std::to_string(field.height) + ") on a repeat field");
-    s.far_field = f;
-  });
+  s.far_field = read_far_field(in, field, s.search_radius, "search_radius");
   return s;
 }
 

@@ -12,23 +12,17 @@
 #include "field/height_field.hpp"
 #include "field/scene.hpp"
 #include "methods/method_table.hpp"
+#include "job/far_field.hpp"
 #include "methods/relief/radius_horizon.hpp"
 
 namespace hfbake {
-
-// The far field (radius_horizon.hpp FarField): exact out to `beyond`, coarse cells of `cell` texels from
-// there to the search radius.
-struct ReliefFarField {
-  double beyond = 100;  // world units (default: 100 texels)
-  int cell = 8;         // texels along a coarse cell's side
-};
 
 struct ReliefSettings {
   int directions = 16;
   double search_radius = 10;  // world units (default: 10 texels, RVT's 10 px)
   bool compass = false;       // direction k at compass azimuth 360 k / K (north = image top, east = right)
   std::vector<std::string> layers;
-  std::optional<ReliefFarField> far_field;  // none: the exact march out to the search radius
+  std::optional<FarFieldSpec> far_field;  // none: the exact march out to the search radius (FarField)
 };
 
 ReliefSettings read_relief_settings(Params& in, const FieldShape& field);
