@@ -38,9 +38,10 @@ int job_halo(const Job& job) {
     const MethodConfig& config = entry_config(entry);
     const std::optional<int> h = halo_texels(config.method->reach(config), texel);
     if (!h)
-      refuse(job, entry.pointer,
-             "reads heights without a bound: it cannot be baked in tiles (p1 needs a far_field; hbao a radius "
-             "of bounded support or a max_distance)");
+      refuse(
+          job, entry.pointer,
+          "reads heights without a bound: it cannot be baked in tiles (p1 and sun need a far_field; hbao a "
+          "radius of bounded support or a max_distance)");
     halo = std::max(halo, *h);
   }
   return halo;
@@ -117,8 +118,13 @@ void bake_tile(const Job& job, const GeoHeightBand& band, const TilePlan& plan, 
                std::vector<double>& seconds, Sink&& sink) {
   if (cancel.load()) throw Cancelled();
   const Tile& tile = plan.tiles[k];
-  Georeference tile_geo;  // none of the tiled methods reads the site
+  // The raster's site (sun's place, a geographic raster's frame): the whole bake's, whatever the tile.
+  Georeference tile_geo;
   tile_geo.geotransform = band.georeference.geotransform;
+  tile_geo.has_site = band.georeference.has_site;
+  tile_geo.site_longitude = band.georeference.site_longitude;
+  tile_geo.site_latitude = band.georeference.site_latitude;
+  tile_geo.site_convergence = band.georeference.site_convergence;
   Scene scene = complete_scene(job, read_window(job, band, tile.read), tile_geo, band.source);
   scene.window = {tile.read.x0, tile.read.y0, coarse};
   const int ox = tile.interior.x0 - tile.read.x0, oy = tile.interior.y0 - tile.read.y0;
@@ -220,7 +226,7 @@ void check_tiled_job(const Job& job) {
       refuse(job, entry.pointer + "/method",
              entry.method +
                  " reads heights from the whole field: a tiled bake takes the methods with a bounded reach "
-                 "(relief, p1 with a far_field, hbao with a radius or max_distance)");
+                 "(relief, p1 and sun with a far_field, hbao with a radius or max_distance)");
   }
   job_halo(job);
 }

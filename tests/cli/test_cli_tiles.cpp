@@ -224,16 +224,30 @@ TEST_F(CliTiles, TiledBakeWithFarFieldEqualsWholeBake) {
   }
 }
 
-// p1 with a far field: every tile's exact search over its window, beyond `beyond` the raster's coarse
+// p1 and sun with a far field: every tile's exact search over its window, beyond `beyond` the raster's coarse
 // copy's floor (methods/p1/far_floor.hpp), so the tiles are the whole bake's texels bit for bit.
-TEST_F(CliTiles, TiledP1WithFarFieldEqualsWholeBake) {
+TEST_F(CliTiles, TiledP1AndSunWithFarFieldEqualWholeBake) {
   write_family(150, 97);
   const nlohmann::json bake = {
       {{"method", "p1"},
        {"directions", 8},
        {"far_field", {{"beyond", 6}, {"cell", 4}}},
        {"layers", {"ao", "vsky", "horizon", "bent_normal"}}},
-      {{"method", "p1"}, {"directions", 5}, {"far_field", {{"beyond", 3.5}, {"cell", 8}}}, {"layers", {"vsky"}}}};
+      {{"method", "p1"},
+       {"directions", 5},
+       {"far_field", {{"beyond", 3.5}, {"cell", 8}}},
+       {"layers", {"vsky"}}},
+      // sun's horizons are p1's: the sun's own azimuths and the sky term's K directions.
+      {{"method", "sun"},
+       {"start", "2026-06-21T05:00"},
+       {"end", "2026-06-21T19:00"},
+       {"utc_offset", 2},
+       {"step_minutes", 120},
+       {"latitude", 46.5},
+       {"longitude", 8},
+       {"directions", 8},
+       {"far_field", {{"beyond", 5}, {"cell", 4}}},
+       {"layers", {"irradiation", "sun_hours"}}}};
   for (const char* field : {"sines.tif", "terraces.tif", "craters.tif", "noise.tif"}) {
     SCOPED_TRACE(field);
     expect_tiles_equal_whole(field, bake, {16, 45, 100});
@@ -308,6 +322,12 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
   const std::vector<Case> cases = {
       {"p1", {{"image", "f.tif"}}, {{{"method", "p1"}, {"directions", 8}}}, {}, "/bake/0", ""},
       {"nlp", {{"image", "f.tif"}}, {{{"method", "nlp"}}}, {}, "/bake/0/method", ""},
+      {"sun",
+       {{"image", "f.tif"}},
+       {{{"method", "sun"}, {"start", "2026-06-21T05:00"}, {"end", "2026-06-21T19:00"}, {"utc_offset", 2}}},
+       {},
+       "/bake/0",
+       ""},
       {"unbounded",
        {{"image", "f.tif"}},
        {{{"method", "hbao"}, {"directions", 8}, {"max_distance", 1e6}}},

@@ -75,7 +75,8 @@ TEST(P1FarFloor, BoundsEveryCasterBeyondItsDistance) {
                   }
                   const double exact = dz / run;
                   ASSERT_GE(double(pick.slope), exact) << "texel (" << i << ", " << j << ") phi " << phi;
-                  ASSERT_LE(double(pick.least), exact + 1e-9) << "texel (" << i << ", " << j << ") phi " << phi;
+                  ASSERT_LE(double(pick.least), exact + 1e-9)
+                      << "texel (" << i << ", " << j << ") phi " << phi;
                   worst_excess = std::max(worst_excess, double(pick.slope) - exact);
                   ++checked;
                 }

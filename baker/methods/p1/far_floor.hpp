@@ -59,7 +59,8 @@ struct FloorPick {
 // The floor of the field's texel (i, j) of height z.
 inline FloorPick floor_at(const FloorGrid& grid, const DirectionFloor& f, int i, int j, float z) {
   const CoarseHeights& g = *grid.coarse;
-  const int cx = std::min((i + grid.x0) / g.cell, g.columns - 1), cy = std::min((j + grid.y0) / g.cell, g.rows - 1);
+  const int cx = std::min((i + grid.x0) / g.cell, g.columns - 1),
+            cy = std::min((j + grid.y0) / g.cell, g.rows - 1);
   const std::size_t at = std::size_t(cy - f.cy0) * std::size_t(f.columns) + std::size_t(cx - f.cx0);
   FloorPick p;
   const float a = f.at_low[at], b = f.at_high[at];

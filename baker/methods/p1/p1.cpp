@@ -106,7 +106,8 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
   std::vector<double> row_slack(floor ? std::size_t(f.height) : 0, 0.0);  // one slot a row: any thread count
   p1::lane_directions(
       f, probe, ks, curvature, float(p.horizon_tolerance), rc,
-      [&](const SweepDirection& sd, const p1::LaneDirection& d, const float* slope, const std::int32_t* which) {
+      [&](const SweepDirection& sd, const p1::LaneDirection& d, const float* slope,
+          const std::int32_t* which) {
         const int k = sd.k;
         if (floor) p1::direction_floor(*floor, f.width, f.height, azimuth(k, K), df);
         tbb::parallel_for(0, f.height, [&](int j) {
@@ -132,9 +133,12 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
                 dist[x] = pick.distance;
               }
             for (int x = 0; x < w; ++x) e[x] = fast_atan(m[x]);
-            const float* FX[2] = {facets ? fx.data() + base : nullptr, facets ? fx.data() + N + base : nullptr};
-            const float* FY[2] = {facets ? fy.data() + base : nullptr, facets ? fy.data() + N + base : nullptr};
-            const float* FZ[2] = {facets ? fz.data() + base : nullptr, facets ? fz.data() + N + base : nullptr};
+            const float* FX[2] = {facets ? fx.data() + base : nullptr,
+                                  facets ? fx.data() + N + base : nullptr};
+            const float* FY[2] = {facets ? fy.data() + base : nullptr,
+                                  facets ? fy.data() + N + base : nullptr};
+            const float* FZ[2] = {facets ? fz.data() + base : nullptr,
+                                  facets ? fz.data() + N + base : nullptr};
             shade(k, base, w, nx.data() + base, ny.data() + base, nz.data() + base, FX, FY, FZ, e, dist);
           }
         });
@@ -536,7 +540,8 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
   if (f.wrap == Wrap::repeat) {
     strip_direction_sums(f, p, k_begin, k_end, rc, facets, shade);
   } else if (normals) {
-    r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, floor, shade);
+    r.far_slack =
+        lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, floor, shade);
   } else {
     const FieldNormals own = field_normals(f, facets);
     r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, own, floor, shade);
@@ -549,11 +554,12 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
 P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
                          float* horizon_out, float* distance_out) {
   CoarseHeights own;
-  const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own);
+  const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own, scene.curvature);
   return direction_sums(scene, p, k_begin, k_end, rc, horizon_out, distance_out, nullptr, floor.get());
 }
 
-std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params& p, CoarseHeights& own) {
+std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params& p, CoarseHeights& own,
+                                             double curvature) {
   if (!p.far_field) return nullptr;
   const HeightField& f = scene.field;
   if (f.wrap != Wrap::clamp) throw std::logic_error("p1_floor_grid: a far field on a repeat field");
@@ -563,7 +569,7 @@ std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params&
     coarse = &own;
   }
   return std::make_unique<p1::FloorGrid>(
-      p1::floor_grid(*coarse, scene.window.x0, scene.window.y0, f, p.far_field->beyond, scene.curvature));
+      p1::floor_grid(*coarse, scene.window.x0, scene.window.y0, f, p.far_field->beyond, curvature));
 }
 
 void p1_add_sums(P1Sums& total, const P1Sums& block) {
@@ -590,7 +596,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   std::optional<FieldNormals> normals;  // the lane path's, shared by the blocks
   if (scene.field.wrap == Wrap::clamp) normals = field_normals(scene.field, p.direct && p.facet_direct);
   CoarseHeights own;
-  const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own);
+  const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own, scene.curvature);
   for (int b = 0; b < B; ++b) {
     const int k0 = direction_block_begin(b, K), k1 = direction_block_begin(b + 1, K);
     P1Sums part = direction_sums(
@@ -670,7 +676,8 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
 
   // Directional lights: each texel's horizon at each light's azimuth (p1_horizons_at, as the K directions').
   CoarseHeights own;
-  const std::unique_ptr<p1::FloorGrid> floor = lights.empty() ? nullptr : p1_floor_grid(scene, p, own);
+  const std::unique_ptr<p1::FloorGrid> floor =
+      lights.empty() ? nullptr : p1_floor_grid(scene, p, own, scene.curvature);
   double light_slack = 0;
   if (!lights.empty()) {
     std::vector<double> elevation, radius, azimuths;

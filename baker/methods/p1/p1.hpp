@@ -162,8 +162,10 @@ void p1_horizons_at(const HeightField& field, const P1Params& params, const std:
                     const p1::FloorGrid* floor = nullptr, double* slack = nullptr);
 
 // With params.far_field: the scene's floor grid over its window's coarse copy (Scene::window) or, when the
-// scene has none, over a copy of its own field (held in `own`). Null without a far field.
-std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params& params, CoarseHeights& own);
+// scene has none, over a copy of its own field (held in `own`), each point lowered by `curvature` (the
+// horizons' own). Null without a far field.
+std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params& params, CoarseHeights& own,
+                                             double curvature);
 
 // Fraction of a light disk of angular radius `radius` (radians) centred at elevation `elevation` that lies
 // above a horizon at elevation `horizon` (a straight horizon across the disk). radius 0: a step.

@@ -11,8 +11,8 @@
 #include "core/run_control.hpp"
 #include "field/height_field.hpp"
 #include "field/scene.hpp"
-#include "methods/method_table.hpp"
 #include "job/far_field.hpp"
+#include "methods/method_table.hpp"
 #include "methods/relief/radius_horizon.hpp"
 
 namespace hfbake {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "core/error.hpp"
 #include "methods/p1/p1.hpp"
@@ -61,12 +62,13 @@ P1Params horizon_params(const SunConfig& c) {
   P1Params p;
   p.directions = c.directions;
   p.near_radius = c.near_radius;
+  p.far_field = c.far_field;
   return p;
 }
 
 }  // namespace
 
-SunConfig read_sun_config(Params& in) {
+SunConfig read_sun_config(Params& in, const FieldShape& field) {
   SunConfig c;
   c.file = in.file(), c.pointer = in.pointer();
   if (in.has("latitude")) c.latitude = in.number("latitude", 0, -89.9, 89.9);
@@ -100,6 +102,9 @@ SunConfig read_sun_config(Params& in) {
   c.directions = in.integer("directions", c.directions, 1, 4096);
   c.near_radius = in.number("near_radius", c.near_radius, 1, 64);
   c.layers = in.layers(sun_layer_names(), {"irradiation", "sun_hours"});
+  c.far_field = read_far_field(in, field);
+  if (c.far_field && field.wrap == Wrap::repeat)
+    in.fail("far_field", "needs a clamp field: a repeating field has no casters beyond its own period");
   return c;
 }
 
@@ -169,19 +174,25 @@ LayerSet bake_sun(const Scene& scene, const MethodConfig& config, const RunContr
   // Direct sun: per texel the beam irradiation (Wh/m^2) and the steps it is lit, summed in step order.
   std::vector<double> beam(beam_wanted ? N : 0);
   std::vector<float> lit(beam_wanted ? N : 0);
+  double far_slack = 0;  // with a far field: the largest slack its floor left (p1_horizons_at)
   if (beam_wanted) {
     std::vector<double> azimuths;
     for (const SunStep& s : steps) azimuths.push_back(s.azimuth);
-    p1_horizons_at(f, horizon_params(c), azimuths, part_of(rc, 0, 1 - sky_share),
-                   [&](int a, int i, int j, float horizon) {
-                     const SunStep& s = steps[std::size_t(a)];
-                     if (!(s.elevation > double(horizon))) return;
-                     const std::size_t t = f.index(i, j);
-                     const double e = sun_beam(c, s, f.z[t], normal_at(f, i, j).d());
-                     if (e <= 0) return;
-                     beam[t] += e * s.hours;
-                     lit[t] += 1;
-                   });
+    // Flat horizons, as the sky term's (the far field's floor too).
+    CoarseHeights own;
+    const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, horizon_params(c), own, 0.0);
+    p1_horizons_at(
+        f, horizon_params(c), azimuths, part_of(rc, 0, 1 - sky_share),
+        [&](int a, int i, int j, float horizon) {
+          const SunStep& s = steps[std::size_t(a)];
+          if (!(s.elevation > double(horizon))) return;
+          const std::size_t t = f.index(i, j);
+          const double e = sun_beam(c, s, f.z[t], normal_at(f, i, j).d());
+          if (e <= 0) return;
+          beam[t] += e * s.hours;
+          lit[t] += 1;
+        },
+        0.0, floor.get(), &far_slack);
   }
 
   // The sky: an isotropic sky of radiance 1 above the astronomical horizon, lit through p1's exact
@@ -193,6 +204,7 @@ LayerSet bake_sun(const Scene& scene, const MethodConfig& config, const RunContr
   if (sky_wanted && diffuse_wh > 0) {
     Scene upper;
     upper.field = f;
+    upper.window = scene.window;
     upper.environment = make_latlong_environment(
         4, 2, {Rgb{1, 1, 1}, Rgb{1, 1, 1}, Rgb{1, 1, 1}, Rgb{1, 1, 1}, Rgb{}, Rgb{}, Rgb{}, Rgb{}});
     P1Params p = horizon_params(c);
@@ -201,6 +213,7 @@ LayerSet bake_sun(const Scene& scene, const MethodConfig& config, const RunContr
     p.lights = false;
     P1Result r = compute_p1(upper, p, part_of(rc, 1 - sky_share, sky_share));
     for (std::size_t t = 0; t < N; ++t) sky[t] = float(double(r.direct[3 * t]) * diffuse_wh);
+    far_slack = std::max(far_slack, r.far_field_bound.value_or(0.0));
   }
 
   LayerSet out;
@@ -228,6 +241,13 @@ LayerSet bake_sun(const Scene& scene, const MethodConfig& config, const RunContr
                 place.longitude, place.from_crs ? "the field's centre, from its CRS" : "the job's",
                 place.convergence * 180 / kPi);
   out.attributes.emplace_back("hfbake:sun:place", where);
+  if (c.far_field) {
+    // Certified per bake (methods/p1/far_floor.hpp): every horizon's tangent at least the exact one's and at
+    // most this above it.
+    char b[32];
+    std::snprintf(b, sizeof b, "%.6g", far_slack);
+    out.attributes.emplace_back("hfbake:sun:far_field_bound", b);
+  }
   rc.report(1.0);
   return out;
 }
@@ -238,8 +258,8 @@ MethodInfo sun_method() {
   m.summary =
       "sunlight over a time range: clear-sky beam through the exact horizons at each sun position, "
       "plus diffuse sky";
-  m.read = [](Params& in, const MethodContext&) {
-    const SunConfig c = read_sun_config(in);
+  m.read = [](Params& in, const MethodContext& context) {
+    const SunConfig c = read_sun_config(in, context.field);
     return method_config(c, 0);
   };
   m.bake = bake_sun;
@@ -252,6 +272,16 @@ MethodInfo sun_method() {
            p1_working_bytes(context.field, horizon_params(c));
   };
   m.division = WorkDivision::texel_tiles;
+  // A far field bounds the heights the horizons read exactly (P1Params::far_field): tiles with a halo of
+  // `beyond` and the raster's coarse copy.
+  m.reach = [](const MethodConfig& config) {
+    const SunConfig& c = config.get<SunConfig>();
+    return c.far_field ? c.far_field->beyond : std::numeric_limits<double>::infinity();
+  };
+  m.far_cell = [](const MethodConfig& config) {
+    const SunConfig& c = config.get<SunConfig>();
+    return c.far_field ? c.far_field->cell : 0;
+  };
   m.division_note =
       "texel tiles with a halo of the horizons' reach (each texel's sums are its own); runs "
       "whole on the farm";

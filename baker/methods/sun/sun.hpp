@@ -15,6 +15,7 @@
 #include "core/layers.hpp"
 #include "core/run_control.hpp"
 #include "field/scene.hpp"
+#include "job/far_field.hpp"
 #include "methods/method_table.hpp"
 
 namespace hfbake {
@@ -28,10 +29,12 @@ struct SunConfig {
   int directions = 32;           // K of the sky term's horizons
   double near_radius = 2;        // p1's near field (texels)
   std::vector<std::string> layers;
+  // p1's far field for the horizons (P1Params::far_field): what lets sun bake in tiles.
+  std::optional<FarFieldSpec> far_field;
   std::string file, pointer;  // the entry, for errors found when the scene is known
 };
 
-SunConfig read_sun_config(Params& in);
+SunConfig read_sun_config(Params& in, const FieldShape& field);
 
 // One time step: the sun's direction in the field's texel frame (x, y texel axes, z up) and what the
 // clear-sky model gives at sea level; hours is the step's length.

@@ -1,0 +1,110 @@
+#!/usr/bin/python3
+"""p1's far field against its exact search on one DEM: whole-process CPU time and the errors of ao, vsky and
+the horizons, beside the bound each far-field bake certifies (docs/methods/p1.md, Far field).
+
+    /usr/bin/python3 bench/p1_far_field.py [--dem ../shared/data/TM1_564_146.tif] [--directions 64]
+        [--far 100:8,200:8,400:16] [--reps 3] [--threads 2] [--out FILE.md]
+
+--far lists D:C pairs (D: the far field's beyond, C: its cell, both in texels). Each repetition bakes the
+exact job, then each far-field job, as whole processes timed by /usr/bin/time; a far field's cost is the
+median over repetitions of its CPU seconds (user + sys) over the exact bake's in the same repetition. The
+errors compare the far field's GeoTIFFs with the exact bake's texel by texel (ao, vsky) and texel-direction
+by texel-direction (horizon: the sine of the elevation). Without --dem's file, a 2048^2 fractal GeoTIFF
+(1 m texels) is written and used. Prints the Markdown table and writes it to --out. Needs Debian's
+python3-numpy and python3-gdal.
+"""
+import argparse
+import json
+import math
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+from osgeo import gdal
+
+gdal.UseExceptions()
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+from relief_far_field import bands, fractal, timed  # noqa: E402
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--hfbake", default=os.path.join(ROOT, "build", "baker", "cli", "hfbake"))
+    ap.add_argument("--dem", default=os.path.join(ROOT, "..", "shared", "data", "TM1_564_146.tif"))
+    ap.add_argument("--directions", type=int, default=64)
+    ap.add_argument("--far", default="100:8,200:8,400:16")
+    ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--out", default="")
+    a = ap.parse_args()
+
+    work = tempfile.mkdtemp(prefix="hfbake_p1_far_field_")
+    dem = os.path.abspath(a.dem)
+    if not os.path.exists(dem):
+        print("%s is absent: a 2048^2 fractal instead" % dem, file=sys.stderr)
+        dem = os.path.join(work, "fractal2048.tif")
+        fractal(dem, size=2048)
+    texel = gdal.Open(dem).GetGeoTransform()[1]
+    fars = [tuple(int(x) for x in p.split(":")) for p in a.far.split(",")]
+    runs = [("exact", None)] + [("D%d_C%d" % (d, c), (d, c)) for d, c in fars]
+    jobs = {}
+    for name, far in runs:
+        entry = {"method": "p1", "directions": a.directions, "layers": ["ao", "vsky", "horizon"]}
+        if far:
+            entry["far_field"] = {"beyond": far[0] * texel, "cell": far[1]}
+        job = {"version": 1, "name": name, "height": {"image": dem}, "bake": [entry],
+               "output": {"dir": os.path.join(work, name), "geotiff": True}}
+        jobs[name] = os.path.join(work, name + ".json")
+        with open(jobs[name], "w") as f:
+            json.dump(job, f)
+
+    cpu = {name: [] for name, _ in runs}
+    for rep in range(a.reps):
+        for name, _ in runs:
+            c, w, _ = timed([a.hfbake, "bake", "--quiet", "--no-cache", "--overwrite", "--threads",
+                             str(a.threads), jobs[name]])
+            cpu[name].append(c)
+            print("rep %d %s: %.1f s CPU, %.1f s wall" % (rep, name, c, w), file=sys.stderr)
+
+    def layer(name, what):
+        return bands(os.path.join(work, name, "%s.p1.%s.tif" % (name, what)))
+
+    ao_e, _ = layer("exact", "ao")
+    vs_e, _ = layer("exact", "vsky")
+    hz_e, _ = layer("exact", "horizon")
+    rows = ["| run | CPU s (median) | run / exact (median of pairs) | ao error max / mean | vsky error max / mean "
+            "| horizon error (sin) max / mean / share raised | certified bound: tan / deg |",
+            "|---|---|---|---|---|---|---|"]
+    for name, far in runs:
+        med = statistics.median(cpu[name])
+        if far is None:
+            rows.append("| exact search | %.1f | 1 | — | — | — | — |" % med)
+            continue
+        ratio = statistics.median(r / e for e, r in zip(cpu["exact"], cpu[name]))
+        ao, meta = layer(name, "ao")
+        vs, _ = layer(name, "vsky")
+        hz, _ = layer(name, "horizon")
+        da, dv, dh = np.abs(ao - ao_e), np.abs(vs - vs_e), hz - hz_e
+        bound = float(meta["HFBAKE_P1_FAR_FIELD_BOUND"])
+        rows.append("| D = %d, C = %d | %.1f | %.2f | %.4f / %.5f | %.4f / %.5f | %.4f / %.5f / %.1f %% | %.3f / %.2f |"
+                    % (far[0], far[1], med, ratio, da.max(), da.mean(), dv.max(), dv.mean(), dh.max(),
+                       np.abs(dh).mean(), 100.0 * np.mean(dh > 1e-5), bound, math.degrees(math.atan(bound))))
+    table = "\n".join(rows)
+    print("%s: %dx%d, K = %d, %d repetitions, --threads %d\n" % (
+        os.path.basename(dem), ao_e.shape[1], ao_e.shape[0], a.directions, a.reps, a.threads))
+    print(table)
+    if a.out:
+        with open(a.out, "w") as f:
+            f.write(table + "\n")
+    shutil.rmtree(work)
+
+
+if __name__ == "__main__":
+    main()
