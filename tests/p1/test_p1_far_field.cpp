@@ -89,6 +89,40 @@ TEST(P1FarFloor, BoundsEveryCasterBeyondItsDistance) {
           }
 }
 
+// Farther, larger, and along the axes, where the centre of a cell's rays lies on the walk's cell borders
+// and a direction's cosine rounds to about 1e-16: white noise with sparse spikes of 100 (any one of them
+// can be a horizon), 1400 x 520 texels of 0.125, cells of 16, 200 texels exact, the window far from the
+// origin (where a texel coordinate's rounding swallows a step of 1e-14).
+TEST(P1FarFloor, BoundsEveryCasterOnALargerFieldAlongTheAxes) {
+  HeightField f = truth::random_field(1400, 520, 1.0, 9, Wrap::clamp);
+  f.texel_size = 0.125;
+  const HeightField spikes = truth::random_field(1400, 520, 1.0, 10, Wrap::clamp);
+  for (std::size_t t = 0; t < f.z.size(); ++t)
+    if (spikes.z[t] < 0.02f) f.z[t] += 100 * spikes.z[t] / 0.02f;
+  const int x0 = 1050, y0 = 170, ww = 300, wh = 250, cell = 16;
+  const double beyond_texels = 200;
+  const CoarseHeights g = coarse_heights(f, cell);
+  const HeightField win = window_of(f, x0, y0, ww, wh);
+  const p1::FloorGrid grid = p1::floor_grid(g, x0, y0, win, beyond_texels * f.texel_size, 0.0);
+  int checked = 0;
+  for (int a = 0; a < 16; ++a) {
+    const double phi = 2 * kPi * a / 16;
+    p1::DirectionFloor df;
+    p1::direction_floor(grid, ww, wh, phi, df);
+    for (int j = 0; j < wh; j += 3)
+      for (int i = (j / 3) % 2; i < ww; i += 2) {
+        double dz = 0, run = 0;
+        if (!truth::march_from(f, x0 + i, y0 + j, std::cos(phi), std::sin(phi), 7, beyond_texels, &dz, &run))
+          continue;
+        const p1::FloorPick pick = p1::floor_at(grid, df, i, j, win.z[win.index(i, j)]);
+        ASSERT_GE(double(pick.slope), dz / run) << "texel (" << i << ", " << j << ") phi " << phi;
+        ASSERT_LE(double(pick.least), dz / run + 1e-9) << "texel (" << i << ", " << j << ") phi " << phi;
+        ++checked;
+      }
+  }
+  EXPECT_GT(checked, 50000);
+}
+
 Scene scene_of(HeightField f) {
   Scene s;
   s.name = "far";

@@ -63,8 +63,10 @@ void direction_floor(const FloorGrid& grid, int width, int height, double phi, D
   out.rows = std::min((grid.y0 + height - 1) / C, g.rows - 1) - out.cy0 + 1;
   const std::size_t cells = std::size_t(out.columns) * std::size_t(out.rows);
   out.at_low.resize(cells), out.at_high.resize(cells), out.least.resize(cells), out.distance.resize(cells);
-  // Texel coordinates per world unit along the ray.
-  const double rx = std::cos(phi) / grid.dx, ry = std::sin(phi) / grid.dy;
+  // Texel coordinates per world unit along the ray; a direction along an axis moves along it alone (its
+  // other component rounds to about 1e-16, which no texel coordinate can represent a step of).
+  auto component = [](double v) { return std::fabs(v) < 1e-12 ? 0.0 : v; };
+  const double rx = component(std::cos(phi)) / grid.dx, ry = component(std::sin(phi)) / grid.dy;
   const int sx = rx > 1e-15 ? 1 : rx < -1e-15 ? -1 : 0, sy = ry > 1e-15 ? 1 : ry < -1e-15 ? -1 : 0;
   const double half = 0.5 * C, W = g.width - 1, H = g.height - 1, c = grid.curvature, t0 = grid.beyond;
   tbb::parallel_for(0, out.rows, [&](int row) {
@@ -89,7 +91,8 @@ void direction_floor(const FloorGrid& grid, int width, int height, double phi, D
         };
         double next_x = leave(u, sx, rx, ox), next_y = leave(v, sy, ry, oy);
         for (double ta = t0;;) {
-          const double tb = std::min({next_x, next_y, t1});
+          // Never before ta: where the start lies on a border, its rounding may name the cell behind it.
+          const double tb = std::max(ta, std::min({next_x, next_y, t1}));
           // Dual cell (u, v): the highest and lowest of coarse cells u - 1 .. u, v - 1 .. v (clamped).
           float hi = -std::numeric_limits<float>::infinity(), lo = std::numeric_limits<float>::infinity();
           for (int b = std::max(v - 1, 0); b <= std::min(v, g.rows - 1); ++b)

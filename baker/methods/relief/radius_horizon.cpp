@@ -96,7 +96,7 @@ void walk_far(const CoarseHeights& g, long gi, long gj, double rx, double ry, do
   double up = -std::numeric_limits<double>::infinity(), up_floor = up;
   double down = std::numeric_limits<double>::infinity(), down_ceiling = down;
   for (double ta = t0;;) {
-    const double tb = std::min({next_x, next_y, t1});
+    const double tb = std::max(ta, std::min({next_x, next_y, t1}));  // never before ta (a start on a border)
     const std::size_t k = g.wrap == Wrap::repeat ? g.index(wrapped(cx, g.columns), wrapped(cy, g.rows))
                                                  : g.index(int(std::clamp(cx, 0L, long(g.columns) - 1)),
                                                            int(std::clamp(cy, 0L, long(g.rows) - 1)));
@@ -141,7 +141,10 @@ HorizonPair exact_horizon(const HeightField& field, int i, int j, double rx, dou
 
 HorizonPair radius_horizon(const HeightField& field, int i, int j, double ux, double uy, double radius,
                            double curvature, const FarField& far) {
-  const double rx = ux / field.dx(), ry = uy / field.dy();
+  // A direction along an axis moves along it alone: its other component rounds to about 1e-16, which the
+  // far field's walk would otherwise take for a step (the exact march already ignores it).
+  auto component = [](double v) { return std::fabs(v) < 1e-12 ? 0.0 : v; };
+  const double rx = component(ux) / field.dx(), ry = component(uy) / field.dy();
   if (!far.coarse || !(far.beyond < radius)) return exact_horizon(field, i, j, rx, ry, radius, curvature);
   HorizonPair h = exact_horizon(field, i, j, rx, ry, far.beyond, curvature);
   const CoarseHeights& g = *far.coarse;
