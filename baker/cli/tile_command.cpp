@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <map>
 #include <memory>
@@ -126,8 +127,8 @@ void bake_tile(const Job& job, const GeoHeightBand& band, const TilePlan& plan, 
   tile_geo.site_latitude = band.georeference.site_latitude;
   tile_geo.site_convergence = band.georeference.site_convergence;
   Scene scene = complete_scene(job, read_window(job, band, tile.read), tile_geo, band.source);
-  scene.window = {tile.read.x0, tile.read.y0, coarse};
   const int ox = tile.interior.x0 - tile.read.x0, oy = tile.interior.y0 - tile.read.y0;
+  scene.window = {tile.read.x0, tile.read.y0, coarse, {ox, oy, tile.interior.width, tile.interior.height}};
   for (std::size_t e = 0; e < job.bakes.size(); ++e) {
     const BakeEntry& entry = job.bakes[e];
     const MethodConfig& config = entry_config(entry);
@@ -164,6 +165,27 @@ GeoTiffOptions output_options(const Job& job, const OutputStage& stage, const Ti
                                           {"hfbake:parameters", entry_config(job.bakes[e]).resolved.dump()},
                                           {"hfbake:tiles", tiles_text(plan)}});
   return tiff;
+}
+
+// A far field's certified bound, the attribute "hfbake:<method>:far_field_bound" (relief, p1, sun): the
+// largest of the tiles' is the whole bake's.
+std::string far_bound_key(const std::string& method) {
+  return "hfbake:" + method + ":far_field_bound";
+}
+
+// A tile's attributes into its entry's: each kept as the first tile gave it, the far-field bound as the
+// largest of the tiles'.
+void merge_attributes(std::vector<std::pair<std::string, std::string>>& into,
+                      const std::vector<std::pair<std::string, std::string>>& from,
+                      const std::string& method) {
+  for (const auto& [key, value] : from) {
+    auto at = std::find_if(into.begin(), into.end(), [&](const auto& kv) { return kv.first == key; });
+    if (at == into.end()) {
+      into.emplace_back(key, value);
+    } else if (key == far_bound_key(method) && std::stod(value) > std::stod(at->second)) {
+      at->second = value;
+    }
+  }
 }
 
 // The tiles of tile task `task`: [I T / N, (I + 1) T / N) of the plan's T.
@@ -329,6 +351,9 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
             geo.geotransform[3] += tile.interior.y0 * geo.geotransform[5];
             GeoTiffOptions tiff;
             tiff.metadata = {{"HFBAKE_TILE_OF", std::to_string(k) + " of " + tile_identity(job, plan, e)}};
+            for (const auto& [key, value] : layers.attributes)  // the merge takes the largest of the tasks'
+              if (key == far_bound_key(job.bakes[e].method))
+                tiff.metadata.emplace_back("HFBAKE_TILE_FAR_FIELD_BOUND", value);
             for (const Layer& layer : layers.layers) {
               const std::size_t nc = std::size_t(layer.channel_count());
               LayerSet part;
@@ -366,6 +391,8 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
     std::unique_ptr<TiledGeoTiff> writer;
   };
   std::map<std::pair<std::size_t, std::string>, Output> outputs;
+  // Each entry's attributes (merge_attributes): what its COGs carry, as a whole bake's do.
+  std::vector<std::vector<std::pair<std::string, std::string>>> attributes(job.bakes.size());
   auto output = [&](std::size_t e, const std::string& layer,
                     const std::vector<std::string>& channels) -> Output& {
     Output& out = outputs[{e, layer}];
@@ -398,6 +425,10 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
                              fs::exists(file) ? "is not tile " + std::to_string(k) + " of this job's plan (" +
                                                     tiles_text(plan) + "): bake it again with --tile-task"
                                               : "is missing: bake its tile task (bake --tiles --tile-task)");
+          const std::string bound = georaster_metadata_item(file, "HFBAKE_TILE_FAR_FIELD_BOUND");
+          if (!bound.empty())
+            merge_attributes(attributes[e], {{far_bound_key(job.bakes[e].method), bound}},
+                             job.bakes[e].method);
           std::vector<std::string> channels;
           std::vector<float> texels(std::size_t(info->width) * std::size_t(info->height) * std::size_t(nc));
           for (int c = 0; c < nc; ++c) {
@@ -418,6 +449,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
     }
     bake_tile(job, band, plan, k, coarse, cancel, tile_progress, seconds,
               [&](std::size_t e, const LayerSet& layers, int ox, int oy) {
+                merge_attributes(attributes[e], layers.attributes, job.bakes[e].method);
                 for (const Layer& layer : layers.layers) {
                   const std::size_t nc = std::size_t(layer.channel_count());
                   const float* first = layer.data.data() +
@@ -433,6 +465,8 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
   const auto t2 = std::chrono::steady_clock::now();
   for (auto& [key, out] : outputs) {
     if (cancel.load()) throw Cancelled();
+    for (const auto& [name, value] : stage.geotiff_metadata(attributes[key.first]))
+      out.writer->set_metadata(name, value);
     out.writer->finish(stage.folder() / out.file);
     out.writer.reset();
     stage.adopt(out.file);

@@ -59,6 +59,17 @@ struct HeightSource {
   bool geographic = false;                // a raster in a geographic CRS, baked in its local frame
 };
 
+// The texels of a field whose results are kept (a tile's interior, in the field's own coordinates;
+// width < 0: every texel): what a bake's certified bounds count, since a halo texel's horizons stop at the
+// window's edge.
+struct KeptTexels {
+  int x0 = 0, y0 = 0, width = -1, height = -1;
+
+  bool contains(int i, int j) const {
+    return width < 0 || (i >= x0 && j >= y0 && i < x0 + width && j < y0 + height);
+  }
+};
+
 // Where the field lies in the raster it is cut from: a tile of a raster larger than memory
 // (cli/tile_command.hpp) is the window whose texel (0, 0) is the raster's (x0, y0), with the raster's
 // coarse copies (one per cell side a method walks, MethodInfo::far_cell). Default: the field is the whole
@@ -66,6 +77,7 @@ struct HeightSource {
 struct FieldWindow {
   int x0 = 0, y0 = 0;
   std::vector<std::shared_ptr<const CoarseHeights>> coarse;
+  KeptTexels kept;
 
   // The raster's coarse copy of cells of `cell` texels; null when there is none.
   const CoarseHeights* coarse_of(int cell) const {

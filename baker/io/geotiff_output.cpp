@@ -140,6 +140,10 @@ void TiledGeoTiff::write(int x0, int y0, int width, int height, const float* tex
       throw InputError(work_.string(), "", "cannot write: " + gdal.error());
 }
 
+void TiledGeoTiff::set_metadata(const std::string& key, const std::string& value) {
+  dataset_->ds->SetMetadataItem(key.c_str(), value.c_str());
+}
+
 void TiledGeoTiff::finish(const fs::path& file) {
   GdalQuiet gdal;
   dataset_->ds->FlushCache();

@@ -49,6 +49,8 @@ class TiledGeoTiff {
   // the window's texel (i, j) at texels[(j * stride + i) * channels + c] (a layer's interleaving; `stride`
   // texels a row).
   void write(int x0, int y0, int width, int height, const float* texels, std::size_t stride);
+  // A dataset metadata item (GDAL's default domain) the COG carries, set or replaced.
+  void set_metadata(const std::string& key, const std::string& value);
   // The COG as `file` (under a temporary name beside it, renamed into place); the work file removed.
   void finish(const std::filesystem::path& file);
 

@@ -248,9 +248,36 @@ TEST_F(CliTiles, TiledP1AndSunWithFarFieldEqualWholeBake) {
        {"directions", 8},
        {"far_field", {{"beyond", 5}, {"cell", 4}}},
        {"layers", {"irradiation", "sun_hours"}}}};
+  // A COG's metadata item (GDAL's default domain); "" when absent.
+  auto item = [](const fs::path& file, const char* key) {
+    std::unique_ptr<GDALDataset> ds(GDALDataset::Open(file.c_str(), GDAL_OF_RASTER));
+    const char* v = ds ? ds->GetMetadataItem(key) : nullptr;
+    return std::string(v ? v : "");
+  };
   for (const char* field : {"sines.tif", "terraces.tif", "craters.tif", "noise.tif"}) {
     SCOPED_TRACE(field);
     expect_tiles_equal_whole(field, bake, {16, 45, 100});
+    // The certified bound, the largest of the tiles' interiors': never below the whole bake's (a tile's
+    // texel knows only the casters its window holds, so its slack over the floor can only be larger), the
+    // same in one process and through tile tasks and their merge.
+    const fs::path job = write_job("farm", {{"image", field}}, bake);
+    for (const int i : {1, 0, 2})
+      ASSERT_EQ(hfbake("bake --quiet --tiles --tile-size 45 --tile-task " + std::to_string(i) + "/3 " +
+                       job.string())
+                    .exit_code,
+                0);
+    ASSERT_EQ(hfbake("merge --quiet --tiles --tile-size 45 " + job.string()).exit_code, 0);
+    for (const auto& [file, key] : {std::pair{".p1-0.ao.tif", "HFBAKE_P1_FAR_FIELD_BOUND"},
+                                    std::pair{".sun.sun_hours.tif", "HFBAKE_SUN_FAR_FIELD_BOUND"}}) {
+      const std::string whole = item(dir_ / "out_whole" / ("whole" + std::string(file)), key);
+      const std::string tiled = item(dir_ / "out_tiled45" / ("tiled45" + std::string(file)), key);
+      ASSERT_FALSE(whole.empty()) << file;
+      ASSERT_FALSE(tiled.empty()) << file;
+      EXPECT_GE(std::stod(tiled), std::stod(whole)) << file;
+      EXPECT_LT(std::stod(tiled), 10.0) << file;
+      EXPECT_EQ(item(dir_ / "out_farm" / ("farm" + std::string(file)), key), tiled) << file;
+    }
+    fs::remove_all(dir_ / "out_farm");
   }
 }
 

@@ -153,11 +153,12 @@ double lane_horizons_at(const HeightField& f, const P1Params& p, const std::vect
           for (int i = 0; i < f.width; ++i) {
             const std::size_t t = f.index(i, j);
             float m = slope[t];
-            if (floor) {
+            if (floor && p1::on_field_caster(m)) {
               const p1::FloorPick pick = p1::floor_at(*floor, df, i, j, f.z[t]);
               if (pick.slope > m) {
-                row_slack[std::size_t(j)] =
-                    std::max(row_slack[std::size_t(j)], double(pick.slope) - std::max(m, pick.least));
+                if (floor->kept.contains(i, j))
+                  row_slack[std::size_t(j)] =
+                      std::max(row_slack[std::size_t(j)], double(pick.slope) - std::max(m, pick.least));
                 m = pick.slope;
               }
             }

@@ -26,6 +26,7 @@
 
 #include "field/coarse_heights.hpp"
 #include "field/height_field.hpp"
+#include "field/scene.hpp"
 
 namespace hfbake::p1 {
 
@@ -36,6 +37,7 @@ struct FloorGrid {
   double dx = 1, dy = 1;  // the texels' sides, world units
   double beyond = 0;      // world units
   double curvature = 0;   // c: a point at distance d lowered by c d^2
+  KeptTexels kept;        // the texels whose slack counts (a tile's interior)
 };
 // Clamp fields only.
 FloorGrid floor_grid(const CoarseHeights& coarse, int x0, int y0, const FieldShape& field, double beyond,
@@ -56,6 +58,14 @@ struct FloorPick {
   float least = -std::numeric_limits<float>::infinity();
   float distance = std::numeric_limits<float>::infinity();
 };
+// Whether a lane search's slope is a caster's on the field: a ray that crosses nothing there gets -inf, or
+// from crossings that read the padding beyond the field, a slope near -1e30 (lane_horizons.hpp kOffField).
+// Such a texel lies on the field's border facing out: nothing lies beyond `beyond` either, and its floor is
+// not taken (the floor of its cell bounds the other receivers' rays, which may run on).
+inline bool on_field_caster(float slope) {
+  return slope > -1e20f;
+}
+
 // The floor of the field's texel (i, j) of height z.
 inline FloorPick floor_at(const FloorGrid& grid, const DirectionFloor& f, int i, int j, float z) {
   const CoarseHeights& g = *grid.coarse;

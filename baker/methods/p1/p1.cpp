@@ -125,10 +125,12 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
               }
             if (floor)
               for (int x = 0; x < w; ++x) {
+                if (!p1::on_field_caster(m[x])) continue;
                 const p1::FloorPick pick = p1::floor_at(*floor, df, i0 + x, j, f.z[base + x]);
                 if (!(pick.slope > m[x])) continue;
-                row_slack[std::size_t(j)] =
-                    std::max(row_slack[std::size_t(j)], double(pick.slope) - std::max(m[x], pick.least));
+                if (floor->kept.contains(i0 + x, j))
+                  row_slack[std::size_t(j)] =
+                      std::max(row_slack[std::size_t(j)], double(pick.slope) - std::max(m[x], pick.least));
                 m[x] = pick.slope;
                 dist[x] = pick.distance;
               }
@@ -568,8 +570,10 @@ std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params&
     own = coarse_heights(f, p.far_field->cell);
     coarse = &own;
   }
-  return std::make_unique<p1::FloorGrid>(
+  auto grid = std::make_unique<p1::FloorGrid>(
       p1::floor_grid(*coarse, scene.window.x0, scene.window.y0, f, p.far_field->beyond, curvature));
+  grid->kept = scene.window.kept;
+  return grid;
 }
 
 void p1_add_sums(P1Sums& total, const P1Sums& block) {

@@ -46,7 +46,7 @@ void relief_direction(int k, int K, bool compass, double& dx, double& dy) {
 }
 
 LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc,
-                     double curvature, const CoarseHeights* coarse, int x0, int y0) {
+                     double curvature, const CoarseHeights* coarse, int x0, int y0, const KeptTexels& kept) {
   const int w = field.width, h = field.height, K = s.directions;
   CoarseHeights own;
   FarField far;
@@ -83,7 +83,8 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
       for (int k = 0; k < K; ++k) {
         // No surface within the radius (beyond a clamp border): level in both senses, open sky.
         const HorizonPair hp = radius_horizon(field, i, j, dx[k], dy[k], s.search_radius, curvature, far);
-        row_slack[std::size_t(j)] = std::max({row_slack[std::size_t(j)], hp.up_slack, hp.down_slack});
+        if (kept.contains(i, j))
+          row_slack[std::size_t(j)] = std::max({row_slack[std::size_t(j)], hp.up_slack, hp.down_slack});
         const double up = std::atan(hp.up), down = std::atan(hp.down);
         sum_sin += std::sin(std::max(up, 0.0));
         sum_up += up;
@@ -131,7 +132,8 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
 LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
   const ReliefSettings& s = config.get<ReliefSettings>();
   const CoarseHeights* coarse = s.far_field ? scene.window.coarse_of(s.far_field->cell) : nullptr;
-  return bake_relief(scene.field, s, rc, scene.curvature, coarse, scene.window.x0, scene.window.y0);
+  return bake_relief(scene.field, s, rc, scene.curvature, coarse, scene.window.x0, scene.window.y0,
+                     scene.window.kept);
 }
 
 MethodInfo relief_method() {

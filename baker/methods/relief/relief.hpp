@@ -35,9 +35,11 @@ void relief_direction(int k, int K, bool compass, double& dx, double& dy);
 LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunControl& rc);
 // The same from the heights alone (tests), with the Earth's curvature c per world unit (Scene::curvature).
 // With a far field, `coarse` is the coarse copy of the field the window `field` is cut from, its texel
-// (0, 0) at (x0, y0) there (a tile of a raster); null: the copy of `field` itself, made here.
+// (0, 0) at (x0, y0) there (a tile of a raster); null: the copy of `field` itself, made here. kept: the
+// texels whose slack the recorded bound counts (FieldWindow::kept).
 LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc,
-                     double curvature = 0, const CoarseHeights* coarse = nullptr, int x0 = 0, int y0 = 0);
+                     double curvature = 0, const CoarseHeights* coarse = nullptr, int x0 = 0, int y0 = 0,
+                     const KeptTexels& kept = {});
 
 MethodInfo relief_method();
 
