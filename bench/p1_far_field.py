@@ -14,12 +14,10 @@ by texel-direction (horizon: the sine of the elevation). Without --dem's file, a
 python3-numpy and python3-gdal.
 """
 import argparse
-import json
 import math
 import os
 import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
 
@@ -31,7 +29,7 @@ gdal.UseExceptions()
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
-from relief_far_field import bands, fractal, timed  # noqa: E402
+from relief_far_field import bands, far_field_jobs, fractal, time_runs  # noqa: E402
 
 
 def main():
@@ -52,26 +50,14 @@ def main():
         dem = os.path.join(work, "fractal2048.tif")
         fractal(dem, size=2048)
     texel = gdal.Open(dem).GetGeoTransform()[1]
-    fars = [tuple(int(x) for x in p.split(":")) for p in a.far.split(",")]
-    runs = [("exact", None)] + [("D%d_C%d" % (d, c), (d, c)) for d, c in fars]
-    jobs = {}
-    for name, far in runs:
-        entry = {"method": "p1", "directions": a.directions, "layers": ["ao", "vsky", "horizon"]}
+    def entry(far):
+        e = {"method": "p1", "directions": a.directions, "layers": ["ao", "vsky", "horizon"]}
         if far:
-            entry["far_field"] = {"beyond": far[0] * texel, "cell": far[1]}
-        job = {"version": 1, "name": name, "height": {"image": dem}, "bake": [entry],
-               "output": {"dir": os.path.join(work, name), "geotiff": True}}
-        jobs[name] = os.path.join(work, name + ".json")
-        with open(jobs[name], "w") as f:
-            json.dump(job, f)
+            e["far_field"] = {"beyond": far[0] * texel, "cell": far[1]}
+        return e
 
-    cpu = {name: [] for name, _ in runs}
-    for rep in range(a.reps):
-        for name, _ in runs:
-            c, w, _ = timed([a.hfbake, "bake", "--quiet", "--no-cache", "--overwrite", "--threads",
-                             str(a.threads), jobs[name]])
-            cpu[name].append(c)
-            print("rep %d %s: %.1f s CPU, %.1f s wall" % (rep, name, c, w), file=sys.stderr)
+    runs, jobs = far_field_jobs(dem, work, a.far, entry)
+    cpu = {name: [t[0] for t in ts] for name, ts in time_runs(a.hfbake, runs, jobs, a.reps, a.threads).items()}
 
     def layer(name, what):
         return bands(os.path.join(work, name, "%s.p1.%s.tif" % (name, what)))

@@ -66,6 +66,33 @@ def timed(cmd):
     return float(user) + float(sys_s), float(wall), float(rss) / 1024
 
 
+def far_field_jobs(dem, work, far, make_entry):
+    """The exact run and one per D:C pair of `far` (texels), each a job file baking make_entry(far) (far: None
+    or (D, C)) on `dem` into its own folder of `work`: ([(name, far)], {name: job file})."""
+    fars = [tuple(int(x) for x in p.split(":")) for p in far.split(",")]
+    runs = [("exact", None)] + [("D%d_C%d" % (d, c), (d, c)) for d, c in fars]
+    jobs = {}
+    for name, f in runs:
+        job = {"version": 1, "name": name, "height": {"image": dem}, "bake": [make_entry(f)],
+               "output": {"dir": os.path.join(work, name), "geotiff": True}}
+        jobs[name] = os.path.join(work, name + ".json")
+        with open(jobs[name], "w") as out:
+            json.dump(job, out)
+    return runs, jobs
+
+
+def time_runs(hfbake, runs, jobs, reps, threads):
+    """Each repetition bakes every run in order as a whole process: {name: [(CPU s, wall s, peak MiB)]}."""
+    timings = {name: [] for name, _ in runs}
+    for rep in range(reps):
+        for name, _ in runs:
+            t = timed([hfbake, "bake", "--quiet", "--no-cache", "--overwrite", "--threads", str(threads),
+                       jobs[name]])
+            timings[name].append(t)
+            print("rep %d %s: %.1f s CPU, %.1f s wall" % (rep, name, t[0], t[1]), file=sys.stderr)
+    return timings
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--hfbake", default=os.path.join(ROOT, "build", "baker", "cli", "hfbake"))
@@ -85,31 +112,17 @@ def main():
         dem = os.path.join(work, "fractal4096.tif")
         fractal(dem)
     texel = gdal.Open(dem).GetGeoTransform()[1]
-    fars = [tuple(int(x) for x in p.split(":")) for p in a.far.split(",")]
-    runs = [("exact", None)] + [("D%d_C%d" % (d, c), (d, c)) for d, c in fars]
-    jobs = {}
-    for name, far in runs:
-        entry = {"method": "relief", "directions": a.directions, "search_radius": a.radius * texel,
-                 "layers": ["svf", "horizon_deg"]}
+    def entry(far):
+        e = {"method": "relief", "directions": a.directions, "search_radius": a.radius * texel,
+             "layers": ["svf", "horizon_deg"]}
         if far:
-            entry["far_field"] = {"beyond": far[0] * texel, "cell": far[1]}
-        job = {"version": 1, "name": name, "height": {"image": dem}, "bake": [entry],
-               "output": {"dir": os.path.join(work, name), "geotiff": True}}
-        jobs[name] = os.path.join(work, name + ".json")
-        with open(jobs[name], "w") as f:
-            json.dump(job, f)
+            e["far_field"] = {"beyond": far[0] * texel, "cell": far[1]}
+        return e
 
-    cpu = {name: [] for name, _ in runs}
-    wall = {name: [] for name, _ in runs}
-    rss = {name: [] for name, _ in runs}
-    for rep in range(a.reps):
-        for name, _ in runs:
-            c, w, m = timed([a.hfbake, "bake", "--quiet", "--no-cache", "--overwrite", "--threads",
-                             str(a.threads), jobs[name]])
-            cpu[name].append(c)
-            wall[name].append(w)
-            rss[name].append(m)
-            print("rep %d %s: %.1f s CPU, %.1f s wall" % (rep, name, c, w), file=sys.stderr)
+    runs, jobs = far_field_jobs(dem, work, a.far, entry)
+    timings = time_runs(a.hfbake, runs, jobs, a.reps, a.threads)
+    cpu = {name: [t[0] for t in ts] for name, ts in timings.items()}
+    rss = {name: [t[2] for t in ts] for name, ts in timings.items()}
 
     def layer(name, what):
         return bands(os.path.join(work, name, "%s.relief.%s.tif" % (name, what)))
