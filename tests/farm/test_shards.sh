@@ -6,7 +6,8 @@ set -u
 H=$1 W=$2
 . "$(dirname "$0")/common.sh"
 rm -rf "$W" && mkdir -p "$W" && cd "$W" || exit 1
-# p1 with every layer, a non-uniform environment (the built-in sky) and two suns; hbao with bent
+# p1 with every layer, a non-uniform environment (the built-in sky) and two suns, and again with a far
+# field (its certified bound the same in the merge's EXR as in the bake's); hbao with bent
 # normals; lsao, farfield and hsao with bent normals and more directions than blocks (block partial sums);
 # vo (runs whole in one shard); a reference of every layer the methods are scored against.
 cat >job.json <<'J'
@@ -17,6 +18,7 @@ cat >job.json <<'J'
             {"directional": {"direction": [-0.5, 0.1, 0.6], "irradiance": [1, 0.5, 0.2]}}],
  "bake": [{"method": "p1", "directions": 12,
            "layers": ["ao", "vsky", "direct", "horizon", "horizon_distance", "bent_normal"]},
+          {"method": "p1", "directions": 12, "far_field": {"beyond": 6, "cell": 4}, "layers": ["ao", "horizon"]},
           {"method": "hbao", "directions": 10, "radius": 5, "falloff": "smooth"},
           {"method": "lsao", "directions": 12, "radius": 5, "layers": ["obscurance", "bent_normal"]},
           {"method": "farfield", "directions": 10, "radius": 8, "layers": ["obscurance", "bent_normal"]},
@@ -33,6 +35,9 @@ for N in 1 3 11; do
   done
   "$H" merge job.json --no-cache --quiet --out "s$N" || fail "merge of $N shards"
   same_outputs whole "s$N"
+  bound() { oiiotool --info -v "$1" | grep "hfbake:p1:far_field_bound"; }
+  [ -n "$(bound whole/farm.p1-1.exr)" ] || fail "whole/farm.p1-1.exr has no far-field bound"
+  [ "$(bound whole/farm.p1-1.exr)" = "$(bound "s$N/farm.p1-1.exr")" ] || fail "s$N's far-field bound differs"
   echo "ok: $N shards merge to the bake's bits"
 done
 

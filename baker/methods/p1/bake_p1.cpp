@@ -89,7 +89,9 @@ LayerSet bake_p1(const Scene& scene, const MethodConfig& config, const RunContro
 }
 
 // Farm blocks: the raw sums as layers named after P1Sums' members; each block's horizons as
-// "horizon@<k_begin>" ("horizon_distance@<k_begin>"), kept apart and placed by p1_finish_blocks.
+// "horizon@<k_begin>" ("horizon_distance@<k_begin>"), kept apart and placed by p1_finish_blocks; with a far
+// field, the block's largest slack as "far_slack@<k_begin>" (every texel the same value), of which
+// p1_finish_blocks takes the largest, as compute_p1 does.
 LayerSet p1_bake_block(const Scene& scene, const MethodConfig& config, int block, const RunControl& rc) {
   const P1Params& p = config.get<P1Params>();
   const int K = p.directions;
@@ -104,6 +106,9 @@ LayerSet p1_bake_block(const Scene& scene, const MethodConfig& config, int block
   if (!s.horizon.empty()) out.adopt("horizon" + at, block_channels, std::move(s.horizon));
   if (!s.horizon_distance.empty())
     out.adopt("horizon_distance" + at, block_channels, std::move(s.horizon_distance));
+  if (p.far_field)
+    out.adopt("far_slack" + at, mono_channels(),
+              std::vector<float>(scene.field.texel_count(), float(s.far_slack)));
   return out;
 }
 
@@ -115,6 +120,13 @@ LayerSet p1_finish_blocks(const Scene& scene, const MethodConfig& config, LayerS
   P1Sums s;
   s.k_begin = 0, s.k_end = K;
   p1_sums_from_layers(sums, p1_sums_shape(scene, p), s);
+  for (const Layer& l : sums.layers)
+    if (l.name.rfind("far_slack@", 0) == 0) {
+      if (l.data.size() != N)
+        throw InputError("", "",
+                         "the direction blocks' far_slack layers are not of this field: bake them again");
+      s.far_slack = std::max(s.far_slack, double(l.data[0]));
+    }
   // The blocks' horizons into [texel * K + k].
   auto place = [&](const std::string& name, std::vector<float>& all) {
     all.assign(N * std::size_t(K), 0.0f);

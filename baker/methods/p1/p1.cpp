@@ -146,7 +146,12 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
         });
         rc.report(double(++done) / double(k_end - k_begin));
       });
-  return row_slack.empty() ? 0.0 : *std::max_element(row_slack.begin(), row_slack.end());
+  if (row_slack.empty()) return 0.0;
+  // Rounded up to a float, as the farm's blocks carry it (bake_p1.cpp far_slack@): the same bound either way.
+  const double worst = *std::max_element(row_slack.begin(), row_slack.end());
+  float up = float(worst);
+  if (double(up) < worst) up = std::nextafter(up, std::numeric_limits<float>::infinity());
+  return double(up);
 }
 
 }  // namespace
