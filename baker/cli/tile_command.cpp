@@ -1,6 +1,7 @@
 #include "cli/tile_command.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -30,10 +31,11 @@ namespace {
   throw InputError(job.file.string(), pointer, what);
 }
 
-// The halo of the job's entries: the largest of their reaches, in texels (check_tiled_job has made sure
-// each is bounded).
+// The halo of the job's entries: the largest of their reaches, in texels of the shorter side (check_tiled_job
+// has made sure each is bounded).
 int job_halo(const Job& job) {
-  const double texel = job_texel_size(job);
+  const std::array<double, 2> sides = job_texel_sides(job);
+  const double texel = std::min(sides[0], sides[1]);
   int halo = 0;
   for (const BakeEntry& entry : job.bakes) {
     const MethodConfig& config = entry_config(entry);
@@ -70,7 +72,9 @@ HeightField read_window(const Job& job, const GeoHeightBand& band, const RasterW
   HeightField field;
   field.width = window.width;
   field.height = window.height;
-  field.texel_size = job_texel_size(job);
+  const std::array<double, 2> sides = job_texel_sides(job);  // a geographic raster's are rectangles
+  field.texel_size = sides[0];
+  if (sides[1] != sides[0]) field.texel_size_y = sides[1];
   field.wrap = Wrap::clamp;
   field.z = std::move(plane.values);
   return field;
@@ -119,13 +123,11 @@ void bake_tile(const Job& job, const GeoHeightBand& band, const TilePlan& plan, 
                std::vector<double>& seconds, Sink&& sink) {
   if (cancel.load()) throw Cancelled();
   const Tile& tile = plan.tiles[k];
-  // The raster's site (sun's place, a geographic raster's frame): the whole bake's, whatever the tile.
-  Georeference tile_geo;
-  tile_geo.geotransform = band.georeference.geotransform;
-  tile_geo.has_site = band.georeference.has_site;
-  tile_geo.site_longitude = band.georeference.site_longitude;
-  tile_geo.site_latitude = band.georeference.site_latitude;
-  tile_geo.site_convergence = band.georeference.site_convergence;
+  // The raster's georeference but its holes (a tiled bake refuses holes): its CRS (the Earth's curvature from
+  // its ellipsoid) and its site (sun's place, a geographic raster's frame), the whole bake's whatever the
+  // tile.
+  Georeference tile_geo = band.georeference;
+  std::vector<std::uint8_t>().swap(tile_geo.holes);
   Scene scene = complete_scene(job, read_window(job, band, tile.read), tile_geo, band.source);
   const int ox = tile.interior.x0 - tile.read.x0, oy = tile.interior.y0 - tile.read.y0;
   scene.window = {tile.read.x0, tile.read.y0, coarse, {ox, oy, tile.interior.width, tile.interior.height}};

@@ -6,7 +6,9 @@
 // job (no tiles: one field in memory), read back with GDAL.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
+#include <ogr_spatialref.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -48,13 +50,22 @@ Bands read_bands(const fs::path& file) {
 
 // A float32 GeoTIFF of heights z(i, j) with a 0.5 m north-up geotransform.
 template <class F>
-void write_heights(const fs::path& file, int width, int height, F z) {
+void write_heights(const fs::path& file, int width, int height, F z, bool geographic = false) {
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
   std::unique_ptr<GDALDataset> ds(driver->Create(file.c_str(), width, height, 1, GDT_Float32, nullptr));
   std::vector<float> v(std::size_t(width) * std::size_t(height));
   for (int j = 0; j < height; ++j)
     for (int i = 0; i < width; ++i) v[std::size_t(j) * std::size_t(width) + std::size_t(i)] = float(z(i, j));
+  // Projected: 0.5 world units a texel, no CRS. Geographic: WGS 84 at 46.5 N, 1e-5 degrees a texel (texels of
+  // about 0.77 x 1.11 m in the local frame, the Earth's curvature on).
   double gt[6] = {400000, 0.5, 0, 100000, 0, -0.5};
+  if (geographic) {
+    const double g[6] = {15.0, 1e-5, 0, 46.5, 0, -1e-5};
+    std::copy(g, g + 6, gt);
+    OGRSpatialReference srs;
+    srs.importFromEPSG(4326);
+    ds->SetSpatialRef(&srs);
+  }
   ds->SetGeoTransform(gt);
   ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, width, height, v.data(), width, height,
                                            GDT_Float32, 0, 0, nullptr),
@@ -222,6 +233,29 @@ TEST_F(CliTiles, TiledBakeWithFarFieldEqualsWholeBake) {
     SCOPED_TRACE(field);
     expect_tiles_equal_whole(field, bake, {16, 45, 100});
   }
+}
+
+// A geographic raster (rectangular texels in its local frame, the Earth's curvature from its ellipsoid):
+// relief's and p1's tiles are the whole bake's texels.
+TEST_F(CliTiles, TiledGeographicRasterEqualsWholeBake) {
+  write_heights(
+      dir_ / "geo.tif", 150, 97,
+      [](int i, int j) {
+        const double r = std::hypot(std::fmod(i, 37.0) - 18, std::fmod(j, 29.0) - 14);
+        return r < 10 ? 0.04 * r * r : 4.0 - 0.1 * (r - 10);
+      },
+      true);
+  const nlohmann::json bake = {{{"method", "relief"},
+                                {"directions", 8},
+                                {"search_radius", 30},
+                                {"far_field", {{"beyond", 4}, {"cell", 4}}},
+                                {"layers", {"svf", "horizon_deg"}}},
+                               {{"method", "p1"},
+                                {"directions", 8},
+                                {"lights", false},
+                                {"far_field", {{"beyond", 5}, {"cell", 4}}},
+                                {"layers", {"ao", "horizon"}}}};
+  expect_tiles_equal_whole("geo.tif", bake, {16, 45});
 }
 
 // p1 and sun with a far field: every tile's exact search over its window, beyond `beyond` the raster's coarse
