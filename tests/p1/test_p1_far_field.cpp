@@ -202,6 +202,32 @@ TEST(P1FarField, WindowWithTheFieldsCoarseCopyGivesTheWholeBakesBits) {
   }
 }
 
+// With a horizon_tolerance the search prunes from its neighbours' casters, which differ at a window's
+// edge: the window's horizons are then within the tolerance of the whole bake's, not its bits.
+TEST(P1FarField, WindowWithAToleranceStaysWithinIt) {
+  constexpr int K = 12;
+  constexpr float tau = 0.02f;
+  for (auto& [name, f] : family(90, 71, 1.0)) {
+    SCOPED_TRACE(name);
+    const nlohmann::json entry = {{"directions", K},
+                                  {"horizon_tolerance", tau},
+                                  {"layers", {"horizon"}},
+                                  {"far_field", {{"beyond", 7}, {"cell", 5}}}};
+    const LayerSet all = bake_method("p1", scene_of(f), entry, RunControl{});
+    const int halo = 9, ix = 30, iy = 25, iw = 33, ih = 29;
+    Scene tile = scene_of(window_of(f, ix - halo, iy - halo, iw + 2 * halo, ih + 2 * halo));
+    tile.window.x0 = ix - halo, tile.window.y0 = iy - halo;
+    tile.window.coarse.push_back(std::make_shared<const CoarseHeights>(coarse_heights(f, 5)));
+    const LayerSet part = bake_method("p1", tile, entry, RunControl{});
+    const Layer &a = *all.find("horizon"), &b = *part.find("horizon");
+    for (int j = 0; j < ih; ++j)
+      for (int i = 0; i < iw; ++i)
+        for (int k = 0; k < K; ++k)
+          ASSERT_NEAR(a.data[f.index(ix + i, iy + j) * K + std::size_t(k)],
+                      b.data[tile.field.index(halo + i, halo + j) * K + std::size_t(k)], tau + 1e-6f);
+  }
+}
+
 TEST(P1FarField, ReaderRefusesARepeatField) {
   FieldShape shape;
   shape.width = shape.height = 64;
