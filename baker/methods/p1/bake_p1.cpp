@@ -165,15 +165,7 @@ double lane_horizons_at(const HeightField& f, const P1Params& p, const std::vect
           for (int i = 0; i < f.width; ++i) {
             const std::size_t t = f.index(i, j);
             float m = slope[t];
-            if (floor && p1::on_field_caster(m)) {
-              const p1::FloorPick pick = p1::floor_at(*floor, df, i, j, f.z[t]);
-              if (pick.slope > m) {
-                if (floor->kept.contains(i, j))
-                  row_slack[std::size_t(j)] =
-                      std::max(row_slack[std::size_t(j)], double(pick.slope) - std::max(m, pick.least));
-                m = pick.slope;
-              }
-            }
+            if (floor) m = p1::raise_to_floor(*floor, df, i, j, f.z[t], m, row_slack[std::size_t(j)]);
             visit(sd.k, i, j, p1::fast_atan(m));
           }
         });

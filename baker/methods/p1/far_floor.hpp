@@ -84,6 +84,20 @@ inline FloorPick floor_at(const FloorGrid& grid, const DirectionFloor& f, int i,
   return p;
 }
 
+// The lane search's slope m of the field's texel (i, j) of height z, raised to its floor (on_field_caster:
+// not a texel facing out of the field); where the floor wins, `distance` (when given) becomes the floor's
+// and `slack` the larger of itself and the floor's gap above the texel's certain horizon (only for kept
+// texels).
+inline float raise_to_floor(const FloorGrid& grid, const DirectionFloor& f, int i, int j, float z, float m,
+                            double& slack, float* distance = nullptr) {
+  if (!on_field_caster(m)) return m;
+  const FloorPick pick = floor_at(grid, f, i, j, z);
+  if (!(pick.slope > m)) return m;
+  if (grid.kept.contains(i, j)) slack = std::max(slack, double(pick.slope) - std::max(m, pick.least));
+  if (distance) *distance = pick.distance;
+  return pick.slope;
+}
+
 // Bytes one direction's floor holds for a width x height field.
 double floor_bytes(int width, int height, int cell);
 

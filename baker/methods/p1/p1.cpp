@@ -124,16 +124,9 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
                                 : std::sqrt(1 + m[x] * m[x]) / d.crossings[std::size_t(c)].inv_s;
               }
             if (floor)
-              for (int x = 0; x < w; ++x) {
-                if (!p1::on_field_caster(m[x])) continue;
-                const p1::FloorPick pick = p1::floor_at(*floor, df, i0 + x, j, f.z[base + x]);
-                if (!(pick.slope > m[x])) continue;
-                if (floor->kept.contains(i0 + x, j))
-                  row_slack[std::size_t(j)] =
-                      std::max(row_slack[std::size_t(j)], double(pick.slope) - std::max(m[x], pick.least));
-                m[x] = pick.slope;
-                dist[x] = pick.distance;
-              }
+              for (int x = 0; x < w; ++x)
+                m[x] = p1::raise_to_floor(*floor, df, i0 + x, j, f.z[base + x], m[x],
+                                          row_slack[std::size_t(j)], &dist[x]);
             for (int x = 0; x < w; ++x) e[x] = fast_atan(m[x]);
             const float* FX[2] = {facets ? fx.data() + base : nullptr,
                                   facets ? fx.data() + N + base : nullptr};
