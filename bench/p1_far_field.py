@@ -16,7 +16,6 @@ python3-numpy and python3-gdal.
 import argparse
 import math
 import os
-import shutil
 import statistics
 import sys
 import tempfile
@@ -29,27 +28,17 @@ gdal.UseExceptions()
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
-from relief_far_field import bands, far_field_jobs, fractal, time_runs  # noqa: E402
+from relief_far_field import (add_common_args, bands, dem_or_fractal, far_field_jobs, finish,  # noqa: E402
+                              time_runs)
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--hfbake", default=os.path.join(ROOT, "build", "baker", "cli", "hfbake"))
-    ap.add_argument("--dem", default=os.path.join(ROOT, "..", "shared", "data", "TM1_564_146.tif"))
-    ap.add_argument("--directions", type=int, default=64)
-    ap.add_argument("--far", default="100:8,200:8,400:16")
-    ap.add_argument("--reps", type=int, default=3)
-    ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--out", default="")
+    add_common_args(ap, 64, "100:8,200:8,400:16")
     a = ap.parse_args()
 
     work = tempfile.mkdtemp(prefix="hfbake_p1_far_field_")
-    dem = os.path.abspath(a.dem)
-    if not os.path.exists(dem):
-        print("%s is absent: a 2048^2 fractal instead" % dem, file=sys.stderr)
-        dem = os.path.join(work, "fractal2048.tif")
-        fractal(dem, size=2048)
-    texel = gdal.Open(dem).GetGeoTransform()[1]
+    dem, texel = dem_or_fractal(a.dem, work, 2048)
     def entry(far):
         e = {"method": "p1", "directions": a.directions, "layers": ["ao", "vsky", "horizon"]}
         if far:
@@ -82,14 +71,8 @@ def main():
         rows.append("| D = %d, C = %d | %.1f | %.2f | %.4f / %.5f | %.4f / %.5f | %.4f / %.5f / %.1f %% | %.3f / %.2f |"
                     % (far[0], far[1], med, ratio, da.max(), da.mean(), dv.max(), dv.mean(), dh.max(),
                        np.abs(dh).mean(), 100.0 * np.mean(dh > 1e-5), bound, math.degrees(math.atan(bound))))
-    table = "\n".join(rows)
-    print("%s: %dx%d, K = %d, %d repetitions, --threads %d\n" % (
-        os.path.basename(dem), ao_e.shape[1], ao_e.shape[0], a.directions, a.reps, a.threads))
-    print(table)
-    if a.out:
-        with open(a.out, "w") as f:
-            f.write(table + "\n")
-    shutil.rmtree(work)
+    finish("%s: %dx%d, K = %d, %d repetitions, --threads %d" % (
+        os.path.basename(dem), ao_e.shape[1], ao_e.shape[0], a.directions, a.reps, a.threads), rows, a.out, work)
 
 
 if __name__ == "__main__":

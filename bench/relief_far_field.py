@@ -66,6 +66,39 @@ def timed(cmd):
     return float(user) + float(sys_s), float(wall), float(rss) / 1024
 
 
+def add_common_args(ap, directions, far):
+    """The options both far-field scripts take."""
+    ap.add_argument("--hfbake", default=os.path.join(ROOT, "build", "baker", "cli", "hfbake"))
+    ap.add_argument("--dem", default=os.path.join(ROOT, "..", "shared", "data", "TM1_564_146.tif"))
+    ap.add_argument("--directions", type=int, default=directions)
+    ap.add_argument("--far", default=far)
+    ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--out", default="")
+
+
+def dem_or_fractal(path, work, size):
+    """(the DEM's absolute path, its texel) or, without its file, a size^2 fractal written into `work`."""
+    dem = os.path.abspath(path)
+    if not os.path.exists(dem):
+        print("%s is absent: a %d^2 fractal instead" % (dem, size), file=sys.stderr)
+        dem = os.path.join(work, "fractal%d.tif" % size)
+        fractal(dem, size=size)
+    return dem, gdal.Open(dem).GetGeoTransform()[1]
+
+
+def finish(heading, rows, out, work):
+    """Prints the heading and the Markdown table of `rows`, writes the table to `out` (when given) and removes
+    the work folder."""
+    table = "\n".join(rows)
+    print(heading + "\n")
+    print(table)
+    if out:
+        with open(out, "w") as f:
+            f.write(table + "\n")
+    shutil.rmtree(work)
+
+
 def far_field_jobs(dem, work, far, make_entry):
     """The exact run and one per D:C pair of `far` (texels), each a job file baking make_entry(far) (far: None
     or (D, C)) on `dem` into its own folder of `work`: ([(name, far)], {name: job file})."""
@@ -95,23 +128,12 @@ def time_runs(hfbake, runs, jobs, reps, threads):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--hfbake", default=os.path.join(ROOT, "build", "baker", "cli", "hfbake"))
-    ap.add_argument("--dem", default=os.path.join(ROOT, "..", "shared", "data", "TM1_564_146.tif"))
+    add_common_args(ap, 16, "100:8,200:8,100:16,200:16")
     ap.add_argument("--radius", type=float, default=2000)
-    ap.add_argument("--directions", type=int, default=16)
-    ap.add_argument("--far", default="100:8,200:8,100:16,200:16")
-    ap.add_argument("--reps", type=int, default=3)
-    ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--out", default="")
     a = ap.parse_args()
 
     work = tempfile.mkdtemp(prefix="hfbake_relief_far_field_")
-    dem = os.path.abspath(a.dem)
-    if not os.path.exists(dem):
-        print("%s is absent: a 4096^2 fractal instead" % dem, file=sys.stderr)
-        dem = os.path.join(work, "fractal4096.tif")
-        fractal(dem)
-    texel = gdal.Open(dem).GetGeoTransform()[1]
+    dem, texel = dem_or_fractal(a.dem, work, 4096)
     def entry(far):
         e = {"method": "relief", "directions": a.directions, "search_radius": a.radius * texel,
              "layers": ["svf", "horizon_deg"]}
@@ -147,14 +169,9 @@ def main():
         rows.append("| D = %d, C = %d | %.0f | %.2f | %.0f | %.4f / %.5f | %.2f / %.3f | %.3f / %.2f |" % (
             far[0], far[1], med, ratio, mem, ds.max(), ds.mean(), dh.max(), dh.mean(), bound,
             math.degrees(math.atan(bound))))
-    table = "\n".join(rows)
-    print("%s: %dx%d, K = %d, search_radius %g texels, %d repetitions, --threads %d\n" % (
-        os.path.basename(dem), svf_e.shape[1], svf_e.shape[0], a.directions, a.radius, a.reps, a.threads))
-    print(table)
-    if a.out:
-        with open(a.out, "w") as f:
-            f.write(table + "\n")
-    shutil.rmtree(work)
+    finish("%s: %dx%d, K = %d, search_radius %g texels, %d repetitions, --threads %d" % (
+        os.path.basename(dem), svf_e.shape[1], svf_e.shape[0], a.directions, a.radius, a.reps, a.threads),
+        rows, a.out, work)
 
 
 if __name__ == "__main__":
