@@ -169,6 +169,9 @@ GeoTiffOptions output_options(const Job& job, const OutputStage& stage, const Ti
   return tiff;
 }
 
+// A tile task's file holds its entry's attributes as metadata items kTileAttribute<n>, "<key>=<value>".
+const std::string kTileAttribute = "HFBAKE_TILE_ATTRIBUTE_";
+
 // A far field's certified bound, the attribute "hfbake:<method>:far_field_bound" (relief, p1, sun): the
 // largest of the tiles' is the whole bake's.
 std::string far_bound_key(const std::string& method) {
@@ -353,9 +356,10 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
             geo.geotransform[3] += tile.interior.y0 * geo.geotransform[5];
             GeoTiffOptions tiff;
             tiff.metadata = {{"HFBAKE_TILE_OF", std::to_string(k) + " of " + tile_identity(job, plan, e)}};
-            for (const auto& [key, value] : layers.attributes)  // the merge takes the largest of the tasks'
-              if (key == far_bound_key(job.bakes[e].method))
-                tiff.metadata.emplace_back("HFBAKE_TILE_FAR_FIELD_BOUND", value);
+            // The entry's attributes, "<key>=<value>" each, for the merge (merge_attributes).
+            int n = 0;
+            for (const auto& [key, value] : layers.attributes)
+              tiff.metadata.emplace_back(kTileAttribute + std::to_string(n++), key + "=" + value);
             for (const Layer& layer : layers.layers) {
               const std::size_t nc = std::size_t(layer.channel_count());
               LayerSet part;
@@ -427,10 +431,17 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
                              fs::exists(file) ? "is not tile " + std::to_string(k) + " of this job's plan (" +
                                                     tiles_text(plan) + "): bake it again with --tile-task"
                                               : "is missing: bake its tile task (bake --tiles --tile-task)");
-          const std::string bound = georaster_metadata_item(file, "HFBAKE_TILE_FAR_FIELD_BOUND");
-          if (!bound.empty())
-            merge_attributes(attributes[e], {{far_bound_key(job.bakes[e].method), bound}},
-                             job.bakes[e].method);
+          if (name ==
+              config.layers.front()) {  // the entry's attributes, the same in each of its layers' files
+            std::vector<std::pair<std::string, std::string>> tile_attributes;
+            for (int n = 0;; ++n) {
+              const std::string item = georaster_metadata_item(file, kTileAttribute + std::to_string(n));
+              const std::size_t eq = item.find('=');
+              if (eq == std::string::npos) break;
+              tile_attributes.emplace_back(item.substr(0, eq), item.substr(eq + 1));
+            }
+            merge_attributes(attributes[e], tile_attributes, job.bakes[e].method);
+          }
           std::vector<std::string> channels;
           std::vector<float> texels(std::size_t(info->width) * std::size_t(info->height) * std::size_t(nc));
           for (int c = 0; c < nc; ++c) {
