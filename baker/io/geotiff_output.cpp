@@ -13,12 +13,13 @@
 namespace hfbake {
 namespace fs = std::filesystem;
 
-namespace {
-
-struct DatasetCloser {
+// Outside the anonymous namespace: TiledGeoTiff::Dataset (a class of external linkage) holds one.
+struct GeoTiffDatasetCloser {
   void operator()(GDALDataset* ds) const { GDALClose(GDALDataset::ToHandle(ds)); }
 };
-using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
+using DatasetPtr = std::unique_ptr<GDALDataset, GeoTiffDatasetCloser>;
+
+namespace {
 
 // The CRS and geotransform of `geo` and the metadata of `options` on `ds`.
 template <class Fail>
