@@ -26,4 +26,11 @@ std::optional<FarFieldSpec> read_far_field(Params& in, const FieldShape& field, 
   return spec;
 }
 
+std::optional<FarFieldSpec> read_field_wide_far_field(Params& in, const FieldShape& field) {
+  std::optional<FarFieldSpec> spec = read_far_field(in, field);
+  if (spec && field.wrap == Wrap::repeat)
+    in.fail("far_field", "needs a clamp field: a repeating field has no casters beyond its own period");
+  return spec;
+}
+
 }  // namespace hfbake

@@ -22,5 +22,17 @@ struct FarFieldSpec {
 std::optional<FarFieldSpec> read_far_field(Params& in, const FieldShape& field,
                                            double below = std::numeric_limits<double>::infinity(),
                                            const char* below_name = "");
+// The same for a method whose horizons span the whole field (p1, sun): clamp fields only, since a repeating
+// field has no casters beyond its own period.
+std::optional<FarFieldSpec> read_field_wide_far_field(Params& in, const FieldShape& field);
+
+// What a method with an optional far field tells the tile plan (MethodInfo::reach and far_cell): its reach
+// is `beyond` with one and `otherwise` without; the copy's cell, 0 without one.
+inline double far_field_reach(const std::optional<FarFieldSpec>& far, double otherwise) {
+  return far ? far->beyond : otherwise;
+}
+inline int far_field_cell(const std::optional<FarFieldSpec>& far) {
+  return far ? far->cell : 0;
+}
 
 }  // namespace hfbake

@@ -245,13 +245,9 @@ MethodInfo p1_method() {
   // A far field bounds the heights p1 reads exactly: a tile with a halo of `beyond` and the raster's coarse
   // copy bakes the whole bake's texels (far_floor.hpp).
   m.reach = [](const MethodConfig& config) {
-    const P1Params& p = config.get<P1Params>();
-    return p.far_field ? p.far_field->beyond : std::numeric_limits<double>::infinity();
+    return far_field_reach(config.get<P1Params>().far_field, std::numeric_limits<double>::infinity());
   };
-  m.far_cell = [](const MethodConfig& config) {
-    const P1Params& p = config.get<P1Params>();
-    return p.far_field ? p.far_field->cell : 0;
-  };
+  m.far_cell = [](const MethodConfig& config) { return far_field_cell(config.get<P1Params>().far_field); };
   m.bake_block = p1_bake_block;
   m.finish_blocks = p1_finish_blocks;
   m.division_note = "partial sums over disjoint direction sets (each direction's sweep is independent)";

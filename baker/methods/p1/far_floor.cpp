@@ -19,13 +19,6 @@ double exit_t(double x0, double rate, double lo, double hi) {
   return x0 >= lo && x0 <= hi ? kInf : -1.0;
 }
 
-// Rounded up to a float: a bound stays a bound.
-float float_up(double v) {
-  if (!(v > -kInf)) return -std::numeric_limits<float>::infinity();
-  float f = float(v);
-  if (double(f) < v) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-  return f;
-}
 float float_down(double v) {
   if (!(v > -kInf)) return -std::numeric_limits<float>::infinity();
   float f = float(v);
@@ -123,12 +116,19 @@ void direction_floor(const FloorGrid& grid, int width, int height, double phi, D
         }
       }
       const std::size_t at = std::size_t(row) * std::size_t(out.columns) + std::size_t(col);
-      out.at_low[at] = float_up(up_lo);
-      out.at_high[at] = float_up(up_hi);
+      out.at_low[at] = round_up_to_float(up_lo);
+      out.at_high[at] = round_up_to_float(up_hi);
       out.least[at] = float_down(least);
       out.distance[at] = float(dist);
     }
   });
+}
+
+float round_up_to_float(double v) {
+  if (!(v > -kInf)) return -std::numeric_limits<float>::infinity();
+  float f = float(v);
+  if (double(f) < v) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
 }
 
 double floor_bytes(int width, int height, int cell) {

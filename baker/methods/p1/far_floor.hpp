@@ -98,6 +98,9 @@ inline float raise_to_floor(const FloorGrid& grid, const DirectionFloor& f, int 
   return pick.slope;
 }
 
+// v rounded up to a float (a bound stays a bound); -inf stays -inf.
+float round_up_to_float(double v);
+
 // Bytes one direction's floor holds for a width x height field.
 double floor_bytes(int width, int height, int cell);
 

@@ -141,10 +141,7 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
       });
   if (row_slack.empty()) return 0.0;
   // Rounded up to a float, as the farm's blocks carry it (bake_p1.cpp far_slack@): the same bound either way.
-  const double worst = *std::max_element(row_slack.begin(), row_slack.end());
-  float up = float(worst);
-  if (double(up) < worst) up = std::nextafter(up, std::numeric_limits<float>::infinity());
-  return double(up);
+  return double(p1::round_up_to_float(*std::max_element(row_slack.begin(), row_slack.end())));
 }
 
 }  // namespace
@@ -178,9 +175,7 @@ P1Params read_p1_params(Params& in, const FieldShape& field) {
   p.horizon = wants("horizon");
   p.horizon_distance = wants("horizon_distance");
   p.bent_normal = wants("bent_normal");
-  p.far_field = read_far_field(in, field);
-  if (p.far_field && field.wrap == Wrap::repeat)
-    in.fail("far_field", "needs a clamp field: a repeating field has no casters beyond its own period");
+  p.far_field = read_field_wide_far_field(in, field);
   return p;
 }
 

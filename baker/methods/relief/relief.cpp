@@ -155,12 +155,9 @@ MethodInfo relief_method() {
   m.division = WorkDivision::texel_tiles;
   m.reach = [](const MethodConfig& c) {
     const ReliefSettings& s = c.get<ReliefSettings>();
-    return s.far_field ? s.far_field->beyond : s.search_radius;
+    return far_field_reach(s.far_field, s.search_radius);
   };
-  m.far_cell = [](const MethodConfig& c) {
-    const ReliefSettings& s = c.get<ReliefSettings>();
-    return s.far_field ? s.far_field->cell : 0;
-  };
+  m.far_cell = [](const MethodConfig& c) { return far_field_cell(c.get<ReliefSettings>().far_field); };
   m.division_note =
       "texel tiles with a halo of search_radius, or of far_field.beyond with the whole field's coarse copy "
       "(each texel's horizons are its own)";

@@ -102,9 +102,7 @@ SunConfig read_sun_config(Params& in, const FieldShape& field) {
   c.directions = in.integer("directions", c.directions, 1, 4096);
   c.near_radius = in.number("near_radius", c.near_radius, 1, 64);
   c.layers = in.layers(sun_layer_names(), {"irradiation", "sun_hours"});
-  c.far_field = read_far_field(in, field);
-  if (c.far_field && field.wrap == Wrap::repeat)
-    in.fail("far_field", "needs a clamp field: a repeating field has no casters beyond its own period");
+  c.far_field = read_field_wide_far_field(in, field);
   return c;
 }
 
@@ -275,13 +273,9 @@ MethodInfo sun_method() {
   // A far field bounds the heights the horizons read exactly (P1Params::far_field): tiles with a halo of
   // `beyond` and the raster's coarse copy.
   m.reach = [](const MethodConfig& config) {
-    const SunConfig& c = config.get<SunConfig>();
-    return c.far_field ? c.far_field->beyond : std::numeric_limits<double>::infinity();
+    return far_field_reach(config.get<SunConfig>().far_field, std::numeric_limits<double>::infinity());
   };
-  m.far_cell = [](const MethodConfig& config) {
-    const SunConfig& c = config.get<SunConfig>();
-    return c.far_field ? c.far_field->cell : 0;
-  };
+  m.far_cell = [](const MethodConfig& config) { return far_field_cell(config.get<SunConfig>().far_field); };
   m.division_note =
       "texel tiles with a halo of the horizons' reach (each texel's sums are its own); runs "
       "whole on the farm";
