@@ -13,6 +13,7 @@
 #include "core/azimuth.hpp"
 #include "core/direction_blocks.hpp"
 #include "core/error.hpp"
+#include "core/page_buffer.hpp"
 #include "field/coarse_heights.hpp"
 #include "job/params.hpp"
 #include "methods/p1/far_horizons.hpp"
@@ -204,6 +205,11 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
   const double far = p.far_field ? coarse_bytes(shape.width, shape.height, p.far_field->cell) +
                                        p1::floor_bytes(shape.width, shape.height, p.far_field->cell)
                                  : 0.0;
+  // A direction block's horizon layers by direction before they are placed (HorizonPlanes), bytes a texel.
+  const int B = direction_block_count(p.directions);
+  const double planes = p.horizon_by_direction ? 0.0
+                                               : 4.0 * double((p.directions + B - 1) / B) *
+                                                     ((p.horizon ? 1 : 0) + (p.horizon_distance ? 1 : 0));
   HeightField field;  // the sweeps' plans need only the shape
   static_cast<FieldShape&>(field) = shape;
   const int longest =
@@ -223,16 +229,16 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
     // and one axis' lane layout (heights and window maxima, padded on the minor axis).
     const double layout = 2.0 * 4.0 * double(std::max(shape.width, shape.height)) *
                           double(std::min(shape.width, shape.height) + 2 * p1::kLanePad);
-    const double summing = (sums + block + normals + 8) * texels + layout;
+    const double summing = (sums + block + normals + 8 + planes) * texels + layout;
     // While they are finished: the layers, the sums that are not layers, the normals, the lights' sweeps.
     const double finishing =
         (layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) + normals) * texels +
         double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
     return std::max(summing, finishing) - layers * texels + far;
   }
-  double per_texel = p.direct && !p.ao ? 4 : 0;    // the ao sum behind a uniform sky's direct
-  if (facets) per_texel += 2 * 3 * 4 + 2 * 3 * 4;  // the facets' sums and their layers
-  if (direction_block_count(p.directions) > 1)     // one direction block's sums beside the total (compute_p1)
+  double per_texel = planes + (p.direct && !p.ao ? 4 : 0);  // and the ao sum behind a uniform sky's direct
+  if (facets) per_texel += 2 * 3 * 4 + 2 * 3 * 4;           // the facets' sums and their layers
+  if (direction_block_count(p.directions) > 1)  // one direction block's sums beside the total (compute_p1)
     per_texel += (p.direct ? 12
                   : p.ao   ? 4
                            : 0) +
@@ -290,6 +296,56 @@ P1Sums zero_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, 
   return r;
 }
 
+// A direction block's horizon layer (horizon or horizon_distance) as RowShading writes it, one plane of N
+// texels per direction of the block, and where it goes: into `out` of `per_texel` directions per texel at
+// direction `first` ([texel * per_texel + first + j] for the block's j-th), or, by direction, into
+// [(first + j) * N + texel], which are the planes themselves.
+struct HorizonPlanes {
+  float* planes = nullptr;
+  const float* own = nullptr;  // the planes when `out` is by texel (a PlaneScratch's)
+  float* out = nullptr;
+  std::size_t N = 0;
+  int per_texel = 0, first = 0, count = 0;
+
+  // Into the layer's order: each texel's `count` values contiguous, read from `count` sequential planes.
+  void place() const {
+    if (!own) return;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, N, 4096),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t t = r.begin(); t < r.end(); ++t) {
+                          float* o = out + t * std::size_t(per_texel) + std::size_t(first);
+                          for (int j = 0; j < count; ++j) o[j] = own[std::size_t(j) * N + t];
+                        }
+                      });
+  }
+};
+
+// The planes of a bake's direction blocks, allocated once (on huge pages, uninitialised: RowShading writes
+// every texel of a plane before it is placed).
+struct PlaneScratch {
+  PageBuffer<float> horizon, distance;
+  std::size_t horizon_n = 0, distance_n = 0;
+  float* get(bool distance_layer, std::size_t n) {
+    PageBuffer<float>& b = distance_layer ? distance : horizon;
+    std::size_t& have = distance_layer ? distance_n : horizon_n;
+    if (have < n) b = make_page_buffer<float>(n), have = n;
+    return b.get();
+  }
+};
+
+HorizonPlanes horizon_planes(float* out, int per_texel, int first, bool by_direction, std::size_t N,
+                             int count, PlaneScratch& scratch, bool distance_layer) {
+  HorizonPlanes h;
+  h.out = out, h.N = N, h.per_texel = per_texel, h.first = first, h.count = count;
+  if (by_direction) {
+    h.planes = out + std::size_t(first) * N;
+  } else {
+    h.planes = scratch.get(distance_layer, std::size_t(count) * N);
+    h.own = h.planes;
+  }
+  return h;
+}
+
 // The lighting of one row run of texels (base .. base + w - 1, at most 32) in direction k from their
 // horizon elevations e (dist: the horizon_distance layer's values, or null), at the texels' normals (and
 // the facets' normals FX[q], FY[q], FZ[q]), added to the block's sums; the horizon layers' values written.
@@ -303,13 +359,12 @@ struct RowShading {
   std::optional<p1::SwathProfiles> profiles;
   std::vector<float> cs, sn;  // the azimuths' cosines and sines
   std::vector<float>&ao_sum, &vsky_sum, &rgb_sum, &bent_sum, &fao, &fdr, &fdg, &fdb;
-  // The horizon layers: the caller's [texel * K + k] (by direction: [k * N + texel]) arrays, or the
-  // block's own (zero_sums); KH, KD their directions per texel.
+  // The block's horizon layers by direction, [(k - k_begin) * N + texel] (HorizonPlanes): each direction
+  // writes a contiguous run, where the layers' own order would scatter a store over K floats per texel.
   float *hz, *hd;
-  int KH, KD;
 
-  RowShading(const Scene& scene, const P1Params& params, int k_begin_, int k_end, P1Sums& r,
-             float* horizon_out, float* distance_out)
+  RowShading(const Scene& scene, const P1Params& params, int k_begin_, P1Sums& r, float* horizon_planes,
+             float* distance_planes)
       : p(params),
         N(scene.field.texel_count()),
         K(params.directions),
@@ -322,10 +377,8 @@ struct RowShading {
         fdr(r.fdr),
         fdg(r.fdg),
         fdb(r.fdb),
-        hz(horizon_out ? horizon_out : r.horizon.data()),
-        hd(distance_out ? distance_out : r.horizon_distance.data()),
-        KH(horizon_out ? params.directions : k_end - k_begin_),
-        KD(distance_out ? params.directions : k_end - k_begin_) {
+        hz(horizon_planes),
+        hd(distance_planes) {
     const Environment& env = scene.environment;
     uniform_env = env.is_uniform();
     need_ao = p1_sums_shape(scene, p).ao > 0;
@@ -421,12 +474,9 @@ struct RowShading {
           }
         }
       }
-    if (p.horizon)
-      for (int x = 0; x < w; ++x)
-        hz[p.horizon_by_direction ? std::size_t(k - k_begin + (KH == K ? k_begin : 0)) * N + base + x
-                                  : (base + x) * KH + (KH == K ? k : k - k_begin)] = se[x];
-    if (p.horizon_distance)
-      for (int x = 0; x < w; ++x) hd[(base + x) * KD + (KD == K ? k : k - k_begin)] = dist[x];
+    const std::size_t plane = std::size_t(k - k_begin) * N + base;
+    if (p.horizon) std::copy(se, se + w, hz + plane);
+    if (p.horizon_distance) std::copy(dist, dist + w, hd + plane);
   }
 };
 
@@ -527,11 +577,20 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
 
 P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
                       float* horizon_out, float* distance_out, const FieldNormals* normals,
-                      const p1::FloorGrid* floor) {
+                      const p1::FloorGrid* floor, PlaneScratch& scratch) {
   const HeightField& f = scene.field;
   const bool facets = p.direct && p.facet_direct;
   P1Sums r = zero_sums(scene, p, k_begin, k_end, !horizon_out, !distance_out);
-  const RowShading shade(scene, p, k_begin, k_end, r, horizon_out, distance_out);
+  const int K = p.directions, nb = k_end - k_begin;
+  HorizonPlanes hz, hd;
+  if (p.horizon)
+    hz = horizon_planes(horizon_out ? horizon_out : r.horizon.data(), horizon_out ? K : nb,
+                        horizon_out ? k_begin : 0, p.horizon_by_direction, f.texel_count(), nb, scratch,
+                        false);
+  if (p.horizon_distance)
+    hd = horizon_planes(distance_out ? distance_out : r.horizon_distance.data(), distance_out ? K : nb,
+                        distance_out ? k_begin : 0, false, f.texel_count(), nb, scratch, true);
+  const RowShading shade(scene, p, k_begin, r, hz.planes, hd.planes);
   if (f.wrap == Wrap::repeat) {
     strip_direction_sums(f, p, k_begin, k_end, rc, facets, shade);
   } else if (normals) {
@@ -541,6 +600,7 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
     const FieldNormals own = field_normals(f, facets);
     r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, own, floor, shade);
   }
+  hz.place(), hd.place();
   return r;
 }
 
@@ -550,7 +610,9 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
                          float* horizon_out, float* distance_out) {
   CoarseHeights own;
   const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own, scene.curvature);
-  return direction_sums(scene, p, k_begin, k_end, rc, horizon_out, distance_out, nullptr, floor.get());
+  PlaneScratch planes;
+  return direction_sums(scene, p, k_begin, k_end, rc, horizon_out, distance_out, nullptr, floor.get(),
+                        planes);
 }
 
 std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params& p, CoarseHeights& own,
@@ -583,7 +645,9 @@ void p1_add_sums(P1Sums& total, const P1Sums& block) {
 P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc) {
   const std::size_t N = scene.field.texel_count();
   const int K = p.directions, B = direction_block_count(K);
-  std::vector<float> horizon(p.horizon ? N * K : 0), distance(p.horizon_distance ? N * K : 0);
+  std::vector<float> horizon = make_page_vector<float>(p.horizon ? N * K : 0),
+                     distance = make_page_vector<float>(p.horizon_distance ? N * K : 0);
+  PlaneScratch planes;
   const double lights_share = p.direct && p.lights && !scene.lights.empty()
                                   ? double(scene.lights.size()) / double(K + scene.lights.size())
                                   : 0.0;
@@ -599,12 +663,13 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     P1Sums part = direction_sums(
         scene, p, k0, k1, sub_progress(rc, (1 - lights_share) * k0 / K, (1 - lights_share) * (k1 - k0) / K),
         horizon.empty() ? nullptr : horizon.data(), distance.empty() ? nullptr : distance.data(),
-        normals ? &*normals : nullptr, floor.get());
+        normals ? &*normals : nullptr, floor.get(), planes);
     if (b == 0)
       total = std::move(part);
     else
       p1_add_sums(total, part);
   }
+  planes = PlaneScratch();  // not held while the sums are finished
   total.horizon = std::move(horizon);
   total.horizon_distance = std::move(distance);
   return p1_finish(scene, p, std::move(total), sub_progress(rc, 1 - lights_share, lights_share));
