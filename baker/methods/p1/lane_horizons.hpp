@@ -13,13 +13,15 @@
 // per column the highest texel any crossing of such a ray can use (the texels within [e_lo, e_hi] of the
 // rays' lines, LaneDirection; the maximum of one or two LaneLayout::window values): from those, per
 // strip of eight lanes, the highest over each block, over 4, 16 and 64 blocks, and over all further
-// columns, one value per lane (an 8-wide load). A block is evaluated only when some lane's bound, seen
-// from that lane at the block's nearest crossing, could be steeper than the lane's best slope (plus the
-// tolerance): a bound is never below any crossing's slope, so skipping keeps the result exact, and the walk
-// stops when nothing further can beat any lane. The blocks of the previous group's casters (one column
-// behind on the same strip, whose casters are most often this group's) are evaluated first, so the best
-// slopes are high early and prune the most. With a tolerance tau > 0, a block or the rest is skipped unless
-// it can beat the best slope by more than tau: every slope is within tau of (and never above) the exact one.
+// columns, one value per lane (an 8-wide load). The texel's own block and the four after it are evaluated
+// whole (close to the texel a bound seldom rules a block out); further on, a block is evaluated only when
+// some lane's bound, seen from that lane at the block's nearest crossing, could be steeper than the lane's
+// best slope (plus the tolerance): a bound is never below any crossing's slope, so skipping keeps the result
+// exact, and the walk stops when nothing further can beat any lane. The blocks of the previous group's
+// casters (one column behind on the same strip, whose casters are most often this group's) are evaluated
+// first, so the best slopes are high early and prune the most. With a tolerance tau > 0, a block or the rest
+// is skipped unless it can beat the best slope by more than tau: every slope is within tau of (and never
+// above) the exact one.
 //
 // The arithmetic is the same per lane on every instruction set (adds, multiplies, maxima and compares, no
 // fused multiply-add), so the SSE2 and AVX2 kernels (lane_kernel.inc) give the same bits.
@@ -127,16 +129,30 @@ void lane_search_avx2(const HeightField& f, const LaneLayout& layout, const Lane
                       float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
                       LaneStats* stats);
 
+// What lane_directions keeps from one call to the next on the same field (a bake's direction blocks): the
+// last lane layout it built, so a block whose first axis is the previous block's last does not build it
+// again, and the per-texel slopes and casters. Memory only: no result depends on it.
+struct LaneReuse {
+  int axis = -1;  // the layout's (0: x-major, 1: y-major), -1: none built
+  LaneLayout layout;
+  std::vector<float> slope;
+  std::vector<std::int32_t> which;
+};
+
 // Every texel's horizon in the directions ks of spec (lane_plan's rays), clamp fields: the directions of
 // one axis at a time (the x-major ones first, each group in the order of ks), so one LaneLayout is held at
 // a time; after each direction's search, done(sd, d, slope, which) with lane_search's slope and which of
-// every texel. rc.check() before each direction.
+// every texel. rc.check() before each direction. reuse: kept between calls on the same field (or null).
 template <class Done>
 void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vector<int>& ks,
-                     double curvature, float tolerance, const RunControl& rc, Done&& done) {
+                     double curvature, float tolerance, const RunControl& rc, Done&& done,
+                     LaneReuse* reuse = nullptr) {
   const std::size_t N = f.texel_count();
-  std::vector<float> slope(N);
-  std::vector<std::int32_t> which(N);
+  LaneReuse own;
+  LaneReuse& r = reuse ? *reuse : own;
+  r.slope.resize(N), r.which.resize(N);
+  std::vector<float>& slope = r.slope;
+  std::vector<std::int32_t>& which = r.which;
   tbb::enumerable_thread_specific<LaneScratch> scratch;
   for (int axis = 0; axis < 2; ++axis) {
     std::vector<SweepDirection> dirs;
@@ -145,8 +161,12 @@ void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vec
       if ((std::fabs(sd.dx) >= std::fabs(sd.dy)) == (axis == 0)) dirs.push_back(sd);
     }
     if (dirs.empty()) continue;
-    LaneLayout layout;
-    layout.build(f, axis == 0);
+    if (r.axis != axis) {
+      r.layout = LaneLayout();  // the other axis' freed before this one is built
+      r.layout.build(f, axis == 0);
+      r.axis = axis;
+    }
+    const LaneLayout& layout = r.layout;
     for (const SweepDirection& sd : dirs) {
       rc.check();
       LaneDirection d;

@@ -89,11 +89,12 @@ FieldNormals field_normals(const HeightField& f, bool facets) {
 }
 
 // curvature: Scene::curvature, each crossing dropped by it (lane_horizons.hpp). floor: with a far field,
-// each horizon raised to the coarse copy's floor (far_floor.hpp); returns the largest slack it left.
+// each horizon raised to the coarse copy's floor (far_floor.hpp); returns the largest slack it left. reuse:
+// lane_directions' between the bake's blocks (or null).
 template <class Shade>
 double lane_direction_sums(const HeightField& f, double curvature, const P1Params& p, int k_begin, int k_end,
                            const RunControl& rc, bool facets, const FieldNormals& normals,
-                           const p1::FloorGrid* floor, const Shade& shade) {
+                           const p1::FloorGrid* floor, const Shade& shade, p1::LaneReuse* reuse) {
   const std::size_t N = f.texel_count();
   const int K = p.directions;
   const std::vector<float>&nx = normals.nx, &ny = normals.ny, &nz = normals.nz;
@@ -139,7 +140,8 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
           }
         });
         rc.report(double(++done) / double(k_end - k_begin));
-      });
+      },
+      reuse);
   if (row_slack.empty()) return 0.0;
   // Rounded up to a float, as the farm's blocks carry it (bake_p1.cpp far_slack@): the same bound either way.
   return double(p1::round_up_to_float(*std::max_element(row_slack.begin(), row_slack.end())));
@@ -277,13 +279,15 @@ namespace {
 
 // The block's accumulators: only what the requested layers need, each the layer it becomes (p1_finish
 // finishes them in place); the horizon layers' own arrays when the caller gives none (own_horizon,
-// own_distance): [texel * nb + k - k_begin] ([(k - k_begin) * N + texel] by direction).
+// own_distance): [texel * nb + k - k_begin] ([(k - k_begin) * N + texel] by direction). spare: arrays to
+// reuse (a finished block's), or empty.
 P1Sums zero_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, bool own_horizon,
-                 bool own_distance) {
+                 bool own_distance, P1Sums&& spare) {
   const std::size_t N = scene.field.texel_count();
   const std::size_t nb = std::size_t(k_end - k_begin);
   const P1SumsShape shape = p1_sums_shape(scene, p);
-  P1Sums r;
+  P1Sums r = std::move(spare);  // a previous block's arrays, zeroed in place (no fresh pages to fault in)
+  r.far_slack = 0;
   r.k_begin = k_begin, r.k_end = k_end;
   r.ao.assign(shape.ao * N, 0.0f), r.vsky.assign(shape.vsky * N, 0.0f);
   r.rgb.assign(shape.rgb * N, 0.0f);    // [3 * texel + c]
@@ -302,7 +306,7 @@ P1Sums zero_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, 
 // [(first + j) * N + texel], which are the planes themselves.
 struct HorizonPlanes {
   float* planes = nullptr;
-  const float* own = nullptr;  // the planes when `out` is by texel (a PlaneScratch's)
+  const float* own = nullptr;  // the planes when `out` is by texel (a BlockScratch's)
   float* out = nullptr;
   std::size_t N = 0;
   int per_texel = 0, first = 0, count = 0;
@@ -320,9 +324,11 @@ struct HorizonPlanes {
   }
 };
 
-// The planes of a bake's direction blocks, allocated once (on huge pages, uninitialised: RowShading writes
-// every texel of a plane before it is placed).
-struct PlaneScratch {
+// What a bake's direction blocks reuse: the horizon planes, allocated once (on huge pages, uninitialised:
+// RowShading writes every texel of a plane before it is placed), and the lane search's layout and arrays.
+struct BlockScratch {
+  p1::LaneReuse lanes;
+  P1Sums spare;  // the last block's sums once added to the total
   PageBuffer<float> horizon, distance;
   std::size_t horizon_n = 0, distance_n = 0;
   float* get(bool distance_layer, std::size_t n) {
@@ -334,7 +340,7 @@ struct PlaneScratch {
 };
 
 HorizonPlanes horizon_planes(float* out, int per_texel, int first, bool by_direction, std::size_t N,
-                             int count, PlaneScratch& scratch, bool distance_layer) {
+                             int count, BlockScratch& scratch, bool distance_layer) {
   HorizonPlanes h;
   h.out = out, h.N = N, h.per_texel = per_texel, h.first = first, h.count = count;
   if (by_direction) {
@@ -577,10 +583,10 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
 
 P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, const RunControl& rc,
                       float* horizon_out, float* distance_out, const FieldNormals* normals,
-                      const p1::FloorGrid* floor, PlaneScratch& scratch) {
+                      const p1::FloorGrid* floor, BlockScratch& scratch) {
   const HeightField& f = scene.field;
   const bool facets = p.direct && p.facet_direct;
-  P1Sums r = zero_sums(scene, p, k_begin, k_end, !horizon_out, !distance_out);
+  P1Sums r = zero_sums(scene, p, k_begin, k_end, !horizon_out, !distance_out, std::move(scratch.spare));
   const int K = p.directions, nb = k_end - k_begin;
   HorizonPlanes hz, hd;
   if (p.horizon)
@@ -594,11 +600,12 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
   if (f.wrap == Wrap::repeat) {
     strip_direction_sums(f, p, k_begin, k_end, rc, facets, shade);
   } else if (normals) {
-    r.far_slack =
-        lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, floor, shade);
+    r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, floor,
+                                      shade, &scratch.lanes);
   } else {
     const FieldNormals own = field_normals(f, facets);
-    r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, own, floor, shade);
+    r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, own, floor, shade,
+                                      &scratch.lanes);
   }
   hz.place(), hd.place();
   return r;
@@ -610,7 +617,7 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
                          float* horizon_out, float* distance_out) {
   CoarseHeights own;
   const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own, scene.curvature);
-  PlaneScratch planes;
+  BlockScratch planes;
   return direction_sums(scene, p, k_begin, k_end, rc, horizon_out, distance_out, nullptr, floor.get(),
                         planes);
 }
@@ -647,7 +654,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   const int K = p.directions, B = direction_block_count(K);
   std::vector<float> horizon = make_page_vector<float>(p.horizon ? N * K : 0),
                      distance = make_page_vector<float>(p.horizon_distance ? N * K : 0);
-  PlaneScratch planes;
+  BlockScratch planes;
   const double lights_share = p.direct && p.lights && !scene.lights.empty()
                                   ? double(scene.lights.size()) / double(K + scene.lights.size())
                                   : 0.0;
@@ -664,12 +671,14 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
         scene, p, k0, k1, sub_progress(rc, (1 - lights_share) * k0 / K, (1 - lights_share) * (k1 - k0) / K),
         horizon.empty() ? nullptr : horizon.data(), distance.empty() ? nullptr : distance.data(),
         normals ? &*normals : nullptr, floor.get(), planes);
-    if (b == 0)
+    if (b == 0) {
       total = std::move(part);
-    else
+    } else {
       p1_add_sums(total, part);
+      planes.spare = std::move(part);
+    }
   }
-  planes = PlaneScratch();  // not held while the sums are finished
+  planes = BlockScratch();  // not held while the sums are finished
   total.horizon = std::move(horizon);
   total.horizon_distance = std::move(distance);
   return p1_finish(scene, p, std::move(total), sub_progress(rc, 1 - lights_share, lights_share));
