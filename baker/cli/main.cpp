@@ -79,7 +79,8 @@ hfbake::BakeOptions bake_options(const std::vector<std::string>& jobs, const Run
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+int run(int argc, char** argv) {
   CLI::App app{"hfbake: offline baker of ambient occlusion and lighting for height fields"};
   app.require_subcommand(0, 1);
   app.set_version_flag("--version", std::string("hfbake ") + hfbake::hfbake_version());
@@ -373,4 +374,19 @@ int main(int argc, char** argv) {
     sigaction(sig, &action, nullptr);
   }
   return hfbake::run_bake(bake, g_interrupted);
+}
+
+}  // namespace
+
+// Every command reports its own errors; what escapes one (a module that cannot be loaded, memory) is still
+// one line and a non-zero exit.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::string what = e.what();
+    if (const auto nl = what.find('\n'); nl != std::string::npos) what.resize(nl);
+    std::fprintf(stderr, "hfbake: error: %s\n", what.c_str());
+    return 1;
+  }
 }

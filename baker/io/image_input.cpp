@@ -2,8 +2,6 @@
 
 #include <unistd.h>
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
@@ -15,6 +13,7 @@
 
 #include "core/error.hpp"
 #include "io/color.hpp"
+#include "io/oiio_codec.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -199,44 +198,39 @@ const char* reader_for(const fs::path& file, const InputSite& site) {
            "); convert it, e.g. oiiotool FILE -o FILE.exr");
 }
 
-std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& file, const InputSite& site) {
+std::unique_ptr<OiioReader> open_input(const fs::path& file, const InputSite& site) {
   std::error_code ec;
   if (!fs::exists(file, ec)) fail(site, file, "no such file");
   if (fs::is_directory(file, ec)) fail(site, file, "is a folder, not an image");
   const char* const reader = reader_for(file, site);
   check_exr_header(file, site);
   check_jpeg_metadata(file, site);
-  // Only that format's reader: create() by format name does not open, so nothing falls back to the others.
-  auto in = OIIO::ImageInput::create(reader);
-  if (!in) fail(site, file, "cannot read the image: " + first_line(OIIO::geterror()));
-  OIIO::ImageSpec spec;
-  if (!in->open(file.string(), spec)) {
-    const std::string why = in->geterror();
-    fail(site, file, "cannot read the image: " + first_line(why.empty() ? OIIO::geterror() : why));
-  }
+  // Only that format's reader: nothing falls back to the others.
+  std::string why;
+  auto in = oiio_codec().open(file.string(), reader, why);
+  if (!in) fail(site, file, "cannot read the image: " + first_line(why));
   return in;
 }
 
-ImageInfo info_of(const OIIO::ImageSpec& spec, const OIIO::ImageInput& in) {
+ImageInfo info_of(const OiioHeader& spec) {
   ImageInfo info;
   info.width = spec.width;
   info.height = spec.height;
-  info.channels = spec.nchannels;
-  info.channel_names = spec.channelnames;
+  info.channels = spec.channels;
+  info.channel_names = spec.channel_names;
   for (int c = int(info.channel_names.size()); c < info.channels; ++c)
     info.channel_names.push_back(std::to_string(c));
-  const auto base = spec.format.basetype;
-  info.float_data =
-      base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::DOUBLE;
-  info.format = in.format_name();
-  for (int c = 0; c < info.channels; ++c) info.sample_types.push_back(spec.channelformat(c).c_str());
+  info.float_data = oiio_sample_is_float(spec.format);
+  info.format = spec.format_name;
+  for (int c = 0; c < info.channels; ++c)
+    info.sample_types.push_back(spec.channel_type_names[std::size_t(c)]);
   return info;
 }
 
-void check_spec(const OIIO::ImageSpec& spec, const fs::path& file, const InputSite& site) {
+void check_spec(const OiioHeader& spec, const fs::path& file, const InputSite& site) {
   if (spec.deep) fail(site, file, "deep images are not supported");
   if (spec.depth > 1) fail(site, file, "volume images are not supported");
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+  if (spec.width <= 0 || spec.height <= 0 || spec.channels <= 0)
     fail(site, file,
          "the image is empty (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) + ")");
 }
@@ -250,9 +244,9 @@ std::string lower(std::string s) {
 
 ImageInfo probe_image(const fs::path& file, const InputSite& site) {
   auto in = open_input(file, site);
-  const OIIO::ImageSpec& spec = in->spec();
+  const OiioHeader& spec = in->header();
   check_spec(spec, file, site);
-  return info_of(spec, *in);
+  return info_of(spec);
 }
 
 namespace {
@@ -268,30 +262,30 @@ void stored_to_float(const void* src, std::size_t n, float* dst) {
   for (std::size_t i = 0; i < n; ++i) dst[i] = float(s[i]);
 }
 
-bool integer_to_float(OIIO::TypeDesc type, const void* src, std::size_t n, float* dst) {
-  switch (type.basetype) {
-    case OIIO::TypeDesc::UINT8:
+bool integer_to_float(OiioSample type, const void* src, std::size_t n, float* dst) {
+  switch (type) {
+    case OiioSample::uint8:
       stored_to_float<std::uint8_t>(src, n, dst);
       return true;
-    case OIIO::TypeDesc::INT8:
+    case OiioSample::int8:
       stored_to_float<std::int8_t>(src, n, dst);
       return true;
-    case OIIO::TypeDesc::UINT16:
+    case OiioSample::uint16:
       stored_to_float<std::uint16_t>(src, n, dst);
       return true;
-    case OIIO::TypeDesc::INT16:
+    case OiioSample::int16:
       stored_to_float<std::int16_t>(src, n, dst);
       return true;
-    case OIIO::TypeDesc::UINT32:
+    case OiioSample::uint32:
       stored_to_float<std::uint32_t>(src, n, dst);
       return true;
-    case OIIO::TypeDesc::INT32:
+    case OiioSample::int32:
       stored_to_float<std::int32_t>(src, n, dst);
       return true;
-    case OIIO::TypeDesc::UINT64:
+    case OiioSample::uint64:
       stored_to_float<std::uint64_t>(src, n, dst);
       return true;
-    case OIIO::TypeDesc::INT64:
+    case OiioSample::int64:
       stored_to_float<std::int64_t>(src, n, dst);
       return true;
     default:
@@ -342,45 +336,39 @@ Image read_channels(const fs::path& file, const InputSite& site, int chbegin, in
                     IntegerSamples integers, const ReadProgress& progress = {}) {
   const LibraryStderr quiet;
   auto in = open_input(file, site);
-  const OIIO::ImageSpec spec = in->spec();
+  const OiioHeader spec = in->header();
   check_spec(spec, file, site);
-  chbegin = std::clamp(chbegin, 0, spec.nchannels - 1);
-  chend = std::clamp(chend, chbegin + 1, spec.nchannels);
+  chbegin = std::clamp(chbegin, 0, spec.channels - 1);
+  chend = std::clamp(chend, chbegin + 1, spec.channels);
   const std::size_t row = std::size_t(spec.width) * std::size_t(chend - chbegin);
   Image image;
-  image.info = info_of(spec, *in);
+  image.info = info_of(spec);
   image.pixels.resize(row * std::size_t(spec.height));
   const int band = spec.tile_width > 0 ? std::max(1, spec.tile_height)
                                        : std::max(16, int((std::size_t(4) << 20) / (4 * row)));
-  const OIIO::TypeDesc stored = spec.channelformat(chbegin);
+  const OiioSample stored = spec.channel_formats[std::size_t(chbegin)];
   const bool as_stored = integers == IntegerSamples::stored && chend - chbegin == 1 &&
-                         stored.basetype != OIIO::TypeDesc::FLOAT &&
-                         stored.basetype != OIIO::TypeDesc::HALF && stored.basetype != OIIO::TypeDesc::DOUBLE;
-  const OIIO::TypeDesc read_type = as_stored ? stored : OIIO::TypeDesc::FLOAT;
+                         !oiio_sample_is_float(stored) && oiio_sample_bytes(stored) > 0;
+  const OiioSample read_type = as_stored ? stored : OiioSample::float32;
   std::vector<unsigned char> scratch;
-  if (as_stored) scratch.resize(std::size_t(band) * row * stored.size());
+  if (as_stored) scratch.resize(std::size_t(band) * row * oiio_sample_bytes(stored));
   for (int y0 = 0; y0 < spec.height; y0 += band) {
     const int y1 = std::min(spec.height, y0 + band);
     float* out = image.pixels.data() + std::size_t(y0) * row;
     void* dst = as_stored ? static_cast<void*>(scratch.data()) : static_cast<void*>(out);
-    const bool ok =
-        spec.tile_width > 0
-            ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y0, spec.y + y1, spec.z, spec.z + 1,
-                             chbegin, chend, read_type, dst)
-            : in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, spec.z, chbegin, chend, read_type, dst);
-    // Some readers report a short file only through the error state.
-    if (!ok || in->has_error()) {
-      std::string err = in->geterror();
-      if (err.empty()) err = OIIO::geterror();
+    std::string err;
+    if (!in->read_rows(y0, y1, chbegin, chend, read_type, dst, err)) {
       fail(site, file,
            "cannot decode the image (corrupt or truncated?) at row " + std::to_string(y0) + ": " +
                first_line(err));
     }
     if (as_stored && !integer_to_float(stored, scratch.data(), std::size_t(y1 - y0) * row, out))
-      fail(site, file, std::string("cannot decode the image: unsupported sample type ") + stored.c_str());
+      fail(site, file,
+           "cannot decode the image: unsupported sample type " +
+               spec.channel_type_names[std::size_t(chbegin)]);
     if (progress) progress(double(y1) / spec.height);
   }
-  in->close();
+  in.reset();
   return image;
 }
 

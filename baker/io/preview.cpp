@@ -1,10 +1,5 @@
 #include "io/preview.hpp"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -14,6 +9,7 @@
 #include "core/error.hpp"
 #include "io/color.hpp"
 #include "io/exr_output.hpp"
+#include "io/oiio_codec.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -96,12 +92,12 @@ void write_preview(const fs::path& file, const LayerSet& layers, const Layer& la
   const fs::path tmp = temporary_sibling(file);
   // The temporary name must still end in .png so OpenImageIO picks the PNG writer.
   const fs::path tmp_png = tmp.string() + ".png";
-  auto out = OIIO::ImageOutput::create("png");
-  OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT8);
-  spec.attribute("oiio:ColorSpace", direction ? "Raw" : "sRGB");
-  if (!out || !out->open(tmp_png.string(), spec) || !out->write_image(OIIO::TypeDesc::UINT8, bytes.data()) ||
-      !out->close()) {
-    std::string err = out ? out->geterror() : OIIO::geterror();
+  OiioWrite png;
+  png.format = "png";
+  png.width = w, png.height = h, png.channels = 3;
+  png.text_attributes = {{"oiio:ColorSpace", direction ? "Raw" : "sRGB"}};
+  std::string err;
+  if (!oiio_codec().write(tmp_png.string(), png, bytes.data(), err)) {
     if (const auto nl = err.find('\n'); nl != std::string::npos) err.resize(nl);
     fs::remove(tmp_png, ec);
     throw InputError(file.string(), "", "cannot write the preview: " + err);
@@ -118,18 +114,10 @@ std::string encode_png(int width, int height, int channels, const std::vector<st
   if (width <= 0 || height <= 0 || (channels != 1 && channels != 3) ||
       pixels.size() != std::size_t(width) * height * channels)
     throw std::invalid_argument("encode_png: bad image size or channel count");
-  std::vector<unsigned char> bytes;
-  OIIO::Filesystem::IOVecOutput proxy(bytes);
-  // The name only selects the PNG writer; nothing is written to disk through the proxy.
-  auto out = OIIO::ImageOutput::create("memory.png");
-  OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
-  if (!out || !out->supports("ioproxy") || !out->set_ioproxy(&proxy) || !out->open("memory.png", spec) ||
-      !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close()) {
-    std::string err = out ? out->geterror() : OIIO::geterror();
-    if (err.empty()) err = "the PNG writer does not write to memory";
+  std::string png, err;
+  if (!oiio_codec().encode_png(width, height, channels, pixels.data(), png, err))
     throw std::runtime_error("encode_png: " + err);
-  }
-  return std::string(bytes.begin(), bytes.end());
+  return png;
 }
 
 std::vector<float> resize_pixels(const std::vector<float>& pixels, int width, int height, int channels,
@@ -138,18 +126,10 @@ std::vector<float> resize_pixels(const std::vector<float>& pixels, int width, in
       pixels.size() != std::size_t(width) * height * channels)
     throw std::invalid_argument("resize_pixels: bad image size or channel count");
   if (out_width == width && out_height == height) return pixels;
-  const OIIO::ImageSpec in_spec(width, height, channels, OIIO::TypeDesc::FLOAT);
-  // Wraps the caller's pixels without a copy (ImageBuf only reads them here).
-  const OIIO::ImageBuf src(in_spec, const_cast<float*>(pixels.data()));
-  OIIO::ImageSpec out_spec(out_width, out_height, channels, OIIO::TypeDesc::FLOAT);
-  OIIO::ImageBuf dst(out_spec);
-  // nthreads = 1: the result must not depend on how many threads happen to be free.
-  if (!OIIO::ImageBufAlgo::resize(dst, src, filter, 0.0f, OIIO::ROI(), 1))
-    throw std::runtime_error("resize_pixels: " + dst.geterror());
-  std::vector<float> out(std::size_t(out_width) * out_height * channels);
-  if (!dst.get_pixels(OIIO::ROI(0, out_width, 0, out_height, 0, 1, 0, channels), OIIO::TypeDesc::FLOAT,
-                      out.data()))
-    throw std::runtime_error("resize_pixels: " + dst.geterror());
+  std::vector<float> out;
+  std::string err;
+  if (!oiio_codec().resize(pixels.data(), width, height, channels, out_width, out_height, filter, out, err))
+    throw std::runtime_error("resize_pixels: " + err);
   return out;
 }
 

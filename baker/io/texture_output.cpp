@@ -1,13 +1,12 @@
 #include "io/texture_output.hpp"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include "core/error.hpp"
 #include "io/exr_output.hpp"
+#include "io/oiio_codec.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -178,16 +177,17 @@ namespace {
 void write_exr_texture(const fs::path& tmp, const fs::path& file, const LayerSet& layers,
                        const TextureSpec& spec) {
   const TextureValues v = texture_values(layers, spec);
-  OIIO::ImageSpec ispec(v.width, v.height, v.channels, OIIO::TypeDesc::HALF);
-  ispec.channelnames = v.channels == 1   ? std::vector<std::string>{"Y"}
-                       : v.channels == 3 ? std::vector<std::string>{"R", "G", "B"}
-                                         : std::vector<std::string>{"R", "G", "B", "A"};
-  ispec.alpha_channel = v.channels == 4 ? 3 : -1;
-  ispec.attribute("compression", "zip");
-  auto out = OIIO::ImageOutput::create("exr");
-  if (!out || !out->open(tmp.string(), ispec) || !out->write_image(OIIO::TypeDesc::FLOAT, v.values.data()) ||
-      !out->close()) {
-    std::string err = out ? out->geterror() : OIIO::geterror();
+  OiioWrite w;
+  w.format = "exr";
+  w.width = v.width, w.height = v.height, w.channels = v.channels;
+  w.stored = OiioSample::half, w.given = OiioSample::float32;
+  w.channel_names = v.channels == 1   ? std::vector<std::string>{"Y"}
+                    : v.channels == 3 ? std::vector<std::string>{"R", "G", "B"}
+                                      : std::vector<std::string>{"R", "G", "B", "A"};
+  w.alpha_channel = v.channels == 4 ? 3 : -1;
+  w.text_attributes = {{"compression", "zip"}};
+  std::string err;
+  if (!oiio_codec().write(tmp.string(), w, v.values.data(), err)) {
     if (const auto nl = err.find('\n'); nl != std::string::npos) err.resize(nl);
     std::error_code ec;
     fs::remove(tmp, ec);
@@ -213,15 +213,18 @@ TextureClipping write_texture(const fs::path& file, const LayerSet& layers, cons
   }
   const TexturePixels px = texture_pixels(layers, spec);
   if (spec.bits == 16 && ext == ".tga") throw std::logic_error("write_texture: TGA holds 8 bits");
-  const OIIO::TypeDesc type = spec.bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16;
-  OIIO::ImageSpec ispec(px.width, px.height, px.channels, type);
-  if (px.channels == 4) ispec.alpha_channel = 3;
+  OiioWrite w;
+  w.format = ext.substr(1);
+  w.width = px.width, w.height = px.height, w.channels = px.channels;
+  w.stored = w.given = spec.bits == 8 ? OiioSample::uint8 : OiioSample::uint16;
+  if (px.channels == 4) w.alpha_channel = 3;
   // Data, not colour, unless the sRGB curve was asked for: no gAMA/sRGB chunk that a viewer would apply.
-  if (spec.transfer == Transfer::srgb && !spec.normal_map) ispec.attribute("oiio:ColorSpace", "sRGB");
-  if (ext == ".tif") ispec.attribute("compression", "zip");
-  if (ext == ".tga") ispec.attribute("compression", "rle");
+  if (spec.transfer == Transfer::srgb && !spec.normal_map)
+    w.text_attributes.push_back({"oiio:ColorSpace", "sRGB"});
+  if (ext == ".tif") w.text_attributes.push_back({"compression", "zip"});
+  if (ext == ".tga") w.text_attributes.push_back({"compression", "rle"});
   // A packed RGBA texture's alpha is data of its own: never premultiplied into RGB.
-  ispec.attribute("oiio:UnassociatedAlpha", 1);
+  w.int_attributes.push_back({"oiio:UnassociatedAlpha", 1});
   std::vector<std::uint8_t> bytes;
   const void* data = px.values.data();
   if (spec.bits == 8) {
@@ -230,9 +233,8 @@ TextureClipping write_texture(const fs::path& file, const LayerSet& layers, cons
   }
   const fs::path tmp = temporary_sibling(file).string() + ext;  // keeps the extension: it picks the writer
   std::error_code ec;
-  auto out = OIIO::ImageOutput::create(ext.substr(1));
-  if (!out || !out->open(tmp.string(), ispec) || !out->write_image(type, data) || !out->close()) {
-    std::string err = out ? out->geterror() : OIIO::geterror();
+  std::string err;
+  if (!oiio_codec().write(tmp.string(), w, data, err)) {
     if (const auto nl = err.find('\n'); nl != std::string::npos) err.resize(nl);
     fs::remove(tmp, ec);
     throw InputError(file.string(), "", "cannot write the texture: " + err);

@@ -103,6 +103,37 @@ TEST_F(Cli, VersionNamesTheRevisionItWasBuiltFrom) {
       << version << ": built from " << built << ", whose sources differ from HEAD's (" << rev << ")";
 }
 
+TEST_F(Cli, OpenImageIOIsLoadedOnlyForImageFiles) {
+  // OpenImageIO and the libraries it pulls in cost every process about 0.4 s of CPU to load
+  // (io/oiio_codec.hpp): a bake that reads and writes no image file must not load them; one that writes a
+  // PNG preview must, and does.
+  const fs::path plain = write_job("plain.json", [] {
+    nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}, {"seed", 1}}}});
+    j["output"]["previews"] = false;
+    return j;
+  }());
+  const fs::path with_preview = write_job("preview.json", [] {
+    nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}, {"seed", 1}}}});
+    j["name"] = "p";
+    j["output"]["previews"] = true;
+    return j;
+  }());
+  setenv("LD_DEBUG", "files", 1);
+  const Result a = hfbake("bake " + plain.string() + " --no-cache");
+  const Result b = hfbake("bake " + with_preview.string() + " --no-cache");
+  unsetenv("LD_DEBUG");
+  ASSERT_EQ(a.exit_code, 0) << a.err.substr(a.err.size() > 2000 ? a.err.size() - 2000 : 0);
+  ASSERT_EQ(b.exit_code, 0) << b.err.substr(b.err.size() > 2000 ? b.err.size() - 2000 : 0);
+  EXPECT_EQ(a.err.find("libOpenImageIO"), std::string::npos)
+      << "a bake without image files loaded OpenImageIO";
+  EXPECT_EQ(a.err.find("libhfbake_oiio"), std::string::npos);
+  EXPECT_NE(b.err.find("libhfbake_oiio"), std::string::npos);
+  bool png = false;
+  for (const auto& e : fs::recursive_directory_iterator(dir_ / "out"))
+    png = png || (e.path().extension() == ".png" && e.path().filename().string().rfind("p", 0) == 0);
+  EXPECT_TRUE(png) << "the preview bake wrote no PNG";
+}
+
 TEST_F(Cli, MalformedJson) {
   const fs::path p = dir_ / "bad.json";
   std::ofstream(p) << "{\"version\": 1,,}";

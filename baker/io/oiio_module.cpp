@@ -1,0 +1,204 @@
+// libhfbake_oiio.so: OpenImageIO behind io/oiio_codec.hpp's boundary. It links OpenImageIO and nothing of
+// hfbake's; the executable loads it with dlopen the first time an image file is read or written.
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+
+#include "io/oiio_codec.hpp"
+
+namespace hfbake {
+namespace {
+
+OiioSample sample_of(OIIO::TypeDesc t) {
+  switch (t.basetype) {
+    case OIIO::TypeDesc::UINT8:
+      return OiioSample::uint8;
+    case OIIO::TypeDesc::INT8:
+      return OiioSample::int8;
+    case OIIO::TypeDesc::UINT16:
+      return OiioSample::uint16;
+    case OIIO::TypeDesc::INT16:
+      return OiioSample::int16;
+    case OIIO::TypeDesc::UINT32:
+      return OiioSample::uint32;
+    case OIIO::TypeDesc::INT32:
+      return OiioSample::int32;
+    case OIIO::TypeDesc::UINT64:
+      return OiioSample::uint64;
+    case OIIO::TypeDesc::INT64:
+      return OiioSample::int64;
+    case OIIO::TypeDesc::HALF:
+      return OiioSample::half;
+    case OIIO::TypeDesc::FLOAT:
+      return OiioSample::float32;
+    case OIIO::TypeDesc::DOUBLE:
+      return OiioSample::float64;
+    default:
+      return OiioSample::other;
+  }
+}
+
+OIIO::TypeDesc type_of(OiioSample s) {
+  switch (s) {
+    case OiioSample::uint8:
+      return OIIO::TypeDesc::UINT8;
+    case OiioSample::int8:
+      return OIIO::TypeDesc::INT8;
+    case OiioSample::uint16:
+      return OIIO::TypeDesc::UINT16;
+    case OiioSample::int16:
+      return OIIO::TypeDesc::INT16;
+    case OiioSample::uint32:
+      return OIIO::TypeDesc::UINT32;
+    case OiioSample::int32:
+      return OIIO::TypeDesc::INT32;
+    case OiioSample::uint64:
+      return OIIO::TypeDesc::UINT64;
+    case OiioSample::int64:
+      return OIIO::TypeDesc::INT64;
+    case OiioSample::half:
+      return OIIO::TypeDesc::HALF;
+    case OiioSample::float32:
+      return OIIO::TypeDesc::FLOAT;
+    case OiioSample::float64:
+      return OIIO::TypeDesc::DOUBLE;
+    default:
+      return OIIO::TypeDesc::UNKNOWN;
+  }
+}
+
+// The object's message, else the library's global one.
+std::string message(const std::string& own) {
+  return own.empty() ? OIIO::geterror() : own;
+}
+
+class Reader final : public OiioReader {
+ public:
+  explicit Reader(std::unique_ptr<OIIO::ImageInput> in) : in_(std::move(in)) {
+    const OIIO::ImageSpec& s = in_->spec();
+    h_.width = s.width, h_.height = s.height, h_.channels = s.nchannels, h_.depth = s.depth;
+    h_.x = s.x, h_.y = s.y, h_.z = s.z;
+    h_.tile_width = s.tile_width, h_.tile_height = s.tile_height;
+    h_.deep = s.deep;
+    h_.format = sample_of(s.format);
+    h_.channel_names = s.channelnames;
+    for (int c = 0; c < s.nchannels; ++c) {
+      h_.channel_formats.push_back(sample_of(s.channelformat(c)));
+      h_.channel_type_names.push_back(s.channelformat(c).c_str());
+    }
+    h_.format_name = in_->format_name();
+  }
+  ~Reader() override { in_->close(); }
+  const OiioHeader& header() const override { return h_; }
+  bool read_rows(int y0, int y1, int c0, int c1, OiioSample as, void* dst, std::string& error) override {
+    const OIIO::TypeDesc t = type_of(as);
+    const bool ok = h_.tile_width > 0 ? in_->read_tiles(0, 0, h_.x, h_.x + h_.width, h_.y + y0, h_.y + y1,
+                                                        h_.z, h_.z + 1, c0, c1, t, dst)
+                                      : in_->read_scanlines(0, 0, h_.y + y0, h_.y + y1, h_.z, c0, c1, t, dst);
+    // Some readers report a short file only through the error state.
+    if (ok && !in_->has_error()) return true;
+    error = message(in_->geterror());
+    return false;
+  }
+
+ private:
+  std::unique_ptr<OIIO::ImageInput> in_;
+  OiioHeader h_;
+};
+
+std::unique_ptr<OiioReader> open(const std::string& path, const std::string& reader, std::string& error) {
+  try {
+    // create() by format name does not open, so nothing falls back to the other readers.
+    auto in = OIIO::ImageInput::create(reader);
+    if (!in) {
+      error = message("");
+      return nullptr;
+    }
+    OIIO::ImageSpec spec;
+    if (!in->open(path, spec)) {
+      error = message(in->geterror());
+      return nullptr;
+    }
+    return std::make_unique<Reader>(std::move(in));
+  } catch (const std::exception& e) {
+    error = e.what();
+    return nullptr;
+  }
+}
+
+OIIO::ImageSpec spec_of(const OiioWrite& w) {
+  OIIO::ImageSpec spec(w.width, w.height, w.channels, type_of(w.stored));
+  if (!w.channel_names.empty()) spec.channelnames = w.channel_names;
+  spec.alpha_channel = w.alpha_channel;
+  for (const auto& [name, value] : w.text_attributes) spec.attribute(name, value);
+  for (const auto& [name, value] : w.int_attributes) spec.attribute(name, value);
+  return spec;
+}
+
+bool write(const std::string& path, const OiioWrite& w, const void* pixels, std::string& error) {
+  try {
+    auto out = OIIO::ImageOutput::create(w.format);
+    if (!out || !out->open(path, spec_of(w)) || !out->write_image(type_of(w.given), pixels) ||
+        !out->close()) {
+      error = message(out ? out->geterror() : "");
+      return false;
+    }
+    return true;
+  } catch (const std::exception& e) {
+    error = e.what();
+    return false;
+  }
+}
+
+bool encode_png(int width, int height, int channels, const std::uint8_t* pixels, std::string& png,
+                std::string& error) {
+  try {
+    std::vector<unsigned char> bytes;
+    OIIO::Filesystem::IOVecOutput proxy(bytes);
+    // The name only selects the PNG writer; nothing is written to disk through the proxy.
+    auto out = OIIO::ImageOutput::create("memory.png");
+    const OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
+    if (!out || !out->supports("ioproxy") || !out->set_ioproxy(&proxy) || !out->open("memory.png", spec) ||
+        !out->write_image(OIIO::TypeDesc::UINT8, pixels) || !out->close()) {
+      error = out ? out->geterror() : OIIO::geterror();
+      if (error.empty()) error = "the PNG writer does not write to memory";
+      return false;
+    }
+    png.assign(bytes.begin(), bytes.end());
+    return true;
+  } catch (const std::exception& e) {
+    error = e.what();
+    return false;
+  }
+}
+
+bool resize(const float* pixels, int width, int height, int channels, int out_width, int out_height,
+            const std::string& filter, std::vector<float>& out, std::string& error) {
+  try {
+    const OIIO::ImageSpec in_spec(width, height, channels, OIIO::TypeDesc::FLOAT);
+    // Wraps the caller's pixels without a copy (ImageBuf only reads them here).
+    const OIIO::ImageBuf src(in_spec, const_cast<float*>(pixels));
+    OIIO::ImageBuf dst(OIIO::ImageSpec(out_width, out_height, channels, OIIO::TypeDesc::FLOAT));
+    out.assign(std::size_t(out_width) * out_height * channels, 0.0f);
+    if (!OIIO::ImageBufAlgo::resize(dst, src, filter, 0.0f, OIIO::ROI(), 1) ||
+        !dst.get_pixels(OIIO::ROI(0, out_width, 0, out_height, 0, 1, 0, channels), OIIO::TypeDesc::FLOAT,
+                        out.data())) {
+      error = dst.geterror();
+      return false;
+    }
+    return true;
+  } catch (const std::exception& e) {
+    error = e.what();
+    return false;
+  }
+}
+
+const OiioCodec kCodec{kOiioCodecVersion, open, write, encode_png, resize};
+
+}  // namespace
+}  // namespace hfbake
+
+extern "C" __attribute__((visibility("default"))) const hfbake::OiioCodec* hfbake_oiio_codec() {
+  return &hfbake::kCodec;
+}
