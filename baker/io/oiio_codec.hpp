@@ -1,6 +1,6 @@
 // OpenImageIO behind a boundary. The library and the 250-odd shared libraries it loads (codecs, video,
-// medical and volume formats) cost every process about 0.4 s of CPU to map and relocate, more than a
-// 512² bake. They live in a module of their own, libhfbake_oiio.so (oiio_module.cpp), loaded the first time
+// medical and volume formats) cost a process about 0.4 s of CPU to map and relocate at start-up. They live
+// in a module of their own, libhfbake_oiio.so (oiio_module.cpp), loaded the first time
 // an image file is read or written: a bake of a GeoTIFF or procedural field that writes EXRs and GeoTIFFs,
 // `validate` and `--help` never load it. image_input, preview and texture_output call it through
 // oiio_codec().
