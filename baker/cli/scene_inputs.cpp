@@ -325,4 +325,13 @@ void load_lighting(const Job& job, Scene& scene) {
   scene.lights = std::move(lighting.lights);
 }
 
+bool job_loads_image_module(const Job& job) {
+  if (job.output.previews || job.has_reference) return true;
+  const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
+  if (output.contains("textures") && !output["textures"].empty()) return true;
+  for (const auto& [pointer, file] : job_input_files(job.doc))
+    if (pointer != "/height/image" || !checked_georaster(job)) return true;
+  return false;
+}
+
 }  // namespace hfbake
