@@ -334,4 +334,8 @@ bool job_loads_image_module(const Job& job) {
   return false;
 }
 
+bool job_uses_gdal(const Job& job) {
+  return job.output.geotiff || (job.doc["height"].contains("image") && checked_georaster(job));
+}
+
 }  // namespace hfbake

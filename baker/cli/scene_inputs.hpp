@@ -33,6 +33,9 @@ bool image_geographic(const Job& job);
 // input file OpenImageIO reads (heights that are not a georeferenced raster, an albedo or emission image, an
 // environment map), a PNG preview, an engine texture, or report.html's images (a reference).
 bool job_loads_image_module(const Job& job);
+// Whether a bake of the job reads or writes through GDAL (heights from a georeferenced raster, GeoTIFF
+// outputs), whose drivers and cache memory estimates count too.
+bool job_uses_gdal(const Job& job);
 
 // The height image's chosen channel as a field (heights as stored: scale and offset are applied by the
 // caller), with nodata handling: NaN/Inf texels (and texels equal to height.nodata_value or to the file's

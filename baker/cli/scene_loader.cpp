@@ -126,9 +126,11 @@ int job_bounces(const Job& job) {
 
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts) {
   const double texels = double(size.width) * double(size.height);
-  // The process before any field: libraries and thread pools (measured: 45 MiB for a 16^2 bake), and
-  // OpenImageIO's libraries when the job loads them (139 MiB for the same bake with a PNG preview).
-  const double process = (job_loads_image_module(job) ? 140.0 : 48.0) * (1 << 20);
+  // The process before any field: libraries and thread pools (measured: 45 MiB for a 16^2 bake); GDAL's
+  // drivers and cache when the job reads or writes through it (62 MiB reading a 16^2 GeoTIFF, 70 MiB also
+  // writing COGs); OpenImageIO's libraries when the job loads them (139 MiB with a PNG preview, 151 MiB
+  // reading a 20000 x 2 EXR).
+  const double process = (job_loads_image_module(job) ? 150.0 : job_uses_gdal(job) ? 72.0 : 48.0) * (1 << 20);
   // The scene: heights (decoded straight into the field), the normals only when read (scene_needs), the
   // surface maps the job names.
   const SceneNeeds needs = scene_needs(job);
