@@ -183,7 +183,8 @@ std::string far_bound_key(const std::string& method) {
 void merge_attributes(std::vector<std::pair<std::string, std::string>>& into,
                       const std::vector<std::pair<std::string, std::string>>& from,
                       const std::string& method) {
-  for (const auto& [key, value] : from) {
+  for (const auto& kv_from : from) {
+    const std::string &key = kv_from.first, &value = kv_from.second;  // named: lambdas capture them
     auto at = std::find_if(into.begin(), into.end(), [&](const auto& kv) { return kv.first == key; });
     if (at == into.end()) {
       into.emplace_back(key, value);
@@ -331,7 +332,8 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
   }
 
   if (options.tile_task) {  // a task's tiles, each layer's interior into its tile file
-    const auto [first, end] = task_tiles(plan, *options.tile_task);
+    const auto range = task_tiles(plan, *options.tile_task);
+    const std::size_t first = range.first, end = range.second;  // named: the progress lambda captures them
     progress.message(job.name + ": tiles " + std::to_string(first) + ".." + std::to_string(end) + " of " +
                      tiles_text(plan));
     const fs::path folder = job.output.dir / "tiles";
