@@ -120,7 +120,8 @@ std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
 
 FieldSize probe_image_field_size(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
-  if (const std::optional<GeoRasterInfo> geo = checked_georaster(job)) return {geo->width, geo->height};
+  if (const std::optional<GeoRasterInfo> geo = checked_georaster(job))
+    return {geo->width, geo->height, false, true};
   const ImageInfo info = probe_image(job.resolve(h["image"].get<std::string>()), site(job, "/height/image"));
   return {info.width, info.height};
 }
@@ -323,19 +324,6 @@ void load_lighting(const Job& job, Scene& scene) {
   EnvironmentLighting lighting = load_environment(env, job.base_dir, options);
   scene.environment = std::move(lighting.environment);
   scene.lights = std::move(lighting.lights);
-}
-
-bool job_loads_image_module(const Job& job) {
-  if (job.output.previews || job.has_reference) return true;
-  const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
-  if (output.contains("textures") && !output["textures"].empty()) return true;
-  for (const auto& [pointer, file] : job_input_files(job.doc))
-    if (pointer != "/height/image" || !checked_georaster(job)) return true;
-  return false;
-}
-
-bool job_uses_gdal(const Job& job) {
-  return job.output.geotiff || (job.doc["height"].contains("image") && checked_georaster(job));
 }
 
 }  // namespace hfbake

@@ -29,14 +29,6 @@ std::optional<std::array<double, 2>> image_texel_size(const Job& job);
 // Whether the height image is a raster in a geographic CRS (its Earth curvature's default).
 bool image_geographic(const Job& job);
 
-// Whether a bake of the job loads the image module (io/oiio_codec.hpp), which memory estimates count: an
-// input file OpenImageIO reads (heights that are not a georeferenced raster, an albedo or emission image, an
-// environment map), a PNG preview, an engine texture, or report.html's images (a reference).
-bool job_loads_image_module(const Job& job);
-// Whether a bake of the job reads or writes through GDAL (heights from a georeferenced raster, GeoTIFF
-// outputs), whose drivers and cache memory estimates count too.
-bool job_uses_gdal(const Job& job);
-
 // The height image's chosen channel as a field (heights as stored: scale and offset are applied by the
 // caller), with nodata handling: NaN/Inf texels (and texels equal to height.nodata_value or to the file's
 // NoData value) are an error naming the count and the first texel, unless height.nodata is "fill".

@@ -124,13 +124,38 @@ int job_bounces(const Job& job) {
   return job.doc.value("bounces", 1);
 }
 
+namespace {
+
+// Whether a bake of the job loads the image module (io/oiio_codec.hpp): an input file OpenImageIO reads
+// (heights that are not a georeferenced raster, an albedo or emission image, an environment map), a PNG
+// preview, an engine texture, or report.html's images (a reference).
+bool loads_image_module(const Job& job, const FieldSize& size) {
+  if (job.output.previews || job.has_reference) return true;
+  const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
+  if (output.contains("textures") && !output["textures"].empty()) return true;
+  for (const auto& [pointer, file] : job_input_files(job.doc))
+    if (pointer != "/height/image" || !size.georaster) return true;
+  return false;
+}
+
+// Whether a bake of the job reads or writes through GDAL: heights from a georeferenced raster, GeoTIFF
+// outputs.
+bool uses_gdal(const Job& job, const FieldSize& size) {
+  return job.output.geotiff || size.georaster;
+}
+
+}  // namespace
+
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts) {
   const double texels = double(size.width) * double(size.height);
   // The process before any field: libraries and thread pools (measured: 45 MiB for a 16^2 bake); GDAL's
   // drivers and cache when the job reads or writes through it (62 MiB reading a 16^2 GeoTIFF, 70 MiB also
   // writing COGs); OpenImageIO's libraries when the job loads them (139 MiB with a PNG preview, 151 MiB
   // reading a 20000 x 2 EXR).
-  const double process = (job_loads_image_module(job) ? 150.0 : job_uses_gdal(job) ? 72.0 : 48.0) * (1 << 20);
+  const double process = (loads_image_module(job, size) ? 150.0
+                          : uses_gdal(job, size)        ? 72.0
+                                                        : 48.0) *
+                         (1 << 20);
   // The scene: heights (decoded straight into the field), the normals only when read (scene_needs), the
   // surface maps the job names.
   const SceneNeeds needs = scene_needs(job);

@@ -18,6 +18,8 @@ struct FieldSize {
   // A tile of a tiled bake (cli/tile_command.hpp): its layers go into work GeoTIFFs a band at a time, not
   // through a COG of their own.
   bool tile = false;
+  // The heights are a georeferenced raster read through GDAL (probe_field_size says; a tile's always are).
+  bool georaster = false;
 };
 
 // The longest side of a field (the procedural schema's maximum, and an image's): 2^20 texels.

@@ -145,7 +145,8 @@ int run_slurm(const SlurmOptions& o) {
           const FieldSize size = probe_field_size(job);
           const int w = std::min(size.width, o.tile_size + 2 * plan.halo);
           const int h = std::min(size.height, o.tile_size + 2 * plan.halo);
-          need_bytes = std::max(need_bytes, estimate_peak_bytes(job, {w, h}) + kTiledGdalCacheBytes);
+          need_bytes = std::max(
+              need_bytes, estimate_peak_bytes(job, {w, h, false, size.georaster}) + kTiledGdalCacheBytes);
         } catch (const InputError& e) {
           return fail(e.line());
         }

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <iterator>
 #include <mutex>
 #include <stdexcept>
 
@@ -11,25 +12,11 @@ namespace hfbake {
 namespace fs = std::filesystem;
 
 std::size_t oiio_sample_bytes(OiioSample s) {
-  switch (s) {
-    case OiioSample::uint8:
-    case OiioSample::int8:
-      return 1;
-    case OiioSample::uint16:
-    case OiioSample::int16:
-    case OiioSample::half:
-      return 2;
-    case OiioSample::uint32:
-    case OiioSample::int32:
-    case OiioSample::float32:
-      return 4;
-    case OiioSample::uint64:
-    case OiioSample::int64:
-    case OiioSample::float64:
-      return 8;
-    default:
-      return 0;
-  }
+  // In OiioSample's order: other, uint8, int8, uint16, int16, uint32, int32, uint64, int64, half, float32,
+  // float64.
+  constexpr std::size_t kBytes[] = {0, 1, 1, 2, 2, 4, 4, 8, 8, 2, 4, 8};
+  const auto at = std::size_t(s);
+  return at < std::size(kBytes) ? kBytes[at] : 0;
 }
 
 namespace {

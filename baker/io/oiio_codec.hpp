@@ -15,7 +15,8 @@
 
 namespace hfbake {
 
-// A sample type as OpenImageIO names it (TypeDesc::BASETYPE), as far as hfbake reads or writes it.
+// A sample type as OpenImageIO names it (TypeDesc::BASETYPE), as far as hfbake reads or writes it; the
+// order is oiio_sample_bytes's table.
 enum class OiioSample : int {
   other,
   uint8,

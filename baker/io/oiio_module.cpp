@@ -5,67 +5,32 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
+#include <utility>
+
 #include "io/oiio_codec.hpp"
 
 namespace hfbake {
 namespace {
 
+// Each sample type and OpenImageIO's base type for it; one table both ways.
+constexpr std::pair<OiioSample, OIIO::TypeDesc::BASETYPE> kSamples[] = {
+    {OiioSample::uint8, OIIO::TypeDesc::UINT8},   {OiioSample::int8, OIIO::TypeDesc::INT8},
+    {OiioSample::uint16, OIIO::TypeDesc::UINT16}, {OiioSample::int16, OIIO::TypeDesc::INT16},
+    {OiioSample::uint32, OIIO::TypeDesc::UINT32}, {OiioSample::int32, OIIO::TypeDesc::INT32},
+    {OiioSample::uint64, OIIO::TypeDesc::UINT64}, {OiioSample::int64, OIIO::TypeDesc::INT64},
+    {OiioSample::half, OIIO::TypeDesc::HALF},     {OiioSample::float32, OIIO::TypeDesc::FLOAT},
+    {OiioSample::float64, OIIO::TypeDesc::DOUBLE}};
+
 OiioSample sample_of(OIIO::TypeDesc t) {
-  switch (t.basetype) {
-    case OIIO::TypeDesc::UINT8:
-      return OiioSample::uint8;
-    case OIIO::TypeDesc::INT8:
-      return OiioSample::int8;
-    case OIIO::TypeDesc::UINT16:
-      return OiioSample::uint16;
-    case OIIO::TypeDesc::INT16:
-      return OiioSample::int16;
-    case OIIO::TypeDesc::UINT32:
-      return OiioSample::uint32;
-    case OIIO::TypeDesc::INT32:
-      return OiioSample::int32;
-    case OIIO::TypeDesc::UINT64:
-      return OiioSample::uint64;
-    case OIIO::TypeDesc::INT64:
-      return OiioSample::int64;
-    case OIIO::TypeDesc::HALF:
-      return OiioSample::half;
-    case OIIO::TypeDesc::FLOAT:
-      return OiioSample::float32;
-    case OIIO::TypeDesc::DOUBLE:
-      return OiioSample::float64;
-    default:
-      return OiioSample::other;
-  }
+  for (const auto& [sample, base] : kSamples)
+    if (t.basetype == base) return sample;
+  return OiioSample::other;
 }
 
 OIIO::TypeDesc type_of(OiioSample s) {
-  switch (s) {
-    case OiioSample::uint8:
-      return OIIO::TypeDesc::UINT8;
-    case OiioSample::int8:
-      return OIIO::TypeDesc::INT8;
-    case OiioSample::uint16:
-      return OIIO::TypeDesc::UINT16;
-    case OiioSample::int16:
-      return OIIO::TypeDesc::INT16;
-    case OiioSample::uint32:
-      return OIIO::TypeDesc::UINT32;
-    case OiioSample::int32:
-      return OIIO::TypeDesc::INT32;
-    case OiioSample::uint64:
-      return OIIO::TypeDesc::UINT64;
-    case OiioSample::int64:
-      return OIIO::TypeDesc::INT64;
-    case OiioSample::half:
-      return OIIO::TypeDesc::HALF;
-    case OiioSample::float32:
-      return OIIO::TypeDesc::FLOAT;
-    case OiioSample::float64:
-      return OIIO::TypeDesc::DOUBLE;
-    default:
-      return OIIO::TypeDesc::UNKNOWN;
-  }
+  for (const auto& [sample, base] : kSamples)
+    if (s == sample) return base;
+  return OIIO::TypeDesc::UNKNOWN;
 }
 
 // The object's message, else the library's global one.

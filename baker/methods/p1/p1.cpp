@@ -305,20 +305,20 @@ P1Sums zero_sums(const Scene& scene, const P1Params& p, int k_begin, int k_end, 
 // direction `first` ([texel * per_texel + first + j] for the block's j-th), or, by direction, into
 // [(first + j) * N + texel], which are the planes themselves.
 struct HorizonPlanes {
-  float* planes = nullptr;
-  const float* own = nullptr;  // the planes when `out` is by texel (a BlockScratch's)
+  float* planes = nullptr;  // `out`'s own when by direction, else a BlockScratch's
   float* out = nullptr;
   std::size_t N = 0;
   int per_texel = 0, first = 0, count = 0;
+  bool by_direction = false;
 
   // Into the layer's order: each texel's `count` values contiguous, read from `count` sequential planes.
   void place() const {
-    if (!own) return;
+    if (!planes || by_direction) return;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, N, 4096),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                         for (std::size_t t = r.begin(); t < r.end(); ++t) {
                           float* o = out + t * std::size_t(per_texel) + std::size_t(first);
-                          for (int j = 0; j < count; ++j) o[j] = own[std::size_t(j) * N + t];
+                          for (int j = 0; j < count; ++j) o[j] = planes[std::size_t(j) * N + t];
                         }
                       });
   }
@@ -343,12 +343,9 @@ HorizonPlanes horizon_planes(float* out, int per_texel, int first, bool by_direc
                              int count, BlockScratch& scratch, bool distance_layer) {
   HorizonPlanes h;
   h.out = out, h.N = N, h.per_texel = per_texel, h.first = first, h.count = count;
-  if (by_direction) {
-    h.planes = out + std::size_t(first) * N;
-  } else {
-    h.planes = scratch.get(distance_layer, std::size_t(count) * N);
-    h.own = h.planes;
-  }
+  h.by_direction = by_direction;
+  h.planes =
+      by_direction ? out + std::size_t(first) * N : scratch.get(distance_layer, std::size_t(count) * N);
   return h;
 }
 
@@ -617,9 +614,9 @@ P1Sums p1_direction_sums(const Scene& scene, const P1Params& p, int k_begin, int
                          float* horizon_out, float* distance_out) {
   CoarseHeights own;
   const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own, scene.curvature);
-  BlockScratch planes;
+  BlockScratch scratch;
   return direction_sums(scene, p, k_begin, k_end, rc, horizon_out, distance_out, nullptr, floor.get(),
-                        planes);
+                        scratch);
 }
 
 std::unique_ptr<p1::FloorGrid> p1_floor_grid(const Scene& scene, const P1Params& p, CoarseHeights& own,
@@ -654,7 +651,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   const int K = p.directions, B = direction_block_count(K);
   std::vector<float> horizon = make_page_vector<float>(p.horizon ? N * K : 0),
                      distance = make_page_vector<float>(p.horizon_distance ? N * K : 0);
-  BlockScratch planes;
+  BlockScratch scratch;
   const double lights_share = p.direct && p.lights && !scene.lights.empty()
                                   ? double(scene.lights.size()) / double(K + scene.lights.size())
                                   : 0.0;
@@ -670,15 +667,15 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
     P1Sums part = direction_sums(
         scene, p, k0, k1, sub_progress(rc, (1 - lights_share) * k0 / K, (1 - lights_share) * (k1 - k0) / K),
         horizon.empty() ? nullptr : horizon.data(), distance.empty() ? nullptr : distance.data(),
-        normals ? &*normals : nullptr, floor.get(), planes);
+        normals ? &*normals : nullptr, floor.get(), scratch);
     if (b == 0) {
       total = std::move(part);
     } else {
       p1_add_sums(total, part);
-      planes.spare = std::move(part);
+      scratch.spare = std::move(part);
     }
   }
-  planes = BlockScratch();  // not held while the sums are finished
+  scratch = BlockScratch();  // not held while the sums are finished
   total.horizon = std::move(horizon);
   total.horizon_distance = std::move(distance);
   return p1_finish(scene, p, std::move(total), sub_progress(rc, 1 - lights_share, lights_share));
