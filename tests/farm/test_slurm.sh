@@ -118,12 +118,19 @@ deleted_shard)
   echo "ok: $(grep error "$log")"
   ;;
 scancel_resume)
-  job a 1 256  # slow enough that a task is still running when cancelled
+  # 4096 reference samples: a shard task runs for seconds (a whole bake, 2 threads: about 4 s), so task 1 is
+  # still running when it is cancelled.
+  job a 1 4096
   "$H" bake a.json --no-cache --quiet --out whole || fail "bake"
   "$H" slurm a.json --shards 4 --out farm --no-cache --quiet || fail "hfbake slurm"
   array=$(squeue -h -o %F -n hfbake-a | head -n1)
   [ -n "$array" ] || fail "no array job queued"
-  for _ in $(seq 200); do [ -n "$(squeue -h -t R -j "$array" 2>/dev/null)" ] && break; sleep 0.1; done
+  running=
+  for _ in $(seq 600); do
+    [ -n "$(squeue -h -t R -j "${array}_1" 2>/dev/null)" ] && running=1 && break
+    sleep 0.05
+  done
+  [ -n "$running" ] || fail "task 1 never ran"
   scancel "${array}_1" || fail "scancel"
   wait_gone "$array"
   [ -f farm/shards/a.shard-1-of-4.hfshard ] && fail "the cancelled task still wrote its shard"
