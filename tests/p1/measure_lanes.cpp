@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
   p1::LaneScratch S;
   p1::LaneStats st;
   double search_s = 0, sse_s = 0, maxerr = 0;
+  std::uint64_t hash = 1469598103934665603ull;
   std::uint64_t seed = 99;
   for (int k = 0; k < K; ++k) {
     const SweepDirection sd = plan_direction(f, spec, k);
@@ -59,6 +60,11 @@ int main(int argc, char** argv) {
                     which.data(), &st, p1::LaneIsa::avx2);
     const double b = cpu_now();
     search_s += b - a;
+    for (std::size_t t = 0; t < slope.size(); ++t) {
+      std::uint32_t bits;
+      std::memcpy(&bits, &slope[t], 4);
+      hash = (hash ^ bits ^ (std::uint64_t(std::uint32_t(which[t])) << 32)) * 1099511628211ull;
+    }
     std::vector<float> slope2(slope.size());
     std::vector<std::int32_t> which2(slope.size());
     p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope2.data(),
@@ -84,6 +90,7 @@ int main(int argc, char** argv) {
   std::printf("%s %d K=%d tol=%g: layouts %.3f s, search %.3f s = %.1f ns/texdir = %.1f M/s; max err %.2e\n",
               kind.c_str(), n, K, tol, std::chrono::duration<double>(t1 - t0).count(), search_s,
               search_s / td * 1e9, td / search_s * 1e-6, maxerr);
+  std::printf("hash of every slope and caster: %016llx\n", (unsigned long long)hash);
   std::printf("sse2: %.1f ns/texdir (avx2/sse2 %.3f)\n", sse_s / td * 1e9, search_s / sse_s);
   std::printf("per group: blocks %.2f crossings %.1f\n", double(st.blocks) / st.groups,
               double(st.crossings) / st.groups);

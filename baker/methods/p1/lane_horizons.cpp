@@ -117,6 +117,12 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
   // read within e_hi - e_lo + 2 texels across their lines (about 2 + 2 |g|), never more than 2 kLaneWindow.
   if (e_hi - e_lo > 2 * kLaneWindow - 2.01)
     throw std::logic_error("lane search: a direction's crossings read too far from its rays");
+  reach_lo.resize(std::size_t(L.nmajor)), reach_hi.resize(std::size_t(L.nmajor));
+  for (int u = 0; u < L.nmajor; ++u) {
+    const double P = g * u, fl = std::floor(P), phi = P - fl;
+    reach_lo[std::size_t(u)] = std::int32_t(fl + std::ceil(phi + e_lo - 1e-6));
+    reach_hi[std::size_t(u)] = std::int32_t(fl + std::ceil(phi + e_hi + 1 + 1e-6) - 1);
+  }
   // first_at[n]: the first crossing at major distance >= n; first_at[nmajor + 2 + n] (the second half):
   // the first beyond n (distance > n), i.e. the end of the crossings on the field up to n.
   const int nn = L.nmajor + 2;

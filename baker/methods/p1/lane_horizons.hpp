@@ -85,6 +85,9 @@ struct LaneDirection {
   // Where the texels the crossings read lie across a ray's line: for a ray of intercept c (the line
   // v - g u = c) and a texel (U, V) one of its crossings reads, V - (c + g U) is in [e_lo, e_hi].
   double e_lo = 0, e_hi = 0;
+  // The texels the rays of the unit strip of intercepts [k, k + 1) (k an integer) read at major index u:
+  // minor indices k + reach_lo[u] .. k + reach_hi[u] (from e_lo and e_hi, with a margin for rounding).
+  std::vector<std::int32_t> reach_lo, reach_hi;
 
   // curvature: c of the lowering c d^2 of a point at horizontal world distance d (terrain/earth.hpp
   // EarthCurvature; 0: a flat Earth).
