@@ -82,7 +82,7 @@ std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::
   // The heights alone first: the estimate plans the sweeps, whose plan is itself about a byte per 128 texels
   // (a 1000000^2 field: 8 GB just to estimate), so a size far beyond the budget (its heights alone over four
   // times it) is refused before the plan is made; nearer ones get the estimate and its parts.
-  const double heights = 150.0 * (1 << 20) + 4.0 * double(size.width) * double(size.height);
+  const double heights = kProcessBytes + 4.0 * double(size.width) * double(size.height);
   if (heights > 4.0 * double(have))
     throw InputError(job.file.string(), "/height",
                      "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +

@@ -126,11 +126,12 @@ int job_bounces(const Job& job) {
 
 namespace {
 
-// Whether a bake of the job loads the image module (io/oiio_codec.hpp): an input file OpenImageIO reads
-// (heights that are not a georeferenced raster, an albedo or emission image, an environment map), a PNG
-// preview, an engine texture, or report.html's images (a reference).
-bool loads_image_module(const Job& job, const FieldSize& size) {
-  if (job.output.previews || job.has_reference) return true;
+// Whether a bake of the job loads the image module (io/oiio_codec.hpp) before a reference traces: an input
+// file OpenImageIO reads (heights that are not a georeferenced raster, an albedo or emission image, an
+// environment map), a PNG preview or an engine texture (written after each method). A reference alone
+// loads it after its tracing, for report.html's images.
+bool loads_image_module_early(const Job& job, const FieldSize& size) {
+  if (job.output.previews) return true;
   const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
   if (output.contains("textures") && !output["textures"].empty()) return true;
   for (const auto& [pointer, file] : job_input_files(job.doc))
@@ -148,14 +149,10 @@ bool uses_gdal(const Job& job, const FieldSize& size) {
 
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts) {
   const double texels = double(size.width) * double(size.height);
-  // The process before any field: libraries and thread pools (measured: 45 MiB for a 16^2 bake); GDAL's
-  // drivers and cache when the job reads or writes through it (62 MiB reading a 16^2 GeoTIFF, 70 MiB also
-  // writing COGs); OpenImageIO's libraries when the job loads them (139 MiB with a PNG preview, 151 MiB
-  // reading a 20000 x 2 EXR).
-  const double process = (loads_image_module(job, size) ? 150.0
-                          : uses_gdal(job, size)        ? 72.0
-                                                        : 48.0) *
-                         (1 << 20);
+  // The process before any field (kProcessBytes and the two beside it), while the methods run and a
+  // reference traces; a reference's report adds OpenImageIO's libraries after the tracing (below).
+  const double base = (uses_gdal(job, size) ? kGdalProcessBytes : kProcessBytes);
+  const double process = loads_image_module_early(job, size) ? kImageProcessBytes : base;
   // The scene: heights (decoded straight into the field), the normals only when read (scene_needs), the
   // surface maps the job names.
   const SceneNeeds needs = scene_needs(job);
@@ -232,16 +229,22 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   double reference = 0;
   if (job.has_reference) {
     // Its layers (value and standard error, 8 bytes a texel and channel) and Embree's geometry and BVH of
-    // the triangulated field (reference/embree_field.hpp: 60 to 260 bytes a texel by reference.geometry).
+    // the triangulated field (reference/embree_field.hpp: 54 to 194 bytes a texel by reference.geometry,
+    // and up to 115 MiB that do not grow with the field).
     int channels = 0;
     if (job.reference_options)
       for (const std::string& l : job.reference_options->layers) channels += layer_channel_count(l, 0);
     if (channels == 0) channels = 5;  // not resolved yet: ao, vsky, direct
-    const double embree = reference::embree_bytes_per_texel(
-        job.reference_options ? job.reference_options->geometry : reference::GeometryKind::quads);
-    reference = (8.0 * channels + embree + 4.0 * horizon_channels + added_per_texel) * texels;
+    const reference::GeometryKind geometry =
+        job.reference_options ? job.reference_options->geometry : reference::GeometryKind::quads;
+    const double layers = (8.0 * channels + 4.0 * horizon_channels + added_per_texel) * texels;
+    reference = layers + reference::embree_bytes_per_texel(geometry) * texels +
+                reference::embree_fixed_bytes(geometry);
     // Its widest layer: direct (3 channels) or the horizons it traces.
     peak = std::max(peak, kept + reference + writing(std::max(3, horizon_channels / 2)));
+    // report.html's images, after the tracing (Embree's scene freed): OpenImageIO's libraries beside the
+    // layers, when nothing loaded them before.
+    if (process < kImageProcessBytes) peak = std::max(peak, kept + layers + kImageProcessBytes - process);
   }
   // The environment: the world lat-long kept through the bake (with the reference's sampling tables), and
   // its images while they are read, before any method runs (measured: 8192 x 4096 half EXR, 24 bytes a

@@ -622,8 +622,8 @@ ReferenceOptions read_reference_options(const nlohmann::json& reference,
   o.target_stderr = in.number("target_stderr", 0, 0, 1e9);
   if (in.has("target_stderr") && !(o.target_stderr > 0))
     in.fail("target_stderr", "must be a positive number");
-  // Quads trace about 1.5x faster than the grid but hold 160 bytes a texel against 60 (the bits are the
-  // same): the default up to 4096² texels, the grid beyond (a 16384² field's quads alone would take 40 GiB).
+  // Quads trace about 1.5x faster than the grid but hold 108 bytes a texel against 54 (the bits are the
+  // same): the default up to 4096² texels, the grid beyond (a 16384² field's quads alone would take 27 GiB).
   const double texels = double(context.field.width) * context.field.height;
   o.geometry = reference::geometry_kind(
       in.choice("geometry", texels <= 4096.0 * 4096.0 ? "quads" : "grid", {"quads", "grid", "triangles"}));

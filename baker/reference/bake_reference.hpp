@@ -68,8 +68,9 @@ struct ReferenceOptions {
   // quads (default), grid or triangles: the same surface, and quads and grid the same bits (the same robust
   // intersector; tests/reference). Measured at 1024^2 (ao rays per CPU second, tests/reference/
   // bench_reference BM_AoRays1024, a loaded machine): grid 2.9 M, triangles 3.8 M, quads 4.1 M single rays
-  // and 4.4 M in streams; memory (geometry and BVH) grid 54 MB, quads 155 MB, triangles 250 MB
-  // (embree_bytes_per_texel). Quads trace one BVH (its skirt is quads too); grid and triangles two.
+  // and 4.4 M in streams. A bake's peak while it traces grows by 54 (grid), 108 (quads) and 194
+  // (triangles) bytes a texel (embree_bytes_per_texel). Quads trace one BVH (its skirt is quads too); grid
+  // and triangles two.
   reference::GeometryKind geometry = reference::GeometryKind::quads;
   int repeat_tiles = 1;         // wrap repeat: tiles instanced on each side
   bool sh_environment = false;  // light with the environment band-limited to SH order 4

@@ -524,6 +524,42 @@ TEST_F(Cli, JobsWhoseOutputsCollideAreRefusedUpFront) {
 namespace hfbake {
 namespace {
 
+// The reference's memory estimate against the whole process's measured peak (wait4's ru_maxrss of the bake
+// alone), within the +-25 % every estimate keeps, for the two geometries a bake picks by size: quads and the
+// grid. 1024^2 (where the parts that do not grow with the field weigh the most), p1 K = 4, one sample, no
+// previews (OpenImageIO loads only for report.html, after the tracing).
+TEST_F(Cli, TheReferencesMemoryEstimateHoldsForQuadsAndTheGrid) {
+  for (const char* geometry : {"quads", "grid"}) {
+    nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {1024, 1024}}, {"seed", 3}}}},
+                           {{{"method", "p1"}, {"directions", 4}}});
+    j["reference"] = {{"samples", 1}, {"geometry", geometry}};
+    j["output"]["dir"] = std::string("out_") + geometry;
+    const fs::path p = write_job(std::string(geometry) + ".json", j);
+    const Result v = hfbake("validate " + p.string());
+    ASSERT_EQ(v.exit_code, 0) << v.err;
+    const auto at = v.err.find("about ");
+    ASSERT_NE(at, std::string::npos) << v.err;
+    const double estimate = std::stod(v.err.substr(at + 6));
+    ASSERT_NE(v.err.find(" MiB to bake"), std::string::npos) << v.err;
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      if (chdir(dir_.c_str()) != 0 || !freopen("/dev/null", "w", stderr)) _exit(126);
+      execl(HFBAKE_BINARY, "hfbake", "bake", "--quiet", "--no-cache", p.c_str(), static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    int status = 0;
+    rusage usage{};
+    ASSERT_EQ(wait4(pid, &status, 0, &usage), pid);
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << geometry << ": exit status " << status;
+    const double peak = double(usage.ru_maxrss) / 1024.0;
+    EXPECT_GT(peak, 0.75 * estimate) << geometry << ": estimate " << estimate << " MiB, peak " << peak
+                                     << " MiB";
+    EXPECT_LT(peak, 1.25 * estimate) << geometry << ": estimate " << estimate << " MiB, peak " << peak
+                                     << " MiB";
+  }
+}
+
 // --memory-limit: a job whose estimate exceeds the budget is refused by validate and by bake before anything
 // is allocated or written, with the estimate's parts and the knob; a budget it fits passes.
 TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
