@@ -123,7 +123,8 @@ bool lane_avx2_available();
 
 // Searches the groups of strips [s0, s1): for every texel (i, j) of them, slope[f.index(i, j)] = the
 // steepest slope (rise / run) of any crossing of its ray (-inf: none on the field) and which[...] that
-// crossing's index in d.crossings (-1: none). Clamp fields only.
+// crossing's index in d.crossings (-1: none); which null: the slopes alone (the same ones, a little
+// sooner). Clamp fields only.
 void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
                  float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
                  LaneStats* stats = nullptr, LaneIsa isa = LaneIsa::best);
@@ -145,15 +146,16 @@ struct LaneReuse {
 // Every texel's horizon in the directions ks of spec (lane_plan's rays), clamp fields: the directions of
 // one axis at a time (the x-major ones first, each group in the order of ks), so one LaneLayout is held at
 // a time; after each direction's search, done(sd, d, slope, which) with lane_search's slope and which of
-// every texel. rc.check() before each direction. reuse: kept between calls on the same field (or null).
+// every texel (which: null unless casters). rc.check() before each direction. reuse: kept between calls
+// on the same field (or null).
 template <class Done>
 void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vector<int>& ks,
-                     double curvature, float tolerance, const RunControl& rc, Done&& done,
+                     double curvature, float tolerance, bool casters, const RunControl& rc, Done&& done,
                      LaneReuse* reuse = nullptr) {
   const std::size_t N = f.texel_count();
   LaneReuse own;
   LaneReuse& r = reuse ? *reuse : own;
-  r.slope.resize(N), r.which.resize(N);
+  r.slope.resize(N), r.which.resize(casters ? N : 0);
   std::vector<float>& slope = r.slope;
   std::vector<std::int32_t>& which = r.which;
   tbb::enumerable_thread_specific<LaneScratch> scratch;
@@ -177,9 +179,10 @@ void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vec
       tbb::parallel_for(tbb::blocked_range<int>(0, lane_strip_count(layout, d), 2),
                         [&](const tbb::blocked_range<int>& r) {
                           lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(),
-                                      slope.data(), which.data());
+                                      slope.data(), casters ? which.data() : nullptr);
                         });
-      done(sd, d, static_cast<const float*>(slope.data()), static_cast<const std::int32_t*>(which.data()));
+      done(sd, d, static_cast<const float*>(slope.data()),
+           static_cast<const std::int32_t*>(casters ? which.data() : nullptr));
     }
   }
 }

@@ -107,7 +107,7 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
   p1::DirectionFloor df;
   std::vector<double> row_slack(floor ? std::size_t(f.height) : 0, 0.0);  // one slot a row: any thread count
   p1::lane_directions(
-      f, probe, ks, curvature, float(p.horizon_tolerance), rc,
+      f, probe, ks, curvature, float(p.horizon_tolerance), p.horizon_distance, rc,
       [&](const SweepDirection& sd, const p1::LaneDirection& d, const float* slope,
           const std::int32_t* which) {
         const int k = sd.k;
