@@ -227,11 +227,12 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
                           (facets ? 24 : 0);
     const double normals = 12 + (facets ? 24 : 0);
     const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
-    // While the directions are summed: the sums, a block's, the normals, one direction's slopes and casters,
-    // and one axis' lane layout (heights and window maxima, padded on the minor axis).
+    // While the directions are summed: the sums, a block's, the normals, one direction's slopes (and casters
+    // for horizon_distance), and one axis' lane layout (heights and window maxima, padded on the minor axis).
     const double layout = 2.0 * 4.0 * double(std::max(shape.width, shape.height)) *
                           double(std::min(shape.width, shape.height) + 2 * p1::kLanePad);
-    const double summing = (sums + block + normals + 8 + planes) * texels + layout;
+    const double search = p.horizon_distance ? 8 : 4;
+    const double summing = (sums + block + normals + search + planes) * texels + layout;
     // While they are finished: the layers, the sums that are not layers, the normals, the lights' sweeps.
     const double finishing =
         (layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) + normals) * texels +
