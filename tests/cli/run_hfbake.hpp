@@ -1,8 +1,11 @@
 // Runs the built hfbake binary (HFBAKE_BINARY) as a user's shell would, for the end-to-end tests.
 #pragma once
 
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -35,6 +38,42 @@ inline Result run_hfbake(const std::filesystem::path& dir, const std::string& ar
   std::stringstream ss;
   ss << in.rdbuf();
   r.err = ss.str();
+  return r;
+}
+
+// The estimate `hfbake validate JOB` prints ("valid (WxH, about 12.3 MiB to bake: ..."), in MiB; -1 when
+// validate fails or prints none.
+inline double validate_estimate_mib(const std::filesystem::path& dir, const std::filesystem::path& job) {
+  const Result v = run_hfbake(dir, "validate " + job.string());
+  const auto at = v.err.find("about ");
+  if (v.exit_code != 0 || at == std::string::npos) return -1;
+  std::size_t used = 0;
+  const double value = std::stod(v.err.substr(at + 6), &used);
+  const std::string unit = v.err.substr(at + 6 + used, 4);
+  return unit == " GiB" ? value * 1024 : unit == " MiB" ? value : -1;
+}
+
+// `hfbake bake --quiet --no-cache JOB` in `dir` (stderr discarded), waited for alone: its exit code (-1: it
+// did not exit) and its own peak resident memory in MiB (wait4's ru_maxrss; getrusage's RUSAGE_CHILDREN
+// would give the largest of every child this process ever waited for).
+struct BakePeak {
+  int exit_code = -1;
+  double peak_mib = 0;
+};
+inline BakePeak bake_peak(const std::filesystem::path& dir, const std::filesystem::path& job) {
+  BakePeak r;
+  const pid_t pid = fork();
+  if (pid < 0) return r;
+  if (pid == 0) {
+    if (chdir(dir.c_str()) != 0 || !freopen("/dev/null", "w", stderr)) _exit(126);
+    execl(HFBAKE_BINARY, "hfbake", "bake", "--quiet", "--no-cache", job.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  if (wait4(pid, &status, 0, &usage) != pid) return r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.peak_mib = double(usage.ru_maxrss) / 1024.0;
   return r;
 }
 

@@ -535,24 +535,11 @@ TEST_F(Cli, TheReferencesMemoryEstimateHoldsForQuadsAndTheGrid) {
     j["reference"] = {{"samples", 1}, {"geometry", geometry}};
     j["output"]["dir"] = std::string("out_") + geometry;
     const fs::path p = write_job(std::string(geometry) + ".json", j);
-    const Result v = hfbake("validate " + p.string());
-    ASSERT_EQ(v.exit_code, 0) << v.err;
-    const auto at = v.err.find("about ");
-    ASSERT_NE(at, std::string::npos) << v.err;
-    const double estimate = std::stod(v.err.substr(at + 6));
-    ASSERT_NE(v.err.find(" MiB to bake"), std::string::npos) << v.err;
-    const pid_t pid = fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-      if (chdir(dir_.c_str()) != 0 || !freopen("/dev/null", "w", stderr)) _exit(126);
-      execl(HFBAKE_BINARY, "hfbake", "bake", "--quiet", "--no-cache", p.c_str(), static_cast<char*>(nullptr));
-      _exit(127);
-    }
-    int status = 0;
-    rusage usage{};
-    ASSERT_EQ(wait4(pid, &status, 0, &usage), pid);
-    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << geometry << ": exit status " << status;
-    const double peak = double(usage.ru_maxrss) / 1024.0;
+    const double estimate = cli_test::validate_estimate_mib(dir_, p);
+    ASSERT_GT(estimate, 0) << geometry;
+    const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
+    ASSERT_EQ(run.exit_code, 0) << geometry;
+    const double peak = run.peak_mib;
     EXPECT_GT(peak, 0.75 * estimate) << geometry << ": estimate " << estimate << " MiB, peak " << peak
                                      << " MiB";
     EXPECT_LT(peak, 1.25 * estimate) << geometry << ": estimate " << estimate << " MiB, peak " << peak

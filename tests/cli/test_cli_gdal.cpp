@@ -653,12 +653,6 @@ TEST_F(CliGdal, SunTakesThePlaceAndTrueNorthFromTheCrs) {
 // and the COG driver's own), within the +-25 % every estimate keeps: the peak resident size of each bake
 // (wait4's, that process alone) against "about N MiB to bake".
 TEST_F(CliGdal, TheMemoryEstimateHoldsTheGeoTiffsWriting) {
-  auto estimate_mib = [&](const fs::path& job) {
-    const Result v = hfbake("validate " + job.string());
-    EXPECT_EQ(v.exit_code, 0) << v.err;
-    const auto at = v.err.find("about ");
-    return at == std::string::npos ? -1.0 : std::stod(v.err.substr(at + 6));
-  };
   auto job = [&](const std::string& name, const nlohmann::json& entry) {
     const nlohmann::json j = {{"version", 1},
                               {"name", name},
@@ -677,19 +671,11 @@ TEST_F(CliGdal, TheMemoryEstimateHoldsTheGeoTiffsWriting) {
                   {"layers", {"svf", "horizon_deg"}}}),
       job("hz", {{"method", "p1"}, {"directions", 64}, {"layers", {"ao", "vsky", "horizon"}}})};
   for (const fs::path& p : jobs) {
-    const double estimate = estimate_mib(p);
+    const double estimate = hfbake::cli_test::validate_estimate_mib(dir_, p);
     ASSERT_GT(estimate, 0) << p;
-    const pid_t pid = fork();
-    if (pid == 0) {
-      if (chdir(dir_.c_str()) != 0 || !freopen("/dev/null", "w", stderr)) _exit(126);
-      execl(HFBAKE_BINARY, "hfbake", "bake", "--quiet", "--no-cache", p.c_str(), static_cast<char*>(nullptr));
-      _exit(127);
-    }
-    int status = 0;
-    rusage usage{};
-    ASSERT_EQ(wait4(pid, &status, 0, &usage), pid);
-    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << p << ": exit status " << status;
-    const double peak = double(usage.ru_maxrss) / 1024.0;
+    const hfbake::cli_test::BakePeak run = hfbake::cli_test::bake_peak(dir_, p);
+    ASSERT_EQ(run.exit_code, 0) << p;
+    const double peak = run.peak_mib;
     EXPECT_GT(peak, 0.75 * estimate) << p << ": estimate " << estimate << " MiB, peak " << peak << " MiB";
     EXPECT_LT(peak, 1.25 * estimate) << p << ": estimate " << estimate << " MiB, peak " << peak << " MiB";
   }
