@@ -121,7 +121,7 @@ std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
 FieldSize probe_image_field_size(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
   if (const std::optional<GeoRasterInfo> geo = checked_georaster(job))
-    return {geo->width, geo->height, false, true};
+    return {.width = geo->width, .height = geo->height, .georaster = true};
   const ImageInfo info = probe_image(job.resolve(h["image"].get<std::string>()), site(job, "/height/image"));
   return {info.width, info.height};
 }

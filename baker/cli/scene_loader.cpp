@@ -151,8 +151,9 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   const double texels = double(size.width) * double(size.height);
   // The process before any field (kProcessBytes and the two beside it), while the methods run and a
   // reference traces; a reference's report adds OpenImageIO's libraries after the tracing (below).
-  const double base = (uses_gdal(job, size) ? kGdalProcessBytes : kProcessBytes);
-  const double process = loads_image_module_early(job, size) ? kImageProcessBytes : base;
+  const double process = loads_image_module_early(job, size) ? kImageProcessBytes
+                         : uses_gdal(job, size)              ? kGdalProcessBytes
+                                                             : kProcessBytes;
   // The scene: heights (decoded straight into the field), the normals only when read (scene_needs), the
   // surface maps the job names.
   const SceneNeeds needs = scene_needs(job);

@@ -146,7 +146,8 @@ int run_slurm(const SlurmOptions& o) {
           const int w = std::min(size.width, o.tile_size + 2 * plan.halo);
           const int h = std::min(size.height, o.tile_size + 2 * plan.halo);
           need_bytes = std::max(
-              need_bytes, estimate_peak_bytes(job, {w, h, false, size.georaster}) + kTiledGdalCacheBytes);
+              need_bytes, estimate_peak_bytes(job, {.width = w, .height = h, .georaster = size.georaster}) +
+                              kTiledGdalCacheBytes);
         } catch (const InputError& e) {
           return fail(e.line());
         }

@@ -274,7 +274,7 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
   auto peak = [&](int side) {
     const int w = int(std::min<std::int64_t>(band->width, std::int64_t(side) + 2 * std::int64_t(halo)));
     const int h = int(std::min<std::int64_t>(band->height, std::int64_t(side) + 2 * std::int64_t(halo)));
-    return estimate_peak_bytes(job, FieldSize{w, h, true, true});
+    return estimate_peak_bytes(job, FieldSize{.width = w, .height = h, .tile = true, .georaster = true});
   };
   auto too_large = [&](int side, const std::string& knob) {
     refuse(
@@ -294,7 +294,7 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
   }
   const std::optional<int> side =
       tile_side_for_budget(band->width, band->height, halo, tile_budget, 256, [&job](int w, int h) {
-        return estimate_peak_bytes(job, FieldSize{w, h, true, true});
+        return estimate_peak_bytes(job, FieldSize{.width = w, .height = h, .tile = true, .georaster = true});
       });
   if (!side) too_large(256, "--memory-limit");
   TilePlan plan = plan_tiles(band->width, band->height, *side, halo);

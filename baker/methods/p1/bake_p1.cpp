@@ -158,7 +158,7 @@ double lane_horizons_at(const HeightField& f, const P1Params& p, const std::vect
   p1::DirectionFloor df;
   std::vector<double> row_slack(floor ? std::size_t(f.height) : 0, 0.0);  // one slot a row: any thread count
   p1::lane_directions(
-      f, probe, ks, curvature, float(p.horizon_tolerance), false, rc,
+      f, probe, ks, curvature, float(p.horizon_tolerance), /*casters=*/false, rc,
       [&](const SweepDirection& sd, const p1::LaneDirection&, const float* slope, const std::int32_t*) {
         if (floor) p1::direction_floor(*floor, f.width, f.height, azimuths[std::size_t(sd.k)], df);
         tbb::parallel_for(0, f.height, [&](int j) {

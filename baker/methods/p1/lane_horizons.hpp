@@ -156,8 +156,8 @@ void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vec
   LaneReuse own;
   LaneReuse& r = reuse ? *reuse : own;
   r.slope.resize(N), r.which.resize(casters ? N : 0);
-  std::vector<float>& slope = r.slope;
-  std::vector<std::int32_t>& which = r.which;
+  float* slope = r.slope.data();
+  std::int32_t* which = casters ? r.which.data() : nullptr;
   tbb::enumerable_thread_specific<LaneScratch> scratch;
   for (int axis = 0; axis < 2; ++axis) {
     std::vector<SweepDirection> dirs;
@@ -176,13 +176,11 @@ void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vec
       rc.check();
       LaneDirection d;
       build_lane_direction(d, f, layout, sd, curvature);
-      tbb::parallel_for(tbb::blocked_range<int>(0, lane_strip_count(layout, d), 2),
-                        [&](const tbb::blocked_range<int>& r) {
-                          lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(),
-                                      slope.data(), casters ? which.data() : nullptr);
-                        });
-      done(sd, d, static_cast<const float*>(slope.data()),
-           static_cast<const std::int32_t*>(casters ? which.data() : nullptr));
+      tbb::parallel_for(
+          tbb::blocked_range<int>(0, lane_strip_count(layout, d), 2), [&](const tbb::blocked_range<int>& r) {
+            lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(), slope, which);
+          });
+      done(sd, d, static_cast<const float*>(slope), static_cast<const std::int32_t*>(which));
     }
   }
 }
