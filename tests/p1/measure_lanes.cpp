@@ -1,7 +1,7 @@
 // The lane search alone (methods/p1/lane_horizons.hpp): usage measure_lanes [fractal|rough|step|<procedural
-// kind>] [size] [K] [tolerance] [checks]. Prints CPU per texel-direction (AVX2 with and without casters, and
-// SSE2, checked to give the same bits), groups evaluated, and the largest difference in sin h from the exact
-// march at sampled texels.
+// kind>] [size] [K] [tolerance] [checks]. Prints CPU per texel-direction (AVX2 with and without casters,
+// AVX-512 without, and SSE2, all checked to give the same bits), groups evaluated, and the largest difference
+// in sin h from the exact march at sampled texels.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -47,8 +47,8 @@ int main(int argc, char** argv) {
   std::vector<std::int32_t> which(f.texel_count());
   p1::LaneScratch S;
   p1::LaneStats st;
-  double search_s = 0, sse_s = 0, bare_s = 0, maxerr = 0;
-  std::uint64_t hash = 1469598103934665603ull;
+  double search_s = 0, sse_s = 0, bare_s = 0, avx512_s = 0, maxerr = 0;
+  std::uint64_t hash = 1469598103934665603ull, slope_hash = 1469598103934665603ull;
   std::uint64_t seed = 99;
   for (int k = 0; k < K; ++k) {
     const SweepDirection sd = plan_direction(f, spec, k);
@@ -64,12 +64,25 @@ int main(int argc, char** argv) {
       std::uint32_t bits;
       std::memcpy(&bits, &slope[t], 4);
       hash = (hash ^ bits ^ (std::uint64_t(std::uint32_t(which[t])) << 32)) * 1099511628211ull;
+      slope_hash = (slope_hash ^ bits) * 1099511628211ull;
     }
     std::vector<float> slope0(slope.size());
     const double c0 = cpu_now();
     p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope0.data(),
                     nullptr, nullptr, p1::LaneIsa::avx2);
     bare_s += cpu_now() - c0;
+    if (p1::lane_avx512_available()) {
+      std::vector<float> slope5(slope.size());
+      std::vector<std::int32_t> which5(slope.size());
+      const double e0 = cpu_now();
+      p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope5.data(),
+                      nullptr, nullptr, p1::LaneIsa::avx512);
+      avx512_s += cpu_now() - e0;
+      p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope5.data(),
+                      which5.data(), nullptr, p1::LaneIsa::avx512);
+      if (std::memcmp(slope.data(), slope5.data(), slope.size() * 4) != 0 || which != which5)
+        std::printf("direction %d: AVX2 and AVX-512 differ\n", k);
+    }
     if (std::memcmp(slope.data(), slope0.data(), slope.size() * 4) != 0)
       std::printf("direction %d: the slopes without casters differ\n", k);
     std::vector<float> slope2(slope.size());
@@ -98,9 +111,11 @@ int main(int argc, char** argv) {
   std::printf("%s %d K=%d tol=%g: layouts %.3f s, search %.3f s = %.1f ns/texdir = %.1f M/s; max err %.2e\n",
               kind.c_str(), n, K, tol, std::chrono::duration<double>(t1 - t0).count(), search_s,
               search_s / td * 1e9, td / search_s * 1e-6, maxerr);
-  std::printf("hash of every slope and caster: %016llx\n", (unsigned long long)hash);
+  std::printf("hash of every slope and caster: %016llx; of every slope: %016llx\n", (unsigned long long)hash,
+              (unsigned long long)slope_hash);
   std::printf("without casters: %.1f ns/texdir = %.1f M/s\n", bare_s / td * 1e9, td / bare_s * 1e-6);
+  std::printf("avx-512 without casters: %.1f ns/texdir\n", avx512_s / td * 1e9);
   std::printf("sse2: %.1f ns/texdir (avx2/sse2 %.3f)\n", sse_s / td * 1e9, search_s / sse_s);
-  std::printf("per group: blocks %.2f crossings %.1f\n", double(st.blocks) / st.groups,
+  std::printf("per group of %d: blocks %.2f crossings %.1f\n", p1::kLanes, double(st.blocks) / st.groups,
               double(st.crossings) / st.groups);
 }

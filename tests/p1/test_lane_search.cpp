@@ -1,6 +1,6 @@
 // The lane search (methods/p1/lane_horizons.hpp) on its own against the exact march (p1_truth.hpp), every
-// texel of non-square rough, stepped and smooth fields, in directions of every octant; and its two kernels
-// (SSE2, AVX2), with and without casters, against each other, bit for bit.
+// texel of non-square rough, stepped and smooth fields, in directions of every octant; its kernels (SSE2,
+// AVX2, AVX-512), with and without casters, against each other, bit for bit; and its pruning against none.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -32,6 +32,11 @@ double sin_of(float m) {
   return m == -std::numeric_limits<float>::infinity() ? -1.0 : std::sin(std::atan(double(m)));
 }
 
+bool available(p1::LaneIsa isa) {
+  return isa == p1::LaneIsa::sse2 || (isa == p1::LaneIsa::avx2 && p1::lane_avx2_available()) ||
+         (isa == p1::LaneIsa::avx512 && p1::lane_avx512_available());
+}
+
 void check(const HeightField& f, const char* name, float tolerance, double curvature = 0) {
   SweepSpec spec;
   spec.directions = 24;
@@ -50,15 +55,15 @@ void check(const HeightField& f, const char* name, float tolerance, double curva
     const int strips = p1::lane_strip_count(L, d);
     p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope.data(), which.data(), nullptr,
                     p1::LaneIsa::sse2);
-    if (p1::lane_avx2_available()) {
-      p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope2.data(), which2.data(), nullptr,
-                      p1::LaneIsa::avx2);
+    for (const p1::LaneIsa isa : {p1::LaneIsa::avx2, p1::LaneIsa::avx512}) {
+      if (!available(isa)) continue;
+      p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope2.data(), which2.data(), nullptr, isa);
       EXPECT_EQ(std::memcmp(slope.data(), slope2.data(), N * sizeof(float)), 0) << name << " k " << k;
       EXPECT_EQ(which, which2) << name << " k " << k;
     }
-    // Without casters (which null; its own hints, once a block): the same slopes, on either kernel.
-    for (const p1::LaneIsa isa : {p1::LaneIsa::sse2, p1::LaneIsa::avx2}) {
-      if (isa == p1::LaneIsa::avx2 && !p1::lane_avx2_available()) continue;
+    // Without casters (which null; its own hints, once a block): the same slopes, on every kernel.
+    for (const p1::LaneIsa isa : {p1::LaneIsa::sse2, p1::LaneIsa::avx2, p1::LaneIsa::avx512}) {
+      if (!available(isa)) continue;
       std::fill(slope2.begin(), slope2.end(), 0.0f);
       p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope2.data(), nullptr, nullptr, isa);
       EXPECT_EQ(std::memcmp(slope.data(), slope2.data(), N * sizeof(float)), 0)
@@ -91,6 +96,43 @@ TEST(LaneSearch, CurvedEarthEqualsTheExactMarch) {
   for (const Case& c : cases()) {
     check(c.field, c.name, 0.0f, 0.002);
     check(c.field, c.name, 0.02f, 0.002);
+  }
+}
+
+// The pruning keeps the steepest crossing, bit for bit: the same search with every bound on the field
+// raised out of reach (so no block is skipped and every crossing up to the ray's end is evaluated) gives
+// the same slope at every texel whose ray has a crossing on the field.
+TEST(LaneSearch, PruningKeepsTheSteepestCrossingBitForBit) {
+  for (const Case& c : cases()) {
+    const HeightField& f = c.field;
+    SweepSpec spec;
+    spec.directions = 16;
+    p1::LaneLayout layouts[2], open[2];
+    for (int a = 0; a < 2; ++a) {
+      layouts[a].build(f, a == 0), open[a].build(f, a == 0);
+      for (std::size_t t = 0; t < open[a].size; ++t)
+        if (open[a].window[t] > p1::kOffField) open[a].window[t] = 1e30f;
+    }
+    const std::size_t N = f.texel_count();
+    std::vector<float> pruned(N), all(N);
+    p1::LaneScratch scratch;
+    for (int k = 0; k < spec.directions; ++k) {
+      const SweepDirection sd = plan_direction(f, spec, k);
+      const int a = std::fabs(sd.dx) >= std::fabs(sd.dy) ? 0 : 1;
+      p1::LaneDirection d;
+      d.build(f, layouts[a], sd.dx, sd.dy);
+      const int strips = p1::lane_strip_count(layouts[a], d);
+      p1::lane_search(f, layouts[a], d, 0, strips, 0.0f, scratch, pruned.data(), nullptr);
+      p1::lane_search(f, open[a], d, 0, strips, 0.0f, scratch, all.data(), nullptr);
+      long on_field = 0, differ = 0;
+      for (std::size_t t = 0; t < N; ++t) {
+        if (!(all[t] > -1e20f)) continue;  // no crossing on the field (-inf, or only the padding's)
+        ++on_field;
+        differ += std::memcmp(&pruned[t], &all[t], sizeof(float)) != 0;
+      }
+      EXPECT_EQ(differ, 0) << c.name << " k " << k;
+      EXPECT_GT(on_field, long(N) / 2) << c.name << " k " << k;
+    }
   }
 }
 

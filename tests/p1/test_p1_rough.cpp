@@ -126,7 +126,8 @@ TEST(P1Rough, HorizonsMatchTheExactMarchOnStepsAndSmoothFields) {
 
 // The accuracy dial: at tolerance tau every horizon (the border ring and every direction included) lies
 // within tau of the exact march's and never above it (to float rounding), on rough, stepped and smooth
-// fields; larger tolerances must actually be used (some horizons differ).
+// fields; larger tolerances must actually be used (some horizons differ: on every field at 0.05, on some
+// at 0.01, where a small field's groups of lanes may leave no block to skip).
 TEST(P1Tolerance, EveryHorizonWithinTheToleranceOfTheExactMarch) {
   struct Case {
     const char* name;
@@ -138,6 +139,7 @@ TEST(P1Tolerance, EveryHorizonWithinTheToleranceOfTheExactMarch) {
                         {"steps 40deg", truth::step_field(64, 50, 7, 40, 2, 6)},
                         {"fractal", truth::procedural(ProceduralKind::fractal, 60, 60, Wrap::clamp)}};
   constexpr double kRounding = 2e-5;  // float heights and the atan / sincos approximations
+  long differ_at_1e2 = 0;
   for (const Case& c : cases) {
     const Scene s = make_scene(c.field);
     const HeightField& f = s.field;
@@ -169,11 +171,13 @@ TEST(P1Tolerance, EveryHorizonWithinTheToleranceOfTheExactMarch) {
       if (tau == 0) {
         EXPECT_EQ(differ, 0) << c.name;
       }
-      if (tau >= 1e-2) {
+      if (tau >= 0.05) {
         EXPECT_GT(differ, 0) << c.name << ": the tolerance was not used";
       }
+      if (tau == 1e-2) differ_at_1e2 += differ;
     }
   }
+  EXPECT_GT(differ_at_1e2, 0) << "tolerance 0.01 was used on no field";
 }
 
 // A 4 m step along a column (x >= 32 high): on the triangulated surface the cell between the foot column

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <type_traits>
 
 #include "methods/p1/horizon_sweep.hpp"
 
@@ -20,14 +21,16 @@ inline float fmax_(float a, float b) {
   return a > b ? a : b;
 }
 
-// Eight lanes as two SSE2 registers (every x86-64 has them).
+// Eight lanes as two SSE2 registers (every x86-64 has them); lane_kernel.inc pairs them up to kLanes.
 struct Sse2 {
+  static constexpr int kWidth = 8;
   struct F {
     __m128 lo, hi;
   };
   struct I {
     __m128i lo, hi;
   };
+  using M = F;
   static F load(const float* p) { return {_mm_loadu_ps(p), _mm_loadu_ps(p + 4)}; }
   static void store(float* p, F a) { _mm_storeu_ps(p, a.lo), _mm_storeu_ps(p + 4, a.hi); }
   static void storei(std::int32_t* p, I a) {
@@ -51,6 +54,7 @@ struct Sse2 {
             _mm_or_si128(_mm_and_si128(hi, a.hi), _mm_andnot_si128(hi, b.hi))};
   }
   static bool any(F m) { return _mm_movemask_ps(_mm_or_ps(m.lo, m.hi)) != 0; }
+  static F or_(F a, F b) { return {_mm_or_ps(a.lo, b.lo), _mm_or_ps(a.hi, b.hi)}; }
 };
 
 #include "methods/p1/lane_kernel.inc"
@@ -72,7 +76,14 @@ void LaneLayout::build(const HeightField& f, bool xm) {
     else
       std::copy(row, row + f.width, z.get() + std::ptrdiff_t(j) * stride + kLanePad);
   }
-  // window[at] = max z[at .. at + kLaneWindow - 1] within the major index's row (kOffField past its end).
+  // window[at] = max z[at .. at + kLaneWindow - 1] within the major index's row (kOffField past its end),
+  // raised by more than a crossing's rounding: a crossing's height, (1 - w) z[a] + w z[b] evaluated in
+  // floats, can exceed both heights by a few units in the last place of the field's largest |z|. So every
+  // bound is at least every slope it bounds as the search evaluates them, and the search's slope is the
+  // largest of all its crossings' (however the texels are grouped and the blocks ordered).
+  float zabs = 0;
+  for (float v : f.z) zabs = fmax_(zabs, std::fabs(v));
+  const float margin = zabs * 0x1p-20f;
   window = make_page_buffer<float>(size);
   for (int u = 0; u < nmajor; ++u) {
     const float* r = z.get() + std::ptrdiff_t(u) * stride;
@@ -81,7 +92,7 @@ void LaneLayout::build(const HeightField& f, bool xm) {
       float m = kOffField;
       for (std::ptrdiff_t t = i; t < std::min<std::ptrdiff_t>(stride, i + kLaneWindow); ++t)
         m = fmax_(m, r[t]);
-      w[i] = m;
+      w[i] = m + margin;
     }
   }
 }
@@ -172,8 +183,11 @@ int lane_strip_count(const LaneLayout& L, const LaneDirection& d) {
 void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
                  float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats,
                  LaneIsa isa) {
-  if (isa == LaneIsa::best) isa = lane_avx2_available() ? LaneIsa::avx2 : LaneIsa::sse2;
-  if (isa == LaneIsa::avx2)
+  if (isa == LaneIsa::best)
+    isa = lane_avx512_available() ? LaneIsa::avx512 : lane_avx2_available() ? LaneIsa::avx2 : LaneIsa::sse2;
+  if (isa == LaneIsa::avx512)
+    lane_search_avx512(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
+  else if (isa == LaneIsa::avx2)
     lane_search_avx2(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
   else
     lane_search_any<Sse2>(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
@@ -181,6 +195,11 @@ void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirec
 
 bool lane_avx2_available() {
   static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+
+bool lane_avx512_available() {
+  static const bool yes = __builtin_cpu_supports("avx512f");
   return yes;
 }
 }  // namespace hfbake::p1

@@ -1,30 +1,37 @@
 // P1's horizons by a lane search: every texel's exact horizon over its own ray on the reference's
-// triangulated surface (two triangles per quad, split along (i+1, j)-(i, j+1)), eight texels at a time.
+// triangulated surface (two triangles per quad, split along (i+1, j)-(i, j+1)), kLanes (32) texels at a
+// time.
 //
 // Translation invariance: the ray from any texel centre towards phi crosses the columns, rows and
 // diagonals of the triangulation at the same offsets from that texel (near_field_stencil lists them, with
-// their corner texels and weights), so texels (u, v), ..., (u, v + 7) adjacent on the minor axis (the axis
-// the direction moves less along) read their crossings from eight adjacent texels each. A field copy with
-// the minor axis contiguous (LaneLayout) turns every crossing into two 8-wide loads, a lerp and a slope:
-// the eight rays are searched in lockstep, the steepest crossing of each is the exact horizon.
+// their corner texels and weights), so texels (u, v), ..., (u, v + 31) adjacent on the minor axis (the axis
+// the direction moves less along) read their crossings from 32 adjacent texels each. A field copy with the
+// minor axis contiguous (LaneLayout) turns every crossing into two 32-lane loads, a lerp and a slope: the
+// group's rays are searched in lockstep, the steepest crossing of each is the exact horizon.
 //
 // What makes it cheap is what is not evaluated. The rays are cut into blocks of 4 columns along the walk.
 // A unit strip of intercepts (the lines v - g u in [k, k + 1)) holds every ray of one lane of a group, and
 // per column the highest texel any crossing of such a ray can use (the texels within [e_lo, e_hi] of the
 // rays' lines, LaneDirection; the maximum of one or two LaneLayout::window values): from those, per
-// strip of eight lanes, the highest over each block, over 4, 16 and 64 blocks, and over all further
-// columns, one value per lane (an 8-wide load). The texel's own block and the four after it are evaluated
-// whole (close to the texel a bound seldom rules a block out); further on, a block is evaluated only when
-// some lane's bound, seen from that lane at the block's nearest crossing, could be steeper than the lane's
-// best slope (plus the tolerance): a bound is never below any crossing's slope, so skipping keeps the result
-// exact, and the walk stops when nothing further can beat any lane. The blocks of the previous group's
-// casters (one column behind on the same strip, whose casters are most often this group's) are evaluated
-// first, so the best slopes are high early and prune the most. With a tolerance tau > 0, a block or the rest
-// is skipped unless it can beat the best slope by more than tau: every slope is within tau of (and never
-// above) the exact one.
+// strip of kLanes lanes, the highest over each block, over 4, 16 and 64 blocks, and over all further
+// columns, one value per lane (one load of the group's lanes). The texel's own block and the four after it
+// are evaluated whole (close to the texel a bound seldom rules a block out); further on, a block is evaluated
+// only when some lane's bound, seen from that lane at the block's nearest crossing, could be steeper than the
+// lane's best slope (plus the tolerance): a bound is never below any crossing's slope as evaluated
+// (LaneLayout's window), so skipping keeps the result exact, the largest of all its crossings' slopes bit for
+// bit, and the walk stops when nothing further can beat any lane. The blocks of the previous group's casters
+// (one column behind on the same strip, whose casters are most often this group's) are evaluated first, so
+// the best slopes are high early and prune the most. With a tolerance tau > 0, a block or the rest is skipped
+// unless it can beat the best slope by more than tau: every slope is within tau of (and never above) the
+// exact one.
+//
+// A group is wide because most of its work is shared by its lanes (the strips' bounds, the tests, the loop),
+// while a block is evaluated for all of them when any one needs it: on a 1024² fractal, groups of 32 lanes
+// evaluate about 3.5 crossings a texel-direction, groups of 8 would evaluate about 9 (docs/performance.md).
 //
 // The arithmetic is the same per lane on every instruction set (adds, multiplies, maxima and compares, no
-// fused multiply-add), so the SSE2 and AVX2 kernels (lane_kernel.inc) give the same bits.
+// fused multiply-add), and every instruction set groups the same 32 lanes, so the SSE2, AVX2 and AVX-512
+// kernels (lane_kernel.inc) give the same bits.
 #pragma once
 
 #include <cmath>
@@ -43,8 +50,8 @@
 
 namespace hfbake::p1 {
 
-inline constexpr int kLanes = 8;
-inline constexpr int kLanePad = 16;         // texels of padding on each side of the minor axis
+inline constexpr int kLanes = 32;
+inline constexpr int kLanePad = 64;         // texels of padding on each side of the minor axis
 inline constexpr float kOffField = -1e30f;  // the padding's height: never the steepest
 inline constexpr int kLaneWindow = 3;       // minor-axis texels of LaneLayout::window's maxima
 
@@ -94,7 +101,7 @@ struct LaneDirection {
   void build(const HeightField& f, const LaneLayout& layout, double dx, double dy, double curvature = 0);
 };
 
-// A search's statistics (for measurements): groups of eight texels, blocks evaluated, crossings evaluated.
+// A search's statistics (for measurements): groups of kLanes texels, blocks evaluated, crossings evaluated.
 struct LaneStats {
   std::uint64_t groups = 0, blocks = 0, crossings = 0;
 };
@@ -114,12 +121,14 @@ SweepDirection lane_plan(const HeightField& f, const SweepSpec& spec, int k);
 void build_lane_direction(LaneDirection& d, const HeightField& f, const LaneLayout& layout,
                           const SweepDirection& sd, double curvature);
 
-// Number of strips (each holds at most one group of eight texels per major index) of a direction.
+// Number of strips (each holds at most one group of kLanes texels per major index) of a direction.
 int lane_strip_count(const LaneLayout& layout, const LaneDirection& d);
 
-// The instruction set a search runs on (the same bits on each): best = AVX2 where the processor has it.
-enum class LaneIsa { best, sse2, avx2 };
+// The instruction set a search runs on (the same bits on each): best = AVX-512F where the processor has it,
+// else AVX2 where it has that, else SSE2.
+enum class LaneIsa { best, sse2, avx2, avx512 };
 bool lane_avx2_available();
+bool lane_avx512_available();
 
 // Searches the groups of strips [s0, s1): for every texel (i, j) of them, slope[f.index(i, j)] = the
 // steepest slope (rise / run) of any crossing of its ray (-inf: none on the field) and which[...] that
@@ -132,6 +141,10 @@ void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirec
 void lane_search_avx2(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
                       float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
                       LaneStats* stats);
+// The AVX-512F kernel (lane_horizons_avx512.cpp); call lane_search instead.
+void lane_search_avx512(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0,
+                        int s1, float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
+                        LaneStats* stats);
 
 // What lane_directions keeps from one call to the next on the same field (a bake's direction blocks): the
 // last lane layout it built, so a block whose first axis is the previous block's last does not build it

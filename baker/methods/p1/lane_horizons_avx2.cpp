@@ -1,5 +1,6 @@
-// The lane search's kernel (lane_kernel.inc) on AVX2: this file alone is compiled with -mavx2 (and no FMA);
-// lane_search (lane_horizons.cpp) calls it only where the processor has AVX2.
+// The lane search's kernel (lane_kernel.inc) on AVX2 (eight lanes a register, paired up to kLanes): this file
+// alone is compiled with -mavx2 (and no FMA); lane_search (lane_horizons.cpp) calls it only where the
+// processor has AVX2.
 #include <immintrin.h>
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
+#include <type_traits>
 
 #include "methods/p1/lane_horizons.hpp"
 
@@ -16,8 +18,10 @@ namespace hfbake::p1 {
 namespace {
 
 struct Avx2 {
+  static constexpr int kWidth = 8;
   using F = __m256;
   using I = __m256i;
+  using M = F;
   static F load(const float* p) { return _mm256_loadu_ps(p); }
   static void store(float* p, F a) { _mm256_storeu_ps(p, a); }
   static void storei(std::int32_t* p, I a) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), a); }
@@ -33,6 +37,7 @@ struct Avx2 {
     return _mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(b), _mm256_castsi256_ps(a), m));
   }
   static bool any(F m) { return _mm256_movemask_ps(m) != 0; }
+  static F or_(F a, F b) { return _mm256_or_ps(a, b); }
 };
 
 #include "methods/p1/lane_kernel.inc"
