@@ -16,6 +16,7 @@
 #include "cli/slurm_command.hpp"
 #include "cli/version.hpp"
 #include "io/exr_output.hpp"
+#include "methods/p1/lane_horizons.hpp"
 
 namespace {
 
@@ -264,6 +265,12 @@ int run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     std::fprintf(stderr, "hfbake: error: command line: %s\n", e.what());
+    return 2;
+  }
+  try {
+    hfbake::p1::lane_isa();  // HFBAKE_ISA checked before any command starts
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "hfbake: error: environment: %s\n", e.what());
     return 2;
   }
   if (app.got_subcommand(horizon_cmd)) {

@@ -1,7 +1,7 @@
 #!/bin/bash
 # Shards + merge give the bits of a single-machine bake, for shard counts below, at and above the direction
-# blocks, and with one shard on glibc's baseline (SSE2) math functions; missing, truncated and foreign shards
-# are refused naming the shard (exit 2); a re-run shard is kept.
+# blocks, and with shards on SSE2, AVX2 and this machine's kernels and math functions; missing, truncated and
+# foreign shards are refused naming the shard (exit 2); a re-run shard is kept.
 set -u
 H=$1 W=$2
 . "$(dirname "$0")/common.sh"
@@ -42,14 +42,21 @@ for N in 1 3 11; do
 done
 
 # A farm of mixed machines: glibc picks its math functions' variants (sinf, atanf, sincos, ...) by CPU, FMA
-# and AVX2 ones on this machine, SSE2 ones on machines without them. One shard baked with the SSE2 variants
-# (forced by glibc's tunable) and the others with this machine's: the merge must still be the bake's bits.
+# and AVX2 ones on this machine, SSE2 ones on machines without them, and p1's lane search its kernel
+# (AVX-512F, AVX2 or SSE2). One shard baked as on an SSE2-only machine (glibc's variants forced by its
+# tunable, the lane search's by HFBAKE_ISA), one with the lane search on AVX2, one with this machine's best:
+# the merge must still be the bake's bits.
 SSE2_MATH="glibc.cpu.hwcaps=-AVX2_Usable,-FMA_Usable,-AVX512F_Usable,-AVX2,-FMA,-AVX512F"
-GLIBC_TUNABLES=$SSE2_MATH "$H" bake job.json --no-cache --quiet --out mixed --shard 0/3 || fail "SSE2-math shard"
-for i in 1 2; do "$H" bake job.json --no-cache --quiet --out mixed --shard "$i/3" || fail "bake --shard $i/3"; done
-"$H" merge job.json --no-cache --quiet --out mixed || fail "merge of mixed-math shards"
+GLIBC_TUNABLES=$SSE2_MATH HFBAKE_ISA=sse2 "$H" bake job.json --no-cache --quiet --out mixed --shard 0/3 ||
+  fail "SSE2 shard"
+HFBAKE_ISA=avx2 "$H" bake job.json --no-cache --quiet --out mixed --shard 1/3 || fail "AVX2 shard"
+"$H" bake job.json --no-cache --quiet --out mixed --shard 2/3 || fail "bake --shard 2/3"
+"$H" merge job.json --no-cache --quiet --out mixed || fail "merge of mixed-machine shards"
 same_outputs whole mixed
-echo "ok: a shard baked with glibc's SSE2 math merges with FMA/AVX2 ones to the bake's bits"
+echo "ok: shards baked with SSE2, AVX2 and this machine's kernels and math merge to the bake's bits"
+# Any other HFBAKE_ISA is refused before anything runs, naming the variable.
+msg=$(HFBAKE_ISA=neon "$H" validate job.json 2>&1)
+[ $? -eq 2 ] && echo "$msg" | grep -q "HFBAKE_ISA=neon" || fail "HFBAKE_ISA=neon: $msg"
 
 # A re-run of a complete shard keeps it (idempotent), and the merge is the same again.
 before=$(stat -c %Y%N s3/shards/farm.shard-1-of-3.hfshard)

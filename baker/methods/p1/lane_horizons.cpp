@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <type_traits>
 
 #include "methods/p1/horizon_sweep.hpp"
@@ -183,8 +184,7 @@ int lane_strip_count(const LaneLayout& L, const LaneDirection& d) {
 void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
                  float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats,
                  LaneIsa isa) {
-  if (isa == LaneIsa::best)
-    isa = lane_avx512_available() ? LaneIsa::avx512 : lane_avx2_available() ? LaneIsa::avx2 : LaneIsa::sse2;
+  if (isa == LaneIsa::best) isa = lane_isa();
   if (isa == LaneIsa::avx512)
     lane_search_avx512(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
   else if (isa == LaneIsa::avx2)
@@ -201,5 +201,24 @@ bool lane_avx2_available() {
 bool lane_avx512_available() {
   static const bool yes = __builtin_cpu_supports("avx512f");
   return yes;
+}
+
+LaneIsa lane_isa() {
+  static const LaneIsa isa = [] {
+    LaneIsa cap = LaneIsa::avx512;
+    if (const char* v = std::getenv("HFBAKE_ISA"); v && *v) {
+      const std::string s = v;
+      if (s == "sse2")
+        cap = LaneIsa::sse2;
+      else if (s == "avx2")
+        cap = LaneIsa::avx2;
+      else if (s != "avx512")
+        throw std::invalid_argument("HFBAKE_ISA=" + s + ": must be sse2, avx2 or avx512 (or unset)");
+    }
+    if (cap == LaneIsa::avx512 && lane_avx512_available()) return LaneIsa::avx512;
+    if (cap != LaneIsa::sse2 && lane_avx2_available()) return LaneIsa::avx2;
+    return LaneIsa::sse2;
+  }();
+  return isa;
 }
 }  // namespace hfbake::p1

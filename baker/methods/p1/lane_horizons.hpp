@@ -124,11 +124,14 @@ void build_lane_direction(LaneDirection& d, const HeightField& f, const LaneLayo
 // Number of strips (each holds at most one group of kLanes texels per major index) of a direction.
 int lane_strip_count(const LaneLayout& layout, const LaneDirection& d);
 
-// The instruction set a search runs on (the same bits on each): best = AVX-512F where the processor has it,
-// else AVX2 where it has that, else SSE2.
+// The instruction set a search runs on (the same bits on each): best = lane_isa().
 enum class LaneIsa { best, sse2, avx2, avx512 };
 bool lane_avx2_available();
 bool lane_avx512_available();
+// What LaneIsa::best runs: the widest the processor has (AVX-512F, AVX2, SSE2), capped by the environment
+// variable HFBAKE_ISA (sse2, avx2 or avx512: the most a search may use; docs/cluster.md), read once. Throws
+// std::invalid_argument naming the variable on any other value.
+LaneIsa lane_isa();
 
 // Searches the groups of strips [s0, s1): for every texel (i, j) of them, slope[f.index(i, j)] = the
 // steepest slope (rise / run) of any crossing of its ray (-inf: none on the field) and which[...] that
