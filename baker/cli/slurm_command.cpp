@@ -142,12 +142,7 @@ int run_slurm(const SlurmOptions& o) {
         try {
           check_tiled_job(job);
           const TilePlan plan = plan_job_tiles(job, std::numeric_limits<std::size_t>::max(), o.tile_size);
-          const FieldSize size = probe_field_size(job);
-          const int w = std::min(size.width, o.tile_size + 2 * plan.halo);
-          const int h = std::min(size.height, o.tile_size + 2 * plan.halo);
-          need_bytes = std::max(
-              need_bytes, estimate_peak_bytes(job, {.width = w, .height = h, .georaster = size.georaster}) +
-                              kTiledGdalCacheBytes);
+          need_bytes = std::max(need_bytes, tiled_peak_bytes(job, plan));
         } catch (const InputError& e) {
           return fail(e.line());
         }

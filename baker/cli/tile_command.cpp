@@ -259,6 +259,26 @@ void check_tiled_job(const Job& job) {
   job_halo(job);
 }
 
+namespace {
+
+// The estimate of a bake of a w x h read window of a tiled bake (its layers written as tile files).
+std::size_t window_bytes(const Job& job, int w, int h) {
+  return estimate_peak_bytes(job, FieldSize{.width = w, .height = h, .tile = true, .georaster = true});
+}
+
+// The estimate of a tile of interior side `side` read with `halo` on a raster of width x height.
+std::size_t tile_window_bytes(const Job& job, int width, int height, int side, int halo) {
+  return window_bytes(job, int(std::min<std::int64_t>(width, std::int64_t(side) + 2 * std::int64_t(halo))),
+                      int(std::min<std::int64_t>(height, std::int64_t(side) + 2 * std::int64_t(halo))));
+}
+
+}  // namespace
+
+std::size_t tiled_peak_bytes(const Job& job, const TilePlan& plan) {
+  return tile_window_bytes(job, plan.width, plan.height, plan.tile, plan.halo) + kTiledGdalCacheBytes +
+         plan.kept_bytes;
+}
+
 TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> tile_size) {
   const std::optional<GeoHeightBand> band = georaster_height_band(job);
   if (!band) refuse(job, "/height", "a tiled bake reads a georeferenced raster through GDAL");
@@ -271,11 +291,7 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
     refuse(job, "/height",
            "the far fields' coarse copies of the raster need about " + std::to_string(coarse >> 20) +
                " MiB, more than the memory budget leaves (--memory-limit, or a larger far_field cell)");
-  auto peak = [&](int side) {
-    const int w = int(std::min<std::int64_t>(band->width, std::int64_t(side) + 2 * std::int64_t(halo)));
-    const int h = int(std::min<std::int64_t>(band->height, std::int64_t(side) + 2 * std::int64_t(halo)));
-    return estimate_peak_bytes(job, FieldSize{.width = w, .height = h, .tile = true, .georaster = true});
-  };
+  auto peak = [&](int side) { return tile_window_bytes(job, band->width, band->height, side, halo); };
   auto too_large = [&](int side, const std::string& knob) {
     refuse(
         job, "/height",
@@ -293,9 +309,8 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
     return plan;
   }
   const std::optional<int> side =
-      tile_side_for_budget(band->width, band->height, halo, tile_budget, 256, [&job](int w, int h) {
-        return estimate_peak_bytes(job, FieldSize{.width = w, .height = h, .tile = true, .georaster = true});
-      });
+      tile_side_for_budget(band->width, band->height, halo, tile_budget, 256,
+                           [&job](int w, int h) { return window_bytes(job, w, h); });
   if (!side) too_large(256, "--memory-limit");
   TilePlan plan = plan_tiles(band->width, band->height, *side, halo);
   plan.kept_bytes = coarse;

@@ -33,6 +33,11 @@ void check_tiled_job(const Job& job);
 // /height otherwise (naming the side, the halo and the estimate).
 TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> tile_size);
 
+// The most a tiled bake of `plan` holds at once: its largest tile's read window baked (the estimate
+// plan_job_tiles fits), the GDAL block cache (kTiledGdalCacheBytes) and the plan's kept bytes. What each
+// task of `hfbake slurm --tiles` asks for.
+std::size_t tiled_peak_bytes(const Job& job, const TilePlan& plan);
+
 // What `validate --tiles` checks of a tiled bake: check_tiled_job, the plan, and every texel of the raster
 // read (a window at a time) under the tiled bake's nodata rule. Returns the plan in words ("16 tiles (4 x 4)
 // of 4864^2 texels with a halo of 6").
