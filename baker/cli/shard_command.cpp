@@ -2,9 +2,11 @@
 
 #include <time.h>
 
+#include <charconv>
 #include <chrono>
-#include <regex>
+#include <optional>
 #include <set>
+#include <string_view>
 
 #include "cli/method_dispatch.hpp"
 #include "cli/outputs.hpp"
@@ -63,6 +65,26 @@ std::string layout_text(const std::vector<std::pair<std::string, std::size_t>>& 
   std::string s;
   for (const auto& [name, channels] : layout) s += (s.empty() ? "" : ", ") + name;
   return s.empty() ? "none" : s;
+}
+
+// The shard count in the name of a shard file of job `job` (<job>.shard-<i>-of-<n>.hfshard, i and n decimal
+// digits that fit an int), or nullopt for any other name.
+std::optional<int> shard_count_in_name(const std::string& name, const std::string& job) {
+  const std::string head = job + ".shard-", tail = ".hfshard";
+  if (name.size() <= head.size() + tail.size() || name.compare(0, head.size(), head) != 0 ||
+      name.compare(name.size() - tail.size(), tail.size(), tail) != 0)
+    return std::nullopt;
+  const std::string_view mid(name.data() + head.size(), name.size() - head.size() - tail.size());
+  const std::size_t of = mid.find("-of-");
+  if (of == std::string_view::npos) return std::nullopt;
+  auto number = [](std::string_view t) -> std::optional<int> {
+    int v = 0;
+    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (t.empty() || ec != std::errc() || end != t.data() + t.size() || t.front() == '-') return std::nullopt;
+    return v;
+  };
+  if (!number(mid.substr(0, of))) return std::nullopt;
+  return number(mid.substr(of + 4));
 }
 
 }  // namespace
@@ -315,15 +337,10 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
 MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), height_(height) {
   // How many shards: from the names in the shards folder (one count only).
   const fs::path dir = job.output.dir / "shards";
-  const std::regex name(std::regex_replace(job.name, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
-                        R"(\.shard-(\d+)-of-(\d+)\.hfshard)");
   std::set<int> counts;
   std::error_code ec;
-  for (const auto& f : fs::directory_iterator(dir, ec)) {
-    std::smatch m;
-    const std::string n = f.path().filename().string();
-    if (std::regex_match(n, m, name)) counts.insert(std::stoi(m[2].str()));
-  }
+  for (const auto& f : fs::directory_iterator(dir, ec))
+    if (const auto n = shard_count_in_name(f.path().filename().string(), job.name)) counts.insert(*n);
   if (counts.empty())
     throw InputError(dir.string(), "", "no shards of job " + job.name + " (bake them with --shard I/N)");
   if (counts.size() > 1) {

@@ -64,6 +64,16 @@ sleep 1
 "$H" bake job.json --no-cache --quiet --out s3 --shard 1/3 || fail "re-run shard"
 [ "$(stat -c %Y%N s3/shards/farm.shard-1-of-3.hfshard)" = "$before" ] || fail "a complete shard was baked again"
 
+# Names like a shard's that are not one of this count (a count past int's range, not digits) are not
+# shards: the merge reads the three and gives the bake's bits.
+touch s3/shards/farm.shard-1-of-99999999999.hfshard s3/shards/farm.shard-x-of-3.hfshard \
+  s3/shards/farm.shard--1-of-3.hfshard
+"$H" merge job.json --no-cache --quiet --out s3 || fail "merge beside names that are not shards"
+same_outputs whole s3
+rm s3/shards/farm.shard-1-of-99999999999.hfshard s3/shards/farm.shard-x-of-3.hfshard \
+  s3/shards/farm.shard--1-of-3.hfshard
+echo "ok: names that are not shards are passed over"
+
 expect_refusal() {  # expect_refusal WHAT PATTERN: the merge of s3 exits 2 naming the shard
   local err
   err=$("$H" merge job.json --no-cache --quiet --out s3 2>&1 >/dev/null)
