@@ -136,5 +136,35 @@ TEST(LaneSearch, PruningKeepsTheSteepestCrossingBitForBit) {
   }
 }
 
+// A field past 46341^2 texels: a crossing's offset in the lane layout (major index times the padded stride)
+// exceeds 2^31, and every crossing still reads the texel its corner names. The directions' crossings are
+// built from the field's shape alone (no heights are held).
+TEST(LaneSearch, CrossingOffsetsOfALargeFieldAreExact) {
+  HeightField f;
+  f.width = 50000, f.height = 47000;
+  p1::LaneLayout L;  // its shape only: build would hold 19 GB
+  L.x_major = true, L.nmajor = f.width, L.nminor = f.height, L.stride = f.height + 2 * p1::kLanePad;
+  SweepSpec spec;
+  spec.directions = 8;
+  for (int k : {0, 1}) {
+    const SweepDirection sd = plan_direction(f, spec, k);
+    ASSERT_GE(std::fabs(sd.dx), std::fabs(sd.dy));
+    p1::LaneDirection d;
+    d.build(f, L, sd.dx, sd.dy);
+    std::ptrdiff_t largest = 0;
+    for (std::size_t c = 0; c < d.crossings.size(); ++c) {
+      const p1::LaneCrossing& x = d.crossings[c];
+      // The corner's major index is the crossing's major distance rounded to a neighbouring column, and its
+      // minor index lies within the layout's padding of the ray's line.
+      for (const std::ptrdiff_t a : {x.a, x.b}) {
+        const double maj = std::floor(double(a + L.stride / 2) / double(L.stride));
+        EXPECT_LE(std::fabs(maj - double(d.su) * double(d.major[c])), 1.5) << "k " << k << " crossing " << c;
+        largest = std::max(largest, a < 0 ? -a : a);
+      }
+    }
+    EXPECT_GT(largest, std::ptrdiff_t(1) << 31) << "k " << k;
+  }
+}
+
 }  // namespace
 }  // namespace hfbake

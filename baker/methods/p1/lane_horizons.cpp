@@ -115,9 +115,8 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
   for (const NearCrossing& c : cs) {
     const int amaj = x_major ? c.ai : c.aj, amin = x_major ? c.aj : c.ai;
     const int bmaj = x_major ? c.bi : c.bj, bmin = x_major ? c.bj : c.bi;
-    crossings.push_back({std::int32_t(std::ptrdiff_t(amaj) * L.stride + amin),
-                         std::int32_t(std::ptrdiff_t(bmaj) * L.stride + bmin), c.w, c.inv_s,
-                         float(curvature / double(c.inv_s))});
+    crossings.push_back({std::ptrdiff_t(amaj) * L.stride + amin, std::ptrdiff_t(bmaj) * L.stride + bmin, c.w,
+                         c.inv_s, float(curvature / double(c.inv_s))});
     for (const double e : {double(amin) - g * double(amaj), double(bmin) - g * double(bmaj)}) {
       e_lo = std::min(e_lo, e);
       e_hi = std::max(e_hi, e);

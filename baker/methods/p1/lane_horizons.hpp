@@ -75,7 +75,7 @@ struct LaneLayout {
 // offsets a, b (of the LaneLayout), seen at horizontal world distance d = 1 / inv_s and lowered by the
 // Earth's curvature by drop d^2 (drop = c d, terrain/earth.hpp): its slope is (z - z0) inv_s - drop.
 struct LaneCrossing {
-  std::int32_t a, b;
+  std::ptrdiff_t a, b;  // 64 bits: a large field's offsets exceed 2^31 (46341^2 texels)
   float w, inv_s, drop;
 };
 
