@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
     p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope0.data(),
                     nullptr, nullptr, p1::LaneIsa::avx2);
     bare_s += cpu_now() - c0;
-    if (p1::lane_avx512_available()) {
+    if (p1::lane_isa_available(p1::LaneIsa::avx512)) {
       std::vector<float> slope5(slope.size());
       std::vector<std::int32_t> which5(slope.size());
       const double e0 = cpu_now();

@@ -32,11 +32,6 @@ double sin_of(float m) {
   return m == -std::numeric_limits<float>::infinity() ? -1.0 : std::sin(std::atan(double(m)));
 }
 
-bool available(p1::LaneIsa isa) {
-  return isa == p1::LaneIsa::sse2 || (isa == p1::LaneIsa::avx2 && p1::lane_avx2_available()) ||
-         (isa == p1::LaneIsa::avx512 && p1::lane_avx512_available());
-}
-
 void check(const HeightField& f, const char* name, float tolerance, double curvature = 0) {
   SweepSpec spec;
   spec.directions = 24;
@@ -56,14 +51,14 @@ void check(const HeightField& f, const char* name, float tolerance, double curva
     p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope.data(), which.data(), nullptr,
                     p1::LaneIsa::sse2);
     for (const p1::LaneIsa isa : {p1::LaneIsa::avx2, p1::LaneIsa::avx512}) {
-      if (!available(isa)) continue;
+      if (!p1::lane_isa_available(isa)) continue;
       p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope2.data(), which2.data(), nullptr, isa);
       EXPECT_EQ(std::memcmp(slope.data(), slope2.data(), N * sizeof(float)), 0) << name << " k " << k;
       EXPECT_EQ(which, which2) << name << " k " << k;
     }
     // Without casters (which null; its own hints, once a block): the same slopes, on every kernel.
     for (const p1::LaneIsa isa : {p1::LaneIsa::sse2, p1::LaneIsa::avx2, p1::LaneIsa::avx512}) {
-      if (!available(isa)) continue;
+      if (!p1::lane_isa_available(isa)) continue;
       std::fill(slope2.begin(), slope2.end(), 0.0f);
       p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope2.data(), nullptr, nullptr, isa);
       EXPECT_EQ(std::memcmp(slope.data(), slope2.data(), N * sizeof(float)), 0)
@@ -154,8 +149,7 @@ TEST(LaneSearch, CrossingOffsetsOfALargeFieldAreExact) {
     std::ptrdiff_t largest = 0;
     for (std::size_t c = 0; c < d.crossings.size(); ++c) {
       const p1::LaneCrossing& x = d.crossings[c];
-      // The corner's major index is the crossing's major distance rounded to a neighbouring column, and its
-      // minor index lies within the layout's padding of the ray's line.
+      // The corner's major index (the offset over the stride, rounded) is a column next to the crossing's.
       for (const std::ptrdiff_t a : {x.a, x.b}) {
         const double maj = std::floor(double(a + L.stride / 2) / double(L.stride));
         EXPECT_LE(std::fabs(maj - double(d.su) * double(d.major[c])), 1.5) << "k " << k << " crossing " << c;

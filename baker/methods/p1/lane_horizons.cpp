@@ -192,14 +192,9 @@ void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirec
     lane_search_any<Sse2>(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
 }
 
-bool lane_avx2_available() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
-
-bool lane_avx512_available() {
-  static const bool yes = __builtin_cpu_supports("avx512f");
-  return yes;
+bool lane_isa_available(LaneIsa isa) {
+  static const bool avx2 = __builtin_cpu_supports("avx2"), avx512 = __builtin_cpu_supports("avx512f");
+  return isa == LaneIsa::sse2 || (isa == LaneIsa::avx2 && avx2) || (isa == LaneIsa::avx512 && avx512);
 }
 
 LaneIsa lane_isa() {
@@ -214,8 +209,8 @@ LaneIsa lane_isa() {
       else if (s != "avx512")
         throw std::invalid_argument("HFBAKE_ISA=" + s + ": must be sse2, avx2 or avx512 (or unset)");
     }
-    if (cap == LaneIsa::avx512 && lane_avx512_available()) return LaneIsa::avx512;
-    if (cap != LaneIsa::sse2 && lane_avx2_available()) return LaneIsa::avx2;
+    for (const LaneIsa isa : {LaneIsa::avx512, LaneIsa::avx2})  // the widest first
+      if (int(isa) <= int(cap) && lane_isa_available(isa)) return isa;
     return LaneIsa::sse2;
   }();
   return isa;

@@ -124,10 +124,10 @@ void build_lane_direction(LaneDirection& d, const HeightField& f, const LaneLayo
 // Number of strips (each holds at most one group of kLanes texels per major index) of a direction.
 int lane_strip_count(const LaneLayout& layout, const LaneDirection& d);
 
-// The instruction set a search runs on (the same bits on each): best = lane_isa().
+// The instruction set a search runs on (the same bits on each): best = lane_isa(). sse2 < avx2 < avx512.
 enum class LaneIsa { best, sse2, avx2, avx512 };
-bool lane_avx2_available();
-bool lane_avx512_available();
+// Whether this processor (and its operating system) runs `isa`'s kernel; sse2 always.
+bool lane_isa_available(LaneIsa isa);
 // What LaneIsa::best runs: the widest the processor has (AVX-512F, AVX2, SSE2), capped by the environment
 // variable HFBAKE_ISA (sse2, avx2 or avx512: the most a search may use; docs/cluster.md), read once. Throws
 // std::invalid_argument naming the variable on any other value.
