@@ -1,5 +1,8 @@
 // Float approximations for the per-sample and per-texel hot loops of the horizon methods.
 // Errors (measured over their whole domains in tests/p1): fast_atan < 4e-8 rad, fast_sincos < 2e-7.
+// Always inlined, and built on compiler builtins rather than std:: wrappers: the per-instruction-set
+// kernels (row_shading_*.cpp) include them, and an out-of-line copy compiled for AVX-512 must never be the
+// one the linker keeps for every caller.
 #pragma once
 
 #include <cmath>
@@ -10,7 +13,7 @@ inline constexpr float kHalfPiF = 1.57079632679489661923f;
 inline constexpr float kQuarterPiF = 0.78539816339744830962f;
 
 // atan(x) for |x| <= tan(pi/8) (Taylor series to x^15; the remainder is below 2e-8).
-inline float atan_small(float x) {
+[[gnu::always_inline]] inline float atan_small(float x) {
   const float t = x * x;
   float p = -1.0f / 15;
   p = p * t + 1.0f / 13;
@@ -27,28 +30,28 @@ inline float atan_small(float x) {
 // atan(lo / hi) = pi/4 + atan((lo - hi) / (lo + hi)) when lo / hi > tan(pi/8), and atan(|y| / x) =
 // pi/2 - atan(x / |y|) when |y| > x. Branch-free (selects): loops vectorise, random inputs do not
 // mispredict, and there is a single division on the dependency chain.
-inline float fast_atan2_pos(float y, float x) {
-  const float a = std::fabs(y);
+[[gnu::always_inline]] inline float fast_atan2_pos(float y, float x) {
+  const float a = __builtin_fabsf(y);
   const float lo = a < x ? a : x, hi = a < x ? x : a;
   const bool big = lo > 0.41421356f * hi;
   const float num = big ? lo - hi : lo, den = big ? lo + hi : hi;
   float r = atan_small(num / den) + (big ? kQuarterPiF : 0.0f);
   r = a > x ? kHalfPiF - r : r;
-  return std::copysign(r, y);
+  return __builtin_copysignf(r, y);
 }
 
 // atan(x) for any finite x.
-inline float fast_atan(float x) {
+[[gnu::always_inline]] inline float fast_atan(float x) {
   return fast_atan2_pos(x, 1.0f);
 }
 
 // Elevation angle of a vector with rise dz over horizontal run h > 0: atan2(dz, h) in (-pi/2, pi/2).
-inline float fast_elevation(float dz, float h) {
+[[gnu::always_inline]] inline float fast_elevation(float dz, float h) {
   return fast_atan2_pos(dz, h);
 }
 
 // sin and cos of e for |e| <= pi/2 (Taylor to e^13 / e^14).
-inline void fast_sincos(float e, float& s, float& c) {
+[[gnu::always_inline]] inline void fast_sincos(float e, float& s, float& c) {
   const float t = e * e;
   float ps = 1.0f / 6227020800.0f;  // 1/13!
   ps = ps * t - 1.0f / 39916800.0f;

@@ -20,13 +20,11 @@
 #include "methods/p1/horizon_sweep.hpp"
 #include "methods/p1/lane_horizons.hpp"
 #include "methods/p1/lighting_table.hpp"
+#include "methods/p1/row_shading.hpp"
 
 namespace hfbake {
 
 using p1::fast_atan;
-using p1::fast_atan2_pos;
-using p1::fast_sincos;
-using p1::kHalfPiF;
 using p1::near_slope;
 
 namespace {
@@ -113,8 +111,8 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
         const int k = sd.k;
         if (floor) p1::direction_floor(*floor, f.width, f.height, azimuth(k, K), df);
         tbb::parallel_for(0, f.height, [&](int j) {
-          constexpr int kRun = 32;
-          alignas(64) float m[kRun], e[kRun], dist[kRun];
+          constexpr int kRun = p1::kShadeRun;
+          alignas(64) float m[kRun], dist[kRun];
           for (int i0 = 0; i0 < f.width; i0 += kRun) {
             const int w = std::min(kRun, f.width - i0);
             const std::size_t base = f.index(i0, j);
@@ -129,14 +127,14 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
               for (int x = 0; x < w; ++x)
                 m[x] = p1::raise_to_floor(*floor, df, i0 + x, j, f.z[base + x], m[x],
                                           row_slack[std::size_t(j)], &dist[x]);
-            for (int x = 0; x < w; ++x) e[x] = fast_atan(m[x]);
             const float* FX[2] = {facets ? fx.data() + base : nullptr,
                                   facets ? fx.data() + N + base : nullptr};
             const float* FY[2] = {facets ? fy.data() + base : nullptr,
                                   facets ? fy.data() + N + base : nullptr};
             const float* FZ[2] = {facets ? fz.data() + base : nullptr,
                                   facets ? fz.data() + N + base : nullptr};
-            shade(k, base, w, nx.data() + base, ny.data() + base, nz.data() + base, FX, FY, FZ, e, dist);
+            shade(k, base, w, nx.data() + base, ny.data() + base, nz.data() + base, FX, FY, FZ, m,
+                  /*slopes=*/true, dist);
           }
         });
         rc.report(double(++done) / double(k_end - k_begin));
@@ -351,136 +349,66 @@ HorizonPlanes horizon_planes(float* out, int per_texel, int first, bool by_direc
 }
 
 // The lighting of one row run of texels (base .. base + w - 1, at most 32) in direction k from their
-// horizon elevations e (dist: the horizon_distance layer's values, or null), at the texels' normals (and
-// the facets' normals FX[q], FY[q], FZ[q]), added to the block's sums; the horizon layers' values written.
+// horizons, at the texels' normals (and the facets' normals FX[q], FY[q], FZ[q]), added to the block's sums;
+// the horizon layers' values written (row_shading.hpp: the kernel for this processor's instruction set).
 // Called from many threads at once for disjoint texels.
 struct RowShading {
-  const P1Params& p;
-  std::size_t N;
-  int K, k_begin;
-  bool uniform_env, need_ao, need_theta, facets;
   std::optional<p1::LightingTables> tables;
   std::optional<p1::SwathProfiles> profiles;
   std::vector<float> cs, sn;  // the azimuths' cosines and sines
-  std::vector<float>&ao_sum, &vsky_sum, &rgb_sum, &bent_sum, &fao, &fdr, &fdg, &fdb;
-  // The block's horizon layers by direction, [(k - k_begin) * N + texel] (HorizonPlanes): each direction
-  // writes a contiguous run, where the layers' own order would scatter a store over K floats per texel.
-  float *hz, *hd;
+  p1::ShadeRowTarget target;
+  p1::ShadeRowFn kernel = nullptr;
 
-  RowShading(const Scene& scene, const P1Params& params, int k_begin_, P1Sums& r, float* horizon_planes,
+  // The block's sums r, sized by zero_sums (not resized while this lives); the block's horizon layers by
+  // direction, [(k - k_begin) * N + texel] (HorizonPlanes): each direction writes a contiguous run, where
+  // the layers' own order would scatter a store over K floats per texel.
+  RowShading(const Scene& scene, const P1Params& p, int k_begin, P1Sums& r, float* horizon_planes,
              float* distance_planes)
-      : p(params),
-        N(scene.field.texel_count()),
-        K(params.directions),
-        k_begin(k_begin_),
-        ao_sum(r.ao),
-        vsky_sum(r.vsky),
-        rgb_sum(r.rgb),
-        bent_sum(r.bent),
-        fao(r.fao),
-        fdr(r.fdr),
-        fdg(r.fdg),
-        fdb(r.fdb),
-        hz(horizon_planes),
-        hd(distance_planes) {
+      : kernel(p1::shade_row_kernel()) {
     const Environment& env = scene.environment;
-    uniform_env = env.is_uniform();
-    need_ao = p1_sums_shape(scene, p).ao > 0;
-    facets = p.direct && p.facet_direct;
-    if (p.direct && !uniform_env) {
+    p1::ShadeRowTarget& t = target;
+    t.N = scene.field.texel_count();
+    t.k_begin = k_begin;
+    t.uniform_env = env.is_uniform();
+    t.facets = p.direct && p.facet_direct;
+    if (p.direct && !t.uniform_env) {
       if (p.normal_bins > 0)
-        tables = p1::build_lighting_tables(env, K, p.normal_bins, p.horizon_bins);
+        tables = p1::build_lighting_tables(env, p.directions, p.normal_bins, p.horizon_bins);
       else
-        profiles = p1::build_swath_profiles(env, K);
+        profiles = p1::build_swath_profiles(env, p.directions);
     }
-    need_theta = need_ao || p.bent_normal || profiles;
-    azimuth_table(K, cs, sn);
+    const bool need_ao = p1_sums_shape(scene, p).ao > 0;
+    t.need_theta = need_ao || p.bent_normal || profiles;
+    azimuth_table(p.directions, cs, sn);
+    t.cs = cs.data(), t.sn = sn.data();
+    t.ao = need_ao ? r.ao.data() : nullptr;
+    t.vsky = p.vsky ? r.vsky.data() : nullptr;
+    t.rgb = r.rgb.empty() ? nullptr : r.rgb.data();
+    t.bent = p.bent_normal ? r.bent.data() : nullptr;
+    t.fao = r.fao.empty() ? nullptr : r.fao.data();
+    t.fdr = r.fdr.empty() ? nullptr : r.fdr.data();
+    t.fdg = r.fdg.empty() ? nullptr : r.fdg.data();
+    t.fdb = r.fdb.empty() ? nullptr : r.fdb.data();
+    t.hz = p.horizon ? horizon_planes : nullptr;
+    t.hd = p.horizon_distance ? distance_planes : nullptr;
+    t.tables = tables ? &*tables : nullptr;
+    t.profiles = profiles ? &*profiles : nullptr;
   }
+  RowShading(const RowShading&) = delete;
+  RowShading& operator=(const RowShading&) = delete;
 
+  // h: the texels' horizons, slopes (rise / run) when `slopes`, else elevations in radians; dist: the
+  // horizon_distance layer's values, or null.
   void operator()(int k, std::size_t base, int w, const float* NX, const float* NY, const float* NZ,
-                  const float* const* FX, const float* const* FY, const float* const* FZ, const float* e,
-                  const float* dist) const {
-    constexpr int kMax = 32;
-    const float c = cs[k], s = sn[k];
-    alignas(64) float se[kMax], ce[kMax], th[kMax], st[kMax], ct[kMax], np_[kMax];
-    for (int x = 0; x < w; ++x) {
-      fast_sincos(e[x], se[x], ce[x]);
-      np_[x] = NX[x] * c + NY[x] * s;
-    }
-    if (p.vsky) {
-      float* v = vsky_sum.data() + base;
-      for (int x = 0; x < w; ++x) v[x] += se[x] > 0 ? se[x] : 0.0f;
-    }
-    // theta = the horizon's zenith angle, or where the normal's hemisphere ends if that is higher.
-    auto lobe = [&](const float* NZ) {
-      for (int x = 0; x < w; ++x) {
-        const float n_p = np_[x], n_z = NZ[x];
-        // Everything computed unconditionally, then selected: the loop stays branch-free (vectorises).
-        const bool open = se[x] * n_z + ce[x] * n_p >= 0;
-        const float inv_len = 1.0f / std::sqrt(n_p * n_p + n_z * n_z);
-        const float th_plane = kHalfPiF + fast_atan2_pos(n_p, n_z);
-        st[x] = open ? ce[x] : n_z * inv_len;
-        ct[x] = open ? se[x] : -n_p * inv_len;
-        th[x] = std::min(kHalfPiF - e[x], th_plane);  // (open <=> the horizon's angle is the smaller)
-      }
-    };
-    if (need_theta) {
-      lobe(NZ);
-      if (need_ao) {
-        float* a = ao_sum.data() + base;
-        for (int x = 0; x < w; ++x) a[x] += NZ[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
-      }
-      if (profiles) {
-        float* D = rgb_sum.data() + 3 * base;
-        for (int x = 0; x < w; ++x) {
-          const Rgb l = profiles->eval(k, th[x], st[x], ct[x], NZ[x], np_[x]);
-          D[3 * x] += l.r, D[3 * x + 1] += l.g, D[3 * x + 2] += l.b;
-        }
-      }
-      if (p.bent_normal) {
-        float* X = bent_sum.data() + 3 * base;
-        for (int x = 0; x < w; ++x) {
-          const float s3 = st[x] * st[x] * st[x], c3 = ct[x] * ct[x] * ct[x];
-          const float horiz = NZ[x] * s3 / 3 + np_[x] * (2.0f / 3 - ct[x] + c3 / 3);
-          const float vert = NZ[x] * (1 - c3) / 3 + np_[x] * s3 / 3;
-          X[3 * x] += horiz * c, X[3 * x + 1] += horiz * s, X[3 * x + 2] += vert;
-        }
-      }
-    }
-    if (tables) {
-      float* D = rgb_sum.data() + 3 * base;
-      for (int x = 0; x < w; ++x) {
-        const float len = std::sqrt(np_[x] * np_[x] + NZ[x] * NZ[x]);
-        const Rgb l = tables->lookup(k, fast_atan(np_[x] / NZ[x]), kHalfPiF - e[x]) * len;
-        D[3 * x] += l.r, D[3 * x + 1] += l.g, D[3 * x + 2] += l.b;
-      }
-    }
-    if (facets)  // the same horizons at the facets' normals (np_ and the lobe arrays are reused)
-      for (std::size_t q = 0; q < 2; ++q) {
-        const std::size_t fb = q * N + base;
-        const float *FXq = FX[q], *FYq = FY[q], *FZq = FZ[q];
-        for (int x = 0; x < w; ++x) np_[x] = FXq[x] * c + FYq[x] * s;
-        if (uniform_env || profiles) lobe(FZq);
-        if (uniform_env) {
-          float* a = fao.data() + fb;
-          for (int x = 0; x < w; ++x) a[x] += FZq[x] * st[x] * st[x] + np_[x] * (th[x] - st[x] * ct[x]);
-        } else {
-          float *R = fdr.data() + fb, *G = fdg.data() + fb, *B = fdb.data() + fb;
-          for (int x = 0; x < w; ++x) {
-            Rgb l;
-            if (profiles) {
-              l = profiles->eval(k, th[x], st[x], ct[x], FZq[x], np_[x]);
-            } else {
-              const float len = std::sqrt(np_[x] * np_[x] + FZq[x] * FZq[x]);
-              l = tables->lookup(k, fast_atan(np_[x] / FZq[x]), kHalfPiF - e[x]) * len;
-            }
-            R[x] += l.r, G[x] += l.g, B[x] += l.b;
-          }
-        }
-      }
-    const std::size_t plane = std::size_t(k - k_begin) * N + base;
-    if (p.horizon) std::copy(se, se + w, hz + plane);
-    if (p.horizon_distance) std::copy(dist, dist + w, hd + plane);
+                  const float* const* FX, const float* const* FY, const float* const* FZ, const float* h,
+                  bool slopes, const float* dist) const {
+    p1::ShadeRowRun run;
+    run.k = k, run.base = base, run.w = w;
+    run.nx = NX, run.ny = NY, run.nz = NZ;
+    if (target.facets)
+      for (int q = 0; q < 2; ++q) run.fx[q] = FX[q], run.fy[q] = FY[q], run.fz[q] = FZ[q];
+    run.horizon = h, run.slopes = slopes, run.distance = dist;
+    kernel(target, run);
   }
 };
 
@@ -535,7 +463,7 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
   for (int k = k_begin; k < k_end; ++k) spec.azimuths.push_back(azimuth(k, K));  // the same directions
   auto make_worker = [&] { return make_ray_worker(f, p); };
   sweep_lines_tiled(f, spec, rc, make_worker, [&](const SweepTile& t) {
-    constexpr int kMax = 32;
+    constexpr int kMax = p1::kShadeRun;
     const int k = k_begin + t.k, w = t.width;
     alignas(64) float e[kMax], en[kMax];
     const std::size_t plane = std::size_t(t.width) * t.height;
@@ -574,7 +502,7 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
       const float* FX[2] = {tn.fx + ft, tn.fx + kTileTexels + ft};
       const float* FY[2] = {tn.fy + ft, tn.fy + kTileTexels + ft};
       const float* FZ[2] = {tn.fz + ft, tn.fz + kTileTexels + ft};
-      shade(k, base, w, tn.nx + y * w, tn.ny + y * w, tn.nz + y * w, FX, FY, FZ, e, dist);
+      shade(k, base, w, tn.nx + y * w, tn.ny + y * w, tn.nz + y * w, FX, FY, FZ, e, /*slopes=*/false, dist);
     }
   });
 }
