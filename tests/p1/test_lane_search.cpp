@@ -19,11 +19,19 @@ struct Case {
   HeightField field;
 };
 
+HeightField tilted(HeightField f, double gx, double gy, double z0) {
+  for (int j = 0; j < f.height; ++j)
+    for (int i = 0; i < f.width; ++i) f.z[f.index(i, j)] += float(z0 + gx * i + gy * j);
+  return f;
+}
+
 std::vector<Case> cases() {
   std::vector<Case> c;
   c.push_back({"rough 70", truth::rough_field(97, 61, 70, 0.6, 3, 16)});
   c.push_back({"terraces", truth::step_field(64, 90, 12, 25, 3, 9)});
   c.push_back({"fractal", truth::procedural(ProceduralKind::fractal, 83, 70, Wrap::clamp)});
+  // A regional slope (the strips' trends, lane_kernel.inc).
+  c.push_back({"tilted rough", tilted(truth::rough_field(90, 77, 70, 0.6, 5, 16), 0.5, -0.3, 0.0)});
   return c;
 }
 
@@ -98,7 +106,16 @@ TEST(LaneSearch, CurvedEarthEqualsTheExactMarch) {
 // raised out of reach (so no block is skipped and every crossing up to the ray's end is evaluated) gives
 // the same slope at every texel whose ray has a crossing on the field.
 TEST(LaneSearch, PruningKeepsTheSteepestCrossingBitForBit) {
-  for (const Case& c : cases()) {
+  std::vector<Case> all_cases = cases();
+  // Bare planes far from height 0 (their float heights are too coarse for the exact march's 1e-5): every
+  // crossing of a ray has nearly the same slope, and only the slanted bounds' margins stand between a
+  // skipped block and a crossing one rounding above the best.
+  const HeightField flat = truth::procedural(ProceduralKind::flat, 101, 66, Wrap::clamp);
+  all_cases.push_back({"plane", tilted(flat, 0.37, 0.61, 1500.0)});
+  all_cases.push_back({"steep plane", tilted(flat, -2.3, 0.2, -40.0)});
+  all_cases.push_back(
+      {"tilted rough far from 0", tilted(truth::rough_field(90, 77, 70, 0.6, 5, 16), 0.9, -0.4, 800.0)});
+  for (const Case& c : all_cases) {
     const HeightField& f = c.field;
     SweepSpec spec;
     spec.directions = 16;

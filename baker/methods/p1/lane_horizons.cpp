@@ -82,7 +82,7 @@ void LaneLayout::build(const HeightField& f, bool xm) {
   // floats, can exceed both heights by a few units in the last place of the field's largest |z|. So every
   // bound is at least every slope it bounds as the search evaluates them, and the search's slope is the
   // largest of all its crossings' (however the texels are grouped and the blocks ordered).
-  float zabs = 0;
+  zabs = 0;
   for (float v : f.z) zabs = fmax_(zabs, std::fabs(v));
   const float margin = zabs * 0x1p-20f;
   window = make_page_buffer<float>(size);

@@ -63,6 +63,7 @@ struct LaneLayout {
   int nmajor = 0, nminor = 0;
   std::ptrdiff_t stride = 0;
   std::size_t size = 0;  // floats in z and in window: nmajor * stride
+  float zabs = 0;        // the field's largest |z|
   // On 2 MiB pages where the kernel gives them (core/page_buffer.hpp): a group's crossings read one
   // row of the layout per column, nmajor rows a stride apart.
   PageBuffer<float> z, window;
@@ -109,6 +110,7 @@ struct LaneStats {
 // Per-thread scratch of the strips' bounds and the hinted blocks.
 struct LaneScratch {
   std::vector<float> block, coarse, suffix;
+  std::vector<float> trend;        // per walk column: the strip's trend times the distance (lane_kernel.inc)
   std::vector<std::int32_t> mark;  // per walk block: the group that tried it as a hint
 };
 
