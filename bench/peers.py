@@ -9,8 +9,10 @@ The field is rough fBm at the texel scale (1 m texels, a projected CRS) written 
 read, or --dem. Each figure is the median over --reps runs of /usr/bin/time (user + sys CPU seconds, wall
 seconds, peak resident memory); the runs of hfbake and r.horizon alternate so a drift of the machine's speed
 reaches both. r.horizon (GRASS 8.2) runs on one thread, with its default search distance (the whole
-region) and sampling step; hfbake's figures are its exact horizons unless a tolerance is given. Throughput is texel-directions (texels x K) per CPU second. The Markdown table is printed and
-written to --out. Needs Debian's python3-numpy and python3-gdal (setup.sh installs them in test mode).
+region) and sampling step; hfbake's figures are its exact horizons unless a tolerance is given: ao and vsky,
+those with the horizon layer, and the horizon layer alone (what r.horizon computes), its EXR compressed by
+default (PIZ) and uncompressed. Throughput is texel-directions (texels x K) per CPU second. The Markdown table
+is printed and written to --out. Needs Debian's python3-numpy and python3-gdal (setup.sh installs them in test mode).
 """
 import argparse
 import json
@@ -70,13 +72,15 @@ def timed(cmd, env=None):
     return float(u) + float(s), float(e), float(m) / 1024.0
 
 
-def hfbake_job(path, dem, out_dir, K, layers, tolerance):
+def hfbake_job(path, dem, out_dir, K, layers, tolerance, compression=None):
     entry = {"method": "p1", "directions": K, "layers": layers}
     if tolerance is not None:
         entry["horizon_tolerance"] = tolerance
+    output = {"dir": out_dir, "previews": False}
+    if compression:
+        output["compression"] = compression
     job = {"version": 1, "name": os.path.splitext(os.path.basename(path))[0],
-           "height": {"image": dem}, "environment": {"uniform": 1.0}, "bake": [entry],
-           "output": {"dir": out_dir, "previews": False}}
+           "height": {"image": dem}, "environment": {"uniform": 1.0}, "bake": [entry], "output": output}
     with open(path, "w") as f:
         json.dump(job, f, indent=2)
 
@@ -107,13 +111,18 @@ def main():
             dem = os.path.join(work, "rough.tif")
             write_geotiff(dem, rough_fbm(a.size))
             texels, field = a.size * a.size, f"rough fBm {a.size}² (60° median texel slope)"
-        bakes = [("p1 ao + vsky", ["ao", "vsky"], None), ("p1 ao + vsky + horizon", ["ao", "vsky", "horizon"], None)]
+        # The horizon layer alone is what r.horizon computes; its EXR (64 half channels) is written with the
+        # default PIZ compression and, in the last row, uncompressed (r.horizon's own maps are compressed).
+        bakes = [("p1 ao + vsky", ["ao", "vsky"], None, None),
+                 ("p1 ao + vsky + horizon", ["ao", "vsky", "horizon"], None, None),
+                 ("p1 horizon", ["horizon"], None, None)]
         for tol in a.tolerance or []:
-            bakes.append((f"p1 ao + vsky + horizon, tolerance {tol:g}", ["ao", "vsky", "horizon"], tol))
+            bakes.append((f"p1 ao + vsky + horizon, tolerance {tol:g}", ["ao", "vsky", "horizon"], tol, None))
+        bakes.append(("p1 horizon, EXR uncompressed", ["horizon"], None, "none"))
         cmds = []
-        for i, (label, layers, tol) in enumerate(bakes):
+        for i, (label, layers, tol, compression) in enumerate(bakes):
             job = os.path.join(work, f"bake{i}.json")
-            hfbake_job(job, dem, os.path.join(work, f"out{i}"), K, layers, tol)
+            hfbake_job(job, dem, os.path.join(work, f"out{i}"), K, layers, tol, compression)
             cmds.append((label, [os.path.abspath(a.hfbake), "bake", job, "--threads", str(a.threads), "--quiet",
                                  "--no-cache"]))
         grass = shutil.which("grass")
