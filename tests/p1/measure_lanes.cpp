@@ -1,7 +1,7 @@
-// The lane search alone (methods/p1/lane_horizons.hpp): usage measure_lanes [fractal|rough|step|<procedural
-// kind>] [size] [K] [tolerance] [checks]. Prints CPU per texel-direction (AVX2 with and without casters,
-// AVX-512 without, and SSE2, all checked to give the same bits), groups evaluated, and the largest difference
-// in sin h from the exact march at sampled texels.
+// The lane search alone (methods/p1/lane_horizons.hpp): usage measure_lanes
+// [fractal|rough|step|tilted|<procedural kind>] [size] [K] [tolerance] [checks]. Prints CPU per
+// texel-direction (AVX2 with and without casters, AVX-512 without, and SSE2, all checked to give the same
+// bits), groups evaluated, and the largest difference in sin h from the exact march at sampled texels.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -30,7 +30,11 @@ int main(int argc, char** argv) {
     f = truth::rough_field(n, n, 70, 0.6, 11);
   else if (kind == "step")
     f = truth::step_field(n, n, 20, 30, 3, 16);
-  else {
+  else if (kind == "tilted") {  // rough terrain at a tenth of its relief on a 30 degree tilt along x
+    f = truth::rough_field(n, n, 70, 0.6, 11);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) f.z[f.index(i, j)] = 0.1f * f.z[f.index(i, j)] + 0.57735f * float(i);
+  } else {
     ProceduralKind pk;
     parse_procedural_kind(kind, pk);
     ProceduralSpec s;

@@ -77,23 +77,58 @@ void LaneLayout::build(const HeightField& f, bool xm) {
     else
       std::copy(row, row + f.width, z.get() + std::ptrdiff_t(j) * stride + kLanePad);
   }
-  // window[at] = max z[at .. at + kLaneWindow - 1] within the major index's row (kOffField past its end),
-  // raised by more than a crossing's rounding: a crossing's height, (1 - w) z[a] + w z[b] evaluated in
-  // floats, can exceed both heights by a few units in the last place of the field's largest |z|. So every
-  // bound is at least every slope it bounds as the search evaluates them, and the search's slope is the
-  // largest of all its crossings' (however the texels are grouped and the blocks ordered).
+  // The field's least-squares plane, tilt0 + tilt_major * u + tilt_minor * v at major index u, minor index
+  // v (on a whole grid the two slopes are independent sums).
+  {
+    const double mi = 0.5 * double(f.width - 1), mj = 0.5 * double(f.height - 1);
+    double sz = 0, siz = 0, sjz = 0;
+    for (int j = 0; j < f.height; ++j) {
+      const float* row = f.z.data() + std::size_t(j) * std::size_t(f.width);
+      double rz = 0, riz = 0;
+      for (int i = 0; i < f.width; ++i) rz += double(row[i]), riz += (double(i) - mi) * double(row[i]);
+      sz += rz, siz += riz, sjz += (double(j) - mj) * rz;
+    }
+    const double n = double(f.width) * double(f.height);
+    // sum over the grid of (i - mi)^2 is height * w (w^2 - 1) / 12, and of (j - mj)^2 width * h (h^2 - 1)
+    // / 12.
+    const double w = double(f.width), h = double(f.height);
+    const double a = f.width > 1 ? siz / (h * w * (w * w - 1) / 12) : 0.0;
+    const double b = f.height > 1 ? sjz / (w * h * (h * h - 1) / 12) : 0.0;
+    const double c = sz / n - a * mi - b * mj;
+    if (std::isfinite(a) && std::isfinite(b) && std::isfinite(c)) {
+      tilt0 = c;
+      tilt_major = xm ? a : b;
+      tilt_minor = xm ? b : a;
+    }
+  }
+  // window[at] = the highest of z less the plane over [at, at + kLaneWindow) within the major index's row
+  // (kOffField past its end), raised by more than a crossing's rounding and the plane's: a crossing's height,
+  // (1 - w) z[a] + w z[b] evaluated in floats, can exceed both heights by a few units in the last place of
+  // the field's largest |z|. So every bound is at least every slope it bounds as the search evaluates them,
+  // and the search's slope is the largest of all its crossings' (however the texels are grouped and the
+  // blocks ordered).
   zabs = 0;
   for (float v : f.z) zabs = fmax_(zabs, std::fabs(v));
-  const float margin = zabs * 0x1p-20f;
+  double pabs = 0;  // the plane's largest |value| on the field (at a corner)
+  for (const double u : {0.0, double(nmajor - 1)})
+    for (const double v : {0.0, double(nminor - 1)})
+      pabs = std::max(pabs, std::fabs(tilt0 + tilt_major * u + tilt_minor * v));
+  plane_abs = float(pabs);
+  const float margin = (zabs + plane_abs) * 0x1p-20f;
   window = make_page_buffer<float>(size);
+  std::vector<float> level(static_cast<std::size_t>(stride));  // a row of z less the plane
   for (int u = 0; u < nmajor; ++u) {
     const float* r = z.get() + std::ptrdiff_t(u) * stride;
     float* w = window.get() + std::ptrdiff_t(u) * stride;
+    const double pu = tilt0 + tilt_major * double(u);
+    for (std::ptrdiff_t i = 0; i < stride; ++i)
+      level[std::size_t(i)] =
+          r[i] == kOffField ? kOffField : r[i] - float(pu + tilt_minor * double(i - kLanePad));
     for (std::ptrdiff_t i = 0; i < stride; ++i) {
       float m = kOffField;
       for (std::ptrdiff_t t = i; t < std::min<std::ptrdiff_t>(stride, i + kLaneWindow); ++t)
-        m = fmax_(m, r[t]);
-      w[i] = m + margin;
+        m = fmax_(m, level[std::size_t(t)]);
+      w[i] = m == kOffField ? kOffField : m + margin;
     }
   }
 }

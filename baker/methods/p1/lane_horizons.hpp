@@ -59,13 +59,19 @@ inline constexpr int kLaneWindow = 3;       // minor-axis texels of LaneLayout::
 
 // The field with its minor axis contiguous: x_major (directions moving more along x) stores
 // [x * stride + kLanePad + y], else [y * stride + kLanePad + x]; kLanePad texels of kOffField on both sides.
-// window[at] is the highest of z[at .. at + kLaneWindow - 1] (the same major index).
+// window[at] is the highest of z[at .. at + kLaneWindow - 1] (the same major index) less the field's
+// least-squares plane there (raised by more than the roundings): a search's bounds are of the heights less a
+// trend, which stays close to the slopes they bound far along a ray over terrain with a regional slope.
 struct LaneLayout {
   bool x_major = true;
   int nmajor = 0, nminor = 0;
   std::ptrdiff_t stride = 0;
   std::size_t size = 0;  // floats in z and in window: nmajor * stride
   float zabs = 0;        // the field's largest |z|
+  // The field's least-squares plane: tilt0 + tilt_major * u + tilt_minor * v at major index u, minor index v
+  // (heights per texel index); plane_abs its largest |value| on the field.
+  double tilt0 = 0, tilt_major = 0, tilt_minor = 0;
+  float plane_abs = 0;
   // On 2 MiB pages where the kernel gives them (core/page_buffer.hpp): a group's crossings read one
   // row of the layout per column, nmajor rows a stride apart.
   PageBuffer<float> z, window;
