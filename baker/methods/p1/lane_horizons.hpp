@@ -19,9 +19,9 @@
 // only when some lane's bound, seen from that lane at the block's nearest crossing, could be steeper than the
 // lane's best slope (plus the tolerance): a bound is never below any crossing's slope as evaluated
 // (LaneLayout's window), so skipping keeps the result exact, the largest of all its crossings' slopes bit for
-// bit, and the walk stops when nothing further can beat any lane. The bounds are of the heights less the
-// strip's trend times the distance along the ray (a slanted bound, lane_kernel.inc), which stays tight far
-// along rays over terrain with a regional slope. The blocks of the previous group's casters
+// bit, and the walk stops when nothing further can beat any lane. The bounds are of the heights less a
+// trend (the field's plane, LaneLayout, and the strip's residual slope along its rays, lane_kernel.inc): a
+// slanted bound, which stays tight far along rays over terrain with a regional slope. The blocks of the previous group's casters
 // (one column behind on the same strip, whose casters are most often this group's) are evaluated first, so
 // the best slopes are high early and prune the most. With a tolerance tau > 0, a block or the rest is skipped
 // unless it can beat the best slope by more than tau: every slope is within tau of (and never above) the
