@@ -14,6 +14,7 @@
 #include "exr_pixels.hpp"
 
 #include <OpenImageIO/imageio.h>
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -134,18 +135,28 @@ TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBak
                                          (dir / "cache").string()};
   const std::vector<std::string> bake_no_cache = {"bake", job_file.string(), "--quiet", "--no-cache"};
 
-  // A whole bake: its length spreads the kill moments; its report is the baseline compare reads against.
-  const auto t0 = std::chrono::steady_clock::now();
-  ASSERT_EQ(wait_exit(start(bake_no_cache, err)), 0);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // A whole bake and how long it took (exit code 0 asserted by the caller).
+  const auto timed_bake = [&](const std::vector<std::string>& args, int& code) {
+    const auto t0 = std::chrono::steady_clock::now();
+    code = wait_exit(start(args, err));
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  // Whole bakes: their lengths spread the kill moments, the shortest seen (a bake measured while the
+  // machine was busier would spread the kills past the end of most later bakes); the first one's report is
+  // the baseline compare reads against.
+  int code = 0;
+  double seconds = timed_bake(bake_no_cache, code);
+  ASSERT_EQ(code, 0);
   fs::create_directories(dir / "baseline");
   fs::copy_file(out / "report.json", dir / "baseline" / "report.json");
+  seconds = std::min(seconds, timed_bake(bake_no_cache, code));
+  ASSERT_EQ(code, 0);
   // A bake that finds its reference in the cache is much shorter: its kills are spread over its own length
-  // (one spread for both kinds left most cached bakes finished before the kill on a loaded machine).
+  // (one spread for both kinds left most cached bakes finished before the kill on a loaded machine), the
+  // shortest of every whole cached bake so far.
   ASSERT_EQ(wait_exit(start(bake, err)), 0);  // fills the cache
-  const auto t1 = std::chrono::steady_clock::now();
-  ASSERT_EQ(wait_exit(start(bake, err)), 0);
-  const double cached_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  double cached_seconds = timed_bake(bake, code);
+  ASSERT_EQ(code, 0);
 
   std::mt19937 rng(20);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -162,7 +173,8 @@ TEST(SigKill, TwentyKilledBakesLeaveNothingALaterBakeOrCompareReadsAndTheNextBak
     for (const fs::path& p : visible_files(out)) EXPECT_TRUE(whole(p));
     expect_compare_reads_the_committed_report(dir, out, "k");
     // The next bake of the folder succeeds and leaves no staging behind (the killed one's is removed).
-    ASSERT_EQ(wait_exit(start(bake, err)), 0) << "round " << round;
+    cached_seconds = std::min(cached_seconds, timed_bake(bake, code));
+    ASSERT_EQ(code, 0) << "round " << round;
     EXPECT_EQ(stages_in(out), 0);  // the killed bake's and the planted one are removed
     for (const fs::path& p : visible_files(out)) EXPECT_TRUE(whole(p));
     EXPECT_TRUE(fs::exists(out / "report.json"));
