@@ -11,7 +11,6 @@ families' runs alternate so a drift of the machine's speed reaches all. Throughp
 (texels x K) per CPU second. The Markdown table is printed and written to --out. Needs Debian's python3-numpy
 and python3-gdal (setup.sh installs them in test mode).
 """
-import argparse
 import json
 import os
 import shutil
@@ -21,7 +20,7 @@ import tempfile
 import numpy as np
 from osgeo import gdal
 
-from peers import rough_fbm, timed, write_geotiff
+from peers import bench_arguments, publish, rough_fbm, timed, write_geotiff
 
 gdal.UseExceptions()
 
@@ -29,13 +28,7 @@ KINDS = ["fractal", "rough", "terraces", "craters", "ridges", "cone", "sines"]
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--hfbake", default=os.path.join(os.path.dirname(__file__), "..", "build", "baker", "cli",
-                                                     "hfbake"))
-    ap.add_argument("--size", type=int, default=1024)
-    ap.add_argument("--directions", type=int, default=64)
-    ap.add_argument("--reps", type=int, default=3)
-    ap.add_argument("--threads", type=int, default=2)
+    ap = bench_arguments(__doc__)
     ap.add_argument("--dem", action="append", default=[], help="a DEM GDAL reads (repeatable)")
     ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "p1_families.md"))
     a = ap.parse_args()
@@ -76,10 +69,7 @@ def main():
             cpu = statistics.median(r[0] for r in runs[label])
             wall = statistics.median(r[1] for r in runs[label])
             lines.append(f"| {label} | {texels} | {cpu:.2f} | {wall:.2f} | {texels * K / cpu / 1e6:.1f} |")
-        text = "\n".join(lines) + "\n"
-        print(text)
-        with open(a.out, "w") as f:
-            f.write(text)
+        publish(lines, a.out)
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

@@ -72,6 +72,14 @@ def timed(cmd, env=None):
     return float(u) + float(s), float(e), float(m) / 1024.0
 
 
+def publish(lines, path):
+    """Prints the Markdown lines and writes them to path."""
+    text = "\n".join(lines) + "\n"
+    print(text)
+    with open(path, "w") as f:
+        f.write(text)
+
+
 def hfbake_job(path, dem, out_dir, K, layers, tolerance, compression=None):
     entry = {"method": "p1", "directions": K, "layers": layers}
     if tolerance is not None:
@@ -85,15 +93,21 @@ def hfbake_job(path, dem, out_dir, K, layers, tolerance, compression=None):
         json.dump(job, f, indent=2)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def bench_arguments(doc):
+    """The arguments every p1 speed script takes: the binary, the field's size, K, repetitions, threads."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     ap.add_argument("--hfbake", default=os.path.join(os.path.dirname(__file__), "..", "build", "baker", "cli",
                                                      "hfbake"))
     ap.add_argument("--size", type=int, default=1024)
     ap.add_argument("--directions", type=int, default=64)
     ap.add_argument("--reps", type=int, default=3)
-    ap.add_argument("--grass-reps", type=int, default=1, help="r.horizon takes minutes a run")
     ap.add_argument("--threads", type=int, default=2)
+    return ap
+
+
+def main():
+    ap = bench_arguments(__doc__)
+    ap.add_argument("--grass-reps", type=int, default=1, help="r.horizon takes minutes a run")
     ap.add_argument("--tolerance", type=float, action="append",
                     help="p1 horizon_tolerance values to time besides the default (repeatable)")
     ap.add_argument("--dem", help="a GeoTIFF DEM instead of the rough field")
@@ -167,10 +181,7 @@ def main():
         if not grass:
             lines.append("")
             lines.append("GRASS GIS is not installed (Debian grass-core): r.horizon was not run.")
-        text = "\n".join(lines) + "\n"
-        print(text)
-        with open(a.out, "w") as f:
-            f.write(text)
+        publish(lines, a.out)
     finally:
         shutil.rmtree(work, ignore_errors=True)
 
