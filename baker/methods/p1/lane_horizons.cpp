@@ -215,9 +215,24 @@ int lane_strip_count(const LaneLayout& L, const LaneDirection& d) {
   return int(std::floor(span / kLanes)) + 2;
 }
 
+void LaneScratch::size_for(int n) {
+  if (nmajor == n) return;
+  nmajor = n;
+  const int nq = n / kBlock + 2;  // blocks (walk order), as lane_kernel.inc counts them
+  block.assign(std::size_t(nq + 1) * kRow, kOffField);
+  suffix.assign(std::size_t(nq + 1) * kRow, kOffField);
+  int at = 0;
+  for (int v = 0, span = 4; v < kLevels; ++v, span *= 4) level_at[v] = at, at += nq / span + 2;
+  level_at[kLevels] = at;
+  coarse.assign(std::size_t(at) * kRow, kOffField);
+  mark.assign(std::size_t(nq + 1), -1);
+  trend.assign(std::size_t(n), 0.0f);
+}
+
 void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
                  float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats,
                  LaneIsa isa) {
+  scratch.size_for(layout.nmajor);
   if (isa == LaneIsa::best) isa = lane_isa();
   if (isa == LaneIsa::avx512)
     lane_search_avx512(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);

@@ -21,11 +21,11 @@
 // (LaneLayout's window), so skipping keeps the result exact, the largest of all its crossings' slopes bit for
 // bit, and the walk stops when nothing further can beat any lane. The bounds are of the heights less a
 // trend (the field's plane, LaneLayout, and the strip's residual slope along its rays, lane_kernel.inc): a
-// slanted bound, which stays tight far along rays over terrain with a regional slope. The blocks of the previous group's casters
-// (one column behind on the same strip, whose casters are most often this group's) are evaluated first, so
-// the best slopes are high early and prune the most. With a tolerance tau > 0, a block or the rest is skipped
-// unless it can beat the best slope by more than tau: every slope is within tau of (and never above) the
-// exact one.
+// slanted bound, which stays tight far along rays over terrain with a regional slope. The blocks of the
+// previous group's casters (one column behind on the same strip, whose casters are most often this group's)
+// are evaluated first, so the best slopes are high early and prune the most. With a tolerance tau > 0, a
+// block or the rest is skipped unless it can beat the best slope by more than tau: every slope is within tau
+// of (and never above) the exact one.
 //
 // A group is wide because most of its work is shared by its lanes (the strips' bounds, the tests, the loop),
 // while a block is evaluated for all of them when any one needs it: on a 1024² fractal, groups of 32 lanes
@@ -120,6 +120,13 @@ struct LaneScratch {
   std::vector<float> block, coarse, suffix;
   std::vector<float> trend;        // per walk column: the strip's trend times the distance (lane_kernel.inc)
   std::vector<std::int32_t> mark;  // per walk block: the group that tried it as a hint
+  int level_at[4] = {};            // where each coarse level's rows start in `coarse`, and where they end
+  int nmajor = -1;                 // the layout's columns the arrays are sized for
+
+  // Sizes the arrays for a layout of nmajor columns. lane_search calls it before a kernel runs: the
+  // kernels never grow a vector, whose code emitted out of line in a kernel's file, compiled for AVX-512,
+  // could be the copy the linker keeps for every caller (P1.IsaKernelsOwnTheirCode).
+  void size_for(int nmajor);
 };
 
 // The lane search of a field with rectangular texels (dx x dy) runs each ray along its texel-space
