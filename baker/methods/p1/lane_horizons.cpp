@@ -133,6 +133,13 @@ void LaneLayout::build(const HeightField& f, bool xm) {
   }
 }
 
+namespace {
+double run_of(const LaneDirection& d) {
+  if (d.crossings.empty()) return 0.0;
+  return 1.0 / (double(d.crossings.back().inv_s) * double(d.major.back()));
+}
+}  // namespace
+
 void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, double dy, double curvature) {
   x_major = L.x_major;
   const double dmaj = x_major ? dx : dy, dmin = x_major ? dy : dx;
@@ -183,6 +190,7 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
     while (c < n_c.size() && n_c[c] <= n + 1e-4) ++c;
     first_at[nn + n] = std::int32_t(c);
   }
+  run = run_of(*this);
 }
 
 SweepDirection lane_plan(const HeightField& f, const SweepSpec& spec, int k) {
@@ -208,6 +216,7 @@ void build_lane_direction(LaneDirection& d, const HeightField& f, const LaneLayo
     c.drop = float(curvature / double(c.inv_s));
   }
   d.curved = curvature != 0;
+  d.run = run_of(d);
 }
 
 int lane_strip_count(const LaneLayout& L, const LaneDirection& d) {

@@ -98,6 +98,9 @@ struct LaneDirection {
   std::vector<float> major;  // each crossing's major distance (texels)
   std::vector<std::int32_t> first_at;
   bool curved = false;  // some crossing's drop is not 0
+  // World distance per unit of the major index along the rays (a crossing at major distance n lies n * run
+  // away), from the farthest crossing; 0 without crossings.
+  double run = 0;
   // Where the texels the crossings read lie across a ray's line: for a ray of intercept c (the line
   // v - g u = c) and a texel (U, V) one of its crossings reads, V - (c + g U) is in [e_lo, e_hi].
   double e_lo = 0, e_hi = 0;
