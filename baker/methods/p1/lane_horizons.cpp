@@ -78,14 +78,18 @@ void LaneLayout::build(const HeightField& f, bool xm) {
       std::copy(row, row + f.width, z.get() + std::ptrdiff_t(j) * stride + kLanePad);
   }
   // The field's least-squares plane, tilt0 + tilt_major * u + tilt_minor * v at major index u, minor index
-  // v (on a whole grid the two slopes are independent sums).
+  // v (on a whole grid the two slopes are independent sums), and its largest |z|, in one pass.
+  zabs = 0;
   {
     const double mi = 0.5 * double(f.width - 1), mj = 0.5 * double(f.height - 1);
     double sz = 0, siz = 0, sjz = 0;
     for (int j = 0; j < f.height; ++j) {
       const float* row = f.z.data() + std::size_t(j) * std::size_t(f.width);
       double rz = 0, riz = 0;
-      for (int i = 0; i < f.width; ++i) rz += double(row[i]), riz += (double(i) - mi) * double(row[i]);
+      for (int i = 0; i < f.width; ++i) {
+        rz += double(row[i]), riz += (double(i) - mi) * double(row[i]);
+        zabs = fmax_(zabs, std::fabs(row[i]));
+      }
       sz += rz, siz += riz, sjz += (double(j) - mj) * rz;
     }
     const double n = double(f.width) * double(f.height);
@@ -107,8 +111,6 @@ void LaneLayout::build(const HeightField& f, bool xm) {
   // the field's largest |z|. So every bound is at least every slope it bounds as the search evaluates them,
   // and the search's slope is the largest of all its crossings' (however the texels are grouped and the
   // blocks ordered).
-  zabs = 0;
-  for (float v : f.z) zabs = fmax_(zabs, std::fabs(v));
   double pabs = 0;  // the plane's largest |value| on the field (at a corner)
   for (const double u : {0.0, double(nmajor - 1)})
     for (const double v : {0.0, double(nminor - 1)})
@@ -227,7 +229,7 @@ int lane_strip_count(const LaneLayout& L, const LaneDirection& d) {
 void LaneScratch::size_for(int n) {
   if (nmajor == n) return;
   nmajor = n;
-  const int nq = n / kBlock + 2;  // blocks (walk order), as lane_kernel.inc counts them
+  const int nq = block_count(n);
   block.assign(std::size_t(nq + 1) * kRow, kOffField);
   suffix.assign(std::size_t(nq + 1) * kRow, kOffField);
   int at = 0;
