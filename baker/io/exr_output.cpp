@@ -14,11 +14,14 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "io/half_planes.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -104,14 +107,17 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     const std::size_t n = std::size_t(l.channel_count());
     // A finite value beyond half's range (65504, e.g. horizon distances on a large DEM) would become
     // infinite: such a channel is stored as float instead. The layer's values are read in their order
-    // (texel by texel, every channel), once.
+    // (texel by texel, every channel), once, without branches (an infinity or NaN counts as 0).
     std::vector<float> largest(n, 0.0f);
+    const float finite = std::numeric_limits<float>::max();
     if (type == Imf::HALF)
-      for (std::size_t i = 0; i < texels; ++i)
+      for (std::size_t i = 0; i < texels; ++i) {
+        const float* v = l.data.data() + i * n;
         for (std::size_t c = 0; c < n; ++c) {
-          const float v = std::abs(l.data[i * n + c]);
-          if (std::isfinite(v)) largest[c] = std::max(largest[c], v);
+          const float a = std::abs(v[c]);
+          largest[c] = std::max(largest[c], a <= finite ? a : 0.0f);
         }
+      }
     for (std::size_t c = 0; c < n; ++c) {
       Channel ch{l.name + "." + l.channels[c], l.data.data() + c, n,
                  type != Imf::HALF || largest[c] > float(HALF_MAX)};
@@ -171,21 +177,28 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     // and bands a power of two apart would all fall in one cache set (a 64-channel horizon layer's
     // conversion was bound by those conflicts).
     const std::size_t band_stride = (band_values + 2047) / 2048 * 2048 + 32;
-    std::vector<half> band(band_stride * half_channels);
+    std::vector<std::uint16_t> band(band_stride * half_channels);  // half bits
     for (int y0 = 0; y0 < h; y0 += band_rows) {
       const int rows = std::min(band_rows, h - y0);
       Imf::FrameBuffer frame;
       const std::size_t first = std::size_t(y0) * w, count = std::size_t(rows) * w;
-      // The band's half channels, converted texel by texel (each layer's values in their order).
+      // The band's half channels, converted texel by texel (each layer's values in their order); a layer
+      // whose channels are all half, by to_half_planes.
       std::size_t slot = 0;
       for (std::size_t c0 = 0; c0 < channels.size();) {
         const std::size_t stride = channels[c0].stride;  // a layer's channels are adjacent, stride of them
-        std::size_t layer_slot = slot;
-        for (std::size_t i = 0; i < count; ++i) {
-          const float* v = channels[c0].data + (first + i) * stride;
-          std::size_t s2 = layer_slot;
-          for (std::size_t c = 0; c < stride; ++c)
-            if (!channels[c0 + c].as_float) band[(s2++) * band_stride + i] = half(v[c]);
+        std::size_t layer_halves = 0;
+        for (std::size_t c = 0; c < stride; ++c) layer_halves += channels[c0 + c].as_float ? 0 : 1;
+        if (layer_halves == stride) {
+          to_half_planes(channels[c0].data + first * stride, stride, count, band.data() + slot * band_stride,
+                         band_stride);
+        } else {
+          for (std::size_t i = 0; i < count; ++i) {
+            const float* v = channels[c0].data + (first + i) * stride;
+            std::size_t s2 = slot;
+            for (std::size_t c = 0; c < stride; ++c)
+              if (!channels[c0 + c].as_float) band[(s2++) * band_stride + i] = half(v[c]).bits();
+          }
         }
         for (std::size_t c = 0; c < stride; ++c) {
           const Channel& ch = channels[c0 + c];
@@ -193,10 +206,11 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
             frame.insert(ch.name, float_slice(ch));
             continue;
           }
-          half* dst = band.data() + (slot++) * band_stride;
+          std::uint16_t* dst = band.data() + (slot++) * band_stride;
           // The slice's base is where row 0 would be, so row y0 lands at the band's start.
-          char* base = (char*)dst - std::ptrdiff_t(sizeof(half)) * std::ptrdiff_t(first);
-          frame.insert(ch.name, Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * std::size_t(w)));
+          char* base = (char*)dst - std::ptrdiff_t(sizeof(std::uint16_t)) * std::ptrdiff_t(first);
+          frame.insert(ch.name, Imf::Slice(Imf::HALF, base, sizeof(std::uint16_t),
+                                           sizeof(std::uint16_t) * std::size_t(w)));
         }
         c0 += stride;
       }

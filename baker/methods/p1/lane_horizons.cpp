@@ -12,6 +12,7 @@
 #include <string>
 #include <type_traits>
 
+#include "core/instruction_set.hpp"
 #include "methods/p1/horizon_sweep.hpp"
 
 namespace hfbake::p1 {
@@ -260,18 +261,9 @@ bool lane_isa_available(LaneIsa isa) {
 
 LaneIsa lane_isa() {
   static const LaneIsa isa = [] {
-    LaneIsa cap = LaneIsa::avx512;
-    if (const char* v = std::getenv("HFBAKE_ISA"); v && *v) {
-      const std::string s = v;
-      if (s == "sse2")
-        cap = LaneIsa::sse2;
-      else if (s == "avx2")
-        cap = LaneIsa::avx2;
-      else if (s != "avx512")
-        throw std::invalid_argument("HFBAKE_ISA=" + s + ": must be sse2, avx2 or avx512 (or unset)");
-    }
-    for (const LaneIsa isa : {LaneIsa::avx512, LaneIsa::avx2})  // the widest first
-      if (int(isa) <= int(cap) && lane_isa_available(isa)) return isa;
+    const InstructionSet cap = instruction_set_cap();
+    if (cap >= InstructionSet::avx512 && lane_isa_available(LaneIsa::avx512)) return LaneIsa::avx512;
+    if (cap >= InstructionSet::avx2 && lane_isa_available(LaneIsa::avx2)) return LaneIsa::avx2;
     return LaneIsa::sse2;
   }();
   return isa;

@@ -149,7 +149,7 @@ enum class LaneIsa { best, sse2, avx2, avx512 };
 // Whether this processor (and its operating system) runs `isa`'s kernel; sse2 always.
 bool lane_isa_available(LaneIsa isa);
 // What LaneIsa::best runs: the widest the processor has (AVX-512F, AVX2, SSE2), capped by the environment
-// variable HFBAKE_ISA (sse2, avx2 or avx512: the most a search may use; docs/cluster.md), read once. Throws
+// variable HFBAKE_ISA (core/instruction_set.hpp: the most a search may use; docs/cluster.md). Throws
 // std::invalid_argument naming the variable on any other value.
 LaneIsa lane_isa();
 
