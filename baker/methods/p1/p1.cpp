@@ -63,11 +63,19 @@ p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
 // and, for P2's facet sums, its two facets' (facet_normals, [q * N + texel]), as the lane path's shading
 // reads them: computed once per bake, shared by its direction blocks.
 struct FieldNormals {
-  std::vector<float> nx, ny, nz, fx, fy, fz;
+  std::vector<float> nx, ny, nz, fx, fy, fz;  // empty when the lighting reads no normals
 };
-FieldNormals field_normals(const HeightField& f, bool facets) {
+// Whether the row lighting reads the texels' normals: for the lobe (ao, bent normals, an exact environment's
+// direct light) and a binned environment's direct light; vsky and the horizon layers need none.
+bool shading_reads_normals(const P1Params& p) {
+  return p.ao || p.bent_normal || p.direct;
+}
+FieldNormals field_normals(const Scene& scene, const P1Params& p) {
+  const HeightField& f = scene.field;
+  const bool facets = p.direct && p.facet_direct;
   const std::size_t N = f.texel_count();
   FieldNormals n;
+  if (!shading_reads_normals(p)) return n;
   n.nx.resize(N), n.ny.resize(N), n.nz.resize(N);
   n.fx.resize(facets ? 2 * N : 0), n.fy.resize(n.fx.size()), n.fz.resize(n.fx.size());
   tbb::parallel_for(0, f.height, [&](int j) {
@@ -133,7 +141,9 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
                                   facets ? fy.data() + N + base : nullptr};
             const float* FZ[2] = {facets ? fz.data() + base : nullptr,
                                   facets ? fz.data() + N + base : nullptr};
-            shade(k, base, w, nx.data() + base, ny.data() + base, nz.data() + base, FX, FY, FZ, m,
+            const bool lit = !nx.empty();
+            shade(k, base, w, lit ? nx.data() + base : nullptr, lit ? ny.data() + base : nullptr,
+                  lit ? nz.data() + base : nullptr, FX, FY, FZ, m,
                   /*slopes=*/true, dist);
           }
         });
@@ -223,7 +233,7 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
                         (facets ? (uniform_environment ? 8 : 24) : 0);
     const double layers = (p.ao ? 4 : 0) + (p.vsky ? 4 : 0) + (p.direct ? 12 : 0) + (p.bent_normal ? 12 : 0) +
                           (facets ? 24 : 0);
-    const double normals = 12 + (facets ? 24 : 0);
+    const double normals = shading_reads_normals(p) ? 12 + (facets ? 24 : 0) : 0;
     const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
     // While the directions are summed: the sums, a block's, the normals, one direction's slopes (and casters
     // for horizon_distance), and one axis' lane layout (heights and window maxima, padded on the minor axis).
@@ -379,6 +389,7 @@ struct RowShading {
     }
     const bool need_ao = p1_sums_shape(scene, p).ao > 0;
     t.need_theta = need_ao || p.bent_normal || profiles;
+    t.normals = shading_reads_normals(p);
     azimuth_table(p.directions, cs, sn);
     t.cs = cs.data(), t.sn = sn.data();
     t.ao = need_ao ? r.ao.data() : nullptr;
@@ -529,7 +540,7 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
     r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, floor,
                                       shade, &scratch.lanes);
   } else {
-    const FieldNormals own = field_normals(f, facets);
+    const FieldNormals own = field_normals(scene, p);
     r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, own, floor, shade,
                                       &scratch.lanes);
   }
@@ -588,7 +599,7 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   // order `hfbake merge` adds the farm's shards in.
   P1Sums total;
   std::optional<FieldNormals> normals;  // the lane path's, shared by the blocks
-  if (scene.field.wrap == Wrap::clamp) normals = field_normals(scene.field, p.direct && p.facet_direct);
+  if (scene.field.wrap == Wrap::clamp) normals = field_normals(scene, p);
   CoarseHeights own;
   const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own, scene.curvature);
   for (int b = 0; b < B; ++b) {

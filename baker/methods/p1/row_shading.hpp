@@ -19,6 +19,8 @@ struct ShadeRowTarget {
   int k_begin = 0;                           // the block's first direction, the horizon planes' first
   const float *cs = nullptr, *sn = nullptr;  // the azimuths' cosines and sines, [k]
   bool uniform_env = true;
+  bool normals = true;      // the runs' normals are read (false: they may be null; need_theta and tables
+                            // are then off)
   bool need_theta = false;  // the lobe (the horizon's zenith angle against the normal's) is needed
   bool facets = false;      // the facets' sums too (fao under a uniform sky, else fdr, fdg, fdb)
   float *ao = nullptr, *vsky = nullptr;                                  // [texel]
