@@ -23,8 +23,8 @@ struct GeoTiffOptions {
 };
 
 // `layer` of `layers` as <file>: one float32 band per channel (band description "<layer>.<suffix>"),
-// DEFLATE with the floating-point predictor, 512x512 tiles, overviews (average) as the COG driver makes
-// them; the CRS and geotransform of `geo`; texels marked in geo.holes (when not empty) are NoData
+// DEFLATE (level 1) with the floating-point predictor, 512x512 tiles, overviews (average) as the COG driver
+// makes them; the CRS and geotransform of `geo`; texels marked in geo.holes (when not empty) are NoData
 // (kGeoTiffNodata, declared on every band) and the NoData tag is written only then. Written under a
 // temporary name beside `file` and renamed into place. Failure -> InputError naming the file.
 void write_geotiff(const std::filesystem::path& file, const LayerSet& layers, const Layer& layer,
