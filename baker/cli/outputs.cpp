@@ -1,6 +1,7 @@
 #include "cli/outputs.hpp"
 
 #include <signal.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -372,6 +373,7 @@ std::vector<std::pair<std::string, std::string>> OutputStage::geotiff_metadata(
 void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers) {
   GeoTiffOptions options;
   options.metadata = geotiff_metadata(layers.attributes);
+  options.threads = tbb::this_task_arena::max_concurrency();  // --threads
   for (const Layer& layer : layers.layers) {
     const std::string tif = job_.name + "." + stem + "." + layer.name + ".tif";
     write_geotiff(stage_ / tif, layers, layer, georeference_, options);
