@@ -1,6 +1,7 @@
 #include "io/half_planes.hpp"
 
 #include <Imath/half.h>
+#include <cpuid.h>
 
 #include "core/instruction_set.hpp"
 
@@ -13,7 +14,12 @@ void to_half_planes_portable(const float* src, std::size_t channels, std::size_t
 }
 
 bool half_planes_f16c_available() {
-  static const bool f16c = __builtin_cpu_supports("avx") && __builtin_cpu_supports("f16c");
+  // AVX with the operating system's support of its registers (the builtin checks both), and F16C (CPUID
+  // leaf 1, ECX bit 29: read directly, as not every compiler's builtin knows the name).
+  static const bool f16c = [] {
+    unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+    return __builtin_cpu_supports("avx") && __get_cpuid(1, &eax, &ebx, &ecx, &edx) && (ecx & bit_F16C) != 0;
+  }();
   return f16c;
 }
 
