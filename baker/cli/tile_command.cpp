@@ -1,7 +1,5 @@
 #include "cli/tile_command.hpp"
 
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -168,7 +166,7 @@ GeoTiffOptions output_options(const Job& job, const OutputStage& stage, const Ti
                                           {"hfbake:method", job.bakes[e].method},
                                           {"hfbake:parameters", entry_config(job.bakes[e]).resolved.dump()},
                                           {"hfbake:tiles", tiles_text(plan)}});
-  tiff.threads = tbb::this_task_arena::max_concurrency();  // --threads
+  tiff.threads = worker_threads();
   return tiff;
 }
 
