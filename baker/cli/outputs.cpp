@@ -1,8 +1,6 @@
 #include "cli/outputs.hpp"
 
 #include <signal.h>
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -271,12 +269,6 @@ std::size_t first_bad(const std::vector<float>& values, const Ok& ok) {
 
 }  // namespace
 
-int worker_threads() {
-  const std::size_t allowed = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
-  return int(
-      std::min<std::size_t>(allowed, std::size_t(std::max(1, tbb::this_task_arena::max_concurrency()))));
-}
-
 void check_layers_finite(const std::string& stem, const LayerSet& layers) {
   // Layers broken on purpose (cli/test_break.hpp: +0.05 everywhere) are meant to reach the report.
   const bool broken = std::any_of(layers.attributes.begin(), layers.attributes.end(),
@@ -380,7 +372,6 @@ std::vector<std::pair<std::string, std::string>> OutputStage::geotiff_metadata(
 void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers) {
   GeoTiffOptions options;
   options.metadata = geotiff_metadata(layers.attributes);
-  options.threads = worker_threads();
   for (const Layer& layer : layers.layers) {
     const std::string tif = job_.name + "." + stem + "." + layer.name + ".tif";
     write_geotiff(stage_ / tif, layers, layer, georeference_, options);

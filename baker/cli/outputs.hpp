@@ -54,9 +54,6 @@ std::string azimuth_convention(const Georeference& geo);
 // (0.05).
 void check_layers_finite(const std::string& stem, const LayerSet& layers);
 
-// The threads this process may work on: --threads (main's tbb::global_control), at most the machine's.
-int worker_threads();
-
 class OutputStage {
  public:
   // Creates the output folder and the staging folder in it, after removing the stale staging folders of

@@ -166,7 +166,6 @@ GeoTiffOptions output_options(const Job& job, const OutputStage& stage, const Ti
                                           {"hfbake:method", job.bakes[e].method},
                                           {"hfbake:parameters", entry_config(job.bakes[e]).resolved.dump()},
                                           {"hfbake:tiles", tiles_text(plan)}});
-  tiff.threads = worker_threads();
   return tiff;
 }
 

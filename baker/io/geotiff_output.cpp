@@ -4,7 +4,6 @@
 #include <ogr_spatialref.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -43,7 +42,7 @@ void set_georeference(GDALDataset& ds, const Georeference& geo, const GeoTiffOpt
 // overviews, written under a temporary name beside `file` and renamed into place. Failure -> InputError
 // naming `file`. Level 1: the low bits of float results are noise to DEFLATE, and the default level 6
 // spent about twice the CPU for files 2 % smaller (docs/gis.md).
-void copy_to_cog(const fs::path& file, GDALDataset& source, int threads) {
+void copy_to_cog(const fs::path& file, GDALDataset& source) {
   auto fail = [&](const std::string& what) { throw InputError(file.string(), "", what); };
   GdalQuiet gdal;
   GDALDriver* cog_driver = GetGDALDriverManager()->GetDriverByName("COG");
@@ -51,10 +50,9 @@ void copy_to_cog(const fs::path& file, GDALDataset& source, int threads) {
   std::string tmp_name(1, '.');  // (built up in steps: GCC 12 warns falsely on "." + string)
   tmp_name.append(file.filename().string()).append(".tmp-").append(std::to_string(getpid()));
   const fs::path tmp = file.parent_path() / tmp_name;
-  const std::string num_threads = "NUM_THREADS=" + std::to_string(std::max(1, threads));
   const char* const cog_options[] = {
-      "COMPRESS=DEFLATE",   "LEVEL=1",          "PREDICTOR=YES",     "BLOCKSIZE=512",
-      "RESAMPLING=AVERAGE", "BIGTIFF=IF_SAFER", num_threads.c_str(), nullptr};
+      "COMPRESS=DEFLATE",   "LEVEL=1",          "PREDICTOR=YES", "BLOCKSIZE=512",
+      "RESAMPLING=AVERAGE", "BIGTIFF=IF_SAFER", nullptr};
   DatasetPtr out(
       cog_driver->CreateCopy(tmp.c_str(), &source, FALSE, const_cast<char**>(cog_options), nullptr, nullptr));
   if (!out) {
@@ -118,7 +116,7 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
     if (holes) band->SetNoDataValue(kGeoTiffNodata);
   }
   set_georeference(*mem, geo, options, fail);
-  copy_to_cog(file, *mem, options.threads);
+  copy_to_cog(file, *mem);
 }
 
 struct TiledGeoTiff::Dataset {
@@ -128,10 +126,7 @@ struct TiledGeoTiff::Dataset {
 TiledGeoTiff::TiledGeoTiff(const fs::path& work, int width, int height, const std::string& layer,
                            const std::vector<std::string>& channels, const Georeference& geo,
                            const GeoTiffOptions& options)
-    : dataset_(std::make_unique<Dataset>()),
-      work_(work),
-      threads_(options.threads),
-      channels_(int(channels.size())) {
+    : dataset_(std::make_unique<Dataset>()), work_(work), channels_(int(channels.size())) {
   auto fail = [&](const std::string& what) { throw InputError(work.string(), "", what); };
   if (channels_ < 1 || width < 1 || height < 1) throw std::logic_error("TiledGeoTiff: empty raster");
   GdalQuiet gdal;
@@ -174,7 +169,7 @@ void TiledGeoTiff::finish(const fs::path& file) {
   dataset_->ds->FlushCache();
   if (CPLGetLastErrorType() >= CE_Failure)
     throw InputError(work_.string(), "", "cannot write: " + gdal.error());
-  copy_to_cog(file, *dataset_->ds, threads_);
+  copy_to_cog(file, *dataset_->ds);
   dataset_->ds.reset();
   std::error_code ec;
   fs::remove(work_, ec);

@@ -20,8 +20,6 @@ inline constexpr float kGeoTiffNodata = -9999.0f;
 struct GeoTiffOptions {
   // Dataset metadata items (GDAL's default domain), e.g. {"HFBAKE_METHOD", "p1"}.
   std::vector<std::pair<std::string, std::string>> metadata;
-  // Threads compressing the COG's tiles (GDAL's NUM_THREADS); the file's bytes are the same for any count.
-  int threads = 1;
 };
 
 // `layer` of `layers` as <file>: one float32 band per channel (band description "<layer>.<suffix>"),
@@ -60,7 +58,6 @@ class TiledGeoTiff {
   struct Dataset;
   std::unique_ptr<Dataset> dataset_;
   std::filesystem::path work_;
-  int threads_ = 1;  // GeoTiffOptions::threads
   int channels_ = 0;
 };
 

@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <memory>
 
 #include "core/error.hpp"
@@ -178,32 +177,6 @@ TEST(GeoTiffOutput, CogWithTheInputsCrsGeotransformAndNodata) {
   const std::vector<float> g = read_band(tmp / "t.direct.tif", 2);
   for (std::size_t t = 0; t < g.size(); ++t)
     ASSERT_EQ(g[t], geo.holes[t] ? -9999.0f : layers.layers[1].data[t * 3 + 1]) << t;
-}
-
-// Without holes GDAL reads the layer's own interleaved values (no copy): every band bit-exact, and the file
-// the same bytes whatever the number of compression threads.
-TEST(GeoTiffOutput, WithoutHolesTheLayersValuesAndTheSameBytesForAnyThreadCount) {
-  if (!test::have_gdal_tools()) GTEST_SKIP() << "gdalinfo not found";
-  TempFolder tmp;
-  const int w = 700, h = 600;  // several 512 tiles and an overview
-  const LayerSet layers = test_layers(w, h);
-  Georeference geo;
-  geo.geotransform = local_geotransform(1.0);
-  GeoTiffOptions one, three;
-  three.threads = 3;
-  write_geotiff(tmp / "one.tif", layers, layers.layers[1], geo, one);
-  write_geotiff(tmp / "three.tif", layers, layers.layers[1], geo, three);
-  for (int band = 1; band <= 3; ++band) {
-    const std::vector<float> v = read_band(tmp / "three.tif", band);
-    ASSERT_EQ(v.size(), std::size_t(w) * h);
-    for (std::size_t t = 0; t < v.size(); ++t)
-      ASSERT_EQ(v[t], layers.layers[1].data[t * 3 + std::size_t(band - 1)]) << band << " " << t;
-  }
-  std::ifstream a(tmp / "one.tif", std::ios::binary), b(tmp / "three.tif", std::ios::binary);
-  const std::string bytes_a((std::istreambuf_iterator<char>(a)), {}),
-      bytes_b((std::istreambuf_iterator<char>(b)), {});
-  EXPECT_GT(bytes_a.size(), 10000u);
-  EXPECT_TRUE(bytes_a == bytes_b) << bytes_a.size() << " vs " << bytes_b.size() << " bytes";
 }
 
 TEST(GeoTiffOutput, WithoutHolesNoNodataTagAndALocalGeotransform) {
