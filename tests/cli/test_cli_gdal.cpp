@@ -649,14 +649,17 @@ TEST_F(CliGdal, SunTakesThePlaceAndTrueNorthFromTheCrs) {
   for (float h : hours) ASSERT_EQ(h, 2.0f);
 }
 
-// The estimate `validate` prints holds what writing the COGs takes (a layer's copy in GDAL's memory raster
-// and the COG driver's own), within the +-25 % every estimate keeps: the peak resident size of each bake
-// (wait4's, that process alone) against "about N MiB to bake".
+// The estimate `validate` prints holds what writing the COGs takes (the COG driver's own memory, and where
+// holes are filled the writer's copy of a layer holding NoData), within the +-25 % every estimate keeps:
+// the peak resident size of each bake (wait4's, that process alone) against "about N MiB to bake".
 TEST_F(CliGdal, TheMemoryEstimateHoldsTheGeoTiffsWriting) {
-  auto job = [&](const std::string& name, const nlohmann::json& entry) {
+  auto job = [&](const std::string& name, const nlohmann::json& entry, bool holes = false) {
+    const nlohmann::json height =
+        holes ? nlohmann::json{{"image", (kData / "TM1_564_146_nodata.tif").string()}, {"nodata", "fill"}}
+              : nlohmann::json{{"image", kDem.string()}};
     const nlohmann::json j = {{"version", 1},
                               {"name", name},
-                              {"height", {{"image", kDem.string()}}},
+                              {"height", height},
                               {"bake", {entry}},
                               {"output", {{"dir", "out_" + name}, {"geotiff", true}}}};
     const fs::path p = dir_ / (name + ".json");
@@ -669,7 +672,8 @@ TEST_F(CliGdal, TheMemoryEstimateHoldsTheGeoTiffsWriting) {
                   {"directions", 16},
                   {"search_radius", 4},
                   {"layers", {"svf", "horizon_deg"}}}),
-      job("hz", {{"method", "p1"}, {"directions", 64}, {"layers", {"ao", "vsky", "horizon"}}})};
+      job("hz", {{"method", "p1"}, {"directions", 64}, {"layers", {"ao", "vsky", "horizon"}}}),
+      job("hz_holes", {{"method", "p1"}, {"directions", 64}, {"layers", {"ao", "vsky", "horizon"}}}, true)};
   for (const fs::path& p : jobs) {
     const double estimate = hfbake::cli_test::validate_estimate_mib(dir_, p);
     ASSERT_GT(estimate, 0) << p;

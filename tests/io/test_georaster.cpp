@@ -179,6 +179,24 @@ TEST(GeoTiffOutput, CogWithTheInputsCrsGeotransformAndNodata) {
     ASSERT_EQ(g[t], geo.holes[t] ? -9999.0f : layers.layers[1].data[t * 3 + 1]) << t;
 }
 
+// Without holes GDAL reads the layer's own interleaved values (no copy): every band bit-exact, over several
+// tiles and an overview.
+TEST(GeoTiffOutput, WithoutHolesEveryBandIsTheLayersValues) {
+  if (!test::have_gdal_tools()) GTEST_SKIP() << "gdalinfo not found";
+  TempFolder tmp;
+  const int w = 700, h = 600;
+  const LayerSet layers = test_layers(w, h);
+  Georeference geo;
+  geo.geotransform = local_geotransform(1.0);
+  write_geotiff(tmp / "d.tif", layers, layers.layers[1], geo);
+  for (int band = 1; band <= 3; ++band) {
+    const std::vector<float> v = read_band(tmp / "d.tif", band);
+    ASSERT_EQ(v.size(), std::size_t(w) * h);
+    for (std::size_t t = 0; t < v.size(); ++t)
+      ASSERT_EQ(v[t], layers.layers[1].data[t * 3 + std::size_t(band - 1)]) << band << " " << t;
+  }
+}
+
 TEST(GeoTiffOutput, WithoutHolesNoNodataTagAndALocalGeotransform) {
   if (!test::have_gdal_tools()) GTEST_SKIP() << "gdalinfo not found";
   TempFolder tmp;
