@@ -15,8 +15,8 @@
 #include "cli/init_command.hpp"
 #include "cli/slurm_command.hpp"
 #include "cli/version.hpp"
+#include "core/instruction_set.hpp"
 #include "io/exr_output.hpp"
-#include "methods/p1/lane_horizons.hpp"
 
 namespace {
 
@@ -268,7 +268,7 @@ int run(int argc, char** argv) {
     return 2;
   }
   try {
-    hfbake::p1::lane_isa();  // HFBAKE_ISA checked before any command starts
+    hfbake::instruction_set_cap();  // HFBAKE_ISA checked before any command starts
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "hfbake: error: environment: %s\n", e.what());
     return 2;

@@ -227,6 +227,8 @@ int lane_strip_count(const LaneLayout& L, const LaneDirection& d) {
   return int(std::floor(span / kLanes)) + 2;
 }
 
+static_assert(std::extent_v<decltype(LaneScratch::level_at)> == kLevels + 1);
+
 void LaneScratch::size_for(int n) {
   if (nmajor == n) return;
   nmajor = n;

@@ -105,6 +105,7 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
   const int K = p.directions;
   const std::vector<float>&nx = normals.nx, &ny = normals.ny, &nz = normals.nz;
   const std::vector<float>&fx = normals.fx, &fy = normals.fy, &fz = normals.fz;
+  const bool lit = !nx.empty();  // the lighting reads normals (shading_reads_normals)
   SweepSpec probe;
   probe.directions = K;
   std::vector<int> ks;
@@ -141,7 +142,6 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
                                   facets ? fy.data() + N + base : nullptr};
             const float* FZ[2] = {facets ? fz.data() + base : nullptr,
                                   facets ? fz.data() + N + base : nullptr};
-            const bool lit = !nx.empty();
             shade(k, base, w, lit ? nx.data() + base : nullptr, lit ? ny.data() + base : nullptr,
                   lit ? nz.data() + base : nullptr, FX, FY, FZ, m,
                   /*slopes=*/true, dist);
