@@ -7,6 +7,7 @@
 #include <csignal>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "cli/bake_command.hpp"
@@ -231,6 +232,12 @@ int run(int argc, char** argv) {
   int validate_tile_size = 0;
   validate_cmd->add_option("--tile-size", validate_tile_size, "As bake's --tile-size")
       ->check(CLI::Range(16, 1 << 20));
+  int validate_threads = 0;
+  validate_cmd
+      ->add_option(
+          "--threads", validate_threads,
+          "As bake's --threads: the memory estimate counts each thread's scratch (default: all cores)")
+      ->check(CLI::Range(1, 4096));
 
   // hfbake horizon: the horizon profile at a point of a DEM.
   hfbake::HorizonOptions horizon;
@@ -284,6 +291,8 @@ int run(int argc, char** argv) {
   }
   if (app.got_subcommand(validate_cmd)) {
     std::vector<std::filesystem::path> files(validate_jobs.begin(), validate_jobs.end());
+    std::optional<tbb::global_control> cap;
+    if (validate_threads > 0) cap.emplace(tbb::global_control::max_allowed_parallelism, validate_threads);
     return hfbake::run_validate(
         files, validate_quiet,
         validate_memory_limit.empty() ? std::nullopt : hfbake::parse_memory_size(validate_memory_limit),

@@ -1,6 +1,7 @@
 #include "cli/slurm_command.hpp"
 
 #include <sys/wait.h>
+#include <tbb/global_control.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -118,6 +119,9 @@ int run_slurm(const SlurmOptions& o) {
   if (!errors.empty()) return fail(errors.front());
   fs::path common;
   std::size_t need_bytes = 0;
+  // The estimate of a task's bake on its --cpus-per-task threads (its per-thread scratch).
+  const tbb::global_control task_threads(tbb::global_control::max_allowed_parallelism,
+                                         std::size_t(o.threads));
   for (const fs::path& f : o.inputs) {
     std::vector<std::pair<fs::path, std::optional<fs::path>>> members;
     if (std::optional<Suite> suite = load_suite(f, errors)) {

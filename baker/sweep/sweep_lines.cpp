@@ -1,8 +1,7 @@
 #include "sweep/sweep_lines.hpp"
 
 #include "core/azimuth.hpp"
-
-#include <tbb/task_arena.h>
+#include "core/threads.hpp"
 
 #include <climits>
 
@@ -302,7 +301,7 @@ std::size_t sweep_buffer_bytes(const HeightField& f, const SweepSpec& spec) {
     storage = std::max(storage, floats * sizeof(float));
     batch_peak = std::max(batch_peak, extra);
   }
-  const std::size_t threads = std::size_t(std::max(1, tbb::this_task_arena::max_concurrency()));
+  const std::size_t threads = std::size_t(worker_threads());
   const std::size_t per_thread =
       std::size_t(max_count) * sizeof(float) + std::size_t(4 * C + 3) * 32 * 32 * sizeof(float);
   return storage + batch_peak + (plan.transposed ? f.texel_count() * sizeof(float) : 0) +

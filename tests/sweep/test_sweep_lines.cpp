@@ -3,6 +3,8 @@
 // coverage (every texel's weights sum to 1), repeat-mode warm-up, determinism and cancellation.
 #include <gtest/gtest.h>
 
+#include <tbb/global_control.h>
+#include <tbb/info.h>
 #include <tbb/task_arena.h>
 
 #include <atomic>
@@ -723,6 +725,28 @@ TEST(SweepThin, WorkAndBuffersOfThinFieldsAreLinearInTheTexels) {
     }
     previous[0] = sw, previous[1] = st, previous_bytes[0] = bw, previous_bytes[1] = bt;
   }
+}
+
+// The estimate's per-thread part counts the threads a bake may run (--threads caps TBB's parallelism), not
+// every core: each thread more adds one thread's line and tile buffers.
+TEST(SweepStream, BufferBytesCountTheThreadsTheBakeMayRun) {
+  const HeightField f = test_field(300, 200, Wrap::clamp);
+  SweepSpec spec;
+  spec.directions = 16;
+  spec.channels = 2;
+  auto bytes_with = [&](std::size_t threads) {
+    tbb::global_control cap(tbb::global_control::max_allowed_parallelism, threads);
+    return sweep_buffer_bytes(f, spec);
+  };
+  const std::size_t one = bytes_with(1), two = bytes_with(2), eight = bytes_with(8);
+  // One thread's part: at least its tile of 4 C + 3 channels of 32 x 32 floats.
+  ASSERT_GT(two, one);
+  const std::size_t per_thread = two - one;
+  EXPECT_GE(per_thread, std::size_t(4 * spec.channels + 3) * 32 * 32 * sizeof(float));
+  EXPECT_EQ(eight - one, 7 * per_thread);
+  // Without a cap: the machine's threads.
+  EXPECT_EQ(sweep_buffer_bytes(f, spec) - one,
+            per_thread * std::size_t(tbb::info::default_concurrency() - 1));
 }
 
 }  // namespace

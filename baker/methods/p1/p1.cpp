@@ -3,7 +3,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include "core/direction_blocks.hpp"
 #include "core/error.hpp"
 #include "core/page_buffer.hpp"
+#include "core/threads.hpp"
 #include "field/coarse_heights.hpp"
 #include "job/params.hpp"
 #include "methods/p1/far_horizons.hpp"
@@ -224,8 +224,7 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
   static_cast<FieldShape&>(field) = shape;
   const int longest =
       std::max(shape.width, shape.height) * (shape.wrap == Wrap::repeat ? p.wrap_periods + 1 : 1);
-  const double workers =
-      double(tbb::this_task_arena::max_concurrency()) * double(p1::FarHorizonWorker::scratch_bytes(longest));
+  const double workers = double(worker_threads()) * double(p1::FarHorizonWorker::scratch_bytes(longest));
   if (shape.wrap == Wrap::clamp) {
     // Bytes a texel: the sums (p1_sums_shape), the layers they become, and what the lane search holds.
     const double sums = (p.ao || (p.direct && uniform_environment) ? 4 : 0) + (p.vsky ? 4 : 0) +

@@ -3,13 +3,13 @@
 #include "sweep/sweep_lines.hpp"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <string>
 
 #include "core/direction_blocks.hpp"
 #include "core/error.hpp"
+#include "core/threads.hpp"
 #include "job/params.hpp"
 #include "methods/p1/p1.hpp"
 
@@ -108,7 +108,7 @@ double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
       std::max(shape.width, shape.height) * (shape.wrap == Wrap::repeat ? p.wrap_periods + 1 : 1);
   double line_buffers =
       double(sweep_buffer_bytes(field, indirect_sweep_spec(is))) +
-      double(tbb::this_task_arena::max_concurrency()) *
+      double(worker_threads()) *
           double(indirect_line_scratch_bytes(longest, p.supersampling, p.facet_senders && p.exact_profile));
   double block_horizons = 0;
   if (!kept) {
