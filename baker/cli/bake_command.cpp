@@ -243,7 +243,7 @@ SourcedLayers reference_step(const JobRun& run, ResultSource& source, const Refe
   for (std::size_t i = 0; i < job.bakes.size(); ++i)
     if (const MethodConfig& c = entry_config(job.bakes[i]); c.holds<ReliefSettings>()) {
       add_reference_relief(scene.field, c.get<ReliefSettings>(), report.methods[i].layers, reference, rc,
-                           scene.curvature);
+                           scene.curvature, grid_axes(scene.georeference));
       break;
     }
   add_common_attributes(reference, job, run.job_hash, "reference", job_reference_options(job).resolved,

@@ -76,7 +76,7 @@ EntryReach entry_reach(const MethodConfig& config) {
   r.cosine_weighted = config.cosine_weighted;
   if (config.holds<ReliefSettings>()) {
     const ReliefSettings& s = config.get<ReliefSettings>();
-    r.search = relief_reference_record({s.directions, s.search_radius, s.compass});
+    r.search = relief_reference_record({s.directions, s.search_radius, s.compass, GridAxes{}});
   }
   return r;
 }

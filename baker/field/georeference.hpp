@@ -30,6 +30,17 @@ struct Georeference {
   std::vector<std::uint8_t> holes;
 };
 
+// Where the map's east and north lie on the grid: +x points east (east_x = 1) or west (-1), +y points north
+// (north_y = 1: a south-up raster) or south (-1: north-up, the image top is north). From the signs of the
+// geotransform read from the file; a field without one is north-up with east to the right.
+struct GridAxes {
+  int east_x = 1, north_y = -1;
+};
+inline GridAxes grid_axes(const Georeference& g) {
+  if (!g.from_file) return {};
+  return {g.geotransform[1] < 0 ? -1 : 1, g.geotransform[5] > 0 ? 1 : -1};
+}
+
 // The geotransform of a field without georeferencing: no CRS, north-up, texel (0, 0)'s centre at (0, 0),
 // pixel size texel_size (map Y = -hfbake y, so the raster shows the way it is stored).
 inline std::array<double, 6> local_geotransform(double texel_size) {

@@ -21,7 +21,8 @@ void trace_up(const HeightField& f, const ReliefReferenceSettings& s, const RunC
   out.assign(f.texel_count() * std::size_t(K), 0.0);
   const reference::EmbreeField geometry(f, reference::GeometryKind::grid, 1);
   std::vector<double> dx(static_cast<std::size_t>(K)), dy(static_cast<std::size_t>(K));
-  for (int k = 0; k < K; ++k) relief_direction(k, K, s.compass, dx[std::size_t(k)], dy[std::size_t(k)]);
+  for (int k = 0; k < K; ++k)
+    relief_direction(k, K, s.compass, s.axes, dx[std::size_t(k)], dy[std::size_t(k)]);
   const double lift = horizon_receiver_lift(f, geometry);
   const CurvedRays curved = curved_rays(f, curvature);
   tbb::parallel_for(0, f.height, [&](int j) {
@@ -78,7 +79,7 @@ nlohmann::json relief_reference_record(const ReliefReferenceSettings& s) {
 
 void add_reference_relief(const HeightField& field, const ReliefSettings& settings,
                           const LayerSet& relief_layers, LayerSet& reference, const RunControl& rc,
-                          double curvature) {
+                          double curvature, GridAxes axes) {
   // relief's layers: those the layer table says this step computes.
   std::vector<std::string> names;
   for (const LayerKind& k : layer_kinds())
@@ -90,6 +91,7 @@ void add_reference_relief(const HeightField& field, const ReliefSettings& settin
   s.directions = settings.directions;
   s.search_radius = settings.search_radius;
   s.compass = settings.compass;
+  s.axes = axes;
   const int K = s.directions;
   const ReliefHorizons h =
       trace_relief_horizons(field, s, relief->find("openness_negative") != nullptr, rc, 30, curvature);

@@ -24,6 +24,7 @@ struct ReliefReferenceSettings {
   int directions = 16;
   double search_radius = 10;  // world units
   bool compass = false;
+  GridAxes axes;  // where a compass direction lies on the grid (relief_direction)
 };
 
 // beta_up and beta_down (radians) of every texel, [texel * K + k] each; down left empty unless asked for.
@@ -44,6 +45,6 @@ nlohmann::json relief_reference_record(const ReliefReferenceSettings& s);
 // and azimuth convention, and the record. Nothing when the reference has them already.
 void add_reference_relief(const HeightField& field, const ReliefSettings& relief,
                           const LayerSet& relief_layers, LayerSet& reference, const RunControl& rc,
-                          double curvature = 0);
+                          double curvature = 0, GridAxes axes = {});
 
 }  // namespace hfbake

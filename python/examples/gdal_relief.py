@@ -5,8 +5,10 @@ geotransform.
     gdal_relief.py DEM.tif OUT_DIR [--directions K] [--radius R]
 
 Writes OUT_DIR/svf.tif, openness_positive.tif and openness_negative.tif (float32, one band). The DEM must
-be in a projected CRS with square, north-up pixels in the heights' unit (gdalwarp -t_srs / -tr first if
-not); its NoData texels are filled from their neighbours for the bake and written back as NoData.
+be in a projected CRS with square pixels in the heights' unit (gdalwarp -t_srs / -tr first if not; or bake
+a job naming the file, which reads a geographic DEM's texel sizes itself: docs/gis.md); its NoData texels
+(the band's NoData value, NaN included) are filled from their neighbours for the bake and written back as
+NoData.
 """
 import argparse
 import pathlib
@@ -32,7 +34,11 @@ def main():
     heights = band.ReadAsArray().astype(np.float32)
     geotransform = dem.GetGeoTransform()
     if geotransform[2] != 0 or geotransform[4] != 0 or abs(geotransform[1]) != abs(geotransform[5]):
-        raise SystemExit(f"{args.dem}: needs square north-up pixels (gdalwarp -tr S S first)")
+        raise SystemExit(f"{args.dem}: needs square, unrotated pixels (gdalwarp -tr S S first)")
+    crs = dem.GetSpatialRef()
+    if crs is not None and crs.IsGeographic():
+        raise SystemExit(f"{args.dem}: its pixels are degrees of a geographic CRS: gdalwarp -t_srs to a projected "
+                         "CRS first, or bake a job naming the file (docs/gis.md, Geographic DEMs)")
     nodata = band.GetNoDataValue()
 
     layers = hfbake.relief(
@@ -47,7 +53,9 @@ def main():
 
     args.out_dir.mkdir(parents=True, exist_ok=True)
     driver = gdal.GetDriverByName("GTiff")
-    holes = heights == nodata if nodata is not None else np.zeros(heights.shape, bool)
+    holes = ~np.isfinite(heights)
+    if nodata is not None:
+        holes |= heights == nodata
     for name, values in layers.items():
         out = driver.Create(str(args.out_dir / f"{name}.tif"), dem.RasterXSize, dem.RasterYSize, 1,
                             gdal.GDT_Float32, options=["COMPRESS=DEFLATE"])

@@ -13,12 +13,12 @@ from conftest import SOURCE_DIR, OpenImageIO, read_exr, run_cli, terrain
 gdal = pytest.importorskip("osgeo.gdal")
 
 
-def write_geotiff(path, heights, nodata=None):
+def write_geotiff(path, heights, nodata=None, epsg=32633, geotransform=(500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0)):
     gdal.UseExceptions()
     ds = gdal.GetDriverByName("GTiff").Create(str(path), heights.shape[1], heights.shape[0], 1, gdal.GDT_Float32)
-    ds.SetGeoTransform((500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0))
+    ds.SetGeoTransform(geotransform)
     srs = gdal.osr.SpatialReference()
-    srs.ImportFromEPSG(32633)
+    srs.ImportFromEPSG(epsg)
     ds.SetProjection(srs.ExportToWkt())
     band = ds.GetRasterBand(1)
     if nodata is not None:
@@ -52,6 +52,28 @@ def test_gdal_relief_example(tmp_path):
         assert values[7, 9] == -9999.0
         values[7, 9] = exr[f"{name}.Y"][7, 9]
         assert np.array_equal(values.view(np.uint32), exr[f"{name}.Y"].view(np.uint32)), name
+
+
+def test_gdal_relief_example_nan_holes_and_geographic_dems(tmp_path):
+    # A NaN NoData value: its holes are written back as NoData (NaN never equals itself).
+    heights = terrain(48, 40, seed=11) * 10
+    heights[7, 9] = np.nan
+    dem = tmp_path / "dem.tif"
+    write_geotiff(dem, heights, nodata=float("nan"))
+    script = SOURCE_DIR / "python" / "examples" / "gdal_relief.py"
+    subprocess.run([sys.executable, str(script), str(dem), str(tmp_path / "py"), "--radius", "30"], check=True)
+    ds = gdal.Open(str(tmp_path / "py" / "svf.tif"))  # held: a band outlives no dataset
+    values = ds.GetRasterBand(1).ReadAsArray()
+    assert values[7, 9] == -9999.0
+    assert np.count_nonzero(values == -9999.0) == 1
+    # Degrees are not metres: a lon/lat DEM is refused, naming it.
+    geo = tmp_path / "lonlat.tif"
+    write_geotiff(geo, terrain(48, 40, seed=11) * 10, epsg=4326, geotransform=(15.0, 1e-5, 0.0, 46.0, 0.0, -1e-5))
+    result = subprocess.run([sys.executable, str(script), str(geo), str(tmp_path / "geo")], capture_output=True,
+                            text=True)
+    assert result.returncode != 0
+    assert "lonlat.tif" in result.stderr and "geographic" in result.stderr
+    assert not (tmp_path / "geo").exists()
 
 
 def read_png(path):

@@ -68,3 +68,25 @@ def test_algorithm_writes_the_commands_values(tmp_path, qgis_env, algorithm, par
     for k, plane in enumerate(expected):
         values = ds.GetRasterBand(k + 1).ReadAsArray()
         assert np.array_equal(values.view(np.uint32), plane.view(np.uint32)), f"{algorithm} band {k + 1}"
+
+
+def test_nan_holes_are_nodata_and_geographic_layers_are_refused(tmp_path, qgis_env):
+    heights = terrain(40, 32, seed=13) * 10
+    heights[5, 6] = np.nan
+    dem = tmp_path / "dem.tif"
+    write_geotiff(dem, heights, nodata=float("nan"))
+    out = tmp_path / "svf.tif"
+    result = subprocess.run([QGIS_PROCESS, "run", "hfbake:svf", "--", f"INPUT={dem}", "BAND=1", "DIRECTIONS=8",
+                             "RADIUS=10", f"OUTPUT={out}"], env=qgis_env, capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout + result.stderr
+    ds = gdal.Open(str(out))  # held: a band outlives no dataset
+    values = ds.GetRasterBand(1).ReadAsArray()
+    assert values[5, 6] == -9999.0
+    assert np.count_nonzero(values == -9999.0) == 1
+
+    geo = tmp_path / "lonlat.tif"
+    write_geotiff(geo, terrain(40, 32, seed=13) * 10, epsg=4326, geotransform=(15.0, 1e-5, 0.0, 46.0, 0.0, -1e-5))
+    result = subprocess.run([QGIS_PROCESS, "run", "hfbake:svf", "--", f"INPUT={geo}", "BAND=1",
+                             f"OUTPUT={tmp_path / 'geo.tif'}"], env=qgis_env, capture_output=True, text=True)
+    assert result.returncode != 0
+    assert "geographic" in result.stdout + result.stderr

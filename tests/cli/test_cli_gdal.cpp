@@ -578,6 +578,77 @@ TEST_F(CliGdal, CompassTermsOfTheHorizonChannels) {
             std::string::npos);
 }
 
+// relief's "compass" directions are the map's: a plane rising 45° towards geographic north, written
+// north-up, south-up (rows running north) and east-to-west (columns running west), gives at its centre the
+// horizon +45° looking north, -45° south and 0 east and west on every raster, each band named by its compass
+// azimuth (K = 4: north, east, south, west).
+TEST_F(CliGdal, ReliefCompassDirectionsFollowTheRastersNorth) {
+  const int n = 33;
+  struct Orientation {
+    const char* name;
+    double gt[6];
+    bool rows_north;
+    const char* north;
+  };
+  const Orientation rasters[] = {
+      {"north_up", {500000, 1, 0, 100000, 0, -1}, false, "north = image top (-y), east = image right (+x)"},
+      {"south_up",
+       {500000, 1, 0, 100000 - n, 0, 1},
+       true,
+       "north = image bottom (+y), east = image right (+x)"},
+      {"east_to_west",
+       {500000 + n, -1, 0, 100000, 0, -1},
+       false,
+       "north = image top (-y), east = image left (-x)"}};
+  for (const Orientation& o : rasters) {
+    SCOPED_TRACE(o.name);
+    std::vector<float> z(std::size_t(n) * n);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) z[std::size_t(j) * n + i] = float(o.rows_north ? j : n - j);
+    const std::string tif = std::string(o.name) + ".tif";
+    {
+      GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+      GDALDataset* ds = gtiff->Create((dir_ / tif).c_str(), n, n, 1, GDT_Float32, nullptr);
+      ASSERT_TRUE(ds);
+      double gt[6];
+      std::copy(o.gt, o.gt + 6, gt);
+      ds->SetGeoTransform(gt);
+      OGRSpatialReference srs;
+      srs.importFromEPSG(3794);
+      ds->SetSpatialRef(&srs);
+      ASSERT_EQ(
+          ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, n, n, z.data(), n, n, GDT_Float32, 0, 0, nullptr),
+          CE_None);
+      GDALClose(ds);
+    }
+    const std::string out = std::string("out_") + o.name;
+    const nlohmann::json j = {{"version", 1},
+                              {"name", "plane"},
+                              {"height", {{"image", tif}}},
+                              {"bake",
+                               {{{"method", "relief"},
+                                 {"directions", 4},
+                                 {"search_radius", 5},
+                                 {"azimuth_convention", "compass"},
+                                 {"layers", {"horizon_deg"}}}}},
+                              {"output", {{"dir", out}, {"geotiff", true}}}};
+    const fs::path job = dir_ / (std::string(o.name) + ".json");
+    std::ofstream(job) << j.dump();
+    const Result r = hfbake("bake --quiet " + job.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const fs::path result = dir_ / out / "plane.relief.horizon_deg.tif";
+    const std::size_t centre = std::size_t(n / 2) * n + n / 2;
+    const double expected[4] = {45, 0, -45, 0};  // north, east, south, west
+    for (int k = 0; k < 4; ++k) {
+      const Raster band = read_raster(result, k + 1);
+      ASSERT_EQ(band.values.size(), z.size());
+      EXPECT_NEAR(band.values[centre], expected[k], 0.01) << "channel " << k;
+    }
+    const nlohmann::json info = gdalinfo_json(result);
+    EXPECT_NE(info.dump().find(o.north), std::string::npos) << info["metadata"].dump();
+  }
+}
+
 TEST_F(CliGdal, SunTakesThePlaceAndTrueNorthFromTheCrs) {
   // A flat DEM in D96/TM 100 km east of its central meridian (15 E), about 46 N: the sun method takes the
   // centre's longitude and latitude and the grid's azimuth of true north there from the CRS. The truth is

@@ -138,7 +138,7 @@ TEST(LayerTable, AnEntrysReachComesFromItsConfig) {
   EXPECT_EQ(entry_reach(entry_config(job.bakes[4])).falloff, "none");
   EXPECT_TRUE(entry_reach(entry_config(job.bakes[4])).search.is_null());
   EXPECT_EQ(entry_reach(entry_config(job.bakes[5])).search,
-            relief_reference_record(ReliefReferenceSettings{8, 10.0, false}));
+            relief_reference_record(ReliefReferenceSettings{8, 10.0, false, GridAxes{}}));
 }
 
 }  // namespace

@@ -65,7 +65,7 @@ TEST(Curvature, ReliefOnABowlSeesAPlane) {
       for (int i : {25, 40, 61})
         for (int k = 0; k < 16; ++k) {
           double ux, uy;
-          relief_direction(k, 16, false, ux, uy);
+          relief_direction(k, 16, false, {}, ux, uy);
           const double truth = std::atan(bowl_slope(f, i, j, ux, uy, R));
           const HorizonPair h = radius_horizon(f, i, j, ux, uy, radius, c);
           worst = std::max({worst, std::abs(std::atan(h.up) - truth), std::abs(std::atan(h.down) - truth)});
@@ -91,7 +91,7 @@ TEST(Curvature, ReferenceOnABowlSeesAPlane) {
       for (int i : {20, 30, 41})
         for (int k = 0; k < 8; ++k) {
           double ux, uy;
-          relief_direction(k, 8, false, ux, uy);
+          relief_direction(k, 8, false, {}, ux, uy);
           const double truth = std::atan(bowl_slope(f, i, j, ux, uy, R));
           const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
           const double e = bisect_horizon(geometry, o, ux, uy, 30, 20.0, curved).elevation;
@@ -145,7 +145,7 @@ TEST(Curvature, ReliefAndReferenceAgreeOnRoughFields) {
       for (int i = 1; i + 1 < f.width; ++i)
         for (int k = 0; k < 8; ++k) {
           double ux, uy;
-          relief_direction(k, 8, false, ux, uy);
+          relief_direction(k, 8, false, {}, ux, uy);
           const HorizonPair h = radius_horizon(f, i, j, ux, uy, s.search_radius, c);
           const std::size_t t = f.index(i, j) * 8 + std::size_t(k);
           if (!h.any) continue;

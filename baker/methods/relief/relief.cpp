@@ -34,19 +34,27 @@ ReliefSettings read_relief_settings(Params& in, const FieldShape& field) {
   return s;
 }
 
-void relief_direction(int k, int K, bool compass, double& dx, double& dy) {
+void relief_direction(int k, int K, bool compass, GridAxes axes, double& dx, double& dy) {
   const double a = azimuth(k, K);
   if (compass) {
-    dx = std::sin(a);
-    dy = -std::cos(a);
+    dx = axes.east_x * std::sin(a);
+    dy = axes.north_y * std::cos(a);
   } else {
     dx = std::cos(a);
     dy = std::sin(a);
   }
 }
 
+std::string relief_azimuth_convention(bool compass, GridAxes axes) {
+  if (!compass) return "hfbake: direction k at phi = 360 k / K from +x (image right) towards +y (image down)";
+  return std::string("compass: direction k at azimuth 360 k / K clockwise from north; north = ") +
+         (axes.north_y < 0 ? "image top (-y)" : "image bottom (+y)") +
+         ", east = " + (axes.east_x > 0 ? "image right (+x)" : "image left (-x)");
+}
+
 LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const RunControl& rc,
-                     double curvature, const CoarseHeights* coarse, int x0, int y0, const KeptTexels& kept) {
+                     double curvature, const CoarseHeights* coarse, int x0, int y0, const KeptTexels& kept,
+                     GridAxes axes) {
   const int w = field.width, h = field.height, K = s.directions;
   CoarseHeights own;
   FarField far;
@@ -61,7 +69,7 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
   // thread count.
   std::vector<double> row_slack(std::size_t(h), 0.0);
   std::vector<double> dx(K), dy(K);
-  for (int k = 0; k < K; ++k) relief_direction(k, K, s.compass, dx[k], dy[k]);
+  for (int k = 0; k < K; ++k) relief_direction(k, K, s.compass, axes, dx[k], dy[k]);
   LayerSet out;
   out.width = w;
   out.height = h;
@@ -101,11 +109,7 @@ LayerSet bake_relief(const HeightField& field, const ReliefSettings& s, const Ru
   az.precision(10);
   for (int k = 0; k < K; ++k) az << (k ? " " : "") << 360.0 * k / K;
   out.attributes.emplace_back("hfbake:relief:azimuths_deg", az.str());
-  out.attributes.emplace_back(
-      "hfbake:relief:azimuth_convention",
-      s.compass ? "compass: direction k at azimuth 360 k / K clockwise from north; north = image top (-y), "
-                  "east = image right (+x)"
-                : "hfbake: direction k at phi = 360 k / K from +x (image right) towards +y (image down)");
+  out.attributes.emplace_back("hfbake:relief:azimuth_convention", relief_azimuth_convention(s.compass, axes));
   char c[32];
   std::snprintf(c, sizeof c, "%.9g", curvature);
   out.attributes.emplace_back("hfbake:curvature", c);
@@ -133,7 +137,7 @@ LayerSet bake_relief(const Scene& scene, const MethodConfig& config, const RunCo
   const ReliefSettings& s = config.get<ReliefSettings>();
   const CoarseHeights* coarse = s.far_field ? scene.window.coarse_of(s.far_field->cell) : nullptr;
   return bake_relief(scene.field, s, rc, scene.curvature, coarse, scene.window.x0, scene.window.y0,
-                     scene.window.kept);
+                     scene.window.kept, grid_axes(scene.georeference));
 }
 
 MethodInfo relief_method() {

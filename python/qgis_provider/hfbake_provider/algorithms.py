@@ -56,6 +56,12 @@ class _Bake(QgsProcessingAlgorithm):
         band = dem.GetRasterBand(band_index)
         heights = band.ReadAsArray().astype(np.float32)
         geotransform = dem.GetGeoTransform()
+        if geotransform[2] != 0 or geotransform[4] != 0 or abs(geotransform[1]) != abs(geotransform[5]):
+            raise QgsProcessingException(f"{layer.source()}: needs square, unrotated pixels (Warp it first)")
+        crs = dem.GetSpatialRef()
+        if crs is not None and crs.IsGeographic():
+            raise QgsProcessingException(f"{layer.source()}: its pixels are degrees of a geographic CRS: warp it to a "
+                                         "projected CRS first (the heights' unit per pixel)")
         nodata = band.GetNoDataValue()
         keys = {"directions": self.parameterAsInt(parameters, "DIRECTIONS", context), "layers": [self.layer]}
         if self.radius_key:
@@ -78,7 +84,9 @@ class _Bake(QgsProcessingAlgorithm):
         except hfbake.Cancelled:
             return {}
         planes = values if values.ndim == 3 else values[np.newaxis]
-        holes = heights == nodata if nodata is not None else np.isnan(heights)
+        holes = ~np.isfinite(heights)
+        if nodata is not None:
+            holes |= heights == nodata
         out = gdal.GetDriverByName("GTiff").Create(output, dem.RasterXSize, dem.RasterYSize, planes.shape[0],
                                                    gdal.GDT_Float32, options=["COMPRESS=DEFLATE", "TILED=YES"])
         out.SetGeoTransform(geotransform)
