@@ -102,7 +102,7 @@ void FarHorizonWorker::profile(const LinePattern& pat, const SweepDirection& d, 
       ra -= ra >= nv ? nv : 0;
       rb -= rb >= nv ? nv : 0;
       const float za = Z[pat.major_a[e] + ra * ms], zb = Z[pat.major_b[e] + rb * ms];
-      out[e] = za + (zb - za) * pat.w[e];
+      out[e] = (za - z_ref_) + (zb - za) * pat.w[e];
     }
     return;
   }
@@ -116,11 +116,16 @@ void FarHorizonWorker::profile(const LinePattern& pat, const SweepDirection& d, 
     }
     const int ra = std::clamp(line + pat.d_a[e], 0, nv - 1), rb = std::clamp(line + pat.d_b[e], 0, nv - 1);
     const float za = Z[pat.major_a[e] + ra * ms], zb = Z[pat.major_b[e] + rb * ms];
-    out[e] = za + (zb - za) * pat.w[e];
+    out[e] = (za - z_ref_) + (zb - za) * pat.w[e];
   }
 }
 
 void FarHorizonWorker::operator()(const SweepLine& line, float* out) {
+  if (!have_z_ref_) {
+    const auto [lo, hi] = std::minmax_element(field->z.begin(), field->z.end());
+    z_ref_ = lo == field->z.end() ? 0.0f : float(0.5 * (double(*lo) + double(*hi)));
+    have_z_ref_ = true;
+  }
   // The border rule is a template argument: the search's height reads (Zr) and range tests are the
   // innermost code, and a runtime test in each cost ~1 % of p1's instructions.
   if (line.dir->repeat)
@@ -164,7 +169,7 @@ void FarHorizonWorker::search(const SweepLine& line, float* out) {
     while (s < l) s = strip_line(d, u, ++r);
     texel_r_[n] = r;
     texel_z_[n] = s == l && (rep || (r >= 0 && r < nv))
-                      ? Z[pat.major_a[pat.first[n]] + std::ptrdiff_t(row_of(r)) * ms]
+                      ? Z[pat.major_a[pat.first[n]] + std::ptrdiff_t(row_of(r)) * ms] - z_ref_
                       : std::numeric_limits<float>::quiet_NaN();
   }
   const std::size_t E = pat.pos.size();
@@ -245,9 +250,10 @@ void FarHorizonWorker::search(const SweepLine& line, float* out) {
     auto u_at = [&](double p) { return d.u_start + d.su * p; };
     auto Zr = [&](long long uu, long long vv) {
       if constexpr (rep)
-        return Z[std::int64_t(wrap_index(uu, nu)) * major_stride + std::ptrdiff_t(wrap_index(vv, nv)) * ms];
+        return Z[std::int64_t(wrap_index(uu, nu)) * major_stride + std::ptrdiff_t(wrap_index(vv, nv)) * ms] -
+               z_ref_;
       vv = vv < 0 ? 0 : (vv >= nv ? nv - 1 : vv);
-      return Z[uu * major_stride + vv * ms];
+      return Z[uu * major_stride + vv * ms] - z_ref_;
     };
     // Where T's ray is on the field (clamp), and the far field's end.
     double lo = 0, hi = cut;
@@ -256,8 +262,10 @@ void FarHorizonWorker::search(const SweepLine& line, float* out) {
       lo = std::max(lo, std::min(pa, pb) - 1e-9), hi = std::min(hi, std::max(pa, pb) + 1e-9);
     }
     const double vtop = nv - 1 + 1e-9;
-    auto take = [&](double p, float h) {
-      const double dz = double(h) - zt, run = (n - p) * step;
+    // A point at position p, `rise` above T: the rise as (a - zt) + (b - a) t, rounded as a rise is, not as
+    // the heights are (a DEM 8000 m up rounds a + (b - a) t to 0.5 mm).
+    auto take = [&](double p, float rise) {
+      const double dz = double(rise), run = (n - p) * step;
       if (!any || dz * brun > bdz * run) bdz = dz, brun = run, any = found = true;
     };
     // Column c's point of T's ray, v = r + dvp (c - n) its minor coordinate, fv = floor(v).
@@ -266,7 +274,7 @@ void FarHorizonWorker::search(const SweepLine& line, float* out) {
       if (!rep && (v < -1e-9 || v > vtop)) return;
       const int uu = d.u(c);
       const float a = Zr(uu, fv), b = Zr(uu, fv + 1);
-      take(c, a + (b - a) * float(v - fv));
+      take(c, (a - zt) + (b - a) * float(v - fv));
     };
     auto column = [&](int c) {
       const double v = r + dvp * (c - n);
@@ -286,7 +294,7 @@ void FarHorizonWorker::search(const SweepLine& line, float* out) {
         const double p = n + (kr - r) * inv_dvp, uc = u_at(p);
         if (p > c && p < c + 1) {
           const float a = Zr(fu, kr), b = Zr(fu + 1, kr);
-          take(p, a + (b - a) * float(uc - fu));
+          take(p, (a - zt) + (b - a) * float(uc - fu));
         }
       }
       const double wa = d.u(c) + va, wb = wa + dws;
@@ -297,7 +305,7 @@ void FarHorizonWorker::search(const SweepLine& line, float* out) {
         if (!(p > c && p < c + 1)) continue;
         const int fv = kd - fu - 1;
         const float a = Zr(fu + 1, fv), b = Zr(fu, fv + 1);
-        take(p, a + (b - a) * float(vc - fv));
+        take(p, (a - zt) + (b - a) * float(vc - fv));
       }
     };
     // The hull's value at x (between its vertices j and j + 1, or vertex j itself).

@@ -98,6 +98,10 @@ struct FarHorizonWorker {
   std::vector<float> band_max_, block_max_;          // skip bounds: per band, per block of kBlock bands
   static constexpr int kBlock = 8;
   int last_k_ = -1, last_line_ = 0, last_u_start_ = 0;  // whose profile cur_ holds after a call
+  // The heights the search works with are the field's less z_ref_ (the middle of its range, set at the
+  // first call): their roundings are the relief's, not the heights' (a DEM 8000 m up rounds to 0.5 mm).
+  float z_ref_ = 0;
+  bool have_z_ref_ = false;
   HullStackF hull_;
 
   const LinePattern& pattern(const SweepDirection& dir);

@@ -65,7 +65,7 @@ float near_slope(const HeightField& f, const std::vector<NearCrossing>& stencil,
         (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
       continue;
     const float za = f.at(i + x.ai, j + x.aj), zb = f.at(i + x.bi, j + x.bj);
-    const float m = (za + (zb - za) * x.w - Z) * x.inv_s;
+    const float m = ((za - Z) + (zb - za) * x.w) * x.inv_s;
     if (m > best) best = m, *which = int(c);
   }
   return best;
@@ -96,7 +96,7 @@ void near_slopes_row(const HeightField& f, const NearStencil& s, int i0, int j, 
     const float* zb = Z + s.b[c];
     const float wc = s.crossings[c].w, inv_s = s.crossings[c].inv_s;
     for (int x = xa; x < xb; ++x) {
-      const float m = (za[x] + (zb[x] - za[x]) * wc - Z[x]) * inv_s;
+      const float m = ((za[x] - Z[x]) + (zb[x] - za[x]) * wc) * inv_s;
       out[x] = m > out[x] ? m : out[x];
     }
   }
@@ -114,7 +114,7 @@ float near_slope_at(const HeightField& f, const NearStencil& s, int i, int j) {
   float m = -1e30f;
   for (std::size_t c = 0; c < s.crossings.size(); ++c) {
     const float za = Z[s.a[c]], zb = Z[s.b[c]];
-    const float mc = (za + (zb - za) * s.crossings[c].w - Z[0]) * s.crossings[c].inv_s;
+    const float mc = ((za - Z[0]) + (zb - za) * s.crossings[c].w) * s.crossings[c].inv_s;
     m = mc > m ? mc : m;
   }
   return m;

@@ -204,7 +204,8 @@ inline double near_radius_of(const SweepDirection& d, double near_radius) {
 // Steepest near-field slope (rise / run) from texel (i, j) over `stencil` and its crossing (-1: none; the
 // slope is then -1e30), with the border rules (clamp: crossings off the field are not terrain; repeat:
 // wrapped). Texels whose crossings are all on the field get the same bits from any loop that takes the
-// largest of (za + (zb - za) w - z) inv_s over the stencil.
+// largest of ((za - z) + (zb - za) w) inv_s over the stencil (the rise first: its rounding is the rise's,
+// not the heights').
 float near_slope(const HeightField& f, const std::vector<NearCrossing>& stencil, int i, int j, int* which);
 
 // A direction's near field: near_field_stencil at near_radius_of(d, near_radius), and its crossings'
