@@ -211,6 +211,26 @@ int run_slurm(const SlurmOptions& o) {
           : std::to_string(std::max<std::size_t>(512, (need_bytes + need_bytes / 5) >> 20) + 1) + "M";
   const std::string exe = quoted(own_executable().string());
   const std::string name = jobs.size() == 1 ? jobs.front().job.stem().string() : common.filename().string();
+  // What goes into the scripts' comment and #SBATCH lines unquoted: a line break (or another control
+  // character) there would end the line and start a command of its own.
+  {
+    std::vector<std::pair<std::string, std::string>> lines = {
+        {"the output folder", dir.string()},
+        {"the working folder", fs::current_path().string()},
+        {"the job name", name},
+        {"--mem", mem},
+        {"--partition", o.partition},
+        {"--time", o.time}};
+    for (const std::string& a : o.sbatch_args) lines.push_back({"--sbatch-arg", a});
+    for (const Task& t : tasks) {
+      lines.push_back({"the job file", t.job.string()});
+      lines.push_back({t.job.string() + ": the output folder (output.dir or --out)", t.out.string()});
+    }
+    for (const auto& [what, text] : lines)
+      if (std::any_of(text.begin(), text.end(), [](char c) { return (unsigned char)c < 0x20 || c == 0x7f; }))
+        return fail(what + " \"" + text.substr(0, text.find_first_of("\r\n")) +
+                    "...\" holds a line break or control character: it cannot go into a Slurm script");
+  }
   std::ostringstream head;
   auto common_head = [&](std::ostringstream& s, const std::string& job_name, const char* log) {
     s << "#SBATCH --job-name=" << job_name << "\n";
