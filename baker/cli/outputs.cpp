@@ -203,6 +203,10 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   lock_ = std::make_unique<FolderLock>(job.output.dir / (".hfbake-" + job.name + ".lock"));
   if (!lock_->held()) {
     if (created_dir_) fs::remove(job.output.dir, ec);
+    if (!lock_->problem().empty())
+      throw InputError(job.file.string(), "/output/dir",
+                       (job.output.dir / (".hfbake-" + job.name + ".lock")).string() +
+                           " is no lock file of hfbake's (" + lock_->problem() + "): remove it");
     throw InputError(job.file.string(), "/output/dir",
                      "another hfbake process (" + lock_->holder() + ") is baking job " + job.name + " into " +
                          job.output.dir.string() +

@@ -14,6 +14,7 @@
 #include "cli/scene_loader.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "farm/build_id.hpp"
 #include "farm/merge_blocks.hpp"
 #include "job/content_hash.hpp"
@@ -186,6 +187,15 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
   const fs::path path = shard_path(job, id);
   const std::string label = job.name + " [shard " + shard_id_text(id) + "]";
   const ShardWork work = shard_work(job, size.height, id);
+  {  // shards/ is written and cleaned: a link there would take both outside the output folder
+    std::error_code ec;
+    fs::create_directories(path.parent_path(), ec);
+    if (!is_real_directory(path.parent_path()))
+      throw InputError(job.file.string(), "/output/dir",
+                       path.parent_path().string() +
+                           " is not a folder (a link?): outputs are written inside " +
+                           job.output.dir.string() + " only");
+  }
   for (const fs::path& p : remove_stale_shard_files(path.parent_path()))
     progress.message(label + ": removed " + p.string() + " (left by a process that no longer runs)");
   // The staged entries' pieces of stage `stage` (stage 0 beside the shard's other work) not yet complete.

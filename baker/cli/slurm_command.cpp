@@ -322,9 +322,15 @@ int run_slurm(const SlurmOptions& o) {
   }
 
   try {
+    // The scripts and the logs go inside the output folder only: a link at slurm/ or logs/ is refused.
+    for (const fs::path& d : {dir, dir / "logs"}) {
+      fs::create_directories(d);
+      if (!is_real_directory(d))
+        return fail(d.string() + ": not a folder (a link?): the scripts are written inside " +
+                    common.string() + " only");
+    }
     write_file(dir / "bake.sbatch", bake.str());
     write_file(dir / "merge.sbatch", merge.str());
-    fs::create_directories(dir / "logs");
   } catch (const std::exception& e) {
     return fail(dir.string() + ": " + e.what());
   }

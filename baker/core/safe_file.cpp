@@ -78,7 +78,14 @@ FolderLock::FolderLock(const fs::path& path) : path_(path) {
   for (int attempt = 0; attempt < 100; ++attempt) {
     const int fd = open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
     if (fd < 0) {
-      holder_ = std::error_code(errno, std::generic_category()).message();
+      problem_ = std::error_code(errno, std::generic_category()).message() + " (a link or a folder?)";
+      return;
+    }
+    struct stat own {};
+    if (fstat(fd, &own) != 0 || !S_ISREG(own.st_mode) || own.st_nlink != 1) {
+      problem_ =
+          S_ISREG(own.st_mode) ? "a file with another name elsewhere (a hard link)" : "not a regular file";
+      close(fd);
       return;
     }
     if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
@@ -101,7 +108,7 @@ FolderLock::FolderLock(const fs::path& path) : path_(path) {
     }
     close(fd);
   }
-  holder_ = "the lock file keeps changing";
+  problem_ = "the lock file keeps changing";
 }
 
 FolderLock::~FolderLock() {
@@ -143,6 +150,17 @@ TempFile::TempFile(const fs::path& final, const std::string& tag) : final_(final
   if (fd_ < 0) throw system_error(errno, "cannot create a temporary file beside " + final.string());
   tmp_ = name;
   fchmod(fd_, 0666 & ~kProcessUmask);
+}
+
+TempFolder::TempFolder(const fs::path& final) {
+  std::string name = final.string() + ".tmp-" + std::to_string(getpid()) + "-XXXXXX";
+  if (!mkdtemp(name.data()))
+    throw system_error(errno, "cannot create a temporary folder beside " + final.string());
+  dir_ = name;
+}
+
+TempFolder::~TempFolder() {
+  if (!dir_.empty()) remove_tree(dir_);
 }
 
 TempFile::~TempFile() {

@@ -41,6 +41,21 @@ class TempFile {
   bool committed_ = false;
 };
 
+// A new folder beside `final`, named "<final>.tmp-<pid>-XXXXXX" (mkdtemp: created by this call, mode 0700),
+// for a library that writes a file by name (GDAL): nothing in it can have been planted. Removed with what it
+// holds by the destructor (remove_tree). Errors: std::system_error.
+class TempFolder {
+ public:
+  explicit TempFolder(const std::filesystem::path& final);
+  ~TempFolder();
+  TempFolder(const TempFolder&) = delete;
+  TempFolder& operator=(const TempFolder&) = delete;
+  const std::filesystem::path& path() const { return dir_; }
+
+ private:
+  std::filesystem::path dir_;
+};
+
 // `bytes` as the whole content of `final`, through a TempFile. Errors: std::system_error.
 void write_file_atomically(const std::filesystem::path& final, std::string_view bytes);
 
@@ -61,13 +76,16 @@ class FolderLock {
   FolderLock(const FolderLock&) = delete;
   FolderLock& operator=(const FolderLock&) = delete;
   bool held() const { return fd_ >= 0; }
-  // When not held: what the holder wrote into the file ("<pid>@<host>"), or the error.
+  // When not held: what the holder wrote into the file ("<pid>@<host>").
   const std::string& holder() const { return holder_; }
+  // When not held because `path` is no lock file of its own (a link, a folder, a file with another name
+  // elsewhere: a hard link, which is never written) or cannot be opened: why; else empty.
+  const std::string& problem() const { return problem_; }
 
  private:
   std::filesystem::path path_;
   int fd_ = -1;
-  std::string holder_;
+  std::string holder_, problem_;
 };
 
 }  // namespace hfbake

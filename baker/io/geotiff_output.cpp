@@ -2,15 +2,17 @@
 
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
-#include <unistd.h>
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "io/gdal_quiet.hpp"
 
 namespace hfbake {
@@ -47,31 +49,28 @@ void copy_to_cog(const fs::path& file, GDALDataset& source) {
   GdalQuiet gdal;
   GDALDriver* cog_driver = GetGDALDriverManager()->GetDriverByName("COG");
   if (!cog_driver) fail("GDAL has no COG driver");
-  std::string tmp_name(1, '.');  // (built up in steps: GCC 12 warns falsely on "." + string)
-  tmp_name.append(file.filename().string()).append(".tmp-").append(std::to_string(getpid()));
-  const fs::path tmp = file.parent_path() / tmp_name;
+  // GDAL creates the file by name (following a link there): in a folder made for it, named by mkdtemp, so
+  // nothing in it can have been planted (docs/output_folders.md).
+  std::string dot(1, '.');  // (built up in steps: GCC 12 warns falsely on "." + string)
+  std::optional<TempFolder> folder;
+  try {
+    folder.emplace(file.parent_path() / dot.append(file.filename().string()));
+  } catch (const std::system_error& e) {
+    fail(e.what());
+  }
+  const fs::path tmp = folder->path() / file.filename();
   const char* const cog_options[] = {
       "COMPRESS=DEFLATE",   "LEVEL=1",          "PREDICTOR=YES", "BLOCKSIZE=512",
       "RESAMPLING=AVERAGE", "BIGTIFF=IF_SAFER", nullptr};
   DatasetPtr out(
       cog_driver->CreateCopy(tmp.c_str(), &source, FALSE, const_cast<char**>(cog_options), nullptr, nullptr));
-  if (!out) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    fail("cannot write the GeoTIFF: " + gdal.error());
-  }
+  // On any failure the folder's destructor removes what GDAL wrote.
+  if (!out) fail("cannot write the GeoTIFF: " + gdal.error());
   out.reset();  // flushes and closes
-  if (CPLGetLastErrorType() >= CE_Failure) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    fail("cannot write the GeoTIFF: " + gdal.error());
-  }
+  if (CPLGetLastErrorType() >= CE_Failure) fail("cannot write the GeoTIFF: " + gdal.error());
   std::error_code ec;
   fs::rename(tmp, file, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    fail("cannot move into place: " + ec.message());
-  }
+  if (ec) fail("cannot move into place: " + ec.message());
 }
 
 }  // namespace

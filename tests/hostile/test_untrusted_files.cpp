@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <OpenImageIO/imageio.h>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -314,6 +315,45 @@ TEST_F(Untrusted, ATexturesFolderThatIsALinkIsRefused) {
   const auto lines = r.error_lines();
   ASSERT_EQ(lines.size(), 1u) << r.err;
   EXPECT_NE(lines[0].find("textures: is not a folder (a link?)"), std::string::npos) << lines[0];
+  expect_outside_untouched();
+}
+
+// out/shards and out/slurm as links: a shard task, and the scripts and logs of `hfbake slurm`, would land
+// in their targets (and the shard task's clean-up of stale temporaries would run there).
+TEST_F(Untrusted, ShardAndSlurmFoldersThatAreLinksAreRefused) {
+  fs::create_directories(dir_ / "out");
+  fs::create_directory_symlink(dir_ / "outside", dir_ / "out" / "shards");
+  const std::string job = write_job(dir_, base_job());
+  Outcome r = hfbake(dir_, {"bake", job, "--shard", "0/2", "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  auto lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_NE(lines[0].find("shards is not a folder (a link?)"), std::string::npos) << lines[0];
+  expect_outside_untouched();
+
+  fs::remove(dir_ / "out" / "shards");
+  fs::create_directory_symlink(dir_ / "outside", dir_ / "out" / "slurm");
+  // No sbatch on PATH: nothing could be submitted, and the scripts are refused before it is looked for.
+  r = hfbake(dir_, {"slurm", job, "--shards", "2", "--no-cache"}, [] { setenv("PATH", "/nonexistent", 1); });
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_NE(lines[0].find("slurm: not a folder (a link?)"), std::string::npos) << lines[0];
+  expect_outside_untouched();
+}
+
+// A hard link planted at a job's lock file: opening it without following links still opens the file it
+// shares, which the lock would truncate and write its owner into. Refused in one line, the file untouched.
+TEST_F(Untrusted, AHardLinkAtTheLockFileIsNeverWritten) {
+  fs::create_directories(dir_ / "out");
+  fs::create_hard_link(dir_ / "outside" / "victim", dir_ / "out" / ".hfbake-t.lock");
+  const Outcome r = hfbake(dir_, {"bake", write_job(dir_, base_job()), "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_NE(lines[0].find("is no lock file of hfbake's (a file with another name elsewhere (a hard link))"),
+            std::string::npos)
+      << lines[0];
   expect_outside_untouched();
 }
 
