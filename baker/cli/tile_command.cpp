@@ -20,6 +20,7 @@
 #include "core/safe_file.hpp"
 #include "io/georaster_input.hpp"
 #include "io/geotiff_output.hpp"
+#include "job/content_hash.hpp"
 #include "methods/method_table.hpp"
 
 namespace hfbake {
@@ -145,10 +146,11 @@ void bake_tile(const Job& job, const GeoHeightBand& band, const TilePlan& plan, 
   }
 }
 
-// What a tile file of entry `e` must say it belongs to (its HFBAKE_TILE_OF item): the job, the plan and
-// the entry's resolved parameters.
-std::string tile_identity(const Job& job, const TilePlan& plan, std::size_t e) {
-  return job.name + "; " + tiles_text(plan) + "; " + job.bakes[e].stem + " " +
+// What a tile file of entry `e` must say it belongs to (its HFBAKE_TILE_OF item): the job (its name and
+// content: job_content_hash, the document and its input files' bytes, as a shard's), the plan and the
+// entry's resolved parameters.
+std::string tile_identity(const Job& job, const std::string& content, const TilePlan& plan, std::size_t e) {
+  return job.name + " " + content + "; " + tiles_text(plan) + "; " + job.bakes[e].stem + " " +
          entry_config(job.bakes[e]).resolved.dump();
 }
 
@@ -346,6 +348,8 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
     progress.end(job.name, "coarse copy", seconds_since(t0));
   }
 
+  // Tile files name the job's content: a merge takes none baked from other heights or another job.
+  const std::string content = options.tile_task || options.merge ? job_content_hash(job) : std::string();
   if (options.tile_task) {  // a task's tiles, each layer's interior into its tile file
     const auto range = task_tiles(plan, *options.tile_task);
     const std::size_t first = range.first, end = range.second;  // named: the progress lambda captures them
@@ -372,7 +376,8 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
             geo.geotransform[0] += tile.interior.x0 * geo.geotransform[1];
             geo.geotransform[3] += tile.interior.y0 * geo.geotransform[5];
             GeoTiffOptions tiff;
-            tiff.metadata = {{"HFBAKE_TILE_OF", std::to_string(k) + " of " + tile_identity(job, plan, e)}};
+            tiff.metadata = {
+                {"HFBAKE_TILE_OF", std::to_string(k) + " of " + tile_identity(job, content, plan, e)}};
             // The entry's attributes, "<key>=<value>" each, for the merge (merge_attributes).
             int n = 0;
             for (const auto& [key, value] : layers.attributes)
@@ -440,12 +445,13 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
         for (const std::string& name : config.layers) {
           const fs::path file = tile_file(job, k, job.bakes[e].stem, name);
           const int nc = layer_channel_count(name, config.directions);
-          const std::string expected = std::to_string(k) + " of " + tile_identity(job, plan, e);
+          const std::string expected = std::to_string(k) + " of " + tile_identity(job, content, plan, e);
           const std::optional<GeoRasterInfo> info = probe_georaster(file);
           if (!info || georaster_metadata_item(file, "HFBAKE_TILE_OF") != expected ||
               info->width != tile.interior.width || info->height != tile.interior.height || info->bands != nc)
             throw InputError(file.string(), "",
-                             fs::exists(file) ? "is not tile " + std::to_string(k) + " of this job's plan (" +
+                             fs::exists(file) ? "is not tile " + std::to_string(k) +
+                                                    " of this job (its heights and parameters) and plan (" +
                                                     tiles_text(plan) + "): bake it again with --tile-task"
                                               : "is missing: bake its tile task (bake --tiles --tile-task)");
           if (name ==

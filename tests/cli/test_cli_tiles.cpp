@@ -335,6 +335,16 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find("tiles/farm.tile-0."), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  // Tiles baked from other heights (the raster replaced since the tasks ran): refused, naming the first.
+  fs::rename(dir_ / "craters.tif", dir_ / "craters_kept.tif");
+  fs::copy_file(dir_ / "terraces.tif", dir_ / "craters.tif");
+  r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("tiles/farm.tile-0."), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  fs::remove(dir_ / "craters.tif");
+  fs::rename(dir_ / "craters_kept.tif", dir_ / "craters.tif");
   // A missing tile file: refused, naming it.
   const fs::path gone = dir_ / "out_farm" / "tiles" / "farm.tile-5.relief.svf.tif";
   const fs::path kept = dir_ / "kept.tif";
