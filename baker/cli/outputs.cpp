@@ -427,6 +427,18 @@ std::vector<fs::path> OutputStage::commit() {
           folder.string(), "",
           "is not a folder (a link?): outputs are written inside " + job_.output.dir.string() + " only");
   }
+  // A name rename(2) cannot replace (a folder there, the owner record's included) fails the job before any
+  // output moves, so that the folder keeps the previous outputs whole.
+  for (const fs::path& target : [&] {
+         std::vector<fs::path> all;
+         for (const fs::path& name : staged_) all.push_back(job_.output.dir / name);
+         all.push_back(owner_record(job_));
+         return all;
+       }()) {
+    std::error_code ec;
+    if (fs::symlink_status(target, ec).type() == fs::file_type::directory)
+      throw InputError(target.string(), "", "is a folder: an output goes there (remove it)");
+  }
   for (const fs::path& name : staged_) {
     const fs::path target = job_.output.dir / name;
     std::error_code ec;

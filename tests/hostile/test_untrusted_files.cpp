@@ -357,6 +357,32 @@ TEST_F(Untrusted, AHardLinkAtTheLockFileIsNeverWritten) {
   expect_outside_untouched();
 }
 
+// A folder where an output goes: the bake fails before any output moves, so the previous bake's outputs
+// stay whole (not half old, half new).
+TEST_F(Untrusted, AFolderAtAnOutputNameMovesNothing) {
+  json j = base_job();
+  const std::string job = write_job(dir_, j);
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet"}).exit_code, 0);
+  std::vector<std::pair<fs::path, std::string>> before;
+  for (const auto& e : fs::directory_iterator(dir_ / "out"))
+    if (e.is_regular_file() && e.path().extension() != ".lock")
+      before.push_back({e.path(), read_text(e.path())});
+  ASSERT_GE(before.size(), 2u);
+  // The owner record: renamed after every output, so a late failure would have replaced them all.
+  const fs::path taken = dir_ / "out" / ".hfbake-t.job";
+  ASSERT_TRUE(fs::is_regular_file(taken));
+  fs::remove(taken);
+  fs::create_directory(taken);
+  std::erase_if(before, [&](const auto& b) { return b.first == taken; });
+  j["height"]["procedural"]["seed"] = 9;  // other heights: every output would change
+  const Outcome r = hfbake(dir_, {"bake", write_job(dir_, j), "--no-cache", "--quiet", "--overwrite"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_NE(lines[0].find(taken.filename().string() + ": is a folder"), std::string::npos) << lines[0];
+  for (const auto& [file, text] : before) EXPECT_EQ(read_text(file), text) << file;
+}
+
 // --- one folder, one owner ----------------------------------------------------------------------------
 
 // Two processes bake different job files with the same name into one folder, 20 times: one bakes (exit
