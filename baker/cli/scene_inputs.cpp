@@ -171,6 +171,10 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   out.source.reader = "GDAL";
   out.source.format = geo->driver;
   out.source.geographic = geo->geographic;
+  if (geo->bands > 1)
+    out.source.channel = "band " + std::to_string(band + 1) + " of " + std::to_string(geo->bands);
+  out.source.file_scale = geo->scale[std::size_t(band)];
+  out.source.file_offset = geo->offset[std::size_t(band)];
   Georeference& georeference = out.georeference;
   georeference.geotransform = local_geotransform(job_texel_size(job));
   georeference.from_file = geo->has_geotransform;
@@ -208,6 +212,8 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
     source.reader = geo->source.reader;
     source.format = geo->source.format;
     source.geographic = geo->source.geographic;
+    source.channel = geo->source.channel;
+    source.file_scale = geo->source.file_scale, source.file_offset = geo->source.file_offset;
     file_nodata = geo->nodata;
     georeference = std::move(geo->georeference);
   } else {
@@ -217,6 +223,12 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
                                site(job, "/height/channel"), progress);
     source.reader = "OpenImageIO";
     source.format = info.format;
+    if (info.channels > 1) {
+      std::string names;
+      for (const std::string& n : info.channel_names) names += (names.empty() ? "" : ", ") + n;
+      const int c = find_channel(info, channel, job.resolve(image), site(job, "/height/channel"));
+      source.channel = "channel " + info.channel_names[std::size_t(c)] + " of " + names;
+    }
   }
   source.sample_type = plane.sample_type;
   source.integer = plane.integer;

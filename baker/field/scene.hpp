@@ -57,6 +57,10 @@ struct HeightSource {
   double scale = 1, offset = 0;           // height_scale and height_offset
   double world_min = 0, world_max = 0;    // the heights baked, in world units
   bool geographic = false;                // a raster in a geographic CRS, baked in its local frame
+  // The band or channel read when the file has several ("band 1 of 2", "channel R of R, G, B"); else empty.
+  std::string channel;
+  // A GDAL raster's own scale and offset for the band (1 and 0: none declared), which are not applied.
+  double file_scale = 1, file_offset = 0;
 };
 
 // The texels of a field whose results are kept (a tile's interior, in the field's own coordinates;

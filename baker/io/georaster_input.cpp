@@ -76,6 +76,12 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
     int has = 0;
     const double v = band->GetNoDataValue(&has);
     info.nodata.push_back(has ? std::optional<double>(v) : std::nullopt);
+    has = 0;
+    const double scale = band->GetScale(&has);
+    info.scale.push_back(has ? scale : 1.0);
+    has = 0;
+    const double offset = band->GetOffset(&has);
+    info.offset.push_back(has ? offset : 0.0);
   }
   return info;
 }

@@ -25,6 +25,9 @@ struct GeoRasterInfo {
   bool geographic = false;                    // the CRS is geographic (coordinates in degrees)
   std::string linear_unit;                    // a projected CRS's unit ("metre", "US survey foot", ...)
   std::vector<std::optional<double>> nodata;  // per band: the NoData value, if the file declares one
+  // Per band: GDAL's scale and offset (unscaled = stored x scale + offset) when the file declares them
+  // other than 1 and 0. hfbake reads the stored values (docs/heights.md); the heights line names these.
+  std::vector<double> scale, offset;
 };
 
 // The raster's header when it is one for GDAL (a format OpenImageIO does not read, or a raster with a

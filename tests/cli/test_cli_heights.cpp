@@ -202,6 +202,38 @@ TEST_F(CliHeights, GdalAndOpenImageIoAgreeOnEveryIntegerType) {
   }
 }
 
+// The heights line says which channel of a several-channel image was read, and a GDAL raster's own scale and
+// offset (not applied; height_scale and height_offset apply them): a user sees why the heights are not the
+// ones another GIS tool shows.
+TEST_F(CliHeights, TheHeightsLineNamesTheChannelAndTheFilesScale) {
+  {
+    const fs::path p = dir_ / "rgb.png";
+    auto out = OIIO::ImageOutput::create(p.string());
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(kSide, kSide, 3, OIIO::TypeDesc::UINT16);
+    ASSERT_TRUE(out->open(p.string(), spec));
+    std::vector<std::uint16_t> v(std::size_t(kSide) * kSide * 3);
+    for (std::size_t t = 0; t < v.size(); ++t) v[t] = std::uint16_t(t % 997);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT16, v.data()));
+    out->close();
+  }
+  Result r = hfbake("validate " + write_job("rgb", {{"image", "rgb.png"}, {"channel", "G"}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("through OpenImageIO (png, channel G of R, G, B, uint16"), std::string::npos) << r.err;
+
+  write_image("scaled.tif", integer_heights(65535), OIIO::TypeDesc::UINT16);
+  std::ofstream(dir_ / "scaled.tif.aux.xml")
+      << "<PAMDataset>\n  <GeoTransform>0, 1, 0, 48, 0, -1</GeoTransform>\n  <PAMRasterBand band=\"1\">\n"
+         "    <Offset>250</Offset>\n    <Scale>0.01</Scale>\n  </PAMRasterBand>\n</PAMDataset>\n";
+  r = hfbake("validate " + write_job("scaled", {{"image", "scaled.tif"}, {"height_scale", 0.001}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(
+      r.err.find("through GDAL (GTiff, UInt16 integers as stored) (the file declares scale 0.01 and offset "
+                 "250, not applied"),
+      std::string::npos)
+      << r.err;
+}
+
 // Without height_scale, a 16-bit image's integers are world units: validate states the range and warns that
 // the relief is implausible; a float image of [0, 1] heights over a 48-unit field is warned nearly flat.
 TEST_F(CliHeights, ValidateStatesTheRangeAndWarnsOnImplausibleRelief) {
