@@ -213,13 +213,20 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
                          " now: wait for it, or give this job another name or folder");
   }
   {
+    // The record as hfbake writes it: a regular file of its own (a link planted there is not read, and is
+    // replaced when the outputs move), one line of printable text that an error may quote.
     std::string why, recorded;
-    const int fd = open_regular_file(owner_record(job), why);
+    std::error_code link_ec;
+    const bool link = fs::is_symlink(fs::symlink_status(owner_record(job), link_ec));
+    const int fd = link ? -1 : open_regular_file(owner_record(job), why);
     if (fd >= 0) {
       char buf[4096];
       const ssize_t n = read(fd, buf, sizeof buf);
       close(fd);
       if (n > 0) recorded.assign(buf, std::size_t(n));
+      if (recorded.size() > 1024 ||
+          std::any_of(recorded.begin(), recorded.end(), [](char c) { return (unsigned char)c < 0x20; }))
+        recorded = "a record that is not hfbake's";
     }
     if (!recorded.empty() && recorded != job_identity(job) && !overwrite)
       throw InputError(job.file.string(), "/name",

@@ -191,6 +191,7 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
       georeference.has_site = true;
       georeference.site_longitude = (*lonlat)[0], georeference.site_latitude = (*lonlat)[1];
       georeference.site_convergence = *gamma;
+      if (const auto k = grid_scale_factor(geo->crs_wkt, x, y)) georeference.site_scale = *k;
     }
   }
   return out;

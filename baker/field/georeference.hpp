@@ -25,6 +25,9 @@ struct Georeference {
   // its north from.
   bool has_site = false;
   double site_longitude = 0, site_latitude = 0, site_convergence = 0;
+  // A projected CRS's point scale factor there (io/crs_geodesy grid_scale_factor; 1: none known): the map's
+  // metres per ground metre, which hfbake takes as 1.
+  double site_scale = 1;
   // One byte per texel (row-major like the field), 1 where the input had no valid height (NaN, Inf, the
   // file's NoData value or the job's nodata_value) and the hole was filled; empty when there was none.
   std::vector<std::uint8_t> holes;

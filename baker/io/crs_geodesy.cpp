@@ -81,4 +81,30 @@ std::optional<double> grid_convergence(const std::string& wkt, double x, double 
   return std::atan2((*north)[0] - x, (*north)[1] - y);
 }
 
+std::optional<double> grid_scale_factor(const std::string& wkt, double x, double y) {
+  GdalQuiet gdal;
+  OGRSpatialReference crs;
+  if (!read_crs(wkt, crs)) return std::nullopt;
+  if (!crs.IsProjected()) return 1.0;
+  std::unique_ptr<OGRSpatialReference> geog(crs.CloneGeogCS());
+  if (!geog) return std::nullopt;
+  geog->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  const auto lonlat = transform(crs, *geog, x, y);
+  if (!lonlat) return std::nullopt;
+  // 1e-4 degrees along the meridian: its length on the ellipsoid (the meridional radius of curvature M
+  // times the angle) against the grid's, in metres.
+  const double dlat = 1e-4;
+  const auto north = transform(*geog, crs, (*lonlat)[0], (*lonlat)[1] + dlat);
+  if (!north) return std::nullopt;
+  OGRErr err = OGRERR_NONE;
+  const double a = crs.GetSemiMajor(&err), inv_f = crs.GetInvFlattening(&err);
+  const double f = inv_f > 0 ? 1 / inv_f : 0, e2 = f * (2 - f);
+  const double phi = ((*lonlat)[1] + 0.5 * dlat) * std::acos(-1.0) / 180;
+  const double s = std::sin(phi);
+  const double M = a * (1 - e2) / std::pow(1 - e2 * s * s, 1.5);
+  const double ground = M * dlat * std::acos(-1.0) / 180;
+  const double grid = std::hypot((*north)[0] - x, (*north)[1] - y) * crs.GetLinearUnits();
+  return ground > 0 ? grid / ground : std::optional<double>();
+}
+
 }  // namespace hfbake

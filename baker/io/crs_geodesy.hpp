@@ -28,4 +28,9 @@ std::optional<std::array<double, 2>> crs_to_lonlat(const std::string& wkt, doubl
 // from the grid's +y (0 for a geographic CRS); nullopt when PROJ cannot transform the point.
 std::optional<double> grid_convergence(const std::string& wkt, double x, double y);
 
+// A projected CRS's point scale factor along the meridian at (x, y): metres of the grid (its linear unit in
+// metres) per metre on the ellipsoid; 1.4514 for Web Mercator at 46.45 degrees, 0.9996 to 1.001 in a UTM
+// zone. 1 for a geographic CRS; nullopt when PROJ cannot transform the point.
+std::optional<double> grid_scale_factor(const std::string& wkt, double x, double y);
+
 }  // namespace hfbake

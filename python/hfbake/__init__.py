@@ -25,6 +25,8 @@ import json as _json
 import os as _os
 import tempfile as _tempfile
 
+import numpy as _np
+
 
 class InputError(ValueError):
     """Bad input: a value the caller can fix.
@@ -64,6 +66,8 @@ def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_ke
     # `job` gives the job's.
     own = set(_method_keys(method))
     entry, height, job = {}, {}, dict(job_keys or {})
+    if isinstance(heights, _np.ma.MaskedArray):  # its masked texels are holes, as a file's NoData values
+        heights = heights.astype(_np.float64).filled(_np.nan)
     for key, value in params.items():
         if value is None:
             continue

@@ -67,6 +67,21 @@ def test_a_nan_height_raises_the_commands_message(tmp_path):
     assert np.isfinite(hfbake.p1(heights, nodata="fill")["ao"]).all()
 
 
+def test_a_masked_arrays_masked_texels_are_holes():
+    heights = terrain(16, 12) * 10
+    masked = np.ma.masked_array(heights, mask=np.zeros(heights.shape, bool))
+    masked[5, 3] = np.ma.masked  # its stored value (a -9999 under the mask, say) is not a height
+    masked.data[5, 3] = -9999.0
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.p1(masked)
+    assert "texel (3, 5) is NaN" in caught.value.message
+    # Filled, as the same array with NaN there: not the -9999 well.
+    filled = heights.copy()
+    filled[5, 3] = np.nan
+    a = hfbake.p1(masked, nodata="fill")["ao"]
+    assert np.array_equal(a, hfbake.p1(filled, nodata="fill")["ao"])
+
+
 def test_a_field_below_two_texels_raises_the_commands_message(tmp_path):
     heights = terrain(16, 1)
     pointer, message = cli_problem(tmp_path, heights, {"method": "p1"})

@@ -109,6 +109,23 @@ class CliGdal : public ::testing::Test {
               " " + std::to_string(y0 - 320) + " dem1m.tif dem2m.tif");
   }
 
+  // An n x n float32 GeoTIFF of `z` (row-major) in the D96/TM CRS (EPSG:3794) with geotransform `gt`.
+  void write_d96_raster(const std::string& name, int n, const std::vector<float>& z, const double (&gt)[6]) {
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    GDALDataset* ds = gtiff->Create((dir_ / name).c_str(), n, n, 1, GDT_Float32, nullptr);
+    ASSERT_TRUE(ds);
+    double g[6];
+    std::copy(gt, gt + 6, g);
+    ds->SetGeoTransform(g);
+    OGRSpatialReference srs;
+    srs.importFromEPSG(3794);
+    ds->SetSpatialRef(&srs);
+    EXPECT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, n, n, const_cast<float*>(z.data()), n, n,
+                                             GDT_Float32, 0, 0, nullptr),
+              CE_None);
+    GDALClose(ds);
+  }
+
   fs::path dir_;
 };
 
@@ -542,20 +559,7 @@ TEST_F(CliGdal, CompassTermsOfTheHorizonChannels) {
   std::vector<float> z(std::size_t(n) * n);
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) z[std::size_t(j) * n + i] = float(n - j);
-  {
-    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
-    GDALDataset* ds = gtiff->Create((dir_ / "north_up.tif").c_str(), n, n, 1, GDT_Float32, nullptr);
-    ASSERT_TRUE(ds);
-    double gt[6] = {500000, 1, 0, 100000, 0, -1};
-    ds->SetGeoTransform(gt);
-    OGRSpatialReference srs;
-    srs.importFromEPSG(3794);
-    ds->SetSpatialRef(&srs);
-    ASSERT_EQ(
-        ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, n, n, z.data(), n, n, GDT_Float32, 0, 0, nullptr),
-        CE_None);
-    GDALClose(ds);
-  }
+  write_d96_raster("north_up.tif", n, z, {500000, 1, 0, 100000, 0, -1});
   const nlohmann::json j = {{"version", 1},
                             {"name", "plane"},
                             {"height", {{"image", "north_up.tif"}}},
@@ -606,21 +610,7 @@ TEST_F(CliGdal, ReliefCompassDirectionsFollowTheRastersNorth) {
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) z[std::size_t(j) * n + i] = float(o.rows_north ? j : n - j);
     const std::string tif = std::string(o.name) + ".tif";
-    {
-      GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
-      GDALDataset* ds = gtiff->Create((dir_ / tif).c_str(), n, n, 1, GDT_Float32, nullptr);
-      ASSERT_TRUE(ds);
-      double gt[6];
-      std::copy(o.gt, o.gt + 6, gt);
-      ds->SetGeoTransform(gt);
-      OGRSpatialReference srs;
-      srs.importFromEPSG(3794);
-      ds->SetSpatialRef(&srs);
-      ASSERT_EQ(
-          ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, n, n, z.data(), n, n, GDT_Float32, 0, 0, nullptr),
-          CE_None);
-      GDALClose(ds);
-    }
+    write_d96_raster(tif, n, z, o.gt);
     const std::string out = std::string("out_") + o.name;
     const nlohmann::json j = {{"version", 1},
                               {"name", "plane"},

@@ -15,6 +15,24 @@
 namespace {
 namespace fs = std::filesystem;
 
+struct SlurmRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+// `hfbake ARGS` in `dir` with no sbatch on PATH (a dry run must not call it); its exit code and output.
+SlurmRun run_in(const fs::path& dir, const std::string& args) {
+  const std::string cmd = "cd '" + dir.string() + "' && PATH=/nonexistent " + std::string(HFBAKE_BINARY) +
+                          " " + args + " > stdout.txt 2> stderr.txt";
+  const int status = std::system(cmd.c_str());
+  std::ifstream in(dir / "stdout.txt"), err_in(dir / "stderr.txt");
+  SlurmRun r;
+  r.exit_code = WEXITSTATUS(status);
+  r.out.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  r.err.assign(std::istreambuf_iterator<char>(err_in), std::istreambuf_iterator<char>());
+  return r;
+}
+
 TEST(CliSlurm, DryRunPrintsTheScriptsAndWritesNothing) {
   const fs::path dir =
       fs::temp_directory_path() / ("hfbake_test_dry_run_" + std::to_string(std::random_device{}()));
@@ -25,15 +43,9 @@ TEST(CliSlurm, DryRunPrintsTheScriptsAndWritesNothing) {
                               {"bake", {{{"method", "p1"}, {"directions", 8}}}}};
   std::ofstream(dir / "dry.json") << job.dump();
   const fs::path out = dir / "out";
-  // PATH without sbatch: a dry run must not call it.
-  const std::string cmd = "cd '" + dir.string() + "' && PATH=/nonexistent " + std::string(HFBAKE_BINARY) +
-                          " slurm dry.json --shards 3 --dry-run --out '" + out.string() +
-                          "' > stdout.txt 2> stderr.txt";
-  const int status = std::system(cmd.c_str());
-  std::ifstream in(dir / "stdout.txt"), err_in(dir / "stderr.txt");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string err((std::istreambuf_iterator<char>(err_in)), std::istreambuf_iterator<char>());
-  EXPECT_EQ(WEXITSTATUS(status), 0) << err;
+  const SlurmRun r = run_in(dir, "slurm dry.json --shards 3 --dry-run --out '" + out.string() + "'");
+  const std::string& text = r.out;
+  EXPECT_EQ(r.exit_code, 0) << r.err;
   for (const std::string& s :
        {"# ---- " + (out / "slurm" / "bake.sbatch").string(), std::string("#SBATCH --array=0-2"),
         std::string(" bake \"${JOBS[$i]}\" --shard \"${SHARDS[$i]}/$N\""), std::string(" merge "),
@@ -57,16 +69,11 @@ TEST(CliSlurm, ALineBreakInAPathIsRefused) {
                               {"bake", {{{"method", "p1"}, {"directions", 8}}}},
                               {"output", {{"dir", "out\ntouch " + (dir / "ran").string() + "\n#"}}}};
   std::ofstream(dir / "inj.json") << job.dump();
-  const std::string cmd = "cd '" + dir.string() + "' && PATH=/nonexistent " + std::string(HFBAKE_BINARY) +
-                          " slurm inj.json --shards 2 --dry-run > stdout.txt 2> stderr.txt";
-  const int status = std::system(cmd.c_str());
-  std::ifstream in(dir / "stdout.txt"), err_in(dir / "stderr.txt");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string err((std::istreambuf_iterator<char>(err_in)), std::istreambuf_iterator<char>());
-  EXPECT_EQ(WEXITSTATUS(status), 2);
-  EXPECT_NE(err.find("line break"), std::string::npos) << err;
-  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
-  EXPECT_EQ(text.find("touch"), std::string::npos) << text;
+  const SlurmRun r = run_in(dir, "slurm inj.json --shards 2 --dry-run");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("line break"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_EQ(r.out.find("touch"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(dir / "ran"));
   fs::remove_all(dir);
 }
