@@ -495,6 +495,28 @@ TEST_F(CliGdal, GeographicCopyOfTheLidarTileBakesLikeIt) {
   }
 }
 
+// Web Mercator's map metres are 1 / cos(latitude) ground metres (about 1.45 at the lidar tile's 46.4 N): a
+// DEM warped to it is warned with that factor; the same DEM in its own D96/TM (true to scale within 0.01 %)
+// is not.
+TEST_F(CliGdal, ACrsFarFromTrueScaleIsWarnedWithItsFactor) {
+  make_crops();
+  int status = -1;
+  run_tool("cd '" + dir_.string() + "' && gdalwarp -q -t_srs EPSG:3857 -tr 1.45 1.45 -r bilinear " +
+               "-dstnodata -9999 dem1m.tif merc.tif",
+           &status);
+  ASSERT_EQ(status, 0);
+  const Result merc =
+      hfbake("validate " + write_job("m.json", "merc", {{"image", "merc.tif"}, {"nodata", "fill"}}).string());
+  ASSERT_EQ(merc.exit_code, 0) << merc.err;
+  const std::size_t at = merc.err.find("the CRS's map units are ");
+  ASSERT_NE(at, std::string::npos) << merc.err;
+  const double k = std::stod(merc.err.substr(at + 24));
+  EXPECT_NEAR(k, 1.0 / std::cos(46.4 * std::acos(-1.0) / 180), 0.01) << merc.err;
+  const Result own = hfbake("validate " + write_job("d.json", "d96", {{"image", "dem1m.tif"}}).string());
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  EXPECT_EQ(own.err.find("map units are"), std::string::npos) << own.err;
+}
+
 TEST_F(CliGdal, NonSquarePixelsAreRefusedInOneLine) {
   translate("-srcwin 0 0 64 64 -a_ullr 1000 2000 1064 1872 '" + kDem.string() + "' tall.tif");  // 1 x 2 m
   const fs::path job = write_job("a.json", "tall", {{"image", "tall.tif"}});
