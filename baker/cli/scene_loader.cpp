@@ -353,10 +353,12 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   } else if (const double k = scene.georeference.site_scale; std::fabs(k - 1) > 0.01) {
     // A conformal projection far from its true scale (Web Mercator away from the equator): its map metres
     // are not ground metres, so every slope is flattened by k.
-    report.warning = "the CRS's map units are " + short_num(k) + " times the ground's at the field's centre (" +
-                     scene.georeference.crs_name + "): slopes come out " + short_num(k) +
+    report.warning = "the CRS's map units are " + short_num(k) +
+                     " times the ground's at the field's centre (" + scene.georeference.crs_name +
+                     "): slopes come out " + short_num(k) +
                      " times too flat; warp the DEM to a CRS true to scale there (a UTM zone), or give "
-                     "height_scale " + short_num(k) + " (docs/gis.md)";
+                     "height_scale " +
+                     short_num(k) + " (docs/gis.md)";
   }
   return report;
 }
