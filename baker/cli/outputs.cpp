@@ -43,12 +43,11 @@ std::string azimuth_convention(const Georeference& geo) {
   std::string s =
       "phi (directions, horizon channel k: phi_k = 360 k / K degrees) is measured from +x (image columns, i) "
       "towards +y (image rows, j)";
-  const auto& g = geo.geotransform;
   if (!geo.from_file || geo.crs_wkt.empty()) return s + "; the raster has no CRS";
-  // Per unit +x the map moves east by sign(g[1]); per unit +y north by sign(g[5]) (g[5] < 0: rows go
-  // south). A direction phi: east = sign(g[1]) cos phi, north = sign(g[5]) sin phi; compass azimuth A has
+  // A direction phi: east = east_x cos phi, north = north_y sin phi (grid_axes); compass azimuth A has
   // east = sin A, north = cos A.
-  const bool east = g[1] > 0, north_up = g[5] < 0;
+  const GridAxes axes = grid_axes(geo);
+  const bool east = axes.east_x > 0, north_up = axes.north_y < 0;
   if (east && north_up)
     return s + "; north-up raster: +x = east, +y = south, compass azimuth = (90 + phi) mod 360";
   if (east && !north_up)
@@ -200,13 +199,14 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
                      "cannot create " + job.output.dir.string() + ": " +
                          (ec ? ec.message() : std::string("not a folder")));
   // One writer per job name and folder (docs/output_folders.md).
-  lock_ = std::make_unique<FolderLock>(job.output.dir / (".hfbake-" + job.name + ".lock"));
+  const fs::path lock_file = job.output.dir / (".hfbake-" + job.name + ".lock");
+  lock_ = std::make_unique<FolderLock>(lock_file);
   if (!lock_->held()) {
     if (created_dir_) fs::remove(job.output.dir, ec);
     if (!lock_->problem().empty())
-      throw InputError(job.file.string(), "/output/dir",
-                       (job.output.dir / (".hfbake-" + job.name + ".lock")).string() +
-                           " is no lock file of hfbake's (" + lock_->problem() + "): remove it");
+      throw InputError(
+          job.file.string(), "/output/dir",
+          lock_file.string() + " is no lock file of hfbake's (" + lock_->problem() + "): remove it");
     throw InputError(job.file.string(), "/output/dir",
                      "another hfbake process (" + lock_->holder() + ") is baking job " + job.name + " into " +
                          job.output.dir.string() +
@@ -436,16 +436,13 @@ std::vector<fs::path> OutputStage::commit() {
   }
   // A name rename(2) cannot replace (a folder there, the owner record's included) fails the job before any
   // output moves, so that the folder keeps the previous outputs whole.
-  for (const fs::path& target : [&] {
-         std::vector<fs::path> all;
-         for (const fs::path& name : staged_) all.push_back(job_.output.dir / name);
-         all.push_back(owner_record(job_));
-         return all;
-       }()) {
+  auto refuse_folder = [](const fs::path& target) {
     std::error_code ec;
     if (fs::symlink_status(target, ec).type() == fs::file_type::directory)
       throw InputError(target.string(), "", "is a folder: an output goes there (remove it)");
-  }
+  };
+  for (const fs::path& name : staged_) refuse_folder(job_.output.dir / name);
+  refuse_folder(owner_record(job_));
   for (const fs::path& name : staged_) {
     const fs::path target = job_.output.dir / name;
     std::error_code ec;
