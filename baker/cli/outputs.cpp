@@ -260,16 +260,21 @@ OutputStage::~OutputStage() {
 namespace {
 
 // The index of the first value `ok` refuses (values.size(): none). Chunks of values are tested without
-// branches (the compiler vectorises it: a 64-channel horizon stack is 256 MiB of values), and only a chunk
-// holding a refused value is searched.
+// branches, and only a chunk holding a refused value is searched. A whole chunk's loop has a fixed count
+// and an int accumulator, which is what GCC vectorises (a 64-channel horizon stack is 256 MiB of values).
 template <class Ok>
 std::size_t first_bad(const std::vector<float>& values, const Ok& ok) {
   constexpr std::size_t kChunk = 4096;
   const float* d = values.data();
-  for (std::size_t k0 = 0; k0 < values.size(); k0 += kChunk) {
-    const std::size_t k1 = std::min(values.size(), k0 + kChunk);
-    bool all = true;
-    for (std::size_t k = k0; k < k1; ++k) all &= ok(d[k]);
+  const std::size_t n = values.size();
+  for (std::size_t k0 = 0; k0 < n; k0 += kChunk) {
+    const float* c = d + k0;
+    int all = 1;
+    if (n - k0 >= kChunk) {
+      for (std::size_t k = 0; k < kChunk; ++k) all &= int(ok(c[k]));
+    } else {
+      for (std::size_t k = 0; k < n - k0; ++k) all &= int(ok(c[k]));
+    }
     if (all) continue;
     std::size_t k = k0;
     while (ok(d[k])) ++k;

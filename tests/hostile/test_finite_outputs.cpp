@@ -59,6 +59,26 @@ TEST(FiniteOutputs, HorizonDistanceMayBePlusInfinityOnly) {
       << failure(s);
 }
 
+// A layer of many chunks (the check tests 4096 values at a time): the first bad value is named wherever
+// it lies, in a whole chunk or in the last, partial one, and one bad value among 72 000 is found.
+TEST(FiniteOutputs, TheFirstBadValueOfALargeLayerIsFoundInEveryChunk) {
+  LayerSet s;
+  s.width = 120, s.height = 100;
+  Layer& h = s.add("horizon", indexed_channels(6));  // 72 000 values: 17 whole chunks and a partial one
+  for (float& v : h.data) v = 0.25f;
+  EXPECT_EQ(failure(s), "");
+  for (const std::size_t at : {std::size_t(0), std::size_t(4095), std::size_t(4096), std::size_t(50001),
+                               std::size_t(69631), std::size_t(69632), std::size_t(71999)}) {
+    h.data[at] = std::numeric_limits<float>::quiet_NaN();
+    const std::size_t texel = at / 6;
+    const std::string want = "p1: layer horizon: texel (" + std::to_string(texel % 120) + ", " +
+                             std::to_string(texel / 120) + ") channel horizon.00" + std::to_string(at % 6) +
+                             " is nan";
+    EXPECT_EQ(failure(s).rfind(want, 0), 0u) << at << ": " << failure(s);
+    h.data[at] = 0.25f;
+  }
+}
+
 // A fraction of the sky beyond [0, 1] by more than a quadrature's error: ao up to 1.026 came out of a field
 // of 1e-9 m texels; 1.0019 is what p1 with 4 directions gives on a small fractal.
 TEST(FiniteOutputs, FractionsOfTheSkyStayInZeroOne) {
