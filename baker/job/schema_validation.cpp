@@ -180,29 +180,35 @@ const nlohmann::json* follow_ref(const nlohmann::json* node, std::string& doc_pa
   return node;
 }
 
-// The value of `keyword` ("enum", "maxLength", "uniqueItems") the schema gives the value at the pointer
-// `tokens`, walking properties and items (and $ref); the branches of allOf/anyOf/oneOf and if-then are
-// searched too. nullptr when none is found.
-const nlohmann::json* keyword_at(const nlohmann::json* node, std::string doc_path,
-                                 const std::vector<std::string>& tokens, std::size_t k, const char* keyword) {
+// The values of `keyword` ("enum", "maxLength", "type") the schema gives the value at the pointer `tokens`,
+// walking properties and items (and $ref); the branches of allOf/anyOf/oneOf and if-then are searched too,
+// each branch's value appended in the schema's order.
+void keywords_at(const nlohmann::json* node, std::string doc_path, const std::vector<std::string>& tokens,
+                 std::size_t k, const char* keyword, std::vector<const nlohmann::json*>& found) {
   node = follow_ref(node, doc_path);
-  if (!node || !node->is_object()) return nullptr;
-  if (k == tokens.size() && node->contains(keyword)) return &(*node)[keyword];
+  if (!node || !node->is_object()) return;
+  if (k == tokens.size() && node->contains(keyword)) found.push_back(&(*node)[keyword]);
   if (k < tokens.size()) {
     const std::string& t = tokens[k];
     if (node->contains("properties") && (*node)["properties"].contains(t))
-      if (const auto* e = keyword_at(&(*node)["properties"][t], doc_path, tokens, k + 1, keyword)) return e;
+      keywords_at(&(*node)["properties"][t], doc_path, tokens, k + 1, keyword, found);
     if (node->contains("items") && !t.empty() && std::all_of(t.begin(), t.end(), ::isdigit))
-      if (const auto* e = keyword_at(&(*node)["items"], doc_path, tokens, k + 1, keyword)) return e;
+      keywords_at(&(*node)["items"], doc_path, tokens, k + 1, keyword, found);
   }
   for (const char* branch : {"allOf", "anyOf", "oneOf"})
     if (node->contains(branch))
       for (const auto& b : (*node)[branch]) {
-        if (const auto* e = keyword_at(&b, doc_path, tokens, k, keyword)) return e;
-        if (b.contains("then"))
-          if (const auto* e = keyword_at(&b["then"], doc_path, tokens, k, keyword)) return e;
+        keywords_at(&b, doc_path, tokens, k, keyword, found);
+        if (b.contains("then")) keywords_at(&b["then"], doc_path, tokens, k, keyword, found);
       }
-  return nullptr;
+}
+
+// The first of keywords_at's values, or nullptr when the schema gives none.
+const nlohmann::json* keyword_at(const nlohmann::json* node, const std::string& doc_path,
+                                 const std::vector<std::string>& tokens, std::size_t k, const char* keyword) {
+  std::vector<const nlohmann::json*> found;
+  keywords_at(node, doc_path, tokens, k, keyword, found);
+  return found.empty() ? nullptr : found.front();
 }
 
 std::vector<std::string> pointer_tokens(const std::string& pointer) {
@@ -283,6 +289,43 @@ std::string allowed_values(const std::string& schema_path, const std::string& po
   return list;
 }
 
+// "an integer", "a number or an array": the JSON types the schema allows at the pointer, in its order.
+std::string allowed_types(const std::string& schema_path, const std::string& pointer) {
+  std::vector<const nlohmann::json*> found;
+  keywords_at(&schema_document(schema_path), schema_path, pointer_tokens(pointer), 0, "type", found);
+  std::vector<std::string> names;
+  auto add = [&](const nlohmann::json& t) {
+    if (!t.is_string()) return;
+    const std::string n = t.get<std::string>();
+    const std::string a = n == "integer" || n == "array" || n == "object" ? "an " + n
+                          : n == "boolean"                                ? "true or false"
+                                                                          : "a " + n;
+    if (std::find(names.begin(), names.end(), a) == names.end()) names.push_back(a);
+  };
+  for (const nlohmann::json* t : found) {
+    if (t->is_array())
+      for (const auto& e : *t) add(e);
+    else
+      add(*t);
+  }
+  std::string list;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    list += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  return list;
+}
+
+// What the job holds at the pointer, as a type: "a string", "an array", "null".
+std::string given_type(const nlohmann::json& doc, const std::string& pointer) {
+  const nlohmann::json::json_pointer ptr(pointer);
+  if (!doc.contains(ptr)) return "";
+  const nlohmann::json& v = doc.at(ptr);
+  if (v.is_boolean()) return v.dump();
+  if (v.is_number_integer() || v.is_number_unsigned()) return "an integer";
+  if (v.is_number()) return "a number";
+  if (v.is_null()) return "null";
+  return v.is_array() ? "an array" : v.is_object() ? "an object" : "a string";
+}
+
 }  // namespace
 
 std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
@@ -342,12 +385,25 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
   // When every branch says only that (a string where a number or a constant is expected), one of them.
   std::vector<SchemaViolation> kept;
   for (const SchemaViolation& v : out) {
+    // Another branch that failed on the value, or matched the type and failed inside it, says more.
     const bool other = std::any_of(out.begin(), out.end(), [&](const SchemaViolation& o) {
-      return &o != &v && o.pointer == v.pointer && !says_nothing(o);
+      return &o != &v &&
+             ((o.pointer == v.pointer && !says_nothing(o)) || o.pointer.rfind(v.pointer + "/", 0) == 0);
     });
     const bool said = std::any_of(kept.begin(), kept.end(),
                                   [&](const SchemaViolation& o) { return o.pointer == v.pointer; });
     if (!(says_nothing(v) && (other || said))) kept.push_back(v);
+  }
+  // The lines that are kept say what was expected: "must be an integer (it is a string)", "must be 1".
+  for (SchemaViolation& v : kept) {
+    if (v.message == "wrong type") {
+      const std::string want = allowed_types(schema_path, v.pointer), got = given_type(doc, v.pointer);
+      if (!want.empty()) v.message = "must be " + want + (got.empty() ? "" : " (it is " + got + ")");
+    } else if (v.message.rfind("failed to match expected value set by 'const'", 0) == 0) {
+      const nlohmann::json* c =
+          keyword_at(&schema_document(schema_path), schema_path, pointer_tokens(v.pointer), 0, "const");
+      if (c) v.message = "must be " + c->dump();
+    }
   }
   return kept;
 }

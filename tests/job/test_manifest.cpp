@@ -75,7 +75,26 @@ TEST_F(Manifest, OutOfRangeDirections) {
 TEST_F(Manifest, WrongType) {
   const auto e = errors(minimal(R"(, "bounces": "two")"));
   ASSERT_EQ(e.size(), 1u);
-  EXPECT_EQ(e[0], (dir_ / "x.json").string() + ": /bounces: wrong type");
+  EXPECT_EQ(e[0], (dir_ / "x.json").string() + ": /bounces: must be an integer (it is a string)");
+}
+
+// The line names what the schema expects: the types of every alternative, a constant's value; a value
+// that matched one alternative's type is judged by that alternative alone.
+TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
+  auto one = [&](const std::string& json) {
+    const auto e = errors(json);
+    return e.size() == 1 ? e[0].substr((dir_ / "x.json").string().size() + 2) : std::to_string(e.size());
+  };
+  EXPECT_EQ(one(minimal(R"(, "bounces": 1.5)")), "/bounces: must be an integer (it is a number)");
+  EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": "grey"})")),
+            "/surface/albedo: must be a number, an array or an object (it is a string)");
+  EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": [0.5, "a", 0.5]})")),
+            "/surface/albedo/1: must be a number (it is a string)");
+  EXPECT_EQ(one(minimal(R"(, "output": {"dir": "o", "previews": "no"})")),
+            "/output/previews: must be true or false (it is a string)");
+  std::string v2 = minimal("");
+  v2.replace(v2.find("\"version\": 1"), 12, "\"version\": 2");
+  EXPECT_EQ(one(v2), "/version: must be 1");
 }
 
 TEST_F(Manifest, MissingKey) {
