@@ -507,6 +507,27 @@ TEST(P1, HorizonDistanceOnAPit) {
   EXPECT_TRUE(std::isinf(r.horizon_distance[s.field.index(0, 0) * 16 + 8]));
 }
 
+// Where nothing casts a horizon (a border texel looking out of the field), its sine is -1 exactly, as
+// docs/contract.md says; elsewhere it is above -1.
+TEST(P1, NothingAboveIsMinusOneExactly) {
+  for (const ProceduralKind kind : {ProceduralKind::fractal, ProceduralKind::pit, ProceduralKind::flat}) {
+    const Scene s = make_scene(shape(kind, 33, 30, 10, 10));
+    P1Params p = params(16);
+    p.horizon = true, p.horizon_distance = true;
+    const P1Result r = compute_p1(s, p, RunControl{});
+    std::size_t nothing = 0;
+    for (std::size_t i = 0; i < r.horizon.size(); ++i) {
+      if (std::isinf(r.horizon_distance[i])) {
+        ++nothing;
+        ASSERT_EQ(r.horizon[i], -1.0f) << int(kind) << " at " << i;
+      } else {
+        ASSERT_GT(r.horizon[i], -1.0f) << int(kind) << " at " << i;
+      }
+    }
+    EXPECT_GT(nothing, 0u) << int(kind);
+  }
+}
+
 TEST(BakeP1, LayersAndErrors) {
   const Scene s = make_scene(shape(ProceduralKind::flat, 9));
   nlohmann::json e = {{"method", "p1"}, {"directions", 8}};
