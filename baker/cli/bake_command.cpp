@@ -165,6 +165,7 @@ Scene load_step(const JobRun& run) {
   run.progress.message(run.job.name + ": " + heights.line);
   if (!heights.warning.empty()) run.progress.message("warning: " + run.job.name + ": " + heights.warning);
   run.stage.set_georeference(scene.georeference);
+  run.stage.set_texel_size(scene.field.dx(), scene.field.dy());
   run.progress.end(run.job.name, "load", seconds_since(t0));
   const std::vector<PlannedTexture> textures = plan_textures(run.job);
   if (std::any_of(textures.begin(), textures.end(),

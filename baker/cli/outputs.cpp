@@ -354,6 +354,11 @@ std::vector<std::string> OutputStage::write_layers(const std::string& stem, cons
   // 0.55 s, 0.14 GB), for 0.2 % more bytes. Smaller fields stay scanline files, as before.
   options.tile_size = std::max(layers.width, layers.height) > kLargestScanlineExr ? 256 : 0;
   options.attributes.emplace_back("hfbake:azimuth_convention", azimuth_convention(georeference_));
+  if (texel_x_ > 0) {
+    char sides[64];
+    std::snprintf(sides, sizeof sides, "%.15g %.15g", texel_x_, texel_y_);
+    options.attributes.emplace_back("hfbake:texel_size", sides);
+  }
   write_exr(stage_ / exr, layers, options);
   staged_.push_back(exr);
   if (job_.output.geotiff) write_geotiffs(stem, layers);

@@ -70,6 +70,8 @@ class OutputStage {
 
   // The input's georeferencing and holes, for the GeoTIFF outputs (default: none, pixel size 1).
   void set_georeference(const Georeference& georeference) { georeference_ = georeference; }
+  // The field's texel sides in world units (x along columns, y along rows), for the EXRs' hfbake:texel_size.
+  void set_texel_size(double x, double y) { texel_x_ = x, texel_y_ = y; }
   // Writes <name>.<stem>.exr (and previews <name>.<stem>.<layer>.preview.png, GeoTIFFs and textures when
   // the job asks for them) into the stage, after check_layers_finite. Returns the notices for the user, one
   // line each (a texture whose values were clipped, padding left out).
@@ -104,7 +106,8 @@ class OutputStage {
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage
   std::vector<std::filesystem::path> stale_removed_;
   Georeference georeference_;
-  bool created_dir_ = false;  // the output folder did not exist before this job
+  double texel_x_ = 0, texel_y_ = 0;  // 0: not set, no attribute
+  bool created_dir_ = false;          // the output folder did not exist before this job
   bool committed_ = false;
 };
 

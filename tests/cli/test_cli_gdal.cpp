@@ -372,6 +372,22 @@ TEST_F(CliGdal, GeographicRastersAreCheckedInOneLine) {
   EXPECT_NE(r.err.find("a geographic raster in the local frame at latitude 46.4995"), std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("Earth curvature on (refraction 0.13"), std::string::npos) << r.err;
+  // The EXR records the texel's two sides: the WGS 84 ellipsoid's radii of curvature at the raster's centre
+  // latitude times the pixel's 0.001 / 64 degrees of longitude and of latitude.
+  const Result b = hfbake("bake " + (dir_ / "ok.json").string() + " --quiet");
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  auto in = OIIO::ImageInput::open((dir_ / "out_ok" / "ok.relief.exr").string());
+  ASSERT_TRUE(in);
+  std::istringstream sides(in->spec().get_string_attribute("hfbake:texel_size"));
+  double sx = 0, sy = 0;
+  sides >> sx >> sy;
+  const double a = 6378137.0, e2 = 0.00669437999014, lat = 46.4995 * M_PI / 180,
+               step = 0.001 / 64 * M_PI / 180;
+  const double w = 1 - e2 * std::sin(lat) * std::sin(lat);
+  EXPECT_NEAR(sx, a / std::sqrt(w) * std::cos(lat) * step, 1e-3)
+      << in->spec().get_string_attribute("hfbake:texel_size");
+  EXPECT_NEAR(sy, a * (1 - e2) / (w * std::sqrt(w)) * step, 1e-3)
+      << in->spec().get_string_attribute("hfbake:texel_size");
 }
 
 // The median and the 95th percentile of |a - b| over the pairs given.
