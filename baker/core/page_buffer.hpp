@@ -2,17 +2,16 @@
 // in "madvise" mode, Debian's default): a sweep's line storage is allocated afresh for every direction
 // block, and first-touching it 4 KiB at a time cost p1 about 4 % of its CPU in page faults (on this VM each
 // fault is a hypervisor round trip). Contents start uninitialised, as with new float[n]. Memory only: no
-// result depends on it.
+// result depends on it. For scratch that is written many times: a buffer written once is cheaper on 4 KiB
+// pages on such a VM (methods/p1/p1.cpp, compute_p1's horizon layers).
 #pragma once
 
 #include <sys/mman.h>
 
 #include <cstddef>
-#include <cstdint>
 #include <cstdlib>
 #include <memory>
 #include <new>
-#include <vector>
 
 namespace hfbake {
 
@@ -39,24 +38,6 @@ PageBuffer<T> make_page_buffer(std::size_t n) {
   if (!p) throw std::bad_alloc();
   madvise(p, rounded, MADV_HUGEPAGE);  // advice only: where it is refused, the usual 4 KiB pages
   return PageBuffer<T>(static_cast<T*>(p));
-}
-
-// A zeroed std::vector of n elements whose whole 2 MiB pages are advised for huge pages before the zeros
-// first touch them: a large layer (p1's horizon stack) is faulted in 2 MiB at a time, and its strided
-// writes miss the TLB less. Only a vector at least 4 MiB large is advised.
-template <class T>
-std::vector<T> make_page_vector(std::size_t n) {
-  constexpr std::size_t kHuge = std::size_t(2) << 20;
-  std::vector<T> v;
-  v.reserve(n);
-  const std::size_t bytes = n * sizeof(T);
-  if (bytes >= 2 * kHuge) {
-    const std::uintptr_t a = reinterpret_cast<std::uintptr_t>(v.data());
-    const std::uintptr_t lo = (a + kHuge - 1) / kHuge * kHuge, hi = (a + bytes) / kHuge * kHuge;
-    if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
-  }
-  v.resize(n);
-  return v;
 }
 
 }  // namespace hfbake
