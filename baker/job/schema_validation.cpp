@@ -316,9 +316,14 @@ std::string allowed_types(const std::string& schema_path, const std::string& poi
 
 // What the job holds at the pointer, as a type: "a string", "an array", "null".
 std::string given_type(const nlohmann::json& doc, const std::string& pointer) {
-  const nlohmann::json::json_pointer ptr(pointer);
-  if (!doc.contains(ptr)) return "";
-  const nlohmann::json& v = doc.at(ptr);
+  const nlohmann::json* at = nullptr;
+  try {
+    const nlohmann::json::json_pointer ptr(pointer);
+    if (doc.contains(ptr)) at = &doc.at(ptr);
+  } catch (const nlohmann::json::exception&) {
+  }
+  if (!at) return "";
+  const nlohmann::json& v = *at;
   if (v.is_boolean()) return v.dump();
   if (v.is_number_integer() || v.is_number_unsigned()) return "an integer";
   if (v.is_number()) return "a number";
