@@ -175,6 +175,9 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
     out.source.channel = "band " + std::to_string(band + 1) + " of " + std::to_string(geo->bands);
   out.source.file_scale = geo->scale[std::size_t(band)];
   out.source.file_offset = geo->offset[std::size_t(band)];
+  out.source.pixel_unit = geo->geographic ? "" : geo->linear_unit;
+  out.source.pixel_unit_metres = geo->geographic ? 1.0 : geo->linear_unit_metres;
+  out.source.height_unit = geo->unit_types[std::size_t(band)];
   Georeference& georeference = out.georeference;
   georeference.geotransform = local_geotransform(job_texel_size(job));
   georeference.from_file = geo->has_geotransform;
@@ -215,6 +218,8 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
     source.geographic = geo->source.geographic;
     source.channel = geo->source.channel;
     source.file_scale = geo->source.file_scale, source.file_offset = geo->source.file_offset;
+    source.pixel_unit = geo->source.pixel_unit, source.pixel_unit_metres = geo->source.pixel_unit_metres;
+    source.height_unit = geo->source.height_unit;
     file_nodata = geo->nodata;
     georeference = std::move(geo->georeference);
   } else {

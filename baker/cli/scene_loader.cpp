@@ -1,8 +1,10 @@
 #include "cli/scene_loader.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "cli/scene_inputs.hpp"
 #include "core/error.hpp"
@@ -282,6 +284,19 @@ std::string short_num(double v) {
   return buf;
 }
 
+// Metres in a unit of length as rasters name it (a CRS's unit, a band's unit type): the metre, the
+// international foot and the US survey foot; nullopt for a name not known here.
+std::optional<double> metres_per(std::string unit) {
+  for (char& c : unit) c = char(std::tolower(static_cast<unsigned char>(c)));
+  for (const char* m : {"m", "metre", "meter", "metres", "meters"})
+    if (unit == m) return 1.0;
+  for (const char* f : {"ft", "foot", "feet", "international foot", "foot (international)"})
+    if (unit == f) return 0.3048;
+  for (const char* f : {"us survey foot", "us-ft", "ftus", "foot_us", "us survey feet", "foot (us survey)"})
+    if (unit == f) return 1200.0 / 3937.0;
+  return std::nullopt;
+}
+
 }  // namespace
 
 HeightsReport describe_heights(const Job& job, const Scene& scene) {
@@ -303,6 +318,7 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   line += "; " + std::to_string(f.width) + "x" + std::to_string(f.height) + " texels of " + short_num(texel);
   if (!f.square_texels()) line += " x " + short_num(f.dy());
   line += " (" + short_num(f.width * texel) + " x " + short_num(f.height * f.dy()) + " world units";
+  if (!s.pixel_unit.empty() && metres_per(s.pixel_unit) != 1.0) line += ", the CRS's " + s.pixel_unit;
   if (!f.square_texels())
     line +=
         ", a geographic raster in the local frame at latitude " + short_num(scene.georeference.site_latitude);
@@ -336,7 +352,16 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
       s.integer ? "height_scale (world units per stored integer: a 16-bit image meant as 0..1 of a height H "
                   "needs H / 65535, an 8-bit one H / 255)"
                 : "height_scale (world units per stored unit)";
-  if (relief == 0) {
+  // A band that declares its heights in another unit than its pixels' (metres on a CRS in feet): every
+  // slope would be off by their ratio unless height_scale converts them.
+  const std::optional<double> height_metres = metres_per(s.height_unit);
+  const double unit_ratio = height_metres ? *height_metres / s.pixel_unit_metres : 1.0;
+  if (s.scale == 1 && std::fabs(unit_ratio - 1) > 1e-4) {
+    report.warning = "the band's heights are in " + s.height_unit + " and its pixels in " +
+                     (s.pixel_unit.empty() ? std::string("metres") : s.pixel_unit) + ": slopes come out " +
+                     short_num(unit_ratio) + " times too " + (unit_ratio > 1 ? "flat" : "steep") +
+                     "; give height_scale " + short_num(unit_ratio) + " (docs/gis.md)";
+  } else if (relief == 0) {
     report.warning = "the field is flat (every height is " + short_num(s.world_min) +
                      "): every method bakes it unoccluded";
   } else if (relief < 0.01 * extent) {

@@ -61,6 +61,12 @@ struct HeightSource {
   std::string channel;
   // A GDAL raster's own scale and offset for the band (1 and 0: none declared), which are not applied.
   double file_scale = 1, file_offset = 0;
+  // A GDAL raster's units: the projected CRS's unit of the pixels ("" for a geographic raster, baked in
+  // metres, or a file without a CRS) and metres in it; the band's unit as the file declares it ("" when
+  // none).
+  std::string pixel_unit;
+  double pixel_unit_metres = 1;
+  std::string height_unit;
 };
 
 // The texels of a field whose results are kept (a tile's interior, in the field's own coordinates;

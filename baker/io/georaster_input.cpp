@@ -65,7 +65,7 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
     info.geographic = srs->IsGeographic() != 0;
     if (srs->IsProjected()) {
       const char* unit = nullptr;
-      srs->GetLinearUnits(&unit);
+      info.linear_unit_metres = srs->GetLinearUnits(&unit);
       if (unit) info.linear_unit = unit;
     }
   }
@@ -82,6 +82,8 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
     has = 0;
     const double offset = band->GetOffset(&has);
     info.offset.push_back(has ? offset : 0.0);
+    const char* unit = band->GetUnitType();
+    info.unit_types.emplace_back(unit ? unit : "");
   }
   return info;
 }

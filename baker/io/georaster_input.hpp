@@ -24,10 +24,14 @@ struct GeoRasterInfo {
   std::string crs_wkt, crs_name;              // empty: no CRS
   bool geographic = false;                    // the CRS is geographic (coordinates in degrees)
   std::string linear_unit;                    // a projected CRS's unit ("metre", "US survey foot", ...)
+  double linear_unit_metres = 1;              // metres in that unit
   std::vector<std::optional<double>> nodata;  // per band: the NoData value, if the file declares one
   // Per band: GDAL's scale and offset (unscaled = stored x scale + offset) when the file declares them
   // other than 1 and 0. hfbake reads the stored values (docs/heights.md); the heights line names these.
   std::vector<double> scale, offset;
+  // Per band: the unit its values are in as the file declares it (GDAL's unit type: "m", "ft", ...; "" when
+  // none).
+  std::vector<std::string> unit_types;
 };
 
 // The raster's header when it is one for GDAL (a format OpenImageIO does not read, or a raster with a

@@ -533,6 +533,46 @@ TEST_F(CliGdal, ACrsFarFromTrueScaleIsWarnedWithItsFactor) {
   EXPECT_EQ(own.err.find("map units are"), std::string::npos) << own.err;
 }
 
+// A band that declares its heights in metres on a CRS in US survey feet (EPSG:2263) is warned with the
+// factor that converts them, 3937 / 1200; the heights line names the CRS's unit. With that height_scale, with
+// the band in feet or with no unit declared, no warning; a metre CRS is not named.
+TEST_F(CliGdal, HeightsInAnotherUnitThanThePixelsAreWarned) {
+  translate("-srcwin 400 400 64 64 -a_srs EPSG:2263 '" + kDem.string() + "' feet.tif");
+  translate("-srcwin 400 400 64 64 '" + kDem.string() + "' metres.tif");
+  auto with_unit = [&](const std::string& file, const char* unit) {
+    std::unique_ptr<GDALDataset> ds(
+        GDALDataset::Open((dir_ / file).c_str(), GDAL_OF_RASTER | GDAL_OF_UPDATE));
+    ASSERT_TRUE(ds);
+    ds->GetRasterBand(1)->SetUnitType(unit);
+  };
+  translate("feet.tif feet_m.tif");
+  translate("feet.tif feet_ft.tif");
+  with_unit("feet_m.tif", "m");
+  with_unit("feet_ft.tif", "ft");
+  with_unit("metres.tif", "metre");
+  const std::string warned = "the band's heights are in m and its pixels in US survey foot: slopes come out ";
+  const Result m = hfbake("validate " + write_job("m.json", "m", {{"image", "feet_m.tif"}}).string());
+  ASSERT_EQ(m.exit_code, 0) << m.err;
+  const std::size_t at = m.err.find(warned);
+  ASSERT_NE(at, std::string::npos) << m.err;
+  EXPECT_NEAR(std::stod(m.err.substr(at + warned.size())), 3937.0 / 1200.0, 1e-4) << m.err;
+  EXPECT_NE(m.err.find("times too flat; give height_scale 3.28083"), std::string::npos) << m.err;
+  EXPECT_NE(m.err.find("world units, the CRS's US survey foot)"), std::string::npos) << m.err;
+  const nlohmann::json cases[] = {{{"image", "feet_m.tif"}, {"height_scale", 3937.0 / 1200.0}},
+                                  {{"image", "feet_ft.tif"}},
+                                  {{"image", "feet.tif"}},
+                                  {{"image", "metres.tif"}}};
+  int n = 0;
+  for (const nlohmann::json& height : cases) {
+    const Result r =
+        hfbake("validate " + write_job("c" + std::to_string(n++) + ".json", "c", height).string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err.find("heights are in"), std::string::npos) << height.dump() << r.err;
+  }
+  const Result own = hfbake("validate " + write_job("own.json", "own", {{"image", "metres.tif"}}).string());
+  EXPECT_EQ(own.err.find("the CRS's"), std::string::npos) << own.err;
+}
+
 TEST_F(CliGdal, NonSquarePixelsAreRefusedInOneLine) {
   translate("-srcwin 0 0 64 64 -a_ullr 1000 2000 1064 1872 '" + kDem.string() + "' tall.tif");  // 1 x 2 m
   const fs::path job = write_job("a.json", "tall", {{"image", "tall.tif"}});
