@@ -5,13 +5,15 @@ geotransform.
     gdal_relief.py DEM.tif OUT_DIR [--directions K] [--radius R]
 
 Writes OUT_DIR/svf.tif, openness_positive.tif and openness_negative.tif (float32, one band). The DEM must
-be in a projected CRS with square pixels in the heights' unit (gdalwarp -t_srs / -tr first if not; or bake
-a job naming the file, which reads a geographic DEM's texel sizes itself: docs/gis.md); its NoData texels
-(the band's NoData value, NaN included) are filled from their neighbours for the bake and written back as
-NoData.
+be in a projected CRS with square pixels (gdalwarp -t_srs / -tr first if not; or bake a job naming the file,
+which reads a geographic DEM's texel sizes itself: docs/gis.md). Heights are taken in the pixels' unit; a band
+that declares another (GDAL's unit type: metres on a CRS in feet) is converted into it, and the factor is
+printed. Its NoData texels (the band's NoData value, NaN included) are filled from their neighbours for the
+bake and written back as NoData.
 """
 import argparse
 import pathlib
+import sys
 
 import numpy as np
 from osgeo import gdal
@@ -19,6 +21,11 @@ from osgeo import gdal
 import hfbake
 
 gdal.UseExceptions()
+
+# Metres in the units of length rasters name (a band's unit type, a CRS's unit), in lower case.
+METRES = {"m": 1.0, "metre": 1.0, "meter": 1.0, "metres": 1.0, "meters": 1.0,
+          "ft": 0.3048, "foot": 0.3048, "feet": 0.3048, "international foot": 0.3048,
+          "us survey foot": 1200 / 3937, "us-ft": 1200 / 3937, "ftus": 1200 / 3937, "foot_us": 1200 / 3937}
 
 
 def main():
@@ -40,6 +47,17 @@ def main():
         raise SystemExit(f"{args.dem}: its pixels are degrees of a geographic CRS: gdalwarp -t_srs to a projected "
                          "CRS first, or bake a job naming the file (docs/gis.md, Geographic DEMs)")
     nodata = band.GetNoDataValue()
+    holes = ~np.isfinite(heights)
+    if nodata is not None:
+        holes |= heights == nodata
+    height_metres = METRES.get((band.GetUnitType() or "").strip().lower())
+    pixel_metres = crs.GetLinearUnits() if crs is not None and crs.IsProjected() else 1.0
+    if height_metres is not None and abs(height_metres / pixel_metres - 1) > 1e-4:
+        factor = height_metres / pixel_metres
+        pixel_unit = crs.GetLinearUnitsName() if crs is not None and crs.IsProjected() else "metre"
+        print(f"gdal_relief: {args.dem}: the band's heights are in {band.GetUnitType()} and its pixels in "
+              f"{pixel_unit}: heights x {factor:.6g}", file=sys.stderr)
+        heights[~holes] *= np.float32(factor)
 
     layers = hfbake.relief(
         heights,
@@ -53,9 +71,6 @@ def main():
 
     args.out_dir.mkdir(parents=True, exist_ok=True)
     driver = gdal.GetDriverByName("GTiff")
-    holes = ~np.isfinite(heights)
-    if nodata is not None:
-        holes |= heights == nodata
     for name, values in layers.items():
         out = driver.Create(str(args.out_dir / f"{name}.tif"), dem.RasterXSize, dem.RasterYSize, 1,
                             gdal.GDT_Float32, options=["COMPRESS=DEFLATE"])

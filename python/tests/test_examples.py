@@ -76,6 +76,30 @@ def test_gdal_relief_example_nan_holes_and_geographic_dems(tmp_path):
     assert not (tmp_path / "geo").exists()
 
 
+def test_gdal_relief_example_converts_heights_into_the_pixels_unit(tmp_path):
+    # Heights in metres (the band says so) on 2 US-survey-foot pixels (EPSG:2263) bake as the same heights
+    # given in feet: x 3937 / 1200, the factor printed.
+    heights = terrain(48, 40, seed=11) * 10
+    gt = (300000.0, 2.0, 0.0, 200000.0, 0.0, -2.0)
+    metres = tmp_path / "metres.tif"
+    write_geotiff(metres, heights, epsg=2263, geotransform=gt)
+    ds = gdal.Open(str(metres), gdal.GA_Update)
+    ds.GetRasterBand(1).SetUnitType("m")
+    ds = None
+    feet = tmp_path / "feet.tif"
+    write_geotiff(feet, (heights * np.float32(3937 / 1200)).astype(np.float32), epsg=2263, geotransform=gt)
+    script = SOURCE_DIR / "python" / "examples" / "gdal_relief.py"
+    converted = subprocess.run([sys.executable, str(script), str(metres), str(tmp_path / "m"), "--radius", "30"],
+                               capture_output=True, text=True, check=True)
+    assert "heights are in m and its pixels in US survey foot: heights x 3.28083" in converted.stderr
+    plain = subprocess.run([sys.executable, str(script), str(feet), str(tmp_path / "f"), "--radius", "30"],
+                           capture_output=True, text=True, check=True)
+    assert "heights x" not in plain.stderr
+    for name in ("svf", "openness_positive", "openness_negative"):
+        a, b = gdal.Open(str(tmp_path / "m" / f"{name}.tif")), gdal.Open(str(tmp_path / "f" / f"{name}.tif"))
+        assert np.array_equal(a.GetRasterBand(1).ReadAsArray(), b.GetRasterBand(1).ReadAsArray()), name
+
+
 def read_png(path):
     inp = OpenImageIO.ImageInput.open(str(path))
     spec = inp.spec()

@@ -90,3 +90,25 @@ def test_nan_holes_are_nodata_and_geographic_layers_are_refused(tmp_path, qgis_e
                              f"OUTPUT={tmp_path / 'geo.tif'}"], env=qgis_env, capture_output=True, text=True)
     assert result.returncode != 0
     assert "geographic" in result.stdout + result.stderr
+
+
+def test_heights_in_another_unit_than_the_pixels_are_converted(tmp_path, qgis_env):
+    # Metres (the band says so) on US-survey-foot pixels bake as the same heights given in feet.
+    heights = terrain(40, 32, seed=13) * 10
+    gt = (300000.0, 2.0, 0.0, 200000.0, 0.0, -2.0)
+    metres, feet = tmp_path / "metres.tif", tmp_path / "feet.tif"
+    write_geotiff(metres, heights, epsg=2263, geotransform=gt)
+    ds = gdal.Open(str(metres), gdal.GA_Update)
+    ds.GetRasterBand(1).SetUnitType("m")
+    ds = None
+    write_geotiff(feet, (heights * np.float32(3937 / 1200)).astype(np.float32), epsg=2263, geotransform=gt)
+    outputs = []
+    for dem in (metres, feet):
+        out = tmp_path / f"svf_{dem.stem}.tif"
+        result = subprocess.run([QGIS_PROCESS, "run", "hfbake:svf", "--", f"INPUT={dem}", "BAND=1", "DIRECTIONS=8",
+                                 "RADIUS=10", f"OUTPUT={out}"], env=qgis_env, capture_output=True, text=True)
+        assert result.returncode == 0, result.stdout + result.stderr
+        assert ("heights x 3.28083" in result.stdout + result.stderr) == (dem == metres), result.stdout
+        ds = gdal.Open(str(out))  # held: a band outlives no dataset
+        outputs.append(ds.GetRasterBand(1).ReadAsArray())
+    assert np.array_equal(outputs[0], outputs[1])

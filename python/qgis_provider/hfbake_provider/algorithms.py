@@ -15,6 +15,11 @@ from qgis.core import (
 
 import hfbake
 
+# Metres in the units of length rasters name (a band's unit type, a CRS's unit), in lower case.
+METRES = {"m": 1.0, "metre": 1.0, "meter": 1.0, "metres": 1.0, "meters": 1.0,
+          "ft": 0.3048, "foot": 0.3048, "feet": 0.3048, "international foot": 0.3048,
+          "us survey foot": 1200 / 3937, "us-ft": 1200 / 3937, "ftus": 1200 / 3937, "foot_us": 1200 / 3937}
+
 
 class _Bake(QgsProcessingAlgorithm):
     """One product: `method` baked with its `layer` (for per-direction layers: all directions, one band
@@ -38,7 +43,7 @@ class _Bake(QgsProcessingAlgorithm):
         return type(self)()
 
     def initAlgorithm(self, config=None):  # noqa: N802
-        self.addParameter(QgsProcessingParameterRasterLayer("INPUT", "Elevation (projected CRS, heights in its unit)"))
+        self.addParameter(QgsProcessingParameterRasterLayer("INPUT", "Elevation (projected CRS)"))
         self.addParameter(QgsProcessingParameterBand("BAND", "Band", 1, "INPUT"))
         self.addParameter(QgsProcessingParameterNumber("DIRECTIONS", "Directions", QgsProcessingParameterNumber.Integer,
                                                        self.default_directions, minValue=1, maxValue=4096))
@@ -63,6 +68,18 @@ class _Bake(QgsProcessingAlgorithm):
             raise QgsProcessingException(f"{layer.source()}: its pixels are degrees of a geographic CRS: warp it to a "
                                          "projected CRS first (the heights' unit per pixel)")
         nodata = band.GetNoDataValue()
+        holes = ~np.isfinite(heights)
+        if nodata is not None:
+            holes |= heights == nodata
+        # Heights in the pixels' unit: a band that declares another (metres on a CRS in feet) is converted.
+        height_metres = METRES.get((band.GetUnitType() or "").strip().lower())
+        pixel_metres = crs.GetLinearUnits() if crs is not None and crs.IsProjected() else 1.0
+        if height_metres is not None and abs(height_metres / pixel_metres - 1) > 1e-4:
+            factor = height_metres / pixel_metres
+            pixel_unit = crs.GetLinearUnitsName() if crs is not None and crs.IsProjected() else "metre"
+            feedback.pushWarning(f"{layer.source()}: the band's heights are in {band.GetUnitType()} and its pixels "
+                                 f"in {pixel_unit}: heights x {factor:.6g}")
+            heights[~holes] *= np.float32(factor)
         keys = {"directions": self.parameterAsInt(parameters, "DIRECTIONS", context), "layers": [self.layer]}
         if self.radius_key:
             radius = self.parameterAsDouble(parameters, "RADIUS", context)
@@ -84,9 +101,6 @@ class _Bake(QgsProcessingAlgorithm):
         except hfbake.Cancelled:
             return {}
         planes = values if values.ndim == 3 else values[np.newaxis]
-        holes = ~np.isfinite(heights)
-        if nodata is not None:
-            holes |= heights == nodata
         out = gdal.GetDriverByName("GTiff").Create(output, dem.RasterXSize, dem.RasterYSize, planes.shape[0],
                                                    gdal.GDT_Float32, options=["COMPRESS=DEFLATE", "TILED=YES"])
         out.SetGeoTransform(geotransform)
