@@ -22,11 +22,6 @@ import hfbake
 
 gdal.UseExceptions()
 
-# Metres in the units of length rasters name (a band's unit type, a CRS's unit), in lower case.
-METRES = {"m": 1.0, "metre": 1.0, "meter": 1.0, "metres": 1.0, "meters": 1.0,
-          "ft": 0.3048, "foot": 0.3048, "feet": 0.3048, "international foot": 0.3048,
-          "us survey foot": 1200 / 3937, "us-ft": 1200 / 3937, "ftus": 1200 / 3937, "foot_us": 1200 / 3937}
-
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -50,14 +45,12 @@ def main():
     holes = ~np.isfinite(heights)
     if nodata is not None:
         holes |= heights == nodata
-    height_metres = METRES.get((band.GetUnitType() or "").strip().lower())
-    pixel_metres = crs.GetLinearUnits() if crs is not None and crs.IsProjected() else 1.0
-    if height_metres is not None and abs(height_metres / pixel_metres - 1) > 1e-4:
-        factor = height_metres / pixel_metres
-        pixel_unit = crs.GetLinearUnitsName() if crs is not None and crs.IsProjected() else "metre"
-        print(f"gdal_relief: {args.dem}: the band's heights are in {band.GetUnitType()} and its pixels in "
-              f"{pixel_unit}: heights x {factor:.6g}", file=sys.stderr)
+    projected = crs is not None and crs.IsProjected()
+    factor = hfbake.height_unit_factor(band.GetUnitType(), crs.GetLinearUnits() if projected else 1.0)
+    if factor is not None and abs(factor - 1) > 1e-4:  # heights into the pixels' unit
         heights[~holes] *= np.float32(factor)
+        print(f"gdal_relief: {args.dem}: the band's heights are in {band.GetUnitType()}, its pixels in "
+              f"{crs.GetLinearUnitsName() if projected else 'metre'}: heights x {factor:.6g}", file=sys.stderr)
 
     layers = hfbake.relief(
         heights,

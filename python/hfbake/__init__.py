@@ -175,3 +175,18 @@ def compare(now, baseline, *, tolerances=(), allow_different_job=False, update_b
     result = _hfbake.compare(_os.fspath(now), _os.fspath(baseline), list(tolerances), allow_different_job,
                              update_baseline)
     return _json.loads(result)
+
+
+# Metres in the units of length rasters name (a band's unit type, a CRS's unit), in lower case.
+_METRES = {"m": 1.0, "metre": 1.0, "meter": 1.0, "metres": 1.0, "meters": 1.0,
+           "ft": 0.3048, "foot": 0.3048, "feet": 0.3048, "international foot": 0.3048,
+           "us survey foot": 1200 / 3937, "us-ft": 1200 / 3937, "ftus": 1200 / 3937, "foot_us": 1200 / 3937}
+
+
+def height_unit_factor(height_unit, pixel_metres=1.0):
+    """The factor that converts heights in `height_unit` (a raster band's unit type as GDAL gives it: "m",
+    "ft", "US survey foot", ...) into the unit of pixels `pixel_metres` metres long (a projected CRS's
+    GetLinearUnits(); 1 for metres). None when the unit is empty or not one of the metre, the international
+    foot and the US survey foot. The heights an array function takes are in the pixels' unit (texel_size's)."""
+    metres = _METRES.get((height_unit or "").strip().lower())
+    return None if metres is None else metres / pixel_metres

@@ -107,3 +107,15 @@ def test_numpy_values_are_the_job_values():
                           layers=np.array(["svf", "horizon_deg"]))
     for name in plain:
         assert np.array_equal(plain[name], numpy[name])
+
+
+def test_height_unit_factor_converts_a_bands_unit_into_the_pixels():
+    us_foot = 1200 / 3937  # metres in a US survey foot (EPSG:9003)
+    assert hfbake.height_unit_factor("m", us_foot) == pytest.approx(3.280833333, rel=1e-9)
+    assert hfbake.height_unit_factor("Metre") == 1.0
+    assert hfbake.height_unit_factor("ft") == pytest.approx(0.3048, rel=1e-12)
+    assert hfbake.height_unit_factor("US survey foot", us_foot) == pytest.approx(1.0, rel=1e-12)
+    assert hfbake.height_unit_factor("ft", us_foot) == pytest.approx(0.999998, rel=1e-6)
+    assert hfbake.height_unit_factor("", 0.3048) is None
+    assert hfbake.height_unit_factor(None) is None
+    assert hfbake.height_unit_factor("furlong") is None

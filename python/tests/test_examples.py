@@ -91,7 +91,7 @@ def test_gdal_relief_example_converts_heights_into_the_pixels_unit(tmp_path):
     script = SOURCE_DIR / "python" / "examples" / "gdal_relief.py"
     converted = subprocess.run([sys.executable, str(script), str(metres), str(tmp_path / "m"), "--radius", "30"],
                                capture_output=True, text=True, check=True)
-    assert "heights are in m and its pixels in US survey foot: heights x 3.28083" in converted.stderr
+    assert "heights are in m, its pixels in US survey foot: heights x 3.28083" in converted.stderr
     plain = subprocess.run([sys.executable, str(script), str(feet), str(tmp_path / "f"), "--radius", "30"],
                            capture_output=True, text=True, check=True)
     assert "heights x" not in plain.stderr

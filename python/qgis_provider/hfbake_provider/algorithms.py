@@ -15,11 +15,6 @@ from qgis.core import (
 
 import hfbake
 
-# Metres in the units of length rasters name (a band's unit type, a CRS's unit), in lower case.
-METRES = {"m": 1.0, "metre": 1.0, "meter": 1.0, "metres": 1.0, "meters": 1.0,
-          "ft": 0.3048, "foot": 0.3048, "feet": 0.3048, "international foot": 0.3048,
-          "us survey foot": 1200 / 3937, "us-ft": 1200 / 3937, "ftus": 1200 / 3937, "foot_us": 1200 / 3937}
-
 
 class _Bake(QgsProcessingAlgorithm):
     """One product: `method` baked with its `layer` (for per-direction layers: all directions, one band
@@ -72,14 +67,12 @@ class _Bake(QgsProcessingAlgorithm):
         if nodata is not None:
             holes |= heights == nodata
         # Heights in the pixels' unit: a band that declares another (metres on a CRS in feet) is converted.
-        height_metres = METRES.get((band.GetUnitType() or "").strip().lower())
-        pixel_metres = crs.GetLinearUnits() if crs is not None and crs.IsProjected() else 1.0
-        if height_metres is not None and abs(height_metres / pixel_metres - 1) > 1e-4:
-            factor = height_metres / pixel_metres
-            pixel_unit = crs.GetLinearUnitsName() if crs is not None and crs.IsProjected() else "metre"
-            feedback.pushWarning(f"{layer.source()}: the band's heights are in {band.GetUnitType()} and its pixels "
-                                 f"in {pixel_unit}: heights x {factor:.6g}")
+        linear = crs.GetLinearUnits() if crs is not None and crs.IsProjected() else 1.0
+        factor = hfbake.height_unit_factor(band.GetUnitType(), linear)
+        if factor is not None and abs(factor - 1) > 1e-4:
             heights[~holes] *= np.float32(factor)
+            feedback.pushWarning(f"{layer.source()}: the band's heights are in {band.GetUnitType()}: heights x "
+                                 f"{factor:.6g} into the pixels' unit")
         keys = {"directions": self.parameterAsInt(parameters, "DIRECTIONS", context), "layers": [self.layer]}
         if self.radius_key:
             radius = self.parameterAsDouble(parameters, "RADIUS", context)
