@@ -38,7 +38,8 @@ class _Bake(QgsProcessingAlgorithm):
         return type(self)()
 
     def initAlgorithm(self, config=None):  # noqa: N802
-        self.addParameter(QgsProcessingParameterRasterLayer("INPUT", "Elevation (projected CRS)"))
+        self.addParameter(QgsProcessingParameterRasterLayer(
+            "INPUT", "Elevation (projected CRS; heights in its unit unless the band declares one)"))
         self.addParameter(QgsProcessingParameterBand("BAND", "Band", 1, "INPUT"))
         self.addParameter(QgsProcessingParameterNumber("DIRECTIONS", "Directions", QgsProcessingParameterNumber.Integer,
                                                        self.default_directions, minValue=1, maxValue=4096))
