@@ -284,7 +284,7 @@ std::string short_num(double v) {
   return buf;
 }
 
-// Metres in a unit of length as rasters name it (a CRS's unit, a band's unit type): the metre, the
+// Metres in a unit of length as a raster band names it (GDAL's unit type; a CRS gives its own): the metre, the
 // international foot and the US survey foot; nullopt for a name not known here.
 std::optional<double> metres_per(std::string unit) {
   for (char& c : unit) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -318,7 +318,7 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   line += "; " + std::to_string(f.width) + "x" + std::to_string(f.height) + " texels of " + short_num(texel);
   if (!f.square_texels()) line += " x " + short_num(f.dy());
   line += " (" + short_num(f.width * texel) + " x " + short_num(f.height * f.dy()) + " world units";
-  if (!s.pixel_unit.empty() && metres_per(s.pixel_unit) != 1.0) line += ", the CRS's " + s.pixel_unit;
+  if (!s.pixel_unit.empty() && s.pixel_unit_metres != 1.0) line += ", the CRS's " + s.pixel_unit;
   if (!f.square_texels())
     line +=
         ", a geographic raster in the local frame at latitude " + short_num(scene.georeference.site_latitude);
