@@ -284,8 +284,8 @@ std::string short_num(double v) {
   return buf;
 }
 
-// Metres in a unit of length as a raster band names it (GDAL's unit type; a CRS gives its own): the metre, the
-// international foot and the US survey foot; nullopt for a name not known here.
+// Metres in a unit of length as a raster band names it (GDAL's unit type; a CRS gives its own): the metre,
+// the international foot and the US survey foot; nullopt for a name not known here.
 std::optional<double> metres_per(std::string unit) {
   for (char& c : unit) c = char(std::tolower(static_cast<unsigned char>(c)));
   for (const char* m : {"m", "metre", "meter", "metres", "meters"})
