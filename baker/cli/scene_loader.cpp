@@ -359,8 +359,9 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   if (s.scale == 1 && std::fabs(unit_ratio - 1) > 1e-4) {
     report.warning = "the band's heights are in " + s.height_unit + " and its pixels in " +
                      (s.pixel_unit.empty() ? std::string("metres") : s.pixel_unit) + ": slopes come out " +
-                     short_num(unit_ratio) + " times too " + (unit_ratio > 1 ? "flat" : "steep") +
-                     "; give height_scale " + short_num(unit_ratio) + " (docs/gis.md)";
+                     short_num(unit_ratio > 1 ? unit_ratio : 1 / unit_ratio) + " times too " +
+                     (unit_ratio > 1 ? "flat" : "steep") + "; give height_scale " + short_num(unit_ratio) +
+                     " (docs/gis.md)";
   } else if (relief == 0) {
     report.warning = "the field is flat (every height is " + short_num(s.world_min) +
                      "): every method bakes it unoccluded";
@@ -432,10 +433,15 @@ Scene complete_scene(const Job& job, HeightField field, Georeference georeferenc
     source.world_min = *lo;
     source.world_max = *hi;
   }
-  if (scene.field.width < 2 || scene.field.height < 2)
+  if (scene.field.width < 2 || scene.field.height < 2) {
+    const std::string size = std::to_string(scene.field.width) + "x" + std::to_string(scene.field.height);
+    if (h.contains("image"))
+      throw InputError(job.file.string(), "/height/image",
+                       job.resolve(h["image"].get<std::string>()).string() + " is " + size +
+                           " texels; at least 2x2 are needed");
     throw InputError(job.file.string(), "/height",
-                     "the field is " + std::to_string(scene.field.width) + "x" +
-                         std::to_string(scene.field.height) + "; at least 2x2 texels are needed");
+                     "the field is " + size + "; at least 2x2 texels are needed");
+  }
   // Heights whose squares of differences overflow float would turn normals and slopes into inf and NaN
   // downstream: refuse them here (validate loads the scene too). 1e12 world units is far beyond any terrain.
   constexpr float kMaxHeight = 1e12f;

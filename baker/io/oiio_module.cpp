@@ -80,8 +80,11 @@ std::unique_ptr<OiioReader> open(const std::string& path, const std::string& rea
       error = message("");
       return nullptr;
     }
-    OIIO::ImageSpec spec;
-    if (!in->open(path, spec)) {
+    // Samples as stored: a PNG reader would otherwise multiply the colour channels by alpha (and a tRNS
+    // chunk's colour by an alpha of 0), and heights, albedo and emission are data, not colours to composite.
+    OIIO::ImageSpec spec, config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    if (!in->open(path, spec, config)) {
       error = message(in->geterror());
       return nullptr;
     }

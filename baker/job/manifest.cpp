@@ -288,7 +288,15 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
   for (const auto& [ptr, rel] : job_input_files(doc)) {
     const fs::path p = job.resolve(rel);
     std::error_code ec;
-    if (!fs::is_regular_file(p, ec)) fail(ptr, "no such file: " + p.string());
+    if (fs::is_regular_file(p, ec)) continue;
+    if (fs::is_directory(p, ec))
+      fail(ptr, p.string() + " is a folder, not a file");
+    else if (fs::exists(p, ec))
+      fail(ptr, p.string() + " is not a regular file (a device, a pipe or a socket)");
+    else if (fs::is_symlink(fs::symlink_status(p, ec)))
+      fail(ptr, p.string() + " is a link to nothing");
+    else
+      fail(ptr, "no such file: " + p.string());
   }
   // The baseline is read after the bake; a missing one must not cost the bake. (Not an input of the
   // content hash: the baseline changes what is compared, not what is baked.)

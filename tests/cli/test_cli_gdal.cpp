@@ -534,8 +534,9 @@ TEST_F(CliGdal, ACrsFarFromTrueScaleIsWarnedWithItsFactor) {
 }
 
 // A band that declares its heights in metres on a CRS in US survey feet (EPSG:2263) is warned with the
-// factor that converts them, 3937 / 1200; the heights line names the CRS's unit. With that height_scale, with
-// the band in feet or with no unit declared, no warning; a metre CRS is not named.
+// factor that converts them, 3937 / 1200 (feet on a metre CRS: too steep, by its inverse); the heights line
+// names the CRS's unit. With that height_scale, with the band in feet or with no unit declared, no warning; a
+// metre CRS is not named.
 TEST_F(CliGdal, HeightsInAnotherUnitThanThePixelsAreWarned) {
   translate("-srcwin 400 400 64 64 -a_srs EPSG:2263 '" + kDem.string() + "' feet.tif");
   translate("-srcwin 400 400 64 64 '" + kDem.string() + "' metres.tif");
@@ -558,6 +559,15 @@ TEST_F(CliGdal, HeightsInAnotherUnitThanThePixelsAreWarned) {
   EXPECT_NEAR(std::stod(m.err.substr(at + warned.size())), 3937.0 / 1200.0, 1e-4) << m.err;
   EXPECT_NE(m.err.find("times too flat; give height_scale 3.28083"), std::string::npos) << m.err;
   EXPECT_NE(m.err.find("world units, the CRS's US survey foot)"), std::string::npos) << m.err;
+  // The other way round, heights in feet on a metre CRS: too steep, by the same ratio.
+  translate("metres.tif metres_ft.tif");
+  with_unit("metres_ft.tif", "US survey foot");
+  const Result ft = hfbake("validate " + write_job("ft.json", "ft", {{"image", "metres_ft.tif"}}).string());
+  ASSERT_EQ(ft.exit_code, 0) << ft.err;
+  EXPECT_NE(ft.err.find("the band's heights are in US survey foot and its pixels in metre: slopes come out "
+                        "3.28083 times too steep; give height_scale 0.304801"),
+            std::string::npos)
+      << ft.err;
   const nlohmann::json cases[] = {{{"image", "feet_m.tif"}, {"height_scale", 3937.0 / 1200.0}},
                                   {{"image", "feet_ft.tif"}},
                                   {{"image", "feet.tif"}},

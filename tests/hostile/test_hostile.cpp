@@ -452,7 +452,7 @@ std::vector<Case> cases() {
     write_image(d / "h.exr", 1, 1, 1, {1.0f});
     json j = base_job();
     j["height"] = {{"image", "h.exr"}};
-    return both(write_job(d, j), "/height", "at least 2x2");
+    return both(write_job(d, j), "/height/image", "h.exr is 1x1 texels; at least 2x2 are needed");
   });
 
   // --- bake: the same refusals, and nothing left behind --------------------------------------------------

@@ -7,6 +7,9 @@
 #include <cstdint>
 #include <fstream>
 #include <iterator>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "core/error.hpp"
 #include "image_fixtures.hpp"
@@ -105,6 +108,72 @@ TEST(ImageInput, HeightChannelsGiveStoredIntegers) {
     EXPECT_EQ(p.sample_type, c.sample_type) << c.name;
     EXPECT_EQ(p.integer, c.type != OIIO::TypeDesc::FLOAT) << c.name;
   }
+}
+
+// A PNG written byte by byte (PNG 1.2: IHDR, optional chunks, one IDAT of stored deflate blocks, IEND), so
+// that what is stored does not depend on the reader under test. rows: each row's samples, big-endian.
+void write_raw_png(const fs::path& file, int w, int h, int bit_depth, int colour_type,
+                   const std::vector<std::vector<std::uint8_t>>& rows,
+                   const std::vector<std::pair<std::string, std::vector<std::uint8_t>>>& extra = {}) {
+  const auto crc32 = [](const std::vector<std::uint8_t>& d) {
+    std::uint32_t c = 0xffffffffu;
+    for (std::uint8_t b : d) {
+      c ^= b;
+      for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
+    }
+    return c ^ 0xffffffffu;
+  };
+  const auto be32 = [](std::vector<std::uint8_t>& v, std::uint32_t x) {
+    for (int s = 24; s >= 0; s -= 8) v.push_back(std::uint8_t(x >> s));
+  };
+  std::vector<std::uint8_t> out = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  const auto chunk = [&](const std::string& type, const std::vector<std::uint8_t>& data) {
+    be32(out, std::uint32_t(data.size()));
+    std::vector<std::uint8_t> td(type.begin(), type.end());
+    td.insert(td.end(), data.begin(), data.end());
+    out.insert(out.end(), td.begin(), td.end());
+    be32(out, crc32(td));
+  };
+  std::vector<std::uint8_t> ihdr;
+  be32(ihdr, std::uint32_t(w)), be32(ihdr, std::uint32_t(h));
+  ihdr.insert(ihdr.end(), {std::uint8_t(bit_depth), std::uint8_t(colour_type), 0, 0, 0});
+  chunk("IHDR", ihdr);
+  for (const auto& [type, data] : extra) chunk(type, data);
+  std::vector<std::uint8_t> raw;  // filter type 0 before each row
+  for (const auto& r : rows) raw.push_back(0), raw.insert(raw.end(), r.begin(), r.end());
+  std::vector<std::uint8_t> z = {0x78, 0x01, 0x01};  // one final stored block (raw is small)
+  z.push_back(std::uint8_t(raw.size())), z.push_back(std::uint8_t(raw.size() >> 8));
+  z.push_back(std::uint8_t(~raw.size())), z.push_back(std::uint8_t(~raw.size() >> 8));
+  z.insert(z.end(), raw.begin(), raw.end());
+  std::uint32_t a = 1, b = 0;  // Adler-32
+  for (std::uint8_t x : raw) a = (a + x) % 65521, b = (b + a) % 65521;
+  be32(z, (b << 16) | a);
+  chunk("IDAT", z);
+  chunk("IEND", {});
+  std::ofstream(file, std::ios::binary)
+      .write(reinterpret_cast<const char*>(out.data()), std::streamsize(out.size()));
+}
+
+std::vector<std::uint8_t> be16(std::initializer_list<int> values) {
+  std::vector<std::uint8_t> v;
+  for (int x : values) v.push_back(std::uint8_t(x >> 8)), v.push_back(std::uint8_t(x));
+  return v;
+}
+
+TEST(ImageInput, HeightsInPngsWithTransparencyAreTheStoredIntegers) {
+  TempFolder dir;
+  // 16-bit grey + alpha: alpha 0, a half and 1 must not scale the grey.
+  write_raw_png(dir / "ga16.png", 3, 1, 16, 4, {be16({20000, 0, 25000, 32768, 30000, 65535})});
+  EXPECT_EQ(read_image_channel(dir / "ga16.png", 0, kSite, kChannelSite).values,
+            (std::vector<float>{20000, 25000, 30000}));
+  // 8-bit RGBA at half opacity: the red channel as stored.
+  write_raw_png(dir / "rgba8.png", 2, 1, 8, 6, {{100, 1, 2, 128, 150, 3, 4, 128}});
+  EXPECT_EQ(read_image_channel(dir / "rgba8.png", 0, kSite, kChannelSite).values,
+            (std::vector<float>{100, 150}));
+  // 16-bit grey whose tRNS chunk names one of its values transparent: that value stays a height.
+  write_raw_png(dir / "trns16.png", 3, 1, 16, 0, {be16({1000, 1018, 1100})}, {{"tRNS", be16({1018})}});
+  EXPECT_EQ(read_image_channel(dir / "trns16.png", 0, kSite, kChannelSite).values,
+            (std::vector<float>{1000, 1018, 1100}));
 }
 
 TEST(ImageInput, MissingFile) {
