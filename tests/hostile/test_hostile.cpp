@@ -448,6 +448,17 @@ std::vector<Case> cases() {
     j["height"] = {{"image", "wide.tif"}};
     return both(write_job(d, j), "/height/image", "fields of up to 1048576 texels a side are supported");
   });
+  add("HeightImageIsAFolder", [](const fs::path& d) {
+    fs::create_directories(d / "h.png");
+    json j = base_job();
+    j["height"] = {{"image", "h.png"}};
+    return both(write_job(d, j), "/height/image", "h.png is a folder, not a file");
+  });
+  add("HeightImageIsADevice", [](const fs::path& d) {
+    json j = base_job();
+    j["height"] = {{"image", "/dev/zero"}};
+    return both(write_job(d, j), "/height/image", "/dev/zero is not a regular file");
+  });
   add("HeightImageOneByOne", [](const fs::path& d) {
     write_image(d / "h.exr", 1, 1, 1, {1.0f});
     json j = base_job();
