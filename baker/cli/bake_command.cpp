@@ -517,8 +517,16 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   std::vector<JobOutcome> outcomes(inputs.size());
   std::vector<std::optional<Job>> jobs(inputs.size());
   // Validate everything first: a typo in the last job is reported before hours of baking.
+  std::vector<fs::path> read = options.jobs;  // every file the bake reads: a summary may not replace one
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     JobLoad load = load_job(inputs[i].file, inputs[i].out);
+    read.push_back(inputs[i].file);
+    try {  // an invalid job's inputs too, as far as its document says them
+      const nlohmann::json doc = load.job ? load.job->doc : read_json_file(inputs[i].file);
+      const fs::path base = fs::absolute(inputs[i].file).parent_path();
+      for (const auto& [ptr, rel] : job_input_files(doc)) read.push_back(base / rel);
+    } catch (const std::exception&) {
+    }
     if (load.job) {
       load.errors = resolve_job(*load.job);
       if (!load.errors.empty()) load.job.reset();
@@ -551,6 +559,19 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     }
   for (std::size_t i = 0; i < jobs.size(); ++i)
     if (outcomes[i].status == JobStatus::invalid) jobs[i].reset();
+  // A summary written over a job, a suite or an input: refused before anything is baked (and no summary).
+  if (options.summary) {
+    for (const fs::path& f : read) {
+      std::error_code ec;
+      if (fs::equivalent(*options.summary, f, ec) && !ec) {
+        std::fprintf(stderr, "hfbake: error: %s\n",
+                     printable(options.summary->string() + ": --summary: is " + f.string() +
+                               ", which this bake reads: give the summary another name")
+                         .c_str());
+        return 2;
+      }
+    }
+  }
 
   std::optional<ReferenceCache> cache;
   if (!options.no_cache) {

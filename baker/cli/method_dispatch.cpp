@@ -6,6 +6,9 @@
 #include <cerrno>
 #include <filesystem>
 #include <new>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "cli/scene_inputs.hpp"
 #include "cli/scene_loader.hpp"
@@ -88,6 +91,51 @@ void check_output_folder(const Job& job) {
     throw InputError(
         job.file.string(), "/output/dir",
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
+  // What the bake would refuse only after baking (docs/output_folders.md): its lock name taken by anything
+  // but a file, and a textures/ entry that is not a folder.
+  const fs::path lock = job.output.dir / (".hfbake-" + job.name + ".lock");
+  const fs::file_status ls = fs::symlink_status(lock, ec);
+  if (fs::exists(ls) && !fs::is_regular_file(ls))
+    throw InputError(job.file.string(), "/output/dir",
+                     lock.string() + " is no lock file of hfbake's (" +
+                         (fs::is_symlink(ls) ? "a link" : "not a file") + "): remove it");
+  const fs::path textures = job.output.dir / "textures";
+  const fs::file_status ts = fs::symlink_status(textures, ec);
+  if (job.doc.contains("output") && job.doc["output"].contains("textures") && fs::exists(ts) &&
+      !fs::is_directory(ts))
+    throw InputError(job.file.string(), "/output/textures",
+                     textures.string() + " is not a folder (" + (fs::is_symlink(ts) ? "a link" : "a file") +
+                         "): the textures are written inside " + job.output.dir.string() + " only");
+  // An input the outputs would replace: a file in the output folder named as an output of this job
+  // (<name>.<stem>.exr, <name>.<stem>.*.preview.png, <name>.<stem>.*.tif, report.json, report.html; in
+  // textures/, <name>.*), the job file included.
+  std::vector<std::string> stems = {"reference"};
+  for (const BakeEntry& e : job.bakes) stems.push_back(e.stem);
+  const auto ends_with = [](const std::string& n, const std::string& tail) {
+    return n.size() >= tail.size() && n.compare(n.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  const auto an_output = [&](const std::string& n, bool in_textures) {
+    if (in_textures) return n.rfind(job.name + ".", 0) == 0;
+    if (n == "report.json" || n == "report.html") return true;
+    for (const std::string& stem : stems) {
+      const std::string at = job.name + "." + stem + ".";
+      if (n == at + "exr" || (n.rfind(at, 0) == 0 && (ends_with(n, ".preview.png") || ends_with(n, ".tif"))))
+        return true;
+    }
+    return false;
+  };
+  const fs::path dir = fs::weakly_canonical(job.output.dir, ec);
+  std::vector<std::pair<std::string, fs::path>> inputs = {{"", job.file}};
+  for (const auto& [ptr, rel] : job_input_files(job.doc)) inputs.emplace_back(ptr, job.resolve(rel));
+  for (const auto& [ptr, file] : inputs) {
+    const fs::path real = fs::weakly_canonical(fs::absolute(file), ec);
+    if (ec) continue;
+    const bool in_textures = real.parent_path() == dir / "textures";
+    if ((real.parent_path() == dir || in_textures) && an_output(real.filename().string(), in_textures))
+      throw InputError(job.file.string(), ptr,
+                       file.string() + " is where this job writes an output: a bake would replace it; move " +
+                           "it, or give the job another name or output.dir");
+  }
 }
 
 std::vector<std::string> resolve_job_checks(Job& job);

@@ -459,6 +459,54 @@ std::vector<Case> cases() {
     j["height"] = {{"image", "/dev/zero"}};
     return both(write_job(d, j), "/height/image", "/dev/zero is not a regular file");
   });
+  // Files a bake would replace or refuse only after baking, refused by validate.
+  add("HeightImageNamedAsAnOutput", [](const fs::path& d) {
+    fs::create_directories(d / "out");
+    write_image(d / "out" / "t.p1.exr", 16, 16, 1, std::vector<float>(16 * 16, 1.0f));
+    json j = base_job();
+    j["height"] = {{"image", "out/t.p1.exr"}};
+    return both(write_job(d, j), "/height/image", "t.p1.exr is where this job writes an output");
+  });
+  add("JobFileNamedAsAnOutput", [](const fs::path& d) {
+    fs::create_directories(d / "out");
+    json j = base_job();
+    j["output"]["dir"] = ".";
+    j["reference"] = {{"samples", 4}};
+    write_job(d / "out", j, "report.json");
+    const std::string job = (d / "out" / "report.json").string();
+    return CaseSetup{{"validate", job}, job, "", "report.json is where this job writes an output"};
+  });
+  add("LockNameTakenByALink", [](const fs::path& d) {
+    fs::create_directories(d / "out");
+    fs::create_symlink("../elsewhere", d / "out" / ".hfbake-t.lock");
+    return both(write_job(d, base_job()), "/output/dir",
+                ".hfbake-t.lock is no lock file of hfbake's (a link)");
+  });
+  add("TexturesFolderIsALink", [](const fs::path& d) {
+    fs::create_directories(d / "out");
+    fs::create_directories(d / "elsewhere");
+    fs::create_symlink("../elsewhere", d / "out" / "textures");
+    json j = base_job();
+    j["output"]["textures"] = {{{"layers", {"ao"}}, {"format", "png"}}};
+    return both(write_job(d, j), "/output/textures", "textures is not a folder (a link)");
+  });
+  add("SummaryOverTheJobFile", [](const fs::path& d) {
+    const std::string job = write_job(d, base_job());
+    return CaseSetup{
+        {"bake", "--no-cache", "--quiet", "--summary", job, job}, job, "--summary", "which this bake reads"};
+  });
+  add(
+      "SummaryOverAnInvalidJobsHeightImage",
+      [](const fs::path& d) {
+        write_image(d / "h.exr", 16, 16, 1, std::vector<float>(16 * 16, 1.0f));
+        json j = base_job();
+        j["height"] = {{"image", "h.exr"}};
+        j["unknown"] = 1;
+        const std::string job = write_job(d, j), summary = (d / "h.exr").string();
+        return CaseSetup{
+            {"bake", "--no-cache", "--quiet", "--summary", summary, job}, "", "/unknown", "unknown key"};
+      },
+      2, 2);
   add("HeightImageOneByOne", [](const fs::path& d) {
     write_image(d / "h.exr", 1, 1, 1, {1.0f});
     json j = base_job();
