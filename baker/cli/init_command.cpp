@@ -4,7 +4,6 @@
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <system_error>
 #include <vector>
@@ -12,6 +11,7 @@
 #include "cli/method_dispatch.hpp"
 #include "cli/scene_loader.hpp"
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "job/embedded_schemas.hpp"
 #include "job/manifest.hpp"
 #include "methods/method_table.hpp"
@@ -202,6 +202,8 @@ int run_init(const InitOptions& options) {
   if (!fs::is_regular_file(height, ec))
     return refuse(height.string() + ": " + (fs::exists(height, ec) ? "not a file" : "no such file"));
   const fs::path job_file = options.out ? *options.out : fs::path(job_name(height) + ".json");
+  if (fs::equivalent(job_file, height, ec) && !ec)
+    return refuse(job_file.string() + ": is the height file itself: give the job another name (-o)");
   if (fs::exists(job_file, ec) && !options.force)
     return refuse(job_file.string() + ": exists (--force writes over it)");
   const fs::path job_dir = fs::absolute(job_file).parent_path();
@@ -220,10 +222,12 @@ int run_init(const InitOptions& options) {
       for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
       return 1;  // a preset that does not validate is hfbake's fault, not the input's
     }
-    std::ofstream out(job_file);
-    out << doc.dump(2) << "\n";
-    out.close();
-    if (!out) return refuse(job_file.string() + ": cannot write it");
+    // A temporary renamed into place: a link at job_file is replaced, never written through.
+    try {
+      write_file_atomically(job_file, doc.dump(2) + "\n");
+    } catch (const std::system_error& e) {
+      return refuse(job_file.string() + ": cannot write it: " + e.code().message());
+    }
     HeightSource& s = found.scene.height_source;
     s.scale = scale;
     s.world_min = s.stored_min * scale;

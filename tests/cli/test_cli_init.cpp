@@ -120,6 +120,27 @@ TEST_F(CliInit, BadInputIsOneLineAndWritesNothing) {
   EXPECT_NE(r.err.find("kept.json: exists (--force writes over it)"), std::string::npos) << r.err;
   r = run("init " + (dir_ / "h.png").string() + " --preset unknown");
   EXPECT_EQ(r.exit_code, 2);
+  // --force over the height file itself: refused, the image kept.
+  const auto size = fs::file_size(dir_ / "h.png");
+  r = run("init " + (dir_ / "h.png").string() + " --preset game-ao --force --out " +
+          (dir_ / "h.png").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("h.png: is the height file itself"), std::string::npos) << r.err;
+  EXPECT_EQ(fs::file_size(dir_ / "h.png"), size);
+}
+
+// --force replaces a link at the job's name; what it points to is never written.
+TEST_F(CliInit, ForceReplacesALinkAndLeavesItsTarget) {
+  write_png16(dir_ / "h.png");
+  std::ofstream(dir_ / "target.json") << "kept";
+  fs::create_symlink("target.json", dir_ / "link.json");
+  const Result r = run("init " + (dir_ / "h.png").string() + " --preset game-ao --force --out " +
+                       (dir_ / "link.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::is_symlink(dir_ / "link.json"));
+  EXPECT_EQ(read_json(dir_ / "link.json")["name"], "h");
+  std::ifstream in(dir_ / "target.json");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "kept");
 }
 
 TEST_F(CliInit, HelpListsMethodsLayersAndPresets) {
