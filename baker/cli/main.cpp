@@ -44,7 +44,7 @@ struct RunOptions {
 void add_run_options(CLI::App* cmd, RunOptions& o) {
   cmd->add_option("-o,--out", o.out,
                   "Output folder, replacing each job's output.dir (the shards: <out>/shards)");
-  cmd->add_flag("--quiet", o.quiet, "No progress output (errors are still printed)");
+  cmd->add_flag("--quiet", o.quiet, "No progress output (warnings and errors are still printed)");
   cmd->add_option("--cache", o.cache,
                   "Reference cache folder (default: $XDG_CACHE_HOME/hfbake/references or "
                   "~/.cache/hfbake/references; on a cluster, a folder every node sees)");

@@ -97,6 +97,12 @@ void Progress::message(const std::string& text) {
   std::fprintf(out_, "hfbake: %s\n", text.c_str());
 }
 
+void Progress::warning(const std::string& text) {
+  std::lock_guard lock(mutex_);
+  clear_bar_locked();
+  std::fprintf(out_, "hfbake: %s\n", text.c_str());
+}
+
 void Progress::error(const std::string& line) {
   std::lock_guard lock(mutex_);
   clear_bar_locked();

@@ -49,6 +49,8 @@ class Progress {
   void set_observer(Observer observer) { observer_ = std::move(observer); }
   // A one-off message (e.g. "wrote out/demo/demo.p1.exr"), printed above the bar.
   void message(const std::string& text);
+  // A message that warns ("warning: ..."): printed above the bar as message() does, and even when quiet.
+  void warning(const std::string& text);
   // An error line "hfbake: error: <line>": printed even when quiet.
   void error(const std::string& line);
 

@@ -244,6 +244,11 @@ TEST_F(CliHeights, ValidateStatesTheRangeAndWarnsOnImplausibleRelief) {
   EXPECT_NE(r.err.find("hfbake: warning: "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("times the field's 48-unit side: steeper than any terrain"), std::string::npos)
       << r.err;
+  // bake says it too, --quiet or not: --quiet silences progress, not warnings.
+  r = hfbake("bake --quiet --no-cache " + (dir_ / "raw16.json").string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("hfbake: warning: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("steeper than any terrain"), std::string::npos) << r.err;
 
   std::vector<float> unit = integer_heights(65535);
   for (float& v : unit) v /= 65535;
