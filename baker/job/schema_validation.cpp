@@ -408,6 +408,26 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
       const nlohmann::json* c =
           keyword_at(&schema_document(schema_path), schema_path, pointer_tokens(v.pointer), 0, "const");
       if (c) v.message = "must be " + c->dump();
+    } else if (v.message.rfind("failed to match regex", 0) == 0) {
+      const nlohmann::json* p =
+          keyword_at(&schema_document(schema_path), schema_path, pointer_tokens(v.pointer), 0, "pattern");
+      if (p && p->is_string()) v.message = "must match the pattern " + p->get<std::string>();
+    } else if (v.message.rfind("failed to validate against exactly one child schema", 0) == 0) {
+      // Alternatives that each require keys (an image or a procedural field): name them.
+      const nlohmann::json* o =
+          keyword_at(&schema_document(schema_path), schema_path, pointer_tokens(v.pointer), 0, "oneOf");
+      std::string list;
+      bool keys_only = o && o->is_array() && !o->empty();
+      for (std::size_t i = 0; keys_only && i < o->size(); ++i) {
+        const nlohmann::json& b = (*o)[i];
+        keys_only = b.is_object() && b.size() == 1 && b.contains("required") && b["required"].is_array();
+        if (!keys_only) break;
+        std::string keys;
+        for (std::size_t k = 0; k < b["required"].size(); ++k)
+          keys += (k == 0 ? "" : " and ") + b["required"][k].get<std::string>();
+        list += (i == 0 ? "" : i + 1 == o->size() ? " or " : ", ") + keys;
+      }
+      if (keys_only) v.message = "needs exactly one of " + list;
     }
   }
   return kept;

@@ -95,6 +95,12 @@ TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
   std::string v2 = minimal("");
   v2.replace(v2.find("\"version\": 1"), 12, "\"version\": 2");
   EXPECT_EQ(one(v2), "/version: must be 1");
+  std::string named = minimal("");
+  named.replace(named.find("\"name\": \"t\""), 11, "\"name\": \"a b\"");
+  EXPECT_EQ(one(named), "/name: must match the pattern ^[A-Za-z0-9_][A-Za-z0-9_.-]*$");
+  std::string both = minimal("");
+  both.replace(both.find("\"height\": {"), 11, "\"height\": {\"image\": \"h.exr\", ");
+  EXPECT_EQ(one(both), "/height: needs exactly one of image or procedural");
 }
 
 TEST_F(Manifest, MissingKey) {
