@@ -350,6 +350,34 @@ TEST(NlpBake, SubsampleTwo) {
           << i << " " << r;
 }
 
+// Light is never negative (docs/contract.md: every layer is light-like): a subsampled receiver's
+// interpolated light, or a truncated SH lobe, may ring below 0 on terrain rough at the texel scale, and the
+// light layers are clamped there.
+TEST(NlpBake, LightLayersAreNeverNegative) {
+  for (const ProceduralKind kind :
+       {ProceduralKind::rough, ProceduralKind::craters, ProceduralKind::terraces}) {
+    ProceduralSpec spec;
+    spec.kind = kind;
+    spec.width = 97, spec.height = 83, spec.seed = 11;
+    Scene s = make_scene(spec, Wrap::clamp, Rgb{1, 1, 1}, 0.6f);
+    s.environment = make_sky_environment(SkySpec{}).environment;  // the built-in sky and its sun
+    s.bounces = 2;
+    for (const int subsample : {1, 2})
+      for (const bool exact : {true, false}) {
+        NlpOptions o;
+        o.directions = 8;
+        o.subsample = subsample;
+        o.exact_direct_cosine = o.exact_indirect_cosine = exact;
+        const LayerSet ls = bake_nlp(s, o, RunControl{});
+        for (const char* layer : {"direct", "indirect", "total"}) {
+          const auto& v = ls.find(layer)->data;
+          EXPECT_GE(*std::min_element(v.begin(), v.end()), 0.0f)
+              << layer << ", kind " << int(kind) << ", subsample " << subsample << ", exact " << exact;
+        }
+      }
+  }
+}
+
 // sh_irradiance is the SH of E(n)/pi over normals: evaluated at each texel's normal it gives total (no
 // lights) when total takes the SH form too (direct_cosine and indirect_cosine sh; with the exact cosines,
 // the defaults, total differs from it by the SH truncation, 3 % at these texels).

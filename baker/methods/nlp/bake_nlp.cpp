@@ -856,7 +856,11 @@ LayerSet NlpBake::layers() {
       for (std::size_t t = 0; t < N; ++t) {
         const Rgb ind = indirect.empty() ? Rgb{} : indirect[t];  // empty without bounces
         const Rgb v = name == "direct" ? direct[t] : (name == "indirect" ? ind : direct[t] + ind);
-        L.data[t * 3] = v.r, L.data[t * 3 + 1] = v.g, L.data[t * 3 + 2] = v.b;
+        // Light is never negative; the SH form of a receiver's cosine lobe (every texel with
+        // indirect_cosine "sh", the texels between subsampled receivers always) rings below 0 where the
+        // light comes from a narrow range of directions.
+        L.data[t * 3] = std::max(v.r, 0.0f), L.data[t * 3 + 1] = std::max(v.g, 0.0f),
+                   L.data[t * 3 + 2] = std::max(v.b, 0.0f);
       }
     } else if (name == "sh_visibility") {
       out.adopt(name, indexed_channels(kSh), std::move(vis));
