@@ -5,8 +5,12 @@
 #include <ogr_spatialref.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 #include "core/error.hpp"
 #include "io/gdal_quiet.hpp"
@@ -39,6 +43,38 @@ GDALRasterBand* band_of(GDALDataset& ds, const fs::path& file, int band, const I
   if (!b)
     throw InputError(site.job_file, site.pointer, file.string() + ": has no band " + std::to_string(band));
   return b;
+}
+
+// Rows [y0, y0 + n) of columns [x0, x0 + w) of band b as floats into dst. A double band is read as double
+// first: a finite value beyond float's range (other than the band's NoData value) would become an infinity
+// and pass for a hole; it is refused instead, naming the texel.
+bool read_rows(GDALRasterBand* b, int x0, int y0, int w, int n, float* dst, const fs::path& file,
+               const InputSite& site) {
+  if (b->GetRasterDataType() != GDT_Float64)
+    return b->RasterIO(GF_Read, x0, y0, w, n, dst, w, n, GDT_Float32, 0, 0, nullptr) == CE_None;
+  std::vector<double> row(static_cast<std::size_t>(w));
+  int has_nodata = 0;
+  const double nodata = b->GetNoDataValue(&has_nodata);
+  constexpr double kFloatMax = double(std::numeric_limits<float>::max());
+  for (int y = 0; y < n; ++y) {
+    if (b->RasterIO(GF_Read, x0, y0 + y, w, 1, row.data(), w, 1, GDT_Float64, 0, 0, nullptr) != CE_None)
+      return false;
+    for (int x = 0; x < w; ++x) {
+      const double v = row[std::size_t(x)];
+      if (std::isfinite(v) && std::fabs(v) > kFloatMax && !(has_nodata && v == nodata)) {
+        char value[32];
+        std::snprintf(value, sizeof value, "%g", v);
+        throw InputError(
+            site.job_file, site.pointer,
+            file.string() + ": texel (" + std::to_string(x0 + x) + ", " + std::to_string(y0 + y) + ") is " +
+                value +
+                ", beyond a float's range: heights are baked as floats (if it marks missing data, "
+                "declare it the band's NoData value)");
+      }
+      dst[std::size_t(y) * std::size_t(w) + std::size_t(x)] = float(v);
+    }
+  }
+  return true;
 }
 
 }  // namespace
@@ -108,8 +144,7 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
   for (int y0 = 0; y0 < plane.height; y0 += rows) {
     const int n = std::min(rows, plane.height - y0);
     float* dst = plane.values.data() + std::size_t(y0) * std::size_t(plane.width);
-    if (b->RasterIO(GF_Read, 0, y0, plane.width, n, dst, plane.width, n, GDT_Float32, 0, 0, nullptr) !=
-        CE_None)
+    if (!read_rows(b, 0, y0, plane.width, n, dst, file, site))
       throw InputError(site.job_file, site.pointer,
                        file.string() + ": cannot decode the raster (corrupt or truncated?) at row " +
                            std::to_string(y0) + ": " + gdal.error());
@@ -154,8 +189,7 @@ Plane read_georaster_window(const fs::path& file, int band, int x0, int y0, int 
   const GDALDataType type = b->GetRasterDataType();
   plane.sample_type = GDALGetDataTypeName(type);
   plane.integer = GDALDataTypeIsInteger(type) != 0;
-  if (b->RasterIO(GF_Read, x0, y0, width, height, plane.values.data(), width, height, GDT_Float32, 0, 0,
-                  nullptr) != CE_None)
+  if (!read_rows(b, x0, y0, width, height, plane.values.data(), file, site))
     throw InputError(site.job_file, site.pointer,
                      file.string() + ": cannot decode the raster (corrupt or truncated?) at " + window +
                          ": " + gdal.error());

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <vector>
 
 #include "core/error.hpp"
 #include "gdal_tool.hpp"
@@ -286,6 +287,45 @@ TEST(GeoRaster, TruncatedRasterIsAOneLineErrorNamingTheFile) {
     EXPECT_EQ(line.rfind("job.json: /height/image: " + file.string() + ": cannot ", 0), 0u) << line;
     EXPECT_EQ(line.find('\n'), std::string::npos) << line;
   }
+}
+
+// A double band's finite value beyond float's range would become an infinity and pass for a hole: it is
+// refused, naming the texel, unless it is the band's NoData value; every other value is read as float(v).
+TEST(GeoRaster, DoubleValuesBeyondFloatAreRefusedUnlessNoData) {
+  TempFolder tmp;
+  const auto write = [&](const fs::path& file, bool declare) {
+    GDALAllRegister();
+    GDALDriver* drv = GetGDALDriverManager()->GetDriverByName("GTiff");
+    std::unique_ptr<GDALDataset> ds(drv->Create(file.c_str(), 5, 4, 1, GDT_Float64, nullptr));
+    ASSERT_TRUE(ds);
+    std::vector<double> z(20);
+    for (int t = 0; t < 20; ++t) z[std::size_t(t)] = 100.0 + 0.1 * t;
+    z[13] = -1e300;  // texel (3, 2)
+    if (declare) ds->GetRasterBand(1)->SetNoDataValue(-1e300);
+    ASSERT_EQ(
+        ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 5, 4, z.data(), 5, 4, GDT_Float64, 0, 0, nullptr),
+        CE_None);
+  };
+  write(tmp / "sentinel.tif", false);
+  write(tmp / "declared.tif", true);
+  for (const bool window : {false, true}) {
+    try {
+      if (window)
+        read_georaster_window(tmp / "sentinel.tif", 0, 1, 1, 4, 3, {"job.json", "/height/image"});
+      else
+        read_georaster_band(tmp / "sentinel.tif", 0, {"job.json", "/height/image"});
+      ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.line(),
+                "job.json: /height/image: " + (tmp / "sentinel.tif").string() +
+                    ": texel (3, 2) is -1e+300, beyond a float's range: heights are baked as floats (if "
+                    "it marks missing data, declare it the band's NoData value)");
+    }
+  }
+  const Plane p = read_georaster_band(tmp / "declared.tif", 0, {"job.json", "/height/image"});
+  EXPECT_EQ(p.sample_type, "Float64");
+  EXPECT_EQ(p.values[12], float(100.0 + 0.1 * 12));
+  EXPECT_TRUE(std::isinf(p.values[13]));  // the NoData value: a hole for the loader's nodata rule
 }
 
 }  // namespace
