@@ -335,6 +335,11 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   const double relief = s.world_max - s.world_min;
   line += " heights " + short_num(s.world_min) + " .. " + short_num(s.world_max) + " world units (relief " +
           short_num(relief) + ")";
+  // A CRS in another unit than the metre, and a band that does not say which unit its heights are in: they
+  // are taken in the CRS's unit, which a DEM in feet with heights in metres is not (docs/gis.md).
+  if (!s.pixel_unit.empty() && s.pixel_unit_metres != 1.0 && s.height_unit.empty() && s.scale == 1)
+    line += " (the band declares no unit: heights taken in " + s.pixel_unit + "; heights in metres need " +
+            "height_scale " + short_num(1 / s.pixel_unit_metres) + ")";
 
   if (scene.curvature > 0) {
     line += "; Earth curvature on (refraction " + short_num(scene.refraction) + ": a point 1 km away is " +

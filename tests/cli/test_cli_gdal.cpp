@@ -581,6 +581,14 @@ TEST_F(CliGdal, HeightsInAnotherUnitThanThePixelsAreWarned) {
   }
   const Result own = hfbake("validate " + write_job("own.json", "own", {{"image", "metres.tif"}}).string());
   EXPECT_EQ(own.err.find("the CRS's"), std::string::npos) << own.err;
+  // No unit on the band: the heights line says which unit they are taken in, and the factor for metres.
+  const Result bare = hfbake("validate " + write_job("bare.json", "bare", {{"image", "feet.tif"}}).string());
+  EXPECT_NE(
+      bare.err.find("(the band declares no unit: heights taken in US survey foot; heights in metres need "
+                    "height_scale 3.28083)"),
+      std::string::npos)
+      << bare.err;
+  EXPECT_EQ(own.err.find("declares no unit"), std::string::npos) << own.err;
 }
 
 TEST_F(CliGdal, NonSquarePixelsAreRefusedInOneLine) {
