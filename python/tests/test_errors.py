@@ -82,12 +82,15 @@ def test_a_masked_arrays_masked_texels_are_holes():
     assert np.array_equal(a, hfbake.p1(filled, nodata="fill")["ao"])
 
 
-def test_a_field_below_two_texels_raises_the_commands_message(tmp_path):
+def test_a_field_below_two_texels_raises_the_commands_rule(tmp_path):
+    # The command names the image file; the array has none, so the module names the field.
     heights = terrain(16, 1)
     pointer, message = cli_problem(tmp_path, heights, {"method": "p1"})
+    assert pointer == "/height/image" and message.endswith(" is 16x1 texels; at least 2x2 are needed")
     with pytest.raises(hfbake.InputError) as caught:
         hfbake.p1(heights)
-    assert (caught.value.pointer, caught.value.message) == (pointer.replace("/height", "/heights"), message)
+    assert (caught.value.pointer, caught.value.message) == (
+        "/heights", "the field is 16x1; at least 2x2 texels are needed")
 
 
 def test_arrays_that_are_no_height_field():
