@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <cstring>
 #include <exception>
@@ -115,7 +116,15 @@ json to_json(py::handle value, const std::string& pointer) {
       return value.cast<double>();
     }
   }
-  if (py::isinstance<py::float_>(value)) return value.cast<double>();
+  if (py::isinstance<py::float_>(value)) {
+    // A job file cannot hold NaN or an infinity (JSON has none), and the schema's ranges cannot refuse
+    // them (every comparison with NaN is false): refused here, as the file's parser would.
+    const double x = value.cast<double>();
+    if (!std::isfinite(x))
+      throw InputError("", pointer,
+                       "must be a finite number (it is " + py::str(value).cast<std::string>() + ")");
+    return x;
+  }
   if (py::isinstance<py::str>(value)) return value.cast<std::string>();
   if (py::isinstance(value, py::module_::import("os").attr("PathLike")))
     return py::str(py::module_::import("os").attr("fspath")(value)).cast<std::string>();

@@ -54,6 +54,27 @@ def test_a_bad_field_key_raises_the_commands_message(tmp_path):
     assert (caught.value.pointer, caught.value.message) == (pointer[len("/height"):], message)
 
 
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda h: hfbake.p1(h, texel_size=float("nan"), directions=8),
+        lambda h: hfbake.relief(h, texel_size=float("nan"), directions=8, search_radius=10),
+        lambda h: hfbake.p1(h, texel_size=np.float64("inf"), directions=8),
+        lambda h: hfbake.p1(h, directions=8, job={"environment": {"uniform": float("nan")}}),
+        lambda h: hfbake.p1(h, directions=8, layers=["direct"],
+                            job={"lights": [{"directional": {"direction": [0.3, 0.2, 0.5],
+                                                             "irradiance": float("nan")}}]}),
+        lambda h: hfbake.hbao(h, radius=float("-inf")),
+    ],
+    ids=["p1-texel", "relief-texel", "numpy-inf", "sky", "light", "radius"],
+)
+def test_a_non_finite_number_is_refused_as_a_job_file_would_be(call):
+    # A job file cannot hold NaN or an infinity; a keyword argument that does is refused naming its key.
+    with pytest.raises(hfbake.InputError) as caught:
+        call(terrain(37, 53))
+    assert caught.value.message.startswith("must be a finite number (it is ")
+
+
 def test_a_nan_height_raises_the_commands_message(tmp_path):
     heights = terrain(16, 12)
     heights[5, 3] = np.nan
