@@ -154,6 +154,14 @@ std::string tile_identity(const Job& job, const std::string& content, const Tile
          entry_config(job.bakes[e]).resolved.dump();
 }
 
+// The checksum of a tile file's values (each texel's channels in turn) that its HFBAKE_TILE_SUM item holds:
+// it finds damage, not a forger (docs/large-fields.md), as a shard's does.
+std::string tile_checksum(const std::vector<float>& values) {
+  ContentHash h;
+  h.add(std::string_view(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float)));
+  return h.hex();
+}
+
 // <output dir>/tiles/<name>.tile-<k>.<stem>.<layer>.tif: tile k's interior of one layer, from a tile task.
 fs::path tile_file(const Job& job, std::size_t k, const std::string& stem, const std::string& layer) {
   return job.output.dir / "tiles" /
@@ -394,8 +402,13 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
                 std::copy(row, row + std::size_t(part.width) * nc,
                           data.begin() + std::ptrdiff_t(std::size_t(j) * std::size_t(part.width) * nc));
               }
+              // Which layer it is, and its values' checksum: a merge refuses another layer's file of the
+              // same tile and a damaged one.
+              GeoTiffOptions own = tiff;
+              own.metadata[0].second += "; layer " + layer.name;
+              own.metadata.emplace_back("HFBAKE_TILE_SUM", tile_checksum(data));
               const Layer& l = part.adopt(layer.name, layer.channels, std::move(data));
-              write_geotiff(tile_file(job, k, job.bakes[e].stem, layer.name), part, l, geo, tiff);
+              write_geotiff(tile_file(job, k, job.bakes[e].stem, layer.name), part, l, geo, own);
             }
           });
     }
@@ -445,7 +458,8 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
         for (const std::string& name : config.layers) {
           const fs::path file = tile_file(job, k, job.bakes[e].stem, name);
           const int nc = layer_channel_count(name, config.directions);
-          const std::string expected = std::to_string(k) + " of " + tile_identity(job, content, plan, e);
+          const std::string expected =
+              std::to_string(k) + " of " + tile_identity(job, content, plan, e) + "; layer " + name;
           const std::optional<GeoRasterInfo> info = probe_georaster(file);
           if (!info || georaster_metadata_item(file, "HFBAKE_TILE_OF") != expected ||
               info->width != tile.interior.width || info->height != tile.interior.height || info->bands != nc)
@@ -475,6 +489,10 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
             const std::string& band_name = info->band_names[std::size_t(c)];
             channels.push_back(band_name.substr(std::min(band_name.size(), name.size() + 1)));
           }
+          if (tile_checksum(texels) != georaster_metadata_item(file, "HFBAKE_TILE_SUM"))
+            throw InputError(file.string(), "",
+                             "is damaged: its values are not those its tile task wrote (their checksum "
+                             "differs): bake it again with --tile-task");
           output(e, name, channels)
               .writer->write(tile.interior.x0, tile.interior.y0, tile.interior.width, tile.interior.height,
                              texels.data(), std::size_t(tile.interior.width));

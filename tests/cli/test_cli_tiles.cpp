@@ -13,6 +13,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -345,6 +346,27 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
   fs::remove(dir_ / "craters.tif");
   fs::rename(dir_ / "craters_kept.tif", dir_ / "craters.tif");
+  // A damaged tile file (one value changed, or made NaN, in place): refused, naming it.
+  const fs::path damaged = dir_ / "out_farm" / "tiles" / "farm.tile-3.relief.svf.tif";
+  fs::copy_file(damaged, dir_ / "kept_svf.tif");
+  for (const float bad : {0.5f, std::numeric_limits<float>::quiet_NaN()}) {
+    {
+      std::unique_ptr<GDALDataset> ds(GDALDataset::Open(damaged.c_str(), GDAL_OF_RASTER | GDAL_OF_UPDATE));
+      ASSERT_TRUE(ds);
+      float v = 0;
+      ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Read, 3, 2, 1, 1, &v, 1, 1, GDT_Float32, 0, 0, nullptr),
+                CE_None);
+      v = std::isnan(bad) ? bad : v + bad;
+      ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 3, 2, 1, 1, &v, 1, 1, GDT_Float32, 0, 0, nullptr),
+                CE_None);
+    }
+    r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(damaged.string() + ": is damaged"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+    fs::copy_file(dir_ / "kept_svf.tif", damaged, fs::copy_options::overwrite_existing);
+  }
   // A missing tile file: refused, naming it.
   const fs::path gone = dir_ / "out_farm" / "tiles" / "farm.tile-5.relief.svf.tif";
   const fs::path kept = dir_ / "kept.tif";
