@@ -43,8 +43,14 @@ std::map<std::string, fs::path> reports_under(const fs::path& dir) {
       it.disable_recursion_pending();
       continue;
     }
-    if (it->is_regular_file() && it->path().filename() == "report.json")
-      found[fs::relative(it->path(), dir).string()] = it->path();
+    if (it->path().filename() != "report.json") continue;
+    // Keyed by where it is, not by where a link leads (fs::relative would resolve it): a baseline's link
+    // is compared and replaced as the report of its own folder.
+    std::error_code ec;
+    if (!fs::is_regular_file(it->path(), ec))
+      throw InputError(it->path().string(), "",
+                       "is not a regular file (a folder, a device or a broken link)");
+    found[it->path().lexically_relative(dir).string()] = it->path();
   }
   return found;
 }

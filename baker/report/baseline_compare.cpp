@@ -21,9 +21,14 @@ const nlohmann::json& methods_of(const nlohmann::json& doc, const char* which) {
   return doc["methods"];
 }
 
+// A metric: absent, or null (a value JSON cannot hold), is none; any other type is not a report hfbake
+// writes (a damaged baseline whose metric would otherwise pass for new).
 std::optional<double> number_at(const nlohmann::json& obj, const std::string& key) {
-  if (obj.is_object() && obj.contains(key) && obj[key].is_number()) return obj[key].get<double>();
-  return std::nullopt;
+  if (!obj.is_object() || !obj.contains(key) || obj[key].is_null()) return std::nullopt;
+  if (!obj[key].is_number())
+    throw std::invalid_argument("not a report.json as hfbake writes it: \"" + key + "\" is " +
+                                std::string(obj[key].type_name()) + ", not a number");
+  return obj[key].get<double>();
 }
 
 bool known_metric(const std::string& name) {

@@ -304,6 +304,42 @@ TEST_F(Untrusted, StagingFoldersThatAreLinksAreRemovedNotFollowed) {
   expect_outside_untouched();
 }
 
+// A baseline folder whose report.json is a link: compared as its own folder's report (fs::relative resolved
+// it, so the report counted as new and the link's target as missing), and --update-baseline replaces the
+// link by the new report (it removed the report it had just written). A metric of another type than a
+// number is a damaged report, not a new metric.
+TEST_F(Untrusted, ABaselineReportThatIsALinkIsComparedAndReplacedInItsFolder) {
+  json j = base_job();
+  j["reference"] = {{"samples", 4}, {"seed", 1}};
+  ASSERT_EQ(hfbake(dir_, {"bake", write_job(dir_, j), "--no-cache", "--quiet"}).exit_code, 0);
+  const std::string report = read_text(dir_ / "out" / "report.json");
+  fs::create_directories(dir_ / "U" / "j1");
+  fs::create_directories(dir_ / "V" / "j1");
+  fs::create_directories(dir_ / "V" / "store");
+  std::ofstream(dir_ / "U" / "j1" / "report.json") << report;
+  std::ofstream(dir_ / "V" / "store" / "x.json") << report;
+  fs::create_symlink("../store/x.json", dir_ / "V" / "j1" / "report.json");
+  Outcome r = hfbake(dir_, {"compare", (dir_ / "U").string(), (dir_ / "V").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = hfbake(dir_, {"compare", (dir_ / "U").string(), (dir_ / "V").string(), "--update-baseline", "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(dir_ / "V" / "j1" / "report.json")));
+  EXPECT_EQ(read_text(dir_ / "V" / "j1" / "report.json"), report);
+  EXPECT_EQ(read_text(dir_ / "V" / "store" / "x.json"), report);
+
+  json damaged = json::parse(report);
+  bool changed = false;
+  for (auto& [stem, m] : damaged["methods"].items())
+    for (auto& [layer, metrics] : m["layers"].items())
+      if (!changed && metrics.contains("mae")) metrics["mae"] = "x", changed = true;
+  ASSERT_TRUE(changed);
+  std::ofstream(dir_ / "V" / "j1" / "report.json") << damaged.dump();
+  r = hfbake(dir_, {"compare", (dir_ / "U").string(), (dir_ / "V").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("\"mae\" is string, not a number"), std::string::npos) << r.err;
+  expect_outside_untouched();
+}
+
 // out/textures as a link: the textures would land in its target.
 TEST_F(Untrusted, ATexturesFolderThatIsALinkIsRefused) {
   fs::create_directories(dir_ / "out");
