@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -87,7 +88,7 @@ std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::
     throw InputError(job.file.string(), "/height",
                      "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
                          " field needs about " + gib(std::size_t(std::min(heights, 1.8e19))) +
-                         " or more to bake (its heights alone), more than the " + gib(have) +
+                         " or more to bake (the process and the heights alone), more than the " + gib(have) +
                          (limit ? " of --memory-limit" : " available (--memory-limit SIZE sets the budget)"));
   std::vector<MemoryPart> parts;
   const std::size_t need = estimate_peak_bytes(job, size, &parts);
@@ -391,6 +392,10 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
 }  // namespace
 
 std::optional<std::size_t> parse_memory_size(const std::string& text) {
+  // Decimal digits first (std::stod alone also takes "0x100", "inf" and leading blanks).
+  if (text.empty() || !(std::isdigit(static_cast<unsigned char>(text[0])) || text[0] == '.') ||
+      text.find_first_of("xX") != std::string::npos)
+    return std::nullopt;
   std::size_t used = 0;
   double value = 0;
   try {

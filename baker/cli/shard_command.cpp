@@ -104,8 +104,8 @@ ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, in
   const BakeEntry& e = job.bakes[std::size_t(entry)];
   ShardIdentity id = shard_identity(job, {stage, entry_stages(e)}, width, height);
   id.what = "stage " + std::to_string(stage) + " of " + e.stem;
-  id.redo =
-      "bake it with --stage " + std::to_string(stage) + " and --shard " + std::to_string(entry) + " mod N/N";
+  id.redo = "bake it again with --stage " + std::to_string(stage) +
+            " --shard I/N, I = " + std::to_string(entry) + " mod N";
   return id;
 }
 

@@ -298,9 +298,13 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
   const std::size_t tile_budget =
       budget > kTiledGdalCacheBytes + coarse ? budget - kTiledGdalCacheBytes - coarse : 0;
   if (coarse > 0 && tile_budget == 0)
-    refuse(job, "/height",
-           "the far fields' coarse copies of the raster need about " + std::to_string(coarse >> 20) +
-               " MiB, more than the memory budget leaves (--memory-limit, or a larger far_field cell)");
+    refuse(
+        job, "/height",
+        "the far fields' coarse copies of the raster (about " +
+            std::to_string((coarse + (1u << 20) - 1) >> 20) + " MiB) and GDAL's block cache (" +
+            std::to_string(kTiledGdalCacheBytes >> 20) +
+            " MiB) leave nothing of the memory budget for the tiles (--memory-limit, or a larger far_field "
+            "cell)");
   auto peak = [&](int side) { return tile_window_bytes(job, band->width, band->height, side, halo); };
   auto too_large = [&](int side, const std::string& knob) {
     refuse(

@@ -576,9 +576,12 @@ TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
             std::string::npos)
       << r.err;
   EXPECT_EQ(hfbake("validate " + p.string() + " --memory-limit 8G --quiet").exit_code, 0);
-  const Result bad = hfbake("validate " + p.string() + " --memory-limit lots");
-  EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_NE(bad.err.find("--memory-limit: not a size"), std::string::npos) << bad.err;
+  for (const char* text : {"lots", "0x100", "inf", " 8G", "-1G"}) {
+    const Result bad = hfbake("validate " + p.string() + " --memory-limit '" + text + "'");
+    EXPECT_EQ(bad.exit_code, 2) << text;
+    EXPECT_NE(bad.err.find("--memory-limit: not a size"), std::string::npos) << bad.err;
+  }
+  EXPECT_EQ(hfbake("validate " + p.string() + " --memory-limit 8.5e9 --quiet").exit_code, 0);
 }
 
 }  // namespace
