@@ -61,6 +61,19 @@ def _method_keys(name):
     return [k for k in schema.get("properties", {}) if k != "method"]
 
 
+def _run_arguments(threads, memory_limit):
+    """threads and memory_limit as the module takes them (0: all cores), or InputError naming the argument:
+    the command line's ranges (--threads 1..4096, a memory limit of at least a byte)."""
+    def integer(x):
+        return isinstance(x, (int, _np.integer)) and not isinstance(x, (bool, _np.bool_))
+    if threads is not None and not (integer(threads) and 1 <= threads <= 4096):
+        raise InputError("must be an integer from 1 to 4096 (or None: all cores)", "/threads")
+    if memory_limit is not None and not (integer(memory_limit) and 1 <= memory_limit < 2**63):
+        raise InputError("must be a whole number of bytes, at least 1 (or None: the available memory)",
+                         "/memory_limit")
+    return int(threads or 0), None if memory_limit is None else int(memory_limit)
+
+
 def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_keys, params):
     # A method's own key wins over a job key of the same name (p1's lights, p2's bounces, hbao's surface);
     # `job` gives the job's.
@@ -71,6 +84,8 @@ def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_ke
     for key, value in params.items():
         if value is None:
             continue
+        if key == "nodata_value" and isinstance(value, (float, _np.floating)) and _np.isnan(value):
+            continue  # a band's NoData of NaN: NaN heights are holes already
         if key in own:
             entry[key] = value
         elif key in _HEIGHT_KEYS:
@@ -79,7 +94,8 @@ def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_ke
             job[key] = value
         else:
             entry[key] = value  # refused by the method's schema as the job file would be
-    return _hfbake.bake_array(method, heights, entry, height, job, threads or 0, progress, cancel, memory_limit)
+    threads, memory_limit = _run_arguments(threads, memory_limit)
+    return _hfbake.bake_array(method, heights, entry, height, job, threads, progress, cancel, memory_limit)
 
 
 def _method_doc(name):
@@ -135,7 +151,7 @@ def validate(job, *, memory_limit=None):
     """Checks a job (a path to a job file, or a dict of one) as `hfbake validate` does: the schema, every
     method's and the reference's parameters, the memory estimate, the inputs loaded. Returns
     {"name", "width", "height", "memory_bytes", "memory_parts"}; raises InputError listing every problem."""
-    return _hfbake.validate(job, memory_limit)
+    return _hfbake.validate(job, _run_arguments(None, memory_limit)[1])
 
 
 def bake(job, out=None, *, threads=None, progress=None, cancel=None, memory_limit=None, cache=True):
@@ -156,7 +172,8 @@ def bake(job, out=None, *, threads=None, progress=None, cancel=None, memory_limi
 
 
 def _bake_job(job, out, threads, progress, cancel, memory_limit, cache):
-    layers, summary = _hfbake.bake_job(job, out, threads or 0, progress, cancel, memory_limit, cache)
+    threads, memory_limit = _run_arguments(threads, memory_limit)
+    layers, summary = _hfbake.bake_job(job, out, threads, progress, cancel, memory_limit, cache)
     report = _json.loads(summary)
     for path in report["outputs"]:
         if _os.path.basename(path) == "report.json":

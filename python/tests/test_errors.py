@@ -75,6 +75,19 @@ def test_a_non_finite_number_is_refused_as_a_job_file_would_be(call):
     assert caught.value.message.startswith("must be a finite number (it is ")
 
 
+@pytest.mark.parametrize(
+    "kwargs, pointer",
+    [({"threads": 2**40}, "/threads"), ({"threads": 0}, "/threads"), ({"threads": 1.5}, "/threads"),
+     ({"memory_limit": -1}, "/memory_limit"), ({"memory_limit": "8G"}, "/memory_limit")],
+    ids=["threads-huge", "threads-0", "threads-float", "memory-negative", "memory-text"],
+)
+def test_run_arguments_out_of_range_raise_input_error(kwargs, pointer):
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.p1(terrain(16, 16), directions=4, **kwargs)
+    assert caught.value.pointer == pointer
+    assert len(str(caught.value)) < 200  # the message, not the arguments' repr
+
+
 def test_a_nan_height_raises_the_commands_message(tmp_path):
     heights = terrain(16, 12)
     heights[5, 3] = np.nan
