@@ -139,6 +139,7 @@ Profile compute(const HorizonOptions& o) {
   if (o.lonlat) {
     if (info->crs_wkt.empty()) fail("--lonlat", "the raster has no CRS to transform longitude/latitude into");
     if (std::abs((*at)[1]) > 90) fail("--at", "latitude " + num((*at)[1]) + " is outside [-90, 90]");
+    if (std::abs((*at)[0]) > 180) fail("--at", "longitude " + num((*at)[0]) + " is outside [-180, 180]");
     const auto moved = lonlat_to_crs(info->crs_wkt, (*at)[0], (*at)[1]);
     if (!moved) fail("--at", "PROJ cannot transform " + o.at + " (WGS 84) into " + info->crs_name);
     xy = *moved;

@@ -110,6 +110,8 @@ TEST(HorizonCli, BadInputIsOneLineAndExit2) {
       {"--at 1021,1981 --band 1", "--band: is 1 but the raster has 1 band(s)"},
       {"--at 1021,1981 --refraction 0.2", "--refraction: applies with Earth curvature only"},
       {"--at 15,46 --lonlat", "--at: "},
+      {"--at 200,46 --lonlat", "--at: longitude 200 is outside [-180, 180]"},
+      {"--at 15,95 --lonlat", "--at: latitude 95 is outside [-90, 90]"},
   };
   for (const Case& c : cases) {
     const auto r = run_hfbake(dir, "horizon " + dem.string() + " " + c.args);
