@@ -507,6 +507,15 @@ std::vector<Case> cases() {
             {"bake", "--no-cache", "--quiet", "--summary", summary, job}, "", "/unknown", "unknown key"};
       },
       2, 2);
+  add("ShardsEntryIsAFile", [](const fs::path& d) {
+    fs::create_directories(d / "out");
+    std::ofstream(d / "out" / "shards") << "x";
+    const std::string job = write_job(d, base_job());
+    return CaseSetup{{"merge", job, "--no-cache", "--quiet"},
+                     (d / "out" / "shards").string(),
+                     "",
+                     "is not a folder (a file or a link)"};
+  });
   add("HeightImageOneByOne", [](const fs::path& d) {
     write_image(d / "h.exr", 1, 1, 1, {1.0f});
     json j = base_job();
