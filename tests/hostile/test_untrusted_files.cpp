@@ -304,10 +304,10 @@ TEST_F(Untrusted, StagingFoldersThatAreLinksAreRemovedNotFollowed) {
   expect_outside_untouched();
 }
 
-// A baseline folder whose report.json is a link: compared as its own folder's report (fs::relative resolved
-// it, so the report counted as new and the link's target as missing), and --update-baseline replaces the
-// link by the new report (it removed the report it had just written). A metric of another type than a
-// number is a damaged report, not a new metric.
+// A baseline folder whose report.json is a link: compared as its own folder's report (not as its target's,
+// which would count the report new and the target missing), and --update-baseline replaces the link by the
+// new report, leaving its target as it was. A metric of another type than a number is a damaged report, not
+// a new metric.
 TEST_F(Untrusted, ABaselineReportThatIsALinkIsComparedAndReplacedInItsFolder) {
   json j = base_job();
   j["reference"] = {{"samples", 4}, {"seed", 1}};
