@@ -147,7 +147,7 @@ struct JobRun {
   void tell(const std::vector<std::string>& notices) const {
     for (const std::string& n : notices)
       if (n.rfind("warning: ", 0) == 0)
-        progress.warning(n);
+        progress.warning(job.name + ": " + n);
       else
         progress.message(job.name + ": " + n);
   }

@@ -173,14 +173,19 @@ TextureValues texture_values(const LayerSet& layers, const TextureSpec& spec) {
 
 namespace {
 
-// A half-float OpenEXR texture: the values as they are (texture_values), ZIP-compressed; Y, RGB or RGBA.
+// A half-float OpenEXR texture (float when a value exceeds half's range): the values as they are
+// (texture_values), ZIP-compressed; Y, RGB or RGBA.
 void write_exr_texture(const fs::path& tmp, const fs::path& file, const LayerSet& layers,
                        const TextureSpec& spec) {
   const TextureValues v = texture_values(layers, spec);
   OiioWrite w;
   w.format = "exr";
   w.width = v.width, w.height = v.height, w.channels = v.channels;
-  w.stored = OiioSample::half, w.given = OiioSample::float32;
+  // Half holds at most 65504: a texture with a larger value (a light map under a bright sun) is stored as
+  // float, as the bake's own EXRs are, never as infinity.
+  float largest = 0;
+  for (const float x : v.values) largest = std::max(largest, std::abs(x));
+  w.stored = largest > 65504.0f ? OiioSample::float32 : OiioSample::half, w.given = OiioSample::float32;
   w.channel_names = v.channels == 1   ? std::vector<std::string>{"Y"}
                     : v.channels == 3 ? std::vector<std::string>{"R", "G", "B"}
                                       : std::vector<std::string>{"R", "G", "B", "A"};

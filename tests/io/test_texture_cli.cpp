@@ -275,6 +275,18 @@ TEST(TextureCli, LightMapAboveOneIsNotClippedSilently) {
     tex_largest = std::max(tex_largest, tex.values[i]);
   }
   EXPECT_GT(tex_largest, 1.0f);
+  // Light beyond half's range (65504): the texture is float, with the EXR's values, never infinity.
+  const fs::path bright = dir / "bright";
+  json sun = lit(bright, {{"layers", {"direct"}}, {"format", "exr"}});
+  sun["lights"][0]["directional"]["irradiance"] = 1e6;
+  r = run_hfbake(dir.path(), "bake " + write(dir, "f.json", sun).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Pixels big = read(bright / "textures" / "slope.p1.direct.exr");
+  const Pixels big_exr = read(bright / "slope.p1.exr", "direct.");
+  EXPECT_EQ(big.type, OIIO::TypeDesc::FLOAT);
+  ASSERT_EQ(big.values.size(), big_exr.values.size());
+  EXPECT_GT(*std::max_element(big_exr.values.begin(), big_exr.values.end()), 65504.0f);
+  for (std::size_t i = 0; i < big.values.size(); ++i) ASSERT_EQ(big.values[i], big_exr.values[i]) << i;
   // bits and the sRGB curve do not apply to it: refused before baking, at their pointers.
   r = run_hfbake(
       dir.path(),
