@@ -112,3 +112,29 @@ def test_heights_in_another_unit_than_the_pixels_are_converted(tmp_path, qgis_en
         ds = gdal.Open(str(out))  # held: a band outlives no dataset
         outputs.append(ds.GetRasterBand(1).ReadAsArray())
     assert np.array_equal(outputs[0], outputs[1])
+
+
+def test_bad_layers_and_outputs_fail_with_a_message_not_a_traceback(tmp_path, qgis_env):
+    heights = terrain(40, 32, seed=13) * 10
+    dem = tmp_path / "dem.tif"
+    write_geotiff(dem, heights)
+    square_degrees = tmp_path / "degrees.tif"  # pixels square in degrees: still geographic
+    write_geotiff(square_degrees, heights, epsg=4326, geotransform=(10.0, 1e-4, 0.0, 47.0, 0.0, -1e-4))
+    no_crs = tmp_path / "plain.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(str(no_crs), 40, 32, 1, gdal.GDT_Float32)
+    ds.GetRasterBand(1).WriteArray(heights)
+    ds = None
+    cases = [
+        ({"INPUT": dem, "BAND": 2}, "has no band 2 (it has 1)"),
+        ({"INPUT": dem, "OUTPUT": tmp_path / "no" / "svf.tif"}, "its folder does not exist"),
+        ({"INPUT": square_degrees}, "geographic"),
+        ({"INPUT": no_crs}, "has no CRS"),
+    ]
+    for params, expect in cases:
+        args = {"BAND": 1, "DIRECTIONS": 8, "OUTPUT": tmp_path / "out.tif", **params}
+        result = subprocess.run([QGIS_PROCESS, "run", "hfbake:svf", "--"] + [f"{k}={v}" for k, v in args.items()],
+                                env=qgis_env, capture_output=True, text=True)
+        text = result.stdout + result.stderr
+        assert result.returncode != 0, text
+        assert expect in text, text
+        assert "Traceback" not in text and "AttributeError" not in text, text

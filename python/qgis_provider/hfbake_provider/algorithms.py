@@ -2,6 +2,8 @@
 NoData -9999 where the input had none), baked by the Python module hfbake with the job keys' names and
 checks; a bad value fails the algorithm with hfbake's message."""
 
+import os
+
 import numpy as np
 from osgeo import gdal
 from qgis.core import (
@@ -54,15 +56,26 @@ class _Bake(QgsProcessingAlgorithm):
         band_index = self.parameterAsInt(parameters, "BAND", context)
         output = self.parameterAsOutputLayer(parameters, "OUTPUT", context)
         dem = gdal.Open(layer.source())
+        if dem is None:
+            raise QgsProcessingException(f"{layer.source()}: GDAL cannot read it as a raster")
+        if not 1 <= band_index <= dem.RasterCount:
+            raise QgsProcessingException(f"{layer.source()}: has no band {band_index} (it has {dem.RasterCount})")
         band = dem.GetRasterBand(band_index)
-        heights = band.ReadAsArray().astype(np.float32)
+        # The CRS first: a geographic raster's pixels are degrees, whatever their shape.
+        crs = dem.GetSpatialRef()
+        if crs is None:
+            raise QgsProcessingException(f"{layer.source()}: has no CRS: the texel size would be a guess (assign "
+                                         "its projected CRS first)")
+        if crs.IsGeographic():
+            raise QgsProcessingException(f"{layer.source()}: its pixels are degrees of a geographic CRS: warp it to a "
+                                         "projected CRS first (the heights' unit per pixel)")
         geotransform = dem.GetGeoTransform()
         if geotransform[2] != 0 or geotransform[4] != 0 or abs(geotransform[1]) != abs(geotransform[5]):
             raise QgsProcessingException(f"{layer.source()}: needs square, unrotated pixels (Warp it first)")
-        crs = dem.GetSpatialRef()
-        if crs is not None and crs.IsGeographic():
-            raise QgsProcessingException(f"{layer.source()}: its pixels are degrees of a geographic CRS: warp it to a "
-                                         "projected CRS first (the heights' unit per pixel)")
+        folder = os.path.dirname(os.path.abspath(output))
+        if not os.path.isdir(folder):
+            raise QgsProcessingException(f"{output}: its folder does not exist")
+        heights = band.ReadAsArray().astype(np.float32)
         nodata = band.GetNoDataValue()
         holes = ~np.isfinite(heights)
         if nodata is not None:
@@ -97,6 +110,8 @@ class _Bake(QgsProcessingAlgorithm):
         planes = values if values.ndim == 3 else values[np.newaxis]
         out = gdal.GetDriverByName("GTiff").Create(output, dem.RasterXSize, dem.RasterYSize, planes.shape[0],
                                                    gdal.GDT_Float32, options=["COMPRESS=DEFLATE", "TILED=YES"])
+        if out is None:
+            raise QgsProcessingException(f"{output}: GDAL cannot create it: {gdal.GetLastErrorMsg()}")
         out.SetGeoTransform(geotransform)
         out.SetProjection(dem.GetProjection())
         for k, plane in enumerate(planes):
