@@ -38,7 +38,7 @@ double round4(double v) {
   return std::strtod(buf, nullptr);
 }
 
-// The height file's stem as a job name (the schema's pattern: letters, digits, _ . -, not starting with . or
+// A file's stem as a job name (the schema's pattern: letters, digits, _ . -, not starting with . or
 // -).
 std::string job_name(const fs::path& file) {
   std::string name = file.stem().string();
@@ -83,7 +83,10 @@ double suggested_height_scale(const HeightsFound& h) {
   const HeightSource& s = h.scene.height_source;
   const double relief = s.stored_max - s.stored_min;
   const double extent = std::max(h.scene.field.width, h.scene.field.height) * h.scene.field.texel_size;
-  if (h.georeferenced || relief <= 0 || (relief >= 0.01 * extent && relief <= 4 * extent)) return 1;
+  // An integer image's stored units are levels, not world units (an 8-bit map's 0..255 over 64 texels would
+  // be cliffs four times the field's side); a float image's may be world units when plausible.
+  if (h.georeferenced || relief <= 0 || (!s.integer && relief >= 0.01 * extent && relief <= 4 * extent))
+    return 1;
   return round4(0.1 * extent / relief);
 }
 
@@ -214,7 +217,9 @@ int run_init(const InitOptions& options) {
   try {
     HeightsFound found = read_heights(image, job_file);
     const double scale = suggested_height_scale(found);
-    const ordered doc = preset_job(options.preset, job_name(height), image, found, scale);
+    // Named after the job file (the height file's stem unless --out names another): jobs written for one
+    // height file with several presets (--out) bake into folders of their own.
+    const ordered doc = preset_job(options.preset, job_name(job_file), image, found, scale);
     // The job as validate checks it, before anything is written.
     JobLoad load = load_job_document(json::parse(doc.dump()), job_file, std::nullopt);
     if (load.job) load.errors = resolve_job(*load.job);

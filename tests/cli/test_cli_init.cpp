@@ -86,8 +86,9 @@ TEST_F(CliInit, EveryPresetValidatesAndBakes) {
       EXPECT_EQ(v.exit_code, 0) << v.err;
       const Result b = run("bake --quiet --no-cache " + (dir_ / job).string());
       EXPECT_EQ(b.exit_code, 0) << b.err;
-      // The outputs the preset promises, in out/<stem> beside the job.
-      const std::string stem = fs::path(file).stem().string();
+      // The outputs the preset promises, in out/<stem> beside the job (the job file's stem: one height file
+      // with several presets bakes into folders of their own).
+      const std::string stem = fs::path(job).stem().string();
       const fs::path out = dir_ / "out" / stem;
       const fs::path promised = std::string(preset) == "game-ao" ? out / "textures" / (stem + ".p1.ao.png")
                                 : std::string(preset) == "gis-relief" ? out / (stem + ".relief.svf.tif")
@@ -96,6 +97,18 @@ TEST_F(CliInit, EveryPresetValidatesAndBakes) {
       fs::remove_all(dir_ / "out");
     }
   }
+  // An 8-bit map (levels 0..255 over 64 texels): a scale, not cliffs four times the field's side.
+  std::vector<float> px(64 * 64);
+  for (int t = 0; t < 64 * 64; ++t) px[std::size_t(t)] = float(t % 64) / 63.0f;
+  auto out = OIIO::ImageOutput::create((dir_ / "h8.png").string());
+  ASSERT_TRUE(out &&
+              out->open((dir_ / "h8.png").string(), OIIO::ImageSpec(64, 64, 1, OIIO::TypeDesc::UINT8)) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close());
+  const Result h8 = run("init " + (dir_ / "h8.png").string() + " --preset reference-check --out " +
+                        (dir_ / "h8.json").string());
+  ASSERT_EQ(h8.exit_code, 0) << h8.err;
+  EXPECT_NEAR(read_json(dir_ / "h8.json")["height"]["height_scale"].get<double>() * 255, 6.4, 6.4 * 5e-4);
+  EXPECT_EQ(run("bake --quiet --no-cache " + (dir_ / "h8.json").string()).exit_code, 0);
 }
 
 TEST_F(CliInit, BadInputIsOneLineAndWritesNothing) {
@@ -138,7 +151,7 @@ TEST_F(CliInit, ForceReplacesALinkAndLeavesItsTarget) {
                        (dir_ / "link.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(fs::is_symlink(dir_ / "link.json"));
-  EXPECT_EQ(read_json(dir_ / "link.json")["name"], "h");
+  EXPECT_EQ(read_json(dir_ / "link.json")["name"], "link");
   std::ifstream in(dir_ / "target.json");
   EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "kept");
 }
