@@ -420,6 +420,13 @@ std::vector<std::string> OutputStage::write_textures(const std::string& stem, co
     staged_.push_back(t.file);
     if (!t.note.empty()) notices.push_back(t.note);
     if (clipped.clipped > 0) notices.push_back(clipping_notice(t.file, clipped, t.spec.exposure));
+    if (clipped.negative > 0) {
+      char share[32];
+      std::snprintf(share, sizeof share, "%.1f", 100.0 * double(clipped.negative) / double(clipped.values));
+      notices.push_back("warning: " + t.file + ": " + share +
+                        " % of its values were below 0 and clipped to 0 (a signed channel, such as a bent "
+                        "normal's or a horizon's, needs a texture of its own: docs/textures.md)");
+    }
   }
   return notices;
 }

@@ -47,6 +47,7 @@ TextureClipping clipping(const std::vector<Tap>& taps, std::size_t n, double exp
       if (!std::isfinite(v)) continue;
       ++c.values;
       if (v > 1) ++c.clipped;
+      if (v < -1e-6) ++c.negative;  // a rounding below 0 of a fraction (an ao of -1e-9) is no signed value
       c.largest = std::max(c.largest, v);
     }
   }

@@ -306,6 +306,34 @@ TEST(TextureCli, LightMapAboveOneIsNotClippedSilently) {
       << r.err;
 }
 
+// A pack of a signed channel (a bent normal's X) clips its negative half to 0: with a warning giving the
+// share, counted here from the EXR; an unsigned pack (ao) says nothing.
+TEST(TextureCli, APackedSignedChannelIsNotClippedSilently) {
+  TempFolder dir;
+  const fs::path out = dir / "signed";
+  json j = job(out, json::array({{{"pack", "bn"}, {"channels", {{"R", "bent_normal.X"}, {"G", "ao"}}}}}),
+               {{"kind", "fractal"}, {"size", {33, 33}}});
+  j["bake"][0]["layers"] = {"ao", "bent_normal"};
+  auto r = run_hfbake(dir.path(), "bake " + write(dir, "a.json", j).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Pixels exr = read(out / "slope.p1.exr", "bent_normal.");
+  ASSERT_EQ(exr.channels, 3);
+  std::size_t below = 0;
+  for (std::size_t t = 0; t < exr.values.size(); t += 3) below += exr.values[t] < -1e-6f;
+  ASSERT_GT(below, 0u) << "the field must have bent normals leaning to -x";
+  char share[32];
+  std::snprintf(share, sizeof share, "%.1f %%", 100.0 * double(below) / double(2 * exr.values.size() / 3));
+  EXPECT_NE(r.err.find("warning: textures/slope.p1.bn.png: " + std::string(share) +
+                       " of its values were below 0 and clipped to 0"),
+            std::string::npos)
+      << r.err;
+  j["output"]["textures"][0]["channels"] = {{"R", "ao"}};
+  j["output"]["dir"] = (dir / "unsigned").string();
+  r = run_hfbake(dir.path(), "bake " + write(dir, "b.json", j).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("clipped"), std::string::npos) << r.err;
+}
+
 // Previews (display-encoded, for looking at) and textures (data) never share a file name.
 TEST(TextureCli, PreviewsAndTexturesHaveDistinctNames) {
   TempFolder dir;
