@@ -1,5 +1,6 @@
 // Importance sampling of a lat-long environment by luminance: a piecewise-constant distribution over the
-// level-0 texels (weight = |luminance| x solid angle), and inside a texel uniform in solid angle. The pdf is
+// level-0 texels (weight = the |luminance| the bilinear lookup spreads over the texel, from it and its eight
+// neighbours, x solid angle), and inside a texel uniform in solid angle. The pdf is
 // exact for this procedure, so any radiance lookup (bilinear, band-limited) stays unbiased under MIS.
 #pragma once
 

@@ -428,6 +428,29 @@ TEST(Reference, ShBandLimitedSkyOnFlatGround) {
   }
 }
 
+// A sun in one texel of a lat-long map (60000 over a sky of 0.2) lights flat ground with E / pi = 0.2 plus
+// the sun texel's 60000 Omega cos(theta) / pi (the bilinear lookup spreads it over its neighbours, keeping
+// its integral to first order). The sampler must put samples where the lookup puts that light: at 256 samples
+// the noise is under a tenth of the value and the estimate agrees with the closed form. (A sampler weighting
+// each texel by its own luminance alone seldom samples the neighbours: a heavy-tailed estimate, 40 % low
+// here with a small reported noise.)
+TEST(EnvSampler, OneBrightTexelIsSampledWhereTheLookupSpreadsIt) {
+  const int W = 64, H = 32, row = 8, col = 21;
+  std::vector<Rgb> texels(std::size_t(W) * H, Rgb{0.2f, 0.2f, 0.2f});
+  texels[std::size_t(row) * W + col] = Rgb{60000, 60000, 60000};
+  Scene s = make_scene(spec_of(ProceduralKind::flat, 9));
+  s.environment = make_latlong_environment(W, H, texels);
+  const LayerSet r = bake_reference(s, options({"direct"}, 256), {});
+  const double theta = kPi * (row + 0.5) / H;
+  const double omega = s.environment.texel_solid_angle(row);
+  const double expected = 0.2 + (60000 - 0.2) * omega * std::cos(theta) / kPi;
+  for (int c = 0; c < 3; ++c) {
+    const Value e = at(r, "direct", 4, 4, c);
+    EXPECT_LT(e.se, 0.1 * expected) << c;
+    EXPECT_WITHIN_3SE(e, expected, 0.01 * expected);
+  }
+}
+
 TEST(EnvSampler, PdfIsNormalisedAndMatchesSampling) {
   SkySpec spec;
   spec.height = 32;
