@@ -52,8 +52,8 @@ struct TextureSpec {
 // exposure, and so clipped to 1: what a light map loses silently otherwise.
 struct TextureClipping {
   std::size_t clipped = 0, values = 0;
-  std::size_t negative =
-      0;               // values below 0 (a signed channel, such as bent_normal.X in a pack), clipped to 0
+  // Values below 0 (a signed channel, such as bent_normal.X in a pack), clipped to 0.
+  std::size_t negative = 0;
   double largest = 0;  // the largest value after the exposure
   double p99 = 0;      // the 99th percentile of the values after the exposure (computed when any clipped)
 };
