@@ -350,8 +350,9 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
   std::set<int> counts;
   std::error_code ec;
   if (fs::exists(fs::symlink_status(dir, ec)) && !is_real_directory(dir))
-    throw InputError(dir.string(), "", "is not a folder (a file or a link): the shards are read from inside " +
-                                           job.output.dir.string() + " only");
+    throw InputError(dir.string(), "",
+                     "is not a folder (a file or a link): the shards are read from inside " +
+                         job.output.dir.string() + " only");
   for (const auto& f : fs::directory_iterator(dir, ec))
     if (const auto n = shard_count_in_name(f.path().filename().string(), job.name)) counts.insert(*n);
   if (counts.empty())
