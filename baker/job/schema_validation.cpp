@@ -2,7 +2,9 @@
 
 // GCC 12 reports a false -Wrestrict inside valijson's json_pointer string handling (inlined
 // std::string::replace); it is not in hfbake's code and the TU is otherwise warning-free.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wrestrict"
+#endif
 
 #include <algorithm>
 #include <map>
