@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli/outputs.hpp"
 #include "cli/scene_inputs.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/texture_plan.hpp"
@@ -93,7 +94,7 @@ void check_output_folder(const Job& job) {
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
   // What the bake would refuse only after baking (docs/output_folders.md): its lock name taken by anything
   // but a file, and a textures/ entry that is not a folder.
-  const fs::path lock = job.output.dir / (".hfbake-" + job.name + ".lock");
+  const fs::path lock = output_lock_file(job);
   const fs::file_status ls = fs::symlink_status(lock, ec);
   if (fs::exists(ls) && !fs::is_regular_file(ls))
     throw InputError(job.file.string(), "/output/dir",
@@ -119,7 +120,8 @@ void check_output_folder(const Job& job) {
     if (n == "report.json" || n == "report.html") return true;
     for (const std::string& stem : stems) {
       const std::string at = job.name + "." + stem + ".";
-      if (n == at + "exr" || (n.rfind(at, 0) == 0 && (ends_with(n, ".preview.png") || ends_with(n, ".tif"))))
+      if (n == job.output_path(stem, ".exr").filename().string() ||
+          (n.rfind(at, 0) == 0 && (ends_with(n, ".preview.png") || ends_with(n, ".tif"))))
         return true;
     }
     return false;

@@ -175,6 +175,10 @@ int adopt_stale_checkpoints(const fs::path& dir, const std::string& job_name, co
   return moved;
 }
 
+fs::path output_lock_file(const Job& job) {
+  return job.output.dir / (".hfbake-" + job.name + ".lock");
+}
+
 namespace {
 
 // <dir>/.hfbake-<name>.job: the job file whose outputs of that name the folder holds.
@@ -199,7 +203,7 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
                      "cannot create " + job.output.dir.string() + ": " +
                          (ec ? ec.message() : std::string("not a folder")));
   // One writer per job name and folder (docs/output_folders.md).
-  const fs::path lock_file = job.output.dir / (".hfbake-" + job.name + ".lock");
+  const fs::path lock_file = output_lock_file(job);
   lock_ = std::make_unique<FolderLock>(lock_file);
   if (!lock_->held()) {
     if (created_dir_) fs::remove(job.output.dir, ec);

@@ -28,6 +28,8 @@ struct StageOwner {
 std::optional<unsigned long long> process_start_time(long long pid);
 // This process's staging folder name for a job.
 std::string stage_name(const std::string& job_name);
+// <output dir>/.hfbake-<name>.lock: the file a bake of the job locks (docs/output_folders.md).
+std::filesystem::path output_lock_file(const Job& job);
 // True when the stage's owner certainly no longer runs: same host, and no process with its id, or one
 // that started at another time than the owner did.
 bool stage_owner_is_gone(const StageOwner& owner);
