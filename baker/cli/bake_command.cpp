@@ -464,6 +464,7 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
       }
       std::string parts;
       const std::size_t need = check_job_memory(*load.job, size, memory_limit, &parts);
+      check_report_baseline(*load.job, size.width, size.height);
       // Everything bake refuses about the inputs, refused here first: the same loader reads every image
       // (NaN heights without nodata, environment aspect ratios, channel names, map sizes).
       const Scene scene = load_scene(*load.job);

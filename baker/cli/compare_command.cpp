@@ -3,11 +3,11 @@
 #include <unistd.h>
 
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli/report_writer.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
 #include "job/manifest.hpp"
@@ -17,10 +17,6 @@ namespace hfbake {
 namespace fs = std::filesystem;
 
 namespace {
-
-nlohmann::json read_json(const fs::path& file) {
-  return read_json_file(file);  // bounded, with the job parser's checks
-}
 
 void copy_atomically(const fs::path& from, const fs::path& to) {
   if (to.has_parent_path()) fs::create_directories(to.parent_path());
@@ -102,7 +98,7 @@ CompareResult compare_reports(const CompareOptions& o) {
     }
     BaselineComparison c;
     try {
-      c = compare_to_baseline(read_json(now_file), read_json(old_file), rule);
+      c = compare_to_baseline(read_report_file(now_file), read_report_file(old_file), rule);
     } catch (const std::invalid_argument& e) {
       throw InputError(now_file.string() + " vs " + old_file.string(), "", e.what());
     }
@@ -121,9 +117,14 @@ CompareResult compare_reports(const CompareOptions& o) {
   }
   if (!r.refusals.empty()) return r;  // neither --json nor --update-baseline: the comparison did not happen
   if (o.json) {
-    std::ofstream j(*o.json);
-    j << nlohmann::json{{"regression", r.regression}, {"comparisons", r.comparisons}}.dump(2) << "\n";
-    if (!j) throw InputError(o.json->string(), "--json", "cannot write file");
+    // Atomic like every output: a reader never sees half of it, and a link at the name is replaced.
+    try {
+      write_file_atomically(
+          *o.json,
+          nlohmann::json{{"regression", r.regression}, {"comparisons", r.comparisons}}.dump(2) + "\n");
+    } catch (const std::system_error& e) {
+      throw InputError(o.json->string(), "--json", "cannot write file: " + e.code().message());
+    }
   }
   if (o.update_baseline) {
     for (const auto& [label, now_file, old_file] : pairs) {

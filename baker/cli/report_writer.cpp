@@ -2,15 +2,14 @@
 // file, builds report.json and stages it.
 #include "cli/report_writer.hpp"
 
-#include <fstream>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 
 #include "cli/method_dispatch.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
+#include "job/schema_validation.hpp"
 #include "methods/method_table.hpp"
 #include "reference/bake_reference.hpp"
 #include "reference/relief_reference.hpp"
@@ -20,23 +19,28 @@
 namespace hfbake {
 namespace {
 
-// The job's report.baseline, parsed; nullopt when the job names none.
+// The job's report.baseline, read and checked (read_report_file); nullopt when the job names none.
 std::optional<nlohmann::json> read_baseline(const Job& job) {
   const nlohmann::json options = job.doc.value("report", nlohmann::json::object());
   if (!options.contains("baseline")) return std::nullopt;
   const auto path = job.resolve(options["baseline"].get<std::string>());
-  std::ifstream in(path);
-  if (!in) throw InputError(job.file.string(), "/report/baseline", "cannot read " + path.string());
-  std::stringstream ss;
-  ss << in.rdbuf();
   try {
-    return nlohmann::json::parse(ss.str());
-  } catch (const nlohmann::json::exception&) {
-    throw InputError(job.file.string(), "/report/baseline", path.string() + " is not valid JSON");
+    return read_report_file(path);
+  } catch (const InputError& e) {
+    throw InputError(job.file.string(), "/report/baseline", e.line());
   }
 }
 
 }  // namespace
+
+nlohmann::json read_report_file(const std::filesystem::path& file) {
+  nlohmann::json doc = read_json_file(file);
+  const std::vector<SchemaViolation> violations = validate_against_schema(doc, "report.schema.json");
+  if (!violations.empty())
+    throw InputError(file.string(), violations.front().pointer,
+                     violations.front().message + " (not a report.json as hfbake writes it)");
+  return doc;
+}
 
 nlohmann::json job_scene(const Job& job) {
   nlohmann::json scene = nlohmann::json::object();

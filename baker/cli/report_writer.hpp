@@ -35,6 +35,11 @@ struct ReportResult {
 // file's path replaced by "fnv1a:<hash of its bytes>". InputError if an input file cannot be read.
 nlohmann::json job_scene(const Job& job);
 
+// Reads a report.json (a baseline, or `hfbake compare`'s inputs): a regular JSON file within the job
+// reader's bounds, checked against schemas/report.schema.json. InputError naming the file and the field when
+// it is not one as hfbake writes it (a negative mae, a metric that is text, a key missing).
+nlohmann::json read_report_file(const std::filesystem::path& file);
+
 // Refuses (InputError at /report/baseline) a report.baseline that is a report of another job than the one
 // this job's report will be (name, field size, crop, reference settings, scene: report/baseline_compare.hpp),
 // before anything is baked. Does nothing for a job without a reference or a baseline.

@@ -194,6 +194,8 @@ void keywords_at(const nlohmann::json* node, std::string doc_path, const std::ve
     const std::string& t = tokens[k];
     if (node->contains("properties") && (*node)["properties"].contains(t))
       keywords_at(&(*node)["properties"][t], doc_path, tokens, k + 1, keyword, found);
+    else if (node->contains("additionalProperties") && (*node)["additionalProperties"].is_object())
+      keywords_at(&(*node)["additionalProperties"], doc_path, tokens, k + 1, keyword, found);
     if (node->contains("items") && !t.empty() && std::all_of(t.begin(), t.end(), ::isdigit))
       keywords_at(&(*node)["items"], doc_path, tokens, k + 1, keyword, found);
   }

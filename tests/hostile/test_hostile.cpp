@@ -564,8 +564,8 @@ std::vector<Case> cases() {
     write_text(d, text.substr(0, sep), "a/report.json");
     write_text(d, text.substr(sep + 4), "b/report.json");
     return CaseSetup{{"compare", (d / "a").string(), (d / "b").string()},
-                     (d / "a/report.json").string() + " vs " + (d / "b/report.json").string(),
-                     "",
+                     (d / "b/report.json").string(),
+                     "/job/scene_hash",
                      "not a report.json as hfbake writes it"};
   });
   return c;

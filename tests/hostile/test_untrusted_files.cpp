@@ -336,7 +336,56 @@ TEST_F(Untrusted, ABaselineReportThatIsALinkIsComparedAndReplacedInItsFolder) {
   std::ofstream(dir_ / "V" / "j1" / "report.json") << damaged.dump();
   r = hfbake(dir_, {"compare", (dir_ / "U").string(), (dir_ / "V").string()});
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("\"mae\" is string, not a number"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("/mae: must be a number (it is a string)"), std::string::npos) << r.err;
+  expect_outside_untouched();
+}
+
+// A report whose values break schemas/report.schema.json (a negative error, a missing metric, a key hfbake
+// never writes) is refused by compare, and as a job's report.baseline by validate, before anything is baked:
+// one line naming the file and the field. A forged baseline would otherwise decide what counts as a
+// regression.
+TEST_F(Untrusted, ADamagedReportIsRefusedByCompareAndAsABaselineByValidate) {
+  json j = base_job();
+  j["reference"] = {{"samples", 4}, {"seed", 1}};
+  ASSERT_EQ(hfbake(dir_, {"bake", write_job(dir_, j), "--no-cache", "--quiet"}).exit_code, 0);
+  const json report = json::parse(read_text(dir_ / "out" / "report.json"));
+  const std::string stem = report["methods"].begin().key();
+  const std::string layer = report["methods"][stem]["layers"].begin().key();
+  const std::string metrics = "/methods/" + stem + "/layers/" + layer;
+  struct Damage {
+    std::string pointer, what;
+    std::function<void(json&)> apply;
+  };
+  const std::vector<Damage> damages = {
+      {metrics + "/mae", "must be >= 0", [&](json& d) { d["methods"][stem]["layers"][layer]["mae"] = -1.0; }},
+      {metrics, "missing required key \"rmse\"",
+       [&](json& d) { d["methods"][stem]["layers"][layer].erase("rmse"); }},
+      {"/job/forged", "unknown key", [&](json& d) { d["job"]["forged"] = 1; }},
+  };
+  fs::create_directories(dir_ / "base");
+  for (const Damage& damage : damages) {
+    json d = report;
+    damage.apply(d);
+    std::ofstream(dir_ / "base" / "report.json") << d.dump();
+    const std::string base = (dir_ / "base" / "report.json").string();
+    Outcome r = hfbake(dir_, {"compare", (dir_ / "out" / "report.json").string(), base});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find(base + ": " + damage.pointer + ": " + damage.what), std::string::npos) << r.err;
+
+    json with_baseline = j;
+    with_baseline["output"]["dir"] = "out2";
+    with_baseline["report"] = {{"baseline", "base/report.json"}};
+    const std::string job = write_job(dir_, with_baseline, "b.json");
+    for (const std::string command : {"validate", "bake"}) {
+      r = hfbake(dir_, command == "bake" ? std::vector<std::string>{"bake", job, "--no-cache", "--quiet"}
+                                         : std::vector<std::string>{"validate", job, "--quiet"});
+      EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+      EXPECT_NE(r.err.find(job + ": /report/baseline: " + base + ": " + damage.pointer + ": " + damage.what),
+                std::string::npos)
+          << command << ": " << r.err;
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "out2"));
+  }
   expect_outside_untouched();
 }
 
