@@ -86,6 +86,8 @@ TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
     return e.size() == 1 ? e[0].substr((dir_ / "x.json").string().size() + 2) : std::to_string(e.size());
   };
   EXPECT_EQ(one(minimal(R"(, "bounces": 1.5)")), "/bounces: must be an integer (it is a number)");
+  EXPECT_EQ(one(minimal(R"(, "bounces": 2.0)")),
+            "/bounces: must be an integer (it is 2.0, written with a fraction: write 2)");
   EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": "grey"})")),
             "/surface/albedo: must be a number, an array or an object (it is a string)");
   EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": [0.5, "a", 0.5]})")),
