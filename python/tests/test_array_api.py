@@ -121,3 +121,14 @@ def test_height_unit_factor_converts_a_bands_unit_into_the_pixels():
     assert hfbake.height_unit_factor("", 0.3048) is None
     assert hfbake.height_unit_factor(None) is None
     assert hfbake.height_unit_factor("furlong") is None
+
+
+def test_a_sun_a_hair_off_an_axis_lights_flat_ground():
+    # The sun at 269.997 degrees (the equator at 14:30 on the March equinox): its own search runs a hair off
+    # the field's x axis, where a search that read past the field's last column shaded texels at random.
+    flat = np.zeros((8, 8), np.float32)
+    for _ in range(5):
+        out = hfbake.sun(flat, start="2026-03-20T14:30", end="2026-03-20T14:31", utc_offset=0, step_minutes=1,
+                         latitude=0, longitude=0, layers=["sun_hours", "beam"], threads=1)
+        assert np.all(out["sun_hours"] == np.float32(1 / 60)), out["sun_hours"]
+        assert np.ptp(out["beam"]) == 0 and out["beam"].min() > 12

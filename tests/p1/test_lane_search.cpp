@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "methods/p1/lane_horizons.hpp"
 #include "p1_truth.hpp"
@@ -40,10 +42,12 @@ double sin_of(float m) {
   return m == -std::numeric_limits<float>::infinity() ? -1.0 : std::sin(std::atan(double(m)));
 }
 
-void check(const HeightField& f, const char* name, float tolerance, double curvature = 0) {
+void check(const HeightField& f, const char* name, float tolerance, double curvature = 0,
+           std::vector<double> azimuths = {0.3, 1.2, 2.0, 2.9, 3.7, 4.4, 5.1, 5.9, 0.0, 3.14159265358979 / 4,
+                                           3.14159265358979}) {
   SweepSpec spec;
   spec.directions = 24;
-  spec.azimuths = {0.3, 1.2, 2.0, 2.9, 3.7, 4.4, 5.1, 5.9, 0.0, 3.14159265358979 / 4, 3.14159265358979};
+  spec.azimuths = std::move(azimuths);
   p1::LaneLayout layouts[2];
   layouts[0].build(f, true), layouts[1].build(f, false);
   const std::size_t N = f.texel_count();
@@ -91,6 +95,24 @@ TEST(LaneSearch, EveryTexelEqualsTheExactMarch) {
 
 TEST(LaneSearch, WithinTheToleranceOfTheExactMarch) {
   for (const Case& c : cases()) check(c.field, c.name, 0.02f);
+}
+
+// Rays a hair off an axis or a diagonal (a light's or the sun's exact azimuth: 270.003 degrees) cross the
+// field's other lines only far beyond it; their crossings read inside the layout and give the exact march's
+// slopes, on small fields (a strip wider than the field) and on the cases'.
+TEST(LaneSearch, RaysAHairOffAnAxisEqualTheExactMarch) {
+  const double pi = 3.14159265358979;
+  std::vector<double> azimuths;
+  for (const double axis : {0.0, pi / 4, pi / 2, pi, 1.5 * pi, 1.75 * pi})
+    for (const double off : {1e-4, 5.2e-5, 1e-5, 1e-6, 1e-7})
+      for (const double sign : {-1.0, 1.0}) azimuths.push_back(std::fmod(axis + sign * off + 2 * pi, 2 * pi));
+  std::vector<Case> all = cases();
+  all.push_back({"rough 8x8", truth::rough_field(8, 8, 70, 0.6, 3, 4)});
+  all.push_back({"rough 5x13", truth::rough_field(5, 13, 70, 0.6, 3, 4)});
+  HeightField flat;
+  flat.width = 8, flat.height = 8, flat.z.assign(64, 0.0f);
+  all.push_back({"flat 8x8", flat});
+  for (const Case& c : all) check(c.field, c.name, 0.0f, 0.0, azimuths);
 }
 
 // A curvature large enough to change most horizons on fields this size (a point 40 texels away lowered by

@@ -4,7 +4,9 @@ namespace hfbake::p1 {
 
 std::vector<NearCrossing> near_field_stencil(double dx, double dy, double radius, double texel_size) {
   std::vector<NearCrossing> out;
+  std::vector<double> dist;  // each crossing's s, the sort's key (float inv_s ties crossings a hair apart)
   auto add = [&](double s) {
+    dist.push_back(s);
     double x = s * dx, y = s * dy;
     // Snap coordinates that are integers up to rounding, so the cell below is chosen consistently.
     if (std::fabs(x - std::round(x)) < 1e-9) x = std::round(x);
@@ -48,9 +50,17 @@ std::vector<NearCrossing> near_field_stencil(double dx, double dy, double radius
   family(dx);
   family(dy);
   family(dx + dy);
-  std::sort(out.begin(), out.end(),
-            [](const NearCrossing& a, const NearCrossing& b) { return a.inv_s > b.inv_s; });
-  return out;
+  // By distance, exactly: a ray a hair off an axis crosses a column and a diagonal within float rounding of
+  // each other, and the farther one reads the column beyond (LaneDirection::build bounds a texel's crossings
+  // by the columns they read). Equal distances keep the families' order.
+  std::vector<std::size_t> order(out.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return dist[a] < dist[b]; });
+  std::vector<NearCrossing> sorted;
+  sorted.reserve(out.size());
+  for (const std::size_t k : order) sorted.push_back(out[k]);
+  return sorted;
 }
 
 float near_slope(const HeightField& f, const std::vector<NearCrossing>& stencil, int i, int j, int* which) {

@@ -155,8 +155,10 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
   major.clear();
   curved = curvature != 0;
   e_lo = 0, e_hi = 0;
-  std::vector<double> n_c;
-  n_c.reserve(cs.size());
+  // Each crossing's nearest and farthest column read (major distances in texels: a crossing a hair past a
+  // column reads the next one, with a weight of that hair).
+  std::vector<int> near_col, far_col;
+  near_col.reserve(cs.size()), far_col.reserve(cs.size());
   for (const NearCrossing& c : cs) {
     const int amaj = x_major ? c.ai : c.aj, amin = x_major ? c.aj : c.ai;
     const int bmaj = x_major ? c.bi : c.bj, bmin = x_major ? c.bj : c.bi;
@@ -166,8 +168,9 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
       e_lo = std::min(e_lo, e);
       e_hi = std::max(e_hi, e);
     }
-    n_c.push_back(std::fabs(double(x_major ? c.x : c.y)));
-    major.push_back(float(n_c.back()));
+    near_col.push_back(std::min(std::abs(amaj), std::abs(bmaj)));
+    far_col.push_back(std::max(std::abs(amaj), std::abs(bmaj)));
+    major.push_back(std::fabs(x_major ? c.x : c.y));
   }
   // The strips' bounds cover a column's texels with two windows (lane_kernel.inc): the rays' crossings
   // read within e_hi - e_lo + 2 texels across their lines (about 2 + 2 |g|), never more than 2 kLaneWindow.
@@ -179,18 +182,20 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
     reach_lo[std::size_t(u)] = std::int32_t(fl + std::ceil(phi + e_lo - 1e-6));
     reach_hi[std::size_t(u)] = std::int32_t(fl + std::ceil(phi + e_hi + 1 + 1e-6) - 1);
   }
-  // first_at[n]: the first crossing at major distance >= n; first_at[nmajor + 2 + n] (the second half):
-  // the first beyond n (distance > n), i.e. the end of the crossings on the field up to n.
+  // first_at[n]: the first crossing reading no column nearer than n (the crossings of walk columns n ..
+  // read columns n and beyond); first_at[nmajor + 2 + n] (the second half): the first reading a column
+  // beyond n, i.e. the end of the crossings a texel with n columns ahead on the field may read (the layout
+  // has no padding along its major axis). The crossings are ordered by distance, so both columns only grow.
   const int nn = L.nmajor + 2;
   first_at.assign(std::size_t(2 * nn), std::int32_t(crossings.size()));
   std::size_t c = 0;
   for (int n = 0; n < nn; ++n) {
-    while (c < n_c.size() && n_c[c] < n - 1e-4) ++c;
+    while (c < near_col.size() && near_col[c] < n) ++c;
     first_at[n] = std::int32_t(c);
   }
   c = 0;
   for (int n = 0; n < nn; ++n) {
-    while (c < n_c.size() && n_c[c] <= n + 1e-4) ++c;
+    while (c < far_col.size() && far_col[c] <= n) ++c;
     first_at[nn + n] = std::int32_t(c);
   }
   run = run_of(*this);

@@ -88,8 +88,9 @@ struct LaneCrossing {
   float w, inv_s, drop;
 };
 
-// A direction's crossings in the lane layout, ordered by distance; first_at[n] is the first crossing at a
-// major distance >= n texels (n = 0 .. nmajor + 1).
+// A direction's crossings in the lane layout, ordered by distance; first_at[n] is the first crossing reading
+// no column nearer than n texels along the major axis (n = 0 .. nmajor + 1), first_at[nmajor + 2 + n] the
+// first reading one beyond n.
 struct LaneDirection {
   bool x_major = true;
   int su = 1;    // the ray's step along the major axis (+1 or -1)
