@@ -10,6 +10,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <memory>
+#include <optional>
 
 #include "core/error.hpp"
 #include "io/color.hpp"
@@ -293,6 +294,71 @@ bool integer_to_float(OiioSample type, const void* src, std::size_t n, float* ds
   }
 }
 
+// Where OpenImageIO stretches a file's integer samples over their type's whole range (a 12-bit TIFF's
+// 0..4095 as 0..65535, a 4-bit grey PNG's 0..15 as 0..255, a PGM of maxval 1023 as 0..65535), the stored
+// maximum and how the stretch rounds; GDAL reads the same files as stored, and so do heights
+// (docs/heights.md).
+struct Stretch {
+  std::uint32_t stored_max = 0, type_max = 0;
+  bool floors = false;  // x = floor(v * type_max / stored_max) (PNM); else the nearest (bit replication)
+};
+
+// A PNM's maxval (P2, P3, P5, P6: magic, width, height, maxval, with # comments), or 0.
+std::uint32_t pnm_maxval(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char magic[2] = {};
+  if (!in.read(magic, 2) || magic[0] != 'P' || !std::strchr("2356", magic[1])) return 0;
+  std::uint64_t fields[3] = {};
+  for (std::uint64_t& field : fields) {
+    int ch = in.get();
+    while (ch != EOF && (std::isspace(ch) || ch == '#')) {
+      if (ch == '#')
+        while (ch != EOF && ch != '\n') ch = in.get();
+      ch = in.get();
+    }
+    if (ch == EOF || !std::isdigit(ch)) return 0;
+    for (; ch != EOF && std::isdigit(ch) && field < 1000000; ch = in.get())
+      field = field * 10 + unsigned(ch - '0');
+  }
+  return fields[2] <= 65535 ? std::uint32_t(fields[2]) : 0;
+}
+
+std::optional<Stretch> stretch_of(const fs::path& file, const OiioHeader& spec, OiioSample stored) {
+  if (stored != OiioSample::uint8 && stored != OiioSample::uint16) return std::nullopt;
+  Stretch s;
+  s.type_max = stored == OiioSample::uint8 ? 255 : 65535;
+  if (spec.format_name == "tiff" && spec.bits_per_sample > 0) {
+    s.stored_max = (std::uint32_t(1) << spec.bits_per_sample) - 1;
+  } else if (spec.format_name == "png") {
+    // IHDR: the bit depth and colour type bytes follow the signature, the chunk's length and name, and the
+    // width and height. A grey image of 1, 2 or 4 bits is expanded to 8 (a palette's indices are not
+    // heights: its colours are read).
+    unsigned char head[26] = {};
+    std::ifstream in(file, std::ios::binary);
+    if (!in.read(reinterpret_cast<char*>(head), sizeof head) || head[25] != 0 || head[24] >= 8)
+      return std::nullopt;
+    s.stored_max = (std::uint32_t(1) << head[24]) - 1;
+  } else if (spec.format_name == "pnm") {
+    s.stored_max = pnm_maxval(file);
+    s.floors = true;
+  }
+  if (s.stored_max == 0 || s.stored_max >= s.type_max) return std::nullopt;
+  return s;
+}
+
+// The stored integers back from OpenImageIO's stretched ones (floats holding integers), in place; false
+// where a value is not one the stretch gives.
+bool unstretch(const Stretch& s, float* v, std::size_t n) {
+  const std::uint64_t m = s.stored_max, t = s.type_max;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint64_t x = std::uint64_t(v[i]);
+    const std::uint64_t back = s.floors ? (x * m + t - 1) / t : (2 * x * m + t) / (2 * t);
+    if (s.floors && back * t / m != x) return false;
+    v[i] = float(back);
+  }
+  return true;
+}
+
 // The image libraries' own printing while an image is decoded (libpng's default error handler writes
 // "libpng error: IDAT: Read error" to stderr before OpenImageIO reports the failure): stderr goes to a
 // temporary file for the scope, and only hfbake's own lines (another thread's progress) are printed after.
@@ -350,6 +416,7 @@ Image read_channels(const fs::path& file, const InputSite& site, int chbegin, in
   const bool as_stored = integers == IntegerSamples::stored && chend - chbegin == 1 &&
                          !oiio_sample_is_float(stored) && oiio_sample_bytes(stored) > 0;
   const OiioSample read_type = as_stored ? stored : OiioSample::float32;
+  const std::optional<Stretch> stretch = as_stored ? stretch_of(file, spec, stored) : std::nullopt;
   std::vector<unsigned char> scratch;
   if (as_stored) scratch.resize(std::size_t(band) * row * oiio_sample_bytes(stored));
   for (int y0 = 0; y0 < spec.height; y0 += band) {
@@ -366,6 +433,11 @@ Image read_channels(const fs::path& file, const InputSite& site, int chbegin, in
       fail(site, file,
            "cannot decode the image: unsupported sample type " +
                spec.channel_type_names[std::size_t(chbegin)]);
+    if (stretch && !unstretch(*stretch, out, std::size_t(y1 - y0) * row))
+      fail(site, file,
+           "cannot recover the stored integers of its " + std::to_string(stretch->stored_max) +
+               "-level samples (OpenImageIO stretches them to " + std::to_string(stretch->type_max) +
+               "): convert it to 8- or 16-bit");
     if (progress) progress(double(y1) / spec.height);
   }
   in.reset();

@@ -47,6 +47,9 @@ struct OiioHeader {
   std::vector<OiioSample> channel_formats;      // per channel
   std::vector<std::string> channel_type_names;  // per channel: "uint8", "uint16", "half", ...
   std::string format_name;                      // the reader's ("png", "openexr", ...)
+  // The file's bits per integer sample where the reader names fewer than its type's (a 12-bit TIFF read
+  // as uint16: 12), else 0. OpenImageIO stretches such samples over the type's range.
+  int bits_per_sample = 0;
 };
 
 // An open image file.

@@ -53,6 +53,8 @@ class Reader final : public OiioReader {
       h_.channel_type_names.push_back(s.channelformat(c).c_str());
     }
     h_.format_name = in_->format_name();
+    const int bits = s.get_int_attribute("oiio:BitsPerSample", 0);
+    if (bits > 0 && bits < int(8 * s.format.size())) h_.bits_per_sample = bits;
   }
   ~Reader() override { in_->close(); }
   const OiioHeader& header() const override { return h_; }

@@ -176,6 +176,73 @@ TEST(ImageInput, HeightsInPngsWithTransparencyAreTheStoredIntegers) {
             (std::vector<float>{1000, 1018, 1100}));
 }
 
+// A baseline TIFF of one strip written byte by byte (little-endian; samples of `bits` bits packed MSB first,
+// each row starting on a byte), so that what is stored does not depend on the reader under test.
+void write_raw_tiff(const fs::path& file, int w, int h, int bits, const std::vector<std::uint32_t>& samples) {
+  std::vector<std::uint8_t> data;
+  for (int j = 0; j < h; ++j) {
+    std::uint64_t acc = 0;
+    int have = 0;
+    for (int i = 0; i < w; ++i) {
+      acc = (acc << bits) | samples[std::size_t(j * w + i)], have += bits;
+      for (; have >= 8; have -= 8) data.push_back(std::uint8_t(acc >> (have - 8)));
+    }
+    if (have > 0) data.push_back(std::uint8_t(acc << (8 - have)));
+  }
+  std::vector<std::uint8_t> out = {'I', 'I', 42, 0, 8, 0, 0, 0};
+  const auto le = [&](std::uint32_t x, int bytes) {
+    for (int b = 0; b < bytes; ++b) out.push_back(std::uint8_t(x >> (8 * b)));
+  };
+  const std::uint16_t tags[][2] = {{256, 0}, {257, 0}, {258, 0}, {259, 1}, {262, 1},
+                                   {273, 0}, {277, 1}, {278, 0}, {279, 0}};
+  const std::uint32_t n = sizeof tags / sizeof tags[0];
+  const std::uint32_t data_at = 8 + 2 + 12 * n + 4;
+  le(n, 2);
+  for (const auto& t : tags) {
+    const std::uint32_t value = t[0] == 256   ? std::uint32_t(w)
+                                : t[0] == 257 ? std::uint32_t(h)
+                                : t[0] == 258 ? std::uint32_t(bits)
+                                : t[0] == 273 ? data_at
+                                : t[0] == 278 ? std::uint32_t(h)
+                                : t[0] == 279 ? std::uint32_t(data.size())
+                                              : t[1];
+    le(t[0], 2), le(t[0] == 273 || t[0] == 279 ? 4 : 3, 2), le(1, 4), le(value, 4);  // LONG or SHORT
+  }
+  le(0, 4);  // no next IFD
+  out.insert(out.end(), data.begin(), data.end());
+  std::ofstream(file, std::ios::binary)
+      .write(reinterpret_cast<const char*>(out.data()), std::streamsize(out.size()));
+}
+
+// Integers of fewer bits than their type (a 12-bit TIFF, a 1-, 2- or 4-bit grey PNG, a PGM of maxval 1023
+// or 100) are heights as stored, as GDAL reads them: OpenImageIO stretches them over the type's range.
+TEST(ImageInput, HeightsOfFewerBitsThanTheirTypeAreTheStoredIntegers) {
+  TempFolder dir;
+  const auto heights = [&](const char* name) {
+    return read_image_channel(dir / name, 0, kSite, kChannelSite);
+  };
+  std::vector<std::uint32_t> twelve = {0, 1, 15, 16, 255, 256, 2048, 4000, 4094, 4095};
+  write_raw_tiff(dir / "u12.tif", 5, 2, 12, twelve);
+  EXPECT_EQ(heights("u12.tif").values, std::vector<float>(twelve.begin(), twelve.end()));
+  EXPECT_TRUE(heights("u12.tif").integer);
+  write_raw_png(dir / "g4.png", 16, 1, 4, 0, {{0x01, 0x23, 0x45, 0x67, 0x89, 0xab, 0xcd, 0xef}});
+  std::vector<float> sixteen(16);
+  for (int v = 0; v < 16; ++v) sixteen[std::size_t(v)] = float(v);
+  EXPECT_EQ(heights("g4.png").values, sixteen);
+  write_raw_png(dir / "g2.png", 4, 1, 2, 0, {{0b00011011}});
+  EXPECT_EQ(heights("g2.png").values, (std::vector<float>{0, 1, 2, 3}));
+  write_raw_png(dir / "g1.png", 8, 1, 1, 0, {{0b10110010}});
+  EXPECT_EQ(heights("g1.png").values, (std::vector<float>{1, 0, 1, 1, 0, 0, 1, 0}));
+  std::ofstream(dir / "m1023.pgm", std::ios::binary)
+      << std::string("P5\n# a comment\n4 1\n1023\n") << std::string("\x00\x00\x00\x01\x02\x00\x03\xff", 8);
+  EXPECT_EQ(heights("m1023.pgm").values, (std::vector<float>{0, 1, 512, 1023}));
+  std::ofstream(dir / "m100.pgm", std::ios::binary)
+      << std::string("P5 4 1 100\n") << std::string("\x00\x01\x32\x64", 4);
+  EXPECT_EQ(heights("m100.pgm").values, (std::vector<float>{0, 1, 50, 100}));
+  std::ofstream(dir / "a7.pgm") << "P2\n4 1\n7\n0 3 6 7\n";
+  EXPECT_EQ(heights("a7.pgm").values, (std::vector<float>{0, 3, 6, 7}));
+}
+
 TEST(ImageInput, MissingFile) {
   TempFolder dir;
   const fs::path f = dir / "nope.exr";
