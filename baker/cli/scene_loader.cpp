@@ -390,6 +390,10 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
                      " times too flat; warp the DEM to a CRS true to scale there (a UTM zone), or give "
                      "height_scale " +
                      short_num(k) + " (docs/gis.md)";
+  } else if (s.format == "jpeg" || s.format == "JPEG") {
+    report.warning =
+        "JPEG is lossy: the heights carry its compression artefacts (a TIFF or PNG of the same "
+        "heights keeps what was stored; docs/heights.md)";
   }
   return report;
 }

@@ -234,6 +234,17 @@ TEST_F(CliHeights, TheHeightsLineNamesTheChannelAndTheFilesScale) {
       << r.err;
 }
 
+// JPEG heights are lossy: validate says so (a plausible relief, so no other warning takes its place).
+TEST_F(CliHeights, JpegHeightsAreWarnedLossy) {
+  write_image("h.jpg", integer_heights(255), OIIO::TypeDesc::UINT8);
+  const Result r =
+      hfbake("validate " + write_job("jpg", {{"image", "h.jpg"}, {"height_scale", 0.05}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("hfbake: warning: " + (dir_ / "jpg.json").string() + ": JPEG is lossy"),
+            std::string::npos)
+      << r.err;
+}
+
 // Without height_scale, a 16-bit image's integers are world units: validate states the range and warns that
 // the relief is implausible; a float image of [0, 1] heights over a 48-unit field is warned nearly flat.
 TEST_F(CliHeights, ValidateStatesTheRangeAndWarnsOnImplausibleRelief) {
