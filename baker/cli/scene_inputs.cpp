@@ -229,6 +229,7 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
                                site(job, "/height/channel"), progress);
     source.reader = "OpenImageIO";
     source.format = info.format;
+    source.unread = info.unread;
     if (info.channels > 1) {
       std::string names;
       for (const std::string& n : info.channel_names) names += (names.empty() ? "" : ", ") + n;

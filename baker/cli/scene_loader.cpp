@@ -395,6 +395,9 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
         "JPEG is lossy: the heights carry its compression artefacts (a TIFF or PNG of the same "
         "heights keeps what was stored; docs/heights.md)";
   }
+  if (!s.unread.empty())
+    report.warning +=
+        (report.warning.empty() ? "" : "; and ") + h["image"].get<std::string>() + ": " + s.unread;
   return report;
 }
 

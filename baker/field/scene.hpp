@@ -67,6 +67,8 @@ struct HeightSource {
   std::string pixel_unit;
   double pixel_unit_metres = 1;
   std::string height_unit;
+  // What of the image file is not read (io/image_input.hpp ImageInfo::unread), warned about; "" when nothing.
+  std::string unread;
 };
 
 // The texels of a field whose results are kept (a tile's interior, in the field's own coordinates;

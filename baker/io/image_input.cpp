@@ -225,6 +225,22 @@ ImageInfo info_of(const OiioHeader& spec) {
   info.format = spec.format_name;
   for (int c = 0; c < info.channels; ++c)
     info.sample_types.push_back(spec.channel_type_names[std::size_t(c)]);
+  if (spec.more_subimages) info.unread = "it holds more than one part or page and only the first is read";
+  const bool windowed = spec.full_width > 0 && spec.full_height > 0 &&
+                        (spec.x != spec.full_x || spec.y != spec.full_y || spec.width != spec.full_width ||
+                         spec.height != spec.full_height);
+  if (windowed) {
+    const auto box = [](int x, int y, int w, int h) {
+      std::string b = "(";
+      b += std::to_string(x), b += ", ", b += std::to_string(y), b += ")-(";
+      b += std::to_string(x + w - 1), b += ", ", b += std::to_string(y + h - 1), b += ")";
+      return b;
+    };
+    info.unread += std::string(info.unread.empty() ? "" : "; ") + "its data window " +
+                   box(spec.x, spec.y, spec.width, spec.height) + " is not its display window " +
+                   box(spec.full_x, spec.full_y, spec.full_width, spec.full_height) +
+                   ": the field, and every output, is the data window's pixels from (0, 0)";
+  }
   return info;
 }
 

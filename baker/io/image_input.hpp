@@ -26,6 +26,9 @@ struct ImageInfo {
   bool float_data = false;  // half/float/double samples (EXR, HDR, float TIFF); else integer (8/16-bit)
   std::string format;       // OpenImageIO's format name ("openexr", "png", "tiff", ...)
   std::vector<std::string> sample_types;  // each channel's stored type: "uint8", "uint16", "half", ...
+  // What of the file is not read, in a phrase ("" when nothing): the parts or pages after the first; a data
+  // window that is not the display window (an EXR's pixels are read from the data window's corner).
+  std::string unread;
 };
 ImageInfo probe_image(const std::filesystem::path& file, const InputSite& site);
 

@@ -50,6 +50,9 @@ struct OiioHeader {
   // The file's bits per integer sample where the reader names fewer than its type's (a 12-bit TIFF read
   // as uint16: 12), else 0. OpenImageIO stretches such samples over the type's range.
   int bits_per_sample = 0;
+  // The display window (OpenEXR's; every other format's is the data window x, y, width, height).
+  int full_x = 0, full_y = 0, full_width = 0, full_height = 0;
+  bool more_subimages = false;  // a second part (EXR) or page (TIFF) follows the one read
 };
 
 // An open image file.

@@ -55,6 +55,10 @@ class Reader final : public OiioReader {
     h_.format_name = in_->format_name();
     const int bits = s.get_int_attribute("oiio:BitsPerSample", 0);
     if (bits > 0 && bits < int(8 * s.format.size())) h_.bits_per_sample = bits;
+    h_.full_x = s.full_x, h_.full_y = s.full_y, h_.full_width = s.full_width, h_.full_height = s.full_height;
+    // Whether a second subimage exists, then back to the first (the one every read uses).
+    h_.more_subimages = in_->seek_subimage(1, 0);
+    if (h_.more_subimages) in_->seek_subimage(0, 0);
   }
   ~Reader() override { in_->close(); }
   const OiioHeader& header() const override { return h_; }

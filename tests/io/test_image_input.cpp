@@ -243,6 +243,41 @@ TEST(ImageInput, HeightsOfFewerBitsThanTheirTypeAreTheStoredIntegers) {
   EXPECT_EQ(heights("a7.pgm").values, (std::vector<float>{0, 3, 6, 7}));
 }
 
+// What of a file is not read is named: the parts after an EXR's first, a data window that is not the
+// display window (the pixels are the data window's).
+TEST(ImageInput, PartsAndWindowsNotReadAreNamed) {
+  TempFolder dir;
+  const std::vector<float> px(16 * 8, 1.0f);
+  {
+    OIIO::ImageSpec a(16, 8, 1, OIIO::TypeDesc::FLOAT), b(4, 4, 1, OIIO::TypeDesc::FLOAT);
+    a.channelnames = {"Z"}, b.channelnames = {"R"};
+    a.attribute("oiio:subimagename", "heights"), b.attribute("oiio:subimagename", "other");
+    b.full_width = 16, b.full_height = 8;  // the parts of one file share a display window
+    const OIIO::ImageSpec specs[] = {a, b};
+    auto out = OIIO::ImageOutput::create((dir / "two.exr").string());
+    ASSERT_TRUE(out && out->open((dir / "two.exr").string(), 2, specs));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    ASSERT_TRUE(out->open((dir / "two.exr").string(), b, OIIO::ImageOutput::AppendSubimage));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close());
+  }
+  const ImageInfo two = probe_image(dir / "two.exr", kSite);
+  EXPECT_EQ(two.width, 16);
+  EXPECT_EQ(two.unread, "it holds more than one part or page and only the first is read");
+  {
+    OIIO::ImageSpec w(16, 8, 1, OIIO::TypeDesc::FLOAT);
+    w.x = 10, w.y = 5, w.full_x = 0, w.full_y = 0, w.full_width = 100, w.full_height = 50;
+    auto out = OIIO::ImageOutput::create((dir / "window.exr").string());
+    ASSERT_TRUE(out && out->open((dir / "window.exr").string(), w));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close());
+  }
+  EXPECT_EQ(
+      probe_image(dir / "window.exr", kSite).unread,
+      "its data window (10, 5)-(25, 12) is not its display window (0, 0)-(99, 49): the field, and every "
+      "output, is the data window's pixels from (0, 0)");
+  write_test_image(dir / "plain.exr", 16, 8, 1, px, OIIO::TypeDesc::FLOAT);
+  EXPECT_EQ(probe_image(dir / "plain.exr", kSite).unread, "");
+}
+
 TEST(ImageInput, MissingFile) {
   TempFolder dir;
   const fs::path f = dir / "nope.exr";
