@@ -80,7 +80,13 @@ FieldSize probe_field_size(const Job& job) {
 std::array<double, 2> job_texel_sides(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
   if (h.contains("image"))
-    if (const std::optional<std::array<double, 2>> from_file = image_texel_size(job)) return *from_file;
+    if (const std::optional<std::array<double, 2>> from_file = image_texel_size(job)) {
+      // Sides equal to 1e-9 (a geographic raster sized square, its local frame's rounding) are square: no
+      // texel position across the largest field moves by 1e-4 texels.
+      const auto [a, b] = *from_file;
+      if (std::fabs(a - b) <= 1e-9 * std::max(a, b)) return {a, a};
+      return *from_file;
+    }
   if (h.contains("texel_size") && h["texel_size"].is_string())
     throw InputError(job.file.string(), "/height/texel_size",
                      "is \"from_file\" but the field is procedural: give texel_size as a number");

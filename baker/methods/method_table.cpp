@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 
 #include "core/error.hpp"
 #include "methods/ao/bake_ao.hpp"
@@ -60,8 +61,15 @@ MethodConfig resolve_method(const nlohmann::json& entry, const MethodContext& co
     throw InputError(file, pointer + "/method",
                      "unknown method \"" + name + "\" (one of " + quoted_list(method_names()) + ")");
   if (!context.field.square_texels() && !m->rectangular_texels) {
+    // As many digits as show the two sides differ (a geographic raster's can agree to 6 and more).
     char sides[96];
-    std::snprintf(sides, sizeof sides, "%.6g x %.6g", context.field.dx(), context.field.dy());
+    for (int digits = 6; digits <= 17; ++digits) {
+      char a[40], b[40];
+      std::snprintf(a, sizeof a, "%.*g", digits, context.field.dx());
+      std::snprintf(b, sizeof b, "%.*g", digits, context.field.dy());
+      std::snprintf(sides, sizeof sides, "%s x %s", a, b);
+      if (std::strcmp(a, b) != 0) break;
+    }
     throw InputError(
         file, pointer + "/method",
         name + " needs square texels and this field's are " + sides +

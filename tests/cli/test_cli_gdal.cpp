@@ -390,6 +390,26 @@ TEST_F(CliGdal, GeographicRastersAreCheckedInOneLine) {
       << in->spec().get_string_attribute("hfbake:texel_size");
 }
 
+// A geographic raster whose pixel is 10 x 10 m in its local frame (WGS 84's radii of curvature at its
+// centre latitude, 45.99525 N) up to the frame's rounding has square texels: a square-texel method bakes it.
+TEST_F(CliGdal, AGeographicRasterSizedSquareHasSquareTexels) {
+  const double dlon = 0.00012908235150332906, dlat = 8.996751886820413e-05, lat = 45.995252219470;
+  char ullr[160];
+  std::snprintf(ullr, sizeof ullr, "-a_ullr 15.0 %.15f %.15f %.15f", lat + 32 * dlat, 15.0 + 64 * dlon,
+                lat - 32 * dlat);
+  translate("-srcwin 0 0 64 64 -a_srs EPSG:4326 " + std::string(ullr) + " '" + kDem.string() +
+            "' square.tif");
+  const nlohmann::json j = {{"version", 1},
+                            {"name", "sq"},
+                            {"height", {{"image", "square.tif"}, {"curvature", false}}},
+                            {"bake", {{{"method", "hbao"}, {"directions", 4}}}},
+                            {"output", {{"dir", "out_sq"}}}};
+  std::ofstream(dir_ / "sq.json") << j.dump(2);
+  const Result r = hfbake("validate " + (dir_ / "sq.json").string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("64x64 texels of 10 ("), std::string::npos) << r.err;
+}
+
 // The median and the 95th percentile of |a - b| over the pairs given.
 std::pair<double, double> median_p95(std::vector<double> d) {
   if (d.empty()) return {NAN, NAN};
