@@ -165,6 +165,7 @@ const char* reader_for(const fs::path& file, const InputSite& site) {
   unsigned char b[12] = {};
   in.read(reinterpret_cast<char*>(b), sizeof b);
   const std::size_t n = std::size_t(in.gcount());
+  if (n == 0) fail(site, file, "is empty (0 bytes)");
   auto starts = [&](std::initializer_list<int> bytes) {
     if (bytes.size() > n) return false;
     std::size_t i = 0;
@@ -442,8 +443,8 @@ Image read_channels(const fs::path& file, const InputSite& site, int chbegin, in
     std::string err;
     if (!in->read_rows(y0, y1, chbegin, chend, read_type, dst, err)) {
       fail(site, file,
-           "cannot decode the image (corrupt or truncated?) at row " + std::to_string(y0) + ": " +
-               first_line(err));
+           "cannot decode the image (corrupt or truncated?) in rows " + std::to_string(y0) + ".." +
+               std::to_string(y1 - 1) + ": " + first_line(err));
     }
     if (as_stored && !integer_to_float(stored, scratch.data(), std::size_t(y1 - y0) * row, out))
       fail(site, file,

@@ -293,9 +293,13 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
       fail(ptr, p.string() + " is a folder, not a file");
     else if (fs::exists(p, ec))
       fail(ptr, p.string() + " is not a regular file (a device, a pipe or a socket)");
-    else if (fs::is_symlink(fs::symlink_status(p, ec)))
-      fail(ptr, p.string() + " is a link to nothing");
-    else
+    else if (fs::is_symlink(fs::symlink_status(p, ec))) {
+      std::error_code why;
+      (void)fs::status(p, why);
+      fail(ptr, p.string() + (why == std::errc::too_many_symbolic_link_levels
+                                  ? " is a link that leads back to itself (a loop)"
+                                  : " is a link to nothing"));
+    } else
       fail(ptr, "no such file: " + p.string());
   }
   // The baseline is read after the bake; a missing one must not cost the bake. (Not an input of the

@@ -93,7 +93,7 @@ std::set<std::string> listing(const fs::path& dir) {
   out.insert(".");
   for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
        it.increment(ec))
-    out.insert(fs::relative(it->path(), dir).string());
+    out.insert(it->path().lexically_relative(dir).string());  // not fs::relative: it follows links
   return out;
 }
 
@@ -458,6 +458,19 @@ std::vector<Case> cases() {
     json j = base_job();
     j["height"] = {{"image", "/dev/zero"}};
     return both(write_job(d, j), "/height/image", "/dev/zero is not a regular file");
+  });
+  add("HeightImageIsALinkLoop", [](const fs::path& d) {
+    fs::create_symlink("b.png", d / "a.png");
+    fs::create_symlink("a.png", d / "b.png");
+    json j = base_job();
+    j["height"] = {{"image", "a.png"}};
+    return both(write_job(d, j), "/height/image", "a.png is a link that leads back to itself (a loop)");
+  });
+  add("HeightImageIsEmpty", [](const fs::path& d) {
+    std::ofstream(d / "h.png");
+    json j = base_job();
+    j["height"] = {{"image", "h.png"}};
+    return both(write_job(d, j), "/height/image", "h.png: is empty (0 bytes)");
   });
   // Files a bake would replace or refuse only after baking, refused by validate.
   add("HeightImageNamedAsAnOutput", [](const fs::path& d) {

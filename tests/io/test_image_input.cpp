@@ -501,7 +501,7 @@ TEST(ImageInput, TruncatedBigPngIsAOneLineErrorNamingTheFile) {
   fs::resize_file(dir / "big.png", size / 2);
   const std::string line = error_line([&] { read_image_channel(dir / "big.png", 0, kSite, kChannelSite); });
   EXPECT_EQ(line.rfind("jobs/x.json: /height/image: " + (dir / "big.png").string() +
-                           ": cannot decode the image (corrupt or truncated?) at row ",
+                           ": cannot decode the image (corrupt or truncated?) in rows ",
                        0),
             0u)
       << line;
