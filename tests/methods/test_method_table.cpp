@@ -175,7 +175,12 @@ TEST(MethodTable, ResolvedParametersHoldTheDefaults) {
       resolved_params({{"method", "hbao"}, {"radius", 3}, {"step", 0.5}}, context(), "", "/bake/0");
   EXPECT_EQ(stepped["surface"], "bilinear");  // a step means the stepped march
   EXPECT_EQ(stepped["estimator"], "slab");
-  EXPECT_EQ(resolved_params({{"method", "farfield"}}, context(), "", "/bake/0")["surface"], "triangles");
+  const nlohmann::json farfield = resolved_params({{"method", "farfield"}}, context(), "", "/bake/0");
+  EXPECT_EQ(farfield["surface"], "triangles");
+  EXPECT_EQ(farfield["near_field"], 12.0);  // 1.5 intervals of 8, as the bake uses it
+  EXPECT_EQ(
+      resolved_params({{"method", "farfield"}, {"interval", 4}}, context(), "", "/bake/0")["near_field"],
+      6.0);
   EXPECT_EQ(hbao["max_distance"], 3.0);  // the step falloff's support
   EXPECT_EQ(hbao["layers"], nlohmann::json({"obscurance", "bent_normal"}));
   const nlohmann::json plain = resolved_params({{"method", "hbao"}}, context(), "", "/bake/0");

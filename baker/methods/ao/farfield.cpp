@@ -444,7 +444,11 @@ FarfieldOptions read_farfield_options(Params& in) {
   read_weighting(in, false);
   o.directions = in.integer("directions", 16, 1, 4096);
   o.interval = in.integer("interval", 8, 1, 256);
-  o.near_field = in.number("near_field", -1, 0, 1e6);  // -1: the default (FarfieldOptions)
+  o.near_field = in.number("near_field", -1, 0, 1e6);
+  if (o.near_field < 0) {  // the default, 1.5 intervals (FarfieldOptions), recorded as the bake uses it
+    o.near_field = 1.5 * o.interval;
+    in.resolve("near_field", o.near_field);
+  }
   o.sector_average = in.boolean("sector_average", true);
   o.split = in.boolean("split", true);
   o.growth = in.number("growth", 1.0, 0.125, 8.0);
