@@ -389,6 +389,36 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
   }
 }
 
+// For job i of one call, a line for each other job whose outputs would be the same files
+// (docs/output_folders.md): the same output folder, however written, and the same name (every output), or
+// both with a reference (report.json and report.html, which carry no job name). Null entries are skipped.
+std::vector<std::string> output_collisions(const std::vector<const Job*>& jobs, std::size_t i) {
+  std::vector<std::string> lines;
+  if (!jobs[i]) return lines;
+  const Job& a = *jobs[i];
+  const auto folder = [](const fs::path& d) {  // "out", "./out/" and a link to it: one folder
+    std::error_code ec;
+    fs::path p = fs::weakly_canonical(fs::absolute(d), ec);
+    if (ec) p = fs::absolute(d).lexically_normal();
+    return p.has_filename() ? p : p.parent_path();
+  };
+  const fs::path dir = folder(a.output.dir);
+  for (std::size_t k = 0; k < jobs.size(); ++k) {
+    if (k == i || !jobs[k]) continue;
+    const Job& b = *jobs[k];
+    if (folder(b.output.dir) != dir) continue;
+    if (a.name == b.name)
+      lines.push_back(a.file.string() + ": /name: its outputs (" + a.output_path("*", ".exr").string() +
+                      ", report.json) would be the same files as " + b.file.string() +
+                      "'s (give one another name or output folder)");
+    else if (a.has_reference && b.has_reference)
+      lines.push_back(a.file.string() + ": /output/dir: its report (" +
+                      (a.output.dir / "report.json").string() + ", report.html) would be the same files as " +
+                      b.file.string() + "'s (both have a reference: give each its own output folder)");
+  }
+  return lines;
+}
+
 }  // namespace
 
 std::optional<std::size_t> parse_memory_size(const std::string& text) {
@@ -444,9 +474,25 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
   }
   for (const std::string& e : suite_errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
   if (!suite_errors.empty()) exit_code = 2;
+  // Every job loaded and resolved first: jobs whose outputs collide are refused as bake refuses them.
+  std::vector<JobLoad> loads;
   for (const fs::path& file : jobs) {
     JobLoad load = load_job(file, std::nullopt);
     if (load.job) load.errors = resolve_job(*load.job);
+    if (!load.errors.empty()) load.job.reset();
+    loads.push_back(std::move(load));
+  }
+  {
+    std::vector<const Job*> valid;
+    for (const JobLoad& l : loads) valid.push_back(l.job ? &*l.job : nullptr);
+    for (std::size_t i = 0; i < loads.size(); ++i) {
+      std::vector<std::string> lines = output_collisions(valid, i);
+      loads[i].errors.insert(loads[i].errors.end(), lines.begin(), lines.end());
+    }
+  }
+  for (std::size_t n = 0; n < jobs.size(); ++n) {
+    const fs::path& file = jobs[n];
+    JobLoad& load = loads[n];
     for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
     if (!load.job || !load.errors.empty()) {
       exit_code = 2;
@@ -553,20 +599,18 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
       outcomes[i].status = JobStatus::invalid;
     }
   }
-  // Two jobs whose outputs would land on the same paths (same output folder and name): both refused before
-  // anything is baked, naming each other (one would silently replace the other's files).
-  for (std::size_t i = 0; i < jobs.size(); ++i)
-    for (std::size_t k = 0; k < jobs.size(); ++k) {
-      if (i == k || !jobs[i] || !jobs[k]) continue;
-      if (jobs[i]->output.dir != jobs[k]->output.dir || jobs[i]->name != jobs[k]->name) continue;
-      const std::string e = jobs[i]->file.string() + ": /name: its outputs (" +
-                            jobs[i]->output_path("*", ".exr").string() +
-                            ", report.json) would be the same files as " + jobs[k]->file.string() +
-                            "'s (give one another name or output folder)";
-      std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
-      outcomes[i].errors.push_back(e);
-      outcomes[i].status = JobStatus::invalid;
-    }
+  // Two jobs whose outputs would land on the same paths: both refused before anything is baked, naming
+  // each other (one would silently replace the other's files).
+  {
+    std::vector<const Job*> valid;
+    for (const std::optional<Job>& j : jobs) valid.push_back(j ? &*j : nullptr);
+    for (std::size_t i = 0; i < jobs.size(); ++i)
+      for (const std::string& e : output_collisions(valid, i)) {
+        std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+        outcomes[i].errors.push_back(e);
+        outcomes[i].status = JobStatus::invalid;
+      }
+  }
   for (std::size_t i = 0; i < jobs.size(); ++i)
     if (outcomes[i].status == JobStatus::invalid) jobs[i].reset();
   // A summary written over a job, a suite or an input: refused before anything is baked (and no summary).

@@ -138,6 +138,28 @@ void check_output_folder(const Job& job) {
                        file.string() + " is where this job writes an output: a bake would replace it; move " +
                            "it, or give the job another name or output.dir");
   }
+  // Another job's report: report.json and report.html carry no job name, so a job with a reference writes
+  // them over the report of any other job baked into the same folder (docs/output_folders.md).
+  if (job.has_reference) {
+    const fs::path report = job.output.dir / "report.json";
+    if (fs::exists(fs::symlink_status(report, ec))) {
+      std::string owner;
+      try {
+        const nlohmann::json doc = read_json_file(report);
+        if (doc.is_object() && doc.contains("job") && doc["job"].is_object() && doc["job"].contains("name") &&
+            doc["job"]["name"].is_string())
+          owner = doc["job"]["name"].get<std::string>();
+      } catch (const std::exception&) {
+      }
+      if (owner != job.name)
+        throw InputError(
+            job.file.string(), "/output/dir",
+            report.string() + " is " +
+                (owner.empty() ? std::string("no report of hfbake's") : "job \"" + owner + "\"'s report") +
+                ": this job's report would replace it; give the job an output folder of its own "
+                "(a job with a reference writes report.json and report.html there), or remove it");
+    }
+  }
 }
 
 std::vector<std::string> resolve_job_checks(Job& job);

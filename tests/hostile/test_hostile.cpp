@@ -556,6 +556,35 @@ std::vector<Case> cases() {
             {"bake", a, b, "--out", (d / "out").string(), "--quiet"}, a, "/name", "would be the same files"};
       },
       2, 2);
+  add(
+      "ValidateCollidingJobs",  // as bake refuses them, the folder however written
+      [](const fs::path& d) {
+        fs::create_directories(d / "x");
+        fs::create_directories(d / "y");
+        json a = base_job(), b = base_job();
+        a["output"]["dir"] = "../out", b["output"]["dir"] = ".././out/";
+        const std::string ja = write_job(d, a, "x/job.json"), jb = write_job(d, b, "y/job.json");
+        return CaseSetup{{"validate", ja, jb}, ja, "/name", "would be the same files"};
+      },
+      2, 2);
+  add(
+      "ReportsOfTwoJobsInOneFolder",  // report.json carries no job name
+      [](const fs::path& d) {
+        json a = base_job(), b = base_job();
+        a["reference"] = b["reference"] = {{"samples", 4}};
+        b["name"] = "u";
+        const std::string ja = write_job(d, a, "a.json"), jb = write_job(d, b, "b.json");
+        return CaseSetup{
+            {"bake", ja, jb, "--no-cache", "--quiet"}, ja, "/output/dir", "both have a reference"};
+      },
+      2, 2);
+  add("AnotherJobsReportInTheFolder", [](const fs::path& d) {
+    fs::create_directories(d / "out");
+    std::ofstream(d / "out" / "report.json") << R"({"job": {"name": "other"}})";
+    json j = base_job();
+    j["reference"] = {{"samples", 4}};
+    return both(write_job(d, j), "/output/dir", "report.json is job \"other\"'s report");
+  });
   add("SummaryIntoAFileNotAFolder", [](const fs::path& d) {
     std::ofstream(d / "file") << "x";
     json j = base_job();
