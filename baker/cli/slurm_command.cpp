@@ -230,7 +230,19 @@ int run_slurm(const SlurmOptions& o) {
       if (std::any_of(text.begin(), text.end(), [](char c) { return (unsigned char)c < 0x20 || c == 0x7f; }))
         return fail(what + " \"" + text.substr(0, text.find_first_of("\r\n")) +
                     "...\" holds a line break or control character: it cannot go into a Slurm script");
+    // The #SBATCH values themselves (--chdir, --output, --job-name): Slurm splits them at a blank and expands
+    // a % (%j, %A, ...) in a file name.
+    for (const auto& [what, text] : {lines[0], lines[1], lines[2]})
+      if (text.find_first_of(" \t%") != std::string::npos)
+        return fail(what + " \"" + text +
+                    "\" holds a blank or a %: Slurm's #SBATCH lines would split or expand " +
+                    "it; use a folder and job file whose names have neither");
   }
+  // A job path as the scripts pass it: one that starts with '-' would be read as an option.
+  const auto as_argument = [](const fs::path& p) {
+    const std::string s = p.string();
+    return quoted(!s.empty() && s[0] == '-' ? "./" + s : s);
+  };
   std::ostringstream head;
   auto common_head = [&](std::ostringstream& s, const std::string& job_name, const char* log) {
     s << "#SBATCH --job-name=" << job_name << "\n";
@@ -260,7 +272,7 @@ int run_slurm(const SlurmOptions& o) {
        << "set -euo pipefail\n"
        << "N=" << o.shards << "\n"
        << "JOBS=(\n";
-  for (const Task& t : tasks) bake << "  " << quoted(t.job.string()) << "\n";
+  for (const Task& t : tasks) bake << "  " << as_argument(t.job) << "\n";
   bake << ")\nOUTS=(\n";
   for (const Task& t : tasks) bake << "  " << quoted(t.out.string()) << "\n";
   bake << ")\nSHARDS=(";
@@ -285,7 +297,7 @@ int run_slurm(const SlurmOptions& o) {
   common_head(merge, "hfbake-merge-" + name, "%x-%j.out");
   merge << "set -euo pipefail\n"
         << "exec " << exe << " merge";
-  for (const fs::path& f : o.inputs) merge << " " << quoted(f.string());
+  for (const fs::path& f : o.inputs) merge << " " << as_argument(f);
   if (o.out) merge << " --out " << quoted(o.out->string());
   if (o.tile_size > 0) merge << " --tiles --tile-size " << o.tile_size;
   merge << " --threads \"${SLURM_CPUS_PER_TASK:-" << o.threads << "}\"" << bake_flags(o)

@@ -144,6 +144,7 @@ TiledGeoTiff::TiledGeoTiff(const fs::path& work, int width, int height, const st
 
 TiledGeoTiff::~TiledGeoTiff() {
   if (!dataset_->ds) return;
+  GdalQuiet gdal;  // closing flushes the cache: on a full disk, GDAL's messages are not hfbake's line
   dataset_->ds.reset();
   std::error_code ec;
   fs::remove(work_, ec);

@@ -78,4 +78,30 @@ TEST(CliSlurm, ALineBreakInAPathIsRefused) {
   fs::remove_all(dir);
 }
 
+// Slurm splits an #SBATCH value at a blank and expands a % in a file name: a folder with either is refused
+// in one line. A job file whose name starts with '-' is passed as ./-name, never as an option.
+TEST(CliSlurm, SbatchValuesAndJobPathsStayWhole) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("hfbake_test_slurm_values_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  nlohmann::json job = {{"version", 1},
+                        {"name", "v"},
+                        {"height", {{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}},
+                        {"bake", {{{"method", "p1"}, {"directions", 8}}}},
+                        {"output", {{"dir", "out 50%"}}}};
+  std::ofstream(dir / "v.json") << job.dump();
+  SlurmRun r = run_in(dir, "slurm v.json --shards 2 --dry-run");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("holds a blank or a %"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  job["output"]["dir"] = "out";
+  std::ofstream(dir / "-v.json") << job.dump();
+  r = run_in(dir, "slurm --shards 2 --dry-run -- -v.json");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("  './-v.json'\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(" merge './-v.json'"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
 }  // namespace
