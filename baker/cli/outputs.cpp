@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
@@ -464,6 +465,13 @@ std::vector<fs::path> OutputStage::commit() {
   };
   for (const fs::path& name : staged_) refuse_folder(job_.output.dir / name);
   refuse_folder(owner_record(job_));
+  // Every output on the disk before any moves (core/safe_file.hpp sync_file): a machine that crashes after
+  // the moves finds whole files under the outputs' names, and a disk that could not take a file (a full
+  // network disk reports it only at the flush) fails the job while the previous outputs are still there.
+  for (const fs::path& name : staged_)
+    if (const int e = sync_file(stage_ / name))
+      throw InputError((job_.output.dir / name).string(), "",
+                       "cannot write file: " + std::error_code(e, std::generic_category()).message());
   for (const fs::path& name : staged_) {
     const fs::path target = job_.output.dir / name;
     std::error_code ec;
@@ -482,6 +490,10 @@ std::vector<fs::path> OutputStage::commit() {
   std::error_code ec;
   fs::rename(staged_record, record, ec);
   if (ec) throw InputError(record.string(), "", "cannot move into place: " + ec.message());
+  // The moves themselves on the disk: the output folder's entries (and textures/'s).
+  std::set<fs::path> folders = {job_.output.dir};
+  for (const fs::path& name : staged_) folders.insert((job_.output.dir / name).parent_path());
+  for (const fs::path& folder : folders) sync_folder(folder);
   staged_.clear();
   committed_ = true;
   return final_paths;

@@ -182,10 +182,31 @@ bool TempFile::write(const void* data, std::size_t n) {
 void TempFile::commit() {
   const int fd = fd_;
   fd_ = -1;
+  if (fsync(fd) != 0 && errno != EINVAL) {  // EINVAL: a file system without fsync
+    const int e = errno;
+    close(fd);
+    throw system_error(e, "cannot write " + tmp_.string());
+  }
   if (close(fd) != 0) throw system_error(errno, "cannot write " + tmp_.string());
   if (rename(tmp_.c_str(), final_.c_str()) != 0)
     throw system_error(errno, "cannot rename into " + final_.string());
   committed_ = true;
+  sync_folder(final_.has_parent_path() ? final_.parent_path() : fs::path("."));
+}
+
+int sync_file(const fs::path& path) {
+  const int fd = open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) return errno;
+  const int r = fsync(fd) != 0 && errno != EINVAL ? errno : 0;
+  close(fd);
+  return r;
+}
+
+void sync_folder(const fs::path& folder) {
+  const int fd = open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;  // the rename stands; only its durability is not asked for
+  (void)fsync(fd);
+  close(fd);
 }
 
 void write_file_atomically(const fs::path& final, std::string_view bytes) {

@@ -59,6 +59,12 @@ class TempFolder {
 // `bytes` as the whole content of `final`, through a TempFile. Errors: std::system_error.
 void write_file_atomically(const std::filesystem::path& final, std::string_view bytes);
 
+// Durability: what a rename puts in place survives a crash of the machine, not only of the process. A file's
+// bytes are flushed to the disk before it is renamed into place, and the folder after (fsync(2)).
+// sync_file: 0, or the errno of a write the disk could not take (a full disk found only at the flush).
+int sync_file(const std::filesystem::path& path);
+void sync_folder(const std::filesystem::path& folder);
+
 // True when `path` is a folder itself (lstat: a link to one is not).
 bool is_real_directory(const std::filesystem::path& path);
 

@@ -1,0 +1,50 @@
+// core/safe_file.hpp: what is renamed into place is flushed first (sync_file), never through a link, and
+// write_file_atomically leaves the whole content or the previous file.
+#include <gtest/gtest.h>
+
+#include <cerrno>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "core/safe_file.hpp"
+
+namespace hfbake {
+namespace {
+namespace fs = std::filesystem;
+
+class SafeFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("hfbake_safe_file_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(SafeFile, SyncFileFlushesAFileAndNeverFollowsALink) {
+  std::ofstream(dir_ / "a") << "bytes";
+  EXPECT_EQ(sync_file(dir_ / "a"), 0);
+  EXPECT_EQ(sync_file(dir_ / "missing"), ENOENT);
+  fs::create_symlink(dir_ / "a", dir_ / "link");
+  EXPECT_EQ(sync_file(dir_ / "link"), ELOOP);  // O_NOFOLLOW: a planted link is not what was staged
+  sync_folder(dir_);                           // no error to report: the rename stands either way
+  sync_folder(dir_ / "missing");
+}
+
+TEST_F(SafeFile, WriteFileAtomicallyReplacesALinkNotItsTarget) {
+  std::ofstream(dir_ / "target") << "theirs";
+  fs::create_symlink(dir_ / "target", dir_ / "out.json");
+  write_file_atomically(dir_ / "out.json", "ours");
+  EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(dir_ / "out.json")));
+  std::ifstream ours(dir_ / "out.json"), theirs(dir_ / "target");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(ours), {}), "ours");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(theirs), {}), "theirs");
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+}  // namespace
+}  // namespace hfbake
