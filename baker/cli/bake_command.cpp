@@ -658,6 +658,8 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
         bake_job(*jobs[i], progress, cancel, o, cache ? &*cache : nullptr, options);
       } catch (const Cancelled&) {
         o.status = JobStatus::cancelled;
+      } catch (const OutputError& e) {  // a full disk: the job is not at fault
+        fail(o, JobStatus::failed, e.line());
       } catch (const InputError& e) {
         fail(o, JobStatus::invalid, e.line());
       } catch (const std::exception& e) {

@@ -440,7 +440,7 @@ void OutputStage::write_text(const std::string& filename, const std::string& tex
   std::ofstream out(stage_ / filename, std::ios::binary);
   out << text;
   out.close();
-  if (!out) throw InputError((job_.output.dir / filename).string(), "", "cannot write file");
+  if (!out) throw OutputError((job_.output.dir / filename).string(), "", "cannot write file");
   staged_.push_back(filename);
 }
 
@@ -470,13 +470,13 @@ std::vector<fs::path> OutputStage::commit() {
   // network disk reports it only at the flush) fails the job while the previous outputs are still there.
   for (const fs::path& name : staged_)
     if (const int e = sync_file(stage_ / name))
-      throw InputError((job_.output.dir / name).string(), "",
-                       "cannot write file: " + std::error_code(e, std::generic_category()).message());
+      throw OutputError((job_.output.dir / name).string(), "",
+                        "cannot write file: " + std::error_code(e, std::generic_category()).message());
   for (const fs::path& name : staged_) {
     const fs::path target = job_.output.dir / name;
     std::error_code ec;
     fs::rename(stage_ / name, target, ec);  // same folder tree: an atomic replace
-    if (ec) throw InputError(target.string(), "", "cannot move into place: " + ec.message());
+    if (ec) throw OutputError(target.string(), "", "cannot move into place: " + ec.message());
     final_paths.push_back(target);
   }
   // The owner record is written in the stage and renamed into place like the outputs: a process killed
@@ -485,11 +485,11 @@ std::vector<fs::path> OutputStage::commit() {
   try {
     write_file_atomically(staged_record, job_identity(job_));
   } catch (const std::system_error& e) {
-    throw InputError(record.string(), "", std::string("cannot write: ") + e.code().message());
+    throw OutputError(record.string(), "", std::string("cannot write: ") + e.code().message());
   }
   std::error_code ec;
   fs::rename(staged_record, record, ec);
-  if (ec) throw InputError(record.string(), "", "cannot move into place: " + ec.message());
+  if (ec) throw OutputError(record.string(), "", "cannot move into place: " + ec.message());
   // The moves themselves on the disk: the output folder's entries (and textures/'s).
   std::set<fs::path> folders = {job_.output.dir};
   for (const fs::path& name : staged_) folders.insert((job_.output.dir / name).parent_path());

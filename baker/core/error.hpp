@@ -44,6 +44,14 @@ class InputError : public std::runtime_error {
   std::string file_, where_;
 };
 
+// An output that could not be written or moved into place (a full disk, an I/O error): one line like
+// InputError's, but the job and its inputs are not at fault, so a bake reports it as status "failed", not
+// "invalid" (a farm may retry it elsewhere).
+class OutputError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 // A bake stopped because the user interrupted it (SIGINT). Exit code 130.
 class Cancelled : public std::runtime_error {
  public:

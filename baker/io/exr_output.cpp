@@ -227,7 +227,7 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     fs::remove(tmp, ec);
     std::string what = e.what();
     if (const auto nl = what.find('\n'); nl != std::string::npos) what.resize(nl);
-    throw InputError(file.string(), "", "cannot write the EXR: " + what);
+    throw OutputError(file.string(), "", "cannot write the EXR: " + what);
   }
   // A full disk can fail the last buffered writes where OpenEXR does not look (its stream's flush when the
   // file closes: a 0-byte EXR was moved into place with exit 0). Read the header and the chunk table back:
@@ -240,14 +240,14 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
   }
   if (!whole) {
     fs::remove(tmp, ec);
-    throw InputError(file.string(), "",
-                     "cannot write the EXR: the written file is not whole (is the disk full?)");
+    throw OutputError(file.string(), "",
+                      "cannot write the EXR: the written file is not whole (is the disk full?)");
   }
   fs::rename(tmp, file, ec);
   if (ec) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
-    throw InputError(file.string(), "", "cannot move the EXR into place: " + ec.message());
+    throw OutputError(file.string(), "", "cannot move the EXR into place: " + ec.message());
   }
 }
 

@@ -65,12 +65,13 @@ void copy_to_cog(const fs::path& file, GDALDataset& source) {
   DatasetPtr out(
       cog_driver->CreateCopy(tmp.c_str(), &source, FALSE, const_cast<char**>(cog_options), nullptr, nullptr));
   // On any failure the folder's destructor removes what GDAL wrote.
-  if (!out) fail("cannot write the GeoTIFF: " + gdal.error());
+  if (!out) throw OutputError(file.string(), "", "cannot write the GeoTIFF: " + gdal.error());
   out.reset();  // flushes and closes
-  if (CPLGetLastErrorType() >= CE_Failure) fail("cannot write the GeoTIFF: " + gdal.error());
+  if (CPLGetLastErrorType() >= CE_Failure)
+    throw OutputError(file.string(), "", "cannot write the GeoTIFF: " + gdal.error());
   std::error_code ec;
   fs::rename(tmp, file, ec);
-  if (ec) fail("cannot move into place: " + ec.message());
+  if (ec) throw OutputError(file.string(), "", "cannot move into place: " + ec.message());
 }
 
 }  // namespace
@@ -157,7 +158,7 @@ void TiledGeoTiff::write(int x0, int y0, int width, int height, const float* tex
     if (dataset_->ds->GetRasterBand(c + 1)->RasterIO(GF_Write, x0, y0, width, height,
                                                      const_cast<float*>(texels + c), width, height,
                                                      GDT_Float32, pixel, line, nullptr) != CE_None)
-      throw InputError(work_.string(), "", "cannot write: " + gdal.error());
+      throw OutputError(work_.string(), "", "cannot write: " + gdal.error());
 }
 
 void TiledGeoTiff::set_metadata(const std::string& key, const std::string& value) {
@@ -168,7 +169,7 @@ void TiledGeoTiff::finish(const fs::path& file) {
   GdalQuiet gdal;
   dataset_->ds->FlushCache();
   if (CPLGetLastErrorType() >= CE_Failure)
-    throw InputError(work_.string(), "", "cannot write: " + gdal.error());
+    throw OutputError(work_.string(), "", "cannot write: " + gdal.error());
   copy_to_cog(file, *dataset_->ds);
   dataset_->ds.reset();
   std::error_code ec;

@@ -100,13 +100,13 @@ void write_preview(const fs::path& file, const LayerSet& layers, const Layer& la
   if (!oiio_codec().write(tmp_png.string(), png, bytes.data(), err)) {
     if (const auto nl = err.find('\n'); nl != std::string::npos) err.resize(nl);
     fs::remove(tmp_png, ec);
-    throw InputError(file.string(), "", "cannot write the preview: " + err);
+    throw OutputError(file.string(), "", "cannot write the preview: " + err);
   }
   fs::rename(tmp_png, file, ec);
   if (ec) {
     std::error_code ignored;
     fs::remove(tmp_png, ignored);
-    throw InputError(file.string(), "", "cannot move the preview into place: " + ec.message());
+    throw OutputError(file.string(), "", "cannot move the preview into place: " + ec.message());
   }
 }
 

@@ -197,7 +197,7 @@ void write_exr_texture(const fs::path& tmp, const fs::path& file, const LayerSet
     if (const auto nl = err.find('\n'); nl != std::string::npos) err.resize(nl);
     std::error_code ec;
     fs::remove(tmp, ec);
-    throw InputError(file.string(), "", "cannot write the texture: " + err);
+    throw OutputError(file.string(), "", "cannot write the texture: " + err);
   }
 }
 
@@ -213,7 +213,7 @@ TextureClipping write_texture(const fs::path& file, const LayerSet& layers, cons
     if (ec) {
       std::error_code ignored;
       fs::remove(tmp, ignored);
-      throw InputError(file.string(), "", "cannot move the texture into place: " + ec.message());
+      throw OutputError(file.string(), "", "cannot move the texture into place: " + ec.message());
     }
     return {};  // nothing clipped
   }
@@ -243,13 +243,13 @@ TextureClipping write_texture(const fs::path& file, const LayerSet& layers, cons
   if (!oiio_codec().write(tmp.string(), w, data, err)) {
     if (const auto nl = err.find('\n'); nl != std::string::npos) err.resize(nl);
     fs::remove(tmp, ec);
-    throw InputError(file.string(), "", "cannot write the texture: " + err);
+    throw OutputError(file.string(), "", "cannot write the texture: " + err);
   }
   fs::rename(tmp, file, ec);
   if (ec) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
-    throw InputError(file.string(), "", "cannot move the texture into place: " + ec.message());
+    throw OutputError(file.string(), "", "cannot move the texture into place: " + ec.message());
   }
   return px.clipping;
 }

@@ -915,11 +915,15 @@ TEST(FullDisk, AnExrCutShortByTheDiskIsNeverMovedIntoPlace) {
   const fs::path dir = fs::temp_directory_path() / ("hfbake_full_" + std::to_string(std::random_device{}()));
   fs::create_directories(dir);
   const std::string job = write_job(dir, base_job());
-  const HfbakeRun r = run_hfbake(dir, {"bake", job, "--no-cache", "--quiet"}, 1024);
+  const HfbakeRun r =
+      run_hfbake(dir, {"bake", job, "--no-cache", "--quiet", "--summary", (dir / "s.json").string()}, 1024);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   const auto lines = r.error_lines();
   ASSERT_EQ(lines.size(), 1u) << r.err;
   EXPECT_NE(lines[0].find("t.p1.exr: cannot write the EXR"), std::string::npos) << lines[0];
+  // The job is not at fault: "failed" (a farm may retry elsewhere), not "invalid".
+  std::ifstream summary(dir / "s.json");
+  EXPECT_EQ(json::parse(summary)["jobs"][0]["status"], "failed");
   EXPECT_TRUE(listing(dir / "out").empty()) << "the output folder is left behind";
   for (const auto& p : listing(dir)) EXPECT_EQ(p.find(".tmp"), std::string::npos) << p;
   fs::remove_all(dir);
