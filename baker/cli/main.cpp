@@ -14,9 +14,11 @@
 #include "cli/compare_command.hpp"
 #include "cli/horizon_command.hpp"
 #include "cli/init_command.hpp"
+#include "cli/outputs.hpp"
 #include "cli/slurm_command.hpp"
 #include "cli/version.hpp"
 #include "core/instruction_set.hpp"
+#include "core/safe_file.hpp"
 #include "io/exr_output.hpp"
 
 namespace {
@@ -83,6 +85,7 @@ hfbake::BakeOptions bake_options(const std::vector<std::string>& jobs, const Run
 
 namespace {
 int run(int argc, char** argv) {
+  hfbake::set_temporary_owner(hfbake::temporary_owner());  // temporaries a later process can clean up
   CLI::App app{"hfbake: offline baker of ambient occlusion and lighting for height fields"};
   app.require_subcommand(0, 1);
   app.set_version_flag("--version", std::string("hfbake ") + hfbake::hfbake_version());

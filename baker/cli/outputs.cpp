@@ -148,6 +148,32 @@ std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
   return removed;
 }
 
+std::string temporary_owner() {
+  const std::string stage = stage_name("x");  // .hfbake-staging-x-<pid>+<start>@<host>
+  return stage.substr(stage.rfind('-') + 1);
+}
+
+std::vector<fs::path> remove_stale_temporaries(const fs::path& dir) {
+  std::vector<fs::path> removed;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const auto tmp = name.rfind(".tmp-");
+    if (tmp == std::string::npos) continue;
+    // <name>.tmp-<owner>-XXXXXX (core/safe_file), or <name>.tmp-<owner>; the owner read as a staging
+    // folder's, so by the same rule.
+    const std::string owner = name.substr(tmp + 5);
+    auto gone = [](const std::string& o) {
+      const std::optional<StageOwner> parsed = parse_stage_name(std::string(kStagePrefix) + "x-" + o);
+      return parsed && stage_owner_is_gone(*parsed);
+    };
+    const bool suffixed = owner.size() > 7 && owner[owner.size() - 7] == '-';
+    if (!(suffixed && gone(owner.substr(0, owner.size() - 7))) && !gone(owner)) continue;
+    if (remove_tree(it->path())) removed.push_back(it->path());  // a link is removed, never its target
+  }
+  return removed;
+}
+
 fs::path stage_checkpoint_dir(const fs::path& stage) {
   return stage / "reference-checkpoint";
 }

@@ -38,6 +38,14 @@ std::optional<StageOwner> parse_stage_name(const std::string& name);
 // Removes the staging folders in `dir` whose owner is gone (stage_owner_is_gone) and returns them; those of
 // live processes, of this process and of other hosts are kept.
 std::vector<std::filesystem::path> remove_stale_stages(const std::filesystem::path& dir);
+// The owner this process's temporaries carry (core/safe_file.hpp set_temporary_owner): <pid>+<start>@<host>,
+// as a staging folder's name records it.
+std::string temporary_owner();
+// Removes the temporaries in `dir` (files and folders named <name>.tmp-<owner>-XXXXXX: shards, tile
+// GeoTIFFs, reference-cache entries) whose owner certainly no longer runs (stage_owner_is_gone: this host,
+// no such process or another one with that id); returns them. A temporary is never read as what it will
+// become; this only frees the space of a killed process's.
+std::vector<std::filesystem::path> remove_stale_temporaries(const std::filesystem::path& dir);
 // The folder of a stage that holds its reference's checkpoints (cli/reference_checkpoint).
 std::filesystem::path stage_checkpoint_dir(const std::filesystem::path& stage);
 // Moves the checkpoint files of job `job_name`'s stages in `dir` whose owner is gone into `into` (a file

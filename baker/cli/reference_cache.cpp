@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <system_error>
 
+#include "cli/outputs.hpp"
 #include "core/safe_file.hpp"
 #include "job/content_hash.hpp"
 #include "reference/bake_reference.hpp"
@@ -182,6 +183,7 @@ std::string ReferenceCache::store(const std::string& key, const LayerSet& layers
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) return "cannot create " + dir_.string() + ": " + ec.message();
+  remove_stale_temporaries(dir_);  // a killed bake's half-written entries (never read as entries)
   nlohmann::json header = {{"key", key},
                            {"seconds", seconds},
                            {"width", layers.width},

@@ -31,11 +31,6 @@ ShardIdentity identity_of(const Job& job, ShardId id, int width, int height) {
 }
 
 // This process as the owner of a temporary shard file: <pid>+<start>@<host> (as staging folders name it).
-std::string temporary_owner() {
-  const std::string stage = stage_name("x");  // .hfbake-staging-x-<pid>+<start>@<host>
-  return stage.substr(stage.rfind('-') + 1);
-}
-
 // Rows [r0, r1) of a whole-field LayerSet.
 LayerSet rows_of(const LayerSet& all, int r0, int r1) {
   LayerSet out;
@@ -157,29 +152,6 @@ LayerSet StageSources::load(const Scene& scene, const RunControl& rc) {
   return c.method->finish_stage_blocks(scene, c, stage_, std::move(state), std::move(total), rc);
 }
 
-std::vector<fs::path> remove_stale_shard_files(const fs::path& dir) {
-  std::vector<fs::path> removed;
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    const auto tmp = name.rfind(".hfshard.tmp-");
-    if (tmp == std::string::npos || !it->is_regular_file(ec)) continue;
-    // <shard>.tmp-<owner>-XXXXXX (core/safe_file TempFile), or <shard>.tmp-<owner>; the owner read as a
-    // staging folder's, so by the same rule.
-    const std::string owner = name.substr(tmp + 13);
-    auto gone = [](const std::string& o) {
-      const std::optional<StageOwner> parsed = parse_stage_name(".hfbake-staging-x-" + o);
-      return parsed && stage_owner_is_gone(*parsed);
-    };
-    const bool suffixed = owner.size() > 7 && owner[owner.size() - 7] == '-';
-    if (!(suffixed && gone(owner.substr(0, owner.size() - 7))) && !gone(owner)) continue;
-    std::error_code remove_ec;
-    fs::remove(it->path(), remove_ec);
-    if (!remove_ec) removed.push_back(it->path());
-  }
-  return removed;
-}
-
 fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::atomic<bool>& cancel,
                     JobOutcome& outcome, const ReferenceCache* cache, int stage) {
   const FieldSize size = probe_field_size(job);
@@ -196,7 +168,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
                            " is not a folder (a link?): outputs are written inside " +
                            job.output.dir.string() + " only");
   }
-  for (const fs::path& p : remove_stale_shard_files(path.parent_path()))
+  for (const fs::path& p : remove_stale_temporaries(path.parent_path()))
     progress.message(label + ": removed " + p.string() + " (left by a process that no longer runs)");
   // The staged entries' pieces of stage `stage` (stage 0 beside the shard's other work) not yet complete.
   std::vector<StageItem> todo;

@@ -51,10 +51,6 @@ class StageSources {
 // The version a shard records: hfbake_version() (the version and git revision CMake configured), then
 // "+build." and the executable's GNU build id (farm/build_id.hpp), which changes whenever the binary does.
 std::string shard_version();
-// Removes the temporary shard files (<shard>.tmp-<pid>+<start>@<host>) in `dir` whose writer certainly no
-// longer runs (cli/outputs.hpp stage_owner_is_gone: this host, no such process or another one with that
-// id); returns them. A killed task's temporary file is never read as a shard; this only frees its space.
-std::vector<std::filesystem::path> remove_stale_shard_files(const std::filesystem::path& dir);
 
 // Computes shard `id` of a valid job into its shard file (farm/shard_plan.hpp shard_path) and returns the
 // path. A complete shard file of the same job and hfbake is kept as it is (a re-run does nothing). With a

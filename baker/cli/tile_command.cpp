@@ -374,6 +374,8 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
       refuse(job, "/output/dir",
              folder.string() + " is not a folder (a link?): outputs are written inside " +
                  job.output.dir.string() + " only");
+    for (const fs::path& p : remove_stale_temporaries(folder))
+      progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
     progress.begin(job.name, "tiles");
     for (std::size_t k = first; k < end; ++k) {
       const Tile& tile = plan.tiles[k];

@@ -144,8 +144,27 @@ bool read_at(int fd, void* data, std::size_t n, std::uint64_t offset) {
   return true;
 }
 
+namespace {
+struct TemporaryOwner {
+  std::string tag;
+  pid_t pid = 0;  // the process that set it: a forked child is not its owner
+};
+TemporaryOwner& temporary_owner_tag() {
+  static TemporaryOwner owner;
+  return owner;
+}
+std::string temporary_owner_or_pid() {
+  const TemporaryOwner& o = temporary_owner_tag();
+  return o.tag.empty() || o.pid != getpid() ? std::to_string(getpid()) : o.tag;
+}
+}  // namespace
+
+void set_temporary_owner(const std::string& owner) {
+  temporary_owner_tag() = {owner, getpid()};
+}
+
 TempFile::TempFile(const fs::path& final, const std::string& tag) : final_(final) {
-  std::string name = final.string() + ".tmp-" + (tag.empty() ? std::to_string(getpid()) : tag) + "-XXXXXX";
+  std::string name = final.string() + ".tmp-" + (tag.empty() ? temporary_owner_or_pid() : tag) + "-XXXXXX";
   fd_ = mkostemp(name.data(), O_CLOEXEC);
   if (fd_ < 0) throw system_error(errno, "cannot create a temporary file beside " + final.string());
   tmp_ = name;
@@ -153,7 +172,7 @@ TempFile::TempFile(const fs::path& final, const std::string& tag) : final_(final
 }
 
 TempFolder::TempFolder(const fs::path& final) {
-  std::string name = final.string() + ".tmp-" + std::to_string(getpid()) + "-XXXXXX";
+  std::string name = final.string() + ".tmp-" + temporary_owner_or_pid() + "-XXXXXX";
   if (!mkdtemp(name.data()))
     throw system_error(errno, "cannot create a temporary folder beside " + final.string());
   dir_ = name;

@@ -19,8 +19,15 @@ int open_regular_file(const std::filesystem::path& path, std::string& why);
 // Reads exactly `n` bytes at `offset`; false on a short read or an error.
 bool read_at(int fd, void* data, std::size_t n, std::uint64_t offset);
 
-// A new file beside `final`, named "<final>.tmp-<tag>-XXXXXX" (mkostemp: created by this call, mode as
-// an ordinary file under the umask). Removed by the destructor unless committed. Errors: std::system_error.
+// The owner a temporary's name carries ("<final>.tmp-<owner>-XXXXXX"), so that a later process can tell a
+// dead process's temporaries from a live one's and remove them: set once at start by the program (the
+// command and the Python module: <pid>+<start>@<host>, cli/outputs.hpp temporary_owner); the process id
+// until then.
+void set_temporary_owner(const std::string& owner);
+
+// A new file beside `final`, named "<final>.tmp-<tag>-XXXXXX" (tag "": the temporary owner; mkostemp:
+// created by this call, mode as an ordinary file under the umask). Removed by the destructor unless
+// committed. Errors: std::system_error.
 class TempFile {
  public:
   explicit TempFile(const std::filesystem::path& final, const std::string& tag = "");
@@ -41,9 +48,9 @@ class TempFile {
   bool committed_ = false;
 };
 
-// A new folder beside `final`, named "<final>.tmp-<pid>-XXXXXX" (mkdtemp: created by this call, mode 0700),
-// for a library that writes a file by name (GDAL): nothing in it can have been planted. Removed with what it
-// holds by the destructor (remove_tree). Errors: std::system_error.
+// A new folder beside `final`, named "<final>.tmp-<owner>-XXXXXX" (the temporary owner; mkdtemp: created by
+// this call, mode 0700), for a library that writes a file by name (GDAL): nothing in it can have been
+// planted. Removed with what it holds by the destructor (remove_tree). Errors: std::system_error.
 class TempFolder {
  public:
   explicit TempFolder(const std::filesystem::path& final);

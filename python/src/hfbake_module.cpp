@@ -29,6 +29,7 @@
 #include "cli/scene_loader.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "field/georeference.hpp"
 #include "job/embedded_schemas.hpp"
 #include "job/manifest.hpp"
@@ -467,6 +468,7 @@ std::string compare_api(const std::string& now, const std::string& baseline,
 PYBIND11_MODULE(_hfbake, m) {
   using namespace hfbake;
   m.doc() = "hfbake's C++ core (the package hfbake wraps it)";
+  set_temporary_owner(temporary_owner());  // temporaries a later process can clean up
   m.attr("__version__") = hfbake_version();
   py::register_exception_translator([](std::exception_ptr p) {
     try {

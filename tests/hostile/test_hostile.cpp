@@ -716,6 +716,47 @@ TEST(Staging, AStageWhoseProcessIdWasReusedIsRemovedAndALiveOwnersIsKept) {
 
 namespace {
 
+// A killed process's temporaries (a reference-cache entry's file, a tile GeoTIFF's folder) carry their
+// owner, <pid>+<start>@<host>: a later bake removes those whose owner no longer runs (an id reused by
+// another process included) and keeps a live owner's.
+TEST(Temporaries, AKilledProcessesAreRemovedAndALiveOnesKept) {
+  const fs::path dir = fs::temp_directory_path() / ("hfbake_tmps_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir / "cache");
+  const pid_t live = fork();
+  if (live == 0) {
+    pause();
+    _exit(0);
+  }
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  const unsigned long long start = start_time_of(live);
+  const std::string id = std::to_string(live);
+  const std::string reused = id + "+" + std::to_string(start + 1) + "@" + host,
+                    owner = id + "+" + std::to_string(start) + "@" + host;
+  const fs::path dead_file = dir / "cache" / ("k1.hfref.tmp-" + reused + "-Ab12Cd"),
+                 dead_folder = dir / "cache" / (".t.tif.tmp-" + reused + "-Ef34Gh"),
+                 live_file = dir / "cache" / ("k2.hfref.tmp-" + owner + "-Ij56Kl");
+  std::ofstream(dead_file) << "half-written";
+  fs::create_directories(dead_folder);
+  std::ofstream(dead_folder / "t.tif") << "half-written";
+  std::ofstream(live_file) << "being written";
+  json j = base_job();
+  j["reference"] = {{"samples", 4}};
+  const HfbakeRun r =
+      run_hfbake(dir, {"bake", write_job(dir, j), "--cache", (dir / "cache").string(), "--quiet"});
+  kill(live, SIGKILL);
+  waitpid(live, nullptr, 0);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(dead_file));
+  EXPECT_FALSE(fs::exists(dead_folder));
+  EXPECT_TRUE(fs::exists(live_file));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+
+namespace {
+
 // Two members of one suite whose outputs would be the same files (x/job.json and y/job.json, both
 // named "t", one output folder) are refused up front, naming both, in every one of 20 runs, and nothing is
 // written; two members with different names in that folder are baked side by side 20 times and neither
