@@ -141,6 +141,13 @@ std::string write_text(const fs::path& dir, const std::string& text, const std::
 }
 
 // validate and bake alike: both must refuse before anything is baked.
+// A base job baking the height image `image` (a name in `d`), written into `d`; its path.
+std::string image_job(const fs::path& d, const std::string& image) {
+  json j = base_job();
+  j["height"] = {{"image", image}};
+  return write_job(d, j);
+}
+
 CaseSetup both(const std::string& job, std::string pointer, std::string what) {
   return {{"validate", job}, "", std::move(pointer), std::move(what)};
 }
@@ -351,33 +358,25 @@ std::vector<Case> cases() {
     for (std::size_t i = 0; i < px.size(); ++i) px[i] = float(i % 97) / 97.0f;
     write_image(d / "h.png", 64, 64, 1, px, OIIO::TypeDesc::UINT16);
     fs::resize_file(d / "h.png", fs::file_size(d / "h.png") * 2 / 3);
-    json j = base_job();
-    j["height"] = {{"image", "h.png"}};
-    return both(write_job(d, j), "/height/image", "cannot decode the image");
+    return both(image_job(d, "h.png"), "/height/image", "cannot decode the image");
   });
   add("NanHeights", [](const fs::path& d) {
     std::vector<float> px(16 * 16, 1.0f);
     px[3 * 16 + 5] = std::numeric_limits<float>::quiet_NaN();
     write_image(d / "h.exr", 16, 16, 1, px);
-    json j = base_job();
-    j["height"] = {{"image", "h.exr"}};
-    return both(write_job(d, j), "/height/image", "texel (5, 3) is NaN");
+    return both(image_job(d, "h.exr"), "/height/image", "texel (5, 3) is NaN");
   });
   add("Heights1e38", [](const fs::path& d) {
     std::vector<float> px(16 * 16, 1.0f);
     px[17] = 1e38f;
     write_image(d / "h.exr", 16, 16, 1, px);
-    json j = base_job();
-    j["height"] = {{"image", "h.exr"}};
-    return both(write_job(d, j), "/height", "texel (1, 1) is 1e+38 world units high");
+    return both(image_job(d, "h.exr"), "/height", "texel (1, 1) is 1e+38 world units high");
   });
   add("HeightPatternPlusMinus3e38", [](const fs::path& d) {
     std::vector<float> px(16 * 16);
     for (std::size_t t = 0; t < px.size(); ++t) px[t] = t % 2 ? -3e38f : 3e38f;
     write_image(d / "h.exr", 16, 16, 1, px);
-    json j = base_job();
-    j["height"] = {{"image", "h.exr"}};
-    return both(write_job(d, j), "/height", "world units high");
+    return both(image_job(d, "h.exr"), "/height", "world units high");
   });
   add("LatlongPixelMinus5", [](const fs::path& d) {
     std::vector<float> px(16 * 8 * 3, 1.0f);
@@ -425,9 +424,7 @@ std::vector<Case> cases() {
     std::string grid = "ncols 16\nnrows 16\nxllcorner 0\nyllcorner 0\ncellsize 1e-9\n";
     for (int k = 0; k < 16 * 16; ++k) grid += std::to_string(k % 11) + (k % 16 == 15 ? "\n" : " ");
     write_text(d, grid, "h.asc");
-    json j = base_job();
-    j["height"] = {{"image", "h.asc"}};
-    return both(write_job(d, j), "/height/image", "has a pixel size of 1e-09");
+    return both(image_job(d, "h.asc"), "/height/image", "has a pixel size of 1e-09");
   });
   add("AlbedoMapOfFive", [](const fs::path& d) {  // the image holds what the number may not
     write_image(d / "a.exr", 16, 16, 3, std::vector<float>(16 * 16 * 3, 5.0f));
@@ -444,41 +441,30 @@ std::vector<Case> cases() {
   add("HeightImageWiderThanSupported", [](const fs::path& d) {
     const int w = (1 << 20) + 1;
     write_image(d / "wide.tif", w, 2, 1, std::vector<float>(std::size_t(w) * 2, 0.5f), OIIO::TypeDesc::UINT8);
-    json j = base_job();
-    j["height"] = {{"image", "wide.tif"}};
-    return both(write_job(d, j), "/height/image", "fields of up to 1048576 texels a side are supported");
+    return both(image_job(d, "wide.tif"), "/height/image",
+                "fields of up to 1048576 texels a side are supported");
   });
   add("HeightImageIsAFolder", [](const fs::path& d) {
     fs::create_directories(d / "h.png");
-    json j = base_job();
-    j["height"] = {{"image", "h.png"}};
-    return both(write_job(d, j), "/height/image", "h.png is a folder, not a file");
+    return both(image_job(d, "h.png"), "/height/image", "h.png is a folder, not a file");
   });
   add("HeightImageIsADevice", [](const fs::path& d) {
-    json j = base_job();
-    j["height"] = {{"image", "/dev/zero"}};
-    return both(write_job(d, j), "/height/image", "/dev/zero is not a regular file");
+    return both(image_job(d, "/dev/zero"), "/height/image", "/dev/zero is not a regular file");
   });
   add("HeightImageIsALinkLoop", [](const fs::path& d) {
     fs::create_symlink("b.png", d / "a.png");
     fs::create_symlink("a.png", d / "b.png");
-    json j = base_job();
-    j["height"] = {{"image", "a.png"}};
-    return both(write_job(d, j), "/height/image", "a.png is a link that leads back to itself (a loop)");
+    return both(image_job(d, "a.png"), "/height/image", "a.png is a link that leads back to itself (a loop)");
   });
   add("HeightImageIsEmpty", [](const fs::path& d) {
     std::ofstream(d / "h.png");
-    json j = base_job();
-    j["height"] = {{"image", "h.png"}};
-    return both(write_job(d, j), "/height/image", "h.png: is empty (0 bytes)");
+    return both(image_job(d, "h.png"), "/height/image", "h.png: is empty (0 bytes)");
   });
   // Files a bake would replace or refuse only after baking, refused by validate.
   add("HeightImageNamedAsAnOutput", [](const fs::path& d) {
     fs::create_directories(d / "out");
     write_image(d / "out" / "t.p1.exr", 16, 16, 1, std::vector<float>(16 * 16, 1.0f));
-    json j = base_job();
-    j["height"] = {{"image", "out/t.p1.exr"}};
-    return both(write_job(d, j), "/height/image", "t.p1.exr is where this job writes an output");
+    return both(image_job(d, "out/t.p1.exr"), "/height/image", "t.p1.exr is where this job writes an output");
   });
   add("JobFileNamedAsAnOutput", [](const fs::path& d) {
     fs::create_directories(d / "out");
@@ -531,9 +517,7 @@ std::vector<Case> cases() {
   });
   add("HeightImageOneByOne", [](const fs::path& d) {
     write_image(d / "h.exr", 1, 1, 1, {1.0f});
-    json j = base_job();
-    j["height"] = {{"image", "h.exr"}};
-    return both(write_job(d, j), "/height/image", "h.exr is 1x1 texels; at least 2x2 are needed");
+    return both(image_job(d, "h.exr"), "/height/image", "h.exr is 1x1 texels; at least 2x2 are needed");
   });
 
   // --- bake: the same refusals, and nothing left behind --------------------------------------------------
