@@ -658,31 +658,45 @@ unsigned long long start_time_of(pid_t pid) {
   return std::stoull(f);
 }
 
+// A process that runs until the test ends (killed and reaped then), and the owner names a stage or a
+// temporary records (<pid>+<start>@<host>): its own, and one of the same id that started at another time
+// (the id reused by another process since).
+struct LiveProcess {
+  pid_t pid = fork();
+  std::string owner, reused;
+  LiveProcess() {
+    if (pid == 0) {
+      pause();
+      _exit(0);
+    }
+    char host[256] = {};
+    gethostname(host, sizeof host - 1);
+    const unsigned long long start = start_time_of(pid);
+    owner = std::to_string(pid) + "+" + std::to_string(start) + "@" + host;
+    reused = std::to_string(pid) + "+" + std::to_string(start + 1) + "@" + host;
+  }
+  ~LiveProcess() {
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+  }
+  LiveProcess(const LiveProcess&) = delete;
+  LiveProcess& operator=(const LiveProcess&) = delete;
+};
+
 // SIGKILL leaves a staging folder; its process id may by then belong to another process (after a reboot, on
 // a busy node). The stage records the owner's start time, so the next bake removes the stage of a live id
 // that started at another time, and keeps the stage of a process that still runs.
 TEST(Staging, AStageWhoseProcessIdWasReusedIsRemovedAndALiveOwnersIsKept) {
   const fs::path dir = fs::temp_directory_path() / ("hfbake_stage_" + std::to_string(std::random_device{}()));
   fs::create_directories(dir / "out");
-  const pid_t live = fork();  // a process that runs for the whole test
-  if (live == 0) {
-    pause();
-    _exit(0);
-  }
-  char host[256] = {};
-  gethostname(host, sizeof host - 1);
-  const unsigned long long start = start_time_of(live);
-  const std::string id = std::to_string(live);
-  const fs::path reused =
-      dir / "out" / (".hfbake-staging-t-" + id + "+" + std::to_string(start + 1) + "@" + host);
-  const fs::path owner = dir / "out" / (".hfbake-staging-u-" + id + "+" + std::to_string(start) + "@" + host);
+  LiveProcess live;
+  const fs::path reused = dir / "out" / (".hfbake-staging-t-" + live.reused);
+  const fs::path owner = dir / "out" / (".hfbake-staging-u-" + live.owner);
   for (const fs::path& p : {reused, owner}) {
     fs::create_directories(p);
     std::ofstream(p / "t.p1.exr") << "half-written";
   }
   const HfbakeRun r = run_hfbake(dir, {"bake", write_job(dir, base_job()), "--no-cache"});
-  kill(live, SIGKILL);
-  waitpid(live, nullptr, 0);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(fs::exists(reused)) << r.err;
   EXPECT_TRUE(fs::exists(owner / "t.p1.exr"));
@@ -706,20 +720,10 @@ namespace {
 TEST(Temporaries, AKilledProcessesAreRemovedAndALiveOnesKept) {
   const fs::path dir = fs::temp_directory_path() / ("hfbake_tmps_" + std::to_string(std::random_device{}()));
   fs::create_directories(dir / "cache");
-  const pid_t live = fork();
-  if (live == 0) {
-    pause();
-    _exit(0);
-  }
-  char host[256] = {};
-  gethostname(host, sizeof host - 1);
-  const unsigned long long start = start_time_of(live);
-  const std::string id = std::to_string(live);
-  const std::string reused = id + "+" + std::to_string(start + 1) + "@" + host,
-                    owner = id + "+" + std::to_string(start) + "@" + host;
-  const fs::path dead_file = dir / "cache" / ("k1.hfref.tmp-" + reused + "-Ab12Cd"),
-                 dead_folder = dir / "cache" / (".t.tif.tmp-" + reused + "-Ef34Gh"),
-                 live_file = dir / "cache" / ("k2.hfref.tmp-" + owner + "-Ij56Kl");
+  LiveProcess live;
+  const fs::path dead_file = dir / "cache" / ("k1.hfref.tmp-" + live.reused + "-Ab12Cd"),
+                 dead_folder = dir / "cache" / (".t.tif.tmp-" + live.reused + "-Ef34Gh"),
+                 live_file = dir / "cache" / ("k2.hfref.tmp-" + live.owner + "-Ij56Kl");
   std::ofstream(dead_file) << "half-written";
   fs::create_directories(dead_folder);
   std::ofstream(dead_folder / "t.tif") << "half-written";
@@ -728,8 +732,6 @@ TEST(Temporaries, AKilledProcessesAreRemovedAndALiveOnesKept) {
   j["reference"] = {{"samples", 4}};
   const HfbakeRun r =
       run_hfbake(dir, {"bake", write_job(dir, j), "--cache", (dir / "cache").string(), "--quiet"});
-  kill(live, SIGKILL);
-  waitpid(live, nullptr, 0);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(fs::exists(dead_file));
   EXPECT_FALSE(fs::exists(dead_folder));
