@@ -92,36 +92,52 @@ std::optional<unsigned long long> parse_count(std::string_view s) {
 
 }  // namespace
 
-std::optional<StageOwner> parse_stage_name(const std::string& name) {
-  if (name.compare(0, kStagePrefix.size(), kStagePrefix) != 0) return std::nullopt;
+namespace {
+
+// An owner tag, <pid>[+<start>][@<host>] (older stages had neither a start time nor a host): the owner
+// without its job; nullopt for anything else.
+std::optional<StageOwner> parse_owner_tag(std::string tag) {
   StageOwner owner;
-  std::string rest = name.substr(kStagePrefix.size());
-  const auto at = rest.rfind('@');  // job names have no '@' (schema); older stages had no host part
+  const auto at = tag.find('@');  // hosts may hold '-' or '+', a pid and a start time do not
   if (at != std::string::npos) {
-    owner.host = rest.substr(at + 1);
-    rest.resize(at);
+    owner.host = tag.substr(at + 1);
+    tag.resize(at);
   }
-  const auto plus = rest.rfind('+');  // job names have no '+' (schema); older stages had no start time
+  const auto plus = tag.find('+');
   if (plus != std::string::npos) {
-    owner.start = parse_count(std::string_view(rest).substr(plus + 1));
+    owner.start = parse_count(std::string_view(tag).substr(plus + 1));
     if (!owner.start) return std::nullopt;
-    rest.resize(plus);
+    tag.resize(plus);
   }
-  const auto dash = rest.rfind('-');
-  if (dash == std::string::npos) return std::nullopt;
-  const std::optional<unsigned long long> pid = parse_count(std::string_view(rest).substr(dash + 1));
+  const std::optional<unsigned long long> pid = parse_count(tag);
   if (!pid || *pid == 0 || *pid > (1ull << 40)) return std::nullopt;
   owner.pid = (long long)*pid;
-  owner.job = rest.substr(0, dash);
   return owner;
 }
 
-std::string stage_name(const std::string& job_name) {
+}  // namespace
+
+std::optional<StageOwner> parse_stage_name(const std::string& name) {
+  if (name.compare(0, kStagePrefix.size(), kStagePrefix) != 0) return std::nullopt;
+  const std::string rest = name.substr(kStagePrefix.size());
+  // <job>-<tag>: job names have no '@' or '+' (schema), so the tag starts after the last '-' before them.
+  const auto dash = rest.rfind('-', rest.find_first_of("@+"));
+  if (dash == std::string::npos) return std::nullopt;
+  std::optional<StageOwner> owner = parse_owner_tag(rest.substr(dash + 1));
+  if (owner) owner->job = rest.substr(0, dash);
+  return owner;
+}
+
+std::string temporary_owner() {
   const long long pid = getpid();
   const std::optional<unsigned long long> start = process_start_time(pid);
-  std::string name = std::string(kStagePrefix) + job_name + "-" + std::to_string(pid);
-  if (start) name.append("+").append(std::to_string(*start));  // (appends: GCC 12 warns on "+" + string)
-  return name.append("@").append(host_name());
+  std::string tag = std::to_string(pid);
+  if (start) tag.append("+").append(std::to_string(*start));  // (appends: GCC 12 warns on "+" + string)
+  return tag.append("@").append(host_name());
+}
+
+std::string stage_name(const std::string& job_name) {
+  return std::string(kStagePrefix) + job_name + "-" + temporary_owner();
 }
 
 bool stage_owner_is_gone(const StageOwner& owner) {
@@ -148,11 +164,6 @@ std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
   return removed;
 }
 
-std::string temporary_owner() {
-  const std::string stage = stage_name("x");  // .hfbake-staging-x-<pid>+<start>@<host>
-  return stage.substr(stage.rfind('-') + 1);
-}
-
 std::vector<fs::path> remove_stale_temporaries(const fs::path& dir) {
   std::vector<fs::path> removed;
   std::error_code ec;
@@ -160,15 +171,11 @@ std::vector<fs::path> remove_stale_temporaries(const fs::path& dir) {
     const std::string name = it->path().filename().string();
     const auto tmp = name.rfind(".tmp-");
     if (tmp == std::string::npos) continue;
-    // <name>.tmp-<owner>-XXXXXX (core/safe_file), or <name>.tmp-<owner>; the owner read as a staging
-    // folder's, so by the same rule.
-    const std::string owner = name.substr(tmp + 5);
-    auto gone = [](const std::string& o) {
-      const std::optional<StageOwner> parsed = parse_stage_name(std::string(kStagePrefix) + "x-" + o);
-      return parsed && stage_owner_is_gone(*parsed);
-    };
-    const bool suffixed = owner.size() > 7 && owner[owner.size() - 7] == '-';
-    if (!(suffixed && gone(owner.substr(0, owner.size() - 7))) && !gone(owner)) continue;
+    // <name>.tmp-<owner>-XXXXXX (core/safe_file), or <name>.tmp-<owner>-<n>; the owner judged as a staging
+    // folder's, by the same rule.
+    const std::string rest = name.substr(tmp + 5);
+    const std::optional<StageOwner> owner = parse_owner_tag(rest.substr(0, rest.rfind('-')));
+    if (!owner || !stage_owner_is_gone(*owner)) continue;
     if (remove_tree(it->path())) removed.push_back(it->path());  // a link is removed, never its target
   }
   return removed;
