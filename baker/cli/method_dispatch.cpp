@@ -143,12 +143,9 @@ void check_output_folder(const Job& job) {
   if (job.has_reference) {
     const fs::path report = job.output.dir / "report.json";
     if (fs::exists(fs::symlink_status(report, ec))) {
-      std::string owner;
+      std::string owner;  // "" for a file that is no report (unreadable, or no string at /job/name)
       try {
-        const nlohmann::json doc = read_json_file(report);
-        if (doc.is_object() && doc.contains("job") && doc["job"].is_object() && doc["job"].contains("name") &&
-            doc["job"]["name"].is_string())
-          owner = doc["job"]["name"].get<std::string>();
+        owner = read_json_file(report).value(nlohmann::json::json_pointer("/job/name"), std::string());
       } catch (const std::exception&) {
       }
       if (owner != job.name)
