@@ -532,6 +532,21 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
   return exit_code;
 }
 
+bool bake_interrupted(const std::vector<JobOutcome>& outcomes, bool cancel) {
+  return cancel && std::any_of(outcomes.begin(), outcomes.end(),
+                               [](const JobOutcome& o) { return o.status == JobStatus::cancelled; });
+}
+
+int bake_exit_status(const std::vector<JobOutcome>& outcomes, bool interrupted, int signal) {
+  if (interrupted) return 128 + (signal > 0 ? signal : SIGINT);
+  int code = 0;
+  for (const JobOutcome& o : outcomes) {
+    if (o.status == JobStatus::threshold_failed) code = std::max(code, 1);
+    if (o.status == JobStatus::invalid || o.status == JobStatus::failed) code = std::max(code, 2);
+  }
+  return code;
+}
+
 int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   const auto t_start = std::chrono::steady_clock::now();
   const Progress::Mode mode = Progress::detect(options.quiet);
@@ -669,17 +684,17 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   }
   group.wait();
 
-  for (const JobOutcome& o : outcomes) {
-    if (o.status == JobStatus::threshold_failed) exit_code = std::max(exit_code, 1);
-    if (o.status == JobStatus::invalid || o.status == JobStatus::failed) exit_code = std::max(exit_code, 2);
-  }
-  if (cancel.load()) {
-    const int sig = options.interrupt_signal ? options.interrupt_signal->load() : 0;
-    exit_code = 128 + (sig > 0 ? sig : SIGINT);
-  }
+  const bool interrupted = bake_interrupted(outcomes, cancel.load());
+  if (cancel.load() && !interrupted)
+    std::fprintf(stderr,
+                 "hfbake: note: the stop signal came after every job had ended; nothing was "
+                 "interrupted\n");
+  exit_code =
+      std::max(exit_code, bake_exit_status(outcomes, interrupted,
+                                           options.interrupt_signal ? options.interrupt_signal->load() : 0));
   print_summary(outcomes, options.quiet);
   const double total_seconds = seconds_since(t_start);
-  for (std::size_t s = 0; s < suites.size() && !cancel.load() && !options.shard; ++s) {
+  for (std::size_t s = 0; s < suites.size() && !interrupted && !options.shard; ++s) {
     std::vector<JobOutcome> members;
     for (std::size_t i = 0; i < inputs.size(); ++i)
       if (inputs[i].suite == int(s)) members.push_back(outcomes[i]);

@@ -72,6 +72,13 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
 // 129 SIGHUP).
 int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel);
 
+// Whether a stop signal (`cancel`) interrupted the bake: it stopped some job. A signal that came after every
+// job had ended (its outputs moved into place, or its error found) stopped nothing, and the jobs' outcomes
+// decide the exit status.
+bool bake_interrupted(const std::vector<JobOutcome>& outcomes, bool cancel);
+// run_bake's exit status: 128 + `signal` (0: SIGINT) when interrupted, else the worst of the outcomes.
+int bake_exit_status(const std::vector<JobOutcome>& outcomes, bool interrupted, int signal);
+
 // Schema and file checks without baking: 0 all valid, 2 otherwise. Prints one line per problem.
 // `tiles`: as a tiled bake (cli/tile_command.hpp validate_tiled) with tiles of `tile_size` when given.
 int run_validate(const std::vector<std::filesystem::path>& jobs, bool quiet,
