@@ -12,4 +12,13 @@ void facet_normals(const HeightField& f, int i, int j, Vec3f out[2]) {
   out[1] = Vec3f::from(normalize(Vec3{-bx, -by, 1}));
 }
 
+void corner_facet_normals(const HeightField& f, int i, int j, Vec3f out[kCornerFacets]) {
+  facet_normals(f, i, j, out);
+  for (int c = 2; c < kCornerFacets; ++c) {
+    Vec3f fn[2];
+    facet_normals(f, i + kCornerFacet[c].di, j + kCornerFacet[c].dj, fn);
+    out[c] = fn[kCornerFacet[c].q];
+  }
+}
+
 }  // namespace hfbake

@@ -70,4 +70,29 @@ inline FacetRef facet_under(double x, double y) {
 // Neighbours are read with HeightField::at: at a clamp border the missing neighbour is the texel itself.
 void facet_normals(const HeightField& field, int i, int j, Vec3f out[2]);
 
+// The six facets that meet at texel (i, j), its corner facets, texel-centred: c = 0 and 1 the texel's own
+// facets 0 and 1, c = 2 facet 0 of (i-1, j), c = 3 facet 0 of (i, j-1), c = 4 facet 1 of (i+1, j), c = 5
+// facet 1 of (i, j+1). Light that varies over a facet is carried by its three corners' values (the value
+// at each corner, as albedo and emission are), interpolated as the reference interpolates them.
+inline constexpr int kCornerFacets = 6;
+struct CornerFacet {
+  int di, dj, q;  // the facet: facet q of texel (i + di, j + dj)
+};
+inline constexpr CornerFacet kCornerFacet[kCornerFacets] = {{0, 0, 0},  {0, 0, 1}, {-1, 0, 0},
+                                                            {0, -1, 0}, {1, 0, 1}, {0, 1, 1}};
+// The corner facet c of texel (i, j) that is facet q of texel (i + di, j + dj); -1 when that facet does not
+// meet the texel.
+inline int corner_facet_index(int di, int dj, int q) {
+  for (int c = 0; c < kCornerFacets; ++c)
+    if (kCornerFacet[c].di == di && kCornerFacet[c].dj == dj && kCornerFacet[c].q == q) return c;
+  return -1;
+}
+// For corner k of facet_weights' list (FacetWeights::di[k], dj[k] from the quad's origin): which corner
+// facet of that corner's texel the point's facet is. Lower facet: (i, j) 0, (i+1, j) 2, (i, j+1) 3; upper
+// facet: (i+1, j) 5, (i+1, j+1) 1, (i, j+1) 4.
+inline constexpr int kWeightCornerFacet[2][3] = {{0, 2, 3}, {5, 1, 4}};
+// The unit normals of texel (i, j)'s corner facets, in kCornerFacet's order; [0] and [1] are
+// facet_normals' (the same values). Neighbours are read as facet_normals reads them.
+void corner_facet_normals(const HeightField& field, int i, int j, Vec3f out[kCornerFacets]);
+
 }  // namespace hfbake

@@ -134,7 +134,7 @@ TEST(P1Analytic, TrenchFloorFacets) {
   p.facet_direct = true;
   const Scene s = make_scene(shape(ProceduralKind::trench, 65, 35));
   const P1Result r = compute_p1(s, p, RunControl{});
-  ASSERT_EQ(r.direct_facets.size(), 2 * s.field.texel_count());
+  ASSERT_EQ(r.direct_facets.size(), kCornerFacets * s.field.texel_count());
   double sum[2] = {0, 0};
   for (int q = 0; q < 2; ++q) {
     const double nx = q == 0 ? -std::sin(A) : std::sin(A), nz = std::cos(A);
@@ -149,13 +149,17 @@ TEST(P1Analytic, TrenchFloorFacets) {
   std::printf("[trench facets] K=%d Eq.5 sums %.6f %.6f, limit cos^2 A %.6f\n", K, sum[0], sum[1], limit);
   EXPECT_NEAR(sum[0], limit, 2e-3);  // the quadrature itself
   double worst = 0;
+  // The floor texel's corner facets (field/triangulation.hpp): 0, 3 and 4 lie on the +x side of the
+  // crease, 1, 2 and 5 on the -x side.
+  const int side[kCornerFacets] = {0, 1, 1, 0, 0, 1};
   for (int j = 16; j <= 48; ++j) {
     const std::size_t t = s.field.index(32, j);
-    for (int q = 0; q < 2; ++q) worst = std::max(worst, std::fabs(r.direct_facets[2 * t + q].g - sum[q]));
-    // On the walls both facets are the wall's plane: the texel's own direct light.
+    for (int c = 0; c < kCornerFacets; ++c)
+      worst = std::max(worst, std::fabs(r.direct_facets[kCornerFacets * t + c].g - sum[side[c]]));
+    // On the walls every facet is the wall's plane: the texel's own direct light.
     const std::size_t w = s.field.index(40, j);
-    EXPECT_NEAR(r.direct_facets[2 * w].g, r.direct_at(w).g, 1e-4);
-    EXPECT_NEAR(r.direct_facets[2 * w + 1].g, r.direct_at(w).g, 1e-4);
+    for (int c = 0; c < kCornerFacets; ++c)
+      EXPECT_NEAR(r.direct_facets[kCornerFacets * w + c].g, r.direct_at(w).g, 1e-4);
   }
   EXPECT_LE(worst, 5e-3);  // the floor's crease residual of TrenchFloor
   EXPECT_GT(r.direct_at(s.field.index(32, 32)).g - limit, 0.05);  // the smoothed normal is far off
@@ -167,8 +171,9 @@ TEST(P1Analytic, TrenchFloorFacets) {
       make_scene(shape(ProceduralKind::trench, 65, 35), make_uniform_environment({0, 0, 0}), {sun});
   const P1Result rl = compute_p1(lit, p, RunControl{});
   const std::size_t t = lit.field.index(32, 32);
-  EXPECT_NEAR(rl.direct_facets[2 * t].r, 3 * std::sin(15 * kDeg) / kPi, 1e-5);      // faces away from it
-  EXPECT_NEAR(rl.direct_facets[2 * t + 1].r, 3 * std::sin(85 * kDeg) / kPi, 1e-5);  // faces it
+  for (int c = 0; c < kCornerFacets; ++c)  // the +x side faces away from it, the -x side faces it
+    EXPECT_NEAR(rl.direct_facets[kCornerFacets * t + c].r,
+                3 * std::sin((side[c] == 0 ? 15 : 85) * kDeg) / kPi, 1e-5);
 }
 
 TEST(P1Analytic, PitCenter) {

@@ -24,10 +24,10 @@ struct Sums {
         vsky(N),
         rgb(3 * N),
         bent(3 * N),
-        fao(2 * N),
-        fdr(2 * N),
-        fdg(2 * N),
-        fdb(2 * N),
+        fao(kCornerFacets * N),
+        fdr(kCornerFacets * N),
+        fdg(kCornerFacets * N),
+        fdb(kCornerFacets * N),
         hz(N * std::size_t(nb)),
         hd(N * std::size_t(nb)) {}
   bool same_bits(const Sums& o) const {
@@ -64,10 +64,11 @@ Sums shade_all(p1::ShadeRowFn kernel, Light light, bool slopes, const p1::Lighti
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-1, 1), up(0.05f, 1), span(-1.5f, 1.5f), wide(-40, 40);
   std::uniform_int_distribution<int> width(1, p1::kShadeRun);
-  std::vector<float> nx(N), ny(N), nz(N), fx(2 * N), fy(2 * N), fz(2 * N), h(N), d(N);
+  std::vector<float> nx(N), ny(N), nz(N), fx(kCornerFacets * N), fy(kCornerFacets * N), fz(kCornerFacets * N),
+      h(N), d(N);
   for (std::size_t i = 0; i < N; ++i) {
     nx[i] = u(rng), ny[i] = u(rng), nz[i] = up(rng);
-    for (std::size_t q = 0; q < 2; ++q)
+    for (std::size_t q = 0; q < kCornerFacets; ++q)
       fx[q * N + i] = u(rng), fy[q * N + i] = u(rng), fz[q * N + i] = up(rng);
     // Slopes over a wide range with no crossing at all (-inf) among them; elevations within (-pi/2, pi/2).
     h[i] = slopes ? (i % 97 == 0 ? -std::numeric_limits<float>::infinity() : wide(rng)) : span(rng);
@@ -79,7 +80,7 @@ Sums shade_all(p1::ShadeRowFn kernel, Light light, bool slopes, const p1::Lighti
       p1::ShadeRowRun run;
       run.k = k, run.base = base, run.w = w;
       run.nx = nx.data() + base, run.ny = ny.data() + base, run.nz = nz.data() + base;
-      for (int q = 0; q < 2; ++q)
+      for (int q = 0; q < kCornerFacets; ++q)
         run.fx[q] = fx.data() + q * N + base, run.fy[q] = fy.data() + q * N + base,
         run.fz[q] = fz.data() + q * N + base;
       run.horizon = h.data() + base, run.slopes = slopes, run.distance = d.data() + base;

@@ -345,67 +345,89 @@ TEST(P2Bake, BouncesOnARoughFieldMatchTheReference) {
 
 // Brute force for the exact near field: E/pi of one bounce at texel (i, j), marched from the texel centre
 // over every column, row and diagonal crossing of the triangulated surface (clamp field, to the border;
-// beyond it the nearest texels, as the reference);
-// each piece between crossings radiates its facet's mean emission (the facet's three corners), visible
-// over the elevations above everything nearer, weighted over each of the K wedges at the texel normal.
-// facet_L(ci, cj, lower): the radiance of quad (ci, cj)'s lower (fx + fy <= 1) or upper triangle; by default
-// its mean emission.
-template <class FacetL>
-double centre_gather(const Scene& s, int i, int j, int K, FacetL&& facet_L) {
+// beyond it the nearest texels, as the reference), each piece between crossings visible over the elevations
+// above everything nearer, weighted over each of the K wedges at the texel normal.
+// point_L(ci, cj, lower, x, y): the radiance of quad (ci, cj)'s lower (fx + fy <= 1) or upper triangle at
+// the point (x, y) of it. The crease below the first piece radiates the first triangle's light at the texel;
+// a piece radiates the light at the middle of its visible part (docs/methods/p2.md), or, with `split` > 1,
+// each of `split` equal parts of the piece its own middle's light: the gather of light that varies
+// linearly over each triangle, to the quadrature's accuracy.
+template <class PointL>
+double centre_gather(const Scene& s, int i, int j, int K, PointL&& point_L, int split = 1) {
   const HeightField& f = s.field;
   const Vec3 n = s.normals[f.index(i, j)].d();
-  const double z0 = f.z[f.index(i, j)];
+  const double z0 = f.z[f.index(i, j)], ts = f.texel_size;
   double sum = 0;
   for (int k = 0; k < K; ++k) {
     const double phi = 2 * kPi * k / K, dx = std::cos(phi), dy = std::sin(phi);
     const WedgeWeights w = WedgeWeights::make(n, dx, dy, 2 * kPi / K);
-    std::vector<double> ts;
+    std::vector<double> cuts;
     auto family = [&](double origin, double d) {
       if (std::fabs(d) < 1e-12) return;
       for (double c = d > 0 ? std::floor(origin) + 1 : std::ceil(origin) - 1;; c += d > 0 ? 1 : -1) {
         const double t = (c - origin) / d, x = i + t * dx, y = j + t * dy;
         if (x < -1e-9 || y < -1e-9 || x > f.width - 1 + 1e-9 || y > f.height - 1 + 1e-9) break;
-        ts.push_back(t);
+        cuts.push_back(t);
       }
     };
     family(i, dx), family(j, dy), family(i + j, dx + dy);
-    std::sort(ts.begin(), ts.end());
-    double prev = 0, m = -1e300;
-    for (double t : ts) {
-      if (t - prev < 1e-9) continue;
-      const double x = std::clamp(i + t * dx, 0.0, f.width - 1.0),
-                   y = std::clamp(j + t * dy, 0.0, f.height - 1.0);
-      const double slope = (f.triangle_height(x, y) - z0) / (t * f.texel_size);
-      // The mean emission of the triangle under the piece; a piece along an edge (the axis and diagonal
-      // directions run along columns, rows or diagonals) sees the triangles on both sides, half each.
-      auto triangle_at = [&](double px, double py) {
+    std::sort(cuts.begin(), cuts.end());
+    auto height = [&](double t) {
+      return f.triangle_height(std::clamp(i + t * dx, 0.0, f.width - 1.0),
+                               std::clamp(j + t * dy, 0.0, f.height - 1.0));
+    };
+    // The light at parameter u of the ray, on the triangle under the piece around um; a piece along an edge
+    // (the axis and diagonal directions run along columns, rows or diagonals) sees the triangles on both
+    // sides, half each.
+    auto light = [&](double um, double u) {
+      const double mx = i + um * dx, my = j + um * dy, x = i + u * dx, y = j + u * dy;
+      auto side = [&](double px, double py) {
         const int ci = int(std::floor(px)), cj = int(std::floor(py));
-        return double(facet_L(ci, cj, (px - ci) + (py - cj) <= 1));
+        return double(point_L(ci, cj, (px - ci) + (py - cj) <= 1, x, y));
       };
-      const double u = 0.5 * (prev + t), mx = i + u * dx, my = j + u * dy;
-      const double L =
-          0.5 * (triangle_at(mx - 1e-6 * dy, my + 1e-6 * dx) + triangle_at(mx + 1e-6 * dy, my - 1e-6 * dx));
-      const double lo = prev == 0 ? w.t_n : std::max(m, w.t_n);
-      if (slope > lo) sum += L * (w.F(slope) - w.F(lo));
-      m = std::max(m, slope), prev = t;
+      return 0.5 * (side(mx - 1e-6 * dy, my + 1e-6 * dx) + side(mx + 1e-6 * dy, my - 1e-6 * dx));
+    };
+    double prev = 0, m = -1e300;
+    bool first = true;
+    for (double t : cuts) {
+      if (t - prev < 1e-9) continue;
+      const double parts = first ? 1 : split;
+      for (int q = 0; q < parts; ++q) {
+        const double a = prev + (t - prev) * q / parts, b = prev + (t - prev) * (q + 1) / parts;
+        const double dza = height(a) - z0, dzb = height(b) - z0, sa = a * ts, sb = b * ts;
+        const double slope = dzb / sb;
+        const double lo = first ? w.t_n : std::max(m, w.t_n);
+        if (slope > lo) {
+          double L;
+          if (first) {
+            L = light(0.5 * (a + b), 0.0);  // the crease: at the texel
+          } else {
+            const double den = (dzb - dza) - m * (sb - sa);
+            const double t0 = std::clamp(den > 0 ? (m * sa - dza) / den : 0.0, 0.0, 1.0);
+            L = light(0.5 * (a + b), a + 0.5 * (t0 + 1) * (b - a));
+          }
+          sum += L * (w.F(slope) - w.F(lo));
+        }
+        m = std::max(m, slope);
+      }
+      prev = t, first = false;
     }
   }
   return sum / kPi;
 }
 
-double centre_gather(const Scene& s, int i, int j, int K) {
+// The emission map's light at (x, y) on quad (ci, cj)'s lower or upper triangle: linear between its corners.
+double emission_at(const Scene& s, int ci, int cj, bool lower, double x, double y) {
   const HeightField& f = s.field;
-  auto emission = [&](int a, int b) {
-    return double(s.surface.emission[f.index(f.wrap_i(a), f.wrap_j(b))].g);
-  };
-  return centre_gather(s, i, j, K, [&](int ci, int cj, bool lower) {
-    if (lower) return (emission(ci, cj) + emission(ci + 1, cj) + emission(ci, cj + 1)) / 3;
-    return (emission(ci + 1, cj + 1) + emission(ci, cj + 1) + emission(ci + 1, cj)) / 3;
-  });
+  auto em = [&](int a, int b) { return double(s.surface.emission[f.index(f.wrap_i(a), f.wrap_j(b))].g); };
+  const double fx = std::clamp(x - ci, 0.0, 1.0), fy = std::clamp(y - cj, 0.0, 1.0);
+  if (lower) return em(ci, cj) * (1 - fx - fy) + em(ci + 1, cj) * fx + em(ci, cj + 1) * fy;
+  return em(ci + 1, cj) * (1 - fy) + em(ci + 1, cj + 1) * (fx + fy - 1) + em(ci, cj + 1) * (1 - fx);
 }
 
 // A near radius that covers the whole field turns P2 (and P1's horizons) into the exact gather from every
-// texel centre over the triangulated surface: against the brute force above, rough field, emission map.
+// texel centre over the triangulated surface: against the brute force above, rough field, emission map; and
+// the rule's error against the gather of the emission as it varies over each triangle.
 TEST(P2Bake, NearFieldCoveringTheFieldIsTheExactCentreGather) {
   HeightField f;
   f.width = f.height = 11;
@@ -424,16 +446,24 @@ TEST(P2Bake, NearFieldCoveringTheFieldIsTheExactCentreGather) {
   P2Params p = params(K, 1);
   p.near_radius = 16;  // > the field's diagonal
   const P2Result r = compute_p2(s, p, RunControl{});
-  double worst = 0, mean = 0;
+  auto em = [&](int ci, int cj, bool lower, double px, double py) {
+    return emission_at(s, ci, cj, lower, px, py);
+  };
+  double worst = 0, mean = 0, linear_err = 0;
   for (int j = 0; j < f.height; ++j)
     for (int i = 0; i < f.width; ++i) {
-      const double bf = centre_gather(s, i, j, K);
+      const double bf = centre_gather(s, i, j, K, em), fine = centre_gather(s, i, j, K, em, 64);
       worst = std::max(worst, std::fabs(r.indirect[s.field.index(i, j)].g - bf));
-      mean += bf / double(f.texel_count());
+      mean += fine / double(f.texel_count());
+      linear_err += (r.indirect[s.field.index(i, j)].g - fine) / double(f.texel_count());
     }
-  std::printf("near field over the whole field: mean E/pi %.4f, max |P2 - brute force| %.2e\n", mean, worst);
+  std::printf(
+      "near field over the whole field: mean E/pi %.4f, max |P2 - brute force| %.2e, P2 against the "
+      "linear emission's gather %+.2f %%\n",
+      mean, worst, 100 * linear_err / mean);
   EXPECT_GT(mean, 0.1);
   EXPECT_LT(worst, 2e-5);
+  EXPECT_LT(std::fabs(linear_err / mean), 0.02);
 }
 
 // Stepped terrain: P2 at its defaults against the brute-force gather from every texel
@@ -459,11 +489,20 @@ TEST(P2Bake, SteppedFieldMatchesTheExactCentreGather) {
   // The senders exactly as compute_p2 lights them: P1's facet direct light times the albedo.
   P1Params p1 = p2_direct_params(params(K, 1), false);
   const P1Result d = compute_p1(s, p1, RunControl{});
-  auto facet_L = [&](int ci, int cj,
-                     bool lower) {  // texel-centred: the lower triangle is texel (ci, cj)'s q = 0
-    const int ti = std::clamp(lower ? ci : ci + 1, 0, f.width - 1),
-              tj = std::clamp(lower ? cj : cj + 1, 0, f.height - 1);
-    return 0.5 * d.direct_facets[2 * f.index(ti, tj) + (lower ? 0 : 1)].g;
+  // Each triangle's light at a point: its three corners' (P1's light of that triangle at each corner,
+  // field/triangulation.hpp kWeightCornerFacet), linear between them.
+  auto facet_L = [&](int ci, int cj, bool lower, double px, double py) {
+    const double fx = std::clamp(px - ci, 0.0, 1.0), fy = std::clamp(py - cj, 0.0, 1.0);
+    const FacetWeights fw = facet_weights(lower ? 0.0 : 1.0, lower ? 0.0 : 1.0);  // the corners
+    const double wt[2][3] = {{1 - fx - fy, fx, fy}, {1 - fy, fx + fy - 1, 1 - fx}};
+    double L = 0;
+    for (int c = 0; c < 3; ++c) {
+      const int ti = std::clamp(ci + fw.di[c], 0, f.width - 1),
+                tj = std::clamp(cj + fw.dj[c], 0, f.height - 1);
+      L += wt[lower ? 0 : 1][c] *
+           d.direct_facets[kCornerFacets * f.index(ti, tj) + kWeightCornerFacet[lower ? 0 : 1][c]].g;
+    }
+    return 0.5 * L;
   };
   std::vector<double> bf(f.texel_count());
   double mean_bf = 0;

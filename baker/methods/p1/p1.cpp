@@ -1,5 +1,7 @@
 #include "methods/p1/p1.hpp"
 
+#include "field/triangulation.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -60,8 +62,8 @@ p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
 // field's lane layout, per direction every texel's exact horizon (slope and caster), then
 // shade(k, base, w, NX, NY, NZ, FX, FY, FZ, e, dist) per run of at most 32 texels of a row. The directions
 // are visited by axis (x-major ones first), so one layout is held at a time. Every texel's normal (normal_at)
-// and, for P2's facet sums, its two facets' (facet_normals, [q * N + texel]), as the lane path's shading
-// reads them: computed once per bake, shared by its direction blocks.
+// and, for P2's facet sums, its corner facets' (corner_facet_normals, [c * N + texel]), as the lane path's
+// shading reads them: computed once per bake, shared by its direction blocks.
 struct FieldNormals {
   std::vector<float> nx, ny, nz, fx, fy, fz;  // empty when the lighting reads no normals
 };
@@ -77,16 +79,16 @@ FieldNormals field_normals(const Scene& scene, const P1Params& p) {
   FieldNormals n;
   if (!shading_reads_normals(p)) return n;
   n.nx.resize(N), n.ny.resize(N), n.nz.resize(N);
-  n.fx.resize(facets ? 2 * N : 0), n.fy.resize(n.fx.size()), n.fz.resize(n.fx.size());
+  n.fx.resize(facets ? kCornerFacets * N : 0), n.fy.resize(n.fx.size()), n.fz.resize(n.fx.size());
   tbb::parallel_for(0, f.height, [&](int j) {
     for (int i = 0; i < f.width; ++i) {
       const std::size_t at = f.index(i, j);
       const Vec3f v = normal_at(f, i, j);
       n.nx[at] = v.x, n.ny[at] = v.y, n.nz[at] = v.z;
       if (facets) {
-        Vec3f fn[2];
-        facet_normals(f, i, j, fn);
-        for (std::size_t q = 0; q < 2; ++q)
+        Vec3f fn[kCornerFacets];
+        corner_facet_normals(f, i, j, fn);
+        for (std::size_t q = 0; q < kCornerFacets; ++q)
           n.fx[q * N + at] = fn[q].x, n.fy[q * N + at] = fn[q].y, n.fz[q * N + at] = fn[q].z;
       }
     }
@@ -136,12 +138,11 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
               for (int x = 0; x < w; ++x)
                 m[x] = p1::raise_to_floor(*floor, df, i0 + x, j, f.z[base + x], m[x],
                                           row_slack[std::size_t(j)], &dist[x]);
-            const float* FX[2] = {facets ? fx.data() + base : nullptr,
-                                  facets ? fx.data() + N + base : nullptr};
-            const float* FY[2] = {facets ? fy.data() + base : nullptr,
-                                  facets ? fy.data() + N + base : nullptr};
-            const float* FZ[2] = {facets ? fz.data() + base : nullptr,
-                                  facets ? fz.data() + N + base : nullptr};
+            const float *FX[kCornerFacets] = {}, *FY[kCornerFacets] = {}, *FZ[kCornerFacets] = {};
+            if (facets)
+              for (std::size_t q = 0; q < kCornerFacets; ++q)
+                FX[q] = fx.data() + q * N + base, FY[q] = fy.data() + q * N + base,
+                FZ[q] = fz.data() + q * N + base;
             shade(k, base, w, lit ? nx.data() + base : nullptr, lit ? ny.data() + base : nullptr,
                   lit ? nz.data() + base : nullptr, FX, FY, FZ, m,
                   /*slopes=*/true, dist);
@@ -225,14 +226,16 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
   const int longest =
       std::max(shape.width, shape.height) * (shape.wrap == Wrap::repeat ? p.wrap_periods + 1 : 1);
   const double workers = double(worker_threads()) * double(p1::FarHorizonWorker::scratch_bytes(longest));
+  // The corner facets' (field/triangulation.hpp): a sum (4 bytes, or RGB 12) and a layer (RGB 12) each.
+  const double CF = kCornerFacets;
   if (shape.wrap == Wrap::clamp) {
     // Bytes a texel: the sums (p1_sums_shape), the layers they become, and what the lane search holds.
     const double sums = (p.ao || (p.direct && uniform_environment) ? 4 : 0) + (p.vsky ? 4 : 0) +
                         (p.direct && !uniform_environment ? 12 : 0) + (p.bent_normal ? 12 : 0) +
-                        (facets ? (uniform_environment ? 8 : 24) : 0);
+                        (facets ? (uniform_environment ? 4 : 12) * CF : 0);
     const double layers = (p.ao ? 4 : 0) + (p.vsky ? 4 : 0) + (p.direct ? 12 : 0) + (p.bent_normal ? 12 : 0) +
-                          (facets ? 24 : 0);
-    const double normals = shading_reads_normals(p) ? 12 + (facets ? 24 : 0) : 0;
+                          (facets ? 12 * CF : 0);
+    const double normals = shading_reads_normals(p) ? 12 + (facets ? 12 * CF : 0) : 0;
     const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
     // While the directions are summed: the sums, a block's, the normals, one direction's slopes (and casters
     // for horizon_distance), and one axis' lane layout (heights and window maxima, padded on the minor axis).
@@ -247,12 +250,12 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
     return std::max(summing, finishing) - layers * texels + far;
   }
   double per_texel = planes + (p.direct && !p.ao ? 4 : 0);  // and the ao sum behind a uniform sky's direct
-  if (facets) per_texel += 2 * 3 * 4 + 2 * 3 * 4;           // the facets' sums and their layers
+  if (facets) per_texel += CF * 3 * 4 + CF * 3 * 4;         // the corner facets' sums and their layers
   if (direction_block_count(p.directions) > 1)  // one direction block's sums beside the total (compute_p1)
     per_texel += (p.direct ? 12
                   : p.ao   ? 4
                            : 0) +
-                 (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) + (facets ? 24 : 0);
+                 (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) + (facets ? 12 * CF : 0);
   // Each thread's far-field worker: two direction patterns, the lines' heights, the hull (FarHorizonWorker).
   return per_texel * texels + double(sweep_buffer_bytes(field, p1_sweep_spec(p))) + workers;
 }
@@ -273,8 +276,8 @@ P1SumsShape p1_sums_shape(const Scene& scene, const P1Params& p) {
   s.vsky = p.vsky ? 1 : 0;
   s.rgb = p.direct && !uniform_env ? 3 : 0;
   s.bent = p.bent_normal ? 3 : 0;
-  s.fao = facets && uniform_env ? 2 : 0;
-  s.fd = facets && !uniform_env ? 2 : 0;
+  s.fao = facets && uniform_env ? kCornerFacets : 0;
+  s.fd = facets && !uniform_env ? kCornerFacets : 0;
   return s;
 }
 
@@ -416,7 +419,7 @@ struct RowShading {
     run.k = k, run.base = base, run.w = w;
     run.nx = NX, run.ny = NY, run.nz = NZ;
     if (target.facets)
-      for (int q = 0; q < 2; ++q) run.fx[q] = FX[q], run.fy[q] = FY[q], run.fz[q] = FZ[q];
+      for (int q = 0; q < kCornerFacets; ++q) run.fx[q] = FX[q], run.fy[q] = FY[q], run.fz[q] = FZ[q];
     run.horizon = h, run.slopes = slopes, run.distance = dist;
     kernel(target, run);
   }
@@ -433,9 +436,10 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
   constexpr int kTileTexels = 32 * 32;  // sweep_lines_tiled's tiles
   struct TileNormals {
     int i0 = -1, j0 = -1;
-    // [y * width + x]; the facets' [q * kTileTexels + y * width + x]
+    // [y * width + x]; the corner facets' [q * kTileTexels + y * width + x]
     alignas(64) float nx[kTileTexels], ny[kTileTexels], nz[kTileTexels];
-    alignas(64) float fx[2 * kTileTexels], fy[2 * kTileTexels], fz[2 * kTileTexels];
+    alignas(64) float fx[kCornerFacets * kTileTexels], fy[kCornerFacets * kTileTexels],
+        fz[kCornerFacets * kTileTexels];
   };
   tbb::enumerable_thread_specific<TileNormals> tile_normals;
   auto normals_of = [&](const SweepTile& t) -> const TileNormals& {
@@ -448,9 +452,9 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
         const Vec3f v = normal_at(f, t.i0 + x, t.j0 + y);
         n.nx[at] = v.x, n.ny[at] = v.y, n.nz[at] = v.z;
         if (facets) {
-          Vec3f fn[2];
-          facet_normals(f, t.i0 + x, t.j0 + y, fn);
-          for (int q = 0; q < 2; ++q)
+          Vec3f fn[kCornerFacets];
+          corner_facet_normals(f, t.i0 + x, t.j0 + y, fn);
+          for (int q = 0; q < kCornerFacets; ++q)
             n.fx[q * kTileTexels + at] = fn[q].x, n.fy[q * kTileTexels + at] = fn[q].y,
                                    n.fz[q * kTileTexels + at] = fn[q].z;
         }
@@ -509,9 +513,10 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
         }
       }
       const std::size_t ft = std::size_t(y) * w;
-      const float* FX[2] = {tn.fx + ft, tn.fx + kTileTexels + ft};
-      const float* FY[2] = {tn.fy + ft, tn.fy + kTileTexels + ft};
-      const float* FZ[2] = {tn.fz + ft, tn.fz + kTileTexels + ft};
+      const float *FX[kCornerFacets], *FY[kCornerFacets], *FZ[kCornerFacets];
+      for (int q = 0; q < kCornerFacets; ++q)
+        FX[q] = tn.fx + q * kTileTexels + ft, FY[q] = tn.fy + q * kTileTexels + ft,
+        FZ[q] = tn.fz + q * kTileTexels + ft;
       shade(k, base, w, tn.nx + y * w, tn.ny + y * w, tn.nz + y * w, FX, FY, FZ, e, /*slopes=*/false, dist);
     }
   });
@@ -637,7 +642,7 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
   const Environment& env = scene.environment;
   const bool uniform_env = env.is_uniform();
   const bool facets = p.direct && p.facet_direct;
-  const std::size_t NF = facets ? 2 * N : 0;
+  const std::size_t NF = facets ? kCornerFacets * N : 0;
   std::vector<float>&ao_sum = sums.ao, &vsky_sum = sums.vsky, &rgb_sum = sums.rgb, &bent_sum = sums.bent;
   const std::vector<float>&fao = sums.fao, &fdr = sums.fdr, &fdg = sums.fdg, &fdb = sums.fdb;
   std::vector<const DirectionalLight*> lights;
@@ -677,9 +682,9 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
   std::vector<Rgb> direct_facets(NF);
   if (facets)
     tbb::parallel_for(std::size_t(0), N, [&](std::size_t idx) {
-      for (std::size_t q = 0; q < 2; ++q) {
+      for (std::size_t q = 0; q < kCornerFacets; ++q) {
         const std::size_t t = q * N + idx;
-        direct_facets[2 * idx + q] =
+        direct_facets[kCornerFacets * idx + q] =
             uniform_env ? env.uniform_radiance * (fao[t] * inv_k) : Rgb{fdr[t], fdg[t], fdb[t]};
       }
     });
@@ -713,11 +718,12 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
             d[0] += add.r, d[1] += add.g, d[2] += add.b;
           }
           if (facets) {
-            Vec3f fn[2];
-            facet_normals(f, i, j, fn);
-            for (std::size_t q = 0; q < 2; ++q) {
+            Vec3f fn[kCornerFacets];
+            corner_facet_normals(f, i, j, fn);
+            for (std::size_t q = 0; q < kCornerFacets; ++q) {
               const double fdl = fn[q].x * dir[li].x + fn[q].y * dir[li].y + fn[q].z * dir[li].z;
-              if (fdl > 0) direct_facets[2 * idx + q] += lights[li]->irradiance * float(fdl * frac / kPi);
+              if (fdl > 0)
+                direct_facets[kCornerFacets * idx + q] += lights[li]->irradiance * float(fdl * frac / kPi);
             }
           }
         },

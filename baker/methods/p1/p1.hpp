@@ -57,8 +57,9 @@ struct P1Params {
   bool ao = true, vsky = true, direct = true;
   bool horizon = false, horizon_distance = false, bent_normal = false;
   bool lights = true;  // add the scene's directional lights to direct
-  // Also the direct light of each texel's two facets (P1Result::direct_facets): the same horizons, the
-  // facets' own normals. P2's senders radiate with them (the reference shades every hit with its facet).
+  // Also the direct light of each texel's corner facets at the texel (P1Result::direct_facets): the same
+  // horizons, the facets' own normals. P2's senders radiate with them (the reference shades every hit with
+  // its facet).
   bool facet_direct = false;
   // P1Result::horizon by direction, [k * texels + texel], instead of by texel: what a per-direction
   // consumer (P2's lobe split) reads without striding across K floats per texel.
@@ -73,9 +74,9 @@ struct P1Result {
   std::vector<float> horizon;   // sin(elevation), [texel * K + k] (horizon_by_direction: [k * N + texel])
   std::vector<float> horizon_distance;  // world units, [texel * K + k]
   std::vector<float> bent_normal;       // unit, world frame: [3 * texel + c]
-  // E_direct / pi at the normals of the two triangles of the reference's surface that have their right
-  // angle at the texel (facet_normals): [2 * texel + 0] the triangle (i, j), (i+1, j), (i, j+1),
-  // [2 * texel + 1] the triangle (i, j), (i-1, j), (i, j-1). Empty unless P1Params::facet_direct.
+  // E_direct / pi at the texel, at the normals of the six triangles of the reference's surface that meet
+  // there (field/triangulation.hpp corner_facet_normals): [kCornerFacets * texel + c], c in kCornerFacet's
+  // order (0 and 1 the texel's own facets). Empty unless P1Params::facet_direct.
   std::vector<Rgb> direct_facets;
   // With P1Params::far_field: the largest amount (in slope, rise over run) by which any horizon's tangent
   // exceeds the exact one's (far_floor.hpp): a certified bound, each texel's sine and elevation within it.
@@ -89,7 +90,7 @@ struct P1Result {
   }
 };
 
-// facet_normals (field/triangulation.hpp) gives the two normals of P1Result::direct_facets.
+// corner_facet_normals (field/triangulation.hpp) gives the normals of P1Result::direct_facets.
 
 // Reads the bake entry (schemas/methods/p1.schema.json) with every check (even normal_bins, unknown
 // layers), recording the resolved values in `in` (layers in the order written).
@@ -110,8 +111,8 @@ P1Result compute_p1(const Scene& scene, const P1Params& params, const RunControl
 struct P1Sums {
   int k_begin = 0, k_end = 0;  // the directions summed
   // Per texel, each direction's term summed (empty when not needed): ao's and vsky's, direct's RGB
-  // [3 * texel + c] for a non-uniform environment, the bent normal's [3 * texel + c], and P2's facet sums
-  // [q * N + texel] (fao: uniform environment; fdr, fdg, fdb: otherwise).
+  // [3 * texel + c] for a non-uniform environment, the bent normal's [3 * texel + c], and P2's corner-facet
+  // sums [c * N + texel] (fao: uniform environment; fdr, fdg, fdb: otherwise).
   std::vector<float> ao, vsky, rgb, bent, fao, fdr, fdg, fdb;
   // The horizons of directions [k_begin, k_end): [texel * n + k - k_begin] (horizon_by_direction:
   // [(k - k_begin) * N + texel]), n = k_end - k_begin; p1_finish wants all K in P1Result's layout.
@@ -119,7 +120,7 @@ struct P1Sums {
   double far_slack = 0;  // with a far field: the largest slack of the floors the directions took
 };
 // Floats a texel of each sum p1_direction_sums keeps for these parameters and this scene's environment
-// (0: not kept); the facet sums' [q * N + texel] count 2.
+// (0: not kept); the corner-facet sums' [c * N + texel] count kCornerFacets.
 struct P1SumsShape {
   std::size_t ao = 0, vsky = 0, rgb = 0, bent = 0, fao = 0, fd = 0;  // fd: each of fdr, fdg, fdb
 };

@@ -7,6 +7,7 @@
 #include <cstddef>
 
 #include "core/vec.hpp"
+#include "field/triangulation.hpp"
 #include "methods/p1/lane_horizons.hpp"
 #include "methods/p1/lighting_table.hpp"
 
@@ -22,7 +23,7 @@ struct ShadeRowTarget {
   bool normals = true;      // the runs' normals are read (false: they may be null; need_theta and tables
                             // are then off)
   bool need_theta = false;  // the lobe (the horizon's zenith angle against the normal's) is needed
-  bool facets = false;      // the facets' sums too (fao under a uniform sky, else fdr, fdg, fdb)
+  bool facets = false;      // the corner facets' sums too (fao under a uniform sky, else fdr, fdg, fdb)
   float *ao = nullptr, *vsky = nullptr;                                  // [texel]
   float *rgb = nullptr, *bent = nullptr;                                 // [3 * texel + c]
   float *fao = nullptr, *fdr = nullptr, *fdg = nullptr, *fdb = nullptr;  // [q * N + texel]
@@ -38,7 +39,8 @@ struct ShadeRowRun {
   std::size_t base = 0;
   int w = 0;
   const float *nx = nullptr, *ny = nullptr, *nz = nullptr;
-  const float *fx[2] = {}, *fy[2] = {}, *fz[2] = {};  // the two facets' normals (facets only)
+  // The corner facets' normals (facets only; field/triangulation.hpp kCornerFacet's order).
+  const float *fx[kCornerFacets] = {}, *fy[kCornerFacets] = {}, *fz[kCornerFacets] = {};
   const float* horizon = nullptr;   // each texel's horizon: its slope (rise / run), or its elevation (rad)
   bool slopes = true;               // which of the two `horizon` holds
   const float* distance = nullptr;  // the horizon_distance layer's values (when hd is set)

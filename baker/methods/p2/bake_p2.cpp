@@ -16,14 +16,28 @@
 namespace hfbake {
 namespace {
 
-// The mean albedo of the three corners of texel (i, j)'s facet q (q = 0: (i, j), (i + 1, j), (i, j + 1);
-// q = 1: (i, j), (i - 1, j), (i, j - 1)).
-Rgb facet_albedo(const Scene& scene, int i, int j, int q) {
-  const HeightField& f = scene.field;
-  const int d = q == 0 ? 1 : -1;
-  const std::size_t t = f.index(i, j), a = f.index(f.wrap_i(i + d), j), b = f.index(i, f.wrap_j(j + d));
-  const auto& al = scene.surface.albedo;
-  return (al[t] + al[a] + al[b]) * (1.0f / 3);
+// The facets' exit radiance (P2State::facet_exit) from their corners' (corner_exit): each facet's the mean
+// of the values at its three corners, texel (i, j)'s facet q = 0 at (i, j), (i + 1, j), (i, j + 1), q = 1
+// at (i, j), (i - 1, j), (i, j - 1). A corner off a clamp field (the facet lies outside it and no ray meets
+// it) counts as the facet's own texel.
+void facets_of_corners(const HeightField& f, const std::vector<Rgb>& corner_exit, std::vector<Rgb>& out) {
+  out.resize(2 * f.texel_count());
+  tbb::parallel_for(0, f.height, [&](int j) {
+    for (int i = 0; i < f.width; ++i) {
+      const std::size_t t = f.index(i, j);
+      for (int q = 0; q < 2; ++q) {
+        const int d = q == 0 ? 1 : -1;
+        const Rgb own = corner_exit[kCornerFacets * t + q];
+        auto corner = [&](int ci, int cj, int c) {
+          const bool on = f.wrap == Wrap::repeat || (ci >= 0 && cj >= 0 && ci < f.width && cj < f.height);
+          return on ? corner_exit[kCornerFacets * f.index(f.wrap_i(ci), f.wrap_j(cj)) + c] : own;
+        };
+        // The corner facet that this facet is at (i + d, j) and at (i, j + d) (kCornerFacet's order).
+        out[2 * t + q] =
+            (own + corner(i + d, j, q == 0 ? 2 : 4) + corner(i, j + d, q == 0 ? 3 : 5)) * (1.0f / 3);
+      }
+    }
+  });
 }
 
 }  // namespace
@@ -92,10 +106,10 @@ double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
   const double p1_phase = horizons + 12 * N + p1_working_bytes(shape, p2_direct_params(p, kept));
   // A bounce, one direction block at a time: P1's kept horizons, or the block's recomputed (4 bytes a
   // texel per direction of the largest block) and P1's sweep recomputing them (before the block's own
-  // sweep); direct, the exit radiance, the facets' (24), the block's double sums (24) and the blocks'
-  // total (24, SplitDouble), the indirect sum from the second bounce on; before the last bounce the
-  // facets' block sums (48) and total (48); the bounces kept for indirect_b layers (12 each); the line
-  // buffers of one block's sweep.
+  // sweep); direct, the exit radiance, the facets' and their corners' (24 + 72), the block's double sums
+  // (24) and the blocks' total (24, SplitDouble), the indirect sum from the second bounce on; before the
+  // last bounce the corner facets' block sums (144) and total (144); the bounces kept for indirect_b
+  // layers (12 each); the line buffers of one block's sweep.
   const int blocks = direction_block_count(K), largest = (K + blocks - 1) / blocks;
   IndirectSweepSpec is;
   is.directions = K;
@@ -117,9 +131,9 @@ double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
   }
   double bounce_phase = 0;
   for (int b = 1; b <= B; ++b) {
-    double t =
-        12 + 12 + (p.facet_senders ? 24 : 0) + 24 + 24 + (b > 1 ? 12 : 0) + (keep ? 12.0 * (b - 1) : 0);
-    if (p.facet_senders && b < B) t += 48 + 48;
+    double t = 12 + 12 + (p.facet_senders ? 24 + 12 * kCornerFacets : 0) + 24 + 24 + (b > 1 ? 12 : 0) +
+               (keep ? 12.0 * (b - 1) : 0);
+    if (p.facet_senders && b < B) t += 2 * 24.0 * kCornerFacets;
     bounce_phase = std::max(bounce_phase, horizons + block_horizons + t * N + line_buffers);
   }
   // Writing the layers: direct and indirect (and the kept bounces) beside them.
@@ -147,25 +161,20 @@ P2State p2_state_of_direct(const Scene& scene, const P2Params& params, P1Result&
   const bool emits = scene.surface.emission.size() == N;
   for (std::size_t i = 0; i < N; ++i)
     r.exit[i] = scene.surface.albedo[i] * r.direct[i] + (emits ? scene.surface.emission[i] : Rgb{});
-  // Facet senders: each texel's two facets (P1Result::direct_facets), lit with their own normals, with
-  // the mean albedo and emission of their three corners (the reference interpolates them over the facet).
-  // Their exit radiance replaces P1's facet light in place; albedos and normals are recomputed where needed.
+  // Facet senders: the exit radiance of the six facets that meet at each texel, at the texel (P1's
+  // direct light of each at the texel, P1Result::direct_facets, times the texel's albedo, plus its
+  // emission), replacing P1's corner light in place; each facet's mean over its corners (facets_of_corners).
+  // The reference interpolates albedo and emission over a facet, and its light varies over it: on ground
+  // rough at the texel scale a facet is lit very differently at its three corners.
   if (params.facet_senders) {
-    r.facet_exit = std::move(direct.direct_facets);
-    tbb::parallel_for(0, f.height, [&](int j) {
-      for (int i = 0; i < f.width; ++i) {
-        const std::size_t t = f.index(i, j);
-        for (int q = 0; q < 2; ++q) {
-          const int d = q == 0 ? 1 : -1;
-          const std::size_t a = f.index(f.wrap_i(i + d), j), b = f.index(i, f.wrap_j(j + d));
-          Rgb em{};
-          if (emits)
-            em = (scene.surface.emission[t] + scene.surface.emission[a] + scene.surface.emission[b]) *
-                 (1.0f / 3);
-          r.facet_exit[2 * t + q] = facet_albedo(scene, i, j, q) * r.facet_exit[2 * t + q] + em;
-        }
-      }
+    r.corner_exit = std::move(direct.direct_facets);
+    tbb::parallel_for(std::size_t(0), N, [&](std::size_t t) {
+      const Rgb em = emits ? scene.surface.emission[t] : Rgb{};
+      for (int c = 0; c < kCornerFacets; ++c)
+        r.corner_exit[kCornerFacets * t + c] =
+            scene.surface.albedo[t] * r.corner_exit[kCornerFacets * t + c] + em;
     });
+    facets_of_corners(f, r.corner_exit, r.facet_exit);
   }
   std::vector<Rgb>().swap(direct.direct_facets);
   return r;
@@ -198,6 +207,7 @@ P2BlockSums p2_bounce_block(const Scene& scene, const P2Params& params, int B, c
   }
   if (params.facet_senders) {
     spec.exit_facets = &r.facet_exit;
+    spec.corner_exit = &r.corner_exit;
     spec.near_radius = params.near_radius;
   }
   P2BlockSums s;
@@ -212,15 +222,13 @@ void p2_finish_bounce(const Scene& scene, const P2Params& params, int B, P2State
   const std::size_t N = f.texel_count();
   const int b = r.bounces_done + 1;
   std::vector<Rgb> e = indirect_of_total(total, N);
-  if (params.facet_senders && b < B) {
-    const std::vector<Rgb> facet_e = indirect_of_total(facet_total, 2 * N);
-    tbb::parallel_for(0, f.height, [&](int j) {
-      for (int i = 0; i < f.width; ++i)
-        for (int q = 0; q < 2; ++q) {
-          const std::size_t fq = 2 * f.index(i, j) + q;
-          r.facet_exit[fq] = facet_albedo(scene, i, j, q) * facet_e[fq];
-        }
+  if (params.facet_senders && b < B) {  // the corners' light gathered at the corner facets' normals
+    const std::vector<Rgb> corner_e = indirect_of_total(facet_total, kCornerFacets * N);
+    tbb::parallel_for(std::size_t(0), N, [&](std::size_t t) {
+      for (int c = 0; c < kCornerFacets; ++c)
+        r.corner_exit[kCornerFacets * t + c] = scene.surface.albedo[t] * corner_e[kCornerFacets * t + c];
     });
+    facets_of_corners(f, r.corner_exit, r.facet_exit);
   }
   add_sweep_stats(r.stats, st);
   if (b < B)
@@ -353,6 +361,7 @@ LayerSet state_layers(P2State&& s, int width, int height, bool last) {
   if (!last) {
     put("exit", s.exit, 1);
     put("facet_exit", s.facet_exit, 2);
+    put("corner_exit", s.corner_exit, kCornerFacets);
     if (!s.p1_sin_horizon.empty()) {
       const int K = int(s.p1_sin_horizon.size() / N);  // before the move (argument order is unspecified)
       out.adopt("horizon", indexed_channels(K), std::move(s.p1_sin_horizon));
@@ -378,6 +387,7 @@ P2State state_of(LayerSet&& l) {
     s.indirect_b.push_back(rgb_of(x));
   s.exit = rgb_of(l.find("exit"));
   s.facet_exit = rgb_of(l.find("facet_exit"));
+  s.corner_exit = rgb_of(l.find("corner_exit"));
   if (Layer* h = l.find("horizon")) s.p1_sin_horizon = std::move(h->data);
   auto count = [&](const char* key) -> std::uint64_t {
     for (const auto& [k, v] : l.attributes)
@@ -416,7 +426,8 @@ LayerSet p2_bake_stage(const Scene& scene, const MethodConfig& config, int stage
 }
 
 // A bounce's direction blocks on the farm: block b's double sums as SplitDouble pairs ("indirect#2f": 3
-// values a texel, "facet#2f": 6, before the last bounce with facet senders), which the merge adds by
+// values a texel, "facet#2f": 18 (the corner facets'), before the last bounce with facet senders), which
+// the merge adds by
 // add_split in block order (farm/merge_blocks.cpp) as p2_bounce does; its sweep counts as attributes
 // "<count>@<b>" (kept apart by the merge, summed here).
 // Stage 0 (p1's direct light) divides by the same blocks: block b's P1Sums (p1_direction_sums) as layers
@@ -489,7 +500,7 @@ LayerSet p2_bake_stage_block(const Scene& scene, const MethodConfig& config, int
     out.adopt(name, std::move(ch), std::move(split));
   };
   put("indirect#2f", sums.texel, 1);
-  put("facet#2f", sums.facet, 2);
+  put("facet#2f", sums.facet, kCornerFacets);
   for (int i = 0; i < 7; ++i)
     out.attributes.emplace_back(std::string(kStatNames[i]) + "@" + std::to_string(block),
                                 std::to_string(*stat_field(sums.stats, i)));
@@ -509,7 +520,7 @@ LayerSet p2_finish_stage_blocks(const Scene& scene, const MethodConfig& config, 
   const Layer* facet = sums.find("facet#2f");
   const bool want_facet = p.facet_senders && stage < B;
   if (!total || total->data.size() != 6 * N || want_facet != (facet != nullptr) ||
-      (facet && facet->data.size() != 12 * N))
+      (facet && facet->data.size() != 6 * kCornerFacets * N))
     throw std::runtime_error("p2 stage " + std::to_string(stage) + ": blocks of another layout");
   P2SweepStats st;
   const int blocks = direction_block_count(p.directions);

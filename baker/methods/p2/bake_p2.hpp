@@ -113,7 +113,8 @@ struct P2State {
   std::vector<Rgb> direct;                   // E_direct / pi
   std::vector<float> p1_sin_horizon;         // P1's kept horizons ([k * texels + texel], sin e), or empty
   std::vector<Rgb> exit;                     // the exit radiance the next bounce gathers
-  std::vector<Rgb> facet_exit;               // facet senders: [2 * texel + q]
+  std::vector<Rgb> facet_exit;               // facet senders: [2 * texel + q], its corners' mean
+  std::vector<Rgb> corner_exit;              // facet senders: [kCornerFacets * texel + c] at the texel
   std::vector<Rgb> indirect;                 // the sum of the bounces done (empty before bounce 1)
   std::vector<std::vector<Rgb>> indirect_b;  // with P2Params::keep_bounces
   P2SweepStats stats;

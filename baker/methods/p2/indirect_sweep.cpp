@@ -385,6 +385,8 @@ struct LineWorker {
 struct NearPiece {
   p1::NearCrossing c;
   FacetRef a, b;  // the facets beside the piece (facets_beside), relative to the texel
+  // The first piece (from the texel centre): which of the texel's corner facets a and b are.
+  int ca = -1, cb = -1;
   // For texels whose stencil lies on the field (NearStencil::margin): the offsets of the edge's end points
   // in the field's heights and of the facets in the facets' radiance, from the texel's own.
   std::ptrdiff_t za = 0, zb = 0, fa = 0, fb = 0;
@@ -409,6 +411,10 @@ NearStencil near_stencil(const HeightField& f, double dx, double dy, double radi
     std::tie(p.a, p.b) = facets_beside(0.5 * (px + c.x), 0.5 * (py + c.y), dx, dy);
     p.za = c.ai + c.aj * w, p.zb = c.bi + c.bj * w;
     p.fa = 2 * (p.a.i + p.a.j * w) + p.a.q, p.fb = 2 * (p.b.i + p.b.j * w) + p.b.q;
+    if (out.pieces.empty()) {
+      p.ca = corner_facet_index(p.a.i, p.a.j, p.a.q), p.cb = corner_facet_index(p.b.i, p.b.j, p.b.q);
+      if (p.ca < 0 || p.cb < 0) throw std::logic_error("near_stencil: a first piece off the texel's facets");
+    }
     for (int d : {c.ai, c.aj, c.bi, c.bj, p.a.i, p.a.j, p.b.i, p.b.j}) cover(d);
     cover(int(std::ceil(std::fabs(c.x))) + 1), cover(int(std::ceil(std::fabs(c.y))) + 1);
     out.pieces.push_back(p);
@@ -422,48 +428,84 @@ NearStencil near_stencil(const HeightField& f, double dx, double dy, double radi
 // lowest from -infinity: the crease down to any tangent plane) and the facet radiance of each, in `out`
 // (empty when the stencil leaves a clamp field at once). Marched outward: a piece is visible above
 // everything nearer, so the intervals tile the elevations up to the steepest near crossing.
+// With corner_exit (IndirectSweepSpec::corner_exit) the crease radiates the first piece's corner facet
+// light at the texel, and a piece the light at the middle of its visible part, interpolated over its facet
+// (corner_light); without, each its facet's exit_facets value.
 struct NearInterval {
   double lo, hi;
   Rgb L;
 };
-void march_near(const HeightField& f, const NearStencil& st, const Rgb* exit_facets, int i, int j,
-                std::vector<NearInterval>& out) {
+
+// The light of facet r (texel-centred, absolute) at the point (x, y) of it (texel coordinates), from its
+// three corners' values in corner_exit (the barycentric weights of facet_weights, the facet's own).
+Rgb corner_light(const HeightField& f, const Rgb* corner_exit, FacetRef r, double x, double y) {
+  const int qi = r.i - r.q, qj = r.j - r.q;  // the quad the facet lies in
+  const double fx = std::clamp(x - qi, 0.0, 1.0), fy = std::clamp(y - qj, 0.0, 1.0);
+  // facet_weights' corners and weights for each facet of the quad.
+  constexpr int kCorner[2][3][2] = {{{0, 0}, {1, 0}, {0, 1}}, {{1, 0}, {1, 1}, {0, 1}}};
+  const double w[2][3] = {{1 - fx - fy, fx, fy}, {1 - fy, fx + fy - 1, 1 - fx}};
+  Rgb sum{};
+  for (int c = 0; c < 3; ++c) {
+    const std::size_t t = f.index(f.wrap_i(qi + kCorner[r.q][c][0]), f.wrap_j(qj + kCorner[r.q][c][1]));
+    sum += corner_exit[kCornerFacets * t + kWeightCornerFacet[r.q][c]] * float(std::max(0.0, w[r.q][c]));
+  }
+  return sum;
+}
+
+void march_near(const HeightField& f, const NearStencil& st, const Rgb* exit_facets, const Rgb* corner_exit,
+                int i, int j, std::vector<NearInterval>& out) {
   out.clear();
   const std::size_t idx = f.index(i, j);
   const double z0 = f.z[idx];
   double m = -std::numeric_limits<double>::infinity();
-  auto slope_of = [&](const p1::NearCrossing& c, float za, float zb) {
-    return (double(za + (zb - za) * c.w) - z0) * c.inv_s;
-  };
-  const int g = st.margin;
-  if (i >= g && j >= g && i + g < f.width && j + g < f.height) {  // the whole stencil on the field
-    const float* z = f.z.data() + idx;
-    const Rgb* fe = exit_facets + 2 * idx;
-    for (const NearPiece& p : st.pieces) {
-      const double slope = slope_of(p.c, z[p.za], z[p.zb]);
-      if (slope > m) {
-        const Rgb La = fe[p.fa];
-        out.push_back({m, slope, p.a == p.b ? La : (La + fe[p.fb]) * 0.5f});
-        m = slope;
-      }
-    }
-    return;
-  }
+  // The previous crossing (the texel centre at first): its height above the texel and world distance.
+  double prev_dz = 0, prev_s = 0, prev_x = 0, prev_y = 0;
   const bool clamp = f.wrap == Wrap::clamp;
+  const int g = st.margin;
+  const bool inside = i >= g && j >= g && i + g < f.width && j + g < f.height;  // the stencil on the field
   for (const NearPiece& p : st.pieces) {
     const p1::NearCrossing& c = p.c;
-    const float px = float(i) + c.x, py = float(j) + c.y;
-    if (clamp &&
-        (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
-      break;  // the terrain ends at the border
-    const double slope = slope_of(c, f.at(i + c.ai, j + c.aj), f.at(i + c.bi, j + c.bj));
+    float za, zb;
+    if (inside) {
+      za = f.z[std::size_t(std::ptrdiff_t(idx) + p.za)], zb = f.z[std::size_t(std::ptrdiff_t(idx) + p.zb)];
+    } else {
+      const float px = float(i) + c.x, py = float(j) + c.y;
+      if (clamp &&
+          (px < -1e-4f || py < -1e-4f || px > float(f.width - 1) + 1e-4f || py > float(f.height - 1) + 1e-4f))
+        break;  // the terrain ends at the border
+      za = f.at(i + c.ai, j + c.aj), zb = f.at(i + c.bi, j + c.bj);
+    }
+    const double dz = double(za + (zb - za) * c.w) - z0, s = 1.0 / double(c.inv_s);
+    const double slope = dz * c.inv_s;
     if (slope > m) {
-      const Rgb La = facet_value(f, exit_facets, {i + p.a.i, j + p.a.j, p.a.q});
-      const Rgb L =
-          p.a == p.b ? La : (La + facet_value(f, exit_facets, {i + p.b.i, j + p.b.j, p.b.q})) * 0.5f;
+      const FacetRef a{i + p.a.i, j + p.a.j, p.a.q}, b{i + p.b.i, j + p.b.j, p.b.q};
+      Rgb L;
+      if (!corner_exit) {
+        const Rgb La = inside ? exit_facets[std::size_t(std::ptrdiff_t(2 * idx) + p.fa)]
+                              : facet_value(f, exit_facets, a);
+        L = p.a == p.b ? La
+                       : (La + (inside ? exit_facets[std::size_t(std::ptrdiff_t(2 * idx) + p.fb)]
+                                       : facet_value(f, exit_facets, b))) *
+                             0.5f;
+      } else if (out.empty()) {  // the crease: the first piece's facet at the texel itself
+        const Rgb* x = corner_exit + kCornerFacets * idx;
+        L = p.ca == p.cb ? x[p.ca] : (x[p.ca] + x[p.cb]) * 0.5f;
+      } else {
+        // The part of the piece above m starts where the line from the previous crossing (prev_s, prev_dz)
+        // to this one is seen at slope m; its middle is where the light is read.
+        const double den = (dz - prev_dz) - m * (s - prev_s);
+        double t0 = den > 0 ? (m * prev_s - prev_dz) / den : 0.0;
+        t0 = std::clamp(t0, 0.0, 1.0);
+        const double h = 0.5 * (t0 + 1);
+        const double x = i + prev_x + h * (c.x - prev_x), y = j + prev_y + h * (c.y - prev_y);
+        L = p.a == p.b
+                ? corner_light(f, corner_exit, a, x, y)
+                : (corner_light(f, corner_exit, a, x, y) + corner_light(f, corner_exit, b, x, y)) * 0.5f;
+      }
       out.push_back({m, slope, L});
       m = slope;
     }
+    prev_dz = dz, prev_s = s, prev_x = c.x, prev_y = c.y;
   }
 }
 
@@ -472,7 +514,7 @@ void march_near(const HeightField& f, const NearStencil& st, const Rgb* exit_fac
 struct NearScratch {
   std::vector<NearInterval> intervals;
   int fi = -1, fj = -1;
-  Vec3f fn[2];
+  Vec3f fn[kCornerFacets];  // corner_facet_normals of texel (fi, fj)
 };
 
 }  // namespace
@@ -534,7 +576,7 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
   const bool facets = spec.exit_facets && facet_acc;
   std::vector<double> no_facets;
   std::vector<double>& acc_f = facets ? *facet_acc : no_facets;  // [(2 * texel + q) * 3 + channel]
-  acc_f.assign(facets ? texels * 6 : 0, 0.0);
+  acc_f.assign(facets ? texels * kCornerFacets * 3 : 0, 0.0);
   // The sweep's direction k is direction k_begin + k of K (indirect_sweep_spec's azimuths).
   const SweepSpec ss = indirect_sweep_spec(spec);
   const int K = spec.directions, nb = int(ss.azimuths.size());
@@ -563,7 +605,8 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
                             double ce) {
     NearScratch& ns = near_scratch.local();
     std::vector<NearInterval>& iv = ns.intervals;
-    march_near(field, pieces[k], spec.exit_facets->data(), i, j, iv);
+    march_near(field, pieces[k], spec.exit_facets->data(),
+               spec.corner_exit ? spec.corner_exit->data() : nullptr, i, j, iv);
     const double top = ce > 0 ? se / ce : std::numeric_limits<double>::infinity();  // tan e
     const double wb = t.value(kTerrainWeight);
     const bool has_far = wb > 0;  // else the samples saw no far terrain: the near field's mean fills in
@@ -596,8 +639,9 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
     };
     part(normals[idx].d(), acc.data() + idx * 3);
     if (facets) {
-      if (ns.fi != i || ns.fj != j) facet_normals(field, i, j, ns.fn), ns.fi = i, ns.fj = j;
-      for (int q = 0; q < 2; ++q) part(ns.fn[q].d(), acc_f.data() + (2 * idx + q) * 3);
+      if (ns.fi != i || ns.fj != j) corner_facet_normals(field, i, j, ns.fn), ns.fi = i, ns.fj = j;
+      for (int q = 0; q < kCornerFacets; ++q)
+        part(ns.fn[q].d(), acc_f.data() + (kCornerFacets * idx + q) * 3);
     }
   };
   sweep_lines(
@@ -638,18 +682,19 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
         }
         if (facets) {  // the same mean terrain radiance over the facets' lobes
           NearScratch& ns = near_scratch.local();
-          if (ns.fi != i || ns.fj != j) facet_normals(field, i, j, ns.fn), ns.fi = i, ns.fj = j;
+          if (ns.fi != i || ns.fj != j) corner_facet_normals(field, i, j, ns.fn), ns.fi = i, ns.fj = j;
           const Vec3f* fn = ns.fn;
-          for (int q = 0; q < 2; ++q) {
-            const std::size_t fi = 2 * idx + q;
+          for (int q = 0; q < kCornerFacets; ++q) {
+            const std::size_t fi = kCornerFacets * idx + q;
             const double tf = terrain_weight(fn[q].d(), cs[k], sn[k], K, e, se, ce);
             if (!(tf > 0)) continue;
             double* a = acc_f.data() + fi * 3;
             if (wb > 0) {
               a[0] += t.value(kRadianceR) * tf / wb, a[1] += t.value(kRadianceG) * tf / wb,
                   a[2] += t.value(kRadianceB) * tf / wb;
-            } else {
-              const Rgb x = (*spec.exit_facets)[fi];
+            } else {  // the samples saw no terrain: the texel's own surface
+              const Rgb x =
+                  spec.corner_exit ? (*spec.corner_exit)[fi] : (*spec.exit_facets)[2 * idx + std::min(q, 1)];
               a[0] += x.r * tf, a[1] += x.g * tf, a[2] += x.b * tf;
             }
           }
@@ -725,7 +770,7 @@ std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3
     add_indirect_block(total, acc);
     if (facets) add_indirect_block(facet_total, acc_f);
   }
-  if (facets) *facet_result = indirect_of_total(facet_total.data(), 2 * texels);
+  if (facets) *facet_result = indirect_of_total(facet_total.data(), kCornerFacets * texels);
   if (stats) *stats = st;
   return indirect_of_total(total.data(), texels);
 }

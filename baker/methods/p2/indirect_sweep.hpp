@@ -60,6 +60,14 @@ struct IndirectSweepSpec {
   // trend for partly visible segments). The facets' normals are recomputed from the heights where needed
   // (facet_normals, field/triangulation.hpp), not held.
   const std::vector<Rgb>* exit_facets = nullptr;
+  // With exit_facets: the exit radiance of the six facets that meet at every texel, at the texel
+  // ([kCornerFacets * texel + c], field/triangulation.hpp), of which exit_facets holds each facet's mean.
+  // The exact near field radiates with them: the crease below a texel's first crossing is its own corner
+  // facet's light at the texel, and each visible piece the light at the middle of its visible part,
+  // interpolated from its facet's corners (as the reference interpolates albedo and emission, and as the
+  // light on rough ground varies over a facet). The sums at the corner facets' normals (facet_acc) are the
+  // next bounce's.
+  const std::vector<Rgb>* corner_exit = nullptr;
   // Exact near field (facet senders and P1's horizons only; 0: off, the method as published): every
   // texel gathers the terrain within near_radius texels itself, from its centre over the triangulated
   // surface (every column, row and diagonal crossing of P1's near-field stencil, each piece radiating
@@ -84,7 +92,7 @@ SweepSpec indirect_sweep_spec(const IndirectSweepSpec& spec);
 
 // The double sums over directions [spec.k_begin, spec.k_end) (one direction block), each from zero, k
 // ascending: E_indirect / pi per texel, acc[3 * texel + c], and with facet_acc (facet senders only) at the
-// facets' normals, [(2 * texel + q) * 3 + c]. stats: the sweep's counts.
+// corner facets' normals, [(kCornerFacets * texel + q) * 3 + c]. stats: the sweep's counts.
 void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& normals,
                          const std::vector<Rgb>& exit, const IndirectSweepSpec& spec, const RunControl& rc,
                          P2SweepStats* stats, std::vector<double>& acc, std::vector<double>* facet_acc);
@@ -100,9 +108,9 @@ void add_sweep_stats(P2SweepStats& total, const P2SweepStats& s);
 // E_indirect / pi per texel (row-major) from the exit radiance `exit` per texel, for one bounce: every
 // direction block by sweep_indirect_sums, added by add_indirect_block. normals: compute_normals(field).
 // stats (optional) is filled with the totals of the sweep.
-// facet_result (optional, facet senders only): E_indirect / pi at the facets' normals, [2 * texel + q]
-// (each texel's gathered terrain radiance over the part of the facet's lobe below P1's horizons): the
-// facets' exit radiance of the next bounce.
+// facet_result (optional, facet senders only): E_indirect / pi at the corner facets' normals,
+// [kCornerFacets * texel + c] (each texel's gathered terrain radiance over the part of the facet's lobe
+// below P1's horizons): the corners' exit radiance of the next bounce.
 std::vector<Rgb> sweep_indirect(const HeightField& field, const std::vector<Vec3f>& normals,
                                 const std::vector<Rgb>& exit, const IndirectSweepSpec& spec,
                                 const RunControl& rc, P2SweepStats* stats = nullptr,
