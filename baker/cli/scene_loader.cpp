@@ -387,15 +387,9 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
     report.warning = "the relief (" + short_num(relief) + " world units) is " + short_num(relief / extent) +
                      " times the field's " + short_num(extent) +
                      "-unit side: steeper than any terrain; check " + scale_hint + " and texel_size";
-  } else if (const double k = scene.georeference.site_scale; std::fabs(k - 1) > 0.01) {
-    // A conformal projection far from its true scale (Web Mercator away from the equator): its map metres
-    // are not ground metres, so every slope is flattened by k.
-    report.warning = "the CRS's map units are " + short_num(k) +
-                     " times the ground's at the field's centre (" + scene.georeference.crs_name +
-                     "): slopes come out " + short_num(k) +
-                     " times too flat; warp the DEM to a CRS true to scale there (a UTM zone), or give "
-                     "height_scale " +
-                     short_num(k) + " (docs/gis.md)";
+  } else if (const std::string w = site_scale_warning(scene.georeference.site_scale, scene.georeference.crs_name);
+             !w.empty()) {
+    report.warning = w;
   } else if (s.format == "jpeg" || s.format == "JPEG") {
     report.warning =
         "JPEG is lossy: the heights carry its compression artefacts (a TIFF or PNG of the same "
@@ -405,6 +399,16 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
     report.warning +=
         (report.warning.empty() ? "" : "; and ") + h["image"].get<std::string>() + ": " + s.unread;
   return report;
+}
+
+std::string site_scale_warning(double k, const std::string& crs_name) {
+  // A conformal projection far from its true scale: its map metres are not ground metres, so every slope is
+  // flattened by k.
+  if (!(std::fabs(k - 1) > 0.01)) return "";
+  return "the CRS's map units are " + short_num(k) + " times the ground's at the field's centre (" + crs_name +
+         "): slopes come out " + short_num(k) +
+         " times too flat; warp the DEM to a CRS true to scale there (a UTM zone), or give height_scale " +
+         short_num(k) + " (docs/gis.md)";
 }
 
 Scene load_scene(const Job& job, const std::function<void(double)>& progress) {

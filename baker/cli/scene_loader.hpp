@@ -88,6 +88,9 @@ struct HeightsReport {
   std::string warning;
 };
 HeightsReport describe_heights(const Job& job, const Scene& scene);
+// The warning for a DEM whose CRS's map units are k times the ground's at the field's centre (Web Mercator
+// away from the equator): slopes come out k times too flat. Empty when k is within 1 % of 1.
+std::string site_scale_warning(double k, const std::string& crs_name);
 
 // The job's Scene. Scene::normals and the constant albedo are filled only when scene_needs says a method
 // reads them (an albedo map the job names is always read, so validate checks it). `progress` (optional): the

@@ -4,7 +4,7 @@ Arrays in, arrays out::
 
     import numpy as np, hfbake
     heights = np.load("dem.npy").astype(np.float32)        # (rows, columns), world units
-    out = hfbake.relief(heights, texel_size=2.0, layers=["svf", "openness_pos"])
+    out = hfbake.relief(heights, texel_size=2.0, layers=["svf", "openness_positive"])
     out["svf"]                                              # (rows, columns) float32
 
 One function per method (p1, p2, nlp, hbao, lsao, farfield, hsao, vo, relief, sun) takes the method's job keys as
@@ -12,6 +12,9 @@ keyword arguments, with the same names, defaults and checks as a job file's bake
 keys (texel_size, wrap, height_scale, height_offset, nodata, nodata_value) and the job's lighting keys
 (environment, lights, bounces, surface). It returns a dict of layers: one channel as (H, W), per-direction
 layers (horizon, horizon_distance, horizon_deg) as (K, H, W), colours and vectors as (H, W, C).
+
+A DEM file: read_dem(path) reads it with GDAL, with the checks a job naming it gets, into heights, holes and
+the height keys to pass on.
 
 Jobs: validate(job) and bake(job, out=None) take a job file's path or a dict of one and do what
 `hfbake validate` and `hfbake bake` do; compare(now, baseline) is `hfbake compare`.
@@ -207,3 +210,82 @@ def height_unit_factor(height_unit, pixel_metres=1.0):
     foot and the US survey foot. The heights an array function takes are in the pixels' unit (texel_size's)."""
     metres = _METRES.get((height_unit or "").strip().lower())
     return None if metres is None else metres / pixel_metres
+
+
+class Dem:
+    """A DEM as the array functions take it (read_dem): `heights` (float32, rows x columns, in the pixels'
+    unit), `holes` (bool: NoData, NaN or infinite), `keys` (the height keys for the array functions:
+    texel_size, and nodata="fill" with the band's nodata_value when it has holes), `geotransform` and
+    `projection` (GDAL's, for writing results back), `warnings` (one line each, as `hfbake validate` says
+    them: heights converted into the pixels' unit, a CRS far from true scale)."""
+
+    def __init__(self, heights, holes, keys, geotransform, projection, warnings):
+        self.heights, self.holes, self.keys = heights, holes, keys
+        self.geotransform, self.projection, self.warnings = geotransform, projection, warnings
+
+
+def read_dem(path, band=1):
+    """Reads band `band` of the raster at `path` with GDAL (Debian's python3-gdal) for the array functions,
+    with the checks a job naming the file gets: a CRS that is projected (a geographic DEM's pixels are
+    degrees: warp it, or bake a job naming the file, docs/gis.md), square unrotated pixels (sides equal to
+    1e-9), heights converted into the pixels' unit (height_unit_factor), NoData, NaN and infinite heights as
+    holes (filled for the bake: write results back as NoData there), and a warning where the CRS's map
+    units are not ground units (Web Mercator away from the equator flattens every slope). Raises InputError
+    naming the file."""
+    from osgeo import gdal  # noqa: PLC0415  (only this function needs GDAL)
+
+    path = _os.fspath(path)
+
+    def refuse(message):
+        raise InputError(message, "/height/image", path, [f"{path}: {message}"])
+
+    if not _os.path.isfile(path):
+        refuse("no such file")
+    used = gdal.GetUseExceptions()
+    gdal.DontUseExceptions()
+    try:
+        dem = gdal.Open(path)
+        if dem is None:
+            refuse(f"GDAL cannot read it as a raster ({gdal.GetLastErrorMsg().strip()})")
+    finally:
+        if used:
+            gdal.UseExceptions()
+    if not 1 <= band <= dem.RasterCount:
+        refuse(f"has no band {band} (it has {dem.RasterCount})")
+    crs = dem.GetSpatialRef()
+    if crs is None:
+        refuse("has no CRS: the texel size would be a guess (assign its projected CRS first)")
+    if crs.IsGeographic():
+        refuse("its pixels are degrees of a geographic CRS: warp it to a projected CRS first, or bake a job "
+               "naming the file, which reads a lon/lat DEM's texel sizes itself (docs/gis.md)")
+    gt = dem.GetGeoTransform()
+    sx, sy = abs(gt[1]), abs(gt[5])
+    if gt[2] != 0 or gt[4] != 0:
+        refuse("has rotated pixels: warp it north-up first (gdalwarp)")
+    if not abs(sx - sy) <= 1e-9 * max(sx, sy):
+        refuse(f"has non-square pixels ({sx!r} x {sy!r}); hfbake needs square texels: resample it first, e.g. "
+               "gdalwarp -tr S S")
+    b = dem.GetRasterBand(band)
+    values = b.ReadAsArray().astype(_np.float64)
+    nodata = b.GetNoDataValue()
+    holes = ~_np.isfinite(values)
+    if nodata is not None and _np.isfinite(nodata):
+        holes |= values == nodata
+    heights = _np.where(holes, _np.nan, values).astype(_np.float32)
+    holes |= ~_np.isfinite(heights)  # beyond float's range
+    warnings = []
+    linear = crs.GetLinearUnits() if crs.IsProjected() else 1.0
+    factor = height_unit_factor(b.GetUnitType(), linear)
+    if factor is not None and abs(factor - 1) > 1e-4:
+        heights[~holes] *= _np.float32(factor)
+        warnings.append(f"{path}: the band's heights are in {b.GetUnitType()}, its pixels in "
+                        f"{crs.GetLinearUnitsName()}: heights x {factor:.6g} into the pixels' unit")
+    centre_x = gt[0] + gt[1] * dem.RasterXSize / 2
+    centre_y = gt[3] + gt[5] * dem.RasterYSize / 2
+    scale = _hfbake.site_scale_warning(crs.ExportToWkt(), centre_x, centre_y, crs.GetName() or "")
+    if scale:
+        warnings.append(f"{path}: {scale}")
+    keys = {"texel_size": sx}
+    if holes.any():
+        keys["nodata"] = "fill"
+    return Dem(heights, holes, keys, gt, dem.GetProjection(), warnings)

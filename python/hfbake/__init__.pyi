@@ -262,3 +262,13 @@ def compare(
     update_baseline: bool = ...,
 ) -> dict[str, Any]: ...
 def height_unit_factor(height_unit: Optional[str], pixel_metres: float = ...) -> Optional[float]: ...
+
+class Dem:
+    heights: np.ndarray
+    holes: np.ndarray
+    keys: dict[str, Any]
+    geotransform: tuple[float, float, float, float, float, float]
+    projection: str
+    warnings: list[str]
+
+def read_dem(path: Union[str, os.PathLike[str]], band: int = ...) -> Dem: ...

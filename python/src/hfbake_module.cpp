@@ -27,6 +27,7 @@
 #include "cli/reference_cache.hpp"
 #include "cli/scene_inputs.hpp"
 #include "cli/scene_loader.hpp"
+#include "io/crs_geodesy.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
@@ -496,6 +497,14 @@ PYBIND11_MODULE(_hfbake, m) {
   m.def("compare", &compare_api, py::arg("now"), py::arg("baseline"), py::arg("tolerances"),
         py::arg("allow_different_job"), py::arg("update_baseline"));
   m.def("validate", &validate_job, py::arg("job"), py::arg("memory_limit") = std::nullopt);
+  // The command's warning for a DEM whose CRS is far from true scale at (x, y), or "" (read_dem).
+  m.def(
+      "site_scale_warning",
+      [](const std::string& wkt, double x, double y, const std::string& crs_name) {
+        const std::optional<double> k = grid_scale_factor(wkt, x, y);
+        return k ? site_scale_warning(*k, crs_name) : std::string();
+      },
+      py::arg("wkt"), py::arg("x"), py::arg("y"), py::arg("crs_name"));
   m.def("bake_job", &bake_job_api, py::arg("job"), py::arg("out"), py::arg("threads") = 0,
         py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
         py::arg("memory_limit") = std::nullopt, py::arg("cache") = true);

@@ -138,3 +138,29 @@ def test_bad_layers_and_outputs_fail_with_a_message_not_a_traceback(tmp_path, qg
         assert result.returncode != 0, text
         assert expect in text, text
         assert "Traceback" not in text and "AttributeError" not in text, text
+
+
+def test_direction_bands_name_their_bearing_and_a_mercator_dem_warns(tmp_path, qgis_env):
+    # K = 16 on a north-up raster: direction 12 (azimuth 270, towards -rows) looks north; north-down: 4.
+    for name, geotransform, north_band in [("up", (500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0), 13),
+                                           ("down", (500000.0, 2.0, 0.0, 5100000.0, 0.0, 2.0), 5)]:
+        dem = tmp_path / f"{name}.tif"
+        write_geotiff(dem, terrain(40, 32, seed=13) * 10, geotransform=geotransform)
+        out = tmp_path / f"h_{name}.tif"
+        result = subprocess.run([QGIS_PROCESS, "run", "hfbake:horizons", "--", f"INPUT={dem}", "BAND=1",
+                                 "DIRECTIONS=16", "RADIUS=0", f"OUTPUT={out}"], env=qgis_env, capture_output=True,
+                                text=True)
+        assert result.returncode == 0, result.stdout + result.stderr
+        ds = gdal.Open(str(out))
+        assert ds.GetRasterBand(north_band).GetDescription().endswith("bearing 0.00 degrees (clockwise from grid "
+                                                                      "north)"), name
+        assert "bearing 90.00" in ds.GetRasterBand(1).GetDescription()  # +columns: east either way
+
+    mercator = tmp_path / "mercator.tif"
+    write_geotiff(mercator, terrain(40, 32, seed=13) * 10, epsg=3857,
+                  geotransform=(1669792.0, 2.0, 0.0, 5861197.0, 0.0, -2.0))
+    result = subprocess.run([QGIS_PROCESS, "run", "hfbake:svf", "--", f"INPUT={mercator}", "BAND=1",
+                             "DIRECTIONS=8", "RADIUS=10", f"OUTPUT={tmp_path / 'm.tif'}"], env=qgis_env,
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "times too flat" in result.stdout + result.stderr

@@ -2,6 +2,7 @@
 NoData -9999 where the input had none), baked by the Python module hfbake with the job keys' names and
 checks; a bad value fails the algorithm with hfbake's message."""
 
+import math
 import os
 
 import numpy as np
@@ -55,45 +56,21 @@ class _Bake(QgsProcessingAlgorithm):
         layer = self.parameterAsRasterLayer(parameters, "INPUT", context)
         band_index = self.parameterAsInt(parameters, "BAND", context)
         output = self.parameterAsOutputLayer(parameters, "OUTPUT", context)
-        dem = gdal.Open(layer.source())
-        if dem is None:
-            raise QgsProcessingException(f"{layer.source()}: GDAL cannot read it as a raster")
-        if not 1 <= band_index <= dem.RasterCount:
-            raise QgsProcessingException(f"{layer.source()}: has no band {band_index} (it has {dem.RasterCount})")
-        band = dem.GetRasterBand(band_index)
-        # The CRS first: a geographic raster's pixels are degrees, whatever their shape.
-        crs = dem.GetSpatialRef()
-        if crs is None:
-            raise QgsProcessingException(f"{layer.source()}: has no CRS: the texel size would be a guess (assign "
-                                         "its projected CRS first)")
-        if crs.IsGeographic():
-            raise QgsProcessingException(f"{layer.source()}: its pixels are degrees of a geographic CRS: warp it to a "
-                                         "projected CRS first (the heights' unit per pixel)")
-        geotransform = dem.GetGeoTransform()
-        if geotransform[2] != 0 or geotransform[4] != 0 or abs(geotransform[1]) != abs(geotransform[5]):
-            raise QgsProcessingException(f"{layer.source()}: needs square, unrotated pixels (Warp it first)")
         folder = os.path.dirname(os.path.abspath(output))
         if not os.path.isdir(folder):
             raise QgsProcessingException(f"{output}: its folder does not exist")
-        heights = band.ReadAsArray().astype(np.float32)
-        nodata = band.GetNoDataValue()
-        holes = ~np.isfinite(heights)
-        if nodata is not None:
-            holes |= heights == nodata
-        # Heights in the pixels' unit: a band that declares another (metres on a CRS in feet) is converted.
-        linear = crs.GetLinearUnits() if crs is not None and crs.IsProjected() else 1.0
-        factor = hfbake.height_unit_factor(band.GetUnitType(), linear)
-        if factor is not None and abs(factor - 1) > 1e-4:
-            heights[~holes] *= np.float32(factor)
-            feedback.pushWarning(f"{layer.source()}: the band's heights are in {band.GetUnitType()}: heights x "
-                                 f"{factor:.6g} into the pixels' unit")
+        try:  # the checks and conversions a job naming the file gets (docs/python.md, read_dem)
+            dem = hfbake.read_dem(layer.source(), band_index)
+        except hfbake.InputError as e:
+            raise QgsProcessingException(str(e))
+        for warning in dem.warnings:
+            feedback.pushWarning(warning)
         keys = {"directions": self.parameterAsInt(parameters, "DIRECTIONS", context), "layers": [self.layer]}
         if self.radius_key:
             radius = self.parameterAsDouble(parameters, "RADIUS", context)
             if radius > 0:
                 keys[self.radius_key] = radius
-        if nodata is not None:
-            keys.update(nodata="fill", nodata_value=nodata)
+        keys.update(dem.keys)
 
         class Stop:  # the Cancel button, polled by hfbake while it bakes
             def is_set(self):
@@ -101,25 +78,39 @@ class _Bake(QgsProcessingAlgorithm):
 
         try:
             values = getattr(hfbake, self.method)(
-                heights, texel_size=abs(geotransform[1]), progress=lambda f: feedback.setProgress(100 * f),
+                dem.heights, progress=lambda f: feedback.setProgress(100 * f),
                 cancel=Stop(), **keys)[self.layer]
         except hfbake.InputError as e:
             raise QgsProcessingException(f"{self.method}: {e}")
         except hfbake.Cancelled:
             return {}
         planes = values if values.ndim == 3 else values[np.newaxis]
-        out = gdal.GetDriverByName("GTiff").Create(output, dem.RasterXSize, dem.RasterYSize, planes.shape[0],
-                                                   gdal.GDT_Float32, options=["COMPRESS=DEFLATE", "TILED=YES"])
+        rows, columns = planes.shape[1:]
+        out = gdal.GetDriverByName("GTiff").Create(output, columns, rows, planes.shape[0], gdal.GDT_Float32,
+                                                   options=["COMPRESS=DEFLATE", "TILED=YES"])
         if out is None:
             raise QgsProcessingException(f"{output}: GDAL cannot create it: {gdal.GetLastErrorMsg()}")
-        out.SetGeoTransform(geotransform)
-        out.SetProjection(dem.GetProjection())
+        out.SetGeoTransform(dem.geotransform)
+        out.SetProjection(dem.projection)
         for k, plane in enumerate(planes):
             b = out.GetRasterBand(k + 1)
             b.SetNoDataValue(-9999.0)
-            b.WriteArray(np.where(holes, np.float32(-9999.0), plane))
+            if planes.shape[0] > 1:  # a band per direction: which way it looks, as a compass bearing
+                b.SetDescription(direction_description(dem.geotransform, k, planes.shape[0]))
+            b.WriteArray(np.where(dem.holes, np.float32(-9999.0), plane))
         out = None
         return {"OUTPUT": output}
+
+
+def direction_description(geotransform, k, count):
+    """Band k of `count` per-direction bands: direction k's azimuth is 360 k / count degrees, measured in the
+    pixel grid from +x (columns) towards +y (rows) (docs/contract.md); its bearing on the map follows the
+    geotransform (a north-up raster's rows run south)."""
+    angle = 2 * math.pi * k / count
+    east = math.cos(angle) * geotransform[1] + math.sin(angle) * geotransform[2]
+    north = math.cos(angle) * geotransform[4] + math.sin(angle) * geotransform[5]
+    bearing = round(math.degrees(math.atan2(east, north)), 2) % 360  # -0.001 is 0.00, not 360.00
+    return f"direction {k}: bearing {bearing:.2f} degrees (clockwise from grid north)"
 
 
 class SkyViewFactor(_Bake):

@@ -1,0 +1,89 @@
+"""hfbake.read_dem: a DEM read for the array functions with the checks and warnings a job naming the file
+gets (the command's own reading is the truth)."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import hfbake
+from conftest import SOURCE_DIR, run_cli, terrain
+from test_examples import write_geotiff
+
+gdal = pytest.importorskip("osgeo.gdal")
+
+
+def test_a_web_mercator_dem_warns_as_the_command_does(tmp_path):
+    # 46.5 degrees north: Web Mercator's metres are 1/cos(46.5) = 1.45 ground metres.
+    dem = tmp_path / "mercator.tif"
+    x, y = 1669792.0, 5861197.0  # EPSG:3857 near 15 E, 46.5 N
+    write_geotiff(dem, terrain(40, 32, seed=13) * 10, epsg=3857, geotransform=(x, 2.0, 0.0, y, 0.0, -2.0))
+    d = hfbake.read_dem(dem)
+    assert len(d.warnings) == 1 and "times too flat" in d.warnings[0], d.warnings
+    job = {"version": 1, "name": "m", "height": {"image": str(dem)}, "bake": [{"method": "relief"}]}
+    (tmp_path / "m.json").write_text(json.dumps(job))
+    said = run_cli("validate", tmp_path / "m.json", check=False)
+    command = next(line for line in said.stderr.splitlines() if "too flat" in line)
+    assert d.warnings[0].split(": ", 1)[1] in command  # the same sentence
+    # The example passes the warning on.
+    result = subprocess.run([sys.executable, SOURCE_DIR / "python" / "examples" / "gdal_relief.py", dem,
+                             tmp_path / "out"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert "times too flat" in result.stderr
+
+
+def test_nan_holes_without_a_declared_nodata_are_filled_and_kept_as_holes(tmp_path):
+    heights = terrain(40, 32, seed=13) * 10
+    heights[5, 6] = np.nan
+    dem = tmp_path / "dem.tif"
+    write_geotiff(dem, heights)  # no NoData value: the NaN is a hole all the same
+    d = hfbake.read_dem(dem)
+    assert d.keys["nodata"] == "fill" and d.holes[5, 6] and np.count_nonzero(d.holes) == 1
+    svf = hfbake.relief(d.heights, directions=8, layers=["svf"], **d.keys)["svf"]
+    assert np.isfinite(svf).all()
+    result = subprocess.run([sys.executable, SOURCE_DIR / "python" / "examples" / "gdal_relief.py", dem,
+                             tmp_path / "out"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    out = gdal.Open(str(tmp_path / "out" / "svf.tif")).ReadAsArray()
+    assert out[5, 6] == -9999.0 and np.count_nonzero(out == -9999.0) == 1
+
+
+def test_pixel_sides_equal_to_1e9_are_square_and_others_are_refused_naming_both(tmp_path):
+    dem = tmp_path / "noisy.tif"
+    write_geotiff(dem, terrain(40, 32, seed=13), geotransform=(500000.0, 2.000000000001, 0.0, 5200000.0, 0.0,
+                                                                 -1.999999999999))
+    assert hfbake.read_dem(dem).keys["texel_size"] == pytest.approx(2.0, rel=1e-9)
+    wide = tmp_path / "wide.tif"
+    write_geotiff(wide, terrain(40, 32, seed=13), geotransform=(500000.0, 2.0, 0.0, 5200000.0, 0.0, -1.5))
+    with pytest.raises(hfbake.InputError) as e:
+        hfbake.read_dem(wide)
+    assert e.value.file == str(wide) and "2.0 x 1.5" in str(e.value)
+
+
+def test_a_float64_sentinel_beyond_float_range_is_a_hole(tmp_path):
+    heights = (terrain(40, 32, seed=13) * 10).astype(np.float64)
+    heights[3, 4] = -1e300
+    dem = tmp_path / "f64.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(str(dem), 40, 32, 1, gdal.GDT_Float64)
+    ds.SetGeoTransform((500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0))
+    srs = gdal.osr.SpatialReference()
+    srs.ImportFromEPSG(32633)
+    ds.SetProjection(srs.ExportToWkt())
+    ds.GetRasterBand(1).SetNoDataValue(-1e300)
+    ds.GetRasterBand(1).WriteArray(heights)
+    ds = None
+    d = hfbake.read_dem(dem)
+    assert d.holes[3, 4] and np.count_nonzero(d.holes) == 1 and d.keys["nodata"] == "fill"
+
+
+def test_missing_files_geographic_and_crs_less_rasters_are_refused_naming_the_file(tmp_path):
+    with pytest.raises(hfbake.InputError, match="no such file"):
+        hfbake.read_dem(tmp_path / "none.tif")
+    geo = tmp_path / "lonlat.tif"
+    write_geotiff(geo, terrain(40, 32, seed=13), epsg=4326, geotransform=(15.0, 1e-5, 0.0, 46.0, 0.0, -1e-5))
+    with pytest.raises(hfbake.InputError, match="geographic"):
+        hfbake.read_dem(geo)
+    with pytest.raises(hfbake.InputError, match="no band 2"):
+        hfbake.read_dem(tmp_path / "lonlat.tif", band=2)
