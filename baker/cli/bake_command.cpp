@@ -457,7 +457,7 @@ std::optional<std::size_t> parse_memory_size(const std::string& text) {
 }
 
 int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<std::size_t> memory_limit,
-                 bool tiles, std::optional<int> tile_size) {
+                 bool tiles, std::optional<int> tile_size, bool overwrite) {
   int exit_code = 0;
   // A suite validates as the jobs it lists (as `bake` would run them).
   std::vector<fs::path> jobs;
@@ -488,6 +488,11 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
     for (std::size_t i = 0; i < loads.size(); ++i) {
       std::vector<std::string> lines = output_collisions(valid, i);
       loads[i].errors.insert(loads[i].errors.end(), lines.begin(), lines.end());
+      if (loads[i].job) try {
+          check_output_owner(*loads[i].job, overwrite);  // another job file's outputs of this name there
+        } catch (const InputError& e) {
+          loads[i].errors.push_back(e.line());
+        }
     }
   }
   for (std::size_t n = 0; n < jobs.size(); ++n) {

@@ -235,6 +235,9 @@ int run(int argc, char** argv) {
   int validate_tile_size = 0;
   validate_cmd->add_option("--tile-size", validate_tile_size, "As bake's --tile-size")
       ->check(CLI::Range(16, 1 << 20));
+  bool validate_overwrite = false;
+  validate_cmd->add_flag("--overwrite", validate_overwrite,
+                         "As bake's --overwrite: outputs of the same job name from another job file may go");
   int validate_threads = 0;
   validate_cmd
       ->add_option(
@@ -299,7 +302,8 @@ int run(int argc, char** argv) {
     return hfbake::run_validate(
         files, validate_quiet,
         validate_memory_limit.empty() ? std::nullopt : hfbake::parse_memory_size(validate_memory_limit),
-        validate_tiles, validate_tile_size > 0 ? std::optional<int>(validate_tile_size) : std::nullopt);
+        validate_tiles, validate_tile_size > 0 ? std::optional<int>(validate_tile_size) : std::nullopt,
+        validate_overwrite);
   }
   if (app.got_subcommand(init_cmd)) {
     init.height_file = init_height;

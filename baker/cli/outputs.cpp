@@ -228,6 +228,29 @@ std::string job_identity(const Job& job) {
 
 }  // namespace
 
+void check_output_owner(const Job& job, bool overwrite) {
+  // The record as hfbake writes it: a regular file of its own (a link planted there is not read, and is
+  // replaced when the outputs move), one line of printable text that an error may quote.
+  std::string why, recorded;
+  std::error_code link_ec;
+  const bool link = fs::is_symlink(fs::symlink_status(owner_record(job), link_ec));
+  const int fd = link ? -1 : open_regular_file(owner_record(job), why);
+  if (fd >= 0) {
+    char buf[4096];
+    const ssize_t n = read(fd, buf, sizeof buf);
+    close(fd);
+    if (n > 0) recorded.assign(buf, std::size_t(n));
+    if (recorded.size() > 1024 ||
+        std::any_of(recorded.begin(), recorded.end(), [](char c) { return (unsigned char)c < 0x20; }))
+      recorded = "a record that is not hfbake's";
+  }
+  if (!recorded.empty() && recorded != job_identity(job) && !overwrite)
+    throw InputError(job.file.string(), "/name",
+                     "the outputs of job " + job.name + " in " + job.output.dir.string() +
+                         " were baked from " + recorded +
+                         ": give this job another name or output folder, or bake with --overwrite");
+}
+
 OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   std::error_code ec;
   created_dir_ = !fs::exists(job.output.dir, ec);
@@ -250,27 +273,12 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
                          job.output.dir.string() +
                          " now: wait for it, or give this job another name or folder");
   }
-  {
-    // The record as hfbake writes it: a regular file of its own (a link planted there is not read, and is
-    // replaced when the outputs move), one line of printable text that an error may quote.
-    std::string why, recorded;
-    std::error_code link_ec;
-    const bool link = fs::is_symlink(fs::symlink_status(owner_record(job), link_ec));
-    const int fd = link ? -1 : open_regular_file(owner_record(job), why);
-    if (fd >= 0) {
-      char buf[4096];
-      const ssize_t n = read(fd, buf, sizeof buf);
-      close(fd);
-      if (n > 0) recorded.assign(buf, std::size_t(n));
-      if (recorded.size() > 1024 ||
-          std::any_of(recorded.begin(), recorded.end(), [](char c) { return (unsigned char)c < 0x20; }))
-        recorded = "a record that is not hfbake's";
-    }
-    if (!recorded.empty() && recorded != job_identity(job) && !overwrite)
-      throw InputError(job.file.string(), "/name",
-                       "the outputs of job " + job.name + " in " + job.output.dir.string() +
-                           " were baked from " + recorded +
-                           ": give this job another name or output folder, or bake with --overwrite");
+  try {
+    check_output_owner(job, overwrite);
+  } catch (const InputError&) {
+    lock_.reset();
+    if (created_dir_) fs::remove(job.output.dir, ec);
+    throw;
   }
   // Hidden, per process (id and start time), host and job: concurrent jobs and concurrent hfbake processes
   // never share a stage, and a later bake can tell when its owner is gone. A name already there (a link
@@ -479,6 +487,15 @@ void OutputStage::write_text(const std::string& filename, const std::string& tex
 
 std::vector<fs::path> OutputStage::commit() {
   std::vector<fs::path> final_paths;
+  // A name rename(2) cannot replace (a folder there, the owner record's included) fails the job before any
+  // output moves or any folder is made, so that the folder keeps the previous outputs whole.
+  auto refuse_folder = [](const fs::path& target) {
+    std::error_code ec;
+    if (fs::symlink_status(target, ec).type() == fs::file_type::directory)
+      throw InputError(target.string(), "", "is a folder: an output goes there (remove it)");
+  };
+  for (const fs::path& name : staged_) refuse_folder(job_.output.dir / name);
+  refuse_folder(owner_record(job_));
   for (const fs::path& name : staged_) {  // textures/: made here, never a link to elsewhere
     if (!name.has_parent_path()) continue;
     const fs::path folder = (job_.output.dir / name).parent_path();
@@ -489,15 +506,6 @@ std::vector<fs::path> OutputStage::commit() {
           folder.string(), "",
           "is not a folder (a link?): outputs are written inside " + job_.output.dir.string() + " only");
   }
-  // A name rename(2) cannot replace (a folder there, the owner record's included) fails the job before any
-  // output moves, so that the folder keeps the previous outputs whole.
-  auto refuse_folder = [](const fs::path& target) {
-    std::error_code ec;
-    if (fs::symlink_status(target, ec).type() == fs::file_type::directory)
-      throw InputError(target.string(), "", "is a folder: an output goes there (remove it)");
-  };
-  for (const fs::path& name : staged_) refuse_folder(job_.output.dir / name);
-  refuse_folder(owner_record(job_));
   // Every output on the disk before any moves (core/safe_file.hpp sync_file): a machine that crashes after
   // the moves finds whole files under the outputs' names, and a disk that could not take a file (a full
   // network disk reports it only at the flush) fails the job while the previous outputs are still there.

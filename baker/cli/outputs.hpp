@@ -64,6 +64,11 @@ std::string azimuth_convention(const Georeference& geo);
 // (0.05).
 void check_layers_finite(const std::string& stem, const LayerSet& layers);
 
+// Refuses (InputError at /name) a job whose output folder records that another job file baked its outputs of
+// the same job name (docs/output_folders.md), unless `overwrite`: what OutputStage's constructor and
+// `validate` check before anything is baked.
+void check_output_owner(const Job& job, bool overwrite);
+
 class OutputStage {
  public:
   // Creates the output folder and the staging folder in it, after removing the stale staging folders of

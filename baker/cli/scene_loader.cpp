@@ -387,7 +387,8 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
     report.warning = "the relief (" + short_num(relief) + " world units) is " + short_num(relief / extent) +
                      " times the field's " + short_num(extent) +
                      "-unit side: steeper than any terrain; check " + scale_hint + " and texel_size";
-  } else if (const std::string w = site_scale_warning(scene.georeference.site_scale, scene.georeference.crs_name);
+  } else if (const std::string w =
+                 site_scale_warning(scene.georeference.site_scale, scene.georeference.crs_name);
              !w.empty()) {
     report.warning = w;
   } else if (s.format == "jpeg" || s.format == "JPEG") {
@@ -405,8 +406,8 @@ std::string site_scale_warning(double k, const std::string& crs_name) {
   // A conformal projection far from its true scale: its map metres are not ground metres, so every slope is
   // flattened by k.
   if (!(std::fabs(k - 1) > 0.01)) return "";
-  return "the CRS's map units are " + short_num(k) + " times the ground's at the field's centre (" + crs_name +
-         "): slopes come out " + short_num(k) +
+  return "the CRS's map units are " + short_num(k) + " times the ground's at the field's centre (" +
+         crs_name + "): slopes come out " + short_num(k) +
          " times too flat; warp the DEM to a CRS true to scale there (a UTM zone), or give height_scale " +
          short_num(k) + " (docs/gis.md)";
 }

@@ -474,6 +474,33 @@ TEST_F(Untrusted, AFolderAtAnOutputNameMovesNothing) {
 
 // --- one folder, one owner ----------------------------------------------------------------------------
 
+// A copy of a job file, the same job name and folder: validate refuses it as bake does, before anything is
+// baked, naming the file that owns the outputs; with --overwrite both accept it. A textures/ folder the bake
+// would have made is not left behind when the commit is refused for a folder at an output's name.
+TEST_F(Untrusted, ValidateRefusesAnotherJobFilesOutputsAsBakeDoes) {
+  json j = base_job();
+  const std::string first = write_job(dir_, j), copy = write_job(dir_, j, "copy.json");
+  ASSERT_EQ(hfbake(dir_, {"bake", first, "--no-cache", "--quiet"}).exit_code, 0);
+  const Outcome v = hfbake(dir_, {"validate", copy, "--quiet"});
+  EXPECT_EQ(v.exit_code, 2) << v.err;
+  const auto lines = v.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << v.err;
+  EXPECT_NE(lines[0].find("copy.json: /name: the outputs of job t in "), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find(" were baked from " + fs::weakly_canonical(first).string()), std::string::npos)
+      << lines[0];
+  EXPECT_EQ(hfbake(dir_, {"validate", first, "--quiet"}).exit_code, 0);
+  EXPECT_EQ(hfbake(dir_, {"validate", copy, "--quiet", "--overwrite"}).exit_code, 0);
+
+  j["output"]["textures"] = json::array({{{"layers", {"ao"}}}});
+  j["bake"][0]["layers"] = {"ao"};
+  const std::string textured = write_job(dir_, j);
+  fs::remove(dir_ / "out" / "t.p1.exr");
+  fs::create_directory(dir_ / "out" / "t.p1.exr");  // where an output goes
+  const Outcome r = hfbake(dir_, {"bake", textured, "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "textures"));
+}
+
 // Two processes bake different job files with the same name into one folder, 20 times: one bakes (exit
 // 0), the other is refused with one line (exit 2: the folder is locked by the first, or holds the first's
 // outputs); the winner's outputs are never replaced. --overwrite lets a job take the name over.
