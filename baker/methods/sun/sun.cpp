@@ -66,6 +66,15 @@ P1Params horizon_params(const SunConfig& c) {
   return p;
 }
 
+// The sky term's p1 bake: its direct light alone, under the isotropic upper-hemisphere sky (bake_sun).
+P1Params sky_params(const SunConfig& c) {
+  P1Params p = horizon_params(c);
+  p.ao = p.vsky = false;
+  p.direct = true;
+  p.lights = false;
+  return p;
+}
+
 }  // namespace
 
 SunConfig read_sun_config(Params& in, const FieldShape& field) {
@@ -205,11 +214,7 @@ LayerSet bake_sun(const Scene& scene, const MethodConfig& config, const RunContr
     upper.window = scene.window;
     upper.environment = make_latlong_environment(
         4, 2, {Rgb{1, 1, 1}, Rgb{1, 1, 1}, Rgb{1, 1, 1}, Rgb{1, 1, 1}, Rgb{}, Rgb{}, Rgb{}, Rgb{}});
-    P1Params p = horizon_params(c);
-    p.ao = p.vsky = false;
-    p.direct = true;
-    p.lights = false;
-    P1Result r = compute_p1(upper, p, part_of(rc, 1 - sky_share, sky_share));
+    P1Result r = compute_p1(upper, sky_params(c), part_of(rc, 1 - sky_share, sky_share));
     for (std::size_t t = 0; t < N; ++t) sky[t] = float(double(r.direct[3 * t]) * diffuse_wh);
     far_slack = std::max(far_slack, r.far_field_bound.value_or(0.0));
   }
@@ -265,9 +270,12 @@ MethodInfo sun_method() {
   m.working_bytes = [](const MethodConfig& config, const MethodContext& context) {
     const SunConfig& c = config.get<SunConfig>();
     // The beam and lit sums (12 bytes a texel), the sky term's copy of the heights and p1's direct (16),
-    // and p1's sweep buffers.
+    // and the sky term's p1 bake (its direct light under a non-uniform sky) or, without one, the beam's
+    // horizons.
+    const bool sky = wants(c, "irradiation") || wants(c, "sky");
     return 28.0 * double(context.field.width) * double(context.field.height) +
-           p1_working_bytes(context.field, horizon_params(c));
+           (sky ? p1_working_bytes(context.field, sky_params(c), false)
+                : p1_working_bytes(context.field, horizon_params(c)));
   };
   m.division = WorkDivision::texel_tiles;
   // A far field bounds the heights the horizons read exactly (P1Params::far_field): tiles with a halo of
