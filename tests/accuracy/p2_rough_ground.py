@@ -14,20 +14,12 @@ import os
 import subprocess
 import tempfile
 
+import sys
+
 import numpy as np
-from osgeo import gdal, osr
 
-gdal.UseExceptions()
-
-
-def write_raster(path, z):
-    ds = gdal.GetDriverByName("GTiff").Create(path, z.shape[1], z.shape[0], 1, gdal.GDT_Float32)
-    ds.SetGeoTransform((500000.0, 1.0, 0.0, 5100000.0 + z.shape[0], 0.0, -1.0))
-    srs = osr.SpatialReference()
-    srs.ImportFromEPSG(32633)
-    ds.SetProjection(srs.ExportToWkt())
-    ds.GetRasterBand(1).WriteArray(z)
-    ds = None
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "bench"))
+from peers import write_geotiff as write_raster  # noqa: E402  (1 m texels, a projected CRS)
 
 
 def smooth_noise(n, cell, rng):
