@@ -27,6 +27,7 @@ import inspect as _inspect
 import json as _json
 import os as _os
 import tempfile as _tempfile
+import warnings as _warnings
 
 import numpy as _np
 
@@ -153,8 +154,13 @@ del _name
 def validate(job, *, memory_limit=None):
     """Checks a job (a path to a job file, or a dict of one) as `hfbake validate` does: the schema, every
     method's and the reference's parameters, the memory estimate, the inputs loaded. Returns
-    {"name", "width", "height", "memory_bytes", "memory_parts"}; raises InputError listing every problem."""
-    return _hfbake.validate(job, _run_arguments(None, memory_limit)[1])
+    {"name", "width", "height", "memory_bytes", "memory_parts", "heights", "warnings"} ("heights": the line
+    `hfbake validate` prints about them, in world units; "warnings": its warnings, one line each, also issued
+    through Python's warnings module as UserWarning); raises InputError listing every problem."""
+    info = _hfbake.validate(job, _run_arguments(None, memory_limit)[1])
+    for line in info["warnings"]:
+        _warnings.warn(line, UserWarning, stacklevel=2)
+    return info
 
 
 def bake(job, out=None, *, threads=None, progress=None, cancel=None, memory_limit=None, cache=True):

@@ -27,11 +27,11 @@
 #include "cli/reference_cache.hpp"
 #include "cli/scene_inputs.hpp"
 #include "cli/scene_loader.hpp"
-#include "io/crs_geodesy.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
 #include "field/georeference.hpp"
+#include "io/crs_geodesy.hpp"
 #include "job/embedded_schemas.hpp"
 #include "job/manifest.hpp"
 #include "methods/method_table.hpp"
@@ -383,12 +383,18 @@ py::dict validate_job(py::handle job_arg, std::optional<std::size_t> memory_limi
   const FieldSize size = probe_field_size(job);
   std::string parts;
   const std::size_t need = check_job_memory(job, size, memory_limit, &parts);
+  HeightsReport heights;
   {
     py::gil_scoped_release release;
-    load_scene(job);
+    const Scene scene = load_scene(job);
+    heights = describe_heights(job, scene);
   }
   py::dict out;
   out["name"] = job.name;
+  out["heights"] = heights.line;  // the heights line `hfbake validate` prints
+  py::list warnings;              // and its warnings, one line each
+  if (!heights.warning.empty()) warnings.append(job.file.string() + ": " + heights.warning);
+  out["warnings"] = warnings;
   out["width"] = size.width;
   out["height"] = size.height;
   out["memory_bytes"] = need;
