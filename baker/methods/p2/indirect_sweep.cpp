@@ -575,7 +575,8 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
   acc.assign(texels * 3, 0.0);
   const bool facets = spec.exit_facets && facet_acc;
   std::vector<double> no_facets;
-  std::vector<double>& acc_f = facets ? *facet_acc : no_facets;  // [(2 * texel + q) * 3 + channel]
+  std::vector<double>& acc_f =
+      facets ? *facet_acc : no_facets;  // [(kCornerFacets * texel + c) * 3 + channel]
   acc_f.assign(facets ? texels * kCornerFacets * 3 : 0, 0.0);
   // The sweep's direction k is direction k_begin + k of K (indirect_sweep_spec's azimuths).
   const SweepSpec ss = indirect_sweep_spec(spec);

@@ -53,8 +53,8 @@ struct IndirectSweepSpec {
   // exactly whatever way P1 brings its horizons to the texels; when null, the line samples' blended elevation
   // is used.
   const float* p1_sin_horizon = nullptr;
-  // Facet senders: the exit radiance of every texel's two facets (P1Result::direct_facets' layout,
-  // [2 * texel + q]). When given, the terrain a receiver sees radiates per facet of the reference's
+  // Facet senders: the exit radiance of every texel's two facets, [2 * texel + q] (facet_normals' order),
+  // each its three corners' mean (corner_exit below). When given, the terrain a receiver sees radiates per facet of the reference's
   // triangulated surface, as the reference shades its hits, instead of per texel with the smoothed normal:
   // each line segment's radiance is its length-weighted mean over the facets it crosses (with a linear
   // trend for partly visible segments). The facets' normals are recomputed from the heights where needed
