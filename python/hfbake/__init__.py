@@ -163,7 +163,8 @@ def validate(job, *, memory_limit=None):
     return info
 
 
-def bake(job, out=None, *, threads=None, progress=None, cancel=None, memory_limit=None, cache=True):
+def bake(job, out=None, *, threads=None, progress=None, cancel=None, memory_limit=None, cache=True,
+         overwrite=False):
     """Bakes a job (a path to a job file, or a dict of one; relative paths in a dict resolve against the
     current folder) as `hfbake bake --out OUT` does, writing its outputs into `out` (a folder; None: a
     temporary one, removed afterwards).
@@ -171,18 +172,20 @@ def bake(job, out=None, *, threads=None, progress=None, cancel=None, memory_limi
     Returns (layers, report): layers[stem][layer] as arrays (the values as baked, before the EXR's pixel
     type), the reference's under "reference"; report: status ("ok" or "regressed" when a threshold failed),
     errors, per-method seconds and metrics, the output files, and report.json's content under "report" when
-    the job has a reference. `cache`: use the reference cache (~/.cache/hfbake) as the command does."""
+    the job has a reference. `cache`: use the reference cache (~/.cache/hfbake) as the command does.
+    `overwrite`: as the command's --overwrite, replace outputs of the same job name that another job (file, or
+    a dict: every dict job counts as one) baked into `out`."""
     if out is None:
         with _tempfile.TemporaryDirectory(prefix="hfbake-") as tmp:
-            layers, report = _bake_job(job, tmp, threads, progress, cancel, memory_limit, cache)
+            layers, report = _bake_job(job, tmp, threads, progress, cancel, memory_limit, cache, overwrite)
             report["outputs"] = []
             return layers, report
-    return _bake_job(job, _os.fspath(out), threads, progress, cancel, memory_limit, cache)
+    return _bake_job(job, _os.fspath(out), threads, progress, cancel, memory_limit, cache, overwrite)
 
 
-def _bake_job(job, out, threads, progress, cancel, memory_limit, cache):
+def _bake_job(job, out, threads, progress, cancel, memory_limit, cache, overwrite):
     threads, memory_limit = _run_arguments(threads, memory_limit)
-    layers, summary = _hfbake.bake_job(job, out, threads, progress, cancel, memory_limit, cache)
+    layers, summary = _hfbake.bake_job(job, out, threads, progress, cancel, memory_limit, cache, overwrite)
     report = _json.loads(summary)
     for path in report["outputs"]:
         if _os.path.basename(path) == "report.json":

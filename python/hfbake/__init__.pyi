@@ -252,6 +252,7 @@ def bake(
     cancel: Optional[threading.Event] = ...,
     memory_limit: Optional[int] = ...,
     cache: bool = ...,
+    overwrite: bool = ...,
 ) -> tuple[dict[str, Layers], dict[str, Any]]: ...
 def compare(
     now: Union[str, os.PathLike],

@@ -404,10 +404,12 @@ py::dict validate_job(py::handle job_arg, std::optional<std::size_t> memory_limi
 
 // bake(job, out): `hfbake bake --out out` of one job; returns (layers by stem, outcome as JSON text).
 py::tuple bake_job_api(py::handle job_arg, const std::string& out, int threads, py::object progress,
-                       py::object cancel, std::optional<std::size_t> memory_limit, bool use_cache) {
+                       py::object cancel, std::optional<std::size_t> memory_limit, bool use_cache,
+                       bool overwrite) {
   const Job job = load_resolved_job(job_arg, out);
   BakeOptions options;
   options.memory_limit = memory_limit;
+  options.overwrite = overwrite;
   options.quiet = true;
   std::optional<ReferenceCache> cache;
   if (use_cache)
@@ -513,5 +515,5 @@ PYBIND11_MODULE(_hfbake, m) {
       py::arg("wkt"), py::arg("x"), py::arg("y"), py::arg("crs_name"));
   m.def("bake_job", &bake_job_api, py::arg("job"), py::arg("out"), py::arg("threads") = 0,
         py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
-        py::arg("memory_limit") = std::nullopt, py::arg("cache") = true);
+        py::arg("memory_limit") = std::nullopt, py::arg("cache") = true, py::arg("overwrite") = false);
 }

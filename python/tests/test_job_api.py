@@ -111,3 +111,31 @@ def test_a_cancelled_bake_raises_and_leaves_nothing(tmp_path):
         hfbake.bake(doc, tmp_path / "out", cancel=stop, threads=1)
     timer.cancel()
     assert [p for p in tmp_path.rglob("*")] == []
+
+
+def test_validate_returns_and_issues_the_commands_warnings(tmp_path):
+    pytest.importorskip("osgeo.gdal")
+    from test_examples import write_geotiff  # noqa: PLC0415  (GDAL's, when installed)
+
+    dem = tmp_path / "mercator.tif"
+    write_geotiff(dem, terrain(40, 32, seed=13) * 10, epsg=3857,
+                  geotransform=(1669792.0, 2.0, 0.0, 5861197.0, 0.0, -2.0))
+    job = {"version": 1, "name": "m", "height": {"image": str(dem)}, "bake": [{"method": "relief"}]}
+    with pytest.warns(UserWarning, match="times too flat"):
+        info = hfbake.validate(job)
+    assert len(info["warnings"]) == 1 and "times too flat" in info["warnings"][0]
+    assert info["heights"].startswith("heights: ") and "40x32 texels" in info["heights"]
+    plain = tmp_path / "plain.tif"
+    write_geotiff(plain, terrain(40, 32, seed=13) * 10)
+    job["height"]["image"] = str(plain)
+    assert hfbake.validate(job)["warnings"] == []
+
+
+def test_bake_takes_overwrite_as_the_command_does(tmp_path):
+    job = {"version": 1, "name": "o", "height": {"procedural": {"kind": "fractal", "size": [16, 16]}},
+           "bake": [{"method": "p1", "directions": 4, "layers": ["ao"]}]}
+    (tmp_path / "o.json").write_text(json.dumps(job))
+    hfbake.bake(tmp_path / "o.json", out=tmp_path / "out")
+    with pytest.raises(hfbake.InputError, match="were baked from"):
+        hfbake.bake(job, out=tmp_path / "out")  # a dict is another job than the file
+    hfbake.bake(job, out=tmp_path / "out", overwrite=True)

@@ -88,17 +88,3 @@ def test_missing_files_geographic_and_crs_less_rasters_are_refused_naming_the_fi
     with pytest.raises(hfbake.InputError, match="no band 2"):
         hfbake.read_dem(tmp_path / "lonlat.tif", band=2)
 
-
-def test_validate_returns_and_issues_the_commands_warnings(tmp_path):
-    dem = tmp_path / "mercator.tif"
-    write_geotiff(dem, terrain(40, 32, seed=13) * 10, epsg=3857,
-                  geotransform=(1669792.0, 2.0, 0.0, 5861197.0, 0.0, -2.0))
-    job = {"version": 1, "name": "m", "height": {"image": str(dem)}, "bake": [{"method": "relief"}]}
-    with pytest.warns(UserWarning, match="times too flat"):
-        info = hfbake.validate(job)
-    assert len(info["warnings"]) == 1 and "times too flat" in info["warnings"][0]
-    assert info["heights"].startswith("heights: ") and "40x32 texels" in info["heights"]
-    plain = tmp_path / "plain.tif"
-    write_geotiff(plain, terrain(40, 32, seed=13) * 10)
-    job["height"]["image"] = str(plain)
-    assert hfbake.validate(job)["warnings"] == []
