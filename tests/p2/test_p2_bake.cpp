@@ -347,8 +347,8 @@ TEST(P2Bake, BouncesOnARoughFieldMatchTheReference) {
 // Ground rough at the texel scale (white noise of 1.8 texels: 60-70 degrees between neighbours), against
 // the Embree reference: under a uniform sky, and lit by an emission map that rises with the heights. A
 // facet's light differs at its three corners (its pits see far less sky than its crests), and the crease
-// below a texel's first crossing is the facet at the texel itself: each facet's light taken at one vertex
-// put the first bounce 18 % high under the sky and 10 % high under the emission.
+// below a texel's first crossing is the facet at the texel itself: taking each facet's light at one vertex
+// puts the first bounce 18 % high under the sky and 10 % high under the emission.
 TEST(P2Bake, WhiteNoiseGroundMatchesTheReference) {
   HeightField f;
   f.width = f.height = 40;
