@@ -54,11 +54,11 @@ struct IndirectSweepSpec {
   // is used.
   const float* p1_sin_horizon = nullptr;
   // Facet senders: the exit radiance of every texel's two facets, [2 * texel + q] (facet_normals' order),
-  // each its three corners' mean (corner_exit below). When given, the terrain a receiver sees radiates per facet of the reference's
-  // triangulated surface, as the reference shades its hits, instead of per texel with the smoothed normal:
-  // each line segment's radiance is its length-weighted mean over the facets it crosses (with a linear
-  // trend for partly visible segments). The facets' normals are recomputed from the heights where needed
-  // (facet_normals, field/triangulation.hpp), not held.
+  // each its three corners' mean (corner_exit below). When given, the terrain a receiver sees radiates per
+  // facet of the reference's triangulated surface, as the reference shades its hits, instead of per texel
+  // with the smoothed normal: each line segment's radiance is its length-weighted mean over the facets it
+  // crosses (with a linear trend for partly visible segments). The facets' normals are recomputed from the
+  // heights where needed (facet_normals, field/triangulation.hpp), not held.
   const std::vector<Rgb>* exit_facets = nullptr;
   // With exit_facets: the exit radiance of the six facets that meet at every texel, at the texel
   // ([kCornerFacets * texel + c], field/triangulation.hpp), of which exit_facets holds each facet's mean.
