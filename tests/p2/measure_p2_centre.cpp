@@ -1,7 +1,9 @@
 // P2 accuracy decomposition (a measurement program, not a test). For a job's scene and one bounce, on a
 // strided subset of texels, compares
 //   P2(K):  compute_p2's indirect_b1 (facet senders);
-//   T_c(K): the same senders (every facet's exit radiance from P1's facet direct light) gathered from the
+//   T_c(K): the same senders (every facet's exit radiance, its corners' mean, constant over the facet: the
+//           exact near field's own rule, the light at the texel and along each facet, is test_p2_bake's
+//           brute force) gathered from the
 //           texel centre itself over the reference's triangulated surface: along each of the K azimuths the
 //           profile is piecewise linear with kinks at every column, row and diagonal crossing, each piece
 //           lies on one facet, and a piece is visible over the elevations above everything nearer;
@@ -103,30 +105,15 @@ int main(int argc, char** argv) {
   const int stride = std::atoi(argv[3]), K = std::atoi(argv[4]), S = argc > 5 ? std::atoi(argv[5]) : 1;
   const double near_radius = argc > 6 ? std::atof(argv[6]) : P2Params{}.near_radius;
 
-  // The senders' exit radiance exactly as compute_p2 makes it.
-  P1Params p1;
-  p1.directions = K;
-  p1.ao = p1.vsky = false;
-  p1.facet_direct = true;
-  p1.near_radius = std::max(p1.near_radius, near_radius);  // as compute_p2
-  const P1Result d = compute_p1(scene, p1, RunControl{});
-  const std::size_t N = f.texel_count();
-  std::vector<Rgb> exit_f(2 * N);
-  for (int j = 0; j < f.height; ++j)
-    for (int i = 0; i < f.width; ++i)
-      for (int q = 0; q < 2; ++q) {
-        const int e = q == 0 ? 1 : -1;
-        const auto& al = scene.surface.albedo;
-        const std::size_t t = f.index(i, j);
-        const Rgb a =
-            (al[t] + al[f.index(f.wrap_i(i + e), j)] + al[f.index(i, f.wrap_j(j + e))]) * (1.0f / 3);
-        exit_f[2 * t + q] = a * d.direct_facets[2 * t + q];
-      }
   P2Params p;
   p.directions = K;
   p.bounces = 1;
   p.supersampling = S;
   p.near_radius = near_radius;
+  const std::size_t N = f.texel_count();
+  // The facets' exit radiance as compute_p2 makes it (each facet's corner mean, P2State::facet_exit).
+  const std::vector<Rgb> exit_f =
+      p2_state_of_direct(scene, p, compute_p1(scene, p2_direct_params(p, false), RunControl{})).facet_exit;
   const P2Result r = compute_p2(scene, p, RunControl{});
 
   std::vector<float> ref, se;
