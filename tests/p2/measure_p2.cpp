@@ -161,10 +161,13 @@ void speed(int N, int K, int naive_K) {
     ts.visibility = P2Visibility::tree;
     const std::vector<Rgb> c = sweep_indirect(f, normals, exit, ts, RunControl{});
     const bool same = std::memcmp(b.data(), c.data(), b.size() * sizeof(Rgb)) == 0;
-    // The default sender model: per-facet radiance (two facets per texel) and their next-bounce light.
-    std::vector<Rgb> exit_f(2 * f.texel_count(), Rgb{0.5f, 0.5f, 0.5f}), facet_e;
+    // The default sender model: per-facet radiance (two facets per texel, six corner values per texel) and
+    // the corners' next-bounce light.
+    std::vector<Rgb> exit_f(2 * f.texel_count(), Rgb{0.5f, 0.5f, 0.5f}),
+        corner_f(kCornerFacets * f.texel_count(), Rgb{0.5f, 0.5f, 0.5f}), facet_e;
     IndirectSweepSpec fs = spec;
     fs.exit_facets = &exit_f;
+    fs.corner_exit = &corner_f;
     t0 = CpuClock{};
     sweep_indirect(f, normals, exit, fs, RunControl{}, nullptr, &facet_e);
     const double bounce_facets = t0.seconds() * 1000 / K;

@@ -388,8 +388,8 @@ struct NearPiece {
   // The first piece (from the texel centre): which of the texel's corner facets a and b are.
   int ca = -1, cb = -1;
   // For texels whose stencil lies on the field (NearStencil::margin): the offsets of the edge's end points
-  // in the field's heights and of the facets in the facets' radiance, from the texel's own.
-  std::ptrdiff_t za = 0, zb = 0, fa = 0, fb = 0;
+  // in the field's heights, from the texel's own.
+  std::ptrdiff_t za = 0, zb = 0;
 };
 
 // P1's near stencil of one direction with its facets, and how far it reaches: texels at least `margin`
@@ -410,7 +410,6 @@ NearStencil near_stencil(const HeightField& f, double dx, double dy, double radi
     p.c = c;
     std::tie(p.a, p.b) = facets_beside(0.5 * (px + c.x), 0.5 * (py + c.y), dx, dy);
     p.za = c.ai + c.aj * w, p.zb = c.bi + c.bj * w;
-    p.fa = 2 * (p.a.i + p.a.j * w) + p.a.q, p.fb = 2 * (p.b.i + p.b.j * w) + p.b.q;
     if (out.pieces.empty()) {
       p.ca = corner_facet_index(p.a.i, p.a.j, p.a.q), p.cb = corner_facet_index(p.b.i, p.b.j, p.b.q);
       if (p.ca < 0 || p.cb < 0) throw std::logic_error("near_stencil: a first piece off the texel's facets");
@@ -428,9 +427,8 @@ NearStencil near_stencil(const HeightField& f, double dx, double dy, double radi
 // lowest from -infinity: the crease down to any tangent plane) and the facet radiance of each, in `out`
 // (empty when the stencil leaves a clamp field at once). Marched outward: a piece is visible above
 // everything nearer, so the intervals tile the elevations up to the steepest near crossing.
-// With corner_exit (IndirectSweepSpec::corner_exit) the crease radiates the first piece's corner facet
-// light at the texel, and a piece the light at the middle of its visible part, interpolated over its facet
-// (corner_light); without, each its facet's exit_facets value.
+// The crease radiates the first piece's corner facet light at the texel (IndirectSweepSpec::corner_exit), and
+// a piece the light at the middle of its visible part, interpolated over its facet (corner_light).
 struct NearInterval {
   double lo, hi;
   Rgb L;
@@ -452,8 +450,8 @@ Rgb corner_light(const HeightField& f, const Rgb* corner_exit, FacetRef r, doubl
   return sum;
 }
 
-void march_near(const HeightField& f, const NearStencil& st, const Rgb* exit_facets, const Rgb* corner_exit,
-                int i, int j, std::vector<NearInterval>& out) {
+void march_near(const HeightField& f, const NearStencil& st, const Rgb* corner_exit, int i, int j,
+                std::vector<NearInterval>& out) {
   out.clear();
   const std::size_t idx = f.index(i, j);
   const double z0 = f.z[idx];
@@ -480,14 +478,7 @@ void march_near(const HeightField& f, const NearStencil& st, const Rgb* exit_fac
     if (slope > m) {
       const FacetRef a{i + p.a.i, j + p.a.j, p.a.q}, b{i + p.b.i, j + p.b.j, p.b.q};
       Rgb L;
-      if (!corner_exit) {
-        const Rgb La = inside ? exit_facets[std::size_t(std::ptrdiff_t(2 * idx) + p.fa)]
-                              : facet_value(f, exit_facets, a);
-        L = p.a == p.b ? La
-                       : (La + (inside ? exit_facets[std::size_t(std::ptrdiff_t(2 * idx) + p.fb)]
-                                       : facet_value(f, exit_facets, b))) *
-                             0.5f;
-      } else if (out.empty()) {  // the crease: the first piece's facet at the texel itself
+      if (out.empty()) {  // the crease: the first piece's facet at the texel itself
         const Rgb* x = corner_exit + kCornerFacets * idx;
         L = p.ca == p.cb ? x[p.ca] : (x[p.ca] + x[p.cb]) * 0.5f;
       } else {
@@ -606,8 +597,7 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
                             double ce) {
     NearScratch& ns = near_scratch.local();
     std::vector<NearInterval>& iv = ns.intervals;
-    march_near(field, pieces[k], spec.exit_facets->data(),
-               spec.corner_exit ? spec.corner_exit->data() : nullptr, i, j, iv);
+    march_near(field, pieces[k], spec.corner_exit->data(), i, j, iv);
     const double top = ce > 0 ? se / ce : std::numeric_limits<double>::infinity();  // tan e
     const double wb = t.value(kTerrainWeight);
     const bool has_far = wb > 0;  // else the samples saw no far terrain: the near field's mean fills in
@@ -694,8 +684,7 @@ void sweep_indirect_sums(const HeightField& field, const std::vector<Vec3f>& nor
               a[0] += t.value(kRadianceR) * tf / wb, a[1] += t.value(kRadianceG) * tf / wb,
                   a[2] += t.value(kRadianceB) * tf / wb;
             } else {  // the samples saw no terrain: the texel's own surface
-              const Rgb x =
-                  spec.corner_exit ? (*spec.corner_exit)[fi] : (*spec.exit_facets)[2 * idx + std::min(q, 1)];
+              const Rgb x = (*spec.corner_exit)[fi];
               a[0] += x.r * tf, a[1] += x.g * tf, a[2] += x.b * tf;
             }
           }

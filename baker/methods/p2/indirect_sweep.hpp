@@ -60,7 +60,7 @@ struct IndirectSweepSpec {
   // crosses (with a linear trend for partly visible segments). The facets' normals are recomputed from the
   // heights where needed (facet_normals, field/triangulation.hpp), not held.
   const std::vector<Rgb>* exit_facets = nullptr;
-  // With exit_facets: the exit radiance of the six facets that meet at every texel, at the texel
+  // Required with exit_facets: the exit radiance of the six facets that meet at every texel, at the texel
   // ([kCornerFacets * texel + c], field/triangulation.hpp), of which exit_facets holds each facet's mean.
   // The exact near field radiates with them: the crease below a texel's first crossing is its own corner
   // facet's light at the texel, and each visible piece the light at the middle of its visible part,
