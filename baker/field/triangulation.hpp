@@ -48,9 +48,22 @@ struct FacetWeights {
   int di[3] = {0, 0, 0}, dj[3] = {0, 0, 0};
   double w[3] = {0, 0, 0};
 };
+// The corners (di, dj) of each facet in facet_weights' order.
+inline constexpr int kWeightCorner[2][3][2] = {{{0, 0}, {1, 0}, {0, 1}}, {{1, 0}, {1, 1}, {0, 1}}};
+// The weights of the point with fractions (fx, fy) at facet q's corners (kWeightCorner), the point taken as
+// lying on facet q (a point beside it gets the facet's plane extended).
+inline void facet_corner_weights(int q, double fx, double fy, double w[3]) {
+  if (q == 0)
+    w[0] = 1 - fx - fy, w[1] = fx, w[2] = fy;
+  else
+    w[0] = 1 - fy, w[1] = fx + fy - 1, w[2] = 1 - fx;
+}
 inline FacetWeights facet_weights(double fx, double fy) {
-  if (facet_of(fx, fy) == 0) return {0, {0, 1, 0}, {0, 0, 1}, {1 - fx - fy, fx, fy}};
-  return {1, {1, 1, 0}, {0, 1, 1}, {1 - fy, fx + fy - 1, 1 - fx}};
+  FacetWeights r;
+  r.facet = facet_of(fx, fy);
+  for (int c = 0; c < 3; ++c) r.di[c] = kWeightCorner[r.facet][c][0], r.dj[c] = kWeightCorner[r.facet][c][1];
+  facet_corner_weights(r.facet, fx, fy, r.w);
+  return r;
 }
 
 // The facet under the point (x, y) in texel coordinates (not wrapped), named texel-centred: facet q of

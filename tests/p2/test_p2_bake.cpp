@@ -536,14 +536,13 @@ TEST(P2Bake, SteppedFieldMatchesTheExactCentreGather) {
   // field/triangulation.hpp kWeightCornerFacet), linear between them.
   auto facet_L = [&](int ci, int cj, bool lower, double px, double py) {
     const double fx = std::clamp(px - ci, 0.0, 1.0), fy = std::clamp(py - cj, 0.0, 1.0);
-    const FacetWeights fw = facet_weights(lower ? 0.0 : 1.0, lower ? 0.0 : 1.0);  // the corners
+    const int q = lower ? 0 : 1;
     const double wt[2][3] = {{1 - fx - fy, fx, fy}, {1 - fy, fx + fy - 1, 1 - fx}};
     double L = 0;
     for (int c = 0; c < 3; ++c) {
-      const int ti = std::clamp(ci + fw.di[c], 0, f.width - 1),
-                tj = std::clamp(cj + fw.dj[c], 0, f.height - 1);
-      L += wt[lower ? 0 : 1][c] *
-           d.direct_facets[kCornerFacets * f.index(ti, tj) + kWeightCornerFacet[lower ? 0 : 1][c]].g;
+      const int ti = std::clamp(ci + kWeightCorner[q][c][0], 0, f.width - 1),
+                tj = std::clamp(cj + kWeightCorner[q][c][1], 0, f.height - 1);
+      L += wt[q][c] * d.direct_facets[kCornerFacets * f.index(ti, tj) + kWeightCornerFacet[q][c]].g;
     }
     return 0.5 * L;
   };

@@ -439,13 +439,13 @@ struct NearInterval {
 Rgb corner_light(const HeightField& f, const Rgb* corner_exit, FacetRef r, double x, double y) {
   const int qi = r.i - r.q, qj = r.j - r.q;  // the quad the facet lies in
   const double fx = std::clamp(x - qi, 0.0, 1.0), fy = std::clamp(y - qj, 0.0, 1.0);
-  // facet_weights' corners and weights for each facet of the quad.
-  constexpr int kCorner[2][3][2] = {{{0, 0}, {1, 0}, {0, 1}}, {{1, 0}, {1, 1}, {0, 1}}};
-  const double w[2][3] = {{1 - fx - fy, fx, fy}, {1 - fy, fx + fy - 1, 1 - fx}};
+  double w[3];
+  facet_corner_weights(r.q, fx, fy, w);
   Rgb sum{};
   for (int c = 0; c < 3; ++c) {
-    const std::size_t t = f.index(f.wrap_i(qi + kCorner[r.q][c][0]), f.wrap_j(qj + kCorner[r.q][c][1]));
-    sum += corner_exit[kCornerFacets * t + kWeightCornerFacet[r.q][c]] * float(std::max(0.0, w[r.q][c]));
+    const std::size_t t =
+        f.index(f.wrap_i(qi + kWeightCorner[r.q][c][0]), f.wrap_j(qj + kWeightCorner[r.q][c][1]));
+    sum += corner_exit[kCornerFacets * t + kWeightCornerFacet[r.q][c]] * float(std::max(0.0, w[c]));
   }
   return sum;
 }
