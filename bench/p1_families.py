@@ -20,7 +20,7 @@ import tempfile
 import numpy as np
 from osgeo import gdal
 
-from peers import bench_arguments, publish, rough_fbm, timed, write_geotiff
+from peers import bench_arguments, has_holes, publish, rough_fbm, timed, write_geotiff
 
 gdal.UseExceptions()
 
@@ -48,7 +48,11 @@ def main():
             fields.append((label, {"image": path}, n * n))
         for dem in a.dem:
             ds = gdal.Open(dem)
-            fields.append((os.path.basename(dem), {"image": os.path.abspath(dem)}, ds.RasterXSize * ds.RasterYSize))
+            # Holes are filled from their neighbours (docs/gis.md), and the row says so.
+            fill = has_holes(dem)
+            fields.append((os.path.basename(dem) + (", NoData filled" if fill else ""),
+                           dict({"image": os.path.abspath(dem)}, **({"nodata": "fill"} if fill else {})),
+                           ds.RasterXSize * ds.RasterYSize))
             ds = None
         cmds = []
         for i, (label, height, texels) in enumerate(fields):

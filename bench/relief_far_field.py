@@ -26,6 +26,8 @@ import tempfile
 import numpy as np
 from osgeo import gdal, osr
 
+from peers import has_holes
+
 gdal.UseExceptions()
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -104,9 +106,11 @@ def far_field_jobs(dem, work, far, make_entry):
     or (D, C)) on `dem` into its own folder of `work`: ([(name, far)], {name: job file})."""
     fars = [tuple(int(x) for x in p.split(":")) for p in far.split(",")]
     runs = [("exact", None)] + [("D%d_C%d" % (d, c), (d, c)) for d, c in fars]
+    # A DEM's NoData holes are filled from their neighbours (docs/gis.md), the same in every run.
+    height = dict({"image": dem}, **({"nodata": "fill"} if has_holes(dem) else {}))
     jobs = {}
     for name, f in runs:
-        job = {"version": 1, "name": name, "height": {"image": dem}, "bake": [make_entry(f)],
+        job = {"version": 1, "name": name, "height": height, "bake": [make_entry(f)],
                "output": {"dir": os.path.join(work, name), "geotiff": True}}
         jobs[name] = os.path.join(work, name + ".json")
         with open(jobs[name], "w") as out:
