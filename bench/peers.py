@@ -50,10 +50,11 @@ def rough_fbm(size, seed=11, slope_deg=60.0, gain=0.7, largest=64):
     return (z * np.tan(np.radians(slope_deg)) / med + 500.0).astype(np.float32)
 
 
-def write_geotiff(path, z):
+def write_geotiff(path, z, pixel=1.0):
+    """z as a float32 GeoTIFF of square pixels `pixel` metres wide in UTM 33N."""
     drv = gdal.GetDriverByName("GTiff")
     ds = drv.Create(path, z.shape[1], z.shape[0], 1, gdal.GDT_Float32)
-    ds.SetGeoTransform((500000.0, 1.0, 0.0, 5100000.0 + z.shape[0], 0.0, -1.0))
+    ds.SetGeoTransform((500000.0, pixel, 0.0, 5100000.0 + pixel * z.shape[0], 0.0, -pixel))
     srs = osr.SpatialReference()
     srs.ImportFromEPSG(32633)
     ds.SetProjection(srs.ExportToWkt())
