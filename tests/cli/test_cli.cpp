@@ -144,6 +144,33 @@ TEST_F(Cli, MalformedJson) {
       << r.err;
 }
 
+// A mistaken command line is named in one line, exit 2, nothing baked: an unknown option even when the word
+// after it is no file (it would be taken as a job), an integer option's text that is no number at all.
+TEST_F(Cli, CommandLineMistakesAreNamed) {
+  const fs::path p = write_job("m.json", job({{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}));
+  const struct {
+    std::string args, expected;
+  } cases[] = {
+      {"bake " + p.string() + " --ouput x",
+       "hfbake: error: command line: The following argument was not expected: --ouput"},
+      {"bake " + p.string() + " --threads abc",
+       "hfbake: error: command line: --threads: not a whole number: abc (it must be from 1 to 4096)"},
+      {"bake " + p.string() + " --threads 2.5",
+       "hfbake: error: command line: --threads: not a whole number: 2.5 (it must be from 1 to 4096)"},
+      {"bake " + p.string() + " --threads 0",
+       "hfbake: error: command line: --threads: must be from 1 to 4096 (it is 0)"},
+      {"validate " + p.string() + " --threads 99999999999999999999",
+       "hfbake: error: command line: --threads: must be from 1 to 4096 (it is 99999999999999999999)"},
+  };
+  for (const auto& c : cases) {
+    const Result r = hfbake(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args;
+    ASSERT_EQ(r.error_lines().size(), 1u) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.error_lines()[0], c.expected) << c.args;
+  }
+  EXPECT_TRUE(output_dir_is_empty());
+}
+
 TEST_F(Cli, SchemaViolationOneLinePerProblem) {
   nlohmann::json j =
       job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}, {{{"method", "p1"}, {"directions", 0}}});
