@@ -592,6 +592,16 @@ TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
     EXPECT_NE(lines[0].find(", p1 "), std::string::npos) << lines[0];
     EXPECT_NE(lines[0].find("more than the 200 MiB of --memory-limit"), std::string::npos) << lines[0];
   }
+  // A limit that a MiB count would round is said in bytes: 10 bytes, and 700.5M (700.5 x 2^20; the job
+  // needs about 756 MiB).
+  for (const auto& [limit, said] :
+       {std::pair<std::string, std::string>{"10", "the 10 bytes of --memory-limit"},
+        {"700.5M", "the 734527488 bytes of --memory-limit"}}) {
+    const Result r = hfbake("validate " + p.string() + " --memory-limit " + limit + " --quiet");
+    EXPECT_EQ(r.exit_code, 2) << limit;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("more than " + said), std::string::npos) << r.err;
+  }
   EXPECT_TRUE(output_dir_is_empty());
   // The knob: a p2 at K = 64 on 2048^2 is mostly p1's horizons (4 bytes a texel per direction).
   nlohmann::json p2 = job({{"procedural", {{"kind", "flat"}, {"size", {2048, 2048}}}}},
