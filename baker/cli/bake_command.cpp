@@ -148,10 +148,12 @@ struct JobRun {
   std::string job_hash;
 
   void tell(const std::vector<std::string>& notices) const {
+    const std::string warning = "warning: ";
     for (const std::string& n : notices)
-      if (n.rfind("warning: ", 0) == 0)
+      if (n.rfind(warning, 0) == 0) {
         progress.warning(job.name + ": " + n);
-      else
+        outcome.warnings.push_back(n.substr(warning.size()));
+      } else
         progress.message(job.name + ": " + n);
   }
   // A RunControl reporting `step`'s progress and stopping when the bake is cancelled.
@@ -171,7 +173,10 @@ Scene load_step(const JobRun& run) {
   Scene scene = load_scene(run.job, [&](double f) { run.progress.update(run.job.name, "load", f); });
   const HeightsReport heights = describe_heights(run.job, scene);
   run.progress.message(run.job.name + ": " + heights.line);
-  if (!heights.warning.empty()) run.progress.warning("warning: " + run.job.name + ": " + heights.warning);
+  if (!heights.warning.empty()) {
+    run.progress.warning("warning: " + run.job.name + ": " + heights.warning);
+    run.outcome.warnings.push_back(run.job.file.string() + ": " + heights.warning);
+  }
   run.stage.set_georeference(scene.georeference);
   run.stage.set_texel_size(scene.field.dx(), scene.field.dy());
   run.progress.end(run.job.name, "load", seconds_since(t0));
