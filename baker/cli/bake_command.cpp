@@ -78,8 +78,14 @@ std::string largest_part_knob(const std::vector<MemoryPart>& parts) {
 }  // namespace
 
 std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::size_t> limit,
-                             std::string* parts_text) {
+                             std::string* parts_text, const std::string& limit_name) {
   const std::size_t have = limit ? *limit : available_memory_bytes();
+  // The budget as the caller gave it, named; in bytes when gib() would round it (10 bytes to "0 MiB").
+  const std::size_t mib = std::size_t(1) << 20, half_gib = std::size_t(1) << 29;
+  const bool exact = have % mib == 0 && (have < 2 * half_gib || have % half_gib == 0);
+  const std::string budget =
+      limit ? "the " + (exact ? gib(have) : std::to_string(have) + " bytes") + " of " + limit_name
+            : "the " + gib(have) + " available (" + limit_name + " sets the budget)";
   // The heights alone first: the estimate plans the sweeps, whose plan is itself about a byte per 128 texels
   // (a 1000000^2 field: 8 GB just to estimate), so a size far beyond the budget (its heights alone over four
   // times it) is refused before the plan is made; nearer ones get the estimate and its parts.
@@ -88,8 +94,7 @@ std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::
     throw InputError(job.file.string(), "/height",
                      "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
                          " field needs about " + gib(std::size_t(std::min(heights, 1.8e19))) +
-                         " or more to bake (the process and the heights alone), more than the " + gib(have) +
-                         (limit ? " of --memory-limit" : " available (--memory-limit SIZE sets the budget)"));
+                         " or more to bake (the process and the heights alone), more than " + budget);
   std::vector<MemoryPart> parts;
   const std::size_t need = estimate_peak_bytes(job, size, &parts);
   if (parts_text) *parts_text = memory_parts_text(parts);
@@ -97,9 +102,7 @@ std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::
     throw InputError(job.file.string(), "/height",
                      "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
                          " field needs about " + gib(need) + " to bake (" + memory_parts_text(parts) +
-                         "), more than the " + gib(have) +
-                         (limit ? " of --memory-limit" : " available (--memory-limit SIZE sets the budget)") +
-                         largest_part_knob(parts));
+                         "), more than " + budget + largest_part_knob(parts));
   return need;
 }
 
@@ -145,10 +148,12 @@ struct JobRun {
   std::string job_hash;
 
   void tell(const std::vector<std::string>& notices) const {
+    const std::string warning = "warning: ";
     for (const std::string& n : notices)
-      if (n.rfind("warning: ", 0) == 0)
+      if (n.rfind(warning, 0) == 0) {
         progress.warning(job.name + ": " + n);
-      else
+        outcome.warnings.push_back(n.substr(warning.size()));
+      } else
         progress.message(job.name + ": " + n);
   }
   // A RunControl reporting `step`'s progress and stopping when the bake is cancelled.
@@ -168,7 +173,10 @@ Scene load_step(const JobRun& run) {
   Scene scene = load_scene(run.job, [&](double f) { run.progress.update(run.job.name, "load", f); });
   const HeightsReport heights = describe_heights(run.job, scene);
   run.progress.message(run.job.name + ": " + heights.line);
-  if (!heights.warning.empty()) run.progress.warning("warning: " + run.job.name + ": " + heights.warning);
+  if (!heights.warning.empty()) {
+    run.progress.warning("warning: " + run.job.name + ": " + heights.warning);
+    run.outcome.warnings.push_back(run.job.file.string() + ": " + heights.warning);
+  }
   run.stage.set_georeference(scene.georeference);
   run.stage.set_texel_size(scene.field.dx(), scene.field.dy());
   run.progress.end(run.job.name, "load", seconds_since(t0));
@@ -291,7 +299,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
                options.memory_limit ? *options.memory_limit : available_memory_bytes());
     return;
   }
-  check_job_memory(job, size, options.memory_limit);
+  check_job_memory(job, size, options.memory_limit, nullptr, options.memory_limit_name);
   check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
   if (options.shard) {
     const fs::path made = bake_shard(job, *options.shard, progress, cancel, outcome, cache, options.stage);

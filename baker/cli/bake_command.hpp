@@ -30,8 +30,10 @@ struct BakeOptions {
   // The signal that set `cancel` (0 or null: SIGINT): an interrupted bake exits 128 + it (130 SIGINT,
   // 143 SIGTERM, 129 SIGHUP), the status a shell reports for a process that signal killed.
   const std::atomic<int>* interrupt_signal = nullptr;
-  // --memory-limit: the budget a job's memory estimate must fit (default: the machine's available memory).
+  // --memory-limit: the budget a job's memory estimate must fit (default: the machine's available memory),
+  // and the name messages give it (the Python module's is memory_limit).
   std::optional<std::size_t> memory_limit;
+  std::string memory_limit_name = "--memory-limit";
   // The farm (cli/shard_command.hpp): --shard I/N bakes that shard of each job into its shard file;
   // merge (`hfbake merge`) writes each job's outputs from its shards instead of baking.
   std::optional<ShardId> shard;
@@ -53,10 +55,12 @@ struct BakeOptions {
 std::optional<std::size_t> parse_memory_size(const std::string& text);
 
 // Refuses a job that cannot fit in `limit` bytes (default: the machine's available memory) before anything is
-// allocated: an InputError at /height naming the estimate's parts and what shrinks the largest. Returns the
-// estimate (cli/scene_loader.hpp estimate_peak_bytes); `parts_text` (optional) receives its parts.
+// allocated: an InputError at /height naming the estimate's parts, what shrinks the largest, and the limit as
+// given (its bytes, and `limit_name`: the option or argument that set it). Returns the estimate
+// (cli/scene_loader.hpp estimate_peak_bytes); `parts_text` (optional) receives its parts.
 std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::size_t> limit,
-                             std::string* parts_text = nullptr);
+                             std::string* parts_text = nullptr,
+                             const std::string& limit_name = "--memory-limit");
 
 // Bakes one job that resolve_job accepted, as `hfbake bake` does: the memory check, the scene, each method,
 // the reference and its report, the outputs staged and moved into job.output.dir whole. Fills `outcome`

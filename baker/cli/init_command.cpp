@@ -207,6 +207,9 @@ int run_init(const InitOptions& options) {
   const fs::path job_file = options.out ? *options.out : fs::path(job_name(height) + ".json");
   if (fs::equivalent(job_file, height, ec) && !ec)
     return refuse(job_file.string() + ": is the height file itself: give the job another name (-o)");
+  if (fs::is_directory(job_file, ec))
+    return refuse(job_file.string() + ": is a folder: --out names the job file to write (e.g. " +
+                  (job_file / (job_name(height) + ".json")).string() + ")");
   if (fs::exists(job_file, ec) && !options.force)
     return refuse(job_file.string() + ": exists (--force writes over it)");
   const fs::path job_dir = fs::absolute(job_file).parent_path();

@@ -30,6 +30,9 @@ struct JobOutcome {
   std::string file, name;
   JobStatus status = JobStatus::ok;
   std::vector<std::string> errors;
+  // What the bake warned about, one line each, "<file>: <what>": the job file for its heights
+  // (heights_warning), an output file for its values (the Python module issues them as Python warnings).
+  std::vector<std::string> warnings;
   std::vector<std::filesystem::path> outputs;
   nlohmann::json methods = nlohmann::json::object();  // stem -> {method, seconds, metrics, cache}
   // The report's comparison with the job's report.baseline ({file, rel_tolerance, abs_tolerance,

@@ -4,10 +4,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <csignal>
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <string>
+#include <system_error>
 #include <thread>
 
 #include "cli/bake_command.hpp"
@@ -37,6 +40,24 @@ extern "C" void on_stop_signal(int sig) {
   if (g_interrupted.exchange(true)) std::_Exit(128 + sig);
 }
 
+// A whole number from `lo` to `hi`: the check of every integer option, whose message says whether the text is
+// a number at all ("--threads: not a whole number: abc (it must be from 1 to 4096)") or out of the range.
+CLI::Validator whole_number(int lo, int hi) {
+  const std::string range = std::to_string(lo) + " to " + std::to_string(hi);
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) {
+        long long value = 0;
+        const char* end = text.data() + text.size();
+        const auto [stop, error] = std::from_chars(text.data(), end, value);
+        if (text.empty() || stop != end || (error != std::errc() && error != std::errc::result_out_of_range))
+          return "not a whole number: " + text + " (it must be from " + range + ")";
+        if (error != std::errc() || value < lo || value > hi)
+          return "must be from " + range + " (it is " + text + ")";
+        return std::string();
+      },
+      "INT in " + range);
+}
+
 // The options of every command that bakes (bake, merge, slurm), one meaning and one help text each.
 struct RunOptions {
   std::string out, cache;
@@ -61,7 +82,8 @@ struct JobOptions {
 };
 
 void add_job_options(CLI::App* cmd, JobOptions& o) {
-  cmd->add_option("--threads", o.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  cmd->add_option("--threads", o.threads, "Worker threads (default: all cores)")
+      ->check(whole_number(1, 4096));
   cmd->add_flag("--overwrite", o.overwrite,
                 "Replace outputs of the same job name that another job file baked into the output folder");
   cmd->add_option("--summary", o.summary, "Write a machine-readable JSON summary to FILE");
@@ -120,7 +142,7 @@ int run(int argc, char** argv) {
   bake_cmd
       ->add_option("--tile-size", tile_size,
                    "N: with --tiles, tiles of N^2 texels (default: from --memory-limit)")
-      ->check(CLI::Range(16, 1 << 20));
+      ->check(whole_number(16, 1 << 20));
   std::string tile_task;
   bake_cmd->add_option(
       "--tile-task", tile_task,
@@ -136,7 +158,7 @@ int run(int argc, char** argv) {
           "--stage", stage,
           "S: with --shard, stage S of the staged methods (p2: stage 0 direct light, S its bounce S; "
           "stage S needs stage S - 1 of the same job)")
-      ->check(CLI::Range(0, 64));
+      ->check(whole_number(0, 64));
   // hfbake merge: the outputs of `bake` from a job's shards.
   std::vector<std::string> merge_jobs;
   RunOptions merge_run;
@@ -152,7 +174,7 @@ int run(int argc, char** argv) {
   merge_cmd->add_flag("--tiles", merge_tiles, "Write the COGs of a tiled bake from its tile tasks' files");
   int merge_tile_size = 0;
   merge_cmd->add_option("--tile-size", merge_tile_size, "N: the tile tasks' --tile-size")
-      ->check(CLI::Range(16, 1 << 20));
+      ->check(whole_number(16, 1 << 20));
 
   // hfbake slurm: shards as a Slurm job array, then the merge.
   hfbake::SlurmOptions slurm;
@@ -165,7 +187,7 @@ int run(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   slurm_cmd->add_option("--shards", slurm.shards, "Shards per job (bake --shard I/N)")
       ->required()
-      ->check(CLI::Range(1, 4096));
+      ->check(whole_number(1, 4096));
   slurm_cmd->add_option("--partition", slurm.partition, "sbatch --partition");
   slurm_cmd->add_option("--time", slurm.time, "sbatch --time (per task)");
   slurm_cmd->add_option("--mem", slurm.mem,
@@ -176,11 +198,11 @@ int run(int argc, char** argv) {
   slurm_cmd->add_flag("--tiles", slurm_tiles,
                       "A tiled bake: --shards tile tasks (bake --tiles --tile-task), then merge --tiles");
   slurm_cmd->add_option("--tile-size", slurm.tile_size, "N: with --tiles, tiles of N^2 texels")
-      ->check(CLI::Range(16, 1 << 20));
+      ->check(whole_number(16, 1 << 20));
   slurm_cmd->add_flag("--resume", slurm.resume, "Submit only the shards whose file is not complete");
   add_run_options(slurm_cmd, slurm_run);
   slurm_cmd->add_option("--threads", slurm.threads, "Threads per task (--cpus-per-task; default 1)")
-      ->check(CLI::Range(1, 4096));
+      ->check(whole_number(1, 4096));
   slurm_cmd->add_flag(
       "--dry-run", slurm.dry_run,
       "Print the two sbatch scripts and the sbatch commands to stdout; write and submit nothing");
@@ -234,7 +256,7 @@ int run(int argc, char** argv) {
                          "As bake --tiles: the tile plan, every tile's heights read");
   int validate_tile_size = 0;
   validate_cmd->add_option("--tile-size", validate_tile_size, "As bake's --tile-size")
-      ->check(CLI::Range(16, 1 << 20));
+      ->check(whole_number(16, 1 << 20));
   bool validate_overwrite = false;
   validate_cmd->add_flag("--overwrite", validate_overwrite,
                          "As bake's --overwrite: outputs of the same job name from another job file may go");
@@ -243,7 +265,7 @@ int run(int argc, char** argv) {
       ->add_option(
           "--threads", validate_threads,
           "As bake's --threads: the memory estimate counts each thread's scratch (default: all cores)")
-      ->check(CLI::Range(1, 4096));
+      ->check(whole_number(1, 4096));
 
   // hfbake horizon: the horizon profile at a point of a DEM.
   hfbake::HorizonOptions horizon;
@@ -277,7 +299,11 @@ int run(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-    std::fprintf(stderr, "hfbake: error: command line: %s\n", e.what());
+    // An argument no command takes is the mistake to name, even where a word after it failed a check first
+    // (a misspelt --output's folder taken as a job file).
+    const std::vector<std::string> unknown = app.remaining(true);
+    std::fprintf(stderr, "hfbake: error: command line: %s\n",
+                 unknown.empty() ? e.what() : CLI::ExtrasError(unknown).what());
     return 2;
   }
   try {

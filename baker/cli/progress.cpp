@@ -20,7 +20,7 @@ void Progress::clear_bar_locked() {
 }
 
 void Progress::begin(const std::string& job, const std::string& step) {
-  if (mode_ == Mode::quiet) return;
+  if (!shows_steps()) return;
   std::lock_guard lock(mutex_);
   clear_bar_locked();
   std::fprintf(out_, "hfbake: %s: %s ...\n", job.c_str(), step.c_str());
@@ -63,7 +63,7 @@ void Progress::line_locked(const std::string& job, const std::string& step, doub
 void Progress::update(const std::string& job, const std::string& step, double fraction) {
   fraction = fraction < 0 ? 0 : (fraction > 1 ? 1 : fraction);
   if (observer_) observer_(job, step, fraction);
-  if (mode_ == Mode::quiet) return;
+  if (!shows_steps()) return;
   std::lock_guard lock(mutex_);
   if (mode_ == Mode::lines) {
     line_locked(job, step, fraction);
@@ -83,7 +83,7 @@ void Progress::update(const std::string& job, const std::string& step, double fr
 }
 
 void Progress::end(const std::string& job, const std::string& step, double seconds) {
-  if (mode_ == Mode::quiet) return;
+  if (!shows_steps()) return;
   std::lock_guard lock(mutex_);
   clear_bar_locked();
   steps_.erase(job + "/" + step);
@@ -91,19 +91,21 @@ void Progress::end(const std::string& job, const std::string& step, double secon
 }
 
 void Progress::message(const std::string& text) {
-  if (mode_ == Mode::quiet) return;
+  if (!shows_steps()) return;
   std::lock_guard lock(mutex_);
   clear_bar_locked();
   std::fprintf(out_, "hfbake: %s\n", text.c_str());
 }
 
 void Progress::warning(const std::string& text) {
+  if (mode_ == Mode::silent) return;
   std::lock_guard lock(mutex_);
   clear_bar_locked();
   std::fprintf(out_, "hfbake: %s\n", text.c_str());
 }
 
 void Progress::error(const std::string& line) {
+  if (mode_ == Mode::silent) return;
   std::lock_guard lock(mutex_);
   clear_bar_locked();
   std::fprintf(out_, "hfbake: error: %s\n", line.c_str());

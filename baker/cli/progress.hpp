@@ -28,7 +28,9 @@ inline double process_cpu_seconds() {
 
 class Progress {
  public:
-  enum class Mode { quiet, lines, bar };
+  // quiet: warnings and errors only; silent: nothing (the caller reports the warnings from JobOutcome, as the
+  // Python module does).
+  enum class Mode { quiet, lines, bar, silent };
   using Clock = std::chrono::steady_clock::time_point (*)();
   // Everything goes to `out`; `clock` is what the bar's redraw interval and the lines' elapsed and remaining
   // times are read from (both for tests; the program uses stderr and the steady clock).
@@ -51,10 +53,11 @@ class Progress {
   void message(const std::string& text);
   // A message that warns ("warning: ..."): printed above the bar as message() does, and even when quiet.
   void warning(const std::string& text);
-  // An error line "hfbake: error: <line>": printed even when quiet.
+  // An error line "hfbake: error: <line>": printed even when quiet (not when silent).
   void error(const std::string& line);
 
  private:
+  bool shows_steps() const { return mode_ == Mode::lines || mode_ == Mode::bar; }
   void clear_bar_locked();
   void line_locked(const std::string& job, const std::string& step, double fraction);
   Mode mode_;

@@ -305,6 +305,52 @@ std::optional<double> metres_per(std::string unit) {
 
 }  // namespace
 
+std::string heights_warning(const Scene& scene) {
+  const HeightSource& s = scene.height_source;
+  const HeightField& f = scene.field;
+  const double texel = f.texel_size;
+  const double relief = s.world_max - s.world_min;
+  std::string warning;
+  const double extent = std::max(f.width, f.height) * texel;
+  const std::string scale_hint =
+      s.integer ? "height_scale (world units per stored integer: a 16-bit image meant as 0..1 of a height H "
+                  "needs H / 65535, an 8-bit one H / 255)"
+                : "height_scale (world units per stored unit)";
+  // A band that declares its heights in another unit than its pixels' (metres on a CRS in feet): every
+  // slope would be off by their ratio unless height_scale converts them.
+  const std::optional<double> height_metres = metres_per(s.height_unit);
+  const double unit_ratio = height_metres ? *height_metres / s.pixel_unit_metres : 1.0;
+  if (s.scale == 1 && std::fabs(unit_ratio - 1) > 1e-4) {
+    warning = "the band's heights are in " + s.height_unit + " and its pixels in " +
+              (s.pixel_unit.empty() ? std::string("metres") : s.pixel_unit) + ": slopes come out " +
+              short_num(unit_ratio > 1 ? unit_ratio : 1 / unit_ratio) + " times too " +
+              (unit_ratio > 1 ? "flat" : "steep") + "; give height_scale " + short_num(unit_ratio) +
+              " (docs/gis.md)";
+  } else if (relief == 0) {
+    warning = "the field is flat (every height is " + short_num(s.world_min) +
+              "): every method bakes it unoccluded";
+  } else if (relief < 0.01 * extent) {
+    warning = "the relief (" + short_num(relief) + " world units) is " + short_num(100 * relief / extent) +
+              " % of the field's " + short_num(extent) +
+              "-unit side: nearly flat, the bake will be close to unoccluded; if the heights are meant "
+              "higher, set " +
+              scale_hint;
+  } else if (relief > 4 * extent) {
+    warning = "the relief (" + short_num(relief) + " world units) is " + short_num(relief / extent) +
+              " times the field's " + short_num(extent) + "-unit side: steeper than any terrain; check " +
+              scale_hint + " and texel_size";
+  } else if (const std::string w =
+                 site_scale_warning(scene.georeference.site_scale, scene.georeference.crs_name);
+             !w.empty()) {
+    warning = w;
+  } else if (s.format == "jpeg" || s.format == "JPEG") {
+    warning =
+        "JPEG is lossy: the heights carry its compression artefacts (a TIFF or PNG of the same "
+        "heights keeps what was stored; docs/heights.md)";
+  }
+  return warning;
+}
+
 HeightsReport describe_heights(const Job& job, const Scene& scene) {
   const HeightSource& s = scene.height_source;
   const HeightField& f = scene.field;
@@ -357,45 +403,7 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
     line += ")";
   }
 
-  HeightsReport report{line, {}};
-  const double extent = std::max(f.width, f.height) * texel;
-  const std::string scale_hint =
-      s.integer ? "height_scale (world units per stored integer: a 16-bit image meant as 0..1 of a height H "
-                  "needs H / 65535, an 8-bit one H / 255)"
-                : "height_scale (world units per stored unit)";
-  // A band that declares its heights in another unit than its pixels' (metres on a CRS in feet): every
-  // slope would be off by their ratio unless height_scale converts them.
-  const std::optional<double> height_metres = metres_per(s.height_unit);
-  const double unit_ratio = height_metres ? *height_metres / s.pixel_unit_metres : 1.0;
-  if (s.scale == 1 && std::fabs(unit_ratio - 1) > 1e-4) {
-    report.warning = "the band's heights are in " + s.height_unit + " and its pixels in " +
-                     (s.pixel_unit.empty() ? std::string("metres") : s.pixel_unit) + ": slopes come out " +
-                     short_num(unit_ratio > 1 ? unit_ratio : 1 / unit_ratio) + " times too " +
-                     (unit_ratio > 1 ? "flat" : "steep") + "; give height_scale " + short_num(unit_ratio) +
-                     " (docs/gis.md)";
-  } else if (relief == 0) {
-    report.warning = "the field is flat (every height is " + short_num(s.world_min) +
-                     "): every method bakes it unoccluded";
-  } else if (relief < 0.01 * extent) {
-    report.warning =
-        "the relief (" + short_num(relief) + " world units) is " + short_num(100 * relief / extent) +
-        " % of the field's " + short_num(extent) +
-        "-unit side: nearly flat, the bake will be close to unoccluded; if the heights are meant "
-        "higher, set " +
-        scale_hint;
-  } else if (relief > 4 * extent) {
-    report.warning = "the relief (" + short_num(relief) + " world units) is " + short_num(relief / extent) +
-                     " times the field's " + short_num(extent) +
-                     "-unit side: steeper than any terrain; check " + scale_hint + " and texel_size";
-  } else if (const std::string w =
-                 site_scale_warning(scene.georeference.site_scale, scene.georeference.crs_name);
-             !w.empty()) {
-    report.warning = w;
-  } else if (s.format == "jpeg" || s.format == "JPEG") {
-    report.warning =
-        "JPEG is lossy: the heights carry its compression artefacts (a TIFF or PNG of the same "
-        "heights keeps what was stored; docs/heights.md)";
-  }
+  HeightsReport report{line, heights_warning(scene)};
   if (!s.unread.empty())
     report.warning +=
         (report.warning.empty() ? "" : "; and ") + h["image"].get<std::string>() + ": " + s.unread;

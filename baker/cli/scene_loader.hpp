@@ -78,11 +78,16 @@ struct SceneNeeds {
 };
 SceneNeeds scene_needs(const Job& job);
 
+// What validate and bake warn about a scene's heights (empty: nothing): heights in another unit than the
+// pixels, or a relief implausible for the field's extent E (its longer side in world units): zero, under 1 %
+// of E (the bake comes out nearly unoccluded: an integer image meant as 0..1, or a missing height_scale) or
+// over 4 E (steeper than terrain: integers taken as metres that are not, or a wrong texel_size); else a CRS
+// far from true scale, or a lossy JPEG. docs/heights.md states the rule; the Python module's array
+// functions warn with it too (docs/python.md).
+std::string heights_warning(const Scene& scene);
+
 // What validate and bake say about the heights: `line` names the reader, the field's size, the texel size
-// and the height range in world units; `warning` (empty: none) when the relief is implausible for the
-// field's extent E (its longer side in world units): zero, under 1 % of E (the bake comes out nearly
-// unoccluded: an integer image meant as 0..1, or a missing height_scale) or over 4 E (steeper than terrain:
-// integers taken as metres that are not, or a wrong texel_size). docs/heights.md states the rule.
+// and the height range in world units; `warning`: heights_warning, and what of the height file was not read.
 struct HeightsReport {
   std::string line;
   std::string warning;

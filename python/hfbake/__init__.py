@@ -9,9 +9,10 @@ Arrays in, arrays out::
 
 One function per method (p1, p2, nlp, hbao, lsao, farfield, hsao, vo, relief, sun) takes the method's job keys as
 keyword arguments, with the same names, defaults and checks as a job file's bake entry, plus the height
-keys (texel_size, wrap, height_scale, height_offset, nodata, nodata_value) and the job's lighting keys
-(environment, lights, bounces, surface). It returns a dict of layers: one channel as (H, W), per-direction
-layers (horizon, horizon_distance, horizon_deg) as (K, H, W), colours and vectors as (H, W, C).
+keys (texel_size, wrap, height_scale, height_offset, nodata, nodata_value, curvature, refraction) and the
+job's lighting keys (environment, lights, bounces, surface). It returns a dict of layers: one channel as
+(H, W), per-direction layers (horizon, horizon_distance, horizon_deg) as (K, H, W), colours and vectors as
+(H, W, C). It warns (UserWarning) where the command warns about the heights.
 
 A DEM file: read_dem(path) reads it with GDAL, with the checks a job naming it gets, into heights, holes and
 the height keys to pass on.
@@ -56,7 +57,8 @@ from . import _hfbake  # noqa: E402  (the exceptions above are what it raises)
 
 __version__ = _hfbake.__version__
 
-_HEIGHT_KEYS = ("texel_size", "wrap", "height_scale", "height_offset", "nodata", "nodata_value")
+_HEIGHT_KEYS = ("texel_size", "wrap", "height_scale", "height_offset", "nodata", "nodata_value", "curvature",
+                "refraction")
 _JOB_KEYS = ("environment", "lights", "bounces", "surface")
 
 
@@ -65,16 +67,26 @@ def _method_keys(name):
     return [k for k in schema.get("properties", {}) if k != "method"]
 
 
-def _run_arguments(threads, memory_limit):
+def _run_arguments(threads, memory_limit, progress=None, cancel=None):
     """threads and memory_limit as the module takes them (0: all cores), or InputError naming the argument:
-    the command line's ranges (--threads 1..4096, a memory limit of at least a byte)."""
+    the command line's ranges (--threads 1..4096, a memory limit of at least a byte), a `progress` that can be
+    called, a `cancel` with an is_set() that can be called; refused before anything is baked."""
     def integer(x):
         return isinstance(x, (int, _np.integer)) and not isinstance(x, (bool, _np.bool_))
+
+    def kind(x):
+        return type(x).__name__
     if threads is not None and not (integer(threads) and 1 <= threads <= 4096):
         raise InputError("must be an integer from 1 to 4096 (or None: all cores)", "/threads")
     if memory_limit is not None and not (integer(memory_limit) and 1 <= memory_limit < 2**63):
         raise InputError("must be a whole number of bytes, at least 1 (or None: the available memory)",
                          "/memory_limit")
+    if progress is not None and not callable(progress):
+        raise InputError("must be a function called with the fraction done (or None); it is a "
+                         f"{kind(progress)}", "/progress")
+    if cancel is not None and not callable(getattr(cancel, "is_set", None)):
+        raise InputError("must have an is_set() method, as a threading.Event (or be None); it is a "
+                         f"{kind(cancel)}", "/cancel")
     return int(threads or 0), None if memory_limit is None else int(memory_limit)
 
 
@@ -82,6 +94,9 @@ def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_ke
     # A method's own key wins over a job key of the same name (p1's lights, p2's bounces, hbao's surface);
     # `job` gives the job's.
     own = set(_method_keys(method))
+    if job_keys is not None and not isinstance(job_keys, dict):
+        raise InputError("must be a dict of job keys (environment, lights, bounces, surface) or None; it is a "
+                         f"{type(job_keys).__name__}", "/job")
     entry, height, job = {}, {}, dict(job_keys or {})
     if isinstance(heights, _np.ma.MaskedArray):  # its masked texels are holes, as a file's NoData values
         heights = heights.astype(_np.float64).filled(_np.nan)
@@ -98,8 +113,12 @@ def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_ke
             job[key] = value
         else:
             entry[key] = value  # refused by the method's schema as the job file would be
-    threads, memory_limit = _run_arguments(threads, memory_limit)
-    return _hfbake.bake_array(method, heights, entry, height, job, threads, progress, cancel, memory_limit)
+    threads, memory_limit = _run_arguments(threads, memory_limit, progress, cancel)
+    layers, warnings = _hfbake.bake_array(method, heights, entry, height, job, threads, progress, cancel,
+                                          memory_limit)
+    for line in warnings:
+        _warnings.warn(line, UserWarning, stacklevel=3)  # at the caller of the method's function
+    return layers
 
 
 def _method_doc(name):
@@ -116,14 +135,17 @@ def _method_doc(name):
         lines.append(f"  {key}: {spec.get('description', '')}")
     lines.append("")
     lines.append("Field and lighting keys: texel_size (default 1), wrap ('clamp' or 'repeat'), height_scale, "
-                 "height_offset, nodata ('error' or 'fill'), nodata_value; environment, lights, bounces, "
+                 "height_offset, nodata ('error' or 'fill'), nodata_value, curvature (default False; world "
+                 "units taken as metres), refraction; environment, lights, bounces, "
                  "surface as in a job file. job: a dict of those job keys, for a name the method's own key "
                  "takes (p1's lights, p2's bounces, the obscurance methods' surface).")
     lines.append("threads: worker threads (default: all cores; the bits do not depend on it). progress: called "
                  "with the fraction done (0..1) on the calling thread. cancel: an object with is_set() "
                  "(threading.Event) polled while baking: Cancelled is raised when it is set. memory_limit: "
                  "bytes the memory estimate must fit (default: the available memory).")
-    lines.append("Raises InputError (a ValueError) with the command line's message for bad input.")
+    lines.append("Raises InputError (a ValueError) with the command line's message for bad input. Warns "
+                 "(UserWarning) where the command warns about the heights: a flat field, a relief implausible "
+                 "for the field's extent (16-bit levels taken as world units).")
     return "\n".join(lines)
 
 
@@ -171,20 +193,26 @@ def bake(job, out=None, *, threads=None, progress=None, cancel=None, memory_limi
 
     Returns (layers, report): layers[stem][layer] as arrays (the values as baked, before the EXR's pixel
     type), the reference's under "reference"; report: status ("ok" or "regressed" when a threshold failed),
-    errors, per-method seconds and metrics, the output files, and report.json's content under "report" when
-    the job has a reference. `cache`: use the reference cache (~/.cache/hfbake) as the command does.
+    errors, warnings (what `hfbake bake` warns about, one line each, also issued through Python's warnings
+    module as UserWarning), per-method seconds and metrics, the output files, and report.json's content
+    under "report" when the job has a reference. `cache`: use the reference cache (~/.cache/hfbake) as the
+    command does.
     `overwrite`: as the command's --overwrite, replace outputs of the same job name that another job (file, or
     a dict: every dict job counts as one) baked into `out`."""
     if out is None:
         with _tempfile.TemporaryDirectory(prefix="hfbake-") as tmp:
             layers, report = _bake_job(job, tmp, threads, progress, cancel, memory_limit, cache, overwrite)
             report["outputs"] = []
-            return layers, report
-    return _bake_job(job, _os.fspath(out), threads, progress, cancel, memory_limit, cache, overwrite)
+    else:
+        layers, report = _bake_job(job, _os.fspath(out), threads, progress, cancel, memory_limit, cache,
+                                   overwrite)
+    for line in report["warnings"]:
+        _warnings.warn(line, UserWarning, stacklevel=2)
+    return layers, report
 
 
 def _bake_job(job, out, threads, progress, cancel, memory_limit, cache, overwrite):
-    threads, memory_limit = _run_arguments(threads, memory_limit)
+    threads, memory_limit = _run_arguments(threads, memory_limit, progress, cancel)
     layers, summary = _hfbake.bake_job(job, out, threads, progress, cancel, memory_limit, cache, overwrite)
     report = _json.loads(summary)
     for path in report["outputs"]:

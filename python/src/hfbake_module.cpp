@@ -186,7 +186,8 @@ py::dict layers_dict(LayerSet&& set) {
 // `threads` (0: all cores); the calling thread wakes every 50 ms to deliver the progress fraction to
 // `progress` (on the calling thread, when it changed), to poll `cancel.is_set()` and Python's signal
 // handlers. Ctrl-C (or an exception from `progress`) cancels the bake, waits for it to stop and raises that
-// exception; a set `cancel` raises hfbake.Cancelled. Nothing the bake made is kept then.
+// exception; a set `cancel` (polled before the bake starts too) raises hfbake.Cancelled. Nothing the bake
+// made is kept then.
 struct Runner {
   int threads = 0;
   py::object progress = py::none(), cancel = py::none();
@@ -202,6 +203,9 @@ struct Runner {
 
   template <class Work>
   void run(Work&& work) {
+    // A `cancel` set before the bake starts stops it as one set during it does (a small field may bake
+    // between two polls).
+    if (!cancel.is_none() && cancel.attr("is_set")().cast<bool>()) throw Cancelled();
     std::mutex mutex;
     std::condition_variable cv;
     bool done = false;
@@ -288,10 +292,19 @@ json array_job_document(const std::string& method, int width, int height, const 
   return doc;
 }
 
-py::dict bake_array(const std::string& method, py::array heights, const py::dict& entry_keys,
-                    const py::dict& height_keys, const py::dict& job_keys, int threads, py::object progress,
-                    py::object cancel, std::optional<std::size_t> memory_limit) {
+// The array functions' bake: (layers, warnings), the warnings heights_warning's lines about the heights
+// ("heights: <what>"), for the package to issue as Python warnings.
+py::tuple bake_array(const std::string& method, py::object heights_arg, const py::dict& entry_keys,
+                     const py::dict& height_keys, const py::dict& job_keys, int threads, py::object progress,
+                     py::object cancel, std::optional<std::size_t> memory_limit) {
   if (!find_method(method)) raise_input_error({{"", "/method", "unknown method \"" + method + "\""}});
+  if (!py::isinstance<py::array>(heights_arg))
+    raise_input_error(
+        {{"", "/heights",
+          "must be a 2-D array (rows, columns) of heights, a numpy array (numpy.asarray converts a list); it "
+          "is a " +
+              py::str(py::type::handle_of(heights_arg).attr("__name__")).cast<std::string>()}});
+  const py::array heights = heights_arg.cast<py::array>();
   if (heights.ndim() != 2)
     raise_input_error({{"", "/heights",
                         "must be a 2-D array (rows, columns) of heights; it has " +
@@ -315,9 +328,9 @@ py::dict bake_array(const std::string& method, py::array heights, const py::dict
   Job& job = *load.job;
   job.file.clear();  // messages name the keyword arguments, not a file
   try {
-    check_job_memory(job, {width, height}, memory_limit);
-  } catch (const InputError& e) {
-    raise_input_error({{"", array_pointer(e.where()), e.what()}});
+    check_job_memory(job, {width, height}, memory_limit, nullptr, "memory_limit");
+  } catch (const InputError& e) {  // the limit given is what the caller can change
+    raise_input_error({{"", memory_limit ? "/memory_limit" : array_pointer(e.where()), e.what()}});
   }
 
   check_threads(threads);
@@ -326,6 +339,7 @@ py::dict bake_array(const std::string& method, py::array heights, const py::dict
   runner.progress = std::move(progress);
   runner.cancel = std::move(cancel);
   LayerSet layers;
+  std::string warning;
   std::optional<InputError> input_error;
   runner.run([&] {
     try {
@@ -343,6 +357,7 @@ py::dict bake_array(const std::string& method, py::array heights, const py::dict
       read_by.format = "array";
       read_by.sample_type = "float";
       const Scene scene = complete_scene(job, std::move(field), std::move(georeference), read_by);
+      warning = heights_warning(scene);
       layers = run_method(job.bakes.front(), scene, runner.control());
       check_layers_finite(job.bakes.front().stem, layers);  // what bake refuses to write
     } catch (const InputError& e) {
@@ -350,7 +365,9 @@ py::dict bake_array(const std::string& method, py::array heights, const py::dict
     }
   });
   if (input_error) raise_input_error({{"", array_pointer(input_error->where()), input_error->what()}});
-  return layers_dict(std::move(layers));
+  py::list warnings;
+  if (!warning.empty()) warnings.append("heights: " + warning);
+  return py::make_tuple(layers_dict(std::move(layers)), warnings);
 }
 
 // A job from a path (str or os.PathLike) or a dict (relative paths resolve against the current folder; `name`
@@ -369,7 +386,9 @@ Job load_resolved_job(py::handle job, const std::optional<std::string>& out) {
     file = py::str(os.attr("fspath")(job)).cast<std::string>();
     load = load_job(file, out_dir);
   } else {
-    raise_input_error({{"", "", "a job is a path to a job file or a dict of one"}});
+    raise_input_error({{"", "/job",
+                        "must be a path to a job file or a dict of one; it is a " +
+                            py::str(py::type::handle_of(job).attr("__name__")).cast<std::string>()}});
   }
   if (load.job) load.errors = resolve_job(*load.job);
   if (!load.errors.empty()) raise_lines(load.errors, file, false);
@@ -382,7 +401,7 @@ py::dict validate_job(py::handle job_arg, std::optional<std::size_t> memory_limi
   const Job job = load_resolved_job(job_arg, std::nullopt);
   const FieldSize size = probe_field_size(job);
   std::string parts;
-  const std::size_t need = check_job_memory(job, size, memory_limit, &parts);
+  const std::size_t need = check_job_memory(job, size, memory_limit, &parts, "memory_limit");
   HeightsReport heights;
   {
     py::gil_scoped_release release;
@@ -409,6 +428,7 @@ py::tuple bake_job_api(py::handle job_arg, const std::string& out, int threads, 
   const Job job = load_resolved_job(job_arg, out);
   BakeOptions options;
   options.memory_limit = memory_limit;
+  options.memory_limit_name = "memory_limit";
   options.overwrite = overwrite;
   options.quiet = true;
   std::optional<ReferenceCache> cache;
@@ -424,7 +444,7 @@ py::tuple bake_job_api(py::handle job_arg, const std::string& out, int threads, 
   std::map<std::string, int> step_index = {{"load", 0}};
   for (std::size_t i = 0; i < job.bakes.size(); ++i) step_index[job.bakes[i].stem] = int(i) + 1;
   step_index["reference"] = int(job.bakes.size()) + 1;
-  Progress quiet(Progress::Mode::quiet);
+  Progress quiet(Progress::Mode::silent);  // the warnings go to Python, from outcome.warnings
   quiet.set_observer([&](const std::string&, const std::string& step, double f) {
     const auto it = step_index.find(step);
     if (it != step_index.end()) runner.fraction.store((it->second + f) / steps, std::memory_order_relaxed);
@@ -437,11 +457,9 @@ py::tuple bake_job_api(py::handle job_arg, const std::string& out, int threads, 
       [&] { bake_job(job, quiet, runner.cancelled, outcome, cache ? &*cache : nullptr, options, &kept); });
   py::dict layers;
   for (auto& [stem, set] : kept) layers[py::str(stem)] = layers_dict(std::move(set));
-  json summary = {{"file", outcome.file},
-                  {"name", outcome.name},
-                  {"status", job_status_name(outcome.status)},
-                  {"errors", outcome.errors},
-                  {"methods", outcome.methods}};
+  json summary = {
+      {"file", outcome.file},     {"name", outcome.name},         {"status", job_status_name(outcome.status)},
+      {"errors", outcome.errors}, {"warnings", outcome.warnings}, {"methods", outcome.methods}};
   summary["outputs"] = json::array();
   for (const fs::path& p : outcome.outputs) summary["outputs"].push_back(fs::absolute(p).string());
   return py::make_tuple(layers, summary.dump());

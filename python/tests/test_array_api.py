@@ -132,3 +132,50 @@ def test_a_sun_a_hair_off_an_axis_lights_flat_ground():
                          latitude=0, longitude=0, layers=["sun_hours", "beam"], threads=1)
         assert np.all(out["sun_hours"] == np.float32(1 / 60)), out["sun_hours"]
         assert np.ptp(out["beam"]) == 0 and out["beam"].min() > 12
+
+
+@pytest.mark.parametrize("levels", ["uint16", "flat", "terrain"])
+def test_the_array_functions_warn_about_the_heights_as_the_command_does(tmp_path, levels):
+    import warnings
+
+    from conftest import run_cli, write_job
+
+    if levels == "uint16":  # 16-bit levels taken as world units: a relief far beyond 4 x the 64-unit side
+        heights = (np.random.default_rng(0).random((64, 64)) * 65535).astype(np.uint16)
+    elif levels == "flat":
+        heights = np.full((64, 64), 3.0, np.float32)
+    else:
+        heights = terrain(64, 64)
+    relief, side = float(heights.max()) - float(heights.min()), 64.0
+    expected = relief == 0 or relief < 0.01 * side or relief > 4 * side  # docs/heights.md's rule
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hfbake.p1(heights, directions=4)
+    said = [str(w.message) for w in caught if w.category is UserWarning]
+    assert len(said) == int(expected), said
+    # The command's validate of the same heights (a float image: the array is converted to float) says the
+    # same after its job file's name.
+    job = write_job(tmp_path, heights.astype(np.float32), {"method": "p1", "directions": 4})
+    lines = [line for line in run_cli("validate", job).stderr.splitlines() if line.startswith("hfbake: warning:")]
+    assert [line.replace(f"hfbake: warning: {job}: ", "heights: ") for line in lines] == said
+    if levels == "uint16":
+        assert "steeper than any terrain" in said[0]
+    if levels == "flat":
+        assert said == ["heights: the field is flat (every height is 3): every method bakes it unoccluded"]
+
+
+def test_earth_curvature_lowers_a_wall_by_d2_over_2r():
+    # A wall 10 m high three km east of the receivers (30 texels of 100 m): with curvature and no refraction
+    # its top is d^2 / (2 R) lower, R = 6371008.8 m (a sphere without a CRS, docs/gis.md).
+    heights = np.zeros((16, 64), np.float32)
+    heights[:, 40] = 10.0
+    d, radius = 3000.0, 6371008.8
+    flat = hfbake.relief(heights, texel_size=100.0, directions=4, search_radius=6000.0, layers=["horizon_deg"])
+    curved = hfbake.relief(heights, texel_size=100.0, directions=4, search_radius=6000.0, layers=["horizon_deg"],
+                           curvature=True, refraction=0.0)
+    assert flat["horizon_deg"][0, 8, 10] == pytest.approx(np.degrees(np.arctan(10.0 / d)), abs=1e-4)
+    assert curved["horizon_deg"][0, 8, 10] == pytest.approx(
+        np.degrees(np.arctan((10.0 - d * d / (2 * radius)) / d)), abs=1e-4)
+    with pytest.raises(hfbake.InputError) as caught:  # the job's rule: refraction only with curvature
+        hfbake.relief(heights, refraction=0.1)
+    assert caught.value.pointer == "/refraction"

@@ -134,11 +134,60 @@ def test_arrays_that_are_no_height_field():
         hfbake.p1(np.array([["a", "b"], ["c", "d"]]))
 
 
-def test_the_memory_estimate_is_checked_before_baking():
+@pytest.mark.parametrize("limit, said", [(1 << 20, "the 1 MiB of memory_limit"),
+                                         (10, "the 10 bytes of memory_limit"),
+                                         (1401 << 19, "the 734527488 bytes of memory_limit")])
+def test_the_memory_estimate_is_checked_before_baking(limit, said):
+    # A 4096^2 p1 needs about 756 MiB (`hfbake validate`): refused at the argument, with the limit as given
+    # (a MiB count would round 10 bytes to 0 and 700.5 MiB to 700).
     with pytest.raises(hfbake.InputError) as caught:
-        hfbake.p1(terrain(64, 64), memory_limit=1 << 20)
+        hfbake.p1(np.zeros((4096, 4096), np.float32), directions=8, memory_limit=limit)
+    assert caught.value.pointer == "/memory_limit"
+    assert "needs about" in caught.value.message and caught.value.message.find("more than " + said) > 0
+    assert "--memory-limit" not in caught.value.message
+
+
+@pytest.mark.parametrize("heights, kind", [(None, "NoneType"), ([[0.0, 1.0], [2.0, 3.0]], "list")])
+def test_heights_that_are_no_array_are_refused_naming_heights(heights, kind):
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.relief(heights)
     assert caught.value.pointer == "/heights"
-    assert "needs about" in caught.value.message and "--memory-limit" in caught.value.message
+    assert caught.value.message.startswith("must be a 2-D array (rows, columns) of heights")
+    assert caught.value.message.endswith(f"it is a {kind}")
+
+
+@pytest.mark.parametrize("kwargs, pointer", [({"progress": 5}, "/progress"), ({"cancel": 5}, "/cancel"),
+                                             ({"cancel": threading.Lock()}, "/cancel"), ({"job": 5}, "/job"),
+                                             ({"job": ["lights"]}, "/job")])
+def test_arguments_of_the_wrong_kind_are_refused_naming_them(kwargs, pointer, tmp_path):
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.relief(terrain(16, 16), **kwargs)
+    assert caught.value.pointer == pointer
+    assert caught.value.message.startswith("must ")
+    if "job" not in kwargs:  # the job API: refused before anything is written
+        doc = {"version": 1, "name": "w", "height": {"procedural": {"kind": "fractal", "size": [16, 16]}},
+               "bake": [{"method": "p1", "directions": 4}]}
+        with pytest.raises(hfbake.InputError) as caught:
+            hfbake.bake(doc, tmp_path / "out", **kwargs)
+        assert caught.value.pointer == pointer
+        assert not (tmp_path / "out").exists()
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.bake(5)
+    assert (caught.value.pointer, caught.value.message) == (
+        "/job", "must be a path to a job file or a dict of one; it is a int")
+
+
+def test_a_cancel_set_before_the_bake_raises_cancelled(tmp_path):
+    # A field small enough to bake between two polls of `cancel`.
+    stop = threading.Event()
+    stop.set()
+    with pytest.raises(hfbake.Cancelled):
+        hfbake.relief(np.zeros((64, 64), np.float32), cancel=stop)
+    doc = {"version": 1, "name": "c", "height": {"procedural": {"kind": "fractal", "size": [16, 16]}},
+           "bake": [{"method": "p1", "directions": 4}]}
+    with pytest.raises(hfbake.Cancelled):
+        hfbake.bake(doc, tmp_path / "out", cancel=stop)
+    assert list(tmp_path.rglob("*")) == []
 
 
 def test_a_set_cancel_event_stops_the_bake():

@@ -139,3 +139,22 @@ def test_bake_takes_overwrite_as_the_command_does(tmp_path):
     with pytest.raises(hfbake.InputError, match="were baked from"):
         hfbake.bake(job, out=tmp_path / "out")  # a dict is another job than the file
     hfbake.bake(job, out=tmp_path / "out", overwrite=True)
+
+
+def test_bake_returns_and_issues_the_commands_warnings(tmp_path, capfd):
+    # A flat field: the command's validate and bake warn; the module returns and issues the warning and
+    # prints nothing.
+    job = tmp_path / "flat.json"
+    job.write_text(json.dumps({"version": 1, "name": "f",
+                               "height": {"procedural": {"kind": "flat", "size": [16, 16]}},
+                               "bake": [{"method": "p1", "directions": 4}]}))
+    said = [line[len("hfbake: warning: "):] for line in run_cli("validate", job).stderr.splitlines()
+            if line.startswith("hfbake: warning: ")]
+    assert len(said) == 1 and "the field is flat" in said[0]
+    capfd.readouterr()
+    with pytest.warns(UserWarning) as caught:
+        layers, report = hfbake.bake(job)
+    assert report["warnings"] == said
+    assert [str(w.message) for w in caught if w.category is UserWarning] == said
+    assert capfd.readouterr().err == ""
+    assert np.all(layers["p1"]["ao"] == 1.0)

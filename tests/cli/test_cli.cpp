@@ -144,6 +144,33 @@ TEST_F(Cli, MalformedJson) {
       << r.err;
 }
 
+// A mistaken command line is named in one line, exit 2, nothing baked: an unknown option even when the word
+// after it is no file (it would be taken as a job), an integer option's text that is no number at all.
+TEST_F(Cli, CommandLineMistakesAreNamed) {
+  const fs::path p = write_job("m.json", job({{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}));
+  const struct {
+    std::string args, expected;
+  } cases[] = {
+      {"bake " + p.string() + " --ouput x",
+       "hfbake: error: command line: The following argument was not expected: --ouput"},
+      {"bake " + p.string() + " --threads abc",
+       "hfbake: error: command line: --threads: not a whole number: abc (it must be from 1 to 4096)"},
+      {"bake " + p.string() + " --threads 2.5",
+       "hfbake: error: command line: --threads: not a whole number: 2.5 (it must be from 1 to 4096)"},
+      {"bake " + p.string() + " --threads 0",
+       "hfbake: error: command line: --threads: must be from 1 to 4096 (it is 0)"},
+      {"validate " + p.string() + " --threads 99999999999999999999",
+       "hfbake: error: command line: --threads: must be from 1 to 4096 (it is 99999999999999999999)"},
+  };
+  for (const auto& c : cases) {
+    const Result r = hfbake(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args;
+    ASSERT_EQ(r.error_lines().size(), 1u) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.error_lines()[0], c.expected) << c.args;
+  }
+  EXPECT_TRUE(output_dir_is_empty());
+}
+
 TEST_F(Cli, SchemaViolationOneLinePerProblem) {
   nlohmann::json j =
       job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}, {{{"method", "p1"}, {"directions", 0}}});
@@ -564,6 +591,16 @@ TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
     EXPECT_NE(lines[0].find("(scene "), std::string::npos) << lines[0];
     EXPECT_NE(lines[0].find(", p1 "), std::string::npos) << lines[0];
     EXPECT_NE(lines[0].find("more than the 200 MiB of --memory-limit"), std::string::npos) << lines[0];
+  }
+  // A limit that a MiB count would round is said in bytes: 10 bytes, and 700.5M (700.5 x 2^20; the job
+  // needs about 756 MiB).
+  for (const auto& [limit, said] :
+       {std::pair<std::string, std::string>{"10", "the 10 bytes of --memory-limit"},
+        {"700.5M", "the 734527488 bytes of --memory-limit"}}) {
+    const Result r = hfbake("validate " + p.string() + " --memory-limit " + limit + " --quiet");
+    EXPECT_EQ(r.exit_code, 2) << limit;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("more than " + said), std::string::npos) << r.err;
   }
   EXPECT_TRUE(output_dir_is_empty());
   // The knob: a p2 at K = 64 on 2048^2 is mostly p1's horizons (4 bytes a texel per direction).

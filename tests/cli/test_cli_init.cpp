@@ -131,6 +131,18 @@ TEST_F(CliInit, BadInputIsOneLineAndWritesNothing) {
   r = run("init " + (dir_ / "h.png").string() + " --preset game-ao --out " + (dir_ / "kept.json").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("kept.json: exists (--force writes over it)"), std::string::npos) << r.err;
+  // A folder is no job file, with or without --force: refused naming it a folder, the folder kept.
+  fs::create_directory(dir_ / "jobs");
+  for (const char* force : {"", " --force"}) {
+    r = run("init " + (dir_ / "h.png").string() + " --preset game-ao" + force + " --out " +
+            (dir_ / "jobs").string());
+    EXPECT_EQ(r.exit_code, 2) << force;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_EQ(r.error_lines()[0], "hfbake: error: " + (dir_ / "jobs").string() +
+                                      ": is a folder: --out names the job file to write (e.g. " +
+                                      (dir_ / "jobs" / "h.json").string() + ")");
+    EXPECT_TRUE(fs::is_directory(dir_ / "jobs") && fs::is_empty(dir_ / "jobs"));
+  }
   r = run("init " + (dir_ / "h.png").string() + " --preset unknown");
   EXPECT_EQ(r.exit_code, 2);
   // --force over the height file itself: refused, the image kept.
