@@ -90,6 +90,42 @@ def _run_arguments(threads, memory_limit, progress=None, cancel=None):
     return int(threads or 0), None if memory_limit is None else int(memory_limit)
 
 
+def _beyond_float_range(values, nodata_value):
+    """(column, row, value) of the first finite value of a float array that a float32 cannot hold, other than
+    nodata_value, or None: as a job's Float64 band, such a value is refused, not taken for an infinite hole
+    (docs/gis.md)."""
+    if not (_np.issubdtype(values.dtype, _np.floating) and values.dtype.itemsize > 4):
+        return None
+    beyond = _np.isfinite(values) & (_np.abs(values) > _np.finfo(_np.float32).max)
+    if isinstance(nodata_value, (int, float, _np.integer, _np.floating)) and not isinstance(nodata_value, bool):
+        beyond &= values != nodata_value
+    if not beyond.any():
+        return None
+    row, col = (int(i) for i in _np.argwhere(beyond)[0])
+    return col, row, float(values[row, col])
+
+
+def _beyond_float_range_message(col, row, value, nodata_name):
+    return (f"texel ({col}, {row}) is {value:g}, beyond a float's range: heights are baked as floats (if it "
+            f"marks missing data, {nodata_name})")
+
+
+def _as_float_heights(heights, nodata_value):
+    """A float64 (or wider) 2-D array as the float32 heights are baked from, its values beyond float's range
+    refused (_beyond_float_range) unless they are nodata_value (then infinities: holes). Anything else is
+    returned as it is."""
+    if not (isinstance(heights, _np.ndarray) and heights.ndim == 2):
+        return heights
+    beyond = _beyond_float_range(heights, nodata_value)
+    if beyond:
+        raise InputError("heights: " + _beyond_float_range_message(*beyond, "give it as nodata_value"),
+                         "/heights")
+    if not (_np.issubdtype(heights.dtype, _np.floating) and heights.dtype.itemsize > 4):
+        return heights
+    with _np.errstate(over="ignore"):
+        return heights.astype(_np.float32)
+
+
 def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_keys, params):
     # A method's own key wins over a job key of the same name (p1's lights, p2's bounces, hbao's surface);
     # `job` gives the job's.
@@ -100,6 +136,7 @@ def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_ke
     entry, height, job = {}, {}, dict(job_keys or {})
     if isinstance(heights, _np.ma.MaskedArray):  # its masked texels are holes, as a file's NoData values
         heights = heights.astype(_np.float64).filled(_np.nan)
+    heights = _as_float_heights(heights, params.get("nodata_value"))
     for key, value in params.items():
         if value is None:
             continue
@@ -303,13 +340,16 @@ def read_dem(path, band=1):
         refuse(f"has non-square pixels ({sx!r} x {sy!r}); hfbake needs square texels: resample it first, e.g. "
                "gdalwarp -tr S S")
     b = dem.GetRasterBand(band)
-    values = b.ReadAsArray().astype(_np.float64)
+    values = b.ReadAsArray()
     nodata = b.GetNoDataValue()
+    beyond = _beyond_float_range(values, nodata)
+    if beyond:
+        refuse(_beyond_float_range_message(*beyond, "declare it the band's NoData value"))
+    values = values.astype(_np.float64)
     holes = ~_np.isfinite(values)
     if nodata is not None and _np.isfinite(nodata):
         holes |= values == nodata
     heights = _np.where(holes, _np.nan, values).astype(_np.float32)
-    holes |= ~_np.isfinite(heights)  # beyond float's range
     warnings = []
     linear = crs.GetLinearUnits() if crs.IsProjected() else 1.0
     factor = height_unit_factor(b.GetUnitType(), linear)

@@ -3,6 +3,8 @@ job, its pointer relative to the keyword arguments; a cancelled bake raises and 
 
 import threading
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -99,6 +101,24 @@ def test_a_nan_height_raises_the_commands_message(tmp_path):
     assert caught.value.message == "heights: " + message[len("h.exr: "):]
     # nodata="fill" fills it, as the job key does.
     assert np.isfinite(hfbake.p1(heights, nodata="fill")["ao"]).all()
+
+
+def test_a_float64_height_beyond_floats_range_is_refused_unless_it_is_nodata_value():
+    # docs/gis.md: a Float64 band's finite value beyond a float's range is refused naming the texel unless it
+    # is the band's NoData value; an array's as well, not taken for an infinite hole (nor filled).
+    heights = terrain(16, 12).astype(np.float64)
+    heights[5, 3] = -1e300
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # numpy's overflow in the cast
+        for keys in ({}, {"nodata": "fill"}):
+            with pytest.raises(hfbake.InputError) as caught:
+                hfbake.p1(heights, **keys)
+            assert caught.value.pointer == "/heights"
+            assert caught.value.message.startswith("heights: texel (3, 5) is -1e+300, beyond a float's range")
+        filled = heights.copy()
+        filled[5, 3] = np.nan
+        a = hfbake.p1(heights, nodata="fill", nodata_value=-1e300)["ao"]
+    assert np.array_equal(a, hfbake.p1(filled, nodata="fill")["ao"])
 
 
 def test_a_masked_arrays_masked_texels_are_holes():

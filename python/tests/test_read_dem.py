@@ -62,7 +62,7 @@ def test_pixel_sides_equal_to_1e9_are_square_and_others_are_refused_naming_both(
     assert e.value.file == str(wide) and "2.0 x 1.5" in str(e.value)
 
 
-def test_a_float64_sentinel_beyond_float_range_is_a_hole(tmp_path):
+def test_a_float64_sentinel_beyond_float_range_is_a_hole_only_as_the_nodata_value(tmp_path):
     heights = (terrain(40, 32, seed=13) * 10).astype(np.float64)
     heights[3, 4] = -1e300
     dem = tmp_path / "f64.tif"
@@ -76,6 +76,14 @@ def test_a_float64_sentinel_beyond_float_range_is_a_hole(tmp_path):
     ds = None
     d = hfbake.read_dem(dem)
     assert d.holes[3, 4] and np.count_nonzero(d.holes) == 1 and d.keys["nodata"] == "fill"
+    # Without that NoData value the sentinel is no hole: refused naming the texel, as the command does
+    # (docs/gis.md).
+    ds = gdal.Open(str(dem), gdal.GA_Update)
+    ds.GetRasterBand(1).DeleteNoDataValue()
+    ds = None
+    with pytest.raises(hfbake.InputError) as e:
+        hfbake.read_dem(dem)
+    assert e.value.file == str(dem) and "texel (4, 3) is -1e+300, beyond a float's range" in str(e.value)
 
 
 def test_missing_files_geographic_and_crs_less_rasters_are_refused_naming_the_file(tmp_path):
