@@ -121,6 +121,35 @@ void forge_part_size(const fs::path& shard, long long width, long long height) {
   std::ofstream(shard, std::ios::binary | std::ios::trunc) << bytes;
 }
 
+// The seconds a shard's parts claim are summed into the report: a value no part could have taken (each is in
+// [0, 1e9), docs/cluster.md) is refused by the merge in one line naming the shard, and nothing is written.
+TEST_F(Untrusted, ShardSecondsOutsideTheirRangeAreRefusedByTheMerge) {
+  json j = base_job();
+  j["reference"] = {{"samples", 4}};
+  const std::string job = write_job(dir_, j);
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path shard = dir_ / "out" / "shards" / "t.shard-0-of-1.hfshard";
+  const std::string genuine = read_text(shard);
+  for (const double seconds : {1e308, -5.0}) {
+    SCOPED_TRACE(seconds);
+    std::uint64_t at = 0;
+    json h = shard_header(genuine, at);
+    for (json& p : h["parts"]) p["seconds"] = seconds;
+    std::ofstream(shard, std::ios::binary | std::ios::trunc)
+        << genuine.substr(0, at) + h.dump() + "\n" + genuine.substr(genuine.size() - 24);
+    const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+    EXPECT_EQ(r.exit_code, 2);
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(shard.string()), std::string::npos) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("seconds"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "report.json"));
+  }
+  std::ofstream(shard, std::ios::binary | std::ios::trunc) << genuine;
+  ASSERT_EQ(hfbake(dir_, {"merge", job, "--no-cache", "--quiet"}).exit_code, 0);
+  const json report = json::parse(read_text(dir_ / "out" / "report.json"));
+  EXPECT_TRUE(report["methods"]["p1"]["seconds"].is_number()) << report["methods"]["p1"];
+}
+
 TEST_F(Untrusted, ShardPartsClaimingAnotherSizeAreRefusedByTheMerge) {
   const std::string job = write_job(dir_, base_job());
   ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"}).exit_code, 0);
