@@ -285,6 +285,18 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
              "must have a length of at least 1e-6 (it is normalised; a shorter one has no direction)");
     }
   }
+  // A path is handed to the system as a C string, which ends at a NUL: one that holds a NUL would name
+  // another file than the job says (its part before the NUL).
+  std::vector<std::pair<std::string, std::string>> paths = job_input_files(doc);
+  for (const char* ptr : {"/report/baseline", "/output/dir"})
+    if ((!out_override || std::string_view(ptr) != "/output/dir") &&
+        doc.contains(nlohmann::json::json_pointer(ptr)) &&
+        doc.at(nlohmann::json::json_pointer(ptr)).is_string())
+      paths.emplace_back(ptr, doc.at(nlohmann::json::json_pointer(ptr)).get<std::string>());
+  for (const auto& [ptr, path] : paths)
+    if (path.find('\0') != std::string::npos)
+      fail(ptr, "\"" + path + "\" holds a NUL character (\\u0000), which no path can hold");
+  if (!result.errors.empty()) return result;
   for (const auto& [ptr, rel] : job_input_files(doc)) {
     const fs::path p = job.resolve(rel);
     std::error_code ec;

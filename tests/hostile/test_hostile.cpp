@@ -489,6 +489,16 @@ std::vector<Case> cases() {
     j["output"]["textures"] = {{{"layers", {"ao"}}, {"format", "png"}}};
     return both(write_job(d, j), "/output/textures", "textures is not a folder (a link)");
   });
+  // A path is a C string to the system: a NUL in it would name another file (the part before it).
+  add("HeightImagePathHoldingANul", [](const fs::path& d) {
+    write_image(d / "h.exr", 16, 16, 1, std::vector<float>(16 * 16, 1.0f));
+    return both(image_job(d, std::string("h.exr\0.png", 10)), "/height/image", "holds a NUL character");
+  });
+  add("OutputDirHoldingANul", [](const fs::path& d) {
+    json j = base_job();
+    j["output"]["dir"] = std::string("out\0x", 5);
+    return both(write_job(d, j), "/output/dir", "holds a NUL character");
+  });
   add("SummaryOverTheJobFile", [](const fs::path& d) {
     const std::string job = write_job(d, base_job());
     return CaseSetup{
