@@ -92,14 +92,18 @@ void check_output_folder(const Job& job) {
     throw InputError(
         job.file.string(), "/output/dir",
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
-  // What the bake would refuse only after baking (docs/output_folders.md): its lock name taken by anything
-  // but a file, and a textures/ entry that is not a folder.
-  const fs::path lock = output_lock_file(job);
-  const fs::file_status ls = fs::symlink_status(lock, ec);
-  if (fs::exists(ls) && !fs::is_regular_file(ls))
-    throw InputError(job.file.string(), "/output/dir",
-                     lock.string() + " is no lock file of hfbake's (" +
-                         (fs::is_symlink(ls) ? "a link" : "not a file") + "): remove it");
+  // What the bake would refuse only after baking (docs/output_folders.md): its lock names (the job's, and
+  // the report's for a job with a reference) taken by anything but a file, and a textures/ entry that is not
+  // a folder.
+  std::vector<fs::path> locks = {output_lock_file(job)};
+  if (job.has_reference) locks.push_back(report_lock_file(job));
+  for (const fs::path& lock : locks) {
+    const fs::file_status ls = fs::symlink_status(lock, ec);
+    if (fs::exists(ls) && !fs::is_regular_file(ls))
+      throw InputError(job.file.string(), "/output/dir",
+                       lock.string() + " is no lock file of hfbake's (" +
+                           (fs::is_symlink(ls) ? "a link" : "not a file") + "): remove it");
+  }
   const fs::path textures = job.output.dir / "textures";
   const fs::file_status ts = fs::symlink_status(textures, ec);
   if (job.doc.contains("output") && job.doc["output"].contains("textures") && fs::exists(ts) &&
@@ -140,23 +144,7 @@ void check_output_folder(const Job& job) {
   }
   // Another job's report: report.json and report.html carry no job name, so a job with a reference writes
   // them over the report of any other job baked into the same folder (docs/output_folders.md).
-  if (job.has_reference) {
-    const fs::path report = job.output.dir / "report.json";
-    if (fs::exists(fs::symlink_status(report, ec))) {
-      std::string owner;  // "" for a file that is no report (unreadable, or no string at /job/name)
-      try {
-        owner = read_json_file(report).value(nlohmann::json::json_pointer("/job/name"), std::string());
-      } catch (const std::exception&) {
-      }
-      if (owner != job.name)
-        throw InputError(
-            job.file.string(), "/output/dir",
-            report.string() + " is " +
-                (owner.empty() ? std::string("no report of hfbake's") : "job \"" + owner + "\"'s report") +
-                ": this job's report would replace it; give the job an output folder of its own "
-                "(a job with a reference writes report.json and report.html there), or remove it");
-    }
-  }
+  check_report_owner(job);
 }
 
 std::vector<std::string> resolve_job_checks(Job& job);

@@ -213,6 +213,29 @@ fs::path output_lock_file(const Job& job) {
   return job.output.dir / (".hfbake-" + job.name + ".lock");
 }
 
+fs::path report_lock_file(const Job& job) {
+  return job.output.dir / ".hfbake+report.lock";
+}
+
+void check_report_owner(const Job& job) {
+  if (!job.has_reference) return;
+  std::error_code ec;
+  const fs::path report = job.output.dir / "report.json";
+  if (!fs::exists(fs::symlink_status(report, ec))) return;
+  std::string owner;  // "" for a file that is no report (unreadable, or no string at /job/name)
+  try {
+    owner = read_json_file(report).value(nlohmann::json::json_pointer("/job/name"), std::string());
+  } catch (const std::exception&) {
+  }
+  if (owner != job.name)
+    throw InputError(
+        job.file.string(), "/output/dir",
+        report.string() + " is " +
+            (owner.empty() ? std::string("no report of hfbake's") : "job \"" + owner + "\"'s report") +
+            ": this job's report would replace it; give the job an output folder of its own "
+            "(a job with a reference writes report.json and report.html there), or remove it");
+}
+
 namespace {
 
 // <dir>/.hfbake-<name>.job: the job file whose outputs of that name the folder holds.
@@ -273,9 +296,31 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
                          job.output.dir.string() +
                          " now: wait for it, or give this job another name or folder");
   }
+  // A job with a reference also writes report.json and report.html, which carry no job name: one such job
+  // at a time per folder, and only over its own report (docs/output_folders.md).
+  if (job.has_reference) {
+    const fs::path report_lock = report_lock_file(job);
+    report_lock_ = std::make_unique<FolderLock>(report_lock);
+    if (!report_lock_->held()) {
+      const std::string problem = report_lock_->problem(), holder = report_lock_->holder();
+      report_lock_.reset();
+      lock_.reset();
+      if (created_dir_) fs::remove(job.output.dir, ec);
+      if (!problem.empty())
+        throw InputError(job.file.string(), "/output/dir",
+                         report_lock.string() + " is no lock file of hfbake's (" + problem + "): remove it");
+      throw InputError(job.file.string(), "/output/dir",
+                       "another hfbake process (" + holder + ") is baking a job with a reference into " +
+                           job.output.dir.string() +
+                           " now (report.json and report.html carry no job name): wait for it, or give "
+                           "this job an output folder of its own");
+    }
+  }
   try {
     check_output_owner(job, overwrite);
+    check_report_owner(job);
   } catch (const InputError&) {
+    report_lock_.reset();
     lock_.reset();
     if (created_dir_) fs::remove(job.output.dir, ec);
     throw;
@@ -297,6 +342,7 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
 OutputStage::~OutputStage() {
   std::error_code ec;
   remove_tree(stage_);
+  report_lock_.reset();
   lock_.reset();
   // A job that failed or was stopped leaves no empty output folder behind it (only if it made the folder,
   // and only while it is empty: another job's stage or outputs keep it).

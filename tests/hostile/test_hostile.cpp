@@ -489,6 +489,13 @@ std::vector<Case> cases() {
     j["output"]["textures"] = {{{"layers", {"ao"}}, {"format", "png"}}};
     return both(write_job(d, j), "/output/textures", "textures is not a folder (a link)");
   });
+  add("ReportLockNameTakenByALink", [](const fs::path& d) {
+    fs::create_directories(d / "out");
+    fs::create_symlink("../elsewhere", d / "out" / ".hfbake+report.lock");
+    json j = base_job();
+    j["reference"] = {{"samples", 4}};
+    return both(write_job(d, j), "/output/dir", ".hfbake+report.lock is no lock file of hfbake's (a link)");
+  });
   // A path is a C string to the system: a NUL in it would name another file (the part before it).
   add("HeightImagePathHoldingANul", [](const fs::path& d) {
     write_image(d / "h.exr", 16, 16, 1, std::vector<float>(16 * 16, 1.0f));

@@ -576,4 +576,32 @@ TEST_F(Untrusted, TwoJobsOfOneNameInOneFolderNeverReplaceEachOther) {
   EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(other).string());
 }
 
+// report.json and report.html carry no job name: of two jobs of different names, each with a reference,
+// started together into one folder, one bakes and the other is refused in one line naming the folder
+// (docs/output_folders.md), whichever moment the second reaches its outputs; the report is the winner's.
+TEST_F(Untrusted, TwoJobsWithAReferenceInOneFolderNeverReplaceEachOthersReport) {
+  json a = base_job("out"), b = base_job("out");
+  a["name"] = "a", b["name"] = "b";
+  a["reference"] = b["reference"] = {{"samples", 4}};
+  const std::string ja = write_job(dir_, a, "a.json"), jb = write_job(dir_, b, "b.json");
+  const std::string folder = fs::weakly_canonical(dir_ / "out").string();
+  for (int run = 0; run < 10; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(dir_ / "out");
+    const pid_t pa = start(dir_, {"bake", ja, "--no-cache", "--quiet"}, "a.txt");
+    const pid_t pb = start(dir_, {"bake", jb, "--no-cache", "--quiet"}, "b.txt");
+    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
+    ASSERT_TRUE((ra.exit_code == 0 && rb.exit_code == 2) || (ra.exit_code == 2 && rb.exit_code == 0))
+        << ra.err << rb.err;
+    const Outcome& lost = ra.exit_code == 2 ? ra : rb;
+    const auto lines = lost.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << lost.err;
+    EXPECT_NE(lines[0].find(folder), std::string::npos) << lines[0];
+    const json report = json::parse(read_text(dir_ / "out" / "report.json"));
+    EXPECT_EQ(report["job"]["name"], ra.exit_code == 0 ? "a" : "b");
+    for (const auto& e : fs::directory_iterator(dir_ / "out"))
+      EXPECT_FALSE(hfbake_test::is_stage(e.path())) << e.path();
+  }
+}
+
 }  // namespace
