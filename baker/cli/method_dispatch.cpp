@@ -111,33 +111,11 @@ void check_output_folder(const Job& job) {
     throw InputError(job.file.string(), "/output/textures",
                      textures.string() + " is not a folder (" + (fs::is_symlink(ts) ? "a link" : "a file") +
                          "): the textures are written inside " + job.output.dir.string() + " only");
-  // An input the outputs would replace: a file in the output folder named as an output of this job
-  // (<name>.<stem>.exr, <name>.<stem>.*.preview.png, <name>.<stem>.*.tif, report.json, report.html; in
-  // textures/, <name>.*), the job file included.
-  std::vector<std::string> stems = {"reference"};
-  for (const BakeEntry& e : job.bakes) stems.push_back(e.stem);
-  const auto ends_with = [](const std::string& n, const std::string& tail) {
-    return n.size() >= tail.size() && n.compare(n.size() - tail.size(), tail.size(), tail) == 0;
-  };
-  const auto an_output = [&](const std::string& n, bool in_textures) {
-    if (in_textures) return n.rfind(job.name + ".", 0) == 0;
-    if (n == "report.json" || n == "report.html") return true;
-    for (const std::string& stem : stems) {
-      const std::string at = job.name + "." + stem + ".";
-      if (n == job.output_path(stem, ".exr").filename().string() ||
-          (n.rfind(at, 0) == 0 && (ends_with(n, ".preview.png") || ends_with(n, ".tif"))))
-        return true;
-    }
-    return false;
-  };
-  const fs::path dir = fs::weakly_canonical(job.output.dir, ec);
+  // An input the outputs would replace (writes_in_output_folder), the job file included.
   std::vector<std::pair<std::string, fs::path>> inputs = {{"", job.file}};
   for (const auto& [ptr, rel] : job_input_files(job.doc)) inputs.emplace_back(ptr, job.resolve(rel));
   for (const auto& [ptr, file] : inputs) {
-    const fs::path real = fs::weakly_canonical(fs::absolute(file), ec);
-    if (ec) continue;
-    const bool in_textures = real.parent_path() == dir / "textures";
-    if ((real.parent_path() == dir || in_textures) && an_output(real.filename().string(), in_textures))
+    if (writes_in_output_folder(job, file))
       throw InputError(job.file.string(), ptr,
                        file.string() + " is where this job writes an output: a bake would replace it; move " +
                            "it, or give the job another name or output.dir");
@@ -207,6 +185,32 @@ std::vector<std::string> resolve_job_checks(Job& job) {
 }
 
 }  // namespace
+
+bool writes_in_output_folder(const Job& job, const fs::path& file) {
+  std::error_code ec;
+  const fs::path dir = fs::weakly_canonical(fs::absolute(job.output.dir), ec);
+  if (ec) return false;
+  const fs::path real = fs::weakly_canonical(fs::absolute(file), ec);
+  if (ec) return false;
+  const std::string n = real.filename().string();
+  if (real.parent_path() == dir / "textures") return n.rfind(job.name + ".", 0) == 0;
+  if (real.parent_path() != dir) return false;
+  if (n == "report.json" || n == "report.html" || n == output_lock_file(job).filename() ||
+      n == owner_record(job).filename() || n == report_lock_file(job).filename())
+    return true;
+  const auto ends_with = [&n](const std::string& tail) {
+    return n.size() >= tail.size() && n.compare(n.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  std::vector<std::string> stems = {"reference"};
+  for (const BakeEntry& e : job.bakes) stems.push_back(e.stem);
+  for (const std::string& stem : stems) {
+    const std::string at = job.name + "." + stem + ".";
+    if (n == job.output_path(stem, ".exr").filename().string() ||
+        (n.rfind(at, 0) == 0 && (ends_with(".preview.png") || ends_with(".tif"))))
+      return true;
+  }
+  return false;
+}
 
 const MethodConfig& entry_config(const BakeEntry& entry) {
   if (!entry.config)

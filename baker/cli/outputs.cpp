@@ -236,12 +236,11 @@ void check_report_owner(const Job& job) {
             "(a job with a reference writes report.json and report.html there), or remove it");
 }
 
-namespace {
-
-// <dir>/.hfbake-<name>.job: the job file whose outputs of that name the folder holds.
 fs::path owner_record(const Job& job) {
   return job.output.dir / (".hfbake-" + job.name + ".job");
 }
+
+namespace {
 
 std::string job_identity(const Job& job) {
   std::error_code ec;

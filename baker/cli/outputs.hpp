@@ -30,6 +30,8 @@ std::optional<unsigned long long> process_start_time(long long pid);
 std::string stage_name(const std::string& job_name);
 // <output dir>/.hfbake-<name>.lock: the file a bake of the job locks (docs/output_folders.md).
 std::filesystem::path output_lock_file(const Job& job);
+// <output dir>/.hfbake-<name>.job: the job file whose outputs of that name the folder holds.
+std::filesystem::path owner_record(const Job& job);
 // <output dir>/.hfbake+report.lock: the file a bake or merge of a job with a reference locks as well, since
 // report.json and report.html carry no job name (docs/output_folders.md). No job's lock has this name (a job
 // name never starts with '+').

@@ -506,6 +506,13 @@ std::vector<Case> cases() {
     j["output"]["dir"] = std::string("out\0x", 5);
     return both(write_job(d, j), "/output/dir", "holds a NUL character");
   });
+  add("SummaryWhereTheJobWritesAnOutput", [](const fs::path& d) {
+    const std::string job = write_job(d, base_job()), summary = (d / "out" / "t.p1.exr").string();
+    return CaseSetup{{"bake", "--no-cache", "--quiet", "--summary", summary, job},
+                     summary,
+                     "--summary",
+                     "is where job t writes its outputs"};
+  });
   add("SummaryOverTheJobFile", [](const fs::path& d) {
     const std::string job = write_job(d, base_job());
     return CaseSetup{

@@ -604,4 +604,26 @@ TEST_F(Untrusted, TwoJobsWithAReferenceInOneFolderNeverReplaceEachOthersReport) 
   }
 }
 
+// --summary where a job writes: refused before anything is baked, the output and the record kept.
+TEST_F(Untrusted, ASummaryWhereAJobWritesIsRefusedBeforeBaking) {
+  const std::string job = write_job(dir_, base_job("out"));
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path out = dir_ / "out";
+  const std::string exr = read_text(out / "t.p1.exr"), record = read_text(out / ".hfbake-t.job");
+  for (const std::string name : {"t.p1.exr", ".hfbake-t.job", "t.p1.ao.preview.png", "report.json"}) {
+    SCOPED_TRACE(name);
+    const Outcome r = hfbake(dir_, {"bake", job, "--no-cache", "--quiet", "--summary", "out/" + name});
+    EXPECT_EQ(r.exit_code, 2);
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("--summary"), std::string::npos) << r.err;
+    EXPECT_EQ(read_text(out / "t.p1.exr"), exr);
+    EXPECT_EQ(read_text(out / ".hfbake-t.job"), record);
+    EXPECT_FALSE(fs::exists(out / name) && name != "t.p1.exr" && name != ".hfbake-t.job");
+  }
+  // A name beside them that is no output of the job is written.
+  EXPECT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet", "--summary", "out/summary.json"}).exit_code,
+            0);
+  EXPECT_TRUE(fs::is_regular_file(out / "summary.json"));
+}
+
 }  // namespace
