@@ -1,9 +1,12 @@
 #include "cli/outputs.hpp"
 
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -29,6 +32,12 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::string_view kStagePrefix = ".hfbake-staging-";
+// In a stage whose files are all whole and are being moved into place: their names, one a line, the owner
+// record last (OutputStage::commit; docs/output_folders.md).
+constexpr char kCommitList[] = "commit-list";
+// The commits under way in this process (read by a signal handler: a lock-free atomic).
+std::atomic<int> g_moving{0};
+static_assert(std::atomic<int>::is_always_lock_free);
 // The longest side of a field whose EXRs are written as scanlines (larger ones are tiled).
 constexpr int kLargestScanlineExr = 2048;
 
@@ -157,8 +166,11 @@ std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
   std::error_code ec;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::optional<StageOwner> owner = parse_stage_name(it->path().filename().string());
-    // A link named like a stage is no stage: removed itself, its target untouched (remove_tree).
+    // A link named like a stage is no stage: removed itself, its target untouched (remove_tree). A stage
+    // killed during its moves is kept for the next bake of its job name (complete_killed_commits).
     if (!owner || !stage_owner_is_gone(*owner)) continue;
+    struct stat st {};
+    if (is_real_directory(it->path()) && lstat((it->path() / kCommitList).c_str(), &st) == 0) continue;
     if (remove_tree(it->path())) removed.push_back(it->path());
   }
   return removed;
@@ -273,6 +285,55 @@ void check_output_owner(const Job& job, bool overwrite) {
                          ": give this job another name or output folder, or bake with --overwrite");
 }
 
+bool outputs_moving() noexcept {
+  return g_moving.load() > 0;
+}
+
+namespace {
+
+// A name the commit list may hold: a file of the stage or of its textures/ folder, as OutputStage stages
+// them (no absolute path, no "..", no hidden name but the owner record).
+bool committable_name(const fs::path& name, const Job& job) {
+  if (name.empty() || name.is_absolute()) return false;
+  const std::vector<fs::path> parts(name.begin(), name.end());
+  if (parts.size() == 1) return parts[0] == owner_record(job).filename() || parts[0].string()[0] != '.';
+  return parts.size() == 2 && parts[0] == "textures" && parts[1].string()[0] != '.';
+}
+
+}  // namespace
+
+std::vector<fs::path> complete_killed_commits(const Job& job) {
+  std::vector<fs::path> completed;
+  std::error_code ec;
+  for (fs::directory_iterator it(job.output.dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const fs::path stage = it->path();
+    const std::optional<StageOwner> owner = parse_stage_name(stage.filename().string());
+    if (!owner || owner->job != job.name || !is_real_directory(stage) || !stage_owner_is_gone(*owner))
+      continue;
+    std::string why;
+    const int fd = open_regular_file(stage / kCommitList, why);
+    if (fd < 0) continue;  // killed before its files were whole: nothing of it is an output
+    std::string list;
+    char buf[4096];
+    for (ssize_t n; (n = read(fd, buf, sizeof buf)) > 0;) list.append(buf, std::size_t(n));
+    close(fd);
+    std::istringstream lines(list);
+    for (std::string line; std::getline(lines, line);) {
+      const fs::path name = line;
+      if (!committable_name(name, job)) continue;
+      struct stat st {};
+      if (lstat((stage / name).c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;  // moved already
+      if (name.has_parent_path() && !is_real_directory(job.output.dir / name.parent_path())) continue;
+      std::error_code mv;
+      fs::rename(stage / name, job.output.dir / name, mv);
+    }
+    sync_folder(job.output.dir);
+    unlink((stage / kCommitList).c_str());  // then an ordinary stale stage: remove_stale_stages takes it
+    completed.push_back(stage);
+  }
+  return completed;
+}
+
 OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   std::error_code ec;
   created_dir_ = !fs::exists(job.output.dir, ec);
@@ -315,6 +376,9 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
                            "this job an output folder of its own");
     }
   }
+  // A process killed while it moved this job's outputs (it held the lock) left them part moved: its moves
+  // are completed first, so that the folder holds one bake's outputs and the record names its job file.
+  complete_killed_commits(job);
   try {
     check_output_owner(job, overwrite);
     check_report_owner(job);
@@ -558,20 +622,29 @@ std::vector<fs::path> OutputStage::commit() {
     if (const int e = sync_file(stage_ / name))
       throw OutputError((job_.output.dir / name).string(), "",
                         "cannot write file: " + std::error_code(e, std::generic_category()).message());
+  // The owner record is written in the stage like the outputs, then the commit list: from the list on, the
+  // stage is whole, and a process killed during the moves leaves a stage the next bake of this job name
+  // completes (complete_killed_commits); killed before it, its stage is removed and no output moved.
+  const fs::path record = owner_record(job_), staged_record = stage_ / record.filename();
+  try {
+    write_file_atomically(staged_record, job_identity(job_));
+    std::string list;
+    for (const fs::path& name : staged_) list += name.string() + "\n";
+    write_file_atomically(stage_ / kCommitList, list + record.filename().string() + "\n");
+  } catch (const std::system_error& e) {
+    throw OutputError(record.string(), "", std::string("cannot write: ") + e.code().message());
+  }
+  // A stop signal during the moves lets them finish (outputs_moving).
+  struct Moving {
+    Moving() { ++g_moving; }
+    ~Moving() { --g_moving; }
+  } moving;
   for (const fs::path& name : staged_) {
     const fs::path target = job_.output.dir / name;
     std::error_code ec;
     fs::rename(stage_ / name, target, ec);  // same folder tree: an atomic replace
     if (ec) throw OutputError(target.string(), "", "cannot move into place: " + ec.message());
     final_paths.push_back(target);
-  }
-  // The owner record is written in the stage and renamed into place like the outputs: a process killed
-  // here leaves its temporary inside its stage, which the next bake removes.
-  const fs::path record = owner_record(job_), staged_record = stage_ / record.filename();
-  try {
-    write_file_atomically(staged_record, job_identity(job_));
-  } catch (const std::system_error& e) {
-    throw OutputError(record.string(), "", std::string("cannot write: ") + e.code().message());
   }
   std::error_code ec;
   fs::rename(staged_record, record, ec);

@@ -64,6 +64,15 @@ std::filesystem::path stage_checkpoint_dir(const std::filesystem::path& stage);
 int adopt_stale_checkpoints(const std::filesystem::path& dir, const std::string& job_name,
                             const std::filesystem::path& into);
 
+// Completes what a killed process of job `job`'s name (its owner gone, stage_owner_is_gone) left part moved:
+// its stage's commit list names files that were whole when the moves began; those still in the stage are
+// moved into place, the owner record last (docs/output_folders.md). Called under the job's lock; returns the
+// stages it completed (then removed as stale stages).
+std::vector<std::filesystem::path> complete_killed_commits(const Job& job);
+// True while a job of this process moves its outputs into place (OutputStage::commit). Async-signal-safe:
+// a stop signal's handler lets the moves finish rather than end the process part way.
+bool outputs_moving() noexcept;
+
 // The azimuth convention of a bake in words, with the compass mapping when the input's geotransform gives
 // one (north-up: compass azimuth = (90 + phi) mod 360): written into every output's metadata.
 std::string azimuth_convention(const Georeference& geo);

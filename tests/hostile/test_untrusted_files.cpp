@@ -604,6 +604,85 @@ TEST_F(Untrusted, TwoJobsWithAReferenceInOneFolderNeverReplaceEachOthersReport) 
   }
 }
 
+// --- stopped while the outputs move into place (docs/output_folders.md#moving-the-outputs-into-place) ------
+
+// The job hash an EXR output records ("" when it cannot be read).
+std::string exr_job_hash(const fs::path& exr) {
+  auto in = OIIO::ImageInput::open(exr.string());
+  return in ? std::string(in->spec().get_string_attribute("hfbake:job_hash")) : std::string();
+}
+
+class Moves : public Untrusted {
+ protected:
+  void SetUp() override {
+    Untrusted::SetUp();
+    for (const int seed : {5, 6}) {
+      json j = base_job("out");
+      j["height"]["procedural"]["seed"] = seed;
+      j["bake"].push_back({{"method", "hbao"}, {"directions", 4}, {"radius", 4}});
+      jobs_.push_back(write_job(dir_, j, "seed" + std::to_string(seed) + ".json"));
+    }
+  }
+  // Bakes jobs_[1] over jobs_[0]'s outputs with --overwrite, its move of t.hbao.exr (after t.p1.exr's) held
+  // 3 s by the preload library; sends `sig` `times` times once that move has begun. Returns the exit code.
+  int stop_during_the_moves(int sig, int times) {
+    EXPECT_EQ(hfbake(dir_, {"bake", jobs_[0], "--no-cache", "--quiet"}).exit_code, 0);
+    old_hash_ = exr_job_hash(dir_ / "out" / "t.p1.exr");
+    const fs::path flag = dir_ / "moving";
+    const pid_t pid = start(dir_, {"bake", jobs_[1], "--no-cache", "--quiet", "--overwrite"}, "err.txt", [&] {
+      setenv("LD_PRELOAD", HFBAKE_SLOW_RENAME, 1);
+      setenv("ASAN_OPTIONS", "verify_asan_link_order=0", 1);
+      setenv("HFBAKE_TEST_SLOW_RENAME", "/out/t.hbao.exr", 1);
+      setenv("HFBAKE_TEST_SLOW_RENAME_FLAG", flag.c_str(), 1);
+    });
+    for (int wait = 0; wait < 6000 && !fs::exists(flag); ++wait) usleep(10000);
+    EXPECT_TRUE(fs::exists(flag)) << "the moves never began";
+    for (int i = 0; i < times; ++i) {
+      kill(pid, sig);
+      usleep(100000);
+    }
+    return finish(pid, dir_, "err.txt").exit_code;
+  }
+  std::vector<std::string> jobs_;
+  std::string old_hash_;
+};
+
+TEST_F(Moves, ASecondSignalDuringTheMovesLetsThemFinish) {
+  // The job finished: its exit status, not the signal's (docs/contract.md).
+  EXPECT_EQ(stop_during_the_moves(SIGTERM, 2), 0);
+  const std::string p1 = exr_job_hash(dir_ / "out" / "t.p1.exr"),
+                    hbao = exr_job_hash(dir_ / "out" / "t.hbao.exr");
+  EXPECT_NE(p1, old_hash_);
+  EXPECT_EQ(hbao, p1);
+  EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
+}
+
+TEST_F(Moves, MovesAKilledProcessBeganAreCompletedByTheNextBakeOfTheJobName) {
+  EXPECT_EQ(stop_during_the_moves(SIGKILL, 1), -SIGKILL);
+  const fs::path out = dir_ / "out";
+  const std::string p1 = exr_job_hash(out / "t.p1.exr");
+  ASSERT_NE(p1, old_hash_);
+  ASSERT_EQ(exr_job_hash(out / "t.hbao.exr"), old_hash_) << "killed before the moves began";
+  // Another job name's bake into the folder keeps the killed stage.
+  json other = base_job("out");
+  other["name"] = "u";
+  ASSERT_EQ(hfbake(dir_, {"bake", write_job(dir_, other, "u.json"), "--no-cache", "--quiet"}).exit_code, 0);
+  // The first job file again, without --overwrite: the killed moves are completed first, and their record
+  // names the second job file, so it is refused naming that file.
+  const Outcome again = hfbake(dir_, {"bake", jobs_[0], "--no-cache", "--quiet"});
+  EXPECT_EQ(again.exit_code, 2) << again.err;
+  ASSERT_EQ(again.error_lines().size(), 1u) << again.err;
+  EXPECT_NE(again.error_lines()[0].find(fs::weakly_canonical(jobs_[1]).string()), std::string::npos)
+      << again.err;
+  EXPECT_EQ(exr_job_hash(out / "t.p1.exr"), p1);
+  EXPECT_EQ(exr_job_hash(out / "t.hbao.exr"), p1);
+  EXPECT_EQ(read_text(out / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
+  // With --overwrite it bakes, and leaves no stage.
+  EXPECT_EQ(hfbake(dir_, {"bake", jobs_[0], "--no-cache", "--quiet", "--overwrite"}).exit_code, 0);
+  EXPECT_EQ(exr_job_hash(out / "t.hbao.exr"), old_hash_);
+  EXPECT_EQ(hfbake_test::stages_in(out), 0);
+}
+
 // --summary where a job writes: refused before anything is baked, the output and the record kept.
 TEST_F(Untrusted, ASummaryWhereAJobWritesIsRefusedBeforeBaking) {
   const std::string job = write_job(dir_, base_job("out"));
