@@ -174,6 +174,26 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
   for (const SchemaViolation& v : validate_against_schema(doc, "suite.schema.json"))
     errors.push_back(file.string() + ": " + (v.pointer.empty() ? "/" : v.pointer) + ": " + v.message);
   if (errors.size() != errors_before) return std::nullopt;
+  // Every path the suite names (its output folder, the jobs' files or globs, the files they need) is refused
+  // when it holds a NUL (nul_in_path).
+  std::vector<std::pair<std::string, std::string>> paths;
+  if (doc.contains("output") && doc["output"].contains("dir"))
+    paths.emplace_back("/output/dir", doc["output"]["dir"].get<std::string>());
+  for (std::size_t i = 0; i < doc["jobs"].size(); ++i) {
+    const nlohmann::json& entry = doc["jobs"][i];
+    const std::string at = "/jobs/" + std::to_string(i);
+    if (!entry.is_object()) {
+      paths.emplace_back(at, entry.get<std::string>());
+      continue;
+    }
+    paths.emplace_back(at + "/job", entry["job"].get<std::string>());
+    for (std::size_t k = 0; k < entry["needs"].size(); ++k)
+      paths.emplace_back(at + "/needs/" + std::to_string(k), entry["needs"][k].get<std::string>());
+  }
+  for (const auto& [ptr, path] : paths)
+    if (const std::string why = nul_in_path(path); !why.empty())
+      errors.push_back(printable(file.string() + ": " + ptr + ": " + why));
+  if (errors.size() != errors_before) return std::nullopt;
 
   Suite suite;
   suite.file = file;

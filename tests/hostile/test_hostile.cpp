@@ -519,6 +519,15 @@ std::vector<Case> cases() {
                      "--summary",
                      "is where job t writes its outputs"};
   });
+  add("SuiteOutputDirHoldingANul", [](const fs::path& d) {
+    write_job(d, base_job());
+    const json suite = {{"version", 1},
+                        {"suite", "s"},
+                        {"jobs", {"job.json"}},
+                        {"output", {{"dir", std::string("out\0x", 5)}}}};
+    const std::string file = write_job(d, suite, "suite.json");
+    return CaseSetup{{"validate", file}, file, "/output/dir", "holds a NUL character", true};
+  });
   add("SummaryOverTheJobFile", [](const fs::path& d) {
     const std::string job = write_job(d, base_job());
     return CaseSetup{
