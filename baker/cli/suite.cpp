@@ -281,6 +281,11 @@ nlohmann::json append_suite_history(const nlohmann::json& history, nlohmann::jso
   return {{"runs", std::move(runs)}};
 }
 
+std::vector<fs::path> suite_report_files(const Suite& suite) {
+  return {suite.output_dir / "suite.json", suite.output_dir / "history.json", suite.output_dir / "index.html",
+          suite.output_dir / "junit.xml"};
+}
+
 SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcome>& outcomes,
                                  double seconds) {
   fs::create_directories(suite.output_dir);
@@ -297,7 +302,8 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
   doc["skipped"] = suite.skipped;
 
   SuiteReports written;
-  const fs::path history_file = suite.output_dir / "history.json";
+  written.files = suite_report_files(suite);
+  const fs::path history_file = written.files[1];
   nlohmann::json previous = {{"runs", nlohmann::json::array()}};
   bool dropped = false;
   if (fs::exists(history_file)) {
@@ -318,8 +324,6 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
     written.warnings.push_back(history_file.string() +
                                ": not a suite history (history.json); starting it afresh with this run");
 
-  written.files = {suite.output_dir / "suite.json", history_file, suite.output_dir / "index.html",
-                   suite.output_dir / "junit.xml"};
   write_atomically(written.files[0], doc.dump(2) + "\n");
   write_atomically(written.files[1], history.dump(2) + "\n");
   write_atomically(written.files[2], index_html(suite, outcomes, seconds, history));

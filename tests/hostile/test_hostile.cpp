@@ -528,6 +528,16 @@ std::vector<Case> cases() {
     const std::string file = write_job(d, suite, "suite.json");
     return CaseSetup{{"validate", file}, file, "/output/dir", "holds a NUL character", true};
   });
+  add("SummaryWhereTheSuiteWritesItsHistory", [](const fs::path& d) {
+    write_job(d, base_job());
+    const json suite = {{"version", 1}, {"suite", "s"}, {"jobs", {"job.json"}}, {"output", {{"dir", "out"}}}};
+    const std::string file = write_job(d, suite, "suite.json"),
+                      summary = (d / "out" / "history.json").string();
+    return CaseSetup{{"bake", "--no-cache", "--quiet", "--summary", summary, file},
+                     summary,
+                     "--summary",
+                     "is where suite s writes history.json"};
+  });
   add("SummaryOverTheJobFile", [](const fs::path& d) {
     const std::string job = write_job(d, base_job());
     return CaseSetup{
