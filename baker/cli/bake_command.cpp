@@ -641,7 +641,8 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   }
   for (std::size_t i = 0; i < jobs.size(); ++i)
     if (outcomes[i].status == JobStatus::invalid) jobs[i].reset();
-  // A summary written over a job, a suite or an input: refused before anything is baked (and no summary).
+  // A summary written over a job, a suite or an input, or where a job writes (an output, its owner record,
+  // its lock) or a suite its reports: refused before anything is baked (and no summary).
   if (options.summary) {
     for (const fs::path& f : read) {
       std::error_code ec;
@@ -653,6 +654,26 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
         return 2;
       }
     }
+    std::error_code ec;
+    const fs::path summary = fs::weakly_canonical(fs::absolute(*options.summary), ec);
+    for (const Suite& suite : suites)
+      for (const fs::path& report : suite_report_files(suite))
+        if (fs::weakly_canonical(report, ec) == summary) {
+          std::fprintf(stderr, "hfbake: error: %s\n",
+                       printable(options.summary->string() + ": --summary: is where suite " + suite.name +
+                                 " writes " + report.filename().string() + ": give the summary another name")
+                           .c_str());
+          return 2;
+        }
+    for (const std::optional<Job>& job : jobs)
+      if (job && writes_in_output_folder(*job, *options.summary)) {
+        std::fprintf(stderr, "hfbake: error: %s\n",
+                     printable(options.summary->string() + ": --summary: is where job " + job->name +
+                               " writes its outputs in " + job->output.dir.string() +
+                               ": give the summary another name")
+                         .c_str());
+        return 2;
+      }
   }
 
   std::optional<ReferenceCache> cache;

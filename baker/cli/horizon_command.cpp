@@ -7,8 +7,11 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <system_error>
+#include <utility>
 
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "core/vec.hpp"
 #include "io/crs_geodesy.hpp"
 #include "io/georaster_input.hpp"
@@ -17,6 +20,7 @@
 #include "terrain/point_horizon.hpp"
 
 namespace hfbake {
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -211,23 +215,36 @@ Profile compute(const HorizonOptions& o) {
 
 int run_horizon(const HorizonOptions& o) {
   try {
+    // The outputs never replace the DEM, nor each other; each is written whole or not at all (a
+    // temporary renamed into place, docs/output_folders.md), the previous file kept until then.
+    std::error_code ec;
+    const fs::path dem = fs::weakly_canonical(fs::absolute(o.dem), ec);
+    for (const auto& [option, file] :
+         {std::pair<std::string, std::string>{"--out", o.out}, {"--plot", o.plot}})
+      if (!file.empty() && fs::weakly_canonical(fs::absolute(file), ec) == dem)
+        throw InputError(o.dem, option, "is the DEM this command reads: give the output another name");
+    if (!o.out.empty() && !o.plot.empty() &&
+        fs::weakly_canonical(fs::absolute(o.out), ec) == fs::weakly_canonical(fs::absolute(o.plot), ec))
+      throw InputError(o.dem, "--plot", "is the --out file too: give each output its own name");
     const Profile p = compute(o);
     const std::string text = o.format == "json" ? to_json(o, p) : to_csv(p);
+    const auto write = [](const std::string& file, const std::string& option, const std::string& bytes) {
+      try {
+        write_file_atomically(file, bytes);
+      } catch (const std::system_error& e) {
+        throw InputError(file, option, "cannot write the file: " + e.code().message());
+      }
+    };
     if (!o.plot.empty()) {
       PolarPlotGeometry geometry;
       geometry.size = o.plot_size;
-      const std::string png = encode_png(o.plot_size, o.plot_size, 3, horizon_polar_plot(p.rays, geometry));
-      std::ofstream file(o.plot, std::ios::binary);
-      file << png;
-      if (!file.good()) throw InputError(o.plot, "--plot", "cannot write the file");
+      write(o.plot, "--plot", encode_png(o.plot_size, o.plot_size, 3, horizon_polar_plot(p.rays, geometry)));
     }
     if (o.out.empty()) {
       std::fputs(text.c_str(), stdout);
       return 0;
     }
-    std::ofstream file(o.out, std::ios::binary);
-    file << text;
-    if (!file.good()) throw InputError(o.out, "--out", "cannot write the file");
+    write(o.out, "--out", text);
     return 0;
   } catch (const InputError& e) {
     std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());

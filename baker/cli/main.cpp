@@ -33,11 +33,13 @@ static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_alw
 
 // SIGINT (Ctrl-C), SIGTERM (kill, timeout, cron, CI) and SIGHUP (the terminal went away) all stop the bake
 // at its next check; the staging folders are removed on the way out. A second signal stops at once: the
-// staging folders left behind carry this process's id and the next bake of that folder removes them.
+// staging folders left behind carry this process's id and the next bake of that folder removes them. While
+// a job moves its outputs into place it does not: the moves finish first, and the process stops after them
+// (docs/output_folders.md).
 extern "C" void on_stop_signal(int sig) {
   int none = 0;
   g_signal.compare_exchange_strong(none, sig);
-  if (g_interrupted.exchange(true)) std::_Exit(128 + sig);
+  if (g_interrupted.exchange(true) && !hfbake::outputs_moving()) std::_Exit(128 + sig);
 }
 
 // A whole number from `lo` to `hi`: the check of every integer option, whose message says whether the text is

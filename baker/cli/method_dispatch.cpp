@@ -92,14 +92,18 @@ void check_output_folder(const Job& job) {
     throw InputError(
         job.file.string(), "/output/dir",
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
-  // What the bake would refuse only after baking (docs/output_folders.md): its lock name taken by anything
-  // but a file, and a textures/ entry that is not a folder.
-  const fs::path lock = output_lock_file(job);
-  const fs::file_status ls = fs::symlink_status(lock, ec);
-  if (fs::exists(ls) && !fs::is_regular_file(ls))
-    throw InputError(job.file.string(), "/output/dir",
-                     lock.string() + " is no lock file of hfbake's (" +
-                         (fs::is_symlink(ls) ? "a link" : "not a file") + "): remove it");
+  // What the bake would refuse only after baking (docs/output_folders.md): its lock names (the job's, and
+  // the report's for a job with a reference) taken by anything but a file, and a textures/ entry that is not
+  // a folder.
+  std::vector<fs::path> locks = {output_lock_file(job)};
+  if (job.has_reference) locks.push_back(report_lock_file(job));
+  for (const fs::path& lock : locks) {
+    const fs::file_status ls = fs::symlink_status(lock, ec);
+    if (fs::exists(ls) && !fs::is_regular_file(ls))
+      throw InputError(job.file.string(), "/output/dir",
+                       lock.string() + " is no lock file of hfbake's (" +
+                           (fs::is_symlink(ls) ? "a link" : "not a file") + "): remove it");
+  }
   const fs::path textures = job.output.dir / "textures";
   const fs::file_status ts = fs::symlink_status(textures, ec);
   if (job.doc.contains("output") && job.doc["output"].contains("textures") && fs::exists(ts) &&
@@ -107,56 +111,18 @@ void check_output_folder(const Job& job) {
     throw InputError(job.file.string(), "/output/textures",
                      textures.string() + " is not a folder (" + (fs::is_symlink(ts) ? "a link" : "a file") +
                          "): the textures are written inside " + job.output.dir.string() + " only");
-  // An input the outputs would replace: a file in the output folder named as an output of this job
-  // (<name>.<stem>.exr, <name>.<stem>.*.preview.png, <name>.<stem>.*.tif, report.json, report.html; in
-  // textures/, <name>.*), the job file included.
-  std::vector<std::string> stems = {"reference"};
-  for (const BakeEntry& e : job.bakes) stems.push_back(e.stem);
-  const auto ends_with = [](const std::string& n, const std::string& tail) {
-    return n.size() >= tail.size() && n.compare(n.size() - tail.size(), tail.size(), tail) == 0;
-  };
-  const auto an_output = [&](const std::string& n, bool in_textures) {
-    if (in_textures) return n.rfind(job.name + ".", 0) == 0;
-    if (n == "report.json" || n == "report.html") return true;
-    for (const std::string& stem : stems) {
-      const std::string at = job.name + "." + stem + ".";
-      if (n == job.output_path(stem, ".exr").filename().string() ||
-          (n.rfind(at, 0) == 0 && (ends_with(n, ".preview.png") || ends_with(n, ".tif"))))
-        return true;
-    }
-    return false;
-  };
-  const fs::path dir = fs::weakly_canonical(job.output.dir, ec);
+  // An input the outputs would replace (writes_in_output_folder), the job file included.
   std::vector<std::pair<std::string, fs::path>> inputs = {{"", job.file}};
   for (const auto& [ptr, rel] : job_input_files(job.doc)) inputs.emplace_back(ptr, job.resolve(rel));
   for (const auto& [ptr, file] : inputs) {
-    const fs::path real = fs::weakly_canonical(fs::absolute(file), ec);
-    if (ec) continue;
-    const bool in_textures = real.parent_path() == dir / "textures";
-    if ((real.parent_path() == dir || in_textures) && an_output(real.filename().string(), in_textures))
+    if (writes_in_output_folder(job, file))
       throw InputError(job.file.string(), ptr,
                        file.string() + " is where this job writes an output: a bake would replace it; move " +
                            "it, or give the job another name or output.dir");
   }
   // Another job's report: report.json and report.html carry no job name, so a job with a reference writes
   // them over the report of any other job baked into the same folder (docs/output_folders.md).
-  if (job.has_reference) {
-    const fs::path report = job.output.dir / "report.json";
-    if (fs::exists(fs::symlink_status(report, ec))) {
-      std::string owner;  // "" for a file that is no report (unreadable, or no string at /job/name)
-      try {
-        owner = read_json_file(report).value(nlohmann::json::json_pointer("/job/name"), std::string());
-      } catch (const std::exception&) {
-      }
-      if (owner != job.name)
-        throw InputError(
-            job.file.string(), "/output/dir",
-            report.string() + " is " +
-                (owner.empty() ? std::string("no report of hfbake's") : "job \"" + owner + "\"'s report") +
-                ": this job's report would replace it; give the job an output folder of its own "
-                "(a job with a reference writes report.json and report.html there), or remove it");
-    }
-  }
+  check_report_owner(job);
 }
 
 std::vector<std::string> resolve_job_checks(Job& job);
@@ -219,6 +185,32 @@ std::vector<std::string> resolve_job_checks(Job& job) {
 }
 
 }  // namespace
+
+bool writes_in_output_folder(const Job& job, const fs::path& file) {
+  std::error_code ec;
+  const fs::path dir = fs::weakly_canonical(fs::absolute(job.output.dir), ec);
+  if (ec) return false;
+  const fs::path real = fs::weakly_canonical(fs::absolute(file), ec);
+  if (ec) return false;
+  const std::string n = real.filename().string();
+  if (real.parent_path() == dir / "textures") return n.rfind(job.name + ".", 0) == 0;
+  if (real.parent_path() != dir) return false;
+  if (n == "report.json" || n == "report.html" || n == output_lock_file(job).filename() ||
+      n == owner_record(job).filename() || n == report_lock_file(job).filename())
+    return true;
+  const auto ends_with = [&n](const std::string& tail) {
+    return n.size() >= tail.size() && n.compare(n.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  std::vector<std::string> stems = {"reference"};
+  for (const BakeEntry& e : job.bakes) stems.push_back(e.stem);
+  for (const std::string& stem : stems) {
+    const std::string at = job.name + "." + stem + ".";
+    if (n == job.output_path(stem, ".exr").filename().string() ||
+        (n.rfind(at, 0) == 0 && (ends_with(".preview.png") || ends_with(".tif"))))
+      return true;
+  }
+  return false;
+}
 
 const MethodConfig& entry_config(const BakeEntry& entry) {
   if (!entry.config)

@@ -2,6 +2,7 @@
 // bake starts (validate runs the same), and the dispatch of a bake entry to its method.
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,12 @@ MethodContext job_method_context(const Job& job);
 // method reader fills BakeEntry::config, the reference's reader (given those configs) Job::reference_options.
 // Returns every problem as one line "<file>: <JSON pointer>: <what>" (empty: the job is good to bake).
 std::vector<std::string> resolve_job(Job& job);
+
+// True when `file` (existing or not) is a name a bake of `job` writes in its output folder, so that writing
+// or keeping anything else there would lose it: <name>.<stem>.exr, <name>.<stem>.*.preview.png,
+// <name>.<stem>.*.tif, report.json, report.html, textures/<name>.*, and the job's lock, owner record and the
+// report lock (docs/output_folders.md). Links are resolved first.
+bool writes_in_output_folder(const Job& job, const std::filesystem::path& file);
 
 // A resolved entry's config (std::logic_error before resolve_job).
 const MethodConfig& entry_config(const BakeEntry& entry);

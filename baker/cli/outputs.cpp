@@ -1,9 +1,12 @@
 #include "cli/outputs.hpp"
 
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -29,6 +32,12 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::string_view kStagePrefix = ".hfbake-staging-";
+// In a stage whose files are all whole and are being moved into place: their names, one a line, the owner
+// record last (OutputStage::commit; docs/output_folders.md).
+constexpr char kCommitList[] = "commit-list";
+// The commits under way in this process (read by a signal handler: a lock-free atomic).
+std::atomic<int> g_moving{0};
+static_assert(std::atomic<int>::is_always_lock_free);
 // The longest side of a field whose EXRs are written as scanlines (larger ones are tiled).
 constexpr int kLargestScanlineExr = 2048;
 
@@ -157,8 +166,11 @@ std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
   std::error_code ec;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::optional<StageOwner> owner = parse_stage_name(it->path().filename().string());
-    // A link named like a stage is no stage: removed itself, its target untouched (remove_tree).
+    // A link named like a stage is no stage: removed itself, its target untouched (remove_tree). A stage
+    // killed during its moves is kept for the next bake of its job name (complete_killed_commits).
     if (!owner || !stage_owner_is_gone(*owner)) continue;
+    struct stat st {};
+    if (is_real_directory(it->path()) && lstat((it->path() / kCommitList).c_str(), &st) == 0) continue;
     if (remove_tree(it->path())) removed.push_back(it->path());
   }
   return removed;
@@ -213,12 +225,34 @@ fs::path output_lock_file(const Job& job) {
   return job.output.dir / (".hfbake-" + job.name + ".lock");
 }
 
-namespace {
+fs::path report_lock_file(const Job& job) {
+  return job.output.dir / ".hfbake+report.lock";
+}
 
-// <dir>/.hfbake-<name>.job: the job file whose outputs of that name the folder holds.
+void check_report_owner(const Job& job) {
+  if (!job.has_reference) return;
+  std::error_code ec;
+  const fs::path report = job.output.dir / "report.json";
+  if (!fs::exists(fs::symlink_status(report, ec))) return;
+  std::string owner;  // "" for a file that is no report (unreadable, or no string at /job/name)
+  try {
+    owner = read_json_file(report).value(nlohmann::json::json_pointer("/job/name"), std::string());
+  } catch (const std::exception&) {
+  }
+  if (owner != job.name)
+    throw InputError(
+        job.file.string(), "/output/dir",
+        report.string() + " is " +
+            (owner.empty() ? std::string("no report of hfbake's") : "job \"" + owner + "\"'s report") +
+            ": this job's report would replace it; give the job an output folder of its own "
+            "(a job with a reference writes report.json and report.html there), or remove it");
+}
+
 fs::path owner_record(const Job& job) {
   return job.output.dir / (".hfbake-" + job.name + ".job");
 }
+
+namespace {
 
 std::string job_identity(const Job& job) {
   std::error_code ec;
@@ -251,6 +285,55 @@ void check_output_owner(const Job& job, bool overwrite) {
                          ": give this job another name or output folder, or bake with --overwrite");
 }
 
+bool outputs_moving() noexcept {
+  return g_moving.load() > 0;
+}
+
+namespace {
+
+// A name the commit list may hold: a file of the stage or of its textures/ folder, as OutputStage stages
+// them (no absolute path, no "..", no hidden name but the owner record).
+bool committable_name(const fs::path& name, const Job& job) {
+  if (name.empty() || name.is_absolute()) return false;
+  const std::vector<fs::path> parts(name.begin(), name.end());
+  if (parts.size() == 1) return parts[0] == owner_record(job).filename() || parts[0].string()[0] != '.';
+  return parts.size() == 2 && parts[0] == "textures" && parts[1].string()[0] != '.';
+}
+
+}  // namespace
+
+std::vector<fs::path> complete_killed_commits(const Job& job) {
+  std::vector<fs::path> completed;
+  std::error_code ec;
+  for (fs::directory_iterator it(job.output.dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const fs::path stage = it->path();
+    const std::optional<StageOwner> owner = parse_stage_name(stage.filename().string());
+    if (!owner || owner->job != job.name || !is_real_directory(stage) || !stage_owner_is_gone(*owner))
+      continue;
+    std::string why;
+    const int fd = open_regular_file(stage / kCommitList, why);
+    if (fd < 0) continue;  // killed before its files were whole: nothing of it is an output
+    std::string list;
+    char buf[4096];
+    for (ssize_t n; (n = read(fd, buf, sizeof buf)) > 0;) list.append(buf, std::size_t(n));
+    close(fd);
+    std::istringstream lines(list);
+    for (std::string line; std::getline(lines, line);) {
+      const fs::path name = line;
+      if (!committable_name(name, job)) continue;
+      struct stat st {};
+      if (lstat((stage / name).c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;  // moved already
+      if (name.has_parent_path() && !is_real_directory(job.output.dir / name.parent_path())) continue;
+      std::error_code mv;
+      fs::rename(stage / name, job.output.dir / name, mv);
+    }
+    sync_folder(job.output.dir);
+    unlink((stage / kCommitList).c_str());  // then an ordinary stale stage: remove_stale_stages takes it
+    completed.push_back(stage);
+  }
+  return completed;
+}
+
 OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   std::error_code ec;
   created_dir_ = !fs::exists(job.output.dir, ec);
@@ -273,9 +356,34 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
                          job.output.dir.string() +
                          " now: wait for it, or give this job another name or folder");
   }
+  // A job with a reference also writes report.json and report.html, which carry no job name: one such job
+  // at a time per folder, and only over its own report (docs/output_folders.md).
+  if (job.has_reference) {
+    const fs::path report_lock = report_lock_file(job);
+    report_lock_ = std::make_unique<FolderLock>(report_lock);
+    if (!report_lock_->held()) {
+      const std::string problem = report_lock_->problem(), holder = report_lock_->holder();
+      report_lock_.reset();
+      lock_.reset();
+      if (created_dir_) fs::remove(job.output.dir, ec);
+      if (!problem.empty())
+        throw InputError(job.file.string(), "/output/dir",
+                         report_lock.string() + " is no lock file of hfbake's (" + problem + "): remove it");
+      throw InputError(job.file.string(), "/output/dir",
+                       "another hfbake process (" + holder + ") is baking a job with a reference into " +
+                           job.output.dir.string() +
+                           " now (report.json and report.html carry no job name): wait for it, or give "
+                           "this job an output folder of its own");
+    }
+  }
+  // A process killed while it moved this job's outputs (it held the lock) left them part moved: its moves
+  // are completed first, so that the folder holds one bake's outputs and the record names its job file.
+  complete_killed_commits(job);
   try {
     check_output_owner(job, overwrite);
+    check_report_owner(job);
   } catch (const InputError&) {
+    report_lock_.reset();
     lock_.reset();
     if (created_dir_) fs::remove(job.output.dir, ec);
     throw;
@@ -297,6 +405,7 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
 OutputStage::~OutputStage() {
   std::error_code ec;
   remove_tree(stage_);
+  report_lock_.reset();
   lock_.reset();
   // A job that failed or was stopped leaves no empty output folder behind it (only if it made the folder,
   // and only while it is empty: another job's stage or outputs keep it).
@@ -513,20 +622,29 @@ std::vector<fs::path> OutputStage::commit() {
     if (const int e = sync_file(stage_ / name))
       throw OutputError((job_.output.dir / name).string(), "",
                         "cannot write file: " + std::error_code(e, std::generic_category()).message());
+  // The owner record is written in the stage like the outputs, then the commit list: from the list on, the
+  // stage is whole, and a process killed during the moves leaves a stage the next bake of this job name
+  // completes (complete_killed_commits); killed before it, its stage is removed and no output moved.
+  const fs::path record = owner_record(job_), staged_record = stage_ / record.filename();
+  try {
+    write_file_atomically(staged_record, job_identity(job_));
+    std::string list;
+    for (const fs::path& name : staged_) list += name.string() + "\n";
+    write_file_atomically(stage_ / kCommitList, list + record.filename().string() + "\n");
+  } catch (const std::system_error& e) {
+    throw OutputError(record.string(), "", std::string("cannot write: ") + e.code().message());
+  }
+  // A stop signal during the moves lets them finish (outputs_moving).
+  struct Moving {
+    Moving() { ++g_moving; }
+    ~Moving() { --g_moving; }
+  } moving;
   for (const fs::path& name : staged_) {
     const fs::path target = job_.output.dir / name;
     std::error_code ec;
     fs::rename(stage_ / name, target, ec);  // same folder tree: an atomic replace
     if (ec) throw OutputError(target.string(), "", "cannot move into place: " + ec.message());
     final_paths.push_back(target);
-  }
-  // The owner record is written in the stage and renamed into place like the outputs: a process killed
-  // here leaves its temporary inside its stage, which the next bake removes.
-  const fs::path record = owner_record(job_), staged_record = stage_ / record.filename();
-  try {
-    write_file_atomically(staged_record, job_identity(job_));
-  } catch (const std::system_error& e) {
-    throw OutputError(record.string(), "", std::string("cannot write: ") + e.code().message());
   }
   std::error_code ec;
   fs::rename(staged_record, record, ec);

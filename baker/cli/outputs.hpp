@@ -30,6 +30,16 @@ std::optional<unsigned long long> process_start_time(long long pid);
 std::string stage_name(const std::string& job_name);
 // <output dir>/.hfbake-<name>.lock: the file a bake of the job locks (docs/output_folders.md).
 std::filesystem::path output_lock_file(const Job& job);
+// <output dir>/.hfbake-<name>.job: the job file whose outputs of that name the folder holds.
+std::filesystem::path owner_record(const Job& job);
+// <output dir>/.hfbake+report.lock: the file a bake or merge of a job with a reference locks as well, since
+// report.json and report.html carry no job name (docs/output_folders.md). No job's lock has this name (a job
+// name never starts with '+').
+std::filesystem::path report_lock_file(const Job& job);
+// Refuses (InputError at /output/dir) a job with a reference whose output folder holds a report.json that is
+// not this job's (another job's, or no report of hfbake's): what `validate` checks, and OutputStage's
+// constructor again under the report lock.
+void check_report_owner(const Job& job);
 // True when the stage's owner certainly no longer runs: same host, and no process with its id, or one
 // that started at another time than the owner did.
 bool stage_owner_is_gone(const StageOwner& owner);
@@ -54,6 +64,15 @@ std::filesystem::path stage_checkpoint_dir(const std::filesystem::path& stage);
 int adopt_stale_checkpoints(const std::filesystem::path& dir, const std::string& job_name,
                             const std::filesystem::path& into);
 
+// Completes what a killed process of job `job`'s name (its owner gone, stage_owner_is_gone) left part moved:
+// its stage's commit list names files that were whole when the moves began; those still in the stage are
+// moved into place, the owner record last (docs/output_folders.md). Called under the job's lock; returns the
+// stages it completed (then removed as stale stages).
+std::vector<std::filesystem::path> complete_killed_commits(const Job& job);
+// True while a job of this process moves its outputs into place (OutputStage::commit). Async-signal-safe:
+// a stop signal's handler lets the moves finish rather than end the process part way.
+bool outputs_moving() noexcept;
+
 // The azimuth convention of a bake in words, with the compass mapping when the input's geotransform gives
 // one (north-up: compass azimuth = (90 + phi) mod 360): written into every output's metadata.
 std::string azimuth_convention(const Georeference& geo);
@@ -75,7 +94,8 @@ class OutputStage {
   // dead processes there; InputError naming /output/dir if impossible. One folder, one owner per job name
   // (docs/output_folders.md): the lock <dir>/.hfbake-<name>.lock is held from here to destruction (another
   // process holding it: InputError), and outputs of <name> that <dir>/.hfbake-<name>.job records as baked
-  // from another job file are refused (InputError) unless `overwrite`.
+  // from another job file are refused (InputError) unless `overwrite`. A job with a reference holds
+  // report_lock_file too and is refused over another job's report (check_report_owner).
   explicit OutputStage(const Job& job, bool overwrite = false);
   // Removes the staging folder and anything left in it, and the output folder when this job made it and
   // did not commit (it is then empty unless another job writes there).
@@ -115,7 +135,7 @@ class OutputStage {
 
  private:
   const Job& job_;
-  std::unique_ptr<FolderLock> lock_;
+  std::unique_ptr<FolderLock> lock_, report_lock_;  // report_lock_: a job with a reference only
   std::filesystem::path stage_;
   void write_geotiffs(const std::string& stem, const LayerSet& layers);
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <new>
 #include <optional>
 
 #include "cli/scene_inputs.hpp"
@@ -434,7 +435,19 @@ Scene load_scene(const Job& job, const std::function<void(double)>& progress) {
     source.reader = "procedural";
     source.format = h["procedural"]["kind"].get<std::string>();
   } else {
-    field = load_image_field(job, texel, wrap, georeference, source, progress);
+    try {
+      field = load_image_field(job, texel, wrap, georeference, source, progress);
+    } catch (const std::bad_alloc&) {
+      // Under a --memory-limit above what the machine has, the estimate lets through a header that
+      // declares more texels than can be held (a damaged header can declare any size).
+      const FieldSize size = probe_field_size(job);
+      throw InputError(
+          job.file.string(), "/height/image",
+          h["image"].get<std::string>() + ": its " + std::to_string(size.width) + "x" +
+              std::to_string(size.height) +
+              " texels do not fit in this machine's memory (the read could not allocate "
+              "them): is --memory-limit above the memory there is, or the file's header damaged?");
+    }
     if (sides[1] != sides[0]) field.texel_size_y = sides[1];
   }
   return complete_scene(job, std::move(field), std::move(georeference), std::move(source));

@@ -174,6 +174,26 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
   for (const SchemaViolation& v : validate_against_schema(doc, "suite.schema.json"))
     errors.push_back(file.string() + ": " + (v.pointer.empty() ? "/" : v.pointer) + ": " + v.message);
   if (errors.size() != errors_before) return std::nullopt;
+  // Every path the suite names (its output folder, the jobs' files or globs, the files they need) is refused
+  // when it holds a NUL (nul_in_path).
+  std::vector<std::pair<std::string, std::string>> paths;
+  if (doc.contains("output") && doc["output"].contains("dir"))
+    paths.emplace_back("/output/dir", doc["output"]["dir"].get<std::string>());
+  for (std::size_t i = 0; i < doc["jobs"].size(); ++i) {
+    const nlohmann::json& entry = doc["jobs"][i];
+    const std::string at = "/jobs/" + std::to_string(i);
+    if (!entry.is_object()) {
+      paths.emplace_back(at, entry.get<std::string>());
+      continue;
+    }
+    paths.emplace_back(at + "/job", entry["job"].get<std::string>());
+    for (std::size_t k = 0; k < entry["needs"].size(); ++k)
+      paths.emplace_back(at + "/needs/" + std::to_string(k), entry["needs"][k].get<std::string>());
+  }
+  for (const auto& [ptr, path] : paths)
+    if (const std::string why = nul_in_path(path); !why.empty())
+      errors.push_back(printable(file.string() + ": " + ptr + ": " + why));
+  if (errors.size() != errors_before) return std::nullopt;
 
   Suite suite;
   suite.file = file;
@@ -261,6 +281,11 @@ nlohmann::json append_suite_history(const nlohmann::json& history, nlohmann::jso
   return {{"runs", std::move(runs)}};
 }
 
+std::vector<fs::path> suite_report_files(const Suite& suite) {
+  return {suite.output_dir / "suite.json", suite.output_dir / "history.json", suite.output_dir / "index.html",
+          suite.output_dir / "junit.xml"};
+}
+
 SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcome>& outcomes,
                                  double seconds) {
   fs::create_directories(suite.output_dir);
@@ -277,7 +302,8 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
   doc["skipped"] = suite.skipped;
 
   SuiteReports written;
-  const fs::path history_file = suite.output_dir / "history.json";
+  written.files = suite_report_files(suite);
+  const fs::path history_file = written.files[1];
   nlohmann::json previous = {{"runs", nlohmann::json::array()}};
   bool dropped = false;
   if (fs::exists(history_file)) {
@@ -298,8 +324,6 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
     written.warnings.push_back(history_file.string() +
                                ": not a suite history (history.json); starting it afresh with this run");
 
-  written.files = {suite.output_dir / "suite.json", history_file, suite.output_dir / "index.html",
-                   suite.output_dir / "junit.xml"};
   write_atomically(written.files[0], doc.dump(2) + "\n");
   write_atomically(written.files[1], history.dump(2) + "\n");
   write_atomically(written.files[2], index_html(suite, outcomes, seconds, history));

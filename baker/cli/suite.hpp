@@ -46,6 +46,10 @@ struct SuiteReports {
   std::vector<std::string> warnings;         // one line each, for the caller to print
 };
 
+// The files write_suite_reports writes into suite.output_dir, in this order: suite.json, history.json,
+// index.html, junit.xml.
+std::vector<std::filesystem::path> suite_report_files(const Suite& suite);
+
 // suite.json (per job: status, outputs, metrics, the comparison with the job's baseline), history.json (the
 // last kSuiteHistoryRuns runs), index.html (per job: status, time, reference, the baseline comparison, the
 // last runs' results and a link to the report), junit.xml. Written atomically into suite.output_dir.

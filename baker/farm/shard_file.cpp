@@ -194,8 +194,11 @@ void ShardReader::read_header(const ShardIdentity& expected) {
       if (!rows && part.kind != "whole" && part.kind != "block" && part.kind != "stage" &&
           part.kind != "stage-block")
         throw damaged("a part of unknown kind");
-      if (part.entry < -1 || part.block < 0 || !(part.seconds >= 0) || !(part.cpu_seconds >= 0))
-        throw damaged("a part of no entry");
+      if (part.entry < -1 || part.block < 0) throw damaged("a part of no entry");
+      // The times the merge sums into the report: non-negative and under 10^9 s (32 years) each, so that
+      // no sum of them overflows (docs/cluster.md).
+      if (!(part.seconds >= 0 && part.seconds < 1e9) || !(part.cpu_seconds >= 0 && part.cpu_seconds < 1e9))
+        throw damaged("a part's seconds outside [0, 1e9)");
       if (rows && !(part.row_begin >= 0 && part.row_begin < part.row_end &&
                     std::uint64_t(part.row_end) <= H && part.height == part.row_end - part.row_begin))
         throw damaged("rows outside the field");

@@ -80,6 +80,11 @@ std::vector<std::pair<std::string, std::string>> job_input_files(const nlohmann:
   return files;
 }
 
+std::string nul_in_path(const std::string& path) {
+  if (path.find('\0') == std::string::npos) return "";
+  return "\"" + path + "\" holds a NUL character (\\u0000), which no path can hold";
+}
+
 nlohmann::json parse_json_text(const std::string& text, const std::string& file) {
   // Nesting first: a deep document would exhaust the stack of whatever walks it (the parser's callers,
   // the schema validator, the destructor).
@@ -285,6 +290,16 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
              "must have a length of at least 1e-6 (it is normalised; a shorter one has no direction)");
     }
   }
+  // Every path the job names, with the reason when it holds a NUL (nul_in_path).
+  std::vector<std::pair<std::string, std::string>> paths = job_input_files(doc);
+  for (const char* ptr : {"/report/baseline", "/output/dir"})
+    if ((!out_override || std::string_view(ptr) != "/output/dir") &&
+        doc.contains(nlohmann::json::json_pointer(ptr)) &&
+        doc.at(nlohmann::json::json_pointer(ptr)).is_string())
+      paths.emplace_back(ptr, doc.at(nlohmann::json::json_pointer(ptr)).get<std::string>());
+  for (const auto& [ptr, path] : paths)
+    if (const std::string why = nul_in_path(path); !why.empty()) fail(ptr, why);
+  if (!result.errors.empty()) return result;
   for (const auto& [ptr, rel] : job_input_files(doc)) {
     const fs::path p = job.resolve(rel);
     std::error_code ec;

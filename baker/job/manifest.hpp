@@ -91,6 +91,10 @@ inline constexpr std::size_t kMaxJsonArrayItems = 4096;
 // object, a string longer than kMaxJsonStringBytes, an array longer than kMaxJsonArrayItems.
 nlohmann::json parse_json_text(const std::string& text, const std::string& file);
 
+// A path from a JSON file goes to the system as a C string, which ends at a NUL, so one that holds a NUL
+// would name another file (its part before the NUL): the reason such a path is refused, "" for any other.
+std::string nul_in_path(const std::string& path);
+
 // Reads and parses a JSON file: a regular file (not a FIFO, device or folder) of at most kMaxJsonFileBytes.
 nlohmann::json read_json_file(const std::filesystem::path& file);
 

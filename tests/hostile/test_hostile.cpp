@@ -47,8 +47,10 @@ struct HfbakeRun {
 
 // Runs hfbake with `args` in `dir`, stderr to a file; killed (and reported as -SIGKILL) after 120 s.
 // file_size_limit > 0: the largest file the run may write (RLIMIT_FSIZE, SIGXFSZ ignored: a write beyond it
-// fails with EFBIG, as on a full disk).
-HfbakeRun run_hfbake(const fs::path& dir, const std::vector<std::string>& args, long file_size_limit = 0) {
+// fails with EFBIG, as on a full disk). address_space_limit > 0: the most virtual memory the run may map
+// (RLIMIT_AS: an allocation beyond it fails, as on a machine with that much memory).
+HfbakeRun run_hfbake(const fs::path& dir, const std::vector<std::string>& args, long file_size_limit = 0,
+                     long address_space_limit = 0) {
   const fs::path err = dir / "stderr.txt", out = dir / "stdout.txt";
   const pid_t pid = fork();
   if (pid == 0) {
@@ -59,6 +61,10 @@ HfbakeRun run_hfbake(const fs::path& dir, const std::vector<std::string>& args, 
       signal(SIGXFSZ, SIG_IGN);
       const struct rlimit limit { rlim_t(file_size_limit), rlim_t(file_size_limit) };
       if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(126);
+    }
+    if (address_space_limit > 0) {
+      const struct rlimit limit { rlim_t(address_space_limit), rlim_t(address_space_limit) };
+      if (setrlimit(RLIMIT_AS, &limit) != 0) _exit(126);
     }
     std::vector<char*> argv{const_cast<char*>("hfbake")};
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -489,6 +495,49 @@ std::vector<Case> cases() {
     j["output"]["textures"] = {{{"layers", {"ao"}}, {"format", "png"}}};
     return both(write_job(d, j), "/output/textures", "textures is not a folder (a link)");
   });
+  add("ReportLockNameTakenByALink", [](const fs::path& d) {
+    fs::create_directories(d / "out");
+    fs::create_symlink("../elsewhere", d / "out" / ".hfbake+report.lock");
+    json j = base_job();
+    j["reference"] = {{"samples", 4}};
+    return both(write_job(d, j), "/output/dir", ".hfbake+report.lock is no lock file of hfbake's (a link)");
+  });
+  // A path is a C string to the system: a NUL in it would name another file (the part before it).
+  add("HeightImagePathHoldingANul", [](const fs::path& d) {
+    write_image(d / "h.exr", 16, 16, 1, std::vector<float>(16 * 16, 1.0f));
+    return both(image_job(d, std::string("h.exr\0.png", 10)), "/height/image", "holds a NUL character");
+  });
+  add("OutputDirHoldingANul", [](const fs::path& d) {
+    json j = base_job();
+    j["output"]["dir"] = std::string("out\0x", 5);
+    return both(write_job(d, j), "/output/dir", "holds a NUL character");
+  });
+  add("SummaryWhereTheJobWritesAnOutput", [](const fs::path& d) {
+    const std::string job = write_job(d, base_job()), summary = (d / "out" / "t.p1.exr").string();
+    return CaseSetup{{"bake", "--no-cache", "--quiet", "--summary", summary, job},
+                     summary,
+                     "--summary",
+                     "is where job t writes its outputs"};
+  });
+  add("SuiteOutputDirHoldingANul", [](const fs::path& d) {
+    write_job(d, base_job());
+    const json suite = {{"version", 1},
+                        {"suite", "s"},
+                        {"jobs", {"job.json"}},
+                        {"output", {{"dir", std::string("out\0x", 5)}}}};
+    const std::string file = write_job(d, suite, "suite.json");
+    return CaseSetup{{"validate", file}, file, "/output/dir", "holds a NUL character", true};
+  });
+  add("SummaryWhereTheSuiteWritesItsHistory", [](const fs::path& d) {
+    write_job(d, base_job());
+    const json suite = {{"version", 1}, {"suite", "s"}, {"jobs", {"job.json"}}, {"output", {{"dir", "out"}}}};
+    const std::string file = write_job(d, suite, "suite.json"),
+                      summary = (d / "out" / "history.json").string();
+    return CaseSetup{{"bake", "--no-cache", "--quiet", "--summary", summary, file},
+                     summary,
+                     "--summary",
+                     "is where suite s writes history.json"};
+  });
   add("SummaryOverTheJobFile", [](const fs::path& d) {
     const std::string job = write_job(d, base_job());
     return CaseSetup{
@@ -900,6 +949,27 @@ namespace {
 // estimate near the process's fixed part (150 MiB: an EXR heights file loads OpenImageIO) and bake (exit 0)
 // in that memory: the Release build's peak stays within the estimate (the sweep's own work count is
 // tests/sweep SweepThin).
+// A header that declares more texels than the machine holds, let through by a --memory-limit above the
+// machine's memory (here 2 GiB of address space): one line at /height/image naming the declared size, not an
+// allocator's exception.
+TEST(DeclaredSize, AHeaderDeclaringMoreThanMemoryHoldsIsOneLineAtTheImage) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer maps more address space than the limit";
+#endif
+  const fs::path dir =
+      fs::temp_directory_path() / ("hfbake_declared_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "huge.pgm", std::ios::binary) << "P5\n100000 100000\n65535\n" << std::string(4, '\1');
+  const std::string job = image_job(dir, "huge.pgm");
+  const HfbakeRun r = run_hfbake(dir, {"validate", job, "--memory-limit", "900G", "--quiet"}, 0, 2L << 30);
+  fs::remove_all(dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_EQ(lines[0].rfind(job + ": /height/image: huge.pgm: its 100000x100000 texels do not fit", 0), 0u)
+      << lines[0];
+}
+
 TEST(ThinField, BothOrientationsOfA20000x2ImageBakeWithinTheEstimate) {
   const fs::path dir = fs::temp_directory_path() / ("hfbake_thin_" + std::to_string(std::random_device{}()));
   fs::create_directories(dir);

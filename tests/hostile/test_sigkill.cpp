@@ -73,9 +73,12 @@ std::vector<fs::path> visible_files(const fs::path& dir) {
     return ::testing::AssertionSuccess();
   }
   if (ext == ".html") return ::testing::AssertionSuccess();
-  // The folder's owner files (docs/output_folders.md): a lock, whatever a killed holder left in it, and the
-  // record of the job file whose outputs these are, written whole or not at all.
-  if (p.filename().string().rfind(".hfbake-", 0) == 0 && ext == ".lock") return ::testing::AssertionSuccess();
+  // The folder's owner files (docs/output_folders.md): a lock (the job's, or the report's of a job with a
+  // reference), whatever a killed holder left in it, and the record of the job file whose outputs these are,
+  // written whole or not at all.
+  if ((p.filename().string().rfind(".hfbake-", 0) == 0 || p.filename() == ".hfbake+report.lock") &&
+      ext == ".lock")
+    return ::testing::AssertionSuccess();
   if (p.filename().string().rfind(".hfbake-", 0) == 0 && ext == ".job") {
     std::ifstream in(p);
     const std::string owner{std::istreambuf_iterator<char>(in), {}};

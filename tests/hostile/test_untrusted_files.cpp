@@ -121,6 +121,35 @@ void forge_part_size(const fs::path& shard, long long width, long long height) {
   std::ofstream(shard, std::ios::binary | std::ios::trunc) << bytes;
 }
 
+// The seconds a shard's parts claim are summed into the report: a value no part could have taken (each is in
+// [0, 1e9), docs/cluster.md) is refused by the merge in one line naming the shard, and nothing is written.
+TEST_F(Untrusted, ShardSecondsOutsideTheirRangeAreRefusedByTheMerge) {
+  json j = base_job();
+  j["reference"] = {{"samples", 4}};
+  const std::string job = write_job(dir_, j);
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path shard = dir_ / "out" / "shards" / "t.shard-0-of-1.hfshard";
+  const std::string genuine = read_text(shard);
+  for (const double seconds : {1e308, -5.0}) {
+    SCOPED_TRACE(seconds);
+    std::uint64_t at = 0;
+    json h = shard_header(genuine, at);
+    for (json& p : h["parts"]) p["seconds"] = seconds;
+    std::ofstream(shard, std::ios::binary | std::ios::trunc)
+        << genuine.substr(0, at) + h.dump() + "\n" + genuine.substr(genuine.size() - 24);
+    const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+    EXPECT_EQ(r.exit_code, 2);
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(shard.string()), std::string::npos) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("seconds"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "report.json"));
+  }
+  std::ofstream(shard, std::ios::binary | std::ios::trunc) << genuine;
+  ASSERT_EQ(hfbake(dir_, {"merge", job, "--no-cache", "--quiet"}).exit_code, 0);
+  const json report = json::parse(read_text(dir_ / "out" / "report.json"));
+  EXPECT_TRUE(report["methods"]["p1"]["seconds"].is_number()) << report["methods"]["p1"];
+}
+
 TEST_F(Untrusted, ShardPartsClaimingAnotherSizeAreRefusedByTheMerge) {
   const std::string job = write_job(dir_, base_job());
   ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"}).exit_code, 0);
@@ -545,6 +574,135 @@ TEST_F(Untrusted, TwoJobsOfOneNameInOneFolderNeverReplaceEachOther) {
   EXPECT_EQ(hfbake(dir_, {"bake", other, "--no-cache", "--quiet"}).exit_code, 2);
   EXPECT_EQ(hfbake(dir_, {"bake", other, "--no-cache", "--quiet", "--overwrite"}).exit_code, 0);
   EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(other).string());
+}
+
+// report.json and report.html carry no job name: of two jobs of different names, each with a reference,
+// started together into one folder, one bakes and the other is refused in one line naming the folder
+// (docs/output_folders.md), whichever moment the second reaches its outputs; the report is the winner's.
+TEST_F(Untrusted, TwoJobsWithAReferenceInOneFolderNeverReplaceEachOthersReport) {
+  json a = base_job("out"), b = base_job("out");
+  a["name"] = "a", b["name"] = "b";
+  a["reference"] = b["reference"] = {{"samples", 4}};
+  const std::string ja = write_job(dir_, a, "a.json"), jb = write_job(dir_, b, "b.json");
+  const std::string folder = fs::weakly_canonical(dir_ / "out").string();
+  for (int run = 0; run < 10; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(dir_ / "out");
+    const pid_t pa = start(dir_, {"bake", ja, "--no-cache", "--quiet"}, "a.txt");
+    const pid_t pb = start(dir_, {"bake", jb, "--no-cache", "--quiet"}, "b.txt");
+    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
+    ASSERT_TRUE((ra.exit_code == 0 && rb.exit_code == 2) || (ra.exit_code == 2 && rb.exit_code == 0))
+        << ra.err << rb.err;
+    const Outcome& lost = ra.exit_code == 2 ? ra : rb;
+    const auto lines = lost.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << lost.err;
+    EXPECT_NE(lines[0].find(folder), std::string::npos) << lines[0];
+    const json report = json::parse(read_text(dir_ / "out" / "report.json"));
+    EXPECT_EQ(report["job"]["name"], ra.exit_code == 0 ? "a" : "b");
+    for (const auto& e : fs::directory_iterator(dir_ / "out"))
+      EXPECT_FALSE(hfbake_test::is_stage(e.path())) << e.path();
+  }
+}
+
+// --- stopped while the outputs move into place (docs/output_folders.md#moving-the-outputs-into-place) ------
+
+// The job hash an EXR output records ("" when it cannot be read).
+std::string exr_job_hash(const fs::path& exr) {
+  auto in = OIIO::ImageInput::open(exr.string());
+  return in ? std::string(in->spec().get_string_attribute("hfbake:job_hash")) : std::string();
+}
+
+class Moves : public Untrusted {
+ protected:
+  void SetUp() override {
+    Untrusted::SetUp();
+    for (const int seed : {5, 6}) {
+      json j = base_job("out");
+      j["height"]["procedural"]["seed"] = seed;
+      j["bake"].push_back({{"method", "hbao"}, {"directions", 4}, {"radius", 4}});
+      jobs_.push_back(write_job(dir_, j, "seed" + std::to_string(seed) + ".json"));
+    }
+  }
+  // Bakes jobs_[1] over jobs_[0]'s outputs with --overwrite, its move of t.hbao.exr (after t.p1.exr's) held
+  // 3 s by the preload library; sends `sig` `times` times once that move has begun. Returns the exit code.
+  int stop_during_the_moves(int sig, int times) {
+    EXPECT_EQ(hfbake(dir_, {"bake", jobs_[0], "--no-cache", "--quiet"}).exit_code, 0);
+    old_hash_ = exr_job_hash(dir_ / "out" / "t.p1.exr");
+    const fs::path flag = dir_ / "moving";
+    const pid_t pid = start(dir_, {"bake", jobs_[1], "--no-cache", "--quiet", "--overwrite"}, "err.txt", [&] {
+      setenv("LD_PRELOAD", HFBAKE_SLOW_RENAME, 1);
+      setenv("ASAN_OPTIONS", "verify_asan_link_order=0", 1);
+      setenv("HFBAKE_TEST_SLOW_RENAME", "/out/t.hbao.exr", 1);
+      setenv("HFBAKE_TEST_SLOW_RENAME_FLAG", flag.c_str(), 1);
+    });
+    for (int wait = 0; wait < 6000 && !fs::exists(flag); ++wait) usleep(10000);
+    EXPECT_TRUE(fs::exists(flag)) << "the moves never began";
+    for (int i = 0; i < times; ++i) {
+      kill(pid, sig);
+      usleep(100000);
+    }
+    return finish(pid, dir_, "err.txt").exit_code;
+  }
+  std::vector<std::string> jobs_;
+  std::string old_hash_;
+};
+
+TEST_F(Moves, ASecondSignalDuringTheMovesLetsThemFinish) {
+  // The job finished: its exit status, not the signal's (docs/contract.md).
+  EXPECT_EQ(stop_during_the_moves(SIGTERM, 2), 0);
+  const std::string p1 = exr_job_hash(dir_ / "out" / "t.p1.exr"),
+                    hbao = exr_job_hash(dir_ / "out" / "t.hbao.exr");
+  EXPECT_NE(p1, old_hash_);
+  EXPECT_EQ(hbao, p1);
+  EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
+}
+
+TEST_F(Moves, MovesAKilledProcessBeganAreCompletedByTheNextBakeOfTheJobName) {
+  EXPECT_EQ(stop_during_the_moves(SIGKILL, 1), -SIGKILL);
+  const fs::path out = dir_ / "out";
+  const std::string p1 = exr_job_hash(out / "t.p1.exr");
+  ASSERT_NE(p1, old_hash_);
+  ASSERT_EQ(exr_job_hash(out / "t.hbao.exr"), old_hash_) << "killed before the moves began";
+  // Another job name's bake into the folder keeps the killed stage.
+  json other = base_job("out");
+  other["name"] = "u";
+  ASSERT_EQ(hfbake(dir_, {"bake", write_job(dir_, other, "u.json"), "--no-cache", "--quiet"}).exit_code, 0);
+  // The first job file again, without --overwrite: the killed moves are completed first, and their record
+  // names the second job file, so it is refused naming that file.
+  const Outcome again = hfbake(dir_, {"bake", jobs_[0], "--no-cache", "--quiet"});
+  EXPECT_EQ(again.exit_code, 2) << again.err;
+  ASSERT_EQ(again.error_lines().size(), 1u) << again.err;
+  EXPECT_NE(again.error_lines()[0].find(fs::weakly_canonical(jobs_[1]).string()), std::string::npos)
+      << again.err;
+  EXPECT_EQ(exr_job_hash(out / "t.p1.exr"), p1);
+  EXPECT_EQ(exr_job_hash(out / "t.hbao.exr"), p1);
+  EXPECT_EQ(read_text(out / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
+  // With --overwrite it bakes, and leaves no stage.
+  EXPECT_EQ(hfbake(dir_, {"bake", jobs_[0], "--no-cache", "--quiet", "--overwrite"}).exit_code, 0);
+  EXPECT_EQ(exr_job_hash(out / "t.hbao.exr"), old_hash_);
+  EXPECT_EQ(hfbake_test::stages_in(out), 0);
+}
+
+// --summary where a job writes: refused before anything is baked, the output and the record kept.
+TEST_F(Untrusted, ASummaryWhereAJobWritesIsRefusedBeforeBaking) {
+  const std::string job = write_job(dir_, base_job("out"));
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path out = dir_ / "out";
+  const std::string exr = read_text(out / "t.p1.exr"), record = read_text(out / ".hfbake-t.job");
+  for (const std::string name : {"t.p1.exr", ".hfbake-t.job", "t.p1.ao.preview.png", "report.json"}) {
+    SCOPED_TRACE(name);
+    const Outcome r = hfbake(dir_, {"bake", job, "--no-cache", "--quiet", "--summary", "out/" + name});
+    EXPECT_EQ(r.exit_code, 2);
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("--summary"), std::string::npos) << r.err;
+    EXPECT_EQ(read_text(out / "t.p1.exr"), exr);
+    EXPECT_EQ(read_text(out / ".hfbake-t.job"), record);
+    EXPECT_FALSE(fs::exists(out / name) && name != "t.p1.exr" && name != ".hfbake-t.job");
+  }
+  // A name beside them that is no output of the job is written.
+  EXPECT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet", "--summary", "out/summary.json"}).exit_code,
+            0);
+  EXPECT_TRUE(fs::is_regular_file(out / "summary.json"));
 }
 
 }  // namespace

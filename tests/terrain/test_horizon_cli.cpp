@@ -5,6 +5,7 @@
 #include <geodesic.h>
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <nlohmann/json.hpp>
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -123,6 +125,49 @@ TEST(HorizonCli, BadInputIsOneLineAndExit2) {
   const auto r = run_hfbake(dir, "horizon " + (dir / "none.tif").string() + " --at 1,1");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("none.tif: no such file"), std::string::npos) << r.err;
+  fs::remove_all(dir);
+}
+
+// The outputs never replace the DEM or each other, and are written whole or not at all: a write the disk
+// refuses (a file size limit, SIGXFSZ ignored: EFBIG, as on a full disk) keeps the previous file.
+TEST(HorizonCli, OutputsNeverReplaceTheDemAndAreWrittenWhole) {
+  const fs::path dir = temp_dir("outputs");
+  const fs::path dem = dir / "dem.tif";
+  write_dem(dem, 20, 10, {1000, 2, 0, 2000, 0, -2}, 32633, [](int i, int) { return 1.0 * i; });
+  const auto bytes = [](const fs::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string genuine = bytes(dem), at = "horizon " + dem.string() + " --at 1021,1981 ";
+  struct Case {
+    std::string args, expect;
+  } cases[] = {
+      {"--out " + dem.string(), "--out: is the DEM this command reads"},
+      {"--plot " + (dir / "." / "dem.tif").string(), "--plot: is the DEM this command reads"},
+      {"--out " + (dir / "a").string() + " --plot " + (dir / "a").string(), "--plot: is the --out file too"},
+  };
+  for (const Case& c : cases) {
+    const auto r = run_hfbake(dir, at + c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args;
+    ASSERT_EQ(r.error_lines().size(), 1u) << c.args << ": " << r.err;
+    EXPECT_NE(r.error_lines()[0].find(dem.string() + ": " + c.expect), std::string::npos)
+        << r.error_lines()[0];
+    EXPECT_EQ(bytes(dem), genuine);
+    EXPECT_FALSE(fs::exists(dir / "a"));
+  }
+  std::ofstream(dir / "plot.png") << "keep";
+  struct rlimit limit {};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &limit), 0);
+  const rlim_t soft = limit.rlim_cur;
+  const auto previous = std::signal(SIGXFSZ, SIG_IGN);
+  limit.rlim_cur = 4096;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limit), 0);
+  const auto r = run_hfbake(dir, at + "--plot " + (dir / "plot.png").string() + " --plot-size 2048");
+  limit.rlim_cur = soft;
+  setrlimit(RLIMIT_FSIZE, &limit);
+  std::signal(SIGXFSZ, previous);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(bytes(dir / "plot.png"), "keep");
   fs::remove_all(dir);
 }
 
