@@ -10,6 +10,7 @@
 #include <algorithm>
 
 #include "core/threads.hpp"
+#include "field/triangulation.hpp"
 #include "methods/p1/p1.hpp"
 
 namespace hfbake {
@@ -42,6 +43,29 @@ TEST(P1WorkingBytes, RepeatFieldsHoldOneDirectionBlocksStripsAndSums) {
         EXPECT_GE(got, expected) << s.width << "x" << s.height << " K " << K << " layers " << layers;
         EXPECT_LE(got, expected + slack) << s.width << "x" << s.height << " K " << K << " layers " << layers;
       }
+}
+
+// P2's corner facets (direct_facets, field/triangulation.hpp) are no layer a caller counts: while the
+// directions are summed (the peak), each facet's RGB float sum is held in the total and in the block's sums
+// and, for the lane search of a clamp field, each facet's normal (12 bytes): 3 x 12 bytes a texel and facet
+// on clamp fields, 2 x 12 on repeat ones, beside what direct alone holds.
+TEST(P1WorkingBytes, P2sCornerFacetsAreHeldBesideTheLayers) {
+  for (const Wrap wrap : {Wrap::clamp, Wrap::repeat}) {
+    FieldShape shape;
+    shape.width = 1024, shape.height = 768;
+    shape.wrap = wrap;
+    P1Params p;
+    p.directions = 16;
+    p.ao = p.vsky = false;
+    p.direct = true;
+    p.lights = false;
+    P1Params facets = p;
+    facets.facet_direct = true;
+    const double N = 1024.0 * 768.0;
+    const double held = (wrap == Wrap::clamp ? 3 : 2) * 12.0 * kCornerFacets * N;
+    EXPECT_DOUBLE_EQ(p1_working_bytes(shape, facets, false) - p1_working_bytes(shape, p, false), held)
+        << (wrap == Wrap::clamp ? "clamp" : "repeat");
+  }
 }
 
 }  // namespace

@@ -240,9 +240,12 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
                       (p.direct && !uniform_environment ? 12 : 0) + (p.bent_normal ? 12 : 0) + facet_sums;
   const double caller_layers =
       (p.ao ? 4 : 0) + (p.vsky ? 4 : 0) + (p.direct ? 12 : 0) + (p.bent_normal ? 12 : 0);
+  // While the sums are finished (p1_finish): the layers, the ao sum behind a uniform sky's direct, and P2's
+  // facets' layer beside their sums (no caller counts either).
+  const double finished = caller_layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) +
+                          (facets ? 12 * CF + facet_sums : 0);
   if (shape.wrap == Wrap::clamp) {
-    // ... with the facets' layer, and what the lane search holds.
-    const double layers = caller_layers + (facets ? 12 * CF : 0);
+    // ... and what the lane search holds.
     const double normals = shading_reads_normals(p) ? 12 + (facets ? 12 * CF : 0) : 0;
     const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
     // While the directions are summed: the sums, a block's, the normals, one direction's slopes (and casters
@@ -251,11 +254,10 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
                           double(std::min(shape.width, shape.height) + 2 * p1::kLanePad);
     const double search = p.horizon_distance ? 8 : 4;
     const double summing = (sums + block + normals + search + planes) * texels + layout;
-    // While they are finished: the layers, the sums that are not layers, the normals, the lights' sweeps.
+    // While they are finished: the normals beside them, and the lights' sweeps.
     const double finishing =
-        (layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) + normals) * texels +
-        double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
-    return std::max(summing, finishing) - layers * texels + far;
+        (finished + normals) * texels + double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
+    return std::max(summing, finishing) - caller_layers * texels + far;
   }
   // Repeat fields: the strip search sums one direction block at a time (compute_p1), each through its own
   // sweep, whose line buffers FarHorizonWorker fills whole (every receiver slot of every line); the largest
@@ -265,14 +267,10 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
   // While summing: the sums, the block's beside them (their arrays reused from block to block), the
   // block's horizon planes, its sweep and the workers.
   const double summing_repeat = (sums + (B > 1 ? sums : 0) + planes) * texels + block_sweep + workers;
-  // While finishing (p1_finish): the layers, the ao sum behind a uniform sky's direct, the facets' layer
-  // beside their sums, and the directional lights' sweep (p1_horizons_at), counted as one direction's.
+  // While finishing: the directional lights' sweep (p1_horizons_at) beside them, counted as one direction's.
   const double light_sweep =
       p.direct && p.lights ? double(sweep_buffer_bytes(field, p1_block_sweep_spec(p, 0, 1))) + workers : 0.0;
-  const double finishing_repeat = (caller_layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) +
-                                   (facets ? 12 * CF + facet_sums : 0)) *
-                                      texels +
-                                  light_sweep;
+  const double finishing_repeat = finished * texels + light_sweep;
   return std::max(summing_repeat, finishing_repeat) - caller_layers * texels;
 }
 
