@@ -691,10 +691,16 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     o.errors.push_back(line);
     progress.error(line);
   };
-  tbb::task_group group;  // jobs run concurrently and share the cores with their own parallel loops
+  // Jobs run concurrently and share the cores with their own parallel loops. The last runs on this thread
+  // (run_and_wait), so a single job's allocations always come from the same malloc arena: its peak resident
+  // memory does not depend on which thread the scheduler hands it (docs/large-fields.md).
+  tbb::task_group group;
+  std::size_t last = jobs.size();
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (jobs[i]) last = i;
   for (std::size_t i = 0; i < jobs.size(); ++i) {
     if (!jobs[i]) continue;
-    group.run([&, i] {
+    auto run_job = [&, i] {
       JobOutcome& o = outcomes[i];
       const auto t_job = std::chrono::steady_clock::now();
       // However the job ends, the summary shows how long it ran (not 0 s for an interrupted job).
@@ -714,7 +720,11 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
       } catch (const std::exception& e) {
         fail(o, JobStatus::failed, jobs[i]->file.string() + ": " + e.what());
       }
-    });
+    };
+    if (i == last)
+      group.run_and_wait(run_job);
+    else
+      group.run(run_job);
   }
   group.wait();
 

@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "field/procedural.hpp"
 #include "io/crs_geodesy.hpp"
+#include "io/geotiff_output.hpp"
 #include "io/load_environment.hpp"
 #include "methods/method_table.hpp"
 #include "reference/bake_reference.hpp"
@@ -174,17 +175,15 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   if (surface.contains("albedo") && surface["albedo"].is_object()) scene_per_texel += 12;
   if (surface.contains("emission")) scene_per_texel += 12;
   // Writing a result whose widest layer has `widest` channels: a preview's RGB floats and bytes (15 bytes a
-  // pixel, at most io/preview.hpp's 2048 px a side), or a layer's COG (io/geotiff_output.cpp): what GDAL's
-  // COG driver holds while it compresses and builds the overviews (measured: about 5 bytes a texel and
-  // channel; GDAL reads the layer itself) and, where the job fills holes ("nodata": "fill", the only way a
-  // result has any), the writer's copy of the layer holding NoData (4 bytes a texel and channel). A tile of
-  // a tiled bake writes a band's plane at a time into its work files.
+  // pixel, at most io/preview.hpp's 2048 px a side), or a layer's COG (geotiff_writing_bytes: GDAL reads the
+  // layer itself; where the job fills holes, "nodata": "fill", the only way a result has any, the writer
+  // copies it). A tile of a tiled bake writes a band's plane at a time into its work files.
   const double previews = job.output.previews ? 15 * std::min(texels, 2048.0 * 2048.0) : 0;
   const bool holes = job.doc["height"].value("nodata", "error") == "fill";
   auto writing = [&](int widest) {
     const double geotiff = !job.output.geotiff ? 0
                            : size.tile         ? 4.0 * texels
-                                               : (holes ? 9.0 : 5.0) * double(widest) * texels;
+                                       : geotiff_writing_bytes(size.width, size.height, widest, holes);
     return std::max(previews, geotiff);
   };
 

@@ -3,6 +3,7 @@
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -25,6 +26,8 @@ struct GeoTiffDatasetCloser {
 using DatasetPtr = std::unique_ptr<GDALDataset, GeoTiffDatasetCloser>;
 
 namespace {
+
+constexpr int kCogTile = 512;  // the COGs' tiles, kCogTile x kCogTile texels (copy_to_cog's BLOCKSIZE)
 
 // The CRS and geotransform of `geo` and the metadata of `options` on `ds`.
 template <class Fail>
@@ -59,8 +62,9 @@ void copy_to_cog(const fs::path& file, GDALDataset& source) {
     fail(e.what());
   }
   const fs::path tmp = folder->path() / file.filename();
+  const std::string block_size = "BLOCKSIZE=" + std::to_string(kCogTile);
   const char* const cog_options[] = {
-      "COMPRESS=DEFLATE",   "LEVEL=1",          "PREDICTOR=YES", "BLOCKSIZE=512",
+      "COMPRESS=DEFLATE",   "LEVEL=1",          "PREDICTOR=YES", block_size.c_str(),
       "RESAMPLING=AVERAGE", "BIGTIFF=IF_SAFER", nullptr};
   DatasetPtr out(
       cog_driver->CreateCopy(tmp.c_str(), &source, FALSE, const_cast<char**>(cog_options), nullptr, nullptr));
@@ -117,6 +121,19 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
   }
   set_georeference(*mem, geo, options, fail);
   copy_to_cog(file, *mem);
+}
+
+double geotiff_writing_bytes(int width, int height, int channels, bool holes) {
+  const double tile = 4.0 * kCogTile * kCogTile;
+  const double window = 4.0 * std::min(width, kCogTile) * std::min(height, kCogTile);
+  double overview_texels = 0;
+  for (long long w = width, h = height; w > kCogTile || h > kCogTile;) {
+    w /= 2, h /= 2;
+    overview_texels += double(w) * double(h);
+  }
+  const double overviews = std::min(4.0 * channels * overview_texels, double(GDALGetCacheMax64()));
+  const double copy = holes ? 4.0 * channels * double(width) * double(height) : 0.0;
+  return (3 * tile + 2 * window) * channels + overviews + copy;
 }
 
 struct TiledGeoTiff::Dataset {

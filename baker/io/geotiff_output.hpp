@@ -30,6 +30,15 @@ struct GeoTiffOptions {
 void write_geotiff(const std::filesystem::path& file, const LayerSet& layers, const Layer& layer,
                    const Georeference& geo, const GeoTiffOptions& options = {});
 
+// Bytes write_geotiff holds beside a width x height layer of `channels` channels, for the memory estimate:
+// the COG driver's (GDAL's frmts/gtiff/cogdriver.cpp) buffers for the tile it assembles, for every band three
+// whole 512 x 512 float tiles (the tile buffer, its predicted and compressed copies) and two of the layer's
+// first tile (the window read from the layer and the band's cached block: the same on fields of at least a
+// tile a side); the overviews it first writes into a temporary GeoTIFF (each level half the last while the
+// last is wider or taller than a tile), whose blocks GDAL's block cache keeps up to its size (GDAL_CACHEMAX);
+// and with `holes`, the writer's copy of the layer holding NoData.
+double geotiff_writing_bytes(int width, int height, int channels, bool holes);
+
 // One layer as a COG written a window at a time, never whole in memory: what a tiled bake writes
 // (cli/tile_command.hpp). The windows go into a work file (a tiled BigTIFF, 256x256 blocks, DEFLATE), which
 // finish() copies into a COG as write_geotiff makes it (the same options, CRS, geotransform, band

@@ -577,6 +577,25 @@ TEST_F(Cli, TheReferencesMemoryEstimateHoldsForQuadsAndTheGrid) {
   }
 }
 
+// p1's memory estimate on a repeat field against the measured peak (as above): there the strip search's sweep
+// of one direction block (FarHorizonWorker's two floats a texel and direction) is the largest part beyond the
+// layers and the block's sums. A non-square field, K = 8 (a direction a block), ao alone.
+TEST_F(Cli, P1sMemoryEstimateHoldsOnARepeatField) {
+  nlohmann::json j =
+      job({{"procedural", {{"kind", "fractal"}, {"size", {1536, 1024}}, {"seed", 3}}}, {"wrap", "repeat"}},
+          {{{"method", "p1"}, {"directions", 8}, {"layers", {"ao"}}}});
+  j["environment"] = {{"uniform", 1}};
+  const fs::path p = write_job("repeat.json", j);
+  const double estimate = cli_test::validate_estimate_mib(dir_, p);
+  ASSERT_GT(estimate, 0);
+  const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_GT(run.peak_mib, 0.75 * estimate)
+      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  EXPECT_LT(run.peak_mib, 1.25 * estimate)
+      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+}
+
 // --memory-limit: a job whose estimate exceeds the budget is refused by validate and by bake before anything
 // is allocated or written, with the estimate's parts and the knob; a budget it fits passes.
 TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {

@@ -843,7 +843,7 @@ TEST_F(CliGdal, TheMemoryEstimateHoldsTheGeoTiffsWriting) {
     std::ofstream(p) << j.dump(2);
     return p;
   };
-  const std::vector<fs::path> jobs = {
+  std::vector<fs::path> jobs = {
       job("svf", {{"method", "relief"}, {"directions", 16}, {"search_radius", 4}, {"layers", {"svf"}}}),
       job("deg", {{"method", "relief"},
                   {"directions", 16},
@@ -851,6 +851,18 @@ TEST_F(CliGdal, TheMemoryEstimateHoldsTheGeoTiffsWriting) {
                   {"layers", {"svf", "horizon_deg"}}}),
       job("hz", {{"method", "p1"}, {"directions", 64}, {"layers", {"ao", "vsky", "horizon"}}}),
       job("hz_holes", {{"method", "p1"}, {"directions", 64}, {"layers", {"ao", "vsky", "horizon"}}}, true)};
+  // A procedural 2048^2 field whose widest layer is a 16-direction horizon stack (256 MiB): its COG's
+  // overviews and tiles take far less than the layer.
+  const nlohmann::json procedural = {
+      {"version", 1},
+      {"name", "hz_2048"},
+      {"height", {{"procedural", {{"kind", "fractal"}, {"size", {2048, 2048}}, {"seed", 3}}}}},
+      {"environment", {{"uniform", 1}}},
+      {"bake", {{{"method", "p1"}, {"directions", 16}, {"layers", {"ao", "horizon"}}}}},
+      {"output", {{"dir", "out_hz_2048"}, {"geotiff", true}}}};
+  const fs::path hz_2048 = dir_ / "hz_2048.json";
+  std::ofstream(hz_2048) << procedural.dump(2);
+  jobs.push_back(hz_2048);
   for (const fs::path& p : jobs) {
     const double estimate = hfbake::cli_test::validate_estimate_mib(dir_, p);
     ASSERT_GT(estimate, 0) << p;

@@ -414,3 +414,41 @@ TEST(GeoTiffOutput, WindowedCogHoldsEveryWindowAsWritten) {
 
 }  // namespace
 }  // namespace hfbake
+
+namespace hfbake {
+namespace {
+
+// geotiff_writing_bytes against the parts counted here by hand: for every band three 512 x 512 float tiles
+// (1 MiB each) and two of the first tile (min(width, 512) x min(height, 512) floats), the overview levels
+// listed for each shape (halved, rounded down, while the last is wider or taller than 512), 4 bytes a texel
+// and band, held up to GDAL's block cache, and the copy holding NoData with holes.
+TEST(GeoTiffOutput, WritingBytesCountTheTilesAndTheOverviewsUpToTheCache) {
+  constexpr double MiB = 1 << 20;
+  struct Case {
+    int width, height, channels;
+    double overview_texels;
+  };
+  const Case cases[] = {{2048, 2048, 16, 1024.0 * 1024 + 512.0 * 512},
+                        {1000, 1000, 32, 500.0 * 500},
+                        {4000, 700, 3, 2000.0 * 350 + 1000.0 * 175 + 500.0 * 87},
+                        {512, 512, 64, 0},
+                        {513, 300, 1, 256.0 * 150},
+                        {16, 16, 64, 0}};
+  {
+    const GdalCacheLimit cache(std::size_t(1) << 30);  // holds every case's overviews
+    for (const Case& c : cases)
+      for (const bool holes : {false, true}) {
+        const double first_tile = 4.0 * std::min(c.width, 512) * std::min(c.height, 512);
+        const double expected = (3 * MiB + 2 * first_tile) * c.channels +
+                                4.0 * c.channels * c.overview_texels +
+                                (holes ? 4.0 * c.channels * c.width * c.height : 0.0);
+        EXPECT_DOUBLE_EQ(geotiff_writing_bytes(c.width, c.height, c.channels, holes), expected)
+            << c.width << "x" << c.height << "x" << c.channels << (holes ? " with holes" : "");
+      }
+  }
+  const GdalCacheLimit cache(std::size_t(32) << 20);  // below 2048^2 x 16's 80 MiB of overviews
+  EXPECT_DOUBLE_EQ(geotiff_writing_bytes(2048, 2048, 16, false), 5 * MiB * 16 + 32 * MiB);
+}
+
+}  // namespace
+}  // namespace hfbake

@@ -591,5 +591,21 @@ TEST(NlpMarch, RowMarchEqualsMarch) {
     }
 }
 
+// nlp_working_bytes with subsample 2 against the bytes counted here: a bounce's gather holds the receivers'
+// U, 3 x 16 floats for each of 513 x 385 receivers of a 1024 x 768 field (every other texel and the last),
+// beside the radiance pyramid and indirect (12 bytes a texel); with every texel a receiver the pyramid's
+// build (36 bytes a texel beside the pyramid) holds the most instead.
+TEST(NlpBake, SubsampleTwoCountsTheReceiversValues) {
+  FieldShape f;
+  f.width = 1024, f.height = 768;
+  NlpOptions full;
+  full.directions = 8;
+  NlpOptions half = full;
+  half.subsample = 2;
+  const double N = 1024.0 * 768.0, receivers = 513.0 * 385.0;
+  EXPECT_DOUBLE_EQ(nlp_working_bytes(f, half, 1) - nlp_working_bytes(f, full, 1),
+                   4.0 * 3 * 16 * receivers + 12 * N - 36 * N);
+}
+
 }  // namespace
 }  // namespace hfbake

@@ -69,6 +69,11 @@ NlpOptions read_nlp_options(Params& in) {
 namespace {
 
 constexpr int kSh = sh::kCount;
+
+// Receivers along an axis of n texels: every texel, or with subsample sub > 1 every sub-th and the last.
+int receivers_along(int n, int sub) {
+  return (n + sub - 1) / sub + (sub > 1 && (n - 1) % sub ? 1 : 0);
+}
 // sh_irradiance: 16 coefficients x RGB a texel, held as the layer itself (bands l < 3 filled: 27 floats).
 constexpr std::size_t kIrrChannels = 3 * kSh;
 constexpr float kInvPi = float(1 / kPi);
@@ -283,8 +288,8 @@ NlpBake::NlpBake(const Scene& scene_, const NlpOptions& o_, const RunControl& rc
       lv(nlp::height_levels(ms)),
       steps(ms.steps),
       sub(o.subsample),
-      cw((W + sub - 1) / sub + (sub > 1 && (W - 1) % sub ? 1 : 0)),
-      ch((H + sub - 1) / sub + (sub > 1 && (H - 1) % sub ? 1 : 0)),
+      cw(receivers_along(W, sub)),
+      ch(receivers_along(H, sub)),
       // Row buffers: V and the lights' visibility (kSh + lights), or U and the exact-cosine E (3 kSh + 3).
       scratch([lv = lv, steps = steps, W = W,
                row_floats = std::max(kSh + int(scene.lights.size()) + 3, 3 * kSh + 3)] {
@@ -901,15 +906,22 @@ double nlp_working_bytes(const FieldShape& field, const NlpOptions& o, int bounc
   double rgb_layers = 0;
   for (const char* name : {"direct", "indirect", "total"})
     if (std::find(o.layers.begin(), o.layers.end(), name) != o.layers.end()) rgb_layers += 12 * N;
+  // With subsampled receivers, their values before they are interpolated to the texels: the direct pass's
+  // visibility (kSh floats a receiver; the lights' one each are left out) and each bounce's U (3 kSh).
+  const double receivers =
+      o.subsample > 1 ? double(receivers_along(W, o.subsample)) * receivers_along(H, o.subsample) : 0.0;
+  const double coarse_direct = 4.0 * kSh * receivers, coarse_bounce = 4.0 * 3 * kSh * receivers;
   // Through the direct pass and the bounces: the height pyramid, direct (RGB floats) and, with facet
   // senders and bounces, the two facets' exit radiance (RGB floats). While a bounce's radiance pyramid is
   // built: the exitant radiance, one level in float and its horizontal pass (12 bytes a texel each), the
   // pyramid (binary16), and after the first bounce `indirect` (12). Its gather holds the pyramid, indirect
-  // and, for all but the last bounce, that bounce's light (12): never more than the build. At the end: the
-  // heights, direct and indirect beside the layers (the facets freed).
+  // (12), for all but the last bounce that bounce's light (12), and the subsampled receivers' U. At the end:
+  // the heights, direct and indirect beside the layers (the facets freed).
   const double held = heights + 12 * N + (o.facet_senders && bounces > 0 ? 24 * N : 0);
-  const double bounce = bounces > 0 ? radiance + 36 * N + (bounces > 1 ? 12 * N : 0) : 0;
-  return std::max(heights + 24 * N, held + bounce - rgb_layers);
+  const double build = 36 * N + (bounces > 1 ? 12 * N : 0);
+  const double gather = (bounces > 1 ? 24 * N : 12 * N) + coarse_bounce;
+  const double bounce = bounces > 0 ? radiance + std::max(build, gather) : 0;
+  return std::max(heights + 24 * N, held + std::max(bounce, coarse_direct) - rgb_layers);
 }
 
 MethodInfo nlp_method() {

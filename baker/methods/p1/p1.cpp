@@ -208,6 +208,12 @@ SweepSpec p1_sweep_spec(const P1Params& p) {
   return spec;
 }
 
+SweepSpec p1_block_sweep_spec(const P1Params& p, int k_begin, int k_end) {
+  SweepSpec spec = p1_sweep_spec(p);
+  for (int k = k_begin; k < k_end; ++k) spec.azimuths.push_back(azimuth(k, p.directions));
+  return spec;
+}
+
 double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform_environment) {
   const bool facets = p.direct && p.facet_direct;
   const double texels = double(shape.width) * double(shape.height);
@@ -228,13 +234,18 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
   const double workers = double(worker_threads()) * double(p1::FarHorizonWorker::scratch_bytes(longest));
   // The corner facets' (field/triangulation.hpp): a sum (4 bytes, or RGB 12) and a layer (RGB 12) each.
   const double CF = kCornerFacets;
+  const double facet_sums = facets ? (uniform_environment ? 4 : 12) * CF : 0;
+  // Bytes a texel: the sums (p1_sums_shape) and the layers the caller counts, which the sums become.
+  const double sums = (p.ao || (p.direct && uniform_environment) ? 4 : 0) + (p.vsky ? 4 : 0) +
+                      (p.direct && !uniform_environment ? 12 : 0) + (p.bent_normal ? 12 : 0) + facet_sums;
+  const double caller_layers =
+      (p.ao ? 4 : 0) + (p.vsky ? 4 : 0) + (p.direct ? 12 : 0) + (p.bent_normal ? 12 : 0);
+  // While the sums are finished (p1_finish): the layers, the ao sum behind a uniform sky's direct, and P2's
+  // facets' layer beside their sums (no caller counts either).
+  const double finished = caller_layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) +
+                          (facets ? 12 * CF + facet_sums : 0);
   if (shape.wrap == Wrap::clamp) {
-    // Bytes a texel: the sums (p1_sums_shape), the layers they become, and what the lane search holds.
-    const double sums = (p.ao || (p.direct && uniform_environment) ? 4 : 0) + (p.vsky ? 4 : 0) +
-                        (p.direct && !uniform_environment ? 12 : 0) + (p.bent_normal ? 12 : 0) +
-                        (facets ? (uniform_environment ? 4 : 12) * CF : 0);
-    const double layers = (p.ao ? 4 : 0) + (p.vsky ? 4 : 0) + (p.direct ? 12 : 0) + (p.bent_normal ? 12 : 0) +
-                          (facets ? 12 * CF : 0);
+    // ... and what the lane search holds.
     const double normals = shading_reads_normals(p) ? 12 + (facets ? 12 * CF : 0) : 0;
     const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
     // While the directions are summed: the sums, a block's, the normals, one direction's slopes (and casters
@@ -243,21 +254,24 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
                           double(std::min(shape.width, shape.height) + 2 * p1::kLanePad);
     const double search = p.horizon_distance ? 8 : 4;
     const double summing = (sums + block + normals + search + planes) * texels + layout;
-    // While they are finished: the layers, the sums that are not layers, the normals, the lights' sweeps.
+    // While they are finished: the normals beside them, and the lights' sweeps.
     const double finishing =
-        (layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) + normals) * texels +
-        double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
-    return std::max(summing, finishing) - layers * texels + far;
+        (finished + normals) * texels + double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
+    return std::max(summing, finishing) - caller_layers * texels + far;
   }
-  double per_texel = planes + (p.direct && !p.ao ? 4 : 0);  // and the ao sum behind a uniform sky's direct
-  if (facets) per_texel += CF * 3 * 4 + CF * 3 * 4;         // the corner facets' sums and their layers
-  if (direction_block_count(p.directions) > 1)  // one direction block's sums beside the total (compute_p1)
-    per_texel += (p.direct ? 12
-                  : p.ao   ? 4
-                           : 0) +
-                 (p.vsky ? 4 : 0) + (p.bent_normal ? 12 : 0) + (facets ? 12 * CF : 0);
-  // Each thread's far-field worker: two direction patterns, the lines' heights, the hull (FarHorizonWorker).
-  return per_texel * texels + double(sweep_buffer_bytes(field, p1_sweep_spec(p))) + workers;
+  // Repeat fields: the strip search sums one direction block at a time (compute_p1), each through its own
+  // sweep, whose line buffers FarHorizonWorker fills whole (every receiver slot of every line); the largest
+  // block's is the one counted.
+  const int largest = (p.directions + B - 1) / B;
+  const double block_sweep = double(sweep_buffer_bytes(field, p1_block_sweep_spec(p, 0, largest)));
+  // While summing: the sums, the block's beside them (their arrays reused from block to block), the
+  // block's horizon planes, its sweep and the workers.
+  const double summing_repeat = (sums + (B > 1 ? sums : 0) + planes) * texels + block_sweep + workers;
+  // While finishing: the directional lights' sweep (p1_horizons_at) beside them, counted as one direction's.
+  const double light_sweep =
+      p.direct && p.lights ? double(sweep_buffer_bytes(field, p1_block_sweep_spec(p, 0, 1))) + workers : 0.0;
+  const double finishing_repeat = finished * texels + light_sweep;
+  return std::max(summing_repeat, finishing_repeat) - caller_layers * texels;
 }
 
 double disk_fraction_above(double elevation, double horizon, double radius) {
@@ -473,8 +487,7 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
     return near_slope(f, near[k].crossings, i, j, which);
   };
 
-  SweepSpec spec = p1_sweep_spec(p);
-  for (int k = k_begin; k < k_end; ++k) spec.azimuths.push_back(azimuth(k, K));  // the same directions
+  const SweepSpec spec = p1_block_sweep_spec(p, k_begin, k_end);
   auto make_worker = [&] { return make_ray_worker(f, p); };
   sweep_lines_tiled(f, spec, rc, make_worker, [&](const SweepTile& t) {
     constexpr int kMax = p1::kShadeRun;

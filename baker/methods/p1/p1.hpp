@@ -139,12 +139,17 @@ void p1_sums_from_layers(LayerSet& sums, const P1SumsShape& shape, P1Sums& s);
 void p1_add_sums(P1Sums& total, const P1Sums& block);
 P1Result p1_finish(const Scene& scene, const P1Params& params, P1Sums&& sums, const RunControl& rc);
 
-// Bytes compute_p1 holds at peak beyond the layers it returns, for the memory estimate: per texel the ao
-// sum behind direct from a uniform sky when ao is not requested and P2's facet sums, plus the sweep's
-// line buffers (sweep_buffer_bytes of p1_sweep_spec).
+// Bytes compute_p1 holds at peak beyond the layers it returns, for the memory estimate: per texel the sums
+// beside the layers (the ao sum behind direct from a uniform sky when ao is not requested, one direction
+// block's sums, P2's facet sums and their layer), plus, on clamp fields, the lane search's normals, slopes
+// and layout, and on repeat fields the strip search's sweep of one direction block (sweep_buffer_bytes of
+// p1_block_sweep_spec) and each thread's FarHorizonWorker.
 double p1_working_bytes(const FieldShape& field, const P1Params& params, bool uniform_environment = false);
-// The sweep compute_p1 runs for its K directions.
+// The strip search's sweep (repeat fields): FarHorizonWorker's strips, no line heights, 8 directions a batch.
 SweepSpec p1_sweep_spec(const P1Params& params);
+// The sweep compute_p1 runs for directions [k_begin, k_end) of params.directions on a repeat field: one
+// direction block's (core/direction_blocks.hpp), p1_sweep_spec at those directions' azimuths.
+SweepSpec p1_block_sweep_spec(const P1Params& params, int k_begin, int k_end);
 
 // Each texel's horizon at arbitrary azimuths, exactly as p1 computes its K directions' (radians from +x
 // towards +y): on clamp fields the lane search's exact horizon over the texel's own ray; on repeat fields
