@@ -18,8 +18,9 @@ namespace hfbake {
 // Bump whenever baker/reference (or the procedural fields it sees) changes what it computes for the
 // same inputs, or starts reading more of the job than reference_cache_key hashes: every cached reference
 // then misses once and is recomputed.
-// 3: ao from whole rays beside an obscurance; 4: receivers lifted vertically, not along the normal.
-inline constexpr int kReferenceCodeVersion = 4;
+// 3: ao from whole rays beside an obscurance; 4: receivers lifted vertically, not along the normal; 5: a
+// path vertex near a facet edge starts its next rays on the arriving ray (bake_reference.cpp path_origin).
+inline constexpr int kReferenceCodeVersion = 5;
 
 // 16 hex digits: a hash of kReferenceCodeVersion, the job's height, surface (albedo, emission),
 // environment, lights, bounces and reference parameters, the falloff and radius of every bake entry that

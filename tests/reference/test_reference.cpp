@@ -295,6 +295,43 @@ TEST(Reference, ReceiverInANotchSeesTheWedgeBetweenItsWalls) {
   EXPECT_WITHIN_3SE(z, bz / len, 2e-3);
 }
 
+// The first bounce at the bottom of the same notch under a uniform sky (radiance 1, albedo rho): every
+// direction of the receiver's that the sky wedge does not hold enters a wall at the crease, so it sees each
+// wall's light there, rho E_w / pi, with E_w / pi the wall's own cosine-weighted view of the wedge,
+// (1/2) [sin(psi - nu_w)] over it (nu_w the angle of the wall's normal in the xz plane). The paths' next rays
+// start eps off their hits, and the hits lie within a few eps of the crease: started eps along the wall's
+// normal they began under the other wall and read it dark (0.0013 here instead of 0.0184).
+TEST(Reference, FirstBounceInANotchIsTheWallsLightAtTheCrease) {
+  Scene s;
+  s.name = "notch";
+  HeightField& f = s.field;
+  f.width = f.height = 9;
+  f.texel_size = 1;
+  f.wrap = Wrap::clamp;
+  f.z.resize(f.texel_count());
+  const int c = 4;
+  for (int j = 0; j < 9; ++j)
+    for (int i = 0; i < 9; ++i) f.z[f.index(i, j)] = float(i < c ? 3 * (c - i) : 13 * (i - c));
+  s.normals = compute_normals(f);
+  const double rho = 0.5;
+  s.surface.albedo.assign(f.texel_count(), Rgb{float(rho), float(rho), float(rho)});
+  s.environment = make_uniform_environment({1, 1, 1});
+  s.bounces = 1;
+  const LayerSet r = bake_reference(s, options({"indirect_b1"}, 65536), {});
+  // The sky wedge psi in [psi0, psi1]; the right wall (z = 13 (x - c)) lies below psi0, the left above psi1.
+  const double psi0 = std::atan(13.0), psi1 = kPi - std::atan(3.0);
+  const double nu_left = std::atan2(1.0, 3.0), nu_right = std::atan2(1.0, -13.0);
+  const auto cosine_view = [](double nu, double a, double b) {
+    return 0.5 * (std::sin(b - nu) - std::sin(a - nu));
+  };
+  const double left = rho * cosine_view(nu_left, psi0, psi1), right = rho * cosine_view(nu_right, psi0, psi1);
+  const Vec3 n = s.normals[f.index(c, 4)].d();
+  const double nu = std::atan2(n.z, n.x);
+  const double b1 = right * cosine_view(nu, nu - kPi / 2, psi0) + left * cosine_view(nu, psi1, nu + kPi / 2);
+  ASSERT_GT(b1, 0.01);
+  EXPECT_WITHIN_3SE(at(r, "indirect_b1", c, 4), b1, 1e-4);
+}
+
 TEST(ReferenceHorizons, AgreeWithTheExactMarchOnRoughTerrain) {
   // Two independent computations of the same horizons of the triangulated surface: bisection with Embree
   // rays, and the exact march over every column, row and diagonal crossing (tests/p1/p1_truth.hpp).
