@@ -66,6 +66,28 @@ Outcome hfbake(const fs::path& dir, const std::vector<std::string>& args,
   return finish(start(dir, args, "stderr.txt", in_child), dir, "stderr.txt");
 }
 
+// Two bakes of job files ja and jb started together in `dir`: exactly one must bake (exit 0) and the other be
+// refused (exit 2) in one error line. Returns the winner's pid and job file, and the loser's error line.
+struct Race {
+  pid_t winner_pid = 0;
+  std::string winner, lost_line;
+};
+Race race(const fs::path& dir, const std::string& ja, const std::string& jb) {
+  const pid_t pa = start(dir, {"bake", ja, "--no-cache", "--quiet"}, "a.txt");
+  const pid_t pb = start(dir, {"bake", jb, "--no-cache", "--quiet"}, "b.txt");
+  const Outcome ra = finish(pa, dir, "a.txt"), rb = finish(pb, dir, "b.txt");
+  Race r;
+  EXPECT_TRUE((ra.exit_code == 0 && rb.exit_code == 2) || (ra.exit_code == 2 && rb.exit_code == 0))
+      << ra.err << rb.err;
+  const Outcome& lost = ra.exit_code == 2 ? ra : rb;
+  r.winner = ra.exit_code == 0 ? ja : jb;
+  r.winner_pid = ra.exit_code == 0 ? pa : pb;
+  const auto lines = lost.error_lines();
+  EXPECT_EQ(lines.size(), 1u) << lost.err;
+  if (!lines.empty()) r.lost_line = lines[0];
+  return r;
+}
+
 json base_job(const std::string& out = "out") {
   return {{"version", 1},
           {"name", "t"},
@@ -542,26 +564,18 @@ TEST_F(Untrusted, TwoJobsOfOneNameInOneFolderNeverReplaceEachOther) {
   for (int run = 0; run < 20; ++run) {
     SCOPED_TRACE(run);
     fs::remove_all(dir_ / "out");
-    const pid_t pa = start(dir_, {"bake", ja, "--no-cache", "--quiet"}, "a.txt");
-    const pid_t pb = start(dir_, {"bake", jb, "--no-cache", "--quiet"}, "b.txt");
-    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
-    ASSERT_TRUE((ra.exit_code == 0 && rb.exit_code == 2) || (ra.exit_code == 2 && rb.exit_code == 0))
-        << ra.err << rb.err;
-    const Outcome& lost = ra.exit_code == 2 ? ra : rb;
-    const std::string& winner = ra.exit_code == 0 ? ja : jb;
-    const pid_t winner_pid = ra.exit_code == 0 ? pa : pb;
-    const auto lines = lost.error_lines();
-    ASSERT_EQ(lines.size(), 1u) << lost.err;
+    const Race r = race(dir_, ja, jb);
+    ASSERT_FALSE(r.lost_line.empty());
     // The loser names the folder and who owns it: the running holder (<pid>@<host>), or the job file whose
     // finished outputs are there.
     const std::string folder = fs::weakly_canonical(dir_ / "out").string();
-    EXPECT_NE(
-        lines[0].find(" into " + folder + " now") == std::string::npos
-            ? lines[0].find(" in " + folder + " were baked from " + fs::weakly_canonical(winner).string())
-            : lines[0].find("another hfbake process (" + std::to_string(winner_pid) + "@" + host() + ")"),
-        std::string::npos)
-        << lines[0];
-    EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(winner).string());
+    const std::string& line = r.lost_line;
+    EXPECT_NE(line.find(" into " + folder + " now") == std::string::npos
+                  ? line.find(" in " + folder + " were baked from " + fs::weakly_canonical(r.winner).string())
+                  : line.find("another hfbake process (" + std::to_string(r.winner_pid) + "@" + host() + ")"),
+              std::string::npos)
+        << line;
+    EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
     auto in = OIIO::ImageInput::open((dir_ / "out" / "t.p1.exr").string());
     ASSERT_TRUE(in);
     for (const auto& e : fs::directory_iterator(dir_ / "out"))
@@ -588,17 +602,11 @@ TEST_F(Untrusted, TwoJobsWithAReferenceInOneFolderNeverReplaceEachOthersReport) 
   for (int run = 0; run < 10; ++run) {
     SCOPED_TRACE(run);
     fs::remove_all(dir_ / "out");
-    const pid_t pa = start(dir_, {"bake", ja, "--no-cache", "--quiet"}, "a.txt");
-    const pid_t pb = start(dir_, {"bake", jb, "--no-cache", "--quiet"}, "b.txt");
-    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
-    ASSERT_TRUE((ra.exit_code == 0 && rb.exit_code == 2) || (ra.exit_code == 2 && rb.exit_code == 0))
-        << ra.err << rb.err;
-    const Outcome& lost = ra.exit_code == 2 ? ra : rb;
-    const auto lines = lost.error_lines();
-    ASSERT_EQ(lines.size(), 1u) << lost.err;
-    EXPECT_NE(lines[0].find(folder), std::string::npos) << lines[0];
+    const Race r = race(dir_, ja, jb);
+    ASSERT_FALSE(r.lost_line.empty());
+    EXPECT_NE(r.lost_line.find(folder), std::string::npos) << r.lost_line;
     const json report = json::parse(read_text(dir_ / "out" / "report.json"));
-    EXPECT_EQ(report["job"]["name"], ra.exit_code == 0 ? "a" : "b");
+    EXPECT_EQ(report["job"]["name"], r.winner == ja ? "a" : "b");
     for (const auto& e : fs::directory_iterator(dir_ / "out"))
       EXPECT_FALSE(hfbake_test::is_stage(e.path())) << e.path();
   }

@@ -246,13 +246,9 @@ TEST(Reference, PitCenter) {
   EXPECT_NEAR(at(r, "ao", 24, 24).v, 1 - D * D / (D * D + R * R), 0.03);
 }
 
-TEST(Reference, ReceiverInANotchSeesTheWedgeBetweenItsWalls) {
-  // A notch between two straight walls, extruded along y: z = 3 (c - x) on the left, 13 (x - c) on the right.
-  // From the notch the free sky is the dihedral wedge between the wall planes, opening alpha = pi - atan 3 -
-  // atan 13: vsky = 2 alpha / (2 pi). The texel's normal, from central differences, leans far to the left,
-  // over the left wall: a receiver offset along it started under that wall and saw nothing (vsky 0 instead of
-  // 0.127). Receivers are lifted vertically, which is above the surface wherever
-  // the surface is a height field.
+// A notch between two straight walls, extruded along y: z = 3 (c - x) on the left, 13 (x - c) on the right, c
+// = 4 on a 9 x 9 field, albedo rho, under a uniform sky of radiance 1.
+Scene notch_scene(double rho) {
   Scene s;
   s.name = "notch";
   HeightField& f = s.field;
@@ -260,12 +256,23 @@ TEST(Reference, ReceiverInANotchSeesTheWedgeBetweenItsWalls) {
   f.texel_size = 1;
   f.wrap = Wrap::clamp;
   f.z.resize(f.texel_count());
-  const int c = 4;
   for (int j = 0; j < 9; ++j)
-    for (int i = 0; i < 9; ++i) f.z[f.index(i, j)] = float(i < c ? 3 * (c - i) : 13 * (i - c));
+    for (int i = 0; i < 9; ++i) f.z[f.index(i, j)] = float(i < 4 ? 3 * (4 - i) : 13 * (i - 4));
   s.normals = compute_normals(f);
-  s.surface.albedo.assign(f.texel_count(), Rgb{0.5f, 0.5f, 0.5f});
+  s.surface.albedo.assign(f.texel_count(), Rgb{float(rho), float(rho), float(rho)});
   s.environment = make_uniform_environment({1, 1, 1});
+  return s;
+}
+
+TEST(Reference, ReceiverInANotchSeesTheWedgeBetweenItsWalls) {
+  // From the notch (notch_scene) the free sky is the dihedral wedge between the wall planes, opening alpha =
+  // pi - atan 3 - atan 13: vsky = 2 alpha / (2 pi). The texel's normal, from central differences, leans far
+  // to the left, over the left wall: a receiver offset along it started under that wall and saw nothing (vsky
+  // 0 instead of 0.127). Receivers are lifted vertically, which is above the surface wherever the surface is
+  // a height field.
+  Scene s = notch_scene(0.5);
+  const HeightField& f = s.field;
+  const int c = 4;
   const LayerSet r = bake_reference(s, options({"vsky", "ao", "bent_normal"}, 4096), {});
   const double alpha = kPi - std::atan(3.0) - std::atan(13.0);
   EXPECT_WITHIN_3SE(at(r, "vsky", c, 4), alpha / kPi, 1e-3);
@@ -302,20 +309,10 @@ TEST(Reference, ReceiverInANotchSeesTheWedgeBetweenItsWalls) {
 // start eps off their hits, and the hits lie within a few eps of the crease: started eps along the wall's
 // normal they began under the other wall and read it dark (0.0013 here instead of 0.0184).
 TEST(Reference, FirstBounceInANotchIsTheWallsLightAtTheCrease) {
-  Scene s;
-  s.name = "notch";
-  HeightField& f = s.field;
-  f.width = f.height = 9;
-  f.texel_size = 1;
-  f.wrap = Wrap::clamp;
-  f.z.resize(f.texel_count());
-  const int c = 4;
-  for (int j = 0; j < 9; ++j)
-    for (int i = 0; i < 9; ++i) f.z[f.index(i, j)] = float(i < c ? 3 * (c - i) : 13 * (i - c));
-  s.normals = compute_normals(f);
   const double rho = 0.5;
-  s.surface.albedo.assign(f.texel_count(), Rgb{float(rho), float(rho), float(rho)});
-  s.environment = make_uniform_environment({1, 1, 1});
+  Scene s = notch_scene(rho);
+  const HeightField& f = s.field;
+  const int c = 4;
   s.bounces = 1;
   const LayerSet r = bake_reference(s, options({"indirect_b1"}, 65536), {});
   // The sky wedge psi in [psi0, psi1]; the right wall (z = 13 (x - c)) lies below psi0, the left above psi1.
