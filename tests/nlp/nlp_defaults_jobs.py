@@ -17,7 +17,7 @@ import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-FIELDS = os.path.join(HERE, "..", "..", "jobs", "nightly", "fields")
+FIELDS = os.path.join(HERE, "..", "nightly", "fields")
 DEM = os.path.join(HERE, "..", "..", "..", "shared", "data", "TM1_564_146.tif")
 PREVIOUS = {"senders": "texels", "indirect_cosine": "sh", "direct_cosine": "sh", "visibility_horizon": "bspline",
             "near_spacing": 0}
