@@ -90,11 +90,16 @@ def _run_arguments(threads, memory_limit, progress=None, cancel=None):
     return int(threads or 0), None if memory_limit is None else int(memory_limit)
 
 
+def _wider_than_float(values):
+    """Whether an array's values are floats wider than float32 (float64, longdouble)."""
+    return _np.issubdtype(values.dtype, _np.floating) and values.dtype.itemsize > 4
+
+
 def _beyond_float_range(values, nodata_value):
     """(column, row, value) of the first finite value of a float array that a float32 cannot hold, other than
     nodata_value, or None: as a job's Float64 band, such a value is refused, not taken for an infinite hole
     (docs/gis.md)."""
-    if not (_np.issubdtype(values.dtype, _np.floating) and values.dtype.itemsize > 4):
+    if not _wider_than_float(values):
         return None
     beyond = _np.isfinite(values) & (_np.abs(values) > _np.finfo(_np.float32).max)
     if isinstance(nodata_value, (int, float, _np.integer, _np.floating)) and not isinstance(nodata_value, bool):
@@ -120,7 +125,7 @@ def _as_float_heights(heights, nodata_value):
     if beyond:
         raise InputError("heights: " + _beyond_float_range_message(*beyond, "give it as nodata_value"),
                          "/heights")
-    if not (_np.issubdtype(heights.dtype, _np.floating) and heights.dtype.itemsize > 4):
+    if not _wider_than_float(heights):
         return heights
     with _np.errstate(over="ignore"):
         return heights.astype(_np.float32)
