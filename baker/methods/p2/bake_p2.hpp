@@ -16,14 +16,15 @@
 // `senders: "texels"` is the method as published: each sender radiates with its texel's smoothed normal.
 // On smooth fields the two agree; where the field is rough at the texel scale the facets a receiver sees
 // lean towards it (less sky, more bounce light than the smoothed normal says): per-bounce field means
-// against the Embree reference on the rough furnace field (tests/p2), bounces 1-4: texel senders
-// +9.6/-4.2/-13.5/-21.8 %, facet senders with the near field +0.4/-0.5/-0.7/-1.3 %.
+// against the Embree reference on the rough furnace field (tests/accuracy/p2_furnace.json), bounces 1-4:
+// texel senders +9.4/-3.7/-13.1/-20.8 %, facet senders with the near field -1.2/+0.3/+1.4/+3.0 %.
 // Each line carries the triangulated surface along it exactly (line_profile "exact", default): its column
 // samples and every row and diagonal crossing between them (indirect_sweep.hpp, exact_profile). With the
 // column samples alone ("columns", the paper's) a line takes the straight segment between two columns for
-// the surface and misses its bends; on stepped terrain those are a cliff's top edge and foot, and that was
-// the whole of the sweep's bias against the exact gather from the texel centres (terraces, K = 64,
-// measure_p2_centre: +0.00096 of a mean 0.039, now +0.00001; against the reference +4.1 % -> +1.5 %).
+// the surface and misses its bends; on stepped terrain those are a cliff's top edge and foot, the whole of
+// the sweep's bias against the exact gather from the texel centres (terraces, K = 64, measure_p2_centre:
+// +0.00096 of a mean 0.039 with "columns", +0.00001 with "exact"; against the reference under a uniform
+// sky +1.2 % and -0.2 %, tests/accuracy/senders_terraces.json).
 // The receivers of the sweep sit on its lines, up to half a texel from the texel centres; the nearest
 // terrain subtends the largest angles. So each
 // texel gathers its first `near_radius` texels (default 4) itself, from its centre over every column, row
