@@ -175,7 +175,7 @@ P1Params read_p1_params(Params& in, const FieldShape& field) {
   p.wrap_periods = in.integer("wrap_periods", p.wrap_periods, 1, 16);
   p.near_radius = in.number("near_radius", p.near_radius, 1, 64);
   p.horizon_tolerance = in.number("horizon_tolerance", p.horizon_tolerance, 0, 0.5);
-  p.far_crossings = in.boolean("far_crossings", p.far_crossings);
+  in.boolean("far_crossings", true);  // accepted and ignored: the far field is exact (far_horizons.hpp)
   p.lights = in.boolean("lights", p.lights);
   const std::vector<std::string> layers = in.layers(p1_layer_names(), {"ao", "vsky", "direct"});
   auto wants = [&](const char* name) {

@@ -53,7 +53,6 @@ struct P1Params {
   // horizon at least the exact one and at most P1Result::far_field_bound above it; what makes p1 bake in
   // tiles (docs/large-fields.md). Clamp fields. None: the exact search over the whole field.
   std::optional<FarFieldSpec> far_field;
-  bool far_crossings = true;  // no longer used (the far field is exact: far_horizons.hpp); read for old jobs
   bool ao = true, vsky = true, direct = true;
   bool horizon = false, horizon_distance = false, bent_normal = false;
   bool lights = true;  // add the scene's directional lights to direct
