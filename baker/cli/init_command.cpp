@@ -129,7 +129,8 @@ ordered preset_job(const std::string& preset, const std::string& name, const std
     job["bake"] = {{{"method", "relief"}, {"directions", 16}, {"search_radius", radius}},
                    {{"method", "p1"}, {"directions", 32}, {"layers", {"ao", "vsky"}}}};
     output["geotiff"] = true;
-    notes += "relief search_radius: 10 texels (world units). GeoTIFFs in out/" + name + ".";
+    notes += "relief search_radius: " + json(radius).dump() + " world units (10 texels). GeoTIFFs in out/" +
+             name + ".";
   } else {
     job["bake"] = {{{"method", "p1"}, {"directions", 32}, {"layers", {"ao"}}}};
     job["reference"] = {{"samples", 64}, {"seed", 1}};

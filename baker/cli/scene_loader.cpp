@@ -329,7 +329,9 @@ std::string heights_warning(const Scene& scene) {
   } else if (relief == 0) {
     warning = "the field is flat (every height is " + short_num(s.world_min) +
               "): every method bakes it unoccluded";
-  } else if (relief < 0.01 * extent) {
+  } else if (relief < 0.01 * extent && scene.georeference.crs_wkt.empty()) {
+    // A raster with a CRS holds elevations in its units: a plain's lidar tile of a few metres' relief is a
+    // common relief bake (docs/heights.md), not a map missing its height_scale.
     warning = "the relief (" + short_num(relief) + " world units) is " + short_num(100 * relief / extent) +
               " % of the field's " + short_num(extent) +
               "-unit side: nearly flat, the bake will be close to unoccluded; if the heights are meant "

@@ -269,6 +269,24 @@ TEST_F(CliHeights, ValidateStatesTheRangeAndWarnsOnImplausibleRelief) {
   EXPECT_NE(r.err.find("through OpenImageIO (openexr, float)"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("nearly flat"), std::string::npos) << r.err;
 
+  // A raster with a CRS holds elevations: the same few tenths of relief (a plain's lidar tile) are baked
+  // without the warning; without the CRS, the same file is warned.
+  std::vector<float> plain = integer_heights(65535);
+  for (float& v : plain) v *= 0.3f / 65535;
+  write_image("plain.tif", plain, OIIO::TypeDesc::FLOAT);
+  write_image("plain_crs.tif", plain, OIIO::TypeDesc::FLOAT);
+  std::ofstream(dir_ / "plain_crs.tif.aux.xml")
+      << "<PAMDataset>\n  <SRS>EPSG:32633</SRS>\n"
+         "  <GeoTransform>500000, 1, 0, 6500048, 0, -1</GeoTransform>\n"
+         "</PAMDataset>\n";
+  r = hfbake("validate " + write_job("plain", {{"image", "plain.tif"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("nearly flat"), std::string::npos) << r.err;
+  r = hfbake("validate " + write_job("plain_crs", {{"image", "plain_crs.tif"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("through GDAL"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+
   // A plausible field: no warning, and --quiet prints nothing.
   r = hfbake("validate --quiet " +
              write_job("fine", {{"image", "raw16.png"}, {"height_scale", 20.0 / 65535}}).string());
