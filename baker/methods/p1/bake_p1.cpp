@@ -222,7 +222,7 @@ MethodInfo p1_method() {
   // curvature: cli/scene_loader job_curvature). Directional lights' shadows are flat (docs/gis.md).
   m.applies_curvature = true;
   m.rectangular_texels = true;  // the lane search; the reader refuses the rest
-  m.summary = "exact horizons by the convex-hull stack on K line sweeps; ao, vsky, direct light from them";
+  m.summary = "exact horizons of every texel's own ray in K azimuths; ao, vsky, direct light from them";
   m.read = [](Params& in, const MethodContext& c) {
     const P1Params p = read_p1_params(in, c.field);
     // Rectangular texels: the lane search only (clamp fields), without the directional lights' sweeps.
