@@ -16,6 +16,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -609,6 +610,52 @@ TEST_F(Untrusted, TwoJobsWithAReferenceInOneFolderNeverReplaceEachOthersReport) 
     EXPECT_EQ(report["job"]["name"], r.winner == ja ? "a" : "b");
     for (const auto& e : fs::directory_iterator(dir_ / "out"))
       EXPECT_FALSE(hfbake_test::is_stage(e.path())) << e.path();
+  }
+}
+
+// Two suites of different jobs with one output folder, finishing together, 5 times: each one's replacement of
+// history.json is held 0.4 s by the preload library, so that the second reads the history while the first
+// still writes it unless the suite lock (docs/output_folders.md) orders them. Both bake (exit 0), both runs
+// are in history.json, and suite.json, index.html and junit.xml are each one suite's.
+TEST_F(Untrusted, TwoSuitesIntoOneFolderBothKeepTheirRunInTheHistory) {
+  for (const std::string s : {"a", "b"}) {
+    json j = base_job();
+    j["name"] = s;
+    write_job(dir_, j, s + ".json");
+    std::ofstream(dir_ / ("suite_" + s + ".json"))
+        << json{{"version", 1}, {"suite", "s" + s}, {"jobs", {s + ".json"}}, {"output", {{"dir", "out"}}}};
+  }
+  const auto slow_history = [] {
+    setenv("LD_PRELOAD", HFBAKE_SLOW_RENAME, 1);
+    setenv("ASAN_OPTIONS", "verify_asan_link_order=0", 1);
+    setenv("HFBAKE_TEST_SLOW_RENAME", "/out/history.json", 1);
+    setenv("HFBAKE_TEST_SLOW_RENAME_MS", "400", 1);
+  };
+  const fs::path out = dir_ / "out";
+  for (int run = 0; run < 5; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(out);
+    const pid_t pa = start(dir_, {"bake", "suite_a.json", "--no-cache", "--quiet"}, "a.txt", slow_history);
+    const pid_t pb = start(dir_, {"bake", "suite_b.json", "--no-cache", "--quiet"}, "b.txt", slow_history);
+    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
+    EXPECT_EQ(ra.exit_code, 0) << ra.err;
+    EXPECT_EQ(rb.exit_code, 0) << rb.err;
+    const json history = json::parse(read_text(out / "history.json"));
+    ASSERT_EQ(history["runs"].size(), 2u) << history.dump();
+    std::set<std::string> jobs;
+    for (const json& r : history["runs"])
+      for (const auto& [stem, outcome] : r["jobs"].items()) jobs.insert(stem);
+    EXPECT_EQ(jobs, (std::set<std::string>{"a", "b"})) << history.dump();
+    // The last suite to finish wrote all four reports.
+    const json suite = json::parse(read_text(out / "suite.json"));
+    const std::string name = suite["suite"];
+    ASSERT_EQ(suite["jobs"].size(), 1u);
+    EXPECT_EQ(fs::path(suite["jobs"][0]["file"].get<std::string>()).stem(), name.substr(1));
+    EXPECT_NE(read_text(out / "index.html").find("<h1>Suite " + name + "</h1>"), std::string::npos);
+    EXPECT_NE(read_text(out / "junit.xml").find("<testsuite name=\"" + name + "\""), std::string::npos);
+    for (const auto& e : fs::directory_iterator(out))
+      EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+    EXPECT_FALSE(fs::exists(fs::symlink_status(out / ".hfbake+suite.lock")));
   }
 }
 
