@@ -613,6 +613,44 @@ TEST_F(Untrusted, TwoJobsWithAReferenceInOneFolderNeverReplaceEachOthersReport) 
   }
 }
 
+// A job's output folder inside another's is harmless (their names are in different folders), except the
+// textures folder, where a job that writes textures and a job that bakes into it under the same name would
+// write the same files (textures/t.p1.ao.tif: a texture of the first, a GeoTIFF of the second). Started
+// together, 10 times, one bakes and the other is refused in one line naming the textures folder; one after
+// the other, the second is refused naming the first's job file, unless --overwrite.
+TEST_F(Untrusted, AJobBakingIntoAnotherJobsTexturesFolderNeverReplacesItsTextures) {
+  json a = base_job("out"), b = base_job("out/textures");
+  a["output"]["textures"] = {{{"layers", {"ao"}}, {"format", "tif"}}};
+  b["output"]["geotiff"] = true;
+  b["height"]["procedural"]["seed"] = 5;
+  const std::string ja = write_job(dir_, a, "a.json"), jb = write_job(dir_, b, "b.json");
+  const fs::path textures = dir_ / "out" / "textures";
+  for (int run = 0; run < 10; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(dir_ / "out");
+    const Race r = race(dir_, ja, jb);
+    EXPECT_NE(r.lost_line.find(fs::weakly_canonical(textures).string()), std::string::npos) << r.lost_line;
+    EXPECT_EQ(read_text(textures / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
+    EXPECT_TRUE(fs::is_regular_file(textures / "t.p1.ao.tif"));
+  }
+  for (const auto& [first, second] : {std::pair(ja, jb), std::pair(jb, ja)}) {
+    fs::remove_all(dir_ / "out");
+    ASSERT_EQ(hfbake(dir_, {"bake", first, "--no-cache", "--quiet"}).exit_code, 0);
+    const std::string tif = read_text(textures / "t.p1.ao.tif");
+    const Outcome r = hfbake(dir_, {"bake", second, "--no-cache", "--quiet"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("the outputs of job t in " + textures.string() + " were baked from " +
+                                      fs::weakly_canonical(first).string()),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(read_text(textures / "t.p1.ao.tif"), tif);
+    EXPECT_EQ(hfbake(dir_, {"bake", second, "--no-cache", "--quiet", "--overwrite"}).exit_code, 0);
+    EXPECT_NE(read_text(textures / "t.p1.ao.tif"), tif);
+    EXPECT_EQ(read_text(textures / ".hfbake-t.job"), fs::weakly_canonical(second).string());
+  }
+}
+
 // Two suites of different jobs with one output folder, finishing together, 5 times: each one's replacement of
 // history.json is held 0.4 s by the preload library, so that the second reads the history while the first
 // still writes it unless the suite lock (docs/output_folders.md) orders them. Both bake (exit 0), both runs
