@@ -46,6 +46,12 @@ std::string read_text(const fs::path& p) {
   return ss.str();
 }
 
+// The job hash an EXR output records ("" when it cannot be read).
+std::string exr_job_hash(const fs::path& exr) {
+  auto in = OIIO::ImageInput::open(exr.string());
+  return in ? std::string(in->spec().get_string_attribute("hfbake:job_hash")) : std::string();
+}
+
 // Starts `hfbake args` in `dir` (stderr to err_name); `in_child` runs in the child before exec (it knows
 // the process id hfbake will have). A hang is killed by SIGALRM after 120 s.
 pid_t start(const fs::path& dir, const std::vector<std::string>& args, const std::string& err_name,
@@ -613,6 +619,55 @@ TEST_F(Untrusted, TwoJobsWithAReferenceInOneFolderNeverReplaceEachOthersReport) 
   }
 }
 
+// One folder under different spellings (a "." part, a trailing "/", a link to it) is one folder: the lock is
+// the file in it, whatever path reached it. Of two processes baking different job files named t into it,
+// one bakes and the other is refused, 5 times per spelling.
+TEST_F(Untrusted, OneFolderUnderAnotherSpellingIsLockedAsOne) {
+  fs::create_directories(dir_ / "out");
+  fs::create_directory_symlink(dir_ / "out", dir_ / "link");
+  json a = base_job("out");
+  const std::string ja = write_job(dir_, a, "a.json");
+  for (const std::string spelling : {"out/./", "./out/", "link", "link/../out"}) {
+    SCOPED_TRACE(spelling);
+    json b = base_job(spelling);
+    b["height"]["procedural"]["seed"] = 5;
+    const std::string jb = write_job(dir_, b, "b.json");
+    for (int run = 0; run < 5; ++run) {
+      SCOPED_TRACE(run);
+      for (const auto& e : fs::directory_iterator(dir_ / "out")) fs::remove_all(e.path());
+      const Race r = race(dir_, ja, jb);
+      EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
+      EXPECT_EQ(hfbake_test::stages_in(dir_ / "out"), 0);
+    }
+  }
+}
+
+// A folder inside another job's output folder is a folder of its own: two job files named t, baking with
+// previews and GeoTIFFs into out and out/sub at once, 5 times, both bake, and each folder holds its own job's
+// outputs and record, and no stage.
+TEST_F(Untrusted, ANestedOutputFolderIsAFolderOfItsOwn) {
+  json a = base_job("out"), b = base_job("out/sub");
+  b["height"]["procedural"]["seed"] = 5;
+  for (json* j : {&a, &b}) (*j)["output"]["previews"] = (*j)["output"]["geotiff"] = true;
+  const std::string ja = write_job(dir_, a, "a.json"), jb = write_job(dir_, b, "b.json");
+  for (int run = 0; run < 5; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(dir_ / "out");
+    const pid_t pa = start(dir_, {"bake", ja, "--no-cache", "--quiet"}, "a.txt");
+    const pid_t pb = start(dir_, {"bake", jb, "--no-cache", "--quiet"}, "b.txt");
+    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
+    EXPECT_EQ(ra.exit_code, 0) << ra.err;
+    EXPECT_EQ(rb.exit_code, 0) << rb.err;
+    for (const auto& [folder, job] : {std::pair(dir_ / "out", ja), std::pair(dir_ / "out" / "sub", jb)}) {
+      EXPECT_EQ(read_text(folder / ".hfbake-t.job"), fs::weakly_canonical(job).string());
+      EXPECT_NE(exr_job_hash(folder / "t.p1.exr"), "");
+      EXPECT_TRUE(fs::is_regular_file(folder / "t.p1.ao.tif"));
+      EXPECT_EQ(hfbake_test::stages_in(folder), 0);
+    }
+    EXPECT_NE(exr_job_hash(dir_ / "out" / "t.p1.exr"), exr_job_hash(dir_ / "out" / "sub" / "t.p1.exr"));
+  }
+}
+
 // A job's output folder inside another's is harmless (their names are in different folders), except the
 // textures folder, where a job that writes textures and a job that bakes into it under the same name would
 // write the same files (textures/t.p1.ao.tif: a texture of the first, a GeoTIFF of the second). Started
@@ -698,12 +753,6 @@ TEST_F(Untrusted, TwoSuitesIntoOneFolderBothKeepTheirRunInTheHistory) {
 }
 
 // --- stopped while the outputs move into place (docs/output_folders.md#moving-the-outputs-into-place) ------
-
-// The job hash an EXR output records ("" when it cannot be read).
-std::string exr_job_hash(const fs::path& exr) {
-  auto in = OIIO::ImageInput::open(exr.string());
-  return in ? std::string(in->spec().get_string_attribute("hfbake:job_hash")) : std::string();
-}
 
 class Moves : public Untrusted {
  protected:
