@@ -656,8 +656,10 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     }
     std::error_code ec;
     const fs::path summary = fs::weakly_canonical(fs::absolute(*options.summary), ec);
-    for (const Suite& suite : suites)
-      for (const fs::path& report : suite_report_files(suite))
+    for (const Suite& suite : suites) {
+      std::vector<fs::path> names = suite_report_files(suite);
+      names.push_back(suite_lock_file(suite));
+      for (const fs::path& report : names)
         if (fs::weakly_canonical(report, ec) == summary) {
           std::fprintf(stderr, "hfbake: error: %s\n",
                        printable(options.summary->string() + ": --summary: is where suite " + suite.name +
@@ -665,6 +667,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
                            .c_str());
           return 2;
         }
+    }
     for (const std::optional<Job>& job : jobs)
       if (job && writes_in_output_folder(*job, *options.summary)) {
         std::fprintf(stderr, "hfbake: error: %s\n",

@@ -92,11 +92,12 @@ void check_output_folder(const Job& job) {
     throw InputError(
         job.file.string(), "/output/dir",
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
-  // What the bake would refuse only after baking (docs/output_folders.md): its lock names (the job's, and
-  // the report's for a job with a reference) taken by anything but a file, and a textures/ entry that is not
-  // a folder.
+  // What the bake would refuse only after baking (docs/output_folders.md): its lock names (the job's, the
+  // report's for a job with a reference, the textures folder's for a job that writes textures) taken by
+  // anything but a file, and a textures/ entry that is not a folder.
   std::vector<fs::path> locks = {output_lock_file(job)};
   if (job.has_reference) locks.push_back(report_lock_file(job));
+  if (textures_folder(job)) locks.push_back(textures_lock_file(job));
   for (const fs::path& lock : locks) {
     const fs::file_status ls = fs::symlink_status(lock, ec);
     if (fs::exists(ls) && !fs::is_regular_file(ls))
@@ -106,8 +107,7 @@ void check_output_folder(const Job& job) {
   }
   const fs::path textures = job.output.dir / "textures";
   const fs::file_status ts = fs::symlink_status(textures, ec);
-  if (job.doc.contains("output") && job.doc["output"].contains("textures") && fs::exists(ts) &&
-      !fs::is_directory(ts))
+  if (textures_folder(job) && fs::exists(ts) && !fs::is_directory(ts))
     throw InputError(job.file.string(), "/output/textures",
                      textures.string() + " is not a folder (" + (fs::is_symlink(ts) ? "a link" : "a file") +
                          "): the textures are written inside " + job.output.dir.string() + " only");
@@ -193,7 +193,9 @@ bool writes_in_output_folder(const Job& job, const fs::path& file) {
   const fs::path real = fs::weakly_canonical(fs::absolute(file), ec);
   if (ec) return false;
   const std::string n = real.filename().string();
-  if (real.parent_path() == dir / "textures") return n.rfind(job.name + ".", 0) == 0;
+  if (real.parent_path() == dir / "textures")
+    return n.rfind(job.name + ".", 0) == 0 || n == textures_lock_file(job).filename() ||
+           n == textures_owner_record(job).filename();
   if (real.parent_path() != dir) return false;
   if (n == "report.json" || n == "report.html" || n == output_lock_file(job).filename() ||
       n == owner_record(job).filename() || n == report_lock_file(job).filename())

@@ -225,6 +225,19 @@ fs::path output_lock_file(const Job& job) {
   return job.output.dir / (".hfbake-" + job.name + ".lock");
 }
 
+std::optional<fs::path> textures_folder(const Job& job) {
+  if (!job.doc.contains("output") || !job.doc["output"].contains("textures")) return std::nullopt;
+  return job.output.dir / "textures";
+}
+
+fs::path textures_lock_file(const Job& job) {
+  return job.output.dir / "textures" / output_lock_file(job).filename();
+}
+
+fs::path textures_owner_record(const Job& job) {
+  return job.output.dir / "textures" / owner_record(job).filename();
+}
+
 fs::path report_lock_file(const Job& job) {
   return job.output.dir / ".hfbake+report.lock";
 }
@@ -262,13 +275,17 @@ std::string job_identity(const Job& job) {
 
 }  // namespace
 
-void check_output_owner(const Job& job, bool overwrite) {
+namespace {
+
+// Refuses (InputError at /name) the job when `record`, the owner record of its name in `folder`, names
+// another job file, unless `overwrite`.
+void check_owner_record(const Job& job, const fs::path& record, const fs::path& folder, bool overwrite) {
   // The record as hfbake writes it: a regular file of its own (a link planted there is not read, and is
   // replaced when the outputs move), one line of printable text that an error may quote.
   std::string why, recorded;
   std::error_code link_ec;
-  const bool link = fs::is_symlink(fs::symlink_status(owner_record(job), link_ec));
-  const int fd = link ? -1 : open_regular_file(owner_record(job), why);
+  const bool link = fs::is_symlink(fs::symlink_status(record, link_ec));
+  const int fd = link ? -1 : open_regular_file(record, why);
   if (fd >= 0) {
     char buf[4096];
     const ssize_t n = read(fd, buf, sizeof buf);
@@ -280,9 +297,17 @@ void check_output_owner(const Job& job, bool overwrite) {
   }
   if (!recorded.empty() && recorded != job_identity(job) && !overwrite)
     throw InputError(job.file.string(), "/name",
-                     "the outputs of job " + job.name + " in " + job.output.dir.string() +
-                         " were baked from " + recorded +
+                     "the outputs of job " + job.name + " in " + folder.string() + " were baked from " +
+                         recorded +
                          ": give this job another name or output folder, or bake with --overwrite");
+}
+
+}  // namespace
+
+void check_output_owner(const Job& job, bool overwrite) {
+  check_owner_record(job, owner_record(job), job.output.dir, overwrite);
+  if (const std::optional<fs::path> textures = textures_folder(job))
+    check_owner_record(job, textures_owner_record(job), *textures, overwrite);
 }
 
 bool outputs_moving() noexcept {
@@ -292,12 +317,13 @@ bool outputs_moving() noexcept {
 namespace {
 
 // A name the commit list may hold: a file of the stage or of its textures/ folder, as OutputStage stages
-// them (no absolute path, no "..", no hidden name but the owner record).
+// them (no absolute path, no "..", no hidden name but the owner records).
 bool committable_name(const fs::path& name, const Job& job) {
   if (name.empty() || name.is_absolute()) return false;
   const std::vector<fs::path> parts(name.begin(), name.end());
-  if (parts.size() == 1) return parts[0] == owner_record(job).filename() || parts[0].string()[0] != '.';
-  return parts.size() == 2 && parts[0] == "textures" && parts[1].string()[0] != '.';
+  const fs::path record = owner_record(job).filename();
+  if (parts.size() == 1) return parts[0] == record || parts[0].string()[0] != '.';
+  return parts.size() == 2 && parts[0] == "textures" && (parts[1] == record || parts[1].string()[0] != '.');
 }
 
 }  // namespace
@@ -342,17 +368,26 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
     throw InputError(job.file.string(), "/output/dir",
                      "cannot create " + job.output.dir.string() + ": " +
                          (ec ? ec.message() : std::string("not a folder")));
+  // Before a refusal: the locks given up, and the folders this job made removed (when still empty).
+  const auto release = [&] {
+    textures_lock_.reset();
+    report_lock_.reset();
+    lock_.reset();
+    std::error_code rm;
+    if (created_textures_) fs::remove(job.output.dir / "textures", rm);
+    if (created_dir_) fs::remove(job.output.dir, rm);
+  };
   // One writer per job name and folder (docs/output_folders.md).
   const fs::path lock_file = output_lock_file(job);
   lock_ = std::make_unique<FolderLock>(lock_file);
   if (!lock_->held()) {
-    if (created_dir_) fs::remove(job.output.dir, ec);
-    if (!lock_->problem().empty())
-      throw InputError(
-          job.file.string(), "/output/dir",
-          lock_file.string() + " is no lock file of hfbake's (" + lock_->problem() + "): remove it");
+    const std::string problem = lock_->problem(), holder = lock_->holder();
+    release();
+    if (!problem.empty())
+      throw InputError(job.file.string(), "/output/dir",
+                       lock_file.string() + " is no lock file of hfbake's (" + problem + "): remove it");
     throw InputError(job.file.string(), "/output/dir",
-                     "another hfbake process (" + lock_->holder() + ") is baking job " + job.name + " into " +
+                     "another hfbake process (" + holder + ") is baking job " + job.name + " into " +
                          job.output.dir.string() +
                          " now: wait for it, or give this job another name or folder");
   }
@@ -363,9 +398,7 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
     report_lock_ = std::make_unique<FolderLock>(report_lock);
     if (!report_lock_->held()) {
       const std::string problem = report_lock_->problem(), holder = report_lock_->holder();
-      report_lock_.reset();
-      lock_.reset();
-      if (created_dir_) fs::remove(job.output.dir, ec);
+      release();
       if (!problem.empty())
         throw InputError(job.file.string(), "/output/dir",
                          report_lock.string() + " is no lock file of hfbake's (" + problem + "): remove it");
@@ -376,6 +409,33 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
                            "this job an output folder of its own");
     }
   }
+  // A job that writes textures holds its name's lock in the textures folder too: another job may bake into
+  // that folder (docs/output_folders.md).
+  if (const std::optional<fs::path> textures = textures_folder(job)) {
+    created_textures_ = !fs::exists(fs::symlink_status(*textures, ec));
+    fs::create_directory(*textures, ec);
+    if (!is_real_directory(*textures)) {
+      release();
+      throw InputError(job.file.string(), "/output/textures",
+                       textures->string() + " is not a folder (a link?): the textures are written inside " +
+                           job.output.dir.string() + " only");
+    }
+    const fs::path textures_lock = textures_lock_file(job);
+    textures_lock_ = std::make_unique<FolderLock>(textures_lock);
+    if (!textures_lock_->held()) {
+      const std::string problem = textures_lock_->problem(), holder = textures_lock_->holder();
+      release();
+      if (!problem.empty())
+        throw InputError(
+            job.file.string(), "/output/dir",
+            textures_lock.string() + " is no lock file of hfbake's (" + problem + "): remove it");
+      throw InputError(job.file.string(), "/output/dir",
+                       "another hfbake process (" + holder + ") is baking job " + job.name + " into " +
+                           textures->string() +
+                           ", where this job writes its textures, now: wait for it, or "
+                           "give this job another name or folder");
+    }
+  }
   // A process killed while it moved this job's outputs (it held the lock) left them part moved: its moves
   // are completed first, so that the folder holds one bake's outputs and the record names its job file.
   complete_killed_commits(job);
@@ -383,9 +443,7 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
     check_output_owner(job, overwrite);
     check_report_owner(job);
   } catch (const InputError&) {
-    report_lock_.reset();
-    lock_.reset();
-    if (created_dir_) fs::remove(job.output.dir, ec);
+    release();
     throw;
   }
   // Hidden, per process (id and start time), host and job: concurrent jobs and concurrent hfbake processes
@@ -405,10 +463,12 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
 OutputStage::~OutputStage() {
   std::error_code ec;
   remove_tree(stage_);
+  textures_lock_.reset();
   report_lock_.reset();
   lock_.reset();
-  // A job that failed or was stopped leaves no empty output folder behind it (only if it made the folder,
-  // and only while it is empty: another job's stage or outputs keep it).
+  // A job that failed or was stopped leaves no empty output or textures folder behind it (only if it made
+  // the folder, and only while it is empty: another job's stage or outputs keep it).
+  if (created_textures_ && !committed_) fs::remove(job_.output.dir / "textures", ec);
   if (created_dir_ && !committed_) fs::remove(job_.output.dir, ec);
 }
 
@@ -603,9 +663,15 @@ std::vector<fs::path> OutputStage::commit() {
     if (fs::symlink_status(target, ec).type() == fs::file_type::directory)
       throw InputError(target.string(), "", "is a folder: an output goes there (remove it)");
   };
-  for (const fs::path& name : staged_) refuse_folder(job_.output.dir / name);
-  refuse_folder(owner_record(job_));
-  for (const fs::path& name : staged_) {  // textures/: made here, never a link to elsewhere
+  // The owner records, moved after the outputs: the textures folder's (a job that writes textures), then the
+  // output folder's, last.
+  std::vector<fs::path> records;
+  if (textures_folder(job_)) records.push_back(fs::path("textures") / owner_record(job_).filename());
+  records.push_back(owner_record(job_).filename());
+  std::vector<fs::path> moves = staged_;
+  moves.insert(moves.end(), records.begin(), records.end());
+  for (const fs::path& name : moves) refuse_folder(job_.output.dir / name);
+  for (const fs::path& name : moves) {  // textures/: made here, never a link to elsewhere
     if (!name.has_parent_path()) continue;
     const fs::path folder = (job_.output.dir / name).parent_path();
     std::error_code ec;
@@ -622,36 +688,35 @@ std::vector<fs::path> OutputStage::commit() {
     if (const int e = sync_file(stage_ / name))
       throw OutputError((job_.output.dir / name).string(), "",
                         "cannot write file: " + std::error_code(e, std::generic_category()).message());
-  // The owner record is written in the stage like the outputs, then the commit list: from the list on, the
-  // stage is whole, and a process killed during the moves leaves a stage the next bake of this job name
+  // The owner records are written in the stage like the outputs, then the commit list: from the list on,
+  // the stage is whole, and a process killed during the moves leaves a stage the next bake of this job name
   // completes (complete_killed_commits); killed before it, its stage is removed and no output moved.
-  const fs::path record = owner_record(job_), staged_record = stage_ / record.filename();
   try {
-    write_file_atomically(staged_record, job_identity(job_));
+    for (const fs::path& name : records) {
+      fs::create_directories((stage_ / name).parent_path());
+      write_file_atomically(stage_ / name, job_identity(job_));
+    }
     std::string list;
-    for (const fs::path& name : staged_) list += name.string() + "\n";
-    write_file_atomically(stage_ / kCommitList, list + record.filename().string() + "\n");
+    for (const fs::path& name : moves) list += name.string() + "\n";
+    write_file_atomically(stage_ / kCommitList, list);
   } catch (const std::system_error& e) {
-    throw OutputError(record.string(), "", std::string("cannot write: ") + e.code().message());
+    throw OutputError(owner_record(job_).string(), "", std::string("cannot write: ") + e.code().message());
   }
   // A stop signal during the moves lets them finish (outputs_moving).
   struct Moving {
     Moving() { ++g_moving; }
     ~Moving() { --g_moving; }
   } moving;
-  for (const fs::path& name : staged_) {
-    const fs::path target = job_.output.dir / name;
+  for (std::size_t k = 0; k < moves.size(); ++k) {
+    const fs::path target = job_.output.dir / moves[k];
     std::error_code ec;
-    fs::rename(stage_ / name, target, ec);  // same folder tree: an atomic replace
+    fs::rename(stage_ / moves[k], target, ec);  // same folder tree: an atomic replace
     if (ec) throw OutputError(target.string(), "", "cannot move into place: " + ec.message());
-    final_paths.push_back(target);
+    if (k < staged_.size()) final_paths.push_back(target);
   }
-  std::error_code ec;
-  fs::rename(staged_record, record, ec);
-  if (ec) throw OutputError(record.string(), "", "cannot move into place: " + ec.message());
   // The moves themselves on the disk: the output folder's entries (and textures/'s).
   std::set<fs::path> folders = {job_.output.dir};
-  for (const fs::path& name : staged_) folders.insert((job_.output.dir / name).parent_path());
+  for (const fs::path& name : moves) folders.insert((job_.output.dir / name).parent_path());
   for (const fs::path& folder : folders) sync_folder(folder);
   staged_.clear();
   committed_ = true;

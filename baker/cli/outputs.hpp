@@ -32,6 +32,15 @@ std::string stage_name(const std::string& job_name);
 std::filesystem::path output_lock_file(const Job& job);
 // <output dir>/.hfbake-<name>.job: the job file whose outputs of that name the folder holds.
 std::filesystem::path owner_record(const Job& job);
+// <output dir>/textures when the job asks for textures (output.textures), else nullopt. Another job may bake
+// into that folder: a job that writes textures owns its name there as in its output folder, with
+// textures_lock_file held and textures_owner_record checked and written as the two above
+// (docs/output_folders.md).
+std::optional<std::filesystem::path> textures_folder(const Job& job);
+// <output dir>/textures/.hfbake-<name>.lock and .hfbake-<name>.job: the lock and the owner record of a job
+// that bakes into that folder under the same name.
+std::filesystem::path textures_lock_file(const Job& job);
+std::filesystem::path textures_owner_record(const Job& job);
 // <output dir>/.hfbake+report.lock: the file a bake or merge of a job with a reference locks as well, since
 // report.json and report.html carry no job name (docs/output_folders.md). No job's lock has this name (a job
 // name never starts with '+').
@@ -83,9 +92,9 @@ std::string azimuth_convention(const Georeference& geo);
 // (0.05).
 void check_layers_finite(const std::string& stem, const LayerSet& layers);
 
-// Refuses (InputError at /name) a job whose output folder records that another job file baked its outputs of
-// the same job name (docs/output_folders.md), unless `overwrite`: what OutputStage's constructor and
-// `validate` check before anything is baked.
+// Refuses (InputError at /name) a job whose output folder, or textures folder (textures_folder), records that
+// another job file baked its outputs of the same job name (docs/output_folders.md), unless `overwrite`: what
+// OutputStage's constructor and `validate` check before anything is baked.
 void check_output_owner(const Job& job, bool overwrite);
 
 class OutputStage {
@@ -95,7 +104,8 @@ class OutputStage {
   // (docs/output_folders.md): the lock <dir>/.hfbake-<name>.lock is held from here to destruction (another
   // process holding it: InputError), and outputs of <name> that <dir>/.hfbake-<name>.job records as baked
   // from another job file are refused (InputError) unless `overwrite`. A job with a reference holds
-  // report_lock_file too and is refused over another job's report (check_report_owner).
+  // report_lock_file too and is refused over another job's report (check_report_owner); a job that writes
+  // textures makes its textures folder and holds textures_lock_file too.
   explicit OutputStage(const Job& job, bool overwrite = false);
   // Removes the staging folder and anything left in it, and the output folder when this job made it and
   // did not commit (it is then empty unless another job writes there).
@@ -125,7 +135,8 @@ class OutputStage {
   std::vector<std::pair<std::string, std::string>> geotiff_metadata(
       const std::vector<std::pair<std::string, std::string>>& attributes) const;
   // Moves every staged file to its final place (each rename is atomic; a folder on the way that is a link
-  // is refused) and records the job file as the outputs' owner; returns the final paths.
+  // is refused) and records the job file as the outputs' owner (owner_record, and textures_owner_record for
+  // a job that writes textures); returns the final paths.
   std::vector<std::filesystem::path> commit();
   // The stale staging folders the constructor removed (to tell the user).
   const std::vector<std::filesystem::path>& stale_removed() const { return stale_removed_; }
@@ -135,7 +146,8 @@ class OutputStage {
 
  private:
   const Job& job_;
-  std::unique_ptr<FolderLock> lock_, report_lock_;  // report_lock_: a job with a reference only
+  // report_lock_: a job with a reference only; textures_lock_: a job that writes textures only.
+  std::unique_ptr<FolderLock> lock_, report_lock_, textures_lock_;
   std::filesystem::path stage_;
   void write_geotiffs(const std::string& stem, const LayerSet& layers);
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage
@@ -143,6 +155,7 @@ class OutputStage {
   Georeference georeference_;
   double texel_x_ = 0, texel_y_ = 0;  // 0: not set, no attribute
   bool created_dir_ = false;          // the output folder did not exist before this job
+  bool created_textures_ = false;     // nor its textures folder
   bool committed_ = false;
 };
 

@@ -4,11 +4,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "cli/version.hpp"
 #include "core/error.hpp"
@@ -21,6 +23,10 @@ namespace hfbake {
 namespace fs = std::filesystem;
 
 namespace {
+
+// How long a suite waits for another process's suite reports into the same folder (a few files: seconds at
+// most, unless that process is stopped).
+constexpr std::chrono::seconds kSuiteLockPatience{60};
 
 void write_atomically(const fs::path& file, const std::string& text) {
   try {
@@ -281,6 +287,10 @@ nlohmann::json append_suite_history(const nlohmann::json& history, nlohmann::jso
   return {{"runs", std::move(runs)}};
 }
 
+fs::path suite_lock_file(const Suite& suite) {
+  return suite.output_dir / ".hfbake+suite.lock";
+}
+
 std::vector<fs::path> suite_report_files(const Suite& suite) {
   return {suite.output_dir / "suite.json", suite.output_dir / "history.json", suite.output_dir / "index.html",
           suite.output_dir / "junit.xml"};
@@ -301,6 +311,17 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
   }
   doc["skipped"] = suite.skipped;
 
+  // history.json is read, extended and replaced: one suite at a time per folder, so that suites finishing
+  // together each add their run, and the four reports are each one suite's.
+  const fs::path lock_file = suite_lock_file(suite);
+  const FolderLock lock(lock_file, kSuiteLockPatience);
+  if (!lock.held())
+    throw std::runtime_error(
+        lock.problem().empty()
+            ? "another hfbake process (" + lock.holder() + ") has been writing suite reports into " +
+                  suite.output_dir.string() + " for " + std::to_string(kSuiteLockPatience.count()) +
+                  " s: wait for it to finish, then bake the suite again"
+            : lock_file.string() + " is no lock file of hfbake's (" + lock.problem() + "): remove it");
   SuiteReports written;
   written.files = suite_report_files(suite);
   const fs::path history_file = written.files[1];

@@ -50,9 +50,17 @@ struct SuiteReports {
 // index.html, junit.xml.
 std::vector<std::filesystem::path> suite_report_files(const Suite& suite);
 
+// <output dir>/.hfbake+suite.lock: the file write_suite_reports locks while it reads history.json and writes
+// the reports (docs/output_folders.md). No job's lock has this name (a job name never starts with '+').
+std::filesystem::path suite_lock_file(const Suite& suite);
+
 // suite.json (per job: status, outputs, metrics, the comparison with the job's baseline), history.json (the
 // last kSuiteHistoryRuns runs), index.html (per job: status, time, reference, the baseline comparison, the
-// last runs' results and a link to the report), junit.xml. Written atomically into suite.output_dir.
+// last runs' results and a link to the report), junit.xml. Written atomically into suite.output_dir, all
+// four under suite_lock_file: a suite that finishes while another process writes its reports into the same
+// folder waits for it (a minute at most), then adds its run to the history that process wrote. Errors (the
+// lock still held after that, or no lock file of hfbake's at its name): std::runtime_error naming the folder,
+// nothing written.
 SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds);
 
 }  // namespace hfbake

@@ -72,11 +72,18 @@ bool remove_tree(const fs::path& path) {
   return ok;
 }
 
-FolderLock::FolderLock(const fs::path& path) : path_(path) {
-  // The file locked must still be the one at `path` (a holder that finished removed it, and the next one
+FolderLock::FolderLock(const fs::path& path, std::chrono::milliseconds patience) : path_(path) {
+  const auto until = std::chrono::steady_clock::now() + patience;
+  for (try_lock(); !held() && problem_.empty() && std::chrono::steady_clock::now() < until; try_lock())
+    usleep(10000);
+}
+
+void FolderLock::try_lock() {
+  holder_.clear();
+  // The file locked must still be the one at `path_` (a holder that finished removed it, and the next one
   // made another): else lock again.
   for (int attempt = 0; attempt < 100; ++attempt) {
-    const int fd = open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+    const int fd = open(path_.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
     if (fd < 0) {
       problem_ = std::error_code(errno, std::generic_category()).message() + " (a link or a folder?)";
       return;
@@ -99,7 +106,7 @@ FolderLock::FolderLock(const fs::path& path) : path_(path) {
     }
     struct stat held {
     }, now{};
-    if (fstat(fd, &held) == 0 && lstat(path.c_str(), &now) == 0 && held.st_ino == now.st_ino &&
+    if (fstat(fd, &held) == 0 && lstat(path_.c_str(), &now) == 0 && held.st_ino == now.st_ino &&
         held.st_dev == now.st_dev) {
       const std::string me = std::to_string(getpid()) + "@" + host_name();
       if (ftruncate(fd, 0) == 0 && pwrite(fd, me.data(), me.size(), 0) < 0) holder_.clear();

@@ -3,6 +3,7 @@
 // link included), and moved into place by rename(2), which replaces a link instead of following it.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -81,10 +82,11 @@ bool is_real_directory(const std::filesystem::path& path);
 bool remove_tree(const std::filesystem::path& path);
 
 // An exclusive flock(2) on `path` (created if missing, never through a link), held until destruction,
-// which removes the file. Taken without waiting: `held()` is false when another process holds it.
+// which removes the file. Taken without waiting unless `patience` is given: then tried again every 10 ms
+// while another process holds it, for up to `patience`. `held()` is false when another process holds it.
 class FolderLock {
  public:
-  explicit FolderLock(const std::filesystem::path& path);
+  explicit FolderLock(const std::filesystem::path& path, std::chrono::milliseconds patience = {});
   ~FolderLock();
   FolderLock(const FolderLock&) = delete;
   FolderLock& operator=(const FolderLock&) = delete;
@@ -96,6 +98,7 @@ class FolderLock {
   const std::string& problem() const { return problem_; }
 
  private:
+  void try_lock();
   std::filesystem::path path_;
   int fd_ = -1;
   std::string holder_, problem_;

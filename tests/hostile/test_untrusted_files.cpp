@@ -16,6 +16,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -43,6 +44,12 @@ std::string read_text(const fs::path& p) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+// The job hash an EXR output records ("" when it cannot be read).
+std::string exr_job_hash(const fs::path& exr) {
+  auto in = OIIO::ImageInput::open(exr.string());
+  return in ? std::string(in->spec().get_string_attribute("hfbake:job_hash")) : std::string();
 }
 
 // Starts `hfbake args` in `dir` (stderr to err_name); `in_child` runs in the child before exec (it knows
@@ -612,13 +619,140 @@ TEST_F(Untrusted, TwoJobsWithAReferenceInOneFolderNeverReplaceEachOthersReport) 
   }
 }
 
-// --- stopped while the outputs move into place (docs/output_folders.md#moving-the-outputs-into-place) ------
-
-// The job hash an EXR output records ("" when it cannot be read).
-std::string exr_job_hash(const fs::path& exr) {
-  auto in = OIIO::ImageInput::open(exr.string());
-  return in ? std::string(in->spec().get_string_attribute("hfbake:job_hash")) : std::string();
+// One folder under different spellings (a "." part, a trailing "/", a link to it) is one folder: the lock is
+// the file in it, whatever path reached it. Of two processes baking different job files named t into it,
+// one bakes and the other is refused, 5 times per spelling.
+TEST_F(Untrusted, OneFolderUnderAnotherSpellingIsLockedAsOne) {
+  fs::create_directories(dir_ / "out");
+  fs::create_directory_symlink(dir_ / "out", dir_ / "link");
+  json a = base_job("out");
+  const std::string ja = write_job(dir_, a, "a.json");
+  for (const std::string spelling : {"out/./", "./out/", "link", "link/../out"}) {
+    SCOPED_TRACE(spelling);
+    json b = base_job(spelling);
+    b["height"]["procedural"]["seed"] = 5;
+    const std::string jb = write_job(dir_, b, "b.json");
+    for (int run = 0; run < 5; ++run) {
+      SCOPED_TRACE(run);
+      for (const auto& e : fs::directory_iterator(dir_ / "out")) fs::remove_all(e.path());
+      const Race r = race(dir_, ja, jb);
+      EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
+      EXPECT_EQ(hfbake_test::stages_in(dir_ / "out"), 0);
+    }
+  }
 }
+
+// A folder inside another job's output folder is a folder of its own: two job files named t, baking with
+// previews and GeoTIFFs into out and out/sub at once, 5 times, both bake, and each folder holds its own job's
+// outputs and record, and no stage.
+TEST_F(Untrusted, ANestedOutputFolderIsAFolderOfItsOwn) {
+  json a = base_job("out"), b = base_job("out/sub");
+  b["height"]["procedural"]["seed"] = 5;
+  for (json* j : {&a, &b}) (*j)["output"]["previews"] = (*j)["output"]["geotiff"] = true;
+  const std::string ja = write_job(dir_, a, "a.json"), jb = write_job(dir_, b, "b.json");
+  for (int run = 0; run < 5; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(dir_ / "out");
+    const pid_t pa = start(dir_, {"bake", ja, "--no-cache", "--quiet"}, "a.txt");
+    const pid_t pb = start(dir_, {"bake", jb, "--no-cache", "--quiet"}, "b.txt");
+    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
+    EXPECT_EQ(ra.exit_code, 0) << ra.err;
+    EXPECT_EQ(rb.exit_code, 0) << rb.err;
+    for (const auto& [folder, job] : {std::pair(dir_ / "out", ja), std::pair(dir_ / "out" / "sub", jb)}) {
+      EXPECT_EQ(read_text(folder / ".hfbake-t.job"), fs::weakly_canonical(job).string());
+      EXPECT_NE(exr_job_hash(folder / "t.p1.exr"), "");
+      EXPECT_TRUE(fs::is_regular_file(folder / "t.p1.ao.tif"));
+      EXPECT_EQ(hfbake_test::stages_in(folder), 0);
+    }
+    EXPECT_NE(exr_job_hash(dir_ / "out" / "t.p1.exr"), exr_job_hash(dir_ / "out" / "sub" / "t.p1.exr"));
+  }
+}
+
+// A job's output folder inside another's is harmless (their names are in different folders), except the
+// textures folder, where a job that writes textures and a job that bakes into it under the same name would
+// write the same files (textures/t.p1.ao.tif: a texture of the first, a GeoTIFF of the second). Started
+// together, 10 times, one bakes and the other is refused in one line naming the textures folder; one after
+// the other, the second is refused naming the first's job file, unless --overwrite.
+TEST_F(Untrusted, AJobBakingIntoAnotherJobsTexturesFolderNeverReplacesItsTextures) {
+  json a = base_job("out"), b = base_job("out/textures");
+  a["output"]["textures"] = {{{"layers", {"ao"}}, {"format", "tif"}}};
+  b["output"]["geotiff"] = true;
+  b["height"]["procedural"]["seed"] = 5;
+  const std::string ja = write_job(dir_, a, "a.json"), jb = write_job(dir_, b, "b.json");
+  const fs::path textures = dir_ / "out" / "textures";
+  for (int run = 0; run < 10; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(dir_ / "out");
+    const Race r = race(dir_, ja, jb);
+    EXPECT_NE(r.lost_line.find(fs::weakly_canonical(textures).string()), std::string::npos) << r.lost_line;
+    EXPECT_EQ(read_text(textures / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
+    EXPECT_TRUE(fs::is_regular_file(textures / "t.p1.ao.tif"));
+  }
+  for (const auto& [first, second] : {std::pair(ja, jb), std::pair(jb, ja)}) {
+    fs::remove_all(dir_ / "out");
+    ASSERT_EQ(hfbake(dir_, {"bake", first, "--no-cache", "--quiet"}).exit_code, 0);
+    const std::string tif = read_text(textures / "t.p1.ao.tif");
+    const Outcome r = hfbake(dir_, {"bake", second, "--no-cache", "--quiet"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("the outputs of job t in " + textures.string() + " were baked from " +
+                                      fs::weakly_canonical(first).string()),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(read_text(textures / "t.p1.ao.tif"), tif);
+    EXPECT_EQ(hfbake(dir_, {"bake", second, "--no-cache", "--quiet", "--overwrite"}).exit_code, 0);
+    EXPECT_NE(read_text(textures / "t.p1.ao.tif"), tif);
+    EXPECT_EQ(read_text(textures / ".hfbake-t.job"), fs::weakly_canonical(second).string());
+  }
+}
+
+// Two suites of different jobs with one output folder, finishing together, 5 times: each one's replacement of
+// history.json is held 0.4 s by the preload library, so that the second reads the history while the first
+// still writes it unless the suite lock (docs/output_folders.md) orders them. Both bake (exit 0), both runs
+// are in history.json, and suite.json, index.html and junit.xml are each one suite's.
+TEST_F(Untrusted, TwoSuitesIntoOneFolderBothKeepTheirRunInTheHistory) {
+  for (const std::string s : {"a", "b"}) {
+    json j = base_job();
+    j["name"] = s;
+    write_job(dir_, j, s + ".json");
+    std::ofstream(dir_ / ("suite_" + s + ".json"))
+        << json{{"version", 1}, {"suite", "s" + s}, {"jobs", {s + ".json"}}, {"output", {{"dir", "out"}}}};
+  }
+  const auto slow_history = [] {
+    setenv("LD_PRELOAD", HFBAKE_SLOW_RENAME, 1);
+    setenv("ASAN_OPTIONS", "verify_asan_link_order=0", 1);
+    setenv("HFBAKE_TEST_SLOW_RENAME", "/out/history.json", 1);
+    setenv("HFBAKE_TEST_SLOW_RENAME_MS", "400", 1);
+  };
+  const fs::path out = dir_ / "out";
+  for (int run = 0; run < 5; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(out);
+    const pid_t pa = start(dir_, {"bake", "suite_a.json", "--no-cache", "--quiet"}, "a.txt", slow_history);
+    const pid_t pb = start(dir_, {"bake", "suite_b.json", "--no-cache", "--quiet"}, "b.txt", slow_history);
+    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
+    EXPECT_EQ(ra.exit_code, 0) << ra.err;
+    EXPECT_EQ(rb.exit_code, 0) << rb.err;
+    const json history = json::parse(read_text(out / "history.json"));
+    ASSERT_EQ(history["runs"].size(), 2u) << history.dump();
+    std::set<std::string> jobs;
+    for (const json& r : history["runs"])
+      for (const auto& [stem, outcome] : r["jobs"].items()) jobs.insert(stem);
+    EXPECT_EQ(jobs, (std::set<std::string>{"a", "b"})) << history.dump();
+    // The last suite to finish wrote all four reports.
+    const json suite = json::parse(read_text(out / "suite.json"));
+    const std::string name = suite["suite"];
+    ASSERT_EQ(suite["jobs"].size(), 1u);
+    EXPECT_EQ(fs::path(suite["jobs"][0]["file"].get<std::string>()).stem(), name.substr(1));
+    EXPECT_NE(read_text(out / "index.html").find("<h1>Suite " + name + "</h1>"), std::string::npos);
+    EXPECT_NE(read_text(out / "junit.xml").find("<testsuite name=\"" + name + "\""), std::string::npos);
+    for (const auto& e : fs::directory_iterator(out))
+      EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+    EXPECT_FALSE(fs::exists(fs::symlink_status(out / ".hfbake+suite.lock")));
+  }
+}
+
+// --- stopped while the outputs move into place (docs/output_folders.md#moving-the-outputs-into-place) ------
 
 class Moves : public Untrusted {
  protected:
