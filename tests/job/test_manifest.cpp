@@ -138,6 +138,9 @@ TEST_F(Manifest, EnumErrorsListTheAllowedValues) {
   e = errors(minimal("", R"([{"method": "p1", "layers": ["ao", "horizn"]}])"));
   ASSERT_EQ(e.size(), 1u);
   EXPECT_NE(e[0].find("/bake/0/layers/1: must be one of \"ao\", \"vsky\""), std::string::npos) << e[0];
+  e = errors(minimal("", R"([{"method": "p2", "subdivide": 3}])"));
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], (dir_ / "x.json").string() + ": /bake/0/subdivide: must be one of 1, 2, 4");
 }
 
 // A missing baseline is found before the bake (it used to fail after hours of baking), and the message says

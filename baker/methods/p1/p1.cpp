@@ -67,6 +67,16 @@ p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
 struct FieldNormals {
   std::vector<float> nx, ny, nz, fx, fy, fz;  // empty when the lighting reads no normals
 };
+// The receivers' normals (P1Params::scene_normals): Scene::normals when set, else normal_at; null: normal_at.
+const Vec3f* given_normals(const Scene& scene, const P1Params& p) {
+  if (!p.scene_normals) return nullptr;
+  if (scene.normals.size() != scene.field.texel_count())
+    throw std::invalid_argument("compute_p1: scene_normals without the scene's normals");
+  return scene.normals.data();
+}
+Vec3f texel_normal(const HeightField& f, const Vec3f* given, int i, int j) {
+  return given ? given[f.index(i, j)] : normal_at(f, i, j);
+}
 // Whether the row lighting reads the texels' normals: for the lobe (ao, bent normals, an exact environment's
 // direct light) and a binned environment's direct light; vsky and the horizon layers need none.
 bool shading_reads_normals(const P1Params& p) {
@@ -80,10 +90,11 @@ FieldNormals field_normals(const Scene& scene, const P1Params& p) {
   if (!shading_reads_normals(p)) return n;
   n.nx.resize(N), n.ny.resize(N), n.nz.resize(N);
   n.fx.resize(facets ? kCornerFacets * N : 0), n.fy.resize(n.fx.size()), n.fz.resize(n.fx.size());
+  const Vec3f* given = given_normals(scene, p);
   tbb::parallel_for(0, f.height, [&](int j) {
     for (int i = 0; i < f.width; ++i) {
       const std::size_t at = f.index(i, j);
-      const Vec3f v = normal_at(f, i, j);
+      const Vec3f v = texel_normal(f, given, i, j);
       n.nx[at] = v.x, n.ny[at] = v.y, n.nz[at] = v.z;
       if (facets) {
         Vec3f fn[kCornerFacets];
@@ -442,7 +453,7 @@ struct RowShading {
 // The strip search's horizons (repeat fields): the near field by each direction's stencil from the texel
 // centre, the far field by the sweep's strips (far_horizons.hpp), shade(...) per row run of a sweep tile.
 template <class Shade>
-void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, int k_end,
+void strip_direction_sums(const HeightField& f, const Vec3f* given, const P1Params& p, int k_begin, int k_end,
                           const RunControl& rc, bool facets, const Shade& shade) {
   const int K = p.directions;
   // The tile's normals, per thread: recomputed (normal_at) when the sweep hands the thread a new tile, kept
@@ -463,7 +474,7 @@ void strip_direction_sums(const HeightField& f, const P1Params& p, int k_begin, 
     for (int y = 0; y < t.height; ++y)
       for (int x = 0; x < t.width; ++x) {
         const int at = y * t.width + x;
-        const Vec3f v = normal_at(f, t.i0 + x, t.j0 + y);
+        const Vec3f v = texel_normal(f, given, t.i0 + x, t.j0 + y);
         n.nx[at] = v.x, n.ny[at] = v.y, n.nz[at] = v.z;
         if (facets) {
           Vec3f fn[kCornerFacets];
@@ -552,7 +563,7 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
                         distance_out ? k_begin : 0, false, f.texel_count(), nb, scratch, true);
   const RowShading shade(scene, p, k_begin, r, hz.planes, hd.planes);
   if (f.wrap == Wrap::repeat) {
-    strip_direction_sums(f, p, k_begin, k_end, rc, facets, shade);
+    strip_direction_sums(f, given_normals(scene, p), p, k_begin, k_end, rc, facets, shade);
   } else if (normals) {
     r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, floor,
                                       shade, &scratch.lanes);
@@ -652,6 +663,7 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
   r.horizon = std::move(sums.horizon);
   r.horizon_distance = std::move(sums.horizon_distance);
   double far_slack = sums.far_slack;
+  const Vec3f* given = given_normals(scene, p);
   const Environment& env = scene.environment;
   const bool uniform_env = env.is_uniform();
   const bool facets = p.direct && p.facet_direct;
@@ -681,9 +693,9 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
     if (p.bent_normal) {
       float* b = bent_sum.data() + 3 * idx;
       const Vec3 v{b[0], b[1], b[2]};
-      const Vec3f n = length(v) > 1e-12
-                          ? Vec3f::from(normalize(v))
-                          : normal_at(f, int(idx % std::size_t(f.width)), int(idx / std::size_t(f.width)));
+      const Vec3f n = length(v) > 1e-12 ? Vec3f::from(normalize(v))
+                                        : texel_normal(f, given, int(idx % std::size_t(f.width)),
+                                                       int(idx / std::size_t(f.width)));
       b[0] = n.x, b[1] = n.y, b[2] = n.z;
     }
   });
@@ -721,7 +733,7 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
         f, p, azimuths, rc,
         [&](int li, int i, int j, float horizon) {
           const std::size_t idx = f.index(i, j);
-          const double ndl = dot(normal_at(f, i, j).d(), dir[li]);
+          const double ndl = dot(texel_normal(f, given, i, j).d(), dir[li]);
           if (ndl <= 0 && !facets) return;
           const double frac = disk_fraction_above(elevation[li], horizon, radius[li]);
           if (frac <= 0) return;

@@ -63,6 +63,9 @@ struct P1Params {
   // P1Result::horizon by direction, [k * texels + texel], instead of by texel: what a per-direction
   // consumer (P2's lobe split) reads without striding across K floats per texel.
   bool horizon_by_direction = false;
+  // The receivers' normals from Scene::normals instead of normal_at (not a job parameter): P2 on a
+  // subdivided field (P2Params::subdivide), whose original texels keep the original field's normals.
+  bool scene_normals = false;
 };
 
 // The layers as the EXR stores them (interleaved per texel), so bake_p1 hands them on without a copy.
@@ -98,7 +101,8 @@ P1Params read_p1_params(Params& in, const FieldShape& field);
 const std::vector<std::string>& p1_layer_names();
 
 // Reads the scene's heights, environment and lights only (normals are recomputed per tile with
-// normal_at; Scene::normals and the surface may be empty). Memory: the requested layers (4 bytes per texel
+// normal_at, or read from Scene::normals with P1Params::scene_normals; else Scene::normals and the surface
+// may be empty). Memory: the requested layers (4 bytes per texel
 // and channel; direct from a uniform sky also its 4-byte ao sum) plus the sweep's bounded line buffers:
 // p1_working_bytes.
 P1Result compute_p1(const Scene& scene, const P1Params& params, const RunControl& rc);

@@ -10,6 +10,7 @@
 #include "core/direction_blocks.hpp"
 #include "core/error.hpp"
 #include "core/threads.hpp"
+#include "field/subdivide.hpp"
 #include "job/params.hpp"
 #include "methods/p1/p1.hpp"
 
@@ -48,6 +49,8 @@ P2Params read_p2_params(Params& in, int job_bounces) {
   p.bounces = in.integer("bounces", -1, 0, 64);
   p.wrap_periods = in.integer("wrap_periods", 1, 1, 16);
   p.supersampling = in.integer("supersampling", 1, 1, 16);
+  p.subdivide = in.integer("subdivide", 1, 1, 4);
+  if (p.subdivide == 3) in.fail("subdivide", "must be 1, 2 or 4");
   p.visibility =
       in.choice("visibility", "tree", {"tree", "naive"}) == "tree" ? P2Visibility::tree : P2Visibility::naive;
   p.near_radius = in.number("near_radius", p.near_radius, 0, 16);
@@ -77,6 +80,7 @@ P1Params p2_direct_params(const P2Params& params, bool horizons) {
   // P1's exact near field reaches at least as far as the texels' own near-field gather.
   if (params.facet_senders) p1.near_radius = std::max(p1.near_radius, params.near_radius);
   p1.horizon_by_direction = true;
+  p1.scene_normals = params.scene_normals;
   return p1;
 }
 
@@ -93,7 +97,8 @@ bool p2_keeps_horizons(const FieldShape& field, const P2Params& p, int job_bounc
   return 4.0 * p.directions * double(field.width) * double(field.height) <= kP2KeptHorizonBytes;
 }
 
-double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
+namespace {
+double field_working_bytes(const FieldShape& shape, const P2Params& p) {
   const double N = double(shape.width) * double(shape.height);
   const int B = std::max(0, p.bounces), K = p.directions;
   const bool kept = p2_keeps_horizons(shape, p, B);
@@ -139,6 +144,78 @@ double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
   // Writing the layers: direct and indirect (and the kept bounces) beside them.
   const double output = (24 + (keep ? 12.0 * B : 0)) * N;
   return std::max(output, std::max(p1_phase, bounce_phase) - layers);
+}
+}  // namespace
+
+double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
+  if (p.subdivide == 1) return field_working_bytes(shape, p);
+  // Subdivided: the fine scene (heights, normals, and albedo and emission counted as images: 40 bytes a
+  // fine texel) beside the fine bake, whose layers (counted here) are then read into the coarse ones (which
+  // the estimate counts itself).
+  const FieldShape fine = subdivided_shape(shape, p.subdivide);
+  const double Nf = double(fine.width) * double(fine.height), N = double(shape.width) * double(shape.height);
+  const double fine_layers = 12.0 * double(p.layers.size()) * Nf;
+  const double bake = 40 * Nf + field_working_bytes(fine, p2_fine_params(p)) + fine_layers;
+  const double read_back = fine_layers + 12.0 * double(p.layers.size()) * N;
+  return std::max(bake, read_back) - 12.0 * double(p.layers.size()) * N;
+}
+
+Scene p2_subdivided_scene(const Scene& scene, int s) {
+  Scene fine;
+  fine.name = scene.name;
+  fine.environment = scene.environment;
+  fine.lights = scene.lights;
+  fine.bounces = scene.bounces;
+  fine.curvature = scene.curvature;
+  fine.refraction = scene.refraction;
+  const HeightField& c = scene.field;
+  fine.field = subdivided_field(c, s);
+  fine.normals = compute_normals(fine.field);
+  const bool own = scene.normals.size() == c.texel_count();
+  tbb::parallel_for(0, c.height, [&](int j) {
+    for (int i = 0; i < c.width; ++i)
+      fine.normals[fine_index_of(fine.field, s, i, j)] =
+          own ? scene.normals[c.index(i, j)] : normal_at(c, i, j);
+  });
+  const SurfaceMap& albedo = scene.surface.albedo;
+  if (albedo.size() == c.texel_count() && albedo.bytes() > 0) {
+    std::vector<Rgb> v(c.texel_count());
+    for (std::size_t t = 0; t < v.size(); ++t) v[t] = albedo[t];
+    fine.surface.albedo.assign(subdivided_values(c, s, v));
+  } else if (!albedo.empty()) {
+    fine.surface.albedo.assign(fine.field.texel_count(), albedo[0]);
+  }
+  if (scene.surface.emission.size() == c.texel_count())
+    fine.surface.emission = subdivided_values(c, s, scene.surface.emission);
+  return fine;
+}
+
+P2Params p2_fine_params(const P2Params& params) {
+  P2Params p = params;
+  p.near_radius = params.near_radius * params.subdivide;
+  p.subdivide = 1;
+  p.scene_normals = true;
+  return p;
+}
+
+LayerSet p2_original_texels(const LayerSet& fine, const FieldShape& coarse, int s) {
+  LayerSet out;
+  out.width = coarse.width, out.height = coarse.height;
+  out.attributes = fine.attributes;
+  FieldShape shape = coarse;
+  shape.width = fine.width, shape.height = fine.height;
+  for (const Layer& l : fine.layers) {
+    Layer& o = out.add(l.name, l.channels);
+    const std::size_t C = l.channels.size();
+    tbb::parallel_for(0, coarse.height, [&](int j) {
+      for (int i = 0; i < coarse.width; ++i) {
+        const std::size_t from = C * fine_index_of(shape, s, i, j);
+        std::copy_n(l.data.begin() + std::ptrdiff_t(from), C,
+                    o.data.begin() + std::ptrdiff_t(C * (std::size_t(j) * std::size_t(coarse.width) + i)));
+      }
+    });
+  }
+  return out;
 }
 
 P2State p2_stage0(const Scene& scene, const P2Params& params, const RunControl& rc) {
@@ -290,7 +367,13 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
 
 LayerSet bake_p2(const Scene& scene, const MethodConfig& config, const RunControl& rc) {
   const P2Params& p = config.get<P2Params>();
-  return p2_layers(p, p.bounces, compute_p2(scene, p, rc));
+  if (p.subdivide == 1) return p2_layers(p, p.bounces, compute_p2(scene, p, rc));
+  LayerSet fine;
+  {
+    const Scene subdivided = p2_subdivided_scene(scene, p.subdivide);
+    fine = p2_layers(p, p.bounces, compute_p2(subdivided, p2_fine_params(p), rc));
+  }
+  return p2_original_texels(fine, scene.field, p.subdivide);
 }
 
 LayerSet p2_layers(const P2Params& p, int B, const P2Result& r) {
@@ -416,9 +499,8 @@ int p2_stages(const MethodConfig& config) {
   return 1 + config.get<P2Params>().bounces;
 }
 
-LayerSet p2_bake_stage(const Scene& scene, const MethodConfig& config, int stage, LayerSet&& previous,
-                       const RunControl& rc) {
-  const P2Params& p = config.get<P2Params>();
+LayerSet bake_stage(const Scene& scene, const P2Params& p, int stage, LayerSet&& previous,
+                    const RunControl& rc) {
   const int B = p.bounces;
   P2State s = stage == 0 ? p2_stage0(scene, p, rc) : stage_state_before(stage, std::move(previous));
   if (stage > 0) p2_bounce(scene, p, B, s, rc);
@@ -478,9 +560,8 @@ std::uint64_t* stat_field(P2SweepStats& t, int i) {
   return f[i];
 }
 
-LayerSet p2_bake_stage_block(const Scene& scene, const MethodConfig& config, int stage, int block,
-                             LayerSet&& previous, const RunControl& rc) {
-  const P2Params& p = config.get<P2Params>();
+LayerSet bake_stage_block(const Scene& scene, const P2Params& p, int stage, int block, LayerSet&& previous,
+                          const RunControl& rc) {
   const int B = p.bounces;
   if (stage == 0) return p1_block_layers(scene, p, block, rc);
   const P2State s = stage_state_before(stage, std::move(previous));
@@ -507,9 +588,8 @@ LayerSet p2_bake_stage_block(const Scene& scene, const MethodConfig& config, int
   return out;
 }
 
-LayerSet p2_finish_stage_blocks(const Scene& scene, const MethodConfig& config, int stage,
-                                LayerSet&& previous, LayerSet&& sums, const RunControl& rc) {
-  const P2Params& p = config.get<P2Params>();
+LayerSet finish_stage_blocks(const Scene& scene, const P2Params& p, int stage, LayerSet&& previous,
+                             LayerSet&& sums, const RunControl& rc) {
   const int B = p.bounces;
   if (stage == 0)
     return state_layers(p2_state_of_direct(scene, p, p1_of_block_layers(scene, p, std::move(sums), rc)),
@@ -539,10 +619,89 @@ LayerSet p2_finish_stage_blocks(const Scene& scene, const MethodConfig& config, 
   return state_layers(std::move(s), scene.field.width, scene.field.height, stage == B);
 }
 
+// A subdivided bake's stages (P2Params::subdivide) run on the subdivided scene; the farm's files hold the
+// fine state in layers of the job's field (the shard file's size): each fine layer's values in their order,
+// zero-padded to width * height * channels * s^2 floats, channels "f<k>.<channel>" (k < s^2), unpacked
+// before use. The merge adds same-named layers value by value, so packed blocks add as the fine ones do.
+LayerSet packed(LayerSet&& fine, const FieldShape& coarse, int s) {
+  if (s == 1) return std::move(fine);
+  LayerSet out;
+  out.width = coarse.width, out.height = coarse.height;
+  out.attributes = std::move(fine.attributes);
+  const std::size_t room = std::size_t(coarse.width) * std::size_t(coarse.height) * std::size_t(s * s);
+  for (Layer& l : fine.layers) {
+    std::vector<std::string> ch;
+    for (int k = 0; k < s * s; ++k)
+      for (const std::string& c : l.channels) {
+        std::string name = "f";
+        name += std::to_string(k);
+        name += '.';
+        ch.push_back(name + c);
+      }
+    l.data.resize(room * l.channels.size(), 0.0f);
+    out.adopt(l.name, std::move(ch), std::move(l.data));
+  }
+  return out;
+}
+LayerSet unpacked(LayerSet&& in, const FieldShape& coarse, int s) {
+  if (s == 1) return std::move(in);
+  const FieldShape fine = subdivided_shape(coarse, s);
+  LayerSet out;
+  out.width = fine.width, out.height = fine.height;
+  out.attributes = std::move(in.attributes);
+  const std::size_t N = std::size_t(fine.width) * std::size_t(fine.height);
+  for (Layer& l : in.layers) {
+    const std::size_t C = l.channels.size() / std::size_t(s * s);
+    std::vector<std::string> ch;
+    for (std::size_t c = 0; c < C; ++c) ch.push_back(l.channels[c].substr(l.channels[c].find('.') + 1));
+    l.data.resize(N * C);
+    l.data.shrink_to_fit();
+    out.adopt(l.name, std::move(ch), std::move(l.data));
+  }
+  return out;
+}
+
+LayerSet p2_bake_stage(const Scene& scene, const MethodConfig& config, int stage, LayerSet&& previous,
+                       const RunControl& rc) {
+  const P2Params& p = config.get<P2Params>();
+  const int s = p.subdivide;
+  if (s == 1) return bake_stage(scene, p, stage, std::move(previous), rc);
+  const Scene fine = p2_subdivided_scene(scene, s);
+  return packed(bake_stage(fine, p2_fine_params(p), stage, unpacked(std::move(previous), scene.field, s), rc),
+                scene.field, s);
+}
+
+LayerSet p2_bake_stage_block(const Scene& scene, const MethodConfig& config, int stage, int block,
+                             LayerSet&& previous, const RunControl& rc) {
+  const P2Params& p = config.get<P2Params>();
+  const int s = p.subdivide;
+  if (s == 1) return bake_stage_block(scene, p, stage, block, std::move(previous), rc);
+  const Scene fine = p2_subdivided_scene(scene, s);
+  return packed(bake_stage_block(fine, p2_fine_params(p), stage, block,
+                                 unpacked(std::move(previous), scene.field, s), rc),
+                scene.field, s);
+}
+
+LayerSet p2_finish_stage_blocks(const Scene& scene, const MethodConfig& config, int stage,
+                                LayerSet&& previous, LayerSet&& sums, const RunControl& rc) {
+  const P2Params& p = config.get<P2Params>();
+  const int s = p.subdivide;
+  if (s == 1) return finish_stage_blocks(scene, p, stage, std::move(previous), std::move(sums), rc);
+  const Scene fine = p2_subdivided_scene(scene, s);
+  return packed(
+      finish_stage_blocks(fine, p2_fine_params(p), stage, unpacked(std::move(previous), scene.field, s),
+                          unpacked(std::move(sums), scene.field, s), rc),
+      scene.field, s);
+}
+
 LayerSet p2_finish_stages(const Scene& scene, const MethodConfig& config, LayerSet&& last,
                           const RunControl&) {
   const P2Params& p = config.get<P2Params>();
-  return p2_layers(p, p.bounces, p2_result(state_of(std::move(last)), scene.field.width, scene.field.height));
+  const int s = p.subdivide;
+  const FieldShape fine = s == 1 ? FieldShape(scene.field) : subdivided_shape(scene.field, s);
+  LayerSet l = p2_layers(
+      p, p.bounces, p2_result(state_of(unpacked(std::move(last), scene.field, s)), fine.width, fine.height));
+  return s == 1 ? l : p2_original_texels(l, scene.field, s);
 }
 
 }  // namespace

@@ -38,10 +38,10 @@
 //
 // Parameters (schemas/methods/p2.schema.json): directions (K, default 64), bounces (default: the job's
 // "bounces"), visibility ("tree" or "naive": the same output, the naive march is for benchmarks and
-// checks), supersampling (S, default 1), senders ("facets", default, or "texels"), near_radius (texels,
-// default 4; 0 = off; facet senders only), line_profile ("exact", default, or "columns"; facet senders
-// only), wrap_periods, layers: indirect, total, direct (default: all three), indirect_b1 ..
-// indirect_b<bounces>.
+// checks), supersampling (S, default 1), subdivide (1, 2 or 4, default 1), senders ("facets", default, or
+// "texels"), near_radius (texels, default 4; 0 = off; facet senders only), line_profile ("exact", default, or
+// "columns"; facet senders only), wrap_periods, layers: indirect, total, direct (default: all three),
+// indirect_b1 .. indirect_b<bounces>.
 #pragma once
 
 #include <vector>
@@ -71,6 +71,13 @@ struct P2Params {
   // row and diagonal bend between columns; facet senders only; IndirectSweepSpec::exact_profile), or
   // straight between column samples (false, job key line_profile "columns": the method as published).
   bool exact_profile = true;
+  // The field subdivided this many times a texel on its triangulation (1, 2 or 4; p2_subdivided_scene),
+  // baked, and every layer read at the original texels (docs/methods/p2.md, rough ground). Lengths in
+  // texels (near_radius) keep their world length: p2_fine_params scales them.
+  int subdivide = 1;
+  // P1 reads the receivers' normals from the scene (P1Params::scene_normals; not a job parameter): set by
+  // p2_fine_params for the subdivided scene, whose original texels keep the original field's normals.
+  bool scene_normals = false;
   std::vector<std::string> layers;  // empty: indirect, total, direct
   // Keep each bounce's indirect apart (P2Result::indirect_b); bake_p2 keeps them only for indirect_b
   // layers (12 bytes a texel and bounce).
@@ -102,6 +109,8 @@ struct P2Result {
   P2SweepStats stats;                        // summed over the bounces' sweeps
 };
 
+// Bakes the scene it is given: params.subdivide is bake_p2's (and the farm's stages'), which hand it the
+// subdivided scene and p2_fine_params.
 P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl& rc);
 
 // compute_p2 as its stages (the farm runs them as successive tasks, baker/farm): stage 0 P1's direct light
@@ -145,6 +154,17 @@ P2Result p2_result(P2State&& state, int width, int height);
 struct P1Params;
 P1Params p2_direct_params(const P2Params& params, bool horizons);
 P1Params p2_horizon_params(const P2Params& params);
+// With subdivide s > 1, p2 bakes the scene subdivided on its triangulation (field/subdivide.hpp): the fine
+// field; albedo and emission interpolated over the coarse facets as the reference interpolates them (so the
+// fine facets carry the same light); the fine field's normals (compute_normals), except at the original
+// texels (s i, s j), which keep the scene's, the normals the reference's receivers there have. Its
+// parameters: subdivide 1, near_radius times s (the same world length), P1 reading the scene's normals.
+// bake_p2 reads each layer back at the original texels (p2_original_texels).
+Scene p2_subdivided_scene(const Scene& scene, int s);
+P2Params p2_fine_params(const P2Params& params);
+// The layers of the fine bake at the original texels: texel (i, j) of `coarse` is fine texel (s i, s j).
+LayerSet p2_original_texels(const LayerSet& fine, const FieldShape& coarse, int s);
+
 // Bytes compute_p2 and bake_p2 hold at their peak beyond the output layers (P1's horizons, kept or one
 // block's, the exit radiance, the sweep's sums, the line buffers): the method table's working_bytes.
 // params with bounces resolved (>= 0).
