@@ -3,7 +3,8 @@
 # direction blocks across the shards, a bounce's blocks from the whole field's previous stage) merges to the (float) bits
 # of a single-machine bake, for 1, 2, 3 and 5 shards (K = 16: 8 blocks of 2 directions, so 3 and 5 shards
 # take unequal runs of blocks), with a second p2 entry of 1 bounce (fewer stages, K = 8: blocks of one
-# direction, texel senders) and a direction-dividing method beside them. A stage whose previous stage is
+# direction, texel senders), a third subdivided on its triangulation (its stages hold the fine field's
+# state) and a direction-dividing method beside them. A stage whose previous stage is
 # missing is refused naming a missing file, before anything is baked; so is a merge without a block.
 set -u
 H=$1 W=$2
@@ -18,7 +19,8 @@ cat >job.json <<'J'
  "bake": [{"method": "p2", "directions": 16,
            "layers": ["indirect", "total", "direct", "indirect_b1", "indirect_b2"]},
           {"method": "hbao", "directions": 10, "radius": 5},
-          {"method": "p2", "directions": 8, "bounces": 1, "senders": "texels"}],
+          {"method": "p2", "directions": 8, "bounces": 1, "senders": "texels"},
+          {"method": "p2", "directions": 8, "subdivide": 2, "layers": ["indirect", "indirect_b2"]}],
  "output": {"dir": "out", "previews": true, "pixel_type": "float"}}
 J
 "$H" validate job.json --quiet || fail "test job invalid"
