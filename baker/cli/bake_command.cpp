@@ -473,6 +473,10 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
   for (const fs::path& file : files) {
     const std::size_t errors_before = suite_errors.size();
     if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
+      if (const std::string problem = suite_folder_problem(*suite); !problem.empty()) {
+        suite_errors.push_back(problem);
+        continue;
+      }
       jobs.insert(jobs.end(), suite->jobs.begin(), suite->jobs.end());
       for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
       if (!quiet) std::fprintf(stderr, "hfbake: %s: suite of %zu jobs\n", file.c_str(), suite->jobs.size());
@@ -579,6 +583,10 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     const std::size_t errors_before = suite_errors.size();
     if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
       if (options.out) suite->output_dir = fs::absolute(*options.out / suite->name);
+      if (const std::string problem = suite_folder_problem(*suite); !problem.empty()) {
+        suite_errors.push_back(problem);  // nothing of the suite baked
+        continue;
+      }
       for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
       for (const fs::path& job : suite->jobs)
         inputs.push_back({job, suite->output_dir / job.stem(), int(suites.size())});

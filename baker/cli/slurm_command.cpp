@@ -126,6 +126,7 @@ int run_slurm(const SlurmOptions& o) {
     std::vector<std::pair<fs::path, std::optional<fs::path>>> members;
     if (std::optional<Suite> suite = load_suite(f, errors)) {
       if (o.out) suite->output_dir = fs::absolute(*o.out / suite->name);
+      if (const std::string problem = suite_folder_problem(*suite); !problem.empty()) return fail(problem);
       for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
       for (const fs::path& j : suite->jobs) members.push_back({j, suite->output_dir / j.stem()});
       if (common.empty()) common = suite->output_dir;

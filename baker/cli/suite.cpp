@@ -291,6 +291,15 @@ fs::path suite_lock_file(const Suite& suite) {
   return suite.output_dir / ".hfbake+suite.lock";
 }
 
+std::string suite_folder_problem(const Suite& suite) {
+  const fs::path lock = suite_lock_file(suite);
+  std::error_code ec;
+  const fs::file_status ls = fs::symlink_status(lock, ec);
+  if (!fs::exists(ls) || fs::is_regular_file(ls)) return "";
+  return suite.file.string() + ": /output/dir: " + lock.string() + " is no lock file of hfbake's (" +
+         (fs::is_symlink(ls) ? "a link" : "not a file") + "): remove it";
+}
+
 std::vector<fs::path> suite_report_files(const Suite& suite) {
   return {suite.output_dir / "suite.json", suite.output_dir / "history.json", suite.output_dir / "index.html",
           suite.output_dir / "junit.xml"};

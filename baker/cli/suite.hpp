@@ -54,6 +54,10 @@ std::vector<std::filesystem::path> suite_report_files(const Suite& suite);
 // the reports (docs/output_folders.md). No job's lock has this name (a job name never starts with '+').
 std::filesystem::path suite_lock_file(const Suite& suite);
 
+// What write_suite_reports would refuse only after the suite's jobs have baked: its lock's name taken by
+// anything but a file (a link, a folder). The error line (the suite file, /output/dir), or "" when none.
+std::string suite_folder_problem(const Suite& suite);
+
 // suite.json (per job: status, outputs, metrics, the comparison with the job's baseline), history.json (the
 // last kSuiteHistoryRuns runs), index.html (per job: status, time, reference, the baseline comparison, the
 // last runs' results and a link to the report), junit.xml. Written atomically into suite.output_dir, all

@@ -752,6 +752,33 @@ TEST_F(Untrusted, TwoSuitesIntoOneFolderBothKeepTheirRunInTheHistory) {
   }
 }
 
+// A link planted at the suite's lock name: validate and bake refuse the suite with one line naming the suite
+// file and the lock, before any of its jobs bakes, and the link's target is untouched.
+TEST_F(Untrusted, ALinkAtTheSuitesLockIsRefusedBeforeAnyJobBakes) {
+  json j = base_job();
+  j["name"] = "a";
+  write_job(dir_, j, "a.json");
+  std::ofstream(dir_ / "suite.json") << json{
+      {"version", 1}, {"suite", "s"}, {"jobs", {"a.json"}}, {"output", {{"dir", "out"}}}};
+  const fs::path out = dir_ / "out", target = dir_ / "target.txt";
+  fs::create_directories(out);
+  std::ofstream(target) << "kept";
+  fs::create_symlink(target, out / ".hfbake+suite.lock");
+  for (const bool bake : {false, true}) {
+    SCOPED_TRACE(bake ? "bake" : "validate");
+    const Outcome r = bake ? hfbake(dir_, {"bake", "suite.json", "--no-cache", "--quiet"})
+                           : hfbake(dir_, {"validate", "suite.json", "--quiet"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("suite.json: /output/dir: " + (out / ".hfbake+suite.lock").string() +
+                                      " is no lock file of hfbake's (a link)"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(out / "a")) << "a job of the suite baked";
+    EXPECT_EQ(read_text(target), "kept");
+  }
+}
+
 // --- stopped while the outputs move into place (docs/output_folders.md#moving-the-outputs-into-place) ------
 
 class Moves : public Untrusted {
