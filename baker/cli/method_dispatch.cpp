@@ -15,6 +15,7 @@
 #include "cli/scene_loader.hpp"
 #include "cli/texture_plan.hpp"
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "report/compare.hpp"
 
 namespace hfbake {
@@ -98,13 +99,9 @@ void check_output_folder(const Job& job) {
   std::vector<fs::path> locks = {output_lock_file(job)};
   if (job.has_reference) locks.push_back(report_lock_file(job));
   if (textures_folder(job)) locks.push_back(textures_lock_file(job));
-  for (const fs::path& lock : locks) {
-    const fs::file_status ls = fs::symlink_status(lock, ec);
-    if (fs::exists(ls) && !fs::is_regular_file(ls))
-      throw InputError(job.file.string(), "/output/dir",
-                       lock.string() + " is no lock file of hfbake's (" +
-                           (fs::is_symlink(ls) ? "a link" : "not a file") + "): remove it");
-  }
+  for (const fs::path& lock : locks)
+    if (const std::string problem = lock_name_problem(lock); !problem.empty())
+      throw InputError(job.file.string(), "/output/dir", problem);
   const fs::path textures = job.output.dir / "textures";
   const fs::file_status ts = fs::symlink_status(textures, ec);
   if (textures_folder(job) && fs::exists(ts) && !fs::is_directory(ts))

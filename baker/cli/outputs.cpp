@@ -377,38 +377,28 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
     if (created_textures_) fs::remove(job.output.dir / "textures", rm);
     if (created_dir_) fs::remove(job.output.dir, rm);
   };
-  // One writer per job name and folder (docs/output_folders.md).
-  const fs::path lock_file = output_lock_file(job);
-  lock_ = std::make_unique<FolderLock>(lock_file);
-  if (!lock_->held()) {
-    const std::string problem = lock_->problem(), holder = lock_->holder();
+  // Takes `slot`'s lock on `file`, or gives up every lock and refuses: not a lock file, or held by another
+  // process (busy: what that process does, after "another hfbake process (<holder>) ").
+  const auto take = [&](std::unique_ptr<FolderLock>& slot, const fs::path& file, const std::string& busy) {
+    slot = std::make_unique<FolderLock>(file);
+    if (slot->held()) return;
+    const std::string problem = slot->problem(), holder = slot->holder();
     release();
-    if (!problem.empty())
-      throw InputError(job.file.string(), "/output/dir",
-                       lock_file.string() + " is no lock file of hfbake's (" + problem + "): remove it");
-    throw InputError(job.file.string(), "/output/dir",
-                     "another hfbake process (" + holder + ") is baking job " + job.name + " into " +
-                         job.output.dir.string() +
-                         " now: wait for it, or give this job another name or folder");
-  }
+    throw InputError(
+        job.file.string(), "/output/dir",
+        problem.empty() ? "another hfbake process (" + holder + ") " + busy : not_a_lock_file(file, problem));
+  };
+  // One writer per job name and folder (docs/output_folders.md).
+  take(lock_, output_lock_file(job),
+       "is baking job " + job.name + " into " + job.output.dir.string() +
+           " now: wait for it, or give this job another name or folder");
   // A job with a reference also writes report.json and report.html, which carry no job name: one such job
   // at a time per folder, and only over its own report (docs/output_folders.md).
-  if (job.has_reference) {
-    const fs::path report_lock = report_lock_file(job);
-    report_lock_ = std::make_unique<FolderLock>(report_lock);
-    if (!report_lock_->held()) {
-      const std::string problem = report_lock_->problem(), holder = report_lock_->holder();
-      release();
-      if (!problem.empty())
-        throw InputError(job.file.string(), "/output/dir",
-                         report_lock.string() + " is no lock file of hfbake's (" + problem + "): remove it");
-      throw InputError(job.file.string(), "/output/dir",
-                       "another hfbake process (" + holder + ") is baking a job with a reference into " +
-                           job.output.dir.string() +
-                           " now (report.json and report.html carry no job name): wait for it, or give "
-                           "this job an output folder of its own");
-    }
-  }
+  if (job.has_reference)
+    take(report_lock_, report_lock_file(job),
+         "is baking a job with a reference into " + job.output.dir.string() +
+             " now (report.json and report.html carry no job name): wait for it, or give this job an output "
+             "folder of its own");
   // A job that writes textures holds its name's lock in the textures folder too: another job may bake into
   // that folder (docs/output_folders.md).
   if (const std::optional<fs::path> textures = textures_folder(job)) {
@@ -420,21 +410,10 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
                        textures->string() + " is not a folder (a link?): the textures are written inside " +
                            job.output.dir.string() + " only");
     }
-    const fs::path textures_lock = textures_lock_file(job);
-    textures_lock_ = std::make_unique<FolderLock>(textures_lock);
-    if (!textures_lock_->held()) {
-      const std::string problem = textures_lock_->problem(), holder = textures_lock_->holder();
-      release();
-      if (!problem.empty())
-        throw InputError(
-            job.file.string(), "/output/dir",
-            textures_lock.string() + " is no lock file of hfbake's (" + problem + "): remove it");
-      throw InputError(job.file.string(), "/output/dir",
-                       "another hfbake process (" + holder + ") is baking job " + job.name + " into " +
-                           textures->string() +
-                           ", where this job writes its textures, now: wait for it, or "
-                           "give this job another name or folder");
-    }
+    take(textures_lock_, textures_lock_file(job),
+         "is baking job " + job.name + " into " + textures->string() +
+             ", where this job writes its textures, now: wait for it, or give this job another name or "
+             "folder");
   }
   // A process killed while it moved this job's outputs (it held the lock) left them part moved: its moves
   // are completed first, so that the folder holds one bake's outputs and the record names its job file.

@@ -292,12 +292,8 @@ fs::path suite_lock_file(const Suite& suite) {
 }
 
 std::string suite_folder_problem(const Suite& suite) {
-  const fs::path lock = suite_lock_file(suite);
-  std::error_code ec;
-  const fs::file_status ls = fs::symlink_status(lock, ec);
-  if (!fs::exists(ls) || fs::is_regular_file(ls)) return "";
-  return suite.file.string() + ": /output/dir: " + lock.string() + " is no lock file of hfbake's (" +
-         (fs::is_symlink(ls) ? "a link" : "not a file") + "): remove it";
+  const std::string problem = lock_name_problem(suite_lock_file(suite));
+  return problem.empty() ? "" : suite.file.string() + ": /output/dir: " + problem;
 }
 
 std::vector<fs::path> suite_report_files(const Suite& suite) {
@@ -325,12 +321,12 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
   const fs::path lock_file = suite_lock_file(suite);
   const FolderLock lock(lock_file, kSuiteLockPatience);
   if (!lock.held())
-    throw std::runtime_error(
-        lock.problem().empty()
-            ? "another hfbake process (" + lock.holder() + ") has been writing suite reports into " +
-                  suite.output_dir.string() + " for " + std::to_string(kSuiteLockPatience.count()) +
-                  " s: wait for it to finish, then bake the suite again"
-            : lock_file.string() + " is no lock file of hfbake's (" + lock.problem() + "): remove it");
+    throw std::runtime_error(lock.problem().empty()
+                                 ? "another hfbake process (" + lock.holder() +
+                                       ") has been writing suite reports into " + suite.output_dir.string() +
+                                       " for " + std::to_string(kSuiteLockPatience.count()) +
+                                       " s: wait for it to finish, then bake the suite again"
+                                 : not_a_lock_file(lock_file, lock.problem()));
   SuiteReports written;
   written.files = suite_report_files(suite);
   const fs::path history_file = written.files[1];

@@ -81,6 +81,13 @@ bool is_real_directory(const std::filesystem::path& path);
 // when something could not be removed (what could, is).
 bool remove_tree(const std::filesystem::path& path);
 
+// The line for a lock's name that holds no lock file of hfbake's: "<lock> is no lock file of hfbake's (why):
+// remove it" (why: FolderLock::problem, or what lock_name_problem found).
+std::string not_a_lock_file(const std::filesystem::path& lock, const std::string& why);
+// What a FolderLock on `lock` would refuse before it is taken: its name taken by anything but a file (a link,
+// a folder), as not_a_lock_file's line; "" when the name is free or a file.
+std::string lock_name_problem(const std::filesystem::path& lock);
+
 // An exclusive flock(2) on `path` (created if missing, never through a link), held until destruction,
 // which removes the file. Taken without waiting unless `patience` is given: then tried again every 10 ms
 // while another process holds it, for up to `patience`. `held()` is false when another process holds it.

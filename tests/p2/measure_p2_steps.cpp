@@ -7,23 +7,10 @@
 #include <cstdlib>
 #include <vector>
 
-#include "methods/p2/bake_p2.hpp"
+#include "p2_test_scenes.hpp"
 #include "stepped_fields.hpp"
 
 using namespace hfbake;
-
-namespace {
-
-LayerSet bake_p2_defaults(const Scene& scene, int K) {
-  P2Params p;
-  p.directions = K;
-  p.bounces = 1;
-  p.keep_bounces = false;
-  p.layers = {"direct", "indirect", "total"};
-  return p2_layers(p, 1, compute_p2(scene, p, RunControl{}));
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   const int size = argc > 1 ? std::atoi(argv[1]) : 128;

@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
-#include <random>
 #include <utility>
 
 #include "core/error.hpp"
@@ -18,6 +17,7 @@
 #include "methods/p1/p1.hpp"
 #include "methods/p2/bake_p2.hpp"
 #include "methods/p2/indirect_gather.hpp"
+#include "p2_test_scenes.hpp"
 #include "reference/bake_reference.hpp"
 #include "sweep/sweep_lines.hpp"
 
@@ -350,12 +350,7 @@ TEST(P2Bake, BouncesOnARoughFieldMatchTheReference) {
 // below a texel's first crossing is the facet at the texel itself: taking each facet's light at one vertex
 // puts the first bounce 18 % high under the sky and 10 % high under the emission.
 TEST(P2Bake, WhiteNoiseGroundMatchesTheReference) {
-  HeightField f;
-  f.width = f.height = 40;
-  f.z.resize(f.texel_count());
-  std::mt19937 rng(2);
-  std::normal_distribution<float> noise(0.0f, 1.8f);
-  for (float& z : f.z) z = noise(rng);
+  const HeightField f = white_noise_field(40);
   float lo = f.z[0], hi = f.z[0];
   for (float z : f.z) lo = std::min(lo, z), hi = std::max(hi, z);
   for (int lit = 0; lit < 2; ++lit) {

@@ -7,20 +7,11 @@
 
 #include <cstdio>
 
-#include "methods/p2/bake_p2.hpp"
+#include "p2_test_scenes.hpp"
 #include "stepped_fields.hpp"
 
 namespace hfbake {
 namespace {
-
-LayerSet bake_p2_defaults(const Scene& scene, int K) {
-  P2Params p;
-  p.directions = K;
-  p.bounces = 1;
-  p.keep_bounces = false;
-  p.layers = {"direct", "indirect", "total"};
-  return p2_layers(p, 1, compute_p2(scene, p, RunControl{}));
-}
 
 TEST(P2Steps, IndirectBiasOnUnseenSteps) {
   // docs/methods/p2.md "Steps": indirect bias -7.3 % to +4.0 % over the family at 160^2 (K = 16 to 64).
