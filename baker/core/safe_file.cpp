@@ -241,15 +241,15 @@ void write_file_atomically(const fs::path& final, std::string_view bytes) {
   tmp.commit();
 }
 
-std::string not_a_lock_file(const std::filesystem::path& lock, const std::string& why) {
+std::string not_a_lock_file(const fs::path& lock, const std::string& why) {
   return lock.string() + " is no lock file of hfbake's (" + why + "): remove it";
 }
 
-std::string lock_name_problem(const std::filesystem::path& lock) {
+std::string lock_name_problem(const fs::path& lock) {
   std::error_code ec;
-  const std::filesystem::file_status s = std::filesystem::symlink_status(lock, ec);
-  if (!std::filesystem::exists(s) || std::filesystem::is_regular_file(s)) return "";
-  return not_a_lock_file(lock, std::filesystem::is_symlink(s) ? "a link" : "not a file");
+  const fs::file_status s = fs::symlink_status(lock, ec);
+  if (!fs::exists(s) || fs::is_regular_file(s)) return "";
+  return not_a_lock_file(lock, fs::is_symlink(s) ? "a link" : "not a file");
 }
 
 }  // namespace hfbake
