@@ -28,7 +28,7 @@ for name in "${names[@]}"; do
   [ -d "$root/tests/fuzz/regressions/$name" ] && seeds+=("$root/tests/fuzz/regressions/$name")
   [ "$name" = job ] && seeds+=("$root/jobs" "$root/jobs/examples" "$root/bench" "$root/tests/accuracy" "$root/tests/nightly/fields")
   echo "run_fuzzers: fuzz_$name for $seconds s"
-  if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 \
+  if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0:intercept_tls_get_addr=0 \
       LSAN_OPTIONS=suppressions=$root/tests/sanitizers/lsan.supp \
       UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       "$exe" -max_total_time="$seconds" -timeout="${FUZZ_TIMEOUT:-60}" -rss_limit_mb=3072 -max_len=65536 -print_final_stats=1 \

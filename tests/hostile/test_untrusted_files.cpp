@@ -39,6 +39,17 @@ struct Outcome {
   }
 };
 
+// In a child about to exec hfbake: the preload library that holds chosen renames (slow_rename.cpp). Under
+// AddressSanitizer its runtime must come first, so the link-order check is turned off, added to the options
+// the suite runs with (which it keeps).
+void preload_slow_rename() {
+  setenv("LD_PRELOAD", HFBAKE_SLOW_RENAME, 1);
+  const char* asan = std::getenv("ASAN_OPTIONS");
+  const std::string options =
+      (asan && *asan ? std::string(asan) + ":" : std::string()) + "verify_asan_link_order=0";
+  setenv("ASAN_OPTIONS", options.c_str(), 1);
+}
+
 std::string read_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::stringstream ss;
@@ -719,8 +730,7 @@ TEST_F(Untrusted, TwoSuitesIntoOneFolderBothKeepTheirRunInTheHistory) {
         << json{{"version", 1}, {"suite", "s" + s}, {"jobs", {s + ".json"}}, {"output", {{"dir", "out"}}}};
   }
   const auto slow_history = [] {
-    setenv("LD_PRELOAD", HFBAKE_SLOW_RENAME, 1);
-    setenv("ASAN_OPTIONS", "verify_asan_link_order=0", 1);
+    preload_slow_rename();
     setenv("HFBAKE_TEST_SLOW_RENAME", "/out/history.json", 1);
     setenv("HFBAKE_TEST_SLOW_RENAME_MS", "400", 1);
   };
@@ -799,8 +809,7 @@ class Moves : public Untrusted {
     old_hash_ = exr_job_hash(dir_ / "out" / "t.p1.exr");
     const fs::path flag = dir_ / "moving";
     const pid_t pid = start(dir_, {"bake", jobs_[1], "--no-cache", "--quiet", "--overwrite"}, "err.txt", [&] {
-      setenv("LD_PRELOAD", HFBAKE_SLOW_RENAME, 1);
-      setenv("ASAN_OPTIONS", "verify_asan_link_order=0", 1);
+      preload_slow_rename();
       setenv("HFBAKE_TEST_SLOW_RENAME", "/out/t.hbao.exr", 1);
       setenv("HFBAKE_TEST_SLOW_RENAME_FLAG", flag.c_str(), 1);
     });
