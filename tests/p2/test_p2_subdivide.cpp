@@ -115,6 +115,36 @@ TEST(P2Subdivide, APlaneGivesTheSameValues) {
   }
 }
 
+// near_radius keeps its world length: a subdivided bake with near_radius r is the fine field baked with
+// near_radius s r (its receivers reading P1's horizons at the scene's normals) and read at the original
+// texels, bit for bit; with r fine texels instead, the near field is half as long and the result differs.
+TEST(P2Subdivide, NearRadiusKeepsItsWorldLength) {
+  ProceduralSpec spec;
+  spec.kind = ProceduralKind::fractal;
+  spec.width = spec.height = 24;
+  spec.seed = 4;
+  spec.amplitude = 6;
+  const Scene s = make_scene(make_procedural(spec, 1.0, Wrap::clamp), 1.0f, 35);
+  nlohmann::json e = entry(2, 16);
+  e["near_radius"] = 2;
+  const LayerSet baked = bake_method("p2", s, e, RunControl{});
+  const Scene fine = p2_subdivided_scene(s, 2);
+  auto by_hand = [&](double fine_near_radius) {
+    P2Params p;
+    p.directions = 16;
+    p.bounces = 2;
+    p.near_radius = fine_near_radius;
+    p.scene_normals = true;
+    p.layers = {"indirect_b1", "indirect_b2", "direct", "indirect"};
+    return p2_original_texels(p2_layers(p, 2, compute_p2(fine, p, RunControl{})), s.field, 2);
+  };
+  const LayerSet world = by_hand(4), texels = by_hand(2);
+  const Layer *b = baked.find("indirect"), *w = world.find("indirect"), *t = texels.find("indirect");
+  ASSERT_TRUE(b && w && t);
+  EXPECT_EQ(b->data, w->data);
+  EXPECT_NE(b->data, t->data);
+}
+
 // A smooth field, where p2 without subdividing is already close to exact: the bounces agree within 0.5 %.
 TEST(P2Subdivide, ASmoothFieldGivesTheSameBounces) {
   for (Wrap wrap : {Wrap::clamp, Wrap::repeat}) {
