@@ -11,6 +11,9 @@
 // each texel owns the two triangles with their right angle at it.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/vec.hpp"
 
 namespace hfbake {
@@ -64,6 +67,13 @@ inline FacetWeights facet_weights(double fx, double fy) {
   for (int c = 0; c < 3; ++c) r.di[c] = kWeightCorner[r.facet][c][0], r.dj[c] = kWeightCorner[r.facet][c][1];
   facet_corner_weights(r.facet, fx, fy, r.w);
   return r;
+}
+
+// The horizontal distance from the point with fractions (fx, fy) of a quad of sides sx x sy to the nearest
+// edge of the triangulation: the quad's four sides and its split diagonal.
+inline double facet_edge_distance(double fx, double fy, double sx, double sy) {
+  return std::min({fx * sx, (1 - fx) * sx, fy * sy, (1 - fy) * sy,
+                   std::fabs(fx + fy - 1) * sx * sy / std::hypot(sx, sy)});
 }
 
 // The facet under the point (x, y) in texel coordinates (not wrapped), named texel-centred: facet q of

@@ -390,19 +390,15 @@ struct NeeBuffers {
 // Where a path vertex's next rays (its next-event and continuation rays) start, for a hit at pos with
 // geometric normal ng (facing the arriving ray, which came along dir from tfar away): eps off the hit
 // along ng, which is in the air above the hit's own facet when the hit lies more than eps (horizontally)
-// from the facet's edges (the field's columns, rows and (i+1, j)-(i, j+1) diagonals,
-// field/triangulation.hpp). Nearer an edge that point can fall under a neighbouring facet that folds up
-// beside it: a receiver at the bottom of a pit finds its hits within a few eps of the pit's vertex, and
-// their light, read under the opposite wall, came out dark (7 % low at a 2-unit pit, whatever eps). There
-// the rays start on the arriving ray's own segment, which is free, eps (at most half of it) short of the
-// hit.
+// from the facet's edges (field/triangulation.hpp facet_edge_distance). Nearer an edge that point can fall
+// under a neighbouring facet that folds up beside it: a receiver at the bottom of a pit finds its hits
+// within a few eps of the pit's vertex, and light read under the opposite wall is dark (7 % low at a 2-unit
+// pit, whatever eps). There the rays start on the arriving ray's own segment, which is free, eps (at most
+// half of it) short of the hit.
 Vec3 path_origin(const HeightField& f, Vec3 pos, Vec3 ng, Vec3 dir, double tfar, double eps) {
-  const double sx = f.dx(), sy = f.dy();
-  const double u = pos.x / sx, v = pos.y / sy;
-  const double fx = u - std::floor(u), fy = v - std::floor(v);
-  const double edge = std::min({fx * sx, (1 - fx) * sx, fy * sy, (1 - fy) * sy,
-                                std::fabs(fx + fy - 1) * sx * sy / std::hypot(sx, sy)});
-  if (edge > 2 * eps) return pos + ng * eps;
+  const double u = pos.x / f.dx(), v = pos.y / f.dy();
+  if (facet_edge_distance(u - std::floor(u), v - std::floor(v), f.dx(), f.dy()) > 2 * eps)
+    return pos + ng * eps;
   return pos - dir * std::min(eps, 0.5 * tfar);
 }
 

@@ -202,8 +202,7 @@ LayerSet p2_original_texels(const LayerSet& fine, const FieldShape& coarse, int 
   LayerSet out;
   out.width = coarse.width, out.height = coarse.height;
   out.attributes = fine.attributes;
-  FieldShape shape = coarse;
-  shape.width = fine.width, shape.height = fine.height;
+  const FieldShape shape = subdivided_shape(coarse, s);
   for (const Layer& l : fine.layers) {
     Layer& o = out.add(l.name, l.channels);
     const std::size_t C = l.channels.size();
@@ -661,37 +660,36 @@ LayerSet unpacked(LayerSet&& in, const FieldShape& coarse, int s) {
   return out;
 }
 
+// run(scene, params, unpack) on the scene as the entry bakes it: the subdivided scene with p2_fine_params
+// when P2Params::subdivide > 1, its farm inputs unpacked with unpack and its result packed.
+template <class Run>
+LayerSet on_baked_scene(const Scene& scene, const P2Params& p, Run&& run) {
+  const int s = p.subdivide;
+  const auto unpack = [&](LayerSet&& l) { return unpacked(std::move(l), scene.field, s); };
+  if (s == 1) return run(scene, p, unpack);
+  const Scene fine = p2_subdivided_scene(scene, s);
+  return packed(run(fine, p2_fine_params(p), unpack), scene.field, s);
+}
+
 LayerSet p2_bake_stage(const Scene& scene, const MethodConfig& config, int stage, LayerSet&& previous,
                        const RunControl& rc) {
-  const P2Params& p = config.get<P2Params>();
-  const int s = p.subdivide;
-  if (s == 1) return bake_stage(scene, p, stage, std::move(previous), rc);
-  const Scene fine = p2_subdivided_scene(scene, s);
-  return packed(bake_stage(fine, p2_fine_params(p), stage, unpacked(std::move(previous), scene.field, s), rc),
-                scene.field, s);
+  return on_baked_scene(scene, config.get<P2Params>(), [&](const Scene& sc, const P2Params& p, auto unpack) {
+    return bake_stage(sc, p, stage, unpack(std::move(previous)), rc);
+  });
 }
 
 LayerSet p2_bake_stage_block(const Scene& scene, const MethodConfig& config, int stage, int block,
                              LayerSet&& previous, const RunControl& rc) {
-  const P2Params& p = config.get<P2Params>();
-  const int s = p.subdivide;
-  if (s == 1) return bake_stage_block(scene, p, stage, block, std::move(previous), rc);
-  const Scene fine = p2_subdivided_scene(scene, s);
-  return packed(bake_stage_block(fine, p2_fine_params(p), stage, block,
-                                 unpacked(std::move(previous), scene.field, s), rc),
-                scene.field, s);
+  return on_baked_scene(scene, config.get<P2Params>(), [&](const Scene& sc, const P2Params& p, auto unpack) {
+    return bake_stage_block(sc, p, stage, block, unpack(std::move(previous)), rc);
+  });
 }
 
 LayerSet p2_finish_stage_blocks(const Scene& scene, const MethodConfig& config, int stage,
                                 LayerSet&& previous, LayerSet&& sums, const RunControl& rc) {
-  const P2Params& p = config.get<P2Params>();
-  const int s = p.subdivide;
-  if (s == 1) return finish_stage_blocks(scene, p, stage, std::move(previous), std::move(sums), rc);
-  const Scene fine = p2_subdivided_scene(scene, s);
-  return packed(
-      finish_stage_blocks(fine, p2_fine_params(p), stage, unpacked(std::move(previous), scene.field, s),
-                          unpacked(std::move(sums), scene.field, s), rc),
-      scene.field, s);
+  return on_baked_scene(scene, config.get<P2Params>(), [&](const Scene& sc, const P2Params& p, auto unpack) {
+    return finish_stage_blocks(sc, p, stage, unpack(std::move(previous)), unpack(std::move(sums)), rc);
+  });
 }
 
 LayerSet p2_finish_stages(const Scene& scene, const MethodConfig& config, LayerSet&& last,
