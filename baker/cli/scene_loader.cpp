@@ -194,6 +194,11 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
       job.doc["height"].value("wrap", std::string("clamp")) == "repeat" ? Wrap::repeat : Wrap::clamp;
   context.bounces = job_bounces(job);
   context.uniform_environment = job_environment_uniform(job.doc);
+  EnvironmentLoadOptions env_options;
+  env_options.job_file = job.file.string();
+  const EnvironmentBytes env =
+      environment_bytes(job.doc.value("environment", nlohmann::json::object()), job.base_dir, env_options);
+  context.environment_bytes = env.world;
   // Methods run one at a time; each one's layers are kept until the report when there is a reference.
   double kept = 0, peak = 0;
   // The reference adds the layers it traces after its paths (the layer table's LayerTrace): horizon and
@@ -259,15 +264,12 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     // layers, when nothing loaded them before.
     if (process < kImageProcessBytes) peak = std::max(peak, kept + layers + kImageProcessBytes - process);
   }
-  // The environment: the world lat-long kept through the bake (with the reference's sampling tables), and
-  // its images while they are read, before any method runs (measured: 8192 x 4096 half EXR, 24 bytes a
-  // pixel).
-  EnvironmentLoadOptions env_options;
-  env_options.job_file = job.file.string();
-  const EnvironmentBytes env =
-      environment_bytes(job.doc.value("environment", nlohmann::json::object()), job.base_dir, env_options);
-  peak = std::max(peak, env.loading);
-  const double scene = process + scene_per_texel * texels + env.kept;
+  // The environment's images are read and resampled before any method runs, when nothing of the bake is
+  // held yet but the field; the world lat-long is kept through the bake (with the reference's sampling
+  // tables when a reference traces).
+  const double field_bytes = process + scene_per_texel * texels;
+  const double scene = field_bytes + env.world + (job.has_reference ? env.tables : 0.0);
+  const double total = std::max(scene + peak, field_bytes + env.loading);
   if (parts) {
     parts->insert(parts->begin(), {"scene", std::size_t(scene), "a smaller field"});
     if (env.loading > 0)
@@ -278,7 +280,7 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
                         "fewer reference.layers (8 bytes a texel a channel; the sample count does not change "
                         "it) or bounces"});
   }
-  return std::size_t(scene + peak);
+  return std::size_t(total);
 }
 
 namespace {

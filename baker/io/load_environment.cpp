@@ -276,10 +276,14 @@ EnvironmentBytes environment_bytes(const json& environment, const fs::path& base
                                    const EnvironmentLoadOptions& options) {
   EnvironmentBytes b;
   if (!environment.is_object()) return b;
-  // The world lat-long of `rows` rows: texels, mip levels and the reference's sampling tables.
-  auto kept = [](int rows) { return 32.0 * 2.0 * double(rows) * double(rows); };
+  // The world lat-long of `rows` rows (2 rows x rows texels): 16 bytes a texel with its mip levels, and 16
+  // for the reference's sampling tables.
+  auto set_world = [&b](int rows) {
+    b.world = 16.0 * 2.0 * double(rows) * double(rows);
+    b.tables = 16.0 * 2.0 * double(rows) * double(rows);
+  };
   if (environment.contains("sky")) {
-    b.kept = kept(SkySpec{}.height);
+    set_world(SkySpec{}.height);
     return b;
   }
   std::vector<std::pair<std::string, std::string>> files;  // key, file
@@ -307,9 +311,10 @@ EnvironmentBytes environment_bytes(const json& environment, const fs::path& base
     rows = std::max(rows, std::clamp(pow2_at_least(latitude), 8, options.max_height));
   }
   // Every image held as linear RGB (12 bytes a pixel) until the resampling, and while the last one is read
-  // its decoded channels beside it (read_rgb_image: up to 12 bytes a pixel more).
-  b.loading = 12 * sum + 12 * largest;
-  b.kept = kept(rows);
+  // its decoded channels beside it (read_rgb_image: up to 12 bytes a pixel more); then the world lat-long
+  // built beside them.
+  set_world(rows);
+  b.loading = std::max(12 * sum + 12 * largest, 12 * sum + b.world);
   return b;
 }
 

@@ -28,13 +28,15 @@ struct EnvironmentLoadOptions {
 EnvironmentLighting load_environment(const nlohmann::json& environment, const std::filesystem::path& base_dir,
                                      const EnvironmentLoadOptions& options = {});
 
-// What load_environment allocates, from the images' headers alone (for the memory estimate): `loading`, the
-// transient peak while the images are read (24 bytes a source pixel: the decoded channels and their linear
-// RGB copy; cube faces are all held until the resampling) and `kept`, the world lat-long with its mip levels
-// (16 bytes a texel: 12 and a third more) and the reference's importance-sampling tables of it (16 bytes a
-// texel). Throws like load_environment for a file it cannot probe.
+// What load_environment allocates, from the images' headers alone (for the memory estimate). `loading`:
+// the peak while the images are read and resampled, before anything below is kept (24 bytes a pixel of
+// the image being read: its decoded channels and their linear RGB copy, 12 bytes a pixel of the others,
+// all held until the resampling, and beside them the world lat-long as it is built). `world`: the world
+// lat-long with its mip levels (16 bytes a texel: 12 and a third more), kept through the bake. `tables`:
+// the reference's importance-sampling tables of it (16 bytes a texel), built only by the reference.
+// Throws like load_environment for a file it cannot probe.
 struct EnvironmentBytes {
-  double loading = 0, kept = 0;
+  double loading = 0, world = 0, tables = 0;
 };
 EnvironmentBytes environment_bytes(const nlohmann::json& environment, const std::filesystem::path& base_dir,
                                    const EnvironmentLoadOptions& options = {});

@@ -39,6 +39,7 @@ struct MethodContext {
   bool curvature = false;           // the job's Earth curvature is on (Scene::curvature > 0)
   int bounces = 0;                  // the job's
   bool uniform_environment = true;  // no sky, latlong, cubemap or cross (io/load_environment.cpp)
+  double environment_bytes = 0;     // the world lat-long a copy of the scene holds (EnvironmentBytes::world)
 };
 // Whether a job document's environment is uniform (the rule of io/load_environment.cpp).
 inline bool job_environment_uniform(const nlohmann::json& doc) {

@@ -147,15 +147,16 @@ double field_working_bytes(const FieldShape& shape, const P2Params& p) {
 }
 }  // namespace
 
-double p2_working_bytes(const FieldShape& shape, const P2Params& p) {
+double p2_working_bytes(const FieldShape& shape, const P2Params& p, double environment_bytes) {
   if (p.subdivide == 1) return field_working_bytes(shape, p);
   // Subdivided: the fine scene (heights, normals, and albedo and emission counted as images: 40 bytes a
-  // fine texel) beside the fine bake, whose layers (counted here) are then read into the coarse ones (which
-  // the estimate counts itself).
+  // fine texel, and its copy of the environment) beside the fine bake, whose layers (counted here) are then
+  // read into the coarse ones (which the estimate counts itself).
   const FieldShape fine = subdivided_shape(shape, p.subdivide);
   const double Nf = double(fine.width) * double(fine.height), N = double(shape.width) * double(shape.height);
   const double fine_layers = 12.0 * double(p.layers.size()) * Nf;
-  const double bake = 40 * Nf + field_working_bytes(fine, p2_fine_params(p)) + fine_layers;
+  const double bake =
+      40 * Nf + environment_bytes + field_working_bytes(fine, p2_fine_params(p)) + fine_layers;
   const double read_back = fine_layers + 12.0 * double(p.layers.size()) * N;
   return std::max(bake, read_back) - 12.0 * double(p.layers.size()) * N;
 }
@@ -718,7 +719,7 @@ MethodInfo p2_method() {
       "its directions (p1's horizons: 4 bytes a texel per direction, kept up to 1 GiB), its bounces and "
       "the indirect_b layers";
   m.working_bytes = [](const MethodConfig& config, const MethodContext& c) {
-    return p2_working_bytes(c.field, config.get<P2Params>());
+    return p2_working_bytes(c.field, config.get<P2Params>(), c.environment_bytes);
   };
   m.division = WorkDivision::bounce_stages;
   m.stages = p2_stages;

@@ -167,8 +167,9 @@ LayerSet p2_original_texels(const LayerSet& fine, const FieldShape& coarse, int 
 
 // Bytes compute_p2 and bake_p2 hold at their peak beyond the output layers (P1's horizons, kept or one
 // block's, the exit radiance, the sweep's sums, the line buffers): the method table's working_bytes.
-// params with bounces resolved (>= 0).
-double p2_working_bytes(const FieldShape& field, const P2Params& params);
+// params with bounces resolved (>= 0); environment_bytes: the scene's world lat-long (MethodContext), which a
+// subdivided bake's fine scene copies.
+double p2_working_bytes(const FieldShape& field, const P2Params& params, double environment_bytes = 0);
 
 LayerSet bake_p2(const Scene& scene, const MethodConfig& config, const RunControl& rc);
 // bake_p2's layers of a result (B: the bounces baked).
