@@ -78,8 +78,14 @@ std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
     throw InputError(job.file.string(), pointer, what);
   };
   const std::string file = job.resolve(image).string();
-  if (info->geographic && !info->has_geotransform)
-    fail("/height/image", file + ": has a geographic CRS (" + info->crs_name + ") but no geotransform");
+  if (!info->placed_by.empty())
+    fail("/height/image", file + ": is placed by " + info->placed_by +
+                              ", not by a geotransform: warp it onto a north-up grid first (gdalwarp " +
+                              image + " warped.tif)");
+  if (!info->crs_wkt.empty() && !info->has_geotransform)
+    fail("/height/image", file + ": has a CRS (" + info->crs_name +
+                              ") but no geotransform, so its pixels have no size or place in it: give it one "
+                              "(gdal_edit.py -a_ullr) or leave the CRS out (gdal_edit.py -a_srs \"\")");
   if (!info->has_geotransform) return info;
   const auto& g = info->geotransform;
   if (g[2] != 0 || g[4] != 0)

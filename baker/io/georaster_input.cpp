@@ -10,6 +10,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include "core/error.hpp"
@@ -77,6 +78,33 @@ bool read_rows(GDALRasterBand* b, int x0, int y0, int w, int n, float* dst, cons
   return true;
 }
 
+// A palette band's indices as their colours' red values, as OpenImageIO reads a palette image (it expands
+// the palette, and a height is read from the first channel): the same file gives the same heights through
+// either reader (docs/heights.md). An index outside the palette, and the band's NoData value, are left as
+// they are. Returns whether the band has a palette.
+bool through_palette(GDALRasterBand* b, float* values, std::size_t count) {
+  const GDALColorTable* table =
+      b->GetColorInterpretation() == GCI_PaletteIndex ? b->GetColorTable() : nullptr;
+  if (!table) return false;
+  std::vector<float> red(std::size_t(std::max(0, table->GetColorEntryCount())));
+  for (std::size_t i = 0; i < red.size(); ++i) red[i] = float(table->GetColorEntry(int(i))->c1);
+  int has_nodata = 0;
+  const double nodata = b->GetNoDataValue(&has_nodata);
+  for (std::size_t i = 0; i < count; ++i) {
+    const float v = values[i];
+    if (has_nodata && double(v) == nodata) continue;
+    if (v >= 0 && v < float(red.size())) values[i] = red[std::size_t(v)];
+  }
+  return true;
+}
+
+// The sample type the heights line names: GDAL's, and that a palette's colours are read.
+std::string sample_type_of(GDALRasterBand* b) {
+  std::string t = GDALGetDataTypeName(b->GetRasterDataType());
+  if (b->GetColorInterpretation() == GCI_PaletteIndex && b->GetColorTable()) t = "red of its palette, " + t;
+  return t;
+}
+
 }  // namespace
 
 std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
@@ -105,7 +133,16 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
       if (unit) info.linear_unit = unit;
     }
   }
-  if (!info.has_geotransform && info.crs_wkt.empty() && asset_driver(info.driver)) return std::nullopt;
+  if (!info.has_geotransform) {
+    if (ds->GetGCPCount() > 0)
+      info.placed_by = "ground control points";
+    else if (ds->GetMetadata("RPC"))
+      info.placed_by = "RPCs";
+    else if (ds->GetMetadata("GEOLOCATION"))
+      info.placed_by = "geolocation arrays";
+  }
+  if (!info.has_geotransform && info.crs_wkt.empty() && info.placed_by.empty() && asset_driver(info.driver))
+    return std::nullopt;
   for (int b = 1; b <= info.bands; ++b) {
     GDALRasterBand* band = ds->GetRasterBand(b);
     info.band_names.push_back(band->GetDescription());
@@ -134,7 +171,7 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
   plane.height = ds->GetRasterYSize();
   plane.values.resize(std::size_t(plane.width) * std::size_t(plane.height));
   const GDALDataType type = b->GetRasterDataType();
-  plane.sample_type = GDALGetDataTypeName(type);
+  plane.sample_type = sample_type_of(b);
   plane.integer = GDALDataTypeIsInteger(type) != 0;
   int block_x = 0, block_y = 0;
   b->GetBlockSize(&block_x, &block_y);
@@ -148,6 +185,7 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
       throw InputError(site.job_file, site.pointer,
                        file.string() + ": cannot decode the raster (corrupt or truncated?) at row " +
                            std::to_string(y0) + ": " + gdal.error());
+    through_palette(b, dst, std::size_t(n) * std::size_t(plane.width));
     ds->FlushCache();  // read-only: drops the cached blocks (of every band: pixel-interleaved files cache
                        // all)
     if (progress) progress(double(y0 + n) / plane.height);
@@ -187,12 +225,13 @@ Plane read_georaster_window(const fs::path& file, int band, int x0, int y0, int 
   plane.height = height;
   plane.values.resize(std::size_t(width) * std::size_t(height));
   const GDALDataType type = b->GetRasterDataType();
-  plane.sample_type = GDALGetDataTypeName(type);
+  plane.sample_type = sample_type_of(b);
   plane.integer = GDALDataTypeIsInteger(type) != 0;
   if (!read_rows(b, x0, y0, width, height, plane.values.data(), file, site))
     throw InputError(site.job_file, site.pointer,
                      file.string() + ": cannot decode the raster (corrupt or truncated?) at " + window +
                          ": " + gdal.error());
+  through_palette(b, plane.values.data(), plane.values.size());
   ds->FlushCache();
   return plane;
 }

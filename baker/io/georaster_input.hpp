@@ -21,6 +21,9 @@ struct GeoRasterInfo {
   std::vector<std::string> band_names;  // each band's description ("" when it has none)
   bool has_geotransform = false;
   std::array<double, 6> geotransform{0, 1, 0, 0, 0, 1};
+  // What places the raster instead of a geotransform, when it has none: "ground control points", "RPCs"
+  // or "geolocation arrays" (GDAL's warper reads each); "" when nothing does.
+  std::string placed_by;
   std::string crs_wkt, crs_name;              // empty: no CRS
   bool geographic = false;                    // the CRS is geographic (coordinates in degrees)
   std::string linear_unit;                    // a projected CRS's unit ("metre", "US survey foot", ...)
@@ -35,8 +38,9 @@ struct GeoRasterInfo {
 };
 
 // The raster's header when it is one for GDAL (a format OpenImageIO does not read, or a raster with a
-// geotransform or a CRS); nullopt when GDAL cannot open it or it is an image without georeferencing in a
-// format OpenImageIO reads (EXR, PNG, JPEG, plain TIFF, ...), which then stays with OpenImageIO.
+// geotransform, a CRS, or ground control points, RPCs or geolocation arrays in place of a geotransform);
+// nullopt when GDAL cannot open it or it is an image without georeferencing in a format OpenImageIO reads
+// (EXR, PNG, JPEG, plain TIFF, ...), which then stays with OpenImageIO.
 std::optional<GeoRasterInfo> probe_georaster(const std::filesystem::path& file);
 
 // Band `band` (0-based) as float32, row 0 = the first stored row (north for a north-up raster); values as
