@@ -10,6 +10,7 @@
 #include <system_error>
 #include <utility>
 
+#include "cli/scene_loader.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
 #include "core/vec.hpp"
@@ -56,6 +57,7 @@ struct Profile {
   std::string crs_name, unit;
   bool geographic = false;
   double convergence = 0;  // radians: true north's azimuth in the grid
+  double map_scale = 1;    // the projected CRS's point scale factor there (1: none known)
   std::vector<HorizonRay> rays;
 };
 
@@ -84,6 +86,7 @@ std::string to_json(const HorizonOptions& o, const Profile& p) {
   doc["crs"] = p.crs_name;
   doc["point"] = {{"x", p.map_x}, {"y", p.map_y}, {"surface_z", p.surface}, {"observer_z", p.observer}};
   doc["distance_unit"] = p.unit;
+  doc["map_scale_factor"] = p.map_scale;  // map units per ground unit at the point (a projected CRS's)
   doc["azimuth"] = p.crs_name.empty() ? "compass: degrees clockwise from the raster's north (no CRS)"
                                       : "compass: degrees clockwise from true north";
   doc["grid_convergence_deg"] = p.convergence * 180 / kPi;
@@ -181,6 +184,7 @@ Profile compute(const HorizonOptions& o) {
       const std::optional<double> gamma = grid_convergence(info->crs_wkt, xy[0], xy[1]);
       if (!gamma) fail("--at", "PROJ cannot find true north at " + where + " in " + info->crs_name);
       q.frame.convergence = *gamma;
+      if (const std::optional<double> k = grid_scale_factor(info->crs_wkt, xy[0], xy[1])) p.map_scale = *k;
     }
     if (earth && o.curvature.value_or(false)) {
       const auto lonlat = crs_to_lonlat(info->crs_wkt, xy[0], xy[1]);
@@ -227,6 +231,8 @@ int run_horizon(const HorizonOptions& o) {
         fs::weakly_canonical(fs::absolute(o.out), ec) == fs::weakly_canonical(fs::absolute(o.plot), ec))
       throw InputError(o.dem, "--plot", "is the --out file too: give each output its own name");
     const Profile p = compute(o);
+    if (const std::string w = site_scale_warning(p.map_scale, p.crs_name, true); !w.empty())
+      std::fprintf(stderr, "hfbake: warning: %s: %s\n", o.dem.c_str(), w.c_str());
     const std::string text = o.format == "json" ? to_json(o, p) : to_csv(p);
     const auto write = [](const std::string& file, const std::string& option, const std::string& bytes) {
       try {

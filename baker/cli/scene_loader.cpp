@@ -414,14 +414,16 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   return report;
 }
 
-std::string site_scale_warning(double k, const std::string& crs_name) {
+std::string site_scale_warning(double k, const std::string& crs_name, bool point_query) {
   // A conformal projection far from its true scale: its map metres are not ground metres, so every slope is
   // flattened by k.
   if (!(std::fabs(k - 1) > 0.01)) return "";
-  return "the CRS's map units are " + short_num(k) + " times the ground's at the field's centre (" +
-         crs_name + "): slopes come out " + short_num(k) +
-         " times too flat; warp the DEM to a CRS true to scale there (a UTM zone), or give height_scale " +
-         short_num(k) + " (docs/gis.md)";
+  const std::string site = point_query ? "the point" : "the field's centre";
+  return "the CRS's map units are " + short_num(k) + " times the ground's at " + site + " (" + crs_name +
+         "): slopes come out " + short_num(k) + " times too flat" +
+         (point_query ? " and distances " + short_num(k) + " times too long" : "") +
+         "; warp the DEM to a CRS true to scale there (a UTM zone)" +
+         (point_query ? "" : ", or give height_scale " + short_num(k)) + " (docs/gis.md)";
 }
 
 Scene load_scene(const Job& job, const std::function<void(double)>& progress) {

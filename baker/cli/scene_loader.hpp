@@ -41,11 +41,12 @@ struct MemoryPart {
 };
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts = nullptr);
 // The process itself, before any field: libraries and thread pools (measured: 45 MiB for a 16^2 bake);
-// with GDAL's drivers and cache, when the job reads or writes through it (62 MiB reading a 16^2 GeoTIFF,
-// 70 MiB also writing COGs); with OpenImageIO's libraries, when the job loads them (139 MiB with a PNG
-// preview, 151 MiB reading a 20000 x 2 EXR).
+// with GDAL's drivers and cache, when the job reads or writes through it (55 MiB reading a 64 x 48 PNG with
+// a world file, 61 MiB reading a 16^2 GeoTIFF, 70 MiB also writing COGs: the constant is the middle one, the
+// writing's own bytes are counted beside it); with OpenImageIO's libraries, when the job loads them (139 MiB
+// with a PNG preview, 151 MiB reading a 20000 x 2 EXR).
 inline constexpr double kProcessBytes = 48.0 * (1 << 20);
-inline constexpr double kGdalProcessBytes = 72.0 * (1 << 20);
+inline constexpr double kGdalProcessBytes = 64.0 * (1 << 20);
 inline constexpr double kImageProcessBytes = 150.0 * (1 << 20);
 
 // The job's texel sides (x, y): a georeferenced height raster's pixel size (the job's texel_size, when
@@ -93,9 +94,10 @@ struct HeightsReport {
   std::string warning;
 };
 HeightsReport describe_heights(const Job& job, const Scene& scene);
-// The warning for a DEM whose CRS's map units are k times the ground's at the field's centre (Web Mercator
-// away from the equator): slopes come out k times too flat. Empty when k is within 1 % of 1.
-std::string site_scale_warning(double k, const std::string& crs_name);
+// The warning for a DEM whose CRS's map units are k times the ground's at `site` (Web Mercator away from the
+// equator): slopes come out k times too flat (and a caster's distance k times too long). Empty when k is
+// within 1 % of 1. A bake can correct it with height_scale; `hfbake horizon` cannot (point_query).
+std::string site_scale_warning(double k, const std::string& crs_name, bool point_query = false);
 
 // The job's Scene. Scene::normals and the constant albedo are filled only when scene_needs says a method
 // reads them (an albedo map the job names is always read, so validate checks it). `progress` (optional): the

@@ -626,6 +626,145 @@ TEST_F(CliGdal, NonSquarePixelsAreRefusedInOneLine) {
   }
 }
 
+// A raster placed by ground control points (no geotransform) and one with a CRS but no geotransform have no
+// texel size or place hfbake can use: both are refused in one line at /height/image by validate and bake,
+// nothing baked (a raster with neither is an image, baked with texel 1).
+TEST_F(CliGdal, RastersWithoutAGeotransformButWithGcpsOrACrsAreRefused) {
+  translate(
+      "-srcwin 0 0 64 48 -gcp 0 0 500000 5000240 -gcp 64 0 500320 5000240 -gcp 0 48 500000 5000000 "
+      "-gcp 64 48 500320 5000000 -a_srs EPSG:32633 '" +
+      kDem.string() + "' gcp.tif");
+  translate("-srcwin 0 0 64 48 '" + kDem.string() + "' plain.tif");
+  {
+    std::unique_ptr<GDALDataset> ds(GDALDataset::Open((dir_ / "plain.tif").c_str(), GDAL_OF_RASTER));
+    ASSERT_TRUE(ds);
+    EXPECT_EQ(ds->GetGCPCount(), 0);
+  }
+  translate("-a_srs EPSG:32633 plain.tif crs_only_src.tif");
+  // gdal_translate gives a raster with a CRS a geotransform of its own; strip it to leave the CRS alone.
+  {
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    std::unique_ptr<GDALDataset> src(GDALDataset::Open((dir_ / "plain.tif").c_str(), GDAL_OF_RASTER));
+    ASSERT_TRUE(src);
+    std::vector<float> z(64 * 48);
+    ASSERT_EQ(
+        src->GetRasterBand(1)->RasterIO(GF_Read, 0, 0, 64, 48, z.data(), 64, 48, GDT_Float32, 0, 0, nullptr),
+        CE_None);
+    GDALDataset* ds = gtiff->Create((dir_ / "crs_only.tif").c_str(), 64, 48, 1, GDT_Float32, nullptr);
+    ASSERT_TRUE(ds);
+    OGRSpatialReference srs;
+    srs.importFromEPSG(32633);
+    ds->SetSpatialRef(&srs);
+    EXPECT_EQ(
+        ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 64, 48, z.data(), 64, 48, GDT_Float32, 0, 0, nullptr),
+        CE_None);
+    GDALClose(ds);
+    std::unique_ptr<GDALDataset> check(GDALDataset::Open((dir_ / "crs_only.tif").c_str(), GDAL_OF_RASTER));
+    double gt[6];
+    ASSERT_NE(check->GetGeoTransform(gt), CE_None);
+    ASSERT_NE(check->GetSpatialRef(), nullptr);
+  }
+  for (const auto& [file, says] :
+       {std::pair<std::string, std::string>{"gcp.tif",
+                                            "is placed by ground control "
+                                            "points, not by a geotransform"},
+        {"crs_only.tif", "has a CRS (WGS 84 / UTM zone 33N) but no geotransform"}}) {
+    const fs::path job = write_job(file + ".json", "r", {{"image", file}});
+    for (const char* cmd : {"validate ", "bake "}) {
+      const Result r = hfbake(cmd + job.string());
+      EXPECT_EQ(r.exit_code, 2) << cmd << file;
+      ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+      EXPECT_EQ(r.error_lines()[0].rfind("hfbake: error: " + job.string() +
+                                             ": /height/image: " + (dir_ / file).string() + ": " + says,
+                                         0),
+                0u)
+          << r.err;
+      EXPECT_FALSE(fs::exists(dir_ / "out_r" / "r.p1.ao.tif")) << file;
+    }
+  }
+  const Result plain = hfbake("validate " + write_job("p.json", "p", {{"image", "plain.tif"}}).string());
+  EXPECT_EQ(plain.exit_code, 0) << plain.err;
+}
+
+// An 8-bit palette PNG reads the same heights with a world file beside it (through GDAL) as alone (through
+// OpenImageIO, which expands the palette): its palette's red values, not its indices. The palette here maps
+// index i to red 255 - i, so the indices would be the heights upside down.
+TEST_F(CliGdal, APalettePngReadsTheSameHeightsWithAWorldFile) {
+  GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
+  GDALDriver* png = GetGDALDriverManager()->GetDriverByName("PNG");
+  ASSERT_TRUE(mem && png);
+  const int w = 40, h = 32;
+  GDALDataset* ds = mem->Create("", w, h, 1, GDT_Byte, nullptr);
+  std::vector<std::uint8_t> idx(std::size_t(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      idx[std::size_t(y) * w + x] = std::uint8_t(3 + (x * 37 + y * 11 + x * y) % 230);
+  ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, w, h, idx.data(), w, h, GDT_Byte, 0, 0, nullptr),
+            CE_None);
+  GDALColorTable table;
+  for (int i = 0; i < 256; ++i) {
+    const GDALColorEntry e{short(255 - i), short(i / 2), short(i), 255};
+    table.SetColorEntry(i, &e);
+  }
+  ds->GetRasterBand(1)->SetColorInterpretation(GCI_PaletteIndex);
+  ds->GetRasterBand(1)->SetColorTable(&table);
+  for (const char* name : {"alone.png", "placed.png"}) {
+    GDALDataset* out = png->CreateCopy((dir_ / name).c_str(), ds, FALSE, nullptr, nullptr, nullptr);
+    ASSERT_TRUE(out);
+    GDALClose(out);
+  }
+  GDALClose(ds);
+  fs::remove(dir_ / "alone.png.aux.xml");
+  fs::remove(dir_ / "placed.png.aux.xml");
+  std::ofstream(dir_ / "placed.pgw") << "1\n0\n0\n-1\n500000.5\n5000031.5\n";
+  std::vector<float> ao[2];
+  int i = 0;
+  for (const char* name : {"alone", "placed"}) {
+    const fs::path job =
+        write_job(std::string(name) + ".json", name, {{"image", std::string(name) + ".png"}});
+    const Result r = hfbake("bake " + job.string() + " --no-cache --quiet");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Raster a = read_raster(dir_ / ("out_" + std::string(name)) / (std::string(name) + ".p1.ao.tif"));
+    ASSERT_EQ(a.values.size(), std::size_t(w) * h) << name;
+    ao[i++] = a.values;
+  }
+  EXPECT_EQ(max_abs_diff(ao[0], ao[1]), 0.0);
+  const Result said = hfbake("validate " + (dir_ / "placed.json").string());
+  EXPECT_NE(said.err.find("through GDAL (PNG, red of its palette, Byte"), std::string::npos) << said.err;
+  // The heights line's range is the palette's reds of the indices used (3 .. 232: reds 23 .. 252).
+  EXPECT_NE(said.err.find("heights 23 .. 252"), std::string::npos) << said.err;
+}
+
+// `hfbake horizon` at a point of a Web Mercator DEM warns on stderr that map units are 1 / cos(latitude)
+// times the ground's there, and its JSON records that factor; on the DEM's own CRS (true to scale within
+// 1e-4) it says nothing.
+TEST_F(CliGdal, HorizonWarnsOfAMapScaleFarFromTrue) {
+  make_crops();
+  int status = -1;
+  run_tool("cd '" + dir_.string() + "' && gdalwarp -q -t_srs EPSG:3857 -r bilinear -dstnodata -9999 " +
+               "dem1m.tif merc.tif",
+           &status);
+  ASSERT_EQ(status, 0);
+  const Result merc =
+      hfbake("horizon " + (dir_ / "merc.tif").string() + " --at 15.8397,46.4551 --lonlat --directions 8 " +
+             "--format json --out " + (dir_ / "merc.json").string());
+  ASSERT_EQ(merc.exit_code, 0) << merc.err;
+  const std::size_t at = merc.err.find("the CRS's map units are ");
+  ASSERT_NE(at, std::string::npos) << merc.err;
+  const double k = std::stod(merc.err.substr(at + 24));
+  const double expect = 1.0 / std::cos(46.4551 * std::acos(-1.0) / 180);
+  EXPECT_NEAR(k, expect, 0.005 * expect) << merc.err;
+  const nlohmann::json doc = nlohmann::json::parse(std::ifstream(dir_ / "merc.json"));
+  EXPECT_NEAR(doc["map_scale_factor"].get<double>(), k, 1e-4 * k);
+  const Result own =
+      hfbake("horizon " + (dir_ / "dem1m.tif").string() + " --at 15.8397,46.4551 --lonlat --directions 8 " +
+             "--format json --out " + (dir_ / "own.json").string());
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  EXPECT_EQ(own.err.find("map units are"), std::string::npos) << own.err;
+  EXPECT_NEAR(nlohmann::json::parse(std::ifstream(dir_ / "own.json"))["map_scale_factor"].get<double>(), 1.0,
+              1e-3);
+}
+
 TEST_F(CliGdal, AnInterruptedBakeLeavesNoGeoTiff) {
   // p1's GeoTIFFs are staged before the long reference runs; the interrupt must take them away with it.
   make_crops();
