@@ -566,6 +566,28 @@ TEST_F(CliTiles, ALinkInPlaceOfTilesIsRefused) {
   }
 }
 
+// The heights lying where the job's tile task would write a tile file, or its tiles record: validate refuses
+// the job naming the key, and the file is kept.
+TEST_F(CliTiles, AnInputWhereATileTaskWritesIsRefused) {
+  fs::create_directories(dir_ / "out_t" / "tiles");
+  for (const std::string name : {"t+tile-0.relief.svf.tif", ".hfbake-t+tiles.job"}) {
+    SCOPED_TRACE(name);
+    const fs::path input = dir_ / "out_t" / "tiles" / name;
+    write_heights(input, 40, 30, [](int i, int j) { return 0.1 * i * j; });
+    const fs::path job =
+        write_job("t", {{"image", input.string()}}, {{{"method", "relief"}, {"search_radius", 2}}});
+    const Result r = hfbake("validate --quiet --tiles --tile-size 16 " + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(job.string() + ": /height/image: " + input.string() +
+                                      " is where this job writes an output"),
+              std::string::npos)
+        << r.err;
+    EXPECT_TRUE(fs::exists(input));
+    fs::remove(input);
+  }
+}
+
 // Each refusal: exit 2, one error line naming the job file and `pointer`, and no output folder.
 TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
   write_heights(dir_ / "f.tif", 40, 30, [](int i, int j) { return 0.1 * i * j; });
