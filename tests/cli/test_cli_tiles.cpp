@@ -414,6 +414,76 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   EXPECT_EQ(merged, compared);
 }
 
+// A forged tile file, each under the name of the tile it claims to be, with the values and checksum its task
+// wrote: a tile of another job (the same heights and entries, another name), another tile of this job,
+// another layer's file of the same tile, and the tile with its plan record changed. Merge refuses each in one
+// line naming the file, and writes no COG.
+TEST_F(CliTiles, MergeRefusesTilesOfAnotherJobTileLayerOrPlan) {
+  write_family(150, 97);
+  const nlohmann::json height = {{"image", "craters.tif"}};
+  const fs::path job = write_job("farm", height, kBounded), copy = write_job("copy", height, kBounded);
+  for (const fs::path& j : {job, copy})
+    for (const int i : {0, 1, 2})
+      ASSERT_EQ(
+          hfbake("bake --quiet --tiles --tile-size 40 --tile-task " + std::to_string(i) + "/3 " + j.string())
+              .exit_code,
+          0);
+  const fs::path tiles = dir_ / "out_farm" / "tiles";
+  const fs::path target = tiles / "farm+tile-1.relief.svf.tif", kept = dir_ / "kept.tif";
+  fs::copy_file(target, kept);
+  // The plan record as the task wrote it, with the halo one texel wider.
+  const auto other_plan = [&] {
+    std::string of = metadata_item(target, "HFBAKE_TILE_OF");
+    const std::string halo = "with a halo of ";
+    const std::size_t at = of.find(halo);
+    if (at == std::string::npos) return;
+    const std::size_t n = at + halo.size(), end = of.find_first_not_of("0123456789", n);
+    of.replace(n, end - n, std::to_string(std::stoi(of.substr(n, end - n)) + 1));
+    CPLPushErrorHandler(CPLQuietErrorHandler);  // GDAL's notes that the file is no longer a COG
+    std::unique_ptr<GDALDataset> ds(GDALDataset::Open(target.c_str(), GDAL_OF_RASTER | GDAL_OF_UPDATE));
+    ASSERT_TRUE(ds);
+    ASSERT_EQ(ds->SetMetadataItem("HFBAKE_TILE_OF", of.c_str()), CE_None);
+    ds.reset();
+    CPLPopErrorHandler();
+  };
+  struct Forgery {
+    std::string what;
+    std::function<void()> make;
+  };
+  const std::vector<Forgery> forgeries = {
+      {"another job's tile",
+       [&] {
+         fs::copy_file(dir_ / "out_copy" / "tiles" / "copy+tile-1.relief.svf.tif", target,
+                       fs::copy_options::overwrite_existing);
+       }},
+      {"another tile",
+       [&] {
+         fs::copy_file(tiles / "farm+tile-2.relief.svf.tif", target, fs::copy_options::overwrite_existing);
+       }},
+      {"another layer",
+       [&] {
+         fs::copy_file(tiles / "farm+tile-1.hbao-1.obscurance.tif", target,
+                       fs::copy_options::overwrite_existing);
+       }},
+      {"another plan", other_plan},
+  };
+  for (const Forgery& f : forgeries) {
+    SCOPED_TRACE(f.what);
+    f.make();
+    ASSERT_NE(metadata_item(target, "HFBAKE_TILE_SUM"), "") << "the forgery carries a checksum of its values";
+    const Result r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.err.find(target.string() + ": is not tile 1 of this job"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+    for (const auto& e : fs::directory_iterator(dir_ / "out_farm"))  // a COG a merge should not have written
+      if (e.path().extension() == ".tif") fs::remove(e.path());
+    fs::copy_file(kept, target, fs::copy_options::overwrite_existing);
+  }
+  const Result r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 // A tile task's files are its job's alone. A job named a.tile-1 baking GeoTIFFs into the tiles/ folder of job
 // a, and a's tile tasks, leave each other's files as they wrote them, whichever bakes first, and a's merge
 // takes its own tiles. The entries are a sweep whose stems hold a '.' (relief-search_radius2.5).
