@@ -502,6 +502,7 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
       loads[i].errors.insert(loads[i].errors.end(), lines.begin(), lines.end());
       if (loads[i].job) try {
           check_output_owner(*loads[i].job, overwrite);  // another job file's outputs of this name there
+          if (tiles) check_tiles_folder(*loads[i].job, overwrite);  // as its tile tasks and merge find tiles/
         } catch (const InputError& e) {
           loads[i].errors.push_back(e.line());
         }

@@ -84,7 +84,8 @@ bool bake_interrupted(const std::vector<JobOutcome>& outcomes, bool cancel);
 int bake_exit_status(const std::vector<JobOutcome>& outcomes, bool interrupted, int signal);
 
 // Schema and file checks without baking: 0 all valid, 2 otherwise. Prints one line per problem.
-// `tiles`: as a tiled bake (cli/tile_command.hpp validate_tiled) with tiles of `tile_size` when given;
+// `tiles`: as a tiled bake (cli/tile_command.hpp validate_tiled) with tiles of `tile_size` when given, its
+// tiles/ folder as its tile tasks and merge find it (cli/outputs.hpp check_tiles_folder);
 // `overwrite`: as a bake with --overwrite (outputs another job file baked may be replaced).
 int run_validate(const std::vector<std::filesystem::path>& jobs, bool quiet,
                  std::optional<std::size_t> memory_limit = std::nullopt, bool tiles = false,

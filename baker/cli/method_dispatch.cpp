@@ -193,6 +193,9 @@ bool writes_in_output_folder(const Job& job, const fs::path& file) {
   if (real.parent_path() == dir / "textures")
     return n.rfind(job.name + ".", 0) == 0 || n == textures_lock_file(job).filename() ||
            n == textures_owner_record(job).filename();
+  if (real.parent_path() == dir / "tiles")
+    return n.rfind(tile_file_prefix(job), 0) == 0 || n == tiles_lock_file(job).filename() ||
+           n == tiles_owner_record(job).filename();
   if (real.parent_path() != dir) return false;
   if (n == "report.json" || n == "report.html" || n == output_lock_file(job).filename() ||
       n == owner_record(job).filename() || n == report_lock_file(job).filename())

@@ -26,8 +26,9 @@ std::vector<std::string> resolve_job(Job& job);
 
 // True when `file` (existing or not) is a name a bake of `job` writes in its output folder, so that writing
 // or keeping anything else there would lose it: <name>.<stem>.exr, <name>.<stem>.*.preview.png,
-// <name>.<stem>.*.tif, report.json, report.html, textures/<name>.*, and the job's locks and owner records
-// (in the folder and in textures/) and the report lock (docs/output_folders.md). Links are resolved first.
+// <name>.<stem>.*.tif, report.json, report.html, textures/<name>.*, a tile task's tiles/<name>+tile-*, and
+// the job's locks and owner records (in the folder, in textures/ and in tiles/) and the report lock
+// (docs/output_folders.md). Links are resolved first.
 bool writes_in_output_folder(const Job& job, const std::filesystem::path& file);
 
 // A resolved entry's config (std::logic_error before resolve_job).

@@ -277,11 +277,10 @@ std::string job_identity(const Job& job) {
 
 namespace {
 
-// Refuses (InputError at /name) the job when `record`, the owner record of its name in `folder`, names
-// another job file, unless `overwrite`.
-void check_owner_record(const Job& job, const fs::path& record, const fs::path& folder, bool overwrite) {
-  // The record as hfbake writes it: a regular file of its own (a link planted there is not read, and is
-  // replaced when the outputs move), one line of printable text that an error may quote.
+// The job file `record`, an owner record, names; "" when there is none. Read as hfbake writes it: a regular
+// file of its own (a link planted there is not read, and is replaced when a record is written), one line of
+// printable text that an error may quote.
+std::string read_owner_record(const fs::path& record) {
   std::string why, recorded;
   std::error_code link_ec;
   const bool link = fs::is_symlink(fs::symlink_status(record, link_ec));
@@ -295,9 +294,17 @@ void check_owner_record(const Job& job, const fs::path& record, const fs::path& 
         std::any_of(recorded.begin(), recorded.end(), [](char c) { return (unsigned char)c < 0x20; }))
       recorded = "a record that is not hfbake's";
   }
+  return recorded;
+}
+
+// Refuses (InputError at /name) the job when `record`, the owner record of its name in `folder`, names
+// another job file, unless `overwrite`. `what`: what the record is of ("outputs", "tiles").
+void check_owner_record(const Job& job, const fs::path& record, const fs::path& folder, bool overwrite,
+                        const std::string& what = "outputs") {
+  const std::string recorded = read_owner_record(record);
   if (!recorded.empty() && recorded != job_identity(job) && !overwrite)
     throw InputError(job.file.string(), "/name",
-                     "the outputs of job " + job.name + " in " + folder.string() + " were baked from " +
+                     "the " + what + " of job " + job.name + " in " + folder.string() + " were baked from " +
                          recorded +
                          ": give this job another name or output folder, or bake with --overwrite");
 }
@@ -308,6 +315,59 @@ void check_output_owner(const Job& job, bool overwrite) {
   check_owner_record(job, owner_record(job), job.output.dir, overwrite);
   if (const std::optional<fs::path> textures = textures_folder(job))
     check_owner_record(job, textures_owner_record(job), *textures, overwrite);
+}
+
+fs::path tiles_folder(const Job& job) {
+  return job.output.dir / "tiles";
+}
+
+std::string tile_file_prefix(const Job& job) {
+  return job.name + "+tile-";
+}
+
+fs::path tiles_lock_file(const Job& job) {
+  return tiles_folder(job) / (".hfbake-" + job.name + "+tiles.lock");
+}
+
+fs::path tiles_owner_record(const Job& job) {
+  return tiles_folder(job) / (".hfbake-" + job.name + "+tiles.job");
+}
+
+void check_tiles_folder(const Job& job, bool overwrite) {
+  const fs::path folder = tiles_folder(job);
+  std::error_code ec;
+  const fs::file_status s = fs::symlink_status(folder, ec);
+  if (fs::exists(s) && !fs::is_directory(s))
+    throw InputError(job.file.string(), "/output/dir",
+                     folder.string() + " is not a folder (" + (fs::is_symlink(s) ? "a link" : "a file") +
+                         "): the tiles are written inside " + job.output.dir.string() + " only");
+  if (const std::string problem = lock_name_problem(tiles_lock_file(job)); !problem.empty())
+    throw InputError(job.file.string(), "/output/dir", problem);
+  check_owner_record(job, tiles_owner_record(job), folder, overwrite, "tiles");
+}
+
+void claim_tiles_folder(const Job& job, bool overwrite) {
+  const fs::path folder = tiles_folder(job);
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  check_tiles_folder(job, overwrite);  // tiles/ a folder itself, and the lock's name free or a file
+  const FolderLock lock(tiles_lock_file(job), kTilesClaimPatience);
+  if (!lock.held())
+    throw InputError(job.file.string(), "/output/dir",
+                     lock.problem().empty()
+                         ? "another hfbake process (" + lock.holder() +
+                               ") has been claiming the tiles of job " + job.name + " in " + folder.string() +
+                               " for " + std::to_string(kTilesClaimPatience.count()) +
+                               " s: wait for it, then bake again"
+                         : not_a_lock_file(tiles_lock_file(job), lock.problem()));
+  check_owner_record(job, tiles_owner_record(job), folder, overwrite, "tiles");
+  if (read_owner_record(tiles_owner_record(job)) == job_identity(job)) return;
+  try {
+    write_file_atomically(tiles_owner_record(job), job_identity(job));
+  } catch (const std::system_error& e) {
+    throw InputError(job.file.string(), "/output/dir",
+                     "cannot write " + tiles_owner_record(job).string() + ": " + e.code().message());
+  }
 }
 
 bool outputs_moving() noexcept {

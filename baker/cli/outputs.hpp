@@ -2,6 +2,7 @@
 // when the whole job has succeeded, so a failure or an interrupt never leaves a partial output behind.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -41,6 +42,31 @@ std::optional<std::filesystem::path> textures_folder(const Job& job);
 // that bakes into that folder under the same name.
 std::filesystem::path textures_lock_file(const Job& job);
 std::filesystem::path textures_owner_record(const Job& job);
+// <output dir>/tiles: where a tiled bake's tile tasks write <name>+tile-<k>.<stem>.<layer>.tif
+// (cli/tile_command.hpp). A job name holds no '+', so the name before the first '+' is the job's: no other
+// job's tile file, and no output, lock or record of a job baking into that folder, has such a name
+// (docs/output_folders.md).
+std::filesystem::path tiles_folder(const Job& job);
+// The first part of the job's tile files' names, "<name>+tile-".
+std::string tile_file_prefix(const Job& job);
+// <output dir>/tiles/.hfbake-<name>+tiles.lock and .hfbake-<name>+tiles.job: the lock under which a tile
+// task claims the job's name in tiles/ (claim_tiles_folder), and the record of the job file whose tiles of
+// that name the folder holds. No job's lock or record has these names.
+std::filesystem::path tiles_lock_file(const Job& job);
+std::filesystem::path tiles_owner_record(const Job& job);
+// Refuses (InputError naming the job file) what a tile task or `merge --tiles` of `job` would find in
+// tiles/: an entry there that is not a folder (/output/dir), its lock's name taken by anything but a file
+// (/output/dir), and tiles of the job's name that tiles_owner_record says another job file baked (/name),
+// unless `overwrite`. What `validate --tiles` and `merge --tiles` check.
+void check_tiles_folder(const Job& job, bool overwrite);
+// How long a tile task waits for tiles_lock_file while another task holds it (for one record's write).
+inline constexpr std::chrono::seconds kTilesClaimPatience{10};
+// What a tile task does before it bakes: makes tiles/, and holding tiles_lock_file (waited for up to
+// kTilesClaimPatience; InputError at /output/dir naming the holder after that) checks it as
+// check_tiles_folder does and records this job file as the owner of the job's name there. Tasks of one job
+// file claim it together; a task of another job file with the same name is refused (InputError at /name)
+// unless `overwrite`, which takes the name over.
+void claim_tiles_folder(const Job& job, bool overwrite);
 // <output dir>/.hfbake+report.lock: the file a bake or merge of a job with a reference locks as well, since
 // report.json and report.html carry no job name (docs/output_folders.md). No job's lock has this name (a job
 // name never starts with '+').

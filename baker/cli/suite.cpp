@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <set>
@@ -23,10 +25,6 @@ namespace hfbake {
 namespace fs = std::filesystem;
 
 namespace {
-
-// How long a suite waits for another process's suite reports into the same folder (a few files: seconds at
-// most, unless that process is stopped).
-constexpr std::chrono::seconds kSuiteLockPatience{60};
 
 void write_atomically(const fs::path& file, const std::string& text) {
   try {
@@ -287,6 +285,13 @@ nlohmann::json append_suite_history(const nlohmann::json& history, nlohmann::jso
   return {{"runs", std::move(runs)}};
 }
 
+std::chrono::seconds suite_lock_patience() {
+  const char* v = std::getenv("HFBAKE_TEST_SUITE_LOCK_WAIT");
+  if (!v || !*v || std::strlen(v) > 2 || std::strspn(v, "0123456789") != std::strlen(v))
+    return kSuiteLockPatience;
+  return std::min(std::chrono::seconds(std::atoi(v)), kSuiteLockPatience);
+}
+
 fs::path suite_lock_file(const Suite& suite) {
   return suite.output_dir / ".hfbake+suite.lock";
 }
@@ -319,12 +324,13 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
   // history.json is read, extended and replaced: one suite at a time per folder, so that suites finishing
   // together each add their run, and the four reports are each one suite's.
   const fs::path lock_file = suite_lock_file(suite);
-  const FolderLock lock(lock_file, kSuiteLockPatience);
+  const std::chrono::seconds patience = suite_lock_patience();
+  const FolderLock lock(lock_file, patience);
   if (!lock.held())
     throw std::runtime_error(lock.problem().empty()
                                  ? "another hfbake process (" + lock.holder() +
                                        ") has been writing suite reports into " + suite.output_dir.string() +
-                                       " for " + std::to_string(kSuiteLockPatience.count()) +
+                                       " for " + std::to_string(patience.count()) +
                                        " s: wait for it to finish, then bake the suite again"
                                  : not_a_lock_file(lock_file, lock.problem()));
   SuiteReports written;

@@ -2,6 +2,7 @@
 // A file given to `hfbake bake` is a suite when it has a "suite" key (schema: schemas/suite.schema.json).
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -54,6 +55,14 @@ std::vector<std::filesystem::path> suite_report_files(const Suite& suite);
 // the reports (docs/output_folders.md). No job's lock has this name (a job name never starts with '+').
 std::filesystem::path suite_lock_file(const Suite& suite);
 
+// How long a suite waits for another process's suite reports into the same folder (a few files: seconds at
+// most, unless that process is stopped).
+inline constexpr std::chrono::seconds kSuiteLockPatience{60};
+// The wait write_suite_reports gives the suite lock: kSuiteLockPatience, or the whole seconds of
+// HFBAKE_TEST_SUITE_LOCK_WAIT, up to kSuiteLockPatience, when it holds them. A test-only switch
+// (docs/development.md), so that a test sees the wait end without waiting a minute; never set in production.
+std::chrono::seconds suite_lock_patience();
+
 // What write_suite_reports would refuse only after the suite's jobs have baked: its lock's name taken by
 // anything but a file (a link, a folder). The error line (the suite file, /output/dir), or "" when none.
 std::string suite_folder_problem(const Suite& suite);
@@ -62,9 +71,9 @@ std::string suite_folder_problem(const Suite& suite);
 // last kSuiteHistoryRuns runs), index.html (per job: status, time, reference, the baseline comparison, the
 // last runs' results and a link to the report), junit.xml. Written atomically into suite.output_dir, all
 // four under suite_lock_file: a suite that finishes while another process writes its reports into the same
-// folder waits for it (a minute at most), then adds its run to the history that process wrote. Errors (the
-// lock still held after that, or no lock file of hfbake's at its name): std::runtime_error naming the folder,
-// nothing written.
+// folder waits for it (suite_lock_patience: a minute), then adds its run to the history that process wrote.
+// Errors (the lock still held after that, or no lock file of hfbake's at its name): std::runtime_error naming
+// the folder, the holder and the wait, nothing written.
 SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds);
 
 }  // namespace hfbake

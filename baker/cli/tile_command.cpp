@@ -17,7 +17,6 @@
 #include "cli/scene_loader.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
-#include "core/safe_file.hpp"
 #include "io/georaster_input.hpp"
 #include "io/geotiff_output.hpp"
 #include "job/content_hash.hpp"
@@ -162,10 +161,10 @@ std::string tile_checksum(const std::vector<float>& values) {
   return h.hex();
 }
 
-// <output dir>/tiles/<name>.tile-<k>.<stem>.<layer>.tif: tile k's interior of one layer, from a tile task.
+// <output dir>/tiles/<name>+tile-<k>.<stem>.<layer>.tif: tile k's interior of one layer, from a tile task
+// (cli/outputs.hpp tiles_folder: no other job's file has that name).
 fs::path tile_file(const Job& job, std::size_t k, const std::string& stem, const std::string& layer) {
-  return job.output.dir / "tiles" /
-         (job.name + ".tile-" + std::to_string(k) + "." + stem + "." + layer + ".tif");
+  return tiles_folder(job) / (tile_file_prefix(job) + std::to_string(k) + "." + stem + "." + layer + ".tif");
 }
 
 // GeoTIFF metadata of an output of entry `e`.
@@ -348,6 +347,9 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
   GdalCacheLimit cache(kTiledGdalCacheBytes);
   std::vector<double> seconds(job.bakes.size(), 0.0);
   const auto t0 = std::chrono::steady_clock::now();
+  // The job's name in tiles/: claimed by its tasks (one job file's tiles of that name), checked by its merge.
+  if (options.tile_task) claim_tiles_folder(job, options.overwrite);
+  if (options.merge) check_tiles_folder(job, options.overwrite);
   // The far fields' coarse copies of the whole raster, read in runs of rows within what the tiles will
   // take (the plan left room for the copies beside them).
   std::vector<std::shared_ptr<const CoarseHeights>> coarse;
@@ -367,13 +369,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
     const std::size_t first = range.first, end = range.second;  // named: the progress lambda captures them
     progress.message(job.name + ": tiles " + std::to_string(first) + ".." + std::to_string(end) + " of " +
                      tiles_text(plan));
-    const fs::path folder = job.output.dir / "tiles";
-    std::error_code ec;
-    fs::create_directories(folder, ec);
-    if (!is_real_directory(folder))
-      refuse(job, "/output/dir",
-             folder.string() + " is not a folder (a link?): outputs are written inside " +
-                 job.output.dir.string() + " only");
+    const fs::path folder = tiles_folder(job);
     for (const fs::path& p : remove_stale_temporaries(folder))
       progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
     progress.begin(job.name, "tiles");

@@ -47,10 +47,12 @@ std::string validate_tiled(const Job& job, std::size_t budget, std::optional<int
 // the COGs appear whole, or nothing does. `options`: --tile-size (else the plan from `budget`),
 // --overwrite, and the farm's two halves:
 //   - tile_task I/N: only tiles [I T / N, (I + 1) T / N) of the plan's T, each layer's interior written
-//     as <output dir>/tiles/<name>.tile-<k>.<stem>.<layer>.tif (a GeoTIFF naming the tile, the job, the plan
-//     and the entry's parameters in its HFBAKE_TILE_OF item), nothing staged;
-//   - merge: the COGs from those files instead of baking, each file checked against the plan (missing, of
-//     another plan or job, another size or band count: InputError naming it) before it is taken.
+//     as <output dir>/tiles/<name>+tile-<k>.<stem>.<layer>.tif (a GeoTIFF naming the tile, the job, the plan
+//     and the entry's parameters in its HFBAKE_TILE_OF item), nothing staged; the job's name in tiles/
+//     claimed first (cli/outputs.hpp claim_tiles_folder: InputError when another job file's tiles hold it);
+//   - merge: the COGs from those files instead of baking, tiles/ checked first (check_tiles_folder), each
+//     file checked against the plan (missing, of another plan or job, another size or band count: InputError
+//     naming it) before it is taken.
 // The tasks and the merge must make the same plan: give them the same --tile-size.
 void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& cancel, JobOutcome& outcome,
                 const BakeOptions& options, std::size_t budget);

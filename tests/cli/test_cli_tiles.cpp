@@ -1,25 +1,31 @@
 // hfbake bake --tiles, end to end (the binary): on rasters that fit both ways, the tiled bake's COGs hold
 // the whole bake's texels bit for bit, for every method with a bounded reach (relief's far field included:
 // the tiles walk the whole raster's coarse copy), on a family of fields (sines, terraces, craters, white
-// noise, the lidar DEM when present) at tile sizes that cut them unevenly; and what a tiled bake refuses is
-// one line naming the job file and the key, with nothing written. The truth is the whole bake of the same
+// noise, the lidar DEM when present) at tile sizes that cut them unevenly; a tile task's files are its job
+// file's alone, and a merge takes no other; and what a tiled bake refuses is one line naming the job file and
+// the key, with nothing written. The truth is the whole bake of the same
 // job (no tiles: one field in memory), read back with GDAL.
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "../hostile/child_process.hpp"
 #include "run_hfbake.hpp"
 
 namespace {
@@ -47,6 +53,26 @@ Bands read_bands(const fs::path& file) {
     r.values.push_back(std::move(v));
   }
   return r;
+}
+
+// A GeoTIFF's metadata item (GDAL's default domain); "" when absent.
+std::string metadata_item(const fs::path& file, const char* key) {
+  std::unique_ptr<GDALDataset> ds(GDALDataset::Open(file.c_str(), GDAL_OF_RASTER));
+  const char* v = ds ? ds->GetMetadataItem(key) : nullptr;
+  return std::string(v ? v : "");
+}
+
+// Each regular file in `dir` (not below it) by name, with its bytes.
+std::map<std::string, std::string> folder_files(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    std::ifstream in(e.path(), std::ios::binary);
+    std::stringstream bytes;
+    bytes << in.rdbuf();
+    files[e.path().filename().string()] = bytes.str();
+  }
+  return files;
 }
 
 // A float32 GeoTIFF of heights z(i, j) with a 0.5 m north-up geotransform.
@@ -283,12 +309,6 @@ TEST_F(CliTiles, TiledP1AndSunWithFarFieldEqualWholeBake) {
        {"directions", 8},
        {"far_field", {{"beyond", 5}, {"cell", 4}}},
        {"layers", {"irradiation", "sun_hours"}}}};
-  // A COG's metadata item (GDAL's default domain); "" when absent.
-  auto item = [](const fs::path& file, const char* key) {
-    std::unique_ptr<GDALDataset> ds(GDALDataset::Open(file.c_str(), GDAL_OF_RASTER));
-    const char* v = ds ? ds->GetMetadataItem(key) : nullptr;
-    return std::string(v ? v : "");
-  };
   for (const char* field : {"sines.tif", "terraces.tif", "craters.tif", "noise.tif"}) {
     SCOPED_TRACE(field);
     expect_tiles_equal_whole(field, bake, {16, 45, 100});
@@ -304,13 +324,13 @@ TEST_F(CliTiles, TiledP1AndSunWithFarFieldEqualWholeBake) {
     ASSERT_EQ(hfbake("merge --quiet --tiles --tile-size 45 " + job.string()).exit_code, 0);
     for (const auto& [file, key] : {std::pair{".p1-0.ao.tif", "HFBAKE_P1_FAR_FIELD_BOUND"},
                                     std::pair{".sun.sun_hours.tif", "HFBAKE_SUN_FAR_FIELD_BOUND"}}) {
-      const std::string whole = item(dir_ / "out_whole" / ("whole" + std::string(file)), key);
-      const std::string tiled = item(dir_ / "out_tiled45" / ("tiled45" + std::string(file)), key);
+      const std::string whole = metadata_item(dir_ / "out_whole" / ("whole" + std::string(file)), key);
+      const std::string tiled = metadata_item(dir_ / "out_tiled45" / ("tiled45" + std::string(file)), key);
       ASSERT_FALSE(whole.empty()) << file;
       ASSERT_FALSE(tiled.empty()) << file;
       EXPECT_GE(std::stod(tiled), std::stod(whole)) << file;
       EXPECT_LT(std::stod(tiled), 10.0) << file;
-      EXPECT_EQ(item(dir_ / "out_farm" / ("farm" + std::string(file)), key), tiled) << file;
+      EXPECT_EQ(metadata_item(dir_ / "out_farm" / ("farm" + std::string(file)), key), tiled) << file;
     }
     fs::remove_all(dir_ / "out_farm");
   }
@@ -334,7 +354,7 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   r = hfbake("merge --quiet --tiles --tile-size 50 " + job.string());
   EXPECT_EQ(r.exit_code, 2) << r.err;
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
-  EXPECT_NE(r.error_lines()[0].find("tiles/farm.tile-0."), std::string::npos) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("tiles/farm+tile-0."), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
   // Tiles baked from other heights (the raster replaced since the tasks ran): refused, naming the first.
   fs::rename(dir_ / "craters.tif", dir_ / "craters_kept.tif");
@@ -342,12 +362,12 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
   EXPECT_EQ(r.exit_code, 2) << r.err;
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
-  EXPECT_NE(r.error_lines()[0].find("tiles/farm.tile-0."), std::string::npos) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("tiles/farm+tile-0."), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
   fs::remove(dir_ / "craters.tif");
   fs::rename(dir_ / "craters_kept.tif", dir_ / "craters.tif");
   // A damaged tile file (one value changed, or made NaN, in place): refused, naming it.
-  const fs::path damaged = dir_ / "out_farm" / "tiles" / "farm.tile-3.relief.svf.tif";
+  const fs::path damaged = dir_ / "out_farm" / "tiles" / "farm+tile-3.relief.svf.tif";
   fs::copy_file(damaged, dir_ / "kept_svf.tif");
   for (const float bad : {0.5f, std::numeric_limits<float>::quiet_NaN()}) {
     {
@@ -368,7 +388,7 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
     fs::copy_file(dir_ / "kept_svf.tif", damaged, fs::copy_options::overwrite_existing);
   }
   // A missing tile file: refused, naming it.
-  const fs::path gone = dir_ / "out_farm" / "tiles" / "farm.tile-5.relief.svf.tif";
+  const fs::path gone = dir_ / "out_farm" / "tiles" / "farm+tile-5.relief.svf.tif";
   const fs::path kept = dir_ / "kept.tif";
   fs::rename(gone, kept);
   r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
@@ -392,6 +412,250 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   for (const auto& e : fs::directory_iterator(dir_ / "out_farm")) merged += e.path().extension() == ".tif";
   EXPECT_GE(compared, 6u);  // relief's svf and horizon_deg, each hbao entry's obscurance and bent_normal, ...
   EXPECT_EQ(merged, compared);
+}
+
+// A forged tile file, each under the name of the tile it claims to be, with the values and checksum its task
+// wrote: a tile of another job (the same heights and entries, another name), another tile of this job,
+// another layer's file of the same tile, and the tile with its plan record changed. Merge refuses each in one
+// line naming the file, and writes no COG.
+TEST_F(CliTiles, MergeRefusesTilesOfAnotherJobTileLayerOrPlan) {
+  write_family(150, 97);
+  const nlohmann::json height = {{"image", "craters.tif"}};
+  const fs::path job = write_job("farm", height, kBounded), copy = write_job("copy", height, kBounded);
+  for (const fs::path& j : {job, copy})
+    for (const int i : {0, 1, 2})
+      ASSERT_EQ(
+          hfbake("bake --quiet --tiles --tile-size 40 --tile-task " + std::to_string(i) + "/3 " + j.string())
+              .exit_code,
+          0);
+  const fs::path tiles = dir_ / "out_farm" / "tiles";
+  const fs::path target = tiles / "farm+tile-1.relief.svf.tif", kept = dir_ / "kept.tif";
+  fs::copy_file(target, kept);
+  // The plan record as the task wrote it, with the halo one texel wider.
+  const auto other_plan = [&] {
+    std::string of = metadata_item(target, "HFBAKE_TILE_OF");
+    const std::string halo = "with a halo of ";
+    const std::size_t at = of.find(halo);
+    if (at == std::string::npos) return;
+    const std::size_t n = at + halo.size(), end = of.find_first_not_of("0123456789", n);
+    of.replace(n, end - n, std::to_string(std::stoi(of.substr(n, end - n)) + 1));
+    CPLPushErrorHandler(CPLQuietErrorHandler);  // GDAL's notes that the file is no longer a COG
+    std::unique_ptr<GDALDataset> ds(GDALDataset::Open(target.c_str(), GDAL_OF_RASTER | GDAL_OF_UPDATE));
+    ASSERT_TRUE(ds);
+    ASSERT_EQ(ds->SetMetadataItem("HFBAKE_TILE_OF", of.c_str()), CE_None);
+    ds.reset();
+    CPLPopErrorHandler();
+  };
+  struct Forgery {
+    std::string what;
+    std::function<void()> make;
+  };
+  const std::vector<Forgery> forgeries = {
+      {"another job's tile",
+       [&] {
+         fs::copy_file(dir_ / "out_copy" / "tiles" / "copy+tile-1.relief.svf.tif", target,
+                       fs::copy_options::overwrite_existing);
+       }},
+      {"another tile",
+       [&] {
+         fs::copy_file(tiles / "farm+tile-2.relief.svf.tif", target, fs::copy_options::overwrite_existing);
+       }},
+      {"another layer",
+       [&] {
+         fs::copy_file(tiles / "farm+tile-1.hbao-1.obscurance.tif", target,
+                       fs::copy_options::overwrite_existing);
+       }},
+      {"another plan", other_plan},
+  };
+  for (const Forgery& f : forgeries) {
+    SCOPED_TRACE(f.what);
+    f.make();
+    ASSERT_NE(metadata_item(target, "HFBAKE_TILE_SUM"), "") << "the forgery carries a checksum of its values";
+    const Result r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.err.find(target.string() + ": is not tile 1 of this job"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+    for (const auto& e : fs::directory_iterator(dir_ / "out_farm"))  // a COG a merge should not have written
+      if (e.path().extension() == ".tif") fs::remove(e.path());
+    fs::copy_file(kept, target, fs::copy_options::overwrite_existing);
+  }
+  const Result r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// A tile task's files are its job's alone. A job named a.tile-1 baking GeoTIFFs into the tiles/ folder of job
+// a, and a's tile tasks, leave each other's files as they wrote them, whichever bakes first, and a's merge
+// takes its own tiles. The entries are a sweep whose stems hold a '.' (relief-search_radius2.5).
+TEST_F(CliTiles, TileFilesShareNoNameWithAnotherJobsFiles) {
+  write_family(150, 97);
+  const nlohmann::json height = {{"image", "sines.tif"}};
+  const nlohmann::json bake = {
+      {{"method", "relief"}, {"directions", 8}, {"search_radius", {2.5, 3}}, {"layers", {"svf"}}}};
+  const fs::path a = write_job("a", height, bake);
+  const fs::path other =
+      write_job("a.tile-1", height, bake, {{"output", {{"dir", "out_a/tiles"}, {"geotiff", true}}}});
+  const fs::path tiles = dir_ / "out_a" / "tiles";
+  const auto tasks = [&] {
+    for (const int i : {0, 1, 2}) {
+      const Result r =
+          hfbake("bake --quiet --tiles --tile-size 40 --tile-task " + std::to_string(i) + "/3 " + a.string());
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+    }
+  };
+  // The tile files of a's tasks, and the other job's outputs, by name (the hidden locks and records aside).
+  const auto split = [&] {
+    std::map<std::string, std::string> own, others;
+    for (auto& [name, bytes] : folder_files(tiles))
+      if (name[0] != '.') (name.rfind("a+tile-", 0) == 0 ? own : others)[name] = bytes;
+    return std::pair{own, others};
+  };
+  Result r = hfbake("bake --quiet --no-cache " + other.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto baked = split().second;
+  ASSERT_TRUE(baked.count("a.tile-1.relief-search_radius2.5.svf.tif")) << "the other job's GeoTIFF";
+  tasks();
+  const auto [own, others] = split();
+  EXPECT_TRUE(others == baked) << "a tile task replaced or removed a file of the other job";
+  EXPECT_TRUE(own.count("a+tile-1.relief-search_radius2.5.svf.tif"));
+  EXPECT_EQ(own.size(), 12u * 2u) << "12 tiles, each of 2 entries with one layer";
+  r = hfbake("bake --quiet --no-cache " + other.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(split().first == own) << "the other job replaced or removed a tile file";
+  r = hfbake("merge --quiet --tiles --tile-size 40 " + a.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "out_a" / "a.relief-search_radius2.5.svf.tif"));
+}
+
+// Two job files of one name and output folder (other heights) never share tiles/: it holds one job file's
+// tiles of that name. Tasks of one job file run at once; a task, a merge or `validate --tiles` of the other
+// is refused in one line naming tiles/ and the job file whose tiles it holds, with nothing written; with
+// --overwrite it takes the name over. Started at once, 5 times: one job file's task bakes, the other's is
+// refused, and tiles/ holds the first's tiles only.
+TEST_F(CliTiles, OneJobNameInTilesHasOneJobFile) {
+  write_family(150, 97);
+  const nlohmann::json same = {{"name", "t"}, {"output", {{"dir", "out_t"}}}};
+  const fs::path ja = write_job("ja", {{"image", "craters.tif"}}, kBounded, same);
+  const fs::path jb = write_job("jb", {{"image", "terraces.tif"}}, kBounded, same);
+  const fs::path tiles = dir_ / "out_t" / "tiles";
+  const auto task = [](const fs::path& job, int i, const std::string& more = "") {
+    return "bake --quiet --tiles --tile-size 40 --tile-task " + std::to_string(i) + "/3 " + more +
+           job.string();
+  };
+  const auto owned_by = [&](const fs::path& job) {
+    return "/name: the tiles of job t in " + tiles.string() + " were baked from " +
+           fs::canonical(job).string() +
+           ": give this job another name or output folder, or bake with --overwrite";
+  };
+  const auto start = [&](const fs::path& job, int i, const std::string& err) {
+    return hfbake_test::start_hfbake({"bake", "--quiet", "--tiles", "--tile-size", "40", "--tile-task",
+                                      std::to_string(i) + "/3", job.string()},
+                                     dir_ / err, dir_, 300);
+  };
+  // One job file's tasks, all at once.
+  std::vector<pid_t> pids;
+  for (const int i : {0, 1, 2}) pids.push_back(start(ja, i, "task" + std::to_string(i) + ".txt"));
+  for (const pid_t pid : pids) EXPECT_EQ(hfbake_test::wait_exit(pid), 0);
+  const auto baked = folder_files(tiles);
+  // The other job file: its task, merge and validate --tiles are refused, naming the owner.
+  for (const std::string& command : {task(jb, 1), "merge --quiet --tiles --tile-size 40 " + jb.string(),
+                                     "validate --quiet --tiles --tile-size 40 " + jb.string()}) {
+    SCOPED_TRACE(command);
+    const Result r = hfbake(command);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(jb.string() + ": " + owned_by(ja)), std::string::npos) << r.err;
+    EXPECT_TRUE(folder_files(tiles) == baked) << "a refused job file changed tiles/";
+    EXPECT_FALSE(fs::exists(dir_ / "out_t" / "t.relief.svf.tif"));
+  }
+  Result r = hfbake("merge --quiet --tiles --tile-size 40 " + ja.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // --overwrite takes the name over: then the first job file is refused, and its merge (with --overwrite
+  // too) refuses the tile the other baked.
+  r = hfbake(task(jb, 0, "--overwrite "));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = hfbake(task(ja, 0));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find(ja.string() + ": " + owned_by(jb)), std::string::npos) << r.err;
+  r = hfbake("merge --quiet --overwrite --tiles --tile-size 40 " + ja.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find((tiles / "t+tile-0.").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.error_lines()[0].find(": is not tile 0 of this job"), std::string::npos) << r.err;
+  // Raced: the first task to claim the name bakes; the other is refused and writes no tile.
+  for (int run = 0; run < 5; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(dir_ / "out_t");
+    const pid_t pa = start(ja, 0, "a.txt"), pb = start(jb, 1, "b.txt");
+    const int ea = hfbake_test::wait_exit(pa), eb = hfbake_test::wait_exit(pb);
+    ASSERT_TRUE((ea == 0 && eb == 2) || (ea == 2 && eb == 0)) << ea << " " << eb;
+    const fs::path& winner = ea == 0 ? ja : jb;
+    std::ifstream lost(dir_ / (ea == 0 ? "b.txt" : "a.txt"));
+    std::stringstream err;
+    err << lost.rdbuf();
+    EXPECT_NE(err.str().find(owned_by(winner)), std::string::npos) << err.str();
+    // Task 0 bakes tiles 0..3 of 12, task 1 tiles 4..7.
+    const char first = ea == 0 ? '0' : '4';
+    std::size_t tile_files = 0;
+    for (const auto& [name, bytes] : folder_files(tiles)) {
+      if (name.rfind("t+tile-", 0) != 0) continue;
+      ++tile_files;
+      EXPECT_TRUE(name[7] >= first && name[7] < first + 4 && name[8] == '.')
+          << name << " is not the winner's";
+    }
+    EXPECT_GT(tile_files, 0u);
+  }
+}
+
+// tiles/ or the tiles' lock name taken by a link: validate --tiles, a tile task and a merge refuse the job in
+// one line naming the job file and /output/dir, and the link's target stays empty.
+TEST_F(CliTiles, ALinkInPlaceOfTilesIsRefused) {
+  write_heights(dir_ / "f.tif", 40, 30, [](int i, int j) { return 0.1 * i * j; });
+  const fs::path job = write_job("t", {{"image", "f.tif"}}, {{{"method", "relief"}, {"search_radius", 2}}});
+  const fs::path out = dir_ / "out_t", target = dir_ / "elsewhere";
+  fs::create_directories(out / "tiles");
+  fs::create_directories(target);
+  for (const fs::path& link : {out / "tiles" / ".hfbake-t+tiles.lock", out / "tiles"}) {
+    SCOPED_TRACE(link.string());
+    if (link == out / "tiles") fs::remove_all(link);
+    fs::create_directory_symlink(target, link);
+    for (const std::string command :
+         {"validate --quiet --tiles --tile-size 16 ", "bake --quiet --tiles --tile-size 16 --tile-task 0/1 ",
+          "merge --quiet --tiles --tile-size 16 "}) {
+      SCOPED_TRACE(command);
+      const Result r = hfbake(command + job.string());
+      EXPECT_EQ(r.exit_code, 2) << r.err;
+      ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+      EXPECT_NE(r.error_lines()[0].find(job.string() + ": /output/dir: " + link.string() + " is "),
+                std::string::npos)
+          << r.err;
+      EXPECT_TRUE(fs::is_empty(target));
+    }
+    fs::remove(link);
+  }
+}
+
+// The heights lying where the job's tile task would write a tile file, or its tiles record: validate refuses
+// the job naming the key, and the file is kept.
+TEST_F(CliTiles, AnInputWhereATileTaskWritesIsRefused) {
+  fs::create_directories(dir_ / "out_t" / "tiles");
+  for (const std::string name : {"t+tile-0.relief.svf.tif", ".hfbake-t+tiles.job"}) {
+    SCOPED_TRACE(name);
+    const fs::path input = dir_ / "out_t" / "tiles" / name;
+    write_heights(input, 40, 30, [](int i, int j) { return 0.1 * i * j; });
+    const fs::path job =
+        write_job("t", {{"image", input.string()}}, {{{"method", "relief"}, {"search_radius", 2}}});
+    const Result r = hfbake("validate --quiet --tiles --tile-size 16 " + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(job.string() + ": /height/image: " + input.string() +
+                                      " is where this job writes an output"),
+              std::string::npos)
+        << r.err;
+    EXPECT_TRUE(fs::exists(input));
+    fs::remove(input);
+  }
 }
 
 // Each refusal: exit 2, one error line naming the job file and `pointer`, and no output folder.

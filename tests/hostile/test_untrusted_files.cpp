@@ -1,9 +1,14 @@
 // Files and names hfbake does not own, against the hfbake binary: the farm's shard files with forged claims
 // or a FIFO in their place; links planted at the temporary names and staging folders hfbake uses; two
-// processes writing one job name into one folder. Each must end in one error line (or a documented
-// behaviour: docs/output_folders.md), with nothing written outside the folder asked for and nothing lost.
+// processes writing one job name into one folder; a suite waiting for another's suite lock. Each must end in
+// one error line (or a documented behaviour: docs/output_folders.md), with nothing written outside the folder
+// asked for and nothing lost.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <signal.h>
+#include <sys/file.h>
+#include <sys/inotify.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -760,6 +765,100 @@ TEST_F(Untrusted, TwoSuitesIntoOneFolderBothKeepTheirRunInTheHistory) {
       EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
     EXPECT_FALSE(fs::exists(fs::symlink_status(out / ".hfbake+suite.lock")));
   }
+}
+
+// The suite lock held as hfbake holds it (flock(2), "<pid>@<host>" in the file) by this test, standing for
+// another process writing its suite reports.
+class HeldSuiteLock {
+ public:
+  explicit HeldSuiteLock(const fs::path& file) : file_(file) {
+    fs::create_directories(file.parent_path());
+    fd_ = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);  // O_CLOEXEC: no hfbake child keeps it
+    EXPECT_GE(fd_, 0);
+    EXPECT_EQ(flock(fd_, LOCK_EX | LOCK_NB), 0);
+    const std::string holder = "4242@node7";
+    EXPECT_EQ(write(fd_, holder.data(), holder.size()), ssize_t(holder.size()));
+  }
+  ~HeldSuiteLock() { release(); }
+  HeldSuiteLock(const HeldSuiteLock&) = delete;
+  HeldSuiteLock& operator=(const HeldSuiteLock&) = delete;
+  // Given up as hfbake gives it up: the file removed while held, then closed.
+  void release() {
+    if (fd_ < 0) return;
+    unlink(file_.c_str());
+    close(fd_);
+    fd_ = -1;
+  }
+
+ private:
+  fs::path file_;
+  int fd_ = -1;
+};
+
+// A suite of one job into out/.
+void write_one_job_suite(const fs::path& dir) {
+  json j = base_job();
+  j["name"] = "a";
+  write_job(dir, j, "a.json");
+  std::ofstream(dir / "suite.json") << json{
+      {"version", 1}, {"suite", "s"}, {"jobs", {"a.json"}}, {"output", {{"dir", "out"}}}};
+}
+
+// The suite lock held for longer than the suite waits (HFBAKE_TEST_SUITE_LOCK_WAIT=1, a test switch: one
+// second instead of a minute): the suite's job bakes, and the suite ends with exit 2 and one line naming the
+// suite file, the folder, the holder and the wait; none of its four reports is written, and the lock is still
+// the holder's.
+TEST_F(Untrusted, ASuiteGivesUpOnALockHeldLongerThanItWaits) {
+  write_one_job_suite(dir_);
+  const fs::path out = dir_ / "out", lock = out / ".hfbake+suite.lock";
+  HeldSuiteLock held(lock);
+  const Outcome r = hfbake(dir_, {"bake", "suite.json", "--no-cache", "--quiet"},
+                           [] { setenv("HFBAKE_TEST_SUITE_LOCK_WAIT", "1", 1); });
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_EQ(r.error_lines()[0],
+            "suite.json: cannot write the suite reports: another hfbake process (4242@node7) "
+            "has been writing suite reports into " +
+                out.string() + " for 1 s: wait for it to finish, then bake the suite again")
+      << r.err;
+  EXPECT_TRUE(fs::exists(out / "a" / "a.p1.exr")) << "the suite's job did not bake";
+  for (const char* report : {"suite.json", "history.json", "index.html", "junit.xml"})
+    EXPECT_FALSE(fs::exists(out / report)) << report;
+  EXPECT_EQ(read_text(lock), "4242@node7");
+}
+
+// A suite that finds the lock held waits for it (its wait as shipped: a minute), and writes its reports once
+// the holder gives the lock up. The holder gives it up when it sees the suite open the lock's file (inotify),
+// which a suite does only to try the lock: the suite has found it held by then.
+TEST_F(Untrusted, ASuiteWaitsForTheLocksHolderThenWritesItsReports) {
+  write_one_job_suite(dir_);
+  const fs::path out = dir_ / "out", lock = out / ".hfbake+suite.lock";
+  HeldSuiteLock held(lock);
+  const int watch = inotify_init1(IN_CLOEXEC);
+  ASSERT_GE(watch, 0);
+  ASSERT_GE(inotify_add_watch(watch, lock.c_str(), IN_OPEN), 0);
+  const pid_t pid = start(dir_, {"bake", "suite.json", "--no-cache", "--quiet"}, "suite.txt");
+  // The suite's first try of the lock, or its end (start's SIGALRM ends a hung suite).
+  bool tried = false;
+  for (int status = 0; !tried;) {
+    pollfd p{watch, POLLIN, 0};
+    if (poll(&p, 1, 100) > 0) {
+      char events[4096];
+      tried = read(watch, events, sizeof events) > 0;
+    } else if (waitpid(pid, &status, WNOHANG) == pid) {
+      close(watch);
+      FAIL() << "the suite ended without trying the lock: " << read_text(dir_ / "suite.txt");
+    }
+  }
+  close(watch);
+  held.release();
+  const Outcome r = finish(pid, dir_, "suite.txt");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json history = json::parse(read_text(out / "history.json"));
+  EXPECT_EQ(history["runs"].size(), 1u) << history.dump();
+  for (const char* report : {"suite.json", "index.html", "junit.xml"})
+    EXPECT_TRUE(fs::exists(out / report)) << report;
+  EXPECT_FALSE(fs::exists(fs::symlink_status(lock)));
 }
 
 // A link planted at the suite's lock name: validate and bake refuse the suite with one line naming the suite
