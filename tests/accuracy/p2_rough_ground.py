@@ -5,11 +5,12 @@ heights, and the built-in sky with suns at 20, 35 and 60 degrees. Prints the Mar
 docs/methods/p2.md (bias of the field mean, excess rmse over the reference's own noise, the mean).
 
     /usr/bin/python3 tests/accuracy/p2_rough_ground.py [--hfbake build/baker/cli/hfbake] [--samples 256]
-                                                      [--subdivided | --subdivided-only]
+                                                      [--subdivided | --subdivided-only] [--method nlp]
 
 --subdivided adds the second table of p2.md: p2 with "subdivide" 1, 2 and 4 on the white-noise field (the
 field baked subdivided on its triangulation, read at its own texels). About 2 minutes on two cores (about 1
-more with --subdivided). Needs Debian's python3-numpy and python3-gdal.
+more with --subdivided). --method nlp prints the same table for nlp (its defaults, the same fields, lights and
+reference: the figures of docs/methods/nlp.md). Needs Debian's python3-numpy and python3-gdal.
 """
 import argparse
 import json
@@ -96,6 +97,7 @@ def main():
     ap.add_argument("--subdivided", action="store_true",
                     help='also p2 with "subdivide" 1, 2 and 4 on the white-noise field')
     ap.add_argument("--subdivided-only", action="store_true", help="only the table of --subdivided")
+    ap.add_argument("--method", choices=("p2", "nlp"), default="p2", help="the method of the first table")
     a = ap.parse_args()
     if a.subdivided_only:
         with tempfile.TemporaryDirectory() as tmp:
@@ -109,7 +111,13 @@ def main():
               ("sky, sun at 35°", {"sky": {"sun": {"elevation_deg": 35, "azimuth_deg": 135}}}, None),
               ("sky, sun at 20°", {"sky": {"sun": {"elevation_deg": 20, "azimuth_deg": 135}}}, None),
               ("sky, sun at 60°", {"sky": {"sun": {"elevation_deg": 60, "azimuth_deg": 135}}}, None)]
-    lines = ["| field | light | `indirect_b1`: bias, excess rmse of mean | `indirect_b2` |", "|---|---|---|---|"]
+    # p2 at K = 64, each bounce; nlp (its defaults) has no layer per bounce: its indirect light of both.
+    entry = ({"method": "p2", "directions": 64, "layers": ["indirect_b1", "indirect_b2"]} if a.method == "p2"
+             else {"method": "nlp", "layers": ["indirect"]})
+    scored = entry["layers"]
+    lines = (["| field | light | `indirect_b1`: bias, excess rmse of mean | `indirect_b2` |", "|---|---|---|---|"]
+             if a.method == "p2" else
+             ["| field | light | `indirect` (two bounces): bias, excess rmse of mean |", "|---|---|---|"])
     with tempfile.TemporaryDirectory() as tmp:
         for fi, (fname, z) in enumerate(fields):
             heights = os.path.join(tmp, f"f{fi}.tif")
@@ -122,8 +130,8 @@ def main():
                     surface["emission"] = {"image": emission}
                 job = {"version": 1, "name": f"r{fi}_{li}", "height": {"image": heights}, "surface": surface,
                        "environment": env, "bounces": 2,
-                       "bake": [{"method": "p2", "directions": 64, "layers": ["indirect_b1", "indirect_b2"]}],
-                       "reference": {"samples": a.samples, "seed": 1, "layers": ["indirect_b1", "indirect_b2"]},
+                       "bake": [entry],
+                       "reference": {"samples": a.samples, "seed": 1, "layers": scored},
                        "report": {"crop": 4}, "output": {"dir": os.path.join(tmp, f"out{fi}_{li}"),
                                                           "pixel_type": "float", "previews": False}}
                 path = os.path.join(tmp, f"r{fi}_{li}.json")
@@ -131,13 +139,13 @@ def main():
                     json.dump(job, f)
                 subprocess.run([a.hfbake, "bake", path, "--quiet", "--no-cache"], check=True)
                 with open(os.path.join(tmp, f"out{fi}_{li}", "report.json")) as f:
-                    layers = json.load(f)["methods"]["p2"]["layers"]
+                    layers = json.load(f)["methods"][a.method]["layers"]
                 cells = []
-                for layer in ("indirect_b1", "indirect_b2"):
+                for layer in scored:
                     v = layers[layer]
                     cells.append(f"{100 * v['bias'] / v['reference_mean']:+.1f} %, {v['excess_rmse']:.4f} of "
                                  f"{v['reference_mean']:.3f}")
-                lines.append(f"| {fname} | {lname} | {cells[0]} | {cells[1]} |")
+                lines.append(f"| {fname} | {lname} | " + " | ".join(cells) + " |")
                 print(lines[-1], flush=True)
     print("\n".join(lines))
     if a.subdivided:
