@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <map>
 #include <memory>
 #include <regex>
@@ -251,6 +253,48 @@ void overlong_strings(const nlohmann::json& value, const std::string& schema_pat
   }
 }
 
+// Whole numbers beyond a 64-bit integer where the schema asks for an integer (2^63 and up, or a number like
+// 1e20 or 18446744073709551616 that JSON holds as a float): the validator would wrap them, or call them not
+// integers. Checked first, said with the schema's bound ("must be <= 4096") or the 64-bit one.
+void oversized_integers(const nlohmann::json& value, const std::string& schema_path,
+                        std::vector<std::string>& tokens, std::vector<SchemaViolation>& out) {
+  if (value.is_number_unsigned() || value.is_number_float()) {
+    constexpr double k2p63 = 9223372036854775808.0;
+    bool over = false, under = false;
+    if (value.is_number_unsigned()) {
+      over = value.get<std::uint64_t>() > std::uint64_t(std::numeric_limits<std::int64_t>::max());
+    } else {
+      const double x = value.get<double>();
+      over = std::isfinite(x) && x == std::floor(x) && x >= k2p63;
+      under = std::isfinite(x) && x == std::floor(x) && x < -k2p63;
+    }
+    if (!over && !under) return;
+    std::vector<const nlohmann::json*> types;
+    keywords_at(&schema_document(schema_path), schema_path, tokens, 0, "type", types);
+    const bool integer = std::any_of(types.begin(), types.end(), [](const nlohmann::json* t) {
+      return *t == "integer" || (t->is_array() && std::find(t->begin(), t->end(), "integer") != t->end());
+    });
+    if (!integer) return;
+    std::string pointer;
+    for (const std::string& t : tokens) pointer += "/" + t;
+    const nlohmann::json* bound =
+        keyword_at(&schema_document(schema_path), schema_path, tokens, 0, over ? "maximum" : "minimum");
+    out.push_back(
+        {pointer, bound && bound->is_number()
+                      ? std::string(over ? "must be <= " : "must be >= ") + bound->dump() + " (it is " +
+                            value.dump() + ")"
+                      : std::string("is ") + value.dump() + ", beyond a 64-bit integer (" +
+                            (over ? "at most 9223372036854775807" : "at least -9223372036854775808") + ")"});
+  } else if (value.is_object() || value.is_array()) {
+    std::size_t index = 0;
+    for (const auto& [key, child] : value.items()) {
+      tokens.push_back(value.is_array() ? std::to_string(index++) : key);
+      oversized_integers(child, schema_path, tokens, out);
+      tokens.pop_back();
+    }
+  }
+}
+
 // Arrays whose schema says "uniqueItems": one line per value listed more than once, at its second place.
 void repeated_items(const nlohmann::json& value, const std::string& schema_path,
                     std::vector<std::string>& tokens, std::vector<SchemaViolation>& out) {
@@ -351,6 +395,7 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
     std::vector<std::string> tokens;
     std::vector<SchemaViolation> overlong;
     overlong_strings(doc, schema_path, tokens, overlong);
+    oversized_integers(doc, schema_path, tokens, overlong);
     if (!overlong.empty()) return overlong;
   }
   // Parsing the schema is cheap (a few KB); keep it per call so there is no shared mutable state.
