@@ -396,6 +396,14 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   if (!s.pixel_unit.empty() && s.pixel_unit_metres != 1.0 && s.height_unit.empty() && s.scale == 1)
     line += " (the band declares no unit: heights taken in " + s.pixel_unit + "; heights in metres need " +
             "height_scale " + short_num(1 / s.pixel_unit_metres) + ")";
+  // "nodata": "fill": how much of the field is filled (the outputs mark it NoData, docs/gis.md).
+  const auto& holes = scene.georeference.holes;
+  if (const std::size_t n = std::size_t(std::count(holes.begin(), holes.end(), std::uint8_t(1))); n > 0) {
+    char share[32];
+    std::snprintf(share, sizeof share, "%.2g", 100.0 * double(n) / double(f.texel_count()));
+    line +=
+        "; " + std::to_string(n) + " texels without a height (" + share + " %) filled from their neighbours";
+  }
 
   if (scene.curvature > 0) {
     line += "; Earth curvature on (refraction " + short_num(scene.refraction) + ": a point 1 km away is " +

@@ -275,6 +275,15 @@ TEST_F(CliGdal, NodataValueOfTheFileMakesHoles) {
   }
   EXPECT_FALSE(fs::exists(dir_ / "out_refused" / "refused.p1.exr"));
 
+  // With "fill", validate's heights line says how many texels are filled.
+  {
+    const Result v =
+        hfbake("validate " +
+               write_job("v.json", "counted", {{"image", "minus9999.tif"}, {"nodata", "fill"}}, 4).string());
+    ASSERT_EQ(v.exit_code, 0) << v.err;
+    EXPECT_NE(v.err.find("; " + std::to_string(holes) + " texels without a height ("), std::string::npos)
+        << v.err;
+  }
   // With "fill": holes, not pits. The GeoTIFF has NoData exactly at the holes, and every other texel
   // equals the bake of the NaN original (the same holes, filled the same way).
   Result r =
