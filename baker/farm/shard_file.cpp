@@ -4,11 +4,13 @@
 #include <unistd.h>
 
 #include <climits>
+#include <cstdint>
 #include <cstring>
 #include <system_error>
 
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
+#include "job/manifest.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -163,7 +165,13 @@ void ShardReader::read_header(const ShardIdentity& expected) {
   };
   nlohmann::json h;
   try {
-    h = nlohmann::json::parse(text);
+    // The parser of every JSON file hfbake reads, which refuses a key given twice; the header's size bounds
+    // its strings and arrays (a relief part's azimuth list is longer than a job file's strings may be).
+    h = parse_json_text(text, name, {kMaxJsonDepth, SIZE_MAX, SIZE_MAX});
+  } catch (const InputError& e) {
+    throw damaged("header " + e.where() + ": " + e.what());
+  }
+  try {
     if (h.at("job_hash") != expected.job_hash || h.at("job") != expected.job_name)
       throw InputError(name, "",
                        which + " belongs to another job (" + h.at("job").get<std::string>() + ", hash " +

@@ -214,6 +214,43 @@ TEST_F(Untrusted, ShardPartsClaimingAnotherSizeAreRefusedByTheMerge) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// The shard's bytes with its header text replaced by edit(header text); the header stays where it was.
+std::string with_header_text(const std::string& bytes, const std::function<std::string(std::string)>& edit) {
+  std::uint64_t at = 0;
+  shard_header(bytes, at);
+  const std::string text = bytes.substr(at, bytes.size() - 24 - at);
+  return bytes.substr(0, at) + edit(text) + bytes.substr(bytes.size() - 24);
+}
+
+// A shard's header is read by the parser of every JSON file hfbake reads: a key given twice, at the top or in
+// a part, is refused in one line naming the shard and the key, never resolved by its last value.
+TEST_F(Untrusted, ShardHeaderKeysGivenTwiceAreRefusedByTheMerge) {
+  const std::string job = write_job(dir_, base_job());
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path shard = dir_ / "out" / "shards" / "t.shard-0-of-1.hfshard";
+  const std::string genuine = read_text(shard);
+  const std::vector<std::pair<std::string, std::string>> forgeries = {
+      {"/job", "{\"job\":\"zzz\","}, {"/parts/0/entry", "\"parts\":[{\"entry\":5,"}};
+  for (const auto& [key, insert] : forgeries) {
+    SCOPED_TRACE(key);
+    std::ofstream(shard, std::ios::binary | std::ios::trunc) << with_header_text(genuine, [&](std::string t) {
+      const std::string head = insert.substr(0, insert.find('{') + 1);
+      const std::size_t at = t.find(head);
+      EXPECT_NE(at, std::string::npos) << t;
+      return t.replace(at, head.size(), insert);
+    });
+    const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_EQ(lines[0].rfind(shard.string() + ": ", 0), 0u) << lines[0];
+    EXPECT_NE(lines[0].find(key + ": duplicate key"), std::string::npos) << lines[0];
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "t.p1.exr"));
+  }
+  std::ofstream(shard, std::ios::binary | std::ios::trunc) << genuine;
+  EXPECT_EQ(hfbake(dir_, {"merge", job, "--no-cache", "--quiet"}).exit_code, 0);
+}
+
 // Rewrites every part's layer list in the header (checksums stay right: they cover the data, not the names).
 void forge_layers(const fs::path& shard, const std::function<void(json&)>& edit) {
   std::string bytes = read_text(shard);
