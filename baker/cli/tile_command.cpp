@@ -489,7 +489,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
           std::vector<float> texels(std::size_t(info->width) * std::size_t(info->height) * std::size_t(nc));
           for (int c = 0; c < nc; ++c) {
             const Plane plane =
-                read_georaster_window(file, c, 0, 0, info->width, info->height, {file.string(), ""});
+                read_georaster_window(file, c, 0, 0, info->width, info->height, {});  // names the file
             for (std::size_t t = 0; t < plane.values.size(); ++t)
               texels[t * std::size_t(nc) + std::size_t(c)] = plane.values[t];
             const std::string& band_name = info->band_names[std::size_t(c)];

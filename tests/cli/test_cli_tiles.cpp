@@ -376,6 +376,16 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find(gone.string() + ": is missing"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  // A truncated tile file: refused in one line naming it once.
+  fs::copy_file(kept, gone);
+  fs::resize_file(gone, fs::file_size(kept) / 2);
+  r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_EQ(r.error_lines()[0].find("hfbake: error: " + gone.string() + ": "), 0u) << r.err;
+  EXPECT_EQ(r.error_lines()[0].find(gone.string(), 16), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  fs::remove(gone);
   fs::rename(kept, gone);
   r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
