@@ -7,12 +7,14 @@
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -385,7 +387,21 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   EXPECT_EQ(r.error_lines()[0].find("hfbake: error: " + gone.string() + ": "), 0u) << r.err;
   EXPECT_EQ(r.error_lines()[0].find(gone.string(), 16), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
-  fs::remove(gone);
+  // A folder, a FIFO or an empty file at its name: refused, saying what stands there.
+  for (const auto& [what, make] : std::vector<std::pair<std::string, std::function<void()>>>{
+           {": cannot read tile 5: not a regular file (a folder)", [&] { fs::create_directory(gone); }},
+           {": cannot read tile 5: not a regular file (a FIFO)",
+            [&] { ASSERT_EQ(mkfifo(gone.c_str(), 0600), 0); }},
+           {": is empty, not tile 5", [&] { std::ofstream{gone}; }}}) {
+    fs::remove_all(gone);
+    make();
+    r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_EQ(r.error_lines()[0].find("hfbake: error: " + gone.string() + what), 0u) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  }
+  fs::remove_all(gone);
   fs::rename(kept, gone);
   r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
