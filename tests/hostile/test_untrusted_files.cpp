@@ -511,6 +511,8 @@ TEST_F(Untrusted, ADamagedReportIsRefusedByCompareAndAsABaselineByValidate) {
       {metrics, "missing required key \"rmse\"",
        [&](json& d) { d["methods"][stem]["layers"][layer].erase("rmse"); }},
       {"/job/forged", "unknown key", [&](json& d) { d["job"]["forged"] = 1; }},
+      {metrics + "/rmse", "must be at most 6.80565e+38 in magnitude",
+       [&](json& d) { d["methods"][stem]["layers"][layer]["rmse"] = 1e308; }},
   };
   fs::create_directories(dir_ / "base");
   for (const Damage& damage : damages) {
