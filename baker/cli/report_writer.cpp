@@ -39,6 +39,9 @@ nlohmann::json read_report_file(const std::filesystem::path& file) {
   if (!violations.empty())
     throw InputError(file.string(), violations.front().pointer,
                      violations.front().message + " (not a report.json as hfbake writes it)");
+  if (const auto impossible = impossible_report_value(doc))
+    throw InputError(file.string(), impossible->first,
+                     impossible->second + " (not a report.json as hfbake writes it)");
   return doc;
 }
 

@@ -36,8 +36,9 @@ struct ReportResult {
 nlohmann::json job_scene(const Job& job);
 
 // Reads a report.json (a baseline, or `hfbake compare`'s inputs): a regular JSON file within the job
-// reader's bounds, checked against schemas/report.schema.json. InputError naming the file and the field when
-// it is not one as hfbake writes it (a negative mae, a metric that is text, a key missing).
+// reader's bounds, checked against schemas/report.schema.json and report/report_document.hpp
+// impossible_report_value. InputError naming the file and the field when it is not one as hfbake writes it (a
+// negative mae, a metric that is text, a key missing, an rmse beyond any two floats' difference).
 nlohmann::json read_report_file(const std::filesystem::path& file);
 
 // Refuses (InputError at /report/baseline) a report.baseline that is a report of another job than the one

@@ -2,6 +2,7 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <optional>
@@ -99,9 +100,25 @@ ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, in
   const BakeEntry& e = job.bakes[std::size_t(entry)];
   ShardIdentity id = shard_identity(job, {stage, entry_stages(e)}, width, height);
   id.what = "stage " + std::to_string(stage) + " of " + e.stem;
-  id.redo = "bake it again with --stage " + std::to_string(stage) +
-            " --shard I/N, I = " + std::to_string(entry) + " mod N";
+  // A whole stage's file is its task's own piece; a divided stage's is made from its blocks by the next
+  // stage's tasks (stage_state_to_rebuild), whose re-run makes it again.
+  if (entry_stage_blocks(e, stage) == 0)
+    id.redo = "bake it again with --stage " + std::to_string(stage) +
+              " --shard I/N, I = " + std::to_string(entry) + " mod N";
+  else
+    id.redo = "bake stage " + std::to_string(stage + 1) + " again, --stage " + std::to_string(stage + 1) +
+              " with every --shard I/N: it makes this file from the blocks of stage " + std::to_string(stage);
   return id;
+}
+
+bool stage_state_to_rebuild(const Job& job, int entry, int stage, int width, int height) {
+  const BakeEntry& e = job.bakes[std::size_t(entry)];
+  if (stage <= 0 || stage >= entry_stages(e) || entry_stage_blocks(e, stage - 1) == 0) return false;
+  // The state after `stage` as a complete file: nothing reads the state before it any more.
+  if (shard_is_complete(stage_path(job, entry, stage), stage_identity(job, entry, stage, width, height)))
+    return false;
+  return !shard_is_complete(stage_path(job, entry, stage - 1),
+                            stage_identity(job, entry, stage - 1, width, height));
 }
 
 ShardIdentity stage_item_identity(const Job& job, int stage, StageItem item, int width, int height) {
@@ -170,26 +187,39 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
   }
   for (const fs::path& p : remove_stale_temporaries(path.parent_path()))
     progress.message(label + ": removed " + p.string() + " (left by a process that no longer runs)");
-  // The staged entries' pieces of stage `stage` (stage 0 beside the shard's other work) not yet complete.
+  // The staged entries' pieces of stage `stage` (stage 0 beside the shard's other work) not yet complete,
+  // and the entries whose pieces are complete but whose state before the stage is to be made again.
+  const std::vector<StageItem> items = stage_work(job, id, stage);
   std::vector<StageItem> todo;
-  for (const StageItem& item : stage_work(job, id, stage))
+  for (const StageItem& item : items)
     if (!shard_is_complete(stage_item_path(job, stage, item),
                            stage_item_identity(job, stage, item, size.width, size.height)))
       todo.push_back(item);
+  std::vector<int> rebuild;
+  for (const StageItem& item : items) {
+    const int e = item.entry;
+    if ((rebuild.empty() || rebuild.back() != e) &&
+        std::none_of(todo.begin(), todo.end(), [e](const StageItem& t) { return t.entry == e; }) &&
+        stage_state_to_rebuild(job, e, stage, size.width, size.height))
+      rebuild.push_back(e);
+  }
   const bool shard_done = stage > 0 || shard_is_complete(path, identity);
-  if (shard_done && todo.empty()) {
+  if (shard_done && todo.empty() && rebuild.empty()) {
     progress.message(label + (stage > 0 ? " stage " + std::to_string(stage) : std::string()) +
                      ": nothing to bake (complete or no such stage)");
     return stage > 0 ? fs::path() : path;
   }
-  // The state before the stage of each entry with work (its file, or the files it is merged from), checked
-  // before loading anything.
+  // The state before the stage of each entry with work or to rebuild (its file, or the files it is merged
+  // from), checked before loading anything.
   std::map<int, StageSources> previous;
+  auto open_previous = [&](int e) {
+    if (!previous.count(e))
+      previous.emplace(std::piecewise_construct, std::forward_as_tuple(e),
+                       std::forward_as_tuple(job, e, stage - 1, size.width, size.height));
+  };
   if (stage > 0)
-    for (const StageItem& item : todo)
-      if (!previous.count(item.entry))
-        previous.emplace(std::piecewise_construct, std::forward_as_tuple(item.entry),
-                         std::forward_as_tuple(job, item.entry, stage - 1, size.width, size.height));
+    for (const StageItem& item : todo) open_previous(item.entry);
+  for (const int e : rebuild) open_previous(e);
   progress.begin(job.name, "load");
   const auto t_load = std::chrono::steady_clock::now();
   const Scene scene = load_scene(job, [&](double f) { progress.update(job.name, "load", f); });
@@ -203,8 +233,31 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
     progress.begin(job.name, step);
     return rc;
   };
-  // The state before the stage, per entry: loaded once (merged from its blocks and written as that stage's
-  // file when it was divided, so later readers find it whole).
+  // The state before the stage of entry e: its file, or merged from the blocks and written as that stage's
+  // file, so that later readers find it whole.
+  auto load_state = [&](int e) {
+    StageSources& src = previous.at(e);
+    if (!src.merged()) return src.load(scene, RunControl{});
+    const std::string step = job.bakes[std::size_t(e)].stem + "@stage" + std::to_string(stage - 1);
+    const RunControl rc = begin_step(step);
+    const auto t0 = std::chrono::steady_clock::now();
+    LayerSet merged = src.load(scene, rc);
+    ShardWriter w(stage_path(job, e, stage - 1), stage_identity(job, e, stage - 1, size.width, size.height),
+                  temporary_owner());
+    ShardPart part;
+    part.entry = e, part.kind = "stage", part.block = stage - 1;
+    part.seconds = src.seconds(), part.cpu_seconds = src.cpu_seconds();
+    w.add(std::move(part), merged);
+    if (cancel.load()) throw Cancelled();
+    w.commit();
+    progress.end(job.name, step, seconds_since(t0));
+    return merged;
+  };
+  for (const int e : rebuild) {
+    if (cancel.load()) throw Cancelled();
+    load_state(e);
+  }
+  // The state before the stage, per entry: loaded once.
   int state_entry = -1;
   LayerSet state;
   double state_seconds = 0, state_cpu = 0;
@@ -215,26 +268,9 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
     const BakeEntry& entry = job.bakes[std::size_t(e)];
     const MethodInfo* m = find_method(entry.method);
     if (stage > 0 && state_entry != e) {
-      StageSources& src = previous.at(e);
       state_entry = e;
-      state_seconds = src.seconds(), state_cpu = src.cpu_seconds();
-      if (src.merged()) {
-        const std::string step = entry.stem + "@stage" + std::to_string(stage - 1);
-        const RunControl rc = begin_step(step);
-        const auto t0 = std::chrono::steady_clock::now();
-        state = src.load(scene, rc);
-        ShardWriter w(stage_path(job, e, stage - 1),
-                      stage_identity(job, e, stage - 1, size.width, size.height), temporary_owner());
-        ShardPart part;
-        part.entry = e, part.kind = "stage", part.block = stage - 1;
-        part.seconds = state_seconds, part.cpu_seconds = state_cpu;
-        w.add(std::move(part), state);
-        if (cancel.load()) throw Cancelled();
-        w.commit();
-        progress.end(job.name, step, seconds_since(t0));
-      } else {
-        state = src.load(scene, RunControl{});
-      }
+      state_seconds = previous.at(e).seconds(), state_cpu = previous.at(e).cpu_seconds();
+      state = load_state(e);
     }
     const std::string step = entry.stem + "@stage" + std::to_string(stage) +
                              (item.block >= 0 ? "#" + std::to_string(item.block) : std::string());
@@ -266,6 +302,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
     if (cancel.load()) throw Cancelled();
     writer.commit();
   }
+  if (shard_done && todo.empty()) return stage_path(job, rebuild.front(), stage - 1);
   if (shard_done) return stage > 0 ? stage_item_path(job, stage, todo.front()) : path;
 
   ShardWriter writer(path, identity, temporary_owner());

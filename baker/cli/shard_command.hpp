@@ -29,6 +29,13 @@ ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, in
 // "shard" index = the block, count = the stage's blocks.
 ShardIdentity stage_item_identity(const Job& job, int stage, StageItem item, int width, int height);
 
+// Whether the tasks of stage `stage` (> 0) of a staged entry are to (re)write the state file of stage
+// `stage - 1` (stage_path) from that stage's blocks even when their own pieces are complete: stage
+// `stage - 1` is divided by direction blocks, its file is missing or not complete, and something still
+// reads it (the state after `stage` is no complete file: the merge or stage `stage + 1` reads it). Its
+// re-run, by hand or by `hfbake slurm --resume`, then repairs the file.
+bool stage_state_to_rebuild(const Job& job, int entry, int stage, int width, int height);
+
 // The files that give a staged entry's state after stage `stage`: the stage's file when complete (or the
 // stage is whole), else, for a stage divided by direction blocks, the previous stage's file and the stage's
 // block files (stage 0: its block files alone), merged on load (MethodInfo::finish_stage_blocks). Opened and
@@ -56,7 +63,8 @@ std::string shard_version();
 // path. A complete shard file of the same job and hfbake is kept as it is (a re-run does nothing). With a
 // cache holding the job's reference, the shard's reference rows are read from it. Staged entries (p2) of
 // the shard run stage `stage` into their stage files (farm/shard_plan.hpp stage_path) from the previous
-// stage's; stage 0 comes with the shard's other work, a later stage alone (`bake --shard I/N --stage S`).
+// stage's; stage 0 comes with the shard's other work, a later stage alone (`bake --shard I/N --stage S`),
+// which also makes the state file before the stage again wherever stage_state_to_rebuild says so.
 std::filesystem::path bake_shard(const Job& job, ShardId id, Progress& progress,
                                  const std::atomic<bool>& cancel, JobOutcome& outcome,
                                  const ReferenceCache* cache, int stage = 0);

@@ -8,7 +8,9 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
+#include <tuple>
 
 #include "cli/method_dispatch.hpp"
 #include "cli/scene_loader.hpp"
@@ -184,6 +186,7 @@ int run_slurm(const SlurmOptions& o) {
   };
   // Whether task t has work in stage `stage`, and (--resume) whether that work is not on disk yet.
   auto has_stage = [&](const Task& t, int stage) { return stage == 0 || !items_of(t, stage).empty(); };
+  std::map<std::tuple<fs::path, fs::path, int, int>, bool> rebuild;  // (job, out, entry, stage)
   auto complete = [&](const Task& t, int stage) {
     if (o.tile_size > 0) return false;  // tile tasks are re-run whole
     JobLoad load = load_job(t.job, t.out);
@@ -198,6 +201,15 @@ int run_slurm(const SlurmOptions& o) {
       if (!shard_is_complete(stage_item_path(job, stage, item),
                              stage_item_identity(job, stage, item, size.width, size.height)))
         return false;
+    // The state file before the stage, which the stage's tasks make again (read once per entry and stage).
+    for (const StageItem& item : items_of(t, stage)) {
+      const auto key = std::make_tuple(t.job, t.out, item.entry, stage);
+      auto known = rebuild.find(key);
+      if (known == rebuild.end())
+        known = rebuild.emplace(key, stage_state_to_rebuild(job, item.entry, stage, size.width, size.height))
+                    .first;
+      if (known->second) return false;
+    }
     return true;
   };
   std::vector<std::vector<int>> submit(static_cast<std::size_t>(stage_count));  // per stage: task indices

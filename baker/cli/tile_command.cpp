@@ -1,5 +1,8 @@
 #include "cli/tile_command.hpp"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -111,6 +114,24 @@ std::string tiles_text(const TilePlan& plan) {
          (plan.kept_bytes > 0 ? ", beside coarse copies of the raster of " +
                                     std::to_string((plan.kept_bytes + (1 << 20) - 1) >> 20) + " MiB"
                               : std::string());
+}
+
+// The refusal of the file at tile k's name when it is not that tile of this job and plan, saying what it is:
+// missing, not a regular file (a folder, a FIFO), empty, or a raster of something else.
+std::string not_tile(const fs::path& file, std::size_t k, const TilePlan& plan) {
+  const std::string tile = "tile " + std::to_string(k);
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return "is missing: bake its tile task (bake --tiles --tile-task)";
+  std::string why;
+  const int fd = open_regular_file(file, why);
+  if (fd < 0)
+    return "cannot read " + tile + ": " + why + ": remove it and bake its tile task again (--tile-task)";
+  struct stat st {};
+  const bool empty = fstat(fd, &st) == 0 && st.st_size == 0;
+  close(fd);
+  if (empty) return "is empty, not " + tile + ": bake its tile task again (--tile-task)";
+  return "is not " + tile + " of this job (its heights and parameters) and plan (" + tiles_text(plan) +
+         "): bake it again with --tile-task";
 }
 
 // Bakes tile `k` of the plan: the tile's heights as a field of their own, then each entry through the method
@@ -465,11 +486,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
           const std::optional<GeoRasterInfo> info = probe_georaster(file);
           if (!info || georaster_metadata_item(file, "HFBAKE_TILE_OF") != expected ||
               info->width != tile.interior.width || info->height != tile.interior.height || info->bands != nc)
-            throw InputError(file.string(), "",
-                             fs::exists(file) ? "is not tile " + std::to_string(k) +
-                                                    " of this job (its heights and parameters) and plan (" +
-                                                    tiles_text(plan) + "): bake it again with --tile-task"
-                                              : "is missing: bake its tile task (bake --tiles --tile-task)");
+            throw InputError(file.string(), "", not_tile(file, k, plan));
           if (name ==
               config.layers.front()) {  // the entry's attributes, the same in each of its layers' files
             std::vector<std::pair<std::string, std::string>> tile_attributes;
@@ -485,7 +502,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
           std::vector<float> texels(std::size_t(info->width) * std::size_t(info->height) * std::size_t(nc));
           for (int c = 0; c < nc; ++c) {
             const Plane plane =
-                read_georaster_window(file, c, 0, 0, info->width, info->height, {file.string(), ""});
+                read_georaster_window(file, c, 0, 0, info->width, info->height, {});  // names the file
             for (std::size_t t = 0; t < plane.values.size(); ++t)
               texels[t * std::size_t(nc) + std::size_t(c)] = plane.values[t];
             const std::string& band_name = info->band_names[std::size_t(c)];

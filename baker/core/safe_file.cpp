@@ -133,6 +133,9 @@ int open_regular_file(const fs::path& path, std::string& why) {
   struct stat st {};
   if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
     why = "not a regular file";
+    if (S_ISDIR(st.st_mode)) why += " (a folder)";
+    if (S_ISFIFO(st.st_mode)) why += " (a FIFO)";
+    if (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) why += " (a device)";
     close(fd);
     return -1;
   }

@@ -14,7 +14,7 @@ namespace hfbake {
 
 // Opens `path` read-only with O_NONBLOCK (a FIFO or a device never blocks the open) and returns the
 // descriptor when it is a regular file (fstat; O_NONBLOCK cleared again). Otherwise -1 and `why` says
-// what it is ("not a regular file", or the error).
+// what it is ("not a regular file (a folder)", "(a FIFO)", "(a device)", or the error).
 int open_regular_file(const std::filesystem::path& path, std::string& why);
 
 // Reads exactly `n` bytes at `offset`; false on a short read or an error.

@@ -4,11 +4,13 @@
 #include <unistd.h>
 
 #include <climits>
+#include <cstdint>
 #include <cstring>
 #include <system_error>
 
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
+#include "job/manifest.hpp"
 
 namespace hfbake {
 namespace fs = std::filesystem;
@@ -151,82 +153,125 @@ void ShardReader::read_header(const ShardIdentity& expected) {
   if (size - kTrailer - header_at > kMaxShardHeaderBytes) throw damaged("a header beyond any shard's");
   std::string text(std::size_t(size - kTrailer - header_at), '\0');
   if (!read_at(fd_, text.data(), text.size(), header_at)) throw damaged("unreadable header");
+  nlohmann::json h;
+  try {
+    // The parser of every JSON file hfbake reads, which refuses a key given twice; the header's size bounds
+    // its strings and arrays (a relief part's azimuth list is longer than a job file's strings may be).
+    h = parse_json_text(text, name, {kMaxJsonDepth, SIZE_MAX, SIZE_MAX});
+  } catch (const InputError& e) {
+    throw damaged("header " + e.where() + ": " + e.what());
+  }
+  // A header field, named in messages by its JSON pointer (`at` the pointer of the object holding it):
+  // present and of the kind asked, else damage.
+  enum class Is { text, number, list };
+  auto field = [&](const nlohmann::json& in, const std::string& at, const std::string& key,
+                   Is kind) -> const nlohmann::json& {
+    const auto it = in.find(key);
+    if (it == in.end()) throw damaged("no header field " + at + "/" + key);
+    if (kind == Is::text ? !it->is_string() : kind == Is::number ? !it->is_number() : !it->is_array())
+      throw damaged("header field " + at + "/" + key + " is not " +
+                    (kind == Is::text     ? "a string"
+                     : kind == Is::number ? "a number"
+                                          : "an array"));
+    return *it;
+  };
+  auto text_field = [&](const nlohmann::json& in, const std::string& at, const std::string& key) {
+    return field(in, at, key, Is::text).get<std::string>();
+  };
   // An integer of the header within [lo, hi]: a float or an integer out of range is damage (converting
   // it would be undefined).
-  auto whole_number = [&](const nlohmann::json& in, const char* key, std::int64_t lo, std::int64_t hi) {
-    const nlohmann::json& v = in.at(key);
+  auto whole_number = [&](const nlohmann::json& in, const std::string& at, const std::string& key,
+                          std::int64_t lo, std::int64_t hi) {
+    const nlohmann::json& v = field(in, at, key, Is::number);
     const bool fits = v.is_number_unsigned()  ? v.get<std::uint64_t>() <= std::uint64_t(hi)
                       : v.is_number_integer() ? v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi
                                               : false;
-    if (!fits) throw damaged(std::string("a part's ") + key + " that is no whole number in range");
+    if (!fits) throw damaged("header field " + at + "/" + key + " is no whole number in range");
     return v.get<std::int64_t>();
   };
-  nlohmann::json h;
-  try {
-    h = nlohmann::json::parse(text);
-    if (h.at("job_hash") != expected.job_hash || h.at("job") != expected.job_name)
-      throw InputError(name, "",
-                       which + " belongs to another job (" + h.at("job").get<std::string>() + ", hash " +
-                           h.at("job_hash").get<std::string>() + "; this job's is " + expected.job_hash +
-                           "): " + redo);
-    if (h.at("hfbake_version") != expected.version)
-      throw InputError(name, "",
-                       which + " was baked by hfbake " + h.at("hfbake_version").get<std::string>() +
-                           ", not " + expected.version + ": bake it again");
-    if (h.at("shard") != expected.id.index || h.at("shards") != expected.id.count ||
-        h.at("width") != expected.width || h.at("height") != expected.height)
-      throw damaged("header of another shard or field size");
-    // Every claim against the job's field and the file's bytes: a part is the whole field (or its rows
-    // [row_begin, row_end) for the reference), each layer width * height * channels floats inside the data.
-    const std::uint64_t W = std::uint64_t(expected.width), H = std::uint64_t(expected.height);
-    for (const auto& p : h.at("parts")) {
-      ShardPart part;
-      part.entry = int(whole_number(p, "entry", -1, INT_MAX));
-      part.kind = p.at("kind");
-      part.block = int(whole_number(p, "block", 0, INT_MAX));
-      part.row_begin = int(whole_number(p, "row_begin", 0, INT_MAX));
-      part.row_end = int(whole_number(p, "row_end", 0, INT_MAX));
-      part.seconds = p.at("seconds"), part.cpu_seconds = p.at("cpu_seconds");
-      part.width = int(whole_number(p, "width", 0, INT_MAX));
-      part.height = int(whole_number(p, "height", 0, INT_MAX));
-      part.layers = p.at("layers");
-      const bool rows = part.kind == "rows";
-      if (!rows && part.kind != "whole" && part.kind != "block" && part.kind != "stage" &&
-          part.kind != "stage-block")
-        throw damaged("a part of unknown kind");
-      if (part.entry < -1 || part.block < 0) throw damaged("a part of no entry");
-      // The times the merge sums into the report: non-negative and under 10^9 s (32 years) each, so that
-      // no sum of them overflows (docs/cluster.md).
-      if (!(part.seconds >= 0 && part.seconds < 1e9) || !(part.cpu_seconds >= 0 && part.cpu_seconds < 1e9))
-        throw damaged("a part's seconds outside [0, 1e9)");
-      if (rows && !(part.row_begin >= 0 && part.row_begin < part.row_end &&
-                    std::uint64_t(part.row_end) <= H && part.height == part.row_end - part.row_begin))
-        throw damaged("rows outside the field");
-      if (std::uint64_t(part.width) != W || (!rows && std::uint64_t(part.height) != H))
-        throw damaged("a part of another size than the field's " + std::to_string(W) + "x" +
-                      std::to_string(H));
-      const std::uint64_t texels = W * std::uint64_t(part.height);
-      if (texels == 0) throw damaged("a part of no texels");
-      if (!part.layers.is_array()) throw damaged("a part without layers");
-      for (const auto& l : part.layers) {
-        const std::uint64_t channels = l.at("channels").size(),
-                            floats = std::uint64_t(whole_number(l, "floats", 0, INT64_MAX)),
-                            offset = std::uint64_t(whole_number(l, "offset", 0, INT64_MAX));
-        if (!l.at("name").is_string() || l.at("name").get_ref<const std::string&>().empty() ||
-            !l.at("channels").is_array() || channels == 0 || !l.at("checksum").is_string())
-          throw damaged("a layer without a name, channels or checksum");
-        for (const auto& c : l.at("channels"))
-          if (!c.is_string()) throw damaged("a layer's channel without a name");
-        if (channels > header_at / 4 / texels || floats != texels * channels)
-          throw damaged("layer " + l.at("name").get<std::string>() + " of another size than the part's");
-        if (offset < sizeof magic || offset > header_at || floats > (header_at - offset) / sizeof(float))
-          throw damaged("a layer beyond the data");
-      }
-      for (const auto& a : p.at("attributes")) part.attributes.emplace_back(a.at(0), a.at(1));
-      parts_.push_back(std::move(part));
+  auto object = [&](const nlohmann::json& v, const std::string& at) {
+    if (!v.is_object())
+      throw damaged(at.empty() ? "a header that is no JSON object"
+                               : "header field " + at + " is not an object");
+  };
+  object(h, "");
+  const std::string job = text_field(h, "", "job"), job_hash = text_field(h, "", "job_hash");
+  if (job_hash != expected.job_hash || job != expected.job_name)
+    throw InputError(name, "",
+                     which + " belongs to another job (" + job + ", hash " + job_hash + "; this job's is " +
+                         expected.job_hash + "): " + redo);
+  const std::string version = text_field(h, "", "hfbake_version");
+  if (version != expected.version)
+    throw InputError(
+        name, "",
+        which + " was baked by hfbake " + version + ", not " + expected.version + ": bake it again");
+  if (whole_number(h, "", "shard", 0, INT_MAX) != expected.id.index ||
+      whole_number(h, "", "shards", 0, INT_MAX) != expected.id.count ||
+      whole_number(h, "", "width", 0, INT_MAX) != expected.width ||
+      whole_number(h, "", "height", 0, INT_MAX) != expected.height)
+    throw damaged("header of another shard or field size");
+  // Every claim against the job's field and the file's bytes: a part is the whole field (or its rows
+  // [row_begin, row_end) for the reference), each layer width * height * channels floats inside the data.
+  const std::uint64_t W = std::uint64_t(expected.width), H = std::uint64_t(expected.height);
+  const nlohmann::json& parts = field(h, "", "parts", Is::list);
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const nlohmann::json& p = parts[i];
+    const std::string at = "/parts/" + std::to_string(i);
+    object(p, at);
+    ShardPart part;
+    part.entry = int(whole_number(p, at, "entry", -1, INT_MAX));
+    part.kind = text_field(p, at, "kind");
+    part.block = int(whole_number(p, at, "block", 0, INT_MAX));
+    part.row_begin = int(whole_number(p, at, "row_begin", 0, INT_MAX));
+    part.row_end = int(whole_number(p, at, "row_end", 0, INT_MAX));
+    part.seconds = field(p, at, "seconds", Is::number).get<double>();
+    part.cpu_seconds = field(p, at, "cpu_seconds", Is::number).get<double>();
+    part.width = int(whole_number(p, at, "width", 0, INT_MAX));
+    part.height = int(whole_number(p, at, "height", 0, INT_MAX));
+    part.layers = field(p, at, "layers", Is::list);
+    const bool rows = part.kind == "rows";
+    if (!rows && part.kind != "whole" && part.kind != "block" && part.kind != "stage" &&
+        part.kind != "stage-block")
+      throw damaged("a part of unknown kind");
+    if (part.entry < -1 || part.block < 0) throw damaged("a part of no entry");
+    // The times the merge sums into the report: non-negative and under 10^9 s (32 years) each, so that
+    // no sum of them overflows (docs/cluster.md).
+    if (!(part.seconds >= 0 && part.seconds < 1e9) || !(part.cpu_seconds >= 0 && part.cpu_seconds < 1e9))
+      throw damaged("a part's seconds outside [0, 1e9)");
+    if (rows && !(part.row_begin >= 0 && part.row_begin < part.row_end && std::uint64_t(part.row_end) <= H &&
+                  part.height == part.row_end - part.row_begin))
+      throw damaged("rows outside the field");
+    if (std::uint64_t(part.width) != W || (!rows && std::uint64_t(part.height) != H))
+      throw damaged("a part of another size than the field's " + std::to_string(W) + "x" + std::to_string(H));
+    const std::uint64_t texels = W * std::uint64_t(part.height);
+    if (texels == 0) throw damaged("a part of no texels");
+    for (std::size_t k = 0; k < part.layers.size(); ++k) {
+      const nlohmann::json& l = part.layers[k];
+      const std::string lat = at + "/layers/" + std::to_string(k);
+      object(l, lat);
+      const std::string layer = text_field(l, lat, "name");
+      const nlohmann::json& names = field(l, lat, "channels", Is::list);
+      const std::uint64_t channels = names.size(),
+                          floats = std::uint64_t(whole_number(l, lat, "floats", 0, INT64_MAX)),
+                          offset = std::uint64_t(whole_number(l, lat, "offset", 0, INT64_MAX));
+      text_field(l, lat, "checksum");
+      if (layer.empty() || channels == 0) throw damaged("a layer without a name or channels");
+      for (const auto& c : names)
+        if (!c.is_string()) throw damaged("header field " + lat + "/channels holds a channel without a name");
+      if (channels > header_at / 4 / texels || floats != texels * channels)
+        throw damaged("layer " + layer + " of another size than the part's");
+      if (offset < sizeof magic || offset > header_at || floats > (header_at - offset) / sizeof(float))
+        throw damaged("a layer beyond the data");
     }
-  } catch (const nlohmann::json::exception& e) {
-    throw damaged(std::string("bad header: ") + e.what());
+    const nlohmann::json& attributes = field(p, at, "attributes", Is::list);
+    for (std::size_t k = 0; k < attributes.size(); ++k) {
+      const nlohmann::json& a = attributes[k];
+      if (!a.is_array() || a.size() != 2 || !a[0].is_string() || !a[1].is_string())
+        throw damaged("header field " + at + "/attributes/" + std::to_string(k) +
+                      " is not a pair of strings [name, value]");
+      part.attributes.emplace_back(a[0].get<std::string>(), a[1].get<std::string>());
+    }
+    parts_.push_back(std::move(part));
   }
 }
 

@@ -10,7 +10,8 @@
 //     direction blocks (MethodInfo::stage_blocks: every stage of p2) as blocks, shard I taking blocks
 //     [I B / N, (I + 1) B / N), each into its own block file (stage_block_path). Whoever first needs the
 //     state after such a stage (the next stage's tasks, the merge) adds its blocks to the state before it
-//     (MethodInfo::finish_stage_blocks); the next stage's tasks also write it as the stage's file;
+//     (MethodInfo::finish_stage_blocks); the next stage's tasks also write it as the stage's file (and
+//     write it again when it is missing or damaged while read: cli/shard_command stage_state_to_rebuild);
 //   - any other method runs whole, in shard (entry index mod N).
 // Shards beyond a method's block count simply have none of its blocks.
 #pragma once

@@ -29,6 +29,15 @@ class GdalQuiet {
     if (nl != std::string::npos) s.resize(nl);
     return s.empty() ? std::string("unknown error") : s;
   }
+  // The same for a message about `file`, which the error line names already: GDAL's leading "<file>, " or
+  // "<file>: " is left out, so that the line names the file once.
+  std::string error(const std::string& file) const {
+    std::string s = error();
+    if (!file.empty() && s.compare(0, file.size(), file) == 0 && s.size() > file.size() + 2 &&
+        (s.compare(file.size(), 2, ", ") == 0 || s.compare(file.size(), 2, ": ") == 0))
+      s.erase(0, file.size() + 2);
+    return s;
+  }
 };
 
 }  // namespace hfbake

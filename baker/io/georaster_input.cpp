@@ -34,7 +34,7 @@ std::unique_ptr<GDALDataset> open_raster(const fs::path& file, const InputSite& 
       GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!ds)
     throw InputError(site.job_file, site.pointer,
-                     file.string() + ": cannot read the raster: " + gdal.error());
+                     file.string() + ": cannot read the raster: " + gdal.error(file.string()));
   return ds;
 }
 
@@ -184,7 +184,7 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
     if (!read_rows(b, 0, y0, plane.width, n, dst, file, site))
       throw InputError(site.job_file, site.pointer,
                        file.string() + ": cannot decode the raster (corrupt or truncated?) at row " +
-                           std::to_string(y0) + ": " + gdal.error());
+                           std::to_string(y0) + ": " + gdal.error(file.string()));
     through_palette(b, dst, std::size_t(n) * std::size_t(plane.width));
     ds->FlushCache();  // read-only: drops the cached blocks (of every band: pixel-interleaved files cache
                        // all)
@@ -230,7 +230,7 @@ Plane read_georaster_window(const fs::path& file, int band, int x0, int y0, int 
   if (!read_rows(b, x0, y0, width, height, plane.values.data(), file, site))
     throw InputError(site.job_file, site.pointer,
                      file.string() + ": cannot decode the raster (corrupt or truncated?) at " + window +
-                         ": " + gdal.error());
+                         ": " + gdal.error(file.string()));
   through_palette(b, plane.values.data(), plane.values.size());
   ds->FlushCache();
   return plane;

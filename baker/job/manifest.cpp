@@ -85,7 +85,7 @@ std::string nul_in_path(const std::string& path) {
   return "\"" + path + "\" holds a NUL character (\\u0000), which no path can hold";
 }
 
-nlohmann::json parse_json_text(const std::string& text, const std::string& file) {
+nlohmann::json parse_json_text(const std::string& text, const std::string& file, const JsonBounds& bounds) {
   // Nesting first: a deep document would exhaust the stack of whatever walks it (the parser's callers,
   // the schema validator, the destructor).
   {
@@ -103,9 +103,9 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& file)
       } else if (c == '"') {
         in_string = true;
       } else if (c == '[' || c == '{') {
-        if (++depth > kMaxJsonDepth)
+        if (++depth > bounds.depth)
           throw InputError(file, line_column(text, i + 1),
-                           "nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+                           "nested deeper than " + std::to_string(bounds.depth) + " levels");
       } else if (c == ']' || c == '}') {
         --depth;
       }
@@ -129,16 +129,16 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& file)
     return p;
   };
   auto element = [&] {
-    if (!frames.empty() && frames.back().array && std::size_t(++frames.back().index) >= kMaxJsonArrayItems)
+    if (!frames.empty() && frames.back().array && std::size_t(++frames.back().index) >= bounds.array_items)
       throw InputError(file, pointer(frames.size() - 1),
-                       "an array of more than " + std::to_string(kMaxJsonArrayItems) +
-                           " items; hfbake's JSON files hold at most " + std::to_string(kMaxJsonArrayItems));
+                       "an array of more than " + std::to_string(bounds.array_items) +
+                           " items; hfbake's JSON files hold at most " + std::to_string(bounds.array_items));
   };
   auto bounded_string = [&](const std::string& s, const std::string& where) {
-    if (s.size() > kMaxJsonStringBytes)
+    if (s.size() > bounds.string_bytes)
       throw InputError(file, where,
                        "a string of " + std::to_string(s.size()) +
-                           " bytes; hfbake's JSON files hold at most " + std::to_string(kMaxJsonStringBytes));
+                           " bytes; hfbake's JSON files hold at most " + std::to_string(bounds.string_bytes));
   };
   using Event = nlohmann::json::parse_event_t;
   const nlohmann::json::parser_callback_t callback = [&](int, Event event, nlohmann::json& parsed) {

@@ -86,10 +86,21 @@ inline constexpr std::uintmax_t kMaxJsonFileBytes = 16u << 20;
 inline constexpr std::size_t kMaxJsonStringBytes = 4096;
 inline constexpr std::size_t kMaxJsonArrayItems = 4096;
 
-// Parses JSON text; errors (InputError naming `file`) as "line L, column C: <what>": malformed text, numbers
-// beyond double's range, nesting deeper than kMaxJsonDepth; as the JSON pointer: a key given twice in one
-// object, a string longer than kMaxJsonStringBytes, an array longer than kMaxJsonArrayItems.
-nlohmann::json parse_json_text(const std::string& text, const std::string& file);
+// What parse_json_text bounds besides the text's own size: nesting, each string's bytes, each array's items.
+// The defaults are those of the JSON files people write (jobs, suites, reports).
+struct JsonBounds {
+  int depth = kMaxJsonDepth;
+  std::size_t string_bytes = kMaxJsonStringBytes;
+  std::size_t array_items = kMaxJsonArrayItems;
+};
+
+// Parses JSON text, the one parser of every JSON document hfbake reads (jobs, suites, reports, the farm's
+// shard headers); errors (InputError naming `file`) as "line L, column C: <what>": malformed text, numbers
+// beyond double's range, nesting deeper than `bounds.depth`; as the JSON pointer: a key given twice in one
+// object (never resolved silently), a string longer than `bounds.string_bytes`, an array longer than
+// `bounds.array_items`.
+nlohmann::json parse_json_text(const std::string& text, const std::string& file,
+                               const JsonBounds& bounds = {});
 
 // A path from a JSON file goes to the system as a C string, which ends at a NUL, so one that holds a NUL
 // would name another file (its part before the NUL): the reason such a path is refused, "" for any other.

@@ -304,11 +304,16 @@ std::string comparison_table(const BaselineComparison& c, bool all) {
                          r.change == MetricChange::improved || r.change == MetricChange::added;
     if (!notable && !(all && r.checked)) continue;
     if (r.change == MetricChange::added && r.metric != "seconds" && !r.checked && !all) continue;
+    // The change in percent of the baseline's magnitude: "-" where that is no finite number (a baseline of
+    // 0, or a ratio beyond double's range), in powers of ten from 10^5 %.
     std::string change = "-";
-    if (r.now && r.was && *r.was != 0 && std::isfinite(*r.now)) {
-      char buf[32];
-      std::snprintf(buf, sizeof buf, "%+.1f%%", 100.0 * (*r.now - *r.was) / std::abs(*r.was));
-      change = buf;
+    if (r.now && r.was && *r.was != 0) {
+      const double percent = 100.0 * ((*r.now - *r.was) / std::abs(*r.was));
+      if (std::isfinite(percent)) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, std::abs(percent) < 1e5 ? "%+.1f%%" : "%+.2g%%", percent);
+        change = buf;
+      }
     }
     std::snprintf(line, sizeof line, "  %-44s %12s %12s %9s  %s\n",
                   (r.layer.empty() ? r.stem + "." + r.metric : r.key()).c_str(), fmt(r.was).c_str(),

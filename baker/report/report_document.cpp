@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <stdexcept>
 
 namespace hfbake {
@@ -117,6 +118,41 @@ nlohmann::json metrics_json(const LayerMetrics& m) {
   j["reference_mean"] = m.reference_mean;
   j["values"] = m.values;
   return j;
+}
+
+std::optional<std::pair<std::string, std::string>> impossible_report_value(const nlohmann::json& report) {
+  std::optional<std::pair<std::string, std::string>> found;
+  // Each of `keys` present in `object` (at `at`) within [-limit, limit]; the first beyond is `found`.
+  auto within = [&](const nlohmann::json& object, const std::string& at,
+                    std::initializer_list<const char*> keys, double limit, const std::string& rule) {
+    for (const char* key : keys) {
+      const auto it = object.find(key);
+      if (!found && it != object.end() && it->is_number() && !(std::abs(it->get<double>()) <= limit))
+        found.emplace(at + "/" + key, rule);
+    }
+  };
+  const std::string magnitude = "must be at most " + number(kMaxReportMagnitude) +
+                                " in magnitude (the largest difference of two floats)";
+  if (report.contains("methods") && report["methods"].is_object())
+    for (const auto& [stem, method] : report["methods"].items()) {
+      if (!method.is_object() || !method.contains("layers") || !method["layers"].is_object()) continue;
+      for (const auto& [layer, metrics] : method["layers"].items()) {
+        if (!metrics.is_object()) continue;
+        const std::string at = "/methods/" + stem + "/layers/" + layer;
+        within(metrics, at,
+               {"mae", "rmse", "max", "p99", "bias", "noise_rmse", "excess_rmse", "reference_mean"},
+               kMaxReportMagnitude, magnitude);
+        within(metrics, at, {"angle_mean_deg", "angle_p99_deg", "angle_max_deg"}, 180,
+               "must be <= 180 (degrees)");
+      }
+    }
+  const nlohmann::json::json_pointer layers("/reference/layers");
+  if (report.contains(layers) && report[layers].is_object())
+    for (const auto& [layer, summary] : report[layers].items())
+      if (summary.is_object())
+        within(summary, "/reference/layers/" + layer, {"mean", "noise_rmse", "max_stderr"},
+               kMaxReportMagnitude, magnitude);
+  return found;
 }
 
 ReportOutcome build_report(const ReportSpec& spec, const std::vector<ReportMethodInput>& methods,

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/layers.hpp"
@@ -64,5 +65,13 @@ ReportOutcome build_report(const ReportSpec& spec, const std::vector<ReportMetho
 
 // Metrics as JSON (absent optional metrics are left out).
 nlohmann::json metrics_json(const LayerMetrics& m);
+
+// The largest difference of two float32 values: no error, bias or mean of a report lies beyond it.
+inline constexpr double kMaxReportMagnitude = 2.0 * 3.4028234663852886e38;
+
+// A value of a report.json (valid against schemas/report.schema.json) that no bake writes: an error metric,
+// bias, mean or reference noise beyond kMaxReportMagnitude in magnitude, an angle beyond 180 degrees. Its
+// JSON pointer and the rule it breaks, or nullopt.
+std::optional<std::pair<std::string, std::string>> impossible_report_value(const nlohmann::json& report);
 
 }  // namespace hfbake

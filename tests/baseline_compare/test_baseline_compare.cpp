@@ -4,6 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include "report/baseline_compare.hpp"
 
@@ -126,6 +130,35 @@ TEST(BaselineCompare, PsnrIsHigherBetter) {
   const BaselineComparison c = compare_to_baseline(exact, kBase, o);
   EXPECT_EQ(row(c, "p1.ao.psnr").change, MetricChange::improved);
   EXPECT_FALSE(c.regression());
+}
+
+// The change column is a finite percentage or "-": never inf or nan, whatever the two values.
+TEST(BaselineCompare, TheChangeIsAFinitePercentageOrNone) {
+  const std::vector<std::tuple<double, double, std::string>> cases = {
+      {0.1, 1e308, "-100.0%"},  // 100 * (0.1 - 1e308) overflows before the division
+      {1e300, 0.1, "+1e+303%"}, {1e308, 0.1, "-"},      {0.1, 1e-320, "-"},
+      {-1e308, 1e308, "-"},     {0.03, 0.02, "+50.0%"}, {0.1, 0.0, "-"}};
+  for (const auto& [now, was, change] : cases) {
+    SCOPED_TRACE(std::to_string(now) + " from " + std::to_string(was));
+    auto with_bias = [](double bias) {
+      nlohmann::json m = metrics(0.010, 0.020, 0.015);
+      m["bias"] = bias;
+      return report({{"p1", method({{"ao", m}})}});
+    };
+    BaselineOptions options = BaselineOptions::defaults();
+    ASSERT_EQ(parse_tolerance("bias=0.05", options), "");
+    const std::string table =
+        comparison_table(compare_to_baseline(with_bias(now), with_bias(was), options), true);
+    const std::size_t at = table.find("p1.ao.bias");
+    ASSERT_NE(at, std::string::npos) << table;
+    const std::string line = table.substr(at, table.find('\n', at) - at);
+    std::istringstream fields(line);
+    std::string key, baseline, value, shown;
+    fields >> key >> baseline >> value >> shown;
+    EXPECT_EQ(shown, change) << line;
+    EXPECT_EQ(table.find("inf"), std::string::npos) << table;
+    EXPECT_EQ(table.find("nan"), std::string::npos) << table;
+  }
 }
 
 TEST(BaselineCompare, CustomTolerancesAndTheirErrors) {

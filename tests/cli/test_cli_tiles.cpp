@@ -8,6 +8,7 @@
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -396,6 +397,30 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   EXPECT_NE(r.error_lines()[0].find(gone.string() + ": is missing"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  // A truncated tile file: refused in one line naming it once.
+  fs::copy_file(kept, gone);
+  fs::resize_file(gone, fs::file_size(kept) / 2);
+  r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_EQ(r.error_lines()[0].find("hfbake: error: " + gone.string() + ": "), 0u) << r.err;
+  EXPECT_EQ(r.error_lines()[0].find(gone.string(), 16), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  // A folder, a FIFO or an empty file at its name: refused, saying what stands there.
+  for (const auto& [what, make] : std::vector<std::pair<std::string, std::function<void()>>>{
+           {": cannot read tile 5: not a regular file (a folder)", [&] { fs::create_directory(gone); }},
+           {": cannot read tile 5: not a regular file (a FIFO)",
+            [&] { ASSERT_EQ(mkfifo(gone.c_str(), 0600), 0); }},
+           {": is empty, not tile 5", [&] { std::ofstream{gone}; }}}) {
+    fs::remove_all(gone);
+    make();
+    r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_EQ(r.error_lines()[0].find("hfbake: error: " + gone.string() + what), 0u) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
+  }
+  fs::remove_all(gone);
   fs::rename(kept, gone);
   r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;

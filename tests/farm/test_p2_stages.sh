@@ -5,7 +5,9 @@
 # take unequal runs of blocks), with a second p2 entry of 1 bounce (fewer stages, K = 8: blocks of one
 # direction, texel senders), a third subdivided on its triangulation (its stages hold the fine field's
 # state) and a direction-dividing method beside them. A stage whose previous stage is
-# missing is refused naming a missing file, before anything is baked; so is a merge without a block.
+# missing is refused naming a missing file, before anything is baked; so is a merge without a block. A lost
+# or damaged stage file is made again by following its refusal's advice as printed (the merge then gives the
+# bake's bits), and slurm --resume submits the stage that makes it.
 set -u
 H=$1 W=$2
 . "$(dirname "$0")/common.sh"
@@ -42,6 +44,39 @@ for N in 1 2 3 5; do
   same_outputs whole "s$N"
   echo "ok: $N shards, 3 stages, each by 8 direction blocks: the bake's bits"
 done
+# A lost or damaged stage file is made again from its blocks by the command the refusal names: the advice,
+# followed as printed, ends in the bake's bits, and slurm --resume submits the stage whose tasks make it.
+# run_advised N CMD...: runs CMD; while it is refused with "bake stage S again, --stage S with every
+# --shard I/N", runs that (each refused the same way followed in turn), then CMD again.
+run_advised() {
+  local n=$1 err stage i k=0
+  shift
+  while ! err=$("$@" 2>&1); do
+    k=$((k + 1))
+    [ $k -le 3 ] || fail "$* still refused after following its advice: $err"
+    [ "$(printf '%s\n' "$err" | wc -l)" = 1 ] && printf '%s' "$err" | grep -q '^hfbake: error: .*\.hfshard: ' ||
+      fail "$* refused not in one line naming the file: $err"
+    stage=$(printf '%s' "$err" | sed -n 's/.*bake stage \([0-9]*\) again, --stage \1 with every --shard I\/N.*/\1/p')
+    [ -n "$stage" ] || fail "$* refused without a stage to bake again: $err"
+    for ((i = 0; i < n; i++)); do
+      run_advised "$n" "$H" bake job.json --no-cache --quiet --out "s$n" --shard "$i/$n" --stage "$stage"
+    done
+  done
+}
+head -c 5000 s2/shards/p2farm.p2-0.stage-1.hfshard >cut && mv cut s2/shards/p2farm.p2-0.stage-1.hfshard
+run_advised 2 "$H" merge job.json --no-cache --quiet --out s2
+same_outputs whole s2
+echo "ok: a truncated stage file is made again by the stage the merge names"
+rm s3/shards/p2farm.p2-0.stage-[01].hfshard s3/shards/p2farm.p2-2.stage-0.hfshard
+run_advised 3 "$H" merge job.json --no-cache --quiet --out s3
+same_outputs whole s3
+echo "ok: lost stage files are made again, each by the stage its refusal names"
+resume() { "$H" slurm job.json --shards 5 --no-cache --quiet --out s5 --resume --dry-run | grep '^sbatch --parsable --array='; }
+[ -z "$(resume)" ] || fail "slurm --resume of a complete bake submits tasks: $(resume)"
+head -c 5000 s5/shards/p2farm.p2-0.stage-1.hfshard >cut && mv cut s5/shards/p2farm.p2-0.stage-1.hfshard
+[ "$(resume)" = "sbatch --parsable --array=0-4 '$PWD/s5/slurm/bake.sbatch' 2" ] ||
+  fail "slurm --resume with stage 1's file damaged submits other than stage 2: $(resume)"
+echo "ok: slurm --resume submits the stage that makes a damaged stage file again"
 # Stage 2 without stage 1 (neither its file nor one of its blocks): refused, naming the missing block.
 rm -f s2/shards/p2farm.p2-0.stage-[12].hfshard s2/shards/p2farm.p2-0.stage-[12].block-*.hfshard
 rm -f s2/shards/p2farm.p2-0.stage-1.block-3.hfshard

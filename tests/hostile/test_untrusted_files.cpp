@@ -219,6 +219,86 @@ TEST_F(Untrusted, ShardPartsClaimingAnotherSizeAreRefusedByTheMerge) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// The shard's bytes with its header text replaced by edit(header text); the header stays where it was.
+std::string with_header_text(const std::string& bytes, const std::function<std::string(std::string)>& edit) {
+  std::uint64_t at = 0;
+  shard_header(bytes, at);
+  const std::string text = bytes.substr(at, bytes.size() - 24 - at);
+  return bytes.substr(0, at) + edit(text) + bytes.substr(bytes.size() - 24);
+}
+
+// A shard's header is read by the parser of every JSON file hfbake reads: a key given twice, at the top or in
+// a part, is refused in one line naming the shard and the key, never resolved by its last value.
+TEST_F(Untrusted, ShardHeaderKeysGivenTwiceAreRefusedByTheMerge) {
+  const std::string job = write_job(dir_, base_job());
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path shard = dir_ / "out" / "shards" / "t.shard-0-of-1.hfshard";
+  const std::string genuine = read_text(shard);
+  const std::vector<std::pair<std::string, std::string>> forgeries = {
+      {"/job", "{\"job\":\"zzz\","}, {"/parts/0/entry", "\"parts\":[{\"entry\":5,"}};
+  for (const auto& [key, insert] : forgeries) {
+    SCOPED_TRACE(key);
+    std::ofstream(shard, std::ios::binary | std::ios::trunc) << with_header_text(genuine, [&](std::string t) {
+      const std::string head = insert.substr(0, insert.find('{') + 1);
+      const std::size_t at = t.find(head);
+      EXPECT_NE(at, std::string::npos) << t;
+      return t.replace(at, head.size(), insert);
+    });
+    const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_EQ(lines[0].rfind(shard.string() + ": ", 0), 0u) << lines[0];
+    EXPECT_NE(lines[0].find(key + ": duplicate key"), std::string::npos) << lines[0];
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "t.p1.exr"));
+  }
+  std::ofstream(shard, std::ios::binary | std::ios::trunc) << genuine;
+  EXPECT_EQ(hfbake(dir_, {"merge", job, "--no-cache", "--quiet"}).exit_code, 0);
+}
+
+// A header field missing or of the wrong kind is refused in one line naming the shard and the field's JSON
+// pointer, with no parser library's text.
+TEST_F(Untrusted, ShardHeaderFieldsOfTheWrongKindAreRefusedNamingTheField) {
+  const std::string job = write_job(dir_, base_job());
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path shard = dir_ / "out" / "shards" / "t.shard-0-of-1.hfshard";
+  const std::string genuine = read_text(shard);
+  const std::vector<std::pair<std::string, std::function<void(json&)>>> forgeries = {
+      {"/parts/0/attributes is not an array", [](json& h) { h["parts"][0]["attributes"] = json::object(); }},
+      {"/parts/0/attributes/0 is not a pair of strings",
+       [](json& h) {
+         h["parts"][0]["attributes"] = {{1, 2}};
+       }},
+      {"/parts/0/kind is not a string", [](json& h) { h["parts"][0]["kind"] = 3; }},
+      {"/parts/0/layers/0/channels is not an array",
+       [](json& h) { h["parts"][0]["layers"][0]["channels"] = "Y"; }},
+      {"/parts/0/layers/0 is not an object", [](json& h) { h["parts"][0]["layers"][0] = 1; }},
+      {"/parts/0 is not an object", [](json& h) { h["parts"][0] = "p"; }},
+      {"/parts is not an array", [](json& h) { h["parts"] = 5; }},
+      {"/job is not a string", [](json& h) { h["job"] = 7; }},
+      {"no header field /job_hash", [](json& h) { h.erase("job_hash"); }},
+      {"a header that is no JSON object", [](json& h) { h = json::array(); }}};
+  for (const auto& [what, edit] : forgeries) {
+    SCOPED_TRACE(what);
+    std::ofstream(shard, std::ios::binary | std::ios::trunc)
+        << with_header_text(genuine, [&](const std::string& t) {
+             json h = json::parse(t);
+             edit(h);
+             return h.dump() + "\n";
+           });
+    const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_EQ(lines[0].rfind(shard.string() + ": ", 0), 0u) << lines[0];
+    EXPECT_NE(lines[0].find(what), std::string::npos) << lines[0];
+    EXPECT_EQ(lines[0].find("json.exception"), std::string::npos) << lines[0];
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "t.p1.exr"));
+  }
+  std::ofstream(shard, std::ios::binary | std::ios::trunc) << genuine;
+  EXPECT_EQ(hfbake(dir_, {"merge", job, "--no-cache", "--quiet"}).exit_code, 0);
+}
+
 // Rewrites every part's layer list in the header (checksums stay right: they cover the data, not the names).
 void forge_layers(const fs::path& shard, const std::function<void(json&)>& edit) {
   std::string bytes = read_text(shard);
@@ -273,7 +353,8 @@ TEST_F(Untrusted, AFifoWhereAShardBelongsNeverBlocks) {
   EXPECT_EQ(merge.exit_code, 2) << merge.err;
   const auto lines = merge.error_lines();
   ASSERT_EQ(lines.size(), 1u) << merge.err;
-  EXPECT_NE(lines[0].find(shard.string() + ": cannot read shard 0/1: not a regular file"), std::string::npos)
+  EXPECT_NE(lines[0].find(shard.string() + ": cannot read shard 0/1: not a regular file (a FIFO)"),
+            std::string::npos)
       << lines[0];
   // bake --shard takes the FIFO for an incomplete shard and puts its file in its place.
   const Outcome bake = hfbake(dir_, {"bake", job, "--shard", "0/1", "--no-cache", "--quiet"});
@@ -435,6 +516,8 @@ TEST_F(Untrusted, ADamagedReportIsRefusedByCompareAndAsABaselineByValidate) {
       {metrics, "missing required key \"rmse\"",
        [&](json& d) { d["methods"][stem]["layers"][layer].erase("rmse"); }},
       {"/job/forged", "unknown key", [&](json& d) { d["job"]["forged"] = 1; }},
+      {metrics + "/rmse", "must be at most 6.80565e+38 in magnitude",
+       [&](json& d) { d["methods"][stem]["layers"][layer]["rmse"] = 1e308; }},
   };
   fs::create_directories(dir_ / "base");
   for (const Damage& damage : damages) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "core/vec.hpp"
@@ -185,6 +186,30 @@ TEST(Report, ThresholdsPassFailAndTypos) {
   EXPECT_NEAR(out.metrics_by_method["p1"]["ao"]["noise_rmse"].get<double>(), 0.01, 1e-7);
   EXPECT_EQ(out.doc["methods"]["p1"]["not_compared"], nlohmann::json::array({"horizon"}));
   EXPECT_TRUE(validate_against_schema(out.doc, "report.schema.json").empty()) << out.doc.dump(2);
+}
+
+// A report as build_report writes it holds no impossible value; an error beyond any two floats' difference,
+// an angle beyond 180 degrees or a reference mean beyond float's range is named by its JSON pointer.
+TEST(Report, ImpossibleValuesAreNamed) {
+  Fixture f;
+  ReportSpec spec;
+  spec.hfbake_version = "test";
+  const nlohmann::json genuine = build_report(spec, {{"p1", "p1", 1.0, {}, &f.method}}, f.reference).doc;
+  EXPECT_FALSE(impossible_report_value(genuine)) << genuine.dump(2);
+  const std::vector<std::pair<std::string, double>> edits = {{"/methods/p1/layers/ao/rmse", 1e308},
+                                                             {"/methods/p1/layers/ao/bias", -7e38},
+                                                             {"/methods/p1/layers/ao/angle_max_deg", 181},
+                                                             {"/reference/layers/ao/mean", 1e39}};
+  for (const auto& [pointer, value] : edits) {
+    nlohmann::json doc = genuine;
+    doc[nlohmann::json::json_pointer(pointer)] = value;
+    const auto found = impossible_report_value(doc);
+    ASSERT_TRUE(found) << pointer;
+    EXPECT_EQ(found->first, pointer);
+  }
+  nlohmann::json largest = genuine;
+  largest["methods"]["p1"]["layers"]["ao"]["max"] = 2.0 * double(std::numeric_limits<float>::max());
+  EXPECT_FALSE(impossible_report_value(largest));
 }
 
 TEST(Report, BaselineRegression) {
