@@ -467,29 +467,19 @@ std::optional<std::size_t> parse_memory_size(const std::string& text) {
 int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<std::size_t> memory_limit,
                  bool tiles, std::optional<int> tile_size, bool overwrite) {
   int exit_code = 0;
-  // A suite validates as the jobs it lists (as `bake` would run them).
-  std::vector<fs::path> jobs;
-  std::vector<std::string> suite_errors;
-  for (const fs::path& file : files) {
-    const std::size_t errors_before = suite_errors.size();
-    if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
-      if (const std::string problem = suite_folder_problem(*suite); !problem.empty()) {
-        suite_errors.push_back(problem);
-        continue;
-      }
-      jobs.insert(jobs.end(), suite->jobs.begin(), suite->jobs.end());
-      for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
-      if (!quiet) std::fprintf(stderr, "hfbake: %s: suite of %zu jobs\n", file.c_str(), suite->jobs.size());
-    } else if (suite_errors.size() == errors_before) {
-      jobs.push_back(file);  // not a suite: a job
-    }
+  // A suite validates as the jobs it lists, each in the output folder `bake` gives it.
+  const CallJobs call = call_jobs(files, std::nullopt);
+  for (const Suite& suite : call.suites) {
+    for (const std::string& s : suite.skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
+    if (!quiet)
+      std::fprintf(stderr, "hfbake: %s: suite of %zu jobs\n", suite.file.c_str(), suite.jobs.size());
   }
-  for (const std::string& e : suite_errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
-  if (!suite_errors.empty()) exit_code = 2;
+  for (const std::string& e : call.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+  if (!call.errors.empty()) exit_code = 2;
   // Every job loaded and resolved first: jobs whose outputs collide are refused as bake refuses them.
   std::vector<JobLoad> loads;
-  for (const fs::path& file : jobs) {
-    JobLoad load = load_job(file, std::nullopt);
+  for (const CallJob& job : call.jobs) {
+    JobLoad load = load_job(job.file, job.out);
     if (load.job) load.errors = resolve_job(*load.job);
     if (!load.errors.empty()) load.job.reset();
     loads.push_back(std::move(load));
@@ -507,8 +497,8 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
         }
     }
   }
-  for (std::size_t n = 0; n < jobs.size(); ++n) {
-    const fs::path& file = jobs[n];
+  for (std::size_t n = 0; n < call.jobs.size(); ++n) {
+    const fs::path& file = call.jobs[n].file;
     JobLoad& load = loads[n];
     for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
     if (!load.job || !load.errors.empty()) {
@@ -569,42 +559,17 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   const Progress::Mode mode = Progress::detect(options.quiet);
   Progress progress(mode);
 
-  // Expand suites into their jobs. Each input is (job file, output override).
-  struct Input {
-    fs::path file;
-    std::optional<fs::path> out;
-    int suite = -1;  // index into suites
-  };
-  std::vector<Input> inputs;
-  std::vector<Suite> suites;
-  std::vector<std::string> suite_errors;
+  // The call's jobs, suites expanded, each with the output folder the call gives it.
+  const CallJobs call = call_jobs(options.jobs, options.out);
+  for (const Suite& suite : call.suites)
+    for (const std::string& s : suite.skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
   int exit_code = 0;
-  for (const fs::path& file : options.jobs) {
-    const std::size_t errors_before = suite_errors.size();
-    if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
-      if (options.out) suite->output_dir = fs::absolute(*options.out / suite->name);
-      if (const std::string problem = suite_folder_problem(*suite); !problem.empty()) {
-        suite_errors.push_back(problem);  // nothing of the suite baked
-        continue;
-      }
-      for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
-      for (const fs::path& job : suite->jobs)
-        inputs.push_back({job, suite->output_dir / job.stem(), int(suites.size())});
-      suites.push_back(std::move(*suite));
-    } else if (suite_errors.size() == errors_before) {  // not a suite: a job
-      inputs.push_back({file, std::nullopt, -1});
-    }
-  }
-  for (const std::string& e : suite_errors) {
+  for (const std::string& e : call.errors) {
     std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
     exit_code = 2;
   }
-  const std::size_t plain_jobs =
-      std::count_if(inputs.begin(), inputs.end(), [](const Input& i) { return i.suite < 0; });
-  for (Input& in : inputs) {
-    // With --out and several jobs, each job gets its own folder under DIR.
-    if (in.suite < 0 && options.out) in.out = plain_jobs > 1 ? *options.out / in.file.stem() : *options.out;
-  }
+  const std::vector<CallJob>& inputs = call.jobs;
+  const std::vector<Suite>& suites = call.suites;
 
   std::vector<JobOutcome> outcomes(inputs.size());
   std::vector<std::optional<Job>> jobs(inputs.size());

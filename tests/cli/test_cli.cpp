@@ -487,6 +487,59 @@ TEST_F(Cli, ValidateSuiteChecksEveryJobItLists) {
   EXPECT_NE(r.error_lines()[0].find("suite.json: /jobs"), std::string::npos) << r.err;
 }
 
+// A suite's job i writes to <suite output.dir>/<job file stem>/, whatever its own output.dir: validate judges
+// collisions and owner records in that folder, as bake does, and the two agree on every case.
+TEST_F(Cli, ValidateSuiteJudgesEachJobInTheFolderBakeGivesIt) {
+  for (const char* d : {"x", "y", "z"}) fs::create_directories(dir_ / d);
+  nlohmann::json j = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}});
+  j["name"] = "a";
+  j["output"]["dir"] = "../out/a";
+  const fs::path xa = write_job("x/a.json", j), zp = write_job("z/p.json", j);
+  write_job("z/q.json", j);
+  j["output"]["dir"] = "../elsewhere";
+  const fs::path ya = write_job("y/a.json", j);
+  auto suite = [&](const std::string& name, const nlohmann::json& jobs) {
+    return write_job(name + ".json",
+                     {{"version", 1}, {"suite", name}, {"jobs", jobs}, {"output", {{"dir", name}}}});
+  };
+  // Two files named a.json, named "a", with their own output folders apart: both write s2/a/a.p1.exr.
+  const fs::path s2 = suite("s2", {"x/a.json", "y/a.json"});
+  Result v = hfbake("validate " + s2.string() + " --quiet");
+  EXPECT_EQ(v.exit_code, 2) << v.err;
+  ASSERT_EQ(v.error_lines().size(), 2u) << v.err;
+  EXPECT_NE(v.error_lines()[0].find(xa.string() + ": /name: its outputs (" + (dir_ / "s2" / "a").string()),
+            std::string::npos)
+      << v.err;
+  Result b = hfbake("bake " + s2.string() + " --quiet --no-cache");
+  EXPECT_EQ(b.exit_code, 2) << b.err;
+  EXPECT_EQ(b.error_lines(), v.error_lines());
+  // Two files named "a" with one own output folder: the suite gives them s3/p/ and s3/q/.
+  const fs::path s3 = suite("s3", {"z/p.json", "z/q.json"});
+  v = hfbake("validate " + s3.string() + " --quiet");
+  EXPECT_EQ(v.exit_code, 0) << v.err;
+  b = hfbake("bake " + s3.string() + " --quiet --no-cache");
+  EXPECT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_TRUE(fs::exists(dir_ / "s3" / "p" / "a.p1.exr"));
+  EXPECT_TRUE(fs::exists(dir_ / "s3" / "q" / "a.p1.exr"));
+  // s4/a/ holds job "a"'s outputs from z/p.json: x/a.json, which the suite sends there, is refused.
+  ASSERT_EQ(hfbake("bake " + zp.string() + " --out " + (dir_ / "s4" / "a").string() + " --quiet --no-cache")
+                .exit_code,
+            0);
+  const fs::path s4 = suite("s4", {"x/a.json"});
+  v = hfbake("validate " + s4.string() + " --quiet");
+  EXPECT_EQ(v.exit_code, 2) << v.err;
+  ASSERT_EQ(v.error_lines().size(), 1u) << v.err;
+  EXPECT_NE(v.error_lines()[0].find(xa.string() + ": /name: the outputs of job a in " +
+                                    (dir_ / "s4" / "a").string() + " were baked from " + zp.string()),
+            std::string::npos)
+      << v.err;
+  b = hfbake("bake " + s4.string() + " --quiet --no-cache");
+  EXPECT_EQ(b.exit_code, 2) << b.err;
+  EXPECT_EQ(b.error_lines(), v.error_lines());
+  EXPECT_FALSE(fs::exists(dir_ / "out"));  // no job wrote to its own output.dir
+  EXPECT_FALSE(fs::exists(dir_ / "elsewhere"));
+}
+
 TEST_F(Cli, EveryExampleJobValidates) {
   // The jobs users copy from (jobs/, jobs/examples/), the speed jobs (bench/) and the accuracy jobs
   // (tests/accuracy/) must keep validating as the schemas evolve. (bench/memory's production sizes are left
