@@ -310,6 +310,12 @@ void check_output_owner(const Job& job, bool overwrite) {
     check_owner_record(job, textures_owner_record(job), *textures, overwrite);
 }
 
+std::string output_name_problem(const fs::path& target) {
+  std::error_code ec;
+  if (fs::symlink_status(target, ec).type() != fs::file_type::directory) return "";
+  return target.string() + " is a folder where an output goes: remove it";
+}
+
 bool outputs_moving() noexcept {
   return g_moving.load() > 0;
 }
@@ -637,10 +643,10 @@ std::vector<fs::path> OutputStage::commit() {
   std::vector<fs::path> final_paths;
   // A name rename(2) cannot replace (a folder there, the owner record's included) fails the job before any
   // output moves or any folder is made, so that the folder keeps the previous outputs whole.
-  auto refuse_folder = [](const fs::path& target) {
-    std::error_code ec;
-    if (fs::symlink_status(target, ec).type() == fs::file_type::directory)
-      throw InputError(target.string(), "", "is a folder: an output goes there (remove it)");
+  auto refuse_folder = [this](const fs::path& name) {
+    if (const std::string problem = output_name_problem(job_.output.dir / name); !problem.empty())
+      throw InputError(job_.file.string(), name.has_parent_path() ? "/output/textures" : "/output/dir",
+                       problem);
   };
   // The owner records, moved after the outputs: the textures folder's (a job that writes textures), then the
   // output folder's, last.
@@ -649,7 +655,7 @@ std::vector<fs::path> OutputStage::commit() {
   records.push_back(owner_record(job_).filename());
   std::vector<fs::path> moves = staged_;
   moves.insert(moves.end(), records.begin(), records.end());
-  for (const fs::path& name : moves) refuse_folder(job_.output.dir / name);
+  for (const fs::path& name : moves) refuse_folder(name);
   for (const fs::path& name : moves) {  // textures/: made here, never a link to elsewhere
     if (!name.has_parent_path()) continue;
     const fs::path folder = (job_.output.dir / name).parent_path();

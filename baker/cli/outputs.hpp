@@ -92,6 +92,12 @@ std::string azimuth_convention(const Georeference& geo);
 // (0.05).
 void check_layers_finite(const std::string& stem, const LayerSet& layers);
 
+// What stands in the way of moving an output or an owner record to `target`: "" when rename(2) can replace
+// what is there (nothing, a file, a link: the link is replaced, never followed), else the error's text
+// ("<target> is a folder where an output goes: remove it"). Checked by resolve_job for the names the job
+// writes, and by OutputStage::commit before any output moves.
+std::string output_name_problem(const std::filesystem::path& target);
+
 // Refuses (InputError at /name) a job whose output folder, or textures folder (textures_folder), records that
 // another job file baked its outputs of the same job name (docs/output_folders.md), unless `overwrite`: what
 // OutputStage's constructor and `validate` check before anything is baked.
