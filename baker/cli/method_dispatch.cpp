@@ -95,22 +95,18 @@ void check_output_folder(const Job& job) {
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
   // What the bake would refuse only after baking (docs/output_folders.md): its lock names (the job's, the
   // report's for a job with a reference, the textures folder's for a job that writes textures) taken by
-  // anything but a file, and a textures/ entry that is not a folder.
+  // anything but a file, and a textures/ entry that is not a folder or that this process cannot write into.
   std::vector<fs::path> locks = {output_lock_file(job)};
   if (job.has_reference) locks.push_back(report_lock_file(job));
   if (textures_folder(job)) locks.push_back(textures_lock_file(job));
   for (const fs::path& lock : locks)
     if (const std::string problem = lock_name_problem(lock); !problem.empty())
       throw InputError(job.file.string(), "/output/dir", problem);
-  const fs::path textures = job.output.dir / "textures";
-  const fs::file_status ts = fs::symlink_status(textures, ec);
-  if (textures_folder(job) && fs::exists(ts) && !fs::is_directory(ts))
-    throw InputError(job.file.string(), "/output/textures",
-                     textures.string() + " is not a folder (" + (fs::is_symlink(ts) ? "a link" : "a file") +
-                         "): the textures are written inside " + job.output.dir.string() + " only");
+  check_textures_folder(job);
   // A folder where the bake moves an output or an owner record: rename(2) cannot replace it.
   std::vector<std::pair<fs::path, std::string>> folders = {{job.output.dir, "/output/dir"}};
-  if (textures_folder(job)) folders.emplace_back(textures, "/output/textures");
+  if (const std::optional<fs::path> textures = textures_folder(job))
+    folders.emplace_back(*textures, "/output/textures");
   for (const auto& [folder, ptr] : folders) {
     for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
       if (const std::string problem = output_name_problem(it->path());

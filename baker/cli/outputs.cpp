@@ -230,6 +230,22 @@ std::optional<fs::path> textures_folder(const Job& job) {
   return job.output.dir / "textures";
 }
 
+void check_textures_folder(const Job& job) {
+  const std::optional<fs::path> textures = textures_folder(job);
+  std::error_code ec;
+  const fs::file_status status = textures ? fs::symlink_status(*textures, ec) : fs::file_status();
+  if (!textures || !fs::exists(status)) return;
+  if (!fs::is_directory(status))
+    throw InputError(job.file.string(), "/output/textures",
+                     textures->string() + " is not a folder (" +
+                         (fs::is_symlink(status) ? "a link" : "a file") +
+                         "): the textures are written inside " + job.output.dir.string() + " only");
+  if (access(textures->c_str(), W_OK | X_OK) != 0)
+    throw InputError(job.file.string(), "/output/textures",
+                     "cannot write into " + textures->string() + ": " +
+                         std::error_code(errno, std::generic_category()).message());
+}
+
 fs::path textures_lock_file(const Job& job) {
   return job.output.dir / "textures" / output_lock_file(job).filename();
 }
@@ -410,11 +426,11 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   if (const std::optional<fs::path> textures = textures_folder(job)) {
     created_textures_ = !fs::exists(fs::symlink_status(*textures, ec));
     fs::create_directory(*textures, ec);
-    if (!is_real_directory(*textures)) {
+    try {
+      check_textures_folder(job);
+    } catch (const InputError&) {
       release();
-      throw InputError(job.file.string(), "/output/textures",
-                       textures->string() + " is not a folder (a link?): the textures are written inside " +
-                           job.output.dir.string() + " only");
+      throw;
     }
     take(textures_lock_, textures_lock_file(job),
          "is baking job " + job.name + " into " + textures->string() +

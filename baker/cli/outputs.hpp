@@ -37,6 +37,11 @@ std::filesystem::path owner_record(const Job& job);
 // textures_lock_file held and textures_owner_record checked and written as the two above
 // (docs/output_folders.md).
 std::optional<std::filesystem::path> textures_folder(const Job& job);
+// Refuses (InputError at /output/textures) the textures folder of a job that writes textures when the name is
+// taken by anything but a folder (a link, a file: the textures are written inside the output folder only) or
+// when this process cannot write into it: what resolve_job checks, and OutputStage's constructor before it
+// locks there. Nothing there yet: nothing to refuse (the bake makes it).
+void check_textures_folder(const Job& job);
 // <output dir>/textures/.hfbake-<name>.lock and .hfbake-<name>.job: the lock and the owner record of a job
 // that bakes into that folder under the same name.
 std::filesystem::path textures_lock_file(const Job& job);

@@ -2,6 +2,7 @@
 // or a FIFO in their place; links planted at the temporary names and staging folders hfbake uses; two
 // processes writing one job name into one folder. Each must end in one error line (or a documented
 // behaviour: docs/output_folders.md), with nothing written outside the folder asked for and nothing lost.
+#include <grp.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
@@ -474,6 +475,46 @@ TEST_F(Untrusted, ATexturesFolderThatIsALinkIsRefused) {
             std::string::npos)
       << lines[0];
   expect_outside_untouched();
+}
+
+// A textures folder this process cannot write into: validate and bake refuse it at /output/textures, saying
+// that it cannot be written, before anything is baked. Run as root, the commands run as nobody (uid 65534),
+// whom permissions bind.
+TEST_F(Untrusted, ATexturesFolderThatCannotBeWrittenIsRefused) {
+  const fs::path textures = dir_ / "out" / "textures";
+  fs::create_directories(textures);
+  const fs::perms read_only = fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                              fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec;
+  fs::permissions(dir_, read_only | fs::perms::owner_write);
+  fs::permissions(dir_ / "out", fs::perms::all);
+  fs::permissions(textures, read_only);
+  json j = base_job();
+  j["bake"][0]["layers"] = {"ao"};
+  j["output"]["textures"] = json::array({{{"layers", {"ao"}}}});
+  const std::string job = write_job(dir_, j);
+  fs::permissions(job, read_only);
+  const auto as_nobody = [] {
+    if (geteuid() == 0 && (setgroups(0, nullptr) != 0 || setgid(65534) != 0 || setuid(65534) != 0))
+      _exit(126);
+  };
+  for (const std::string command : {"validate", "bake"}) {
+    const Outcome r =
+        hfbake(dir_,
+               command == "bake" ? std::vector<std::string>{"bake", job, "--no-cache", "--quiet"}
+                                 : std::vector<std::string>{"validate", job, "--quiet"},
+               as_nobody);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << command << ": " << r.err;
+    EXPECT_EQ(lines[0],
+              job + ": /output/textures: cannot write into " + textures.string() + ": Permission denied")
+        << command;
+    EXPECT_TRUE(fs::is_empty(textures)) << command;
+    std::vector<fs::path> out;
+    for (const auto& e : fs::directory_iterator(dir_ / "out")) out.push_back(e.path());
+    EXPECT_EQ(out, std::vector<fs::path>{textures}) << command;
+  }
+  fs::permissions(textures, fs::perms::owner_all);
 }
 
 // out/shards and out/slurm as links: a shard task, and the scripts and logs of `hfbake slurm`, would land
