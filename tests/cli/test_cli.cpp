@@ -693,6 +693,74 @@ TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
   EXPECT_EQ(hfbake("validate " + p.string() + " --memory-limit 8.5e9 --quiet").exit_code, 0);
 }
 
+// Several jobs of one call bake together only while their combined estimate fits --memory-limit, else in
+// turns, one after another. validate prints the turns and the peak it plans for (each job's estimate, the
+// process's part of 48 MiB counted once); bake follows the plan: with room for one job at a time, each job
+// has ended before the next begins, and the process's peak stays within the limit.
+TEST_F(Cli, SeveralJobsBakeTogetherOnlyWhileTheirEstimatesFitTheMemoryLimit) {
+  std::vector<std::string> files;
+  for (int n = 1; n <= 3; ++n) {
+    nlohmann::json j =
+        job({{"procedural", {{"kind", "fractal"}, {"size", {512, 512}}, {"seed", n}}}},
+            {{{"method", "p1"}, {"directions", 32}, {"layers", {"ao", "horizon", "horizon_distance"}}}});
+    j["name"] = "t" + std::to_string(n);
+    j["output"]["previews"] = false;
+    files.push_back(write_job("t" + std::to_string(n) + ".json", j).string());
+  }
+  const std::string all = " " + files[0] + " " + files[1] + " " + files[2];
+  // validate's plan line ("3 jobs bake ...: about N MiB at the peak, ..."), its N and the first job's
+  // estimate.
+  double each = 0;
+  auto plan = [&](const std::string& options, double& peak) {
+    const Result v = hfbake("validate" + all + " --threads 2" + options);
+    EXPECT_EQ(v.exit_code, 0) << v.err;
+    const auto estimate = v.err.find("about "), at = v.err.find("hfbake: 3 jobs bake ");
+    if (estimate == std::string::npos || at == std::string::npos) return v.err;
+    each = std::stod(v.err.substr(estimate + 6));
+    const std::string line = v.err.substr(at, v.err.find('\n', at) - at);
+    peak = std::stod(line.substr(line.find(": about ") + 8));
+    return line;
+  };
+  double peak = 0;
+  std::string line = plan("", peak);
+  EXPECT_EQ(line.find("hfbake: 3 jobs bake together: about "), 0u) << line;
+  ASSERT_GT(each, 100) << line;  // two jobs (2 each - 48) need more than one and a half (1.5 each - 24)
+  EXPECT_NEAR(peak, 3 * each - 2 * 48, 2) << line;
+  // Room for two at once, not three.
+  const std::string two = std::to_string(int(2.5 * each - 72)) + "M";
+  line = plan(" --memory-limit " + two, peak);
+  EXPECT_EQ(line.find("hfbake: 3 jobs bake in 2 turns (2 + 1 jobs): about "), 0u) << line;
+  EXPECT_NEAR(peak, 2 * each - 48, 2) << line;
+  EXPECT_NE(line.find("within the " + two.substr(0, two.size() - 1) + " MiB of --memory-limit"),
+            std::string::npos)
+      << line;
+  // Room for one at a time.
+  const int one_mib = int(1.5 * each - 24);
+  const std::string one = std::to_string(one_mib) + "M";
+  line = plan(" --memory-limit " + one, peak);
+  EXPECT_EQ(line.find("hfbake: 3 jobs bake in 3 turns (1 + 1 + 1 jobs): about "), 0u) << line;
+  EXPECT_NEAR(peak, each, 1) << line;
+  // The bake's progress lines: every line of job t<n> before the first of t<n+1>.
+  const Result b = hfbake("bake" + all + " --threads 2 --no-cache --memory-limit " + one);
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  for (int n = 1; n < 3; ++n) {
+    const auto last = b.err.rfind("hfbake: t" + std::to_string(n) + ": ");
+    const auto next = b.err.find("hfbake: t" + std::to_string(n + 1) + ": ");
+    ASSERT_NE(last, std::string::npos) << b.err;
+    ASSERT_NE(next, std::string::npos) << b.err;
+    EXPECT_LT(last, next) << "t" << n << " and t" << n + 1 << " baked together:\n" << b.err;
+  }
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "peak memory is measured without sanitizers";
+#else
+  std::vector<std::string> args = {"bake", "--quiet", "--no-cache", "--threads", "2", "--memory-limit", one};
+  args.insert(args.end(), files.begin(), files.end());
+  const cli_test::BakePeak run = cli_test::run_peak(dir_, args);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_LE(run.peak_mib, one_mib) << "the process's peak beyond --memory-limit " << one;
+#endif
+}
+
 }  // namespace
 }  // namespace hfbake
 
