@@ -13,6 +13,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 
+#include "cli/bake_turns.hpp"
 #include "cli/job_outcome.hpp"
 #include "cli/method_dispatch.hpp"
 #include "cli/outputs.hpp"
@@ -51,12 +52,17 @@ std::size_t available_memory_bytes() {
 
 // "7.1 GiB", or "35 MiB" below a GiB.
 std::string gib(std::size_t bytes) {
-  char buf[32];
-  if (bytes < (std::size_t(1) << 30))
-    std::snprintf(buf, sizeof buf, "%.0f MiB", double(bytes) / double(1ull << 20));
-  else
-    std::snprintf(buf, sizeof buf, "%.1f GiB", double(bytes) / double(1ull << 30));
-  return buf;
+  return memory_size_text(bytes);
+}
+
+// The budget as the caller gave it, named: "the 170 MiB of --memory-limit" (in bytes when gib() would round
+// it: 10 bytes to "0 MiB"), or "the 7.1 GiB available (--memory-limit sets the budget)".
+std::string budget_text(std::optional<std::size_t> limit, const std::string& limit_name) {
+  const std::size_t have = limit ? *limit : available_memory_bytes();
+  const std::size_t mib = std::size_t(1) << 20, half_gib = std::size_t(1) << 29;
+  const bool exact = have % mib == 0 && (have < 2 * half_gib || have % half_gib == 0);
+  return limit ? "the " + (exact ? gib(have) : std::to_string(have) + " bytes") + " of " + limit_name
+               : "the " + gib(have) + " available (" + limit_name + " sets the budget)";
 }
 
 // "scene 35 MiB, p1 12 MiB": an estimate's parts for messages.
@@ -75,17 +81,19 @@ std::string largest_part_knob(const std::vector<MemoryPart>& parts) {
   return "; the largest part, " + largest->name + ", shrinks with " + largest->knob;
 }
 
+// What a job of the call plans for (plan_bake_turns): its estimate `need` and the process's part of it, or
+// with --tiles the whole budget, which its tiles are sized to fill.
+JobMemory planned_memory(const Job& job, FieldSize size, std::size_t need, bool tiles, std::size_t budget) {
+  if (tiles) return {budget, 0};
+  return {need, estimate_process_bytes(job, size)};
+}
+
 }  // namespace
 
 std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::size_t> limit,
                              std::string* parts_text, const std::string& limit_name) {
   const std::size_t have = limit ? *limit : available_memory_bytes();
-  // The budget as the caller gave it, named; in bytes when gib() would round it (10 bytes to "0 MiB").
-  const std::size_t mib = std::size_t(1) << 20, half_gib = std::size_t(1) << 29;
-  const bool exact = have % mib == 0 && (have < 2 * half_gib || have % half_gib == 0);
-  const std::string budget =
-      limit ? "the " + (exact ? gib(have) : std::to_string(have) + " bytes") + " of " + limit_name
-            : "the " + gib(have) + " available (" + limit_name + " sets the budget)";
+  const std::string budget = budget_text(limit, limit_name);
   // The heights alone first: the estimate plans the sweeps, whose plan is itself about a byte per 128 texels
   // (a 1000000^2 field: 8 GB just to estimate), so a size far beyond the budget (its heights alone over four
   // times it) is refused before the plan is made; nearer ones get the estimate and its parts.
@@ -467,29 +475,19 @@ std::optional<std::size_t> parse_memory_size(const std::string& text) {
 int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<std::size_t> memory_limit,
                  bool tiles, std::optional<int> tile_size, bool overwrite) {
   int exit_code = 0;
-  // A suite validates as the jobs it lists (as `bake` would run them).
-  std::vector<fs::path> jobs;
-  std::vector<std::string> suite_errors;
-  for (const fs::path& file : files) {
-    const std::size_t errors_before = suite_errors.size();
-    if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
-      if (const std::string problem = suite_folder_problem(*suite); !problem.empty()) {
-        suite_errors.push_back(problem);
-        continue;
-      }
-      jobs.insert(jobs.end(), suite->jobs.begin(), suite->jobs.end());
-      for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
-      if (!quiet) std::fprintf(stderr, "hfbake: %s: suite of %zu jobs\n", file.c_str(), suite->jobs.size());
-    } else if (suite_errors.size() == errors_before) {
-      jobs.push_back(file);  // not a suite: a job
-    }
+  // A suite validates as the jobs it lists, each in the output folder `bake` gives it.
+  const CallJobs call = call_jobs(files, std::nullopt);
+  for (const Suite& suite : call.suites) {
+    for (const std::string& s : suite.skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
+    if (!quiet)
+      std::fprintf(stderr, "hfbake: %s: suite of %zu jobs\n", suite.file.c_str(), suite.jobs.size());
   }
-  for (const std::string& e : suite_errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
-  if (!suite_errors.empty()) exit_code = 2;
+  for (const std::string& e : call.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+  if (!call.errors.empty()) exit_code = 2;
   // Every job loaded and resolved first: jobs whose outputs collide are refused as bake refuses them.
   std::vector<JobLoad> loads;
-  for (const fs::path& file : jobs) {
-    JobLoad load = load_job(file, std::nullopt);
+  for (const CallJob& job : call.jobs) {
+    JobLoad load = load_job(job.file, job.out);
     if (load.job) load.errors = resolve_job(*load.job);
     if (!load.errors.empty()) load.job.reset();
     loads.push_back(std::move(load));
@@ -508,8 +506,10 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
         }
     }
   }
-  for (std::size_t n = 0; n < jobs.size(); ++n) {
-    const fs::path& file = jobs[n];
+  const std::size_t budget = memory_limit ? *memory_limit : available_memory_bytes();
+  std::vector<JobMemory> planned;  // the valid jobs', for the plan of their turns
+  for (std::size_t n = 0; n < call.jobs.size(); ++n) {
+    const fs::path& file = call.jobs[n].file;
     JobLoad& load = loads[n];
     for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
     if (!load.job || !load.errors.empty()) {
@@ -519,11 +519,11 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
     try {
       const FieldSize size = probe_field_size(*load.job);
       if (tiles) {
-        const std::string plan =
-            validate_tiled(*load.job, memory_limit ? *memory_limit : available_memory_bytes(), tile_size);
+        const std::string plan = validate_tiled(*load.job, budget, tile_size);
         if (!quiet)
           std::fprintf(stderr, "hfbake: %s: valid (%dx%d in %s)\n", file.c_str(), size.width, size.height,
                        plan.c_str());
+        planned.push_back(planned_memory(*load.job, size, 0, true, budget));
         continue;
       }
       std::string parts;
@@ -539,6 +539,7 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
         std::fprintf(stderr, "hfbake: %s: %s\nhfbake: %s: valid (%dx%d, about %s to bake: %s)\n",
                      file.c_str(), heights.line.c_str(), file.c_str(), size.width, size.height,
                      gib(need).c_str(), parts.c_str());
+      planned.push_back(planned_memory(*load.job, size, need, false, budget));
     } catch (const InputError& e) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
       exit_code = 2;
@@ -547,6 +548,12 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
       exit_code = 2;
     }
   }
+  // Several jobs: the turns a bake of them takes and the peak it plans for.
+  if (!quiet && planned.size() > 1)
+    std::fprintf(
+        stderr, "hfbake: %s\n",
+        bake_turns_text(plan_bake_turns(planned, budget), budget_text(memory_limit, "--memory-limit"))
+            .c_str());
   return exit_code;
 }
 
@@ -570,42 +577,17 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   const Progress::Mode mode = Progress::detect(options.quiet);
   Progress progress(mode);
 
-  // Expand suites into their jobs. Each input is (job file, output override).
-  struct Input {
-    fs::path file;
-    std::optional<fs::path> out;
-    int suite = -1;  // index into suites
-  };
-  std::vector<Input> inputs;
-  std::vector<Suite> suites;
-  std::vector<std::string> suite_errors;
+  // The call's jobs, suites expanded, each with the output folder the call gives it.
+  const CallJobs call = call_jobs(options.jobs, options.out);
+  for (const Suite& suite : call.suites)
+    for (const std::string& s : suite.skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
   int exit_code = 0;
-  for (const fs::path& file : options.jobs) {
-    const std::size_t errors_before = suite_errors.size();
-    if (std::optional<Suite> suite = load_suite(file, suite_errors)) {
-      if (options.out) suite->output_dir = fs::absolute(*options.out / suite->name);
-      if (const std::string problem = suite_folder_problem(*suite); !problem.empty()) {
-        suite_errors.push_back(problem);  // nothing of the suite baked
-        continue;
-      }
-      for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
-      for (const fs::path& job : suite->jobs)
-        inputs.push_back({job, suite->output_dir / job.stem(), int(suites.size())});
-      suites.push_back(std::move(*suite));
-    } else if (suite_errors.size() == errors_before) {  // not a suite: a job
-      inputs.push_back({file, std::nullopt, -1});
-    }
-  }
-  for (const std::string& e : suite_errors) {
+  for (const std::string& e : call.errors) {
     std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
     exit_code = 2;
   }
-  const std::size_t plain_jobs =
-      std::count_if(inputs.begin(), inputs.end(), [](const Input& i) { return i.suite < 0; });
-  for (Input& in : inputs) {
-    // With --out and several jobs, each job gets its own folder under DIR.
-    if (in.suite < 0 && options.out) in.out = plain_jobs > 1 ? *options.out / in.file.stem() : *options.out;
-  }
+  const std::vector<CallJob>& inputs = call.jobs;
+  const std::vector<Suite>& suites = call.suites;
 
   std::vector<JobOutcome> outcomes(inputs.size());
   std::vector<std::optional<Job>> jobs(inputs.size());
@@ -650,6 +632,27 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   }
   for (std::size_t i = 0; i < jobs.size(); ++i)
     if (outcomes[i].status == JobStatus::invalid) jobs[i].reset();
+  // What each job plans for, a job that cannot fit the budget alone refused here; the others then bake in
+  // turns, together only while their combined estimate fits the budget (plan_bake_turns).
+  const std::size_t budget = options.memory_limit ? *options.memory_limit : available_memory_bytes();
+  std::vector<JobMemory> planned;
+  std::vector<std::size_t> planned_jobs;  // the index of each planned job
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    if (!jobs[i]) continue;
+    try {
+      const FieldSize size = probe_field_size(*jobs[i]);
+      const std::size_t need = options.tiles ? 0
+                                             : check_job_memory(*jobs[i], size, options.memory_limit, nullptr,
+                                                                options.memory_limit_name);
+      planned.push_back(planned_memory(*jobs[i], size, need, options.tiles, budget));
+      planned_jobs.push_back(i);
+    } catch (const InputError& e) {
+      std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());
+      outcomes[i].errors.push_back(e.line());
+      outcomes[i].status = JobStatus::invalid;
+      jobs[i].reset();
+    }
+  }
   // A summary written over a job, a suite or an input, or where a job writes (an output, its owner record,
   // its lock) or a suite its reports: refused before anything is baked (and no summary).
   if (options.summary) {
@@ -703,13 +706,14 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     o.errors.push_back(line);
     progress.error(line);
   };
-  // Jobs run concurrently and share the cores with their own parallel loops. The last runs on this thread
-  // (run_and_wait), so a single job's allocations always come from the same malloc arena: its peak resident
+  // The jobs of one turn (plan_bake_turns) run concurrently and share the cores with their own parallel
+  // loops; the turns run one after another. The last job of a turn runs on this thread (run_and_wait, which
+  // ends the turn), so a single job's allocations always come from the same malloc arena: its peak resident
   // memory does not depend on which thread the scheduler hands it (docs/large-fields.md).
   tbb::task_group group;
-  std::size_t last = jobs.size();
-  for (std::size_t i = 0; i < jobs.size(); ++i)
-    if (jobs[i]) last = i;
+  std::vector<bool> ends_turn(jobs.size(), false);
+  for (const std::vector<std::size_t>& turn : plan_bake_turns(planned, budget).turns)
+    ends_turn[planned_jobs[turn.back()]] = true;
   for (std::size_t i = 0; i < jobs.size(); ++i) {
     if (!jobs[i]) continue;
     auto run_job = [&, i] {
@@ -733,7 +737,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
         fail(o, JobStatus::failed, jobs[i]->file.string() + ": " + e.what());
       }
     };
-    if (i == last)
+    if (ends_turn[i])
       group.run_and_wait(run_job);
     else
       group.run(run_job);

@@ -131,8 +131,10 @@ int run(int argc, char** argv) {
       "SIZE");
   std::string memory_limit;
   bake_cmd
-      ->add_option("--memory-limit", memory_limit,
-                   "Refuse a job whose memory estimate exceeds SIZE (default: the available memory)")
+      ->add_option(
+          "--memory-limit", memory_limit,
+          "The process's memory budget: refuse a job whose estimate exceeds SIZE, and bake jobs "
+          "together only while their estimates fit it, else in turns (default: the available memory)")
       ->check(memory_size);
 
   bool tiles = false;
@@ -251,7 +253,9 @@ int run(int argc, char** argv) {
   validate_cmd->add_option("jobs", validate_jobs, "Job files (JSON)")->required();
   validate_cmd->add_flag("--quiet", validate_quiet, "Print only problems");
   std::string validate_memory_limit;
-  validate_cmd->add_option("--memory-limit", validate_memory_limit, "As bake's --memory-limit")
+  validate_cmd
+      ->add_option("--memory-limit", validate_memory_limit,
+                   "As bake's --memory-limit: each job's estimate, and the turns of several jobs")
       ->check(memory_size);
   bool validate_tiles = false;
   validate_cmd->add_flag("--tiles", validate_tiles,

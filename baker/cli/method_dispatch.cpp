@@ -95,19 +95,25 @@ void check_output_folder(const Job& job) {
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
   // What the bake would refuse only after baking (docs/output_folders.md): its lock names (the job's, the
   // report's for a job with a reference, the textures folder's for a job that writes textures) taken by
-  // anything but a file, and a textures/ entry that is not a folder.
+  // anything but a file, and a textures/ entry that is not a folder or that this process cannot write into.
   std::vector<fs::path> locks = {output_lock_file(job)};
   if (job.has_reference) locks.push_back(report_lock_file(job));
   if (textures_folder(job)) locks.push_back(textures_lock_file(job));
   for (const fs::path& lock : locks)
     if (const std::string problem = lock_name_problem(lock); !problem.empty())
       throw InputError(job.file.string(), "/output/dir", problem);
-  const fs::path textures = job.output.dir / "textures";
-  const fs::file_status ts = fs::symlink_status(textures, ec);
-  if (textures_folder(job) && fs::exists(ts) && !fs::is_directory(ts))
-    throw InputError(job.file.string(), "/output/textures",
-                     textures.string() + " is not a folder (" + (fs::is_symlink(ts) ? "a link" : "a file") +
-                         "): the textures are written inside " + job.output.dir.string() + " only");
+  check_textures_folder(job);
+  // A folder where the bake moves an output or an owner record: rename(2) cannot replace it.
+  std::vector<std::pair<fs::path, std::string>> folders = {{job.output.dir, "/output/dir"}};
+  if (const std::optional<fs::path> textures = textures_folder(job))
+    folders.emplace_back(*textures, "/output/textures");
+  for (const auto& [folder, ptr] : folders) {
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
+      if (const std::string problem = output_name_problem(it->path());
+          !problem.empty() && writes_in_output_folder(job, it->path(), OutputNames::moved))
+        throw InputError(job.file.string(), ptr, problem);
+    ec.clear();
+  }
   // An input the outputs would replace (writes_in_output_folder), the job file included.
   std::vector<std::pair<std::string, fs::path>> inputs = {{"", job.file}};
   for (const auto& [ptr, rel] : job_input_files(job.doc)) inputs.emplace_back(ptr, job.resolve(rel));
@@ -183,32 +189,44 @@ std::vector<std::string> resolve_job_checks(Job& job) {
 
 }  // namespace
 
-bool writes_in_output_folder(const Job& job, const fs::path& file) {
+bool writes_in_output_folder(const Job& job, const fs::path& file, OutputNames names) {
   std::error_code ec;
   const fs::path dir = fs::weakly_canonical(fs::absolute(job.output.dir), ec);
   if (ec) return false;
   const fs::path real = fs::weakly_canonical(fs::absolute(file), ec);
   if (ec) return false;
   const std::string n = real.filename().string();
-  if (real.parent_path() == dir / "textures")
-    return n.rfind(job.name + ".", 0) == 0 || n == textures_lock_file(job).filename() ||
-           n == textures_owner_record(job).filename();
+  const bool kept = names == OutputNames::kept;
+  if (real.parent_path() == dir / "textures") {
+    if (kept)
+      return n.rfind(job.name + ".", 0) == 0 || n == textures_lock_file(job).filename() ||
+             n == textures_owner_record(job).filename();
+    if (!textures_folder(job)) return false;
+    const std::vector<PlannedTexture> textures = plan_textures(job);
+    return n == textures_owner_record(job).filename() ||
+           std::any_of(textures.begin(), textures.end(),
+                       [&](const PlannedTexture& t) { return fs::path(t.file).filename() == n; });
+  }
+  // A tile task's files (cli/tile_command.hpp) are kept names; a bake moves none of them into place.
   if (real.parent_path() == dir / "tiles")
-    return n.rfind(tile_file_prefix(job), 0) == 0 || n == tiles_lock_file(job).filename() ||
-           n == tiles_owner_record(job).filename();
+    return kept && (n.rfind(tile_file_prefix(job), 0) == 0 || n == tiles_lock_file(job).filename() ||
+                    n == tiles_owner_record(job).filename());
   if (real.parent_path() != dir) return false;
-  if (n == "report.json" || n == "report.html" || n == output_lock_file(job).filename() ||
-      n == owner_record(job).filename() || n == report_lock_file(job).filename())
+  if (n == owner_record(job).filename() ||
+      ((kept || job.has_reference) && (n == "report.json" || n == "report.html")))
     return true;
+  if (kept && (n == output_lock_file(job).filename() || n == report_lock_file(job).filename())) return true;
   const auto ends_with = [&n](const std::string& tail) {
     return n.size() >= tail.size() && n.compare(n.size() - tail.size(), tail.size(), tail) == 0;
   };
-  std::vector<std::string> stems = {"reference"};
+  std::vector<std::string> stems;
+  if (kept || job.has_reference) stems.push_back("reference");
   for (const BakeEntry& e : job.bakes) stems.push_back(e.stem);
   for (const std::string& stem : stems) {
     const std::string at = job.name + "." + stem + ".";
     if (n == job.output_path(stem, ".exr").filename().string() ||
-        (n.rfind(at, 0) == 0 && (ends_with(".preview.png") || ends_with(".tif"))))
+        (n.rfind(at, 0) == 0 && (((kept || job.output.previews) && ends_with(".preview.png")) ||
+                                 ((kept || job.output.geotiff) && ends_with(".tif")))))
       return true;
   }
   return false;

@@ -24,12 +24,21 @@ MethodContext job_method_context(const Job& job);
 // Returns every problem as one line "<file>: <JSON pointer>: <what>" (empty: the job is good to bake).
 std::vector<std::string> resolve_job(Job& job);
 
+// Which names writes_in_output_folder counts. `kept`: every name hfbake keeps for the job in its output
+// folder, whatever the job's output options (what an input or a summary must never be). `moved`: the names a
+// bake of the job as it stands moves an output or owner record to (what a folder must not take: rename(2)
+// cannot replace it), needing the resolved job (resolve_job's layers, plan_textures).
+enum class OutputNames { kept, moved };
+
 // True when `file` (existing or not) is a name a bake of `job` writes in its output folder, so that writing
 // or keeping anything else there would lose it: <name>.<stem>.exr, <name>.<stem>.*.preview.png,
 // <name>.<stem>.*.tif, report.json, report.html, textures/<name>.*, a tile task's tiles/<name>+tile-*, and
 // the job's locks and owner records (in the folder, in textures/ and in tiles/) and the report lock
-// (docs/output_folders.md). Links are resolved first.
-bool writes_in_output_folder(const Job& job, const std::filesystem::path& file);
+// (docs/output_folders.md). Links are resolved first. With OutputNames::moved, only the files the bake moves
+// into place: previews, GeoTIFFs, textures and the report as the job asks for them, the owner records, no
+// lock.
+bool writes_in_output_folder(const Job& job, const std::filesystem::path& file,
+                             OutputNames names = OutputNames::kept);
 
 // A resolved entry's config (std::logic_error before resolve_job).
 const MethodConfig& entry_config(const BakeEntry& entry);

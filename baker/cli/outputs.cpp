@@ -230,6 +230,22 @@ std::optional<fs::path> textures_folder(const Job& job) {
   return job.output.dir / "textures";
 }
 
+void check_textures_folder(const Job& job) {
+  const std::optional<fs::path> textures = textures_folder(job);
+  std::error_code ec;
+  const fs::file_status status = textures ? fs::symlink_status(*textures, ec) : fs::file_status();
+  if (!textures || !fs::exists(status)) return;
+  if (!fs::is_directory(status))
+    throw InputError(job.file.string(), "/output/textures",
+                     textures->string() + " is not a folder (" +
+                         (fs::is_symlink(status) ? "a link" : "a file") +
+                         "): the textures are written inside " + job.output.dir.string() + " only");
+  if (access(textures->c_str(), W_OK | X_OK) != 0)
+    throw InputError(job.file.string(), "/output/textures",
+                     "cannot write into " + textures->string() + ": " +
+                         std::error_code(errno, std::generic_category()).message());
+}
+
 fs::path textures_lock_file(const Job& job) {
   return job.output.dir / "textures" / output_lock_file(job).filename();
 }
@@ -370,6 +386,12 @@ void claim_tiles_folder(const Job& job, bool overwrite) {
   }
 }
 
+std::string output_name_problem(const fs::path& target) {
+  std::error_code ec;
+  if (fs::symlink_status(target, ec).type() != fs::file_type::directory) return "";
+  return target.string() + " is a folder where an output goes: remove it";
+}
+
 bool outputs_moving() noexcept {
   return g_moving.load() > 0;
 }
@@ -464,11 +486,11 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   if (const std::optional<fs::path> textures = textures_folder(job)) {
     created_textures_ = !fs::exists(fs::symlink_status(*textures, ec));
     fs::create_directory(*textures, ec);
-    if (!is_real_directory(*textures)) {
+    try {
+      check_textures_folder(job);
+    } catch (const InputError&) {
       release();
-      throw InputError(job.file.string(), "/output/textures",
-                       textures->string() + " is not a folder (a link?): the textures are written inside " +
-                           job.output.dir.string() + " only");
+      throw;
     }
     take(textures_lock_, textures_lock_file(job),
          "is baking job " + job.name + " into " + textures->string() +
@@ -697,10 +719,10 @@ std::vector<fs::path> OutputStage::commit() {
   std::vector<fs::path> final_paths;
   // A name rename(2) cannot replace (a folder there, the owner record's included) fails the job before any
   // output moves or any folder is made, so that the folder keeps the previous outputs whole.
-  auto refuse_folder = [](const fs::path& target) {
-    std::error_code ec;
-    if (fs::symlink_status(target, ec).type() == fs::file_type::directory)
-      throw InputError(target.string(), "", "is a folder: an output goes there (remove it)");
+  auto refuse_folder = [this](const fs::path& name) {
+    if (const std::string problem = output_name_problem(job_.output.dir / name); !problem.empty())
+      throw InputError(job_.file.string(), name.has_parent_path() ? "/output/textures" : "/output/dir",
+                       problem);
   };
   // The owner records, moved after the outputs: the textures folder's (a job that writes textures), then the
   // output folder's, last.
@@ -709,7 +731,7 @@ std::vector<fs::path> OutputStage::commit() {
   records.push_back(owner_record(job_).filename());
   std::vector<fs::path> moves = staged_;
   moves.insert(moves.end(), records.begin(), records.end());
-  for (const fs::path& name : moves) refuse_folder(job_.output.dir / name);
+  for (const fs::path& name : moves) refuse_folder(name);
   for (const fs::path& name : moves) {  // textures/: made here, never a link to elsewhere
     if (!name.has_parent_path()) continue;
     const fs::path folder = (job_.output.dir / name).parent_path();

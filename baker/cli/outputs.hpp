@@ -38,6 +38,11 @@ std::filesystem::path owner_record(const Job& job);
 // textures_lock_file held and textures_owner_record checked and written as the two above
 // (docs/output_folders.md).
 std::optional<std::filesystem::path> textures_folder(const Job& job);
+// Refuses (InputError at /output/textures) the textures folder of a job that writes textures when the name is
+// taken by anything but a folder (a link, a file: the textures are written inside the output folder only) or
+// when this process cannot write into it: what resolve_job checks, and OutputStage's constructor before it
+// locks there. Nothing there yet: nothing to refuse (the bake makes it).
+void check_textures_folder(const Job& job);
 // <output dir>/textures/.hfbake-<name>.lock and .hfbake-<name>.job: the lock and the owner record of a job
 // that bakes into that folder under the same name.
 std::filesystem::path textures_lock_file(const Job& job);
@@ -117,6 +122,12 @@ std::string azimuth_convention(const Georeference& geo);
 // fraction of the sky (ao, vsky, obscurance, svf) lies outside [0, 1] by more than a quadrature's error
 // (0.05).
 void check_layers_finite(const std::string& stem, const LayerSet& layers);
+
+// What stands in the way of moving an output or an owner record to `target`: "" when rename(2) can replace
+// what is there (nothing, a file, a link: the link is replaced, never followed), else the error's text
+// ("<target> is a folder where an output goes: remove it"). Checked by resolve_job for the names the job
+// writes, and by OutputStage::commit before any output moves.
+std::string output_name_problem(const std::filesystem::path& target);
 
 // Refuses (InputError at /name) a job whose output folder, or textures folder (textures_folder), records that
 // another job file baked its outputs of the same job name (docs/output_folders.md), unless `overwrite`: what

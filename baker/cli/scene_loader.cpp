@@ -157,13 +157,17 @@ bool uses_gdal(const Job& job, const FieldSize& size) {
 
 }  // namespace
 
+std::size_t estimate_process_bytes(const Job& job, FieldSize size) {
+  return std::size_t(loads_image_module_early(job, size) ? kImageProcessBytes
+                     : uses_gdal(job, size)              ? kGdalProcessBytes
+                                                         : kProcessBytes);
+}
+
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts) {
   const double texels = double(size.width) * double(size.height);
-  // The process before any field (kProcessBytes and the two beside it), while the methods run and a
-  // reference traces; a reference's report adds OpenImageIO's libraries after the tracing (below).
-  const double process = loads_image_module_early(job, size) ? kImageProcessBytes
-                         : uses_gdal(job, size)              ? kGdalProcessBytes
-                                                             : kProcessBytes;
+  // The process before any field, while the methods run and a reference traces; a reference's report adds
+  // OpenImageIO's libraries after the tracing (below).
+  const double process = double(estimate_process_bytes(job, size));
   // The scene: heights (decoded straight into the field), the normals only when read (scene_needs), the
   // surface maps the job names.
   const SceneNeeds needs = scene_needs(job);

@@ -48,6 +48,9 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
 inline constexpr double kProcessBytes = 48.0 * (1 << 20);
 inline constexpr double kGdalProcessBytes = 64.0 * (1 << 20);
 inline constexpr double kImageProcessBytes = 150.0 * (1 << 20);
+// The process's own part of estimate_peak_bytes (kProcessBytes, kGdalProcessBytes or kImageProcessBytes, by
+// the libraries the job loads before it bakes): held once by a process whatever number of jobs it bakes.
+std::size_t estimate_process_bytes(const Job& job, FieldSize size);
 
 // The job's texel sides (x, y): a georeferenced height raster's pixel size (the job's texel_size, when
 // given, must agree with it; a geographic raster's pixel in metres in its local frame, docs/gis.md), else

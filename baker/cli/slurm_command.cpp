@@ -115,54 +115,45 @@ int run_slurm(const SlurmOptions& o) {
   if (o.shards < 1 || o.shards > 4096) return fail("command line: --shards must be 1..4096");
   // The jobs, each with the output folder bake would give it (suites: <suite out>/<job stem>).
   std::vector<Task> jobs;
-  std::vector<std::string> errors;
+  const CallJobs call = call_jobs(o.inputs, o.out);
+  if (!call.errors.empty()) return fail(call.errors.front());
+  for (const Suite& suite : call.suites)
+    for (const std::string& s : suite.skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
   std::size_t plain = 0;
-  for (const fs::path& f : o.inputs) plain += !load_suite(f, errors).has_value();
-  if (!errors.empty()) return fail(errors.front());
+  for (const CallJob& member : call.jobs) plain += member.suite < 0;
   fs::path common;
   std::size_t need_bytes = 0;
   // The estimate of a task's bake on its --cpus-per-task threads (its per-thread scratch).
   const tbb::global_control task_threads(tbb::global_control::max_allowed_parallelism,
                                          std::size_t(o.threads));
-  for (const fs::path& f : o.inputs) {
-    std::vector<std::pair<fs::path, std::optional<fs::path>>> members;
-    if (std::optional<Suite> suite = load_suite(f, errors)) {
-      if (o.out) suite->output_dir = fs::absolute(*o.out / suite->name);
-      if (const std::string problem = suite_folder_problem(*suite); !problem.empty()) return fail(problem);
-      for (const std::string& s : suite->skipped) std::fprintf(stderr, "hfbake: note: %s\n", s.c_str());
-      for (const fs::path& j : suite->jobs) members.push_back({j, suite->output_dir / j.stem()});
-      if (common.empty()) common = suite->output_dir;
+  for (const CallJob& member : call.jobs) {
+    if (member.suite >= 0 && common.empty()) common = call.suites[std::size_t(member.suite)].output_dir;
+    const fs::path& file = member.file;
+    const std::optional<fs::path>& out = member.out;
+    JobLoad load = load_job(file, out);
+    if (load.job) load.errors = resolve_job(*load.job);
+    if (!load.job || !load.errors.empty()) {
+      for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
+      return 2;
+    }
+    const Job& job = *load.job;
+    if (o.tile_size > 0) {  // a tiled bake's task holds one tile's read window at a time
+      try {
+        check_tiled_job(job);
+        const TilePlan plan = plan_job_tiles(job, std::numeric_limits<std::size_t>::max(), o.tile_size);
+        need_bytes = std::max(need_bytes, tiled_peak_bytes(job, plan));
+      } catch (const InputError& e) {
+        return fail(e.line());
+      }
     } else {
-      std::optional<fs::path> out;
-      if (o.out) out = plain > 1 ? *o.out / f.stem() : *o.out;
-      members.push_back({f, out});
+      need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
     }
-    for (const auto& [file, out] : members) {
-      JobLoad load = load_job(file, out);
-      if (load.job) load.errors = resolve_job(*load.job);
-      if (!load.job || !load.errors.empty()) {
-        for (const std::string& e : load.errors) std::fprintf(stderr, "hfbake: error: %s\n", e.c_str());
-        return 2;
-      }
-      const Job& job = *load.job;
-      if (o.tile_size > 0) {  // a tiled bake's task holds one tile's read window at a time
-        try {
-          check_tiled_job(job);
-          const TilePlan plan = plan_job_tiles(job, std::numeric_limits<std::size_t>::max(), o.tile_size);
-          need_bytes = std::max(need_bytes, tiled_peak_bytes(job, plan));
-        } catch (const InputError& e) {
-          return fail(e.line());
-        }
-      } else {
-        need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
-      }
-      const int stages = job_stages(job);
-      std::vector<std::vector<StageItem>> items;
-      for (int s = 0; s < o.shards; ++s)
-        for (int st = 0; st < stages; ++st) items.push_back(stage_work(job, {s, o.shards}, st));
-      jobs.push_back({file, out ? *out : job.output.dir, 0, stages, std::move(items)});
-      if (common.empty()) common = fs::absolute(job.output.dir);
-    }
+    const int stages = job_stages(job);
+    std::vector<std::vector<StageItem>> items;
+    for (int s = 0; s < o.shards; ++s)
+      for (int st = 0; st < stages; ++st) items.push_back(stage_work(job, {s, o.shards}, st));
+    jobs.push_back({file, out ? *out : job.output.dir, 0, stages, std::move(items)});
+    if (common.empty()) common = fs::absolute(job.output.dir);
   }
   if (jobs.empty()) return fail("command line: no jobs");
   if (o.out && plain > 1) common = fs::absolute(*o.out);

@@ -253,6 +253,31 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
   return suite;
 }
 
+CallJobs call_jobs(const std::vector<fs::path>& files, const std::optional<fs::path>& out) {
+  CallJobs call;
+  std::size_t plain = 0;  // job files given as such
+  for (const fs::path& file : files) {
+    const std::size_t errors_before = call.errors.size();
+    if (std::optional<Suite> suite = load_suite(file, call.errors)) {
+      if (out) suite->output_dir = fs::absolute(*out / suite->name);
+      if (const std::string problem = suite_folder_problem(*suite); !problem.empty()) {
+        call.errors.push_back(problem);  // nothing of the suite runs
+        continue;
+      }
+      for (const fs::path& job : suite->jobs)
+        call.jobs.push_back({job, suite->output_dir / job.stem(), int(call.suites.size())});
+      call.suites.push_back(std::move(*suite));
+    } else if (call.errors.size() == errors_before) {  // not a suite: a job
+      call.jobs.push_back({file, std::nullopt, -1});
+      ++plain;
+    }
+  }
+  // With --out and several job files, each gets a folder of its own under DIR.
+  for (CallJob& job : call.jobs)
+    if (job.suite < 0 && out) job.out = plain > 1 ? *out / job.file.stem() : *out;
+  return call;
+}
+
 nlohmann::json suite_history_run(const std::vector<JobOutcome>& outcomes, double seconds,
                                  const std::string& finished) {
   nlohmann::json run = {{"finished", finished}, {"hfbake_version", hfbake_version()}, {"seconds", seconds}};

@@ -28,6 +28,31 @@ struct Suite {
 // Problems with a suite file are appended to `errors` as one-line messages.
 std::optional<Suite> load_suite(const std::filesystem::path& file, std::vector<std::string>& errors);
 
+// A job of one call (bake, merge, validate, slurm): a job file given as such, or one that a suite of the
+// call lists.
+struct CallJob {
+  std::filesystem::path file;
+  // The output folder the call gives the job in place of its output.dir: <suite output folder>/<job file
+  // stem>/ for a suite's job; with --out DIR, DIR for the call's only job file and DIR/<job file stem>/ for
+  // one of several; nullopt: the job's own output.dir.
+  std::optional<std::filesystem::path> out;
+  int suite = -1;  // index into CallJobs::suites; -1: a job file given as such
+};
+
+struct CallJobs {
+  std::vector<CallJob> jobs;  // in the order of the files, a suite's in its order
+  std::vector<Suite> suites;  // each with its output folder (--out DIR: DIR/<suite name>)
+  // One line each: a suite that cannot be read or whose folder is refused (suite_folder_problem); none of
+  // its jobs is listed.
+  std::vector<std::string> errors;
+};
+
+// The jobs of one call from the files given (job files and suites) and --out (`out`): the one home of which
+// jobs a call runs and where each writes, for bake, merge, validate and slurm alike. A file that is not a
+// suite (or not JSON at all) is a job; load_job reports what is wrong with it.
+CallJobs call_jobs(const std::vector<std::filesystem::path>& files,
+                   const std::optional<std::filesystem::path>& out);
+
 // How many runs history.json keeps (the newest; the index shows them per job).
 inline constexpr std::size_t kSuiteHistoryRuns = 10;
 

@@ -53,20 +53,23 @@ inline double validate_estimate_mib(const std::filesystem::path& dir, const std:
   return unit == " GiB" ? value * 1024 : unit == " MiB" ? value : -1;
 }
 
-// `hfbake bake --quiet --no-cache JOB` in `dir` (stderr discarded), waited for alone: its exit code (-1: it
-// did not exit) and its own peak resident memory in MiB (wait4's ru_maxrss; getrusage's RUSAGE_CHILDREN
-// would give the largest of every child this process ever waited for).
+// `hfbake ARGS` in `dir` (stderr discarded), waited for alone: its exit code (-1: it did not exit) and its
+// own peak resident memory in MiB (wait4's ru_maxrss; getrusage's RUSAGE_CHILDREN would give the largest of
+// every child this process ever waited for).
 struct BakePeak {
   int exit_code = -1;
   double peak_mib = 0;
 };
-inline BakePeak bake_peak(const std::filesystem::path& dir, const std::filesystem::path& job) {
+inline BakePeak run_peak(const std::filesystem::path& dir, const std::vector<std::string>& args) {
   BakePeak r;
+  std::vector<char*> argv{const_cast<char*>("hfbake")};
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
   const pid_t pid = fork();
   if (pid < 0) return r;
   if (pid == 0) {
     if (chdir(dir.c_str()) != 0 || !freopen("/dev/null", "w", stderr)) _exit(126);
-    execl(HFBAKE_BINARY, "hfbake", "bake", "--quiet", "--no-cache", job.c_str(), static_cast<char*>(nullptr));
+    execv(HFBAKE_BINARY, argv.data());
     _exit(127);
   }
   int status = 0;
@@ -75,6 +78,10 @@ inline BakePeak bake_peak(const std::filesystem::path& dir, const std::filesyste
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.peak_mib = double(usage.ru_maxrss) / 1024.0;
   return r;
+}
+// `hfbake bake --quiet --no-cache JOB` as run_peak runs it.
+inline BakePeak bake_peak(const std::filesystem::path& dir, const std::filesystem::path& job) {
+  return run_peak(dir, {"bake", "--quiet", "--no-cache", job.string()});
 }
 
 }  // namespace hfbake::cli_test

@@ -487,6 +487,59 @@ TEST_F(Cli, ValidateSuiteChecksEveryJobItLists) {
   EXPECT_NE(r.error_lines()[0].find("suite.json: /jobs"), std::string::npos) << r.err;
 }
 
+// A suite's job i writes to <suite output.dir>/<job file stem>/, whatever its own output.dir: validate judges
+// collisions and owner records in that folder, as bake does, and the two agree on every case.
+TEST_F(Cli, ValidateSuiteJudgesEachJobInTheFolderBakeGivesIt) {
+  for (const char* d : {"x", "y", "z"}) fs::create_directories(dir_ / d);
+  nlohmann::json j = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}});
+  j["name"] = "a";
+  j["output"]["dir"] = "../out/a";
+  const fs::path xa = write_job("x/a.json", j), zp = write_job("z/p.json", j);
+  write_job("z/q.json", j);
+  j["output"]["dir"] = "../elsewhere";
+  const fs::path ya = write_job("y/a.json", j);
+  auto suite = [&](const std::string& name, const nlohmann::json& jobs) {
+    return write_job(name + ".json",
+                     {{"version", 1}, {"suite", name}, {"jobs", jobs}, {"output", {{"dir", name}}}});
+  };
+  // Two files named a.json, named "a", with their own output folders apart: both write s2/a/a.p1.exr.
+  const fs::path s2 = suite("s2", {"x/a.json", "y/a.json"});
+  Result v = hfbake("validate " + s2.string() + " --quiet");
+  EXPECT_EQ(v.exit_code, 2) << v.err;
+  ASSERT_EQ(v.error_lines().size(), 2u) << v.err;
+  EXPECT_NE(v.error_lines()[0].find(xa.string() + ": /name: its outputs (" + (dir_ / "s2" / "a").string()),
+            std::string::npos)
+      << v.err;
+  Result b = hfbake("bake " + s2.string() + " --quiet --no-cache");
+  EXPECT_EQ(b.exit_code, 2) << b.err;
+  EXPECT_EQ(b.error_lines(), v.error_lines());
+  // Two files named "a" with one own output folder: the suite gives them s3/p/ and s3/q/.
+  const fs::path s3 = suite("s3", {"z/p.json", "z/q.json"});
+  v = hfbake("validate " + s3.string() + " --quiet");
+  EXPECT_EQ(v.exit_code, 0) << v.err;
+  b = hfbake("bake " + s3.string() + " --quiet --no-cache");
+  EXPECT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_TRUE(fs::exists(dir_ / "s3" / "p" / "a.p1.exr"));
+  EXPECT_TRUE(fs::exists(dir_ / "s3" / "q" / "a.p1.exr"));
+  // s4/a/ holds job "a"'s outputs from z/p.json: x/a.json, which the suite sends there, is refused.
+  ASSERT_EQ(hfbake("bake " + zp.string() + " --out " + (dir_ / "s4" / "a").string() + " --quiet --no-cache")
+                .exit_code,
+            0);
+  const fs::path s4 = suite("s4", {"x/a.json"});
+  v = hfbake("validate " + s4.string() + " --quiet");
+  EXPECT_EQ(v.exit_code, 2) << v.err;
+  ASSERT_EQ(v.error_lines().size(), 1u) << v.err;
+  EXPECT_NE(v.error_lines()[0].find(xa.string() + ": /name: the outputs of job a in " +
+                                    (dir_ / "s4" / "a").string() + " were baked from " + zp.string()),
+            std::string::npos)
+      << v.err;
+  b = hfbake("bake " + s4.string() + " --quiet --no-cache");
+  EXPECT_EQ(b.exit_code, 2) << b.err;
+  EXPECT_EQ(b.error_lines(), v.error_lines());
+  EXPECT_FALSE(fs::exists(dir_ / "out"));  // no job wrote to its own output.dir
+  EXPECT_FALSE(fs::exists(dir_ / "elsewhere"));
+}
+
 TEST_F(Cli, EveryExampleJobValidates) {
   // The jobs users copy from (jobs/, jobs/examples/), the speed jobs (bench/) and the accuracy jobs
   // (tests/accuracy/) must keep validating as the schemas evolve. (bench/memory's production sizes are left
@@ -638,6 +691,74 @@ TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
     EXPECT_NE(bad.err.find("--memory-limit: not a size"), std::string::npos) << bad.err;
   }
   EXPECT_EQ(hfbake("validate " + p.string() + " --memory-limit 8.5e9 --quiet").exit_code, 0);
+}
+
+// Several jobs of one call bake together only while their combined estimate fits --memory-limit, else in
+// turns, one after another. validate prints the turns and the peak it plans for (each job's estimate, the
+// process's part of 48 MiB counted once); bake follows the plan: with room for one job at a time, each job
+// has ended before the next begins, and the process's peak stays within the limit.
+TEST_F(Cli, SeveralJobsBakeTogetherOnlyWhileTheirEstimatesFitTheMemoryLimit) {
+  std::vector<std::string> files;
+  for (int n = 1; n <= 3; ++n) {
+    nlohmann::json j =
+        job({{"procedural", {{"kind", "fractal"}, {"size", {512, 512}}, {"seed", n}}}},
+            {{{"method", "p1"}, {"directions", 32}, {"layers", {"ao", "horizon", "horizon_distance"}}}});
+    j["name"] = "t" + std::to_string(n);
+    j["output"]["previews"] = false;
+    files.push_back(write_job("t" + std::to_string(n) + ".json", j).string());
+  }
+  const std::string all = " " + files[0] + " " + files[1] + " " + files[2];
+  // validate's plan line ("3 jobs bake ...: about N MiB at the peak, ..."), its N and the first job's
+  // estimate.
+  double each = 0;
+  auto plan = [&](const std::string& options, double& peak) {
+    const Result v = hfbake("validate" + all + " --threads 2" + options);
+    EXPECT_EQ(v.exit_code, 0) << v.err;
+    const auto estimate = v.err.find("about "), at = v.err.find("hfbake: 3 jobs bake ");
+    if (estimate == std::string::npos || at == std::string::npos) return v.err;
+    each = std::stod(v.err.substr(estimate + 6));
+    const std::string line = v.err.substr(at, v.err.find('\n', at) - at);
+    peak = std::stod(line.substr(line.find(": about ") + 8));
+    return line;
+  };
+  double peak = 0;
+  std::string line = plan("", peak);
+  EXPECT_EQ(line.find("hfbake: 3 jobs bake together: about "), 0u) << line;
+  ASSERT_GT(each, 100) << line;  // two jobs (2 each - 48) need more than one and a half (1.5 each - 24)
+  EXPECT_NEAR(peak, 3 * each - 2 * 48, 2) << line;
+  // Room for two at once, not three.
+  const std::string two = std::to_string(int(2.5 * each - 72)) + "M";
+  line = plan(" --memory-limit " + two, peak);
+  EXPECT_EQ(line.find("hfbake: 3 jobs bake in 2 turns (2 + 1 jobs): about "), 0u) << line;
+  EXPECT_NEAR(peak, 2 * each - 48, 2) << line;
+  EXPECT_NE(line.find("within the " + two.substr(0, two.size() - 1) + " MiB of --memory-limit"),
+            std::string::npos)
+      << line;
+  // Room for one at a time.
+  const int one_mib = int(1.5 * each - 24);
+  const std::string one = std::to_string(one_mib) + "M";
+  line = plan(" --memory-limit " + one, peak);
+  EXPECT_EQ(line.find("hfbake: 3 jobs bake in 3 turns (1 + 1 + 1 jobs): about "), 0u) << line;
+  EXPECT_NEAR(peak, each, 1) << line;
+  // The bake's progress lines: every line of job t<n> before the first of t<n+1>.
+  const Result b = hfbake("bake" + all + " --threads 2 --no-cache --memory-limit " + one);
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  for (int n = 1; n < 3; ++n) {
+    const auto last = b.err.rfind("hfbake: t" + std::to_string(n) + ": ");
+    const auto next = b.err.find("hfbake: t" + std::to_string(n + 1) + ": ");
+    ASSERT_NE(last, std::string::npos) << b.err;
+    ASSERT_NE(next, std::string::npos) << b.err;
+    EXPECT_LT(last, next) << "t" << n << " and t" << n + 1 << " baked together:\n" << b.err;
+  }
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "peak memory is measured without sanitizers";
+#else
+  std::vector<std::string> args = {"bake", "--quiet", "--no-cache", "--threads", "2", "--memory-limit", one};
+  args.insert(args.end(), files.begin(), files.end());
+  const cli_test::BakePeak run = cli_test::run_peak(dir_, args);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_LE(run.peak_mib, one_mib) << "the process's peak beyond --memory-limit " << one;
+#endif
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 // one error line (or a documented behaviour: docs/output_folders.md), with nothing written outside the folder
 // asked for and nothing lost.
 #include <fcntl.h>
+#include <grp.h>
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
@@ -564,6 +565,46 @@ TEST_F(Untrusted, ATexturesFolderThatIsALinkIsRefused) {
   expect_outside_untouched();
 }
 
+// A textures folder this process cannot write into: validate and bake refuse it at /output/textures, saying
+// that it cannot be written, before anything is baked. Run as root, the commands run as nobody (uid 65534),
+// whom permissions bind.
+TEST_F(Untrusted, ATexturesFolderThatCannotBeWrittenIsRefused) {
+  const fs::path textures = dir_ / "out" / "textures";
+  fs::create_directories(textures);
+  const fs::perms read_only = fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                              fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec;
+  fs::permissions(dir_, read_only | fs::perms::owner_write);
+  fs::permissions(dir_ / "out", fs::perms::all);
+  fs::permissions(textures, read_only);
+  json j = base_job();
+  j["bake"][0]["layers"] = {"ao"};
+  j["output"]["textures"] = json::array({{{"layers", {"ao"}}}});
+  const std::string job = write_job(dir_, j);
+  fs::permissions(job, read_only);
+  const auto as_nobody = [] {
+    if (geteuid() == 0 && (setgroups(0, nullptr) != 0 || setgid(65534) != 0 || setuid(65534) != 0))
+      _exit(126);
+  };
+  for (const std::string command : {"validate", "bake"}) {
+    const Outcome r =
+        hfbake(dir_,
+               command == "bake" ? std::vector<std::string>{"bake", job, "--no-cache", "--quiet"}
+                                 : std::vector<std::string>{"validate", job, "--quiet"},
+               as_nobody);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << command << ": " << r.err;
+    EXPECT_EQ(lines[0],
+              job + ": /output/textures: cannot write into " + textures.string() + ": Permission denied")
+        << command;
+    EXPECT_TRUE(fs::is_empty(textures)) << command;
+    std::vector<fs::path> out;
+    for (const auto& e : fs::directory_iterator(dir_ / "out")) out.push_back(e.path());
+    EXPECT_EQ(out, std::vector<fs::path>{textures}) << command;
+  }
+  fs::permissions(textures, fs::perms::owner_all);
+}
+
 // out/shards and out/slurm as links: a shard task, and the scripts and logs of `hfbake slurm`, would land
 // in their targets (and the shard task's clean-up of stale temporaries would run there).
 TEST_F(Untrusted, ShardAndSlurmFoldersThatAreLinksAreRefused) {
@@ -625,15 +666,58 @@ TEST_F(Untrusted, AFolderAtAnOutputNameMovesNothing) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   const auto lines = r.error_lines();
   ASSERT_EQ(lines.size(), 1u) << r.err;
-  EXPECT_NE(lines[0].find(taken.filename().string() + ": is a folder"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find("job.json: /output/dir: " + taken.string() + " is a folder where an output goes"),
+            std::string::npos)
+      << lines[0];
   for (const auto& [file, text] : before) EXPECT_EQ(read_text(file), text) << file;
+}
+
+// A folder at the name of a file the bake moves into place (a GeoTIFF, a texture) is refused by validate,
+// and by bake before anything is baked, in one line naming the job file and the key; nothing is written. A
+// folder at a name the job does not write (a GeoTIFF's, previews off) is left alone.
+TEST_F(Untrusted, AFolderAtAnOutputNameIsRefusedBeforeBaking) {
+  json j = base_job();
+  j["bake"][0]["layers"] = {"ao"};
+  j["output"]["geotiff"] = true;
+  j["output"]["textures"] = json::array({{{"layers", {"ao"}}}});
+  const std::string job = write_job(dir_, j);
+  const fs::path tif = dir_ / "out" / "t.p1.ao.tif", png = dir_ / "out" / "textures" / "t.p1.ao.png";
+  const fs::path other = dir_ / "out" / "t.p1.ao.preview.png";
+  for (const fs::path& folder : {tif, png, other}) fs::create_directories(folder / "sub");
+  const auto listing = [&] {
+    std::set<std::string> names;
+    for (const auto& e : fs::recursive_directory_iterator(dir_ / "out")) names.insert(e.path().string());
+    return names;
+  };
+  for (const auto& [folder, key] : {std::pair<fs::path, std::string>{tif, "/output/dir"},
+                                    std::pair<fs::path, std::string>{png, "/output/textures"}}) {
+    const std::set<std::string> made = listing();
+    for (const std::string command : {"validate", "bake"}) {
+      const Outcome r =
+          hfbake(dir_, command == "bake" ? std::vector<std::string>{"bake", job, "--no-cache", "--quiet"}
+                                         : std::vector<std::string>{"validate", job, "--quiet"});
+      EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+      const auto lines = r.error_lines();
+      ASSERT_EQ(lines.size(), 1u) << command << ": " << r.err;
+      EXPECT_EQ(lines[0],
+                job + ": " + key + ": " + folder.string() + " is a folder where an output goes: remove it")
+          << command;
+      EXPECT_EQ(listing(), made) << command;
+    }
+    fs::remove_all(folder);
+  }
+  const Outcome r = hfbake(dir_, {"bake", job, "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(tif));
+  EXPECT_TRUE(fs::is_regular_file(png));
+  EXPECT_TRUE(fs::is_directory(other / "sub"));
 }
 
 // --- one folder, one owner ----------------------------------------------------------------------------
 
 // A copy of a job file, the same job name and folder: validate refuses it as bake does, before anything is
 // baked, naming the file that owns the outputs; with --overwrite both accept it. A textures/ folder the bake
-// would have made is not left behind when the commit is refused for a folder at an output's name.
+// would have made is not left behind when the bake is refused for a folder at an output's name.
 TEST_F(Untrusted, ValidateRefusesAnotherJobFilesOutputsAsBakeDoes) {
   json j = base_job();
   const std::string first = write_job(dir_, j), copy = write_job(dir_, j, "copy.json");
