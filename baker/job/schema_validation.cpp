@@ -229,70 +229,68 @@ std::vector<std::string> pointer_tokens(const std::string& pointer) {
   return tokens;
 }
 
-// Strings longer than the schema's "maxLength" for them, checked before valijson matches any "pattern"
-// (std::regex recurses once per character).
-void overlong_strings(const nlohmann::json& value, const std::string& schema_path,
-                      std::vector<std::string>& tokens, std::vector<SchemaViolation>& out) {
-  if (value.is_string()) {
-    const nlohmann::json* limit =
-        keyword_at(&schema_document(schema_path), schema_path, tokens, 0, "maxLength");
-    const std::size_t n = value.get_ref<const std::string&>().size();
-    if (limit && limit->is_number_unsigned() && n > limit->get<std::size_t>()) {
-      std::string pointer;
-      for (const std::string& t : tokens) pointer += "/" + t;
-      out.push_back({pointer, "must be at most " + limit->dump() + " characters long (it has " +
-                                  std::to_string(n) + ")"});
-    }
-  } else if (value.is_object() || value.is_array()) {
-    std::size_t index = 0;
-    for (const auto& [key, child] : value.items()) {
-      tokens.push_back(value.is_array() ? std::to_string(index++) : key);
-      overlong_strings(child, schema_path, tokens, out);
-      tokens.pop_back();
-    }
+// Calls visit(leaf, tokens) for every value of the document that is neither an object nor an array, tokens
+// its JSON pointer's.
+template <class Visit>
+void for_each_leaf(const nlohmann::json& value, std::vector<std::string>& tokens, const Visit& visit) {
+  if (!value.is_object() && !value.is_array()) return visit(value, tokens);
+  std::size_t index = 0;
+  for (const auto& [key, child] : value.items()) {
+    tokens.push_back(value.is_array() ? std::to_string(index++) : key);
+    for_each_leaf(child, tokens, visit);
+    tokens.pop_back();
   }
 }
 
-// Whole numbers beyond a 64-bit integer where the schema asks for an integer (2^63 and up, or a number like
-// 1e20 or 18446744073709551616 that JSON holds as a float): the validator would wrap them, or call them not
-// integers. Checked first, said with the schema's bound ("must be <= 4096") or the 64-bit one.
-void oversized_integers(const nlohmann::json& value, const std::string& schema_path,
-                        std::vector<std::string>& tokens, std::vector<SchemaViolation>& out) {
-  if (value.is_number_unsigned() || value.is_number_float()) {
-    constexpr double k2p63 = 9223372036854775808.0;
-    bool over = false, under = false;
-    if (value.is_number_unsigned()) {
-      over = value.get<std::uint64_t>() > std::uint64_t(std::numeric_limits<std::int64_t>::max());
-    } else {
-      const double x = value.get<double>();
-      over = std::isfinite(x) && x == std::floor(x) && x >= k2p63;
-      under = std::isfinite(x) && x == std::floor(x) && x < -k2p63;
-    }
-    if (!over && !under) return;
-    std::vector<const nlohmann::json*> types;
-    keywords_at(&schema_document(schema_path), schema_path, tokens, 0, "type", types);
-    const bool integer = std::any_of(types.begin(), types.end(), [](const nlohmann::json* t) {
-      return *t == "integer" || (t->is_array() && std::find(t->begin(), t->end(), "integer") != t->end());
-    });
-    if (!integer) return;
-    std::string pointer;
-    for (const std::string& t : tokens) pointer += "/" + t;
-    const nlohmann::json* bound =
-        keyword_at(&schema_document(schema_path), schema_path, tokens, 0, over ? "maximum" : "minimum");
-    out.push_back(
-        {pointer, bound && bound->is_number()
-                      ? std::string(over ? "must be <= " : "must be >= ") + bound->dump() + " (it is " +
-                            value.dump() + ")"
-                      : std::string("is ") + value.dump() + ", beyond a 64-bit integer (" +
-                            (over ? "at most 9223372036854775807" : "at least -9223372036854775808") + ")"});
-  } else if (value.is_object() || value.is_array()) {
-    std::size_t index = 0;
-    for (const auto& [key, child] : value.items()) {
-      tokens.push_back(value.is_array() ? std::to_string(index++) : key);
-      oversized_integers(child, schema_path, tokens, out);
-      tokens.pop_back();
-    }
+std::string pointer_of_tokens(const std::vector<std::string>& tokens) {
+  std::string pointer;
+  for (const std::string& t : tokens) pointer += "/" + t;
+  return pointer;
+}
+
+// Strings longer than the schema's "maxLength" for them, checked before valijson matches any "pattern"
+// (std::regex recurses once per character).
+void overlong_string(const nlohmann::json& value, const std::string& schema_path,
+                     const std::vector<std::string>& tokens, std::vector<SchemaViolation>& out) {
+  if (!value.is_string()) return;
+  const nlohmann::json* limit =
+      keyword_at(&schema_document(schema_path), schema_path, tokens, 0, "maxLength");
+  const std::size_t n = value.get_ref<const std::string&>().size();
+  if (limit && limit->is_number_unsigned() && n > limit->get<std::size_t>())
+    out.push_back({pointer_of_tokens(tokens), "must be at most " + limit->dump() +
+                                                  " characters long (it has " + std::to_string(n) + ")"});
+}
+
+// A whole number beyond a 64-bit integer where the schema asks for an integer (2^63 and up, or a number like
+// 1e20 or 18446744073709551616 that JSON holds as a float): the validator would wrap it, or call it not an
+// integer. Checked first, said with the schema's bound ("must be <= 4096") or the 64-bit one.
+void oversized_integer(const nlohmann::json& value, const std::string& schema_path,
+                       const std::vector<std::string>& tokens, std::vector<SchemaViolation>& out) {
+  if (!value.is_number_unsigned() && !value.is_number_float()) return;
+  constexpr double k2p63 = 9223372036854775808.0;
+  bool over = false, under = false;
+  if (value.is_number_unsigned()) {
+    over = value.get<std::uint64_t>() > std::uint64_t(std::numeric_limits<std::int64_t>::max());
+  } else {
+    const double x = value.get<double>();
+    over = std::isfinite(x) && x == std::floor(x) && x >= k2p63;
+    under = std::isfinite(x) && x == std::floor(x) && x < -k2p63;
   }
+  if (!over && !under) return;
+  std::vector<const nlohmann::json*> types;
+  keywords_at(&schema_document(schema_path), schema_path, tokens, 0, "type", types);
+  const bool integer = std::any_of(types.begin(), types.end(), [](const nlohmann::json* t) {
+    return *t == "integer" || (t->is_array() && std::find(t->begin(), t->end(), "integer") != t->end());
+  });
+  if (!integer) return;
+  const nlohmann::json* bound =
+      keyword_at(&schema_document(schema_path), schema_path, tokens, 0, over ? "maximum" : "minimum");
+  out.push_back({pointer_of_tokens(tokens),
+                 bound && bound->is_number()
+                     ? std::string(over ? "must be <= " : "must be >= ") + bound->dump() + " (it is " +
+                           value.dump() + ")"
+                     : std::string("is ") + value.dump() + ", beyond a 64-bit integer (" +
+                           (over ? "at most 9223372036854775807" : "at least -9223372036854775808") + ")"});
 }
 
 // Arrays whose schema says "uniqueItems": one line per value listed more than once, at its second place.
@@ -394,8 +392,10 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
   {
     std::vector<std::string> tokens;
     std::vector<SchemaViolation> overlong;
-    overlong_strings(doc, schema_path, tokens, overlong);
-    oversized_integers(doc, schema_path, tokens, overlong);
+    for_each_leaf(doc, tokens, [&](const nlohmann::json& v, const std::vector<std::string>& at) {
+      overlong_string(v, schema_path, at, overlong);
+      oversized_integer(v, schema_path, at, overlong);
+    });
     if (!overlong.empty()) return overlong;
   }
   // Parsing the schema is cheap (a few KB); keep it per call so there is no shared mutable state.
