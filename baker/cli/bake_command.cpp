@@ -4,6 +4,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -548,12 +550,21 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
       exit_code = 2;
     }
   }
-  // Several jobs: the turns a bake of them takes and the peak it plans for.
-  if (!quiet && planned.size() > 1)
-    std::fprintf(
-        stderr, "hfbake: %s\n",
-        bake_turns_text(plan_bake_turns(planned, budget), budget_text(memory_limit, "--memory-limit"))
-            .c_str());
+  // Several jobs: the turns a bake of them takes and the peak it plans for (refused as bake refuses it when
+  // even one at a time they do not fit).
+  if (planned.size() > 1) {
+    const BakeTurns turns = plan_bake_turns(planned, budget);
+    const std::string text = bake_turns_text(turns, budget_text(memory_limit, "--memory-limit"));
+    if (!turns.fits) {
+      std::string files;
+      for (const JobLoad& l : loads)
+        if (l.job) files += (files.empty() ? "" : ", ") + l.job->file.string();
+      std::fprintf(stderr, "hfbake: error: %s\n", printable(files + ": " + text).c_str());
+      exit_code = 2;
+    } else if (!quiet) {
+      std::fprintf(stderr, "hfbake: %s\n", text.c_str());
+    }
+  }
   return exit_code;
 }
 
@@ -653,6 +664,25 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
       jobs[i].reset();
     }
   }
+  // Jobs that do not fit the budget even one at a time beside the libraries the call loads: the call is
+  // refused before anything is baked.
+  if (planned.size() > 1) {
+    const BakeTurns turns = plan_bake_turns(planned, budget);
+    if (!turns.fits) {
+      std::string files;
+      for (std::size_t k : planned_jobs) files += (files.empty() ? "" : ", ") + jobs[k]->file.string();
+      const std::string line =
+          printable(files + ": " +
+                    bake_turns_text(turns, budget_text(options.memory_limit, options.memory_limit_name)));
+      std::fprintf(stderr, "hfbake: error: %s\n", line.c_str());
+      for (std::size_t k : planned_jobs) {
+        outcomes[k].errors.push_back(line);
+        outcomes[k].status = JobStatus::invalid;
+        jobs[k].reset();
+      }
+      planned.clear(), planned_jobs.clear();
+    }
+  }
   // A summary written over a job, a suite or an input, or where a job writes (an output, its owner record,
   // its lock) or a suite its reports: refused before anything is baked (and no summary).
   if (options.summary) {
@@ -737,9 +767,12 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
         fail(o, JobStatus::failed, jobs[i]->file.string() + ": " + e.what());
       }
     };
-    if (ends_turn[i])
+    if (ends_turn[i]) {
       group.run_and_wait(run_job);
-    else
+      // What the turn freed goes back to the system before the next turn allocates: malloc keeps freed
+      // memory in its arenas otherwise, and the next turn's jobs may allocate from other threads' arenas.
+      malloc_trim(0);
+    } else
       group.run(run_job);
   }
   group.wait();

@@ -26,16 +26,25 @@ std::size_t combined_peak_bytes(const std::vector<JobMemory>& jobs) {
 BakeTurns plan_bake_turns(const std::vector<JobMemory>& jobs, std::size_t budget) {
   BakeTurns plan;
   std::vector<JobMemory> turn;
+  // Every job's inputs are probed before any bakes, which loads the libraries each reads them with: every
+  // turn is planned with the largest process part of the call (a job of no part of its own stands for it).
+  std::size_t loaded = 0;
+  for (const JobMemory& j : jobs) loaded = std::max(loaded, j.process);
+  auto with_loaded = [&loaded](std::vector<JobMemory> t) {
+    t.push_back({loaded, loaded});
+    return combined_peak_bytes(t);
+  };
   for (std::size_t k = 0; k < jobs.size(); ++k) {
     turn.push_back(jobs[k]);
-    if (plan.turns.empty() || (turn.size() > 1 && combined_peak_bytes(turn) > budget)) {
+    if (plan.turns.empty() || (turn.size() > 1 && with_loaded(turn) > budget)) {
       plan.turns.emplace_back();
       turn = {jobs[k]};
     }
     plan.turns.back().push_back(k);
-    plan.peak = std::max(plan.peak, combined_peak_bytes(turn));
+    plan.peak = std::max(plan.peak, with_loaded(turn));
   }
   plan.all = combined_peak_bytes(jobs);
+  plan.fits = plan.peak <= budget;
   return plan;
 }
 
@@ -46,6 +55,11 @@ std::string bake_turns_text(const BakeTurns& turns, const std::string& budget) {
     jobs += t.size();
     sizes += (sizes.empty() ? "" : " + ") + std::to_string(t.size());
   }
+  if (!turns.fits)
+    return std::to_string(jobs) + " jobs need about " + memory_size_text(turns.peak) +
+           " at the peak even one at a time (the libraries every job's inputs load stay loaded through the "
+           "call), more than " +
+           budget + ": bake them in calls of their own";
   const std::string peak = ": about " + memory_size_text(turns.peak) + " at the peak, within " + budget;
   if (turns.turns.size() <= 1) return std::to_string(jobs) + " jobs bake together" + peak;
   return std::to_string(jobs) + " jobs bake in " + std::to_string(turns.turns.size()) + " turns (" + sizes +

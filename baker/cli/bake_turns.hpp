@@ -25,11 +25,15 @@ struct BakeTurns {
   std::vector<std::vector<std::size_t>> turns;
   std::size_t peak = 0;  // the largest turn's combined_peak_bytes: the peak the call plans for
   std::size_t all = 0;   // combined_peak_bytes of every job at once
+  bool fits = true;      // peak is within the budget (else the call is refused: bake_turns_text says so)
 };
 
 // The jobs in order, each joining the current turn while the turn's combined peak with it fits `budget`,
-// else starting the next turn. A job that does not fit alone has a turn of its own (check_job_memory
-// refuses it).
+// else starting the next turn. Every turn counts the largest process part of the call: the libraries each
+// job's inputs are read with are loaded before any job bakes, and stay (the memory a turn frees is handed
+// back to the system before the next one starts). A job that does not fit alone has a turn of its own
+// (check_job_memory refuses it); a call whose jobs do not fit even one at a time beside the call's libraries
+// does not fit (BakeTurns::fits).
 BakeTurns plan_bake_turns(const std::vector<JobMemory>& jobs, std::size_t budget);
 
 // "266 MiB", or "1.5 GiB" from a GiB on: a memory figure in messages.
