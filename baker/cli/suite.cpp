@@ -240,6 +240,19 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
                            " is a suite, not a job (a suite lists jobs only)");
           continue;
         }
+        // A job bakes into <suite folder>/<its file's stem>/: a stem that is a suite report's name (or its
+        // lock's) would put a folder where the suite writes that file.
+        const std::vector<fs::path> reports = suite_report_files(suite);
+        const bool report_name = p.stem() == suite_lock_file(suite).filename() ||
+                                 std::any_of(reports.begin(), reports.end(),
+                                             [&](const fs::path& r) { return r.filename() == p.stem(); });
+        if (report_name) {
+          errors.push_back(file.string() + ": /jobs/" + std::to_string(i) + ": " + p.string() +
+                           " would bake into the folder " + (suite.output_dir / p.stem()).string() +
+                           ", where the suite writes its " + p.stem().string() +
+                           ": give the job file another name");
+          continue;
+        }
         if (!skipped.count(p) && seen.insert(p).second) suite.jobs.push_back(p);
       }
     }

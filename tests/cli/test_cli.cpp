@@ -540,6 +540,32 @@ TEST_F(Cli, ValidateSuiteJudgesEachJobInTheFolderBakeGivesIt) {
   EXPECT_FALSE(fs::exists(dir_ / "elsewhere"));
 }
 
+// A suite job bakes into <suite folder>/<its file's stem>/: a job file named after a suite report
+// (junit.xml.json, index.html.json, ...) would put a folder where the suite writes that report. validate and
+// bake refuse it at /jobs/<i> before anything bakes.
+TEST_F(Cli, ASuiteJobNamedAfterASuiteReportIsRefused) {
+  nlohmann::json j = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}});
+  for (const std::string report : {"suite.json", "history.json", "index.html", "junit.xml"}) {
+    const fs::path file = write_job(report + ".json", j);
+    const fs::path suite = write_job("s.json", {{"version", 1},
+                                                {"suite", "s"},
+                                                {"jobs", {file.filename().string()}},
+                                                {"output", {{"dir", "sout"}}}});
+    for (const std::string cmd : {"validate ", "bake --no-cache "}) {
+      const Result r = hfbake(cmd + suite.string() + " --quiet");
+      EXPECT_EQ(r.exit_code, 2) << cmd << report << r.err;
+      ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+      EXPECT_EQ(
+          r.error_lines()[0].rfind("hfbake: error: " + suite.string() + ": /jobs/0: " + file.string() +
+                                       " would bake into the folder " + (dir_ / "sout" / report).string(),
+                                   0),
+          0u)
+          << r.err;
+      EXPECT_FALSE(fs::exists(dir_ / "sout")) << cmd << report;
+    }
+  }
+}
+
 TEST_F(Cli, EveryExampleJobValidates) {
   // The jobs users copy from (jobs/, jobs/examples/), the speed jobs (bench/) and the accuracy jobs
   // (tests/accuracy/) must keep validating as the schemas evolve. (bench/memory's production sizes are left
