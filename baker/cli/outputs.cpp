@@ -359,6 +359,14 @@ void check_tiles_folder(const Job& job, bool overwrite) {
                          "): the tiles are written inside " + job.output.dir.string() + " only");
   if (const std::string problem = lock_name_problem(tiles_lock_file(job)); !problem.empty())
     throw InputError(job.file.string(), "/output/dir", problem);
+  // A folder at the owner record's name or at a tile file's: a task could not write there.
+  if (const std::string problem = output_name_problem(tiles_owner_record(job)); !problem.empty())
+    throw InputError(job.file.string(), "/output/dir", problem);
+  if (fs::is_directory(s))
+    for (const fs::directory_entry& e : fs::directory_iterator(folder, ec))
+      if (e.path().filename().string().rfind(tile_file_prefix(job), 0) == 0)
+        if (const std::string problem = output_name_problem(e.path()); !problem.empty())
+          throw InputError(job.file.string(), "/output/dir", problem);
   check_owner_record(job, tiles_owner_record(job), folder, overwrite, "tiles");
 }
 

@@ -661,6 +661,33 @@ TEST_F(CliTiles, ALinkInPlaceOfTilesIsRefused) {
   }
 }
 
+// A folder at the job's tiles record or at one of its tile files' names: validate and the tile task refuse
+// the job at /output/dir before baking, naming the folder, which is kept.
+TEST_F(CliTiles, AFolderAtATileFilesNameIsRefused) {
+  write_heights(dir_ / "f.tif", 40, 30, [](int i, int j) { return 0.1 * i * j; });
+  const fs::path job = write_job("t", {{"image", "f.tif"}}, {{{"method", "relief"}, {"search_radius", 2}}});
+  const fs::path tiles = dir_ / "out_t" / "tiles";
+  for (const std::string name : {".hfbake-t+tiles.job", "t+tile-1.relief.svf.tif"}) {
+    SCOPED_TRACE(name);
+    fs::create_directories(tiles / name);
+    for (const std::string command : {"validate --quiet --tiles --tile-size 16 ",
+                                      "bake --quiet --tiles --tile-size 16 --tile-task 0/1 "}) {
+      SCOPED_TRACE(command);
+      const Result r = hfbake(command + job.string());
+      EXPECT_EQ(r.exit_code, 2) << r.err;
+      ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+      EXPECT_NE(r.error_lines()[0].find(job.string() + ": /output/dir: " + (tiles / name).string() +
+                                        " is a folder where an output goes"),
+                std::string::npos)
+          << r.err;
+      EXPECT_TRUE(fs::is_directory(tiles / name));
+    }
+    for (const fs::directory_entry& e : fs::directory_iterator(tiles))
+      EXPECT_EQ(e.path().filename(), name) << "a tile task wrote " << e.path();
+    fs::remove_all(tiles / name);
+  }
+}
+
 // The heights lying where the job's tile task would write a tile file, or its tiles record: validate refuses
 // the job naming the key, and the file is kept.
 TEST_F(CliTiles, AnInputWhereATileTaskWritesIsRefused) {
