@@ -103,7 +103,11 @@ void ShardWriter::commit() {
 }
 
 ShardReader::ShardReader(ShardReader&& other) noexcept
-    : file_(std::move(other.file_)), fd_(other.fd_), parts_(std::move(other.parts_)) {
+    : file_(std::move(other.file_)),
+      fd_(other.fd_),
+      parts_(std::move(other.parts_)),
+      which_(std::move(other.which_)),
+      redo_(std::move(other.redo_)) {
   other.fd_ = -1;
 }
 
@@ -127,6 +131,7 @@ void ShardReader::read_header(const ShardIdentity& expected) {
   const std::string which = expected.what.empty() ? "shard " + shard_id_text(expected.id) : expected.what;
   const std::string redo =
       expected.redo.empty() ? "bake it with --shard " + shard_id_text(expected.id) : expected.redo;
+  which_ = which, redo_ = redo;
   std::error_code ec;
   if (!fs::exists(fs::symlink_status(file, ec)))
     throw InputError(name, "", which + " is missing (" + redo + ")");
@@ -287,7 +292,7 @@ LayerSet ShardReader::load(std::size_t i) {
                  l.at("offset").get<std::uint64_t>()) ||
         bytes_checksum(layer.data.data(), layer.data.size()) != l.at("checksum").get<std::string>())
       throw InputError(file_.string(), "",
-                       "shard data damaged (checksum of " + layer.name + "): bake the shard again");
+                       which_ + " is damaged (the checksum of its layer " + layer.name + "): " + redo_);
   }
   out.attributes = p.attributes;
   return out;

@@ -79,7 +79,8 @@ class ShardReader {
   ShardReader& operator=(ShardReader&&) = delete;
   ShardReader(const ShardReader&) = delete;
   const std::vector<ShardPart>& parts() const { return parts_; }
-  // Loads part i's layers and attributes; InputError naming the file when a checksum fails.
+  // Loads part i's layers and attributes; InputError naming the file when a checksum fails, with the advice
+  // that makes the file again (ShardIdentity::redo).
   LayerSet load(std::size_t i);
   const std::filesystem::path& file() const { return file_; }
 
@@ -88,6 +89,7 @@ class ShardReader {
   std::filesystem::path file_;
   int fd_ = -1;
   std::vector<ShardPart> parts_;
+  std::string which_, redo_;  // what the file is and what makes it again, as the errors say them
 };
 
 // Whether `file` is a complete shard of `expected` (the check a re-run does to skip a finished shard).

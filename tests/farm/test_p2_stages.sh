@@ -67,6 +67,15 @@ head -c 5000 s2/shards/p2farm.p2-0.stage-1.hfshard >cut && mv cut s2/shards/p2fa
 run_advised 2 "$H" merge job.json --no-cache --quiet --out s2
 same_outputs whole s2
 echo "ok: a truncated stage file is made again by the stage the merge names"
+# One byte of a layer changed (the middle of the file: layer data; the header is at its end): the checksum
+# finds it, and the advice is the same.
+f=s2/shards/p2farm.p2-0.stage-1.hfshard
+off=$(($(stat -c %s "$f") / 2))
+byte=$(od -An -tu1 -j "$off" -N1 "$f" | tr -d ' ')
+printf "\\$(printf %03o $((255 - byte)))" | dd of="$f" bs=1 seek="$off" conv=notrunc 2>/dev/null
+run_advised 2 "$H" merge job.json --no-cache --quiet --out s2
+same_outputs whole s2
+echo "ok: a stage file whose layer's checksum fails is made again by the stage the merge names"
 rm s3/shards/p2farm.p2-0.stage-[01].hfshard s3/shards/p2farm.p2-2.stage-0.hfshard
 run_advised 3 "$H" merge job.json --no-cache --quiet --out s3
 same_outputs whole s3
