@@ -141,7 +141,7 @@ namespace {
 // environment map), a PNG preview or an engine texture (written after each method). A reference alone
 // loads it after its tracing, for report.html's images.
 bool loads_image_module_early(const Job& job, const FieldSize& size) {
-  if (job.output.previews) return true;
+  if (job.output.previews && !size.tile) return true;  // a tiled bake writes no previews
   const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
   if (output.contains("textures") && !output["textures"].empty()) return true;
   for (const auto& [pointer, file] : job_input_files(job.doc))
@@ -182,7 +182,7 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   // pixel, at most io/preview.hpp's 2048 px a side), or a layer's COG (geotiff_writing_bytes: GDAL reads the
   // layer itself; where the job fills holes, "nodata": "fill", the only way a result has any, the writer
   // copies it). A tile of a tiled bake writes a band's plane at a time into its work files.
-  const double previews = job.output.previews ? 15 * std::min(texels, 2048.0 * 2048.0) : 0;
+  const double previews = job.output.previews && !size.tile ? 15 * std::min(texels, 2048.0 * 2048.0) : 0;
   const bool holes = job.doc["height"].value("nodata", "error") == "fill";
   auto writing = [&](int widest) {
     const double geotiff = !job.output.geotiff ? 0

@@ -661,6 +661,29 @@ TEST_F(CliTiles, ALinkInPlaceOfTilesIsRefused) {
   }
 }
 
+// A tiled bake writes no previews (output.previews is for a whole bake): its plan is the same with previews
+// on as off, and with a memory limit that fits its tiles without OpenImageIO's libraries it is not refused
+// for a preview it never writes; no preview file appears.
+TEST_F(CliTiles, PreviewsAreNotCountedByATiledBakeThatWritesNone) {
+  write_heights(dir_ / "f.tif", 256, 256, [](int i, int j) { return 0.05 * i + 0.1 * std::sin(0.2 * j); });
+  const nlohmann::json bake = {{{"method", "relief"}, {"directions", 16}, {"search_radius", 10}}};
+  std::string plans[2];
+  for (const bool previews : {false, true}) {
+    const std::string name = previews ? "on" : "off";
+    const fs::path job =
+        write_job(name, {{"image", "f.tif"}}, bake,
+                  {{"output", {{"dir", "out_" + name}, {"geotiff", true}, {"previews", previews}}}});
+    const Result v = hfbake("validate --tiles --memory-limit 200M " + job.string());
+    ASSERT_EQ(v.exit_code, 0) << v.err;
+    plans[previews] = v.err.substr(v.err.find("valid ("));
+    const Result b = hfbake("bake --quiet --tiles --memory-limit 200M " + job.string());
+    ASSERT_EQ(b.exit_code, 0) << b.err;
+    for (const fs::directory_entry& e : fs::directory_iterator(dir_ / ("out_" + name)))
+      EXPECT_EQ(e.path().string().find(".preview.png"), std::string::npos) << e.path();
+  }
+  EXPECT_EQ(plans[0], plans[1]);
+}
+
 // A folder at the job's tiles record or at one of its tile files' names: validate and the tile task refuse
 // the job at /output/dir before baking, naming the folder, which is kept.
 TEST_F(CliTiles, AFolderAtATileFilesNameIsRefused) {
