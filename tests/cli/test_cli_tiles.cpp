@@ -406,18 +406,20 @@ TEST_F(CliTiles, TileTasksMergeToTheTiledBake) {
   EXPECT_EQ(r.error_lines()[0].find("hfbake: error: " + gone.string() + ": "), 0u) << r.err;
   EXPECT_EQ(r.error_lines()[0].find(gone.string(), 16), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
-  // A folder, a FIFO or an empty file at its name: refused, saying what stands there.
+  // A folder, a FIFO or an empty file at its name: refused, saying what stands there (a folder, where no
+  // task could write either, as the job's folder check finds it).
   for (const auto& [what, make] : std::vector<std::pair<std::string, std::function<void()>>>{
-           {": cannot read tile 5: not a regular file (a folder)", [&] { fs::create_directory(gone); }},
-           {": cannot read tile 5: not a regular file (a FIFO)",
+           {job.string() + ": /output/dir: " + gone.string() + " is a folder where an output goes",
+            [&] { fs::create_directory(gone); }},
+           {gone.string() + ": cannot read tile 5: not a regular file (a FIFO)",
             [&] { ASSERT_EQ(mkfifo(gone.c_str(), 0600), 0); }},
-           {": is empty, not tile 5", [&] { std::ofstream{gone}; }}}) {
+           {gone.string() + ": is empty, not tile 5", [&] { std::ofstream{gone}; }}}) {
     fs::remove_all(gone);
     make();
     r = hfbake("merge --quiet --tiles --tile-size 40 " + job.string());
     EXPECT_EQ(r.exit_code, 2) << r.err;
     ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
-    EXPECT_EQ(r.error_lines()[0].find("hfbake: error: " + gone.string() + what), 0u) << r.err;
+    EXPECT_EQ(r.error_lines()[0].find("hfbake: error: " + what), 0u) << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "out_farm" / "farm.relief.svf.tif"));
   }
   fs::remove_all(gone);
@@ -569,8 +571,7 @@ TEST_F(CliTiles, OneJobNameInTilesHasOneJobFile) {
   };
   const auto owned_by = [&](const fs::path& job) {
     return "/name: the tiles of job t in " + tiles.string() + " were baked from " +
-           fs::canonical(job).string() +
-           ": give this job another name or output folder, or bake with --overwrite";
+           fs::canonical(job).string() + ": give this job another name or output folder, or give --overwrite";
   };
   const auto start = [&](const fs::path& job, int i, const std::string& err) {
     return hfbake_test::start_hfbake({"bake", "--quiet", "--tiles", "--tile-size", "40", "--tile-task",
