@@ -158,7 +158,20 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   std::string names;
   for (int b = 0; b < geo->bands; ++b)
     names += (b ? ", " : "") + (geo->band_names[b].empty() ? std::to_string(b) : geo->band_names[b]);
-  if (const int* index = std::get_if<int>(&channel)) {
+  if (geo->palette) {
+    // A palette image reads its colours' red, as OpenImageIO's channel 0 or "R" (docs/heights.md); the
+    // palette's other colours are not read through GDAL.
+    const int* index = std::get_if<int>(&channel);
+    const std::string* name = std::get_if<std::string>(&channel);
+    if (!((index && *index == 0) || (name && *name == "R")))
+      throw InputError(
+          job.file.string(), "/height/channel",
+          job.resolve(image).string() +
+              ": is a palette image read through GDAL (georeferenced, or a world file beside it), "
+              "whose heights are its palette's red (channel 0 or \"R\"): for another colour, "
+              "expand it first (gdal_translate -expand rgb)");
+    band = 0;
+  } else if (const int* index = std::get_if<int>(&channel)) {
     if (*index < geo->bands) band = *index;
   } else {
     for (int b = 0; b < geo->bands && band < 0; ++b)

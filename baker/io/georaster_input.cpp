@@ -143,6 +143,8 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
   }
   if (!info.has_geotransform && info.crs_wkt.empty() && info.placed_by.empty() && asset_driver(info.driver))
     return std::nullopt;
+  info.palette = info.bands == 1 && ds->GetRasterBand(1)->GetColorInterpretation() == GCI_PaletteIndex &&
+                 ds->GetRasterBand(1)->GetColorTable();
   for (int b = 1; b <= info.bands; ++b) {
     GDALRasterBand* band = ds->GetRasterBand(b);
     info.band_names.push_back(band->GetDescription());

@@ -742,6 +742,20 @@ TEST_F(CliGdal, APalettePngReadsTheSameHeightsWithAWorldFile) {
   EXPECT_NE(said.err.find("through GDAL (PNG, red of its palette, Byte"), std::string::npos) << said.err;
   // The heights line's range is the palette's reds of the indices used (3 .. 232: reds 23 .. 252).
   EXPECT_NE(said.err.find("heights 23 .. 252"), std::string::npos) << said.err;
+  // Channel "R" (or 0) names that red through GDAL too; another colour is refused at /height/channel with
+  // the way to read it.
+  const fs::path red = write_job("r.json", "r", {{"image", "placed.png"}, {"channel", "R"}});
+  const Result r = hfbake("validate " + red.string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("heights 23 .. 252"), std::string::npos) << r.err;
+  const fs::path green = write_job("g.json", "g", {{"image", "placed.png"}, {"channel", "G"}});
+  const Result g = hfbake("validate " + green.string());
+  EXPECT_EQ(g.exit_code, 2) << g.err;
+  ASSERT_EQ(g.error_lines().size(), 1u) << g.err;
+  EXPECT_NE(g.error_lines()[0].find(green.string() + ": /height/channel: " + (dir_ / "placed.png").string() +
+                                    ": is a palette image read through GDAL"),
+            std::string::npos)
+      << g.err;
 }
 
 // `hfbake horizon` at a point of a Web Mercator DEM warns on stderr that map units are 1 / cos(latitude)
