@@ -253,7 +253,10 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
                            ": give the job file another name");
           continue;
         }
-        if (!skipped.count(p) && seen.insert(p).second) suite.jobs.push_back(p);
+        // Listed twice (a file and a glob, or a link to it): once. Compared as the files they resolve to.
+        std::error_code ec;
+        const fs::path real = fs::weakly_canonical(p, ec);
+        if (!skipped.count(p) && seen.insert(ec ? p : real).second) suite.jobs.push_back(p);
       }
     }
     globfree(&g);

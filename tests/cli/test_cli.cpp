@@ -540,6 +540,23 @@ TEST_F(Cli, ValidateSuiteJudgesEachJobInTheFolderBakeGivesIt) {
   EXPECT_FALSE(fs::exists(dir_ / "elsewhere"));
 }
 
+// A job listed twice in a suite (a file and a glob matching it, or a link to it) bakes once: the suite's
+// summary holds one job, and only the first listing's folder is written.
+TEST_F(Cli, ASuiteJobListedTwiceBakesOnce) {
+  const fs::path file = write_job("one.json", job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}));
+  fs::create_symlink(file, dir_ / "link.json");
+  const fs::path suite = write_job("s.json", {{"version", 1},
+                                              {"suite", "s"},
+                                              {"jobs", {"one.json", "o*.json", "link.json"}},
+                                              {"output", {{"dir", "sout"}}}});
+  const Result r = hfbake("bake --no-cache --quiet " + suite.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(dir_ / "sout" / "suite.json"));
+  EXPECT_EQ(summary["jobs"].size(), 1u) << summary.dump();
+  EXPECT_TRUE(fs::exists(dir_ / "sout" / "one"));
+  EXPECT_FALSE(fs::exists(dir_ / "sout" / "link"));
+}
+
 // A suite job bakes into <suite folder>/<its file's stem>/: a job file named after a suite report
 // (junit.xml.json, index.html.json, ...) would put a folder where the suite writes that report. validate and
 // bake refuse it at /jobs/<i> before anything bakes.
