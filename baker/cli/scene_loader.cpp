@@ -275,7 +275,10 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   const double scene = field_bytes + env.world + (job.has_reference ? env.tables : 0.0);
   const double total = std::max(scene + peak, field_bytes + env.loading);
   if (parts) {
-    parts->insert(parts->begin(), {"scene", std::size_t(scene), "a smaller field"});
+    // A smaller field shrinks the scene only where the field is most of it (not the process's fixed part).
+    const double field_part = scene - process;
+    parts->insert(parts->begin(),
+                  {"scene", std::size_t(scene), field_part > process ? "a smaller field" : ""});
     if (env.loading > 0)
       parts->push_back({"environment", std::size_t(env.loading),
                         "a smaller environment image (24 bytes a pixel while it is read)"});

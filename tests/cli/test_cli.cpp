@@ -727,6 +727,20 @@ TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
   EXPECT_NE(r.err.find("; the largest part, p2, shrinks with its directions (p1's horizons"),
             std::string::npos)
       << r.err;
+  // A field far larger than the process's fixed part: a smaller field is what shrinks the scene. A 16^2
+  // field under a 20 MiB limit is all process: no advice to shrink a field that is not what is large.
+  const fs::path relief =
+      write_job("relief.json",
+                job({{"procedural", {{"kind", "flat"}, {"size", {4096, 4096}}}}},
+                    {{{"method", "relief"}, {"directions", 4}, {"search_radius", 2}, {"layers", {"svf"}}}}));
+  const Result big = hfbake("validate " + relief.string() + " --memory-limit 150M --quiet");
+  EXPECT_NE(big.err.find("; the largest part, scene, shrinks with a smaller field"), std::string::npos)
+      << big.err;
+  const fs::path small =
+      write_job("small.json", job({{"procedural", {{"kind", "flat"}, {"size", {16, 16}}}}}));
+  const Result tiny = hfbake("validate " + small.string() + " --memory-limit 20M --quiet");
+  EXPECT_EQ(tiny.exit_code, 2) << tiny.err;
+  EXPECT_EQ(tiny.err.find("shrinks with"), std::string::npos) << tiny.err;
   EXPECT_EQ(hfbake("validate " + p.string() + " --memory-limit 8G --quiet").exit_code, 0);
   for (const char* text : {"lots", "0x100", "inf", " 8G", "-1G"}) {
     const Result bad = hfbake("validate " + p.string() + " --memory-limit '" + text + "'");
