@@ -14,26 +14,31 @@ std::string memory_size_text(std::size_t bytes) {
   return buf;
 }
 
+namespace {
+
+// The jobs' own parts: each estimate less its process part.
+std::size_t own_bytes(const std::vector<JobMemory>& jobs) {
+  std::size_t own = 0;
+  for (const JobMemory& j : jobs) own += j.peak - std::min(j.process, j.peak);
+  return own;
+}
+
+}  // namespace
+
 std::size_t combined_peak_bytes(const std::vector<JobMemory>& jobs) {
-  std::size_t process = 0, own = 0;
-  for (const JobMemory& j : jobs) {
-    process = std::max(process, j.process);
-    own += j.peak - std::min(j.process, j.peak);
-  }
-  return jobs.empty() ? 0 : process + own;
+  std::size_t process = 0;
+  for (const JobMemory& j : jobs) process = std::max(process, j.process);
+  return jobs.empty() ? 0 : process + own_bytes(jobs);
 }
 
 BakeTurns plan_bake_turns(const std::vector<JobMemory>& jobs, std::size_t budget) {
   BakeTurns plan;
   std::vector<JobMemory> turn;
   // Every job's inputs are probed before any bakes, which loads the libraries each reads them with: every
-  // turn is planned with the largest process part of the call (a job of no part of its own stands for it).
+  // turn holds the largest process part of the call beside its jobs' own parts.
   std::size_t loaded = 0;
   for (const JobMemory& j : jobs) loaded = std::max(loaded, j.process);
-  auto with_loaded = [&loaded](std::vector<JobMemory> t) {
-    t.push_back({loaded, loaded});
-    return combined_peak_bytes(t);
-  };
+  auto with_loaded = [loaded](const std::vector<JobMemory>& t) { return loaded + own_bytes(t); };
   for (std::size_t k = 0; k < jobs.size(); ++k) {
     turn.push_back(jobs[k]);
     if (plan.turns.empty() || (turn.size() > 1 && with_loaded(turn) > budget)) {

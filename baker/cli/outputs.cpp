@@ -321,8 +321,7 @@ void check_owner_record(const Job& job, const fs::path& record, const fs::path& 
   if (!recorded.empty() && recorded != job_identity(job) && !overwrite)
     throw InputError(job.file.string(), "/name",
                      "the " + what + " of job " + job.name + " in " + folder.string() + " were baked from " +
-                         recorded +
-                         ": give this job another name or output folder, or give --overwrite");
+                         recorded + ": give this job another name or output folder, or give --overwrite");
 }
 
 }  // namespace

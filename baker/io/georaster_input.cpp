@@ -78,30 +78,41 @@ bool read_rows(GDALRasterBand* b, int x0, int y0, int w, int n, float* dst, cons
   return true;
 }
 
+// The band's colour table when its values are palette indices, else nullptr.
+const GDALColorTable* palette_of(GDALRasterBand* b) {
+  return b->GetColorInterpretation() == GCI_PaletteIndex ? b->GetColorTable() : nullptr;
+}
+
 // A palette band's indices as their colours' red values, as OpenImageIO reads a palette image (it expands
 // the palette, and a height is read from the first channel): the same file gives the same heights through
 // either reader (docs/heights.md). An index outside the palette, and the band's NoData value, are left as
-// they are. Returns whether the band has a palette.
-bool through_palette(GDALRasterBand* b, float* values, std::size_t count) {
-  const GDALColorTable* table =
-      b->GetColorInterpretation() == GCI_PaletteIndex ? b->GetColorTable() : nullptr;
-  if (!table) return false;
-  std::vector<float> red(std::size_t(std::max(0, table->GetColorEntryCount())));
-  for (std::size_t i = 0; i < red.size(); ++i) red[i] = float(table->GetColorEntry(int(i))->c1);
+// they are. Built once per read; a band without a palette leaves its values alone.
+struct PaletteReds {
+  std::vector<float> red;
   int has_nodata = 0;
-  const double nodata = b->GetNoDataValue(&has_nodata);
-  for (std::size_t i = 0; i < count; ++i) {
-    const float v = values[i];
-    if (has_nodata && double(v) == nodata) continue;
-    if (v >= 0 && v < float(red.size())) values[i] = red[std::size_t(v)];
+  double nodata = 0;
+
+  explicit PaletteReds(GDALRasterBand* b) {
+    const GDALColorTable* table = palette_of(b);
+    if (!table) return;
+    red.resize(std::size_t(std::max(0, table->GetColorEntryCount())));
+    for (std::size_t i = 0; i < red.size(); ++i) red[i] = float(table->GetColorEntry(int(i))->c1);
+    nodata = b->GetNoDataValue(&has_nodata);
   }
-  return true;
-}
+  void apply(float* values, std::size_t count) const {
+    if (red.empty()) return;
+    for (std::size_t i = 0; i < count; ++i) {
+      const float v = values[i];
+      if (has_nodata && double(v) == nodata) continue;
+      if (v >= 0 && v < float(red.size())) values[i] = red[std::size_t(v)];
+    }
+  }
+};
 
 // The sample type the heights line names: GDAL's, and that a palette's colours are read.
 std::string sample_type_of(GDALRasterBand* b) {
   std::string t = GDALGetDataTypeName(b->GetRasterDataType());
-  if (b->GetColorInterpretation() == GCI_PaletteIndex && b->GetColorTable()) t = "red of its palette, " + t;
+  if (palette_of(b)) t = "red of its palette, " + t;
   return t;
 }
 
@@ -143,8 +154,7 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
   }
   if (!info.has_geotransform && info.crs_wkt.empty() && info.placed_by.empty() && asset_driver(info.driver))
     return std::nullopt;
-  info.palette = info.bands == 1 && ds->GetRasterBand(1)->GetColorInterpretation() == GCI_PaletteIndex &&
-                 ds->GetRasterBand(1)->GetColorTable();
+  info.palette = info.bands == 1 && palette_of(ds->GetRasterBand(1));
   for (int b = 1; b <= info.bands; ++b) {
     GDALRasterBand* band = ds->GetRasterBand(b);
     info.band_names.push_back(band->GetDescription());
@@ -178,6 +188,7 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
   int block_x = 0, block_y = 0;
   b->GetBlockSize(&block_x, &block_y);
   block_y = std::clamp(block_y, 1, plane.height);
+  const PaletteReds reds(b);
   // Whole block rows, at least 256 rows (strips of one row would make a band per row).
   const int rows = (256 + block_y - 1) / block_y * block_y;
   for (int y0 = 0; y0 < plane.height; y0 += rows) {
@@ -187,7 +198,7 @@ Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,
       throw InputError(site.job_file, site.pointer,
                        file.string() + ": cannot decode the raster (corrupt or truncated?) at row " +
                            std::to_string(y0) + ": " + gdal.error(file.string()));
-    through_palette(b, dst, std::size_t(n) * std::size_t(plane.width));
+    reds.apply(dst, std::size_t(n) * std::size_t(plane.width));
     ds->FlushCache();  // read-only: drops the cached blocks (of every band: pixel-interleaved files cache
                        // all)
     if (progress) progress(double(y0 + n) / plane.height);
@@ -233,7 +244,7 @@ Plane read_georaster_window(const fs::path& file, int band, int x0, int y0, int 
     throw InputError(site.job_file, site.pointer,
                      file.string() + ": cannot decode the raster (corrupt or truncated?) at " + window +
                          ": " + gdal.error(file.string()));
-  through_palette(b, plane.values.data(), plane.values.size());
+  PaletteReds(b).apply(plane.values.data(), plane.values.size());
   ds->FlushCache();
   return plane;
 }

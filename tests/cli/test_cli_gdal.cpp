@@ -87,6 +87,14 @@ class CliGdal : public ::testing::Test {
     ASSERT_EQ(status, 0) << "gdal_translate " << args;
   }
 
+  // gdalwarp -q -r bilinear -dstnodata -9999 ARGS (file names relative to the test folder); fails the test
+  // when the tool does.
+  void warp(const std::string& args) {
+    int status = -1;
+    run_tool("cd '" + dir_.string() + "' && gdalwarp -q -r bilinear -dstnodata -9999 " + args, &status);
+    ASSERT_EQ(status, 0) << "gdalwarp " << args;
+  }
+
   fs::path write_job(const std::string& file, const std::string& name, const nlohmann::json& height,
                      int directions = 16) {
     const nlohmann::json j = {
@@ -444,21 +452,14 @@ double bilinear(const Raster& r, double x, double y) {
 TEST_F(CliGdal, GeographicCopyOfTheLidarTileBakesLikeIt) {
   translate("-srcwin 300 300 400 400 '" + kDem.string() + "' proj.tif");
   const Raster proj_dem = read_raster(dir_ / "proj.tif");
-  int status = -1;
-  run_tool("cd '" + dir_.string() +
-               "' && gdalwarp -q -t_srs EPSG:4326 -r bilinear -dstnodata -9999 proj.tif geo.tif",
-           &status);
-  ASSERT_EQ(status, 0);
+  warp("-t_srs EPSG:4326 proj.tif geo.tif");
   const double x0 = proj_dem.gt[0], y0 = proj_dem.gt[3];
   char te[160];
   std::snprintf(te, sizeof te, "-te %.6f %.6f %.6f %.6f -tr 1 1", x0, y0 - 400, x0 + 400, y0);
   std::unique_ptr<GDALDataset> proj_ds(GDALDataset::Open((dir_ / "proj.tif").c_str(), GDAL_OF_RASTER));
   ASSERT_TRUE(proj_ds);
   const std::string proj_wkt = proj_ds->GetProjectionRef();
-  run_tool("cd '" + dir_.string() + "' && gdalwarp -q -t_srs EPSG:3794 -r bilinear -dstnodata -9999 " + te +
-               " geo.tif back.tif",
-           &status);
-  ASSERT_EQ(status, 0);
+  warp("-t_srs EPSG:3794 " + std::string(te) + " geo.tif back.tif");
   const char* layers[] = {"p1.ao", "p1.vsky", "relief.svf", "relief.openness_positive", "relief.horizon_deg"};
   for (const char* name : {"proj", "geo", "back"}) {
     const nlohmann::json j = {
@@ -545,11 +546,7 @@ TEST_F(CliGdal, GeographicCopyOfTheLidarTileBakesLikeIt) {
 // is not.
 TEST_F(CliGdal, ACrsFarFromTrueScaleIsWarnedWithItsFactor) {
   make_crops();
-  int status = -1;
-  run_tool("cd '" + dir_.string() + "' && gdalwarp -q -t_srs EPSG:3857 -tr 1.45 1.45 -r bilinear " +
-               "-dstnodata -9999 dem1m.tif merc.tif",
-           &status);
-  ASSERT_EQ(status, 0);
+  warp("-t_srs EPSG:3857 -tr 1.45 1.45 dem1m.tif merc.tif");
   const Result merc =
       hfbake("validate " + write_job("m.json", "merc", {{"image", "merc.tif"}, {"nodata", "fill"}}).string());
   ASSERT_EQ(merc.exit_code, 0) << merc.err;
@@ -763,11 +760,7 @@ TEST_F(CliGdal, APalettePngReadsTheSameHeightsWithAWorldFile) {
 // 1e-4) it says nothing.
 TEST_F(CliGdal, HorizonWarnsOfAMapScaleFarFromTrue) {
   make_crops();
-  int status = -1;
-  run_tool("cd '" + dir_.string() + "' && gdalwarp -q -t_srs EPSG:3857 -r bilinear -dstnodata -9999 " +
-               "dem1m.tif merc.tif",
-           &status);
-  ASSERT_EQ(status, 0);
+  warp("-t_srs EPSG:3857 dem1m.tif merc.tif");
   const Result merc =
       hfbake("horizon " + (dir_ / "merc.tif").string() + " --at 15.8397,46.4551 --lonlat --directions 8 " +
              "--format json --out " + (dir_ / "merc.json").string());
