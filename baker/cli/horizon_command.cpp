@@ -124,7 +124,9 @@ Profile compute(const HorizonOptions& o) {
   if (o.refraction && !(std::isfinite(*o.refraction) && *o.refraction > -1 && *o.refraction < 1))
     fail("--refraction", "must be in (-1, 1)");
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(o.dem, ec)) fail("", "no such file");
+  if (!std::filesystem::is_regular_file(o.dem, ec))
+    fail("", std::filesystem::exists(o.dem, ec) ? "not a regular file (a folder, a device or a pipe)"
+                                                : "no such file");
   const std::optional<GeoRasterInfo> info = probe_georaster(o.dem);
   if (!info)
     fail("", "not a raster GDAL reads with georeferencing (a geotransform): --at needs map coordinates");

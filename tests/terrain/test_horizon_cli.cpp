@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <nlohmann/json.hpp>
@@ -125,6 +126,12 @@ TEST(HorizonCli, BadInputIsOneLineAndExit2) {
   const auto r = run_hfbake(dir, "horizon " + (dir / "none.tif").string() + " --at 1,1");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("none.tif: no such file"), std::string::npos) << r.err;
+  // A pipe at the DEM's name is named for what it is, and never opened (no writer: an open would block).
+  const fs::path pipe = dir / "pipe.tif";
+  ASSERT_EQ(mkfifo(pipe.c_str(), 0600), 0);
+  const auto rp = run_hfbake(dir, "horizon " + pipe.string() + " --at 1,1");
+  EXPECT_EQ(rp.exit_code, 2);
+  EXPECT_NE(rp.err.find("pipe.tif: not a regular file"), std::string::npos) << rp.err;
   fs::remove_all(dir);
 }
 
