@@ -427,7 +427,8 @@ std::vector<std::string> output_collisions(const std::vector<const Job*>& jobs, 
     if (folder(b.output.dir) != dir) continue;
     if (a.name == b.name)
       lines.push_back(a.file.string() + ": /name: its outputs (" + a.output_path("*", ".exr").string() +
-                      ", report.json) would be the same files as " + b.file.string() +
+                      (a.has_reference && b.has_reference ? ", report.json" : "") +
+                      ") would be the same files as " + b.file.string() +
                       "'s (give one another name or output folder)");
     else if (a.has_reference && b.has_reference)
       lines.push_back(a.file.string() + ": /output/dir: its report (" +
