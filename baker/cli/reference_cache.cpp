@@ -18,6 +18,7 @@
 #include "cli/outputs.hpp"
 #include "core/safe_file.hpp"
 #include "job/content_hash.hpp"
+#include "job/manifest.hpp"
 #include "reference/bake_reference.hpp"
 
 namespace hfbake {
@@ -139,7 +140,7 @@ CacheLookup ReferenceCache::load(const std::string& key, Entry& out, int expect_
       if (c == '\n') break;
       header_line.push_back(c);
     }
-    const nlohmann::json header = nlohmann::json::parse(header_line);
+    const nlohmann::json header = parse_json_text(header_line, file.string());  // a key given twice: damage
     if (header.at("key").get<std::string>() != key) return corrupt();
     Entry e;
     e.seconds = header.at("seconds").get<double>();

@@ -235,6 +235,18 @@ TEST_F(Cache, AHeaderClaimingMoreThanTheFileHoldsIsRefusedBeforeAllocating) {
   ASSERT_EQ(cache.store("other", sample(16, 16), 1.0), "");
   ReferenceCache::Entry e;
   EXPECT_EQ(cache.load("other", e, 16, 17), CacheLookup::corrupt);
+  // A header that gives a key twice is damage, whichever value a lenient parser would keep.
+  ASSERT_EQ(cache.store("twice", sample(16, 16), 1.0), "");
+  {
+    std::ifstream in(cache.entry_path("twice"), std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), {});
+    in.close();
+    const std::size_t brace = text.find('{');
+    ASSERT_NE(brace, std::string::npos);
+    text.insert(brace + 1, "\"seconds\":5,");
+    std::ofstream(cache.entry_path("twice"), std::ios::binary | std::ios::trunc) << text;
+  }
+  EXPECT_EQ(cache.load("twice", e), CacheLookup::corrupt);
   ASSERT_EQ(cache.store("same", sample(16, 16), 1.0), "");
   EXPECT_EQ(cache.load("same", e, 16, 16), CacheLookup::hit);
 }
