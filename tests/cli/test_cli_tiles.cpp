@@ -555,8 +555,9 @@ TEST_F(CliTiles, TileFilesShareNoNameWithAnotherJobsFiles) {
 }
 
 // Two job files of one name and output folder (other heights) never share tiles/: it holds one job file's
-// tiles of that name. Tasks of one job file run at once; a task, a merge or `validate --tiles` of the other
-// is refused in one line naming tiles/ and the job file whose tiles it holds, with nothing written; with
+// tiles of that name. Tasks of one job file run at once; a task, a merge, `validate --tiles` or `slurm
+// --tiles` of the other is refused in one line naming tiles/ and the job file whose tiles it holds, with
+// nothing written; with
 // --overwrite it takes the name over. Started at once, 5 times: one job file's task bakes, the other's is
 // refused, and tiles/ holds the first's tiles only.
 TEST_F(CliTiles, OneJobNameInTilesHasOneJobFile) {
@@ -583,9 +584,11 @@ TEST_F(CliTiles, OneJobNameInTilesHasOneJobFile) {
   for (const int i : {0, 1, 2}) pids.push_back(start(ja, i, "task" + std::to_string(i) + ".txt"));
   for (const pid_t pid : pids) EXPECT_EQ(hfbake_test::wait_exit(pid), 0);
   const auto baked = folder_files(tiles);
-  // The other job file: its task, merge and validate --tiles are refused, naming the owner.
+  // The other job file: its task, merge, validate --tiles and slurm --tiles (before anything is submitted)
+  // are refused, naming the owner.
   for (const std::string& command : {task(jb, 1), "merge --quiet --tiles --tile-size 40 " + jb.string(),
-                                     "validate --quiet --tiles --tile-size 40 " + jb.string()}) {
+                                     "validate --quiet --tiles --tile-size 40 " + jb.string(),
+                                     "slurm --dry-run --tiles --tile-size 40 --shards 3 " + jb.string()}) {
     SCOPED_TRACE(command);
     const Result r = hfbake(command);
     EXPECT_EQ(r.exit_code, 2) << r.err;
