@@ -24,6 +24,7 @@
 #include "cli/report_page.hpp"
 #include "cli/report_writer.hpp"
 #include "cli/result_source.hpp"
+#include "cli/scene_inputs.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/shard_command.hpp"
 #include "cli/suite.hpp"
@@ -33,6 +34,7 @@
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
+#include "io/georaster_input.hpp"
 #include "job/content_hash.hpp"
 #include "job/manifest.hpp"
 #include "reference/horizon_reference.hpp"
@@ -611,7 +613,8 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
     try {  // an invalid job's inputs too, as far as its document says them
       const nlohmann::json doc = load.job ? load.job->doc : read_json_file(inputs[i].file);
       const fs::path base = fs::absolute(inputs[i].file).parent_path();
-      for (const auto& [ptr, rel] : job_input_files(doc)) read.push_back(base / rel);
+      for (const auto& [ptr, rel] : job_input_files(doc))
+        for (const fs::path& f : raster_files(base / rel)) read.push_back(f);  // and a VRT's sources
     } catch (const std::exception&) {
     }
     if (load.job) {

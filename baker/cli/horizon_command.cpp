@@ -223,12 +223,22 @@ int run_horizon(const HorizonOptions& o) {
   try {
     // The outputs never replace the DEM, nor each other; each is written whole or not at all (a
     // temporary renamed into place, docs/output_folders.md), the previous file kept until then.
+    // The DEM is every file GDAL reads for it (a VRT's sources, side files: io/georaster_input.hpp).
     std::error_code ec;
-    const fs::path dem = fs::weakly_canonical(fs::absolute(o.dem), ec);
+    std::vector<fs::path> dem;
+    for (const fs::path& f : raster_files(o.dem)) dem.push_back(fs::weakly_canonical(fs::absolute(f), ec));
     for (const auto& [option, file] :
-         {std::pair<std::string, std::string>{"--out", o.out}, {"--plot", o.plot}})
-      if (!file.empty() && fs::weakly_canonical(fs::absolute(file), ec) == dem)
+         {std::pair<std::string, std::string>{"--out", o.out}, {"--plot", o.plot}}) {
+      if (file.empty()) continue;
+      const fs::path out = fs::weakly_canonical(fs::absolute(file), ec);
+      if (out == dem.front())
         throw InputError(o.dem, option, "is the DEM this command reads: give the output another name");
+      for (const fs::path& f : dem)
+        if (out == f)
+          throw InputError(
+              o.dem, option,
+              "is " + f.string() + ", which GDAL reads for the DEM: give the output another name");
+    }
     if (!o.out.empty() && !o.plot.empty() &&
         fs::weakly_canonical(fs::absolute(o.out), ec) == fs::weakly_canonical(fs::absolute(o.plot), ec))
       throw InputError(o.dem, "--plot", "is the --out file too: give each output its own name");

@@ -114,9 +114,10 @@ void check_output_folder(const Job& job) {
         throw InputError(job.file.string(), ptr, problem);
     ec.clear();
   }
-  // An input the outputs would replace (writes_in_output_folder), the job file included.
+  // An input the outputs would replace (writes_in_output_folder), the job file included, and every file GDAL
+  // reads through one (a VRT's sources, side files).
   std::vector<std::pair<std::string, fs::path>> inputs = {{"", job.file}};
-  for (const auto& [ptr, rel] : job_input_files(job.doc)) inputs.emplace_back(ptr, job.resolve(rel));
+  for (const auto& [ptr, file] : job_read_files(job)) inputs.emplace_back(ptr, file);
   for (const auto& [ptr, file] : inputs) {
     if (writes_in_output_folder(job, file))
       throw InputError(job.file.string(), ptr,

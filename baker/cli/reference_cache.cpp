@@ -16,6 +16,7 @@
 #include <system_error>
 
 #include "cli/outputs.hpp"
+#include "cli/scene_inputs.hpp"
 #include "core/safe_file.hpp"
 #include "job/content_hash.hpp"
 #include "job/manifest.hpp"
@@ -84,9 +85,9 @@ std::string reference_cache_key(const Job& job) {
   // Which layers it traces (without "layers", the ones the job's methods are scored against).
   if (job.reference_options) determining["reference_layers"] = job.reference_options->layers;
   h.add(determining.dump());  // objects are key-sorted: a canonical form
-  for (const auto& [pointer, path] : job_input_files(job.doc)) {
+  for (const auto& [pointer, file] : job_read_files(job)) {
     h.add("\n" + pointer + "\n");
-    h.add_file(job.resolve(path));
+    h.add_file(file);
   }
   return h.hex();
 }

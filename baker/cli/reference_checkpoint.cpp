@@ -15,6 +15,7 @@
 #include <string_view>
 
 #include "cli/reference_cache.hpp"
+#include "cli/scene_inputs.hpp"
 #include "core/safe_file.hpp"
 #include "farm/build_id.hpp"
 #include "job/content_hash.hpp"

@@ -13,6 +13,7 @@
 #include "io/georaster_input.hpp"
 #include "io/image_input.hpp"
 #include "io/load_environment.hpp"
+#include "job/content_hash.hpp"
 #include "terrain/earth.hpp"
 
 namespace hfbake {
@@ -123,6 +124,20 @@ std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
 }
 
 }  // namespace
+
+std::vector<std::pair<std::string, std::filesystem::path>> job_read_files(const Job& job) {
+  std::vector<std::pair<std::string, std::filesystem::path>> files;
+  for (const auto& [pointer, rel] : job_input_files(job.doc))
+    for (const std::filesystem::path& file : raster_files(job.resolve(rel)))
+      files.emplace_back(pointer, file);
+  return files;
+}
+
+std::string job_content_hash(const Job& job) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& [pointer, file] : job_read_files(job)) files.push_back(file);
+  return content_hash_of(job, files);
+}
 
 FieldSize probe_image_field_size(const Job& job) {
   const nlohmann::json& h = job.doc["height"];

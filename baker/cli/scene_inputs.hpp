@@ -9,10 +9,22 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli/scene_loader.hpp"
 
 namespace hfbake {
+
+// Every file a bake of the job reads, each with the JSON pointer of the input that names it: the files its
+// document names (job_input_files), each followed by the other files GDAL reads through it (raster_files: a
+// VRT's sources, side files such as .aux.xml and .msk). What the job's outputs never replace, and what its
+// identity hashes.
+std::vector<std::pair<std::string, std::filesystem::path>> job_read_files(const Job& job);
+
+// The job's identity for the farm and the reference checkpoints: its document and the bytes of every file
+// job_read_files names (job/content_hash.hpp content_hash_of).
+std::string job_content_hash(const Job& job);
 
 // The size of the height image from its header (nothing decoded). A georeferenced raster (read through
 // GDAL) is checked here already, so validate refuses what bake refuses: a rotated geotransform, non-square

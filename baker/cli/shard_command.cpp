@@ -12,6 +12,7 @@
 #include "cli/method_dispatch.hpp"
 #include "cli/outputs.hpp"
 #include "cli/progress.hpp"
+#include "cli/scene_inputs.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"

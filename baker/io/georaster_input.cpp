@@ -118,6 +118,27 @@ std::string sample_type_of(GDALRasterBand* b) {
 
 }  // namespace
 
+std::vector<fs::path> raster_files(const fs::path& file) {
+  std::vector<fs::path> files = {file};
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return files;
+  GdalQuiet gdal;
+  std::unique_ptr<GDALDataset> ds(
+      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!ds) return files;
+  char** list = ds->GetFileList();
+  for (char** f = list; f && *f; ++f) {
+    const fs::path p(*f);
+    const bool known = std::any_of(files.begin(), files.end(), [&](const fs::path& q) {
+      std::error_code same;
+      return q == p || fs::equivalent(q, p, same);
+    });
+    if (!known && fs::is_regular_file(p, ec)) files.push_back(p);
+  }
+  CSLDestroy(list);
+  return files;
+}
+
 std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) return std::nullopt;  // the OpenImageIO path names the problem
@@ -152,7 +173,22 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
     else if (ds->GetMetadata("GEOLOCATION"))
       info.placed_by = "geolocation arrays";
   }
-  if (!info.has_geotransform && info.crs_wkt.empty() && info.placed_by.empty() && asset_driver(info.driver))
+  // An image without georeferencing stays with OpenImageIO, but for a TIFF whose values OpenImageIO would
+  // change or whose holes it would not see: a declared NoData value, or MinIsWhite samples (OpenImageIO
+  // inverts them; GDAL reads them as stored).
+  const auto gdal_only_tiff = [&] {
+    if (info.driver != "GTiff") return false;
+    if (const char* w = ds->GetMetadataItem("MINISWHITE", "IMAGE_STRUCTURE"); w && CPLTestBool(w))
+      return true;
+    for (int b = 1; b <= info.bands; ++b) {
+      int has = 0;
+      ds->GetRasterBand(b)->GetNoDataValue(&has);
+      if (has) return true;
+    }
+    return false;
+  };
+  if (!info.has_geotransform && info.crs_wkt.empty() && info.placed_by.empty() && asset_driver(info.driver) &&
+      !gdal_only_tiff())
     return std::nullopt;
   info.palette = info.bands == 1 && palette_of(ds->GetRasterBand(1));
   for (int b = 1; b <= info.bands; ++b) {

@@ -41,8 +41,14 @@ struct GeoRasterInfo {
 // The raster's header when it is one for GDAL (a format OpenImageIO does not read, or a raster with a
 // geotransform, a CRS, or ground control points, RPCs or geolocation arrays in place of a geotransform);
 // nullopt when GDAL cannot open it or it is an image without georeferencing in a format OpenImageIO reads
-// (EXR, PNG, JPEG, plain TIFF, ...), which then stays with OpenImageIO.
+// (EXR, PNG, JPEG, plain TIFF, ...), which then stays with OpenImageIO; but a TIFF that declares a NoData
+// value or holds MinIsWhite samples is GDAL's (its holes seen, its values as stored).
 std::optional<GeoRasterInfo> probe_georaster(const std::filesystem::path& file);
+
+// Every file GDAL reads when it opens `file` as a raster (GDALGetFileList: the file, a VRT's sources, side
+// files such as .aux.xml, .msk, .ovr and world files), `file` first and each once; {file} alone when GDAL
+// cannot open it. What a bake reads through an input: what its identity hashes and its outputs never replace.
+std::vector<std::filesystem::path> raster_files(const std::filesystem::path& file);
 
 // Band `band` (0-based) as float32, row 0 = the first stored row (north for a north-up raster); values as
 // stored (no normalisation, NoData values left as they are). Read a band of whole block rows at a time

@@ -30,10 +30,10 @@ std::string ContentHash::hex() const {
   return buf;
 }
 
-std::string job_content_hash(const Job& job) {
+std::string content_hash_of(const Job& job, const std::vector<std::filesystem::path>& files) {
   ContentHash h;
   h.add(job.doc.dump());  // nlohmann objects are key-sorted: a canonical form
-  for (const auto& [pointer, path] : job_input_files(job.doc)) h.add_file(job.resolve(path));
+  for (const std::filesystem::path& file : files) h.add_file(file);
   return h.hex();
 }
 

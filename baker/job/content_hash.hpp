@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "job/manifest.hpp"
 
@@ -22,7 +23,8 @@ class ContentHash {
   std::uint64_t h_ = 0xcbf29ce484222325ull;
 };
 
-// Hash of the job document (canonical JSON) and the bytes of every input file it names.
-std::string job_content_hash(const Job& job);
+// Hash of the job document (canonical JSON) and the bytes of `files`, in order: every file a bake of the job
+// reads (cli/scene_inputs.hpp job_content_hash gives them).
+std::string content_hash_of(const Job& job, const std::vector<std::filesystem::path>& files);
 
 }  // namespace hfbake

@@ -632,6 +632,112 @@ TEST_F(CliGdal, NonSquarePixelsAreRefusedInOneLine) {
   }
 }
 
+// What a bake reads through a DEM is every file GDAL reads for it: a VRT's source at an output's name is
+// refused by validate, bake and horizon (the source's bytes stay), and a changed source (or a side file that
+// declares NoData) makes shards baked before it another job's: merge refuses them.
+TEST_F(CliGdal, AVrtsSourcesAreReadFilesOfTheJob) {
+  fs::create_directories(dir_ / "out_v");
+  translate("-srcwin 400 400 48 48 '" + kDem.string() + "' out_v/v.p1.ao.tif");
+  translate("-of VRT out_v/v.p1.ao.tif v.vrt");
+  const fs::path job = write_job("v.json", "v", {{"image", "v.vrt"}});
+  const auto bytes = [&](const fs::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string source = bytes(dir_ / "out_v" / "v.p1.ao.tif");
+  for (const char* cmd : {"validate ", "bake --quiet "}) {
+    const Result r = hfbake(cmd + job.string());
+    EXPECT_EQ(r.exit_code, 2) << cmd << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(job.string() +
+                                      ": /height/image: " + (dir_ / "out_v" / "v.p1.ao.tif").string() +
+                                      " is where this job writes an output"),
+              std::string::npos)
+        << r.err;
+  }
+  const Raster vrt = read_raster(dir_ / "v.vrt");
+  Result r = hfbake("horizon " + (dir_ / "v.vrt").string() + " --at " + std::to_string(vrt.gt[0] + 20) + "," +
+                    std::to_string(vrt.gt[3] - 20) + " --plot " + (dir_ / "out_v" / "v.p1.ao.tif").string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--plot: is " + (dir_ / "out_v" / "v.p1.ao.tif").string() + ", which GDAL reads"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(bytes(dir_ / "out_v" / "v.p1.ao.tif"), source) << "the VRT's source was written over";
+
+  // Shards: the source changes between the two tasks; then a side file declares NoData.
+  translate("-srcwin 400 400 48 48 '" + kDem.string() + "' src.tif");
+  translate("-of VRT src.tif w.vrt");
+  const fs::path shard_job = write_job("w.json", "w", {{"image", "w.vrt"}, {"nodata", "fill"}});
+  ASSERT_EQ(hfbake("bake --quiet --shard 0/2 " + shard_job.string()).exit_code, 0);
+  const Raster src = read_raster(dir_ / "src.tif");  // other heights in its place: another window of the DEM
+  translate("-srcwin 300 300 48 48 -a_ullr " + std::to_string(src.gt[0]) + " " + std::to_string(src.gt[3]) +
+            " " + std::to_string(src.gt[0] + 48) + " " + std::to_string(src.gt[3] - 48) + " '" +
+            kDem.string() + "' src2.tif");
+  fs::rename(dir_ / "src2.tif", dir_ / "src.tif");
+  ASSERT_EQ(hfbake("bake --quiet --shard 1/2 " + shard_job.string()).exit_code, 0);
+  r = hfbake("merge --quiet " + shard_job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("belongs to another job"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_w" / "w.p1.ao.tif"));
+  ASSERT_EQ(hfbake("bake --quiet --shard 0/2 " + shard_job.string()).exit_code, 0);
+  ASSERT_EQ(hfbake("merge --quiet " + shard_job.string()).exit_code, 0);  // both of these heights: merged
+  // A GeoTIFF's side file that declares NoData changes the heights read: shards from before it are refused.
+  translate("-srcwin 400 400 48 48 '" + kDem.string() + "' plain.tif");
+  const fs::path plain_job = write_job("x.json", "x", {{"image", "plain.tif"}, {"nodata", "fill"}});
+  ASSERT_EQ(hfbake("bake --quiet --shard 0/2 " + plain_job.string()).exit_code, 0);
+  const float first = read_raster(dir_ / "plain.tif").values[0];
+  std::ofstream(dir_ / "plain.tif.aux.xml") << "<PAMDataset><PAMRasterBand band=\"1\"><NoDataValue>" << first
+                                            << "</NoDataValue></PAMRasterBand></PAMDataset>\n";
+  ASSERT_EQ(hfbake("bake --quiet --shard 1/2 " + plain_job.string()).exit_code, 0);
+  r = hfbake("merge --quiet " + plain_job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("belongs to another job"), std::string::npos) << r.err;
+}
+
+// A TIFF without georeferencing is an image, read by OpenImageIO, but for one whose holes or values only
+// GDAL reads as the file declares them: a NoData value (its texels are holes, filled on request) and
+// MinIsWhite samples (OpenImageIO gives 255 - stored; heights are the stored values).
+TEST_F(CliGdal, ATiffsNodataAndMinIsWhiteSamplesAreReadAsDeclared) {
+  GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+  std::vector<float> z(32 * 32);
+  for (int j = 0; j < 32; ++j)
+    for (int i = 0; i < 32; ++i) z[std::size_t(j * 32 + i)] = float(20 + (i * 7 + j * 3) % 200);
+  std::vector<float> holed = z;
+  holed[5 * 32 + 5] = holed[20 * 32 + 9] = -9999.0f;
+  {
+    GDALDataset* ds = gtiff->Create((dir_ / "holes.tif").c_str(), 32, 32, 1, GDT_Float32, nullptr);
+    ASSERT_TRUE(ds);
+    ds->GetRasterBand(1)->SetNoDataValue(-9999);
+    ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 32, 32, holed.data(), 32, 32, GDT_Float32, 0, 0,
+                                             nullptr),
+              CE_None);
+    GDALClose(ds);
+    const char* options[] = {"PHOTOMETRIC=MINISWHITE", nullptr};
+    ds = gtiff->Create((dir_ / "white.tif").c_str(), 32, 32, 1, GDT_Byte, const_cast<char**>(options));
+    ASSERT_TRUE(ds);
+    ASSERT_EQ(
+        ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 32, 32, z.data(), 32, 32, GDT_Float32, 0, 0, nullptr),
+        CE_None);
+    GDALClose(ds);
+  }
+  const fs::path holes = write_job("h.json", "h", {{"image", "holes.tif"}, {"texel_size", 2}});
+  Result r = hfbake("validate " + holes.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/height/image"), std::string::npos) << r.err;
+  const fs::path filled =
+      write_job("f.json", "f", {{"image", "holes.tif"}, {"texel_size", 2}, {"nodata", "fill"}});
+  r = hfbake("validate " + filled.string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("through GDAL (GTiff, Float32)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("heights 20 .. 219 world units"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("2 texels without a height"), std::string::npos) << r.err;
+  const fs::path white = write_job("w.json", "w", {{"image", "white.tif"}});
+  r = hfbake("validate " + white.string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("through GDAL (GTiff, Byte integers as stored)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("heights 20 .. 219 world units"), std::string::npos) << r.err;
+}
+
 // A raster placed by ground control points (no geotransform) and one with a CRS but no geotransform have no
 // texel size or place hfbake can use: both are refused in one line at /height/image by validate and bake,
 // nothing baked (a raster with neither is an image, baked with texel 1).
