@@ -2,6 +2,7 @@
 
 #include <OpenColorIO/OpenColorIO.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <sstream>
 
@@ -65,9 +66,15 @@ void apply(const OCIO::ConstProcessorRcPtr& processor, std::vector<float>& pixel
   if (processor->isNoOp() || pixels.empty()) return;
   const OCIO::ConstCPUProcessorRcPtr cpu = processor->getDefaultCPUProcessor();
   if (channels == 3 || channels == 4) {
-    const long n = long(pixels.size() / std::size_t(channels));
-    OCIO::PackedImageDesc desc(pixels.data(), n, 1, channels);
-    cpu->apply(desc);
+    // A run of pixels at a time: OpenColorIO's CPU processor holds float RGBA scratch the width of the
+    // image it is given (two copies), which for the whole of a 4096 x 2048 image as one row was 270 MiB.
+    constexpr std::size_t kRun = 4096;
+    const std::size_t n = pixels.size() / std::size_t(channels);
+    for (std::size_t first = 0; first < n; first += kRun) {
+      OCIO::PackedImageDesc desc(pixels.data() + first * std::size_t(channels),
+                                 long(std::min(kRun, n - first)), 1, channels);
+      cpu->apply(desc);
+    }
     return;
   }
   // Grey (or any other count): convert each value as a grey RGB triple and keep the first component.
