@@ -68,7 +68,12 @@ struct RunOptions {
 
 void add_run_options(CLI::App* cmd, RunOptions& o) {
   cmd->add_option("-o,--out", o.out,
-                  "Output folder, replacing each job's output.dir (the shards: <out>/shards)");
+                  "Output folder, replacing each job's output.dir (the shards: <out>/shards)")
+      ->check(CLI::Validator(  // an unset shell variable must not send the outputs to the job's own folder
+          [](std::string& text) {
+            return text.empty() ? std::string("is empty: name the output folder") : "";
+          },
+          "DIR"));
   cmd->add_flag("--quiet", o.quiet, "No progress output (warnings and errors are still printed)");
   cmd->add_option("--cache", o.cache,
                   "Reference cache folder (default: $XDG_CACHE_HOME/hfbake/references or "

@@ -145,7 +145,8 @@ TEST_F(Cli, MalformedJson) {
 }
 
 // A mistaken command line is named in one line, exit 2, nothing baked: an unknown option even when the word
-// after it is no file (it would be taken as a job), an integer option's text that is no number at all.
+// after it is no file (it would be taken as a job), an integer option's text that is no number at all, an
+// empty output folder.
 TEST_F(Cli, CommandLineMistakesAreNamed) {
   const fs::path p = write_job("m.json", job({{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}));
   const struct {
@@ -161,6 +162,9 @@ TEST_F(Cli, CommandLineMistakesAreNamed) {
        "hfbake: error: command line: --threads: must be from 1 to 4096 (it is 0)"},
       {"validate " + p.string() + " --threads 99999999999999999999",
        "hfbake: error: command line: --threads: must be from 1 to 4096 (it is 99999999999999999999)"},
+      // An unset shell variable: not the job's own output.dir.
+      {"bake " + p.string() + " --out ''",
+       "hfbake: error: command line: --out: is empty: name the output folder"},
   };
   for (const auto& c : cases) {
     const Result r = hfbake(c.args);
