@@ -331,13 +331,19 @@ def read_dem(path, band=1):
             gdal.UseExceptions()
     if not 1 <= band <= dem.RasterCount:
         refuse(f"has no band {band} (it has {dem.RasterCount})")
+    gt = dem.GetGeoTransform(can_return_null=True)
+    if gt is None and dem.GetGCPCount() > 0:
+        refuse("is placed by ground control points, not by a geotransform: warp it onto a north-up grid first "
+               f"(gdalwarp {path} warped.tif)")
     crs = dem.GetSpatialRef()
     if crs is None:
         refuse("has no CRS: the texel size would be a guess (assign its projected CRS first)")
+    if gt is None:
+        refuse(f"has a CRS ({crs.GetName()}) but no geotransform, so its pixels have no size or place in it: "
+               "give it one (gdal_edit.py -a_ullr)")
     if crs.IsGeographic():
         refuse("its pixels are degrees of a geographic CRS: warp it to a projected CRS first, or bake a job "
                "naming the file, which reads a lon/lat DEM's texel sizes itself (docs/gis.md)")
-    gt = dem.GetGeoTransform()
     sx, sy = abs(gt[1]), abs(gt[5])
     if gt[2] != 0 or gt[4] != 0:
         refuse("has rotated pixels: warp it north-up first (gdalwarp)")
@@ -346,6 +352,16 @@ def read_dem(path, band=1):
                "gdalwarp -tr S S")
     b = dem.GetRasterBand(band)
     values = b.ReadAsArray()
+    # North up and east right, as the array functions take it (their north is row 0, their east the last
+    # column): a south-up or east-west raster is turned, and its geotransform with it.
+    gt = tuple(gt)
+    if gt[5] > 0:
+        values = values[::-1, :]
+        gt = (gt[0], gt[1], 0.0, gt[3] + gt[5] * dem.RasterYSize, 0.0, -gt[5])
+    if gt[1] < 0:
+        values = values[:, ::-1]
+        gt = (gt[0] + gt[1] * dem.RasterXSize, -gt[1], 0.0, gt[3], 0.0, gt[5])
+    values = _np.ascontiguousarray(values)
     nodata = b.GetNoDataValue()
     beyond = _beyond_float_range(values, nodata)
     if beyond:
@@ -362,6 +378,10 @@ def read_dem(path, band=1):
         heights[~holes] *= _np.float32(factor)
         warnings.append(f"{path}: the band's heights are in {b.GetUnitType()}, its pixels in "
                         f"{crs.GetLinearUnitsName()}: heights x {factor:.6g} into the pixels' unit")
+    scale_of, offset_of = b.GetScale(), b.GetOffset()
+    if (scale_of not in (None, 1.0)) or (offset_of not in (None, 0.0)):
+        warnings.append(f"{path}: the file declares scale {scale_of or 1:g} and offset {offset_of or 0:g}, not "
+                        "applied (heights are the stored values): height_scale and height_offset apply them")
     centre_x = gt[0] + gt[1] * dem.RasterXSize / 2
     centre_y = gt[3] + gt[5] * dem.RasterYSize / 2
     scale = _hfbake.site_scale_warning(crs.ExportToWkt(), centre_x, centre_y, crs.GetName() or "")

@@ -96,3 +96,66 @@ def test_missing_files_geographic_and_crs_less_rasters_are_refused_naming_the_fi
     with pytest.raises(hfbake.InputError, match="no band 2"):
         hfbake.read_dem(tmp_path / "lonlat.tif", band=2)
 
+
+
+def test_a_raster_without_a_geotransform_is_refused_as_a_job_refuses_it(tmp_path):
+    # A CRS but no geotransform, and ground control points in place of one: no texel size or place.
+    heights = terrain(40, 32, seed=13) * 10
+    srs = gdal.osr.SpatialReference()
+    srs.ImportFromEPSG(32633)
+    crs_only = tmp_path / "crs_only.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(str(crs_only), 40, 32, 1, gdal.GDT_Float32)
+    ds.SetProjection(srs.ExportToWkt())
+    ds.GetRasterBand(1).WriteArray(heights)
+    ds = None
+    gcps = tmp_path / "gcps.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(str(gcps), 40, 32, 1, gdal.GDT_Float32)
+    ds.SetGCPs([gdal.GCP(500000.0, 5200000.0, 0, 0, 0), gdal.GCP(500080.0, 5200000.0, 0, 40, 0),
+                gdal.GCP(500000.0, 5199936.0, 0, 0, 32)], srs.ExportToWkt())
+    ds.GetRasterBand(1).WriteArray(heights)
+    ds = None
+    for dem, said in ((crs_only, "but no geotransform"), (gcps, "is placed by ground control points")):
+        with pytest.raises(hfbake.InputError) as e:
+            hfbake.read_dem(dem)
+        assert said in str(e.value), str(e.value)
+        job = {"version": 1, "name": "g", "height": {"image": str(dem)}, "bake": [{"method": "relief"}]}
+        (tmp_path / "g.json").write_text(json.dumps(job))
+        command = run_cli("validate", tmp_path / "g.json", check=False)
+        assert command.returncode == 2 and said in command.stderr, command.stderr
+
+
+def test_a_south_up_or_mirrored_raster_is_read_north_up(tmp_path):
+    # The same ground stored north-up, south-up and east-west: one north-up array and geotransform.
+    heights = terrain(40, 32, seed=13) * 10
+    north_up = tmp_path / "n.tif"
+    write_geotiff(north_up, heights)
+    south_up = tmp_path / "s.tif"
+    write_geotiff(south_up, heights[::-1, :], geotransform=(500000.0, 2.0, 0.0, 5200000.0 - 64.0, 0.0, 2.0))
+    mirrored = tmp_path / "m.tif"
+    write_geotiff(mirrored, heights[:, ::-1], geotransform=(500080.0, -2.0, 0.0, 5200000.0, 0.0, -2.0))
+    truth = hfbake.read_dem(north_up)
+    for dem in (south_up, mirrored):
+        d = hfbake.read_dem(dem)
+        assert np.array_equal(d.heights, truth.heights), dem
+        assert d.geotransform == pytest.approx(truth.geotransform), dem
+
+
+def test_a_declared_scale_and_offset_are_warned_as_the_command_warns(tmp_path):
+    dem = tmp_path / "scaled.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(str(dem), 40, 32, 1, gdal.GDT_UInt16)
+    ds.SetGeoTransform((500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0))
+    srs = gdal.osr.SpatialReference()
+    srs.ImportFromEPSG(32633)
+    ds.SetProjection(srs.ExportToWkt())
+    band = ds.GetRasterBand(1)
+    band.WriteArray((terrain(40, 32, seed=13) * 100 + 3000).astype(np.uint16))
+    band.SetScale(0.01)
+    band.SetOffset(250.0)
+    ds = None
+    d = hfbake.read_dem(dem)
+    said = [w for w in d.warnings if "scale 0.01 and offset 250, not applied" in w]
+    assert len(said) == 1, d.warnings
+    job = {"version": 1, "name": "s", "height": {"image": str(dem)}, "bake": [{"method": "relief"}]}
+    (tmp_path / "s.json").write_text(json.dumps(job))
+    assert "scale 0.01 and offset 250, not applied" in run_cli("validate", tmp_path / "s.json",
+                                                                check=False).stderr
