@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <memory>
@@ -49,8 +50,8 @@ GDALRasterBand* band_of(GDALDataset& ds, const fs::path& file, int band, const I
 // Rows [y0, y0 + n) of columns [x0, x0 + w) of band b as floats into dst. A double band is read as double
 // first: a finite value beyond float's range (other than the band's NoData value) would become an infinity
 // and pass for a hole; it is refused instead, naming the texel.
-bool read_rows(GDALRasterBand* b, int x0, int y0, int w, int n, float* dst, const fs::path& file,
-               const InputSite& site) {
+bool read_rows_as_stored(GDALRasterBand* b, int x0, int y0, int w, int n, float* dst, const fs::path& file,
+                         const InputSite& site) {
   if (b->GetRasterDataType() != GDT_Float64)
     return b->RasterIO(GF_Read, x0, y0, w, n, dst, w, n, GDT_Float32, 0, 0, nullptr) == CE_None;
   std::vector<double> row(static_cast<std::size_t>(w));
@@ -75,6 +76,25 @@ bool read_rows(GDALRasterBand* b, int x0, int y0, int w, int n, float* dst, cons
       dst[std::size_t(y) * std::size_t(w) + std::size_t(x)] = float(v);
     }
   }
+  return true;
+}
+
+// As read_rows_as_stored, and a texel its mask marks invalid (GDAL's mask band: a .msk side file or an
+// internal mask) is NaN: a hole, as a NoData texel is. A mask that only restates the NoData value adds
+// nothing; an alpha band is not a mask of the heights (OpenImageIO, reading the same image without a world
+// file, ignores it too).
+bool read_rows(GDALRasterBand* b, int x0, int y0, int w, int n, float* dst, const fs::path& file,
+               const InputSite& site) {
+  if (!read_rows_as_stored(b, x0, y0, w, n, dst, file, site)) return false;
+  const int flags = b->GetMaskFlags();
+  if (flags & (GMF_ALL_VALID | GMF_NODATA | GMF_ALPHA)) return true;
+  GDALRasterBand* mask = b->GetMaskBand();
+  if (!mask) return true;
+  std::vector<std::uint8_t> valid(std::size_t(w) * std::size_t(n));
+  if (mask->RasterIO(GF_Read, x0, y0, w, n, valid.data(), w, n, GDT_Byte, 0, 0, nullptr) != CE_None)
+    return false;
+  for (std::size_t i = 0; i < valid.size(); ++i)
+    if (valid[i] == 0) dst[i] = std::numeric_limits<float>::quiet_NaN();
   return true;
 }
 

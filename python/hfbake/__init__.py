@@ -352,6 +352,11 @@ def read_dem(path, band=1):
                "gdalwarp -tr S S")
     b = dem.GetRasterBand(band)
     values = b.ReadAsArray()
+    # GDAL's mask band (a .msk side file or an internal mask; not an alpha band, nor the NoData value again):
+    # its invalid texels are holes, as a job reading the file makes them.
+    flags = b.GetMaskFlags()
+    if not flags & (gdal.GMF_ALL_VALID | gdal.GMF_NODATA | gdal.GMF_ALPHA):
+        values = _np.where(b.GetMaskBand().ReadAsArray() == 0, _np.nan, values.astype(_np.float64))
     # North up and east right, as the array functions take it (their north is row 0, their east the last
     # column): a south-up or east-west raster is turned, and its geotransform with it.
     gt = tuple(gt)

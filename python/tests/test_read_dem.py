@@ -159,3 +159,23 @@ def test_a_declared_scale_and_offset_are_warned_as_the_command_warns(tmp_path):
     (tmp_path / "s.json").write_text(json.dumps(job))
     assert "scale 0.01 and offset 250, not applied" in run_cli("validate", tmp_path / "s.json",
                                                                 check=False).stderr
+
+
+def test_a_mask_band_marks_holes_as_a_job_reads_them(tmp_path):
+    dem = tmp_path / "masked.tif"
+    write_geotiff(dem, terrain(40, 32, seed=13) * 10)
+    gdal.SetConfigOption("GDAL_TIFF_INTERNAL_MASK", "NO")
+    try:
+        ds = gdal.Open(str(dem), gdal.GA_Update)
+        ds.CreateMaskBand(gdal.GMF_PER_DATASET)
+        valid = np.full((32, 40), 255, np.uint8)
+        valid[:, 30:] = 0
+        ds.GetRasterBand(1).GetMaskBand().WriteArray(valid)
+        ds = None
+    finally:
+        gdal.SetConfigOption("GDAL_TIFF_INTERNAL_MASK", None)
+    d = hfbake.read_dem(dem)
+    assert np.count_nonzero(d.holes) == 320 and d.holes[:, 30:].all() and d.keys["nodata"] == "fill"
+    job = {"version": 1, "name": "k", "height": {"image": str(dem), "nodata": "fill"}, "bake": [{"method": "relief"}]}
+    (tmp_path / "k.json").write_text(json.dumps(job))
+    assert "320 texels without a height" in run_cli("validate", tmp_path / "k.json", check=False).stderr

@@ -738,6 +738,33 @@ TEST_F(CliGdal, ATiffsNodataAndMinIsWhiteSamplesAreReadAsDeclared) {
   EXPECT_NE(r.err.find("heights 20 .. 219 world units"), std::string::npos) << r.err;
 }
 
+// A mask band (here a .msk side file) marks holes as a NoData value does: refused without "nodata": "fill",
+// counted and filled with it.
+TEST_F(CliGdal, AMaskBandMarksHoles) {
+  translate("-srcwin 400 400 40 40 '" + kDem.string() + "' masked.tif");
+  {
+    CPLSetThreadLocalConfigOption("GDAL_TIFF_INTERNAL_MASK", "NO");
+    GDALDataset* ds = GDALDataset::Open((dir_ / "masked.tif").c_str(), GDAL_OF_RASTER | GDAL_OF_UPDATE);
+    ASSERT_TRUE(ds);
+    ASSERT_EQ(ds->CreateMaskBand(GMF_PER_DATASET), CE_None);
+    std::vector<std::uint8_t> valid(40 * 40, 255);
+    for (int j = 0; j < 40; ++j)
+      for (int i = 30; i < 40; ++i) valid[std::size_t(j * 40 + i)] = 0;  // 400 texels masked
+    ASSERT_EQ(ds->GetRasterBand(1)->GetMaskBand()->RasterIO(GF_Write, 0, 0, 40, 40, valid.data(), 40, 40,
+                                                            GDT_Byte, 0, 0, nullptr),
+              CE_None);
+    GDALClose(ds);
+    CPLSetThreadLocalConfigOption("GDAL_TIFF_INTERNAL_MASK", nullptr);
+  }
+  ASSERT_TRUE(fs::exists(dir_ / "masked.tif.msk"));
+  Result r = hfbake("validate " + write_job("m.json", "m", {{"image", "masked.tif"}}).string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/height/image"), std::string::npos) << r.err;
+  r = hfbake("validate " + write_job("f.json", "f", {{"image", "masked.tif"}, {"nodata", "fill"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("400 texels without a height"), std::string::npos) << r.err;
+}
+
 // A raster placed by ground control points (no geotransform) and one with a CRS but no geotransform have no
 // texel size or place hfbake can use: both are refused in one line at /height/image by validate and bake,
 // nothing baked (a raster with neither is an image, baked with texel 1).
