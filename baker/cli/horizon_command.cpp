@@ -152,6 +152,14 @@ Profile compute(const HorizonOptions& o) {
     const auto moved = lonlat_to_crs(info->crs_wkt, (*at)[0], (*at)[1]);
     if (!moved) fail("--at", "PROJ cannot transform " + o.at + " (WGS 84) into " + info->crs_name);
     xy = *moved;
+    // A geographic raster's longitudes may run past 180 (across the antimeridian, or 0..360): the same
+    // meridian a whole turn away, where it lies on the raster.
+    if (info->geographic) {
+      const double xa = std::min(g[0], g[0] + info->width * g[1]),
+                   xb = std::max(g[0], g[0] + info->width * g[1]);
+      for (const double turn : {-360.0, 360.0})
+        if (!(xy[0] >= xa && xy[0] <= xb) && xy[0] + turn >= xa && xy[0] + turn <= xb) xy[0] += turn;
+    }
   }
   p.map_x = xy[0], p.map_y = xy[1];
 

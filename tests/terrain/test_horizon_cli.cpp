@@ -252,6 +252,35 @@ TEST(HorizonCli, AgreesWithGrassRHorizon) {
 // elevation against the closed form at the geodesic distance, the ray's azimuth against the geodesic's.
 // hfbake's ground frame is the receiver's tangent plane with the ellipsoid's metric scales at the receiver
 // (docs/gis.md "Geographic DEMs"); the bounds below are that approximation's, measured here.
+// A geographic DEM whose longitudes run past 180 (across the antimeridian, and one of 0..360): --lonlat
+// takes the point in [-180, 180] and finds it a whole turn away, the profile that of --at in the raster's own
+// longitudes.
+TEST(HorizonCli, LonLatReachesADemPastTheAntimeridian) {
+  const fs::path dir = temp_dir("antimeridian");
+  const double t = 3.0 / 3600;
+  const auto z = [](int i, int j) { return 100.0 + 40.0 * std::sin(0.3 * i) * std::cos(0.2 * j); };
+  for (const double lon0 : {179.95, 359.95}) {
+    SCOPED_TRACE(lon0);
+    const fs::path dem = dir / ("dem" + std::to_string(int(lon0)) + ".tif");
+    write_dem(dem, 120, 80, {lon0, t, 0, -16.0, 0, -t}, 4326, z);
+    const double lon = lon0 + 90.25 * t, lat = -16.0 - 40.25 * t;  // past 180 (or 360) on the raster
+    std::ostringstream own, wrapped;
+    own.precision(12), wrapped.precision(12);
+    own << lon << "," << lat;
+    wrapped << std::remainder(lon, 360.0) << "," << lat;
+    const std::vector<Row> a = horizon(dir, dem.string() + " --at " + own.str() + " --directions 8");
+    const std::vector<Row> b =
+        horizon(dir, dem.string() + " --lonlat --at " + wrapped.str() + " --directions 8");
+    ASSERT_EQ(a.size(), 8u);
+    ASSERT_EQ(b.size(), a.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      EXPECT_NEAR(b[k].elevation, a[k].elevation, 1e-4) << k;
+      EXPECT_NEAR(b[k].x, a[k].x, 1e-6) << k;
+    }
+  }
+  fs::remove_all(dir);
+}
+
 TEST(HorizonCli, GeographicDemAgainstGeodesics) {
   const fs::path dir = temp_dir("geographic");
   const fs::path dem = dir / "dem.tif";
