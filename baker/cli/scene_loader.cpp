@@ -413,8 +413,11 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   }
 
   if (scene.curvature > 0) {
+    // c is per world unit: 1 km is 1000 / u world units of u metres, and the drop c (1000 / u)^2 of them
+    // is c 1e6 / u metres.
+    const double u = s.pixel_unit_metres > 0 ? s.pixel_unit_metres : 1.0;
     line += "; Earth curvature on (refraction " + short_num(scene.refraction) + ": a point 1 km away is " +
-            short_num(scene.curvature * 1e6) + " m lower, c = " + short_num(scene.curvature) +
+            short_num(scene.curvature * 1e6 / u) + " m lower, c = " + short_num(scene.curvature) +
             " per world unit)";
   } else {
     line += "; Earth curvature off (flat";

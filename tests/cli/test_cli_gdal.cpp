@@ -765,6 +765,37 @@ TEST_F(CliGdal, AMaskBandMarksHoles) {
   EXPECT_NE(r.err.find("400 texels without a height"), std::string::npos) << r.err;
 }
 
+// The curvature line's drop at 1 km is in metres whatever the CRS's unit: on a CRS in US survey feet, c per
+// foot is c / 0.3048006 per metre, and 1 km away lies c 1e6 / 0.3048006 m lower.
+TEST_F(CliGdal, TheCurvatureLineSaysMetresOnACrsInFeet) {
+  std::vector<float> z(32 * 32, 100.0f);
+  const double ft = 1200.0 / 3937.0;
+  {
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    GDALDataset* ds = gtiff->Create((dir_ / "feet.tif").c_str(), 32, 32, 1, GDT_Float32, nullptr);
+    ASSERT_TRUE(ds);
+    double gt[6] = {6500000.0, 10.0, 0.0, 1800000.0, 0.0, -10.0};
+    ds->SetGeoTransform(gt);
+    OGRSpatialReference srs;
+    srs.importFromEPSG(2229);  // NAD83 / California zone 5, US survey feet
+    ds->SetSpatialRef(&srs);
+    ASSERT_EQ(
+        ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 32, 32, z.data(), 32, 32, GDT_Float32, 0, 0, nullptr),
+        CE_None);
+    GDALClose(ds);
+  }
+  const Result r =
+      hfbake("validate " + write_job("c.json", "c", {{"image", "feet.tif"}, {"curvature", true}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::size_t at = r.err.find("a point 1 km away is ");
+  const std::size_t c_at = r.err.find(", c = ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  ASSERT_NE(c_at, std::string::npos) << r.err;
+  const double drop = std::stod(r.err.substr(at + 21)), c = std::stod(r.err.substr(c_at + 6));
+  EXPECT_NEAR(drop, c * 1e6 / ft, 1e-4 * drop) << r.err;
+  EXPECT_NEAR(drop, 0.0683, 0.001) << r.err;  // about 1 km^2 / (2 x 6371 km) x (1 - 0.13)
+}
+
 // A raster placed by ground control points (no geotransform) and one with a CRS but no geotransform have no
 // texel size or place hfbake can use: both are refused in one line at /height/image by validate and bake,
 // nothing baked (a raster with neither is an image, baked with texel 1).
