@@ -378,9 +378,8 @@ void claim_tiles_folder(const Job& job, bool overwrite) {
   if (!lock.held())
     throw InputError(job.file.string(), "/output/dir",
                      lock.problem().empty()
-                         ? "another hfbake process (" + lock.holder() +
-                               ") has been claiming the tiles of job " + job.name + " in " + folder.string() +
-                               " for " + std::to_string(kTilesClaimPatience.count()) +
+                         ? lock.holder_words() + " has been claiming the tiles of job " + job.name + " in " +
+                               folder.string() + " for " + std::to_string(kTilesClaimPatience.count()) +
                                " s: wait for it, then bake again"
                          : not_a_lock_file(tiles_lock_file(job), lock.problem()));
   check_owner_record(job, tiles_owner_record(job), folder, overwrite, "tiles");
@@ -467,15 +466,14 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
     if (created_dir_) fs::remove(job.output.dir, rm);
   };
   // Takes `slot`'s lock on `file`, or gives up every lock and refuses: not a lock file, or held by another
-  // process (busy: what that process does, after "another hfbake process (<holder>) ").
+  // process (busy: what that process does, after FolderLock::holder_words).
   const auto take = [&](std::unique_ptr<FolderLock>& slot, const fs::path& file, const std::string& busy) {
     slot = std::make_unique<FolderLock>(file);
     if (slot->held()) return;
-    const std::string problem = slot->problem(), holder = slot->holder();
+    const std::string problem = slot->problem(), holder = slot->holder_words();
     release();
-    throw InputError(
-        job.file.string(), "/output/dir",
-        problem.empty() ? "another hfbake process (" + holder + ") " + busy : not_a_lock_file(file, problem));
+    throw InputError(job.file.string(), "/output/dir",
+                     problem.empty() ? holder + " " + busy : not_a_lock_file(file, problem));
   };
   // One writer per job name and folder (docs/output_folders.md).
   take(lock_, output_lock_file(job),

@@ -368,12 +368,11 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
   const std::chrono::seconds patience = suite_lock_patience();
   const FolderLock lock(lock_file, patience);
   if (!lock.held())
-    throw std::runtime_error(lock.problem().empty()
-                                 ? "another hfbake process (" + lock.holder() +
-                                       ") has been writing suite reports into " + suite.output_dir.string() +
-                                       " for " + std::to_string(patience.count()) +
-                                       " s: wait for it to finish, then bake the suite again"
-                                 : not_a_lock_file(lock_file, lock.problem()));
+    throw std::runtime_error(
+        lock.problem().empty() ? lock.holder_words() + " has been writing suite reports into " +
+                                     suite.output_dir.string() + " for " + std::to_string(patience.count()) +
+                                     " s: wait for it to finish, then bake the suite again"
+                               : not_a_lock_file(lock_file, lock.problem()));
   SuiteReports written;
   written.files = suite_report_files(suite);
   const fs::path history_file = written.files[1];

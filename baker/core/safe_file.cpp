@@ -72,6 +72,11 @@ bool remove_tree(const fs::path& path) {
   return ok;
 }
 
+std::string FolderLock::holder_words() const {
+  const bool here = holder_ == std::to_string(getpid()) + "@" + host_name();
+  return (here ? "another bake in this process (" : "another hfbake process (") + holder_ + ")";
+}
+
 FolderLock::FolderLock(const fs::path& path, std::chrono::milliseconds patience) : path_(path) {
   const auto until = std::chrono::steady_clock::now() + patience;
   for (try_lock(); !held() && problem_.empty() && std::chrono::steady_clock::now() < until; try_lock())

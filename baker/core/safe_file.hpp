@@ -100,6 +100,10 @@ class FolderLock {
   bool held() const { return fd_ >= 0; }
   // When not held: what the holder wrote into the file ("<pid>@<host>").
   const std::string& holder() const { return holder_; }
+  // When not held: who holds it in words, "another hfbake process (<pid>@<host>)", or "another bake in
+  // this process (<pid>@<host>)" when the holder is this process (a bake on another thread, e.g. from
+  // Python).
+  std::string holder_words() const;
   // When not held because `path` is no lock file of its own (a link, a folder, a file with another name
   // elsewhere: a hard link, which is never written) or cannot be opened: why; else empty.
   const std::string& problem() const { return problem_; }

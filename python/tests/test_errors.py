@@ -235,3 +235,28 @@ def test_an_exception_in_the_progress_callback_stops_the_bake():
 
     with pytest.raises(RuntimeError, match="stop here"):
         hfbake.p1(terrain(512, 512), directions=128, progress=fail, threads=1)
+
+
+def test_two_bakes_of_one_job_and_folder_from_two_threads_name_this_process(tmp_path):
+    # The second is refused by the folder's lock, which the first holds in this same process.
+    doc = {"version": 1, "name": "t", "height": {"procedural": {"kind": "fractal", "size": [384, 384]}},
+           "bake": [{"method": "p1", "directions": 32}]}
+    start = threading.Barrier(2)
+    outcomes = []
+
+    def run():
+        start.wait()
+        try:
+            hfbake.bake(doc, tmp_path / "out", cache=False)
+            outcomes.append("baked")
+        except hfbake.InputError as e:
+            outcomes.append(str(e))
+
+    threads = [threading.Thread(target=run) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    refused = [o for o in outcomes if o != "baked"]
+    assert outcomes.count("baked") == 1 and len(refused) == 1, outcomes
+    assert "another bake in this process (" in refused[0], refused[0]
