@@ -171,9 +171,12 @@ Profile compute(const HorizonOptions& o) {
   const double x0 = g[0] + 0.5 * g[1], x1 = g[0] + (info->width - 0.5) * g[1];
   const double y0 = g[3] + 0.5 * g[5], y1 = g[3] + (info->height - 0.5) * g[5];
   const std::string where = num(xy[0]) + "," + num(xy[1]);
-  if (!(q.x >= 0 && q.y >= 0 && q.x <= info->width - 1 && q.y <= info->height - 1))
-    fail("--at", where + " is outside the surface: its texel centres span x " + num(std::min(x0, x1)) + ".." +
-                     num(std::max(x0, x1)) + ", y " + num(std::min(y0, y1)) + ".." + num(std::max(y0, y1)));
+  if (!(q.x >= 0 && q.y >= 0 && q.x <= info->width - 1 && q.y <= info->height - 1)) {
+    const auto full = [](double v) { return num(v, "%.15g"); };  // a point just outside is not on the range
+    fail("--at", full(xy[0]) + "," + full(xy[1]) + " is outside the surface: its texel centres span x " +
+                     full(std::min(x0, x1)) + ".." + full(std::max(x0, x1)) + ", y " +
+                     full(std::min(y0, y1)) + ".." + full(std::max(y0, y1)));
+  }
 
   // The ground frame and, with curvature, the Earth's radii at the point.
   std::optional<CrsEarth> earth = info->crs_wkt.empty() ? std::nullopt : crs_earth(info->crs_wkt);

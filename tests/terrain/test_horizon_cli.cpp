@@ -105,6 +105,9 @@ TEST(HorizonCli, BadInputIsOneLineAndExit2) {
   } cases[] = {
       {"--at 1000,2000",
        "--at: 1000,2000 is outside the surface: its texel centres span x 1001..1039, y 1981..1999"},
+      {"--at 1000.99999999999,1990",  // within 10 digits of the range's edge: not printed on it
+       "--at: 1000.99999999999,1990 is outside the surface: its texel centres span x 1001..1039, y "
+       "1981..1999"},
       {"--at 1011,1989", "--at: 1011,1989 is on NoData"},
       {"--at 1011", "--at: is \"1011\", not X,Y"},
       {"--at 1021,1981 --directions 0", "--directions: must be in [1, 1000000]"},
