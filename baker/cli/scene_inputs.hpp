@@ -22,8 +22,8 @@ namespace hfbake {
 // identity hashes.
 std::vector<std::pair<std::string, std::filesystem::path>> job_read_files(const Job& job);
 
-// The job's identity for the farm and the reference checkpoints: its document and the bytes of every file
-// job_read_files names (job/content_hash.hpp content_hash_of).
+// The job's identity for the farm (shards, stage files, tiles) and the reference checkpoints: its document
+// and the bytes of every file job_read_files names (job/content_hash.hpp content_hash_of).
 std::string job_content_hash(const Job& job);
 
 // The size of the height image from its header (nothing decoded). A georeferenced raster (read through

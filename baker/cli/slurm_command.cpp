@@ -141,8 +141,8 @@ int run_slurm(const SlurmOptions& o) {
     if (o.tile_size > 0) {  // a tiled bake's task holds one tile's read window at a time
       try {
         check_tiled_job(job);
-        check_tiles_folder(job,
-                           false);  // as its tasks and merge will find tiles/ (they run without --overwrite)
+        // tiles/ as its tasks and merge will find it (they run without --overwrite)
+        check_tiles_folder(job, false);
         const TilePlan plan = plan_job_tiles(job, std::numeric_limits<std::size_t>::max(), o.tile_size);
         need_bytes = std::max(need_bytes, tiled_peak_bytes(job, plan));
       } catch (const InputError& e) {
