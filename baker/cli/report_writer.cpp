@@ -2,10 +2,12 @@
 // file, builds report.json and stages it.
 #include "cli/report_writer.hpp"
 
+#include <map>
 #include <optional>
 #include <stdexcept>
 
 #include "cli/method_dispatch.hpp"
+#include "cli/scene_inputs.hpp"
 #include "cli/version.hpp"
 #include "core/error.hpp"
 #include "job/content_hash.hpp"
@@ -49,11 +51,10 @@ nlohmann::json job_scene(const Job& job) {
   nlohmann::json scene = nlohmann::json::object();
   for (const char* key : {"height", "surface", "environment", "lights", "bounces"})
     if (job.doc.contains(key)) scene[key] = job.doc[key];
-  for (const auto& [pointer, path] : job_input_files(job.doc)) {
-    ContentHash h;
-    h.add_file(job.resolve(path));
-    scene[nlohmann::json::json_pointer(pointer)] = "fnv1a:" + h.hex();
-  }
+  // Each input's bytes, with every file GDAL reads through it (a VRT's sources: cli/scene_inputs.hpp).
+  std::map<std::string, ContentHash> inputs;
+  for (const auto& [pointer, file] : job_read_files(job)) inputs[pointer].add_file(file);
+  for (const auto& [pointer, h] : inputs) scene[nlohmann::json::json_pointer(pointer)] = "fnv1a:" + h.hex();
   return scene;
 }
 

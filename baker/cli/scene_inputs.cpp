@@ -168,11 +168,13 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   const std::optional<GeoRasterInfo> geo = checked_georaster(job);
   if (!geo) return std::nullopt;
   const ChannelSelector channel = channel_selector(h.contains("channel") ? h["channel"] : nlohmann::json());
-  // Bands by index (0-based, like channels) or by description.
+  // Bands by index (0-based, like channels), by description, or by colour as OpenImageIO names a channel
+  // ("R", "G", "B", "A": an RGB TIFF reads alike through either reader).
   int band = -1;
   std::string names;
   for (int b = 0; b < geo->bands; ++b)
-    names += (b ? ", " : "") + (geo->band_names[b].empty() ? std::to_string(b) : geo->band_names[b]);
+    names += (b ? ", " : "") + (geo->band_names[b].empty() ? std::to_string(b) : geo->band_names[b]) +
+             (geo->band_colours[b].empty() ? "" : " (" + geo->band_colours[b] + ")");
   if (geo->palette) {
     // A palette image reads its colours' red, as OpenImageIO's channel 0 or "R" (docs/heights.md); the
     // palette's other colours are not read through GDAL.
@@ -191,6 +193,8 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   } else {
     for (int b = 0; b < geo->bands && band < 0; ++b)
       if (geo->band_names[b] == std::get<std::string>(channel)) band = b;
+    for (int b = 0; b < geo->bands && band < 0; ++b)
+      if (geo->band_colours[b] == std::get<std::string>(channel)) band = b;
   }
   if (band < 0)
     throw InputError(job.file.string(), "/height/channel",

@@ -11,7 +11,9 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/error.hpp"
@@ -138,24 +140,60 @@ std::string sample_type_of(GDALRasterBand* b) {
 
 }  // namespace
 
+namespace {
+
+// The local file behind a name GDAL lists: the name itself, or for a file inside an archive
+// ("/vsizip//data/a.zip/dem.tif", "/vsitar/{/data/a.tar}/dem.tif", "/vsigzip//data/dem.tif.gz") the archive;
+// empty for what no local file holds (a network /vsi path).
+fs::path local_file_of(const std::string& name) {
+  for (const char* prefix : {"/vsizip/", "/vsitar/", "/vsigzip/", "/vsi7z/", "/vsirar/"}) {
+    const std::string_view p(prefix);
+    if (name.compare(0, p.size(), p) != 0) continue;
+    std::string rest = name.substr(p.size());
+    if (!rest.empty() && rest.front() == '{') {
+      const std::size_t close = rest.find('}');
+      return close == std::string::npos ? fs::path() : local_file_of(rest.substr(1, close - 1));
+    }
+    // The longest leading part that is a file: the archive (an archive inside an archive: the outer one).
+    std::error_code ec;
+    for (fs::path candidate(rest); !candidate.empty() && candidate != candidate.parent_path();
+         candidate = candidate.parent_path())
+      if (fs::is_regular_file(candidate, ec)) return local_file_of(candidate.string());
+    return {};
+  }
+  if (name.compare(0, 4, "/vsi") == 0) return {};
+  return fs::path(name);
+}
+
+}  // namespace
+
 std::vector<fs::path> raster_files(const fs::path& file) {
   std::vector<fs::path> files = {file};
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) return files;
   GdalQuiet gdal;
-  std::unique_ptr<GDALDataset> ds(
-      GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
-  if (!ds) return files;
-  char** list = ds->GetFileList();
-  for (char** f = list; f && *f; ++f) {
-    const fs::path p(*f);
-    const bool known = std::any_of(files.begin(), files.end(), [&](const fs::path& q) {
-      std::error_code same;
-      return q == p || fs::equivalent(q, p, same);
-    });
-    if (!known && fs::is_regular_file(p, ec)) files.push_back(p);
+  std::set<fs::path> seen = {fs::weakly_canonical(fs::absolute(file), ec)};  // each file once, however named
+  const auto known = [&](const fs::path& p) {
+    std::error_code canonical;
+    return !seen.insert(fs::weakly_canonical(fs::absolute(p), canonical)).second;
+  };
+  // Breadth first through what each dataset lists: a VRT's source may be a VRT of its own (a loop of them
+  // ends where a file is listed again; at most kMostFiles files are followed).
+  constexpr std::size_t kMostFiles = 100000;
+  std::vector<std::string> open = {file.string()};
+  for (std::size_t next = 0; next < open.size() && files.size() < kMostFiles; ++next) {
+    std::unique_ptr<GDALDataset> ds(
+        GDALDataset::Open(open[next].c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+    if (!ds) continue;
+    char** list = ds->GetFileList();
+    for (char** f = list; f && *f; ++f) {
+      const fs::path local = local_file_of(*f);
+      if (local.empty() || known(local) || !fs::is_regular_file(local, ec)) continue;
+      files.push_back(local);
+      open.emplace_back(*f);  // opened in turn: a nested VRT lists its own sources
+    }
+    CSLDestroy(list);
   }
-  CSLDestroy(list);
   return files;
 }
 
@@ -214,6 +252,23 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
   for (int b = 1; b <= info.bands; ++b) {
     GDALRasterBand* band = ds->GetRasterBand(b);
     info.band_names.push_back(band->GetDescription());
+    switch (band->GetColorInterpretation()) {
+      case GCI_RedBand:
+        info.band_colours.emplace_back("R");
+        break;
+      case GCI_GreenBand:
+        info.band_colours.emplace_back("G");
+        break;
+      case GCI_BlueBand:
+        info.band_colours.emplace_back("B");
+        break;
+      case GCI_AlphaBand:
+        info.band_colours.emplace_back("A");
+        break;
+      default:
+        info.band_colours.emplace_back();
+        break;
+    }
     int has = 0;
     const double v = band->GetNoDataValue(&has);
     info.nodata.push_back(has ? std::optional<double>(v) : std::nullopt);

@@ -19,7 +19,9 @@ struct GeoRasterInfo {
   std::string driver;  // GDAL's short driver name: "GTiff", "VRT", "SRTMHGT", "AAIGrid", "HFA", ...
   int width = 0, height = 0, bands = 0;
   std::vector<std::string> band_names;  // each band's description ("" when it has none)
-  bool palette = false;                 // one band of palette indices, read as its palette's red
+  // Each band's colour as OpenImageIO names a channel of it ("R", "G", "B", "A"; "" for any other).
+  std::vector<std::string> band_colours;
+  bool palette = false;  // one band of palette indices, read as its palette's red
   bool has_geotransform = false;
   std::array<double, 6> geotransform{0, 1, 0, 0, 0, 1};
   // What places the raster instead of a geotransform, when it has none: "ground control points", "RPCs"

@@ -692,6 +692,60 @@ TEST_F(CliGdal, AVrtsSourcesAreReadFilesOfTheJob) {
   r = hfbake("merge --quiet " + plain_job.string());
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("belongs to another job"), std::string::npos) << r.err;
+
+  // A VRT of a VRT: the inner one's source is read too (refused at an output's name), and a source inside a
+  // zip archive is the archive's bytes (a changed archive makes the shards another job's).
+  translate("-of VRT v.vrt outer.vrt");
+  const fs::path outer = write_job("o.json", "v", {{"image", "outer.vrt"}});
+  r = hfbake("validate " + outer.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find((dir_ / "out_v" / "v.p1.ao.tif").string() + " is where this job writes an output"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(bytes(dir_ / "out_v" / "v.p1.ao.tif"), source);
+  int status = -1;
+  run_tool(
+      "cd '" + dir_.string() + "' && cp plain.tif z.tif && python3 -m zipfile -c a.zip z.tif && rm z.tif",
+      &status);
+  ASSERT_EQ(status, 0);
+  translate("-of VRT /vsizip/" + (dir_ / "a.zip").string() + "/z.tif zipped.vrt");
+  const fs::path zipped = write_job("z.json", "z", {{"image", "zipped.vrt"}, {"nodata", "fill"}});
+  ASSERT_EQ(hfbake("bake --quiet --shard 0/2 " + zipped.string()).exit_code, 0);
+  run_tool("cd '" + dir_.string() + "' && cp src.tif z.tif && rm a.zip && python3 -m zipfile -c a.zip z.tif",
+           &status);
+  ASSERT_EQ(status, 0);
+  ASSERT_EQ(hfbake("bake --quiet --shard 1/2 " + zipped.string()).exit_code, 0);
+  r = hfbake("merge --quiet " + zipped.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("belongs to another job"), std::string::npos) << r.err;
+}
+
+// A report's scene names the bytes of every file its heights were read from: a baseline baked from a VRT
+// whose source has changed since is another job's, refused by compare (exit 2).
+TEST_F(CliGdal, AReportsSceneCountsAVrtsSources) {
+  translate("-srcwin 400 400 32 32 '" + kDem.string() + "' src.tif");
+  translate("-of VRT src.tif v.vrt");
+  const nlohmann::json job = {{"version", 1},
+                              {"name", "r"},
+                              {"height", {{"image", "v.vrt"}}},
+                              {"bake", {{{"method", "p1"}, {"directions", 8}, {"layers", {"ao"}}}}},
+                              {"reference", {{"samples", 4}, {"seed", 1}}},
+                              {"output", {{"dir", "out_a"}}}};
+  std::ofstream(dir_ / "r.json") << job.dump();
+  ASSERT_EQ(hfbake("bake --quiet --no-cache " + (dir_ / "r.json").string()).exit_code, 0);
+  const Raster src = read_raster(dir_ / "src.tif");
+  translate("-srcwin 300 300 32 32 -a_ullr " + std::to_string(src.gt[0]) + " " + std::to_string(src.gt[3]) +
+            " " + std::to_string(src.gt[0] + 32) + " " + std::to_string(src.gt[3] - 32) + " '" +
+            kDem.string() + "' other.tif");
+  fs::rename(dir_ / "other.tif", dir_ / "src.tif");
+  ASSERT_EQ(
+      hfbake("bake --quiet --no-cache --out " + (dir_ / "out_b").string() + " " + (dir_ / "r.json").string())
+          .exit_code,
+      0);
+  const Result r = hfbake("compare " + (dir_ / "out_b" / "report.json").string() + " " +
+                          (dir_ / "out_a" / "report.json").string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("a report of another job: scene.height.image"), std::string::npos) << r.err;
 }
 
 // A TIFF without georeferencing is an image, read by OpenImageIO, but for one whose holes or values only
@@ -731,6 +785,26 @@ TEST_F(CliGdal, ATiffsNodataAndMinIsWhiteSamplesAreReadAsDeclared) {
   EXPECT_NE(r.err.find("through GDAL (GTiff, Float32)"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("heights 20 .. 219 world units"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("2 texels without a height"), std::string::npos) << r.err;
+  // An RGB TIFF with NoData: its channels by the names OpenImageIO gives them, as without the NoData.
+  {
+    const char* rgb[] = {"PHOTOMETRIC=RGB", nullptr};
+    GDALDataset* ds =
+        gtiff->Create((dir_ / "rgb.tif").c_str(), 32, 32, 3, GDT_Float32, const_cast<char**>(rgb));
+    ASSERT_TRUE(ds);
+    for (int b = 1; b <= 3; ++b) {
+      std::vector<float> band(z.size());
+      for (std::size_t i = 0; i < z.size(); ++i) band[i] = z[i] * float(b);
+      ds->GetRasterBand(b)->SetNoDataValue(-9999);
+      ASSERT_EQ(ds->GetRasterBand(b)->RasterIO(GF_Write, 0, 0, 32, 32, band.data(), 32, 32, GDT_Float32, 0, 0,
+                                               nullptr),
+                CE_None);
+    }
+    GDALClose(ds);
+  }
+  r = hfbake("validate " +
+             write_job("g.json", "g", {{"image", "rgb.tif"}, {"channel", "G"}, {"texel_size", 8}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("heights 40 .. 438 world units"), std::string::npos) << r.err;
   const fs::path white = write_job("w.json", "w", {{"image", "white.tif"}});
   r = hfbake("validate " + white.string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
