@@ -42,6 +42,13 @@ extern "C" void on_stop_signal(int sig) {
   if (g_interrupted.exchange(true) && !hfbake::outputs_moving()) std::_Exit(128 + sig);
 }
 
+// A path option given empty (an unset shell variable: --out "$OUT") is refused, not taken for the option's
+// absence, which would send the output elsewhere.
+CLI::Validator named(const std::string& kind, const std::string& what) {
+  return CLI::Validator(
+      [what](std::string& text) { return text.empty() ? "is empty: name " + what : std::string(); }, kind);
+}
+
 // A whole number from `lo` to `hi`: the check of every integer option, whose message says whether the text is
 // a number at all ("--threads: not a whole number: abc (it must be from 1 to 4096)") or out of the range.
 CLI::Validator whole_number(int lo, int hi) {
@@ -69,11 +76,7 @@ struct RunOptions {
 void add_run_options(CLI::App* cmd, RunOptions& o) {
   cmd->add_option("-o,--out", o.out,
                   "Output folder, replacing each job's output.dir (the shards: <out>/shards)")
-      ->check(CLI::Validator(  // an unset shell variable must not send the outputs to the job's own folder
-          [](std::string& text) {
-            return text.empty() ? std::string("is empty: name the output folder") : "";
-          },
-          "DIR"));
+      ->check(named("DIR", "the output folder"));
   cmd->add_flag("--quiet", o.quiet, "No progress output (warnings and errors are still printed)");
   cmd->add_option("--cache", o.cache,
                   "Reference cache folder (default: $XDG_CACHE_HOME/hfbake/references or "
@@ -293,9 +296,12 @@ int run(int argc, char** argv) {
                           "K compass azimuths 360 k / K, clockwise from north (default 360)");
   horizon_cmd->add_option("--band", horizon.band, "Band of the heights, 0-based (default 0)");
   horizon_cmd->add_option("--format", horizon.format, "csv (default) or json");
-  horizon_cmd->add_option("-o,--out", horizon.out, "Write to FILE instead of standard output");
-  horizon_cmd->add_option("--plot", horizon.plot,
-                          "Also write a polar plot PNG: seen from above, north up, the zenith at the centre");
+  horizon_cmd->add_option("-o,--out", horizon.out, "Write to FILE instead of standard output")
+      ->check(named("FILE", "the file"));
+  horizon_cmd
+      ->add_option("--plot", horizon.plot,
+                   "Also write a polar plot PNG: seen from above, north up, the zenith at the centre")
+      ->check(named("FILE", "the file"));
   horizon_cmd->add_option("--plot-size", horizon.plot_size,
                           "The plot's width and height in pixels (default 512)");
   bool curvature_on = false, curvature_off = false;

@@ -126,6 +126,14 @@ TEST(HorizonCli, BadInputIsOneLineAndExit2) {
     EXPECT_NE(r.error_lines()[0].find("hfbake: error: " + dem.string() + ": " + c.expect), std::string::npos)
         << r.error_lines()[0];
   }
+  // An empty --out or --plot (an unset shell variable) is refused, not standard output or no plot.
+  for (const char* option : {"--out", "--plot"}) {
+    const auto e = run_hfbake(dir, "horizon " + dem.string() + " --at 1021,1981 " + option + " ''");
+    EXPECT_EQ(e.exit_code, 2) << option;
+    EXPECT_NE(e.err.find(std::string("command line: ") + option + ": is empty: name the file"),
+              std::string::npos)
+        << e.err;
+  }
   const auto r = run_hfbake(dir, "horizon " + (dir / "none.tif").string() + " --at 1,1");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("none.tif: no such file"), std::string::npos) << r.err;
