@@ -141,9 +141,10 @@ def test_bad_layers_and_outputs_fail_with_a_message_not_a_traceback(tmp_path, qg
 
 
 def test_direction_bands_name_their_bearing_and_a_mercator_dem_warns(tmp_path, qgis_env):
-    # K = 16 on a north-up raster: direction 12 (azimuth 270, towards -rows) looks north; north-down: 4.
+    # K = 16 on a north-up raster: direction 12 (azimuth 270, towards -rows) looks north. A north-down raster
+    # is read north up (read_dem turns it, and its geotransform), so its output's direction 12 looks north too.
     for name, geotransform, north_band in [("up", (500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0), 13),
-                                           ("down", (500000.0, 2.0, 0.0, 5100000.0, 0.0, 2.0), 5)]:
+                                           ("down", (500000.0, 2.0, 0.0, 5100000.0, 0.0, 2.0), 13)]:
         dem = tmp_path / f"{name}.tif"
         write_geotiff(dem, terrain(40, 32, seed=13) * 10, geotransform=geotransform)
         out = tmp_path / f"h_{name}.tif"
@@ -155,6 +156,7 @@ def test_direction_bands_name_their_bearing_and_a_mercator_dem_warns(tmp_path, q
         assert ds.GetRasterBand(north_band).GetDescription().endswith("bearing 0.00 degrees (clockwise from grid "
                                                                       "north)"), name
         assert "bearing 90.00" in ds.GetRasterBand(1).GetDescription()  # +columns: east either way
+        assert ds.GetGeoTransform()[5] < 0, name  # written north up
 
     mercator = tmp_path / "mercator.tif"
     write_geotiff(mercator, terrain(40, 32, seed=13) * 10, epsg=3857,
