@@ -94,7 +94,12 @@ void FolderLock::try_lock() {
       return;
     }
     struct stat own {};
-    if (fstat(fd, &own) != 0 || !S_ISREG(own.st_mode) || own.st_nlink != 1) {
+    const bool seen = fstat(fd, &own) == 0;
+    if (seen && S_ISREG(own.st_mode) && own.st_nlink == 0) {
+      close(fd);  // its holder removed it since it was opened (gave the lock up): open the name again
+      continue;
+    }
+    if (!seen || !S_ISREG(own.st_mode) || own.st_nlink != 1) {
       problem_ =
           S_ISREG(own.st_mode) ? "a file with another name elsewhere (a hard link)" : "not a regular file";
       close(fd);

@@ -1,12 +1,18 @@
 // core/safe_file.hpp: what is renamed into place is flushed first (sync_file), never through a link, and
-// write_file_atomically leaves the whole content or the previous file.
+// write_file_atomically leaves the whole content or the previous file; a FolderLock waits out holders.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
+#include <thread>
 
 #include "core/safe_file.hpp"
 
@@ -44,6 +50,36 @@ TEST_F(SafeFile, WriteFileAtomicallyReplacesALinkNotItsTarget) {
   EXPECT_EQ(std::string(std::istreambuf_iterator<char>(theirs), {}), "theirs");
   for (const auto& e : fs::directory_iterator(dir_))
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+// Holders that take the lock and give it up as hfbake does (locked, named, removed while held, closed), one
+// after another, while a FolderLock waits: whatever moment it opens the file at (a holder's file it opened may
+// be removed before it looks at it), it never sees a problem, only a holder or the lock.
+TEST_F(SafeFile, AFolderLockWaitsOutHoldersThatComeAndGo) {
+  const fs::path lock = dir_ / ".lock";
+  std::atomic<bool> stop{false};
+  std::thread holders([&] {
+    while (!stop) {
+      const int fd = open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+      if (fd < 0) continue;
+      if (flock(fd, LOCK_EX | LOCK_NB) == 0) {
+        (void)!write(fd, "1@h", 3);
+        unlink(lock.c_str());
+      }
+      close(fd);
+    }
+  });
+  int held = 0;
+  std::string problem;
+  for (int i = 0; i < 600 && problem.empty(); ++i) {
+    FolderLock l(lock, std::chrono::milliseconds(0));
+    problem = l.problem();
+    held += l.held() ? 1 : 0;
+  }
+  stop = true;
+  holders.join();
+  EXPECT_EQ(problem, "");
+  EXPECT_GT(held, 0);
 }
 
 }  // namespace
