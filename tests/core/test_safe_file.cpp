@@ -53,8 +53,8 @@ TEST_F(SafeFile, WriteFileAtomicallyReplacesALinkNotItsTarget) {
 }
 
 // Holders that take the lock and give it up as hfbake does (locked, named, removed while held, closed), one
-// after another, while a FolderLock waits: whatever moment it opens the file at (a holder's file it opened may
-// be removed before it looks at it), it never sees a problem, only a holder or the lock.
+// after another, while a FolderLock waits: whatever moment it opens the file at (a holder's file it opened
+// may be removed before it looks at it), it never sees a problem, only a holder or the lock.
 TEST_F(SafeFile, AFolderLockWaitsOutHoldersThatComeAndGo) {
   const fs::path lock = dir_ / ".lock";
   std::atomic<bool> stop{false};
