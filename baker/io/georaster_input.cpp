@@ -233,8 +233,10 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
   }
   // An image without georeferencing stays with OpenImageIO, but for a TIFF whose values OpenImageIO would
   // change or whose holes it would not see: a declared NoData value, or MinIsWhite samples (OpenImageIO
-  // inverts them; GDAL reads them as stored).
-  const auto gdal_only_tiff = [&] {
+  // inverts them; GDAL reads them as stored); and for a binary PNM of 16-bit samples (maxval above 255),
+  // which OpenImageIO stretches over 0..65535 inexactly (a maxval of 40000 read as 0..32768).
+  const auto gdal_only = [&] {
+    if (info.driver == "PNM") return ds->GetRasterBand(1)->GetRasterDataType() == GDT_UInt16;
     if (info.driver != "GTiff") return false;
     if (const char* w = ds->GetMetadataItem("MINISWHITE", "IMAGE_STRUCTURE"); w && CPLTestBool(w))
       return true;
@@ -246,7 +248,7 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
     return false;
   };
   if (!info.has_geotransform && info.crs_wkt.empty() && info.placed_by.empty() && asset_driver(info.driver) &&
-      !gdal_only_tiff())
+      !gdal_only())
     return std::nullopt;
   info.palette = info.bands == 1 && palette_of(ds->GetRasterBand(1));
   for (int b = 1; b <= info.bands; ++b) {

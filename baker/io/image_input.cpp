@@ -245,8 +245,35 @@ ImageInfo info_of(const OiioHeader& spec) {
   return info;
 }
 
+// A PNM's maxval (P2, P3, P5, P6: magic, width, height, maxval, with # comments), or 0.
+std::uint32_t pnm_maxval(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char magic[2] = {};
+  if (!in.read(magic, 2) || magic[0] != 'P' || !std::strchr("2356", magic[1])) return 0;
+  std::uint64_t fields[3] = {};
+  for (std::uint64_t& field : fields) {
+    int ch = in.get();
+    while (ch != EOF && (std::isspace(ch) || ch == '#')) {
+      if (ch == '#')
+        while (ch != EOF && ch != '\n') ch = in.get();
+      ch = in.get();
+    }
+    if (ch == EOF || !std::isdigit(ch)) return 0;
+    for (; ch != EOF && std::isdigit(ch) && field < 1000000; ch = in.get())
+      field = field * 10 + unsigned(ch - '0');
+  }
+  return fields[2] <= 65535 ? std::uint32_t(fields[2]) : 0;
+}
+
 void check_spec(const OiioHeader& spec, const fs::path& file, const InputSite& site) {
   if (spec.deep) fail(site, file, "deep images are not supported");
+  // OpenImageIO stretches a PNM's samples to 0..65535 in 32-bit integers: those above 32767 overflow (a
+  // binary PNM's heights are read through GDAL instead, io/georaster_input).
+  if (spec.format_name == "pnm")
+    if (const std::uint32_t maxval = pnm_maxval(file); maxval > 32767)
+      fail(site, file,
+           "is a PNM of maxval " + std::to_string(maxval) +
+               ", whose samples above 32767 OpenImageIO misreads: save it as a 16-bit PNG or TIFF");
   if (spec.depth > 1) fail(site, file, "volume images are not supported");
   if (spec.width <= 0 || spec.height <= 0 || spec.channels <= 0)
     fail(site, file,
@@ -319,26 +346,6 @@ struct Stretch {
   std::uint32_t stored_max = 0, type_max = 0;
   bool floors = false;  // x = floor(v * type_max / stored_max) (PNM); else the nearest (bit replication)
 };
-
-// A PNM's maxval (P2, P3, P5, P6: magic, width, height, maxval, with # comments), or 0.
-std::uint32_t pnm_maxval(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  char magic[2] = {};
-  if (!in.read(magic, 2) || magic[0] != 'P' || !std::strchr("2356", magic[1])) return 0;
-  std::uint64_t fields[3] = {};
-  for (std::uint64_t& field : fields) {
-    int ch = in.get();
-    while (ch != EOF && (std::isspace(ch) || ch == '#')) {
-      if (ch == '#')
-        while (ch != EOF && ch != '\n') ch = in.get();
-      ch = in.get();
-    }
-    if (ch == EOF || !std::isdigit(ch)) return 0;
-    for (; ch != EOF && std::isdigit(ch) && field < 1000000; ch = in.get())
-      field = field * 10 + unsigned(ch - '0');
-  }
-  return fields[2] <= 65535 ? std::uint32_t(fields[2]) : 0;
-}
 
 std::optional<Stretch> stretch_of(const fs::path& file, const OiioHeader& spec, OiioSample stored) {
   if (stored != OiioSample::uint8 && stored != OiioSample::uint16) return std::nullopt;

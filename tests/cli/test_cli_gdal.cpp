@@ -812,6 +812,46 @@ TEST_F(CliGdal, ATiffsNodataAndMinIsWhiteSamplesAreReadAsDeclared) {
   EXPECT_NE(r.err.find("heights 20 .. 219 world units"), std::string::npos) << r.err;
 }
 
+// A binary PNM of 16-bit samples is read through GDAL, as stored, whatever its maxval (OpenImageIO overflows
+// on samples above 32767: a maxval of 40000 read as 0..32768); an ASCII one of maxval above 32767, which only
+// OpenImageIO reads, is refused naming the file and what to convert it to.
+TEST_F(CliGdal, APnmsSixteenBitSamplesAreReadAsStored) {
+  const auto pgm = [&](const std::string& name, int maxval, bool ascii) {
+    std::vector<int> v(16 * 16);
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = int(i * 2654435761u % std::uint32_t(maxval + 1));
+    v[7] = maxval, v[9] = 0;
+    std::ofstream out(dir_ / name, std::ios::binary);
+    out << (ascii ? "P2" : "P5") << "\n16 16\n" << maxval << "\n";
+    for (const int x : v)
+      if (ascii)
+        out << x << " ";
+      else
+        out << char(x >> 8) << char(x & 255);
+  };
+  for (const int maxval : {65535, 50000, 40000, 1023}) {
+    SCOPED_TRACE(maxval);
+    pgm("b.pgm", maxval, false);
+    const Result r = hfbake("validate " + write_job("b.json", "b", {{"image", "b.pgm"}}).string());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("through GDAL (PNM, UInt16 integers as stored)"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("heights 0 .. " + std::to_string(maxval) + " world units"), std::string::npos)
+        << r.err;
+  }
+  pgm("a.pgm", 40000, true);
+  const fs::path a = write_job("a.json", "a", {{"image", "a.pgm"}});
+  for (const char* command : {"validate ", "bake --quiet --no-cache "}) {
+    const Result r = hfbake(command + a.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(
+        r.err.find(a.string() + ": /height/image: " + (dir_ / "a.pgm").string() +
+                   ": is a PNM of maxval 40000, whose samples above 32767 OpenImageIO misreads: save it "
+                   "as a 16-bit PNG or TIFF"),
+        std::string::npos)
+        << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out_a"));
+}
+
 // A mask band (here a .msk side file) marks holes as a NoData value does: refused without "nodata": "fill",
 // counted and filled with it.
 TEST_F(CliGdal, AMaskBandMarksHoles) {
