@@ -265,15 +265,20 @@ std::uint32_t pnm_maxval(const fs::path& file) {
   return fields[2] <= 65535 ? std::uint32_t(fields[2]) : 0;
 }
 
+[[noreturn]] void pnm_misread(const InputSite& site, const fs::path& file, std::uint32_t maxval) {
+  fail(site, file,
+       "is a PNM of maxval " + std::to_string(maxval) +
+           ", whose samples above 32767 OpenImageIO misreads: save it as a 16-bit PNG or TIFF");
+}
+
 void check_spec(const OiioHeader& spec, const fs::path& file, const InputSite& site) {
   if (spec.deep) fail(site, file, "deep images are not supported");
-  // OpenImageIO stretches a PNM's samples to 0..65535 in 32-bit integers: those above 32767 overflow (a
-  // binary PNM's heights are read through GDAL instead, io/georaster_input).
+  // OpenImageIO stretches a PNM's samples to 0..65535 in 32-bit integers: those above 32767 overflow, but
+  // for a maxval of 65535, where they come out one too low (read_channels refuses those heights; a binary
+  // PNM's heights are read through GDAL instead, io/georaster_input).
   if (spec.format_name == "pnm")
-    if (const std::uint32_t maxval = pnm_maxval(file); maxval > 32767)
-      fail(site, file,
-           "is a PNM of maxval " + std::to_string(maxval) +
-               ", whose samples above 32767 OpenImageIO misreads: save it as a 16-bit PNG or TIFF");
+    if (const std::uint32_t maxval = pnm_maxval(file); maxval > 32767 && maxval < 65535)
+      pnm_misread(site, file, maxval);
   if (spec.depth > 1) fail(site, file, "volume images are not supported");
   if (spec.width <= 0 || spec.height <= 0 || spec.channels <= 0)
     fail(site, file,
@@ -441,6 +446,9 @@ Image read_channels(const fs::path& file, const InputSite& site, int chbegin, in
                          !oiio_sample_is_float(stored) && oiio_sample_bytes(stored) > 0;
   const OiioSample read_type = as_stored ? stored : OiioSample::float32;
   const std::optional<Stretch> stretch = as_stored ? stretch_of(file, spec, stored) : std::nullopt;
+  // Heights are the stored integers: a PNM of maxval 65535 read one too low above 32767 would shift them (a
+  // colour's 1 / 65535 is not seen).
+  if (as_stored && spec.format_name == "pnm" && pnm_maxval(file) == 65535) pnm_misread(site, file, 65535);
   std::vector<unsigned char> scratch;
   if (as_stored) scratch.resize(std::size_t(band) * row * oiio_sample_bytes(stored));
   for (int y0 = 0; y0 < spec.height; y0 += band) {

@@ -814,7 +814,8 @@ TEST_F(CliGdal, ATiffsNodataAndMinIsWhiteSamplesAreReadAsDeclared) {
 
 // A binary PNM of 16-bit samples is read through GDAL, as stored, whatever its maxval (OpenImageIO overflows
 // on samples above 32767: a maxval of 40000 read as 0..32768); an ASCII one of maxval above 32767, which only
-// OpenImageIO reads, is refused naming the file and what to convert it to.
+// OpenImageIO reads, is refused naming the file and what to convert it to; so is a colour of such a maxval
+// below 65535.
 TEST_F(CliGdal, APnmsSixteenBitSamplesAreReadAsStored) {
   const auto pgm = [&](const std::string& name, int maxval, bool ascii) {
     std::vector<int> v(16 * 16);
@@ -837,19 +838,40 @@ TEST_F(CliGdal, APnmsSixteenBitSamplesAreReadAsStored) {
     EXPECT_NE(r.err.find("heights 0 .. " + std::to_string(maxval) + " world units"), std::string::npos)
         << r.err;
   }
-  pgm("a.pgm", 40000, true);
-  const fs::path a = write_job("a.json", "a", {{"image", "a.pgm"}});
-  for (const char* command : {"validate ", "bake --quiet --no-cache "}) {
-    const Result r = hfbake(command + a.string());
-    EXPECT_EQ(r.exit_code, 2) << r.err;
-    EXPECT_NE(
-        r.err.find(a.string() + ": /height/image: " + (dir_ / "a.pgm").string() +
-                   ": is a PNM of maxval 40000, whose samples above 32767 OpenImageIO misreads: save it "
-                   "as a 16-bit PNG or TIFF"),
-        std::string::npos)
-        << r.err;
+  for (const int maxval : {40000, 65535}) {
+    SCOPED_TRACE(maxval);
+    pgm("a.pgm", maxval, true);
+    const fs::path a = write_job("a.json", "a", {{"image", "a.pgm"}});
+    for (const char* command : {"validate ", "bake --quiet --no-cache "}) {
+      const Result r = hfbake(command + a.string());
+      EXPECT_EQ(r.exit_code, 2) << r.err;
+      EXPECT_NE(
+          r.err.find(a.string() + ": /height/image: " + (dir_ / "a.pgm").string() + ": is a PNM of maxval " +
+                     std::to_string(maxval) +
+                     ", whose samples above 32767 OpenImageIO misreads: save it as a 16-bit PNG or TIFF"),
+          std::string::npos)
+          << r.err;
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "out_a"));
   }
-  EXPECT_FALSE(fs::exists(dir_ / "out_a"));
+  // A colour (albedo) of maxval 65535 is read (a sample one too low is 1 / 65535 of a colour); one of maxval
+  // 40000 is refused.
+  for (const int maxval : {65535, 40000}) {
+    SCOPED_TRACE(maxval);
+    pgm("c.pgm", maxval, false);
+    nlohmann::json j;
+    std::ifstream(write_job("c.json", "c", {{"image", "b.pgm"}})) >> j;
+    j["surface"] = {{"albedo", {{"image", "c.pgm"}}}};
+    std::ofstream(dir_ / "c.json") << j.dump();
+    const Result r = hfbake("validate " + (dir_ / "c.json").string());
+    EXPECT_EQ(r.exit_code, maxval == 65535 ? 0 : 2) << r.err;
+    if (maxval != 65535) {
+      EXPECT_NE(
+          r.err.find("/surface/albedo/image: " + (dir_ / "c.pgm").string() + ": is a PNM of maxval 40000"),
+          std::string::npos)
+          << r.err;
+    }
+  }
 }
 
 // A mask band (here a .msk side file) marks holes as a NoData value does: refused without "nodata": "fill",
