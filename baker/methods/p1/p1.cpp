@@ -617,11 +617,13 @@ void p1_add_sums(P1Sums& total, const P1Sums& block) {
 P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc) {
   const std::size_t N = scene.field.texel_count();
   const int K = p.directions, B = direction_block_count(K);
-  // The horizon layers are written once, so they stay on 4 KiB pages: a huge page is taken from the large
-  // free blocks a virtual machine hands back to its host (free page reporting), and first-touching 256 MiB of
-  // them cost 0.45-0.6 s of system time on this project's VM against 0.11 s on 4 KiB pages. The scratch that
-  // is written again and again (core/page_buffer.hpp) keeps its huge pages.
-  std::vector<float> horizon(p.horizon ? N * K : 0), distance(p.horizon_distance ? N * K : 0);
+  // The horizon layers are written once, so they stay on 4 KiB pages, faulted in by one call
+  // (populated_zeros): a huge page is taken from the large free blocks a virtual machine hands back to its
+  // host (free page reporting), and first-touching 256 MiB of them cost up to 0.6 s of system time on this
+  // project's VM, as much as 4 KiB pages faulted one at a time. The scratch that is written again and again
+  // (core/page_buffer.hpp) keeps its huge pages.
+  std::vector<float> horizon = populated_zeros<float>(p.horizon ? N * K : 0),
+                     distance = populated_zeros<float>(p.horizon_distance ? N * K : 0);
   BlockScratch scratch;
   const double lights_share = p.direct && p.lights && !scene.lights.empty()
                                   ? double(scene.lights.size()) / double(K + scene.lights.size())
