@@ -34,6 +34,9 @@ MethodContext job_method_context(const Job& job) {
   c.field.wrap = h.value("wrap", "clamp") == "repeat" ? Wrap::repeat : Wrap::clamp;
   c.bounces = job_bounces(job);
   c.uniform_environment = job_environment_uniform(job.doc);
+  if (h.contains("image"))
+    if (const std::optional<GeoHeightBand> band = georaster_height_band(job))
+      c.placed = band->georeference.has_site;
   return c;
 }
 

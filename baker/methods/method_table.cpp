@@ -105,6 +105,7 @@ MethodContext scene_method_context(const Scene& scene) {
   c.curvature = scene.curvature > 0;
   c.bounces = scene.bounces;
   c.uniform_environment = scene.environment.is_uniform();
+  c.placed = scene.georeference.has_site;
   return c;
 }
 

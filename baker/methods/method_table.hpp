@@ -40,6 +40,7 @@ struct MethodContext {
   int bounces = 0;                  // the job's
   bool uniform_environment = true;  // no sky, latlong, cubemap or cross (io/load_environment.cpp)
   double environment_bytes = 0;     // the world lat-long a copy of the scene holds (EnvironmentBytes::world)
+  bool placed = false;  // a CRS places the field on the Earth (Georeference::has_site: a site and north)
 };
 // Whether a job document's environment is uniform (the rule of io/load_environment.cpp).
 inline bool job_environment_uniform(const nlohmann::json& doc) {

@@ -1281,6 +1281,34 @@ TEST_F(CliGdal, SunTakesThePlaceAndTrueNorthFromTheCrs) {
   for (float h : hours) ASSERT_EQ(h, 2.0f);
 }
 
+// Without a CRS and without latitude and longitude, a sun entry has no place: validate refuses it naming the
+// entry's latitude, and bake refuses it before any entry bakes.
+TEST_F(CliGdal, SunWithoutAPlaceIsRefusedBeforeAnyBake) {
+  const nlohmann::json j = {{"version", 1},
+                            {"name", "s"},
+                            {"height", {{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}},
+                            {"bake",
+                             {{{"method", "p1"}, {"directions", 8}, {"layers", {"ao"}}},
+                              {{"method", "sun"},
+                               {"start", "2026-06-21T11:00"},
+                               {"end", "2026-06-21T13:00"},
+                               {"utc_offset", 0},
+                               {"layers", {"sun_hours"}}}}},
+                            {"output", {{"dir", "out_s"}}}};
+  const fs::path job = dir_ / "s.json";
+  std::ofstream(job) << j.dump();
+  for (const char* command : {"validate ", "bake --quiet --no-cache "}) {
+    const Result r = hfbake(command + job.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(
+        r.err.find(job.string() +
+                   ": /bake/1/latitude: required: the height field has no CRS that places it on the Earth"),
+        std::string::npos)
+        << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out_s"));
+}
+
 // The estimate `validate` prints holds what writing the COGs takes (the COG driver's own memory, and where
 // holes are filled the writer's copy of a layer holding NoData), within the +-25 % every estimate keeps:
 // the peak resident size of each bake (wait4's, that process alone) against "about N MiB to bake".

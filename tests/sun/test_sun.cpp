@@ -25,9 +25,12 @@ const Layer& layer(const LayerSet& s, const char* name) {
   throw std::runtime_error(std::string("no layer ") + name);
 }
 
-MethodConfig sun_config(const nlohmann::json& j, const HeightField& f) {
+// `placed`: as for a field a CRS places on the Earth (the tests' scenes carry their place in the entry or
+// test sun_steps directly).
+MethodConfig sun_config(const nlohmann::json& j, const HeightField& f, bool placed = true) {
   MethodContext c;
   c.field = f;
+  c.placed = placed;
   return read_method_config("sun", j, c);
 }
 
@@ -218,7 +221,16 @@ TEST(Sun, ReaderRefusals) {
   j = ok, j["end"] = "2026-06-22T00:00:60", refused(j);
   j = ok, j["step_minutes"] = 7, refused(j);  // 1440 / 7 is not whole
   j = ok, j["latitude"] = 46.0, refused(j);   // without longitude
-  // A field without a CRS needs the place: refused when the scene is known.
+  // A field without a CRS needs the place: refused by the reader (validate), naming the entry's latitude,
+  // and by the bake of a scene that has none.
+  try {
+    sun_config(ok, f, /*placed=*/false);
+    ADD_FAILURE() << "an unplaced field without latitude was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "/latitude") << e.line();
+  }
+  j = ok, j["latitude"] = 46.0, j["longitude"] = 7.0;
+  EXPECT_NO_THROW(sun_config(j, f, /*placed=*/false));
   const MethodConfig c = sun_config(ok, f);
   EXPECT_THROW(sun_steps(c.get<SunConfig>(), scene_of(f)), InputError);
 }

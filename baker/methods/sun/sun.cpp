@@ -16,6 +16,9 @@ namespace hfbake {
 
 namespace {
 
+// Where an entry gives no latitude and longitude, and no CRS gives them.
+constexpr const char* kUnplaced = "required: the height field has no CRS that places it on the Earth";
+
 const std::vector<std::string>& sun_layer_names() {
   static const std::vector<std::string> names = {"irradiation", "beam", "sky", "sun_hours"};
   return names;
@@ -77,13 +80,14 @@ P1Params sky_params(const SunConfig& c) {
 
 }  // namespace
 
-SunConfig read_sun_config(Params& in, const FieldShape& field) {
+SunConfig read_sun_config(Params& in, const FieldShape& field, bool placed) {
   SunConfig c;
   c.file = in.file(), c.pointer = in.pointer();
   if (in.has("latitude")) c.latitude = in.number("latitude", 0, -89.9, 89.9);
   if (in.has("longitude")) c.longitude = in.number("longitude", 0, -180, 180);
   if (c.latitude.has_value() != c.longitude.has_value())
     in.fail(c.latitude ? "longitude" : "latitude", "required with the other of latitude, longitude");
+  if (!c.latitude && !placed) in.fail("latitude", kUnplaced);
   if (!in.has("utc_offset"))
     in.fail("utc_offset", "required: the hours the start and end times are ahead of UTC (0: UTC)");
   const double offset = in.number("utc_offset", 0, -14, 14);
@@ -147,8 +151,7 @@ SunPlace sun_place(const SunConfig& c, const Scene& scene) {
   } else if (g.has_site) {
     p.latitude = g.site_latitude, p.longitude = g.site_longitude, p.from_crs = true;
   } else {
-    throw InputError(c.file, c.pointer + "/latitude",
-                     "required: the height field has no CRS that places it on the Earth");
+    throw InputError(c.file, c.pointer + "/latitude", kUnplaced);
   }
   p.convergence = g.has_site ? g.site_convergence : 0.0;
   p.east_x = g.geotransform[1] < 0 ? -1 : 1, p.north_y = g.geotransform[5] < 0 ? -1 : 1;
@@ -262,7 +265,7 @@ MethodInfo sun_method() {
       "sunlight over a time range: clear-sky beam through the exact horizons at each sun position, "
       "plus diffuse sky";
   m.read = [](Params& in, const MethodContext& context) {
-    const SunConfig c = read_sun_config(in, context.field);
+    const SunConfig c = read_sun_config(in, context.field, context.placed);
     return method_config(c, 0);
   };
   m.bake = bake_sun;

@@ -34,7 +34,9 @@ struct SunConfig {
   std::string file, pointer;  // the entry, for errors found when the scene is known
 };
 
-SunConfig read_sun_config(Params& in, const FieldShape& field);
+// The entry's settings; `placed`: a CRS places the field on the Earth (MethodContext::placed), else the
+// entry must give latitude and longitude.
+SunConfig read_sun_config(Params& in, const FieldShape& field, bool placed);
 
 // One time step: the sun's direction in the field's texel frame (x, y texel axes, z up) and what the
 // clear-sky model gives at sea level; hours is the step's length.
