@@ -13,8 +13,10 @@
 #include <cstring>
 #include <exception>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <mutex>
+#include <new>
 #include <optional>
 #include <string>
 #include <thread>
@@ -316,8 +318,12 @@ py::tuple bake_array(const std::string& method, py::object heights_arg, const py
         {{"", "/heights",
           "must hold real numbers (float32 is used as is; other types are converted); it holds " +
               py::str(heights.dtype()).cast<std::string>()}});
-  // float32 and C-contiguous: read in place; anything else converted once by numpy first.
-  const auto z = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(heights);
+  constexpr py::ssize_t kMaxSide = std::numeric_limits<int>::max();  // a field's side is an int
+  if (heights.shape(0) > kMaxSide || heights.shape(1) > kMaxSide)
+    raise_input_error(
+        {{"", "/heights",
+          "has " + std::to_string(heights.shape(0)) + " x " + std::to_string(heights.shape(1)) +
+              " heights: a field has at most " + std::to_string(kMaxSide) + " rows and columns"}});
   const int height = int(heights.shape(0)), width = int(heights.shape(1));
 
   const std::string file = method + "()";
@@ -332,6 +338,10 @@ py::tuple bake_array(const std::string& method, py::object heights_arg, const py
   } catch (const InputError& e) {  // the limit given is what the caller can change
     raise_input_error({{"", memory_limit ? "/memory_limit" : array_pointer(e.where()), e.what()}});
   }
+  // float32 and C-contiguous: read in place; anything else converted once by numpy first, after the memory
+  // check (a copy numpy cannot allocate is Python's MemoryError).
+  const auto z = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(heights);
+  if (!z) throw std::bad_alloc();
 
   check_threads(threads);
   Runner runner;
