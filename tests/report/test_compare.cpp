@@ -166,21 +166,31 @@ struct Fixture {
 
 TEST(Report, ThresholdsPassFailAndTypos) {
   Fixture f;
+  f.reference.add("vsky", mono_channels()), f.method.add("vsky", mono_channels());  // zeros: no psnr
   ReportSpec spec;
   spec.hfbake_version = "test";
   spec.job_name = "t";
-  spec.thresholds = {{"p1.ao.mae", 0.06}, {"p1.ao.rmse", 0.04},  {"p1.ao.bias", 0.04},
-                     {"p1.ao.psnr", 30},  {"p1.aoo.mae", 1.0},   {"p2.ao.mae", 1.0},
-                     {"p1.ao.nope", 1.0}, {"p1.direct.psnr", 1}, {"p1.direct.mae", 0}};
+  spec.thresholds = {{"p1.ao.mae", 0.06},  {"p1.ao.rmse", 0.04}, {"p1.ao.bias", 0.04}, {"p1.ao.psnr", 30},
+                     {"p1.aoo.mae", 1.0},  {"p2.ao.mae", 1.0},   {"p1.ao.nope", 1.0},  {"p1.direct.psnr", 1},
+                     {"p1.direct.mae", 0}, {"p1.vsky.psnr", 1}};
   const ReportOutcome out =
       build_report(spec, {{"p1", "p1", 1.5, {{"method", "p1"}}, &f.method}}, f.reference);
-  // Held: ao.mae (0.05 <= 0.06), direct.mae (0 <= 0). Failed: rmse (0.05 > 0.04), |bias| (0.05 > 0.04),
-  // psnr (20 log10(0.5/0.05) = 20 dB < 30), three typos, direct.psnr (undefined: identical images).
+  // Held: ao.mae (0.05 <= 0.06), direct.mae (0 <= 0), direct.psnr (identical images: infinite). Failed: rmse
+  // (0.05 > 0.04), |bias| (0.05 > 0.04), psnr (20 log10(0.5/0.05) = 20 dB < 30), three typos, vsky.psnr
+  // (undefined: a zero reference).
   EXPECT_EQ(out.failures.size(), 7u);
   EXPECT_FALSE(out.doc["passed"].get<bool>());
   for (const auto& t : out.doc["thresholds"]) {
     const std::string key = t["key"];
-    EXPECT_EQ(t["passed"].get<bool>(), key == "p1.ao.mae" || key == "p1.direct.mae") << key;
+    EXPECT_EQ(t["passed"].get<bool>(),
+              key == "p1.ao.mae" || key == "p1.direct.mae" || key == "p1.direct.psnr")
+        << key;
+    if (key == "p1.direct.psnr") {
+      EXPECT_FALSE(t.contains("value")) << t;
+    }
+    if (key == "p1.vsky.psnr") {
+      EXPECT_EQ(t["error"], "metric \"psnr\" is undefined for this layer (a zero reference)") << t;
+    }
   }
   EXPECT_NEAR(out.metrics_by_method["p1"]["ao"]["psnr"].get<double>(), 20.0, 1e-4);
   EXPECT_NEAR(out.metrics_by_method["p1"]["ao"]["noise_rmse"].get<double>(), 0.01, 1e-7);
