@@ -96,6 +96,14 @@ void check_output_folder(const Job& job) {
     throw InputError(
         job.file.string(), "/output/dir",
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
+  // The folders still to be made: names the file system can hold (mkdir's ENAMETOOLONG, found now).
+  const long name_max = pathconf(p.c_str(), _PC_NAME_MAX);
+  for (const fs::path& part : job.output.dir.lexically_relative(p))
+    if (name_max > 0 && part.native().size() > std::size_t(name_max))
+      throw InputError(job.file.string(), "/output/dir",
+                       what + ": " + std::error_code(ENAMETOOLONG, std::generic_category()).message() + " (" +
+                           std::to_string(part.native().size()) + " bytes in a name, at most " +
+                           std::to_string(name_max) + ")");
   // What the bake would refuse only after baking (docs/output_folders.md): its lock names (the job's, the
   // report's for a job with a reference, the textures folder's for a job that writes textures) taken by
   // anything but a file, and a textures/ entry that is not a folder or that this process cannot write into.

@@ -424,6 +424,11 @@ std::vector<Case> cases() {
     j["output"]["dir"] = "file/out";
     return both(write_job(d, j), "/output/dir", "is not a folder");
   });
+  add("OutputFolderNameTooLong", [](const fs::path& d) {  // mkdir's ENAMETOOLONG, found by validate too
+    json j = base_job();
+    j["output"]["dir"] = "out/" + std::string(256, 'b') + "/x";
+    return both(write_job(d, j), "/output/dir", "File name too long (256 bytes in a name, at most 255)");
+  });
   // A raster's pixel size becomes the texel size: the range the job's texel_size has (a GeoTIFF of 1e-9 m
   // pixels baked ao up to 1.026).
   add("RasterPixelsOf1em9", [](const fs::path& d) {
