@@ -476,6 +476,13 @@ Scene load_scene(const Job& job, const std::function<void(double)>& progress) {
   return complete_scene(job, std::move(field), std::move(georeference), std::move(source));
 }
 
+void to_world_heights(const Job& job, float* z, std::size_t n) {
+  const nlohmann::json& h = job.doc["height"];
+  const double scale = h.value("height_scale", 1.0), offset = h.value("height_offset", 0.0);
+  if (scale != 1.0 || offset != 0.0)
+    for (std::size_t t = 0; t < n; ++t) z[t] = float(z[t] * scale + offset);
+}
+
 Scene complete_scene(const Job& job, HeightField field, Georeference georeference, HeightSource read_by) {
   Scene scene;
   scene.name = job.name;
@@ -493,8 +500,7 @@ Scene complete_scene(const Job& job, HeightField field, Georeference georeferenc
     source.stored_min = *lo;
     source.stored_max = *hi;
   }
-  if (scale != 1.0 || offset != 0.0)
-    for (float& z : scene.field.z) z = float(z * scale + offset);
+  to_world_heights(job, scene.field.z.data(), scene.field.z.size());
   if (!scene.field.z.empty()) {
     const auto [lo, hi] = std::minmax_element(scene.field.z.begin(), scene.field.z.end());
     source.world_min = *lo;

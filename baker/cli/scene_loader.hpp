@@ -113,4 +113,8 @@ Scene load_scene(const Job& job, const std::function<void(double)>& progress = {
 // the reader that gave the heights (Scene::height_source; its ranges are filled in here).
 Scene complete_scene(const Job& job, HeightField field, Georeference georeference, HeightSource read_by = {});
 
+// Stored heights in world units, in place: z * height_scale + height_offset, rounded to float. The one rule
+// every height the job bakes goes through (complete_scene's field, a tiled bake's coarse copies).
+void to_world_heights(const Job& job, float* z, std::size_t n);
+
 }  // namespace hfbake

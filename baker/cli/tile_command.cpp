@@ -243,7 +243,8 @@ std::vector<std::shared_ptr<const CoarseHeights>> coarse_copies(const Job& job, 
   for (int y = 0; y < band.height; y += rows) {
     if (cancel.load()) throw Cancelled();
     const int n = std::min(rows, band.height - y);
-    const HeightField strip = read_window(job, band, RasterWindow{0, y, band.width, n});
+    HeightField strip = read_window(job, band, RasterWindow{0, y, band.width, n});
+    to_world_heights(job, strip.z.data(), strip.z.size());  // as the tiles' own heights (complete_scene)
     for (CoarseHeights& g : copies) add_coarse_rows(g, strip.z.data(), y, n);
     progress(double(y + n) / band.height);
   }

@@ -129,8 +129,10 @@ class CliTiles : public ::testing::Test {
   // Bakes `image` whole and in tiles of each size with `bake`'s entries; every COG of the tiled bake must
   // hold the whole bake's bits.
   void expect_tiles_equal_whole(const std::string& image, const nlohmann::json& bake,
-                                const std::vector<int>& tile_sizes) {
-    const nlohmann::json height = {{"image", image}};
+                                const std::vector<int>& tile_sizes,
+                                const nlohmann::json& height_keys = nlohmann::json::object()) {
+    nlohmann::json height = {{"image", image}};
+    height.update(height_keys);
     Result r = hfbake("bake --quiet --no-cache " + write_job("whole", height, bake).string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
     std::vector<fs::path> cogs;
@@ -261,6 +263,20 @@ TEST_F(CliTiles, TiledBakeWithFarFieldEqualsWholeBake) {
     SCOPED_TRACE(field);
     expect_tiles_equal_whole(field, bake, {16, 45, 100});
   }
+}
+
+// height_scale and height_offset move the tiles' heights and the coarse copies' alike: the tiles are the
+// whole bake's texels.
+TEST_F(CliTiles, TiledBakeWithScaleAndOffsetEqualsWholeBake) {
+  write_family(150, 97);
+  const nlohmann::json bake = {
+      {{"method", "relief"},
+       {"directions", 8},
+       {"search_radius", 40},
+       {"far_field", {{"beyond", 4}, {"cell", 4}}},
+       {"layers", {"svf", "horizon_deg"}}},
+      {{"method", "p1"}, {"directions", 8}, {"far_field", {{"beyond", 6}, {"cell", 4}}}, {"layers", {"ao"}}}};
+  expect_tiles_equal_whole("craters.tif", bake, {45}, {{"height_scale", 1.5}, {"height_offset", -300}});
 }
 
 // A geographic raster (rectangular texels in its local frame, the Earth's curvature from its ellipsoid):
