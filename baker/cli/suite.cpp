@@ -64,8 +64,13 @@ std::string junit_xml(const Suite& suite, const std::vector<JobOutcome>& outcome
   return x.str();
 }
 
-std::string job_key(const JobOutcome& o) {
-  return fs::path(o.file).stem().string();
+// A job's key in history.json: its file's path from the suite's folder without the extension ("a",
+// "night/cliff"): unique within the suite, whatever the jobs' stems or names.
+std::string job_key(const Suite& suite, const JobOutcome& o) {
+  const fs::path file = fs::absolute(o.file).lexically_normal();
+  fs::path p = file.lexically_relative(fs::absolute(suite.file).parent_path().lexically_normal());
+  if (p.empty() || *p.begin() == "..") p = file.filename();
+  return p.replace_extension().generic_string();
 }
 
 // A metric for people: four significant digits.
@@ -142,7 +147,7 @@ std::string index_html(const Suite& suite, const std::vector<JobOutcome>& outcom
       if (r.value("cache", "") == "hit")
         h << " (cache hit, " << seconds_text(r.value("cache_saved_seconds", 0.0)) << " s saved)";
     }
-    h << "</td><td>" << baseline_cell(o.baseline) << "</td><td>" << history_cell(history, job_key(o))
+    h << "</td><td>" << baseline_cell(o.baseline) << "</td><td>" << history_cell(history, job_key(suite, o))
       << "</td><td>";
     if (!report.empty()) h << "<a href=\"" << html_escape(report) << "\">" << html_escape(report) << "</a>";
     h << "</td><td>";
@@ -294,14 +299,14 @@ CallJobs call_jobs(const std::vector<fs::path>& files, const std::optional<fs::p
   return call;
 }
 
-nlohmann::json suite_history_run(const std::vector<JobOutcome>& outcomes, double seconds,
+nlohmann::json suite_history_run(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds,
                                  const std::string& finished) {
   nlohmann::json run = {{"finished", finished}, {"hfbake_version", hfbake_version()}, {"seconds", seconds}};
   run["jobs"] = nlohmann::json::object();
   for (const JobOutcome& o : outcomes) {
     nlohmann::json j = {{"status", job_status_name(o.status)}, {"seconds", o.seconds}};
     if (!o.baseline.is_null()) j["baseline_regressions"] = o.baseline["regressions"].size();
-    run["jobs"][job_key(o)] = std::move(j);
+    run["jobs"][job_key(suite, o)] = std::move(j);
   }
   return run;
 }
@@ -391,7 +396,7 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
   char finished[32];
   std::strftime(finished, sizeof finished, "%Y-%m-%dT%H:%M:%SZ", &utc);
   const nlohmann::json history =
-      append_suite_history(previous, suite_history_run(outcomes, seconds, finished), dropped);
+      append_suite_history(previous, suite_history_run(suite, outcomes, seconds, finished), dropped);
   if (dropped)
     written.warnings.push_back(history_file.string() +
                                ": not a suite history (history.json); starting it afresh with this run");

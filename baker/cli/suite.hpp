@@ -57,9 +57,9 @@ CallJobs call_jobs(const std::vector<std::filesystem::path>& files,
 inline constexpr std::size_t kSuiteHistoryRuns = 10;
 
 // One run of the suite as history.json records it: {"finished": UTC "YYYY-MM-DDTHH:MM:SSZ", "hfbake_version",
-// "seconds", "jobs": {<job file stem>: {"status", "seconds", "baseline_regressions" (only when the job names
-// a baseline)}}}.
-nlohmann::json suite_history_run(const std::vector<JobOutcome>& outcomes, double seconds,
+// "seconds", "jobs": {<job file's path from the suite's folder, without its extension>: {"status", "seconds",
+// "baseline_regressions" (only when the job names a baseline)}}}.
+nlohmann::json suite_history_run(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds,
                                  const std::string& finished);
 
 // `history` (history.json's document, {"runs": [...]}, oldest first) with `run` appended, keeping the newest

@@ -293,6 +293,31 @@ TEST_F(Cli, UnwritableOutputFolder) {
   EXPECT_NE(r.error_lines()[0].find("/output/dir: cannot create"), std::string::npos) << r.err;
 }
 
+// A suite's history keeps every job apart, by its file's path from the suite's folder: two job files of one
+// stem in two folders are two jobs, and one's failure is not hidden by the other's result.
+TEST_F(Cli, ASuitesHistoryKeepsJobsOfOneStemApart) {
+  nlohmann::json a = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}});
+  a["name"] = "a";
+  write_job("a.json", a);
+  fs::create_directories(dir_ / "x"), fs::create_directories(dir_ / "y");
+  nlohmann::json b1 = job({{"image", "nope.exr"}}), b2 = a;
+  b1["name"] = "b1", b2["name"] = "b2";
+  write_job("x/b.json", b1), write_job("y/b.json", b2);
+  std::ofstream(dir_ / "suite.json")
+      << R"({"version": 1, "suite": "s", "jobs": ["a.json", "x/b.json", "y/b.json"],
+      "output": {"dir": "suite_out"}})";
+  const Result r = hfbake("bake " + (dir_ / "suite.json").string() + " --no-cache --quiet");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  std::ifstream in(dir_ / "suite_out" / "history.json");
+  const nlohmann::json history = nlohmann::json::parse(in);
+  ASSERT_EQ(history["runs"].size(), 1u) << history;
+  const nlohmann::json& jobs = history["runs"][0]["jobs"];
+  EXPECT_EQ(jobs.size(), 3u) << jobs;
+  EXPECT_EQ(jobs["a"]["status"], "ok") << jobs;
+  EXPECT_EQ(jobs["x/b"]["status"], "invalid") << jobs;
+  EXPECT_EQ(jobs["y/b"]["status"], "ok") << jobs;
+}
+
 TEST_F(Cli, ContinuesPastAFailedJob) {
   const fs::path bad = write_job("bad.json", job({{"image", "nope.exr"}}));
   nlohmann::json g = job({{"procedural", {{"kind", "flat"}, {"size", {16, 16}}}}});
