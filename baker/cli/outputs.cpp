@@ -41,12 +41,6 @@ static_assert(std::atomic<int>::is_always_lock_free);
 // The longest side of a field whose EXRs are written as scanlines (larger ones are tiled).
 constexpr int kLargestScanlineExr = 2048;
 
-std::string host_name() {
-  char buf[256] = {};
-  if (gethostname(buf, sizeof buf - 1) != 0) return "localhost";
-  return buf;
-}
-
 }  // namespace
 
 std::string azimuth_convention(const Georeference& geo) {

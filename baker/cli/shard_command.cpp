@@ -94,13 +94,17 @@ std::string shard_version() {
 }
 
 ShardIdentity shard_identity(const Job& job, ShardId id, int width, int height) {
-  return {job.name, job_content_hash(job), shard_version(), id, width, height, "", ""};
+  ShardIdentity identity;
+  identity.job_name = job.name, identity.job_hash = job_content_hash(job), identity.version = shard_version();
+  identity.id = id, identity.width = width, identity.height = height;
+  return identity;
 }
 
 ShardIdentity stage_identity(const Job& job, int entry, int stage, int width, int height) {
   const BakeEntry& e = job.bakes[std::size_t(entry)];
   ShardIdentity id = shard_identity(job, {stage, entry_stages(e)}, width, height);
   id.what = "stage " + std::to_string(stage) + " of " + e.stem;
+  id.part_entry = entry, id.part_kind = "stage", id.part_block = stage;
   // A whole stage's file is its task's own piece; a divided stage's is made from its blocks by the next
   // stage's tasks (stage_state_to_rebuild), whose re-run makes it again.
   if (entry_stage_blocks(e, stage) == 0)
@@ -128,6 +132,7 @@ ShardIdentity stage_item_identity(const Job& job, int stage, StageItem item, int
   ShardIdentity id = shard_identity(job, {item.block, entry_stage_blocks(e, stage)}, width, height);
   id.what = "direction block " + std::to_string(item.block) + " of stage " + std::to_string(stage) + " of " +
             e.stem;
+  id.part_entry = item.entry, id.part_kind = "stage-block", id.part_block = item.block;
   id.redo = "bake it with --stage " + std::to_string(stage) + " and the --shard I/N that holds the block";
   return id;
 }

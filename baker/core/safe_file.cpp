@@ -50,13 +50,13 @@ bool remove_entry(int dir, const char* name) {
   return (unlinkat(dir, name, AT_REMOVEDIR) == 0 || errno == ENOENT) && ok;
 }
 
+}  // namespace
+
 std::string host_name() {
   char buf[256] = {};
   if (gethostname(buf, sizeof buf - 1) != 0) return "localhost";
   return buf;
 }
-
-}  // namespace
 
 bool is_real_directory(const fs::path& path) {
   struct stat st {};

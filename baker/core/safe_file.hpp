@@ -20,6 +20,10 @@ int open_regular_file(const std::filesystem::path& path, std::string& why);
 // Reads exactly `n` bytes at `offset`; false on a short read or an error.
 bool read_at(int fd, void* data, std::size_t n, std::uint64_t offset);
 
+// This machine's name (gethostname; "localhost" where it has none): the host in "<pid>@<host>", how lock
+// files, owner records and shard files name the process that wrote them.
+std::string host_name();
+
 // The owner a temporary's name carries ("<final>.tmp-<owner>-XXXXXX"), so that a later process can tell a
 // dead process's temporaries from a live one's and remove them: set once at start by the program (the
 // command and the Python module: <pid>+<start>@<host>, cli/outputs.hpp temporary_owner); the process id

@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "core/error.hpp"
+#include "core/safe_file.hpp"
 #include "job/content_hash.hpp"
 #include "job/manifest.hpp"
 
@@ -17,21 +18,21 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr char kMagic[] = "hfbake shard 1\n";
+constexpr char kMagic[] = "hfbake shard 2\n";
 constexpr char kEnd[] = "hfbake shard end";  // 16 bytes, then the header offset (8 bytes)
 constexpr std::size_t kTrailer = 16 + 8;
 // A header lists parts and layers by name: far less than this, whatever the job.
 constexpr std::uint64_t kMaxShardHeaderBytes = 64u << 20;
 
-std::string host_name() {
-  char buf[256] = {};
-  if (gethostname(buf, sizeof buf - 1) != 0) return "localhost";
-  return buf;
-}
-
 std::string bytes_checksum(const float* data, std::size_t count) {
   ContentHash h;
   h.add(std::string_view(reinterpret_cast<const char*>(data), count * sizeof(float)));
+  return h.hex();
+}
+
+std::string text_checksum(std::string_view text) {
+  ContentHash h;
+  h.add(text);
   return h.hex();
 }
 
@@ -90,7 +91,10 @@ void ShardWriter::commit() {
                                {"layers", p.layers},
                                {"attributes", a}});
   }
-  const std::string text = header.dump() + "\n";
+  // The header's line, then its checksum's: a byte of the header changed is damage, as a byte of a part's
+  // data is.
+  const std::string line = header.dump() + "\n";
+  const std::string text = line + text_checksum(line) + "\n";
   unsigned char off[8];
   for (int b = 0; b < 8; ++b) off[b] = static_cast<unsigned char>(offset_ >> (8 * b));
   ok_ = ok_ && out_->write(text) && out_->write(kEnd, 16) && out_->write(off, 8);
@@ -158,6 +162,12 @@ void ShardReader::read_header(const ShardIdentity& expected) {
   if (size - kTrailer - header_at > kMaxShardHeaderBytes) throw damaged("a header beyond any shard's");
   std::string text(std::size_t(size - kTrailer - header_at), '\0');
   if (!read_at(fd_, text.data(), text.size(), header_at)) throw damaged("unreadable header");
+  const std::size_t line_end = text.size() >= 2 ? text.rfind('\n', text.size() - 2) : std::string::npos;
+  if (line_end == std::string::npos || text.back() != '\n' ||
+      text.compare(line_end + 1, text.size() - line_end - 2, text_checksum(text.substr(0, line_end + 1))) !=
+          0)
+    throw damaged("header checksum");
+  text.resize(line_end + 1);
   nlohmann::json h;
   try {
     // The parser of every JSON file hfbake reads, which refuses a key given twice; the header's size bounds
@@ -239,6 +249,11 @@ void ShardReader::read_header(const ShardIdentity& expected) {
         part.kind != "stage-block")
       throw damaged("a part of unknown kind");
     if (part.entry < -1 || part.block < 0) throw damaged("a part of no entry");
+    if (expected.part_entry != -2 && (part.entry != expected.part_entry || part.kind != expected.part_kind ||
+                                      part.block != expected.part_block))
+      throw InputError(name, "",
+                       which + " holds another piece (" + part.kind + " " + std::to_string(part.block) +
+                           " of bake entry " + std::to_string(part.entry) + "): " + redo);
     // The times the merge sums into the report: non-negative and under 10^9 s (32 years) each, so that
     // no sum of them overflows (docs/cluster.md).
     if (!(part.seconds >= 0 && part.seconds < 1e9) || !(part.cpu_seconds >= 0 && part.cpu_seconds < 1e9))

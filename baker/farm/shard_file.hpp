@@ -1,10 +1,11 @@
 // The shard file: what one `hfbake bake JOB --shard I/N` computed, for `hfbake merge`.
 //
-// Layout: the magic line "hfbake shard 1\n"; the parts' float data (little-endian float32, each layer's
+// Layout: the magic line "hfbake shard 2\n"; the parts' float data (little-endian float32, each layer's
 // values as in memory), written as each part is computed; then one line of JSON (the header: the job's
 // name and content hash, the hfbake version, I, N, the field's size, and per part its entry, kind, block
-// or rows, seconds, layers with their byte offsets and an FNV-1a checksum of its bytes); then a 24-byte
-// trailer: "hfbake shard end" and the header's offset as 8 little-endian bytes. A file is written under a
+// or rows, seconds, layers with their byte offsets and an FNV-1a checksum of its bytes), and a line with the
+// FNV-1a checksum of the header's line; then a 24-byte trailer: "hfbake shard end" and the header's offset
+// as 8 little-endian bytes. A file is written under a
 // temporary name beside its final one and renamed when complete, so a shard file is whole or absent; the
 // trailer and each part's checksum catch a file truncated or damaged afterwards.
 //
@@ -34,6 +35,11 @@ struct ShardIdentity {
   // For messages: what the file is ("shard I/N" when empty) and how to make it again ("bake it with
   // --shard I/N" when empty).
   std::string what, redo;
+  // A file of one piece (a stage's state, a stage's direction block): that piece's entry, kind and block,
+  // which its one part must have. part_entry -2: a shard, whose parts the merge checks against the plan.
+  int part_entry = -2;
+  std::string part_kind;
+  int part_block = 0;
 };
 
 struct ShardPart {

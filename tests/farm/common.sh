@@ -26,3 +26,19 @@ PY
   fi
   [ "$n" -gt 0 ] || fail "no EXR in $a"
 }
+# reseal FILE: a shard file whose header was edited in place gets its header checksum line again (the
+# writer's FNV-1a of the header's line: farm/shard_file.hpp), so the edit is read as the header's claim.
+reseal() {
+  python3 - "$1" <<'PY' || fail "reseal $1"
+import sys
+p = sys.argv[1]
+b = bytearray(open(p, "rb").read())
+at = int.from_bytes(b[-8:], "little")
+body = b[at:-24]
+line = body[: body.rindex(b"\n", 0, len(body) - 1) + 1]
+h = 0xcbf29ce484222325
+for c in line:
+    h = ((h ^ c) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+open(p, "wb").write(b[:at] + line + b"%016x\n" % h + b[-24:])
+PY
+}

@@ -98,4 +98,24 @@ ls s2/shards/p2farm.p2-0.stage-2.block-*.hfshard >/dev/null 2>&1 && fail "stage 
 # The merge without the last stage names its first missing block.
 err=$("$H" merge job.json --no-cache --quiet --out s2 2>&1)
 [ $? = 2 ] && echo "$err" | grep -q "p2farm.p2-0.stage-2.block-0.hfshard" || fail "merge without the last stage: $err"
+# A stage file of another entry of the same shape (stage count, field) in an entry's place: refused naming
+# the file, never merged as that entry's state.
+mkdir -p two && cd two || fail "mkdir two"
+cat >job.json <<'J'
+{"version": 1, "name": "two",
+ "height": {"procedural": {"kind": "fractal", "size": [33, 29], "seed": 4}},
+ "bounces": 1,
+ "bake": [{"method": "p2", "directions": 8}, {"method": "p2", "directions": 4}],
+ "output": {"dir": "out", "pixel_type": "float"}}
+J
+for s in 0 1; do "$H" bake job.json --no-cache --quiet --shard 0/1 --stage $s || fail "two: --stage $s"; done
+"$H" merge job.json --no-cache --quiet || fail "two: merge"
+cp out/shards/two.p2-1.stage-0.hfshard out/shards/two.p2-0.stage-0.hfshard
+err=$("$H" merge job.json --no-cache --quiet 2>&1)
+rc=$?
+[ $rc = 2 ] || fail "another entry's stage file: merge exit $rc, expected 2 ($err)"
+echo "$err" | grep -q "two.p2-0.stage-0.hfshard: stage 0 of p2-0 holds another piece (stage 0 of bake entry 1)" ||
+  fail "another entry's stage file: $err"
+cd .. || exit 1
+echo "ok: a stage file of another entry is refused"
 echo "ok: all"

@@ -6,6 +6,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/direction_blocks.hpp"
@@ -186,7 +189,9 @@ TEST(ShardFile, RoundTripsAndRefusesDamage) {
   const fs::path dir = fs::temp_directory_path() / ("hfbake_shard_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const fs::path file = dir / "j.shard-1-of-2.hfshard";
-  const ShardIdentity id{"j", "0123456789abcdef", "v1", {1, 2}, 3, 2, "", ""};
+  ShardIdentity id;
+  id.job_name = "j", id.job_hash = "0123456789abcdef", id.version = "v1", id.id = {1, 2};
+  id.width = 3, id.height = 2;
   LayerSet l;
   l.width = 3, l.height = 2;
   l.add("ao", {"Y"}).data = {1, 2, 3, 4, 5, 6};
@@ -211,6 +216,34 @@ TEST(ShardFile, RoundTripsAndRefusesDamage) {
   other.job_hash = "fedcba9876543210";
   EXPECT_THROW(ShardReader(file, other), InputError);
   EXPECT_FALSE(shard_is_complete(file, other));
+  // A file of one piece must hold that piece: another entry's, kind's or block's is refused.
+  for (const auto& [entry, kind, block] : std::vector<std::tuple<int, std::string, int>>{
+           {1, "block", 4}, {0, "stage-block", 4}, {0, "block", 3}}) {
+    ShardIdentity piece = id;
+    piece.part_entry = entry, piece.part_kind = kind, piece.part_block = block;
+    EXPECT_FALSE(shard_is_complete(file, piece)) << entry << kind << block;
+  }
+  ShardIdentity piece = id;
+  piece.part_entry = 0, piece.part_kind = "block", piece.part_block = 4;
+  EXPECT_TRUE(shard_is_complete(file, piece));
+  // A header byte changed (a channel's name, the attribute's text): the header's checksum refuses it.
+  const std::string bytes = [&] {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  for (const std::string& from : {std::string("[\"Y\"]"), std::string("[\"k\",\"v\"]")}) {
+    std::string forged = bytes;
+    const std::size_t at = forged.rfind(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    forged[at + 2] = 'Z';
+    std::ofstream(dir / "h", std::ios::binary) << forged;
+    try {
+      ShardReader(dir / "h", id);
+      ADD_FAILURE() << "a header with " << from << " changed was read";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("header checksum"), std::string::npos) << e.what();
+    }
+  }
   // Truncated: one byte short.
   const auto size = fs::file_size(file);
   fs::copy_file(file, dir / "t", fs::copy_options::overwrite_existing);

@@ -104,7 +104,14 @@ build=$(readelf -n "$H" | sed -n 's/.*Build ID: \([0-9a-f]*\).*/\1/p')
 cp keep s3/shards/farm.shard-1-of-3.hfshard
 grep -aq "+build.${build:0:16}" s3/shards/farm.shard-1-of-3.hfshard || fail "the shard's version lacks the build id ${build:0:16}"
 sed -i "s/+build.${build:0:16}/+build.0000000000000000/" s3/shards/farm.shard-1-of-3.hfshard
+expect_refusal "a shard whose header was edited" "header checksum"
+reseal s3/shards/farm.shard-1-of-3.hfshard
 expect_refusal "a shard of another build" "0000000000000000"
+# A layer's channel named otherwise in the header, edited in place: damage, not a layer of other channels.
+cp keep s3/shards/farm.shard-1-of-3.hfshard
+sed -i 's/"channels":\["Y"\]/"channels":["Z"]/' s3/shards/farm.shard-1-of-3.hfshard
+cmp -s keep s3/shards/farm.shard-1-of-3.hfshard && fail "no channel Y in the shard's header"
+expect_refusal "a shard whose header names other channels" "header checksum"
 # Temporary shard files of writers that no longer run are removed by the next bake of a shard there;
 # those of a live process (this shell: its pid and start time) and of another host are kept.
 cp keep s3/shards/farm.shard-1-of-3.hfshard
