@@ -43,6 +43,7 @@ MethodContext context() {
   MethodContext c;
   c.field.width = c.field.height = 64;
   c.bounces = 2;
+  c.placed = true;  // a CRS places the field: sun's base entry needs no latitude
   return c;
 }
 
