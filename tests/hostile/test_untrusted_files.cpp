@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <OpenImageIO/imageio.h>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -146,12 +147,28 @@ class Untrusted : public ::testing::Test {
 
 // --- the farm's files -----------------------------------------------------------------------------------
 
-// The shard's header: the JSON between the data and the 24-byte trailer.
-json shard_header(const std::string& bytes, std::uint64_t& at) {
+// A shard's header line (farm/shard_file.hpp: the JSON line, then its checksum's line, then the 24-byte
+// trailer) and where it starts.
+std::string shard_header_line(const std::string& bytes, std::uint64_t& at) {
   at = 0;
   for (int b = 0; b < 8; ++b)
     at |= std::uint64_t(static_cast<unsigned char>(bytes[bytes.size() - 8 + b])) << (8 * b);
-  return json::parse(bytes.substr(at, bytes.size() - 24 - at));
+  const std::string text = bytes.substr(at, bytes.size() - 24 - at);
+  return text.substr(0, text.rfind('\n', text.size() - 2) + 1);
+}
+
+json shard_header(const std::string& bytes, std::uint64_t& at) {
+  return json::parse(shard_header_line(bytes, at));
+}
+
+// The shard's bytes with `line` (a header line ending in a newline) in place of its header, sealed with the
+// line's FNV-1a checksum as the writer seals it: the forged claims are what the merge reads.
+std::string with_sealed_header(const std::string& bytes, std::uint64_t at, const std::string& line) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (const unsigned char c : line) h = (h ^ c) * 0x100000001b3ull;
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return bytes.substr(0, at) + line + hex + "\n" + bytes.substr(bytes.size() - 24);
 }
 
 void forge_part_size(const fs::path& shard, long long width, long long height) {
@@ -162,8 +179,7 @@ void forge_part_size(const fs::path& shard, long long width, long long height) {
     p["width"] = width, p["height"] = height;
     for (json& l : p["layers"]) l["floats"] = width * height * (long long)l["channels"].size();
   }
-  const std::string trailer = bytes.substr(bytes.size() - 24);
-  bytes = bytes.substr(0, at) + h.dump() + "\n" + trailer;
+  bytes = with_sealed_header(bytes, at, h.dump() + "\n");
   std::ofstream(shard, std::ios::binary | std::ios::trunc) << bytes;
 }
 
@@ -182,7 +198,7 @@ TEST_F(Untrusted, ShardSecondsOutsideTheirRangeAreRefusedByTheMerge) {
     json h = shard_header(genuine, at);
     for (json& p : h["parts"]) p["seconds"] = seconds;
     std::ofstream(shard, std::ios::binary | std::ios::trunc)
-        << genuine.substr(0, at) + h.dump() + "\n" + genuine.substr(genuine.size() - 24);
+        << with_sealed_header(genuine, at, h.dump() + "\n");
     const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
     EXPECT_EQ(r.exit_code, 2);
     ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
@@ -220,12 +236,12 @@ TEST_F(Untrusted, ShardPartsClaimingAnotherSizeAreRefusedByTheMerge) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
-// The shard's bytes with its header text replaced by edit(header text); the header stays where it was.
+// The shard's bytes with its header text replaced by edit(header text), sealed again; the header stays where
+// it was.
 std::string with_header_text(const std::string& bytes, const std::function<std::string(std::string)>& edit) {
   std::uint64_t at = 0;
-  shard_header(bytes, at);
-  const std::string text = bytes.substr(at, bytes.size() - 24 - at);
-  return bytes.substr(0, at) + edit(text) + bytes.substr(bytes.size() - 24);
+  const std::string text = shard_header_line(bytes, at);
+  return with_sealed_header(bytes, at, edit(text));
 }
 
 // A shard's header is read by the parser of every JSON file hfbake reads: a key given twice, at the top or in
@@ -300,14 +316,14 @@ TEST_F(Untrusted, ShardHeaderFieldsOfTheWrongKindAreRefusedNamingTheField) {
   EXPECT_EQ(hfbake(dir_, {"merge", job, "--no-cache", "--quiet"}).exit_code, 0);
 }
 
-// Rewrites every part's layer list in the header (checksums stay right: they cover the data, not the names).
+// Rewrites every part's layer list in the header, sealed again: the layers' checksums cover their data, not
+// their names.
 void forge_layers(const fs::path& shard, const std::function<void(json&)>& edit) {
   std::string bytes = read_text(shard);
   std::uint64_t at = 0;
   json h = shard_header(bytes, at);
   for (json& p : h["parts"]) edit(p["layers"]);
-  const std::string trailer = bytes.substr(bytes.size() - 24);
-  bytes = bytes.substr(0, at) + h.dump() + "\n" + trailer;
+  bytes = with_sealed_header(bytes, at, h.dump() + "\n");
   std::ofstream(shard, std::ios::binary | std::ios::trunc) << bytes;
 }
 
