@@ -45,7 +45,7 @@ PageBuffer<T> make_page_buffer(std::size_t n) {
 // n zeros, their pages faulted in by one call (MADV_POPULATE_WRITE, Linux 5.14) before they are zeroed:
 // for a large buffer written once, such as a layer, where faulting 4 KiB pages one at a time costs a
 // hypervisor round trip each on a virtual machine (a 256 MiB horizon layer: 0.7 s of first touches against
-// 0.4 s populated). A kernel without the advice faults them in as they are zeroed, as before.
+// 0.4 s populated). A kernel without the advice faults them in as they are zeroed.
 template <class T>
 std::vector<T> populated_zeros(std::size_t n) {
   std::vector<T> v;
