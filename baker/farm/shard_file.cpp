@@ -24,16 +24,14 @@ constexpr std::size_t kTrailer = 16 + 8;
 // A header lists parts and layers by name: far less than this, whatever the job.
 constexpr std::uint64_t kMaxShardHeaderBytes = 64u << 20;
 
-std::string bytes_checksum(const float* data, std::size_t count) {
-  ContentHash h;
-  h.add(std::string_view(reinterpret_cast<const char*>(data), count * sizeof(float)));
-  return h.hex();
-}
-
 std::string text_checksum(std::string_view text) {
   ContentHash h;
   h.add(text);
   return h.hex();
+}
+
+std::string bytes_checksum(const float* data, std::size_t count) {
+  return text_checksum(std::string_view(reinterpret_cast<const char*>(data), count * sizeof(float)));
 }
 
 }  // namespace

@@ -5,9 +5,9 @@
 // name and content hash, the hfbake version, I, N, the field's size, and per part its entry, kind, block
 // or rows, seconds, layers with their byte offsets and an FNV-1a checksum of its bytes), and a line with the
 // FNV-1a checksum of the header's line; then a 24-byte trailer: "hfbake shard end" and the header's offset
-// as 8 little-endian bytes. A file is written under a
-// temporary name beside its final one and renamed when complete, so a shard file is whole or absent; the
-// trailer and each part's checksum catch a file truncated or damaged afterwards.
+// as 8 little-endian bytes. A file is written under a temporary name beside its final one and renamed when
+// complete, so a shard file is whole or absent; the trailer and the header's and each part's checksums catch
+// a file truncated or damaged afterwards.
 //
 // A shard file is read as untrusted input: only a regular file is opened (never blocking on a FIFO), and
 // every part's claims (its kind, size, rows, layers' channels, floats and offsets) must match the job's

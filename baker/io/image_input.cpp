@@ -274,7 +274,7 @@ std::uint32_t pnm_maxval(const fs::path& file) {
 void check_spec(const OiioHeader& spec, const fs::path& file, const InputSite& site) {
   if (spec.deep) fail(site, file, "deep images are not supported");
   // OpenImageIO stretches a PNM's samples to 0..65535 in 32-bit integers: those above 32767 overflow, but
-  // for a maxval of 65535, where they come out one too low (read_channels refuses those heights; a binary
+  // for a maxval of 65535, where they come out one too low (stretch_of refuses those heights; a binary
   // PNM's heights are read through GDAL instead, io/georaster_input).
   if (spec.format_name == "pnm")
     if (const std::uint32_t maxval = pnm_maxval(file); maxval > 32767 && maxval < 65535)
@@ -352,7 +352,10 @@ struct Stretch {
   bool floors = false;  // x = floor(v * type_max / stored_max) (PNM); else the nearest (bit replication)
 };
 
-std::optional<Stretch> stretch_of(const fs::path& file, const OiioHeader& spec, OiioSample stored) {
+// A PNM of maxval 65535, which OpenImageIO reads one too low above 32767, is refused: its heights would shift
+// (check_spec refuses the maxvals whose samples overflow, for colours too).
+std::optional<Stretch> stretch_of(const fs::path& file, const InputSite& site, const OiioHeader& spec,
+                                  OiioSample stored) {
   if (stored != OiioSample::uint8 && stored != OiioSample::uint16) return std::nullopt;
   Stretch s;
   s.type_max = stored == OiioSample::uint8 ? 255 : 65535;
@@ -370,6 +373,7 @@ std::optional<Stretch> stretch_of(const fs::path& file, const OiioHeader& spec, 
   } else if (spec.format_name == "pnm") {
     s.stored_max = pnm_maxval(file);
     s.floors = true;
+    if (s.stored_max == 65535) pnm_misread(site, file, s.stored_max);
   }
   if (s.stored_max == 0 || s.stored_max >= s.type_max) return std::nullopt;
   return s;
@@ -445,10 +449,7 @@ Image read_channels(const fs::path& file, const InputSite& site, int chbegin, in
   const bool as_stored = integers == IntegerSamples::stored && chend - chbegin == 1 &&
                          !oiio_sample_is_float(stored) && oiio_sample_bytes(stored) > 0;
   const OiioSample read_type = as_stored ? stored : OiioSample::float32;
-  const std::optional<Stretch> stretch = as_stored ? stretch_of(file, spec, stored) : std::nullopt;
-  // Heights are the stored integers: a PNM of maxval 65535 read one too low above 32767 would shift them (a
-  // colour's 1 / 65535 is not seen).
-  if (as_stored && spec.format_name == "pnm" && pnm_maxval(file) == 65535) pnm_misread(site, file, 65535);
+  const std::optional<Stretch> stretch = as_stored ? stretch_of(file, site, spec, stored) : std::nullopt;
   std::vector<unsigned char> scratch;
   if (as_stored) scratch.resize(std::size_t(band) * row * oiio_sample_bytes(stored));
   for (int y0 = 0; y0 < spec.height; y0 += band) {
