@@ -370,7 +370,13 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
   std::vector<double> seconds(job.bakes.size(), 0.0);
   const auto t0 = std::chrono::steady_clock::now();
   // The job's name in tiles/: claimed by its tasks (one job file's tiles of that name), checked by its merge.
-  if (options.tile_task) claim_tiles_folder(job, options.overwrite);
+  // A task's windows are checked for holes first, so a refused task claims nothing (`validate --tiles`
+  // checks every window; a task reads only its own).
+  if (options.tile_task) {
+    const auto range = task_tiles(plan, *options.tile_task);
+    for (std::size_t k = range.first; k < range.second; ++k) read_window(job, band, plan.tiles[k].interior);
+    claim_tiles_folder(job, options.overwrite);
+  }
   if (options.merge) check_tiles_folder(job, options.overwrite);
   // The far fields' coarse copies of the whole raster, read in runs of rows within what the tiles will
   // take (the plan left room for the copies beside them).

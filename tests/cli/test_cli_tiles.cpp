@@ -681,6 +681,18 @@ TEST_F(CliTiles, ALinkInPlaceOfTilesIsRefused) {
   }
 }
 
+// A tile task whose windows hold a hole is refused in one line naming the raster's texel, before it claims
+// the job's name in tiles/: the output folder is left as it was (no tiles/, no record).
+TEST_F(CliTiles, ATileTaskWithAHoleIsRefusedBeforeItClaimsTheTiles) {
+  write_heights(dir_ / "f.tif", 40, 30, [](int i, int j) { return i == 7 && j == 5 ? NAN : 0.1 * i * j; });
+  const fs::path job = write_job("t", {{"image", "f.tif"}}, {{{"method", "relief"}, {"search_radius", 2}}});
+  const Result r = hfbake("bake --quiet --no-cache --tiles --tile-size 16 --tile-task 0/1 " + job.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("texel (7, 5) has no valid height"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out_t" / "tiles")) << "the refused task claimed tiles/";
+}
+
 // A tiled bake writes no previews (output.previews is for a whole bake): its plan is the same with previews
 // on as off, and with a memory limit that fits its tiles without OpenImageIO's libraries it is not refused
 // for a preview it never writes; no preview file appears.
