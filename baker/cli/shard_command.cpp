@@ -132,7 +132,7 @@ ShardIdentity stage_item_identity(const Job& job, int stage, StageItem item, int
   ShardIdentity id = shard_identity(job, {item.block, entry_stage_blocks(e, stage)}, width, height);
   id.what = "direction block " + std::to_string(item.block) + " of stage " + std::to_string(stage) + " of " +
             e.stem;
-  id.part_entry = item.entry, id.part_kind = "stage-block", id.part_block = item.block;
+  id.part_entry = item.entry, id.part_kind = "stage-block", id.part_block = item.block, id.part_stage = stage;
   id.redo = "bake it with --stage " + std::to_string(stage) + " and the --shard I/N that holds the block";
   return id;
 }
@@ -288,6 +288,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
     ShardPart part;
     part.entry = e, part.kind = item.block < 0 ? "stage" : "stage-block";
     part.block = item.block < 0 ? stage : item.block;
+    part.stage = item.block < 0 ? 0 : stage;
     // A whole stage's file: the seconds of this stage and the earlier ones (the merge reports the entry's
     // total); a block's: its own.
     double seconds = 0, cpu = 0;

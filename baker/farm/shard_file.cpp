@@ -80,6 +80,7 @@ void ShardWriter::commit() {
     header["parts"].push_back({{"entry", p.entry},
                                {"kind", p.kind},
                                {"block", p.block},
+                               {"stage", p.stage},
                                {"row_begin", p.row_begin},
                                {"row_end", p.row_end},
                                {"seconds", p.seconds},
@@ -235,6 +236,7 @@ void ShardReader::read_header(const ShardIdentity& expected) {
     part.entry = int(whole_number(p, at, "entry", -1, INT_MAX));
     part.kind = text_field(p, at, "kind");
     part.block = int(whole_number(p, at, "block", 0, INT_MAX));
+    part.stage = p.contains("stage") ? int(whole_number(p, at, "stage", 0, INT_MAX)) : 0;
     part.row_begin = int(whole_number(p, at, "row_begin", 0, INT_MAX));
     part.row_end = int(whole_number(p, at, "row_end", 0, INT_MAX));
     part.seconds = field(p, at, "seconds", Is::number).get<double>();
@@ -248,9 +250,10 @@ void ShardReader::read_header(const ShardIdentity& expected) {
       throw damaged("a part of unknown kind");
     if (part.entry < -1 || part.block < 0) throw damaged("a part of no entry");
     if (expected.part_entry != -2 && (part.entry != expected.part_entry || part.kind != expected.part_kind ||
-                                      part.block != expected.part_block))
+                                      part.block != expected.part_block || part.stage != expected.part_stage))
       throw InputError(name, "",
                        which + " holds another piece (" + part.kind + " " + std::to_string(part.block) +
+                           (part.kind == "stage-block" ? " of stage " + std::to_string(part.stage) : "") +
                            " of bake entry " + std::to_string(part.entry) + "): " + redo);
     // The times the merge sums into the report: non-negative and under 10^9 s (32 years) each, so that
     // no sum of them overflows (docs/cluster.md).

@@ -39,13 +39,14 @@ struct ShardIdentity {
   // which its one part must have. part_entry -2: a shard, whose parts the merge checks against the plan.
   int part_entry = -2;
   std::string part_kind;
-  int part_block = 0;
+  int part_block = 0, part_stage = 0;
 };
 
 struct ShardPart {
   int entry = -1;                  // index into Job::bakes; -1: the reference
   std::string kind;                // "whole", "block", "rows"
-  int block = 0;                   // kind "block"
+  int block = 0;                   // kind "block", "stage-block"; kind "stage": the stage
+  int stage = 0;                   // kind "stage-block": the stage the block is of
   int row_begin = 0, row_end = 0;  // kind "rows"
   double seconds = 0, cpu_seconds = 0;
   nlohmann::json layers = nlohmann::json::array();  // header: per layer name, channels, offset, checksum

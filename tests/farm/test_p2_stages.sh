@@ -110,6 +110,15 @@ cat >job.json <<'J'
 J
 for s in 0 1; do "$H" bake job.json --no-cache --quiet --shard 0/1 --stage $s || fail "two: --stage $s"; done
 "$H" merge job.json --no-cache --quiet || fail "two: merge"
+# A block of stage 0 at a stage 1 block's name (the same block of the same entry): refused naming the file.
+cp out/shards/two.p2-0.stage-1.block-0.hfshard keep
+cp out/shards/two.p2-0.stage-0.block-0.hfshard out/shards/two.p2-0.stage-1.block-0.hfshard
+err=$("$H" merge job.json --no-cache --quiet 2>&1)
+rc=$?
+[ $rc = 2 ] || fail "a stage 0 block as stage 1's: merge exit $rc, expected 2 ($err)"
+echo "$err" | grep -q "two.p2-0.stage-1.block-0.hfshard: direction block 0 of stage 1 of p2-0 holds another piece (stage-block 0 of stage 0 of bake entry 0)" ||
+  fail "a stage 0 block as stage 1's: $err"
+mv keep out/shards/two.p2-0.stage-1.block-0.hfshard
 cp out/shards/two.p2-1.stage-0.hfshard out/shards/two.p2-0.stage-0.hfshard
 err=$("$H" merge job.json --no-cache --quiet 2>&1)
 rc=$?
