@@ -142,7 +142,10 @@ std::string job_content_hash(const Job& job) {
 FieldSize probe_image_field_size(const Job& job) {
   const nlohmann::json& h = job.doc["height"];
   if (const std::optional<GeoRasterInfo> geo = checked_georaster(job))
-    return {.width = geo->width, .height = geo->height, .georaster = true};
+    return {.width = geo->width,
+            .height = geo->height,
+            .georaster = true,
+            .image_values = values_through_image_reader(*geo)};
   const ImageInfo info = probe_image(job.resolve(h["image"].get<std::string>()), site(job, "/height/image"));
   return {info.width, info.height};
 }
@@ -175,7 +178,11 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   for (int b = 0; b < geo->bands; ++b)
     names += (b ? ", " : "") + (geo->band_names[b].empty() ? std::to_string(b) : geo->band_names[b]) +
              (geo->band_colours[b].empty() ? "" : " (" + geo->band_colours[b] + ")");
-  if (geo->palette) {
+  const bool image_values = values_through_image_reader(*geo);
+  if (image_values) {
+    const ImageInfo image_info = probe_image(job.resolve(image), site(job, "/height/image"));
+    band = find_channel(image_info, channel, job.resolve(image), site(job, "/height/channel"));
+  } else if (geo->palette) {
     // A palette image reads its colours' red, as OpenImageIO's channel 0 or "R" (docs/heights.md); the
     // palette's other colours are not read through GDAL.
     const int* index = std::get_if<int>(&channel);
@@ -203,19 +210,30 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   GeoHeightBand out;
   out.file = job.resolve(image);
   out.band = band;
+  out.image_values = image_values;
   out.width = geo->width;
   out.height = geo->height;
-  out.nodata = geo->nodata[band];
-  out.source.reader = "GDAL";
+  out.nodata = image_values ? std::nullopt : geo->nodata[std::size_t(band)];
+  out.source.reader = image_values ? "OpenImageIO, placed by GDAL" : "GDAL";
   out.source.format = geo->driver;
   out.source.geographic = geo->geographic;
-  if (geo->bands > 1)
+  if (image_values) {
+    const ImageInfo image_info = probe_image(job.resolve(image), site(job, "/height/image"));
+    if (image_info.channels > 1) {
+      std::string channels;
+      for (const std::string& n : image_info.channel_names) channels += (channels.empty() ? "" : ", ") + n;
+      out.source.channel = "channel " + image_info.channel_names[std::size_t(band)] + " of " + channels;
+    }
+  } else if (geo->bands > 1) {
     out.source.channel = "band " + std::to_string(band + 1) + " of " + std::to_string(geo->bands);
-  out.source.file_scale = geo->scale[std::size_t(band)];
-  out.source.file_offset = geo->offset[std::size_t(band)];
+  }
+  // A PNG declares no scale, offset or unit.
+  const std::size_t gb = image_values ? 0 : std::size_t(band);
+  out.source.file_scale = image_values ? 1.0 : geo->scale[gb];
+  out.source.file_offset = image_values ? 0.0 : geo->offset[gb];
   out.source.pixel_unit = geo->geographic ? "" : geo->linear_unit;
   out.source.pixel_unit_metres = geo->geographic ? 1.0 : geo->linear_unit_metres;
-  out.source.height_unit = geo->unit_types[std::size_t(band)];
+  out.source.height_unit = image_values ? "" : geo->unit_types[gb];
   Georeference& georeference = out.georeference;
   georeference.geotransform = local_geotransform(job_texel_size(job));
   georeference.from_file = geo->has_geotransform;
@@ -250,7 +268,10 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
   Plane plane;
   std::optional<double> file_nodata;
   if (std::optional<GeoHeightBand> geo = georaster_height_band(job)) {
-    plane = read_georaster_band(geo->file, geo->band, site(job, "/height/image"), progress);
+    plane = geo->image_values
+                ? read_image_channel(geo->file, geo->band, site(job, "/height/image"),
+                                     site(job, "/height/channel"), progress)
+                : read_georaster_band(geo->file, geo->band, site(job, "/height/image"), progress);
     source.reader = geo->source.reader;
     source.format = geo->source.format;
     source.geographic = geo->source.geographic;

@@ -63,6 +63,9 @@ struct GeoHeightBand {
   std::optional<double> nodata;
   Georeference georeference;
   HeightSource source;
+  // A PNG (placed by a world file): its values and channels are OpenImageIO's, as without the world file
+  // (docs/heights.md); `band` is the channel's index, and GDAL only places it.
+  bool image_values = false;
 };
 std::optional<GeoHeightBand> georaster_height_band(const Job& job);
 

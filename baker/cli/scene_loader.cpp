@@ -142,6 +142,7 @@ namespace {
 // loads it after its tracing, for report.html's images.
 bool loads_image_module_early(const Job& job, const FieldSize& size) {
   if (job.output.previews && !size.tile) return true;  // a tiled bake writes no previews
+  if (size.image_values) return true;
   const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
   if (output.contains("textures") && !output["textures"].empty()) return true;
   for (const auto& [pointer, file] : job_input_files(job.doc))

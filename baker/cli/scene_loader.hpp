@@ -20,6 +20,8 @@ struct FieldSize {
   bool tile = false;
   // The heights are a georeferenced raster read through GDAL (probe_field_size says; a tile's always are).
   bool georaster = false;
+  // ... whose values OpenImageIO reads (values_through_image_reader: a PNG with a world file).
+  bool image_values = false;
 };
 
 // The longest side of a field (the procedural schema's maximum, and an image's): 2^20 texels.

@@ -41,12 +41,43 @@ std::unique_ptr<GDALDataset> open_raster(const fs::path& file, const InputSite& 
   return ds;
 }
 
-// Band `band` (0-based) of ds, or an error naming the file.
+bool is_png(const GDALDataset& ds) {
+  const GDALDriver* d = const_cast<GDALDataset&>(ds).GetDriver();
+  return d && std::string_view(d->GetDescription()) == "PNG";
+}
+
+// Whether `file` is a PNG of 16-bit samples stored interlaced (Adam7), from its header (IHDR: bit depth at
+// byte 24, interlace method at byte 28): GDAL 3.6's PNG driver reads those samples byte-swapped.
+bool interlaced_16bit_png(const fs::path& file) {
+  unsigned char h[29] = {};
+  std::FILE* f = std::fopen(file.c_str(), "rb");
+  if (!f) return false;
+  const std::size_t n = std::fread(h, 1, sizeof h, f);
+  std::fclose(f);
+  return n == sizeof h && h[1] == 'P' && h[2] == 'N' && h[3] == 'G' && h[24] == 16 && h[28] == 1;
+}
+
+// Band `band` (0-based) of ds, or an error naming the file; a PNG GDAL would misread is refused.
 GDALRasterBand* band_of(GDALDataset& ds, const fs::path& file, int band, const InputSite& site) {
   GDALRasterBand* b = ds.GetRasterBand(band + 1);
   if (!b)
     throw InputError(site.job_file, site.pointer, file.string() + ": has no band " + std::to_string(band));
+  if (is_png(ds) && interlaced_16bit_png(file))
+    throw InputError(site.job_file, site.pointer,
+                     file.string() +
+                         ": is an interlaced 16-bit PNG, which GDAL reads byte-swapped here (this command "
+                         "reads it through GDAL): save it without interlacing, or as a GeoTIFF "
+                         "(gdal_translate)");
   return b;
+}
+
+// The band's NoData value as hfbake takes it: none for a PNG, whose tRNS colour (which GDAL reports as
+// NoData) is a height like any other (docs/heights.md).
+std::optional<double> band_nodata(GDALDataset& ds, GDALRasterBand* b) {
+  int has = 0;
+  const double v = b->GetNoDataValue(&has);
+  if (!has || is_png(ds)) return std::nullopt;
+  return v;
 }
 
 // Rows [y0, y0 + n) of columns [x0, x0 + w) of band b as floats into dst. A double band is read as double
@@ -58,7 +89,7 @@ bool read_rows_as_stored(GDALRasterBand* b, int x0, int y0, int w, int n, float*
     return b->RasterIO(GF_Read, x0, y0, w, n, dst, w, n, GDT_Float32, 0, 0, nullptr) == CE_None;
   std::vector<double> row(static_cast<std::size_t>(w));
   int has_nodata = 0;
-  const double nodata = b->GetNoDataValue(&has_nodata);
+  const double nodata = b->GetNoDataValue(&has_nodata);  // a PNG has no double samples
   constexpr double kFloatMax = double(std::numeric_limits<float>::max());
   for (int y = 0; y < n; ++y) {
     if (b->RasterIO(GF_Read, x0, y0 + y, w, 1, row.data(), w, 1, GDT_Float64, 0, 0, nullptr) != CE_None)
@@ -89,7 +120,7 @@ bool read_rows(GDALRasterBand* b, int x0, int y0, int w, int n, float* dst, cons
                const InputSite& site) {
   if (!read_rows_as_stored(b, x0, y0, w, n, dst, file, site)) return false;
   const int flags = b->GetMaskFlags();
-  if (flags & (GMF_ALL_VALID | GMF_NODATA | GMF_ALPHA)) return true;
+  if (flags & (GMF_ALL_VALID | GMF_NODATA | GMF_ALPHA) || is_png(*b->GetDataset())) return true;
   GDALRasterBand* mask = b->GetMaskBand();
   if (!mask) return true;
   std::vector<std::uint8_t> valid(std::size_t(w) * std::size_t(n));
@@ -107,26 +138,28 @@ const GDALColorTable* palette_of(GDALRasterBand* b) {
 
 // A palette band's indices as their colours' red values, as OpenImageIO reads a palette image (it expands
 // the palette, and a height is read from the first channel): the same file gives the same heights through
-// either reader (docs/heights.md). An index outside the palette, and the band's NoData value, are left as
-// they are. Built once per read; a band without a palette leaves its values alone.
+// either reader (docs/heights.md). The band's NoData index is a hole (NaN), never compared with the reds;
+// an index outside the palette is left as it is. Built once per read; a band without a palette leaves its
+// values alone.
 struct PaletteReds {
   std::vector<float> red;
-  int has_nodata = 0;
-  double nodata = 0;
+  std::optional<double> nodata;
 
   explicit PaletteReds(GDALRasterBand* b) {
     const GDALColorTable* table = palette_of(b);
     if (!table) return;
     red.resize(std::size_t(std::max(0, table->GetColorEntryCount())));
     for (std::size_t i = 0; i < red.size(); ++i) red[i] = float(table->GetColorEntry(int(i))->c1);
-    nodata = b->GetNoDataValue(&has_nodata);
+    nodata = band_nodata(*b->GetDataset(), b);
   }
   void apply(float* values, std::size_t count) const {
     if (red.empty()) return;
     for (std::size_t i = 0; i < count; ++i) {
       const float v = values[i];
-      if (has_nodata && double(v) == nodata) continue;
-      if (v >= 0 && v < float(red.size())) values[i] = red[std::size_t(v)];
+      if (nodata && double(v) == *nodata)
+        values[i] = std::numeric_limits<float>::quiet_NaN();
+      else if (v >= 0 && v < float(red.size()))
+        values[i] = red[std::size_t(v)];
     }
   }
 };
@@ -271,10 +304,9 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
         info.band_colours.emplace_back();
         break;
     }
+    // A palette's NoData index is read as a hole (PaletteReds), not compared with its reds.
+    info.nodata.push_back(info.palette ? std::nullopt : band_nodata(*ds, band));
     int has = 0;
-    const double v = band->GetNoDataValue(&has);
-    info.nodata.push_back(has ? std::optional<double>(v) : std::nullopt);
-    has = 0;
     const double scale = band->GetScale(&has);
     info.scale.push_back(has ? scale : 1.0);
     has = 0;

@@ -40,6 +40,13 @@ struct GeoRasterInfo {
   std::vector<std::string> unit_types;
 };
 
+// Whether a raster's heights are read through OpenImageIO, GDAL only placing it: a PNG (placed by a world
+// file), whose values and channels are then those it has without one (docs/heights.md; GDAL 3.6 reads an
+// interlaced 16-bit PNG byte-swapped, and a tRNS colour as NoData).
+inline bool values_through_image_reader(const GeoRasterInfo& info) {
+  return info.driver == "PNG";
+}
+
 // The raster's header when it is one for GDAL (a format OpenImageIO does not read, or a raster with a
 // geotransform, a CRS, or ground control points, RPCs or geolocation arrays in place of a geotransform);
 // nullopt when GDAL cannot open it or it is an image without georeferencing in a format OpenImageIO reads

@@ -12,6 +12,7 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <zlib.h>
 #include "run_hfbake.hpp"
 
 #include <OpenImageIO/imageio.h>
@@ -1036,23 +1037,164 @@ TEST_F(CliGdal, APalettePngReadsTheSameHeightsWithAWorldFile) {
   }
   EXPECT_EQ(max_abs_diff(ao[0], ao[1]), 0.0);
   const Result said = hfbake("validate " + (dir_ / "placed.json").string());
-  EXPECT_NE(said.err.find("through GDAL (PNG, red of its palette, Byte"), std::string::npos) << said.err;
+  EXPECT_NE(said.err.find("through OpenImageIO, placed by GDAL (PNG"), std::string::npos) << said.err;
   // The heights line's range is the palette's reds of the indices used (3 .. 232: reds 23 .. 252).
   EXPECT_NE(said.err.find("heights 23 .. 252"), std::string::npos) << said.err;
-  // Channel "R" (or 0) names that red through GDAL too; another colour is refused at /height/channel with
-  // the way to read it.
-  const fs::path red = write_job("r.json", "r", {{"image", "placed.png"}, {"channel", "R"}});
+  // Channel "G" reads the palette's greens (i / 2: 1 .. 116), as without the world file.
+  for (const char* name : {"alone", "placed"}) {
+    const fs::path green = write_job(std::string(name) + "_g.json", std::string(name) + "_g",
+                                     {{"image", std::string(name) + ".png"}, {"channel", "G"}});
+    const Result g = hfbake("validate " + green.string());
+    EXPECT_EQ(g.exit_code, 0) << g.err;
+    EXPECT_NE(g.err.find("heights 1 .. 116"), std::string::npos) << g.err;
+  }
+  // A palette GeoTIFF is read through GDAL: channel "R" (or 0) names that red; another colour is refused
+  // at /height/channel with the way to read it.
+  translate("placed.png palette.tif");
+  const fs::path red = write_job("r.json", "r", {{"image", "palette.tif"}, {"channel", "R"}});
   const Result r = hfbake("validate " + red.string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("through GDAL (GTiff, red of its palette, Byte"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("heights 23 .. 252"), std::string::npos) << r.err;
-  const fs::path green = write_job("g.json", "g", {{"image", "placed.png"}, {"channel", "G"}});
+  const fs::path green = write_job("g.json", "g", {{"image", "palette.tif"}, {"channel", "G"}});
   const Result g = hfbake("validate " + green.string());
   EXPECT_EQ(g.exit_code, 2) << g.err;
   ASSERT_EQ(g.error_lines().size(), 1u) << g.err;
-  EXPECT_NE(g.error_lines()[0].find(green.string() + ": /height/channel: " + (dir_ / "placed.png").string() +
+  EXPECT_NE(g.error_lines()[0].find(green.string() + ": /height/channel: " + (dir_ / "palette.tif").string() +
                                     ": is a palette image read through GDAL"),
             std::string::npos)
       << g.err;
+}
+
+// A grey PNG of 16-bit samples written as stored, by hand (zlib), since neither GDAL nor OpenImageIO writes
+// an interlaced (Adam7) one: each pass's rows, filter 0; `trns` >= 0: a tRNS chunk naming that grey.
+void write_grey16_png(const fs::path& file, int w, int h, const std::vector<std::uint16_t>& v,
+                      bool interlaced, int trns = -1) {
+  std::string raw;
+  const auto add_rows = [&](int x0, int y0, int dx, int dy) {
+    if (x0 >= w || y0 >= h) return;
+    for (int y = y0; y < h; y += dy) {
+      raw.push_back('\0');
+      for (int x = x0; x < w; x += dx) {
+        const std::uint16_t s = v[std::size_t(y) * std::size_t(w) + std::size_t(x)];
+        raw.push_back(char(s >> 8)), raw.push_back(char(s & 0xff));
+      }
+    }
+  };
+  if (interlaced)
+    for (const auto& [x0, y0, dx, dy] : std::vector<std::array<int, 4>>{{0, 0, 8, 8},
+                                                                        {4, 0, 8, 8},
+                                                                        {0, 4, 4, 8},
+                                                                        {2, 0, 4, 4},
+                                                                        {0, 2, 2, 4},
+                                                                        {1, 0, 2, 2},
+                                                                        {0, 1, 1, 2}})
+      add_rows(x0, y0, dx, dy);
+  else
+    add_rows(0, 0, 1, 1);
+  uLongf packed_size = compressBound(uLong(raw.size()));
+  std::string packed(packed_size, '\0');
+  ASSERT_EQ(compress(reinterpret_cast<Bytef*>(packed.data()), &packed_size,
+                     reinterpret_cast<const Bytef*>(raw.data()), uLong(raw.size())),
+            Z_OK);
+  packed.resize(packed_size);
+  const auto be32 = [](std::uint32_t x) {
+    return std::string{char(x >> 24), char(x >> 16 & 0xff), char(x >> 8 & 0xff), char(x & 0xff)};
+  };
+  std::string png = "\x89PNG\r\n\x1a\n";
+  const auto chunk = [&](const std::string& type, const std::string& data) {
+    const std::string body = type + data;
+    png += be32(std::uint32_t(data.size())) + body +
+           be32(std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(body.data()), uInt(body.size()))));
+  };
+  chunk("IHDR", be32(std::uint32_t(w)) + be32(std::uint32_t(h)) + std::string{16, 0, 0, 0, char(interlaced)});
+  if (trns >= 0) chunk("tRNS", std::string{char(trns >> 8), char(trns & 0xff)});
+  chunk("IDAT", packed);
+  chunk("IEND", "");
+  std::ofstream(file, std::ios::binary) << png;
+}
+
+// A world file changes where a PNG lies, never its heights: an interlaced 16-bit PNG (which GDAL 3.6 reads
+// byte-swapped) and a 16-bit PNG whose tRNS grey is one of its heights (which GDAL takes for NoData) bake
+// the same bits with a world file as without; a tiled bake, which reads the placed PNG through GDAL, refuses
+// the interlaced one in one line naming it.
+TEST_F(CliGdal, APngReadsTheSameHeightsWithAWorldFile) {
+  const int w = 48, h = 40;
+  std::vector<std::uint16_t> v(std::size_t(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      v[std::size_t(y) * w + x] = std::uint16_t((x * 977 + y * 331 + (x * y) % 7 * 1500) % 40001);
+  for (const bool interlaced : {true, false}) {
+    SCOPED_TRACE(interlaced ? "interlaced" : "tRNS");
+    const int trns = interlaced ? -1 : int(v[std::size_t(3) * w + 5]);
+    std::vector<float> ao[2];
+    for (const std::string name : {"alone", "placed"}) {
+      const std::string stem = name + (interlaced ? "_i" : "_t");
+      write_grey16_png(dir_ / (stem + ".png"), w, h, v, interlaced, trns);
+      if (name == "placed") std::ofstream(dir_ / (stem + ".pgw")) << "1\n0\n0\n-1\n500000.5\n5000039.5\n";
+      const fs::path job =
+          write_job(stem + ".json", stem, {{"image", stem + ".png"}, {"height_scale", 1e-3}});
+      const Result r = hfbake("bake " + job.string() + " --no-cache --quiet");
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      const Raster a = read_raster(dir_ / ("out_" + stem) / (stem + ".p1.ao.tif"));
+      ASSERT_EQ(a.values.size(), std::size_t(w) * h);
+      ao[name == "placed"] = a.values;
+    }
+    EXPECT_EQ(max_abs_diff(ao[0], ao[1]), 0.0);
+  }
+  const fs::path job = dir_ / "placed_i.json";
+  nlohmann::json doc = nlohmann::json::parse(std::ifstream(job));
+  doc["bake"] = {{{"method", "relief"}, {"search_radius", 3}}};
+  std::ofstream(job) << doc.dump();
+  const Result t = hfbake("validate --tiles --tile-size 16 " + job.string());
+  EXPECT_EQ(t.exit_code, 2) << t.err;
+  ASSERT_EQ(t.error_lines().size(), 1u) << t.err;
+  EXPECT_NE(t.error_lines()[0].find((dir_ / "placed_i.png").string() + ": is an interlaced 16-bit PNG"),
+            std::string::npos)
+      << t.err;
+}
+
+// A palette GeoTIFF's NoData index marks holes, and only those: an index whose colour's red equals the
+// NoData index is a height like any other.
+TEST_F(CliGdal, APalettesNoDataIndexIsTheOnlyHole) {
+  GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+  const int w = 32, h = 24;
+  GDALDataset* ds = gtiff->Create((dir_ / "pal.tif").c_str(), w, h, 1, GDT_Byte, nullptr);
+  ASSERT_TRUE(ds);
+  std::vector<std::uint8_t> idx(std::size_t(w) * h);
+  std::size_t holes = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::uint8_t i = (x + y) % 9 == 0       ? 2
+                             : (x * 3 + y) % 5 == 0 ? 4
+                                                    : std::uint8_t(10 + (x * y) % 50);
+      idx[std::size_t(y) * w + x] = i;
+      holes += i == 2;
+    }
+  ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, w, h, idx.data(), w, h, GDT_Byte, 0, 0, nullptr),
+            CE_None);
+  GDALColorTable table;
+  for (int i = 0; i < 256; ++i) {
+    const GDALColorEntry e{short(i == 4 ? 2 : 100 + i / 2), 0, 0, 255};  // index 4: red 2, the NoData index
+    table.SetColorEntry(i, &e);
+  }
+  ds->GetRasterBand(1)->SetColorInterpretation(GCI_PaletteIndex);
+  ds->GetRasterBand(1)->SetColorTable(&table);
+  ds->GetRasterBand(1)->SetNoDataValue(2);
+  double gt[6] = {500000, 1, 0, 5000024, 0, -1};
+  ds->SetGeoTransform(gt);
+  GDALClose(ds);
+  const Result r = hfbake("validate " + write_job("pal.json", "pal", {{"image", "pal.tif"}}).string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(
+      r.err.find("(" + std::to_string(holes) + " of " + std::to_string(w * h) + " texels have no valid"),
+      std::string::npos)
+      << holes << " holes: " << r.err;
+  const Result f = hfbake(
+      "validate " + write_job("palf.json", "palf", {{"image", "pal.tif"}, {"nodata", "fill"}}).string());
+  EXPECT_EQ(f.exit_code, 0) << f.err;
+  EXPECT_NE(f.err.find(std::to_string(holes) + " texels without a height"), std::string::npos)
+      << holes << " holes: " << f.err;
 }
 
 // `hfbake horizon` at a point of a Web Mercator DEM warns on stderr that map units are 1 / cos(latitude)
