@@ -853,11 +853,10 @@ LayerSet bake_reference(const Scene& scene, const ReferenceOptions& options, con
           if (cx.needs.sh_irradiance) {
             // Its environment term: no noise, from the texel's horizons.
             std::fill(sh_environment, sh_environment + reference::kShIrradianceSums, 0.0);
-            const Vec3 o = f.position(i, j) + Vec3{0, 0, sh_lift};
             for (int k = 0; k < kShAzimuths; ++k)
-              sh_elevation[std::size_t(k)] =
-                  bisect_horizon(geometry, o, sh_table.cos_phi[k], sh_table.sin_phi[k], kShIterations)
-                      .elevation;
+              sh_elevation[std::size_t(k)] = texel_horizon(f, geometry, i, j, sh_lift, sh_table.cos_phi[k],
+                                                           sh_table.sin_phi[k], kShIterations)
+                                                 .elevation;
             reference::add_sh_environment_above(sh_table, sh_elevation.data(), sh_environment);
           }
           for (std::size_t k = 0; k < outs.size(); ++k) {

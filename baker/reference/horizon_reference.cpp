@@ -110,6 +110,31 @@ double horizon_receiver_lift(const HeightField& f, const reference::EmbreeField&
   return std::max(1e-5 * std::min(f.dx(), f.dy()), geometry.float_floor());
 }
 
+TexelHorizon texel_horizon(const HeightField& f, const reference::EmbreeField& geometry, int i, int j,
+                           double lift, double c, double s, int iterations, const CurvedRays& curved) {
+  const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
+  int di = 0, dj = 0;  // the step along the border, or none
+  if (f.wrap == Wrap::clamp) {
+    if (std::abs(s) < 1e-12 && (j == 0 || j == f.height - 1)) di = c > 0 ? 1 : -1;
+    if (std::abs(c) < 1e-12 && (i == 0 || i == f.width - 1)) dj = s > 0 ? 1 : -1;
+  }
+  if (di == 0 && dj == 0)
+    return bisect_horizon(geometry, o, c, s, iterations, std::numeric_limits<double>::infinity(), curved);
+  double best = -std::numeric_limits<double>::infinity(), best_rise = 0, best_run = 0;
+  for (int n = 1;; ++n) {
+    const int x = i + n * di, y = j + n * dj;
+    if (x < 0 || y < 0 || x >= f.width || y >= f.height) break;
+    const double run = n * (di ? f.dx() : f.dy());
+    const double rise = double(f.at(x, y)) - o.z - curved.curvature * run * run;
+    if (rise * best_run > best_rise * run || n == 1)
+      best = std::atan2(rise, run), best_rise = rise, best_run = run;
+  }
+  // Nothing along it (a corner looking out along its border): what the rays make of it.
+  if (best_run == 0)
+    return bisect_horizon(geometry, o, c, s, iterations, std::numeric_limits<double>::infinity(), curved);
+  return {best, std::hypot(best_run, best_rise)};
+}
+
 ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool distance, const RunControl& rc,
                                            int iterations, double curvature) {
   ReferenceHorizons out;
@@ -125,11 +150,10 @@ ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool dis
   tbb::parallel_for(0, f.height, [&](int j) {
     rc.check();
     for (int i = 0; i < f.width; ++i) {
-      const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
       const std::size_t t = f.index(i, j);
       for (int k = 0; k < K; ++k) {
-        const TexelHorizon h = bisect_horizon(geometry, o, cos_phi[k], sin_phi[k], iterations,
-                                              std::numeric_limits<double>::infinity(), curved);
+        const TexelHorizon h =
+            texel_horizon(f, geometry, i, j, lift, cos_phi[k], sin_phi[k], iterations, curved);
         out.sin_elevation[t * K + k] = float(std::sin(h.elevation));
         if (distance) out.distance[t * K + k] = float(h.distance);
       }

@@ -61,6 +61,12 @@ TexelHorizon bisect_horizon(const reference::EmbreeField& geometry, const Vec3& 
                             const CurvedRays& curved = {});
 // The lift of a horizon receiver above its texel centre: max(1e-5 texel, the geometry's float floor).
 double horizon_receiver_lift(const HeightField& field, const reference::EmbreeField& geometry);
+// Texel (i, j)'s horizon towards (c, s) from its centre lifted by `lift`: bisected (bisect_horizon), but on
+// a clamp field's border looking along it. That ray runs in the plane of the mesh's outer edges, where
+// Embree reports no hit, not even straight down; the surface it passes over is the border's polyline, whose
+// steepest vertex (less the curvature's drop) is the horizon, found exactly.
+TexelHorizon texel_horizon(const HeightField& field, const reference::EmbreeField& geometry, int i, int j,
+                           double lift, double c, double s, int iterations, const CurvedRays& curved = {});
 
 // curvature: Scene::curvature (0: flat).
 ReferenceHorizons trace_reference_horizons(const HeightField& field, int K, bool distance,

@@ -58,9 +58,8 @@ std::vector<float> trace_reference_sh_visibility(const HeightField& f, int azimu
     rc.check();
     std::vector<double> elevation(azimuths);
     for (int i = 0; i < f.width; ++i) {
-      const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
       for (int k = 0; k < azimuths; ++k)
-        elevation[k] = bisect_horizon(geometry, o, cos_phi[k], sin_phi[k], iterations).elevation;
+        elevation[k] = texel_horizon(f, geometry, i, j, lift, cos_phi[k], sin_phi[k], iterations).elevation;
       const std::array<double, 16> c = project_horizons(elevation, cos_phi, sin_phi);  // no allocation
       float* dst = out.data() + f.index(i, j) * 16;
       for (int n = 0; n < 16; ++n) dst[n] = float(c[n]);
