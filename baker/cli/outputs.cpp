@@ -647,6 +647,10 @@ std::vector<std::string> OutputStage::write_layers(const std::string& stem, cons
     if (layer.channel_count() != 1 && layer.channel_count() != 3) continue;
     if (layer.name.size() > 7 && layer.name.compare(layer.name.size() - 7, 7, "_stderr") == 0) continue;
     const std::string png = job_.name + "." + stem + "." + layer.name + ".preview.png";
+    // Light and fractions of the sky through the display transform; a quantity in a unit of its own
+    // (openness in degrees, the sun's irradiation and hours: mono layers that are neither) over its range.
+    const LayerKind* kind = find_layer_kind(layer.name);
+    preview.stretch = layer.channel_count() == 1 && (!kind || kind->values == LayerValues::finite);
     write_preview(stage_ / png, layers, layer, preview);
     staged_.push_back(png);
   }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -77,7 +78,16 @@ void write_preview(const fs::path& file, const LayerSet& layers, const Layer& la
   const int w = size.width, h = size.height;
   std::vector<float> rgb = preview_rgb(layers, layer, size);
   const bool direction = is_direction_layer(layer.name);
-  if (direction) {
+  std::string description;
+  if (options.stretch && !direction) {
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (const float v : rgb)
+      if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+    for (float& v : rgb) v = !std::isfinite(v) ? v : hi > lo ? (v - lo) / (hi - lo) : 0.5f;
+    char range[160];
+    std::snprintf(range, sizeof range, "%s: black %.6g, white %.6g", layer.name.c_str(), lo, hi);
+    if (lo <= hi) description = range;
+  } else if (direction) {
     for (float& v : rgb) v = 0.5f + 0.5f * v;
   } else {
     convert_to_display(rgb, options.display, options.view, InputSite{file.string(), ""});
@@ -95,7 +105,8 @@ void write_preview(const fs::path& file, const LayerSet& layers, const Layer& la
   OiioWrite png;
   png.format = "png";
   png.width = w, png.height = h, png.channels = 3;
-  png.text_attributes = {{"oiio:ColorSpace", direction ? "Raw" : "sRGB"}};
+  png.text_attributes = {{"oiio:ColorSpace", direction || options.stretch ? "Raw" : "sRGB"}};
+  if (!description.empty()) png.text_attributes.emplace_back("ImageDescription", description);
   std::string err;
   if (!oiio_codec().write(tmp_png.string(), png, bytes.data(), err)) {
     if (const auto nl = err.find('\n'); nl != std::string::npos) err.resize(nl);

@@ -17,6 +17,10 @@ struct PreviewOptions {
   // integer factor f that fits: each preview pixel is the mean of the finite values of an f x f block of
   // texels (fewer at the right and bottom edges), taken in linear light before the display transform.
   int max_size = 2048;
+  // A quantity in a unit of its own (degrees, Wh/m², hours), not light: shown grey from the least of its
+  // finite values (black) to the largest (white), without the display transform (mid grey when it is
+  // constant); the PNG's ImageDescription names the two values.
+  bool stretch = false;
 };
 
 // The preview's size for a width x height layer: (ceil(width / f), ceil(height / f)) with f the reduction

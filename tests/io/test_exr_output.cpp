@@ -234,6 +234,39 @@ TEST(Preview, EncodesThroughTheSrgbDisplay) {
   EXPECT_EQ(std::vector<unsigned char>(b.begin() + 6, b.end()), (std::vector<unsigned char>{128, 0, 128}));
 }
 
+// A quantity in a unit of its own (PreviewOptions::stretch): grey from its least finite value (black) to its
+// largest (white), no display transform, the two values in the PNG's ImageDescription; a constant layer is
+// mid grey.
+TEST(Preview, AQuantityIsShownOverItsRange) {
+  TempFolder dir;
+  LayerSet set;
+  set.width = 4;
+  set.height = 1;
+  set.add("openness_positive", mono_channels()).data = {70.0f, 85.0f, 100.0f, 70.0f};
+  set.add("sun_hours", mono_channels()).data = {12.0f, 12.0f, 12.0f, 12.0f};
+  PreviewOptions o;
+  o.stretch = true;
+  write_preview(dir / "o.png", set, *set.find("openness_positive"), o);
+  write_preview(dir / "h.png", set, *set.find("sun_hours"), o);
+  const auto read8 = [](const fs::path& f, std::string* description) {
+    auto in = OIIO::ImageInput::open(f.string());
+    EXPECT_TRUE(in);
+    if (description) *description = in->spec().get_string_attribute("ImageDescription");
+    std::vector<unsigned char> px(std::size_t(in->spec().width) * in->spec().height * in->spec().nchannels);
+    in->read_image(0, 0, 0, in->spec().nchannels, OIIO::TypeDesc::UINT8, px.data());
+    return px;
+  };
+  std::string description;
+  const auto a = read8(dir / "o.png", &description);
+  ASSERT_EQ(a.size(), 12u);
+  EXPECT_EQ(a[0], 0);
+  EXPECT_EQ(a[3], 128);  // (85 - 70) / 30 * 255 = 127.5, rounded half away from zero
+  EXPECT_EQ(a[6], 255);
+  EXPECT_EQ(description, "openness_positive: black 70, white 100");
+  const auto h = read8(dir / "h.png", nullptr);
+  EXPECT_EQ(h[0], 128);
+}
+
 TEST(Preview, UnwritableFolderIsAnInputError) {
   TempFolder dir;
   LayerSet set;
