@@ -12,6 +12,7 @@
 #include "cli/scene_loader.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
+#include "io/georaster_input.hpp"
 #include "job/embedded_schemas.hpp"
 #include "job/manifest.hpp"
 #include "methods/method_table.hpp"
@@ -208,6 +209,11 @@ int run_init(const InitOptions& options) {
   const fs::path job_file = options.out ? *options.out : fs::path(job_name(height) + ".json");
   if (fs::equivalent(job_file, height, ec) && !ec)
     return refuse(job_file.string() + ": is the height file itself: give the job another name (-o)");
+  // Nor a file GDAL reads with it (a world file, a VRT's sources, an .aux.xml): --force would replace it.
+  for (const fs::path& f : raster_files(height))
+    if (fs::equivalent(job_file, f, ec) && !ec)
+      return refuse(job_file.string() + ": is " + f.string() +
+                    ", which GDAL reads for the height file: give the job another name (-o)");
   if (fs::is_directory(job_file, ec))
     return refuse(job_file.string() + ": is a folder: --out names the job file to write (e.g. " +
                   (job_file / (job_name(height) + ".json")).string() + ")");

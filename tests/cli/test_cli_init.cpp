@@ -152,6 +152,25 @@ TEST_F(CliInit, BadInputIsOneLineAndWritesNothing) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("h.png: is the height file itself"), std::string::npos) << r.err;
   EXPECT_EQ(fs::file_size(dir_ / "h.png"), size);
+  // Nor over a file GDAL reads with it: its world file, or a VRT's source.
+  const std::string world = "1\n0\n0\n-1\n0.5\n-0.5\n";
+  std::ofstream(dir_ / "h.pgw") << world;
+  std::ofstream(dir_ / "h.vrt")
+      << "<VRTDataset rasterXSize=\"32\" rasterYSize=\"32\"><VRTRasterBand dataType=\"UInt16\" "
+         "band=\"1\"><SimpleSource><SourceFilename relativeToVRT=\"1\">h.png"
+         "</SourceFilename><SourceBand>1</SourceBand></SimpleSource></VRTRasterBand>"
+         "</VRTDataset>";
+  for (const auto& [height, out] :
+       {std::pair<std::string, std::string>{"h.png", "h.pgw"}, {"h.vrt", "h.png"}}) {
+    r = run("init " + (dir_ / height).string() + " --preset gis-relief --force --out " +
+            (dir_ / out).string());
+    EXPECT_EQ(r.exit_code, 2) << height << " " << out;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.err.find(", which GDAL reads for the height file"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(fs::file_size(dir_ / "h.png"), size);
+  std::ifstream in(dir_ / "h.pgw");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), world);
 }
 
 // --force replaces a link at the job's name; what it points to is never written.
