@@ -118,8 +118,14 @@ ordered preset_job(const std::string& preset, const std::string& name, const std
   ordered job = {{"version", 1}, {"name", name}, {"description", ""}, {"height", nullptr}};
   ordered output = {{"dir", "out/" + name}, {"previews", true}};
   if (preset == "game-ao") {
-    height["wrap"] = "repeat";
-    notes += "wrap repeat: the map tiles (set clamp if it does not). ";
+    // A georeferenced raster is a piece of the Earth, which does not tile (and a geographic one has no
+    // repeating frame): clamp.
+    if (!h.georeferenced) {
+      height["wrap"] = "repeat";
+      notes += "wrap repeat: the map tiles (set clamp if it does not). ";
+    } else {
+      notes += "wrap clamp: a georeferenced raster does not tile. ";
+    }
     job["bake"] = {{{"method", "p1"}, {"directions", 32}, {"layers", {"ao", "bent_normal"}}}};
     output["textures"] = {
         {{"layers", {"ao"}}, {"bits", 16}, {"format", "png"}},

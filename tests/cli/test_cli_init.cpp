@@ -173,6 +173,22 @@ TEST_F(CliInit, BadInputIsOneLineAndWritesNothing) {
   EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), world);
 }
 
+// game-ao on a georeferenced raster (here geographic, placed by an .aux.xml): a piece of the Earth does not
+// tile, so the job clamps (a geographic raster cannot repeat), and it validates.
+TEST_F(CliInit, GameAoOnAGeoreferencedRasterClamps) {
+  write_png16(dir_ / "geo.tif");
+  std::ofstream(dir_ / "geo.tif.aux.xml")
+      << "<PAMDataset>\n  <SRS>EPSG:4326</SRS>\n  <GeoTransform>15, 1e-5, 0, 46.5, 0, -1e-5</GeoTransform>\n"
+         "</PAMDataset>\n";
+  const Result r =
+      run("init " + (dir_ / "geo.tif").string() + " --preset game-ao --out " + (dir_ / "geo.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json job = read_json(dir_ / "geo.json");
+  EXPECT_EQ(job["height"].value("wrap", "clamp"), "clamp") << job.dump();
+  const Result v = run("validate " + (dir_ / "geo.json").string());
+  EXPECT_EQ(v.exit_code, 0) << v.err;
+}
+
 // --force replaces a link at the job's name; what it points to is never written.
 TEST_F(CliInit, ForceReplacesALinkAndLeavesItsTarget) {
   write_png16(dir_ / "h.png");
