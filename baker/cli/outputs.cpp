@@ -666,6 +666,11 @@ std::vector<std::pair<std::string, std::string>> OutputStage::geotiff_metadata(
     metadata.emplace_back(k, value);
   }
   metadata.emplace_back("HFBAKE_AZIMUTH_CONVENTION", azimuth_convention(georeference_));
+  if (texel_x_ > 0) {  // as the EXR's hfbake:texel_size
+    char sides[64];
+    std::snprintf(sides, sizeof sides, "%.15g %.15g", texel_x_, texel_y_);
+    metadata.emplace_back("HFBAKE_TEXEL_SIZE", sides);
+  }
   return metadata;
 }
 

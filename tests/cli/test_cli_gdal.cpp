@@ -230,6 +230,7 @@ TEST_F(CliGdal, OutputsHaveTheInputsCrsAndGeotransformAndAreCogs) {
     EXPECT_NE(out["metadata"][""]["HFBAKE_AZIMUTH_CONVENTION"].get<std::string>().find(
                   "compass azimuth = (90 + phi) mod 360"),
               std::string::npos);
+    EXPECT_EQ(out["metadata"][""].value("HFBAKE_TEXEL_SIZE", ""), "1 1");  // as the EXR's hfbake:texel_size
   }
   // Values equal the EXR's (float EXR, read with OpenImageIO).
   auto in = OIIO::ImageInput::open((dir_ / "out_m1" / "m1.p1.exr").string());
