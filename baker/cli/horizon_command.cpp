@@ -134,7 +134,7 @@ Profile compute(const HorizonOptions& o) {
   Profile p;
   p.g = info->geotransform;
   const auto& g = p.g;
-  if (g[2] != 0 || g[4] != 0) fail("", "is rotated or sheared; warp it north-up first (gdalwarp)");
+  if (!north_up(g)) fail("", "is rotated or sheared; warp it north-up first (gdalwarp)");
   if (o.band < 0 || o.band >= info->bands)
     fail("--band", "is " + std::to_string(o.band) + " but the raster has " + std::to_string(info->bands) +
                        " band(s) (0-based)");

@@ -89,7 +89,7 @@ std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
                               "(gdal_edit.py -a_ullr) or leave the CRS out (gdal_edit.py -a_srs \"\")");
   if (!info->has_geotransform) return info;
   const auto& g = info->geotransform;
-  if (g[2] != 0 || g[4] != 0)
+  if (!north_up(g))
     fail("/height/image", file + ": is rotated or sheared (geotransform " + num(g[2]) + ", " + num(g[4]) +
                               "); warp it north-up first (gdalwarp)");
   if (info->geographic) {

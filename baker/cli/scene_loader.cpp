@@ -300,12 +300,32 @@ std::string short_num(double v) {
   return buf;
 }
 
-// Metres in a unit of length as a raster band names it (GDAL's unit type; a CRS gives its own): the metre,
-// the international foot and the US survey foot; nullopt for a name not known here.
+// Metres in a unit of length as a raster band names it (GDAL's unit type; a CRS gives its own): the metre
+// and its millimetre, centimetre, decimetre and kilometre, the international foot and the US survey foot;
+// nullopt for a name not known here.
 std::optional<double> metres_per(std::string unit) {
   for (char& c : unit) c = char(std::tolower(static_cast<unsigned char>(c)));
   for (const char* m : {"m", "metre", "meter", "metres", "meters"})
     if (unit == m) return 1.0;
+  for (const auto& [name, metres] : {std::pair<const char*, double>{"mm", 1e-3},
+                                     {"millimetre", 1e-3},
+                                     {"millimeter", 1e-3},
+                                     {"millimetres", 1e-3},
+                                     {"millimeters", 1e-3},
+                                     {"cm", 1e-2},
+                                     {"centimetre", 1e-2},
+                                     {"centimeter", 1e-2},
+                                     {"centimetres", 1e-2},
+                                     {"centimeters", 1e-2},
+                                     {"dm", 0.1},
+                                     {"decimetre", 0.1},
+                                     {"decimeter", 0.1},
+                                     {"km", 1e3},
+                                     {"kilometre", 1e3},
+                                     {"kilometer", 1e3},
+                                     {"kilometres", 1e3},
+                                     {"kilometers", 1e3}})
+    if (unit == name) return metres;
   for (const char* f : {"ft", "foot", "feet", "international foot", "foot (international)"})
     if (unit == f) return 0.3048;
   for (const char* f : {"us survey foot", "us-ft", "ftus", "foot_us", "us survey feet", "foot (us survey)"})

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <filesystem>
 #include <optional>
@@ -39,6 +40,12 @@ struct GeoRasterInfo {
   // none).
   std::vector<std::string> unit_types;
 };
+
+// Whether a geotransform is north-up (neither rotated nor sheared): its rotation terms within 1e-9 of its
+// pixel sizes, the tolerance square pixels are held to (a term of 1e-15, a conversion's rounding, is none).
+inline bool north_up(const std::array<double, 6>& g) {
+  return std::abs(g[2]) <= 1e-9 * std::abs(g[1]) && std::abs(g[4]) <= 1e-9 * std::abs(g[5]);
+}
 
 // Whether a raster's heights are read through OpenImageIO, GDAL only placing it: a PNG (placed by a world
 // file), whose values and channels are then those it has without one (docs/heights.md; GDAL 3.6 reads an

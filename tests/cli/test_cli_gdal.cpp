@@ -561,6 +561,40 @@ TEST_F(CliGdal, ACrsFarFromTrueScaleIsWarnedWithItsFactor) {
   EXPECT_EQ(own.err.find("map units are"), std::string::npos) << own.err;
 }
 
+// A rotated or sheared raster is refused in one line at /height/image; rotation terms of 1e-15 pixel (a
+// conversion's rounding) are north-up, baked as the same raster without them.
+TEST_F(CliGdal, OnlyARotationBeyondRoundingIsRefused) {
+  translate("-srcwin 400 400 48 40 '" + kDem.string() + "' north.tif");
+  const auto with_terms = [&](const std::string& file, double rotation) {
+    translate("north.tif " + file);
+    std::unique_ptr<GDALDataset> ds(
+        GDALDataset::Open((dir_ / file).c_str(), GDAL_OF_RASTER | GDAL_OF_UPDATE));
+    ASSERT_TRUE(ds);
+    double g[6];
+    ds->GetGeoTransform(g);
+    g[2] = rotation * g[1], g[4] = rotation * g[1];
+    ds->SetGeoTransform(g);
+  };
+  with_terms("tiny.tif", 1e-15);
+  with_terms("turned.tif", 0.2);
+  const Result turned = hfbake("validate " + write_job("t.json", "t", {{"image", "turned.tif"}}).string());
+  EXPECT_EQ(turned.exit_code, 2) << turned.err;
+  ASSERT_EQ(turned.error_lines().size(), 1u) << turned.err;
+  EXPECT_NE(turned.err.find("/height/image: " + (dir_ / "turned.tif").string() + ": is rotated or sheared"),
+            std::string::npos)
+      << turned.err;
+  std::vector<float> ao[2];
+  int n = 0;
+  for (const char* name : {"north", "tiny"}) {
+    const Result r = hfbake(
+        "bake --quiet --no-cache " +
+        write_job(std::string(name) + ".json", name, {{"image", std::string(name) + ".tif"}}).string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    ao[n++] = read_raster(dir_ / ("out_" + std::string(name)) / (std::string(name) + ".p1.ao.tif")).values;
+  }
+  EXPECT_EQ(max_abs_diff(ao[0], ao[1]), 0.0);
+}
+
 // A band that declares its heights in metres on a CRS in US survey feet (EPSG:2263) is warned with the
 // factor that converts them, 3937 / 1200 (feet on a metre CRS: too steep, by its inverse); the heights line
 // names the CRS's unit. With that height_scale, with the band in feet or with no unit declared, no warning; a
@@ -596,6 +630,15 @@ TEST_F(CliGdal, HeightsInAnotherUnitThanThePixelsAreWarned) {
                         "3.28083 times too steep; give height_scale 0.304801"),
             std::string::npos)
       << ft.err;
+  // Heights in centimetres on a metre CRS (a lidar product's integer centimetres): too steep by 100.
+  translate("metres.tif metres_cm.tif");
+  with_unit("metres_cm.tif", "cm");
+  const Result cm = hfbake("validate " + write_job("cm.json", "cm", {{"image", "metres_cm.tif"}}).string());
+  ASSERT_EQ(cm.exit_code, 0) << cm.err;
+  EXPECT_NE(cm.err.find("the band's heights are in cm and its pixels in metre: slopes come out 100 times too "
+                        "steep; give height_scale 0.01"),
+            std::string::npos)
+      << cm.err;
   const nlohmann::json cases[] = {{{"image", "feet_m.tif"}, {"height_scale", 3937.0 / 1200.0}},
                                   {{"image", "feet_ft.tif"}},
                                   {{"image", "feet.tif"}},
