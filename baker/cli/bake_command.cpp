@@ -403,7 +403,7 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
   // Atomic like every other output: a temporary of its own beside the file, then rename (a full disk or a
   // read-only folder leaves no temporary behind).
   try {
-    write_file_atomically(file, doc.dump(2) + "\n");
+    write_named_output(file, doc.dump(2) + "\n");
   } catch (const std::system_error& e) {
     throw InputError(file.string(), "--summary", "cannot write file: " + e.code().message());
   }

@@ -119,7 +119,7 @@ CompareResult compare_reports(const CompareOptions& o) {
   if (o.json) {
     // Atomic like every output: a reader never sees half of it, and a link at the name is replaced.
     try {
-      write_file_atomically(
+      write_named_output(
           *o.json,
           nlohmann::json{{"regression", r.regression}, {"comparisons", r.comparisons}}.dump(2) + "\n");
     } catch (const std::system_error& e) {

@@ -259,7 +259,7 @@ int run_horizon(const HorizonOptions& o) {
     const std::string text = o.format == "json" ? to_json(o, p) : to_csv(p);
     const auto write = [](const std::string& file, const std::string& option, const std::string& bytes) {
       try {
-        write_file_atomically(file, bytes);
+        write_named_output(file, bytes);
       } catch (const std::system_error& e) {
         throw InputError(file, option, "cannot write the file: " + e.code().message());
       }

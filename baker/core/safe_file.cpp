@@ -254,6 +254,27 @@ void write_file_atomically(const fs::path& final, std::string_view bytes) {
   tmp.commit();
 }
 
+void write_named_output(const fs::path& file, std::string_view bytes) {
+  struct stat st;
+  if (stat(file.c_str(), &st) != 0 || !(S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode))) {
+    write_file_atomically(file, bytes);
+    return;
+  }
+  const int fd = open(file.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd < 0) throw system_error(errno, "cannot open " + file.string());
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int e = n < 0 ? errno : EIO;
+      close(fd);
+      throw system_error(e, "cannot write " + file.string());
+    }
+    done += std::size_t(n);
+  }
+  if (close(fd) != 0 && errno != EINTR) throw system_error(errno, "cannot write " + file.string());
+}
+
 std::string not_a_lock_file(const fs::path& lock, const std::string& why) {
   return lock.string() + " is no lock file of hfbake's (" + why + "): remove it";
 }

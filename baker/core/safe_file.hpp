@@ -71,6 +71,12 @@ class TempFolder {
 // `bytes` as the whole content of `final`, through a TempFile. Errors: std::system_error.
 void write_file_atomically(const std::filesystem::path& final, std::string_view bytes);
 
+// A file a user names on the command line (hfbake horizon --out, bake --summary, compare --json): written
+// through when it is a stream, a FIFO or a character device, or a link to one (/dev/stdout, a shell's
+// >(...)), which a rename would replace; atomically (write_file_atomically) otherwise. Errors:
+// std::system_error.
+void write_named_output(const std::filesystem::path& file, std::string_view bytes);
+
 // Durability: what a rename puts in place survives a crash of the machine, not only of the process. A file's
 // bytes are flushed to the disk before it is renamed into place, and the folder after (fsync(2)).
 // sync_file: 0, or the errno of a write the disk could not take (a full disk found only at the flush).

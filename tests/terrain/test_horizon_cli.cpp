@@ -1,6 +1,7 @@
 // hfbake horizon end to end: one-line errors (exit 2), the profile of a synthetic DEM against GRASS
 // r.horizon's point mode (skipped when grass is absent), a geographic (EPSG:4326) DEM against PROJ's
 // geodesics, and the real lidar tile in its CRS and warped to EPSG:4326 (skipped when absent).
+#include <fcntl.h>
 #include <gdal_priv.h>
 #include <geodesic.h>
 #include <gtest/gtest.h>
@@ -25,6 +26,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "../cli/run_hfbake.hpp"
@@ -186,6 +188,26 @@ TEST(HorizonCli, OutputsNeverReplaceTheDemAndAreWrittenWhole) {
   std::signal(SIGXFSZ, previous);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_EQ(bytes(dir / "plot.png"), "keep");
+  // A FIFO, and a link to one (as /dev/stdout is a link to a stream), receive the CSV and stay what they
+  // are: a rename would have put a file in their place and the reader would get nothing.
+  ASSERT_EQ(mkfifo((dir / "fifo").c_str(), 0600), 0);
+  fs::create_symlink(dir / "fifo", dir / "link");
+  for (const char* name : {"fifo", "link"}) {
+    SCOPED_TRACE(name);
+    std::string got;
+    std::thread reader([&] {
+      std::ifstream in(dir / "fifo", std::ios::binary);
+      got.assign(std::istreambuf_iterator<char>(in), {});
+    });
+    const auto w = run_hfbake(dir, at + "--out " + (dir / name).string());
+    // A command that never opened the FIFO leaves the reader waiting: a writer of nothing ends it.
+    if (const int fd = open((dir / "fifo").c_str(), O_WRONLY | O_NONBLOCK); fd >= 0) close(fd);
+    reader.join();
+    EXPECT_EQ(w.exit_code, 0) << w.err;
+    EXPECT_EQ(got.rfind("azimuth_deg,elevation_deg", 0), 0u) << got;
+    EXPECT_TRUE(fs::is_fifo(fs::symlink_status(dir / "fifo")));
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "link")));
+  }
   fs::remove_all(dir);
 }
 
