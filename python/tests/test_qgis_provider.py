@@ -127,9 +127,13 @@ def test_bad_layers_and_outputs_fail_with_a_message_not_a_traceback(tmp_path, qg
     cases = [
         ({"INPUT": dem, "BAND": 2}, "has no band 2 (it has 1)"),
         ({"INPUT": dem, "OUTPUT": tmp_path / "no" / "svf.tif"}, "its folder does not exist"),
+        ({"INPUT": dem, "OUTPUT": tmp_path / "a_folder"}, "is a folder"),
+        ({"INPUT": dem, "OUTPUT": dem}, "which the input layer reads"),
         ({"INPUT": square_degrees}, "geographic"),
         ({"INPUT": no_crs}, "has no CRS"),
     ]
+    (tmp_path / "a_folder").mkdir()
+    genuine = dem.read_bytes()
     for params, expect in cases:
         args = {"BAND": 1, "DIRECTIONS": 8, "OUTPUT": tmp_path / "out.tif", **params}
         result = subprocess.run([QGIS_PROCESS, "run", "hfbake:svf", "--"] + [f"{k}={v}" for k, v in args.items()],
@@ -138,6 +142,7 @@ def test_bad_layers_and_outputs_fail_with_a_message_not_a_traceback(tmp_path, qg
         assert result.returncode != 0, text
         assert expect in text, text
         assert "Traceback" not in text and "AttributeError" not in text, text
+    assert dem.read_bytes() == genuine
 
 
 def test_direction_bands_name_their_bearing_and_a_mercator_dem_warns(tmp_path, qgis_env):

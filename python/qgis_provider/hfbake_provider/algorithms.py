@@ -59,6 +59,15 @@ class _Bake(QgsProcessingAlgorithm):
         folder = os.path.dirname(os.path.abspath(output))
         if not os.path.isdir(folder):
             raise QgsProcessingException(f"{output}: its folder does not exist")
+        if os.path.isdir(output):
+            raise QgsProcessingException(f"{output}: is a folder: name the GeoTIFF to write")
+        # Never over what the input reads (the raster, a VRT's sources, its world or .aux.xml file).
+        source = gdal.Open(layer.source()) if layer is not None else None
+        for f in (source.GetFileList() or []) if source is not None else []:
+            if os.path.exists(f) and os.path.exists(output) and os.path.samefile(f, output):
+                raise QgsProcessingException(
+                    f"{output}: is {f}, which the input layer reads: give the output another name")
+        source = None
         try:  # the checks and conversions a job naming the file gets (docs/python.md, read_dem)
             dem = hfbake.read_dem(layer.source(), band_index)
         except hfbake.InputError as e:
@@ -86,7 +95,10 @@ class _Bake(QgsProcessingAlgorithm):
             return {}
         planes = values if values.ndim == 3 else values[np.newaxis]
         rows, columns = planes.shape[1:]
-        out = gdal.GetDriverByName("GTiff").Create(output, columns, rows, planes.shape[0], gdal.GDT_Float32,
+        # Written beside its name and renamed into place: whole or not at all.
+        temporary = os.path.join(folder, f".{os.path.basename(output)}.tmp-{os.getpid()}.tif")
+        gdal.ErrorReset()
+        out = gdal.GetDriverByName("GTiff").Create(temporary, columns, rows, planes.shape[0], gdal.GDT_Float32,
                                                    options=["COMPRESS=DEFLATE", "TILED=YES"])
         if out is None:
             raise QgsProcessingException(f"{output}: GDAL cannot create it: {gdal.GetLastErrorMsg()}")
@@ -98,7 +110,16 @@ class _Bake(QgsProcessingAlgorithm):
             if planes.shape[0] > 1:  # a band per direction: which way it looks, as a compass bearing
                 b.SetDescription(direction_description(dem.geotransform, k, planes.shape[0]))
             b.WriteArray(np.where(dem.holes, np.float32(-9999.0), plane))
+        out.FlushCache()
+        failed = gdal.GetLastErrorType() >= gdal.CE_Failure
         out = None
+        if failed:
+            gdal.Unlink(temporary)
+            raise QgsProcessingException(f"{output}: GDAL cannot write it: {gdal.GetLastErrorMsg()}")
+        os.replace(temporary, output)
+        # The statistics QGIS kept beside an earlier file of that name describe that file, not this one.
+        if os.path.isfile(output + ".aux.xml"):
+            os.remove(output + ".aux.xml")
         return {"OUTPUT": output}
 
 
