@@ -255,6 +255,9 @@ def bake(job, out=None, *, threads=None, progress=None, cancel=None, memory_limi
 
 def _bake_job(job, out, threads, progress, cancel, memory_limit, cache, overwrite):
     threads, memory_limit = _run_arguments(threads, memory_limit, progress, cancel)
+    for name, value in (("cache", cache), ("overwrite", overwrite)):
+        if not isinstance(value, (bool, _np.bool_)):
+            raise InputError(f"must be True or False; it is a {type(value).__name__}", "/" + name)
     layers, summary = _hfbake.bake_job(job, out, threads, progress, cancel, memory_limit, cache, overwrite)
     report = _json.loads(summary)
     for path in report["outputs"]:
@@ -271,22 +274,38 @@ def compare(now, baseline, *, tolerances=(), allow_different_job=False, update_b
     Returns {"regression": bool, "comparisons": [...] (what --json writes), "text": the command's tables,
     "baseline_updated": bool}. Raises InputError for bad input and for a baseline of another job (unless
     allow_different_job)."""
+    if isinstance(tolerances, str):  # one tolerance, not its characters
+        tolerances = [tolerances]
     result = _hfbake.compare(_os.fspath(now), _os.fspath(baseline), list(tolerances), allow_different_job,
                              update_baseline)
     return _json.loads(result)
 
 
-# Metres in the units of length rasters name (a band's unit type, a CRS's unit), in lower case.
+# Metres in the units of length rasters name (a band's unit type, a CRS's unit), in lower case: the names
+# hfbake validate knows (baker/cli/scene_loader.cpp, metres_per).
 _METRES = {"m": 1.0, "metre": 1.0, "meter": 1.0, "metres": 1.0, "meters": 1.0,
+           "mm": 1e-3, "millimetre": 1e-3, "millimeter": 1e-3, "millimetres": 1e-3, "millimeters": 1e-3,
+           "cm": 1e-2, "centimetre": 1e-2, "centimeter": 1e-2, "centimetres": 1e-2, "centimeters": 1e-2,
+           "dm": 0.1, "decimetre": 0.1, "decimeter": 0.1,
+           "km": 1e3, "kilometre": 1e3, "kilometer": 1e3, "kilometres": 1e3, "kilometers": 1e3,
            "ft": 0.3048, "foot": 0.3048, "feet": 0.3048, "international foot": 0.3048,
-           "us survey foot": 1200 / 3937, "us-ft": 1200 / 3937, "ftus": 1200 / 3937, "foot_us": 1200 / 3937}
+           "foot (international)": 0.3048,
+           "us survey foot": 1200 / 3937, "us-ft": 1200 / 3937, "ftus": 1200 / 3937, "foot_us": 1200 / 3937,
+           "us survey feet": 1200 / 3937, "foot (us survey)": 1200 / 3937}
 
 
 def height_unit_factor(height_unit, pixel_metres=1.0):
     """The factor that converts heights in `height_unit` (a raster band's unit type as GDAL gives it: "m",
     "ft", "US survey foot", ...) into the unit of pixels `pixel_metres` metres long (a projected CRS's
-    GetLinearUnits(); 1 for metres). None when the unit is empty or not one of the metre, the international
-    foot and the US survey foot. The heights an array function takes are in the pixels' unit (texel_size's)."""
+    GetLinearUnits(); 1 for metres). None when the unit is empty or not one of the metre (and its mm, cm, dm
+    and km), the international foot and the US survey foot. InputError for a unit that is not a str or a
+    pixel_metres that is not a positive number. The heights an array function takes are in the pixels' unit (texel_size's)."""
+    if height_unit is not None and not isinstance(height_unit, str):
+        raise InputError(f"must be a unit's name (a str) or None; it is a {type(height_unit).__name__}",
+                         "/height_unit")
+    if isinstance(pixel_metres, bool) or not isinstance(pixel_metres, (int, float, _np.number)) or \
+            not (_np.isfinite(pixel_metres) and pixel_metres > 0):
+        raise InputError(f"must be a positive number of metres; it is {pixel_metres!r}", "/pixel_metres")
     metres = _METRES.get((height_unit or "").strip().lower())
     return None if metres is None else metres / pixel_metres
 
@@ -318,6 +337,10 @@ def read_dem(path, band=1):
     def refuse(message):
         raise InputError(message, "/height/image", path, [f"{path}: {message}"])
 
+    if isinstance(band, (bool, _np.bool_)) or not isinstance(band, (int, _np.integer)):
+        raise InputError(f"must be a band number (an int from 1); it is {band!r}", "/band", path)
+    if _os.path.isdir(path):
+        refuse("is a folder, not a raster file")
     if not _os.path.isfile(path):
         refuse("no such file")
     used = gdal.GetUseExceptions()
@@ -345,7 +368,7 @@ def read_dem(path, band=1):
         refuse("its pixels are degrees of a geographic CRS: warp it to a projected CRS first, or bake a job "
                "naming the file, which reads a lon/lat DEM's texel sizes itself (docs/gis.md)")
     sx, sy = abs(gt[1]), abs(gt[5])
-    if gt[2] != 0 or gt[4] != 0:
+    if not (abs(gt[2]) <= 1e-9 * sx and abs(gt[4]) <= 1e-9 * sy):  # north_up, as a job reading the file
         refuse("has rotated pixels: warp it north-up first (gdalwarp)")
     if not abs(sx - sy) <= 1e-9 * max(sx, sy):
         refuse(f"has non-square pixels ({sx!r} x {sy!r}); hfbake needs square texels: resample it first, e.g. "

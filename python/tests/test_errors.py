@@ -213,6 +213,33 @@ def test_arguments_of_the_wrong_kind_are_refused_naming_them(kwargs, pointer, tm
         "/job", "must be a path to a job file or a dict of one; it is a int")
 
 
+def test_the_helpers_arguments_of_the_wrong_kind_are_refused_naming_them(tmp_path):
+    doc = {"version": 1, "name": "w", "height": {"procedural": {"kind": "fractal", "size": [16, 16]}},
+           "bake": [{"method": "p1", "directions": 4}]}
+    for kwargs, pointer in (({"cache": "no"}, "/cache"), ({"overwrite": "no"}, "/overwrite")):
+        with pytest.raises(hfbake.InputError) as caught:
+            hfbake.bake(doc, tmp_path / "out", **kwargs)
+        assert caught.value.pointer == pointer and caught.value.message.startswith("must be True or False")
+        assert not (tmp_path / "out").exists()
+    for band in ("1", 1.0, True):
+        with pytest.raises(hfbake.InputError) as caught:
+            hfbake.read_dem(tmp_path / "none.tif", band)
+        assert caught.value.pointer == "/band"
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.read_dem(tmp_path)
+    assert caught.value.message == "is a folder, not a raster file"
+    for pixel_metres in (0.0, -1.0, float("nan"), "1"):
+        with pytest.raises(hfbake.InputError) as caught:
+            hfbake.height_unit_factor("m", pixel_metres)
+        assert caught.value.pointer == "/pixel_metres"
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.height_unit_factor(5)
+    assert caught.value.pointer == "/height_unit"
+    # The metric multiples the command line knows, as it converts them.
+    assert hfbake.height_unit_factor("cm") == pytest.approx(0.01)
+    assert hfbake.height_unit_factor("km", 0.3048) == pytest.approx(1000 / 0.3048)
+
+
 def test_a_cancel_set_before_the_bake_raises_cancelled(tmp_path):
     # A field small enough to bake between two polls of `cancel`.
     stop = threading.Event()
