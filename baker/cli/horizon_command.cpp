@@ -98,7 +98,7 @@ std::string to_json(const HorizonOptions& o, const Profile& p) {
     doc["curvature"] = nullptr;
   nlohmann::json rays = nlohmann::json::array();
   for (const HorizonRay& r : p.rays) {
-    nlohmann::json ray = {{"azimuth_deg", r.azimuth_deg}};
+    nlohmann::json ray = {{"azimuth_deg", r.azimuth_deg}, {"found", r.found}};
     if (r.found) {
       ray["elevation_deg"] = r.elevation_deg;
       ray["distance"] = r.distance;

@@ -179,3 +179,14 @@ def test_earth_curvature_lowers_a_wall_by_d2_over_2r():
     with pytest.raises(hfbake.InputError) as caught:  # the job's rule: refraction only with curvature
         hfbake.relief(heights, refraction=0.1)
     assert caught.value.pointer == "/refraction"
+
+
+def test_p1_ao_is_a_share_on_extreme_fields():
+    # Spikes of 9e11 on a flat field and relief 1e11 times the texel: every direction's sky a sliver, whose
+    # rounding could leave the mean a few 1e-8 below 0.
+    rng = np.random.default_rng(2)
+    rng.random((32, 32))
+    for heights, texel in ((np.where(rng.random((32, 32)) > 0.9, 9e11, 0).astype(np.float32), 1.0),
+                           ((rng.random((32, 32)) * 5e5).astype(np.float32), 1e-6)):
+        ao = hfbake.p1(heights, texel_size=texel, directions=8, layers=["ao"], threads=1)["ao"]
+        assert ao.min() >= 0 and ao.max() <= 1

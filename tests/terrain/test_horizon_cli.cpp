@@ -449,6 +449,8 @@ TEST(HorizonCli, JsonCarriesTheCsvsRays) {
     const nlohmann::json& ray = doc["rays"][k];
     EXPECT_NEAR(ray["azimuth_deg"].get<double>(), csv[k].azimuth, 1e-6);
     ASSERT_EQ(csv[k].found, !ray["elevation_deg"].is_null()) << k;
+    ASSERT_TRUE(ray.contains("found") && ray["found"].is_boolean()) << ray.dump();
+    EXPECT_EQ(ray["found"].get<bool>(), csv[k].found) << k;
     if (!csv[k].found) continue;
     EXPECT_NEAR(ray["elevation_deg"].get<double>(), csv[k].elevation, 1e-6);
     EXPECT_NEAR(ray["distance"].get<double>(), csv[k].distance, 1e-4);

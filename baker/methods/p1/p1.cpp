@@ -690,7 +690,8 @@ P1Result p1_finish(const Scene& scene, const P1Params& p, P1Sums&& sums, const R
       const Rgb d = env.uniform_radiance * (ao_sum[idx] * inv_k);
       r.direct[3 * idx] = d.r, r.direct[3 * idx + 1] = d.g, r.direct[3 * idx + 2] = d.b;
     }
-    if (p.ao) ao_sum[idx] = std::min(1.0f, ao_sum[idx] * inv_k);  // a share: a rounding above 1 is 1
+    // A share: a rounding above 1 is 1, below 0 (a texel whose every direction is a sliver of sky) 0.
+    if (p.ao) ao_sum[idx] = std::clamp(ao_sum[idx] * inv_k, 0.0f, 1.0f);
     if (p.vsky) vsky_sum[idx] = 1.0f - vsky_sum[idx] * inv_k;
     if (p.bent_normal) {
       float* b = bent_sum.data() + 3 * idx;
