@@ -241,6 +241,7 @@ int run_horizon(const HorizonOptions& o) {
     for (const auto& [option, file] :
          {std::pair<std::string, std::string>{"--out", o.out}, {"--plot", o.plot}}) {
       if (file.empty()) continue;
+      if (fs::is_directory(file, ec)) throw InputError(file, option, "is a folder: name the file to write");
       const fs::path out = fs::weakly_canonical(fs::absolute(file), ec);
       if (out == dem.front())
         throw InputError(o.dem, option, "is the DEM this command reads: give the output another name");

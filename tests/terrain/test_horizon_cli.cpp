@@ -166,6 +166,13 @@ TEST(HorizonCli, OutputsNeverReplaceTheDemAndAreWrittenWhole) {
       {"--plot " + (dir / "." / "dem.tif").string(), "--plot: is the DEM this command reads"},
       {"--out " + (dir / "a").string() + " --plot " + (dir / "a").string(), "--plot: is the --out file too"},
   };
+  // An existing folder as --out: refused naming it a folder, nothing written in it.
+  fs::create_directory(dir / "folder");
+  const auto folder = run_hfbake(dir, at + "--out " + (dir / "folder").string() + "/");
+  EXPECT_EQ(folder.exit_code, 2) << folder.err;
+  ASSERT_EQ(folder.error_lines().size(), 1u) << folder.err;
+  EXPECT_NE(folder.err.find("--out: is a folder: name the file to write"), std::string::npos) << folder.err;
+  EXPECT_TRUE(fs::is_empty(dir / "folder"));
   for (const Case& c : cases) {
     const auto r = run_hfbake(dir, at + c.args);
     EXPECT_EQ(r.exit_code, 2) << c.args;
