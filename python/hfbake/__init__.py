@@ -299,7 +299,8 @@ def height_unit_factor(height_unit, pixel_metres=1.0):
     "ft", "US survey foot", ...) into the unit of pixels `pixel_metres` metres long (a projected CRS's
     GetLinearUnits(); 1 for metres). None when the unit is empty or not one of the metre (and its mm, cm, dm
     and km), the international foot and the US survey foot. InputError for a unit that is not a str or a
-    pixel_metres that is not a positive number. The heights an array function takes are in the pixels' unit (texel_size's)."""
+    pixel_metres that is not a positive number. The heights an array function takes are in the pixels'
+    unit (texel_size's)."""
     if height_unit is not None and not isinstance(height_unit, str):
         raise InputError(f"must be a unit's name (a str) or None; it is a {type(height_unit).__name__}",
                          "/height_unit")
