@@ -179,9 +179,10 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
     names += (b ? ", " : "") + (geo->band_names[b].empty() ? std::to_string(b) : geo->band_names[b]) +
              (geo->band_colours[b].empty() ? "" : " (" + geo->band_colours[b] + ")");
   const bool image_values = values_through_image_reader(*geo);
+  std::optional<ImageInfo> image_info;  // a PNG's channels, as OpenImageIO reads them
   if (image_values) {
-    const ImageInfo image_info = probe_image(job.resolve(image), site(job, "/height/image"));
-    band = find_channel(image_info, channel, job.resolve(image), site(job, "/height/channel"));
+    image_info = probe_image(job.resolve(image), site(job, "/height/image"));
+    band = find_channel(*image_info, channel, job.resolve(image), site(job, "/height/channel"));
   } else if (geo->palette) {
     // A palette image reads its colours' red, as OpenImageIO's channel 0 or "R" (docs/heights.md); the
     // palette's other colours are not read through GDAL.
@@ -217,12 +218,11 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   out.source.reader = image_values ? "OpenImageIO, placed by GDAL" : "GDAL";
   out.source.format = geo->driver;
   out.source.geographic = geo->geographic;
-  if (image_values) {
-    const ImageInfo image_info = probe_image(job.resolve(image), site(job, "/height/image"));
-    if (image_info.channels > 1) {
+  if (image_info) {
+    if (image_info->channels > 1) {
       std::string channels;
-      for (const std::string& n : image_info.channel_names) channels += (channels.empty() ? "" : ", ") + n;
-      out.source.channel = "channel " + image_info.channel_names[std::size_t(band)] + " of " + channels;
+      for (const std::string& n : image_info->channel_names) channels += (channels.empty() ? "" : ", ") + n;
+      out.source.channel = "channel " + image_info->channel_names[std::size_t(band)] + " of " + channels;
     }
   } else if (geo->bands > 1) {
     out.source.channel = "band " + std::to_string(band + 1) + " of " + std::to_string(geo->bands);

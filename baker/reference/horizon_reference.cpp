@@ -120,19 +120,18 @@ TexelHorizon texel_horizon(const HeightField& f, const reference::EmbreeField& g
   }
   if (di == 0 && dj == 0)
     return bisect_horizon(geometry, o, c, s, iterations, std::numeric_limits<double>::infinity(), curved);
-  double best = -std::numeric_limits<double>::infinity(), best_rise = 0, best_run = 0;
+  double best_rise = 0, best_run = 0;  // the steepest vertex's (runs are positive)
   for (int n = 1;; ++n) {
     const int x = i + n * di, y = j + n * dj;
     if (x < 0 || y < 0 || x >= f.width || y >= f.height) break;
     const double run = n * (di ? f.dx() : f.dy());
     const double rise = double(f.at(x, y)) - o.z - curved.curvature * run * run;
-    if (rise * best_run > best_rise * run || n == 1)
-      best = std::atan2(rise, run), best_rise = rise, best_run = run;
+    if (n == 1 || rise * best_run > best_rise * run) best_rise = rise, best_run = run;
   }
   // Nothing along it (a corner looking out along its border): what the rays make of it.
   if (best_run == 0)
     return bisect_horizon(geometry, o, c, s, iterations, std::numeric_limits<double>::infinity(), curved);
-  return {best, std::hypot(best_run, best_rise)};
+  return {std::atan2(best_rise, best_run), std::hypot(best_run, best_rise)};
 }
 
 ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool distance, const RunControl& rc,
