@@ -18,6 +18,18 @@ set -u
 CASE=$1 H=$2 W=$3
 HERE=$(cd "$(dirname "$0")" && pwd)
 . "$HERE/common.sh"
+# A failure says what Slurm saw: the queue, the daemons' log tails and the task logs.
+fail() {
+  echo "FAIL: $*" >&2
+  {
+    echo "--- squeue"
+    squeue -a -o "%i %j %T %r %M" 2>&1
+    for f in "$W"/cluster/log/*.log $(find "$W" -path '*/slurm/logs/*' -type f 2>/dev/null); do
+      [ -f "$f" ] && echo "--- $f" && tail -n 25 "$f"
+    done
+  } >&2
+  exit 1
+}
 rm -rf "$W" && mkdir -p "$W" && cd "$W" || exit 1
 trap '"$HERE/slurm_cluster.sh" stop "$W/cluster"' EXIT
 eval "$("$HERE/slurm_cluster.sh" start "$W/cluster")" || fail "the Slurm test cluster did not start (see above)"
