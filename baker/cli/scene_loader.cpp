@@ -300,9 +300,8 @@ std::string short_num(double v) {
   return buf;
 }
 
-// Metres in a unit of length as a raster band names it (GDAL's unit type; a CRS gives its own): the metre
-// and its millimetre, centimetre, decimetre and kilometre, the international foot and the US survey foot;
-// nullopt for a name not known here.
+}  // namespace
+
 std::optional<double> metres_per(std::string unit) {
   for (char& c : unit) c = char(std::tolower(static_cast<unsigned char>(c)));
   for (const char* m : {"m", "metre", "meter", "metres", "meters"})
@@ -332,8 +331,6 @@ std::optional<double> metres_per(std::string unit) {
     if (unit == f) return 1200.0 / 3937.0;
   return std::nullopt;
 }
-
-}  // namespace
 
 std::string heights_warning(const Scene& scene) {
   const HeightSource& s = scene.height_source;

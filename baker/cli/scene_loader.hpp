@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,11 @@ struct SceneNeeds {
   bool albedo = false;
 };
 SceneNeeds scene_needs(const Job& job);
+
+// Metres in a unit of length as a raster band names it (GDAL's unit type; a CRS gives its own), case
+// ignored: the metre and its millimetre, centimetre, decimetre and kilometre, the international foot and the
+// US survey foot; nullopt for a name not known here. The Python module's read_dem asks it too.
+std::optional<double> metres_per(std::string unit);
 
 // What validate and bake warn about a scene's heights (empty: nothing): heights in another unit than the
 // pixels, or a relief implausible for the field's extent E (its longer side in world units): zero, under 1 %

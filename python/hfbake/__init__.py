@@ -281,19 +281,6 @@ def compare(now, baseline, *, tolerances=(), allow_different_job=False, update_b
     return _json.loads(result)
 
 
-# Metres in the units of length rasters name (a band's unit type, a CRS's unit), in lower case: the names
-# hfbake validate knows (baker/cli/scene_loader.cpp, metres_per).
-_METRES = {"m": 1.0, "metre": 1.0, "meter": 1.0, "metres": 1.0, "meters": 1.0,
-           "mm": 1e-3, "millimetre": 1e-3, "millimeter": 1e-3, "millimetres": 1e-3, "millimeters": 1e-3,
-           "cm": 1e-2, "centimetre": 1e-2, "centimeter": 1e-2, "centimetres": 1e-2, "centimeters": 1e-2,
-           "dm": 0.1, "decimetre": 0.1, "decimeter": 0.1,
-           "km": 1e3, "kilometre": 1e3, "kilometer": 1e3, "kilometres": 1e3, "kilometers": 1e3,
-           "ft": 0.3048, "foot": 0.3048, "feet": 0.3048, "international foot": 0.3048,
-           "foot (international)": 0.3048,
-           "us survey foot": 1200 / 3937, "us-ft": 1200 / 3937, "ftus": 1200 / 3937, "foot_us": 1200 / 3937,
-           "us survey feet": 1200 / 3937, "foot (us survey)": 1200 / 3937}
-
-
 def height_unit_factor(height_unit, pixel_metres=1.0):
     """The factor that converts heights in `height_unit` (a raster band's unit type as GDAL gives it: "m",
     "ft", "US survey foot", ...) into the unit of pixels `pixel_metres` metres long (a projected CRS's
@@ -307,7 +294,7 @@ def height_unit_factor(height_unit, pixel_metres=1.0):
     if isinstance(pixel_metres, bool) or not isinstance(pixel_metres, (int, float, _np.number)) or \
             not (_np.isfinite(pixel_metres) and pixel_metres > 0):
         raise InputError(f"must be a positive number of metres; it is {pixel_metres!r}", "/pixel_metres")
-    metres = _METRES.get((height_unit or "").strip().lower())
+    metres = _hfbake.metres_per((height_unit or "").strip())
     return None if metres is None else metres / pixel_metres
 
 

@@ -541,6 +541,8 @@ PYBIND11_MODULE(_hfbake, m) {
         return k ? site_scale_warning(*k, crs_name) : std::string();
       },
       py::arg("wkt"), py::arg("x"), py::arg("y"), py::arg("crs_name"));
+  // Metres in a unit of length by its name, or None (read_dem's height_unit_factor).
+  m.def("metres_per", &metres_per, py::arg("unit"));
   m.def("bake_job", &bake_job_api, py::arg("job"), py::arg("out"), py::arg("threads") = 0,
         py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
         py::arg("memory_limit") = std::nullopt, py::arg("cache") = true, py::arg("overwrite") = false);
