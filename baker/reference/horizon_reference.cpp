@@ -111,26 +111,35 @@ double horizon_receiver_lift(const HeightField& f, const reference::EmbreeField&
 }
 
 TexelHorizon texel_horizon(const HeightField& f, const reference::EmbreeField& geometry, int i, int j,
-                           double lift, double c, double s, int iterations, const CurvedRays& curved) {
+                           double lift, double c, double s, int iterations, const CurvedRays& curved,
+                           double max_horizontal) {
   const Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
   int di = 0, dj = 0;  // the step along the border, or none
   if (f.wrap == Wrap::clamp) {
     if (std::abs(s) < 1e-12 && (j == 0 || j == f.height - 1)) di = c > 0 ? 1 : -1;
     if (std::abs(c) < 1e-12 && (i == 0 || i == f.width - 1)) dj = s > 0 ? 1 : -1;
   }
-  if (di == 0 && dj == 0)
-    return bisect_horizon(geometry, o, c, s, iterations, std::numeric_limits<double>::infinity(), curved);
-  double best_rise = 0, best_run = 0;  // the steepest vertex's (runs are positive)
+  if (di == 0 && dj == 0) return bisect_horizon(geometry, o, c, s, iterations, max_horizontal, curved);
+  const double step = di ? f.dx() : f.dy();
+  double best_rise = 0, best_run = 0;  // the steepest point's (runs are positive)
+  const auto consider = [&](double run, double height) {
+    const double rise = height - o.z - curved.curvature * run * run;
+    if (best_run == 0 || rise * best_run > best_rise * run) best_rise = rise, best_run = run;
+  };
   for (int n = 1;; ++n) {
     const int x = i + n * di, y = j + n * dj;
     if (x < 0 || y < 0 || x >= f.width || y >= f.height) break;
-    const double run = n * (di ? f.dx() : f.dy());
-    const double rise = double(f.at(x, y)) - o.z - curved.curvature * run * run;
-    if (n == 1 || rise * best_run > best_rise * run) best_rise = rise, best_run = run;
+    const double run = n * step;
+    if (run > max_horizontal) {  // the polyline's point at max_horizontal, between the last two vertices
+      const double t = (max_horizontal - (n - 1) * step) / step;
+      const double before = n == 1 ? double(f.at(i, j)) : double(f.at(x - di, y - dj));
+      if (t > 0) consider(max_horizontal, before + t * (double(f.at(x, y)) - before));
+      break;
+    }
+    consider(run, double(f.at(x, y)));
   }
   // Nothing along it (a corner looking out along its border): what the rays make of it.
-  if (best_run == 0)
-    return bisect_horizon(geometry, o, c, s, iterations, std::numeric_limits<double>::infinity(), curved);
+  if (best_run == 0) return bisect_horizon(geometry, o, c, s, iterations, max_horizontal, curved);
   return {std::atan2(best_rise, best_run), std::hypot(best_run, best_rise)};
 }
 

@@ -64,9 +64,11 @@ double horizon_receiver_lift(const HeightField& field, const reference::EmbreeFi
 // Texel (i, j)'s horizon towards (c, s) from its centre lifted by `lift`: bisected (bisect_horizon), but on
 // a clamp field's border looking along it. That ray runs in the plane of the mesh's outer edges, where
 // Embree reports no hit, not even straight down; the surface it passes over is the border's polyline, whose
-// steepest vertex (less the curvature's drop) is the horizon, found exactly.
+// steepest point (a vertex, or where the polyline reaches max_horizontal; less the curvature's drop) is the
+// horizon, found exactly. max_horizontal as bisect_horizon's.
 TexelHorizon texel_horizon(const HeightField& field, const reference::EmbreeField& geometry, int i, int j,
-                           double lift, double c, double s, int iterations, const CurvedRays& curved = {});
+                           double lift, double c, double s, int iterations, const CurvedRays& curved = {},
+                           double max_horizontal = std::numeric_limits<double>::infinity());
 
 // curvature: Scene::curvature (0: flat).
 ReferenceHorizons trace_reference_horizons(const HeightField& field, int K, bool distance,

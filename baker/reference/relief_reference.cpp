@@ -28,17 +28,6 @@ void trace_up(const HeightField& f, const ReliefReferenceSettings& s, const RunC
   tbb::parallel_for(0, f.height, [&](int j) {
     rc.check();
     for (int i = 0; i < f.width; ++i) {
-      // A clamp border texel's receiver is nudged 1e-4 texel into the field: rays along the border then run
-      // over the surface, not along the skirt's plane (where Embree may let them through between the
-      // border's triangles and the skirt).
-      Vec3 o = f.position(i, j) + Vec3{0, 0, lift};
-      if (f.wrap == Wrap::clamp) {
-        const double nudge = 1e-4 * std::min(f.dx(), f.dy());
-        if (i == 0) o.x += nudge;
-        if (i == f.width - 1) o.x -= nudge;
-        if (j == 0) o.y += nudge;
-        if (j == f.height - 1) o.y -= nudge;
-      }
       for (int k = 0; k < K; ++k) {
         const double x = dx[std::size_t(k)], y = dy[std::size_t(k)];
         // A clamp border texel looking out of the field: no surface along the ray at all (the skirt is not
@@ -48,8 +37,8 @@ void trace_up(const HeightField& f, const ReliefReferenceSettings& s, const RunC
           out[f.index(i, j) * K + k] = 0.0;
           continue;
         }
-        const double e = bisect_horizon(geometry, o, x, y, iterations, s.search_radius, curved).elevation;
-        out[f.index(i, j) * K + k] = e;
+        out[f.index(i, j) * K + k] =
+            texel_horizon(f, geometry, i, j, lift, x, y, iterations, curved, s.search_radius).elevation;
       }
     }
   });

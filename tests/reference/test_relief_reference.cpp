@@ -68,6 +68,32 @@ TEST(ReliefReference, ConeApexAndAWallInsideAndOutsideTheRadius) {
   }
 }
 
+// On a clamp field's border looking along it, the ray runs in the plane of the mesh's outer edges; the
+// horizon is the border's own polyline, cut at the search radius. A 50-high ridge on row 0 only (row 1 is
+// flat ground), seen from (20, 0) along +x: the ramp between columns 29 and 30, exactly (to the receiver's
+// lift), up and down; and from the ridge's far end (40, 0) back along it.
+TEST(ReliefReference, AlongTheBorderTheBorderRowCutAtTheRadius) {
+  HeightField f;
+  f.width = f.height = 41;
+  f.texel_size = 1;
+  f.z.assign(41 * 41, 0.0f);
+  for (int i = 30; i < 41; ++i) f.z[f.index(i, 0)] = 50;
+  ReliefReferenceSettings s;
+  s.directions = 4;  // +x, +y, -x, -y
+  const std::size_t t = f.index(20, 0), e = f.index(40, 0);
+  for (auto [radius, truth] :
+       {std::pair{8.0, 0.0}, std::pair{9.5, std::atan(25 / 9.5)}, std::pair{9.75, std::atan(37.5 / 9.75)},
+        std::pair{12.0, std::atan(50 / 10.0)}}) {
+    s.search_radius = radius;
+    const ReliefHorizons h = trace_relief_horizons(f, s, true, {});
+    EXPECT_NEAR(h.up[t * 4 + 0], truth, 2e-5) << "radius " << radius;
+    EXPECT_NEAR(h.up[t * 4 + 2], 0.0, 2e-5) << "radius " << radius;
+    EXPECT_NEAR(h.down[t * 4 + 0], 0.0, 2e-5) << "radius " << radius;
+    EXPECT_NEAR(h.down[e * 4 + 2], radius < 11 ? 0.0 : -std::atan(50 / 11.0), 2e-5) << "radius " << radius;
+    EXPECT_EQ(h.up[t * 4 + 3], 0.0) << "out of the field";
+  }
+}
+
 TEST(ReliefReference, AddedForTheFirstReliefEntryWithItsSettings) {
   ProceduralSpec p;
   p.kind = ProceduralKind::flat;
