@@ -44,11 +44,11 @@ TextureClipping clipping(const std::vector<Tap>& taps, std::size_t n, double exp
     if (!t.data) continue;
     for (std::size_t i = 0; i < n; ++i) {
       const double v = double(t.data[i * std::size_t(t.stride)]) * exposure;
-      if (!std::isfinite(v)) continue;
+      if (std::isnan(v)) continue;
       ++c.values;
       if (v > 1) ++c.clipped;
       if (v < -1e-6) ++c.negative;  // a rounding below 0 of a fraction (an ao of -1e-9) is no signed value
-      c.largest = std::max(c.largest, v);
+      if (std::isfinite(v)) c.largest = std::max(c.largest, v);
     }
   }
   if (c.clipped == 0) return c;
@@ -58,7 +58,7 @@ TextureClipping clipping(const std::vector<Tap>& taps, std::size_t n, double exp
     if (!t.data) continue;
     for (std::size_t i = 0; i < n; ++i) {
       const double v = double(t.data[i * std::size_t(t.stride)]) * exposure;
-      if (!std::isfinite(v)) continue;
+      if (std::isnan(v)) continue;  // +inf (a horizon_distance with no caster) falls in the top bin
       ++bins[std::size_t(std::clamp(v / c.largest * kBins, 0.0, kBins - 1.0))];
     }
   }
@@ -152,9 +152,9 @@ TexturePixels texture_pixels(const LayerSet& layers, const TextureSpec& spec) {
   TexturePixels out = sized_texture<TexturePixels>(layers, spec, nc);
   const double top = spec.bits == 8 ? 255.0 : 65535.0;
   for_each_texture_value(layers, spec, taps, [&](std::size_t i, int c, double v) {
-    if (!spec.normal_map && spec.transfer == Transfer::srgb && std::isfinite(v))
-      v = srgb_encode(std::clamp(v, 0.0, 1.0));
-    v = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 0.0;
+    // NaN is 0; an infinity clamps like any value (+inf: a horizon_distance with no caster, as far as any).
+    v = std::isnan(v) ? 0.0 : std::clamp(v, 0.0, 1.0);
+    if (!spec.normal_map && spec.transfer == Transfer::srgb) v = srgb_encode(v);
     out.values[i * nc + c] = std::uint16_t(std::round(v * top));
   });
   if (!spec.normal_map)
@@ -167,7 +167,7 @@ TextureValues texture_values(const LayerSet& layers, const TextureSpec& spec) {
   const int nc = int(taps.size());
   TextureValues out = sized_texture<TextureValues>(layers, spec, nc);
   for_each_texture_value(layers, spec, taps, [&](std::size_t i, int c, double v) {
-    out.values[i * nc + c] = std::isfinite(v) ? float(v) : 0.0f;
+    out.values[i * nc + c] = std::isnan(v) ? 0.0f : float(v);  // an infinity stays one (half holds it)
   });
   return out;
 }
@@ -183,9 +183,10 @@ void write_exr_texture(const fs::path& tmp, const fs::path& file, const LayerSet
   w.format = "exr";
   w.width = v.width, w.height = v.height, w.channels = v.channels;
   // Half holds at most 65504: a texture with a larger value (a light map under a bright sun) is stored as
-  // float, as the bake's own EXRs are, never as infinity.
+  // float, as the bake's own EXRs are, never as infinity (an infinity in the layer stays one in half).
   float largest = 0;
-  for (const float x : v.values) largest = std::max(largest, std::abs(x));
+  for (const float x : v.values)
+    if (std::isfinite(x)) largest = std::max(largest, std::abs(x));
   w.stored = largest > 65504.0f ? OiioSample::float32 : OiioSample::half, w.given = OiioSample::float32;
   w.channel_names = v.channels == 1   ? std::vector<std::string>{"Y"}
                     : v.channels == 3 ? std::vector<std::string>{"R", "G", "B"}

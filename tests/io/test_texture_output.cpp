@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "core/vec.hpp"
 #include "io/texture_output.hpp"
@@ -57,6 +58,8 @@ LayerSet ao_layer(int w, int h) {
   ao.data[2] = 1.5f;  // clamped
   ao.data[3] = -0.25f;
   ao.data[4] = std::nanf("");
+  ao.data[5] = std::numeric_limits<float>::infinity();  // a horizon_distance with no caster: as far as any
+  ao.data[6] = -std::numeric_limits<float>::infinity();
   return s;
 }
 
@@ -83,6 +86,25 @@ TEST(Texture, EightAndSixteenBitGreyEqualRoundedValues) {
         ASSERT_EQ(im.values[i], std::uint16_t(std::round(v * top))) << ext << bits << " texel " << i;
       }
     }
+}
+
+// An exr texture holds the values as they are, in half: infinities stay infinities, NaN becomes 0.
+TEST(Texture, ExrKeepsInfinitiesAndZeroesNaN) {
+  TempFolder dir;
+  const LayerSet s = ao_layer(37, 23);
+  TextureSpec spec;
+  spec.channels = {{"ao", 0, 0}};
+  const auto file = dir / "ao.exr";
+  write_texture(file, s, spec);
+  auto in = OIIO::ImageInput::open(file.string());
+  ASSERT_TRUE(in);
+  EXPECT_EQ(in->spec().format, OIIO::TypeDesc::HALF);
+  std::vector<float> v(37 * 23);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, v.data()));
+  EXPECT_EQ(v[4], 0.0f);
+  EXPECT_EQ(v[5], std::numeric_limits<float>::infinity());
+  EXPECT_EQ(v[6], -std::numeric_limits<float>::infinity());
+  EXPECT_EQ(v[2], 1.5f);
 }
 
 TEST(Texture, LinearFilesCarryNoColourCurveAndSrgbIsTheStandardCurve) {
@@ -190,7 +212,7 @@ TEST(Texture, PacksTakeChannelsAndConstants) {
   write_texture(dir / "p.tga", s, spec);
   const Image im = read_back(dir / "p.tga");
   ASSERT_EQ(im.channels, 4);
-  for (std::size_t i = 5; i < 20; ++i) {
+  for (std::size_t i = 7; i < 20; ++i) {  // the values in [0, 1]
     EXPECT_EQ(im.values[4 * i], std::round(s.find("ao")->data[i] * 255));
     EXPECT_EQ(im.values[4 * i + 1], 64);  // round(0.25 * 255)
     EXPECT_EQ(im.values[4 * i + 2], 0);
