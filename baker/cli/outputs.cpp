@@ -430,8 +430,12 @@ std::vector<fs::path> complete_killed_commits(const Job& job) {
       const fs::path name = line;
       if (!committable_name(name, job)) continue;
       struct stat st {};
+      // A folder in the name (textures/) is a real folder on both sides: a link planted in the stage would
+      // move a file from outside the output folder into it.
+      if (name.has_parent_path() && (!is_real_directory(stage / name.parent_path()) ||
+                                     !is_real_directory(job.output.dir / name.parent_path())))
+        continue;
       if (lstat((stage / name).c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;  // moved already
-      if (name.has_parent_path() && !is_real_directory(job.output.dir / name.parent_path())) continue;
       std::error_code mv;
       fs::rename(stage / name, job.output.dir / name, mv);
     }

@@ -476,6 +476,23 @@ TEST_F(Untrusted, StagingFoldersThatAreLinksAreRemovedNotFollowed) {
   expect_outside_untouched();
 }
 
+// A dead process's stage whose commit list names textures/keep.txt, with textures/ in the stage a link to
+// a folder outside: the next bake completes no move through it (the file stays where it is).
+TEST_F(Untrusted, AKilledStagesMovesNeverGoThroughALinkInTheStage) {
+  fs::create_directories(dir_ / "outside");
+  std::ofstream(dir_ / "outside" / "keep.txt") << "someone's data";
+  outside_files_ = 2;
+  fs::create_directories(dir_ / "out" / "textures");
+  const fs::path stage = dir_ / "out" / (".hfbake-staging-t-" + std::to_string(dead_pid()) + "+1@" + host());
+  fs::create_directories(stage);
+  fs::create_directory_symlink(dir_ / "outside", stage / "textures");
+  std::ofstream(stage / "commit-list") << "textures/keep.txt\n";
+  const Outcome r = hfbake(dir_, {"bake", write_job(dir_, base_job()), "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "textures" / "keep.txt"));
+  expect_outside_untouched();
+}
+
 // A baseline folder whose report.json is a link: compared as its own folder's report (not as its target's,
 // which would count the report new and the target missing), and --update-baseline replaces the link by the
 // new report, leaving its target as it was. A metric of another type than a number is a damaged report, not
