@@ -314,6 +314,8 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   check_job_memory(job, size, options.memory_limit, nullptr, options.memory_limit_name);
   check_report_baseline(job, size.width, size.height);  // a baseline of another job: refused before baking
   if (options.shard) {
+    // Another job file's outputs of this name in the folder: refused as the merge would refuse them.
+    check_output_owner(job, options.overwrite);
     const fs::path made = bake_shard(job, *options.shard, progress, cancel, outcome, cache, options.stage);
     if (!made.empty()) outcome.outputs = {made};
     return;

@@ -360,8 +360,11 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
   return path;
 }
 
-MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), height_(height) {
-  // How many shards: from the names in the shards folder (one count only).
+namespace {
+
+// The shard counts in the names of the job's shard files in its shards folder; InputError when the folder is
+// there but not a real folder.
+std::set<int> shard_counts_in_folder(const Job& job) {
   const fs::path dir = job.output.dir / "shards";
   std::set<int> counts;
   std::error_code ec;
@@ -371,6 +374,25 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
                          job.output.dir.string() + " only");
   for (const auto& f : fs::directory_iterator(dir, ec))
     if (const auto n = shard_count_in_name(f.path().filename().string(), job.name)) counts.insert(*n);
+  return counts;
+}
+
+}  // namespace
+
+void check_shards_folder(const Job& job, int count) {
+  for (const int c : shard_counts_in_folder(job))
+    if (c != count)
+      throw InputError((job.output.dir / "shards").string(), "",
+                       "holds shards of job " + job.name + " for " + std::to_string(c) +
+                           " shards, which a merge of " + std::to_string(count) +
+                           " would refuse: remove them (" + job.name + ".shard-*-of-" + std::to_string(c) +
+                           ".hfshard) or give --shards " + std::to_string(c));
+}
+
+MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), height_(height) {
+  // How many shards: from the names in the shards folder (one count only).
+  const fs::path dir = job.output.dir / "shards";
+  const std::set<int> counts = shard_counts_in_folder(job);
   if (counts.empty())
     throw InputError(dir.string(), "", "no shards of job " + job.name + " (bake them with --shard I/N)");
   if (counts.size() > 1) {

@@ -69,6 +69,11 @@ std::filesystem::path bake_shard(const Job& job, ShardId id, Progress& progress,
                                  const std::atomic<bool>& cancel, JobOutcome& outcome,
                                  const ReferenceCache* cache, int stage = 0);
 
+// What `hfbake slurm --shards N` checks before it submits anything (InputError naming the folder): the job's
+// shards folder is a real folder or absent, and holds no shards of the job's name for another count (its
+// merge would refuse the mix).
+void check_shards_folder(const Job& job, int count);
+
 // The shards of a job, opened and checked for `hfbake merge`: every shard 0..N-1 present, whole, of this job
 // and this hfbake (InputError naming the shard otherwise, before anything is baked or written).
 class MergedShards {

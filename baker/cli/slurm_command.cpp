@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <tuple>
 
@@ -73,6 +74,7 @@ struct Task {
   // Per stage: this task's pieces of the staged entries (farm/shard_plan.hpp stage_work); a job's entry in
   // `jobs` holds every shard's, shard after shard.
   std::vector<std::vector<StageItem>> items;
+  std::shared_ptr<const Job> loaded;  // the job as read and resolved at submission (its files' names)
 };
 
 // Compact Slurm array list: "0-3,5,7-8".
@@ -149,13 +151,21 @@ int run_slurm(const SlurmOptions& o) {
         return fail(e.line());
       }
     } else {
+      try {
+        // As its tasks and merge will find the folder (they run without --overwrite).
+        check_output_owner(job, false);
+        check_shards_folder(job, o.shards);
+      } catch (const InputError& e) {
+        return fail(e.line());
+      }
       need_bytes = std::max(need_bytes, estimate_peak_bytes(job, probe_field_size(job)));
     }
     const int stages = job_stages(job);
     std::vector<std::vector<StageItem>> items;
     for (int s = 0; s < o.shards; ++s)
       for (int st = 0; st < stages; ++st) items.push_back(stage_work(job, {s, o.shards}, st));
-    jobs.push_back({file, out ? *out : job.output.dir, 0, stages, std::move(items)});
+    jobs.push_back(
+        {file, out ? *out : job.output.dir, 0, stages, std::move(items), std::make_shared<Job>(job)});
     if (common.empty()) common = fs::absolute(job.output.dir);
   }
   if (jobs.empty()) return fail("command line: no jobs");
@@ -169,7 +179,7 @@ int run_slurm(const SlurmOptions& o) {
   for (const Task& j : jobs)
     for (int s = 0; s < o.shards; ++s) {
       const auto first = j.items.begin() + std::ptrdiff_t(s) * j.stages;
-      tasks.push_back({j.job, j.out, s, j.stages, {first, first + j.stages}});
+      tasks.push_back({j.job, j.out, s, j.stages, {first, first + j.stages}, j.loaded});
     }
   int stage_count = 1;
   for (const Task& j : jobs) stage_count = std::max(stage_count, j.stages);
@@ -237,13 +247,50 @@ int run_slurm(const SlurmOptions& o) {
       if (std::any_of(text.begin(), text.end(), [](char c) { return (unsigned char)c < 0x20 || c == 0x7f; }))
         return fail(what + " \"" + text.substr(0, text.find_first_of("\r\n")) +
                     "...\" holds a line break or control character: it cannot go into a Slurm script");
-    // The #SBATCH values themselves (--chdir, --output, --job-name): Slurm splits them at a blank and expands
-    // a % (%j, %A, ...) in a file name.
+    // The #SBATCH values themselves (--chdir, --output, --job-name): Slurm splits them at a blank, expands
+    // a % (%j, %A, ...) in a file name and takes quotes and backslashes out (another folder's name).
     for (const auto& [what, text] : {lines[0], lines[1], lines[2]})
-      if (text.find_first_of(" \t%") != std::string::npos)
+      if (text.find_first_of(" \t%\"'\\") != std::string::npos)
         return fail(what + " \"" + text +
-                    "\" holds a blank or a %: Slurm's #SBATCH lines would split or expand " +
-                    "it; use a folder and job file whose names have neither");
+                    "\" holds a blank, a %, a quote or a backslash: Slurm's #SBATCH lines would split, " +
+                    "expand or unquote it; use a folder and job file whose names have none");
+  }
+  // What the scripts set themselves (the logs' names, the working folder, the array, the chain): an
+  // --sbatch-arg may not set it too, or the tasks would run elsewhere and the merge's log be missed.
+  struct Owned {
+    const char* name;
+    const char* instead;
+  };
+  static constexpr Owned kOwned[] = {
+      {"-J", "the job file's name names the jobs"},
+      {"--job-name", "the job file's name names the jobs"},
+      {"-o", "the logs go to <output>/slurm/logs"},
+      {"--output", "the logs go to <output>/slurm/logs"},
+      {"-e", "the logs go to <output>/slurm/logs"},
+      {"--error", "the logs go to <output>/slurm/logs"},
+      {"-D", "the tasks run in the folder hfbake slurm runs in"},
+      {"--chdir", "the tasks run in the folder hfbake slurm runs in"},
+      {"-a", "the tasks are the shards: give --shards"},
+      {"--array", "the tasks are the shards: give --shards"},
+      {"-d", "hfbake slurm chains the stages and the merge"},
+      {"--dependency", "hfbake slurm chains the stages and the merge"},
+      {"--kill-on-invalid-dep", "hfbake slurm chains the stages and the merge"},
+      {"-W", "give --wait"},
+      {"--wait", "give --wait"},
+      {"--parsable", "hfbake slurm reads sbatch's answer itself"},
+      {"-c", "give --threads"},
+      {"--cpus-per-task", "give --threads"},
+      {"--mem", "give --mem"},
+      {"--mem-per-cpu", "give --mem"},
+  };
+  for (const std::string& a : o.sbatch_args) {
+    const std::string opt = a.substr(0, a.find_first_of("= "));
+    for (const Owned& n : kOwned) {
+      const bool short_option = n.name[1] != '-';  // -ofile is -o file
+      if (opt == n.name || (short_option && a.size() > 2 && a.rfind(n.name, 0) == 0 && a[2] != '-'))
+        return fail("--sbatch-arg \"" + a + "\": the scripts set " + n.name + " themselves (" + n.instead +
+                    ")");
+    }
   }
   // A job path as the scripts pass it: one that starts with '-' would be read as an option.
   const auto as_argument = [](const fs::path& p) {
@@ -372,20 +419,27 @@ int run_slurm(const SlurmOptions& o) {
     std::fprintf(stderr, "hfbake: every shard is complete; submitting the merge only\n");
   const std::string cmd = merge_command(array_id) + " 2>&1";
   std::string out;
-  const int status = run_capture(cmd, &out);
+  int status = run_capture(cmd, &out);
   const std::string merge_id = out.substr(0, out.find_first_of(";\n"));
   if (!o.wait) {
     if (status != 0) return fail((dir / "merge.sbatch").string() + ": sbatch failed: " + one_line(out));
     if (!o.quiet) std::fprintf(stderr, "hfbake: submitted the merge as job %s (afterok)\n", merge_id.c_str());
     return 0;
   }
+  // `sbatch --wait` exits 0 for a merge that Slurm cancelled because a task failed (its afterok can never
+  // be met: Slurm 22.05): a merge that ran has its log, which Slurm opens when the job starts.
+  const fs::path merge_log = dir / "logs" / ("hfbake-merge-" + name + "-" + merge_id + ".out");
+  bool merge_ran = true;
+  if (status == 0 && !fs::exists(merge_log)) {
+    merge_ran = false;
+    status = 2;
+  }
   if (status != 0 && o.tile_size == 0) {
-    // Name what is missing: the shards no task completed.
+    // Name what is missing: the shards no task completed (named as at submission: the job file may have
+    // changed or gone since).
     for (const Task& t : tasks) {
-      JobLoad load = load_job(t.job, t.out);
-      if (!load.job) continue;
-      resolve_job(*load.job);
-      const fs::path p = shard_path(*load.job, {t.shard, o.shards});
+      const Job& job = *t.loaded;
+      const fs::path p = shard_path(job, {t.shard, o.shards});
       if (!fs::exists(p))
         std::fprintf(stderr, "hfbake: error: %s: shard %d/%d is missing (its task failed: see %s)\n",
                      p.c_str(), t.shard, o.shards, (dir / "logs").c_str());
@@ -393,22 +447,26 @@ int run_slurm(const SlurmOptions& o) {
       for (int st = 0; st < t.stages; ++st) {
         bool missing = false;
         for (const StageItem& item : items_of(t, st)) {
-          const fs::path sp = stage_item_path(*load.job, st, item);
-          if (fs::exists(sp) || (item.block >= 0 && fs::exists(stage_path(*load.job, item.entry, st))))
-            continue;
+          const fs::path sp = stage_item_path(job, st, item);
+          if (fs::exists(sp) || (item.block >= 0 && fs::exists(stage_path(job, item.entry, st)))) continue;
           missing = true;
           std::fprintf(
               stderr, "hfbake: error: %s: %s of %s is missing (its task failed: see %s)\n", sp.c_str(),
               (item.block < 0 ? "stage " + std::to_string(st)
                               : "block " + std::to_string(item.block) + " of stage " + std::to_string(st))
                   .c_str(),
-              load.job->bakes[std::size_t(item.entry)].stem.c_str(), (dir / "logs").c_str());
+              job.bakes[std::size_t(item.entry)].stem.c_str(), (dir / "logs").c_str());
         }
         if (missing) break;
       }
     }
   }
-  if (status != 0)
+  if (!merge_ran)
+    std::fprintf(stderr,
+                 "hfbake: error: %s: the merge job %s never ran: Slurm cancelled it because a task failed "
+                 "(logs: %s)\n",
+                 (dir / "merge.sbatch").c_str(), merge_id.c_str(), (dir / "logs").c_str());
+  else if (status != 0)
     std::fprintf(stderr, "hfbake: error: %s: the merge job %s ended with status %d (log: %s)\n",
                  (dir / "merge.sbatch").c_str(), merge_id.c_str(), status, (dir / "logs").c_str());
   return status;

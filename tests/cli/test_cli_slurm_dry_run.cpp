@@ -78,8 +78,9 @@ TEST(CliSlurm, ALineBreakInAPathIsRefused) {
   fs::remove_all(dir);
 }
 
-// Slurm splits an #SBATCH value at a blank and expands a % in a file name: a folder with either is refused
-// in one line. A job file whose name starts with '-' is passed as ./-name, never as an option.
+// Slurm splits an #SBATCH value at a blank, expands a % in a file name and takes quotes and backslashes out
+// (the tasks would run in another folder): a folder with any of them is refused in one line. A job file whose
+// name starts with '-' is passed as ./-name, never as an option.
 TEST(CliSlurm, SbatchValuesAndJobPathsStayWhole) {
   const fs::path dir =
       fs::temp_directory_path() / ("hfbake_test_slurm_values_" + std::to_string(std::random_device{}()));
@@ -90,17 +91,83 @@ TEST(CliSlurm, SbatchValuesAndJobPathsStayWhole) {
                         {"bake", {{{"method", "p1"}, {"directions", 8}}}},
                         {"output", {{"dir", "out 50%"}}}};
   std::ofstream(dir / "v.json") << job.dump();
-  SlurmRun r = run_in(dir, "slurm v.json --shards 2 --dry-run");
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("holds a blank or a %"), std::string::npos) << r.err;
-  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-  EXPECT_TRUE(r.out.empty()) << r.out;
+  SlurmRun r;
+  for (const char* folder : {"out 50%", "out\"x\"", "out'x", "out\\x"}) {
+    job["output"]["dir"] = folder;
+    std::ofstream(dir / "v.json") << job.dump();
+    r = run_in(dir, "slurm v.json --shards 2 --dry-run");
+    EXPECT_EQ(r.exit_code, 2) << folder;
+    EXPECT_NE(r.err.find("holds a blank, a %, a quote or a backslash"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
   job["output"]["dir"] = "out";
   std::ofstream(dir / "-v.json") << job.dump();
   r = run_in(dir, "slurm --shards 2 --dry-run -- -v.json");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("  './-v.json'\n"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find(" merge './-v.json'"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
+// An --sbatch-arg setting what the scripts set themselves (the logs, the working folder, the array, the
+// chain, the threads, the memory) is refused in one line naming it; any other goes into both scripts.
+TEST(CliSlurm, SbatchArgsTheScriptsOwnAreRefused) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("hfbake_test_slurm_args_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  const nlohmann::json job = {{"version", 1},
+                              {"name", "v"},
+                              {"height", {{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}},
+                              {"bake", {{{"method", "p1"}, {"directions", 8}}}},
+                              {"output", {{"dir", "out"}}}};
+  std::ofstream(dir / "v.json") << job.dump();
+  for (const char* arg : {"--output=x.log", "-ox.log", "--job-name=x", "-J", "--chdir=/tmp", "--array=0-9",
+                          "--dependency=afterok:1", "--wait", "-c4", "--cpus-per-task=4", "--mem=1G"}) {
+    const SlurmRun r =
+        run_in(dir, std::string("slurm v.json --shards 2 --dry-run --sbatch-arg='") + arg + "'");
+    EXPECT_EQ(r.exit_code, 2) << arg;
+    EXPECT_NE(r.err.find("--sbatch-arg \"" + std::string(arg) + "\": the scripts set"), std::string::npos)
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  const SlurmRun r =
+      run_in(dir, "slurm v.json --shards 2 --dry-run --sbatch-arg=--exclusive --sbatch-arg=-pdebug");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("#SBATCH --exclusive\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("#SBATCH -pdebug\n"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
+// Before anything is submitted: shards of the job's name for another count in its shards folder (the merge
+// would refuse the mix), and outputs of the job's name that another job file baked there (its tasks and
+// merge run without --overwrite), are refused in one line naming them.
+TEST(CliSlurm, AFolderTheMergeWouldRefuseIsRefusedBeforeSubmitting) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("hfbake_test_slurm_folder_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir / "out" / "shards");
+  const nlohmann::json job = {{"version", 1},
+                              {"name", "v"},
+                              {"height", {{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}},
+                              {"bake", {{{"method", "p1"}, {"directions", 8}}}},
+                              {"output", {{"dir", "out"}}}};
+  std::ofstream(dir / "v.json") << job.dump();
+  std::ofstream(dir / "out" / "shards" / "v.shard-0-of-3.hfshard") << "a shard of three";
+  SlurmRun r = run_in(dir, "slurm v.json --shards 2 --dry-run");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find((dir / "out" / "shards").string() + ": holds shards of job v for 3 shards"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  r = run_in(dir, "slurm v.json --shards 3 --dry-run");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+
+  std::ofstream(dir / "out" / ".hfbake-v.job") << "/elsewhere/v.json";
+  r = run_in(dir, "slurm v.json --shards 3 --dry-run");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("were baked from /elsewhere/v.json"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   fs::remove_all(dir);
 }
 

@@ -9,6 +9,8 @@
 #                   stage's 8 direction blocks across the 3 tasks, then the merge): bit-identical to hfbake bake
 #   deleted_shard   after hfbake slurm, a deleted shard makes the merge job fail naming it
 #   scancel_resume  a task cancelled (scancel) is resubmitted by hfbake slurm --resume: the same bits
+#   failed_task     the height file removed while the tasks wait to begin: every task fails, Slurm cancels the
+#                   merge, and hfbake slurm --wait exits 2 naming the shards no task wrote
 #   tiles           a 150 x 97 georeferenced raster (an ASCII grid) baked in tiles of 40 (relief, hbao) as 3
 #                   tile tasks + merge --tiles (hfbake slurm --tiles --wait): the COGs of bake --tiles, byte
 #                   for byte
@@ -150,6 +152,27 @@ scancel_resume)
   "$H" slurm a.json --shards 4 --out farm --no-cache --resume --wait || fail "hfbake slurm --resume --wait exit $?"
   grep -q -- "--array" farm/slurm/bake.sbatch || fail "no array script"
   same_outputs whole farm
+  ;;
+failed_task)
+  awk 'BEGIN { print "ncols 40\nnrows 30\nxllcorner 0\nyllcorner 0\ncellsize 1";
+               for (j = 0; j < 30; j++) { r = ""; for (i = 0; i < 40; i++) r = r sprintf(" %.3f", sin(0.3 * i) * cos(0.2 * j)); print r } }' >dem.asc
+  cat >f.json <<J
+{"version": 1, "name": "f", "height": {"image": "dem.asc"},
+ "bake": [{"method": "hbao", "directions": 8, "radius": 3}], "output": {"dir": "out-f"}}
+J
+  "$H" slurm f.json --shards 2 --out farm --no-cache --quiet --wait --sbatch-arg=--begin=now+5 2>slurm.err &
+  pid=$!
+  for _ in $(seq 300); do [ -n "$(squeue -h -n hfbake-f 2>/dev/null)" ] && break; sleep 0.1; done
+  [ -n "$(squeue -h -n hfbake-f)" ] || fail "no array job queued"
+  rm dem.asc
+  wait $pid
+  rc=$?
+  cat slurm.err
+  [ $rc = 2 ] || fail "hfbake slurm --wait exited $rc with every task failed"
+  grep -q "f.shard-0-of-2.hfshard: shard 0/2 is missing" slurm.err || fail "shard 0 not named"
+  grep -q "f.shard-1-of-2.hfshard: shard 1/2 is missing" slurm.err || fail "shard 1 not named"
+  grep -q "never ran" slurm.err || fail "the merge's fate not said"
+  [ -e farm/f.hbao.exr ] && fail "an output was written"
   ;;
 shared_cache)
   job a 1 64

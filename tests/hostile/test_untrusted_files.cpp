@@ -775,6 +775,30 @@ TEST_F(Untrusted, ValidateRefusesAnotherJobFilesOutputsAsBakeDoes) {
   EXPECT_FALSE(fs::exists(dir_ / "out" / "textures"));
 }
 
+// A shard task of another job file with the same name, into a folder holding the first's outputs: refused in
+// one line naming the first file (its merge would refuse the mix), the first's shards kept.
+TEST_F(Untrusted, AShardOfAnotherJobFileOverAJobsOutputsIsRefused) {
+  json a = base_job("../out"), b = base_job("../out");
+  b["height"]["procedural"]["seed"] = 5;
+  fs::create_directories(dir_ / "a");
+  fs::create_directories(dir_ / "b");
+  const std::string ja = write_job(dir_ / "a", a), jb = write_job(dir_ / "b", b);
+  for (const char* shard : {"0/2", "1/2"})
+    ASSERT_EQ(hfbake(dir_, {"bake", ja, "--shard", shard, "--no-cache", "--quiet"}).exit_code, 0);
+  ASSERT_EQ(hfbake(dir_, {"merge", ja, "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path shard0 = dir_ / "out" / "shards" / "t.shard-0-of-2.hfshard";
+  const std::string before = read_text(shard0);
+  const Outcome r = hfbake(dir_, {"bake", jb, "--shard", "0/2", "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("were baked from " + fs::weakly_canonical(ja).string()),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(read_text(shard0), before);
+  EXPECT_EQ(hfbake(dir_, {"bake", jb, "--shard", "0/2", "--no-cache", "--quiet", "--overwrite"}).exit_code,
+            0);
+}
+
 // Two processes bake different job files with the same name into one folder, 20 times: one bakes (exit
 // 0), the other is refused with one line (exit 2: the folder is locked by the first, or holds the first's
 // outputs); the winner's outputs are never replaced. --overwrite lets a job take the name over.
