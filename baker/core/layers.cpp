@@ -14,7 +14,7 @@ using T = LayerTrace;
 using R = LayerReach;
 using V = LayerValues;
 
-// name, numbered, channels, indexed, score, trace, reach, values
+// name, numbered, channels, indexed, score, trace, reach, values, float_storage
 std::vector<LayerKind>& kinds() {
   static std::vector<LayerKind> table = {
       {"ao", false, C::mono, 0, S::values, T::path_traced, R::unlimited, V::fraction},
@@ -31,9 +31,9 @@ std::vector<LayerKind>& kinds() {
       {"horizon_distance", false, C::per_direction, 0, S::values, T::horizons, R::unlimited, V::distance},
       {"sh_visibility", false, C::indexed, 16, S::values, T::sh_visibility, R::unlimited, V::finite},
       {"svf", false, C::mono, 0, S::values, T::relief, R::search_radius, V::fraction},
-      {"openness_positive", false, C::mono, 0, S::values, T::relief, R::search_radius, V::finite},
-      {"openness_negative", false, C::mono, 0, S::values, T::relief, R::search_radius, V::finite},
-      {"horizon_deg", false, C::per_direction, 0, S::values, T::relief, R::search_radius, V::finite},
+      {"openness_positive", false, C::mono, 0, S::values, T::relief, R::search_radius, V::finite, true},
+      {"openness_negative", false, C::mono, 0, S::values, T::relief, R::search_radius, V::finite, true},
+      {"horizon_deg", false, C::per_direction, 0, S::values, T::relief, R::search_radius, V::finite, true},
       {"normal", false, C::xyz, 0, S::none, T::none, R::unlimited, V::finite},  // the height field's own
   };
   return table;

@@ -87,6 +87,9 @@ struct LayerKind {
   LayerTrace trace = LayerTrace::none;
   LayerReach reach = LayerReach::unlimited;
   LayerValues values = LayerValues::finite;
+  // Stored as float in an EXR whatever the job's pixel_type: angles in degrees, where half's steps (0.03°
+  // to 0.06° above 32°) would be coarser than the method (docs/gis.md).
+  bool float_storage = false;
 };
 
 // Every layer kind, the table's lines first.

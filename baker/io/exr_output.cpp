@@ -105,12 +105,14 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
   std::vector<Channel> channels;
   for (const Layer& l : layers.layers) {
     const std::size_t n = std::size_t(l.channel_count());
+    const LayerKind* kind = find_layer_kind(l.name);
+    const bool layer_float = type != Imf::HALF || (kind && kind->float_storage);
     // A finite value beyond half's range (65504, e.g. horizon distances on a large DEM) would become
     // infinite: such a channel is stored as float instead. The layer's values are read in their order
     // (texel by texel, every channel), once, without branches (an infinity or NaN counts as 0).
     std::vector<float> largest(n, 0.0f);
     const float finite = std::numeric_limits<float>::max();
-    if (type == Imf::HALF)
+    if (!layer_float)
       for (std::size_t i = 0; i < texels; ++i) {
         const float* v = l.data.data() + i * n;
         for (std::size_t c = 0; c < n; ++c) {
@@ -120,7 +122,7 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
       }
     for (std::size_t c = 0; c < n; ++c) {
       Channel ch{l.name + "." + l.channels[c], l.data.data() + c, n,
-                 type != Imf::HALF || largest[c] > float(HALF_MAX)};
+                 layer_float || largest[c] > float(HALF_MAX)};
       if (header.channels().findChannel(ch.name))
         throw std::logic_error("write_exr: duplicate channel " + ch.name);
       header.channels().insert(ch.name, Imf::Channel(ch.as_float ? Imf::FLOAT : Imf::HALF));

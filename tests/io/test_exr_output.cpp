@@ -140,6 +140,21 @@ TEST(ExrOutput, ChannelsBeyondHalfRangeAreStoredAsFloat) {
   EXPECT_EQ(ao[279], float(half(set.find("ao")->data[279])));
 }
 
+// Relief's angles in degrees are stored as float in a half file: 87.4321° read back exactly as the float.
+TEST(ExrOutput, DegreeLayersAreStoredAsFloatInAHalfFile) {
+  TempFolder dir;
+  LayerSet set = sample_layers(4, 7);
+  set.add("openness_positive", mono_channels()).data.assign(28, 87.4321f);
+  set.add("horizon_deg", indexed_channels(2)).data.assign(56, -33.3333f);
+  write_exr(dir / "g.exr", set);
+  Imf::InputFile in((dir / "g.exr").c_str());
+  EXPECT_EQ(in.header().channels().findChannel("openness_positive.Y")->type, Imf::FLOAT);
+  EXPECT_EQ(in.header().channels().findChannel("horizon_deg.001")->type, Imf::FLOAT);
+  EXPECT_EQ(in.header().channels().findChannel("ao.Y")->type, Imf::HALF);
+  EXPECT_EQ(read_channel(dir / "g.exr", "openness_positive.Y", 4, 7)[27], 87.4321f);
+  EXPECT_EQ(read_channel(dir / "g.exr", "horizon_deg.001", 4, 7)[27], -33.3333f);
+}
+
 TEST(ExrOutput, NoCompressionAndReservedAttributeNames) {
   TempFolder dir;
   LayerSet set = sample_layers(3, 2);
