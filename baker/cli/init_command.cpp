@@ -261,6 +261,8 @@ int run_init(const InitOptions& options) {
                  job_file.c_str());
     return 0;
   } catch (const InputError& e) {
+    // The job file is not written yet: what its heights refuse is the height file's.
+    if (e.file() == job_file.string()) return refuse(height.string() + ": " + e.what());
     return refuse(e.line());
   } catch (const InitRefused& e) {
     for (const std::string& line : e.lines) refuse(line);

@@ -126,6 +126,23 @@ TEST_F(CliInit, BadInputIsOneLineAndWritesNothing) {
   EXPECT_NE(r.error_lines()[0].find("junk.png: cannot read the image"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "a.json"));
 
+  // Heights the job would refuse: the line names the height file (the job file is not written yet).
+  {
+    std::vector<float> v(8 * 6, 0.0f);
+    v[3 * 8 + 5] = 1e20f;
+    auto out = OIIO::ImageOutput::create((dir_ / "huge.exr").string());
+    ASSERT_TRUE(out &&
+                out->open((dir_ / "huge.exr").string(), OIIO::ImageSpec(8, 6, 1, OIIO::TypeDesc::FLOAT)) &&
+                out->write_image(OIIO::TypeDesc::FLOAT, v.data()) && out->close());
+  }
+  r = run("init " + (dir_ / "huge.exr").string() + " --preset game-ao --out " + (dir_ / "a.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_EQ(r.error_lines()[0].rfind("hfbake: error: " + (dir_ / "huge.exr").string() + ": texel (5, 3)", 0),
+            0u)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "a.json"));
+
   write_png16(dir_ / "h.png");
   std::ofstream(dir_ / "kept.json") << "{}";
   r = run("init " + (dir_ / "h.png").string() + " --preset game-ao --out " + (dir_ / "kept.json").string());
