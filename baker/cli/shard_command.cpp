@@ -59,9 +59,11 @@ std::vector<std::pair<std::string, std::size_t>> layout_of(const ShardPart& part
   return out;
 }
 
+// Layers as a message names them: "ao 1, horizon 16" (name and channel count).
 std::string layout_text(const std::vector<std::pair<std::string, std::size_t>>& layout) {
   std::string s;
-  for (const auto& [name, channels] : layout) s += (s.empty() ? "" : ", ") + name;
+  for (const auto& [name, channels] : layout)
+    s += (s.empty() ? "" : ", ") + name + " " + std::to_string(channels);
   return s.empty() ? "none" : s;
 }
 
@@ -445,9 +447,9 @@ MergedShards::MergedShards(const Job& job, int width, int height) : job_(job), h
           part.entry < 0 ? std::string("/reference") : job.bakes[std::size_t(part.entry)].pointer;
       auto refuse = [&](const std::string& want) {
         throw InputError(readers_.back().file().string(), "",
-                         "shard " + shard_id_text(id) + ": the part of " + where + " holds layers (" +
-                             layout_text(layout) + ") other than this job's plan (" + want +
-                             "): bake it again");
+                         "shard " + shard_id_text(id) + ": the part of " + where +
+                             " holds layers and channels (" + layout_text(layout) +
+                             ") other than this job's plan (" + want + "): bake it again");
       };
       if (part.kind == "whole") {
         const MethodConfig& config = entry_config(job.bakes[std::size_t(part.entry)]);
