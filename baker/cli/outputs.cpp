@@ -609,14 +609,25 @@ std::string short_number(double v) {
 // "textures/x.p1.direct.png: 73.2 % of its values were above 1 and clipped (largest 3.7); "exposure": 0.27
 // would bring 99 % of them into range" (the exposure that maps the 99th percentile, or the largest value
 // when under 1 % clip, to 1).
-std::string clipping_notice(const std::string& file, const TextureClipping& c, double exposure) {
+// A pack that also holds masks or directions (a layer whose values are not light: ao, bent_normal, ...) gets
+// no exposure advice, since an exposure would scale those too; it is told to give the light a file of its
+// own.
+std::string clipping_notice(const std::string& file, const TextureClipping& c, const TextureSpec& spec) {
   char share[32];
   std::snprintf(share, sizeof share, "%.1f", 100.0 * double(c.clipped) / double(c.values));
+  const std::string head = "warning: " + file + ": " + share +
+                           " % of its values were above 1 and clipped to 1 (largest " +
+                           short_number(c.largest) + "); ";
+  for (const TextureSource& t : spec.channels) {
+    const LayerKind* kind = t.layer.empty() ? nullptr : find_layer_kind(t.layer);
+    if (kind && (kind->values == LayerValues::fraction || kind->channels == LayerChannels::xyz))
+      return head + "an \"exposure\" would scale its " + t.layer +
+             " channel too: give the light layers a texture of their own, with an exposure";
+  }
   const bool few = double(c.clipped) <= 0.01 * double(c.values);
-  const double suggested = exposure / (few ? c.largest : c.p99);
-  return "warning: " + file + ": " + share + " % of its values were above 1 and clipped to 1 (largest " +
-         short_number(c.largest) + "); \"exposure\": " + short_number(suggested) + " would bring " +
-         (few ? "all" : "99 %") + " of them into range";
+  const double suggested = spec.exposure / (few ? c.largest : c.p99);
+  return head + "\"exposure\": " + short_number(suggested) + " would bring " + (few ? "all" : "99 %") +
+         " of them into range";
 }
 
 }  // namespace
@@ -707,7 +718,7 @@ std::vector<std::string> OutputStage::write_textures(const std::string& stem, co
     const TextureClipping clipped = write_texture(stage_ / t.file, layers, t.spec);
     staged_.push_back(t.file);
     if (!t.note.empty()) notices.push_back(t.note);
-    if (clipped.clipped > 0) notices.push_back(clipping_notice(t.file, clipped, t.spec.exposure));
+    if (clipped.clipped > 0) notices.push_back(clipping_notice(t.file, clipped, t.spec));
     if (clipped.negative > 0) {
       char share[32];
       std::snprintf(share, sizeof share, "%.1f", 100.0 * double(clipped.negative) / double(clipped.values));

@@ -241,6 +241,15 @@ TEST(TextureCli, LightMapAboveOneIsNotClippedSilently) {
       << r.err;
   EXPECT_NE(r.err.find("\"exposure\": "), std::string::npos) << r.err;
 
+  // A pack of ao (a mask) beside the light: an exposure would scale the ao too, so none is advised.
+  json pack = lit(dir / "packed", {{"pack", "orm"}, {"channels", {{"R", "ao"}, {"G", "direct.G"}}}});
+  pack["bake"][0]["layers"] = {"ao", "direct"};
+  r = run_hfbake(dir.path(), "bake " + write(dir, "p.json", pack).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("clipped to 1"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("\"exposure\": "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("would scale its ao channel too"), std::string::npos) << r.err;
+
   // With an exposure that fits the largest value: the texture is exposure x the EXR, and no warning.
   const double exposure = 0.9 / largest;
   const fs::path fitted = dir / "fitted";
