@@ -4,9 +4,11 @@
 #                              executable, bakes jobs/demo.json and prints where the outputs went
 #   ./setup.sh install [PREFIX] as demo's build plus the Python module, then `cmake --install` into PREFIX
 #                              (default /usr/local; sudo when it is not writable): PREFIX/bin/hfbake,
-#                              PREFIX/share/hfbake/{schemas, hfbake.ocio}, PREFIX/share/doc/hfbake
+#                              PREFIX/share/hfbake/{schemas, hfbake.ocio}, PREFIX/share/doc/hfbake (README, docs, jobs)
 #                              (docs/install.md); the Python module hfbake into Debian's system Python
-#                              (/usr/lib/python3/dist-packages, docs/python.md)
+#                              (/usr/lib/python3/dist-packages, docs/python.md), or, for a user who is
+#                              not root installing into a PREFIX they can write (~/.local), into their
+#                              own site-packages (python3 -m site --user-site)
 #   ./setup.sh package         as demo's build, then a Debian package through CPack (build/hfbake_*.deb)
 #   ./setup.sh build           everything a developer builds: hfbake, the tests and the benchmarks
 #   ./setup.sh test            as build, plus the test-only packages (Slurm and munge for the farm tests,
@@ -129,14 +131,18 @@ else
   prefix=${2:-/usr/local}
   python=OFF
   targets=(hfbake)
+  python_dir=(-UHFBAKE_PYTHON_INSTALL_DIR)  # the system Python's dist-packages (python/CMakeLists.txt)
   if [ "$mode" = install ]; then
     python=ON
     targets+=(_hfbake)
+    if [ "$(id -u)" != 0 ] && mkdir -p "$prefix" 2>/dev/null && [ -w "$prefix" ]; then
+      python_dir=("-DHFBAKE_PYTHON_INSTALL_DIR=$(/usr/bin/python3 -m site --user-site)")
+    fi
   fi
   # Position-independent code in every mode: the Python module (install) needs it, and demo's objects are
   # then install's, so `install` after `demo` compiles the module alone.
   cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DHFBAKE_BUILD_TESTS=OFF -DHFBAKE_BUILD_BENCHMARKS=OFF \
-    -DHFBAKE_BUILD_PYTHON=$python -DHFBAKE_UNITY_BUILD=ON -DCMAKE_INSTALL_PREFIX="$prefix" \
+    -DHFBAKE_BUILD_PYTHON=$python "${python_dir[@]}" -DHFBAKE_UNITY_BUILD=ON -DCMAKE_INSTALL_PREFIX="$prefix" \
     -DCMAKE_POSITION_INDEPENDENT_CODE=ON \
     "${dev_options[@]}" >/dev/null
   cmake --build "$build_dir" -j "$jobs" --target "${targets[@]}"

@@ -26,7 +26,8 @@ namespace {
 
 constexpr InitPreset kPresets[] = {
     {"game-ao",
-     "a tiling game texture: p1's ao and bent normals as 16-bit PNG textures (tangent space, OpenGL)"},
+     "a tiling game texture: p1's ao as a 16-bit PNG and its bent normals as an 8-bit normal map (tangent "
+     "space, OpenGL)"},
     {"gis-relief",
      "a DEM: relief's sky-view factor and openness and p1's ao as GeoTIFFs georeferenced like the input"},
     {"reference-check", "p1 against the path-traced reference: report.html and an excess-error threshold"},
@@ -199,7 +200,9 @@ std::string methods_and_presets_help() {
   }
   out += "\nPresets (hfbake init HEIGHT_FILE --preset NAME):\n";
   for (const InitPreset& p : kPresets) out += "  " + column(p.name, 17) + p.summary + "\n";
-  out += "\nhfbake COMMAND --help for a command's options; docs/ for the manual.\n";
+  out +=
+      "\nhfbake COMMAND --help for a command's options; the manual: docs/ in the repository, installed in "
+      "PREFIX/share/doc/hfbake/docs.\n";
   return out;
 }
 

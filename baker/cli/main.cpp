@@ -128,7 +128,7 @@ int run(int argc, char** argv) {
   RunOptions bake_run;
   JobOptions bake_writes;
   CLI::App* bake_cmd = app.add_subcommand("bake", "Bake every job (continues past a failed job)");
-  bake_cmd->add_option("jobs", bake_jobs, "Job files (JSON)")->required()->check(CLI::ExistingFile);
+  bake_cmd->add_option("jobs", bake_jobs, "Job files or suites (JSON)")->required()->check(CLI::ExistingFile);
   add_run_options(bake_cmd, bake_run);
   add_job_options(bake_cmd, bake_writes);
   const auto memory_size = CLI::Validator(
@@ -255,10 +255,9 @@ int run(int argc, char** argv) {
   init_cmd->add_option("-o,--out", init_out,
                        "The job file to write (default: <height file's stem>.json here)");
   init_cmd->add_flag("--force", init.force, "Write over an existing job file");
-  app.footer("\n" + hfbake::methods_and_presets_help());
 
   CLI::App* validate_cmd = app.add_subcommand("validate", "Check jobs against the schema and their files");
-  validate_cmd->add_option("jobs", validate_jobs, "Job files (JSON)")->required();
+  validate_cmd->add_option("jobs", validate_jobs, "Job files or suites (JSON)")->required();
   validate_cmd->add_flag("--quiet", validate_quiet, "Print only problems");
   std::string validate_memory_limit;
   validate_cmd
@@ -311,6 +310,12 @@ int run(int argc, char** argv) {
   double refraction = 0;
   CLI::Option* refraction_opt = horizon_cmd->add_option(
       "--refraction", refraction, "Refraction coefficient k with curvature (default 0.13, Gauss's)");
+  // The methods and presets under hfbake --help and the commands that take them (bake, init), set once every
+  // command exists (a footer set earlier is copied into the commands made after it).
+  const std::string methods_help = "\n" + hfbake::methods_and_presets_help();
+  app.footer(methods_help);
+  bake_cmd->footer(methods_help);
+  init_cmd->footer(methods_help);
 
   try {
     app.parse(argc, argv);

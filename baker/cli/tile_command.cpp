@@ -303,11 +303,34 @@ std::size_t tile_window_bytes(const Job& job, int width, int height, int side, i
                       int(std::min<std::int64_t>(height, std::int64_t(side) + 2 * std::int64_t(halo))));
 }
 
+// What the process holds while the COG of the job's widest layer is written (after the tiles): the process
+// itself and the COG driver's buffers of every band, beside GDAL's cache; and that layer's name and band
+// count, for a refusal.
+struct CogFinish {
+  std::size_t bytes = 0;
+  std::string layer;
+  int bands = 0;
+};
+CogFinish cog_finish(const Job& job, int width, int height) {
+  CogFinish f;
+  for (const BakeEntry& entry : job.bakes) {
+    const MethodConfig& config = entry_config(entry);
+    for (const std::string& name : config.layers)
+      if (const int n = layer_channel_count(name, config.directions); n > f.bands)
+        f.bands = n, f.layer = name;
+  }
+  f.bytes = estimate_process_bytes(
+                job, FieldSize{.width = width, .height = height, .tile = true, .georaster = true}) +
+            std::size_t(cog_band_bytes(width, height) * f.bands);
+  return f;
+}
+
 }  // namespace
 
 std::size_t tiled_peak_bytes(const Job& job, const TilePlan& plan) {
-  return tile_window_bytes(job, plan.width, plan.height, plan.tile, plan.halo) + kTiledGdalCacheBytes +
-         plan.kept_bytes;
+  return std::max(tile_window_bytes(job, plan.width, plan.height, plan.tile, plan.halo),
+                  cog_finish(job, plan.width, plan.height).bytes) +
+         kTiledGdalCacheBytes + plan.kept_bytes;
 }
 
 TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> tile_size) {
@@ -326,6 +349,18 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
             std::to_string(kTiledGdalCacheBytes >> 20) +
             " MiB) leave nothing of the memory budget for the tiles (--memory-limit, or a larger far_field "
             "cell)");
+  // The COGs are written after the tiles, a layer at a time: the widest one's bands must fit too.
+  const auto check_cog = [&] {
+    const CogFinish f = cog_finish(job, band->width, band->height);
+    if (f.bytes > tile_budget)
+      refuse(job, "/output/geotiff",
+             "writing the COG of layer " + f.layer + " (" + std::to_string(f.bands) +
+                 (f.bands == 1 ? " band" : " bands") + ") holds about " +
+                 std::to_string((f.bytes + (1u << 20) - 1) >> 20) +
+                 " MiB with the process, beside GDAL's block cache: more than the " +
+                 std::to_string(tile_budget >> 20) +
+                 " MiB the memory budget leaves (--memory-limit, or fewer directions)");
+  };
   auto peak = [&](int side) { return tile_window_bytes(job, band->width, band->height, side, halo); };
   auto too_large = [&](int side, const std::string& knob) {
     refuse(
@@ -339,6 +374,7 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
   };
   if (tile_size) {
     if (peak(*tile_size) > tile_budget) too_large(*tile_size, "--memory-limit, or a smaller --tile-size");
+    check_cog();
     TilePlan plan = plan_tiles(band->width, band->height, *tile_size, halo);
     plan.kept_bytes = coarse;
     return plan;
@@ -347,6 +383,7 @@ TilePlan plan_job_tiles(const Job& job, std::size_t budget, std::optional<int> t
       tile_side_for_budget(band->width, band->height, halo, tile_budget, 256,
                            [&job](int w, int h) { return window_bytes(job, w, h); });
   if (!side) too_large(256, "--memory-limit");
+  check_cog();
   TilePlan plan = plan_tiles(band->width, band->height, *side, halo);
   plan.kept_bytes = coarse;
   return plan;

@@ -123,9 +123,13 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
   copy_to_cog(file, *mem);
 }
 
-double geotiff_writing_bytes(int width, int height, int channels, bool holes) {
+double cog_band_bytes(int width, int height) {
   const double tile = 4.0 * kCogTile * kCogTile;
   const double window = 4.0 * std::min(width, kCogTile) * std::min(height, kCogTile);
+  return 3 * tile + 2 * window;
+}
+
+double geotiff_writing_bytes(int width, int height, int channels, bool holes) {
   double overview_texels = 0;
   for (long long w = width, h = height; w > kCogTile || h > kCogTile;) {
     w /= 2, h /= 2;
@@ -133,7 +137,7 @@ double geotiff_writing_bytes(int width, int height, int channels, bool holes) {
   }
   const double overviews = std::min(4.0 * channels * overview_texels, double(GDALGetCacheMax64()));
   const double copy = holes ? 4.0 * channels * double(width) * double(height) : 0.0;
-  return (3 * tile + 2 * window) * channels + overviews + copy;
+  return cog_band_bytes(width, height) * channels + overviews + copy;
 }
 
 struct TiledGeoTiff::Dataset {

@@ -38,6 +38,9 @@ void write_geotiff(const std::filesystem::path& file, const LayerSet& layers, co
 // last is wider or taller than a tile), whose blocks GDAL's block cache keeps up to its size (GDAL_CACHEMAX);
 // and with `holes`, the writer's copy of the layer holding NoData.
 double geotiff_writing_bytes(int width, int height, int channels, bool holes);
+// The per-band part of geotiff_writing_bytes: the COG driver's tile buffers for one band of a width x height
+// layer (what a tiled bake's TiledGeoTiff::finish holds beside GDAL's block cache, for every band).
+double cog_band_bytes(int width, int height);
 
 // One layer as a COG written a window at a time, never whole in memory: what a tiled bake writes
 // (cli/tile_command.hpp). The windows go into a work file (a tiled BigTIFF, 256x256 blocks, DEFLATE), which

@@ -242,6 +242,12 @@ ImageInfo info_of(const OiioHeader& spec) {
                    box(spec.full_x, spec.full_y, spec.full_width, spec.full_height) +
                    ": the field, and every output, is the data window's pixels from (0, 0)";
   }
+  // Pixels are read as stored: a viewer that honours the tag shows the input turned against every output.
+  if (spec.orientation != 1)
+    info.unread += std::string(info.unread.empty() ? "" : "; ") + "its Orientation tag (" +
+                   std::to_string(spec.orientation) +
+                   ") is not applied: the field, and every output, is the pixels as stored, row 0 first "
+                   "(a viewer that applies the tag shows the input turned or mirrored against the outputs)";
   return info;
 }
 

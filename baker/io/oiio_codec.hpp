@@ -53,6 +53,7 @@ struct OiioHeader {
   // The display window (OpenEXR's; every other format's is the data window x, y, width, height).
   int full_x = 0, full_y = 0, full_width = 0, full_height = 0;
   bool more_subimages = false;  // a second part (EXR) or page (TIFF) follows the one read
+  int orientation = 1;  // the file's Exif/TIFF Orientation tag (1: as stored; 2-8: turned or mirrored)
 };
 
 // An open image file.

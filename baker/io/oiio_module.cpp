@@ -56,6 +56,7 @@ class Reader final : public OiioReader {
     const int bits = s.get_int_attribute("oiio:BitsPerSample", 0);
     if (bits > 0 && bits < int(8 * s.format.size())) h_.bits_per_sample = bits;
     h_.full_x = s.full_x, h_.full_y = s.full_y, h_.full_width = s.full_width, h_.full_height = s.full_height;
+    h_.orientation = s.get_int_attribute("Orientation", 1);
     // Whether an EXR or TIFF holds a second part or page, then back to the first (the one every read uses);
     // a failed seek's message is cleared (the reads look at the error state). Other readers are not asked:
     // seeking decodes again in some (WebP), and their files hold one image or an animation's frames.

@@ -111,8 +111,9 @@ TEST(BaselineCompare, NewMethodIsListedNotARegression) {
   const BaselineComparison c = compare_to_baseline(now, kBase, BaselineOptions::defaults());
   EXPECT_FALSE(c.regression());
   EXPECT_EQ(row(c, "lsao.obscurance.rmse").change, MetricChange::added);
-  EXPECT_EQ(c.added, 3);
+  EXPECT_EQ(c.added, 4);  // 3 checked metrics and the method's seconds, each a row of the table
   EXPECT_NE(comparison_table(c, false).find("lsao.obscurance.rmse"), std::string::npos);
+  EXPECT_NE(comparison_table(c, false).find("lsao.seconds"), std::string::npos);
 }
 
 TEST(BaselineCompare, PsnrIsHigherBetter) {

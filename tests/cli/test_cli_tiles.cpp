@@ -811,6 +811,13 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
       {"budget", {{"image", "f.tif"}}, relief, {}, "/height", "--memory-limit 100M"},
       {"tile_size", {{"image", "f.tif"}}, relief, {}, "/height", "--tile-size 16 --memory-limit 100M"},
       {"coarse", {{"image", "big.vrt"}}, far, {}, "/height", "--memory-limit 1G"},
+      // A 64-direction horizon_deg: its COG's 64 bands hold 5 MiB each while it is written, after the tiles.
+      {"wide_cog",
+       {{"image", "f.tif"}},
+       {{{"method", "relief"}, {"search_radius", 3}, {"directions", 64}, {"layers", {"horizon_deg"}}}},
+       {},
+       "/output/geotiff",
+       "--memory-limit 300M"},
   };
   for (const Case& c : cases)
     for (const char* command : {"validate", "bake"}) {
@@ -829,6 +836,13 @@ TEST_F(CliTiles, RefusalsAreOneLineAndWriteNothing) {
   EXPECT_NE(coarse.err.find("coarse copies of the raster (about 1099 MiB) and GDAL's block cache"),
             std::string::npos)
       << coarse.err;
+  const Result wide =
+      hfbake("validate --quiet --tiles --memory-limit 300M " + (dir_ / "wide_cog.json").string());
+  EXPECT_NE(wide.err.find("writing the COG of layer horizon_deg (64 bands) holds about"), std::string::npos)
+      << wide.err;
+  EXPECT_EQ(
+      hfbake("validate --quiet --tiles --memory-limit 500M " + (dir_ / "wide_cog.json").string()).exit_code,
+      0);
   // The same raster and method as a valid job: validate says so, with the halo of 3 m on 0.5 m texels.
   const Result ok =
       hfbake("validate --tiles --tile-size 16 " + write_job("ok", {{"image", "f.tif"}}, relief).string());

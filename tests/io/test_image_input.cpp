@@ -276,6 +276,20 @@ TEST(ImageInput, PartsAndWindowsNotReadAreNamed) {
       "output, is the data window's pixels from (0, 0)");
   write_test_image(dir / "plain.exr", 16, 8, 1, px, OIIO::TypeDesc::FLOAT);
   EXPECT_EQ(probe_image(dir / "plain.exr", kSite).unread, "");
+  // A TIFF whose Orientation tag turns it (4: mirrored top to bottom): read as stored, and said so.
+  {
+    OIIO::ImageSpec t(16, 8, 1, OIIO::TypeDesc::UINT16);
+    t.attribute("Orientation", 4);
+    auto out = OIIO::ImageOutput::create((dir / "turned.tif").string());
+    ASSERT_TRUE(out && out->open((dir / "turned.tif").string(), t));
+    const std::vector<std::uint16_t> v(16 * 8, 7);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT16, v.data()) && out->close());
+  }
+  EXPECT_EQ(probe_image(dir / "turned.tif", kSite).unread.rfind("its Orientation tag (4) is not applied", 0),
+            0u)
+      << probe_image(dir / "turned.tif", kSite).unread;
+  write_test_image(dir / "plain.tif", 16, 8, 1, px, OIIO::TypeDesc::FLOAT);
+  EXPECT_EQ(probe_image(dir / "plain.tif", kSite).unread, "");
 }
 
 TEST(ImageInput, MissingFile) {
