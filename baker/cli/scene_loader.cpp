@@ -368,8 +368,8 @@ std::string heights_warning(const Scene& scene) {
     warning = "the relief (" + short_num(relief) + " world units) is " + short_num(relief / extent) +
               " times the field's " + short_num(extent) + "-unit side: steeper than any terrain; check " +
               scale_hint + " and texel_size";
-  } else if (const std::string w =
-                 site_scale_warning(scene.georeference.site_scale, scene.georeference.crs_name);
+  } else if (const std::string w = site_scale_warning(
+                 scene.georeference.site_scale, scene.georeference.crs_name, false, s.scale, unit_ratio);
              !w.empty()) {
     warning = w;
   } else if (s.format == "jpeg" || s.format == "JPEG") {
@@ -450,16 +450,19 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   return report;
 }
 
-std::string site_scale_warning(double k, const std::string& crs_name, bool point_query) {
+std::string site_scale_warning(double k, const std::string& crs_name, bool point_query, double scale,
+                               double unit_ratio) {
   // A conformal projection far from its true scale: its map metres are not ground metres, so every slope is
-  // flattened by k.
-  if (!(std::fabs(k - 1) > 0.01)) return "";
+  // flattened by k, less what height_scale makes up beyond the unit.
+  const double left = k * unit_ratio / scale;
+  if (!(std::fabs(left - 1) > 0.01)) return "";
   const std::string site = point_query ? "the point" : "the field's centre";
   return "the CRS's map units are " + short_num(k) + " times the ground's at " + site + " (" + crs_name +
-         "): slopes come out " + short_num(k) + " times too flat" +
+         "): slopes come out " + short_num(left >= 1 ? left : 1 / left) + " times too " +
+         (left >= 1 ? "flat" : "steep") +
          (point_query ? " and distances " + short_num(k) + " times too long" : "") +
          "; warp the DEM to a CRS true to scale there (a UTM zone)" +
-         (point_query ? "" : ", or give height_scale " + short_num(k)) + " (docs/gis.md)";
+         (point_query ? "" : ", or give height_scale " + short_num(k * unit_ratio)) + " (docs/gis.md)";
 }
 
 Scene load_scene(const Job& job, const std::function<void(double)>& progress) {

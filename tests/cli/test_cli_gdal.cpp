@@ -556,6 +556,24 @@ TEST_F(CliGdal, ACrsFarFromTrueScaleIsWarnedWithItsFactor) {
   ASSERT_NE(at, std::string::npos) << merc.err;
   const double k = std::stod(merc.err.substr(at + 24));
   EXPECT_NEAR(k, 1.0 / std::cos(46.4 * std::acos(-1.0) / 180), 0.01) << merc.err;
+  // Following the advice (height_scale k) ends the warning; another scale keeps it, advising k in all.
+  const std::size_t advised = merc.err.find("or give height_scale ");
+  ASSERT_NE(advised, std::string::npos) << merc.err;
+  const double scale = std::stod(merc.err.substr(advised + 21));
+  const Result fixed =
+      hfbake("validate " + write_job("mf.json", "mercf",
+                                     {{"image", "merc.tif"}, {"nodata", "fill"}, {"height_scale", scale}})
+                               .string());
+  ASSERT_EQ(fixed.exit_code, 0) << fixed.err;
+  EXPECT_EQ(fixed.err.find("map units are"), std::string::npos) << fixed.err;
+  const Result half =
+      hfbake("validate " +
+             write_job("mh.json", "merch", {{"image", "merc.tif"}, {"nodata", "fill"}, {"height_scale", 2.0}})
+                 .string());
+  ASSERT_EQ(half.exit_code, 0) << half.err;
+  const std::size_t again = half.err.find("or give height_scale ");
+  ASSERT_NE(again, std::string::npos) << half.err;
+  EXPECT_NEAR(std::stod(half.err.substr(again + 21)), scale, 1e-4) << half.err;
   const Result own = hfbake("validate " + write_job("d.json", "d96", {{"image", "dem1m.tif"}}).string());
   ASSERT_EQ(own.exit_code, 0) << own.err;
   EXPECT_EQ(own.err.find("map units are"), std::string::npos) << own.err;
