@@ -33,6 +33,22 @@ SlurmRun run_in(const fs::path& dir, const std::string& args) {
   return r;
 }
 
+// A fresh folder for one test (under the system's temporary folder), and a small p1 job "v" baking into
+// `out` there.
+fs::path fresh_folder(const std::string& what) {
+  const fs::path dir = fs::temp_directory_path() /
+                       ("hfbake_test_slurm_" + what + "_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  return dir;
+}
+nlohmann::json small_job(const std::string& out) {
+  return {{"version", 1},
+          {"name", "v"},
+          {"height", {{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}},
+          {"bake", {{{"method", "p1"}, {"directions", 8}}}},
+          {"output", {{"dir", out}}}};
+}
+
 TEST(CliSlurm, DryRunPrintsTheScriptsAndWritesNothing) {
   const fs::path dir =
       fs::temp_directory_path() / ("hfbake_test_dry_run_" + std::to_string(std::random_device{}()));
@@ -82,15 +98,8 @@ TEST(CliSlurm, ALineBreakInAPathIsRefused) {
 // (the tasks would run in another folder): a folder with any of them is refused in one line. A job file whose
 // name starts with '-' is passed as ./-name, never as an option.
 TEST(CliSlurm, SbatchValuesAndJobPathsStayWhole) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("hfbake_test_slurm_values_" + std::to_string(std::random_device{}()));
-  fs::create_directories(dir);
-  nlohmann::json job = {{"version", 1},
-                        {"name", "v"},
-                        {"height", {{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}},
-                        {"bake", {{{"method", "p1"}, {"directions", 8}}}},
-                        {"output", {{"dir", "out 50%"}}}};
-  std::ofstream(dir / "v.json") << job.dump();
+  const fs::path dir = fresh_folder("values");
+  nlohmann::json job = small_job("out");
   SlurmRun r;
   for (const char* folder : {"out 50%", "out\"x\"", "out'x", "out\\x"}) {
     job["output"]["dir"] = folder;
@@ -113,15 +122,8 @@ TEST(CliSlurm, SbatchValuesAndJobPathsStayWhole) {
 // An --sbatch-arg setting what the scripts set themselves (the logs, the working folder, the array, the
 // chain, the threads, the memory) is refused in one line naming it; any other goes into both scripts.
 TEST(CliSlurm, SbatchArgsTheScriptsOwnAreRefused) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("hfbake_test_slurm_args_" + std::to_string(std::random_device{}()));
-  fs::create_directories(dir);
-  const nlohmann::json job = {{"version", 1},
-                              {"name", "v"},
-                              {"height", {{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}},
-                              {"bake", {{{"method", "p1"}, {"directions", 8}}}},
-                              {"output", {{"dir", "out"}}}};
-  std::ofstream(dir / "v.json") << job.dump();
+  const fs::path dir = fresh_folder("args");
+  std::ofstream(dir / "v.json") << small_job("out").dump();
   for (const char* arg : {"--output=x.log", "-ox.log", "--job-name=x", "-J", "--chdir=/tmp", "--array=0-9",
                           "--dependency=afterok:1", "--wait", "-c4", "--cpus-per-task=4", "--mem=1G"}) {
     const SlurmRun r =
@@ -143,15 +145,9 @@ TEST(CliSlurm, SbatchArgsTheScriptsOwnAreRefused) {
 // would refuse the mix), and outputs of the job's name that another job file baked there (its tasks and
 // merge run without --overwrite), are refused in one line naming them.
 TEST(CliSlurm, AFolderTheMergeWouldRefuseIsRefusedBeforeSubmitting) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("hfbake_test_slurm_folder_" + std::to_string(std::random_device{}()));
+  const fs::path dir = fresh_folder("folder");
   fs::create_directories(dir / "out" / "shards");
-  const nlohmann::json job = {{"version", 1},
-                              {"name", "v"},
-                              {"height", {{"procedural", {{"kind", "fractal"}, {"size", {32, 32}}}}}},
-                              {"bake", {{{"method", "p1"}, {"directions", 8}}}},
-                              {"output", {{"dir", "out"}}}};
-  std::ofstream(dir / "v.json") << job.dump();
+  std::ofstream(dir / "v.json") << small_job("out").dump();
   std::ofstream(dir / "out" / "shards" / "v.shard-0-of-3.hfshard") << "a shard of three";
   SlurmRun r = run_in(dir, "slurm v.json --shards 2 --dry-run");
   EXPECT_EQ(r.exit_code, 2);

@@ -141,6 +141,14 @@ class Untrusted : public ::testing::Test {
     for (const auto& e : fs::recursive_directory_iterator(dir_ / "outside")) n += e.is_regular_file();
     EXPECT_EQ(n, outside_files_);
   }
+  // Two job files of one name (t) baking into dir_/out, a/t.json and b/t.json (another seed): their paths.
+  std::pair<std::string, std::string> two_job_files_of_one_name() {
+    json a = base_job("../out"), b = base_job("../out");
+    b["height"]["procedural"]["seed"] = 5;
+    fs::create_directories(dir_ / "a");
+    fs::create_directories(dir_ / "b");
+    return {write_job(dir_ / "a", a), write_job(dir_ / "b", b)};
+  }
   fs::path dir_;
   int outside_files_ = 1;
 };
@@ -778,11 +786,7 @@ TEST_F(Untrusted, ValidateRefusesAnotherJobFilesOutputsAsBakeDoes) {
 // A shard task of another job file with the same name, into a folder holding the first's outputs: refused in
 // one line naming the first file (its merge would refuse the mix), the first's shards kept.
 TEST_F(Untrusted, AShardOfAnotherJobFileOverAJobsOutputsIsRefused) {
-  json a = base_job("../out"), b = base_job("../out");
-  b["height"]["procedural"]["seed"] = 5;
-  fs::create_directories(dir_ / "a");
-  fs::create_directories(dir_ / "b");
-  const std::string ja = write_job(dir_ / "a", a), jb = write_job(dir_ / "b", b);
+  const auto [ja, jb] = two_job_files_of_one_name();
   for (const char* shard : {"0/2", "1/2"})
     ASSERT_EQ(hfbake(dir_, {"bake", ja, "--shard", shard, "--no-cache", "--quiet"}).exit_code, 0);
   ASSERT_EQ(hfbake(dir_, {"merge", ja, "--no-cache", "--quiet"}).exit_code, 0);
@@ -803,11 +807,7 @@ TEST_F(Untrusted, AShardOfAnotherJobFileOverAJobsOutputsIsRefused) {
 // 0), the other is refused with one line (exit 2: the folder is locked by the first, or holds the first's
 // outputs); the winner's outputs are never replaced. --overwrite lets a job take the name over.
 TEST_F(Untrusted, TwoJobsOfOneNameInOneFolderNeverReplaceEachOther) {
-  json a = base_job("../out"), b = base_job("../out");
-  b["height"]["procedural"]["seed"] = 5;
-  fs::create_directories(dir_ / "a");
-  fs::create_directories(dir_ / "b");
-  const std::string ja = write_job(dir_ / "a", a), jb = write_job(dir_ / "b", b);
+  const auto [ja, jb] = two_job_files_of_one_name();
   for (int run = 0; run < 20; ++run) {
     SCOPED_TRACE(run);
     fs::remove_all(dir_ / "out");
