@@ -454,6 +454,7 @@ std::string site_scale_warning(double k, const std::string& crs_name, bool point
                                double unit_ratio) {
   // A conformal projection far from its true scale: its map metres are not ground metres, so every slope is
   // flattened by k, less what height_scale makes up beyond the unit.
+  if (!(std::fabs(k - 1) > 0.01)) return "";  // true to scale (or no CRS): whatever height_scale does
   const double left = k * unit_ratio / scale;
   if (!(std::fabs(left - 1) > 0.01)) return "";
   const std::string site = point_query ? "the point" : "the field's centre";

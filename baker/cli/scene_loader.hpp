@@ -107,10 +107,10 @@ struct HeightsReport {
 HeightsReport describe_heights(const Job& job, const Scene& scene);
 // The warning for a DEM whose CRS's map units are k times the ground's at `site` (Web Mercator away from the
 // equator): slopes come out k times too flat (and a caster's distance k times too long). Empty when k is
-// within 1 % of 1. A bake can correct it with height_scale; `hfbake horizon` cannot (point_query). `scale`:
-// the job's height_scale, `unit_ratio` the factor of it that converts the heights' unit into the pixels'
-// (heights_warning): what is left, k unit_ratio / scale, is the flattening warned about (none when the job
-// gives the advised height_scale, k unit_ratio).
+// within 1 % of 1 (a CRS true to scale there, or none). A bake can correct it with height_scale; `hfbake
+// horizon` cannot (point_query). `scale`: the job's height_scale, `unit_ratio` the factor of it that converts
+// the heights' unit into the pixels' (heights_warning): what is left, k unit_ratio / scale, is the flattening
+// warned about (none when the job gives the advised height_scale, k unit_ratio).
 std::string site_scale_warning(double k, const std::string& crs_name, bool point_query = false,
                                double scale = 1, double unit_ratio = 1);
 
