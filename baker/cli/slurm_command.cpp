@@ -193,9 +193,7 @@ int run_slurm(const SlurmOptions& o) {
   std::map<std::tuple<fs::path, fs::path, int, int>, bool> rebuild;  // (job, out, entry, stage)
   auto complete = [&](const Task& t, int stage) {
     if (o.tile_size > 0) return false;  // tile tasks are re-run whole
-    JobLoad load = load_job(t.job, t.out);
-    if (!load.job || !resolve_job(*load.job).empty()) return false;
-    const Job& job = *load.job;
+    const Job& job = *t.loaded;
     const FieldSize size = probe_field_size(job);
     const ShardId id{t.shard, o.shards};
     if (stage == 0 &&
@@ -258,38 +256,33 @@ int run_slurm(const SlurmOptions& o) {
   // What the scripts set themselves (the logs' names, the working folder, the array, the chain): an
   // --sbatch-arg may not set it too, or the tasks would run elsewhere and the merge's log be missed.
   struct Owned {
-    const char* name;
+    const char* short_name;  // "" where sbatch has none
+    const char* long_name;
     const char* instead;
   };
   static constexpr Owned kOwned[] = {
-      {"-J", "the job file's name names the jobs"},
-      {"--job-name", "the job file's name names the jobs"},
-      {"-o", "the logs go to <output>/slurm/logs"},
-      {"--output", "the logs go to <output>/slurm/logs"},
-      {"-e", "the logs go to <output>/slurm/logs"},
-      {"--error", "the logs go to <output>/slurm/logs"},
-      {"-D", "the tasks run in the folder hfbake slurm runs in"},
-      {"--chdir", "the tasks run in the folder hfbake slurm runs in"},
-      {"-a", "the tasks are the shards: give --shards"},
-      {"--array", "the tasks are the shards: give --shards"},
-      {"-d", "hfbake slurm chains the stages and the merge"},
-      {"--dependency", "hfbake slurm chains the stages and the merge"},
-      {"--kill-on-invalid-dep", "hfbake slurm chains the stages and the merge"},
-      {"-W", "give --wait"},
-      {"--wait", "give --wait"},
-      {"--parsable", "hfbake slurm reads sbatch's answer itself"},
-      {"-c", "give --threads"},
-      {"--cpus-per-task", "give --threads"},
-      {"--mem", "give --mem"},
-      {"--mem-per-cpu", "give --mem"},
+      {"-J", "--job-name", "the job file's name names the jobs"},
+      {"-o", "--output", "the logs go to <output>/slurm/logs"},
+      {"-e", "--error", "the logs go to <output>/slurm/logs"},
+      {"-D", "--chdir", "the tasks run in the folder hfbake slurm runs in"},
+      {"-a", "--array", "the tasks are the shards: give --shards"},
+      {"-d", "--dependency", "hfbake slurm chains the stages and the merge"},
+      {"", "--kill-on-invalid-dep", "hfbake slurm chains the stages and the merge"},
+      {"-W", "--wait", "give --wait"},
+      {"", "--parsable", "hfbake slurm reads sbatch's answer itself"},
+      {"-c", "--cpus-per-task", "give --threads"},
+      {"", "--mem", "give --mem"},
+      {"", "--mem-per-cpu", "give --mem"},
   };
   for (const std::string& a : o.sbatch_args) {
     const std::string opt = a.substr(0, a.find_first_of("= "));
     for (const Owned& n : kOwned) {
-      const bool short_option = n.name[1] != '-';  // -ofile is -o file
-      if (opt == n.name || (short_option && a.size() > 2 && a.rfind(n.name, 0) == 0 && a[2] != '-'))
-        return fail("--sbatch-arg \"" + a + "\": the scripts set " + n.name + " themselves (" + n.instead +
-                    ")");
+      // A short option may carry its value: -ofile is -o file.
+      const bool as_short = *n.short_name && (opt == n.short_name ||
+                                              (a.size() > 2 && a.rfind(n.short_name, 0) == 0 && a[2] != '-'));
+      if (as_short || opt == n.long_name)
+        return fail("--sbatch-arg \"" + a + "\": the scripts set " + (as_short ? n.short_name : n.long_name) +
+                    " themselves (" + n.instead + ")");
     }
   }
   // A job path as the scripts pass it: one that starts with '-' would be read as an option.
