@@ -316,13 +316,17 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   if (options.shard) {
     // Another job file's outputs of this name in the folder: refused as the merge would refuse them.
     check_output_owner(job, options.overwrite);
+    claim_shards_folder(job, options.overwrite);  // the job's name in shards/: this job file's
     const fs::path made = bake_shard(job, *options.shard, progress, cancel, outcome, cache, options.stage);
     if (!made.empty()) outcome.outputs = {made};
     return;
   }
   // hfbake merge takes the results from the shards, every one checked before anything is written.
   std::optional<MergedShards> shards;
-  if (options.merge) shards.emplace(job, size.width, size.height);
+  if (options.merge) {
+    check_shards_owner(job, options.overwrite);  // shards of this name another job file baked
+    shards.emplace(job, size.width, size.height);
+  }
   OutputStage stage(job, options.overwrite);
   for (const fs::path& p : stage.stale_removed())
     progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");

@@ -363,27 +363,74 @@ void check_tiles_folder(const Job& job, bool overwrite) {
   check_owner_record(job, tiles_owner_record(job), folder, overwrite, "tiles");
 }
 
-void claim_tiles_folder(const Job& job, bool overwrite) {
-  const fs::path folder = tiles_folder(job);
+namespace {
+
+// What a task does before it writes files of the job's name into `folder` (tiles/, shards/): makes the
+// folder and, holding `lock` (waited for up to kTilesClaimPatience; InputError at /output/dir naming the
+// holder after that), runs `check` (the folder's own checks and its owner record) and records this job
+// file as the owner of the job's name there. `what`: the files claimed ("tiles", "shards").
+template <class Check>
+void claim_task_folder(const Job& job, const fs::path& folder, const fs::path& lock_file,
+                       const fs::path& record, const std::string& what, const Check& check) {
   std::error_code ec;
   fs::create_directories(folder, ec);
-  check_tiles_folder(job, overwrite);  // tiles/ a folder itself, and the lock's name free or a file
-  const FolderLock lock(tiles_lock_file(job), kTilesClaimPatience);
+  check();  // the folder a folder itself, and the lock's name free or a file
+  const FolderLock lock(lock_file, kTilesClaimPatience);
   if (!lock.held())
     throw InputError(job.file.string(), "/output/dir",
-                     lock.problem().empty()
-                         ? lock.holder_words() + " has been claiming the tiles of job " + job.name + " in " +
-                               folder.string() + " for " + std::to_string(kTilesClaimPatience.count()) +
-                               " s: wait for it, then bake again"
-                         : not_a_lock_file(tiles_lock_file(job), lock.problem()));
-  check_owner_record(job, tiles_owner_record(job), folder, overwrite, "tiles");
-  if (read_owner_record(tiles_owner_record(job)) == job_identity(job)) return;
+                     lock.problem().empty() ? lock.holder_words() + " has been claiming the " + what +
+                                                  " of job " + job.name + " in " + folder.string() + " for " +
+                                                  std::to_string(kTilesClaimPatience.count()) +
+                                                  " s: wait for it, then bake again"
+                                            : not_a_lock_file(lock_file, lock.problem()));
+  check();
+  if (read_owner_record(record) == job_identity(job)) return;
   try {
-    write_file_atomically(tiles_owner_record(job), job_identity(job));
+    write_file_atomically(record, job_identity(job));
   } catch (const std::system_error& e) {
     throw InputError(job.file.string(), "/output/dir",
-                     "cannot write " + tiles_owner_record(job).string() + ": " + e.code().message());
+                     "cannot write " + record.string() + ": " + e.code().message());
   }
+}
+
+}  // namespace
+
+void claim_tiles_folder(const Job& job, bool overwrite) {
+  claim_task_folder(job, tiles_folder(job), tiles_lock_file(job), tiles_owner_record(job), "tiles",
+                    [&] { check_tiles_folder(job, overwrite); });
+}
+
+fs::path shards_folder(const Job& job) {
+  return job.output.dir / "shards";
+}
+
+fs::path shards_lock_file(const Job& job) {
+  return shards_folder(job) / (".hfbake-" + job.name + "+shards.lock");
+}
+
+fs::path shards_owner_record(const Job& job) {
+  return shards_folder(job) / (".hfbake-" + job.name + "+shards.job");
+}
+
+void check_shards_owner(const Job& job, bool overwrite) {
+  const fs::path folder = shards_folder(job);
+  std::error_code ec;
+  const fs::file_status s = fs::symlink_status(folder, ec);
+  if (fs::exists(s) && !fs::is_directory(s))
+    throw InputError(job.file.string(), "/output/dir",
+                     folder.string() +
+                         " is not a folder (a file or a link): the shards are written and read " + "inside " +
+                         job.output.dir.string() + " only");
+  if (const std::string problem = lock_name_problem(shards_lock_file(job)); !problem.empty())
+    throw InputError(job.file.string(), "/output/dir", problem);
+  if (const std::string problem = output_name_problem(shards_owner_record(job)); !problem.empty())
+    throw InputError(job.file.string(), "/output/dir", problem);
+  check_owner_record(job, shards_owner_record(job), folder, overwrite, "shards");
+}
+
+void claim_shards_folder(const Job& job, bool overwrite) {
+  claim_task_folder(job, shards_folder(job), shards_lock_file(job), shards_owner_record(job), "shards",
+                    [&] { check_shards_owner(job, overwrite); });
 }
 
 std::string output_name_problem(const fs::path& target) {

@@ -72,6 +72,20 @@ inline constexpr std::chrono::seconds kTilesClaimPatience{10};
 // file claim it together; a task of another job file with the same name is refused (InputError at /name)
 // unless `overwrite`, which takes the name over.
 void claim_tiles_folder(const Job& job, bool overwrite);
+// <output dir>/shards: where a job's shard tasks write <name>.shard-<i>-of-<n>.hfshard and its staged
+// entries' stage files (farm/shard_plan.hpp). Its lock and owner record, shards/.hfbake-<name>+shards.lock
+// and .hfbake-<name>+shards.job, are named as tiles/' are, and no shard or stage file has those names.
+std::filesystem::path shards_folder(const Job& job);
+std::filesystem::path shards_lock_file(const Job& job);
+std::filesystem::path shards_owner_record(const Job& job);
+// Refuses (InputError naming the job file) what a shard task, `merge` or `slurm` of `job` would find in
+// shards/: the folder a link or a file, its lock's name taken by anything but a file (/output/dir), and
+// shards of the job's name that shards_owner_record says another job file baked (/name), unless `overwrite`.
+void check_shards_owner(const Job& job, bool overwrite);
+// What a shard task does before it bakes, as claim_tiles_folder does for tiles/: the tasks of one job file
+// share the job's name in shards/; a task of another job file with that name is refused before it bakes
+// (InputError at /name) unless `overwrite`, which takes the name over.
+void claim_shards_folder(const Job& job, bool overwrite);
 // <output dir>/.hfbake+report.lock: the file a bake or merge of a job with a reference locks as well, since
 // report.json and report.html carry no job name (docs/output_folders.md). No job's lock has this name (a job
 // name never starts with '+').

@@ -154,6 +154,7 @@ int run_slurm(const SlurmOptions& o) {
       try {
         // As its tasks and merge will find the folder (they run without --overwrite).
         check_output_owner(job, false);
+        check_shards_owner(job, false);
         check_shards_folder(job, o.shards);
       } catch (const InputError& e) {
         return fail(e.line());

@@ -565,9 +565,9 @@ std::vector<Case> cases() {
     std::ofstream(d / "out" / "shards") << "x";
     const std::string job = write_job(d, base_job());
     return CaseSetup{{"merge", job, "--no-cache", "--quiet"},
-                     (d / "out" / "shards").string(),
-                     "",
-                     "is not a folder (a file or a link)"};
+                     job,
+                     "/output/dir",
+                     (d / "out" / "shards").string() + " is not a folder (a file or a link)"};
   });
   add("HeightImageOneByOne", [](const fs::path& d) {
     write_image(d / "h.exr", 1, 1, 1, {1.0f});

@@ -656,7 +656,10 @@ TEST_F(Untrusted, ShardAndSlurmFoldersThatAreLinksAreRefused) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   auto lines = r.error_lines();
   ASSERT_EQ(lines.size(), 1u) << r.err;
-  EXPECT_NE(lines[0].find("shards is not a folder (a link?)"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find(job + ": /output/dir: " + (dir_ / "out" / "shards").string() +
+                          " is not a folder (a file or a link)"),
+            std::string::npos)
+      << lines[0];
   expect_outside_untouched();
 
   fs::remove(dir_ / "out" / "shards");
@@ -801,6 +804,56 @@ TEST_F(Untrusted, AShardOfAnotherJobFileOverAJobsOutputsIsRefused) {
   EXPECT_EQ(read_text(shard0), before);
   EXPECT_EQ(hfbake(dir_, {"bake", jb, "--shard", "0/2", "--no-cache", "--quiet", "--overwrite"}).exit_code,
             0);
+}
+
+// The job's name in shards/ has one owner, as in tiles/ (docs/output_folders.md): a shard task of another
+// job file with the same name and folder is refused before it bakes, while the first job's shards wait for
+// their merge, and so is its merge; the first's shards are kept. Started at the same moment, one job file's
+// task bakes and the other's is refused. --overwrite takes the name over.
+TEST_F(Untrusted, OneJobNameInShardsHasOneJobFile) {
+  const auto [ja, jb] = two_job_files_of_one_name();
+  const fs::path shards = dir_ / "out" / "shards";
+  const std::string owned_by_a = "/name: the shards of job t in " + fs::weakly_canonical(shards).string() +
+                                 " were baked from " + fs::weakly_canonical(ja).string();
+  ASSERT_EQ(hfbake(dir_, {"bake", ja, "--shard", "0/2", "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path shard0 = shards / "t.shard-0-of-2.hfshard";
+  const std::string before = read_text(shard0);
+  for (const std::vector<std::string>& command :
+       {std::vector<std::string>{"bake", jb, "--shard", "0/2", "--no-cache", "--quiet"},
+        std::vector<std::string>{"bake", jb, "--shard", "1/2", "--no-cache", "--quiet"},
+        std::vector<std::string>{"merge", jb, "--no-cache", "--quiet"},
+        std::vector<std::string>{"slurm", jb, "--shards", "2", "--dry-run"}}) {
+    SCOPED_TRACE(command[0] + " " + command[2]);
+    const Outcome r = hfbake(dir_, command);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_NE(lines[0].find(jb + ": " + owned_by_a), std::string::npos) << lines[0];
+  }
+  EXPECT_EQ(read_text(shard0), before);
+  EXPECT_FALSE(fs::exists(shards / "t.shard-1-of-2.hfshard"));
+  ASSERT_EQ(hfbake(dir_, {"bake", ja, "--shard", "1/2", "--no-cache", "--quiet"}).exit_code, 0);
+  ASSERT_EQ(hfbake(dir_, {"merge", ja, "--no-cache", "--quiet"}).exit_code, 0);
+
+  for (int run = 0; run < 5; ++run) {
+    SCOPED_TRACE(run);
+    fs::remove_all(dir_ / "out");
+    const pid_t pa = start(dir_, {"bake", ja, "--shard", "0/2", "--no-cache", "--quiet"}, "a.txt");
+    const pid_t pb = start(dir_, {"bake", jb, "--shard", "1/2", "--no-cache", "--quiet"}, "b.txt");
+    const Outcome ra = finish(pa, dir_, "a.txt"), rb = finish(pb, dir_, "b.txt");
+    ASSERT_TRUE((ra.exit_code == 0 && rb.exit_code == 2) || (ra.exit_code == 2 && rb.exit_code == 0))
+        << ra.err << rb.err;
+    const bool a_won = ra.exit_code == 0;
+    EXPECT_EQ(read_text(shards / ".hfbake-t+shards.job"), fs::weakly_canonical(a_won ? ja : jb).string());
+    EXPECT_NE((a_won ? rb : ra).err.find("were baked from " + fs::weakly_canonical(a_won ? ja : jb).string()),
+              std::string::npos)
+        << (a_won ? rb : ra).err;
+    EXPECT_EQ(fs::exists(shards / "t.shard-0-of-2.hfshard"), a_won);
+    EXPECT_EQ(fs::exists(shards / "t.shard-1-of-2.hfshard"), !a_won);
+  }
+  const Outcome taken = hfbake(dir_, {"bake", jb, "--shard", "0/2", "--no-cache", "--quiet", "--overwrite"});
+  EXPECT_EQ(taken.exit_code, 0) << taken.err;
+  EXPECT_EQ(read_text(shards / ".hfbake-t+shards.job"), fs::weakly_canonical(jb).string());
 }
 
 // Two processes bake different job files with the same name into one folder, 20 times: one bakes (exit
