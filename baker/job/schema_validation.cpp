@@ -7,6 +7,7 @@
 #endif
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -384,6 +385,51 @@ std::string given_type(const nlohmann::json& doc, const std::string& pointer) {
   return v.is_array() ? "an array" : v.is_object() ? "an object" : "a string";
 }
 
+// Edits between a and b, ASCII case ignored: insertions, deletions, substitutions and swaps of two
+// neighbours (the optimal string alignment distance).
+std::size_t edits_between(const std::string& a, const std::string& b) {
+  const auto low = [](char c) { return char(std::tolower(static_cast<unsigned char>(c))); };
+  const std::size_t n = a.size(), m = b.size();
+  std::vector<std::vector<std::size_t>> d(n + 1, std::vector<std::size_t>(m + 1));
+  for (std::size_t i = 0; i <= n; ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= m; ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= n; ++i)
+    for (std::size_t j = 1; j <= m; ++j) {
+      const bool same = low(a[i - 1]) == low(b[j - 1]);
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (same ? 0 : 1)});
+      if (i > 1 && j > 1 && low(a[i - 1]) == low(b[j - 2]) && low(a[i - 2]) == low(b[j - 1]))
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[n][m];
+}
+
+// For an unknown key at `pointer`: the key the schema allows beside it that is closest to it, when one is
+// within two edits (one for a key of four characters or fewer) and no other is as close; else "".
+std::string closest_known_key(const std::string& schema_path, const std::string& pointer) {
+  std::vector<std::string> tokens = pointer_tokens(pointer);
+  if (tokens.empty()) return "";
+  const std::string key = tokens.back();
+  tokens.pop_back();
+  std::vector<const nlohmann::json*> found;
+  keywords_at(&schema_document(schema_path), schema_path, tokens, 0, "properties", found);
+  const std::size_t most = key.size() <= 4 ? 1 : 2;
+  std::string best;
+  std::size_t best_edits = most + 1;
+  bool tie = false;
+  for (const nlohmann::json* properties : found) {
+    if (!properties->is_object()) continue;
+    for (const auto& [name, schema] : properties->items()) {
+      if (name == best) continue;
+      const std::size_t e = edits_between(key, name);
+      if (e < best_edits)
+        best = name, best_edits = e, tie = false;
+      else if (e == best_edits)
+        tie = true;
+    }
+  }
+  return best_edits <= most && !tie ? best : "";
+}
+
 }  // namespace
 
 std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
@@ -425,6 +471,9 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
   for (const auto& [pointer, text] : raw) {
     if (is_wrapper(text)) continue;
     SchemaViolation v = rewrite(pointer, text);
+    if (v.message == "unknown key")
+      if (const std::string known = closest_known_key(schema_path, v.pointer); !known.empty())
+        v.message += " (did you mean \"" + known + "\"?)";
     if (v.message == "not one of the allowed values")
       if (const std::string list = allowed_values(schema_path, v.pointer); !list.empty())
         v.message = "must be one of " + list;

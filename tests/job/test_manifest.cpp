@@ -114,10 +114,38 @@ TEST_F(Manifest, MissingKey) {
 TEST_F(Manifest, UnknownKeysAreErrorsAtEveryLevel) {
   auto e = errors(minimal(R"(, "bouncess": 2)"));
   ASSERT_EQ(e.size(), 1u);
-  EXPECT_EQ(e[0], (dir_ / "x.json").string() + ": /bouncess: unknown key");
+  EXPECT_EQ(e[0], (dir_ / "x.json").string() + ": /bouncess: unknown key (did you mean \"bounces\"?)");
   e = errors(minimal("", R"([{"method": "p1", "directoins": 8}])"));
   ASSERT_EQ(e.size(), 1u);
-  EXPECT_EQ(e[0], (dir_ / "x.json").string() + ": /bake/0/directoins: unknown key");
+  EXPECT_EQ(e[0],
+            (dir_ / "x.json").string() + ": /bake/0/directoins: unknown key (did you mean \"directions\"?)");
+}
+
+// An unknown key names the key it is closest to, among those allowed beside it (the method's for a bake
+// entry), when one is within two edits and no other is as close; a key near none, or near two, names none.
+TEST_F(Manifest, AnUnknownKeyNamesTheClosestKnownKey) {
+  struct Case {
+    const char* entry;
+    const char* pointer;
+    const char* suggestion;  // "" for none
+  };
+  const Case cases[] = {
+      {R"({"method": "p1", "direction": 8})", "/bake/0/direction", "directions"},
+      {R"({"method": "p1", "Directions": 8})", "/bake/0/Directions", "directions"},
+      {R"({"method": "relief", "serach_radius": 8})", "/bake/0/serach_radius", "search_radius"},
+      {R"({"method": "p1", "search_radius": 8})", "/bake/0/search_radius", ""},  // relief's, not p1's
+      {R"({"method": "p1", "colour": 8})", "/bake/0/colour", ""},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.entry);
+    const auto e = errors(minimal("", std::string("[") + c.entry + "]"));
+    ASSERT_EQ(e.size(), 1u);
+    const std::string want = (dir_ / "x.json").string() + ": " + c.pointer + ": unknown key";
+    EXPECT_EQ(e[0], *c.suggestion ? want + " (did you mean \"" + c.suggestion + "\"?)" : want);
+  }
+  const auto e = errors(minimal(R"(, "outptu": {"dir": "o"})"));
+  ASSERT_FALSE(e.empty());
+  EXPECT_EQ(e[0], (dir_ / "x.json").string() + ": /outptu: unknown key (did you mean \"output\"?)");
 }
 
 TEST_F(Manifest, UnknownMethod) {
