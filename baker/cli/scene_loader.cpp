@@ -368,6 +368,14 @@ std::string heights_warning(const Scene& scene) {
     warning = "the relief (" + short_num(relief) + " world units) is " + short_num(relief / extent) +
               " times the field's " + short_num(extent) + "-unit side: steeper than any terrain; check " +
               scale_hint + " and texel_size";
+    // A raster that declares a scale of its own (an integer band of centimetres: scale 0.01) is read as
+    // stored (docs/heights.md): the likeliest cause, named with the key that applies it.
+    if (s.file_scale != 1 && s.scale == 1)
+      warning +=
+          " (the file declares scale " + short_num(s.file_scale) +
+          ", not applied: \"height_scale\": " + short_num(s.file_scale) +
+          (s.file_offset != 0 ? " and \"height_offset\": " + short_num(s.file_offset) : std::string()) +
+          " apply it)";
   } else if (const std::string w = site_scale_warning(
                  scene.georeference.site_scale, scene.georeference.crs_name, false, s.scale, unit_ratio);
              !w.empty()) {

@@ -235,6 +235,17 @@ TEST_F(CliHeights, TheHeightsLineNamesTheChannelAndTheFilesScale) {
                  "250, not applied"),
       std::string::npos)
       << r.err;
+  // Without height_scale the stored centimetres are far steeper than terrain: the warning names the file's
+  // scale and the keys that apply it.
+  r = hfbake("validate " + write_job("scaled_as_stored", {{"image", "scaled.tif"}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("steeper than any terrain; check height_scale (world units per stored integer"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("(the file declares scale 0.01, not applied: \"height_scale\": 0.01 and "
+                       "\"height_offset\": 250 apply it)"),
+            std::string::npos)
+      << r.err;
 }
 
 // JPEG heights are lossy: validate says so (a plausible relief, so no other warning takes its place).
