@@ -138,6 +138,7 @@ Profile compute(const HorizonOptions& o) {
   if (o.band < 0 || o.band >= info->bands)
     fail("--band", "is " + std::to_string(o.band) + " but the raster has " + std::to_string(info->bands) +
                        " band(s) (0-based)");
+  if (const std::string gap = uncovered_problem(*info, o.band); !gap.empty()) fail("", gap);
   p.crs_name = info->crs_name;
   p.geographic = info->geographic;
   p.unit = info->geographic ? "metre" : info->linear_unit;

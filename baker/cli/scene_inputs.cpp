@@ -215,6 +215,9 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
   out.width = geo->width;
   out.height = geo->height;
   out.nodata = image_values ? std::nullopt : geo->nodata[std::size_t(band)];
+  if (!image_values)
+    if (const std::string gap = uncovered_problem(*geo, band); !gap.empty())
+      throw InputError(job.file.string(), "/height/image", out.file.string() + ": " + gap);
   out.source.reader = image_values ? "OpenImageIO, placed by GDAL" : "GDAL";
   out.source.format = geo->driver;
   out.source.geographic = geo->geographic;

@@ -314,8 +314,24 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
     info.offset.push_back(has ? offset : 0.0);
     const char* unit = band->GetUnitType();
     info.unit_types.emplace_back(unit ? unit : "");
+    double covered = 100;
+    const int status = band->GetDataCoverageStatus(0, 0, info.width, info.height, 0, &covered);
+    info.uncovered_percent.push_back(
+        status & GDAL_DATA_COVERAGE_STATUS_EMPTY ? std::clamp(100 - covered, 0.0, 100.0) : 0.0);
   }
   return info;
+}
+
+std::string uncovered_problem(const GeoRasterInfo& info, int band) {
+  const std::size_t b = std::size_t(band);
+  if (b >= info.uncovered_percent.size() || info.uncovered_percent[b] <= 0 || info.nodata[b]) return "";
+  char pct[32];
+  std::snprintf(pct, sizeof pct, "%.3g", info.uncovered_percent[b]);
+  return std::string(pct) +
+         " % of it is covered by none of its data (gaps between a mosaic's sources, or a sparse file's "
+         "missing blocks), where GDAL reads 0 m: declare a NoData value for the gaps (gdalbuildvrt "
+         "-vrtnodata -9999, or gdal_edit.py -a_nodata) so that they are read as holes, or crop "
+         "them away";
 }
 
 Plane read_georaster_band(const fs::path& file, int band, const InputSite& site,

@@ -39,7 +39,16 @@ struct GeoRasterInfo {
   // Per band: the unit its values are in as the file declares it (GDAL's unit type: "m", "ft", ...; "" when
   // none).
   std::vector<std::string> unit_types;
+  // Per band: the percentage of the raster that none of the file's data covers, where GDAL reads 0 or the
+  // band's NoData value (a mosaic's gaps between its sources, a sparse GeoTIFF's missing blocks), from
+  // GDAL's data coverage status; 0 when all is covered or the driver cannot tell.
+  std::vector<double> uncovered_percent;
 };
+
+// What is wrong with reading band `band` of the raster as heights where no data covers it ("" when nothing
+// is): GDAL reads 0 there unless the band has a NoData value, and a mosaic's gap would bake as a canyon down
+// to height 0. With a NoData value a gap is a hole like any other (docs/gis.md).
+std::string uncovered_problem(const GeoRasterInfo& info, int band);
 
 // Whether a geotransform is north-up (neither rotated nor sheared): its rotation terms within 1e-9 of its
 // pixel sizes, the tolerance square pixels are held to (a term of 1e-15, a conversion's rounding, is none).

@@ -361,6 +361,9 @@ def read_dem(path, band=1):
     if not abs(sx - sy) <= 1e-9 * max(sx, sy):
         refuse(f"has non-square pixels ({sx!r} x {sy!r}); hfbake needs square texels: resample it first, e.g. "
                "gdalwarp -tr S S")
+    gap = _hfbake.uncovered_problem(path, band - 1)
+    if gap:
+        refuse(gap)
     b = dem.GetRasterBand(band)
     values = b.ReadAsArray()
     # GDAL's mask band (a .msk side file or an internal mask; not an alpha band, nor the NoData value again):

@@ -34,6 +34,7 @@
 #include "core/safe_file.hpp"
 #include "field/georeference.hpp"
 #include "io/crs_geodesy.hpp"
+#include "io/georaster_input.hpp"
 #include "job/embedded_schemas.hpp"
 #include "job/manifest.hpp"
 #include "methods/method_table.hpp"
@@ -541,6 +542,15 @@ PYBIND11_MODULE(_hfbake, m) {
         return k ? site_scale_warning(*k, crs_name) : std::string();
       },
       py::arg("wkt"), py::arg("x"), py::arg("y"), py::arg("crs_name"));
+  // What read_dem refuses in band `band` (0-based) of a georeferenced raster where no data covers it ("" when
+  // nothing), in the words a job naming the file gets (io/georaster_input.hpp uncovered_problem).
+  m.def(
+      "uncovered_problem",
+      [](const std::string& path, int band) {
+        const std::optional<GeoRasterInfo> info = probe_georaster(path);
+        return info ? uncovered_problem(*info, band) : std::string();
+      },
+      py::arg("path"), py::arg("band"));
   // Metres in a unit of length by its name, or None (read_dem's height_unit_factor).
   m.def("metres_per", &metres_per, py::arg("unit"));
   m.def("bake_job", &bake_job_api, py::arg("job"), py::arg("out"), py::arg("threads") = 0,

@@ -179,3 +179,23 @@ def test_a_mask_band_marks_holes_as_a_job_reads_them(tmp_path):
     job = {"version": 1, "name": "k", "height": {"image": str(dem), "nodata": "fill"}, "bake": [{"method": "relief"}]}
     (tmp_path / "k.json").write_text(json.dumps(job))
     assert "320 texels without a height" in run_cli("validate", tmp_path / "k.json", check=False).stderr
+
+
+def test_a_mosaics_gap_is_refused_as_a_job_refuses_it(tmp_path):
+    # Two sources with a source's width between them: GDAL reads 0 m in the gap unless it is NoData.
+    heights = terrain(24, 20, seed=3) * 10 + 300
+    write_geotiff(tmp_path / "west.tif", heights, geotransform=(500000.0, 1.0, 0.0, 5100020.0, 0.0, -1.0))
+    write_geotiff(tmp_path / "east.tif", heights, geotransform=(500048.0, 1.0, 0.0, 5100020.0, 0.0, -1.0))
+    gdal.BuildVRT(str(tmp_path / "gap.vrt"), [str(tmp_path / "west.tif"), str(tmp_path / "east.tif")])
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.read_dem(tmp_path / "gap.vrt")
+    assert "33.3 % of it is covered by none of its data" in str(caught.value)
+    job = {"version": 1, "name": "g", "height": {"image": str(tmp_path / "gap.vrt")}, "bake": [{"method": "relief"}]}
+    (tmp_path / "g.json").write_text(json.dumps(job))
+    said = run_cli("validate", tmp_path / "g.json", check=False)
+    assert said.returncode == 2
+    assert caught.value.message in said.stderr  # the same sentence
+    gdal.BuildVRT(str(tmp_path / "holes.vrt"), [str(tmp_path / "west.tif"), str(tmp_path / "east.tif")],
+                  VRTNodata=-9999)
+    d = hfbake.read_dem(tmp_path / "holes.vrt")
+    assert d.holes[:, 24:48].all() and not d.holes[:, :24].any()

@@ -783,6 +783,47 @@ TEST_F(CliGdal, AVrtsSourcesAreReadFilesOfTheJob) {
   EXPECT_NE(r.err.find("belongs to another job"), std::string::npos) << r.err;
 }
 
+// A mosaic whose sources leave a gap: GDAL reads 0 m there (no NoData value), a canyon to sea level in the
+// middle of the terrain. validate, bake, a tiled bake and horizon refuse it in one line naming the file and
+// how much is uncovered; with a NoData value for the gaps they are holes (refused, or filled when the job
+// says so); a mosaic of adjacent sources is whole.
+TEST_F(CliGdal, AMosaicsGapsAreRefusedUnlessTheyAreNoData) {
+  translate("-srcwin 400 400 40 40 '" + kDem.string() + "' west.tif");
+  translate("-srcwin 440 400 40 40 '" + kDem.string() + "' middle.tif");
+  translate("-srcwin 480 400 40 40 '" + kDem.string() + "' east.tif");
+  int status = -1;
+  run_tool("cd '" + dir_.string() +
+               "' && gdalbuildvrt -q gap.vrt west.tif east.tif && gdalbuildvrt -q -vrtnodata -9999 holes.vrt "
+               "west.tif east.tif && gdalbuildvrt -q whole.vrt west.tif middle.tif east.tif",
+           &status);
+  ASSERT_EQ(status, 0);
+  const fs::path gap = dir_ / "gap.vrt";
+  const std::string said = gap.string() + ": 33.3 % of it is covered by none of its data";
+  const fs::path job = write_job("gap.json", "gap", {{"image", "gap.vrt"}});
+  const Raster whole = read_raster(dir_ / "whole.vrt");
+  for (const std::string& command :
+       {"validate " + job.string(), "bake --quiet " + job.string(),
+        "bake --quiet --tiles --tile-size 32 " + job.string(),
+        "horizon " + gap.string() + " --at " + std::to_string(whole.gt[0] + 10.5) + "," +
+            std::to_string(whole.gt[3] - 10.5)}) {
+    SCOPED_TRACE(command);
+    const Result r = hfbake(command);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(said), std::string::npos) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("gdalbuildvrt -vrtnodata"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out_gap"));
+  }
+  Result r = hfbake("validate " + write_job("holes.json", "holes", {{"image", "holes.vrt"}}).string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("1600 of 4800 texels have no valid height"), std::string::npos) << r.err;
+  r = hfbake("bake --quiet " +
+             write_job("filled.json", "filled", {{"image", "holes.vrt"}, {"nodata", "fill"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = hfbake("validate " + write_job("whole.json", "whole", {{"image", "whole.vrt"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 // A report's scene names the bytes of every file its heights were read from: a baseline baked from a VRT
 // whose source has changed since is another job's, refused by compare (exit 2).
 TEST_F(CliGdal, AReportsSceneCountsAVrtsSources) {
