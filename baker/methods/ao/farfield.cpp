@@ -499,7 +499,9 @@ MethodInfo farfield_method() {
   m.name = "farfield";
   m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
-  m.summary = "P4's far-field obscurance: an exact near field, prefiltered far-field slabs beyond it";
+  m.summary =
+      "far-field ambient obscurance (Timonen 2013): an exact near field, prefiltered far-field slabs beyond "
+      "it";
   m.read = [](Params& in, const MethodContext&) {
     const FarfieldOptions o = read_farfield_options(in);
     MethodConfig config = method_config(o, o.directions);

@@ -527,7 +527,8 @@ MethodInfo lsao_method() {
   m.name = "lsao";
   m.reads_normals = false;  // its own, only for texel receivers
   m.reads_albedo = false;
-  m.summary = "P3's line-sweep obscurance: one hull of occluders per sweep line and direction";
+  m.summary =
+      "line-sweep ambient obscurance (Timonen 2013): one hull of occluders per sweep line and direction";
   m.read = [](Params& in, const MethodContext&) {
     const LsaoOptions o = read_lsao_options(in);
     MethodConfig config = method_config(o, o.directions);

@@ -211,7 +211,9 @@ MethodInfo vo_method() {
   m.name = "vo";
   m.reads_normals = false;  // normal_at per texel
   m.reads_albedo = false;
-  m.summary = "volumetric obscurance (ALSVO): the occupied fraction of a tangent-space box per texel";
+  m.summary =
+      "volumetric obscurance (Hendrickx 2015, adaptively layered): the occupied fraction of a tangent-space "
+      "box per texel";
   m.read = [](Params& in, const MethodContext& c) {
     const VoSettings s = read_vo_settings(in, c.field);
     MethodConfig config = method_config(s);

@@ -927,7 +927,7 @@ double nlp_working_bytes(const FieldShape& field, const NlpOptions& o, int bounc
 MethodInfo nlp_method() {
   MethodInfo m;
   m.name = "nlp";
-  m.summary = "NLP/SH multiresolution global illumination (Nowrouzezahrai & Snyder 2009)";
+  m.summary = "spherical-harmonic visibility and light over a height pyramid (Nowrouzezahrai & Snyder 2009)";
   m.read = [](Params& in, const MethodContext&) {
     const NlpOptions o = read_nlp_options(in);
     return method_config(o, o.directions);
