@@ -332,6 +332,13 @@ std::optional<double> metres_per(std::string unit) {
   return std::nullopt;
 }
 
+std::string unitless_heights_note(const std::string& pixel_unit, double pixel_unit_metres,
+                                  const std::string& height_unit) {
+  if (pixel_unit.empty() || pixel_unit_metres == 1.0 || !height_unit.empty()) return "";
+  return "the band declares no unit: heights taken in " + pixel_unit +
+         "; heights in metres need height_scale " + short_num(1 / pixel_unit_metres);
+}
+
 std::string heights_warning(const Scene& scene) {
   const HeightSource& s = scene.height_source;
   const HeightField& f = scene.field;
@@ -424,11 +431,10 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   const double relief = s.world_max - s.world_min;
   line += " heights " + short_num(s.world_min) + " .. " + short_num(s.world_max) + " world units (relief " +
           short_num(relief) + ")";
-  // A CRS in another unit than the metre, and a band that does not say which unit its heights are in: they
-  // are taken in the CRS's unit, which a DEM in feet with heights in metres is not (docs/gis.md).
-  if (!s.pixel_unit.empty() && s.pixel_unit_metres != 1.0 && s.height_unit.empty() && s.scale == 1)
-    line += " (the band declares no unit: heights taken in " + s.pixel_unit + "; heights in metres need " +
-            "height_scale " + short_num(1 / s.pixel_unit_metres) + ")";
+  if (s.scale == 1)
+    if (const std::string note = unitless_heights_note(s.pixel_unit, s.pixel_unit_metres, s.height_unit);
+        !note.empty())
+      line += " (" + note + ")";
   // "nodata": "fill": how much of the field is filled (the outputs mark it NoData, docs/gis.md).
   const auto& holes = scene.georeference.holes;
   if (const std::size_t n = std::size_t(std::count(holes.begin(), holes.end(), std::uint8_t(1))); n > 0) {

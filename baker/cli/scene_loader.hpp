@@ -90,6 +90,13 @@ SceneNeeds scene_needs(const Job& job);
 // US survey foot; nullopt for a name not known here. The Python module's read_dem asks it too.
 std::optional<double> metres_per(std::string unit);
 
+// For a raster in a CRS whose unit is not the metre (`pixel_unit`, `pixel_unit_metres` metres each) and a
+// band that declares no unit for its heights: they are taken in the CRS's unit, which a DEM in feet with
+// heights in metres is not (docs/gis.md). The note says so and gives the height_scale for metres; empty for
+// any other raster. The heights line carries it, and the Python module's read_dem warns with it.
+std::string unitless_heights_note(const std::string& pixel_unit, double pixel_unit_metres,
+                                  const std::string& height_unit);
+
 // What validate and bake warn about a scene's heights (empty: nothing): heights in another unit than the
 // pixels, or a relief implausible for the field's extent E (its longer side in world units): zero, under 1 %
 // of E (the bake comes out nearly unoccluded: an integer image meant as 0..1, or a missing height_scale) or

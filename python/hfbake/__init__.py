@@ -397,6 +397,10 @@ def read_dem(path, band=1):
         heights[~holes] *= _np.float32(factor)
         warnings.append(f"{path}: the band's heights are in {b.GetUnitType()}, its pixels in "
                         f"{crs.GetLinearUnitsName()}: heights x {factor:.6g} into the pixels' unit")
+    if crs.IsProjected():
+        note = _hfbake.unitless_heights_note(crs.GetLinearUnitsName() or "", linear, b.GetUnitType() or "")
+        if note:
+            warnings.append(f"{path}: {note}")
     scale_of, offset_of = b.GetScale(), b.GetOffset()
     if (scale_of not in (None, 1.0)) or (offset_of not in (None, 0.0)):
         warnings.append(f"{path}: the file declares scale {scale_of or 1:g} and offset {offset_of or 0:g}, not "

@@ -551,6 +551,9 @@ PYBIND11_MODULE(_hfbake, m) {
         return info ? uncovered_problem(*info, band) : std::string();
       },
       py::arg("path"), py::arg("band"));
+  // The note on heights a band declares no unit for, in a CRS whose unit is not the metre (read_dem).
+  m.def("unitless_heights_note", &unitless_heights_note, py::arg("pixel_unit"), py::arg("pixel_unit_metres"),
+        py::arg("height_unit"));
   // Metres in a unit of length by its name, or None (read_dem's height_unit_factor).
   m.def("metres_per", &metres_per, py::arg("unit"));
   m.def("bake_job", &bake_job_api, py::arg("job"), py::arg("out"), py::arg("threads") = 0,

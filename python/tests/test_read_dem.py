@@ -199,3 +199,23 @@ def test_a_mosaics_gap_is_refused_as_a_job_refuses_it(tmp_path):
                   VRTNodata=-9999)
     d = hfbake.read_dem(tmp_path / "holes.vrt")
     assert d.holes[:, 24:48].all() and not d.holes[:, :24].any()
+
+
+def test_heights_without_a_unit_on_a_crs_in_feet_are_noted_as_the_command_notes(tmp_path):
+    # EPSG:2263 (New York Long Island, US survey feet); the band declares no unit for its heights.
+    dem = tmp_path / "feet.tif"
+    write_geotiff(dem, terrain(24, 20, seed=5) * 10 + 100, epsg=2263,
+                  geotransform=(980000.0, 6.0, 0.0, 200000.0, 0.0, -6.0))
+    d = hfbake.read_dem(dem)
+    notes = [w for w in d.warnings if "declares no unit" in w]
+    assert len(notes) == 1, d.warnings
+    assert "heights taken in US survey foot; heights in metres need height_scale 3.28083" in notes[0]
+    job = {"version": 1, "name": "f", "height": {"image": str(dem)}, "bake": [{"method": "relief"}]}
+    (tmp_path / "f.json").write_text(json.dumps(job))
+    said = run_cli("validate", tmp_path / "f.json", check=False)
+    assert notes[0].split(": ", 1)[1] in said.stderr  # the same sentence
+    # A band that says its heights are in feet gets no note.
+    ds = gdal.Open(str(dem), gdal.GA_Update)
+    ds.GetRasterBand(1).SetUnitType("US survey foot")
+    ds = None
+    assert not [w for w in hfbake.read_dem(dem).warnings if "declares no unit" in w]
