@@ -69,10 +69,21 @@ std::string budget_text(std::optional<std::size_t> limit, const std::string& lim
                : "the " + gib(have) + " available (" + limit_name + " sets the budget)";
 }
 
-// "scene 35 MiB, p1 12 MiB": an estimate's parts for messages.
+// "scene 35 MiB, p1 12 MiB": an estimate's parts for messages, and how they make the total when they are
+// not simply added (MemoryPart).
 std::string memory_parts_text(const std::vector<MemoryPart>& parts) {
   std::string t;
-  for (const MemoryPart& p : parts) t += (t.empty() ? "" : ", ") + p.name + " " + gib(p.bytes);
+  int entries = 0;
+  bool environment = false;
+  for (const MemoryPart& p : parts) {
+    t += (t.empty() ? "" : ", ") + p.name + " " + gib(p.bytes);
+    entries += p.entry ? 1 : 0;
+    environment = environment || p.name == "environment";
+  }
+  if (entries > 1 || environment)
+    t += entries > 1 ? "; the entries run one at a time, so the largest counts"
+                     : "; the environment is read before the bake";
+  if (entries > 1 && environment) t += ", the environment before them";
   return t;
 }
 

@@ -227,9 +227,10 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double working = m->working_bytes ? m->working_bytes(r, context) : 0.0;
     // Its EXR: each half channel converted a band of at most 256 rows at a time (io/exr_output.cpp).
     const double exr_band = 2.0 * channels * std::min(texels, 256.0 * size.width);
-    peak = std::max(peak, kept + layers + std::max({working, writing(widest), exr_band}));
+    const double entry = layers + std::max({working, writing(widest), exr_band});
+    peak = std::max(peak, kept + entry);
     if (job.has_reference) kept += layers;
-    if (parts) parts->push_back({e.stem, std::size_t(layers + working), m->memory_knob});
+    if (parts) parts->push_back({e.stem, std::size_t(entry), m->memory_knob, true});
     auto traced = [&](const std::string& l, LayerTrace t) {
       const LayerKind* k = find_layer_kind(l);
       return k && k->trace == t;
@@ -263,11 +264,12 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double layers = (8.0 * channels + 4.0 * horizon_channels + added_per_texel) * texels;
     reference = layers + reference::embree_bytes_per_texel(geometry) * texels +
                 reference::embree_fixed_bytes(geometry);
-    // Its widest layer: direct (3 channels) or the horizons it traces.
-    peak = std::max(peak, kept + reference + writing(std::max(3, horizon_channels / 2)));
-    // report.html's images, after the tracing (Embree's scene freed): OpenImageIO's libraries beside the
-    // layers, when nothing loaded them before.
-    if (process < kImageProcessBytes) peak = std::max(peak, kept + layers + kImageProcessBytes - process);
+    // Its widest layer: direct (3 channels) or the horizons it traces; then report.html's images, after the
+    // tracing (Embree's scene freed): OpenImageIO's libraries beside the layers, when nothing loaded them
+    // before. Its part is the larger.
+    reference = std::max(reference + writing(std::max(3, horizon_channels / 2)),
+                         process < kImageProcessBytes ? layers + kImageProcessBytes - process : 0.0);
+    peak = std::max(peak, kept + reference);
   }
   // The environment's images are read and resampled before any method runs, when nothing of the bake is
   // held yet but the field; the world lat-long is kept through the bake (with the reference's sampling

@@ -37,10 +37,15 @@ FieldSize probe_field_size(const Job& job);
 // `parts` (optional): what the estimate is made of, for messages: "scene" (field, normals, surface maps),
 // each bake entry's stem (its layers and working memory), "reference" (its layers). Methods run one at a
 // time, so the peak is less than their sum when there is no reference.
+// A part of estimate_peak_bytes: the scene, each bake entry (its layers and the most it holds beside them,
+// working or writing), the environment while it is read, the reference. The entries run one at a time, so
+// the largest of them counts, and the environment is read before any: the total is the scene plus the
+// larger of the largest entry's and the environment's part, plus the reference's.
 struct MemoryPart {
   std::string name;
   std::size_t bytes = 0;
-  std::string knob;  // what shrinks it (MethodInfo::memory_knob for a method)
+  std::string knob;    // what shrinks it (MethodInfo::memory_knob for a method)
+  bool entry = false;  // a bake entry's
 };
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts = nullptr);
 // The process itself, before any field: libraries and thread pools (measured: 45 MiB for a 16^2 bake);

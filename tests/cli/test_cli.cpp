@@ -18,6 +18,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <thread>
 
@@ -719,6 +720,41 @@ TEST_F(Cli, P1sMemoryEstimateHoldsOnARepeatField) {
       << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
   EXPECT_LT(run.peak_mib, 1.25 * estimate)
       << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+}
+
+// validate's estimate is its parts: a single entry's part holds what it writes beside its layers (a
+// 16-band COG of the horizon layer here, more than p1's own working memory), so scene + entry is the total;
+// with two entries, which run one at a time, the message says the largest counts: scene + the larger.
+TEST_F(Cli, TheMemoryEstimatesPartsMakeItsTotal) {
+  const auto parts_of = [&](const std::string& said) {
+    // "about N MiB to bake: scene S MiB, <stem> P MiB[, <stem> Q MiB][; ...])": N, S, P, Q
+    std::vector<double> v;
+    std::smatch m;
+    if (!std::regex_search(said, m, std::regex(R"(about (\d+) MiB to bake: ([^;)]*))"))) return v;
+    v.push_back(std::stod(m[1]));
+    const std::string parts = m[2];
+    const std::regex mib(R"((\d+) MiB)");
+    for (std::sregex_iterator it(parts.begin(), parts.end(), mib), end; it != end; ++it)
+      v.push_back(std::stod((*it)[1]));
+    return v;
+  };
+  nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {400, 400}}}}},
+                         {{{"method", "p1"}, {"directions", 16}, {"layers", {"horizon"}}}});
+  j["output"]["geotiff"] = true;
+  Result r = hfbake("validate " + write_job("one.json", j).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::vector<double> v = parts_of(r.err);
+  ASSERT_EQ(v.size(), 3u) << r.err;
+  EXPECT_NEAR(v[1] + v[2], v[0], 1.0) << r.err;
+  EXPECT_EQ(r.err.find("one at a time"), std::string::npos) << r.err;
+  j["bake"].push_back({{"method", "hbao"}, {"directions", 4}, {"max_distance", 4}});
+  r = hfbake("validate " + write_job("two.json", j).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  v = parts_of(r.err);
+  ASSERT_EQ(v.size(), 4u) << r.err;
+  EXPECT_NEAR(v[1] + std::max(v[2], v[3]), v[0], 1.0) << r.err;
+  EXPECT_NE(r.err.find("; the entries run one at a time, so the largest counts)"), std::string::npos)
+      << r.err;
 }
 
 // --memory-limit: a job whose estimate exceeds the budget is refused by validate and by bake before anything
