@@ -303,6 +303,12 @@ int run_slurm(const SlurmOptions& o) {
     for (const std::string& a : o.sbatch_args) s << "#SBATCH " << a << "\n";
   };
 
+  // glibc's double math functions (sin, exp, pow, atan2, ...) give other last bits in 1 input in 1400 to 3700
+  // with their FMA variants than with their SSE2 ones: every task and the merge take the SSE2 ones, so the
+  // farm's bits do not depend on which machines have FMA (docs/cluster.md). Appended to the tunables the
+  // task has; a glibc.cpu.hwcaps of its own given before is replaced by this one.
+  const std::string baseline_math = "export GLIBC_TUNABLES=\"${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}" +
+                                    std::string(kBaselineMathTunable) + "\"\n";
   std::ostringstream bake;
   bake << "#!/bin/bash\n"
        << "# Written by hfbake " << shard_version() << " (hfbake slurm): one array task per (job, shard).\n"
@@ -326,7 +332,7 @@ int run_slurm(const SlurmOptions& o) {
   bake << ")\nSHARDS=(";
   for (const Task& t : tasks) bake << " " << t.shard;
   bake << " )\n"
-       << "i=${SLURM_ARRAY_TASK_ID:?run me with sbatch --array}\n"
+       << baseline_math << "i=${SLURM_ARRAY_TASK_ID:?run me with sbatch --array}\n"
        << "STAGE=${1:-0}\n"
        << "exec " << exe << " bake \"${JOBS[$i]}\" "
        << (o.tile_size > 0
@@ -343,8 +349,7 @@ int run_slurm(const SlurmOptions& o) {
         << "# `hfbake bake` writes (bit-identical). It names any shard that is missing or damaged.\n"
         << "# Run it by hand after resubmitting tasks: sbatch " << (dir / "merge.sbatch").string() << "\n";
   common_head(merge, "hfbake-merge-" + name, "%x-%j.out");
-  merge << "set -euo pipefail\n"
-        << "exec " << exe << " merge";
+  merge << "set -euo pipefail\n" << baseline_math << "exec " << exe << " merge";
   for (const fs::path& f : o.inputs) merge << " " << as_argument(f);
   if (o.out) merge << " --out " << quoted(o.out->string());
   if (o.tile_size > 0) merge << " --tiles --tile-size " << o.tile_size;

@@ -11,6 +11,10 @@
 
 namespace hfbake {
 
+// The glibc tunable under which a farm's tasks take the SSE2 variants of glibc's math functions, whatever
+// their machines have (docs/cluster.md): the same bits on every x86-64.
+inline constexpr const char* kBaselineMathTunable = "glibc.cpu.hwcaps=-FMA,-FMA4";
+
 struct SlurmOptions {
   std::vector<std::filesystem::path> inputs;  // jobs and suites
   int shards = 1;

@@ -68,6 +68,14 @@ TEST(CliSlurm, DryRunPrintsTheScriptsAndWritesNothing) {
         "sbatch --parsable --array=0-2 '" + (out / "slurm" / "bake.sbatch").string() + "'",
         std::string("sbatch --parsable --dependency=afterok:<stage 0 array> --kill-on-invalid-dep=yes '")})
     EXPECT_NE(text.find(s), std::string::npos) << s << "\n" << text;
+  // The tasks and the merge take glibc's SSE2 math on every machine (docs/cluster.md): the tunable's line
+  // comes before each script's command.
+  const std::string tunable =
+      "export GLIBC_TUNABLES=\"${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.cpu.hwcaps=-FMA,-FMA4\"\n";
+  const std::size_t first = text.find(tunable), second = text.find(tunable, first + 1);
+  ASSERT_NE(second, std::string::npos) << text;
+  EXPECT_LT(first, text.find(" bake \"${JOBS[$i]}\"")) << text;
+  EXPECT_LT(second, text.find("exec ", text.find(" merge") - 60)) << text;
   EXPECT_FALSE(fs::exists(out)) << "a dry run writes nothing";
   fs::remove_all(dir);
 }
