@@ -39,7 +39,6 @@ constexpr char kCommitList[] = "commit-list";
 std::atomic<int> g_moving{0};
 static_assert(std::atomic<int>::is_always_lock_free);
 // The longest side of a field whose EXRs are written as scanlines (larger ones are tiled).
-constexpr int kLargestScanlineExr = 2048;
 
 }  // namespace
 

@@ -9,8 +9,10 @@
 
 #include "cli/scene_inputs.hpp"
 #include "core/error.hpp"
+#include "core/threads.hpp"
 #include "field/procedural.hpp"
 #include "io/crs_geodesy.hpp"
+#include "io/exr_output.hpp"
 #include "io/geotiff_output.hpp"
 #include "io/load_environment.hpp"
 #include "methods/method_table.hpp"
@@ -219,14 +221,27 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
         e.config ? *e.config : resolve_method(e.params, context, job.file.string(), e.pointer);
     const MethodInfo* m = r.method;
     int channels = 0, widest = 0;
+    std::size_t half_channels = 0, float_channels = 0;
     for (const std::string& l : r.layers) {
-      channels += layer_channel_count(l, r.directions);
-      widest = std::max(widest, layer_channel_count(l, r.directions));
+      const int n = layer_channel_count(l, r.directions);
+      channels += n;
+      widest = std::max(widest, n);
+      const LayerKind* kind = find_layer_kind(l);
+      (job.output.float_pixels || (kind && kind->float_storage) ? float_channels : half_channels) +=
+          std::size_t(n);
     }
     const double layers = 4.0 * channels * texels;
     const double working = m->working_bytes ? m->working_bytes(r, context) : 0.0;
-    // Its EXR: each half channel converted a band of at most 256 rows at a time (io/exr_output.cpp).
-    const double exr_band = 2.0 * channels * std::min(texels, 256.0 * size.width);
+    // Its EXR: the half band it converts and OpenEXR's chunk buffers (io/exr_output.hpp).
+    ExrOptions exr;
+    exr.compression =
+        job.output.compression.empty() ? default_exr_compression(r.layers) : job.output.compression;
+    exr.tile_size = std::max(size.width, size.height) > kLargestScanlineExr ? 256 : 0;
+    exr.threads = worker_threads();
+    // A tile writes work GeoTIFFs instead, a band of its plane at a time (counted as half a band of rows).
+    const double exr_band =
+        size.tile ? 2.0 * channels * std::min(texels, 256.0 * size.width)
+                  : exr_writing_bytes(size.width, size.height, half_channels, float_channels, exr);
     const double entry = layers + std::max({working, writing(widest), exr_band});
     peak = std::max(peak, kept + entry);
     if (job.has_reference) kept += layers;

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "core/error.hpp"
@@ -41,24 +42,20 @@ fs::path temporary_sibling(const fs::path& file) {
   return file.parent_path() / name;
 }
 
-std::string default_exr_compression(const LayerSet& layers) {
-  for (const Layer& layer : layers.layers)
-    if (const LayerKind* k = find_layer_kind(layer.name); k && k->channels == LayerChannels::per_direction)
+std::string default_exr_compression(const std::vector<std::string>& layer_names) {
+  for (const std::string& name : layer_names)
+    if (const LayerKind* k = find_layer_kind(name); k && k->channels == LayerChannels::per_direction)
       return "piz";
   return "zip";
 }
 
-namespace {
-
-Imf::Compression compression_of(const std::string& name, const fs::path& file) {
-  if (name == "zip") return Imf::ZIP_COMPRESSION;
-  if (name == "piz") return Imf::PIZ_COMPRESSION;
-  if (name == "dwaa") return Imf::DWAA_COMPRESSION;
-  if (name == "dwab") return Imf::DWAB_COMPRESSION;
-  if (name == "none") return Imf::NO_COMPRESSION;
-  throw InputError(file.string(), "",
-                   "unknown EXR compression \"" + name + "\" (zip, piz, dwaa, dwab or none)");
+std::string default_exr_compression(const LayerSet& layers) {
+  std::vector<std::string> names;
+  for (const Layer& layer : layers.layers) names.push_back(layer.name);
+  return default_exr_compression(names);
 }
+
+namespace {
 
 // Scanlines OpenEXR compresses together (one chunk of a scanline file).
 int chunk_lines(Imf::Compression c) {
@@ -75,6 +72,33 @@ int chunk_lines(Imf::Compression c) {
   }
 }
 
+// Rows handed to OpenEXR at once: whole chunks (a row of tiles, or scanline blocks of `chunk` rows), enough
+// of them that every thread has one, and at least 64 rows. Half channels are converted one such band at a
+// time, so the extra memory is bounded (channels x width x band halves) whatever the field size. No more
+// rows than the image has (one band then holds it all): a 70000 x 2 field's tiled band of 256 rows took 35 MB
+// a channel.
+int band_rows_of(int chunk, bool tiled, int threads, int height) {
+  int rows = std::max(64, chunk * (tiled ? 1 : threads));
+  rows = (rows + chunk - 1) / chunk * chunk;
+  return std::min(rows, height);
+}
+
+// The compression's name as OpenEXR's, or nullopt for a name it does not have.
+std::optional<Imf::Compression> compression_named(const std::string& name) {
+  if (name == "zip") return Imf::ZIP_COMPRESSION;
+  if (name == "piz") return Imf::PIZ_COMPRESSION;
+  if (name == "dwaa") return Imf::DWAA_COMPRESSION;
+  if (name == "dwab") return Imf::DWAB_COMPRESSION;
+  if (name == "none") return Imf::NO_COMPRESSION;
+  return std::nullopt;
+}
+
+Imf::Compression compression_of(const std::string& name, const fs::path& file) {
+  if (const std::optional<Imf::Compression> c = compression_named(name)) return *c;
+  throw InputError(file.string(), "",
+                   "unknown EXR compression \"" + name + "\" (zip, piz, dwaa, dwab or none)");
+}
+
 void check_layers(const LayerSet& layers) {
   if (layers.width <= 0 || layers.height <= 0 || layers.layers.empty())
     throw std::logic_error("write_exr: empty LayerSet");
@@ -87,6 +111,21 @@ void check_layers(const LayerSet& layers) {
 }
 
 }  // namespace
+
+double exr_writing_bytes(int width, int height, std::size_t half_channels, std::size_t float_channels,
+                         const ExrOptions& options) {
+  const Imf::Compression c = compression_named(options.compression).value_or(Imf::ZIP_COMPRESSION);
+  const int threads = std::max(1, options.threads > 0 ? options.threads : Imf::globalThreadCount());
+  const bool tiled = options.tile_size > 0;
+  const int chunk = tiled ? options.tile_size : chunk_lines(c);
+  const double pixel = 2.0 * double(half_channels) + 4.0 * double(float_channels);
+  const double chunk_bytes =
+      pixel * (tiled ? double(options.tile_size) * options.tile_size : double(chunk) * double(width));
+  const double buffers = 2.0 * threads * (c == Imf::NO_COMPRESSION ? 1.0 : 3.0) * chunk_bytes;
+  const double band =
+      2.0 * double(half_channels) * double(width) * band_rows_of(chunk, tiled, threads, height);
+  return band + buffers;
+}
 
 void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& options) {
   check_layers(layers);
@@ -146,15 +185,8 @@ void write_exr(const fs::path& file, const LayerSet& layers, const ExrOptions& o
     header.lineOrder() =
         Imf::INCREASING_Y;  // tiles stored row of tiles by row of tiles, whatever the threads
   }
-  // Rows handed to OpenEXR at once: whole chunks (a row of tiles, or scanline blocks), enough of them that
-  // every thread has one, and at least 64 rows. Half channels are converted one such band at a time, so the
-  // extra memory is bounded (channels x width x band halves) whatever the field size.
   const int chunk = tiled ? options.tile_size : chunk_lines(header.compression());
-  int band_rows = std::max(64, chunk * (tiled ? 1 : threads));
-  band_rows = (band_rows + chunk - 1) / chunk * chunk;
-  // No more rows than the image has (one band then holds it all): a 70000 x 2 field's tiled band of 256
-  // rows took 35 MB a channel.
-  band_rows = std::min(band_rows, h);
+  const int band_rows = band_rows_of(chunk, tiled, threads, h);
 
   std::error_code ec;
   if (!fs::is_directory(file.parent_path().empty() ? fs::path(".") : file.parent_path(), ec))

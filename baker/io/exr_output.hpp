@@ -10,6 +10,10 @@
 
 namespace hfbake {
 
+// The longest side an output EXR is written as scanlines; a larger field's are tiles of 256 (cli/outputs.cpp
+// says why).
+inline constexpr int kLargestScanlineExr = 2048;
+
 struct ExrOptions {
   bool float_pixels = false;        // half by default
   std::string compression = "zip";  // "zip", "piz", "dwaa", "dwab" (lossy on half colour channels) or "none"
@@ -32,11 +36,19 @@ struct ExrOptions {
 // disk error -> InputError naming the file; inconsistent layers (wrong data size) -> std::logic_error.
 void write_exr(const std::filesystem::path& file, const LayerSet& layers, const ExrOptions& options = {});
 
+// The most memory write_exr holds beside the layers for a file of width x height texels with
+// `half_channels` half and `float_channels` float channels: the band of half values it converts, and
+// OpenEXR's chunk buffers (two per thread, each with a compressor's two buffers of a chunk when the file is
+// compressed; measured on 1025-channel files: docs/large-fields.md).
+double exr_writing_bytes(int width, int height, std::size_t half_channels, std::size_t float_channels,
+                         const ExrOptions& options);
+
 // The compression a job gets when its output names none: "piz" for a file holding a per-direction stack
 // (horizon, horizon_distance, horizon_deg: many channels of smooth float data, where PIZ writes about twice
 // as fast as ZIP in half and three times in float, and smaller in float; docs/large-fields.md, "EXR
 // outputs"), "zip" for the rest (lossless, the smallest half files of scalars and colours).
 std::string default_exr_compression(const LayerSet& layers);
+std::string default_exr_compression(const std::vector<std::string>& layer_names);
 
 // Starts (or resizes) OpenEXR's process-wide thread pool to `threads` workers (0: none, everything in the
 // calling thread). Process state: called once by the program (the CLI's main), never by library code.
