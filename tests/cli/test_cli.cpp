@@ -757,6 +757,32 @@ TEST_F(Cli, TheMemoryEstimatesPartsMakeItsTotal) {
       << r.err;
 }
 
+// A wide EXR's writing, against the measured peak: p1's horizon and horizon_distance at K = 256 in float
+// pixels (513 channels), PIZ and ZIP, where OpenEXR's chunk buffers (two per thread, each with the
+// compressor's two) are a third of the peak.
+TEST_F(Cli, TheMemoryEstimateHoldsAWideExrsChunkBuffers) {
+  for (const char* compression : {"piz", "zip"}) {
+    SCOPED_TRACE(compression);
+    nlohmann::json j =
+        job({{"procedural", {{"kind", "fractal"}, {"size", {256, 256}}, {"seed", 5}}}},
+            {{{"method", "p1"}, {"directions", 256}, {"layers", {"ao", "horizon", "horizon_distance"}}}});
+    j["output"]["pixel_type"] = "float";
+    j["output"]["compression"] = compression;
+    j["name"] = std::string("wide_") + compression;
+    j["environment"] = {{"uniform", 1}};
+    const fs::path p = write_job(std::string("wide_") + compression + ".json", j);
+    const double estimate = cli_test::validate_estimate_mib(dir_, p);
+    ASSERT_GT(estimate, 0);
+    const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
+    ASSERT_EQ(run.exit_code, 0);
+    EXPECT_GT(run.peak_mib, 0.75 * estimate)
+        << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+    EXPECT_LT(run.peak_mib, 1.25 * estimate)
+        << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+    EXPECT_LE(run.peak_mib, estimate) << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  }
+}
+
 // --memory-limit: a job whose estimate exceeds the budget is refused by validate and by bake before anything
 // is allocated or written, with the estimate's parts and the knob; a budget it fits passes.
 TEST_F(Cli, MemoryLimitRefusesAJobThatCannotFitBeforeBaking) {
