@@ -341,20 +341,35 @@ fs::path tiles_owner_record(const Job& job) {
   return tiles_folder(job) / (".hfbake-" + job.name + "+tiles.job");
 }
 
-void check_tiles_folder(const Job& job, bool overwrite) {
-  const fs::path folder = tiles_folder(job);
+namespace {
+
+// What a task folder of the job (tiles/, shards/) must be before a task writes into it: a real folder or
+// absent (a link or file would take the task's files outside the output folder: InputError at /output/dir),
+// with its lock's name free or a file and nothing but a file at its owner record's name. `what`: the files
+// the folder holds ("tiles", "shards").
+void check_task_folder(const Job& job, const fs::path& folder, const fs::path& lock_file,
+                       const fs::path& record, const std::string& what) {
   std::error_code ec;
   const fs::file_status s = fs::symlink_status(folder, ec);
   if (fs::exists(s) && !fs::is_directory(s))
     throw InputError(job.file.string(), "/output/dir",
                      folder.string() + " is not a folder (" + (fs::is_symlink(s) ? "a link" : "a file") +
-                         "): the tiles are written inside " + job.output.dir.string() + " only");
-  if (const std::string problem = lock_name_problem(tiles_lock_file(job)); !problem.empty())
+                         "): the " + what + " are written inside " + job.output.dir.string() + " only");
+  if (const std::string problem = lock_name_problem(lock_file); !problem.empty())
     throw InputError(job.file.string(), "/output/dir", problem);
-  // A folder at the owner record's name or at a tile file's: a task could not write there.
-  if (const std::string problem = output_name_problem(tiles_owner_record(job)); !problem.empty())
+  // A folder at the owner record's name: a task could not write there.
+  if (const std::string problem = output_name_problem(record); !problem.empty())
     throw InputError(job.file.string(), "/output/dir", problem);
-  if (fs::is_directory(s))
+}
+
+}  // namespace
+
+void check_tiles_folder(const Job& job, bool overwrite) {
+  const fs::path folder = tiles_folder(job);
+  check_task_folder(job, folder, tiles_lock_file(job), tiles_owner_record(job), "tiles");
+  std::error_code ec;
+  // A folder at a tile file's name: a task could not write there.
+  if (fs::is_directory(fs::symlink_status(folder, ec)))
     for (const fs::directory_entry& e : fs::directory_iterator(folder, ec))
       if (e.path().filename().string().rfind(tile_file_prefix(job), 0) == 0)
         if (const std::string problem = output_name_problem(e.path()); !problem.empty())
@@ -413,17 +428,7 @@ fs::path shards_owner_record(const Job& job) {
 
 void check_shards_owner(const Job& job, bool overwrite) {
   const fs::path folder = shards_folder(job);
-  std::error_code ec;
-  const fs::file_status s = fs::symlink_status(folder, ec);
-  if (fs::exists(s) && !fs::is_directory(s))
-    throw InputError(job.file.string(), "/output/dir",
-                     folder.string() +
-                         " is not a folder (a file or a link): the shards are written and read " + "inside " +
-                         job.output.dir.string() + " only");
-  if (const std::string problem = lock_name_problem(shards_lock_file(job)); !problem.empty())
-    throw InputError(job.file.string(), "/output/dir", problem);
-  if (const std::string problem = output_name_problem(shards_owner_record(job)); !problem.empty())
-    throw InputError(job.file.string(), "/output/dir", problem);
+  check_task_folder(job, folder, shards_lock_file(job), shards_owner_record(job), "shards");
   check_owner_record(job, shards_owner_record(job), folder, overwrite, "shards");
 }
 
