@@ -18,6 +18,9 @@
 #                   succeed and leave one valid entry (a third bake reads it: a hit, the same bits)
 set -u
 CASE=$1 H=$2 W=$3
+# The farm's tasks take glibc's SSE2 math (hfbake slurm's scripts set this tunable; docs/cluster.md): the
+# single bakes they are compared with take it too.
+export GLIBC_TUNABLES="glibc.cpu.hwcaps=-FMA,-FMA4"
 HERE=$(cd "$(dirname "$0")" && pwd)
 . "$HERE/common.sh"
 # A failure says what Slurm saw: the queue, the daemons' log tails and the task logs.
