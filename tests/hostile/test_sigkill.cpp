@@ -206,9 +206,15 @@ TEST(SigKill, TwentyKilledReferenceBakesResumeAndLeaveNothingALaterBakeOrCompare
   std::ofstream(job_file) << job.dump(2);
   const std::vector<std::string> bake = {"bake", job_file.string(), "--quiet", "--no-cache"};
 
-  const auto t0 = std::chrono::steady_clock::now();
-  ASSERT_EQ(wait_exit(start(bake, err)), 0);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // An uninterrupted bake's time, the shorter of two: the first pays for cold caches (up to twice the
+  // second on a loaded machine), and kill moments spread over it would miss the later, faster bakes.
+  double seconds = 0;
+  for (int run = 0; run < 2; ++run) {
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_EQ(wait_exit(start(bake, err)), 0);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    seconds = run == 0 ? s : std::min(seconds, s);
+  }
   fs::create_directories(dir / "baseline");
   fs::copy_file(out / "report.json", dir / "baseline" / "report.json");
   const std::vector<float> truth = exr_pixels(out / "r.reference.exr");
