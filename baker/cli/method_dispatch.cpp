@@ -16,6 +16,7 @@
 #include "cli/texture_plan.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
+#include "farm/shard_plan.hpp"
 #include "report/compare.hpp"
 
 namespace hfbake {
@@ -223,6 +224,10 @@ bool writes_in_output_folder(const Job& job, const fs::path& file, OutputNames n
   if (real.parent_path() == dir / "tiles")
     return kept && (n.rfind(tile_file_prefix(job), 0) == 0 || n == tiles_lock_file(job).filename() ||
                     n == tiles_owner_record(job).filename());
+  // A shard task's files (farm/shard_plan.hpp), kept as a tile task's are.
+  if (real.parent_path() == dir / "shards")
+    return kept && (is_shard_file_name(job, n) || n == shards_lock_file(job).filename() ||
+                    n == shards_owner_record(job).filename());
   if (real.parent_path() != dir) return false;
   if (n == owner_record(job).filename() ||
       ((kept || job.has_reference) && (n == "report.json" || n == "report.html")))

@@ -32,8 +32,9 @@ enum class OutputNames { kept, moved };
 
 // True when `file` (existing or not) is a name a bake of `job` writes in its output folder, so that writing
 // or keeping anything else there would lose it: <name>.<stem>.exr, <name>.<stem>.*.preview.png,
-// <name>.<stem>.*.tif, report.json, report.html, textures/<name>.*, a tile task's tiles/<name>+tile-*, and
-// the job's locks and owner records (in the folder, in textures/ and in tiles/) and the report lock
+// <name>.<stem>.*.tif, report.json, report.html, textures/<name>.*, a tile task's tiles/<name>+tile-*, a
+// shard task's shards/<name>.*.hfshard, and the job's locks and owner records (in the folder, in textures/,
+// tiles/ and shards/) and the report lock
 // (docs/output_folders.md). Links are resolved first. With OutputNames::moved, only the files the bake moves
 // into place: previews, GeoTIFFs, textures and the report as the job asks for them, the owner records, no
 // lock.

@@ -124,4 +124,16 @@ std::filesystem::path stage_item_path(const Job& job, int stage, StageItem item)
                         : stage_block_path(job, item.entry, stage, item.block);
 }
 
+bool is_shard_file_name(const Job& job, const std::string& filename) {
+  const std::string tail = ".hfshard";
+  if (filename.size() <= tail.size() ||
+      filename.compare(filename.size() - tail.size(), tail.size(), tail) != 0)
+    return false;
+  const auto starts = [&filename](const std::string& head) { return filename.rfind(head, 0) == 0; };
+  if (starts(job.name + ".shard-")) return true;
+  for (const BakeEntry& e : job.bakes)
+    if (starts(job.name + "." + e.stem + ".stage-")) return true;
+  return false;
+}
+
 }  // namespace hfbake

@@ -73,5 +73,8 @@ std::filesystem::path stage_path(const Job& job, int entry, int stage);
 std::filesystem::path stage_block_path(const Job& job, int entry, int stage, int block);
 // The file of a stage item: stage_path or stage_block_path.
 std::filesystem::path stage_item_path(const Job& job, int stage, StageItem item);
+// Whether `filename` (a name in <output dir>/shards/) is one a shard task of `job` may write: a shard file of
+// any I and N, or a stage or stage block file of one of its entries.
+bool is_shard_file_name(const Job& job, const std::string& filename);
 
 }  // namespace hfbake

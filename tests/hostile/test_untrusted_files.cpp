@@ -806,6 +806,34 @@ TEST_F(Untrusted, AShardOfAnotherJobFileOverAJobsOutputsIsRefused) {
             0);
 }
 
+// A job file lying in shards/ under a name a shard task of the job writes (a shard or stage file, the
+// shards lock or owner record): validate and bake --shard refuse it in one line naming it, and it is kept.
+TEST_F(Untrusted, AnInputWhereAShardTaskWritesIsRefused) {
+  const fs::path shards = dir_ / "out" / "shards";
+  fs::create_directories(shards);
+  for (const std::string name :
+       {"t.shard-0-of-2.hfshard", "t.shard-1-of-3.hfshard", "t.p2.stage-0.hfshard",
+        "t.p2.stage-1.block-2.hfshard", ".hfbake-t+shards.job", ".hfbake-t+shards.lock"}) {
+    SCOPED_TRACE(name);
+    json j = base_job("..");
+    j["bake"] = {{{"method", "p2"}, {"directions", 4}}};
+    const std::string job = write_job(shards, j, name);
+    const std::string text = read_text(job);
+    for (const std::vector<std::string>& command :
+         {std::vector<std::string>{"validate", job, "--quiet"},
+          std::vector<std::string>{"bake", job, "--shard", "0/2", "--no-cache", "--quiet"}}) {
+      SCOPED_TRACE(command[0]);
+      const Outcome r = hfbake(dir_, command);
+      EXPECT_EQ(r.exit_code, 2) << r.err;
+      const auto lines = r.error_lines();
+      ASSERT_EQ(lines.size(), 1u) << r.err;
+      EXPECT_NE(lines[0].find(job + " is where this job writes an output"), std::string::npos) << r.err;
+      EXPECT_EQ(read_text(job), text);
+    }
+    fs::remove(job);
+  }
+}
+
 // The job's name in shards/ has one owner, as in tiles/ (docs/output_folders.md): a shard task of another
 // job file with the same name and folder is refused before it bakes, while the first job's shards wait for
 // their merge, and so is its merge; the first's shards are kept. Started at the same moment, one job file's
