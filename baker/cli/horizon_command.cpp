@@ -59,7 +59,34 @@ struct Profile {
   double convergence = 0;  // radians: true north's azimuth in the grid
   double map_scale = 1;    // the projected CRS's point scale factor there (1: none known)
   std::vector<HorizonRay> rays;
+  std::vector<std::string> warnings;  // about the heights, one line each
 };
+
+// What the command says about a band's heights when it is given no --height-scale or --height-offset: a
+// declared scale or offset it does not apply, and heights in another unit than the pixels' (as validate says
+// them for a job, with the arguments that apply them).
+std::vector<std::string> height_warnings(const HorizonOptions& o, const GeoRasterInfo& info) {
+  std::vector<std::string> w;
+  if (o.height_scale || o.height_offset) return w;
+  const std::size_t b = std::size_t(o.band);
+  const double scale = info.scale[b], offset = info.offset[b];
+  if (scale != 1 || offset != 0)
+    w.push_back("the file declares scale " + num(scale, "%.6g") + " and offset " + num(offset, "%.6g") +
+                ", not applied (heights are the stored values): --height-scale " + num(scale, "%.6g") +
+                " --height-offset " + num(offset, "%.6g") + " apply them");
+  const std::string pixel_unit = info.geographic ? "metre" : info.linear_unit;
+  const double pixel_metres = info.geographic ? 1.0 : info.linear_unit_metres;
+  const std::optional<double> height_metres = metres_per(info.unit_types[b]);
+  const double ratio = height_metres && pixel_metres > 0 ? *height_metres / pixel_metres : 1.0;
+  if (std::fabs(ratio - 1) > 1e-4)
+    w.push_back("the band's heights are in " + info.unit_types[b] + " and its pixels in " + pixel_unit +
+                ": elevations come out too " + (ratio > 1 ? "low" : "high") + "; give --height-scale " +
+                num(ratio, "%.6g"));
+  else if (!info.geographic && pixel_metres != 1.0 && info.unit_types[b].empty())
+    w.push_back("the band declares no unit: heights taken in " + pixel_unit +
+                "; heights in metres need --height-scale " + num(1 / pixel_metres, "%.6g"));
+  return w;
+}
 
 std::string to_csv(const Profile& p) {
   std::string s = "azimuth_deg,elevation_deg,distance,caster_x,caster_y,caster_z\n";
@@ -123,6 +150,10 @@ Profile compute(const HorizonOptions& o) {
     fail("--observer-height", "must be a finite height >= 0");
   if (o.refraction && !(std::isfinite(*o.refraction) && *o.refraction > -1 && *o.refraction < 1))
     fail("--refraction", "must be in (-1, 1)");
+  if (o.height_scale && !(std::isfinite(*o.height_scale) && std::fabs(*o.height_scale) <= 1e6))
+    fail("--height-scale", "must be a finite number in [-1e6, 1e6]");
+  if (o.height_offset && !(std::isfinite(*o.height_offset) && std::fabs(*o.height_offset) <= 1e9))
+    fail("--height-offset", "must be a finite number in [-1e9, 1e9]");
   std::error_code ec;
   if (!std::filesystem::is_regular_file(o.dem, ec))
     fail("", std::filesystem::exists(o.dem, ec) ? "not a regular file (a folder, a device or a pipe)"
@@ -221,6 +252,11 @@ Profile compute(const HorizonOptions& o) {
   if (const std::optional<double> nodata = info->nodata[std::size_t(o.band)]; nodata && !std::isnan(*nodata))
     for (float& z : field.z)
       if (z == float(*nodata)) z = std::nanf("");
+  if (o.height_scale || o.height_offset) {
+    const double a = o.height_scale.value_or(1.0), b = o.height_offset.value_or(0.0);
+    for (float& z : field.z) z = float(double(z) * a + b);
+  }
+  p.warnings = height_warnings(o, *info);
   const std::optional<double> z = surface_height(field, q.x, q.y);
   if (!z) fail("--at", where + " is on NoData (a texel around it has no height)");
   p.surface = *z;
@@ -256,6 +292,8 @@ int run_horizon(const HorizonOptions& o) {
         fs::weakly_canonical(fs::absolute(o.out), ec) == fs::weakly_canonical(fs::absolute(o.plot), ec))
       throw InputError(o.dem, "--plot", "is the --out file too: give each output its own name");
     const Profile p = compute(o);
+    for (const std::string& w : p.warnings)
+      std::fprintf(stderr, "hfbake: warning: %s: %s\n", o.dem.c_str(), w.c_str());
     if (const std::string w = site_scale_warning(p.map_scale, p.crs_name, true); !w.empty())
       std::fprintf(stderr, "hfbake: warning: %s: %s\n", o.dem.c_str(), w.c_str());
     const std::string text = o.format == "json" ? to_json(o, p) : to_csv(p);

@@ -12,6 +12,9 @@ struct HorizonOptions {
   std::string at;  // "X,Y" in the raster's CRS, or "LON,LAT" (WGS 84) with lonlat
   bool lonlat = false;
   double observer_height = 0;  // world units above the surface
+  // Heights are stored x height_scale + height_offset, as a job's keys (docs/heights.md); unset: 1 and 0, and
+  // a band that declares a scale, an offset or another unit than its pixels' is warned about.
+  std::optional<double> height_scale, height_offset;
   int directions = 360;
   int band = 0;                // 0-based
   std::string format = "csv";  // "csv" or "json"

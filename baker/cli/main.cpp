@@ -291,6 +291,12 @@ int run(int argc, char** argv) {
   horizon_cmd->add_flag("--lonlat", horizon.lonlat, "--at is longitude,latitude in WGS 84 degrees");
   horizon_cmd->add_option("--observer-height", horizon.observer_height,
                           "Eye height above the surface, in the heights' unit (default 0)");
+  double horizon_scale = 1, horizon_offset = 0;
+  CLI::Option* horizon_scale_opt =
+      horizon_cmd->add_option("--height-scale", horizon_scale,
+                              "Heights are the stored values x this (a job's height_scale; default 1)");
+  CLI::Option* horizon_offset_opt = horizon_cmd->add_option(
+      "--height-offset", horizon_offset, "... + this, after the scale (a job's height_offset; default 0)");
   horizon_cmd->add_option("--directions", horizon.directions,
                           "K compass azimuths 360 k / K, clockwise from north (default 360)");
   horizon_cmd->add_option("--band", horizon.band, "Band of the heights, 0-based (default 0)");
@@ -341,6 +347,8 @@ int run(int argc, char** argv) {
     }
     if (curvature_on || curvature_off) horizon.curvature = curvature_on;
     if (refraction_opt->count() > 0) horizon.refraction = refraction;
+    if (horizon_scale_opt->count() > 0) horizon.height_scale = horizon_scale;
+    if (horizon_offset_opt->count() > 0) horizon.height_offset = horizon_offset;
     return hfbake::run_horizon(horizon);
   }
   if (app.got_subcommand(validate_cmd)) {

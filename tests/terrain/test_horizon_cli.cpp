@@ -411,6 +411,85 @@ TEST(HorizonCli, LidarTileProjectedAndGeographicAgree) {
 }
 
 // --format json: the same rays as the CSV, with the point, the curvature and the grid convergence.
+// A V valley across x whose sides rise 0.5 per ground unit, so that from its floor the horizon east and west
+// is atan(0.5) at every distance: stored as Int16 with a declared scale and offset, and as metres on a CRS in
+// US survey feet. Without --height-scale / --height-offset the command takes the stored values and warns
+// once, naming the file and the arguments; with them it gives the closed form.
+TEST(HorizonCli, DeclaredScaleOffsetAndHeightUnitAreWarnedAndApplied) {
+  const fs::path dir = temp_dir("declared");
+  GDALAllRegister();
+  GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
+  const double us_foot = 1200.0 / 3937.0;  // metres
+  struct Case {
+    const char* name;
+    int epsg;
+    GDALDataType type;
+    double scale, offset, stored_per_unit;  // stored = (height - offset) / scale, heights x stored_per_unit
+    const char* unit;
+    double x0;  // the floor on the CRS's central meridian, where grid north is true north
+    std::string args, warning;
+  };
+  const Case cases[] = {
+      {"scaled.tif", 32633, GDT_Int16, 0.01, 200, 1, "", 500000 - 41,
+       "--height-scale 0.01 --height-offset 200",
+       "the file declares scale 0.01 and offset 200, not applied (heights are the stored values): "
+       "--height-scale 0.01 --height-offset 200 apply them"},
+      {"metres_on_feet.tif", 2229, GDT_Float32, 1, 0, us_foot, "m", 6561666.667 - 41,
+       "--height-scale " + std::to_string(1 / us_foot),
+       "the band's heights are in m and its pixels in US survey foot: elevations come out too low; give "
+       "--height-scale 3.28083"}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const fs::path dem = dir / c.name;
+    {
+      const int w = 41, h = 21;
+      std::unique_ptr<GDALDataset> ds(driver->Create(dem.c_str(), w, h, 1, c.type, nullptr));
+      ASSERT_TRUE(ds);
+      double gt[6] = {c.x0, 2, 0, 2000000, 0, -2};
+      ds->SetGeoTransform(gt);
+      OGRSpatialReference srs;
+      srs.importFromEPSG(c.epsg);
+      ds->SetSpatialRef(&srs);
+      std::vector<double> v(std::size_t(w) * h);
+      for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i)
+          v[std::size_t(j) * w + i] =
+              ((300 + 0.5 * 2 * std::abs(i - 20)) * c.stored_per_unit - c.offset) / c.scale;
+      GDALRasterBand* band = ds->GetRasterBand(1);
+      band->SetScale(c.scale);
+      band->SetOffset(c.offset);
+      band->SetUnitType(c.unit);
+      ASSERT_EQ(band->RasterIO(GF_Write, 0, 0, w, h, v.data(), w, h, GDT_Float64, 0, 0, nullptr), CE_None);
+    }
+    // The floor's centre, 20 texels in.
+    const std::string at = " --at " + std::to_string(c.x0 + 41) + ",1999979 --directions 4";
+    const auto warned = run_hfbake(dir, "horizon " + dem.string() + at);
+    ASSERT_EQ(warned.exit_code, 0) << warned.err;
+    EXPECT_EQ(warned.err, "hfbake: warning: " + dem.string() + ": " + c.warning + "\n");
+    for (const Row& r : horizon(dir, dem.string() + at)) {
+      SCOPED_TRACE(r.azimuth);
+      if (r.azimuth == 90 || r.azimuth == 270) {
+        EXPECT_GT(std::abs(r.elevation - std::atan(0.5) * kDeg), 1);
+      }
+    }
+    const auto applied = run_hfbake(dir, "horizon " + dem.string() + at + " " + c.args);
+    ASSERT_EQ(applied.exit_code, 0) << applied.err;
+    EXPECT_EQ(applied.err, "");
+    for (const Row& r : horizon(dir, dem.string() + at + " " + c.args)) {
+      SCOPED_TRACE(r.azimuth);
+      if (r.azimuth == 90 || r.azimuth == 270) {
+        ASSERT_TRUE(r.found);
+        EXPECT_NEAR(r.elevation, std::atan(0.5) * kDeg, 1e-4);
+      }
+    }
+  }
+  EXPECT_NE(
+      run_hfbake(dir, "horizon " + (dir / "scaled.tif").string() + " --at 500000,1999979 --height-scale nan")
+          .err.find("--height-scale: must be a finite number"),
+      std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST(HorizonCli, JsonCarriesTheCsvsRays) {
   const fs::path dir = temp_dir("json");
   const fs::path dem = dir / "dem.tif";
