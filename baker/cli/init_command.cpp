@@ -2,14 +2,17 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <system_error>
 #include <vector>
 
 #include "cli/method_dispatch.hpp"
 #include "cli/scene_loader.hpp"
+#include "cli/shell_words.hpp"
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
 #include "io/georaster_input.hpp"
@@ -92,9 +95,34 @@ double suggested_height_scale(const HeightsFound& h) {
   return round4(0.1 * extent / relief);
 }
 
+// A georeferenced band's heights as stored x scale + offset in the pixels' unit: what the band declares
+// (GDAL's scale and offset, and a unit of its heights other than the pixels', metres_per), which a job
+// applies only through height_scale and height_offset (docs/heights.md). `why` says which, for the job's
+// notes; empty for a band that declares neither.
+struct DeclaredHeights {
+  double scale = 1, offset = 0;
+  std::string why;
+};
+DeclaredHeights declared_heights(const HeightSource& s) {
+  DeclaredHeights d;
+  if (s.file_scale != 1 || s.file_offset != 0) {
+    d.scale = s.file_scale, d.offset = s.file_offset;
+    d.why = "the file's declared scale " + json(s.file_scale).dump() + " and offset " +
+            json(s.file_offset).dump();
+  }
+  const std::optional<double> metres = metres_per(s.height_unit);
+  const double ratio = metres && s.pixel_unit_metres > 0 ? *metres / s.pixel_unit_metres : 1.0;
+  if (std::fabs(ratio - 1) > 1e-4) {
+    d.scale *= ratio, d.offset *= ratio;
+    d.why += (d.why.empty() ? "" : ", then ") + std::string("the band's heights in ") + s.height_unit +
+             " converted into the pixels' " + (s.pixel_unit.empty() ? "metres" : s.pixel_unit);
+  }
+  return d;
+}
+
 // The job in the order a person reads it: version, name, description, height, bake, the rest.
 ordered preset_job(const std::string& preset, const std::string& name, const std::string& image,
-                   const HeightsFound& h, double scale) {
+                   const HeightsFound& h, double scale, const DeclaredHeights& declared) {
   const HeightField& f = h.scene.field;
   ordered height = {{"image", image}};
   std::string notes;
@@ -104,7 +132,11 @@ ordered preset_job(const std::string& preset, const std::string& name, const std
   } else {
     notes += "texel_size: the raster's pixel size (from the file). ";
   }
-  if (scale != 1) {
+  if (!declared.why.empty()) {
+    if (declared.scale != 1) height["height_scale"] = declared.scale;
+    if (declared.offset != 0) height["height_offset"] = declared.offset;
+    notes += "height_scale and height_offset: " + declared.why + " (docs/heights.md). ";
+  } else if (scale != 1) {
     height["height_scale"] = scale;
     notes += "height_scale " + json(scale).dump() +
              " makes the relief a tenth of the field's side: set your map's real height per stored unit "
@@ -235,10 +267,13 @@ int run_init(const InitOptions& options) {
 
   try {
     HeightsFound found = read_heights(image, job_file);
-    const double scale = suggested_height_scale(found);
+    const DeclaredHeights declared =
+        found.georeferenced ? declared_heights(found.scene.height_source) : DeclaredHeights{};
+    const double scale = declared.why.empty() ? suggested_height_scale(found) : declared.scale;
+    const double offset = declared.offset;
     // Named after the job file (the height file's stem unless --out names another): jobs written for one
     // height file with several presets (--out) bake into folders of their own.
-    const ordered doc = preset_job(options.preset, job_name(job_file), image, found, scale);
+    const ordered doc = preset_job(options.preset, job_name(job_file), image, found, scale, declared);
     // The job as validate checks it, before anything is written.
     JobLoad load = load_job_document(json::parse(doc.dump()), job_file, std::nullopt);
     if (load.job) load.errors = resolve_job(*load.job);
@@ -253,15 +288,18 @@ int run_init(const InitOptions& options) {
       return refuse(job_file.string() + ": cannot write it: " + e.code().message());
     }
     HeightSource& s = found.scene.height_source;
-    s.scale = scale;
-    s.world_min = s.stored_min * scale;
-    s.world_max = s.stored_max * scale;
+    s.scale = scale, s.offset = offset;
+    s.world_min = std::min(s.stored_min * scale, s.stored_max * scale) + offset;
+    s.world_max = std::max(s.stored_min * scale, s.stored_max * scale) + offset;
     const HeightsReport heights = describe_heights(*load.job, found.scene);
     std::fprintf(stderr, "hfbake: wrote %s (preset %s)\nhfbake: %s\n", job_file.c_str(),
                  options.preset.c_str(), heights.line.c_str());
     if (!heights.warning.empty()) std::fprintf(stderr, "hfbake: warning: %s\n", heights.warning.c_str());
-    std::fprintf(stderr, "hfbake: edit it, then: hfbake validate %s && hfbake bake %s\n", job_file.c_str(),
-                 job_file.c_str());
+    // The next step as a line a shell runs: the job file one word, never taken for an option.
+    const std::string word =
+        shell_word(job_file.string().rfind('-', 0) == 0 ? "./" + job_file.string() : job_file.string());
+    std::fprintf(stderr, "hfbake: edit it, then: hfbake validate %s && hfbake bake %s\n", word.c_str(),
+                 word.c_str());
     return 0;
   } catch (const InputError& e) {
     // The job file is not written yet: what its heights refuse is the height file's.

@@ -425,8 +425,9 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
             (s.channel.empty() ? "" : s.channel + ", ") + s.sample_type +
             (s.integer ? " integers as stored" : "") + ")";
     if (s.file_scale != 1 || s.file_offset != 0)
-      line += " (the file declares scale " + short_num(s.file_scale) + " and offset " +
-              short_num(s.file_offset) + ", not applied: height_scale and height_offset apply them)";
+      line +=
+          " (the file declares scale " + short_num(s.file_scale) + " and offset " + short_num(s.file_offset) +
+          (s.scale == 1 && s.offset == 0 ? ", not applied: height_scale and height_offset apply them)" : ")");
   }
   line += "; " + std::to_string(f.width) + "x" + std::to_string(f.height) + " texels of " + short_num(texel);
   if (!f.square_texels()) line += " x " + short_num(f.dy());

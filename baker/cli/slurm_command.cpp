@@ -17,6 +17,7 @@
 #include "cli/outputs.hpp"
 #include "cli/scene_loader.hpp"
 #include "cli/shard_command.hpp"
+#include "cli/shell_words.hpp"
 #include "cli/suite.hpp"
 #include "cli/tile_command.hpp"
 #include "core/safe_file.hpp"
@@ -27,13 +28,6 @@ namespace hfbake {
 namespace fs = std::filesystem;
 
 namespace {
-
-// 'text' for a POSIX shell.
-std::string quoted(const std::string& text) {
-  std::string q = "'";
-  for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
 
 fs::path own_executable() {
   std::error_code ec;
@@ -95,7 +89,7 @@ std::string array_list(const std::vector<int>& ids) {
 std::string bake_flags(const SlurmOptions& o) {
   std::string f;
   if (o.no_cache) f += " --no-cache";
-  if (o.cache) f += " --cache " + quoted(fs::absolute(*o.cache).string());
+  if (o.cache) f += " --cache " + shell_quoted(fs::absolute(*o.cache).string());
   return f;
 }
 
@@ -225,7 +219,7 @@ int run_slurm(const SlurmOptions& o) {
       !o.mem.empty()
           ? o.mem
           : std::to_string(std::max<std::size_t>(512, (need_bytes + need_bytes / 5) >> 20) + 1) + "M";
-  const std::string exe = quoted(own_executable().string());
+  const std::string exe = shell_quoted(own_executable().string());
   const std::string name = jobs.size() == 1 ? jobs.front().job.stem().string() : common.filename().string();
   // What goes into the scripts' comment and #SBATCH lines unquoted: a line break (or another control
   // character) there would end the line and start a command of its own.
@@ -289,7 +283,7 @@ int run_slurm(const SlurmOptions& o) {
   // A job path as the scripts pass it: one that starts with '-' would be read as an option.
   const auto as_argument = [](const fs::path& p) {
     const std::string s = p.string();
-    return quoted(!s.empty() && s[0] == '-' ? "./" + s : s);
+    return shell_quoted(!s.empty() && s[0] == '-' ? "./" + s : s);
   };
   std::ostringstream head;
   auto common_head = [&](std::ostringstream& s, const std::string& job_name, const char* log) {
@@ -328,7 +322,7 @@ int run_slurm(const SlurmOptions& o) {
        << "JOBS=(\n";
   for (const Task& t : tasks) bake << "  " << as_argument(t.job) << "\n";
   bake << ")\nOUTS=(\n";
-  for (const Task& t : tasks) bake << "  " << quoted(t.out.string()) << "\n";
+  for (const Task& t : tasks) bake << "  " << shell_quoted(t.out.string()) << "\n";
   bake << ")\nSHARDS=(";
   for (const Task& t : tasks) bake << " " << t.shard;
   bake << " )\n"
@@ -351,7 +345,7 @@ int run_slurm(const SlurmOptions& o) {
   common_head(merge, "hfbake-merge-" + name, "%x-%j.out");
   merge << "set -euo pipefail\n" << baseline_math << "exec " << exe << " merge";
   for (const fs::path& f : o.inputs) merge << " " << as_argument(f);
-  if (o.out) merge << " --out " << quoted(o.out->string());
+  if (o.out) merge << " --out " << shell_quoted(o.out->string());
   if (o.tile_size > 0) merge << " --tiles --tile-size " << o.tile_size;
   merge << " --threads \"${SLURM_CPUS_PER_TASK:-" << o.threads << "}\"" << bake_flags(o)
         << (o.quiet ? " --quiet" : "") << "\n";
@@ -361,7 +355,7 @@ int run_slurm(const SlurmOptions& o) {
   auto array_command = [&](const std::vector<int>& list, const std::string& after, int stage) {
     std::string cmd = "sbatch --parsable --array=" + array_list(list);
     if (!after.empty()) cmd += " --dependency=afterok:" + after + " --kill-on-invalid-dep=yes";
-    cmd.append(1, ' ').append(quoted((dir / "bake.sbatch").string()));
+    cmd.append(1, ' ').append(shell_quoted((dir / "bake.sbatch").string()));
     if (stage > 0) cmd.append(1, ' ').append(std::to_string(stage));
     return cmd;
   };
@@ -369,7 +363,7 @@ int run_slurm(const SlurmOptions& o) {
     std::string cmd = "sbatch --parsable";
     if (!after.empty()) cmd += " --dependency=afterok:" + after + " --kill-on-invalid-dep=yes";
     if (o.wait) cmd += " --wait";
-    return cmd.append(1, ' ').append(quoted((dir / "merge.sbatch").string()));
+    return cmd.append(1, ' ').append(shell_quoted((dir / "merge.sbatch").string()));
   };
   if (o.dry_run) {
     std::printf("# ---- %s\n%s\n# ---- %s\n%s\n# ---- the submissions (job ids in <>)\n",

@@ -206,6 +206,55 @@ TEST_F(CliInit, GameAoOnAGeoreferencedRasterClamps) {
   EXPECT_EQ(v.exit_code, 0) << v.err;
 }
 
+// A georeferenced raster that declares how its stored values become heights (GDAL's scale and offset, a unit
+// of its heights other than its pixels'): the job init writes applies them with height_scale and
+// height_offset, so it bakes the heights the file declares. The next step init prints is a line a shell runs
+// as it stands, whatever the job file's name.
+TEST_F(CliInit, AJobAppliesWhatTheRasterDeclaresAndItsNextStepRuns) {
+  const int top = write_png16(dir_ / "dem.tif");
+  const double us_foot = 1200.0 / 3937.0;  // metres
+  struct Case {
+    std::string srs, band;
+    double scale, offset;  // what the job must carry
+  };
+  const Case cases[] = {{"EPSG:32633", "<Scale>0.01</Scale><Offset>200</Offset>", 0.01, 200},
+                        {"EPSG:2229", "<UnitType>m</UnitType>", 1 / us_foot, 0},
+                        {"EPSG:2229", "<Scale>0.01</Scale><Offset>200</Offset><UnitType>m</UnitType>",
+                         0.01 / us_foot, 200 / us_foot}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.band);
+    std::ofstream(dir_ / "dem.tif.aux.xml")
+        << "<PAMDataset>\n  <SRS>" << c.srs
+        << "</SRS>\n  <GeoTransform>500000, 2, 0, 5000000, 0, -2</GeoTransform>\n"
+        << "  <PAMRasterBand band=\"1\">" << c.band << "</PAMRasterBand>\n</PAMDataset>\n";
+    const fs::path job = dir_ / "my dem (v2).json";
+    const Result r = run("init " + (dir_ / "dem.tif").string() + " --preset gis-relief --force --out '" +
+                         job.string() + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json h = read_json(job)["height"];
+    EXPECT_NEAR(h.value("height_scale", 1.0), c.scale, 1e-12 * c.scale) << h.dump();
+    EXPECT_NEAR(h.value("height_offset", 0.0), c.offset, 1e-9 * std::max(1.0, c.offset)) << h.dump();
+    // The heights line: the stored 0 .. top as the file declares them.
+    char range[96];
+    std::snprintf(range, sizeof range, "-> heights %.6g .. %.6g world units", c.offset,
+                  top * c.scale + c.offset);
+    EXPECT_NE(r.err.find(range), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("not applied"), std::string::npos) << r.err;
+    // The printed next step, run by a shell (hfbake on its PATH), validates the job.
+    const std::string then = "hfbake: edit it, then: ";
+    const std::size_t at = r.err.find(then);
+    ASSERT_NE(at, std::string::npos) << r.err;
+    std::string line = r.err.substr(at + then.size());
+    line = line.substr(0, line.find('\n'));
+    ASSERT_EQ(line.rfind("hfbake validate ", 0), 0u) << line;
+    line = line.substr(0, line.find(" && "));
+    const fs::path bin = fs::path(HFBAKE_BINARY).parent_path();
+    const std::string shell = "cd '" + dir_.string() + "' && PATH='" + bin.string() + "':\"$PATH\" " + line +
+                              " --quiet >/dev/null 2>&1";
+    EXPECT_EQ(std::system(shell.c_str()), 0) << line;
+  }
+}
+
 // --force replaces a link at the job's name; what it points to is never written.
 TEST_F(CliInit, ForceReplacesALinkAndLeavesItsTarget) {
   write_png16(dir_ / "h.png");
