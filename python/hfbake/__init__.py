@@ -310,14 +310,16 @@ class Dem:
         self.geotransform, self.projection, self.warnings = geotransform, projection, warnings
 
 
-def read_dem(path, band=1):
+def read_dem(path, band=1, unscale=False):
     """Reads band `band` of the raster at `path` with GDAL (Debian's python3-gdal) for the array functions,
     with the checks a job naming the file gets: a CRS that is projected (a geographic DEM's pixels are
     degrees: warp it, or bake a job naming the file, docs/gis.md), square unrotated pixels (sides equal to
     1e-9), heights converted into the pixels' unit (height_unit_factor), NoData, NaN and infinite heights as
-    holes (filled for the bake: write results back as NoData there), and a warning where the CRS's map
-    units are not ground units (Web Mercator away from the equator flattens every slope). Raises InputError
-    naming the file."""
+    holes (filled for the bake: write results back as NoData there; a PNG's NoData, its tRNS colour, is a
+    height, as a job reads it), and a warning where the CRS's map units are not ground units (Web Mercator
+    away from the equator flattens every slope). The heights are the stored values, as a job's are, unless
+    `unscale` is true: then stored x scale + offset as the band declares them (GDAL's scale and offset, as
+    QGIS shows the band). Raises InputError naming the file."""
     from osgeo import gdal  # noqa: PLC0415  (only this function needs GDAL)
 
     path = _os.fspath(path)
@@ -327,6 +329,8 @@ def read_dem(path, band=1):
 
     if isinstance(band, (bool, _np.bool_)) or not isinstance(band, (int, _np.integer)):
         raise InputError(f"must be a band number (an int from 1); it is {band!r}", "/band", path)
+    if not isinstance(unscale, (bool, _np.bool_)):
+        raise InputError(f"must be True or False; it is {unscale!r}", "/unscale", path)
     if _os.path.isdir(path):
         refuse("is a folder, not a raster file")
     if not _os.path.isfile(path):
@@ -341,7 +345,7 @@ def read_dem(path, band=1):
         if used:
             gdal.UseExceptions()
     if not 1 <= band <= dem.RasterCount:
-        refuse(f"has no band {band} (it has {dem.RasterCount})")
+        refuse(f"has no band {band} (bands are numbered from 1; it has {dem.RasterCount})")
     gt = dem.GetGeoTransform(can_return_null=True)
     if gt is None and dem.GetGCPCount() > 0:
         refuse("is placed by ground control points, not by a geotransform: warp it onto a north-up grid first "
@@ -366,10 +370,13 @@ def read_dem(path, band=1):
         refuse(gap)
     b = dem.GetRasterBand(band)
     values = b.ReadAsArray()
+    # A PNG's NoData (GDAL reports its tRNS colour so) is a height, and it has no mask of its heights, as a
+    # job reads it (docs/heights.md).
+    png = dem.GetDriver().ShortName == "PNG"
     # GDAL's mask band (a .msk side file or an internal mask; not an alpha band, nor the NoData value again):
     # its invalid texels are holes, as a job reading the file makes them.
     flags = b.GetMaskFlags()
-    if not flags & (gdal.GMF_ALL_VALID | gdal.GMF_NODATA | gdal.GMF_ALPHA):
+    if not png and not flags & (gdal.GMF_ALL_VALID | gdal.GMF_NODATA | gdal.GMF_ALPHA):
         values = _np.where(b.GetMaskBand().ReadAsArray() == 0, _np.nan, values.astype(_np.float64))
     # North up and east right, as the array functions take it (their north is row 0, their east the last
     # column): a south-up or east-west raster is turned, and its geotransform with it.
@@ -381,7 +388,7 @@ def read_dem(path, band=1):
         values = values[:, ::-1]
         gt = (gt[0] + gt[1] * dem.RasterXSize, -gt[1], 0.0, gt[3], 0.0, gt[5])
     values = _np.ascontiguousarray(values)
-    nodata = b.GetNoDataValue()
+    nodata = None if png else b.GetNoDataValue()
     beyond = _beyond_float_range(values, nodata)
     if beyond:
         refuse(_beyond_float_range_message(*beyond, "declare it the band's NoData value"))
@@ -389,8 +396,22 @@ def read_dem(path, band=1):
     holes = ~_np.isfinite(values)
     if nodata is not None and _np.isfinite(nodata):
         holes |= values == nodata
-    heights = _np.where(holes, _np.nan, values).astype(_np.float32)
     warnings = []
+    scale_of, offset_of = b.GetScale(), b.GetOffset()
+    scale_of = 1.0 if scale_of is None else scale_of
+    offset_of = 0.0 if offset_of is None else offset_of
+    declared = scale_of != 1.0 or offset_of != 0.0
+    if declared and unscale:
+        values = values * scale_of + offset_of
+        if not _np.isfinite(values[~holes]).all():
+            refuse(f"its declared scale {scale_of:g} and offset {offset_of:g} take heights beyond a float's range")
+        warnings.append(f"{path}: the file declares scale {scale_of:g} and offset {offset_of:g}: heights are "
+                        f"stored x {scale_of:g} + {offset_of:g} (unscale=True)")
+    elif declared:
+        warnings.append(f"{path}: the file declares scale {scale_of:g} and offset {offset_of:g}, not applied "
+                        "(heights are the stored values): unscale=True, or height_scale and height_offset, "
+                        "apply them")
+    heights = _np.where(holes, _np.nan, values).astype(_np.float32)
     linear = crs.GetLinearUnits() if crs.IsProjected() else 1.0
     factor = height_unit_factor(b.GetUnitType(), linear)
     if factor is not None and abs(factor - 1) > 1e-4:
@@ -401,10 +422,6 @@ def read_dem(path, band=1):
         note = _hfbake.unitless_heights_note(crs.GetLinearUnitsName() or "", linear, b.GetUnitType() or "")
         if note:
             warnings.append(f"{path}: {note}")
-    scale_of, offset_of = b.GetScale(), b.GetOffset()
-    if (scale_of not in (None, 1.0)) or (offset_of not in (None, 0.0)):
-        warnings.append(f"{path}: the file declares scale {scale_of or 1:g} and offset {offset_of or 0:g}, not "
-                        "applied (heights are the stored values): height_scale and height_offset apply them")
     centre_x = gt[0] + gt[1] * dem.RasterXSize / 2
     centre_y = gt[3] + gt[5] * dem.RasterYSize / 2
     scale = _hfbake.site_scale_warning(crs.ExportToWkt(), centre_x, centre_y, crs.GetName() or "")

@@ -125,7 +125,7 @@ def test_bad_layers_and_outputs_fail_with_a_message_not_a_traceback(tmp_path, qg
     ds.GetRasterBand(1).WriteArray(heights)
     ds = None
     cases = [
-        ({"INPUT": dem, "BAND": 2}, "has no band 2 (it has 1)"),
+        ({"INPUT": dem, "BAND": 2}, "has no band 2 (bands are numbered from 1; it has 1)"),
         ({"INPUT": dem, "OUTPUT": tmp_path / "no" / "svf.tif"}, "its folder does not exist"),
         ({"INPUT": dem, "OUTPUT": tmp_path / "a_folder"}, "is a folder"),
         ({"INPUT": dem, "OUTPUT": dem}, "which the input layer reads"),
@@ -171,3 +171,42 @@ def test_direction_bands_name_their_bearing_and_a_mercator_dem_warns(tmp_path, q
                             capture_output=True, text=True)
     assert result.returncode == 0, result.stdout + result.stderr
     assert "times too flat" in result.stdout + result.stderr
+
+
+def test_a_declared_scale_and_offset_apply_as_qgis_shows_the_band(tmp_path, qgis_env):
+    # An Int16 band of centimetres above 250 m (scale 0.01, offset 250), which QGIS shows as metres, bakes the
+    # same values as the float DEM of those metres.
+    centimetres = np.round(terrain(40, 32, seed=13) * 1000).astype(np.int16)
+    metres = (centimetres.astype(np.float64) * 0.01 + 250).astype(np.float32)
+    scaled, plain = tmp_path / "scaled.tif", tmp_path / "plain.tif"
+    write_geotiff(plain, metres)
+    ds = gdal.GetDriverByName("GTiff").Create(str(scaled), 40, 32, 1, gdal.GDT_Int16)
+    ds.SetGeoTransform((500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0))
+    srs = gdal.osr.SpatialReference()
+    srs.ImportFromEPSG(32633)
+    ds.SetProjection(srs.ExportToWkt())
+    ds.GetRasterBand(1).WriteArray(centimetres)
+    ds.GetRasterBand(1).SetScale(0.01)
+    ds.GetRasterBand(1).SetOffset(250.0)
+    ds = None
+    outputs = []
+    for dem in (scaled, plain):
+        out = tmp_path / f"svf_{dem.stem}.tif"
+        result = subprocess.run([QGIS_PROCESS, "run", "hfbake:svf", "--", f"INPUT={dem}", "BAND=1", "DIRECTIONS=8",
+                                 "RADIUS=10", f"OUTPUT={out}"], env=qgis_env, capture_output=True, text=True)
+        assert result.returncode == 0, result.stdout + result.stderr
+        assert ("stored x 0.01 + 250" in result.stdout + result.stderr) == (dem == scaled), result.stdout
+        ds = gdal.Open(str(out))  # held: a band outlives no dataset
+        outputs.append(ds.GetRasterBand(1).ReadAsArray())
+    assert np.array_equal(outputs[0], outputs[1])
+
+
+def test_the_bakes_warnings_reach_the_log(tmp_path, qgis_env):
+    # Heights 50 times the field's side: the relief warning hfbake's array functions give, in the log.
+    dem = tmp_path / "steep.tif"
+    write_geotiff(dem, terrain(40, 32, seed=13) * 4000)
+    result = subprocess.run([QGIS_PROCESS, "run", "hfbake:svf", "--", f"INPUT={dem}", "BAND=1", "DIRECTIONS=8",
+                             "RADIUS=10", f"OUTPUT={tmp_path / 's.tif'}"], env=qgis_env, capture_output=True,
+                            text=True)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "steeper than any terrain" in result.stdout, result.stdout

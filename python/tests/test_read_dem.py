@@ -159,6 +159,44 @@ def test_a_declared_scale_and_offset_are_warned_as_the_command_warns(tmp_path):
     (tmp_path / "s.json").write_text(json.dumps(job))
     assert "scale 0.01 and offset 250, not applied" in run_cli("validate", tmp_path / "s.json",
                                                                 check=False).stderr
+    # unscale=True: the stored values as the band declares them, NoData still a hole.
+    ds = gdal.Open(str(dem))  # held: a band outlives no dataset
+    stored = ds.GetRasterBand(1).ReadAsArray().astype(np.float64)
+    ds = None
+    u = hfbake.read_dem(dem, unscale=True)
+    assert np.array_equal(u.heights, (stored * 0.01 + 250).astype(np.float32))
+    assert [w for w in u.warnings if "stored x 0.01 + 250 (unscale=True)" in w], u.warnings
+    assert not [w for w in u.warnings if "not applied" in w], u.warnings
+    with pytest.raises(hfbake.InputError, match="must be True or False"):
+        hfbake.read_dem(dem, unscale="yes")
+
+
+def test_a_pngs_nodata_is_a_height_as_a_job_reads_it(tmp_path):
+    # A placed 16-bit PNG whose tRNS colour (0) GDAL reports as NoData: the job bakes it as heights (one of
+    # them 0), and read_dem reads the same heights, with no holes.
+    stored = np.round(terrain(40, 32, seed=13) * 100 + 3000).astype(np.uint16)
+    stored[10:14, 10:14] = 0
+    mem = gdal.GetDriverByName("MEM").Create("", 40, 32, 1, gdal.GDT_UInt16)
+    mem.SetGeoTransform((500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0))
+    srs = gdal.osr.SpatialReference()
+    srs.ImportFromEPSG(32633)
+    mem.SetProjection(srs.ExportToWkt())
+    mem.GetRasterBand(1).WriteArray(stored)
+    mem.GetRasterBand(1).SetNoDataValue(0)
+    png = tmp_path / "dem.png"
+    gdal.GetDriverByName("PNG").CreateCopy(str(png), mem, options=["WORLDFILE=YES"])
+    mem = None
+    ds = gdal.Open(str(png))  # held: a band outlives no dataset
+    assert ds.GetRasterBand(1).GetNoDataValue() == 0
+    ds = None
+    d = hfbake.read_dem(png)
+    assert not d.holes.any()
+    assert np.array_equal(d.heights, stored.astype(np.float32))
+    job = {"version": 1, "name": "p", "height": {"image": str(png)}, "bake": [{"method": "relief"}]}
+    (tmp_path / "p.json").write_text(json.dumps(job))
+    said = run_cli("validate", tmp_path / "p.json", check=False)
+    assert said.returncode == 0, said.stderr
+    assert "heights 0 .. " in said.stderr, said.stderr
 
 
 def test_a_mask_band_marks_holes_as_a_job_reads_them(tmp_path):

@@ -4,6 +4,7 @@ checks; a bad value fails the algorithm with hfbake's message."""
 
 import math
 import os
+import warnings
 
 import numpy as np
 from osgeo import gdal
@@ -68,8 +69,10 @@ class _Bake(QgsProcessingAlgorithm):
                 raise QgsProcessingException(
                     f"{output}: is {f}, which the input layer reads: give the output another name")
         source = None
-        try:  # the checks and conversions a job naming the file gets (docs/python.md, read_dem)
-            dem = hfbake.read_dem(layer.source(), band_index)
+        # The checks and conversions a job naming the file gets (docs/python.md, read_dem), and the band's
+        # declared scale and offset applied, as QGIS shows the band's values.
+        try:
+            dem = hfbake.read_dem(layer.source(), band_index, unscale=True)
         except hfbake.InputError as e:
             raise QgsProcessingException(str(e))
         for warning in dem.warnings:
@@ -86,13 +89,17 @@ class _Bake(QgsProcessingAlgorithm):
                 return feedback.isCanceled()
 
         try:
-            values = getattr(hfbake, self.method)(
-                dem.heights, progress=lambda f: feedback.setProgress(100 * f),
-                cancel=Stop(), **keys)[self.layer]
+            with warnings.catch_warnings(record=True) as said:  # the bake's warnings go to the log
+                warnings.simplefilter("always")
+                values = getattr(hfbake, self.method)(
+                    dem.heights, progress=lambda f: feedback.setProgress(100 * f),
+                    cancel=Stop(), **keys)[self.layer]
         except hfbake.InputError as e:
             raise QgsProcessingException(f"{self.method}: {e}")
         except hfbake.Cancelled:
             return {}
+        for w in said:
+            feedback.pushWarning(f"{layer.source()}: {w.message}")
         planes = values if values.ndim == 3 else values[np.newaxis]
         rows, columns = planes.shape[1:]
         # Written beside its name and renamed into place: whole or not at all.
