@@ -387,8 +387,15 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
                          metrics.value("noise_rmse", 0.0));
       std::fprintf(stderr, "\n");
     }
-    if (!o.outputs.empty())
-      std::fprintf(stderr, "      outputs in %s\n", o.outputs.front().parent_path().c_str());
+    if (!o.outputs.empty()) {
+      // The folder holding them all (the output folder, above its textures/).
+      fs::path common = o.outputs.front().parent_path();
+      for (const fs::path& out : o.outputs)
+        while (!common.empty() &&
+               std::mismatch(common.begin(), common.end(), out.begin(), out.end()).first != common.end())
+          common = common.parent_path();
+      std::fprintf(stderr, "      outputs in %s\n", common.c_str());
+    }
   }
   int hits = 0, computed = 0;
   double saved = 0;

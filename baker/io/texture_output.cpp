@@ -38,15 +38,18 @@ struct Tap {
 // The clipping of the layers' values (the field's texels, not the padding) times the exposure: two passes,
 // the second a histogram of 4096 bins up to the largest value for the 99th percentile (the upper edge of the
 // bin that reaches it), so nothing of the field's size is allocated.
+// +inf (a horizon_distance with no caster) is stored as 1 by the format's rule, not clipped.
 TextureClipping clipping(const std::vector<Tap>& taps, std::size_t n, double exposure) {
   TextureClipping c;
+  std::size_t finite = 0;
   for (const Tap& t : taps) {
     if (!t.data) continue;
     for (std::size_t i = 0; i < n; ++i) {
       const double v = double(t.data[i * std::size_t(t.stride)]) * exposure;
       if (std::isnan(v)) continue;
       ++c.values;
-      if (v > 1) ++c.clipped;
+      finite += std::isfinite(v);
+      if (v > 1 && std::isfinite(v)) ++c.clipped;
       if (v < -1e-6) ++c.negative;  // a rounding below 0 of a fraction (an ao of -1e-9) is no signed value
       if (std::isfinite(v)) c.largest = std::max(c.largest, v);
     }
@@ -58,11 +61,11 @@ TextureClipping clipping(const std::vector<Tap>& taps, std::size_t n, double exp
     if (!t.data) continue;
     for (std::size_t i = 0; i < n; ++i) {
       const double v = double(t.data[i * std::size_t(t.stride)]) * exposure;
-      if (std::isnan(v)) continue;  // +inf (a horizon_distance with no caster) falls in the top bin
+      if (!std::isfinite(v)) continue;
       ++bins[std::size_t(std::clamp(v / c.largest * kBins, 0.0, kBins - 1.0))];
     }
   }
-  const double want = 0.99 * double(c.values);
+  const double want = 0.99 * double(finite);
   double seen = 0;
   for (int b = 0; b < kBins; ++b) {
     seen += double(bins[b]);

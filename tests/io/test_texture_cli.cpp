@@ -165,6 +165,11 @@ TEST(TextureCli, HeightNormalMapIsTheFieldsNormal) {
     EXPECT_NEAR(gl.values[t + 2], 0.5 + 0.5 * nz, 1e-4);
     EXPECT_NEAR(dx.values[t + 1], 0.5 + 0.5 * ny, 1e-4);  // DirectX: G = image down
   }
+  // The bake's summary names the folder holding every output (the normal map, written first, is in its
+  // textures/).
+  const auto said = run_hfbake(dir.path(), "bake " + (dir / "j.json").string());
+  ASSERT_EQ(said.exit_code, 0) << said.err;
+  EXPECT_NE(said.err.find("outputs in " + out.string() + "\n"), std::string::npos) << said.err;
 }
 
 // A repeat tile's textures keep the field's size with padding asked for (no 2 p border that would end the
@@ -207,6 +212,43 @@ TEST(TextureCli, RepeatTileTexturesKeepTheirSizeAndTile) {
   for (int x = 0; x < 64; ++x) seam = std::max(seam, std::abs(at(x, 47) - at(x, 0)));
   EXPECT_GT(inside, 0.01);  // the field has relief
   EXPECT_LE(seam, inside);
+}
+
+// A horizon_distance with no caster (+inf, on the slope's uphill border looking uphill, and wherever a ray
+// leaves the field unblocked) is stored as 1 by the texture rule: no clipping is reported for it, while a
+// finite distance above 1 is.
+TEST(TextureCli, AnInfiniteDistanceIsStoredAsOneWithoutAClippingWarning) {
+  TempFolder dir;
+  const fs::path out = dir / "out";
+  json j = job(out, json::array({{{"pack", "far"}, {"channels", {{"R", "horizon_distance.004"}}}}}));
+  j["bake"][0]["layers"] = {"horizon_distance"};
+  j["bake"][0]["directions"] = 8;
+  const auto r = run_hfbake(dir.path(), "bake " + write(dir, "j.json", j).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Pixels exr = read(out / "slope.p1.exr", "horizon_distance.004");
+  const Pixels png = read(out / "textures" / "slope.p1.far.png");
+  ASSERT_EQ(exr.channels, 1);
+  ASSERT_GT(png.channels, 0);
+  ASSERT_EQ(png.values.size(), exr.values.size() * std::size_t(png.channels));
+  std::size_t infinite = 0, finite_above = 0;
+  for (std::size_t i = 0; i < exr.values.size(); ++i) {
+    const float d = exr.values[i];
+    infinite += std::isinf(d);
+    finite_above += std::isfinite(d) && d > 1;
+    if (std::isinf(d)) {
+      EXPECT_EQ(png.values[i * std::size_t(png.channels)], 1.0f) << i;
+    }
+  }
+  ASSERT_GT(infinite, 0u);
+  if (finite_above == 0) {
+    EXPECT_EQ(r.err.find("clipped"), std::string::npos) << r.err;
+  } else {
+    char share[32];
+    std::snprintf(share, sizeof share, "%.1f %%", 100.0 * double(finite_above) / double(exr.values.size()));
+    EXPECT_NE(r.err.find("slope.p1.far.png: " + std::string(share) + " of its values were above 1"),
+              std::string::npos)
+        << r.err;
+  }
 }
 
 // A light map whose values exceed 1 is written clipped only with a warning giving the clipped share (the
