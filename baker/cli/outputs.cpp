@@ -151,7 +151,16 @@ bool stage_owner_is_gone(const StageOwner& owner) {
   // after a reboot, or on a busy node, a SIGKILLed bake's id may belong to anything).
   if (!owner.start) return false;  // an older stage without a start time: keep it while the id lives
   const std::optional<unsigned long long> now = process_start_time(owner.pid);
-  return now && *now != *owner.start;
+  if (now && *now != *owner.start) return true;
+  // The owner itself, exited but not yet collected by its parent (a zombie, state Z or X in
+  // /proc/<pid>/stat): it never runs again.
+  std::ifstream in("/proc/" + std::to_string(owner.pid) + "/stat");
+  std::string stat;
+  if (!std::getline(in, stat)) return false;
+  const auto close = stat.rfind(')');
+  std::istringstream fields(close == std::string::npos ? std::string() : stat.substr(close + 1));
+  std::string state;
+  return fields >> state && (state == "Z" || state == "X");
 }
 
 std::vector<fs::path> remove_stale_stages(const fs::path& dir) {
@@ -263,7 +272,7 @@ void check_report_owner(const Job& job) {
   }
   if (owner != job.name)
     throw InputError(
-        job.file.string(), "/output/dir",
+        job.file.string(), job.output.dir_key,
         report.string() + " is " +
             (owner.empty() ? std::string("no report of hfbake's") : "job \"" + owner + "\"'s report") +
             ": this job's report would replace it; give the job an output folder of its own "
@@ -352,14 +361,14 @@ void check_task_folder(const Job& job, const fs::path& folder, const fs::path& l
   std::error_code ec;
   const fs::file_status s = fs::symlink_status(folder, ec);
   if (fs::exists(s) && !fs::is_directory(s))
-    throw InputError(job.file.string(), "/output/dir",
+    throw InputError(job.file.string(), job.output.dir_key,
                      folder.string() + " is not a folder (" + (fs::is_symlink(s) ? "a link" : "a file") +
                          "): the " + what + " are written inside " + job.output.dir.string() + " only");
   if (const std::string problem = lock_name_problem(lock_file); !problem.empty())
-    throw InputError(job.file.string(), "/output/dir", problem);
+    throw InputError(job.file.string(), job.output.dir_key, problem);
   // A folder at the owner record's name: a task could not write there.
   if (const std::string problem = output_name_problem(record); !problem.empty())
-    throw InputError(job.file.string(), "/output/dir", problem);
+    throw InputError(job.file.string(), job.output.dir_key, problem);
 }
 
 }  // namespace
@@ -373,7 +382,7 @@ void check_tiles_folder(const Job& job, bool overwrite) {
     for (const fs::directory_entry& e : fs::directory_iterator(folder, ec))
       if (e.path().filename().string().rfind(tile_file_prefix(job), 0) == 0)
         if (const std::string problem = output_name_problem(e.path()); !problem.empty())
-          throw InputError(job.file.string(), "/output/dir", problem);
+          throw InputError(job.file.string(), job.output.dir_key, problem);
   check_owner_record(job, tiles_owner_record(job), folder, overwrite, "tiles");
 }
 
@@ -391,7 +400,7 @@ void claim_task_folder(const Job& job, const fs::path& folder, const fs::path& l
   check();  // the folder a folder itself, and the lock's name free or a file
   const FolderLock lock(lock_file, kTilesClaimPatience);
   if (!lock.held())
-    throw InputError(job.file.string(), "/output/dir",
+    throw InputError(job.file.string(), job.output.dir_key,
                      lock.problem().empty() ? lock.holder_words() + " has been claiming the " + what +
                                                   " of job " + job.name + " in " + folder.string() + " for " +
                                                   std::to_string(kTilesClaimPatience.count()) +
@@ -402,7 +411,7 @@ void claim_task_folder(const Job& job, const fs::path& folder, const fs::path& l
   try {
     write_file_atomically(record, job_identity(job));
   } catch (const std::system_error& e) {
-    throw InputError(job.file.string(), "/output/dir",
+    throw InputError(job.file.string(), job.output.dir_key,
                      "cannot write " + record.string() + ": " + e.code().message());
   }
 }
@@ -502,7 +511,7 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   created_dir_ = !fs::exists(job.output.dir, ec);
   fs::create_directories(job.output.dir, ec);
   if (ec || !fs::is_directory(job.output.dir))
-    throw InputError(job.file.string(), "/output/dir",
+    throw InputError(job.file.string(), job.output.dir_key,
                      "cannot create " + job.output.dir.string() + ": " +
                          (ec ? ec.message() : std::string("not a folder")));
   // Before a refusal: the locks given up, and the folders this job made removed (when still empty).
@@ -521,7 +530,7 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
     if (slot->held()) return;
     const std::string problem = slot->problem(), holder = slot->holder_words();
     release();
-    throw InputError(job.file.string(), "/output/dir",
+    throw InputError(job.file.string(), job.output.dir_key,
                      problem.empty() ? holder + " " + busy : not_a_lock_file(file, problem));
   };
   // One writer per job name and folder (docs/output_folders.md).
@@ -564,11 +573,22 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   // Hidden, per process (id and start time), host and job: concurrent jobs and concurrent hfbake processes
   // never share a stage, and a later bake can tell when its owner is gone. A name already there (a link
   // included) is removed, never followed, and the folder made afresh.
+  // Everything below happens inside the folder held now: a link planted at the output folder's name, the
+  // stage's or a folder in it, while the job runs, is never written through.
+  out_held_ = HeldFolder(job.output.dir, /*follow_link=*/true);
   stage_ = job.output.dir / stage_name(job.name);
-  remove_tree(stage_);
-  if (!fs::create_directory(stage_, ec) || ec)
-    throw InputError(job.file.string(), "/output/dir",
-                     "cannot write into " + job.output.dir.string() + ": " + ec.message());
+  const fs::path stage_in_held = out_held_.path() / stage_name(job.name);
+  remove_tree(stage_in_held);
+  if (!out_held_.held() || !fs::create_directory(stage_in_held, ec) || ec ||
+      !(stage_held_ = HeldFolder(stage_in_held, false)).held() ||
+      !fs::create_directory(stage_held_.path() / "reference-checkpoint", ec) || ec ||
+      !(checkpoint_held_ = HeldFolder(stage_held_.path() / "reference-checkpoint", false)).held()) {
+    release();
+    throw InputError(
+        job.file.string(), job.output.dir_key,
+        "cannot write into " + job.output.dir.string() + ": " +
+            (ec ? ec.message() : std::string("its staging folder was replaced while it was made")));
+  }
   // Stages that processes which no longer run left behind (killed by SIGKILL, a second signal, a crash):
   // this job's reference checkpoints are taken over first (a resumed reference), then the stages removed.
   adopt_stale_checkpoints(job.output.dir, job.name, checkpoint_dir());
@@ -577,7 +597,14 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
 
 OutputStage::~OutputStage() {
   std::error_code ec;
-  remove_tree(stage_);
+  // The stage held, emptied (wherever its name now points), then its name removed (a link, never followed).
+  if (stage_held_.held()) {
+    std::vector<fs::path> entries;
+    for (fs::directory_iterator it(stage_held_.path(), ec), end; !ec && it != end; it.increment(ec))
+      entries.push_back(it->path());
+    for (const fs::path& e : entries) remove_tree(e);
+  }
+  if (out_held_.held()) remove_tree(out_held_.path() / stage_.filename());
   textures_lock_.reset();
   report_lock_.reset();
   lock_.reset();
@@ -700,7 +727,7 @@ std::vector<std::string> OutputStage::write_layers(const std::string& stem, cons
     std::snprintf(sides, sizeof sides, "%.15g %.15g", texel_x_, texel_y_);
     options.attributes.emplace_back("hfbake:texel_size", sides);
   }
-  write_exr(stage_ / exr, layers, options);
+  write_exr(in_stage(exr), layers, options);
   staged_.push_back(exr);
   if (job_.output.geotiff) write_geotiffs(stem, layers);
   std::vector<std::string> notices = write_textures(stem, layers);
@@ -717,7 +744,7 @@ std::vector<std::string> OutputStage::write_layers(const std::string& stem, cons
     // (openness in degrees, the sun's irradiation and hours: mono layers that are neither) over its range.
     const LayerKind* kind = find_layer_kind(layer.name);
     preview.stretch = layer.channel_count() == 1 && (!kind || kind->values == LayerValues::finite);
-    write_preview(stage_ / png, layers, layer, preview);
+    write_preview(in_stage(png), layers, layer, preview);
     staged_.push_back(png);
   }
   return notices;
@@ -745,7 +772,7 @@ void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers
   options.metadata = geotiff_metadata(layers.attributes);
   for (const Layer& layer : layers.layers) {
     const std::string tif = job_.name + "." + stem + "." + layer.name + ".tif";
-    write_geotiff(stage_ / tif, layers, layer, georeference_, options);
+    write_geotiff(in_stage(tif), layers, layer, georeference_, options);
     staged_.push_back(tif);
   }
 }
@@ -765,8 +792,7 @@ std::vector<std::string> OutputStage::write_textures(const std::string& stem, co
                                t.suffixes[c]);
       s.channel = int(at - layer->channels.begin());
     }
-    std::filesystem::create_directories((stage_ / t.file).parent_path());
-    const TextureClipping clipped = write_texture(stage_ / t.file, layers, t.spec);
+    const TextureClipping clipped = write_texture(in_stage(t.file), layers, t.spec);
     staged_.push_back(t.file);
     if (!t.note.empty()) notices.push_back(t.note);
     if (clipped.clipped > 0) notices.push_back(clipping_notice(t.file, clipped, t.spec));
@@ -781,8 +807,22 @@ std::vector<std::string> OutputStage::write_textures(const std::string& stem, co
   return notices;
 }
 
+fs::path OutputStage::in_stage(const fs::path& name) {
+  if (!name.has_parent_path()) return stage_held_.path() / name;
+  // The stage's textures folder (the only folder a name holds), made and held at its first file.
+  if (!stage_textures_held_.held()) {
+    std::error_code ec;
+    fs::create_directory(stage_held_.path() / name.parent_path(), ec);
+    stage_textures_held_ = HeldFolder(stage_held_.path() / name.parent_path(), false);
+    if (!stage_textures_held_.held())
+      throw OutputError((stage_ / name.parent_path()).string(), "",
+                        "cannot write into it: it was replaced (by a link?) while the job ran");
+  }
+  return stage_textures_held_.path() / name.filename();
+}
+
 void OutputStage::write_text(const std::string& filename, const std::string& text) {
-  std::ofstream out(stage_ / filename, std::ios::binary);
+  std::ofstream out(in_stage(filename), std::ios::binary);
   out << text;
   out.close();
   if (!out) throw OutputError((job_.output.dir / filename).string(), "", "cannot write file");
@@ -795,7 +835,8 @@ std::vector<fs::path> OutputStage::commit() {
   // output moves or any folder is made, so that the folder keeps the previous outputs whole.
   auto refuse_folder = [this](const fs::path& name) {
     if (const std::string problem = output_name_problem(job_.output.dir / name); !problem.empty())
-      throw InputError(job_.file.string(), name.has_parent_path() ? "/output/textures" : "/output/dir",
+      throw InputError(job_.file.string(),
+                       name.has_parent_path() ? std::string("/output/textures") : job_.output.dir_key,
                        problem);
   };
   // The owner records, moved after the outputs: the textures folder's (a job that writes textures), then the
@@ -807,20 +848,25 @@ std::vector<fs::path> OutputStage::commit() {
   moves.insert(moves.end(), records.begin(), records.end());
   for (const fs::path& name : moves) refuse_folder(name);
   for (const fs::path& name : moves) {  // textures/: made here, never a link to elsewhere
-    if (!name.has_parent_path()) continue;
+    if (!name.has_parent_path() || out_textures_held_.held()) continue;
     const fs::path folder = (job_.output.dir / name).parent_path();
     std::error_code ec;
-    fs::create_directories(folder, ec);
-    if (!is_real_directory(folder))
+    fs::create_directories(out_held_.path() / name.parent_path(), ec);
+    out_textures_held_ = HeldFolder(out_held_.path() / name.parent_path(), false);
+    if (!out_textures_held_.held())
       throw InputError(
           folder.string(), "",
           "is not a folder (a link?): outputs are written inside " + job_.output.dir.string() + " only");
   }
+  // Where a move puts `name`: in the held output folder, or its held textures folder.
+  const auto in_output = [&](const fs::path& name) {
+    return name.has_parent_path() ? out_textures_held_.path() / name.filename() : out_held_.path() / name;
+  };
   // Every output on the disk before any moves (core/safe_file.hpp sync_file): a machine that crashes after
   // the moves finds whole files under the outputs' names, and a disk that could not take a file (a full
   // network disk reports it only at the flush) fails the job while the previous outputs are still there.
   for (const fs::path& name : staged_)
-    if (const int e = sync_file(stage_ / name))
+    if (const int e = sync_file(in_stage(name)))
       throw OutputError((job_.output.dir / name).string(), "",
                         "cannot write file: " + std::error_code(e, std::generic_category()).message());
   // The owner records are written in the stage like the outputs, then the commit list: from the list on,
@@ -828,12 +874,11 @@ std::vector<fs::path> OutputStage::commit() {
   // completes (complete_killed_commits); killed before it, its stage is removed and no output moved.
   try {
     for (const fs::path& name : records) {
-      fs::create_directories((stage_ / name).parent_path());
-      write_file_atomically(stage_ / name, job_identity(job_));
+      write_file_atomically(in_stage(name), job_identity(job_));
     }
     std::string list;
     for (const fs::path& name : moves) list += name.string() + "\n";
-    write_file_atomically(stage_ / kCommitList, list);
+    write_file_atomically(in_stage(kCommitList), list);
   } catch (const std::system_error& e) {
     throw OutputError(owner_record(job_).string(), "", std::string("cannot write: ") + e.code().message());
   }
@@ -845,14 +890,13 @@ std::vector<fs::path> OutputStage::commit() {
   for (std::size_t k = 0; k < moves.size(); ++k) {
     const fs::path target = job_.output.dir / moves[k];
     std::error_code ec;
-    fs::rename(stage_ / moves[k], target, ec);  // same folder tree: an atomic replace
+    fs::rename(in_stage(moves[k]), in_output(moves[k]), ec);  // same folder tree: an atomic replace
     if (ec) throw OutputError(target.string(), "", "cannot move into place: " + ec.message());
     if (k < staged_.size()) final_paths.push_back(target);
   }
   // The moves themselves on the disk: the output folder's entries (and textures/'s).
-  std::set<fs::path> folders = {job_.output.dir};
-  for (const fs::path& name : moves) folders.insert((job_.output.dir / name).parent_path());
-  for (const fs::path& folder : folders) sync_folder(folder);
+  sync_folder(out_held_.path());
+  if (out_textures_held_.held()) sync_folder(out_textures_held_.path());
   staged_.clear();
   committed_ = true;
   return final_paths;

@@ -179,7 +179,7 @@ class OutputStage {
   void write_text(const std::string& filename, const std::string& text);
   // The staging folder, for outputs written by parts (a tiled bake's GeoTIFFs, cli/tile_command.hpp): a
   // file made there is an output once adopt() names it; anything else there is removed with the stage.
-  const std::filesystem::path& folder() const { return stage_; }
+  const std::filesystem::path& folder() const { return stage_held_.path(); }
   void adopt(const std::string& filename) { staged_.push_back(filename); }
   // The metadata items of a GeoTIFF output whose layers have `attributes` (LayerSet::attributes): each
   // "hfbake:key" as "HFBAKE_KEY", and the azimuth convention.
@@ -193,13 +193,20 @@ class OutputStage {
   const std::vector<std::filesystem::path>& stale_removed() const { return stale_removed_; }
   // Where this job's reference checkpoints its bands: inside the stage, with the checkpoint files the
   // constructor adopted from this job's stale stages.
-  std::filesystem::path checkpoint_dir() const { return stage_checkpoint_dir(stage_); }
+  std::filesystem::path checkpoint_dir() const { return checkpoint_held_.path(); }
 
  private:
   const Job& job_;
   // report_lock_: a job with a reference only; textures_lock_: a job that writes textures only.
   std::unique_ptr<FolderLock> lock_, report_lock_, textures_lock_;
-  std::filesystem::path stage_;
+  std::filesystem::path stage_;  // its name in the output folder
+  // The folders written into, held from when they were made or checked (core/safe_file.hpp HeldFolder): a
+  // link planted at one of their names while the job runs is never written through. The output folder (a
+  // link the job names is followed once, when the stage is made), the stage, and the stage's checkpoint and
+  // textures folders; the output folder's textures folder from the commit.
+  HeldFolder out_held_, stage_held_, checkpoint_held_, stage_textures_held_, out_textures_held_;
+  // Where `name` (relative to the stage: a file, or textures/<file>) is written in the stage.
+  std::filesystem::path in_stage(const std::filesystem::path& name);
   void write_geotiffs(const std::string& stem, const LayerSet& layers);
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage
   std::vector<std::filesystem::path> stale_removed_;

@@ -435,6 +435,13 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
     progress.message(job.name + ": tiles " + std::to_string(first) + ".." + std::to_string(end) + " of " +
                      tiles_text(plan));
     const fs::path folder = tiles_folder(job);
+    // Held from here (core/safe_file.hpp HeldFolder): a link planted at tiles/ while the task runs is never
+    // written through.
+    const HeldFolder held(folder, /*follow_link=*/false);
+    if (!held.held())
+      throw InputError(job.file.string(), job.output.dir_key,
+                       folder.string() + " is not a folder (a link?): tiles are written inside " +
+                           job.output.dir.string() + " only");
     for (const fs::path& p : remove_stale_temporaries(folder))
       progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
     progress.begin(job.name, "tiles");
@@ -475,7 +482,8 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
               own.metadata[0].second += "; layer " + layer.name;
               own.metadata.emplace_back("HFBAKE_TILE_SUM", tile_checksum(data));
               const Layer& l = part.adopt(layer.name, layer.channels, std::move(data));
-              write_geotiff(tile_file(job, k, job.bakes[e].stem, layer.name), part, l, geo, own);
+              write_geotiff(held.path() / tile_file(job, k, job.bakes[e].stem, layer.name).filename(), part,
+                            l, geo, own);
             }
           });
     }

@@ -286,4 +286,34 @@ std::string lock_name_problem(const fs::path& lock) {
   return not_a_lock_file(lock, fs::is_symlink(s) ? "a link" : "not a file");
 }
 
+HeldFolder::HeldFolder(const std::filesystem::path& dir, bool follow_link) {
+  fd_ = ::open(dir.c_str(), O_PATH | O_DIRECTORY | O_CLOEXEC | (follow_link ? 0 : O_NOFOLLOW));
+  if (fd_ < 0) return;
+  const std::filesystem::path proc = "/proc/self/fd/" + std::to_string(fd_);
+  struct stat a {
+  }, b{};
+  // The magic link is the folder itself where /proc is mounted; else the name is all there is.
+  path_ =
+      ::stat(proc.c_str(), &a) == 0 && ::fstat(fd_, &b) == 0 && a.st_dev == b.st_dev && a.st_ino == b.st_ino
+          ? proc
+          : dir;
+}
+
+HeldFolder::HeldFolder(HeldFolder&& other) noexcept : fd_(other.fd_), path_(std::move(other.path_)) {
+  other.fd_ = -1;
+}
+
+HeldFolder& HeldFolder::operator=(HeldFolder&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = other.fd_, path_ = std::move(other.path_);
+    other.fd_ = -1;
+  }
+  return *this;
+}
+
+HeldFolder::~HeldFolder() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
 }  // namespace hfbake

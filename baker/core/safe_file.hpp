@@ -86,6 +86,28 @@ void sync_folder(const std::filesystem::path& folder);
 // True when `path` is a folder itself (lstat: a link to one is not).
 bool is_real_directory(const std::filesystem::path& path);
 
+// A folder held open from the moment it is checked: path() names that folder (/proc/self/fd/<fd>/) whatever
+// is renamed, or linked, at its name later, so that a file written or renamed through it never lands
+// elsewhere (a link planted while a bake runs). Without /proc, path() is the name it was opened by.
+class HeldFolder {
+ public:
+  HeldFolder() = default;
+  // The folder at `dir`; with follow_link false a link there is refused. nullopt-like (held() false) when
+  // it is not a folder, or cannot be opened.
+  HeldFolder(const std::filesystem::path& dir, bool follow_link);
+  HeldFolder(HeldFolder&& other) noexcept;
+  HeldFolder& operator=(HeldFolder&& other) noexcept;
+  HeldFolder(const HeldFolder&) = delete;
+  HeldFolder& operator=(const HeldFolder&) = delete;
+  ~HeldFolder();
+  bool held() const { return fd_ >= 0; }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  int fd_ = -1;
+  std::filesystem::path path_;
+};
+
 // Removes `path` and, when it is a folder itself, everything in it: each entry opened relative to its
 // folder (openat, O_NOFOLLOW), so a link anywhere in the tree is removed, never what it points to. False
 // when something could not be removed (what could, is).

@@ -1208,17 +1208,22 @@ class Moves : public Untrusted {
   }
   // Bakes jobs_[1] over jobs_[0]'s outputs with --overwrite, its move of t.hbao.exr (after t.p1.exr's) held
   // 3 s by the preload library; sends `sig` `times` times once that move has begun. Returns the exit code.
-  int stop_during_the_moves(int sig, int times) {
+  // Starts that bake and returns its process once its held move has begun.
+  pid_t start_the_moves() {
     EXPECT_EQ(hfbake(dir_, {"bake", jobs_[0], "--no-cache", "--quiet"}).exit_code, 0);
     old_hash_ = exr_job_hash(dir_ / "out" / "t.p1.exr");
     const fs::path flag = dir_ / "moving";
     const pid_t pid = start(dir_, {"bake", jobs_[1], "--no-cache", "--quiet", "--overwrite"}, "err.txt", [&] {
       preload_slow_rename();
-      setenv("HFBAKE_TEST_SLOW_RENAME", "/out/t.hbao.exr", 1);
+      setenv("HFBAKE_TEST_SLOW_RENAME", "/t.hbao.exr", 1);
       setenv("HFBAKE_TEST_SLOW_RENAME_FLAG", flag.c_str(), 1);
     });
     for (int wait = 0; wait < 6000 && !fs::exists(flag); ++wait) usleep(10000);
     EXPECT_TRUE(fs::exists(flag)) << "the moves never began";
+    return pid;
+  }
+  int stop_during_the_moves(int sig, int times) {
+    const pid_t pid = start_the_moves();
     for (int i = 0; i < times; ++i) {
       kill(pid, sig);
       usleep(100000);
@@ -1228,6 +1233,44 @@ class Moves : public Untrusted {
   std::vector<std::string> jobs_;
   std::string old_hash_;
 };
+
+// The staging folder renamed and a link to a folder outside planted at its name while the outputs move: the
+// bake moves the rest from the folder it made (held, core/safe_file.hpp HeldFolder), and nothing is written
+// or moved through the link.
+TEST_F(Moves, ALinkPlantedAtTheStageDuringTheMovesIsNotFollowed) {
+  const pid_t pid = start_the_moves();
+  fs::path stage;
+  for (const auto& e : fs::directory_iterator(dir_ / "out"))
+    if (e.path().filename().string().rfind(".hfbake-staging-", 0) == 0) stage = e.path();
+  ASSERT_FALSE(stage.empty());
+  fs::rename(stage, dir_ / "out" / "moved-stage");
+  fs::create_directory_symlink(dir_ / "outside", stage);
+  const Outcome r = finish(pid, dir_, "err.txt");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const std::string p1 = exr_job_hash(dir_ / "out" / "t.p1.exr");
+  EXPECT_NE(p1, old_hash_);
+  EXPECT_EQ(exr_job_hash(dir_ / "out" / "t.hbao.exr"), p1);
+  EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
+  expect_outside_untouched();
+}
+
+// A bake killed during its moves whose parent has not yet collected it (a zombie: `timeout -s KILL` leaves
+// one) is gone: the next bake of the job name completes its moves and removes its stage.
+TEST_F(Moves, AKilledBakeNotYetCollectedIsGone) {
+  const pid_t pid = start_the_moves();
+  kill(pid, SIGKILL);
+  for (int wait = 0; wait < 500; ++wait) {  // until it is a zombie (this test does not collect it yet)
+    std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+    std::string stat;
+    std::getline(in, stat);
+    if (stat.find(") Z ") != std::string::npos) break;
+    usleep(10000);
+  }
+  EXPECT_EQ(hfbake(dir_, {"bake", jobs_[1], "--no-cache", "--quiet"}).exit_code, 0);
+  for (const auto& e : fs::directory_iterator(dir_ / "out"))
+    EXPECT_EQ(e.path().filename().string().find(".hfbake-staging-"), std::string::npos) << e.path();
+  EXPECT_EQ(finish(pid, dir_, "err.txt").exit_code, -SIGKILL);
+}
 
 TEST_F(Moves, ASecondSignalDuringTheMovesLetsThemFinish) {
   // The job finished: its exit status, not the signal's (docs/contract.md).
