@@ -450,6 +450,13 @@ std::vector<std::string> output_collisions(const std::vector<const Job*>& jobs, 
   for (std::size_t k = 0; k < jobs.size(); ++k) {
     if (k == i || !jobs[k]) continue;
     const Job& b = *jobs[k];
+    std::error_code ec;
+    if (fs::equivalent(a.file, b.file, ec)) {  // one line, at the second naming
+      if (k < i && std::none_of(jobs.begin(), jobs.begin() + std::ptrdiff_t(k),
+                                [&](const Job* j) { return j && fs::equivalent(j->file, a.file, ec); }))
+        lines.push_back(a.file.string() + ": is named more than once: give each job file once");
+      continue;
+    }
     if (folder(b.output.dir) != dir) continue;
     if (a.name == b.name)
       lines.push_back(a.file.string() + ": /name: its outputs (" + a.output_path("*", ".exr").string() +
@@ -714,6 +721,13 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   // A summary written over a job, a suite or an input, or where a job writes (an output, its owner record,
   // its lock) or a suite its reports: refused before anything is baked (and no summary).
   if (options.summary) {
+    std::error_code dir_ec;
+    if (fs::is_directory(*options.summary, dir_ec)) {
+      std::fprintf(
+          stderr, "hfbake: error: %s\n",
+          printable(options.summary->string() + ": --summary: is a folder: name the file to write").c_str());
+      return 2;
+    }
     for (const fs::path& f : read) {
       std::error_code ec;
       if (fs::equivalent(*options.summary, f, ec) && !ec) {

@@ -91,17 +91,22 @@ void check_output_folder(const Job& job) {
       (p == job.output.dir ? "cannot write into " : "cannot create ") + job.output.dir.string();
   const bool exists = fs::exists(p, ec);
   if (!exists || !fs::is_directory(p, ec))
-    throw InputError(job.file.string(), "/output/dir",
-                     what + ": " + p.string() + (exists ? " is not a folder" : " does not exist"));
+    throw InputError(
+        job.file.string(), job.output.dir_key,
+        what + ": " + p.string() +
+            (exists                                      ? " is not a folder"
+             : fs::is_symlink(fs::symlink_status(p, ec)) ? " is a link that leads to nothing (its target "
+                                                           "does not exist, or its links loop)"
+                                                         : " does not exist"));
   if (access(p.c_str(), W_OK | X_OK) != 0)
     throw InputError(
-        job.file.string(), "/output/dir",
+        job.file.string(), job.output.dir_key,
         what + ": " + p.string() + ": " + std::error_code(errno, std::generic_category()).message());
   // The folders still to be made: names the file system can hold (mkdir's ENAMETOOLONG, found now).
   const long name_max = pathconf(p.c_str(), _PC_NAME_MAX);
   for (const fs::path& part : job.output.dir.lexically_relative(p))
     if (name_max > 0 && part.native().size() > std::size_t(name_max))
-      throw InputError(job.file.string(), "/output/dir",
+      throw InputError(job.file.string(), job.output.dir_key,
                        what + ": " + std::error_code(ENAMETOOLONG, std::generic_category()).message() + " (" +
                            std::to_string(part.native().size()) + " bytes in a name, at most " +
                            std::to_string(name_max) + ")");
@@ -113,10 +118,10 @@ void check_output_folder(const Job& job) {
   if (textures_folder(job)) locks.push_back(textures_lock_file(job));
   for (const fs::path& lock : locks)
     if (const std::string problem = lock_name_problem(lock); !problem.empty())
-      throw InputError(job.file.string(), "/output/dir", problem);
+      throw InputError(job.file.string(), job.output.dir_key, problem);
   check_textures_folder(job);
   // A folder where the bake moves an output or an owner record: rename(2) cannot replace it.
-  std::vector<std::pair<fs::path, std::string>> folders = {{job.output.dir, "/output/dir"}};
+  std::vector<std::pair<fs::path, std::string>> folders = {{job.output.dir, job.output.dir_key}};
   if (const std::optional<fs::path> textures = textures_folder(job))
     folders.emplace_back(*textures, "/output/textures");
   for (const auto& [folder, ptr] : folders) {

@@ -412,6 +412,19 @@ std::string heights_warning(const Scene& scene) {
   return warning;
 }
 
+namespace {
+
+// Whether the job's height_scale and height_offset are the file's declared scale and offset, in the pixels'
+// unit where the band declares another (as hfbake init writes them).
+bool declared_scale_applied(const HeightSource& s) {
+  const std::optional<double> metres = metres_per(s.height_unit);
+  const double r = metres && s.pixel_unit_metres > 0 ? *metres / s.pixel_unit_metres : 1.0;
+  const auto same = [](double a, double b) { return std::fabs(a - b) <= 1e-9 * std::max(1.0, std::fabs(b)); };
+  return same(s.scale, s.file_scale * r) && same(s.offset, s.file_offset * r);
+}
+
+}  // namespace
+
 HeightsReport describe_heights(const Job& job, const Scene& scene) {
   const HeightSource& s = scene.height_source;
   const HeightField& f = scene.field;
@@ -425,9 +438,10 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
             (s.channel.empty() ? "" : s.channel + ", ") + s.sample_type +
             (s.integer ? " integers as stored" : "") + ")";
     if (s.file_scale != 1 || s.file_offset != 0)
-      line +=
-          " (the file declares scale " + short_num(s.file_scale) + " and offset " + short_num(s.file_offset) +
-          (s.scale == 1 && s.offset == 0 ? ", not applied: height_scale and height_offset apply them)" : ")");
+      line += " (the file declares scale " + short_num(s.file_scale) + " and offset " +
+              short_num(s.file_offset) +
+              (declared_scale_applied(s) ? ", as the job's height_scale and height_offset apply them)"
+                                         : ", not applied: height_scale and height_offset apply them)");
   }
   line += "; " + std::to_string(f.width) + "x" + std::to_string(f.height) + " texels of " + short_num(texel);
   if (!f.square_texels()) line += " x " + short_num(f.dy());

@@ -188,7 +188,7 @@ fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::a
     std::error_code ec;
     fs::create_directories(path.parent_path(), ec);
     if (!is_real_directory(path.parent_path()))
-      throw InputError(job.file.string(), "/output/dir",
+      throw InputError(job.file.string(), job.output.dir_key,
                        path.parent_path().string() +
                            " is not a folder (a link?): outputs are written inside " +
                            job.output.dir.string() + " only");

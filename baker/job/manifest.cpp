@@ -353,9 +353,10 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
   if (job.bakes.empty() && !job.has_reference) fail("/bake", "nothing to bake: no method and no reference");
 
   const nlohmann::json output = doc.value("output", nlohmann::json::object());
-  if (out_override)
+  if (out_override) {
     job.output.dir = fs::absolute(*out_override);
-  else if (output.contains("dir"))
+    job.output.dir_key = "--out";
+  } else if (output.contains("dir"))
     job.output.dir = job.resolve(output["dir"].get<std::string>());
   else
     job.output.dir = job.base_dir / "out" / job.name;

@@ -30,6 +30,8 @@ struct BakeEntry {
 
 struct OutputOptions {
   std::filesystem::path dir;  // absolute
+  // Where dir was given, for messages about it: the job's key, or the command line's --out.
+  std::string dir_key = "/output/dir";
   bool float_pixels = false;  // half by default
   std::string compression;    // EXR compression; empty: default_exr_compression of each file's layers
   bool previews = false;

@@ -424,6 +424,24 @@ std::vector<Case> cases() {
     j["output"]["dir"] = "file/out";
     return both(write_job(d, j), "/output/dir", "is not a folder");
   });
+  add("OutputFolderALinkLoop", [](const fs::path& d) {
+    fs::create_symlink("loop", d / "loop");
+    json j = base_job();
+    j["output"]["dir"] = "loop";
+    return both(write_job(d, j), "/output/dir", "loop is a link that leads to nothing");
+  });
+  add("OutFolderInsideAFile", [](const fs::path& d) {  // the command line's folder is named as such
+    std::ofstream(d / "file") << "x";
+    return CaseSetup{{"bake", write_job(d, base_job()), "--out", (d / "file" / "out").string(), "--quiet"},
+                     "",
+                     "--out",
+                     "is not a folder",
+                     false};
+  });
+  add("OneJobFileNamedTwice", [](const fs::path& d) {  // the second naming is refused, not baked again
+    const std::string j = write_job(d, base_job());
+    return CaseSetup{{"validate", j, j}, "", "", "is named more than once", false};
+  });
   add("OutputFolderNameTooLong", [](const fs::path& d) {  // mkdir's ENAMETOOLONG, found by validate too
     json j = base_job();
     j["output"]["dir"] = "out/" + std::string(256, 'b') + "/x";
@@ -625,6 +643,15 @@ std::vector<Case> cases() {
     json j = base_job();
     j["reference"] = {{"samples", 4}};
     return both(write_job(d, j), "/output/dir", "report.json is job \"other\"'s report");
+  });
+  add("SummaryIsAFolder", [](const fs::path& d) {  // refused before anything is baked
+    fs::create_directories(d / "sums");
+    return CaseSetup{
+        {"bake", write_job(d, base_job()), "--quiet", "--no-cache", "--summary", (d / "sums").string()},
+        (d / "sums").string(),
+        "--summary",
+        "is a folder",
+        false};
   });
   add("SummaryIntoAFileNotAFolder", [](const fs::path& d) {
     std::ofstream(d / "file") << "x";
