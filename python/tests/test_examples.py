@@ -13,9 +13,14 @@ from conftest import SOURCE_DIR, OpenImageIO, read_exr, run_cli, terrain
 gdal = pytest.importorskip("osgeo.gdal")
 
 
-def write_geotiff(path, heights, nodata=None, epsg=32633, geotransform=(500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0)):
+def write_geotiff(path, heights, nodata=None, epsg=32633, geotransform=(500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0),
+                  scale=None, offset=None):
+    """heights as a one-band GeoTIFF: Int16 or UInt16 for those arrays, else Float32; with the band's declared
+    scale and offset when given."""
     gdal.UseExceptions()
-    ds = gdal.GetDriverByName("GTiff").Create(str(path), heights.shape[1], heights.shape[0], 1, gdal.GDT_Float32)
+    kind = {np.dtype(np.int16): gdal.GDT_Int16, np.dtype(np.uint16): gdal.GDT_UInt16}.get(heights.dtype,
+                                                                                         gdal.GDT_Float32)
+    ds = gdal.GetDriverByName("GTiff").Create(str(path), heights.shape[1], heights.shape[0], 1, kind)
     ds.SetGeoTransform(geotransform)
     srs = gdal.osr.SpatialReference()
     srs.ImportFromEPSG(epsg)
@@ -23,6 +28,10 @@ def write_geotiff(path, heights, nodata=None, epsg=32633, geotransform=(500000.0
     band = ds.GetRasterBand(1)
     if nodata is not None:
         band.SetNoDataValue(nodata)
+    if scale is not None:
+        band.SetScale(scale)
+    if offset is not None:
+        band.SetOffset(offset)
     band.WriteArray(heights)
     ds = None
 

@@ -176,16 +176,9 @@ def test_a_pngs_nodata_is_a_height_as_a_job_reads_it(tmp_path):
     # them 0), and read_dem reads the same heights, with no holes.
     stored = np.round(terrain(40, 32, seed=13) * 100 + 3000).astype(np.uint16)
     stored[10:14, 10:14] = 0
-    mem = gdal.GetDriverByName("MEM").Create("", 40, 32, 1, gdal.GDT_UInt16)
-    mem.SetGeoTransform((500000.0, 2.0, 0.0, 5200000.0, 0.0, -2.0))
-    srs = gdal.osr.SpatialReference()
-    srs.ImportFromEPSG(32633)
-    mem.SetProjection(srs.ExportToWkt())
-    mem.GetRasterBand(1).WriteArray(stored)
-    mem.GetRasterBand(1).SetNoDataValue(0)
+    write_geotiff(tmp_path / "dem.tif", stored, nodata=0)
     png = tmp_path / "dem.png"
-    gdal.GetDriverByName("PNG").CreateCopy(str(png), mem, options=["WORLDFILE=YES"])
-    mem = None
+    gdal.GetDriverByName("PNG").CreateCopy(str(png), gdal.Open(str(tmp_path / "dem.tif")), options=["WORLDFILE=YES"])
     ds = gdal.Open(str(png))  # held: a band outlives no dataset
     assert ds.GetRasterBand(1).GetNoDataValue() == 0
     ds = None
