@@ -148,6 +148,14 @@ scancel_resume)
     sleep 0.05
   done
   [ -n "$running" ] || fail "task 1 never ran"
+  # Slurm lists a task as running while its batch step is still being launched, and a cancel that arrives
+  # then can miss the step's processes: cancelled once its hfbake runs.
+  started=
+  for _ in $(seq 600); do
+    pgrep -f -- "--shard 1/4 .*--out farm" >/dev/null && started=1 && break
+    sleep 0.05
+  done
+  [ -n "$started" ] || fail "task 1's hfbake never started"
   scancel "${array}_1" || fail "scancel"
   wait_gone "$array"
   [ -f farm/shards/a.shard-1-of-4.hfshard ] && fail "the cancelled task still wrote its shard"
