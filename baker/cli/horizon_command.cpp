@@ -76,9 +76,8 @@ std::vector<std::string> height_warnings(const HorizonOptions& o, const GeoRaste
                 " --height-offset " + num(offset, "%.6g") + " apply them");
   const std::string pixel_unit = info.geographic ? "metre" : info.linear_unit;
   const double pixel_metres = info.geographic ? 1.0 : info.linear_unit_metres;
-  const std::optional<double> height_metres = metres_per(info.unit_types[b]);
-  const double ratio = height_metres && pixel_metres > 0 ? *height_metres / pixel_metres : 1.0;
-  if (std::fabs(ratio - 1) > 1e-4)
+  const double ratio = height_unit_ratio(info.unit_types[b], pixel_metres);
+  if (ratio != 1)
     w.push_back("the band's heights are in " + info.unit_types[b] + " and its pixels in " + pixel_unit +
                 ": elevations come out too " + (ratio > 1 ? "low" : "high") + "; give --height-scale " +
                 num(ratio, "%.6g"));

@@ -110,9 +110,8 @@ DeclaredHeights declared_heights(const HeightSource& s) {
     d.why = "the file's declared scale " + json(s.file_scale).dump() + " and offset " +
             json(s.file_offset).dump();
   }
-  const std::optional<double> metres = metres_per(s.height_unit);
-  const double ratio = metres && s.pixel_unit_metres > 0 ? *metres / s.pixel_unit_metres : 1.0;
-  if (std::fabs(ratio - 1) > 1e-4) {
+  const double ratio = height_unit_ratio(s.height_unit, s.pixel_unit_metres);
+  if (ratio != 1) {
     d.scale *= ratio, d.offset *= ratio;
     d.why += (d.why.empty() ? "" : ", then ") + std::string("the band's heights in ") + s.height_unit +
              " converted into the pixels' " + (s.pixel_unit.empty() ? "metres" : s.pixel_unit);

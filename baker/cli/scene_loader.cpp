@@ -349,6 +349,12 @@ std::optional<double> metres_per(std::string unit) {
   return std::nullopt;
 }
 
+double height_unit_ratio(const std::string& height_unit, double pixel_unit_metres) {
+  const std::optional<double> metres = metres_per(height_unit);
+  const double r = metres && pixel_unit_metres > 0 ? *metres / pixel_unit_metres : 1.0;
+  return std::fabs(r - 1) > 1e-4 ? r : 1.0;
+}
+
 std::string unitless_heights_note(const std::string& pixel_unit, double pixel_unit_metres,
                                   const std::string& height_unit) {
   if (pixel_unit.empty() || pixel_unit_metres == 1.0 || !height_unit.empty()) return "";
@@ -369,9 +375,8 @@ std::string heights_warning(const Scene& scene) {
                 : "height_scale (world units per stored unit)";
   // A band that declares its heights in another unit than its pixels' (metres on a CRS in feet): every
   // slope would be off by their ratio unless height_scale converts them.
-  const std::optional<double> height_metres = metres_per(s.height_unit);
-  const double unit_ratio = height_metres ? *height_metres / s.pixel_unit_metres : 1.0;
-  if (s.scale == 1 && std::fabs(unit_ratio - 1) > 1e-4) {
+  const double unit_ratio = height_unit_ratio(s.height_unit, s.pixel_unit_metres);
+  if (s.scale == 1 && unit_ratio != 1) {
     warning = "the band's heights are in " + s.height_unit + " and its pixels in " +
               (s.pixel_unit.empty() ? std::string("metres") : s.pixel_unit) + ": slopes come out " +
               short_num(unit_ratio > 1 ? unit_ratio : 1 / unit_ratio) + " times too " +
@@ -417,8 +422,7 @@ namespace {
 // Whether the job's height_scale and height_offset are the file's declared scale and offset, in the pixels'
 // unit where the band declares another (as hfbake init writes them).
 bool declared_scale_applied(const HeightSource& s) {
-  const std::optional<double> metres = metres_per(s.height_unit);
-  const double r = metres && s.pixel_unit_metres > 0 ? *metres / s.pixel_unit_metres : 1.0;
+  const double r = height_unit_ratio(s.height_unit, s.pixel_unit_metres);
   const auto same = [](double a, double b) { return std::fabs(a - b) <= 1e-9 * std::max(1.0, std::fabs(b)); };
   return same(s.scale, s.file_scale * r) && same(s.offset, s.file_offset * r);
 }

@@ -94,6 +94,9 @@ SceneNeeds scene_needs(const Job& job);
 // ignored: the metre and its millimetre, centimetre, decimetre and kilometre, the international foot and the
 // US survey foot; nullopt for a name not known here. The Python module's read_dem asks it too.
 std::optional<double> metres_per(std::string unit);
+// The factor that takes heights in `height_unit` into pixels `pixel_unit_metres` metres long: 1 when the
+// unit is not known (metres_per) or within 1e-4 of the pixels'.
+double height_unit_ratio(const std::string& height_unit, double pixel_unit_metres);
 
 // For a raster in a CRS whose unit is not the metre (`pixel_unit`, `pixel_unit_metres` metres each) and a
 // band that declares no unit for its heights: they are taken in the CRS's unit, which a DEM in feet with
