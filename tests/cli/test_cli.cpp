@@ -336,6 +336,19 @@ TEST_F(Cli, ContinuesPastAFailedJob) {
   EXPECT_EQ(s["jobs"][1]["outputs"][0], (dir_ / "out" / "good.p1.exr").string());
 }
 
+TEST_F(Cli, ASummaryInFoldersNotYetMadeIsWritten) {
+  nlohmann::json g = job({{"procedural", {{"kind", "flat"}, {"size", {16, 16}}}}});
+  const fs::path summary = dir_ / "results" / "night" / "s.json";
+  const Result r =
+      hfbake("bake " + write_job("g.json", g).string() + " --quiet --no-cache --summary " + summary.string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(summary);
+  ASSERT_TRUE(in) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(in);
+  ASSERT_EQ(s["jobs"].size(), 1u);
+  EXPECT_EQ(s["jobs"][0]["status"], "ok");
+}
+
 TEST_F(Cli, InterruptExits130AndLeavesNoOutputs) {
   // A reference bake long enough to be interrupted mid-way.
   nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {256, 256}}}}});
