@@ -8,11 +8,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -412,21 +410,6 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
                  hits == 1 ? "" : "s", saved, computed);
 }
 
-// Why `file` (bake --summary) could not be written, found before anything is baked: "" when the nearest of
-// its folders that exists is a folder this process can write into (the missing ones below it are made when
-// the summary is written, as an output folder is).
-std::string summary_folder_problem(const fs::path& file) {
-  std::error_code ec;
-  fs::path dir = fs::absolute(file, ec).parent_path();
-  if (ec) return "cannot resolve the path: " + ec.message();
-  while (fs::symlink_status(dir, ec).type() == fs::file_type::not_found && dir.has_relative_path())
-    dir = dir.parent_path();
-  if (!fs::is_directory(dir, ec)) return dir.string() + " is not a folder";
-  if (::access(dir.c_str(), W_OK | X_OK) != 0)
-    return "cannot write into " + dir.string() + ": " + std::strerror(errno);
-  return "";
-}
-
 void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& outcomes, int exit_code) {
   nlohmann::json doc = {{"hfbake_version", hfbake_version()}, {"exit_code", exit_code}};
   doc["jobs"] = nlohmann::json::array();
@@ -444,10 +427,7 @@ void write_summary_file(const fs::path& file, const std::vector<JobOutcome>& out
   // Atomic like every other output: a temporary of its own beside the file, then rename (a full disk or a
   // read-only folder leaves no temporary behind).
   try {
-    if (const fs::path dir = fs::absolute(file).parent_path(); !fs::exists(dir)) fs::create_directories(dir);
     write_named_output(file, doc.dump(2) + "\n");
-  } catch (const fs::filesystem_error& e) {
-    throw InputError(file.string(), "--summary", "cannot make its folder: " + e.code().message());
   } catch (const std::system_error& e) {
     throw InputError(file.string(), "--summary", "cannot write file: " + e.code().message());
   }
@@ -748,7 +728,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
           printable(options.summary->string() + ": --summary: is a folder: name the file to write").c_str());
       return 2;
     }
-    if (const std::string why = summary_folder_problem(*options.summary); !why.empty()) {
+    if (const std::string why = named_output_folder_problem(*options.summary); !why.empty()) {
       std::fprintf(stderr, "hfbake: error: %s\n",
                    printable(options.summary->string() + ": --summary: " + why).c_str());
       return 2;

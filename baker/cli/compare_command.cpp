@@ -83,6 +83,32 @@ CompareResult compare_reports(const CompareOptions& o) {
     pairs.emplace_back("", o.now, fs::exists(o.baseline) ? o.baseline : fs::path());
   }
 
+  // --json never replaces a report this comparison reads or a baseline it updates, and is checked before
+  // anything is compared.
+  if (o.json) {
+    const fs::path& json = *o.json;
+    if (fs::is_directory(json, ec))
+      throw InputError(json.string(), "--json", "is a folder: name the file to write");
+    if (const std::string why = named_output_folder_problem(json); !why.empty())
+      throw InputError(json.string(), "--json", why);
+    const fs::path at = fs::weakly_canonical(fs::absolute(json), ec);
+    auto is = [&](const fs::path& f) {
+      std::error_code e;
+      return !f.empty() &&
+             (fs::weakly_canonical(fs::absolute(f), e) == at || (fs::equivalent(json, f, e) && !e));
+    };
+    for (const auto& [label, now_file, old_file] : pairs) {
+      for (const fs::path& f : {now_file, old_file})
+        if (is(f))
+          throw InputError(
+              json.string(), "--json",
+              "is " + f.string() + ", which this comparison reads: give the output another name");
+      if (o.update_baseline && is(folders ? o.baseline / label : o.baseline))
+        throw InputError(json.string(), "--json",
+                         "is where --update-baseline writes the baseline: give the output another name");
+    }
+  }
+
   CompareResult r;
   for (const auto& [label, now_file, old_file] : pairs) {
     if (now_file.empty()) {  // a whole report went missing

@@ -257,6 +257,7 @@ void write_file_atomically(const fs::path& final, std::string_view bytes) {
 void write_named_output(const fs::path& file, std::string_view bytes) {
   struct stat st;
   if (stat(file.c_str(), &st) != 0 || !(S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode))) {
+    if (const fs::path dir = fs::absolute(file).parent_path(); !fs::exists(dir)) fs::create_directories(dir);
     write_file_atomically(file, bytes);
     return;
   }
@@ -273,6 +274,18 @@ void write_named_output(const fs::path& file, std::string_view bytes) {
     done += std::size_t(n);
   }
   if (close(fd) != 0 && errno != EINTR) throw system_error(errno, "cannot write " + file.string());
+}
+
+std::string named_output_folder_problem(const fs::path& file) {
+  std::error_code ec;
+  fs::path dir = fs::absolute(file, ec).parent_path();
+  if (ec) return "cannot resolve the path: " + ec.message();
+  while (fs::symlink_status(dir, ec).type() == fs::file_type::not_found && dir.has_relative_path())
+    dir = dir.parent_path();
+  if (!fs::is_directory(dir, ec)) return dir.string() + " is not a folder";
+  if (access(dir.c_str(), W_OK | X_OK) != 0)
+    return "cannot write into " + dir.string() + ": " + std::strerror(errno);
+  return "";
 }
 
 std::string not_a_lock_file(const fs::path& lock, const std::string& why) {

@@ -73,9 +73,14 @@ void write_file_atomically(const std::filesystem::path& final, std::string_view 
 
 // A file a user names on the command line (hfbake horizon --out, bake --summary, compare --json): written
 // through when it is a stream, a FIFO or a character device, or a link to one (/dev/stdout, a shell's
-// >(...)), which a rename would replace; atomically (write_file_atomically) otherwise. Errors:
-// std::system_error.
+// >(...)), which a rename would replace; atomically (write_file_atomically) otherwise.
+// Folders of the path that do not exist yet are made first. Errors: std::system_error.
 void write_named_output(const std::filesystem::path& file, std::string_view bytes);
+
+// Why write_named_output could not write `file`, found before a command does its work: "" when the nearest
+// of its folders that exists is a folder this process can write into (the missing ones below it are made
+// when the file is written); else the problem, naming that folder.
+std::string named_output_folder_problem(const std::filesystem::path& file);
 
 // Durability: what a rename puts in place survives a crash of the machine, not only of the process. A file's
 // bytes are flushed to the disk before it is renamed into place, and the folder after (fsync(2)).

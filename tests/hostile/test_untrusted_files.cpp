@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <OpenImageIO/imageio.h>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -534,6 +535,47 @@ TEST_F(Untrusted, ABaselineReportThatIsALinkIsComparedAndReplacedInItsFolder) {
   r = hfbake(dir_, {"compare", (dir_ / "U").string(), (dir_ / "V").string()});
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("/mae: must be a number (it is a string)"), std::string::npos) << r.err;
+  expect_outside_untouched();
+}
+
+// compare --json never replaces what the comparison reads or --update-baseline writes (the new report, the
+// baseline, a link to either, the baseline folder's report-to-be), refused in one line before anything is
+// compared; into folders that do not exist yet it is written, the folders made.
+TEST_F(Untrusted, CompareJsonNeverReplacesAReportAndMakesItsFolders) {
+  json j = base_job();
+  j["reference"] = {{"samples", 4}, {"seed", 1}};
+  ASSERT_EQ(hfbake(dir_, {"bake", write_job(dir_, j), "--no-cache", "--quiet"}).exit_code, 0);
+  const std::string report = read_text(dir_ / "out" / "report.json");
+  fs::create_directories(dir_ / "U" / "j1"), fs::create_directories(dir_ / "U" / "j2");
+  fs::create_directories(dir_ / "V" / "j1");
+  for (const char* f : {"U/j1/report.json", "U/j2/report.json", "V/j1/report.json", "a.json", "b.json"})
+    std::ofstream(dir_ / f) << report;
+  fs::create_symlink("b.json", dir_ / "link.json");
+  const std::string a = (dir_ / "a.json").string(), b = (dir_ / "b.json").string();
+  const std::string U = (dir_ / "U").string(), V = (dir_ / "V").string();
+  const std::vector<std::vector<std::string>> refused{
+      {"compare", a, b, "--json", b},
+      {"compare", a, b, "--json", a},
+      {"compare", a, b, "--json", (dir_ / "link.json").string()},
+      {"compare", a, (dir_ / "c.json").string(), "--update-baseline", "--json", (dir_ / "c.json").string()},
+      {"compare", U, V, "--json", (dir_ / "V" / "j1" / "report.json").string()},
+      {"compare", U, V, "--update-baseline", "--json", (dir_ / "V" / "j2" / "report.json").string()},
+      {"compare", a, b, "--json", (dir_ / "a.json" / "x.json").string()}};
+  for (const auto& args : refused) {
+    const Outcome r = hfbake(dir_, args);
+    EXPECT_EQ(r.exit_code, 2) << args.back() << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("hfbake: error: " + args.back() + ": --json: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  for (const char* f : {"U/j1/report.json", "U/j2/report.json", "V/j1/report.json", "a.json", "b.json"})
+    EXPECT_EQ(read_text(dir_ / f), report) << f;
+  EXPECT_FALSE(fs::exists(dir_ / "c.json"));
+  EXPECT_FALSE(fs::exists(dir_ / "V" / "j2"));
+
+  const fs::path deep = dir_ / "results" / "night" / "cmp.json";
+  const Outcome r = hfbake(dir_, {"compare", a, b, "--json", deep.string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(json::parse(read_text(deep))["regression"].get<bool>());
   expect_outside_untouched();
 }
 

@@ -173,6 +173,14 @@ TEST(HorizonCli, OutputsNeverReplaceTheDemAndAreWrittenWhole) {
   ASSERT_EQ(folder.error_lines().size(), 1u) << folder.err;
   EXPECT_NE(folder.err.find("--out: is a folder: name the file to write"), std::string::npos) << folder.err;
   EXPECT_TRUE(fs::is_empty(dir / "folder"));
+  // Under a file: refused before anything is computed. Into folders not made yet: written, the folders made.
+  const auto under = run_hfbake(dir, at + "--out " + (dem / "x.csv").string());
+  EXPECT_EQ(under.exit_code, 2) << under.err;
+  ASSERT_EQ(under.error_lines().size(), 1u) << under.err;
+  EXPECT_NE(under.err.find("--out: " + dem.string() + " is not a folder"), std::string::npos) << under.err;
+  const auto deep = run_hfbake(dir, at + "--out " + (dir / "p" / "q" / "h.csv").string());
+  EXPECT_EQ(deep.exit_code, 0) << deep.err;
+  EXPECT_EQ(bytes(dir / "p" / "q" / "h.csv").rfind("azimuth_deg,elevation_deg", 0), 0u);
   for (const Case& c : cases) {
     const auto r = run_hfbake(dir, at + c.args);
     EXPECT_EQ(r.exit_code, 2) << c.args;
