@@ -277,6 +277,9 @@ void write_named_output(const fs::path& file, std::string_view bytes) {
 }
 
 std::string named_output_folder_problem(const fs::path& file) {
+  struct stat st;
+  if (stat(file.c_str(), &st) == 0 && (S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode)))
+    return "";  // written through, whatever its folder (/dev/stdout)
   std::error_code ec;
   fs::path dir = fs::absolute(file, ec).parent_path();
   if (ec) return "cannot resolve the path: " + ec.message();

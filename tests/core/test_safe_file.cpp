@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -10,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 #include <thread>
@@ -38,6 +40,31 @@ TEST_F(SafeFile, SyncFileFlushesAFileAndNeverFollowsALink) {
   EXPECT_EQ(sync_file(dir_ / "link"), ELOOP);  // O_NOFOLLOW: a planted link is not what was staged
   sync_folder(dir_);                           // no error to report: the rename stands either way
   sync_folder(dir_ / "missing");
+}
+
+// A file a command line names: its missing folders are no problem (write_named_output makes them); a path
+// under a file or a dangling link is, naming it; a stream is written through whatever its folder.
+TEST_F(SafeFile, NamedOutputsMakeTheirFoldersAndRefuseAPathUnderAFile) {
+  const fs::path deep = dir_ / "a" / "b" / "s.json";
+  EXPECT_EQ(named_output_folder_problem(deep), "");
+  write_named_output(deep, "{}\n");
+  std::ifstream in(deep);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "{}\n");
+  std::ofstream(dir_ / "file") << "x";
+  EXPECT_EQ(named_output_folder_problem(dir_ / "file" / "c" / "s.json"),
+            (dir_ / "file").string() + " is not a folder");
+  fs::create_symlink(dir_ / "nowhere", dir_ / "dangling");
+  EXPECT_EQ(named_output_folder_problem(dir_ / "dangling" / "s.json"),
+            (dir_ / "dangling").string() + " is not a folder");
+  ASSERT_EQ(mkfifo((dir_ / "locked_fifo").c_str(), 0600), 0);
+  fs::create_directory(dir_ / "locked");
+  fs::create_symlink(dir_ / "locked_fifo", dir_ / "locked" / "out");
+  fs::permissions(dir_ / "locked", fs::perms::owner_read | fs::perms::owner_exec);
+  EXPECT_EQ(named_output_folder_problem(dir_ / "locked" / "out"), "");  // a link to a FIFO: written through
+  if (geteuid() != 0) {                                                 // root writes into any folder
+    EXPECT_EQ(named_output_folder_problem(dir_ / "locked" / "s.json").rfind("cannot write into ", 0), 0u);
+  }
+  fs::permissions(dir_ / "locked", fs::perms::owner_all);
 }
 
 TEST_F(SafeFile, WriteFileAtomicallyReplacesALinkNotItsTarget) {
