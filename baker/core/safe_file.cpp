@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <system_error>
 #include <vector>
@@ -254,7 +255,53 @@ void write_file_atomically(const fs::path& final, std::string_view bytes) {
   tmp.commit();
 }
 
+namespace {
+
+// The descriptor of this process that `file` names through its links (/dev/stdout -> /proc/self/fd/1,
+// /dev/fd/N, /proc/<this pid>/fd/N), or -1.
+int descriptor_named(const fs::path& file) {
+  std::error_code ec;
+  fs::path p = fs::absolute(file, ec);
+  if (ec) return -1;
+  const std::string own = "/proc/" + std::to_string(getpid()) + "/fd/";
+  for (int hops = 0; hops < 40; ++hops) {
+    const std::string s = p.lexically_normal().string();
+    for (const std::string& prefix : {std::string("/proc/self/fd/"), std::string("/dev/fd/"), own})
+      if (s.rfind(prefix, 0) == 0) {
+        const std::string n = s.substr(prefix.size());
+        if (n.empty() || n.size() > 9 || n.find_first_not_of("0123456789") != std::string::npos) return -1;
+        return std::stoi(n);
+      }
+    if (!fs::is_symlink(fs::symlink_status(p, ec))) return -1;
+    const fs::path target = fs::read_symlink(p, ec);
+    if (ec) return -1;
+    p = target.is_absolute() ? target : p.parent_path() / target;
+  }
+  return -1;
+}
+
+void write_all(int fd, std::string_view bytes, const fs::path& file) {
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw system_error(n < 0 ? errno : EIO, "cannot write " + file.string());
+    done += std::size_t(n);
+  }
+}
+
+}  // namespace
+
 void write_named_output(const fs::path& file, std::string_view bytes) {
+  // A descriptor of this process (a shell's redirection of standard output to a file, say) is written
+  // where it stands, never replaced by a rename, whatever it is open on.
+  if (const int fd = descriptor_named(file); fd >= 0) {
+    const int flags = fcntl(fd, F_GETFL);
+    if (flags < 0 || (flags & O_ACCMODE) == O_RDONLY)
+      throw system_error(flags < 0 ? errno : EBADF, "cannot write " + file.string());
+    std::fflush(nullptr);  // what stdio holds for the same descriptor comes first
+    write_all(fd, bytes, file);
+    return;
+  }
   struct stat st;
   if (stat(file.c_str(), &st) != 0 || !(S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode))) {
     if (const fs::path dir = fs::absolute(file).parent_path(); !fs::exists(dir)) fs::create_directories(dir);
@@ -263,20 +310,17 @@ void write_named_output(const fs::path& file, std::string_view bytes) {
   }
   const int fd = open(file.c_str(), O_WRONLY | O_CLOEXEC);
   if (fd < 0) throw system_error(errno, "cannot open " + file.string());
-  for (std::size_t done = 0; done < bytes.size();) {
-    const ssize_t n = write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int e = n < 0 ? errno : EIO;
-      close(fd);
-      throw system_error(e, "cannot write " + file.string());
-    }
-    done += std::size_t(n);
+  try {
+    write_all(fd, bytes, file);
+  } catch (...) {
+    close(fd);
+    throw;
   }
   if (close(fd) != 0 && errno != EINTR) throw system_error(errno, "cannot write " + file.string());
 }
 
 std::string named_output_folder_problem(const fs::path& file) {
+  if (descriptor_named(file) >= 0) return "";  // written where it stands
   struct stat st;
   if (stat(file.c_str(), &st) == 0 && (S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode)))
     return "";  // written through, whatever its folder (/dev/stdout)

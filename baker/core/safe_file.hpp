@@ -72,8 +72,9 @@ class TempFolder {
 void write_file_atomically(const std::filesystem::path& final, std::string_view bytes);
 
 // A file a user names on the command line (hfbake horizon --out, bake --summary, compare --json): written
-// through when it is a stream, a FIFO or a character device, or a link to one (/dev/stdout, a shell's
-// >(...)), which a rename would replace; atomically (write_file_atomically) otherwise.
+// through when it is one of this process's descriptors by a link (/dev/stdout, /dev/fd/N, /proc/self/fd/N:
+// into the descriptor, whatever it is open on, at its offset), a FIFO or a character device, or a link to
+// one (a shell's >(...)), which a rename would replace; atomically (write_file_atomically) otherwise.
 // Folders of the path that do not exist yet are made first. Errors: std::system_error.
 void write_named_output(const std::filesystem::path& file, std::string_view bytes);
 

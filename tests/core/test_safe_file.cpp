@@ -67,6 +67,33 @@ TEST_F(SafeFile, NamedOutputsMakeTheirFoldersAndRefuseAPathUnderAFile) {
   fs::permissions(dir_ / "locked", fs::perms::owner_all);
 }
 
+// A descriptor of the process named by a link (/dev/stdout redirected to a file by a shell) is written
+// where it stands, at its offset: the file gets the bytes and the link stays; a read-only one is refused.
+TEST_F(SafeFile, ADescriptorNamedByALinkIsWrittenWhereItStands) {
+  const fs::path file = dir_ / "redirected";
+  const int fd = open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND, 0600);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(write(fd, "a\n", 2), 2);
+  const std::string by_fd = "/proc/self/fd/" + std::to_string(fd);
+  fs::create_symlink(by_fd, dir_ / "out");
+  EXPECT_EQ(named_output_folder_problem(dir_ / "out"), "");
+  write_named_output(dir_ / "out", "b\n");
+  write_named_output(by_fd, "c\n");
+  write_named_output("/dev/fd/" + std::to_string(fd), "d\n");
+  close(fd);
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir_ / "out")));
+  const auto text = [&] {
+    std::ifstream in(file);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(text(), "a\nb\nc\nd\n");
+  const int ro = open(file.c_str(), O_RDONLY);
+  ASSERT_GE(ro, 0);
+  EXPECT_THROW(write_named_output("/proc/self/fd/" + std::to_string(ro), "x"), std::system_error);
+  close(ro);
+  EXPECT_EQ(text(), "a\nb\nc\nd\n");
+}
+
 TEST_F(SafeFile, WriteFileAtomicallyReplacesALinkNotItsTarget) {
   std::ofstream(dir_ / "target") << "theirs";
   fs::create_symlink(dir_ / "target", dir_ / "out.json");

@@ -223,6 +223,16 @@ TEST(HorizonCli, OutputsNeverReplaceTheDemAndAreWrittenWhole) {
     EXPECT_TRUE(fs::is_fifo(fs::symlink_status(dir / "fifo")));
     EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "link")));
   }
+  // A link to the process's own standard output (as /dev/stdout is), redirected by the shell to a file,
+  // appended to: the CSV goes into that file after what it held, and the link stays a link.
+  fs::create_symlink("/proc/self/fd/1", dir / "stdout");
+  std::ofstream(dir / "redirected.csv") << "before\n";
+  const std::string cmd = std::string(HFBAKE_BINARY) + " " + at + "--out " + (dir / "stdout").string() +
+                          " >>" + (dir / "redirected.csv").string() + " 2>" + (dir / "err.txt").string();
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << bytes(dir / "err.txt");
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "stdout")));
+  EXPECT_EQ(bytes(dir / "redirected.csv").rfind("before\nazimuth_deg,elevation_deg", 0), 0u)
+      << bytes(dir / "redirected.csv");
   fs::remove_all(dir);
 }
 
