@@ -257,6 +257,10 @@ int run_init(const InitOptions& options) {
   if (fs::is_directory(job_file, ec))
     return refuse(job_file.string() + ": is a folder: --out names the job file to write (e.g. " +
                   (job_file / (job_name(height) + ".json")).string() + ")");
+  // A job file is a file of its own, beside which its relative paths resolve: never a stream, which a
+  // rename would replace (/dev/stdout with --force).
+  if (descriptor_named(job_file) >= 0 || (fs::exists(job_file, ec) && !fs::is_regular_file(job_file, ec)))
+    return refuse(job_file.string() + ": is not a file: --out names the job file to write");
   if (fs::exists(job_file, ec) && !options.force)
     return refuse(job_file.string() + ": exists (--force writes over it)");
   const fs::path job_dir = fs::absolute(job_file).parent_path();

@@ -255,10 +255,6 @@ void write_file_atomically(const fs::path& final, std::string_view bytes) {
   tmp.commit();
 }
 
-namespace {
-
-// The descriptor of this process that `file` names through its links (/dev/stdout -> /proc/self/fd/1,
-// /dev/fd/N, /proc/<this pid>/fd/N), or -1.
 int descriptor_named(const fs::path& file) {
   std::error_code ec;
   fs::path p = fs::absolute(file, ec);
@@ -279,6 +275,8 @@ int descriptor_named(const fs::path& file) {
   }
   return -1;
 }
+
+namespace {
 
 void write_all(int fd, std::string_view bytes, const fs::path& file) {
   for (std::size_t done = 0; done < bytes.size();) {

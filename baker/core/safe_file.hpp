@@ -78,6 +78,10 @@ void write_file_atomically(const std::filesystem::path& final, std::string_view 
 // Folders of the path that do not exist yet are made first. Errors: std::system_error.
 void write_named_output(const std::filesystem::path& file, std::string_view bytes);
 
+// The descriptor of this process that `file` names through its links (/dev/stdout -> /proc/self/fd/1,
+// /dev/fd/N, /proc/<this pid>/fd/N), or -1.
+int descriptor_named(const std::filesystem::path& file);
+
 // Why write_named_output could not write `file`, found before a command does its work: "" when it is a
 // stream written through, or when the nearest of its folders that exists is a folder this process can
 // write into (the missing ones below it are made when the file is written); else the problem, naming that

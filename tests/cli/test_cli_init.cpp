@@ -1,6 +1,8 @@
 // hfbake init: each preset's job validates and bakes, for an image and for a georeferenced raster; its
 // texel size and heights come from the file; --help lists the methods, their layers and the presets.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 
 #include <OpenImageIO/imageio.h>
 
@@ -267,6 +269,27 @@ TEST_F(CliInit, ForceReplacesALinkAndLeavesItsTarget) {
   EXPECT_EQ(read_json(dir_ / "link.json")["name"], "link");
   std::ifstream in(dir_ / "target.json");
   EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "kept");
+}
+
+// A job file is a file: a link to the process's standard output (as /dev/stdout is) redirected to a file,
+// and a FIFO, are refused even with --force, and stay what they are (a rename would have replaced them).
+TEST_F(CliInit, AStreamIsNoJobFile) {
+  write_png16(dir_ / "h.png");
+  fs::create_symlink("/proc/self/fd/1", dir_ / "stdout");
+  ASSERT_EQ(mkfifo((dir_ / "fifo").c_str(), 0600), 0);
+  for (const char* name : {"stdout", "fifo"}) {
+    const std::string cmd = std::string(HFBAKE_BINARY) + " init " + (dir_ / "h.png").string() +
+                            " --preset game-ao --force --out " + (dir_ / name).string() + " >" +
+                            (dir_ / "captured").string() + " 2>" + (dir_ / "err.txt").string();
+    const int status = std::system(cmd.c_str());
+    std::ifstream err(dir_ / "err.txt");
+    const std::string text{std::istreambuf_iterator<char>(err), {}};
+    EXPECT_EQ(WEXITSTATUS(status), 2) << text;
+    EXPECT_NE(text.find((dir_ / name).string() + ": is not a file"), std::string::npos) << text;
+  }
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir_ / "stdout")));
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(dir_ / "fifo")));
+  EXPECT_EQ(fs::file_size(dir_ / "captured"), 0u);
 }
 
 TEST_F(CliInit, HelpListsMethodsLayersAndPresets) {
