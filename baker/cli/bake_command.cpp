@@ -721,14 +721,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   // A summary written over a job, a suite or an input, or where a job writes (an output, its owner record,
   // its lock) or a suite its reports: refused before anything is baked (and no summary).
   if (options.summary) {
-    std::error_code dir_ec;
-    if (fs::is_directory(*options.summary, dir_ec)) {
-      std::fprintf(
-          stderr, "hfbake: error: %s\n",
-          printable(options.summary->string() + ": --summary: is a folder: name the file to write").c_str());
-      return 2;
-    }
-    if (const std::string why = named_output_folder_problem(*options.summary); !why.empty()) {
+    if (const std::string why = named_output_problem(*options.summary); !why.empty()) {
       std::fprintf(stderr, "hfbake: error: %s\n",
                    printable(options.summary->string() + ": --summary: " + why).c_str());
       return 2;

@@ -87,9 +87,7 @@ CompareResult compare_reports(const CompareOptions& o) {
   // anything is compared.
   if (o.json) {
     const fs::path& json = *o.json;
-    if (fs::is_directory(json, ec))
-      throw InputError(json.string(), "--json", "is a folder: name the file to write");
-    if (const std::string why = named_output_folder_problem(json); !why.empty())
+    if (const std::string why = named_output_problem(json); !why.empty())
       throw InputError(json.string(), "--json", why);
     const fs::path at = fs::weakly_canonical(fs::absolute(json), ec);
     auto is = [&](const fs::path& f) {

@@ -277,8 +277,7 @@ int run_horizon(const HorizonOptions& o) {
     for (const auto& [option, file] :
          {std::pair<std::string, std::string>{"--out", o.out}, {"--plot", o.plot}}) {
       if (file.empty()) continue;
-      if (fs::is_directory(file, ec)) throw InputError(file, option, "is a folder: name the file to write");
-      if (const std::string why = named_output_folder_problem(file); !why.empty())
+      if (const std::string why = named_output_problem(file); !why.empty())
         throw InputError(file, option, why);
       const fs::path out = fs::weakly_canonical(fs::absolute(file), ec);
       if (out == dem.front())

@@ -278,6 +278,12 @@ int descriptor_named(const fs::path& file) {
 
 namespace {
 
+// A FIFO or a character device, or a link to one: written through, never replaced by a rename.
+bool is_stream(const fs::path& file) {
+  struct stat st;
+  return stat(file.c_str(), &st) == 0 && (S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode));
+}
+
 void write_all(int fd, std::string_view bytes, const fs::path& file) {
   for (std::size_t done = 0; done < bytes.size();) {
     const ssize_t n = write(fd, bytes.data() + done, bytes.size() - done);
@@ -300,8 +306,7 @@ void write_named_output(const fs::path& file, std::string_view bytes) {
     write_all(fd, bytes, file);
     return;
   }
-  struct stat st;
-  if (stat(file.c_str(), &st) != 0 || !(S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode))) {
+  if (!is_stream(file)) {
     if (const fs::path dir = fs::absolute(file).parent_path(); !fs::exists(dir)) fs::create_directories(dir);
     write_file_atomically(file, bytes);
     return;
@@ -317,12 +322,10 @@ void write_named_output(const fs::path& file, std::string_view bytes) {
   if (close(fd) != 0 && errno != EINTR) throw system_error(errno, "cannot write " + file.string());
 }
 
-std::string named_output_folder_problem(const fs::path& file) {
-  if (descriptor_named(file) >= 0) return "";  // written where it stands
-  struct stat st;
-  if (stat(file.c_str(), &st) == 0 && (S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode)))
-    return "";  // written through, whatever its folder (/dev/stdout)
+std::string named_output_problem(const fs::path& file) {
+  if (descriptor_named(file) >= 0 || is_stream(file)) return "";  // written through, whatever its folder
   std::error_code ec;
+  if (fs::is_directory(file, ec)) return "is a folder: name the file to write";
   fs::path dir = fs::absolute(file, ec).parent_path();
   if (ec) return "cannot resolve the path: " + ec.message();
   while (fs::symlink_status(dir, ec).type() == fs::file_type::not_found && dir.has_relative_path())

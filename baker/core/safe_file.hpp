@@ -83,10 +83,10 @@ void write_named_output(const std::filesystem::path& file, std::string_view byte
 int descriptor_named(const std::filesystem::path& file);
 
 // Why write_named_output could not write `file`, found before a command does its work: "" when it is a
-// stream written through, or when the nearest of its folders that exists is a folder this process can
-// write into (the missing ones below it are made when the file is written); else the problem, naming that
-// folder.
-std::string named_output_folder_problem(const std::filesystem::path& file);
+// stream written through, or a name that is not a folder whose nearest existing folder is one this process
+// can write into (the missing ones below it are made when the file is written); else the problem (a
+// folder at the name, or the folder that is not one or cannot be written into, named).
+std::string named_output_problem(const std::filesystem::path& file);
 
 // Durability: what a rename puts in place survives a crash of the machine, not only of the process. A file's
 // bytes are flushed to the disk before it is renamed into place, and the folder after (fsync(2)).

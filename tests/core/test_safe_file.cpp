@@ -46,23 +46,23 @@ TEST_F(SafeFile, SyncFileFlushesAFileAndNeverFollowsALink) {
 // under a file or a dangling link is, naming it; a stream is written through whatever its folder.
 TEST_F(SafeFile, NamedOutputsMakeTheirFoldersAndRefuseAPathUnderAFile) {
   const fs::path deep = dir_ / "a" / "b" / "s.json";
-  EXPECT_EQ(named_output_folder_problem(deep), "");
+  EXPECT_EQ(named_output_problem(deep), "");
   write_named_output(deep, "{}\n");
   std::ifstream in(deep);
   EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "{}\n");
   std::ofstream(dir_ / "file") << "x";
-  EXPECT_EQ(named_output_folder_problem(dir_ / "file" / "c" / "s.json"),
+  EXPECT_EQ(named_output_problem(dir_ / "file" / "c" / "s.json"),
             (dir_ / "file").string() + " is not a folder");
   fs::create_symlink(dir_ / "nowhere", dir_ / "dangling");
-  EXPECT_EQ(named_output_folder_problem(dir_ / "dangling" / "s.json"),
+  EXPECT_EQ(named_output_problem(dir_ / "dangling" / "s.json"),
             (dir_ / "dangling").string() + " is not a folder");
   ASSERT_EQ(mkfifo((dir_ / "locked_fifo").c_str(), 0600), 0);
   fs::create_directory(dir_ / "locked");
   fs::create_symlink(dir_ / "locked_fifo", dir_ / "locked" / "out");
   fs::permissions(dir_ / "locked", fs::perms::owner_read | fs::perms::owner_exec);
-  EXPECT_EQ(named_output_folder_problem(dir_ / "locked" / "out"), "");  // a link to a FIFO: written through
-  if (geteuid() != 0) {                                                 // root writes into any folder
-    EXPECT_EQ(named_output_folder_problem(dir_ / "locked" / "s.json").rfind("cannot write into ", 0), 0u);
+  EXPECT_EQ(named_output_problem(dir_ / "locked" / "out"), "");  // a link to a FIFO: written through
+  if (geteuid() != 0) {                                          // root writes into any folder
+    EXPECT_EQ(named_output_problem(dir_ / "locked" / "s.json").rfind("cannot write into ", 0), 0u);
   }
   fs::permissions(dir_ / "locked", fs::perms::owner_all);
 }
@@ -76,7 +76,7 @@ TEST_F(SafeFile, ADescriptorNamedByALinkIsWrittenWhereItStands) {
   ASSERT_EQ(write(fd, "a\n", 2), 2);
   const std::string by_fd = "/proc/self/fd/" + std::to_string(fd);
   fs::create_symlink(by_fd, dir_ / "out");
-  EXPECT_EQ(named_output_folder_problem(dir_ / "out"), "");
+  EXPECT_EQ(named_output_problem(dir_ / "out"), "");
   write_named_output(dir_ / "out", "b\n");
   write_named_output(by_fd, "c\n");
   write_named_output("/dev/fd/" + std::to_string(fd), "d\n");
