@@ -5,7 +5,9 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
+#include <cstddef>
 #include <utility>
+#include <vector>
 
 #include "io/oiio_codec.hpp"
 
@@ -72,7 +74,7 @@ class Reader final : public OiioReader {
     const OIIO::TypeDesc t = type_of(as);
     const bool ok = h_.tile_width > 0 ? in_->read_tiles(0, 0, h_.x, h_.x + h_.width, h_.y + y0, h_.y + y1,
                                                         h_.z, h_.z + 1, c0, c1, t, dst)
-                                      : in_->read_scanlines(0, 0, h_.y + y0, h_.y + y1, h_.z, c0, c1, t, dst);
+                                      : read_scanlines(y0, y1, c0, c1, t, static_cast<char*>(dst));
     // Some readers report a short file only through the error state.
     if (ok && !in_->has_error()) return true;
     error = message(in_->geterror());
@@ -80,8 +82,38 @@ class Reader final : public OiioReader {
   }
 
  private:
+  // Rows [y0, y1) of channels [c0, c1) as type t, interleaved. Decoded as stored into a scratch band, then
+  // converted: ImageInput::read_scanlines converts through a buffer of whole strips sized from the file's
+  // RowsPerStrip, not its height, so a TIFF declaring strips of 2^30 rows in a 4-row image would need
+  // terabytes before a byte is read. Here the memory is the band's.
+  bool read_scanlines(int y0, int y1, int c0, int c1, OIIO::TypeDesc t, char* dst) {
+    const OIIO::ImageSpec& s = in_->spec();
+    const bool per_channel = !s.channelformats.empty();
+    if (!per_channel && s.format == t)
+      return in_->read_native_scanlines(0, 0, h_.y + y0, h_.y + y1, h_.z, c0, c1, dst);
+    const std::size_t rows = std::size_t(y1 - y0), width = std::size_t(s.width);
+    const std::size_t stored_pixel = s.pixel_bytes(c0, c1, true);
+    scratch_.resize(stored_pixel * width * rows);
+    if (!in_->read_native_scanlines(0, 0, h_.y + y0, h_.y + y1, h_.z, c0, c1, scratch_.data())) return false;
+    const OIIO::stride_t out_pixel = OIIO::stride_t(t.size()) * (c1 - c0);
+    // Runs of channels stored in one type are converted together.
+    for (int c = c0; c < c1;) {
+      const OIIO::TypeDesc from = per_channel ? s.channelformats[std::size_t(c)] : s.format;
+      int n = 1;
+      while (per_channel && c + n < c1 && s.channelformats[std::size_t(c + n)] == from) ++n;
+      if (!OIIO::convert_image(n, s.width, int(rows), 1, scratch_.data() + s.pixel_bytes(c0, c, true), from,
+                               OIIO::stride_t(stored_pixel), OIIO::stride_t(stored_pixel * width),
+                               OIIO::AutoStride, dst + std::size_t(c - c0) * t.size(), t, out_pixel,
+                               out_pixel * OIIO::stride_t(width), OIIO::AutoStride))
+        return false;
+      c += n;
+    }
+    return true;
+  }
+
   std::unique_ptr<OIIO::ImageInput> in_;
   OiioHeader h_;
+  std::vector<char> scratch_;
 };
 
 std::unique_ptr<OiioReader> open(const std::string& path, const std::string& reader, std::string& error) {

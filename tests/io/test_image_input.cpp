@@ -507,6 +507,52 @@ TEST(ImageInput, BandedChannelReadEqualsTheWholeImageRead) {
   }
 }
 
+// Sets a little-endian TIFF's RowsPerStrip (tag 278) to rows, stored as a LONG.
+void set_rows_per_strip(const fs::path& file, std::uint32_t rows) {
+  std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+  auto get = [&](std::streamoff at, int bytes) {
+    unsigned char b[4] = {};
+    f.seekg(at);
+    f.read(reinterpret_cast<char*>(b), bytes);
+    return std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 | std::uint32_t(b[2]) << 16 |
+           std::uint32_t(b[3]) << 24;
+  };
+  auto put = [&](std::streamoff at, std::uint32_t v, int bytes) {
+    const char b[4] = {char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+    f.seekp(at);
+    f.write(b, bytes);
+  };
+  ASSERT_EQ(get(0, 2), 0x4949u) << "a little-endian TIFF";
+  const std::streamoff ifd = get(4, 4);
+  const std::uint32_t entries = get(ifd, 2);
+  for (std::uint32_t i = 0; i < entries; ++i) {
+    const std::streamoff e = ifd + 2 + 12 * std::streamoff(i);
+    if (get(e, 2) != 278) continue;
+    put(e + 2, 4, 2);  // LONG
+    put(e + 8, rows, 4);
+    return;
+  }
+  FAIL() << "no RowsPerStrip in " << file;
+}
+
+// A strip may be taller than the image (the TIFF default is 2^32 - 1 rows: one strip). Reading such a file
+// takes the memory of the image, not of the strip it declares. The truth: the integers written.
+TEST(ImageInput, AStripTallerThanTheImageIsReadInTheImagesMemory) {
+  TempFolder dir;
+  const int w = 4096, h = 8;
+  const auto px = noise(std::size_t(w) * h * 3, 11);
+  write_test_image(dir / "tall.tif", w, h, 3, px, OIIO::TypeDesc::UINT16);
+  set_rows_per_strip(dir / "tall.tif", std::uint32_t(1) << 30);
+  const Image img = read_image(dir / "tall.tif", kSite);
+  ASSERT_EQ(img.pixels.size(), px.size());
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < px.size(); ++i)
+    differ += std::round(img.pixels[i] * 65535.f) != std::round(px[i] * 65535.f);
+  EXPECT_EQ(differ, 0u);
+  const Plane p = read_image_channel(dir / "tall.tif", 2, kSite, kChannelSite);
+  EXPECT_EQ(p.values[5], std::round(px[5 * 3 + 2] * 65535.f));
+}
+
 TEST(ImageInput, TruncatedBigPngIsAOneLineErrorNamingTheFile) {
   TempFolder dir;
   const int w = 1024, h = 1024;
