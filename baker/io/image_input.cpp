@@ -10,6 +10,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <memory>
+#include <mutex>
 #include <optional>
 
 #include "core/error.hpp"
@@ -200,6 +201,59 @@ const char* reader_for(const fs::path& file, const InputSite& site) {
            "); convert it, e.g. oiiotool FILE -o FILE.exr");
 }
 
+// The image libraries' own printing while an image is opened or decoded: libpng's default error handler
+// writes "libpng error: IDAT: Read error", and libtiff's warnings reach GDAL's handler once GDAL is loaded,
+// which prints "Warning 1: ...". stderr goes to a temporary file while any scope is open (scopes nest and
+// may overlap across threads: the first redirects, the last restores), and only hfbake's own lines (another
+// thread's progress) are printed after. What the library meant is in hfbake's one-line error (OpenImageIO's
+// geterror()).
+class LibraryStderr {
+ public:
+  LibraryStderr() {
+    const std::lock_guard lock(state().mutex);
+    State& st = state();
+    if (st.depth++ > 0) return;
+    std::fflush(stderr);
+    st.captured = std::tmpfile();
+    st.saved = st.captured ? dup(STDERR_FILENO) : -1;
+    if (st.saved >= 0 && dup2(fileno(st.captured), STDERR_FILENO) < 0) {
+      close(st.saved);
+      st.saved = -1;
+    }
+  }
+  ~LibraryStderr() {
+    const std::lock_guard lock(state().mutex);
+    State& st = state();
+    if (--st.depth > 0) return;
+    if (st.saved >= 0) {
+      std::fflush(stderr);
+      dup2(st.saved, STDERR_FILENO);
+      close(st.saved);
+      std::rewind(st.captured);
+      char line[4096];
+      while (std::fgets(line, sizeof line, st.captured))
+        if (std::strncmp(line, "hfbake", 6) == 0) std::fputs(line, stderr);
+    }
+    if (st.captured) std::fclose(st.captured);
+    st.captured = nullptr;
+    st.saved = -1;
+  }
+  LibraryStderr(const LibraryStderr&) = delete;
+  LibraryStderr& operator=(const LibraryStderr&) = delete;
+
+ private:
+  struct State {
+    std::mutex mutex;
+    int depth = 0;
+    std::FILE* captured = nullptr;
+    int saved = -1;
+  };
+  static State& state() {
+    static State s;
+    return s;
+  }
+};
+
 std::unique_ptr<OiioReader> open_input(const fs::path& file, const InputSite& site) {
   std::error_code ec;
   if (!fs::exists(file, ec)) fail(site, file, "no such file");
@@ -299,6 +353,7 @@ std::string lower(std::string s) {
 }  // namespace
 
 ImageInfo probe_image(const fs::path& file, const InputSite& site) {
+  const LibraryStderr quiet;
   auto in = open_input(file, site);
   const OiioHeader& spec = in->header();
   check_spec(spec, file, site);
@@ -397,41 +452,6 @@ bool unstretch(const Stretch& s, float* v, std::size_t n) {
   }
   return true;
 }
-
-// The image libraries' own printing while an image is decoded (libpng's default error handler writes
-// "libpng error: IDAT: Read error" to stderr before OpenImageIO reports the failure): stderr goes to a
-// temporary file for the scope, and only hfbake's own lines (another thread's progress) are printed after.
-// What the library meant is in hfbake's one-line error (OpenImageIO's geterror()).
-class LibraryStderr {
- public:
-  LibraryStderr() {
-    std::fflush(stderr);
-    captured_ = std::tmpfile();
-    saved_ = captured_ ? dup(STDERR_FILENO) : -1;
-    if (saved_ >= 0 && dup2(fileno(captured_), STDERR_FILENO) < 0) {
-      close(saved_);
-      saved_ = -1;
-    }
-  }
-  ~LibraryStderr() {
-    if (saved_ >= 0) {
-      std::fflush(stderr);
-      dup2(saved_, STDERR_FILENO);
-      close(saved_);
-      std::rewind(captured_);
-      char line[4096];
-      while (std::fgets(line, sizeof line, captured_))
-        if (std::strncmp(line, "hfbake", 6) == 0) std::fputs(line, stderr);
-    }
-    if (captured_) std::fclose(captured_);
-  }
-  LibraryStderr(const LibraryStderr&) = delete;
-  LibraryStderr& operator=(const LibraryStderr&) = delete;
-
- private:
-  std::FILE* captured_ = nullptr;
-  int saved_ = -1;
-};
 
 // Decodes channels [chbegin, chend) (clamped to the image's) as floats, interleaved, a band of rows at a time
 // straight into the result (bands of whole tile rows for a tiled file, else of about 4 MiB of floats and at

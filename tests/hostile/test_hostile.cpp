@@ -392,6 +392,21 @@ std::vector<Case> cases() {
     j["environment"] = {{"latlong", "sky.exr"}};
     return both(write_job(d, j), "/environment/latlong", "pixel (7, 2) is negative");
   });
+  add("CrossTiffWithStripsTallerThanTheImage", [](const fs::path& d) {  // found by fuzz_environment
+    // 65535x4 float RGB declaring 65311-row strips (reading it allocated 51 GB) and tags past its end
+    // (libtiff's warnings, printed by GDAL's handler once GDAL is loaded). The seed's first byte is the
+    // harness's layout selector.
+    std::ifstream in(
+        fs::path(HFBAKE_SOURCE_DIR) / "tests/fuzz/regressions/environment/tiff_strip_taller_than_the_image",
+        std::ios::binary);
+    const std::string bytes{std::istreambuf_iterator<char>(in), {}};
+    write_text(d, bytes.substr(1), "sky.tif");
+    write_image(d / "h.exr", 16, 16, 1, std::vector<float>(16 * 16, 1.0f));  // an image height loads GDAL
+    json j = base_job();
+    j["height"] = {{"image", "h.exr"}};
+    j["environment"] = {{"cross", "sky.tif"}};
+    return both(write_job(d, j), "/environment/cross", "cannot decode the image");
+  });
   add("LatlongPixelInf", [](const fs::path& d) {
     std::vector<float> px(16 * 8 * 3, 1.0f);
     px[5] = std::numeric_limits<float>::infinity();
