@@ -188,7 +188,8 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
     // palette's other colours are not read through GDAL.
     const int* index = std::get_if<int>(&channel);
     const std::string* name = std::get_if<std::string>(&channel);
-    if (!((index && *index == 0) || (name && *name == "R")))
+    if (!(std::holds_alternative<FirstNonAlphaChannel>(channel) || (index && *index == 0) ||
+          (name && *name == "R")))
       throw InputError(
           job.file.string(), "/height/channel",
           job.resolve(image).string() +
@@ -196,6 +197,11 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job) {
               "whose heights are its palette's red (channel 0 or \"R\"): for another colour, "
               "expand it first (gdal_translate -expand rgb)");
     band = 0;
+  } else if (std::holds_alternative<FirstNonAlphaChannel>(channel)) {
+    // GDAL names a band's role by its colour interpretation ("A": alpha).
+    band = 0;
+    for (int b = geo->bands - 1; b >= 0; --b)
+      if (geo->band_colours[std::size_t(b)] != "A") band = b;
   } else if (const int* index = std::get_if<int>(&channel)) {
     if (*index < geo->bands) band = *index;
   } else {

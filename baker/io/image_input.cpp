@@ -512,13 +512,26 @@ Image read_image(const fs::path& file, const InputSite& site) {
 ChannelSelector channel_selector(const nlohmann::json& value) {
   if (value.is_string()) return value.get<std::string>();
   if (value.is_number_integer()) return value.get<int>();
-  return 0;
+  return FirstNonAlphaChannel{};
+}
+
+bool is_alpha_channel_name(const std::string& name) {
+  const std::string n = lower(name);
+  const auto ends = [&](const std::string& tail) {
+    return n.size() >= tail.size() && n.compare(n.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  return n == "a" || n == "alpha" || ends(".a") || ends(".alpha");
 }
 
 int find_channel(const ImageInfo& info, const ChannelSelector& channel, const fs::path& file,
                  const InputSite& channel_site) {
   std::string names;
   for (const std::string& n : info.channel_names) names += (names.empty() ? "" : ", ") + n;
+  if (std::holds_alternative<FirstNonAlphaChannel>(channel)) {
+    for (int c = 0; c < info.channels; ++c)
+      if (!is_alpha_channel_name(info.channel_names[std::size_t(c)])) return c;
+    return 0;
+  }
   if (const int* index = std::get_if<int>(&channel)) {
     if (*index >= 0 && *index < info.channels) return *index;
     fail(channel_site, file,

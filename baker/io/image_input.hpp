@@ -44,12 +44,21 @@ struct Image {
 };
 Image read_image(const std::filesystem::path& file, const InputSite& site);
 
+// No channel named: the first channel that is not an alpha channel (named A or alpha, or ending in .A or
+// .alpha, in any case), channel 0 when every one is. An EXR stores its channels sorted by name, so a depth
+// map with alpha lists A before Z.
+struct FirstNonAlphaChannel {
+  bool operator==(const FirstNonAlphaChannel&) const = default;
+};
 // A channel chosen by index (0-based) or by name ("R", "Y", "height.Z"; exact match first, then
-// case-insensitive).
-using ChannelSelector = std::variant<int, std::string>;
+// case-insensitive), or the default.
+using ChannelSelector = std::variant<int, std::string, FirstNonAlphaChannel>;
 
-// A job's "channel" value (integer index or string name; null / absent = channel 0).
+// A job's "channel" value (integer index or string name; null / absent = FirstNonAlphaChannel).
 ChannelSelector channel_selector(const nlohmann::json& value);
+
+// Whether a channel's name marks it as alpha (FirstNonAlphaChannel's rule).
+bool is_alpha_channel_name(const std::string& name);
 
 // The channel's index in `info`, or InputError at `channel_site` naming the file and listing its channels.
 int find_channel(const ImageInfo& info, const ChannelSelector& channel, const std::filesystem::path& file,

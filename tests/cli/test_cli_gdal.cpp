@@ -1257,6 +1257,35 @@ TEST_F(CliGdal, APngReadsTheSameHeightsWithAWorldFile) {
       << t.err;
 }
 
+// Without "channel", a band GDAL declares alpha is passed over: a GeoTIFF whose first band is alpha (255
+// everywhere) bakes its second. Named, the alpha band is read.
+TEST_F(CliGdal, WithoutAChannelAnAlphaBandIsPassedOver) {
+  GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+  const int w = 32, h = 24;
+  GDALDataset* ds = gtiff->Create((dir_ / "ab.tif").c_str(), w, h, 2, GDT_Float32, nullptr);
+  ASSERT_TRUE(ds);
+  std::vector<float> alpha(std::size_t(w) * h, 255.0f), z(std::size_t(w) * h);
+  for (std::size_t t = 0; t < z.size(); ++t) z[t] = 3.0f + float(t % 7) * 0.5f;  // 3 .. 6
+  ds->GetRasterBand(1)->SetColorInterpretation(GCI_AlphaBand);
+  ds->GetRasterBand(2)->SetColorInterpretation(GCI_GrayIndex);
+  ASSERT_EQ(
+      ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, w, h, alpha.data(), w, h, GDT_Float32, 0, 0, nullptr),
+      CE_None);
+  ASSERT_EQ(ds->GetRasterBand(2)->RasterIO(GF_Write, 0, 0, w, h, z.data(), w, h, GDT_Float32, 0, 0, nullptr),
+            CE_None);
+  double gt[6] = {500000, 1, 0, 5000024, 0, -1};
+  ds->SetGeoTransform(gt);
+  GDALClose(ds);
+  const Result r = hfbake("validate " + write_job("ab.json", "ab", {{"image", "ab.tif"}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("band 2 of 2"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("heights 3 .. 6 world units"), std::string::npos) << r.err;
+  const Result named =
+      hfbake("validate " + write_job("a0.json", "a0", {{"image", "ab.tif"}, {"channel", 0}}).string());
+  ASSERT_EQ(named.exit_code, 0) << named.err;
+  EXPECT_NE(named.err.find("band 1 of 2"), std::string::npos) << named.err;
+}
+
 // A palette GeoTIFF's NoData index marks holes, and only those: an index whose colour's red equals the
 // NoData index is a height like any other.
 TEST_F(CliGdal, APalettesNoDataIndexIsTheOnlyHole) {

@@ -420,6 +420,48 @@ TEST(ImageInput, WrongChannel) {
   EXPECT_EQ(read_image_channel(f, channel_selector(nlohmann::json()), kSite, kChannelSite).values[0], 0.0f);
 }
 
+// No channel named: the first that is not alpha. An EXR stores its channels sorted by name (A before Z);
+// the truth is the value each channel was written with.
+TEST(ImageInput, WithoutAChannelTheFirstThatIsNotAlphaIsRead) {
+  TempFolder dir;
+  struct Case {
+    std::vector<std::string> names;
+    float expect;  // channel c is written as 10 c + 1 everywhere
+  };
+  const Case cases[] = {{{"A", "Z"}, 11},
+                        {{"Z", "A"}, 1},
+                        {{"alpha", "depth"}, 11},
+                        {{"height.A", "height.Z"}, 11},
+                        {{"Y", "A"}, 1},
+                        {{"R", "G", "B", "A"}, 1},
+                        {{"A"}, 1},
+                        {{"a", "Alpha"}, 1}};  // all alpha: channel 0 as the reader lists them
+  for (const Case& c : cases) {
+    const int nc = int(c.names.size());
+    std::vector<float> px(std::size_t(4 * 3 * nc));
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = float(10 * (i % std::size_t(nc)) + 1);
+    write_test_image(dir / "d.exr", 4, 3, nc, px, OIIO::TypeDesc::FLOAT, c.names);
+    // Which channel holds which value as stored: the reader lists them in the file's order.
+    const ImageInfo info = probe_image(dir / "d.exr", kSite);
+    const int c0 = find_channel(info, channel_selector(nlohmann::json()), dir / "d.exr", kChannelSite);
+    const Plane p =
+        read_image_channel(dir / "d.exr", channel_selector(nlohmann::json()), kSite, kChannelSite);
+    const std::string& read = info.channel_names[std::size_t(c0)];
+    EXPECT_TRUE(!is_alpha_channel_name(read) ||
+                std::all_of(c.names.begin(), c.names.end(),
+                            [](const std::string& n) { return is_alpha_channel_name(n); }))
+        << read;
+    const auto written = std::find(c.names.begin(), c.names.end(), read) - c.names.begin();
+    EXPECT_EQ(p.values[5], float(10 * written + 1)) << read;
+    EXPECT_EQ(p.values[5], c.expect) << read;
+    // Named or by index, alpha is still read.
+    EXPECT_EQ(read_image_channel(dir / "d.exr", 0, kSite, kChannelSite).values.size(), 12u);
+  }
+  EXPECT_FALSE(is_alpha_channel_name("Z"));
+  EXPECT_FALSE(is_alpha_channel_name("height.AZ"));
+  EXPECT_TRUE(is_alpha_channel_name("rgba.A"));
+}
+
 TEST(ImageInput, RgbImagesConvertFromTheirDefaultColourSpace) {
   TempFolder dir;
   // 8-bit defaults to sRGB: 128/255 -> ((128/255 + 0.055) / 1.055)^2.4.
