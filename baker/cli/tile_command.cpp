@@ -557,8 +557,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
                 read_georaster_window(file, c, 0, 0, info->width, info->height, {});  // names the file
             for (std::size_t t = 0; t < plane.values.size(); ++t)
               texels[t * std::size_t(nc) + std::size_t(c)] = plane.values[t];
-            const std::string& band_name = info->band_names[std::size_t(c)];
-            channels.push_back(band_name.substr(std::min(band_name.size(), name.size() + 1)));
+            channels.push_back(geotiff_band_channel(name, info->band_names[std::size_t(c)]));
           }
           if (tile_checksum(texels) != georaster_metadata_item(file, "HFBAKE_TILE_SUM"))
             throw InputError(file.string(), "",

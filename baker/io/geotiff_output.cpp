@@ -80,6 +80,16 @@ void copy_to_cog(const fs::path& file, GDALDataset& source) {
 
 }  // namespace
 
+std::string geotiff_band_description(const std::string& layer, const std::vector<std::string>& channels,
+                                     int c) {
+  return channels.size() == 1 ? layer : layer + "." + channels[std::size_t(c)];
+}
+
+std::string geotiff_band_channel(const std::string& layer, const std::string& description) {
+  if (description == layer) return mono_channels().front();
+  return description.substr(std::min(description.size(), layer.size() + 1));
+}
+
 void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& layer, const Georeference& geo,
                    const GeoTiffOptions& options) {
   const int w = layers.width, h = layers.height, nc = layer.channel_count();
@@ -116,7 +126,7 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
     if (mem->AddBand(GDT_Float32, const_cast<char**>(band_options)) != CE_None)
       fail("cannot make the raster in memory: " + gdal.error());
     GDALRasterBand* band = mem->GetRasterBand(c + 1);
-    band->SetDescription((layer.name + "." + layer.channels[std::size_t(c)]).c_str());
+    band->SetDescription(geotiff_band_description(layer.name, layer.channels, c).c_str());
     if (holes) band->SetNoDataValue(kGeoTiffNodata);
   }
   set_georeference(*mem, geo, options, fail);
@@ -160,7 +170,7 @@ TiledGeoTiff::TiledGeoTiff(const fs::path& work, int width, int height, const st
                                     const_cast<char**>(create_options)));
   if (!dataset_->ds) fail("cannot create the work file: " + gdal.error());
   for (int c = 0; c < channels_; ++c)
-    dataset_->ds->GetRasterBand(c + 1)->SetDescription((layer + "." + channels[std::size_t(c)]).c_str());
+    dataset_->ds->GetRasterBand(c + 1)->SetDescription(geotiff_band_description(layer, channels, c).c_str());
   set_georeference(*dataset_->ds, geo, options, fail);
 }
 

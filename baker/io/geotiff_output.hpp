@@ -22,7 +22,14 @@ struct GeoTiffOptions {
   std::vector<std::pair<std::string, std::string>> metadata;
 };
 
-// `layer` of `layers` as <file>: one float32 band per channel (band description "<layer>.<suffix>"),
+// A band's description: the layer's name for a one-channel layer ("ao"), "<layer>.<channel>" for each band
+// of a layer of several ("direct.R", "horizon.000"); and back, the channel a band described so holds
+// (a one-channel layer's: its only channel, mono_channels()).
+std::string geotiff_band_description(const std::string& layer, const std::vector<std::string>& channels,
+                                     int c);
+std::string geotiff_band_channel(const std::string& layer, const std::string& description);
+
+// `layer` of `layers` as <file>: one float32 band per channel (described by geotiff_band_description),
 // DEFLATE (level 1) with the floating-point predictor, 512x512 tiles, overviews (average) as the COG driver
 // makes them; the CRS and geotransform of `geo`; texels marked in geo.holes (when not empty) are NoData
 // (kGeoTiffNodata, declared on every band) and the NoData tag is written only then. Written under a

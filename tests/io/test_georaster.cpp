@@ -164,7 +164,7 @@ TEST(GeoTiffOutput, CogWithTheInputsCrsGeotransformAndNodata) {
   }
   const nlohmann::json ao = gdalinfo_json(tmp / "t.ao.tif");
   EXPECT_EQ(ao["bands"].size(), 1u);
-  EXPECT_EQ(ao["bands"][0]["description"], "ao.Y");
+  EXPECT_EQ(ao["bands"][0]["description"], "ao");
   EXPECT_EQ(ao["metadata"][""]["HFBAKE_METHOD"], "p1");
   const nlohmann::json direct = gdalinfo_json(tmp / "t.direct.tif");
   ASSERT_EQ(direct["bands"].size(), 3u);
@@ -410,6 +410,19 @@ TEST(GeoTiffOutput, WindowedCogHoldsEveryWindowAsWritten) {
     for (std::size_t t = 0; t < v.size(); ++t)
       ASSERT_EQ(v[t], truth[t * nc + std::size_t(c)]) << "band " << c << " texel " << t;
   }
+  // A one-channel layer's band is described by the layer's name, and read back as its channel; a band of
+  // several, or one written as "<layer>.Y", by its suffix.
+  {
+    TiledGeoTiff one(tmp / "work1.tif", 8, 4, "svf", mono_channels(), geo, options);
+    one.write(0, 0, 8, 4, truth.data(), 8);
+    one.finish(tmp / "svf.tif");
+  }
+  std::unique_ptr<GDALDataset> svf(GDALDataset::Open((tmp / "svf.tif").c_str(), GDAL_OF_RASTER));
+  ASSERT_TRUE(svf);
+  EXPECT_STREQ(svf->GetRasterBand(1)->GetDescription(), "svf");
+  EXPECT_EQ(geotiff_band_channel("svf", "svf"), mono_channels().front());
+  EXPECT_EQ(geotiff_band_channel("svf", "svf.Y"), "Y");
+  EXPECT_EQ(geotiff_band_channel("bent", "bent.Z"), "Z");
 }
 
 }  // namespace
