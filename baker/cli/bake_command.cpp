@@ -74,16 +74,19 @@ std::string budget_text(std::optional<std::size_t> limit, const std::string& lim
 std::string memory_parts_text(const std::vector<MemoryPart>& parts) {
   std::string t;
   int entries = 0;
-  bool environment = false;
+  bool environment = false, libraries = false;
   for (const MemoryPart& p : parts) {
     t += (t.empty() ? "" : ", ") + p.name + " " + gib(p.bytes);
     entries += p.entry ? 1 : 0;
     environment = environment || p.name == "environment";
+    libraries = libraries || p.name == kImageLibrariesPart;
   }
   if (entries > 1 || environment)
     t += entries > 1 ? "; the entries run one at a time, so the largest counts"
                      : "; the environment is read before the bake";
   if (entries > 1 && environment) t += ", the environment before them";
+  if (libraries)
+    t += "; the image libraries load once the first entry has run, to write its previews or textures";
   return t;
 }
 

@@ -138,39 +138,52 @@ int job_bounces(const Job& job) {
 
 namespace {
 
-// Whether a bake of the job loads the image module (io/oiio_codec.hpp) before a reference traces: an input
-// file OpenImageIO reads (heights that are not a georeferenced raster, an albedo or emission image, an
-// environment map), a PNG preview or an engine texture (written after each method). A reference alone
-// loads it after its tracing, for report.html's images.
-bool loads_image_module_early(const Job& job, const FieldSize& size) {
-  if (job.output.previews && !size.tile) return true;  // a tiled bake writes no previews
-  if (size.image_values) return true;
-  const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
-  if (output.contains("textures") && !output["textures"].empty()) return true;
-  for (const auto& [pointer, file] : job_input_files(job.doc))
-    if (pointer != "/height/image" || !size.georaster) return true;
-  return false;
-}
-
 // Whether a bake of the job reads or writes through GDAL: heights from a georeferenced raster, GeoTIFF
 // outputs.
 bool uses_gdal(const Job& job, const FieldSize& size) {
   return job.output.geotiff || size.georaster;
 }
 
+// Whether a bake of the job loads the image module (io/oiio_codec.hpp) before its first method runs: an
+// input file OpenImageIO reads (heights that are not a georeferenced raster, an albedo or emission image, an
+// environment map).
+bool reads_images(const Job& job, const FieldSize& size) {
+  if (size.image_values) return true;
+  for (const auto& [pointer, file] : job_input_files(job.doc))
+    if (pointer != "/height/image" || !size.georaster) return true;
+  return false;
+}
+
+// Whether it loads it to write a method's results: a PNG preview or an engine texture, written once the
+// method has run (its working memory freed). A reference alone loads it after its tracing, for
+// report.html's images.
+bool writes_images(const Job& job, const FieldSize& size) {
+  if (job.output.previews && !size.tile) return true;  // a tiled bake writes no previews
+  const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
+  return output.contains("textures") && !output["textures"].empty();
+}
+
+// The process before its first method has written anything (kProcessBytes, kGdalProcessBytes or
+// kImageProcessBytes, by the libraries loaded by then).
+double process_before_writing(const Job& job, const FieldSize& size) {
+  return reads_images(job, size) ? kImageProcessBytes
+         : uses_gdal(job, size)  ? kGdalProcessBytes
+                                 : kProcessBytes;
+}
+
 }  // namespace
 
 std::size_t estimate_process_bytes(const Job& job, FieldSize size) {
-  return std::size_t(loads_image_module_early(job, size) ? kImageProcessBytes
-                     : uses_gdal(job, size)              ? kGdalProcessBytes
-                                                         : kProcessBytes);
+  return std::size_t(writes_images(job, size) ? kImageProcessBytes : process_before_writing(job, size));
 }
 
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts) {
   const double texels = double(size.width) * double(size.height);
-  // The process before any field, while the methods run and a reference traces; a reference's report adds
-  // OpenImageIO's libraries after the tracing (below).
-  const double process = double(estimate_process_bytes(job, size));
+  // The process before any field, while the first method runs; the image module's libraries come in (lift)
+  // when that method's previews or textures are written, and stay for the methods after it and a reference;
+  // a reference's report adds them after the tracing when nothing loaded them before (below).
+  const double process = process_before_writing(job, size);
+  const double lift = double(estimate_process_bytes(job, size)) - process;
   // The scene: heights (decoded straight into the field), the normals only when read (scene_needs), the
   // surface maps the job names.
   const SceneNeeds needs = scene_needs(job);
@@ -242,10 +255,14 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double exr_band =
         size.tile ? 2.0 * channels * std::min(texels, 256.0 * size.width)
                   : exr_writing_bytes(size.width, size.height, half_channels, float_channels, exr);
-    const double entry = layers + std::max({working, writing(widest), exr_band});
+    const double before = &e == &job.bakes.front() ? 0.0 : lift;  // the libraries, once loaded
+    const double entry = layers + std::max(before + working, lift + std::max(writing(widest), exr_band));
     peak = std::max(peak, kept + entry);
     if (job.has_reference) kept += layers;
-    if (parts) parts->push_back({e.stem, std::size_t(entry), m->memory_knob, true});
+    // The entry's own part, without the image libraries (their own part below).
+    if (parts)
+      parts->push_back({e.stem, std::size_t(layers + std::max({working, writing(widest), exr_band})),
+                        m->memory_knob, true});
     auto traced = [&](const std::string& l, LayerTrace t) {
       const LayerKind* k = find_layer_kind(l);
       return k && k->trace == t;
@@ -282,8 +299,10 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     // Its widest layer: direct (3 channels) or the horizons it traces; then report.html's images, after the
     // tracing (Embree's scene freed): OpenImageIO's libraries beside the layers, when nothing loaded them
     // before. Its part is the larger.
-    reference = std::max(reference + writing(std::max(3, horizon_channels / 2)),
-                         process < kImageProcessBytes ? layers + kImageProcessBytes - process : 0.0);
+    reference =
+        lift +
+        std::max(reference + writing(std::max(3, horizon_channels / 2)),
+                 process + lift < kImageProcessBytes ? layers + kImageProcessBytes - process - lift : 0.0);
     peak = std::max(peak, kept + reference);
   }
   // The environment's images are read and resampled before any method runs, when nothing of the bake is
@@ -297,11 +316,15 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double field_part = scene - process;
     parts->insert(parts->begin(),
                   {"scene", std::size_t(scene), field_part > process ? "a smaller field" : ""});
+    if (lift > 0)
+      parts->insert(parts->begin() + 1,
+                    {std::string(kImageLibrariesPart), std::size_t(lift),
+                     "no previews or textures (OpenImageIO's libraries load to write them)"});
     if (env.loading > 0)
       parts->push_back({"environment", std::size_t(env.loading),
                         "a smaller environment image (24 bytes a pixel while it is read)"});
     if (job.has_reference)
-      parts->push_back({"reference", std::size_t(reference),
+      parts->push_back({"reference", std::size_t(reference - lift),
                         "fewer reference.layers (8 bytes a texel a channel; the sample count does not change "
                         "it) or bounces"});
   }

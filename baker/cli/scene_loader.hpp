@@ -48,6 +48,9 @@ struct MemoryPart {
   bool entry = false;  // a bake entry's
 };
 std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<MemoryPart>* parts = nullptr);
+// The part of the image module's libraries, when a job loads them only to write previews or textures: after
+// its first entry has run, whose working memory is freed by then, so not simply added to it.
+inline constexpr const char* kImageLibrariesPart = "image libraries";
 // The process itself, before any field: libraries and thread pools (measured: 45 MiB for a 16^2 bake);
 // with GDAL's drivers and cache, when the job reads or writes through it (55 MiB reading a 64 x 48 PNG with
 // a world file, 61 MiB reading a 16^2 GeoTIFF, 70 MiB also writing COGs: the constant is the middle one, the

@@ -716,6 +716,26 @@ TEST_F(Cli, TheReferencesMemoryEstimateHoldsForQuadsAndTheGrid) {
   }
 }
 
+// Previews and textures load OpenImageIO's libraries (about 100 MiB) only once the first entry has run, when
+// its working memory is freed: the estimate counts them beside what is written, not beside the bake. A 1024^2
+// p1 bake writing a texture (heights with no image to read) against its measured peak, as above.
+TEST_F(Cli, TheMemoryEstimateHoldsWhenOnlyTexturesLoadTheImageLibraries) {
+  nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {1024, 1024}}, {"seed", 3}}}},
+                         {{{"method", "p1"}, {"directions", 16}, {"layers", {"ao", "bent_normal", "vsky"}}}});
+  j["output"]["textures"] = {{{"layers", {"ao"}}, {"bits", 8}, {"format", "tga"}}};
+  const fs::path p = write_job("textures.json", j);
+  const Result v = hfbake("validate " + p.string());
+  EXPECT_NE(v.err.find("image libraries"), std::string::npos) << v.err;
+  const double estimate = cli_test::validate_estimate_mib(dir_, p);
+  ASSERT_GT(estimate, 0);
+  const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_GT(run.peak_mib, 0.75 * estimate)
+      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  EXPECT_LT(run.peak_mib, 1.25 * estimate)
+      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+}
+
 // p1's memory estimate on a repeat field against the measured peak (as above): there the strip search's sweep
 // of one direction block (FarHorizonWorker's two floats a texel and direction) is the largest part beyond the
 // layers and the block's sums. A non-square field, K = 8 (a direction a block), ao alone.
