@@ -285,8 +285,8 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   double reference = 0;
   if (job.has_reference) {
     // Its layers (value and standard error, 8 bytes a texel and channel) and Embree's geometry and BVH of
-    // the triangulated field (reference/embree_field.hpp: 54 to 194 bytes a texel by reference.geometry,
-    // and up to 115 MiB that do not grow with the field).
+    // the triangulated field (reference/embree_field.hpp: 36 to 212 bytes a texel by reference.geometry,
+    // and up to 16 MiB that do not grow with the field).
     int channels = 0;
     if (job.reference_options)
       for (const std::string& l : job.reference_options->layers) channels += layer_channel_count(l, 0);
@@ -297,12 +297,11 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     reference = layers + reference::embree_bytes_per_texel(geometry) * texels +
                 reference::embree_fixed_bytes(geometry);
     // Its widest layer: direct (3 channels) or the horizons it traces; then report.html's images, after the
-    // tracing (Embree's scene freed): OpenImageIO's libraries beside the layers, when nothing loaded them
-    // before. Its part is the larger.
-    reference =
-        lift +
-        std::max(reference + writing(std::max(3, horizon_channels / 2)),
-                 process + lift < kImageProcessBytes ? layers + kImageProcessBytes - process - lift : 0.0);
+    // tracing (Embree's scene freed): beside the layers, a float copy of one layer's magnitudes (its
+    // percentile; 3 channels at most) and the error map (report/report_html.cpp), and OpenImageIO's libraries
+    // when nothing loaded them before. Its part is the larger.
+    const double report_page = layers + 16.0 * texels + std::max(0.0, kImageProcessBytes - process - lift);
+    reference = lift + std::max(reference + writing(std::max(3, horizon_channels / 2)), report_page);
     peak = std::max(peak, kept + reference);
   }
   // The environment's images are read and resampled before any method runs, when nothing of the bake is

@@ -139,10 +139,10 @@ const char* geometry_name(GeometryKind kind) {
   return kind == GeometryKind::grid ? "grid" : kind == GeometryKind::triangles ? "triangles" : "quads";
 }
 double embree_bytes_per_texel(GeometryKind kind) {
-  return kind == GeometryKind::grid ? 54 : kind == GeometryKind::triangles ? 194 : 108;
+  return kind == GeometryKind::grid ? 36 : kind == GeometryKind::triangles ? 212 : 120;
 }
 double embree_fixed_bytes(GeometryKind kind) {
-  return (kind == GeometryKind::grid ? 115 : kind == GeometryKind::triangles ? 5 : 40) * double(1 << 20);
+  return (kind == GeometryKind::grid ? 16 : kind == GeometryKind::triangles ? 5 : 8) * double(1 << 20);
 }
 
 EmbreeField::EmbreeField(const HeightField& f, GeometryKind kind, int repeat_tiles) {

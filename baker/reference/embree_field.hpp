@@ -27,8 +27,8 @@ enum class GeometryKind { grid, triangles, quads };
 GeometryKind geometry_kind(const std::string& name);  // "grid", "triangles", "quads" (else quads)
 const char* geometry_name(GeometryKind kind);
 // Embree's geometry and BVH, for the memory estimate: bytes a texel, and bytes that do not grow with the
-// field (the device, its threads' allocators, the builders' blocks). Fitted to whole-process peaks of
-// reference bakes at 1024^2, 2048^2 and 4096^2 (docs/large-fields.md).
+// field (the device, its threads' allocators, the builders' blocks). Fitted to the rise of the resident
+// memory while the reference traces, at 512^2, 2048^2 and 4096^2 (docs/large-fields.md).
 double embree_bytes_per_texel(GeometryKind kind);
 double embree_fixed_bytes(GeometryKind kind);
 

@@ -48,12 +48,15 @@ std::uint8_t to_byte(double v) {
   return std::uint8_t(std::lround(255.0 * (std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 0.0)));
 }
 
-double percentile_abs(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  for (double& x : v) x = std::abs(x);
+// The q-quantile (nearest rank) of the magnitudes of values: one float copy of them (a whole layer's, 4 bytes
+// a value, is the most report.html holds beside the layers).
+double percentile_abs(const std::vector<float>& values, double q) {
+  if (values.empty()) return 0;
+  std::vector<float> v(values.size());
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = std::abs(values[i]);
   const std::size_t k = std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5));
   std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
-  return v[k];
+  return double(v[k]);
 }
 
 struct Img {
@@ -504,8 +507,7 @@ void write_layer_figures(std::ostringstream& h, const HtmlInputs& in, const Html
       continue;
     }
     // One display scale for the method and the reference: the 99.5th percentile of the reference.
-    std::vector<double> ref_values(rl->data.begin(), rl->data.end());
-    double display_max = percentile_abs(ref_values, 0.995);
+    double display_max = percentile_abs(rl->data, 0.995);
     if (!(display_max > 0)) display_max = 1;
     // Signed error, mean over the channels, box-filtered like the images.
     const Shown shown = shown_size(w, ht, in.max_image_size);
@@ -515,8 +517,7 @@ void write_layer_figures(std::ostringstream& h, const HtmlInputs& in, const Html
       for (int c = 0; c < nc; ++c) s += double(ml->data[t * nc + c]) - double(rl->data[t * nc + c]);
       full_err[t] = float(s / nc);
     }
-    const std::vector<float> err_f = down_sample(full_err, w, ht, 1, shown);
-    const std::vector<double> err(err_f.begin(), err_f.end());
+    const std::vector<float> err = down_sample(full_err, w, ht, 1, shown);
     double scale = percentile_abs(err, 0.99);
     if (!(scale > 0)) scale = percentile_abs(err, 1.0);
     if (!(scale > 0)) scale = 1e-6;

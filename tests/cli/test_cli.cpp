@@ -716,6 +716,24 @@ TEST_F(Cli, TheReferencesMemoryEstimateHoldsForQuadsAndTheGrid) {
   }
 }
 
+// The same for the grid at 2048^2 with one traced layer (ao), where Embree's geometry and BVH are most of the
+// tracing's part: about 31 bytes a texel measured, where a fit to whole-process peaks with the default layers
+// (whose report.html part hid the tracing's) had 54 and 115 MiB more.
+TEST_F(Cli, TheReferencesMemoryEstimateHoldsForTheGridTracingOneLayer) {
+  nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {2048, 2048}}, {"seed", 3}}}},
+                         {{{"method", "p1"}, {"directions", 4}, {"layers", {"ao"}}}});
+  j["reference"] = {{"samples", 1}, {"geometry", "grid"}};
+  const fs::path p = write_job("grid_ao.json", j);
+  const double estimate = cli_test::validate_estimate_mib(dir_, p);
+  ASSERT_GT(estimate, 0);
+  const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_GT(run.peak_mib, 0.75 * estimate)
+      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  EXPECT_LT(run.peak_mib, 1.25 * estimate)
+      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+}
+
 // Previews and textures load OpenImageIO's libraries (about 100 MiB) only once the first entry has run, when
 // its working memory is freed: the estimate counts them beside what is written, not beside the bake. A 1024^2
 // p1 bake writing a texture (heights with no image to read) against its measured peak, as above.
