@@ -734,6 +734,28 @@ TEST_F(Cli, TheReferencesMemoryEstimateHoldsForTheGridTracingOneLayer) {
       << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
 }
 
+// p2 under a uniform sky: P1's sums of the corner facets' light are one float a facet, not RGB, and the
+// estimate counts them so. A 1536^2 field with a sun (bench/memory/p2_8192.json's job, smaller) against its
+// measured peak, within 15 %: measured 1.00; counted as RGB it was 1.20 (1.24 at 2048^2, growing with the
+// field).
+TEST_F(Cli, P2sMemoryEstimateUnderAUniformSky) {
+  nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {1536, 1536}}, {"seed", 7}}}},
+                         {{{"method", "p2"}, {"directions", 8}}});
+  j["surface"] = {{"albedo", 0.5}};
+  j["environment"] = {{"uniform", {1, 1, 1}}};
+  j["lights"] = {{{"directional", {{"direction", {0.3, 0.2, 1.0}}, {"irradiance", 3}}}}};
+  j["bounces"] = 1;
+  const fs::path p = write_job("p2_uniform.json", j);
+  const double estimate = cli_test::validate_estimate_mib(dir_, p);
+  ASSERT_GT(estimate, 0);
+  const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_GT(run.peak_mib, 0.85 * estimate)
+      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  EXPECT_LT(run.peak_mib, 1.15 * estimate)
+      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+}
+
 // Previews and textures load OpenImageIO's libraries (about 100 MiB) only once the first entry has run, when
 // its working memory is freed: the estimate counts them beside what is written, not beside the bake. A 1024^2
 // p1 bake writing a texture (heights with no image to read) against its measured peak, as above.

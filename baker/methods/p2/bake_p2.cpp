@@ -98,7 +98,7 @@ bool p2_keeps_horizons(const FieldShape& field, const P2Params& p, int job_bounc
 }
 
 namespace {
-double field_working_bytes(const FieldShape& shape, const P2Params& p) {
+double field_working_bytes(const FieldShape& shape, const P2Params& p, bool uniform_environment) {
   const double N = double(shape.width) * double(shape.height);
   const int B = std::max(0, p.bounces), K = p.directions;
   const bool kept = p2_keeps_horizons(shape, p, B);
@@ -108,7 +108,8 @@ double field_working_bytes(const FieldShape& shape, const P2Params& p) {
   const bool keep = std::any_of(p.layers.begin(), p.layers.end(),
                                 [](const std::string& l) { return l.rfind("indirect_b", 0) == 0; });
   // P1: its kept horizons and direct (and the facets' light) plus its own working memory.
-  const double p1_phase = horizons + 12 * N + p1_working_bytes(shape, p2_direct_params(p, kept));
+  const double p1_phase =
+      horizons + 12 * N + p1_working_bytes(shape, p2_direct_params(p, kept), uniform_environment);
   // A bounce, one direction block at a time: P1's kept horizons, or the block's recomputed (4 bytes a
   // texel per direction of the largest block) and P1's sweep recomputing them (before the block's own
   // sweep); direct, the exit radiance, the facets' and their corners' (24 + 72), the block's double sums
@@ -132,7 +133,7 @@ double field_working_bytes(const FieldShape& shape, const P2Params& p) {
   double block_horizons = 0;
   if (!kept) {
     block_horizons = 4.0 * largest * N;
-    line_buffers = std::max(line_buffers, p1_working_bytes(shape, p2_horizon_params(p)));
+    line_buffers = std::max(line_buffers, p1_working_bytes(shape, p2_horizon_params(p), uniform_environment));
   }
   double bounce_phase = 0;
   for (int b = 1; b <= B; ++b) {
@@ -147,16 +148,17 @@ double field_working_bytes(const FieldShape& shape, const P2Params& p) {
 }
 }  // namespace
 
-double p2_working_bytes(const FieldShape& shape, const P2Params& p, double environment_bytes) {
-  if (p.subdivide == 1) return field_working_bytes(shape, p);
+double p2_working_bytes(const FieldShape& shape, const P2Params& p, double environment_bytes,
+                        bool uniform_environment) {
+  if (p.subdivide == 1) return field_working_bytes(shape, p, uniform_environment);
   // Subdivided: the fine scene (heights, normals, and albedo and emission counted as images: 40 bytes a
   // fine texel, and its copy of the environment) beside the fine bake, whose layers (counted here) are then
   // read into the coarse ones (which the estimate counts itself).
   const FieldShape fine = subdivided_shape(shape, p.subdivide);
   const double Nf = double(fine.width) * double(fine.height), N = double(shape.width) * double(shape.height);
   const double fine_layers = 12.0 * double(p.layers.size()) * Nf;
-  const double bake =
-      40 * Nf + environment_bytes + field_working_bytes(fine, p2_fine_params(p)) + fine_layers;
+  const double bake = 40 * Nf + environment_bytes +
+                      field_working_bytes(fine, p2_fine_params(p), uniform_environment) + fine_layers;
   const double read_back = fine_layers + 12.0 * double(p.layers.size()) * N;
   return std::max(bake, read_back) - 12.0 * double(p.layers.size()) * N;
 }
@@ -719,7 +721,7 @@ MethodInfo p2_method() {
       "its directions (p1's horizons: 4 bytes a texel per direction, kept up to 1 GiB), its bounces and "
       "the indirect_b layers";
   m.working_bytes = [](const MethodConfig& config, const MethodContext& c) {
-    return p2_working_bytes(c.field, config.get<P2Params>(), c.environment_bytes);
+    return p2_working_bytes(c.field, config.get<P2Params>(), c.environment_bytes, c.uniform_environment);
   };
   m.division = WorkDivision::bounce_stages;
   m.stages = p2_stages;

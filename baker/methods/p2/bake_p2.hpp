@@ -168,8 +168,10 @@ LayerSet p2_original_texels(const LayerSet& fine, const FieldShape& coarse, int 
 // Bytes compute_p2 and bake_p2 hold at their peak beyond the output layers (P1's horizons, kept or one
 // block's, the exit radiance, the sweep's sums, the line buffers): the method table's working_bytes.
 // params with bounces resolved (>= 0); environment_bytes: the scene's world lat-long (MethodContext), which a
-// subdivided bake's fine scene copies.
-double p2_working_bytes(const FieldShape& field, const P2Params& params, double environment_bytes = 0);
+// subdivided bake's fine scene copies; uniform_environment: its sky is uniform (P1's sums of the facets'
+// light are then one float a facet, not RGB).
+double p2_working_bytes(const FieldShape& field, const P2Params& params, double environment_bytes = 0,
+                        bool uniform_environment = false);
 
 LayerSet bake_p2(const Scene& scene, const MethodConfig& config, const RunControl& rc);
 // bake_p2's layers of a result (B: the bounces baked).
