@@ -693,6 +693,20 @@ TEST_F(Cli, JobsWhoseOutputsCollideAreRefusedUpFront) {
 namespace hfbake {
 namespace {
 
+// Bakes the job in `dir` and checks its measured peak (cli_test::bake_peak) against validate's estimate: more
+// than lo and less than hi times it (every estimate keeps 0.75 and 1.25). `what` names the case in failures.
+void expect_peak_near_estimate(const fs::path& dir, const fs::path& job, const std::string& what = "",
+                               double lo = 0.75, double hi = 1.25) {
+  const double estimate = cli_test::validate_estimate_mib(dir, job);
+  ASSERT_GT(estimate, 0) << what;
+  const cli_test::BakePeak run = cli_test::bake_peak(dir, job);
+  ASSERT_EQ(run.exit_code, 0) << what;
+  EXPECT_GT(run.peak_mib, lo * estimate)
+      << what << " estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  EXPECT_LT(run.peak_mib, hi * estimate)
+      << what << " estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+}
+
 // The reference's memory estimate against the whole process's measured peak (wait4's ru_maxrss of the bake
 // alone), within the +-25 % every estimate keeps, for the two geometries a bake picks by size: quads and the
 // grid. 1024^2 (where the parts that do not grow with the field weigh the most), p1 K = 4, one sample, no
@@ -703,16 +717,8 @@ TEST_F(Cli, TheReferencesMemoryEstimateHoldsForQuadsAndTheGrid) {
                            {{{"method", "p1"}, {"directions", 4}}});
     j["reference"] = {{"samples", 1}, {"geometry", geometry}};
     j["output"]["dir"] = std::string("out_") + geometry;
-    const fs::path p = write_job(std::string(geometry) + ".json", j);
-    const double estimate = cli_test::validate_estimate_mib(dir_, p);
-    ASSERT_GT(estimate, 0) << geometry;
-    const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
-    ASSERT_EQ(run.exit_code, 0) << geometry;
-    const double peak = run.peak_mib;
-    EXPECT_GT(peak, 0.75 * estimate) << geometry << ": estimate " << estimate << " MiB, peak " << peak
-                                     << " MiB";
-    EXPECT_LT(peak, 1.25 * estimate) << geometry << ": estimate " << estimate << " MiB, peak " << peak
-                                     << " MiB";
+    expect_peak_near_estimate(dir_, write_job(std::string(geometry) + ".json", j),
+                              std::string(geometry) + ":");
   }
 }
 
@@ -724,14 +730,7 @@ TEST_F(Cli, TheReferencesMemoryEstimateHoldsForTheGridTracingOneLayer) {
                          {{{"method", "p1"}, {"directions", 4}, {"layers", {"ao"}}}});
   j["reference"] = {{"samples", 1}, {"geometry", "grid"}};
   const fs::path p = write_job("grid_ao.json", j);
-  const double estimate = cli_test::validate_estimate_mib(dir_, p);
-  ASSERT_GT(estimate, 0);
-  const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
-  ASSERT_EQ(run.exit_code, 0);
-  EXPECT_GT(run.peak_mib, 0.75 * estimate)
-      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
-  EXPECT_LT(run.peak_mib, 1.25 * estimate)
-      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  expect_peak_near_estimate(dir_, p);
 }
 
 // p2 under a uniform sky: P1's sums of the corner facets' light are one float a facet, not RGB, and the
@@ -746,14 +745,7 @@ TEST_F(Cli, P2sMemoryEstimateUnderAUniformSky) {
   j["lights"] = {{{"directional", {{"direction", {0.3, 0.2, 1.0}}, {"irradiance", 3}}}}};
   j["bounces"] = 1;
   const fs::path p = write_job("p2_uniform.json", j);
-  const double estimate = cli_test::validate_estimate_mib(dir_, p);
-  ASSERT_GT(estimate, 0);
-  const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
-  ASSERT_EQ(run.exit_code, 0);
-  EXPECT_GT(run.peak_mib, 0.85 * estimate)
-      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
-  EXPECT_LT(run.peak_mib, 1.15 * estimate)
-      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  expect_peak_near_estimate(dir_, p, "", 0.85, 1.15);
 }
 
 // Previews and textures load OpenImageIO's libraries (about 100 MiB) only once the first entry has run, when
@@ -766,14 +758,7 @@ TEST_F(Cli, TheMemoryEstimateHoldsWhenOnlyTexturesLoadTheImageLibraries) {
   const fs::path p = write_job("textures.json", j);
   const Result v = hfbake("validate " + p.string());
   EXPECT_NE(v.err.find("image libraries"), std::string::npos) << v.err;
-  const double estimate = cli_test::validate_estimate_mib(dir_, p);
-  ASSERT_GT(estimate, 0);
-  const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
-  ASSERT_EQ(run.exit_code, 0);
-  EXPECT_GT(run.peak_mib, 0.75 * estimate)
-      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
-  EXPECT_LT(run.peak_mib, 1.25 * estimate)
-      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  expect_peak_near_estimate(dir_, p);
 }
 
 // p1's memory estimate on a repeat field against the measured peak (as above): there the strip search's sweep
@@ -785,14 +770,7 @@ TEST_F(Cli, P1sMemoryEstimateHoldsOnARepeatField) {
           {{{"method", "p1"}, {"directions", 8}, {"layers", {"ao"}}}});
   j["environment"] = {{"uniform", 1}};
   const fs::path p = write_job("repeat.json", j);
-  const double estimate = cli_test::validate_estimate_mib(dir_, p);
-  ASSERT_GT(estimate, 0);
-  const cli_test::BakePeak run = cli_test::bake_peak(dir_, p);
-  ASSERT_EQ(run.exit_code, 0);
-  EXPECT_GT(run.peak_mib, 0.75 * estimate)
-      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
-  EXPECT_LT(run.peak_mib, 1.25 * estimate)
-      << "estimate " << estimate << " MiB, peak " << run.peak_mib << " MiB";
+  expect_peak_near_estimate(dir_, p);
 }
 
 // validate's estimate is its parts: a single entry's part holds what it writes beside its layers (a
