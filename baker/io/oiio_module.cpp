@@ -6,6 +6,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -74,10 +75,10 @@ class Reader final : public OiioReader {
     const OIIO::TypeDesc t = type_of(as);
     const bool ok = h_.tile_width > 0 ? in_->read_tiles(0, 0, h_.x, h_.x + h_.width, h_.y + y0, h_.y + y1,
                                                         h_.z, h_.z + 1, c0, c1, t, dst)
-                                      : read_scanlines(y0, y1, c0, c1, t, static_cast<char*>(dst));
+                                      : read_scanlines(y0, y1, c0, c1, t, static_cast<char*>(dst), error);
     // Some readers report a short file only through the error state.
     if (ok && !in_->has_error()) return true;
-    error = message(in_->geterror());
+    if (error.empty()) error = message(in_->geterror());
     return false;
   }
 
@@ -86,8 +87,18 @@ class Reader final : public OiioReader {
   // converted: ImageInput::read_scanlines converts through a buffer of whole strips sized from the file's
   // RowsPerStrip, not its height, so a TIFF declaring strips of 2^30 rows in a 4-row image would need
   // terabytes before a byte is read. Here the memory is the band's.
-  bool read_scanlines(int y0, int y1, int c0, int c1, OIIO::TypeDesc t, char* dst) {
+  bool read_scanlines(int y0, int y1, int c0, int c1, OIIO::TypeDesc t, char* dst, std::string& error) {
     const OIIO::ImageSpec& s = in_->spec();
+    // OpenImageIO's TIFF reader sizes a strip's buffer by the strips' declared rows: a strip far taller than
+    // the image (more than the image again and 64 MiB) is refused before anything is allocated for it.
+    const double strip_rows = double(s.get_int_attribute("tiff:RowsPerStrip", 0));
+    if (strip_rows > double(s.height) &&
+        strip_rows * double(s.scanline_bytes(true)) > 2.0 * double(s.image_bytes(true)) + 64.0 * (1 << 20)) {
+      error = "its strips declare " + std::to_string(std::int64_t(strip_rows)) +
+              " rows (RowsPerStrip) in an image of " + std::to_string(s.height) +
+              ": rewrite it (gdal_translate or oiiotool FILE -o FILE.tif)";
+      return false;
+    }
     const bool per_channel = !s.channelformats.empty();
     if (!per_channel && s.format == t)
       return in_->read_native_scanlines(0, 0, h_.y + y0, h_.y + y1, h_.z, c0, c1, dst);

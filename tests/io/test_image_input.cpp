@@ -577,14 +577,16 @@ void set_rows_per_strip(const fs::path& file, std::uint32_t rows) {
   FAIL() << "no RowsPerStrip in " << file;
 }
 
-// A strip may be taller than the image (the TIFF default is 2^32 - 1 rows: one strip). Reading such a file
-// takes the memory of the image, not of the strip it declares. The truth: the integers written.
+// A strip may be taller than the image (the TIFF default is 2^32 - 1 rows: one strip): such a file reads in
+// the image's memory. One that declares strips far taller (2^30 rows: OpenImageIO's TIFF reader would size a
+// strip's buffer by them, terabytes) is one line naming the file, before anything is allocated for it. The
+// truth: the integers written.
 TEST(ImageInput, AStripTallerThanTheImageIsReadInTheImagesMemory) {
   TempFolder dir;
   const int w = 4096, h = 8;
   const auto px = noise(std::size_t(w) * h * 3, 11);
   write_test_image(dir / "tall.tif", w, h, 3, px, OIIO::TypeDesc::UINT16);
-  set_rows_per_strip(dir / "tall.tif", std::uint32_t(1) << 30);
+  set_rows_per_strip(dir / "tall.tif", 64);
   const Image img = read_image(dir / "tall.tif", kSite);
   ASSERT_EQ(img.pixels.size(), px.size());
   std::size_t differ = 0;
@@ -593,6 +595,12 @@ TEST(ImageInput, AStripTallerThanTheImageIsReadInTheImagesMemory) {
   EXPECT_EQ(differ, 0u);
   const Plane p = read_image_channel(dir / "tall.tif", 2, kSite, kChannelSite);
   EXPECT_EQ(p.values[5], std::round(px[5 * 3 + 2] * 65535.f));
+  set_rows_per_strip(dir / "tall.tif", std::uint32_t(1) << 30);
+  const std::string line = error_line([&] { read_image(dir / "tall.tif", kSite); });
+  EXPECT_EQ(line.rfind("jobs/x.json: /height/image: " + (dir / "tall.tif").string() + ": cannot decode", 0),
+            0u)
+      << line;
+  EXPECT_NE(line.find("its strips declare 1073741824 rows"), std::string::npos) << line;
 }
 
 TEST(ImageInput, TruncatedBigPngIsAOneLineErrorNamingTheFile) {
