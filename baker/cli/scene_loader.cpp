@@ -255,14 +255,13 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double exr_band =
         size.tile ? 2.0 * channels * std::min(texels, 256.0 * size.width)
                   : exr_writing_bytes(size.width, size.height, half_channels, float_channels, exr);
+    const double writes = std::max(writing(widest), exr_band);
     const double before = &e == &job.bakes.front() ? 0.0 : lift;  // the libraries, once loaded
-    const double entry = layers + std::max(before + working, lift + std::max(writing(widest), exr_band));
-    peak = std::max(peak, kept + entry);
+    peak = std::max(peak, kept + layers + std::max(before + working, lift + writes));
     if (job.has_reference) kept += layers;
     // The entry's own part, without the image libraries (their own part below).
     if (parts)
-      parts->push_back({e.stem, std::size_t(layers + std::max({working, writing(widest), exr_band})),
-                        m->memory_knob, true});
+      parts->push_back({e.stem, std::size_t(layers + std::max(working, writes)), m->memory_knob, true});
     auto traced = [&](const std::string& l, LayerTrace t) {
       const LayerKind* k = find_layer_kind(l);
       return k && k->trace == t;
