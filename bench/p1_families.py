@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """p1's speed across families of terrain: whole-process timings of the same exact bake (ao + vsky, K
 directions, a uniform sky) on built-in fields of every hard kind, on rough terrain tilted by a regional
-slope, on a bare plane, and on any DEMs given.
+slope, on flat ground (a sea beside land, a city's blocks, a level plane), on a tilted plane, and on any
+DEMs given.
 
     /usr/bin/python3 bench/p1_families.py [--size 1024] [--directions 64] [--reps 3] [--dem FILE.tif ...]
                                           [--out bench/p1_families.md]
@@ -27,6 +28,17 @@ gdal.UseExceptions()
 KINDS = ["fractal", "rough", "terraces", "craters", "ridges", "cone", "sines"]
 
 
+def city(n, seed=3):
+    """A DSM of flat-roofed blocks, 8-40 texels a side and 6-40 m tall, on flat ground 300 m up."""
+    rng = np.random.default_rng(seed)
+    z = np.full((n, n), 300.0)
+    for _ in range(n * n // 1750):
+        w, h = rng.integers(8, 40, 2)
+        x, y = rng.integers(0, n - 40, 2)
+        z[y:y + h, x:x + w] = 300.0 + rng.uniform(6.0, 40.0)
+    return z
+
+
 def main():
     ap = bench_arguments(__doc__)
     ap.add_argument("--dem", action="append", default=[], help="a DEM GDAL reads (repeatable)")
@@ -42,7 +54,10 @@ def main():
                 ("rough fBm (60° texel slopes)", fbm + 500.0),
                 ("rough fBm x 0.1 on a 10° tilt", 500.0 + 0.1 * fbm + np.tan(np.radians(10)) * xx),
                 ("rough fBm x 0.1 on a 30° tilt", 500.0 + 0.1 * fbm + np.tan(np.radians(30)) * xx),
-                ("bare plane, 30°", 500.0 + np.tan(np.radians(30)) * (0.8 * xx + 0.6 * yy))]:
+                ("bare plane, 30°", 500.0 + np.tan(np.radians(30)) * (0.8 * xx + 0.6 * yy)),
+                ("a coast: rough fBm, its east half a flat sea", np.where(xx < n // 2, np.maximum(fbm, 0.0), 0.0)),
+                ("a city: blocks 6-40 m tall on flat ground", city(n)),
+                ("bare plane, level", np.full((n, n), 500.0))]:
             path = os.path.join(work, f"field{len(fields)}.tif")
             write_geotiff(path, z.astype(np.float32))
             fields.append((label, {"image": path}, n * n))

@@ -27,6 +27,21 @@ HeightField tilted(HeightField f, double gx, double gy, double z0) {
   return f;
 }
 
+// f raised by z0, every texel east of `east` (a fraction of the width) set to the height below which
+// `below` (a fraction) of the texels lie, and every texel lower than that raised to it.
+HeightField flattened(HeightField f, double z0, double east, double below) {
+  for (float& z : f.z) z += float(z0);
+  std::vector<float> sorted = f.z;
+  std::sort(sorted.begin(), sorted.end());
+  const float level = sorted[std::size_t(below * double(sorted.size() - 1))];
+  for (int j = 0; j < f.height; ++j)
+    for (int i = 0; i < f.width; ++i) {
+      float& z = f.z[f.index(i, j)];
+      if (double(i) > east * f.width || z < level) z = level;
+    }
+  return f;
+}
+
 std::vector<Case> cases() {
   std::vector<Case> c;
   c.push_back({"rough 70", truth::rough_field(97, 61, 70, 0.6, 3, 16)});
@@ -34,6 +49,18 @@ std::vector<Case> cases() {
   c.push_back({"fractal", truth::procedural(ProceduralKind::fractal, 83, 70, Wrap::clamp)});
   // A regional slope (the strips' trends, lane_kernel.inc).
   c.push_back({"tilted rough", tilted(truth::rough_field(90, 77, 70, 0.6, 5, 16), 0.5, -0.3, 0.0)});
+  // Flat ground at one height, where every crossing ties (the searches that end where nothing ahead is
+  // higher than the texel, lane_kernel.inc): a sea beside rough land, and a lake (the rough field cut off
+  // below one height) far from 0.
+  c.push_back({"coast", flattened(truth::rough_field(96, 70, 70, 0.6, 7, 16), 0.0, 0.45, 0.0)});
+  c.push_back({"lake far from 0", flattened(truth::rough_field(81, 92, 70, 0.6, 9, 16), 1500.0, 2.0, 0.35)});
+  // A sea with pebbles one float step above it: a ray over the sea that passes one has a horizon above 0.
+  HeightField pebbles = flattened(truth::rough_field(88, 75, 70, 0.6, 4, 16), 1500.0, 0.3, 0.0);
+  for (int t = 0; t < 40; ++t) {
+    const std::size_t at = pebbles.index(40 + (t * 37) % 47, (t * 53) % 75);
+    pebbles.z[at] = std::nextafter(pebbles.z[at], 1e30f);
+  }
+  c.push_back({"sea with pebbles", pebbles});
   return c;
 }
 
@@ -157,7 +184,9 @@ TEST(LaneSearch, PruningKeepsTheSteepestCrossingBitForBit) {
       d.build(f, layouts[a], sd.dx, sd.dy);
       const int strips = p1::lane_strip_count(layouts[a], d);
       p1::lane_search(f, layouts[a], d, 0, strips, 0.0f, scratch, pruned.data(), nullptr);
-      p1::lane_search(f, open[a], d, 0, strips, 0.0f, scratch, all.data(), nullptr);
+      p1::LaneDirection every = d;
+      every.end_below = false;  // nor ended where nothing ahead is higher
+      p1::lane_search(f, open[a], every, 0, strips, 0.0f, scratch, all.data(), nullptr);
       long on_field = 0, differ = 0;
       for (std::size_t t = 0; t < N; ++t) {
         if (!(all[t] > -1e20f)) continue;  // no crossing on the field (-inf, or only the padding's)

@@ -154,6 +154,7 @@ void LaneDirection::build(const HeightField& f, const LaneLayout& L, double dx, 
   crossings.reserve(cs.size());
   major.clear();
   curved = curvature != 0;
+  end_below = curvature >= 0;
   e_lo = 0, e_hi = 0;
   // Each crossing's nearest and farthest column read (major distances in texels: a crossing a hair past a
   // column reads the next one, with a weight of that hair).
@@ -224,6 +225,7 @@ void build_lane_direction(LaneDirection& d, const HeightField& f, const LaneLayo
     c.drop = float(curvature / double(c.inv_s));
   }
   d.curved = curvature != 0;
+  d.end_below = curvature >= 0;
   d.run = run_of(d);
 }
 
@@ -240,6 +242,7 @@ void LaneScratch::size_for(int n) {
   const int nq = block_count(n);
   block.assign(std::size_t(nq + 1) * kRow, kOffField);
   suffix.assign(std::size_t(nq + 1) * kRow, kOffField);
+  raw_suffix.assign(std::size_t(nq + 1) * kRow, kOffField);
   int at = 0;
   for (int v = 0, span = 4; v < kLevels; ++v, span *= 4) level_at[v] = at, at += nq / span + 2;
   level_at[kLevels] = at;

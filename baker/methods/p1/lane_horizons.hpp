@@ -98,7 +98,10 @@ struct LaneDirection {
   std::vector<LaneCrossing> crossings;
   std::vector<float> major;  // each crossing's major distance (texels)
   std::vector<std::int32_t> first_at;
-  bool curved = false;  // some crossing's drop is not 0
+  bool curved = false;     // some crossing's drop is not 0
+  // The search may end where nothing ahead of a texel is higher than it (lane_kernel.inc, beats_to_end);
+  // build sets it where every crossing's drop is at least 0 (a curvature of at least 0).
+  bool end_below = true;
   // World distance per unit of the major index along the rays (a crossing at major distance n lies n * run
   // away), from the farthest crossing; 0 without crossings.
   double run = 0;
@@ -122,6 +125,7 @@ struct LaneStats {
 // Per-thread scratch of the strips' bounds and the hinted blocks.
 struct LaneScratch {
   std::vector<float> block, coarse, suffix;
+  std::vector<float> raw_suffix;   // per walk block: the highest height from it to the end (lane_kernel.inc)
   std::vector<float> trend;        // per walk column: the strip's trend times the distance (lane_kernel.inc)
   std::vector<std::int32_t> mark;  // per walk block: the group that tried it as a hint
   int level_at[4] = {};            // where each coarse level's rows start in `coarse`, and where they end
