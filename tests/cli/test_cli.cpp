@@ -748,6 +748,24 @@ TEST_F(Cli, P2sMemoryEstimateUnderAUniformSky) {
   expect_peak_near_estimate(dir_, p, "", 0.85, 1.15);
 }
 
+// A repeat field's lane search holds a copy of its tiling (lane_horizons.hpp, tiled_field: 15 times the
+// field's texels for a square one, 12 bytes each while the layout is built), the bake's largest part: a
+// 1024^2 tiling p1 bake and one with the sun's lights (which search the tiling again after the directions)
+// against their measured peaks, within 15 %.
+TEST_F(Cli, TheMemoryEstimateHoldsForARepeatFieldsTiling) {
+  for (const bool sky : {false, true}) {
+    nlohmann::json j =
+        job({{"procedural", {{"kind", "fractal"}, {"size", {1024, 1024}}, {"seed", 7}}}, {"wrap", "repeat"}},
+            {{{"method", "p1"},
+              {"directions", 16},
+              {"layers", sky ? nlohmann::json({"ao", "direct"}) : nlohmann::json({"ao"})}}});
+    if (sky) j["environment"] = {{"sky", nlohmann::json::object()}};
+    j["output"]["dir"] = sky ? "out_sky" : "out_ao";
+    expect_peak_near_estimate(dir_, write_job(sky ? "repeat_sky.json" : "repeat_ao.json", j),
+                              sky ? "sky:" : "ao:", 0.85, 1.15);
+  }
+}
+
 // Previews and textures load OpenImageIO's libraries (about 100 MiB) only once the first entry has run, when
 // its working memory is freed: the estimate counts them beside what is written, not beside the bake. A 1024^2
 // p1 bake writing a texture (heights with no image to read) against its measured peak, as above.

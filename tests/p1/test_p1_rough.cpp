@@ -212,6 +212,85 @@ TEST(P1Rough, HorizonsAreTheSameAtAnyAbsoluteHeight) {
   }
 }
 
+// A repeat field's ray runs through the tiling to where its sweep line starts: wrap_periods whole periods
+// beyond the texel's own along the direction's major axis (docs/methods/p1.md). The exact march over a clamp
+// field holding that much of the tiling (periods either side along the major axis, and across it as far as
+// a ray drifts, |g| <= 1) is the truth: every texel and direction of non-square rough and fractal tiles, at
+// one and two periods, within float rounding of the rises.
+TEST(P1Rough, RepeatHorizonsEqualTheExactMarchThroughTheTiling) {
+  struct Case {
+    const char* name;
+    HeightField field;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"rough", truth::rough_field(37, 29, 60, 0.6, 31)});
+  cases.push_back({"fractal", truth::procedural(ProceduralKind::fractal, 26, 34, Wrap::repeat)});
+  const int K = 16;
+  for (Case& c : cases)
+    for (const int periods : {1, 2}) {
+      HeightField& f = c.field;
+      f.wrap = Wrap::repeat;
+      Scene scene = make_scene(f);
+      P1Params p;
+      p.directions = K, p.wrap_periods = periods, p.horizon = true, p.vsky = p.direct = false;
+      const P1Result r = compute_p1(scene, p, RunControl{});
+      SweepSpec spec;
+      spec.directions = K;
+      double worst = 0;
+      for (const bool x_major : {true, false}) {
+        const int W = f.width, H = f.height, major = x_major ? W : H;
+        const int along = periods * major, across = (periods + 1) * major + 2;
+        HeightField big;
+        big.texel_size = f.texel_size, big.wrap = Wrap::clamp;
+        big.width = x_major ? 2 * along + W : 2 * across + W;
+        big.height = x_major ? 2 * across + H : 2 * along + H;
+        const int i0 = x_major ? along : across, j0 = x_major ? across : along;
+        big.z.resize(big.texel_count());
+        for (int j = 0; j < big.height; ++j)
+          for (int i = 0; i < big.width; ++i)
+            big.z[big.index(i, j)] = f.z[f.index(((i - i0) % W + W) % W, ((j - j0) % H + H) % H)];
+        for (int k = 0; k < K; ++k) {
+          const SweepDirection d = plan_direction(f, spec, k);
+          if ((std::fabs(d.dx) >= std::fabs(d.dy)) != x_major) continue;
+          for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) {
+              const double exact = std::sin(truth::march_tri(big, i0 + i, j0 + j, d.dx, d.dy, 7));
+              worst = std::max(worst, std::fabs(double(r.horizon[f.index(i, j) * K + k]) - exact));
+            }
+        }
+      }
+      EXPECT_LE(worst, 1e-5) << c.name << " periods " << periods;
+    }
+}
+
+// Where a repeat tile is cut matters only through the occluders beyond its rays' wrap_periods periods: a
+// rough 64 x 48 tile rolled by (13, 29) bakes the same ao at the rolled texels within what
+// schemas/methods/p1.schema.json says (wrap_periods), less and less as the periods grow.
+TEST(P1Rough, ARolledTileBakesTheSameAoWithinItsPeriods) {
+  HeightField f = truth::rough_field(64, 48, 60, 0.6, 7);
+  f.wrap = Wrap::repeat;
+  HeightField rolled = f;
+  for (int j = 0; j < f.height; ++j)
+    for (int i = 0; i < f.width; ++i)
+      rolled.z[rolled.index((i + 13) % f.width, (j + 29) % f.height)] = f.z[f.index(i, j)];
+  double worst[2] = {0, 0};
+  for (const int periods : {1, 8}) {
+    P1Params p;
+    p.directions = 32, p.wrap_periods = periods, p.vsky = p.direct = false;
+    const P1Result a = compute_p1(make_scene(f), p, RunControl{});
+    const P1Result b = compute_p1(make_scene(rolled), p, RunControl{});
+    double& w = worst[periods == 1 ? 0 : 1];
+    for (int j = 0; j < f.height; ++j)
+      for (int i = 0; i < f.width; ++i)
+        w = std::max(w, double(std::fabs(a.ao[f.index(i, j)] -
+                                         b.ao[rolled.index((i + 13) % f.width, (j + 29) % f.height)])));
+  }
+  std::printf("[rolled tile] max |d ao|: %.2g at 1 period, %.2g at 8\n", worst[0], worst[1]);
+  EXPECT_LE(worst[0], 0.06);
+  EXPECT_LE(worst[1], 0.001);
+  EXPECT_LT(worst[1], worst[0] / 20);
+}
+
 TEST(P1Rough, StepAlongAColumnHasTheClosedFormHorizons) {
   const int W = 64, H = 64, K = 24;
   const Scene s = make_scene(truth::step_field(W, H, 4, 0));

@@ -1,16 +1,18 @@
-// p1_working_bytes on repeat fields against the bytes compute_p1 holds there, counted here from its design:
-// the strip search sums one direction block (core/direction_blocks.hpp: min(K, 8) blocks, the largest of
-// ceil(K / blocks) directions) at a time, each through its own sweep whose line buffers hold
-// FarHorizonWorker's two floats ([dz, run]) for every texel and direction of the block; the block's sums (4
-// bytes a texel for ao, 12 for bent_normal) lie beside the total, which is the layers; with horizon layers,
-// the block's horizon planes (4 bytes a texel per direction of the block) wait to be placed. What is left is
-// per-thread scratch (the lines' workers, a tile's gather), bounded here by 4 MiB a thread.
+// p1_working_bytes on repeat fields too large for the lane search's tiling (lane_horizons.hpp, lane_tiles)
+// against the bytes compute_p1 holds there, counted here from its design: the strip search sums one direction
+// block (core/direction_blocks.hpp: min(K, 8) blocks, the largest of ceil(K / blocks) directions) at a time,
+// each through its own sweep whose line buffers hold FarHorizonWorker's two floats ([dz, run]) for every
+// texel and direction of the block; the block's sums (4 bytes a texel for ao, 12 for bent_normal) lie beside
+// the total, which is the layers; with horizon layers, the block's horizon planes (4 bytes a texel per
+// direction of the block) wait to be placed. What is left is per-thread scratch (the lines' workers, a tile's
+// gather), bounded here by 4 MiB a thread.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
 #include "core/threads.hpp"
 #include "field/triangulation.hpp"
+#include "methods/p1/lane_horizons.hpp"
 #include "methods/p1/p1.hpp"
 
 namespace hfbake {
@@ -22,12 +24,13 @@ TEST(P1WorkingBytes, RepeatFieldsHoldOneDirectionBlocksStripsAndSums) {
   };
   const double per_thread = 4.0 * (1 << 20);
   const double slack = per_thread * double(worker_threads()) + double(1 << 20);
-  for (const Shape s : {Shape{1024, 1024}, Shape{1536, 512}, Shape{700, 1800}})
+  for (const Shape s : {Shape{4000, 600}, Shape{600, 3000}, Shape{2400, 1400}})
     for (const int K : {1, 4, 8, 12, 16, 24, 64})
       for (const int layers : {0, 1, 2}) {  // ao; ao and bent_normal; ao and horizon
         FieldShape shape;
         shape.width = s.width, shape.height = s.height;
         shape.wrap = Wrap::repeat;
+        ASSERT_FALSE(p1::lane_tiles(s.width, s.height, shape.wrap, 1)) << s.width << "x" << s.height;
         P1Params p;
         p.directions = K;
         p.ao = true;
@@ -47,13 +50,22 @@ TEST(P1WorkingBytes, RepeatFieldsHoldOneDirectionBlocksStripsAndSums) {
 
 // P2's corner facets (direct_facets, field/triangulation.hpp) are no layer a caller counts: while the
 // directions are summed (the peak), each facet's RGB float sum is held in the total and in the block's sums
-// and, for the lane search of a clamp field, each facet's normal (12 bytes): 3 x 12 bytes a texel and facet
-// on clamp fields, 2 x 12 on repeat ones, beside what direct alone holds.
+// and, for the lane search (clamp fields, and repeat ones whose tiling it takes), each facet's normal (12
+// bytes): 3 x 12 bytes a texel and facet there, 2 x 12 on repeat fields the strip search takes, beside
+// what direct alone holds.
 TEST(P1WorkingBytes, P2sCornerFacetsAreHeldBesideTheLayers) {
-  for (const Wrap wrap : {Wrap::clamp, Wrap::repeat}) {
+  struct Case {
+    Wrap wrap;
+    int width, height;
+  };
+  for (const Case c :
+       {Case{Wrap::clamp, 1024, 768}, Case{Wrap::repeat, 1024, 768}, Case{Wrap::repeat, 4096, 3072}}) {
+    const Wrap wrap = c.wrap;
     FieldShape shape;
-    shape.width = 1024, shape.height = 768;
+    shape.width = c.width, shape.height = c.height;
     shape.wrap = wrap;
+    const bool lanes = p1::lane_tiles(c.width, c.height, wrap, 1);
+    EXPECT_EQ(lanes, c.width == 1024) << c.width;
     P1Params p;
     p.directions = 16;
     p.ao = p.vsky = false;
@@ -61,10 +73,10 @@ TEST(P1WorkingBytes, P2sCornerFacetsAreHeldBesideTheLayers) {
     p.lights = false;
     P1Params facets = p;
     facets.facet_direct = true;
-    const double N = 1024.0 * 768.0;
-    const double held = (wrap == Wrap::clamp ? 3 : 2) * 12.0 * kCornerFacets * N;
+    const double N = double(c.width) * double(c.height);
+    const double held = (lanes ? 3 : 2) * 12.0 * kCornerFacets * N;
     EXPECT_DOUBLE_EQ(p1_working_bytes(shape, facets, false) - p1_working_bytes(shape, p, false), held)
-        << (wrap == Wrap::clamp ? "clamp" : "repeat");
+        << (wrap == Wrap::clamp ? "clamp " : "repeat ") << c.width;
   }
 }
 

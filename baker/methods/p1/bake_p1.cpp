@@ -144,8 +144,8 @@ LayerSet p1_finish_blocks(const Scene& scene, const MethodConfig& config, LayerS
 
 namespace {
 
-// Clamp fields: the lane search (lane_horizons.hpp) per azimuth, the azimuths of one lane layout's axis
-// at a time (x-major ones first), so one layout is held at a time.
+// The lane search (lane_horizons.hpp; a repeat field's through its tiling, lane_tiles) per azimuth, the
+// azimuths of one lane layout's axis at a time (x-major ones first), so one layout is held at a time.
 // floor: raised to the far field's floor (far_floor.hpp), the largest slack left returned.
 double lane_horizons_at(const HeightField& f, const P1Params& p, const std::vector<double>& azimuths,
                         const RunControl& rc, const HorizonVisitor& visit, double curvature,
@@ -170,7 +170,8 @@ double lane_horizons_at(const HeightField& f, const P1Params& p, const std::vect
           }
         });
         rc.report(double(++done) / double(azimuths.size()));
-      });
+      },
+      nullptr, p.wrap_periods);
   return row_slack.empty() ? 0.0 : *std::max_element(row_slack.begin(), row_slack.end());
 }
 
@@ -181,7 +182,7 @@ void p1_horizons_at(const HeightField& f, const P1Params& p, const std::vector<d
                     const p1::FloorGrid* floor, double* slack) {
   if (slack) *slack = 0;
   if (azimuths.empty()) return;
-  if (f.wrap == Wrap::clamp) {
+  if (p1::lane_tiles(f.width, f.height, f.wrap, p.wrap_periods)) {
     const double s = lane_horizons_at(f, p, azimuths, rc, visit, curvature, floor);
     if (slack) *slack = s;
     return;

@@ -63,35 +63,115 @@ struct Sse2 {
 
 }  // namespace
 
+namespace {
+
+// Where f lies in its tiling (tiled_field): texel (i0, j0) of it is f's (0, 0); and the tiling's shape.
+void tiled_frame(int width, int height, bool xm, int periods, int* i0, int* j0, int* tw, int* th) {
+  const long major = xm ? width : height, minor = xm ? height : width;
+  // Across the major axis: a ray's drift over its span ((periods + 1) major periods, |g| <= 1) and the
+  // texels its crossings read either side of its line (at most 2 kLaneWindow, LaneDirection::build).
+  const long across = (long(periods) + 1) * major + 2 * kLaneWindow + 2;
+  const long along = long(periods) * major;
+  const long tmaj = 2 * along + major, tmin = 2 * across + minor;
+  if (tmaj > 1L << 30 || tmin > 1L << 30)
+    throw std::length_error("lane search: a repeat field's tiling is too large");
+  *i0 = int(xm ? along : across), *j0 = int(xm ? across : along);
+  *tw = int(xm ? tmaj : tmin), *th = int(xm ? tmin : tmaj);
+}
+
+}  // namespace
+
+double tiled_texels(int width, int height, bool xm, int periods) {
+  int i0, j0, tw, th;
+  tiled_frame(width, height, xm, periods, &i0, &j0, &tw, &th);
+  return double(tw) * double(th);
+}
+
+bool lane_tiles(int width, int height, Wrap wrap, int periods) {
+  if (wrap == Wrap::clamp) return true;
+  return std::max(tiled_texels(width, height, true, periods), tiled_texels(width, height, false, periods)) <=
+         kTiledTexels;
+}
+
+HeightField tiled_field(const HeightField& f, bool xm, int periods, int* i0, int* j0) {
+  int tw, th;
+  tiled_frame(f.width, f.height, xm, periods, i0, j0, &tw, &th);
+  HeightField t;
+  static_cast<FieldShape&>(t) = f;
+  t.width = tw, t.height = th, t.wrap = Wrap::clamp;
+  t.z.resize(std::size_t(tw) * std::size_t(th));
+  const int W = f.width, H = f.height;
+  const int ti0 = *i0, tj0 = *j0;
+  tbb::parallel_for(0, th, [&](int j) {
+    const float* row = f.z.data() + std::size_t((((j - tj0) % H) + H) % H) * std::size_t(W);
+    float* out = t.z.data() + std::size_t(j) * std::size_t(tw);
+    int i = 0, src = (((0 - ti0) % W) + W) % W;
+    while (i < tw) {  // whole runs of f's row
+      const int n = std::min(tw - i, W - src);
+      std::copy(row + src, row + src + n, out + i);
+      i += n, src = 0;
+    }
+  });
+  return t;
+}
+
+void LaneLayout::build_tiled(const HeightField& f, const HeightField& tiled, bool xm, int periods) {
+  build(tiled, xm);
+  int i0, j0, tw, th;
+  tiled_frame(f.width, f.height, xm, periods, &i0, &j0, &tw, &th);
+  recv_u0 = xm ? i0 : j0, recv_u1 = recv_u0 + (xm ? f.width : f.height);
+  recv_v0 = xm ? j0 : i0, recv_v1 = recv_v0 + (xm ? f.height : f.width);
+  out_i0 = i0, out_j0 = j0, out_width = f.width;
+}
+
 void LaneLayout::build(const HeightField& f, bool xm) {
   x_major = xm;
   nmajor = xm ? f.width : f.height;
   nminor = xm ? f.height : f.width;
+  recv_u0 = 0, recv_u1 = nmajor, recv_v0 = 0, recv_v1 = nminor;
+  out_i0 = 0, out_j0 = 0, out_width = f.width;
   stride = nminor + 2 * kLanePad;
   size = std::size_t(nmajor) * std::size_t(stride);
   z = make_page_buffer<float>(size);
-  std::fill(z.get(), z.get() + size, kOffField);
-  for (int j = 0; j < f.height; ++j) {
-    const float* row = f.z.data() + std::size_t(j) * std::size_t(f.width);
+  // The layout's rows (major indices) in parallel, a run of them at a time: for x_major, each of f's rows
+  // read once per run and spread over the run's rows.
+  tbb::parallel_for(tbb::blocked_range<int>(0, nmajor, 64), [&](const tbb::blocked_range<int>& run) {
+    for (int u = run.begin(); u < run.end(); ++u) {
+      float* row = z.get() + std::ptrdiff_t(u) * stride;
+      std::fill(row, row + kLanePad, kOffField);
+      std::fill(row + kLanePad + nminor, row + stride, kOffField);
+      if (!xm) std::copy(f.z.data() + f.index(0, u), f.z.data() + f.index(0, u) + f.width, row + kLanePad);
+    }
     if (xm)
-      for (int i = 0; i < f.width; ++i) z[std::size_t(i) * std::size_t(stride) + kLanePad + j] = row[i];
-    else
-      std::copy(row, row + f.width, z.get() + std::ptrdiff_t(j) * stride + kLanePad);
-  }
+      for (int j = 0; j < f.height; ++j) {
+        const float* frow = f.z.data() + f.index(0, j);
+        for (int u = run.begin(); u < run.end(); ++u)
+          z[std::size_t(u) * std::size_t(stride) + kLanePad + j] = frow[u];
+      }
+  });
   // The field's least-squares plane, tilt0 + tilt_major * u + tilt_minor * v at major index u, minor index
-  // v (on a whole grid the two slopes are independent sums), and its largest |z|, in one pass.
+  // v (on a whole grid the two slopes are independent sums), and its largest |z|: each row's sums in
+  // parallel, added in row order (the same bits for any thread count).
   zabs = 0;
   {
     const double mi = 0.5 * double(f.width - 1), mj = 0.5 * double(f.height - 1);
-    double sz = 0, siz = 0, sjz = 0;
-    for (int j = 0; j < f.height; ++j) {
-      const float* row = f.z.data() + std::size_t(j) * std::size_t(f.width);
+    std::vector<double> row_z(std::size_t(f.height)), row_iz(std::size_t(f.height));
+    std::vector<float> row_abs(std::size_t(f.height));
+    tbb::parallel_for(0, f.height, [&](int j) {
+      const float* row = f.z.data() + f.index(0, j);
       double rz = 0, riz = 0;
+      float a = 0;
       for (int i = 0; i < f.width; ++i) {
         rz += double(row[i]), riz += (double(i) - mi) * double(row[i]);
-        zabs = fmax_(zabs, std::fabs(row[i]));
+        a = fmax_(a, std::fabs(row[i]));
       }
-      sz += rz, siz += riz, sjz += (double(j) - mj) * rz;
+      row_z[std::size_t(j)] = rz, row_iz[std::size_t(j)] = riz, row_abs[std::size_t(j)] = a;
+    });
+    double sz = 0, siz = 0, sjz = 0;
+    for (int j = 0; j < f.height; ++j) {
+      const double rz = row_z[std::size_t(j)];
+      sz += rz, siz += row_iz[std::size_t(j)], sjz += (double(j) - mj) * rz;
+      zabs = fmax_(zabs, row_abs[std::size_t(j)]);
     }
     const double n = double(f.width) * double(f.height);
     // sum over the grid of (i - mi)^2 is height * w (w^2 - 1) / 12, and of (j - mj)^2 width * h (h^2 - 1)
@@ -119,21 +199,23 @@ void LaneLayout::build(const HeightField& f, bool xm) {
   plane_abs = float(pabs);
   const float margin = (zabs + plane_abs) * 0x1p-20f;
   window = make_page_buffer<float>(size);
-  std::vector<float> level(static_cast<std::size_t>(stride));  // a row of z less the plane
-  for (int u = 0; u < nmajor; ++u) {
-    const float* r = z.get() + std::ptrdiff_t(u) * stride;
-    float* w = window.get() + std::ptrdiff_t(u) * stride;
-    const double pu = tilt0 + tilt_major * double(u);
-    for (std::ptrdiff_t i = 0; i < stride; ++i)
-      level[std::size_t(i)] =
-          r[i] == kOffField ? kOffField : r[i] - float(pu + tilt_minor * double(i - kLanePad));
-    for (std::ptrdiff_t i = 0; i < stride; ++i) {
-      float m = kOffField;
-      for (std::ptrdiff_t t = i; t < std::min<std::ptrdiff_t>(stride, i + kLaneWindow); ++t)
-        m = fmax_(m, level[std::size_t(t)]);
-      w[i] = m == kOffField ? kOffField : m + margin;
+  tbb::parallel_for(tbb::blocked_range<int>(0, nmajor, 64), [&](const tbb::blocked_range<int>& run) {
+    std::vector<float> level(static_cast<std::size_t>(stride));  // a row of z less the plane
+    for (int u = run.begin(); u < run.end(); ++u) {
+      const float* r = z.get() + std::ptrdiff_t(u) * stride;
+      float* w = window.get() + std::ptrdiff_t(u) * stride;
+      const double pu = tilt0 + tilt_major * double(u);
+      for (std::ptrdiff_t i = 0; i < stride; ++i)
+        level[std::size_t(i)] =
+            r[i] == kOffField ? kOffField : r[i] - float(pu + tilt_minor * double(i - kLanePad));
+      for (std::ptrdiff_t i = 0; i < stride; ++i) {
+        float m = kOffField;
+        for (std::ptrdiff_t t = i; t < std::min<std::ptrdiff_t>(stride, i + kLaneWindow); ++t)
+          m = fmax_(m, level[std::size_t(t)]);
+        w[i] = m == kOffField ? kOffField : m + margin;
+      }
     }
-  }
+  });
 }
 
 namespace {
@@ -232,6 +314,22 @@ void build_lane_direction(LaneDirection& d, const HeightField& f, const LaneLayo
 int lane_strip_count(const LaneLayout& L, const LaneDirection& d) {
   const double span = double(L.nminor - 1) + std::fabs(d.g) * double(L.nmajor - 1);
   return int(std::floor(span / kLanes)) + 2;
+}
+
+void lane_strip_range(const LaneLayout& L, const LaneDirection& d, int* s0, int* s1) {
+  // Texel (u, v) lies in strip floor((v - ceil(origin + g u)) / kLanes) (lane_kernel.inc): monotone in u
+  // and in v, so the corners of the searched texels bound their strips.
+  const double origin = lane_intercept_origin(L, d);
+  long lo = std::numeric_limits<long>::max(), hi = std::numeric_limits<long>::min();
+  for (const int u : {L.recv_u0, L.recv_u1 - 1})
+    for (const int v : {L.recv_v0, L.recv_v1 - 1}) {
+      const long base = long(std::ceil(origin + d.g * u));
+      const long s = long(std::floor(double(long(v) - base) / kLanes));
+      lo = std::min(lo, s), hi = std::max(hi, s);
+    }
+  const int count = lane_strip_count(L, d);
+  *s0 = int(std::clamp<long>(lo - 1, 0, count));
+  *s1 = int(std::clamp<long>(hi + 2, *s0, count));
 }
 
 static_assert(std::extent_v<decltype(LaneScratch::level_at)> == kLevels + 1);

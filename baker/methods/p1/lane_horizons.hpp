@@ -75,8 +75,16 @@ struct LaneLayout {
   // On 2 MiB pages where the kernel gives them (core/page_buffer.hpp): a group's crossings read one
   // row of the layout per column, nmajor rows a stride apart.
   PageBuffer<float> z, window;
+  // The texels searched, major [recv_u0, recv_u1) and minor [recv_v0, recv_v1), and where their results
+  // go: texel (i, j) of the layout's field at (j - out_j0) * out_width + i - out_i0. build: every texel, at
+  // the field's own index; a repeat field's tiling (build_tiled) narrows them to the field inside it.
+  int recv_u0 = 0, recv_u1 = 0, recv_v0 = 0, recv_v1 = 0;
+  int out_i0 = 0, out_j0 = 0, out_width = 0;
 
   void build(const HeightField& f, bool x_major);
+  // A repeat field's rays searched as a clamp field's: the layout of `tiled` (tiled_field's), whose texels
+  // of the repeat field f are searched, at f's own index.
+  void build_tiled(const HeightField& f, const HeightField& tiled, bool x_major, int periods);
   std::size_t bytes() const { return 2 * size * sizeof(float); }
 };
 
@@ -98,7 +106,7 @@ struct LaneDirection {
   std::vector<LaneCrossing> crossings;
   std::vector<float> major;  // each crossing's major distance (texels)
   std::vector<std::int32_t> first_at;
-  bool curved = false;     // some crossing's drop is not 0
+  bool curved = false;  // some crossing's drop is not 0
   // The search may end where nothing ahead of a texel is higher than it (lane_kernel.inc, beats_to_end);
   // build sets it where every crossing's drop is at least 0 (a curvature of at least 0).
   bool end_below = true;
@@ -148,6 +156,25 @@ void build_lane_direction(LaneDirection& d, const HeightField& f, const LaneLayo
 
 // Number of strips (each holds at most one group of kLanes texels per major index) of a direction.
 int lane_strip_count(const LaneLayout& layout, const LaneDirection& d);
+// The strips [*s0, *s1) that hold the layout's searched texels (recv_*).
+void lane_strip_range(const LaneLayout& layout, const LaneDirection& d, int* s0, int* s1);
+// The intercept (v - g u) below every strip's: strip s holds the texels whose intercepts lie in
+// [origin + kLanes s, origin + kLanes (s + 1)).
+inline double lane_intercept_origin(const LaneLayout& L, const LaneDirection& d) {
+  return std::min(0.0, -d.g * double(L.nmajor - 1));
+}
+
+// A repeat field's rays on the lanes. The strip search (far_horizons.hpp) follows a texel's ray through the
+// tiling to the start of its sweep line: `periods` (P1Params::wrap_periods) whole periods beyond the
+// texel's own along the major axis. The same rays on a clamp field: the tiling with `periods` periods on
+// either side of f along the major axis and, across it, as far as a ray drifts over that span (at most
+// periods + 1 periods of the major axis, |g| <= 1), whose border ends each ray where its line starts.
+// tiled_field builds it (f at (i0, j0) of it), tiled_texels counts it, and lane_tiles says whether a bake
+// searches f so (clamp fields always; repeat ones while the tiling stays within kTiledTexels).
+inline constexpr double kTiledTexels = double(std::size_t(1) << 26);
+HeightField tiled_field(const HeightField& f, bool x_major, int periods, int* i0, int* j0);
+double tiled_texels(int width, int height, bool x_major, int periods);
+bool lane_tiles(int width, int height, Wrap wrap, int periods);
 
 // The instruction set a search runs on (the same bits on each): best = lane_isa(). sse2 < avx2 < avx512.
 enum class LaneIsa { best, sse2, avx2, avx512 };
@@ -161,7 +188,8 @@ LaneIsa lane_isa();
 // Searches the groups of strips [s0, s1): for every texel (i, j) of them, slope[f.index(i, j)] = the
 // steepest slope (rise / run) of any crossing of its ray (-inf: none on the field) and which[...] that
 // crossing's index in d.crossings (-1: none); which null: the slopes alone (the same ones, a little
-// sooner). Clamp fields only.
+// sooner). Clamp fields, or a repeat field's tiling (LaneLayout::build_tiled), whose outputs are indexed
+// by the layout's out_*.
 void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
                  float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
                  LaneStats* stats = nullptr, LaneIsa isa = LaneIsa::best);
@@ -180,11 +208,13 @@ void lane_search_avx512(const HeightField& f, const LaneLayout& layout, const La
 struct LaneReuse {
   int axis = -1;  // the layout's (0: x-major, 1: y-major), -1: none built
   LaneLayout layout;
+  HeightField shape;  // a repeat field's tiling (tiled_field), its shape alone
   std::vector<float> slope;
   std::vector<std::int32_t> which;
 };
 
-// Every texel's horizon in the directions ks of spec (lane_plan's rays), clamp fields: the directions of
+// Every texel's horizon in the directions ks of spec (lane_plan's rays), clamp fields (and repeat fields
+// through their tiling, wrap_periods its periods: tiled_field): the directions of
 // one axis at a time (the x-major ones first, each group in the order of ks), so one LaneLayout is held at
 // a time; after each direction's search, done(sd, d, slope, which) with lane_search's slope and which of
 // every texel (which: null unless casters). rc.check() before each direction. reuse: kept between calls
@@ -192,7 +222,7 @@ struct LaneReuse {
 template <class Done>
 void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vector<int>& ks,
                      double curvature, float tolerance, bool casters, const RunControl& rc, Done&& done,
-                     LaneReuse* reuse = nullptr) {
+                     LaneReuse* reuse = nullptr, int wrap_periods = 1) {
   const std::size_t N = f.texel_count();
   LaneReuse own;
   LaneReuse& r = reuse ? *reuse : own;
@@ -209,18 +239,28 @@ void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vec
     if (dirs.empty()) continue;
     if (r.axis != axis) {
       r.layout = LaneLayout();  // the other axis' freed before this one is built
-      r.layout.build(f, axis == 0);
+      if (f.wrap == Wrap::repeat) {
+        int i0 = 0, j0 = 0;
+        HeightField tiled = tiled_field(f, axis == 0, wrap_periods, &i0, &j0);
+        r.layout.build_tiled(f, tiled, axis == 0, wrap_periods);
+        tiled.z = std::vector<float>();
+        r.shape = std::move(tiled);  // the searches need its shape alone
+      } else {
+        r.layout.build(f, axis == 0);
+      }
       r.axis = axis;
     }
     const LaneLayout& layout = r.layout;
+    const HeightField& shape = f.wrap == Wrap::repeat ? r.shape : f;
     for (const SweepDirection& sd : dirs) {
       rc.check();
       LaneDirection d;
-      build_lane_direction(d, f, layout, sd, curvature);
-      tbb::parallel_for(
-          tbb::blocked_range<int>(0, lane_strip_count(layout, d), 2), [&](const tbb::blocked_range<int>& r) {
-            lane_search(f, layout, d, r.begin(), r.end(), tolerance, scratch.local(), slope, which);
-          });
+      build_lane_direction(d, shape, layout, sd, curvature);
+      int s0 = 0, s1 = 0;
+      lane_strip_range(layout, d, &s0, &s1);
+      tbb::parallel_for(tbb::blocked_range<int>(s0, s1, 2), [&](const tbb::blocked_range<int>& r) {
+        lane_search(shape, layout, d, r.begin(), r.end(), tolerance, scratch.local(), slope, which);
+      });
       done(sd, d, static_cast<const float*>(slope), static_cast<const std::int32_t*>(which));
     }
   }

@@ -161,7 +161,7 @@ double lane_direction_sums(const HeightField& f, double curvature, const P1Param
         });
         rc.report(double(++done) / double(k_end - k_begin));
       },
-      reuse);
+      reuse, p.wrap_periods);
   if (row_slack.empty()) return 0.0;
   // Rounded up to a float, as the farm's blocks carry it (bake_p1.cpp far_slack@): the same bound either way.
   return double(p1::round_up_to_float(*std::max_element(row_slack.begin(), row_slack.end())));
@@ -255,19 +255,26 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
   // facets' layer beside their sums (no caller counts either).
   const double finished = caller_layers + (p.direct && !p.ao && uniform_environment ? 4 : 0) +
                           (facets ? 12 * CF + facet_sums : 0);
-  if (shape.wrap == Wrap::clamp) {
+  if (p1::lane_tiles(shape.width, shape.height, shape.wrap, p.wrap_periods)) {
     // ... and what the lane search holds.
     const double normals = shading_reads_normals(p) ? 12 + (facets ? 12 * CF : 0) : 0;
     const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
     // While the directions are summed: the sums, a block's, the normals, one direction's slopes (and casters
     // for horizon_distance), and one axis' lane layout (heights and window maxima, padded on the minor axis).
-    const double layout = 2.0 * 4.0 * double(std::max(shape.width, shape.height)) *
-                          double(std::min(shape.width, shape.height) + 2 * p1::kLanePad);
+    // A repeat field's is its tiling's (lane_horizons.hpp, tiled_field), built beside the tiling's heights.
+    const double layout =
+        shape.wrap == Wrap::clamp
+            ? 2.0 * 4.0 * double(std::max(shape.width, shape.height)) *
+                  double(std::min(shape.width, shape.height) + 2 * p1::kLanePad)
+            : 12.0 * std::max(p1::tiled_texels(shape.width, shape.height, true, p.wrap_periods),
+                              p1::tiled_texels(shape.width, shape.height, false, p.wrap_periods));
     const double search = p.horizon_distance ? 8 : 4;
     const double summing = (sums + block + normals + search + planes) * texels + layout;
     // While they are finished: the normals beside them, and the lights' sweeps.
-    const double finishing =
-        (finished + normals) * texels + double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers;
+    // A repeat field's lights search its tiling too.
+    const double lights = shape.wrap == Wrap::repeat && p.direct && p.lights ? layout : 0.0;
+    const double finishing = (finished + normals) * texels +
+                             double(sweep_buffer_bytes(field, p1_sweep_spec(p))) / 8 + workers + lights;
     return std::max(summing, finishing) - caller_layers * texels + far;
   }
   // Repeat fields: the strip search sums one direction block at a time (compute_p1), each through its own
@@ -562,7 +569,7 @@ P1Sums direction_sums(const Scene& scene, const P1Params& p, int k_begin, int k_
     hd = horizon_planes(distance_out ? distance_out : r.horizon_distance.data(), distance_out ? K : nb,
                         distance_out ? k_begin : 0, false, f.texel_count(), nb, scratch, true);
   const RowShading shade(scene, p, k_begin, r, hz.planes, hd.planes);
-  if (f.wrap == Wrap::repeat) {
+  if (!p1::lane_tiles(f.width, f.height, f.wrap, p.wrap_periods)) {
     strip_direction_sums(f, given_normals(scene, p), p, k_begin, k_end, rc, facets, shade);
   } else if (normals) {
     r.far_slack = lane_direction_sums(f, scene.curvature, p, k_begin, k_end, rc, facets, *normals, floor,
@@ -632,7 +639,8 @@ P1Result compute_p1(const Scene& scene, const P1Params& p, const RunControl& rc)
   // order `hfbake merge` adds the farm's shards in.
   P1Sums total;
   std::optional<FieldNormals> normals;  // the lane path's, shared by the blocks
-  if (scene.field.wrap == Wrap::clamp) normals = field_normals(scene, p);
+  if (p1::lane_tiles(scene.field.width, scene.field.height, scene.field.wrap, p.wrap_periods))
+    normals = field_normals(scene, p);
   CoarseHeights own;
   const std::unique_ptr<p1::FloorGrid> floor = p1_floor_grid(scene, p, own, scene.curvature);
   for (int b = 0; b < B; ++b) {
