@@ -748,10 +748,10 @@ TEST_F(Cli, P2sMemoryEstimateUnderAUniformSky) {
   expect_peak_near_estimate(dir_, p, "", 0.85, 1.15);
 }
 
-// A repeat field's lane search holds a copy of its tiling (lane_horizons.hpp, tiled_field: 15 times the
-// field's texels for a square one, 12 bytes each while the layout is built), the bake's largest part: a
-// 1024^2 tiling p1 bake and one with the sun's lights (which search the tiling again after the directions)
-// against their measured peaks, within 15 %.
+// A repeat field's lane search holds a copy of its tiling (lane_horizons.hpp, LaneLayout::build_tiled: 15
+// times the field's texels for a square one, 8 bytes each), the bake's largest part: a 1024^2 tiling p1 bake
+// and one with the sun's lights (which search the tiling again after the directions) against their measured
+// peaks, within 15 %.
 TEST_F(Cli, TheMemoryEstimateHoldsForARepeatFieldsTiling) {
   for (const bool sky : {false, true}) {
     nlohmann::json j =

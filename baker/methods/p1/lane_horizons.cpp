@@ -65,7 +65,7 @@ struct Sse2 {
 
 namespace {
 
-// Where f lies in its tiling (tiled_field): texel (i0, j0) of it is f's (0, 0); and the tiling's shape.
+// Where f lies in its tiling (tiled_shape): texel (i0, j0) of it is f's (0, 0); and the tiling's shape.
 void tiled_frame(int width, int height, bool xm, int periods, int* i0, int* j0, int* tw, int* th) {
   const long major = xm ? width : height, minor = xm ? height : width;
   // Across the major axis: a ray's drift over its span ((periods + 1) major periods, |g| <= 1) and the
@@ -93,97 +93,91 @@ bool lane_tiles(int width, int height, Wrap wrap, int periods) {
          kTiledTexels;
 }
 
-HeightField tiled_field(const HeightField& f, bool xm, int periods, int* i0, int* j0) {
-  int tw, th;
-  tiled_frame(f.width, f.height, xm, periods, i0, j0, &tw, &th);
+HeightField tiled_shape(const HeightField& f, bool xm, int periods) {
+  int i0, j0, tw, th;
+  tiled_frame(f.width, f.height, xm, periods, &i0, &j0, &tw, &th);
   HeightField t;
   static_cast<FieldShape&>(t) = f;
   t.width = tw, t.height = th, t.wrap = Wrap::clamp;
-  t.z.resize(std::size_t(tw) * std::size_t(th));
-  const int W = f.width, H = f.height;
-  const int ti0 = *i0, tj0 = *j0;
-  tbb::parallel_for(0, th, [&](int j) {
-    const float* row = f.z.data() + std::size_t((((j - tj0) % H) + H) % H) * std::size_t(W);
-    float* out = t.z.data() + std::size_t(j) * std::size_t(tw);
-    int i = 0, src = (((0 - ti0) % W) + W) % W;
-    while (i < tw) {  // whole runs of f's row
-      const int n = std::min(tw - i, W - src);
-      std::copy(row + src, row + src + n, out + i);
-      i += n, src = 0;
-    }
-  });
   return t;
 }
 
-void LaneLayout::build_tiled(const HeightField& f, const HeightField& tiled, bool xm, int periods) {
-  build(tiled, xm);
-  int i0, j0, tw, th;
-  tiled_frame(f.width, f.height, xm, periods, &i0, &j0, &tw, &th);
-  recv_u0 = xm ? i0 : j0, recv_u1 = recv_u0 + (xm ? f.width : f.height);
-  recv_v0 = xm ? j0 : i0, recv_v1 = recv_v0 + (xm ? f.height : f.width);
-  out_i0 = i0, out_j0 = j0, out_width = f.width;
-}
+namespace {
 
-void LaneLayout::build(const HeightField& f, bool xm) {
-  x_major = xm;
-  nmajor = xm ? f.width : f.height;
-  nminor = xm ? f.height : f.width;
-  recv_u0 = 0, recv_u1 = nmajor, recv_v0 = 0, recv_v1 = nminor;
-  out_i0 = 0, out_j0 = 0, out_width = f.width;
-  stride = nminor + 2 * kLanePad;
-  size = std::size_t(nmajor) * std::size_t(stride);
-  z = make_page_buffer<float>(size);
-  // The layout's rows (major indices) in parallel, a run of them at a time: for x_major, each of f's rows
-  // read once per run and spread over the run's rows.
+// Builds L from the heights of a width x height field whose texels [ib, ie) of row j rows(j, ib, ie, out)
+// writes to out (LaneLayout::build: a field's own; build_tiled: a repeat field's tiling, never held whole).
+template <class Rows>
+void build_rows(LaneLayout& L, int width, int height, bool xm, const Rows& rows) {
+  L.x_major = xm;
+  L.nmajor = xm ? width : height;
+  L.nminor = xm ? height : width;
+  L.recv_u0 = 0, L.recv_u1 = L.nmajor, L.recv_v0 = 0, L.recv_v1 = L.nminor;
+  L.out_i0 = 0, L.out_j0 = 0, L.out_width = width;
+  const std::ptrdiff_t stride = L.stride = L.nminor + 2 * kLanePad;
+  const int nmajor = L.nmajor, nminor = L.nminor;
+  L.size = std::size_t(nmajor) * std::size_t(stride);
+  L.z = make_page_buffer<float>(L.size);
+  float* z = L.z.get();
+  // The layout's rows (major indices) in parallel, a run of them at a time: for x_major, each field row's
+  // piece across the run read once and spread over the run's rows.
   tbb::parallel_for(tbb::blocked_range<int>(0, nmajor, 64), [&](const tbb::blocked_range<int>& run) {
     for (int u = run.begin(); u < run.end(); ++u) {
-      float* row = z.get() + std::ptrdiff_t(u) * stride;
+      float* row = z + std::ptrdiff_t(u) * stride;
       std::fill(row, row + kLanePad, kOffField);
       std::fill(row + kLanePad + nminor, row + stride, kOffField);
-      if (!xm) std::copy(f.z.data() + f.index(0, u), f.z.data() + f.index(0, u) + f.width, row + kLanePad);
+      if (!xm) rows(u, 0, width, row + kLanePad);
     }
-    if (xm)
-      for (int j = 0; j < f.height; ++j) {
-        const float* frow = f.z.data() + f.index(0, j);
-        for (int u = run.begin(); u < run.end(); ++u)
-          z[std::size_t(u) * std::size_t(stride) + kLanePad + j] = frow[u];
+    if (xm) {
+      constexpr int kPiece = 64;  // a blocked_range's run may exceed its grain size
+      float piece[kPiece];
+      for (int u0 = run.begin(); u0 < run.end(); u0 += kPiece) {
+        const int u1 = std::min(run.end(), u0 + kPiece);
+        for (int j = 0; j < height; ++j) {
+          rows(j, u0, u1, piece);
+          for (int u = u0; u < u1; ++u)
+            z[std::size_t(u) * std::size_t(stride) + kLanePad + j] = piece[u - u0];
+        }
       }
+    }
   });
   // The field's least-squares plane, tilt0 + tilt_major * u + tilt_minor * v at major index u, minor index
   // v (on a whole grid the two slopes are independent sums), and its largest |z|: each row's sums in
-  // parallel, added in row order (the same bits for any thread count).
-  zabs = 0;
+  // parallel (read back from the layout), added in row order (the same bits for any thread count).
+  L.zabs = 0;
   {
-    const double mi = 0.5 * double(f.width - 1), mj = 0.5 * double(f.height - 1);
-    std::vector<double> row_z(std::size_t(f.height)), row_iz(std::size_t(f.height));
-    std::vector<float> row_abs(std::size_t(f.height));
-    tbb::parallel_for(0, f.height, [&](int j) {
-      const float* row = f.z.data() + f.index(0, j);
+    const double mi = 0.5 * double(width - 1), mj = 0.5 * double(height - 1);
+    std::vector<double> row_z(static_cast<std::size_t>(height)), row_iz(static_cast<std::size_t>(height));
+    std::vector<float> row_abs(static_cast<std::size_t>(height));
+    tbb::parallel_for(0, height, [&](int j) {
+      // Texel (i, j) of the field: z[u * stride + kLanePad + v] with (u, v) = (i, j) if x_major, else (j, i).
+      const float* at = z + kLanePad + (xm ? std::ptrdiff_t(j) : std::ptrdiff_t(j) * stride);
+      const std::ptrdiff_t step = xm ? stride : 1;
       double rz = 0, riz = 0;
       float a = 0;
-      for (int i = 0; i < f.width; ++i) {
-        rz += double(row[i]), riz += (double(i) - mi) * double(row[i]);
-        a = fmax_(a, std::fabs(row[i]));
+      for (int i = 0; i < width; ++i) {
+        const float v = at[std::ptrdiff_t(i) * step];
+        rz += double(v), riz += (double(i) - mi) * double(v);
+        a = fmax_(a, std::fabs(v));
       }
       row_z[std::size_t(j)] = rz, row_iz[std::size_t(j)] = riz, row_abs[std::size_t(j)] = a;
     });
     double sz = 0, siz = 0, sjz = 0;
-    for (int j = 0; j < f.height; ++j) {
+    for (int j = 0; j < height; ++j) {
       const double rz = row_z[std::size_t(j)];
       sz += rz, siz += row_iz[std::size_t(j)], sjz += (double(j) - mj) * rz;
-      zabs = fmax_(zabs, row_abs[std::size_t(j)]);
+      L.zabs = fmax_(L.zabs, row_abs[std::size_t(j)]);
     }
-    const double n = double(f.width) * double(f.height);
+    const double n = double(width) * double(height);
     // sum over the grid of (i - mi)^2 is height * w (w^2 - 1) / 12, and of (j - mj)^2 width * h (h^2 - 1)
     // / 12.
-    const double w = double(f.width), h = double(f.height);
-    const double a = f.width > 1 ? siz / (h * w * (w * w - 1) / 12) : 0.0;
-    const double b = f.height > 1 ? sjz / (w * h * (h * h - 1) / 12) : 0.0;
+    const double w = double(width), h = double(height);
+    const double a = width > 1 ? siz / (h * w * (w * w - 1) / 12) : 0.0;
+    const double b = height > 1 ? sjz / (w * h * (h * h - 1) / 12) : 0.0;
     const double c = sz / n - a * mi - b * mj;
     if (std::isfinite(a) && std::isfinite(b) && std::isfinite(c)) {
-      tilt0 = c;
-      tilt_major = xm ? a : b;
-      tilt_minor = xm ? b : a;
+      L.tilt0 = c;
+      L.tilt_major = xm ? a : b;
+      L.tilt_minor = xm ? b : a;
     }
   }
   // window[at] = the highest of z less the plane over [at, at + kLaneWindow) within the major index's row
@@ -195,19 +189,19 @@ void LaneLayout::build(const HeightField& f, bool xm) {
   double pabs = 0;  // the plane's largest |value| on the field (at a corner)
   for (const double u : {0.0, double(nmajor - 1)})
     for (const double v : {0.0, double(nminor - 1)})
-      pabs = std::max(pabs, std::fabs(tilt0 + tilt_major * u + tilt_minor * v));
-  plane_abs = float(pabs);
-  const float margin = (zabs + plane_abs) * 0x1p-20f;
-  window = make_page_buffer<float>(size);
+      pabs = std::max(pabs, std::fabs(L.tilt0 + L.tilt_major * u + L.tilt_minor * v));
+  L.plane_abs = float(pabs);
+  const float margin = (L.zabs + L.plane_abs) * 0x1p-20f;
+  L.window = make_page_buffer<float>(L.size);
   tbb::parallel_for(tbb::blocked_range<int>(0, nmajor, 64), [&](const tbb::blocked_range<int>& run) {
     std::vector<float> level(static_cast<std::size_t>(stride));  // a row of z less the plane
     for (int u = run.begin(); u < run.end(); ++u) {
-      const float* r = z.get() + std::ptrdiff_t(u) * stride;
-      float* w = window.get() + std::ptrdiff_t(u) * stride;
-      const double pu = tilt0 + tilt_major * double(u);
+      const float* r = z + std::ptrdiff_t(u) * stride;
+      float* w = L.window.get() + std::ptrdiff_t(u) * stride;
+      const double pu = L.tilt0 + L.tilt_major * double(u);
       for (std::ptrdiff_t i = 0; i < stride; ++i)
         level[std::size_t(i)] =
-            r[i] == kOffField ? kOffField : r[i] - float(pu + tilt_minor * double(i - kLanePad));
+            r[i] == kOffField ? kOffField : r[i] - float(pu + L.tilt_minor * double(i - kLanePad));
       for (std::ptrdiff_t i = 0; i < stride; ++i) {
         float m = kOffField;
         for (std::ptrdiff_t t = i; t < std::min<std::ptrdiff_t>(stride, i + kLaneWindow); ++t)
@@ -216,6 +210,33 @@ void LaneLayout::build(const HeightField& f, bool xm) {
       }
     }
   });
+}
+
+}  // namespace
+
+void LaneLayout::build(const HeightField& f, bool xm) {
+  build_rows(*this, f.width, f.height, xm, [&](int j, int ib, int ie, float* out) {
+    std::copy(f.z.data() + f.index(ib, j), f.z.data() + f.index(ie, j), out);
+  });
+}
+
+void LaneLayout::build_tiled(const HeightField& f, bool xm, int periods) {
+  int i0, j0, tw, th;
+  tiled_frame(f.width, f.height, xm, periods, &i0, &j0, &tw, &th);
+  const int W = f.width, H = f.height;
+  // Texels [ib, ie) of the tiling's row j: runs of f's row (j - j0) mod H from column (ib - i0) mod W.
+  build_rows(*this, tw, th, xm, [&](int j, int ib, int ie, float* out) {
+    const float* row = f.z.data() + f.index(0, (((j - j0) % H) + H) % H);
+    int i = ib, src = (((ib - i0) % W) + W) % W;
+    while (i < ie) {
+      const int n = std::min(ie - i, W - src);
+      std::copy(row + src, row + src + n, out + (i - ib));
+      i += n, src = 0;
+    }
+  });
+  recv_u0 = xm ? i0 : j0, recv_u1 = recv_u0 + (xm ? f.width : f.height);
+  recv_v0 = xm ? j0 : i0, recv_v1 = recv_v0 + (xm ? f.height : f.width);
+  out_i0 = i0, out_j0 = j0, out_width = f.width;
 }
 
 namespace {

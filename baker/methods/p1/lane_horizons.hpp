@@ -82,9 +82,9 @@ struct LaneLayout {
   int out_i0 = 0, out_j0 = 0, out_width = 0;
 
   void build(const HeightField& f, bool x_major);
-  // A repeat field's rays searched as a clamp field's: the layout of `tiled` (tiled_field's), whose texels
-  // of the repeat field f are searched, at f's own index.
-  void build_tiled(const HeightField& f, const HeightField& tiled, bool x_major, int periods);
+  // A repeat field's rays searched as a clamp field's: the layout of f's tiling (tiled_shape's, its heights
+  // read from f as they are laid out, never held whole), whose texels of f are searched, at f's own index.
+  void build_tiled(const HeightField& f, bool x_major, int periods);
   std::size_t bytes() const { return 2 * size * sizeof(float); }
 };
 
@@ -169,10 +169,11 @@ inline double lane_intercept_origin(const LaneLayout& L, const LaneDirection& d)
 // texel's own along the major axis. The same rays on a clamp field: the tiling with `periods` periods on
 // either side of f along the major axis and, across it, as far as a ray drifts over that span (at most
 // periods + 1 periods of the major axis, |g| <= 1), whose border ends each ray where its line starts.
-// tiled_field builds it (f at (i0, j0) of it), tiled_texels counts it, and lane_tiles says whether a bake
-// searches f so (clamp fields always; repeat ones while the tiling stays within kTiledTexels).
-inline constexpr double kTiledTexels = double(std::size_t(1) << 26);
-HeightField tiled_field(const HeightField& f, bool x_major, int periods, int* i0, int* j0);
+// tiled_shape is its shape (no heights: LaneLayout::build_tiled lays them out), tiled_texels counts it, and
+// lane_tiles says whether a bake searches f so (clamp fields always; repeat ones while the tiling stays
+// within kTiledTexels: 8 bytes a texel of it, 2 GiB).
+inline constexpr double kTiledTexels = double(std::size_t(1) << 28);
+HeightField tiled_shape(const HeightField& f, bool x_major, int periods);
 double tiled_texels(int width, int height, bool x_major, int periods);
 bool lane_tiles(int width, int height, Wrap wrap, int periods);
 
@@ -208,13 +209,13 @@ void lane_search_avx512(const HeightField& f, const LaneLayout& layout, const La
 struct LaneReuse {
   int axis = -1;  // the layout's (0: x-major, 1: y-major), -1: none built
   LaneLayout layout;
-  HeightField shape;  // a repeat field's tiling (tiled_field), its shape alone
+  HeightField shape;  // a repeat field's tiling (tiled_shape)
   std::vector<float> slope;
   std::vector<std::int32_t> which;
 };
 
 // Every texel's horizon in the directions ks of spec (lane_plan's rays), clamp fields (and repeat fields
-// through their tiling, wrap_periods its periods: tiled_field): the directions of
+// through their tiling, wrap_periods its periods: tiled_shape): the directions of
 // one axis at a time (the x-major ones first, each group in the order of ks), so one LaneLayout is held at
 // a time; after each direction's search, done(sd, d, slope, which) with lane_search's slope and which of
 // every texel (which: null unless casters). rc.check() before each direction. reuse: kept between calls
@@ -240,11 +241,8 @@ void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vec
     if (r.axis != axis) {
       r.layout = LaneLayout();  // the other axis' freed before this one is built
       if (f.wrap == Wrap::repeat) {
-        int i0 = 0, j0 = 0;
-        HeightField tiled = tiled_field(f, axis == 0, wrap_periods, &i0, &j0);
-        r.layout.build_tiled(f, tiled, axis == 0, wrap_periods);
-        tiled.z = std::vector<float>();
-        r.shape = std::move(tiled);  // the searches need its shape alone
+        r.layout.build_tiled(f, axis == 0, wrap_periods);
+        r.shape = tiled_shape(f, axis == 0, wrap_periods);
       } else {
         r.layout.build(f, axis == 0);
       }

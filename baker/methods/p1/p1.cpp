@@ -261,13 +261,13 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
     const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
     // While the directions are summed: the sums, a block's, the normals, one direction's slopes (and casters
     // for horizon_distance), and one axis' lane layout (heights and window maxima, padded on the minor axis).
-    // A repeat field's is its tiling's (lane_horizons.hpp, tiled_field), built beside the tiling's heights.
+    // A repeat field's is its tiling's (lane_horizons.hpp, LaneLayout::build_tiled).
     const double layout =
         shape.wrap == Wrap::clamp
             ? 2.0 * 4.0 * double(std::max(shape.width, shape.height)) *
                   double(std::min(shape.width, shape.height) + 2 * p1::kLanePad)
-            : 12.0 * std::max(p1::tiled_texels(shape.width, shape.height, true, p.wrap_periods),
-                              p1::tiled_texels(shape.width, shape.height, false, p.wrap_periods));
+            : 8.0 * std::max(p1::tiled_texels(shape.width, shape.height, true, p.wrap_periods),
+                             p1::tiled_texels(shape.width, shape.height, false, p.wrap_periods));
     const double search = p.horizon_distance ? 8 : 4;
     const double summing = (sums + block + normals + search + planes) * texels + layout;
     // While they are finished: the normals beside them, and the lights' sweeps.
