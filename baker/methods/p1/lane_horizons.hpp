@@ -164,11 +164,11 @@ inline double lane_intercept_origin(const LaneLayout& L, const LaneDirection& d)
   return std::min(0.0, -d.g * double(L.nmajor - 1));
 }
 
-// A repeat field's rays on the lanes. The strip search (far_horizons.hpp) follows a texel's ray through the
-// tiling to the start of its sweep line: `periods` (P1Params::wrap_periods) whole periods beyond the
-// texel's own along the major axis. The same rays on a clamp field: the tiling with `periods` periods on
-// either side of f along the major axis and, across it, as far as a ray drifts over that span (at most
-// periods + 1 periods of the major axis, |g| <= 1), whose border ends each ray where its line starts.
+// A repeat field's rays on the lanes. A repeat field's ray runs through the tiling to where its sweep line
+// starts (the sweep's warm-up, sweep/sweep_lines.hpp): `periods` (P1Params::wrap_periods) whole periods
+// beyond the texel's own along the major axis. The same rays on a clamp field: the tiling with `periods`
+// periods on either side of f along the major axis and, across it, as far as a ray drifts over that span (at
+// most periods + 1 periods of the major axis, |g| <= 1), whose border ends each ray where its line starts.
 // tiled_shape is its shape (no heights: LaneLayout::build_tiled lays them out), tiled_texels counts it, and
 // lane_tiles says whether a bake searches f so (clamp fields always; repeat ones while the tiling stays
 // within kTiledTexels: 8 bytes a texel of it, 2 GiB).
