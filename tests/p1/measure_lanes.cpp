@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
     p1::LaneDirection d;
     const double a = cpu_now();
     d.build(f, L[xm ? 0 : 1], sd.dx, sd.dy);
-    p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope.data(),
+    p1::lane_search(L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope.data(),
                     which.data(), &st, p1::LaneIsa::avx2);
     const double b = cpu_now();
     search_s += b - a;
@@ -72,17 +72,17 @@ int main(int argc, char** argv) {
     }
     std::vector<float> slope0(slope.size());
     const double c0 = cpu_now();
-    p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope0.data(),
+    p1::lane_search(L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope0.data(),
                     nullptr, nullptr, p1::LaneIsa::avx2);
     bare_s += cpu_now() - c0;
     if (p1::lane_isa_available(p1::LaneIsa::avx512)) {
       std::vector<float> slope5(slope.size());
       std::vector<std::int32_t> which5(slope.size());
       const double e0 = cpu_now();
-      p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope5.data(),
+      p1::lane_search(L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope5.data(),
                       nullptr, nullptr, p1::LaneIsa::avx512);
       avx512_s += cpu_now() - e0;
-      p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope5.data(),
+      p1::lane_search(L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope5.data(),
                       which5.data(), nullptr, p1::LaneIsa::avx512);
       if (std::memcmp(slope.data(), slope5.data(), slope.size() * 4) != 0 || which != which5)
         std::printf("direction %d: AVX2 and AVX-512 differ\n", k);
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
     std::vector<float> slope2(slope.size());
     std::vector<std::int32_t> which2(slope.size());
     const double b1 = cpu_now();
-    p1::lane_search(f, L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope2.data(),
+    p1::lane_search(L[xm ? 0 : 1], d, 0, p1::lane_strip_count(L[xm ? 0 : 1], d), tol, S, slope2.data(),
                     which2.data(), nullptr, p1::LaneIsa::sse2);
     const double b2 = cpu_now();
     sse_s += b2 - b1;

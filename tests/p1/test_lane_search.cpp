@@ -87,11 +87,11 @@ void check(const HeightField& f, const char* name, float tolerance, double curva
     p1::LaneDirection d;
     d.build(f, L, sd.dx, sd.dy, curvature);
     const int strips = p1::lane_strip_count(L, d);
-    p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope.data(), which.data(), nullptr,
+    p1::lane_search(L, d, 0, strips, tolerance, scratch, slope.data(), which.data(), nullptr,
                     p1::LaneIsa::sse2);
     for (const p1::LaneIsa isa : {p1::LaneIsa::avx2, p1::LaneIsa::avx512}) {
       if (!p1::lane_isa_available(isa)) continue;
-      p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope2.data(), which2.data(), nullptr, isa);
+      p1::lane_search(L, d, 0, strips, tolerance, scratch, slope2.data(), which2.data(), nullptr, isa);
       EXPECT_EQ(std::memcmp(slope.data(), slope2.data(), N * sizeof(float)), 0) << name << " k " << k;
       EXPECT_EQ(which, which2) << name << " k " << k;
     }
@@ -99,7 +99,7 @@ void check(const HeightField& f, const char* name, float tolerance, double curva
     for (const p1::LaneIsa isa : {p1::LaneIsa::sse2, p1::LaneIsa::avx2, p1::LaneIsa::avx512}) {
       if (!p1::lane_isa_available(isa)) continue;
       std::fill(slope2.begin(), slope2.end(), 0.0f);
-      p1::lane_search(f, L, d, 0, strips, tolerance, scratch, slope2.data(), nullptr, nullptr, isa);
+      p1::lane_search(L, d, 0, strips, tolerance, scratch, slope2.data(), nullptr, nullptr, isa);
       EXPECT_EQ(std::memcmp(slope.data(), slope2.data(), N * sizeof(float)), 0)
           << name << " k " << k << " without casters";
     }
@@ -183,10 +183,10 @@ TEST(LaneSearch, PruningKeepsTheSteepestCrossingBitForBit) {
       p1::LaneDirection d;
       d.build(f, layouts[a], sd.dx, sd.dy);
       const int strips = p1::lane_strip_count(layouts[a], d);
-      p1::lane_search(f, layouts[a], d, 0, strips, 0.0f, scratch, pruned.data(), nullptr);
+      p1::lane_search(layouts[a], d, 0, strips, 0.0f, scratch, pruned.data(), nullptr);
       p1::LaneDirection every = d;
       every.end_below = false;  // nor ended where nothing ahead is higher
-      p1::lane_search(f, open[a], every, 0, strips, 0.0f, scratch, all.data(), nullptr);
+      p1::lane_search(open[a], every, 0, strips, 0.0f, scratch, all.data(), nullptr);
       long on_field = 0, differ = 0;
       for (std::size_t t = 0; t < N; ++t) {
         if (!(all[t] > -1e20f)) continue;  // no crossing on the field (-inf, or only the padding's)

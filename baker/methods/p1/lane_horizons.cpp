@@ -93,6 +93,13 @@ bool lane_tiles(int width, int height, Wrap wrap, int periods) {
          kTiledTexels;
 }
 
+double lane_layout_bytes(int width, int height, Wrap wrap, int periods) {
+  if (wrap == Wrap::clamp)  // heights and window maxima, padded on the minor axis
+    return 2.0 * 4.0 * double(std::max(width, height)) * double(std::min(width, height) + 2 * kLanePad);
+  return 8.0 *
+         std::max(tiled_texels(width, height, true, periods), tiled_texels(width, height, false, periods));
+}
+
 HeightField tiled_shape(const HeightField& f, bool xm, int periods) {
   int i0, j0, tw, th;
   tiled_frame(f.width, f.height, xm, periods, &i0, &j0, &tw, &th);
@@ -370,17 +377,16 @@ void LaneScratch::size_for(int n) {
   trend.assign(std::size_t(n), 0.0f);
 }
 
-void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
-                 float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats,
-                 LaneIsa isa) {
+void lane_search(const LaneLayout& layout, const LaneDirection& d, int s0, int s1, float tolerance,
+                 LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats, LaneIsa isa) {
   scratch.size_for(layout.nmajor);
   if (isa == LaneIsa::best) isa = lane_isa();
   if (isa == LaneIsa::avx512)
-    lane_search_avx512(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
+    lane_search_avx512(layout, d, s0, s1, tolerance, scratch, slope, which, stats);
   else if (isa == LaneIsa::avx2)
-    lane_search_avx2(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
+    lane_search_avx2(layout, d, s0, s1, tolerance, scratch, slope, which, stats);
   else
-    lane_search_any<Sse2>(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
+    lane_search_any<Sse2>(layout, d, s0, s1, tolerance, scratch, slope, which, stats);
 }
 
 bool lane_isa_available(LaneIsa isa) {

@@ -176,6 +176,9 @@ inline constexpr double kTiledTexels = double(std::size_t(1) << 28);
 HeightField tiled_shape(const HeightField& f, bool x_major, int periods);
 double tiled_texels(int width, int height, bool x_major, int periods);
 bool lane_tiles(int width, int height, Wrap wrap, int periods);
+// The larger of the two axes' lane layouts of a width x height field (build, or build_tiled on a repeat
+// field), bytes: what a search holds beside its slopes.
+double lane_layout_bytes(int width, int height, Wrap wrap, int periods);
 
 // The instruction set a search runs on (the same bits on each): best = lane_isa(). sse2 < avx2 < avx512.
 enum class LaneIsa { best, sse2, avx2, avx512 };
@@ -186,22 +189,20 @@ bool lane_isa_available(LaneIsa isa);
 // std::invalid_argument naming the variable on any other value.
 LaneIsa lane_isa();
 
-// Searches the groups of strips [s0, s1): for every texel (i, j) of them, slope[f.index(i, j)] = the
-// steepest slope (rise / run) of any crossing of its ray (-inf: none on the field) and which[...] that
-// crossing's index in d.crossings (-1: none); which null: the slopes alone (the same ones, a little
-// sooner). Clamp fields, or a repeat field's tiling (LaneLayout::build_tiled), whose outputs are indexed
-// by the layout's out_*.
-void lane_search(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
-                 float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
-                 LaneStats* stats = nullptr, LaneIsa isa = LaneIsa::best);
+// Searches the groups of strips [s0, s1): for every texel (i, j) of them the layout searches (recv_*),
+// slope[(j - out_j0) * out_width + i - out_i0] = the steepest slope (rise / run) of any crossing of its ray
+// (-inf: none on the field) and which[...] that crossing's index in d.crossings (-1: none); which null: the
+// slopes alone (the same ones, a little sooner). A clamp field's own layout indexes them as the field
+// does; a repeat field's tiling (LaneLayout::build_tiled), as the repeat field does.
+void lane_search(const LaneLayout& layout, const LaneDirection& d, int s0, int s1, float tolerance,
+                 LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats = nullptr,
+                 LaneIsa isa = LaneIsa::best);
 // The AVX2 kernel (lane_horizons_avx2.cpp); call lane_search instead.
-void lane_search_avx2(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
-                      float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
-                      LaneStats* stats);
+void lane_search_avx2(const LaneLayout& layout, const LaneDirection& d, int s0, int s1, float tolerance,
+                      LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats);
 // The AVX-512F kernel (lane_horizons_avx512.cpp); call lane_search instead.
-void lane_search_avx512(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0,
-                        int s1, float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
-                        LaneStats* stats);
+void lane_search_avx512(const LaneLayout& layout, const LaneDirection& d, int s0, int s1, float tolerance,
+                        LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats);
 
 // What lane_directions keeps from one call to the next on the same field (a bake's direction blocks): the
 // last lane layout it built, so a block whose first axis is the previous block's last does not build it
@@ -257,7 +258,7 @@ void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vec
       int s0 = 0, s1 = 0;
       lane_strip_range(layout, d, &s0, &s1);
       tbb::parallel_for(tbb::blocked_range<int>(s0, s1, 2), [&](const tbb::blocked_range<int>& r) {
-        lane_search(shape, layout, d, r.begin(), r.end(), tolerance, scratch.local(), slope, which);
+        lane_search(layout, d, r.begin(), r.end(), tolerance, scratch.local(), slope, which);
       });
       done(sd, d, static_cast<const float*>(slope), static_cast<const std::int32_t*>(which));
     }

@@ -44,10 +44,9 @@ struct Avx2 {
 
 }  // namespace
 
-void lane_search_avx2(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0, int s1,
-                      float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
-                      LaneStats* stats) {
-  lane_search_any<Avx2>(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
+void lane_search_avx2(const LaneLayout& layout, const LaneDirection& d, int s0, int s1, float tolerance,
+                      LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats) {
+  lane_search_any<Avx2>(layout, d, s0, s1, tolerance, scratch, slope, which, stats);
 }
 
 }  // namespace hfbake::p1

@@ -45,10 +45,9 @@ struct Avx512 {
 
 }  // namespace
 
-void lane_search_avx512(const HeightField& f, const LaneLayout& layout, const LaneDirection& d, int s0,
-                        int s1, float tolerance, LaneScratch& scratch, float* slope, std::int32_t* which,
-                        LaneStats* stats) {
-  lane_search_any<Avx512>(f, layout, d, s0, s1, tolerance, scratch, slope, which, stats);
+void lane_search_avx512(const LaneLayout& layout, const LaneDirection& d, int s0, int s1, float tolerance,
+                        LaneScratch& scratch, float* slope, std::int32_t* which, LaneStats* stats) {
+  lane_search_any<Avx512>(layout, d, s0, s1, tolerance, scratch, slope, which, stats);
 }
 
 }  // namespace hfbake::p1

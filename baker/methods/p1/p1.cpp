@@ -58,12 +58,13 @@ p1::FarHorizonWorker make_ray_worker(const HeightField& f, const P1Params& p) {
   return w;
 }
 
-// The lane search (lane_horizons.hpp) for directions [k_begin, k_end) of a clamp field: per axis the
-// field's lane layout, per direction every texel's exact horizon (slope and caster), then
-// shade(k, base, w, NX, NY, NZ, FX, FY, FZ, e, dist) per run of at most 32 texels of a row. The directions
-// are visited by axis (x-major ones first), so one layout is held at a time. Every texel's normal (normal_at)
-// and, for P2's facet sums, its corner facets' (corner_facet_normals, [c * N + texel]), as the lane path's
-// shading reads them: computed once per bake, shared by its direction blocks.
+// The lane search (lane_horizons.hpp) for directions [k_begin, k_end) of a clamp field or of a repeat one
+// whose tiling it takes (lane_tiles): per axis the field's lane layout (its tiling's), per direction every
+// texel's exact horizon (slope and caster), then shade(k, base, w, NX, NY, NZ, FX, FY, FZ, e, dist) per run
+// of at most 32 texels of a row. The directions are visited by axis (x-major ones first), so one layout is
+// held at a time. Every texel's normal (normal_at) and, for P2's facet sums, its corner facets'
+// (corner_facet_normals, [c * N + texel]), as the lane path's shading reads them: computed once per bake,
+// shared by its direction blocks.
 struct FieldNormals {
   std::vector<float> nx, ny, nz, fx, fy, fz;  // empty when the lighting reads no normals
 };
@@ -260,14 +261,8 @@ double p1_working_bytes(const FieldShape& shape, const P1Params& p, bool uniform
     const double normals = shading_reads_normals(p) ? 12 + (facets ? 12 * CF : 0) : 0;
     const double block = direction_block_count(p.directions) > 1 ? sums : 0;  // one block's beside the total
     // While the directions are summed: the sums, a block's, the normals, one direction's slopes (and casters
-    // for horizon_distance), and one axis' lane layout (heights and window maxima, padded on the minor axis).
-    // A repeat field's is its tiling's (lane_horizons.hpp, LaneLayout::build_tiled).
-    const double layout =
-        shape.wrap == Wrap::clamp
-            ? 2.0 * 4.0 * double(std::max(shape.width, shape.height)) *
-                  double(std::min(shape.width, shape.height) + 2 * p1::kLanePad)
-            : 8.0 * std::max(p1::tiled_texels(shape.width, shape.height, true, p.wrap_periods),
-                             p1::tiled_texels(shape.width, shape.height, false, p.wrap_periods));
+    // for horizon_distance), and one axis' lane layout (a repeat field's: its tiling's).
+    const double layout = p1::lane_layout_bytes(shape.width, shape.height, shape.wrap, p.wrap_periods);
     const double search = p.horizon_distance ? 8 : 4;
     const double summing = (sums + block + normals + search + planes) * texels + layout;
     // While they are finished: the normals beside them, and the lights' sweeps.
@@ -317,8 +312,9 @@ namespace {
 
 // A bake of directions [k_begin, k_end) in three phases: the block's sums, zero, shaped for the layers
 // asked for (zero_sums); the lighting of a row run of texels from their horizons (RowShading); and the
-// horizons themselves, by the lane search on clamp fields (lane_direction_sums) or the strip search on
-// repeat fields (strip_direction_sums), each handing RowShading its horizons a row run at a time.
+// horizons themselves, by the lane search (lane_direction_sums) or, on a repeat field too large for its
+// tiling (lane_tiles), the strip search (strip_direction_sums), each handing RowShading its horizons a row
+// run at a time.
 
 // The block's accumulators: only what the requested layers need, each the layer it becomes (p1_finish
 // finishes them in place); the horizon layers' own arrays when the caller gives none (own_horizon,
