@@ -383,6 +383,74 @@ std::string unitless_heights_note(const std::string& pixel_unit, double pixel_un
          "; heights in metres need height_scale " + short_num(1 / pixel_unit_metres);
 }
 
+namespace {
+
+// Where most of a field's heights lie: the 1st and 99th percentiles (of every texel up to 2^20 of them, of
+// every s-th beyond), and the texels standing out of that band by more than `apart` world units: how many,
+// the farthest (i, j) and how far.
+struct HeightBand {
+  double lo = 0, hi = 0;
+  std::size_t outliers = 0;
+  int i = 0, j = 0;
+  double farthest = 0;
+};
+
+HeightBand height_band(const HeightField& f, double apart) {
+  const std::size_t n = f.z.size(), s = (n + (std::size_t(1) << 20) - 1) >> 20;
+  std::vector<float> sample;
+  sample.reserve(n / s + 1);
+  for (std::size_t t = 0; t < n; t += s) sample.push_back(f.z[t]);
+  const std::size_t m = sample.size();
+  const auto at = [&](std::size_t rank) {
+    std::nth_element(sample.begin(), sample.begin() + std::ptrdiff_t(rank), sample.end());
+    return double(sample[rank]);
+  };
+  HeightBand b;
+  b.lo = at((m - 1) / 100);
+  b.hi = at(m - 1 - (m - 1) / 100);
+  for (std::size_t t = 0; t < n; ++t) {
+    const double z = f.z[t], off = z > b.hi ? z - b.hi : z < b.lo ? b.lo - z : 0.0;
+    if (off <= apart) continue;
+    ++b.outliers;
+    if (off > b.farthest)
+      b.farthest = off, b.i = int(t % std::size_t(f.width)), b.j = int(t / std::size_t(f.width));
+  }
+  return b;
+}
+
+// A georeferenced raster's texels stored as exactly 0 (world height `zero`) where one reaches a corner of
+// the field: how many, that corner, and how far the 1st percentile of the other heights (sampled as
+// height_band's) lies above them. The fill a reprojection leaves outside its source (gdalwarp without
+// -dstnodata) looks so; count 0 when no corner is such a texel.
+struct ZeroFill {
+  std::size_t count = 0;
+  int i = 0, j = 0;
+  double below = 0;
+};
+
+ZeroFill zero_fill(const HeightField& f, float zero) {
+  ZeroFill z;
+  const int corners[4][2] = {{0, 0}, {f.width - 1, 0}, {0, f.height - 1}, {f.width - 1, f.height - 1}};
+  const auto corner = std::find_if(std::begin(corners), std::end(corners),
+                                   [&](const int* c) { return f.z[f.index(c[0], c[1])] == zero; });
+  if (corner == std::end(corners)) return z;
+  const std::size_t n = f.z.size(), s = (n + (std::size_t(1) << 20) - 1) >> 20;
+  std::vector<float> rest;
+  for (std::size_t t = 0; t < n; ++t) {
+    if (f.z[t] == zero)
+      ++z.count;
+    else if (t % s == 0)
+      rest.push_back(f.z[t]);
+  }
+  if (rest.empty()) return {};
+  const std::size_t rank = (rest.size() - 1) / 100;
+  std::nth_element(rest.begin(), rest.begin() + std::ptrdiff_t(rank), rest.end());
+  z.i = (*corner)[0], z.j = (*corner)[1], z.below = double(rest[rank]) - double(zero);
+  return z;
+}
+
+}  // namespace
+
 std::string heights_warning(const Scene& scene) {
   const HeightSource& s = scene.height_source;
   const HeightField& f = scene.field;
@@ -413,6 +481,35 @@ std::string heights_warning(const Scene& scene) {
               " % of the field's " + short_num(extent) +
               "-unit side: nearly flat, the bake will be close to unoccluded; if the heights are meant "
               "higher, set " +
+              scale_hint;
+  } else if (const ZeroFill fill = f.z.size() == f.texel_count() && !scene.georeference.crs_wkt.empty()
+                                       ? zero_fill(f, float(s.offset))
+                                       : ZeroFill{};
+             fill.count > 0 && fill.below > 0.01 * extent) {
+    // Sea level lies next to low ground (a beach), so a coast is no such fill.
+    char share[32];
+    std::snprintf(share, sizeof share, "%.3g", 100.0 * double(fill.count) / double(f.texel_count()));
+    warning = std::to_string(fill.count) + " texels (" + share + " %) are stored as exactly 0, the corner (" +
+              std::to_string(fill.i) + ", " + std::to_string(fill.j) + ") among them, " +
+              short_num(fill.below) +
+              " world units or more below 99 % of the other heights: the fill a reprojection leaves outside "
+              "its source (gdalwarp without -dstnodata)? Baked as they are, they are ground that far down; "
+              "declare them NoData (\"nodata_value\": 0 with \"nodata\": \"fill\" in height, or gdalwarp "
+              "-dstnodata -9999) (docs/gis.md)";
+  } else if (const HeightBand band = f.z.size() == f.texel_count() && scene.georeference.crs_wkt.empty()
+                                         ? height_band(f, 0.005 * extent)
+                                         : HeightBand{};
+             band.outliers > 0 && band.hi - band.lo < 0.01 * extent) {
+    // A nearly flat map whose range a few texels set (a marker, a hot pixel, a white border): its relief
+    // looks plausible, yet the bake is close to unoccluded away from them.
+    warning = "98 % of the heights lie within " + short_num(band.hi - band.lo) + " world units (" +
+              short_num(100 * (band.hi - band.lo) / extent) + " % of the field's " + short_num(extent) +
+              "-unit side: nearly flat), but " + std::to_string(band.outliers) +
+              (band.outliers == 1 ? " texel stands" : " texels stand") + " out of them by up to " +
+              short_num(band.farthest) + " (the farthest at texel (" + std::to_string(band.i) + ", " +
+              std::to_string(band.j) + ")) and set the relief of " + short_num(relief) +
+              ": away from them the bake will be close to unoccluded; if they are markers, a border or "
+              "noise, remove them from the image; if the heights are meant higher, set " +
               scale_hint;
   } else if (relief > 4 * extent) {
     warning = "the relief (" + short_num(relief) + " world units) is " + short_num(relief / extent) +

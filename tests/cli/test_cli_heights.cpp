@@ -301,6 +301,46 @@ TEST_F(CliHeights, ValidateStatesTheRangeAndWarnsOnImplausibleRelief) {
   EXPECT_NE(r.err.find("through GDAL"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
 
+  // A nearly flat map whose relief one stray texel sets (a 16-bit image of 0 .. 3 with a marker at 65535):
+  // the relief looks plausible, yet the bake is close to unoccluded; validate names the texel.
+  std::vector<float> marked(std::size_t(kSide) * kSide);
+  for (int j = 0; j < kSide; ++j)
+    for (int i = 0; i < kSide; ++i) marked[std::size_t(j) * kSide + i] = float((i / 7 + j / 5) % 4);
+  marked[std::size_t(7) * kSide + 5] = 65535;
+  write_image("marked.png", marked, OIIO::TypeDesc::UINT16);
+  r = hfbake("validate " +
+             write_job("marked", {{"image", "marked.png"}, {"height_scale", 20.0 / 65535}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("but 1 texel stands out of them by up to 19.99"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(the farthest at texel (5, 7))"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("nearly flat"), std::string::npos) << r.err;
+
+  // A reprojection's fill: a georeferenced raster's corners stored as 0 beside terrain 250 units up is
+  // warned, naming the corner; a coast, its sea at 0 beside a beach rising from it, is not.
+  std::vector<float> warped(std::size_t(kSide) * kSide), coast(warped.size());
+  for (int j = 0; j < kSide; ++j)
+    for (int i = 0; i < kSide; ++i) {
+      const std::size_t t = std::size_t(j) * kSide + i;
+      warped[t] = i + j < 12 ? 0.0f : 250.0f + float((i * 7 + j * 3) % 11);
+      coast[t] = i < 16 ? 0.0f : 0.2f * float(i - 15) + 0.1f * float((i * 7 + j * 3) % 3);
+    }
+  for (const char* name : {"warped", "coast"}) {
+    write_image(std::string(name) + ".tif", name[0] == 'w' ? warped : coast, OIIO::TypeDesc::FLOAT);
+    std::ofstream(dir_ / (std::string(name) + ".tif.aux.xml"))
+        << "<PAMDataset>\n  <SRS>EPSG:32633</SRS>\n"
+           "  <GeoTransform>500000, 1, 0, 6500048, 0, -1</GeoTransform>\n"
+           "</PAMDataset>\n";
+  }
+  r = hfbake("validate " + write_job("warped", {{"image", "warped.tif"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("78 texels (3.39 %) are stored as exactly 0, the corner (0, 0) among them, 250 world "
+                       "units or more below 99 % of the other heights"),
+            std::string::npos)
+      << r.err;
+  r = hfbake("validate " + write_job("coast", {{"image", "coast.tif"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+
   // A plausible field: no warning, and --quiet prints nothing.
   r = hfbake("validate --quiet " +
              write_job("fine", {{"image", "raw16.png"}, {"height_scale", 20.0 / 65535}}).string());
