@@ -299,19 +299,23 @@ namespace {
 // file of its own (a link planted there is not read, and is replaced when a record is written), one line of
 // printable text that an error may quote.
 std::string read_owner_record(const fs::path& record) {
+  const std::string foreign = "a record that is not hfbake's";
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(record, ec);
+  if (!fs::exists(status)) return "";
+  // hfbake writes its records whole (write_file_atomically), as files: a link, an empty file or anything
+  // else at the name was put there by something else, and is no licence to replace the outputs.
+  if (!fs::is_regular_file(status)) return foreign + (fs::is_symlink(status) ? " (a link)" : "");
   std::string why, recorded;
-  std::error_code link_ec;
-  const bool link = fs::is_symlink(fs::symlink_status(record, link_ec));
-  const int fd = link ? -1 : open_regular_file(record, why);
-  if (fd >= 0) {
-    char buf[4096];
-    const ssize_t n = read(fd, buf, sizeof buf);
-    close(fd);
-    if (n > 0) recorded.assign(buf, std::size_t(n));
-    if (recorded.size() > 1024 ||
-        std::any_of(recorded.begin(), recorded.end(), [](char c) { return (unsigned char)c < 0x20; }))
-      recorded = "a record that is not hfbake's";
-  }
+  const int fd = open_regular_file(record, why);
+  if (fd < 0) return foreign;
+  char buf[4096];
+  const ssize_t n = read(fd, buf, sizeof buf);
+  close(fd);
+  if (n > 0) recorded.assign(buf, std::size_t(n));
+  if (recorded.empty() || recorded.size() > 1024 ||
+      std::any_of(recorded.begin(), recorded.end(), [](char c) { return (unsigned char)c < 0x20; }))
+    return foreign;
   return recorded;
 }
 
@@ -727,7 +731,7 @@ std::vector<std::string> OutputStage::write_layers(const std::string& stem, cons
     std::snprintf(sides, sizeof sides, "%.15g %.15g", texel_x_, texel_y_);
     options.attributes.emplace_back("hfbake:texel_size", sides);
   }
-  write_exr(in_stage(exr), layers, options);
+  write_staged(exr, [&](const fs::path& at) { write_exr(at, layers, options); });
   staged_.push_back(exr);
   if (job_.output.geotiff) write_geotiffs(stem, layers);
   std::vector<std::string> notices = write_textures(stem, layers);
@@ -744,7 +748,7 @@ std::vector<std::string> OutputStage::write_layers(const std::string& stem, cons
     // (openness in degrees, the sun's irradiation and hours: mono layers that are neither) over its range.
     const LayerKind* kind = find_layer_kind(layer.name);
     preview.stretch = layer.channel_count() == 1 && (!kind || kind->values == LayerValues::finite);
-    write_preview(in_stage(png), layers, layer, preview);
+    write_staged(png, [&](const fs::path& at) { write_preview(at, layers, layer, preview); });
     staged_.push_back(png);
   }
   return notices;
@@ -772,7 +776,7 @@ void OutputStage::write_geotiffs(const std::string& stem, const LayerSet& layers
   options.metadata = geotiff_metadata(layers.attributes);
   for (const Layer& layer : layers.layers) {
     const std::string tif = job_.name + "." + stem + "." + layer.name + ".tif";
-    write_geotiff(in_stage(tif), layers, layer, georeference_, options);
+    write_staged(tif, [&](const fs::path& at) { write_geotiff(at, layers, layer, georeference_, options); });
     staged_.push_back(tif);
   }
 }
@@ -792,7 +796,8 @@ std::vector<std::string> OutputStage::write_textures(const std::string& stem, co
                                t.suffixes[c]);
       s.channel = int(at - layer->channels.begin());
     }
-    const TextureClipping clipped = write_texture(in_stage(t.file), layers, t.spec);
+    TextureClipping clipped;
+    write_staged(t.file, [&](const fs::path& at) { clipped = write_texture(at, layers, t.spec); });
     staged_.push_back(t.file);
     if (!t.note.empty()) notices.push_back(t.note);
     if (clipped.clipped > 0) notices.push_back(clipping_notice(t.file, clipped, t.spec));
@@ -805,6 +810,23 @@ std::vector<std::string> OutputStage::write_textures(const std::string& stem, co
     }
   }
   return notices;
+}
+
+void OutputStage::write_staged(const fs::path& name, const std::function<void(const fs::path&)>& write) {
+  const fs::path held = in_stage(name);
+  try {
+    write(held);
+  } catch (const InputError& e) {
+    // The writer named the held folder's path (/proc/self/fd/N/...): the error names the output asked for,
+    // and a temporary beside it by the stage's name in the output folder.
+    std::string what = e.what();
+    const std::string from = held.parent_path().string(), to = (stage_ / name.parent_path()).string();
+    for (std::size_t at = what.find(from); at != std::string::npos; at = what.find(from, at + to.size()))
+      what.replace(at, from.size(), to);
+    const std::string file = (job_.output.dir / name).string();
+    if (dynamic_cast<const OutputError*>(&e)) throw OutputError(file, e.where(), what);
+    throw InputError(file, e.where(), what);
+  }
 }
 
 fs::path OutputStage::in_stage(const fs::path& name) {

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -207,6 +208,9 @@ class OutputStage {
   HeldFolder out_held_, stage_held_, checkpoint_held_, stage_textures_held_, out_textures_held_;
   // Where `name` (relative to the stage: a file, or textures/<file>) is written in the stage.
   std::filesystem::path in_stage(const std::filesystem::path& name);
+  // Runs `write` on `name`'s path in the stage; its InputError or OutputError names the output asked for.
+  void write_staged(const std::filesystem::path& name,
+                    const std::function<void(const std::filesystem::path&)>& write);
   void write_geotiffs(const std::string& stem, const LayerSet& layers);
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage
   std::vector<std::filesystem::path> stale_removed_;

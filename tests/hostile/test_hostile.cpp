@@ -1074,6 +1074,10 @@ TEST(FullDisk, AnExrCutShortByTheDiskIsNeverMovedIntoPlace) {
   const auto lines = r.error_lines();
   ASSERT_EQ(lines.size(), 1u) << r.err;
   EXPECT_NE(lines[0].find("t.p1.exr: cannot write the EXR"), std::string::npos) << lines[0];
+  // It names the output asked for, not the held folder the writer was given (/proc/self/fd/N).
+  EXPECT_NE(lines[0].find((dir / "out" / "t.p1.exr").string() + ": cannot write"), std::string::npos)
+      << lines[0];
+  EXPECT_EQ(lines[0].find("/proc/self/fd"), std::string::npos) << lines[0];
   // The job is not at fault: "failed" (a farm may retry elsewhere), not "invalid".
   std::ifstream summary(dir / "s.json");
   EXPECT_EQ(json::parse(summary)["jobs"][0]["status"], "failed");

@@ -828,6 +828,35 @@ TEST_F(Untrusted, ValidateRefusesAnotherJobFilesOutputsAsBakeDoes) {
   EXPECT_FALSE(fs::exists(dir_ / "out" / "textures"));
 }
 
+// An owner record that hfbake did not write (a link, even to this job's own record; an empty file) is no
+// record of this job file: validate, bake and merge refuse the folder without --overwrite, follow no link,
+// and with it replace the link by a record.
+TEST_F(Untrusted, ALinkOrAnEmptyFileAtAnOwnerRecordIsNoLicenceToReplaceTheOutputs) {
+  const json j = base_job();
+  const std::string job = write_job(dir_, j);
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path record = dir_ / "out" / ".hfbake-t.job", kept = dir_ / "kept.job";
+  fs::rename(record, kept);
+  const std::string kept_text = read_text(kept);
+  fs::create_symlink(kept, record);
+  Outcome r = hfbake(dir_, {"validate", job, "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("were baked from a record that is not hfbake's (a link): give this job "
+                                    "another name or output folder, or give --overwrite"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet"}).exit_code, 2);
+  r = hfbake(dir_, {"bake", job, "--no-cache", "--quiet", "--overwrite"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::is_symlink(fs::symlink_status(record)));
+  EXPECT_EQ(read_text(kept), kept_text);
+  std::ofstream(record, std::ios::trunc).close();  // empty
+  r = hfbake(dir_, {"validate", job, "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("were baked from a record that is not hfbake's: give"), std::string::npos) << r.err;
+}
+
 // A shard task of another job file with the same name, into a folder holding the first's outputs: refused in
 // one line naming the first file (its merge would refuse the mix), the first's shards kept.
 TEST_F(Untrusted, AShardOfAnotherJobFileOverAJobsOutputsIsRefused) {
