@@ -374,13 +374,15 @@ std::string given_type(const nlohmann::json& doc, const std::string& pointer) {
   const nlohmann::json& v = *at;
   if (v.is_boolean()) return v.dump();
   if (v.is_number_integer() || v.is_number_unsigned()) return "an integer";
-  // A whole number written with a fraction (16.0): integers are written without one (docs/job-reference.md).
+  // A whole number written with a fraction or an exponent (16.0, 1.6e1): integers are written without
+  // either (docs/job-reference.md).
   if (v.is_number_float()) {
     const double x = v.get<double>();
     if (std::fabs(x) < 1e15 && x == std::floor(x))
-      return v.dump() + ", written with a fraction: write " + std::to_string(static_cast<long long>(x));
+      return v.dump() + ", written with a fraction or an exponent: write " +
+             std::to_string(static_cast<long long>(x));
+    return v.dump();
   }
-  if (v.is_number()) return "a number";
   if (v.is_null()) return "null";
   return v.is_array() ? "an array" : v.is_object() ? "an object" : "a string";
 }

@@ -85,9 +85,11 @@ TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
     const auto e = errors(json);
     return e.size() == 1 ? e[0].substr((dir_ / "x.json").string().size() + 2) : std::to_string(e.size());
   };
-  EXPECT_EQ(one(minimal(R"(, "bounces": 1.5)")), "/bounces: must be an integer (it is a number)");
+  EXPECT_EQ(one(minimal(R"(, "bounces": 1.5)")), "/bounces: must be an integer (it is 1.5)");
   EXPECT_EQ(one(minimal(R"(, "bounces": 2.0)")),
-            "/bounces: must be an integer (it is 2.0, written with a fraction: write 2)");
+            "/bounces: must be an integer (it is 2.0, written with a fraction or an exponent: write 2)");
+  EXPECT_EQ(one(minimal(R"(, "bounces": 2e0)")),
+            "/bounces: must be an integer (it is 2.0, written with a fraction or an exponent: write 2)");
   EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": "grey"})")),
             "/surface/albedo: must be a number, an array or an object (it is a string)");
   EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": [0.5, "a", 0.5]})")),
@@ -97,6 +99,10 @@ TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
   std::string v2 = minimal("");
   v2.replace(v2.find("\"version\": 1"), 12, "\"version\": 2");
   EXPECT_EQ(one(v2), "/version: must be 1");
+  // A constant or a choice of integers is an integer too: 1.0 is not the version 1.
+  v2.replace(v2.find("\"version\": 2"), 12, "\"version\": 1.0");
+  EXPECT_EQ(one(v2),
+            "/version: must be an integer (it is 1.0, written with a fraction or an exponent: write 1)");
   std::string named = minimal("");
   named.replace(named.find("\"name\": \"t\""), 11, "\"name\": \"a b\"");
   EXPECT_EQ(one(named), "/name: must match the pattern ^[A-Za-z0-9_][A-Za-z0-9_.-]*$");
