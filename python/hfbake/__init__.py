@@ -392,10 +392,13 @@ def read_dem(path, band=1, unscale=False):
     beyond = _beyond_float_range(values, nodata)
     if beyond:
         refuse(_beyond_float_range_message(*beyond, "declare it the band's NoData value"))
-    values = values.astype(_np.float64)
-    holes = ~_np.isfinite(values)
+    # A texel is a hole where its height, as the float a job bakes, equals the NoData value as a float: a
+    # Float32 band declaring -9999.9 stores the float nearest it (a job reading the file compares so too).
+    holes = ~_np.isfinite(values.astype(_np.float64))
     if nodata is not None and _np.isfinite(nodata):
-        holes |= values == nodata
+        with _np.errstate(over="ignore"):
+            holes |= values.astype(_np.float32) == _np.float32(nodata)
+    values = values.astype(_np.float64)
     warnings = []
     scale_of, offset_of = b.GetScale(), b.GetOffset()
     scale_of = 1.0 if scale_of is None else scale_of

@@ -319,12 +319,12 @@ py::tuple bake_array(const std::string& method, py::object heights_arg, const py
         {{"", "/heights",
           "must hold real numbers (float32 is used as is; other types are converted); it holds " +
               py::str(heights.dtype()).cast<std::string>()}});
-  constexpr py::ssize_t kMaxSide = std::numeric_limits<int>::max();  // a field's side is an int
-  if (heights.shape(0) > kMaxSide || heights.shape(1) > kMaxSide)
-    raise_input_error(
-        {{"", "/heights",
-          "has " + std::to_string(heights.shape(0)) + " x " + std::to_string(heights.shape(1)) +
-              " heights: a field has at most " + std::to_string(kMaxSide) + " rows and columns"}});
+  // The sides every method supports, as for a job's height file (cli/scene_loader.hpp).
+  if (heights.shape(0) > kMaxFieldSide || heights.shape(1) > kMaxFieldSide)
+    raise_input_error({{"", "/heights",
+                        "is " + std::to_string(heights.shape(0)) + " x " + std::to_string(heights.shape(1)) +
+                            " heights (rows x columns); fields of up to " + std::to_string(kMaxFieldSide) +
+                            " texels a side are supported"}});
   const int height = int(heights.shape(0)), width = int(heights.shape(1));
 
   const std::string file = method + "()";

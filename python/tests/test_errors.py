@@ -154,16 +154,22 @@ def test_arrays_that_are_no_height_field():
         hfbake.p1(np.array([["a", "b"], ["c", "d"]]))
 
 
-def test_a_side_beyond_an_int_or_a_field_beyond_memory_is_refused_before_any_copy():
+def test_a_side_beyond_the_supported_or_a_field_beyond_memory_is_refused_before_any_copy():
     # Views of one value: no memory behind them, and numpy would need a copy to make them float32 rows.
     one = np.zeros((1, 1), np.float32)
     with pytest.raises(hfbake.InputError) as caught:
         hfbake.p1(np.broadcast_to(one, (2**32 + 2, 2)), directions=4)
     assert caught.value.pointer == "/heights"
-    assert "has 4294967298 x 2 heights: a field has at most 2147483647 rows and columns" in caught.value.message
+    assert caught.value.message == ("is 4294967298 x 2 heights (rows x columns); fields of up to 1048576 texels "
+                                    "a side are supported")
     with pytest.raises(hfbake.InputError) as caught:
         hfbake.p1(np.broadcast_to(one, (2, 2**31 + 5)), directions=4)
-    assert "has 2 x 2147483653 heights" in caught.value.message
+    assert "is 2 x 2147483653 heights" in caught.value.message
+    # One past the side a job's field may have: the same line, once.
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.p1(np.broadcast_to(one, (2**20 + 1, 4)), directions=4)
+    assert caught.value.message == ("is 1048577 x 4 heights (rows x columns); fields of up to 1048576 texels "
+                                    "a side are supported")
     # Within an int but beyond memory: the estimate refuses it, before numpy copies 2^34 floats.
     with pytest.raises(hfbake.InputError) as caught:
         hfbake.p1(np.broadcast_to(one, (2**17, 2**17)), directions=4)

@@ -250,3 +250,24 @@ def test_heights_without_a_unit_on_a_crs_in_feet_are_noted_as_the_command_notes(
     ds.GetRasterBand(1).SetUnitType("US survey foot")
     ds = None
     assert not [w for w in hfbake.read_dem(dem).warnings if "declares no unit" in w]
+
+
+def test_a_float32_bands_nodata_is_compared_as_the_float_it_stores(tmp_path):
+    # A Float32 band holds the float nearest a NoData value declared in decimal (-9999.9 in a VRT, as
+    # gdalbuildvrt -vrtnodata writes it): those texels are the holes, as a job reading the file finds them.
+    heights = (terrain(40, 32, seed=13) * 10).astype(np.float32)
+    heights[10:12, 20:22] = np.float32(-9999.9)
+    src = tmp_path / "src.tif"
+    write_geotiff(src, heights)
+    vrt = tmp_path / "dem.vrt"
+    gdal.Translate(str(vrt), str(src), format="VRT")
+    ds = gdal.Open(str(vrt), gdal.GA_Update)
+    ds.GetRasterBand(1).SetNoDataValue(-9999.9)
+    ds = None
+    d = hfbake.read_dem(vrt)
+    assert np.count_nonzero(d.holes) == 4 and d.holes[10:12, 20:22].all() and d.keys["nodata"] == "fill"
+    job = {"version": 1, "name": "v", "height": {"image": str(vrt), "nodata": "fill"},
+           "bake": [{"method": "relief"}]}
+    (tmp_path / "v.json").write_text(json.dumps(job))
+    said = run_cli("validate", tmp_path / "v.json", check=False)
+    assert "4 texels without a height" in said.stderr, said.stderr
