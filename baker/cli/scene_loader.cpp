@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <new>
@@ -518,11 +519,19 @@ std::string heights_warning(const Scene& scene) {
     // A raster that declares a scale of its own (an integer band of centimetres: scale 0.01) is read as
     // stored (docs/heights.md): the likeliest cause, named with the key that applies it.
     if (s.file_scale != 1 && s.scale == 1)
-      warning +=
-          " (the file declares scale " + short_num(s.file_scale) +
-          ", not applied: \"height_scale\": " + short_num(s.file_scale) +
-          (s.file_offset != 0 ? " and \"height_offset\": " + short_num(s.file_offset) : std::string()) +
-          " apply it)";
+      warning += " (the file declares scale " + short_num(s.file_scale) +
+                 ", not applied: \"height_scale\": " + short_num(s.file_scale) +
+                 (s.file_offset != 0 ? " and \"height_offset\": " + short_num(s.file_offset) + " apply it)"
+                                     : std::string(" applies it)"));
+    // A value that marks missing data in common DEM formats, stored but declared nowhere: holes read as
+    // heights (docs/gis.md, NoData).
+    for (const double sentinel : {-9999.0, -32768.0, -32767.0, -99999.0, double(-FLT_MAX)})
+      if (s.stored_min == sentinel) {
+        warning += "; if the texels stored as " + short_num(sentinel) +
+                   " mark missing data, \"nodata_value\": " + short_num(sentinel) +
+                   " with \"nodata\": \"fill\" in height makes them holes";
+        break;
+      }
   } else if (const std::string w = site_scale_warning(
                  scene.georeference.site_scale, scene.georeference.crs_name, false, s.scale, unit_ratio);
              !w.empty()) {

@@ -341,6 +341,19 @@ TEST_F(CliHeights, ValidateStatesTheRangeAndWarnsOnImplausibleRelief) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
 
+  // Holes stored as -9999 that the file does not declare: the steepness warning says what would make them
+  // holes.
+  std::vector<float> holed = warped;
+  holed[std::size_t(30) * kSide + 30] = -9999;
+  write_image("holed.tif", holed, OIIO::TypeDesc::FLOAT);
+  r = hfbake("validate " + write_job("holed", {{"image", "holed.tif"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("steeper than any terrain; check height_scale (world units per stored unit) and "
+                       "texel_size; if the texels stored as -9999 mark missing data, \"nodata_value\": -9999 "
+                       "with \"nodata\": \"fill\" in height makes them holes"),
+            std::string::npos)
+      << r.err;
+
   // A plausible field: no warning, and --quiet prints nothing.
   r = hfbake("validate --quiet " +
              write_job("fine", {{"image", "raw16.png"}, {"height_scale", 20.0 / 65535}}).string());
