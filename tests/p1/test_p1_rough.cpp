@@ -323,5 +323,33 @@ TEST(P1Rough, StepAlongAColumnHasTheClosedFormHorizons) {
   EXPECT_LE(worst_down, 1e-4);
 }
 
+// The horizon layer by texel is the layer by direction transposed, bit for bit: the by-direction layer is
+// written where the search's rows land, the by-texel one placed from a direction block's planes, four texels
+// of four directions at a time with the rest one by one. Blocks of 1 to 8 directions (K = 10, 32, 40, 64 in
+// 8 blocks) and a texel count that is no multiple of 4.
+TEST(P1Rough, TheHorizonLayerByTexelIsTheLayerByDirectionTransposed) {
+  const Scene s = make_scene(truth::rough_field(37, 29, 60, 0.7, 21));
+  const std::size_t N = s.field.texel_count();
+  for (const int K : {10, 32, 40, 64}) {
+    P1Params p;
+    p.directions = K;
+    p.horizon = true;
+    p.vsky = p.direct = false;
+    const P1Result by_texel = compute_p1(s, p, RunControl{});
+    p.horizon_by_direction = true;
+    const P1Result by_direction = compute_p1(s, p, RunControl{});
+    ASSERT_EQ(by_texel.horizon.size(), N * std::size_t(K));
+    ASSERT_EQ(by_direction.horizon.size(), N * std::size_t(K));
+    std::size_t differ = 0;
+    for (std::size_t t = 0; t < N; ++t)
+      for (int k = 0; k < K; ++k)
+        differ += by_texel.horizon[t * std::size_t(K) + std::size_t(k)] !=
+                          by_direction.horizon[std::size_t(k) * N + t]
+                      ? 1
+                      : 0;
+    EXPECT_EQ(differ, 0u) << "K = " << K;
+  }
+}
+
 }  // namespace
 }  // namespace hfbake
