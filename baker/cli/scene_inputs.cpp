@@ -313,16 +313,50 @@ HeightField load_image_field(const Job& job, double texel_size, Wrap wrap, Geore
   field.texel_size = texel_size;
   field.wrap = wrap;
   field.z = std::move(plane.values);
-  apply_height_nodata(job, image, field, georeference, file_nodata);
+  source.nodata_note = apply_height_nodata(job, image, field, georeference, file_nodata);
   return field;
 }
 
-void apply_height_nodata(const Job& job, const std::string& source, HeightField& field,
-                         Georeference& georeference, std::optional<double> file_nodata) {
+std::string nodata_inside_heights(const HeightField& field, float value) {
+  const std::vector<float>& z = field.z;
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  std::size_t count = 0;
+  for (const float v : z) {
+    if (v == value)
+      ++count;
+    else if (std::isfinite(v))
+      lo = std::min(lo, v), hi = std::max(hi, v);
+  }
+  if (count < 8 || !(lo < value && value < hi)) return "";
+  std::size_t thin = 0;
+  const int W = field.width, H = field.height;
+  for (int j = 0; j < H; ++j)
+    for (int i = 0; i < W; ++i) {
+      if (z[field.index(i, j)] != value) continue;
+      const auto other = [&](int a, int b) {
+        if (a < 0 || b < 0 || a >= W || b >= H) return false;
+        const float v = z[field.index(a, b)];
+        return v != value && std::isfinite(v);
+      };
+      thin += other(i - 1, j) || other(i + 1, j) || other(i, j - 1) || other(i, j + 1) ? 1 : 0;
+    }
+  if (double(thin) < 0.9 * double(count)) return "";
+  return "the NoData value " + num(value) + " lies inside the other heights' range (" + num(lo) + " .. " +
+         num(hi) + ") and its " + std::to_string(count) +
+         " texels lie in thin lines and specks, not blocks: real heights taken for holes? A NoData value "
+         "outside the heights' range (gdal_translate -a_nodata -9999 after setting the holes to it) keeps "
+         "them";
+}
+
+std::string apply_height_nodata(const Job& job, const std::string& source, HeightField& field,
+                                Georeference& georeference, std::optional<double> file_nodata) {
   const nlohmann::json& h = job.doc["height"];
   // The file's NoData value (a NaN one is caught as NaN) and the job's nodata_value both mark holes.
   const std::optional<float> nodata = nodata_value(h);
   const bool file_value = file_nodata && !std::isnan(*file_nodata);
+  const bool fill = h.value("nodata", "error") == "fill";
+  std::string note;
+  if (fill && (file_value || nodata)) note = nodata_inside_heights(field, file_value ? float(*file_nodata) : *nodata);
   std::size_t file_holes = 0;
   if (file_value) {
     const float v = float(*file_nodata);
@@ -330,8 +364,8 @@ void apply_height_nodata(const Job& job, const std::string& source, HeightField&
       if (z == v) z = std::numeric_limits<float>::quiet_NaN(), ++file_holes;
   }
   const NodataScan scan = scan_nodata(field, nodata);
-  if (scan.count == 0) return;
-  if (h.value("nodata", "error") != "fill") {
+  if (scan.count == 0) return "";
+  if (!fill) {
     const float first = field.z[field.index(scan.first_i, scan.first_j)];
     std::string what = std::isnan(first) ? "NaN" : std::isinf(first) ? "infinite" : "nodata_value";
     if (file_value && std::isnan(first)) what = "NaN or the file's NoData value (" + num(*file_nodata) + ")";
@@ -346,6 +380,7 @@ void apply_height_nodata(const Job& job, const std::string& source, HeightField&
     georeference.holes[t] = !std::isfinite(field.z[t]) || (nodata && field.z[t] == *nodata);
   if (!fill_nodata(field, nodata))
     throw InputError(job.file.string(), "/height/image", source + ": no texel has a valid height");
+  return note;
 }
 
 void load_surface_map(const Job& job, const std::string& pointer, const HeightField& field,

@@ -73,8 +73,16 @@ std::optional<GeoHeightBand> georaster_height_band(const Job& job);
 // an array handed in by the Python module): NaN/Inf texels, texels equal to height.nodata_value or to
 // `file_nodata` are an InputError at /height/image naming the count and the first texel, unless
 // height.nodata is "fill": then they are filled (field/nodata.hpp) and marked in georeference.holes.
-void apply_height_nodata(const Job& job, const std::string& source, HeightField& field,
-                         Georeference& georeference, std::optional<double> file_nodata = std::nullopt);
+// Returns, when it fills them, a warning for holes that look like real heights (nodata_inside_heights);
+// else "".
+std::string apply_height_nodata(const Job& job, const std::string& source, HeightField& field,
+                                Georeference& georeference, std::optional<double> file_nodata = std::nullopt);
+
+// A warning when the texels equal to `value` (a NoData value) look like real heights: at least 8 of them,
+// `value` strictly between the least and the greatest other finite height, and 90 % of them beside a
+// texel of another height (thin lines and specks, as a contour of an integer DEM makes, not the blocks a
+// void or a masked lake makes); else "".
+std::string nodata_inside_heights(const HeightField& field, float value);
 
 // Fills `texels` (already sized to the field) from the surface key at `pointer` ("/surface/albedo" or
 // "/surface/emission"): a number, [r, g, b], or {"image", "colorspace", "scale"} of the field's size.

@@ -541,6 +541,7 @@ std::string heights_warning(const Scene& scene) {
         "JPEG is lossy: the heights carry its compression artefacts (a TIFF or PNG of the same "
         "heights keeps what was stored; docs/heights.md)";
   }
+  if (!s.nodata_note.empty()) warning += (warning.empty() ? "" : "; and ") + s.nodata_note;
   return warning;
 }
 

@@ -69,6 +69,9 @@ struct HeightSource {
   std::string height_unit;
   // What of the image file is not read (io/image_input.hpp ImageInfo::unread), warned about; "" when nothing.
   std::string unread;
+  // Holes filled from a NoData value that look like real heights (cli/scene_inputs.hpp
+  // nodata_inside_heights), warned about; "" otherwise.
+  std::string nodata_note;
 };
 
 // The texels of a field whose results are kept (a tile's interior, in the field's own coordinates;

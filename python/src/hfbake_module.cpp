@@ -362,8 +362,8 @@ py::tuple bake_array(const std::string& method, py::object heights_arg, const py
       field.z.assign(z.data(), z.data() + std::size_t(width) * std::size_t(height));
       Georeference georeference;
       georeference.geotransform = local_geotransform(field.texel_size);
-      apply_height_nodata(job, "heights", field, georeference);
       HeightSource read_by;
+      read_by.nodata_note = apply_height_nodata(job, "heights", field, georeference);
       read_by.reader = "numpy";
       read_by.format = "array";
       read_by.sample_type = "float";

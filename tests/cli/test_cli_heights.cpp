@@ -354,6 +354,28 @@ TEST_F(CliHeights, ValidateStatesTheRangeAndWarnsOnImplausibleRelief) {
             std::string::npos)
       << r.err;
 
+  // A NoData value that real heights hold: 40 on a ramp of whole heights is a diagonal line of texels,
+  // filled as holes with a warning; a block of -9999 holes (outside the heights) is filled without one.
+  std::vector<float> ramp(std::size_t(kSide) * kSide);
+  for (int j = 0; j < kSide; ++j)
+    for (int i = 0; i < kSide; ++i) ramp[std::size_t(j) * kSide + i] = float(i + j);
+  write_image("ramp.tif", ramp, OIIO::TypeDesc::FLOAT);
+  r = hfbake("validate " +
+             write_job("ramp", {{"image", "ramp.tif"}, {"nodata", "fill"}, {"nodata_value", 40}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the NoData value 40 lies inside the other heights' range (0 .. 94) and its 41 texels "
+                       "lie in thin lines and specks, not blocks: real heights taken for holes?"),
+            std::string::npos)
+      << r.err;
+  for (int j = 10; j < 20; ++j)
+    for (int i = 10; i < 20; ++i) ramp[std::size_t(j) * kSide + i] = -9999;
+  write_image("voids.tif", ramp, OIIO::TypeDesc::FLOAT);
+  r = hfbake(
+      "validate " +
+      write_job("voids", {{"image", "voids.tif"}, {"nodata", "fill"}, {"nodata_value", -9999}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+
   // A plausible field: no warning, and --quiet prints nothing.
   r = hfbake("validate --quiet " +
              write_job("fine", {{"image", "raw16.png"}, {"height_scale", 20.0 / 65535}}).string());
