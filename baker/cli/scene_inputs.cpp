@@ -356,7 +356,8 @@ std::string apply_height_nodata(const Job& job, const std::string& source, Heigh
   const bool file_value = file_nodata && !std::isnan(*file_nodata);
   const bool fill = h.value("nodata", "error") == "fill";
   std::string note;
-  if (fill && (file_value || nodata)) note = nodata_inside_heights(field, file_value ? float(*file_nodata) : *nodata);
+  if (fill && (file_value || nodata))
+    note = nodata_inside_heights(field, file_value ? float(*file_nodata) : *nodata);
   std::size_t file_holes = 0;
   if (file_value) {
     const float v = float(*file_nodata);
