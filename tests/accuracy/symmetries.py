@@ -65,9 +65,8 @@ def bake(hfbake, work, name, z, scale):
     entries = []
     for method, _, keys in METHODS:
         e = {"method": method, **keys}
-        for k in ("radius", "near_field"):
-            if k in e:
-                e[k] = e[k] * scale
+        if "radius" in e:  # world units (near_field is in texels)
+            e["radius"] = e["radius"] * scale
         entries.append(e)
     job = {"version": 1, "name": name, "height": {"image": name + ".exr", "texel_size": scale},
            "environment": {"uniform": 1.0}, "surface": {"albedo": 0.8}, "bounces": 1, "bake": entries,
