@@ -16,7 +16,8 @@ import os
 import subprocess
 
 import numpy as np
-import OpenImageIO as oiio
+
+from exr_io import read_channel, write_exr
 
 CASES = [("slot", 2, 20), ("slot", 3, 10), ("slot", 3, 30), ("slot", 4, 20), ("pit", 3, 10), ("pit", 4, 10)]
 
@@ -34,23 +35,6 @@ def field(kind, w, depth):
     z[c:c + w, c:c + w] = -float(depth)
     mid = [c + w // 2] if w % 2 else [c + w // 2 - 1, c + w // 2]
     return z, (mid, mid)
-
-
-def write_exr(path, z):
-    out = oiio.ImageOutput.create(path)
-    spec = oiio.ImageSpec(z.shape[1], z.shape[0], 1, "float")
-    spec.channelnames = ("Y",)
-    out.open(path, spec)
-    out.write_image(np.ascontiguousarray(z.reshape(z.shape[0], z.shape[1], 1)))
-    out.close()
-
-
-def read_channel(path, name):
-    inp = oiio.ImageInput.open(path)
-    spec = inp.spec()
-    px = np.asarray(inp.read_image(0, 0, 0, spec.nchannels, "float"))
-    inp.close()
-    return px.reshape(spec.height, spec.width, spec.nchannels)[:, :, list(spec.channelnames).index(name)]
 
 
 def floor_values(layer, where):

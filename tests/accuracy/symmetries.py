@@ -16,7 +16,8 @@ import os
 import subprocess
 
 import numpy as np
-import OpenImageIO as oiio
+
+from exr_io import read_channel, write_exr
 
 METHODS = [("p1", "ao", {"directions": 32, "layers": ["ao"]}),
            ("hbao", "obscurance", {"directions": 16, "radius": 8}),
@@ -41,23 +42,6 @@ def dsm(width=96, height=64, seed=5):
         x, y = rng.integers(0, width - w), rng.integers(0, height - h)
         z[y:y + h, x:x + w] = z[y:y + h, x:x + w].max() + rng.uniform(3, 12)
     return z.astype(np.float32)
-
-
-def write_exr(path, z):
-    out = oiio.ImageOutput.create(path)
-    spec = oiio.ImageSpec(z.shape[1], z.shape[0], 1, "float")
-    spec.channelnames = ("Y",)
-    out.open(path, spec)
-    out.write_image(np.ascontiguousarray(z.reshape(z.shape[0], z.shape[1], 1)))
-    out.close()
-
-
-def read_channel(path, name):
-    inp = oiio.ImageInput.open(path)
-    spec = inp.spec()
-    px = np.asarray(inp.read_image(0, 0, 0, spec.nchannels, "float"))
-    inp.close()
-    return px.reshape(spec.height, spec.width, spec.nchannels)[:, :, list(spec.channelnames).index(name)]
 
 
 def bake(hfbake, work, name, z, scale):
