@@ -497,12 +497,14 @@ std::string heights_warning(const Scene& scene) {
               "its source (gdalwarp without -dstnodata)? Baked as they are, they are ground that far down; "
               "declare them NoData (\"nodata_value\": 0 with \"nodata\": \"fill\" in height, or gdalwarp "
               "-dstnodata -9999) (docs/gis.md)";
-  } else if (const HeightBand band = f.z.size() == f.texel_count() && scene.georeference.crs_wkt.empty()
-                                         ? height_band(f, 0.005 * extent)
-                                         : HeightBand{};
+  } else if (const HeightBand band =
+                 f.z.size() == f.texel_count() && scene.georeference.crs_wkt.empty() && s.reader != "numpy"
+                     ? height_band(f, 0.005 * extent)
+                     : HeightBand{};
              band.outliers > 0 && band.hi - band.lo < 0.01 * extent) {
     // A nearly flat map whose range a few texels set (a marker, a hot pixel, a white border): its relief
-    // looks plausible, yet the bake is close to unoccluded away from them.
+    // looks plausible, yet the bake is close to unoccluded away from them. Not for the Python module's
+    // arrays, which carry no CRS: a DEM read by read_dem (a plain with a few buildings) is no image.
     warning = "98 % of the heights lie within " + short_num(band.hi - band.lo) + " world units (" +
               short_num(100 * (band.hi - band.lo) / extent) + " % of the field's " + short_num(extent) +
               "-unit side: nearly flat), but " + std::to_string(band.outliers) +

@@ -1,10 +1,12 @@
 """The array API against `hfbake bake`: the same field and parameters give the same bits."""
 
+import warnings
+
 import numpy as np
 import pytest
 
 import hfbake
-from conftest import assert_same_bits, cli_bake, terrain
+from conftest import assert_same_bits, cli_bake, run_cli, terrain, write_job
 
 # (method, parameters, field keys): small fields and direction counts; a per-direction layer, colour and
 # vector layers and a repeat field among them.
@@ -162,6 +164,20 @@ def test_the_array_functions_warn_about_the_heights_as_the_command_does(tmp_path
         assert "steeper than any terrain" in said[0]
     if levels == "flat":
         assert said == ["heights: the field is flat (every height is 3): every method bakes it unoccluded"]
+
+
+def test_a_few_outlying_texels_are_warned_in_an_image_not_in_an_array(tmp_path):
+    # A plain with one tower: as an image a job names (a height map, no CRS) the range the tower sets is
+    # warned; as an array (a DEM read by read_dem carries no CRS) it is baked without that warning.
+    heights = np.zeros((64, 64), np.float32)
+    heights[10, 20] = 20.0
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hfbake.p1(heights, directions=4)
+    assert not [w for w in caught if "stands out" in str(w.message)]
+    job = write_job(tmp_path, heights, {"method": "p1", "directions": 4})
+    said = run_cli("validate", job).stderr
+    assert "but 1 texel stands out of them by up to 20 (the farthest at texel (20, 10))" in said, said
 
 
 def test_earth_curvature_lowers_a_wall_by_d2_over_2r():
