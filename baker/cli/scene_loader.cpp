@@ -5,10 +5,12 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <new>
 #include <optional>
 
 #include "cli/scene_inputs.hpp"
+#include "cli/texture_plan.hpp"
 #include "core/error.hpp"
 #include "core/threads.hpp"
 #include "field/procedural.hpp"
@@ -208,6 +210,29 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     return std::max(previews, geotiff);
   };
 
+  // Engine textures (io/texture_output.hpp), written one at a time after their stem's EXR: a texture's values
+  // (two bytes a channel, an 8-bit one's also copied to bytes; an EXR texture's floats and OpenImageIO's
+  // half copy of them). The height's textures (its normal) are written while the scene loads, from the
+  // normal layer they read (12 bytes a texel), and bring the image libraries in before the first method.
+  // A job not resolved yet (plan_textures needs its layers) counts none.
+  std::map<std::string, double> texture_writing;  // by stem, the largest texture's bytes
+  std::vector<PlannedTexture> textures;
+  try {
+    if (!size.tile) textures = plan_textures(job);
+  } catch (const InputError&) {
+  }
+  for (const PlannedTexture& t : textures) {
+    const double c = double(t.spec.channels.size());
+    const bool exr = t.file.size() > 4 && t.file.compare(t.file.size() - 4, 4, ".exr") == 0;
+    const double bytes = texels * (c * (exr                ? 6.0
+                                        : t.spec.bits == 8 ? 3.0
+                                                           : 2.0) +
+                                   (t.stem == kHeightStem ? 12.0 : 0.0));
+    double& largest = texture_writing[t.stem];
+    largest = std::max(largest, bytes);
+  }
+  const double height_textures = texture_writing[kHeightStem];
+
   MethodContext context;
   context.field.width = size.width;
   context.field.height = size.height;
@@ -256,8 +281,9 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double exr_band =
         size.tile ? 2.0 * channels * std::min(texels, 256.0 * size.width)
                   : exr_writing_bytes(size.width, size.height, half_channels, float_channels, exr);
-    const double writes = std::max(writing(widest), exr_band);
-    const double before = &e == &job.bakes.front() ? 0.0 : lift;  // the libraries, once loaded
+    const double writes = std::max({writing(widest), exr_band, texture_writing[e.stem]});
+    // The libraries, once loaded: by the entry before, or by the height's textures.
+    const double before = &e == &job.bakes.front() && height_textures == 0 ? 0.0 : lift;
     peak = std::max(peak, kept + layers + std::max(before + working, lift + writes));
     if (job.has_reference) kept += layers;
     // The entry's own part, without the image libraries (their own part below).
@@ -301,7 +327,9 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     // percentile; 3 channels at most) and the error map (report/report_html.cpp), and OpenImageIO's libraries
     // when nothing loaded them before. Its part is the larger.
     const double report_page = layers + 16.0 * texels + std::max(0.0, kImageProcessBytes - process - lift);
-    reference = lift + std::max(reference + writing(std::max(3, horizon_channels / 2)), report_page);
+    reference = lift + std::max(reference + std::max(writing(std::max(3, horizon_channels / 2)),
+                                                     texture_writing["reference"]),
+                                report_page);
     peak = std::max(peak, kept + reference);
   }
   // The environment's images are read and resampled before any method runs, when nothing of the bake is
@@ -309,7 +337,7 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   // tables when a reference traces).
   const double field_bytes = process + scene_per_texel * texels;
   const double scene = field_bytes + env.world + (job.has_reference ? env.tables : 0.0);
-  const double total = std::max(scene + peak, field_bytes + env.loading);
+  const double total = std::max({scene + peak, field_bytes + env.loading, scene + lift + height_textures});
   if (parts) {
     // A smaller field shrinks the scene only where the field is most of it (not the process's fixed part).
     const double field_part = scene - process;
