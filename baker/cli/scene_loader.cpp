@@ -326,7 +326,10 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     // tracing (Embree's scene freed): beside the layers, a float copy of one layer's magnitudes (its
     // percentile; 3 channels at most) and the error map (report/report_html.cpp), and OpenImageIO's libraries
     // when nothing loaded them before. Its part is the larger.
-    const double report_page = layers + 16.0 * texels + std::max(0.0, kImageProcessBytes - process - lift);
+    // The scores (report/compare.cpp) hold a layer's differences at a time, 4 bytes a value, then a horizon
+    // layer's angles in degrees, 8 bytes a value: K channels' 8 K bytes a texel.
+    const double scores = std::max(16.0, 4.0 * horizon_channels);
+    const double report_page = layers + scores * texels + std::max(0.0, kImageProcessBytes - process - lift);
     reference = lift + std::max(reference + std::max(writing(std::max(3, horizon_channels / 2)),
                                                      texture_writing["reference"]),
                                 report_page);
