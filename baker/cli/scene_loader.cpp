@@ -417,6 +417,24 @@ std::string unitless_heights_note(const std::string& pixel_unit, double pixel_un
 
 namespace {
 
+// Every s-th of the field's heights that keep(z) accepts, s such that at most 2^20 texels are looked at:
+// what the heights warnings take their percentiles from.
+template <class Keep>
+std::vector<float> sampled_heights(const HeightField& f, const Keep& keep) {
+  const std::size_t n = f.z.size(), s = (n + (std::size_t(1) << 20) - 1) >> 20;
+  std::vector<float> sample;
+  sample.reserve(n / s + 1);
+  for (std::size_t t = 0; t < n; t += s)
+    if (keep(f.z[t])) sample.push_back(f.z[t]);
+  return sample;
+}
+
+// The value of rank `rank` (0: the least) of `v`, reordering it.
+double value_of_rank(std::vector<float>& v, std::size_t rank) {
+  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(rank), v.end());
+  return double(v[rank]);
+}
+
 // Where most of a field's heights lie: the 1st and 99th percentiles (of every texel up to 2^20 of them, of
 // every s-th beyond), and the texels standing out of that band by more than `apart` world units: how many,
 // the farthest (i, j) and how far.
@@ -428,19 +446,12 @@ struct HeightBand {
 };
 
 HeightBand height_band(const HeightField& f, double apart) {
-  const std::size_t n = f.z.size(), s = (n + (std::size_t(1) << 20) - 1) >> 20;
-  std::vector<float> sample;
-  sample.reserve(n / s + 1);
-  for (std::size_t t = 0; t < n; t += s) sample.push_back(f.z[t]);
+  std::vector<float> sample = sampled_heights(f, [](float) { return true; });
   const std::size_t m = sample.size();
-  const auto at = [&](std::size_t rank) {
-    std::nth_element(sample.begin(), sample.begin() + std::ptrdiff_t(rank), sample.end());
-    return double(sample[rank]);
-  };
   HeightBand b;
-  b.lo = at((m - 1) / 100);
-  b.hi = at(m - 1 - (m - 1) / 100);
-  for (std::size_t t = 0; t < n; ++t) {
+  b.lo = value_of_rank(sample, (m - 1) / 100);
+  b.hi = value_of_rank(sample, m - 1 - (m - 1) / 100);
+  for (std::size_t t = 0; t < f.z.size(); ++t) {
     const double z = f.z[t], off = z > b.hi ? z - b.hi : z < b.lo ? b.lo - z : 0.0;
     if (off <= apart) continue;
     ++b.outliers;
@@ -466,18 +477,11 @@ ZeroFill zero_fill(const HeightField& f, float zero) {
   const auto corner = std::find_if(std::begin(corners), std::end(corners),
                                    [&](const int* c) { return f.z[f.index(c[0], c[1])] == zero; });
   if (corner == std::end(corners)) return z;
-  const std::size_t n = f.z.size(), s = (n + (std::size_t(1) << 20) - 1) >> 20;
-  std::vector<float> rest;
-  for (std::size_t t = 0; t < n; ++t) {
-    if (f.z[t] == zero)
-      ++z.count;
-    else if (t % s == 0)
-      rest.push_back(f.z[t]);
-  }
+  std::vector<float> rest = sampled_heights(f, [&](float v) { return v != zero; });
   if (rest.empty()) return {};
-  const std::size_t rank = (rest.size() - 1) / 100;
-  std::nth_element(rest.begin(), rest.begin() + std::ptrdiff_t(rank), rest.end());
-  z.i = (*corner)[0], z.j = (*corner)[1], z.below = double(rest[rank]) - double(zero);
+  z.count = std::size_t(std::count(f.z.begin(), f.z.end(), zero));
+  z.i = (*corner)[0], z.j = (*corner)[1];
+  z.below = value_of_rank(rest, (rest.size() - 1) / 100) - double(zero);
   return z;
 }
 
