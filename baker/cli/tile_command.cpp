@@ -1,5 +1,6 @@
 #include "cli/tile_command.hpp"
 
+#include <malloc.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -586,6 +587,11 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
   }
   progress.end(job.name, "tiles", seconds_since(t0));
   progress.begin(job.name, "cog");
+  // The COGs start from the process alone: GDAL's block cache emptied (the work files' last blocks written)
+  // and what the tiles freed given back to the system, so each layer's COG holds the process, its bands'
+  // buffers and the cache it fills again (tiled_peak_bytes), not those beside what the tiles left.
+  { const GdalCacheLimit empty(0); }
+  malloc_trim(0);
   const auto t2 = std::chrono::steady_clock::now();
   for (auto& [key, out] : outputs) {
     if (cancel.load()) throw Cancelled();

@@ -136,7 +136,7 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
 double cog_band_bytes(int width, int height) {
   const double tile = 4.0 * kCogTile * kCogTile;
   const double window = 4.0 * std::min(width, kCogTile) * std::min(height, kCogTile);
-  return 3 * tile + 2 * window;
+  return 4 * tile + 2 * window + 512.0 * (double(width) + double(height));
 }
 
 double geotiff_writing_bytes(int width, int height, int channels, bool holes) {

@@ -1632,3 +1632,37 @@ TEST_F(CliGdal, TheMemoryEstimateHoldsTheGeoTiffsWriting) {
 }
 
 }  // namespace
+
+namespace {
+
+// A tiled bake within --memory-limit: at the least budget whose plan `validate --tiles` takes (found in
+// steps of 4 MiB), the bake's peak resident size stays within that budget. The job's widest layer is a
+// 16-band horizon_deg, so the COGs written after the tiles, not the tiles, set the least budget; beside it,
+// hbao's layers' work files.
+TEST_F(CliGdal, ATiledBakePeaksWithinTheLeastBudgetItsPlanTakes) {
+  const nlohmann::json j = {{"version", 1},
+                            {"name", "budget"},
+                            {"height", {{"image", kDem.string()}}},
+                            {"bake",
+                             {{{"method", "relief"},
+                               {"directions", 16},
+                               {"search_radius", 4},
+                               {"layers", {"svf", "openness_positive", "openness_negative", "horizon_deg"}}},
+                              {{"method", "hbao"}, {"directions", 4}, {"max_distance", 8}}}},
+                            {"output", {{"dir", "out_budget"}, {"geotiff", true}}}};
+  const fs::path job = dir_ / "budget.json";
+  std::ofstream(job) << j.dump(2);
+  int least = 0;
+  for (int mib = 120; mib <= 400 && least == 0; mib += 4)
+    if (hfbake("validate --quiet --tiles --memory-limit " + std::to_string(mib) + "M " + job.string())
+            .exit_code == 0)
+      least = mib;
+  ASSERT_GT(least, 0) << "no budget up to 400 MiB takes the job";
+  const hfbake::cli_test::BakePeak run = hfbake::cli_test::run_peak(
+      dir_, {"bake", "--quiet", "--tiles", "--memory-limit", std::to_string(least) + "M", job.string()});
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_LE(run.peak_mib, double(least)) << "the least budget the plan takes: " << least << " MiB";
+  EXPECT_TRUE(fs::exists(dir_ / "out_budget" / "budget.relief.horizon_deg.tif"));
+}
+
+}  // namespace
