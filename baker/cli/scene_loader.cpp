@@ -330,9 +330,13 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     // layer's angles in degrees, 8 bytes a value: K channels' 8 K bytes a texel.
     const double scores = std::max(16.0, 4.0 * horizon_channels);
     const double report_page = layers + scores * texels + std::max(0.0, kImageProcessBytes - process - lift);
-    reference = lift + std::max(reference + std::max(writing(std::max(3, horizon_channels / 2)),
-                                                     texture_writing["reference"]),
-                                report_page);
+    const double written = std::max(writing(std::max(3, horizon_channels / 2)), texture_writing["reference"]);
+    if (job.bakes.empty())
+      // A reference alone: its previews or textures bring the image libraries in after the tracing, Embree's
+      // scene freed, and its report.html, scored against nothing, shows no images.
+      reference = std::max(reference, lift + layers + written);
+    else
+      reference = lift + std::max(reference + written, report_page);
     peak = std::max(peak, kept + reference);
   }
   // The environment's images are read and resampled before any method runs, when nothing of the bake is
