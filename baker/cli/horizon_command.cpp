@@ -228,7 +228,15 @@ Profile compute(const HorizonOptions& o) {
       const std::optional<double> gamma = grid_convergence(info->crs_wkt, xy[0], xy[1]);
       if (!gamma) fail("--at", "PROJ cannot find true north at " + where + " in " + info->crs_name);
       q.frame.convergence = *gamma;
-      if (const std::optional<double> k = grid_scale_factor(info->crs_wkt, xy[0], xy[1])) p.map_scale = *k;
+      // Distances on the ground where the CRS is far from true scale (as a bake warns of a field): a
+      // conformal projection's map units are k times the ground's near the point (PROJ's point scale
+      // factor), so the frame takes map distances divided by k and the horizons' elevations and distances
+      // are the ground's (docs/gis.md, Map scale). Within 1 % of true scale, map units, as a bake takes them.
+      if (const std::optional<double> k = grid_scale_factor(info->crs_wkt, xy[0], xy[1]); k) {
+        p.map_scale = *k;
+        if (far_from_true_scale(*k) && std::isfinite(*k) && *k > 0)
+          q.frame.east_per_x /= *k, q.frame.north_per_y /= *k;
+      }
     }
     if (earth && o.curvature.value_or(false)) {
       const auto lonlat = crs_to_lonlat(info->crs_wkt, xy[0], xy[1]);
@@ -293,8 +301,6 @@ int run_horizon(const HorizonOptions& o) {
       throw InputError(o.dem, "--plot", "is the --out file too: give each output its own name");
     const Profile p = compute(o);
     for (const std::string& w : p.warnings)
-      std::fprintf(stderr, "hfbake: warning: %s: %s\n", o.dem.c_str(), w.c_str());
-    if (const std::string w = site_scale_warning(p.map_scale, p.crs_name, true); !w.empty())
       std::fprintf(stderr, "hfbake: warning: %s: %s\n", o.dem.c_str(), w.c_str());
     const std::string text = o.format == "json" ? to_json(o, p) : to_csv(p);
     const auto write = [](const std::string& file, const std::string& option, const std::string& bytes) {

@@ -573,8 +573,8 @@ std::string heights_warning(const Scene& scene) {
                    " with \"nodata\": \"fill\" in height makes them holes";
         break;
       }
-  } else if (const std::string w = site_scale_warning(
-                 scene.georeference.site_scale, scene.georeference.crs_name, false, s.scale, unit_ratio);
+  } else if (const std::string w = site_scale_warning(scene.georeference.site_scale,
+                                                      scene.georeference.crs_name, s.scale, unit_ratio);
              !w.empty()) {
     warning = w;
   } else if (s.format == "jpeg" || s.format == "JPEG") {
@@ -669,20 +669,17 @@ HeightsReport describe_heights(const Job& job, const Scene& scene) {
   return report;
 }
 
-std::string site_scale_warning(double k, const std::string& crs_name, bool point_query, double scale,
-                               double unit_ratio) {
+std::string site_scale_warning(double k, const std::string& crs_name, double scale, double unit_ratio) {
   // A conformal projection far from its true scale: its map metres are not ground metres, so every slope is
   // flattened by k, less what height_scale makes up beyond the unit.
-  if (!(std::fabs(k - 1) > 0.01)) return "";  // true to scale (or no CRS): whatever height_scale does
+  if (!far_from_true_scale(k)) return "";  // true to scale (or no CRS): whatever height_scale does
   const double left = k * unit_ratio / scale;
   if (!(std::fabs(left - 1) > 0.01)) return "";
-  const std::string site = point_query ? "the point" : "the field's centre";
-  return "the CRS's map units are " + short_num(k) + " times the ground's at " + site + " (" + crs_name +
-         "): slopes come out " + short_num(left >= 1 ? left : 1 / left) + " times too " +
+  return "the CRS's map units are " + short_num(k) + " times the ground's at the field's centre (" +
+         crs_name + "): slopes come out " + short_num(left >= 1 ? left : 1 / left) + " times too " +
          (left >= 1 ? "flat" : "steep") +
-         (point_query ? " and distances " + short_num(k) + " times too long" : "") +
-         "; warp the DEM to a CRS true to scale there (a UTM zone)" +
-         (point_query ? "" : ", or give height_scale " + short_num(k * unit_ratio)) + " (docs/gis.md)";
+         "; warp the DEM to a CRS true to scale there (a UTM zone), or give height_scale " +
+         short_num(k * unit_ratio) + " (docs/gis.md)";
 }
 
 Scene load_scene(const Job& job, const std::function<void(double)>& progress) {

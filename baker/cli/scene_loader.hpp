@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <functional>
 #include <optional>
@@ -123,14 +124,20 @@ struct HeightsReport {
   std::string warning;
 };
 HeightsReport describe_heights(const Job& job, const Scene& scene);
-// The warning for a DEM whose CRS's map units are k times the ground's at `site` (Web Mercator away from the
-// equator): slopes come out k times too flat (and a caster's distance k times too long). Empty when k is
-// within 1 % of 1 (a CRS true to scale there, or none). A bake can correct it with height_scale; `hfbake
-// horizon` cannot (point_query). `scale`: the job's height_scale, `unit_ratio` the factor of it that converts
-// the heights' unit into the pixels' (heights_warning): what is left, k unit_ratio / scale, is the flattening
-// warned about (none when the job gives the advised height_scale, k unit_ratio).
-std::string site_scale_warning(double k, const std::string& crs_name, bool point_query = false,
-                               double scale = 1, double unit_ratio = 1);
+// The warning for a field whose CRS's map units are k times the ground's at its centre (Web Mercator away
+// from the equator): slopes come out k times too flat. Empty when k is within 1 % of 1 (a CRS true to scale
+// there, or none). `scale`: the job's height_scale, `unit_ratio` the factor of it that converts the heights'
+// unit into the pixels' (heights_warning): what is left, k unit_ratio / scale, is the flattening warned
+// about (none when the job gives the advised height_scale, k unit_ratio). `hfbake horizon` measures on the
+// ground at its point instead (cli/horizon_command.cpp).
+std::string site_scale_warning(double k, const std::string& crs_name, double scale = 1,
+                               double unit_ratio = 1);
+// Whether a CRS whose map units are k times the ground's is far from true scale: k more than 1 % off 1 (a
+// UTM zone, 0.9996 to 1.001, is not). site_scale_warning warns of such a field; `hfbake horizon` measures
+// on the ground at such a point.
+inline bool far_from_true_scale(double k) {
+  return std::fabs(k - 1) > 0.01;
+}
 
 // The job's Scene. Scene::normals and the constant albedo are filled only when scene_needs says a method
 // reads them (an albedo map the job names is always read, so validate checks it). `progress` (optional): the
