@@ -73,6 +73,18 @@ bool remove_tree(const fs::path& path) {
   return ok;
 }
 
+namespace {
+
+// Whether `name` in the folder `dir` is the file open as `fd` (not a link, not another file since).
+bool names_file(int dir, const std::string& name, int fd) {
+  struct stat held {
+  }, now{};
+  return fstat(fd, &held) == 0 && fstatat(dir, name.c_str(), &now, AT_SYMLINK_NOFOLLOW) == 0 &&
+         held.st_ino == now.st_ino && held.st_dev == now.st_dev;
+}
+
+}  // namespace
+
 std::string FolderLock::holder_words() const {
   const bool here = holder_ == std::to_string(getpid()) + "@" + host_name();
   return (here ? "another bake in this process (" : "another hfbake process (") + holder_ + ")";
@@ -86,10 +98,21 @@ FolderLock::FolderLock(const fs::path& path, std::chrono::milliseconds patience)
 
 void FolderLock::try_lock() {
   holder_.clear();
+  // The folder, once: the lock is made, checked and removed through it, so a folder moved away and
+  // replaced (by another folder, or a link to one) while the lock is held never has its file removed.
+  if (dir_ < 0) {
+    const fs::path parent = path_.has_parent_path() ? path_.parent_path() : fs::path(".");
+    dir_ = open(parent.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dir_ < 0) {
+      problem_ = std::error_code(errno, std::generic_category()).message() + " (its folder)";
+      return;
+    }
+  }
+  const std::string name = path_.filename().string();
   // The file locked must still be the one at `path_` (a holder that finished removed it, and the next one
   // made another): else lock again.
   for (int attempt = 0; attempt < 100; ++attempt) {
-    const int fd = open(path_.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+    const int fd = openat(dir_, name.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
     if (fd < 0) {
       problem_ = std::error_code(errno, std::generic_category()).message() + " (a link or a folder?)";
       return;
@@ -115,10 +138,7 @@ void FolderLock::try_lock() {
       close(fd);
       return;
     }
-    struct stat held {
-    }, now{};
-    if (fstat(fd, &held) == 0 && lstat(path_.c_str(), &now) == 0 && held.st_ino == now.st_ino &&
-        held.st_dev == now.st_dev) {
+    if (names_file(dir_, name, fd)) {
       const std::string me = std::to_string(getpid()) + "@" + host_name();
       if (ftruncate(fd, 0) == 0 && pwrite(fd, me.data(), me.size(), 0) < 0) holder_.clear();
       fd_ = fd;
@@ -130,9 +150,11 @@ void FolderLock::try_lock() {
 }
 
 FolderLock::~FolderLock() {
-  if (fd_ < 0) return;
-  unlink(path_.c_str());  // while held: a process waiting on this file locks again (see the constructor)
-  close(fd_);
+  // While held, and only the file this lock holds (a process waiting on it locks again: see try_lock).
+  if (fd_ >= 0 && names_file(dir_, path_.filename().string(), fd_))
+    unlinkat(dir_, path_.filename().c_str(), 0);
+  if (fd_ >= 0) close(fd_);
+  if (dir_ >= 0) close(dir_);
 }
 
 int open_regular_file(const fs::path& path, std::string& why) {

@@ -132,8 +132,11 @@ std::string not_a_lock_file(const std::filesystem::path& lock, const std::string
 std::string lock_name_problem(const std::filesystem::path& lock);
 
 // An exclusive flock(2) on `path` (created if missing, never through a link), held until destruction,
-// which removes the file. Taken without waiting unless `patience` is given: then tried again every 10 ms
-// while another process holds it, for up to `patience`. `held()` is false when another process holds it.
+// which removes the file through the folder it was made in, wherever that folder has been moved, and only
+// while the name there is still the file it locked: a file at `path` in a folder that replaced it, or one
+// made at the name since, is never removed. Taken without waiting
+// unless `patience` is given: then tried again every 10 ms while another process holds it, for up to
+// `patience`. `held()` is false when another process holds it.
 class FolderLock {
  public:
   explicit FolderLock(const std::filesystem::path& path, std::chrono::milliseconds patience = {});
@@ -154,6 +157,7 @@ class FolderLock {
  private:
   void try_lock();
   std::filesystem::path path_;
+  int dir_ = -1;  // path_'s folder, opened by the first try
   int fd_ = -1;
   std::string holder_, problem_;
 };

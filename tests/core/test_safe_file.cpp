@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <random>
 #include <string>
 #include <thread>
@@ -134,6 +135,41 @@ TEST_F(SafeFile, AFolderLockWaitsOutHoldersThatComeAndGo) {
   holders.join();
   EXPECT_EQ(problem, "");
   EXPECT_GT(held, 0);
+}
+
+// A held lock's folder moved away while the lock is held, and its name taken by a link to another folder
+// (holding a file of the lock's name) or by a new folder whose own lock another holder took: the lock's end
+// removes its own file, at the folder's new name, and neither of the others.
+TEST_F(SafeFile, AFolderLockRemovesOnlyItsOwnFileWhereverItsFolderWent) {
+  for (const bool link : {true, false}) {
+    SCOPED_TRACE(link ? "a link at the folder's name" : "a new folder at its name");
+    const fs::path out = dir_ / "out", moved = dir_ / "out.moved", elsewhere = dir_ / "elsewhere";
+    fs::create_directories(out);
+    fs::create_directories(elsewhere);
+    std::ofstream(elsewhere / ".lock") << "precious";
+    std::optional<FolderLock> other;
+    {
+      FolderLock l(out / ".lock");
+      ASSERT_TRUE(l.held()) << l.problem();
+      fs::rename(out, moved);
+      if (link) {
+        fs::create_directory_symlink(elsewhere, out);
+      } else {
+        fs::create_directories(out);
+        other.emplace(out / ".lock");
+        ASSERT_TRUE(other->held()) << other->problem();
+      }
+    }
+    EXPECT_FALSE(fs::exists(moved / ".lock"));
+    EXPECT_TRUE(fs::exists(elsewhere / ".lock"));
+    if (!link) {
+      EXPECT_TRUE(fs::exists(out / ".lock")) << "the new holder's lock was removed";
+      FolderLock third(out / ".lock");
+      EXPECT_FALSE(third.held()) << "a third process took the lock the second holds";
+    }
+    other.reset();
+    fs::remove_all(out), fs::remove_all(moved), fs::remove_all(elsewhere);
+  }
 }
 
 }  // namespace
