@@ -5,8 +5,15 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cstddef>
 #include <cstdint>
+#include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -159,12 +166,72 @@ OIIO::ImageSpec spec_of(const OiioWrite& w) {
   return spec;
 }
 
+// The file a writer writes through, every write(2) and close(2) checked: some of OpenImageIO's writers (PNG
+// and TGA among them) do not check what their stdio writes return, so a full disk would leave a cut file
+// they call written. failure() is the first error, "" when none.
+class CheckedFile final : public OIIO::Filesystem::IOProxy {
+ public:
+  explicit CheckedFile(const std::string& path) : IOProxy(path, Write) {
+    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd_ < 0) fail(errno), m_mode = Closed;
+  }
+  ~CheckedFile() override { close(); }
+  const char* proxytype() const override { return "hfbake_checked_file"; }
+  void close() override {
+    if (fd_ >= 0 && ::close(fd_) != 0) fail(errno);
+    fd_ = -1;
+    m_mode = Closed;
+  }
+  size_t write(const void* buf, size_t size) override {
+    const size_t n = pwrite(buf, size, m_pos);
+    m_pos += std::int64_t(n);
+    return n;
+  }
+  size_t pwrite(const void* buf, size_t size, int64_t offset) override {
+    size_t done = 0;
+    while (fd_ >= 0 && done < size) {
+      const ssize_t n =
+          ::pwrite(fd_, static_cast<const char*>(buf) + done, size - done, offset + off_t(done));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        fail(n < 0 ? errno : ENOSPC);
+        break;
+      }
+      done += size_t(n);
+      end_ = std::max(end_, offset + std::int64_t(done));
+    }
+    return done;
+  }
+  size_t read(void*, size_t) override { return 0; }
+  size_t pread(void*, size_t, int64_t) override { return 0; }
+  size_t size() const override { return size_t(end_); }
+  const std::string& failure() const { return failure_; }
+
+ private:
+  void fail(int err) {
+    if (failure_.empty()) failure_ = std::error_code(err, std::generic_category()).message();
+  }
+  int fd_ = -1;
+  std::int64_t end_ = 0;
+  std::string failure_;
+};
+
 bool write(const std::string& path, const OiioWrite& w, const void* pixels, std::string& error) {
   try {
+    CheckedFile file(path);
     auto out = OIIO::ImageOutput::create(w.format);
-    if (!out || !out->open(path, spec_of(w)) || !out->write_image(type_of(w.given), pixels) ||
-        !out->close()) {
-      error = message(out ? out->geterror() : "");
+    if (!out || !out->supports("ioproxy") || !out->set_ioproxy(&file) || !out->open(path, spec_of(w)) ||
+        !out->write_image(type_of(w.given), pixels) || !out->close()) {
+      error = !file.failure().empty() ? file.failure()
+              : !out                  ? message("")
+              : out->supports("ioproxy")
+                  ? message(out->geterror())
+                  : "the " + w.format + " writer does not write through a checked file";
+      return false;
+    }
+    file.close();
+    if (!file.failure().empty()) {
+      error = file.failure();
       return false;
     }
     return true;

@@ -1086,4 +1086,30 @@ TEST(FullDisk, AnExrCutShortByTheDiskIsNeverMovedIntoPlace) {
   fs::remove_all(dir);
 }
 
+// A full disk under a texture: OpenImageIO's PNG and TGA writers do not check what their writes return, so
+// a cut texture was moved into place and the bake went on. The height's normal texture, written while the
+// scene loads (before any EXR), through a checked file: the bake fails with one line naming the texture and
+// leaves no output folder.
+TEST(FullDisk, ATextureCutShortByTheDiskFailsTheBakeNamingIt) {
+  for (const std::string format : {"png", "tga"}) {
+    SCOPED_TRACE(format);
+    const fs::path dir =
+        fs::temp_directory_path() / ("hfbake_full_texture_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir);
+    json j = base_job();
+    j["height"]["procedural"]["size"] = {64, 64};
+    j["output"]["textures"] = {{{"layers", {"normal"}}, {"methods", {"height"}}, {"format", format}}};
+    const std::string job = write_job(dir, j);
+    const HfbakeRun r = run_hfbake(dir, {"bake", job, "--no-cache", "--quiet"}, 1024);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_NE(lines[0].find("textures/t.height.normal." + format + ": cannot write the texture"),
+              std::string::npos)
+        << lines[0];
+    EXPECT_TRUE(listing(dir / "out").empty()) << "the output folder is left behind";
+    fs::remove_all(dir);
+  }
+}
+
 }  // namespace
