@@ -17,6 +17,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
+#include <vector>
 
 #include "cli/texture_plan.hpp"
 #include "core/error.hpp"
@@ -285,11 +286,29 @@ fs::path owner_record(const Job& job) {
 
 namespace {
 
+// The job file's absolute path as an owner record holds it: one line of printable text, a backslash and
+// each control character (a tab or a newline in a folder's name) escaped as \\ and \xHH.
 std::string job_identity(const Job& job) {
   std::error_code ec;
   const fs::path p = fs::weakly_canonical(fs::absolute(job.file), ec);
-  return (ec ? fs::absolute(job.file) : p).string();
+  const std::string path = (ec ? fs::absolute(job.file) : p).string();
+  std::string text;
+  for (const char c : path) {
+    if (c == '\\') {
+      text += "\\\\";
+    } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", unsigned(static_cast<unsigned char>(c)));
+      text += hex;
+    } else {
+      text += c;
+    }
+  }
+  return text;
 }
+
+// The longest owner record read: job_identity of a path of PATH_MAX (4096) bytes, each escaped.
+constexpr std::size_t kOwnerRecordBytes = 4 * 4096;
 
 }  // namespace
 
@@ -299,23 +318,24 @@ namespace {
 // file of its own (a link planted there is not read, and is replaced when a record is written), one line of
 // printable text that an error may quote.
 std::string read_owner_record(const fs::path& record) {
-  const std::string foreign = "a record that is not hfbake's";
+  // Named, so that a user who knows it for a stray file can remove it instead of giving --overwrite.
+  const std::string foreign = "a record that is not hfbake's (" + record.string();
   std::error_code ec;
   const fs::file_status status = fs::symlink_status(record, ec);
   if (!fs::exists(status)) return "";
   // hfbake writes its records whole (write_file_atomically), as files: a link, an empty file or anything
   // else at the name was put there by something else, and is no licence to replace the outputs.
-  if (!fs::is_regular_file(status)) return foreign + (fs::is_symlink(status) ? " (a link)" : "");
+  if (!fs::is_regular_file(status)) return foreign + (fs::is_symlink(status) ? ", a link)" : ")");
   std::string why, recorded;
   const int fd = open_regular_file(record, why);
-  if (fd < 0) return foreign;
-  char buf[4096];
-  const ssize_t n = read(fd, buf, sizeof buf);
+  if (fd < 0) return foreign + ")";
+  std::vector<char> buf(kOwnerRecordBytes + 1);
+  const ssize_t n = read(fd, buf.data(), buf.size());
   close(fd);
-  if (n > 0) recorded.assign(buf, std::size_t(n));
-  if (recorded.empty() || recorded.size() > 1024 ||
+  if (n > 0) recorded.assign(buf.data(), std::size_t(n));
+  if (recorded.empty() || recorded.size() > kOwnerRecordBytes ||
       std::any_of(recorded.begin(), recorded.end(), [](char c) { return (unsigned char)c < 0x20; }))
-    return foreign;
+    return foreign + ")";
   return recorded;
 }
 

@@ -365,7 +365,12 @@ std::string not_a_lock_file(const fs::path& lock, const std::string& why) {
 std::string lock_name_problem(const fs::path& lock) {
   std::error_code ec;
   const fs::file_status s = fs::symlink_status(lock, ec);
-  if (!fs::exists(s) || fs::is_regular_file(s)) return "";
+  if (!fs::exists(s)) return "";
+  if (fs::is_regular_file(s)) {
+    // FolderLock's own words for a file it would not take.
+    const std::uintmax_t links = fs::hard_link_count(lock, ec);
+    return !ec && links > 1 ? not_a_lock_file(lock, "a file with another name elsewhere (a hard link)") : "";
+  }
   return not_a_lock_file(lock, fs::is_symlink(s) ? "a link" : "not a file");
 }
 

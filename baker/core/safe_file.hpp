@@ -128,7 +128,8 @@ bool remove_tree(const std::filesystem::path& path);
 // remove it" (why: FolderLock::problem, or what lock_name_problem found).
 std::string not_a_lock_file(const std::filesystem::path& lock, const std::string& why);
 // What a FolderLock on `lock` would refuse before it is taken: its name taken by anything but a file (a link,
-// a folder), as not_a_lock_file's line; "" when the name is free or a file.
+// a folder) or by a file with other names (a hard link), as not_a_lock_file's line; "" when the name is free
+// or a file of its own.
 std::string lock_name_problem(const std::filesystem::path& lock);
 
 // An exclusive flock(2) on `path` (created if missing, never through a link), held until destruction,

@@ -720,13 +720,17 @@ TEST_F(Untrusted, ShardAndSlurmFoldersThatAreLinksAreRefused) {
 TEST_F(Untrusted, AHardLinkAtTheLockFileIsNeverWritten) {
   fs::create_directories(dir_ / "out");
   fs::create_hard_link(dir_ / "outside" / "victim", dir_ / "out" / ".hfbake-t.lock");
-  const Outcome r = hfbake(dir_, {"bake", write_job(dir_, base_job()), "--no-cache", "--quiet"});
-  EXPECT_EQ(r.exit_code, 2) << r.err;
-  const auto lines = r.error_lines();
-  ASSERT_EQ(lines.size(), 1u) << r.err;
-  EXPECT_NE(lines[0].find("is no lock file of hfbake's (a file with another name elsewhere (a hard link))"),
-            std::string::npos)
-      << lines[0];
+  const std::string job = write_job(dir_, base_job());
+  for (const char* command : {"validate", "bake"}) {  // validate finds it before any bake starts
+    SCOPED_TRACE(command);
+    const Outcome r = hfbake(dir_, {command, job, "--quiet"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const auto lines = r.error_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_NE(lines[0].find("is no lock file of hfbake's (a file with another name elsewhere (a hard link))"),
+              std::string::npos)
+        << lines[0];
+  }
   expect_outside_untouched();
 }
 
@@ -842,7 +846,8 @@ TEST_F(Untrusted, ALinkOrAnEmptyFileAtAnOwnerRecordIsNoLicenceToReplaceTheOutput
   Outcome r = hfbake(dir_, {"validate", job, "--quiet"});
   EXPECT_EQ(r.exit_code, 2) << r.err;
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
-  EXPECT_NE(r.error_lines()[0].find("were baked from a record that is not hfbake's (a link): give this job "
+  EXPECT_NE(r.error_lines()[0].find("were baked from a record that is not hfbake's (" + record.string() +
+                                    ", a link): give this job "
                                     "another name or output folder, or give --overwrite"),
             std::string::npos)
       << r.err;
@@ -854,7 +859,40 @@ TEST_F(Untrusted, ALinkOrAnEmptyFileAtAnOwnerRecordIsNoLicenceToReplaceTheOutput
   std::ofstream(record, std::ios::trunc).close();  // empty
   r = hfbake(dir_, {"validate", job, "--quiet"});
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("were baked from a record that is not hfbake's: give"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("were baked from a record that is not hfbake's (" + record.string() + "): give"),
+            std::string::npos)
+      << r.err;
+}
+
+// A job file whose path holds a tab and a newline, or runs past 1024 bytes: its owner record (the path, a
+// control character escaped) is its own on the next bake, which replaces the outputs without --overwrite; a
+// job file of the same name at another such path is still refused, naming the first one's escaped path.
+TEST_F(Untrusted, AJobFileAtAnUnusualPathOwnsItsOutputsAgain) {
+  const fs::path odd = dir_ / "tab\there" / "new\nline";
+  fs::path deep = dir_;
+  for (int i = 0; i < 12; ++i) deep /= std::string(100, char('a' + i));
+  for (const fs::path& folder : {odd, deep}) {
+    SCOPED_TRACE(folder.string().size());
+    fs::create_directories(folder);
+    json j = base_job();
+    j["output"]["dir"] = (dir_ / "out").string();
+    const std::string job = write_job(folder, j);
+    for (int run = 0; run < 2; ++run) {
+      const Outcome r = hfbake(dir_, {"bake", job, "--no-cache", "--quiet"});
+      EXPECT_EQ(r.exit_code, 0) << "run " << run << ": " << r.err;
+    }
+    fs::create_directories(folder / "second");
+    const Outcome other = hfbake(dir_, {"validate", write_job(folder / "second", j), "--quiet"});
+    EXPECT_EQ(other.exit_code, 2) << other.err;
+    ASSERT_EQ(other.error_lines().size(), 1u) << other.err;
+    const std::string line = other.error_lines()[0];
+    EXPECT_NE(line.find("were baked from "), std::string::npos) << line;
+    EXPECT_NE(
+        line.find(folder == odd ? "tab\\x09here/new\\x0aline/job.json" : std::string(100, 'l') + "/job.json"),
+        std::string::npos)
+        << line;
+    fs::remove_all(dir_ / "out");
+  }
 }
 
 // A shard task of another job file with the same name, into a folder holding the first's outputs: refused in
