@@ -276,9 +276,17 @@ SourcedLayers reference_step(const JobRun& run, ResultSource& source, const Refe
   LayerSet& reference = result.layers;
   std::vector<const LayerSet*> method_layers;
   for (const MethodLayers& m : report.methods) method_layers.push_back(&m.layers);
-  // Not cached: cheap beside the tracing.
-  add_reference_horizons(scene.field, method_layers, reference, rc, scene.curvature);
+  // Not cached; a step of their own, since a horizon layer's bisections can outlast a few samples' paths
+  // (512^2, K = 32: minutes).
+  const bool traces_more = std::any_of(method_layers.begin(), method_layers.end(), [](const LayerSet* m) {
+    return m->find("horizon") || m->find("horizon_distance") || m->find("sh_visibility");
+  });
+  const auto t1 = std::chrono::steady_clock::now();
+  if (traces_more) run.progress.begin(job.name, "reference horizons");
+  add_reference_horizons(scene.field, method_layers, reference, run.control("reference horizons"),
+                         scene.curvature);
   add_reference_sh_visibility(scene.field, method_layers, reference, rc);
+  if (traces_more) run.progress.end(job.name, "reference horizons", seconds_since(t1));
   // The first relief entry's layers, traced with its settings.
   for (std::size_t i = 0; i < job.bakes.size(); ++i)
     if (const MethodConfig& c = entry_config(job.bakes[i]); c.holds<ReliefSettings>()) {

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -155,8 +156,10 @@ ReferenceHorizons trace_reference_horizons(const HeightField& f, int K, bool dis
   azimuth_table(K, cos_phi, sin_phi);
   const double lift = horizon_receiver_lift(f, geometry);
   const CurvedRays curved = curved_rays(f, curvature);
+  std::atomic<int> rows{0};
   tbb::parallel_for(0, f.height, [&](int j) {
     rc.check();
+    rc.report(double(rows.fetch_add(1)) / f.height);
     for (int i = 0; i < f.width; ++i) {
       const std::size_t t = f.index(i, j);
       for (int k = 0; k < K; ++k) {
@@ -182,7 +185,8 @@ void add_reference_horizons(const HeightField& field, const std::vector<const La
   const Layer& shape = horizon ? *horizon : *distance;
   const int K = shape.channel_count();
   const bool same_k = !horizon || !distance || distance->channel_count() == K;
-  ReferenceHorizons h = trace_reference_horizons(field, K, distance && same_k, rc, 40, curvature);
+  ReferenceHorizons h =
+      trace_reference_horizons(field, K, distance && same_k, rc, kHorizonBisections, curvature);
   if (horizon) reference.layers.push_back({"horizon", horizon->channels, std::move(h.sin_elevation)});
   if (distance && same_k)
     reference.layers.push_back({"horizon_distance", distance->channels, std::move(h.distance)});

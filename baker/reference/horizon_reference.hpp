@@ -70,9 +70,17 @@ TexelHorizon texel_horizon(const HeightField& field, const reference::EmbreeFiel
                            double lift, double c, double s, int iterations, const CurvedRays& curved = {},
                            double max_horizontal = std::numeric_limits<double>::infinity());
 
+// Halvings of the elevation's range [-pi/2, pi/2] per texel and azimuth: pi / 2^32 (7e-10 rad). The
+// elevation is resolved long before (Embree's rays are single precision); the last halvings decide which
+// of two casters at nearly the same elevation the distance is of: on a rough 40^2 field at K = 12 the
+// distances differ from the exact march's in 1.04 % of the texel-directions at 32 halvings, 0.98 % at 40
+// and 2.0 % at 28 (ReferenceHorizons.AgreeWithTheExactMarchOnRoughTerrain).
+inline constexpr int kHorizonBisections = 32;
+
 // curvature: Scene::curvature (0: flat).
 ReferenceHorizons trace_reference_horizons(const HeightField& field, int K, bool distance,
-                                           const RunControl& rc, int iterations = 40, double curvature = 0);
+                                           const RunControl& rc, int iterations = kHorizonBisections,
+                                           double curvature = 0);
 
 // Adds "horizon" (and "horizon_distance") to a reference's layers when one of `methods` bakes it: K is that
 // layer's channel count, the channel names are the method's. The first method's K wins: a method with
