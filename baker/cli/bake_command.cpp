@@ -350,8 +350,7 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
     shards.emplace(job, size.width, size.height);
   }
   OutputStage stage(job, options.overwrite);
-  for (const fs::path& p : stage.stale_removed())
-    progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
+  for (const std::string& line : stage.notes()) progress.message(job.name + ": " + line);
   JobRun run{job, progress, cancel, outcome, stage, ""};
 
   const Scene scene = load_step(run);

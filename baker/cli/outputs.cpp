@@ -586,7 +586,7 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   }
   // A process killed while it moved this job's outputs (it held the lock) left them part moved: its moves
   // are completed first, so that the folder holds one bake's outputs and the record names its job file.
-  complete_killed_commits(job);
+  moves_completed_ = complete_killed_commits(job);
   try {
     check_output_owner(job, overwrite);
     check_report_owner(job);
@@ -617,6 +617,17 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   // this job's reference checkpoints are taken over first (a resumed reference), then the stages removed.
   adopt_stale_checkpoints(job.output.dir, job.name, checkpoint_dir());
   stale_removed_ = remove_stale_stages(job.output.dir);
+}
+
+std::vector<std::string> OutputStage::notes() const {
+  std::vector<std::string> lines;
+  for (const fs::path& p : moves_completed_)
+    lines.push_back("completed the moves of " + p.string() +
+                    " (a bake killed while it moved its outputs into place): the folder holds that bake's "
+                    "outputs until this one's replace them");
+  for (const fs::path& p : stale_removed_)
+    lines.push_back("removed " + p.string() + " (left by a process that no longer runs)");
+  return lines;
 }
 
 OutputStage::~OutputStage() {

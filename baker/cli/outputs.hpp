@@ -190,8 +190,9 @@ class OutputStage {
   // is refused) and records the job file as the outputs' owner (owner_record, and textures_owner_record for
   // a job that writes textures); returns the final paths.
   std::vector<std::filesystem::path> commit();
-  // The stale staging folders the constructor removed (to tell the user).
-  const std::vector<std::filesystem::path>& stale_removed() const { return stale_removed_; }
+  // What the constructor did to what other processes left, one line each for the user: the moves of a bake
+  // killed while it moved its outputs, completed; stale staging folders, removed.
+  std::vector<std::string> notes() const;
   // Where this job's reference checkpoints its bands: inside the stage, with the checkpoint files the
   // constructor adopted from this job's stale stages.
   std::filesystem::path checkpoint_dir() const { return checkpoint_held_.path(); }
@@ -213,7 +214,7 @@ class OutputStage {
                     const std::function<void(const std::filesystem::path&)>& write);
   void write_geotiffs(const std::string& stem, const LayerSet& layers);
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage
-  std::vector<std::filesystem::path> stale_removed_;
+  std::vector<std::filesystem::path> stale_removed_, moves_completed_;
   Georeference georeference_;
   double texel_x_ = 0, texel_y_ = 0;  // 0: not set, no attribute
   bool created_dir_ = false;          // the output folder did not exist before this job

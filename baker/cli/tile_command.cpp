@@ -496,8 +496,7 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
   }
 
   OutputStage stage(job, options.overwrite);
-  for (const fs::path& p : stage.stale_removed())
-    progress.message(job.name + ": removed " + p.string() + " (left by a process that no longer runs)");
+  for (const std::string& line : stage.notes()) progress.message(job.name + ": " + line);
   stage.set_georeference(band.georeference);
   progress.message(job.name + ": " + std::to_string(band.width) + "x" + std::to_string(band.height) + " in " +
                    tiles_text(plan));

@@ -1364,7 +1364,7 @@ TEST_F(Moves, ALinkPlantedAtTheStageDuringTheMovesIsNotFollowed) {
 }
 
 // A bake killed during its moves whose parent has not yet collected it (a zombie: `timeout -s KILL` leaves
-// one) is gone: the next bake of the job name completes its moves and removes its stage.
+// one) is gone: the next bake of the job name completes its moves, says so, and removes its stage.
 TEST_F(Moves, AKilledBakeNotYetCollectedIsGone) {
   const pid_t pid = start_the_moves();
   kill(pid, SIGKILL);
@@ -1375,7 +1375,11 @@ TEST_F(Moves, AKilledBakeNotYetCollectedIsGone) {
     if (stat.find(") Z ") != std::string::npos) break;
     usleep(10000);
   }
-  EXPECT_EQ(hfbake(dir_, {"bake", jobs_[1], "--no-cache", "--quiet"}).exit_code, 0);
+  const Outcome next = hfbake(dir_, {"bake", jobs_[1], "--no-cache"});
+  EXPECT_EQ(next.exit_code, 0) << next.err;
+  EXPECT_NE(next.err.find("t: completed the moves of " + (dir_ / "out").string() + "/.hfbake-staging-"),
+            std::string::npos)
+      << next.err;
   for (const auto& e : fs::directory_iterator(dir_ / "out"))
     EXPECT_EQ(e.path().filename().string().find(".hfbake-staging-"), std::string::npos) << e.path();
   EXPECT_EQ(finish(pid, dir_, "err.txt").exit_code, -SIGKILL);
