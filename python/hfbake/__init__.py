@@ -140,6 +140,11 @@ def _bake_array(method, heights, threads, progress, cancel, memory_limit, job_ke
                          f"{type(job_keys).__name__}", "/job")
     entry, height, job = {}, {}, dict(job_keys or {})
     if isinstance(heights, _np.ma.MaskedArray):  # its masked texels are holes, as a file's NoData values
+        masked = _np.ma.getmaskarray(heights)
+        if masked.any() and params.get("nodata") != "fill":
+            row, column = (int(v) for v in _np.argwhere(masked)[0])
+            raise InputError(f"heights: texel ({column}, {row}) is masked ({int(masked.sum())} of {masked.size} "
+                             "texels have no valid height); nodata=\"fill\" fills the holes", "/heights")
         heights = heights.astype(_np.float64).filled(_np.nan)
     heights = _as_float_heights(heights, params.get("nodata_value"))
     for key, value in params.items():

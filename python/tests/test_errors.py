@@ -128,7 +128,8 @@ def test_a_masked_arrays_masked_texels_are_holes():
     masked.data[5, 3] = -9999.0
     with pytest.raises(hfbake.InputError) as caught:
         hfbake.p1(masked)
-    assert "texel (3, 5) is NaN" in caught.value.message
+    assert "texel (3, 5) is masked (1 of 192 texels" in caught.value.message
+    assert caught.value.pointer == "/heights"
     # Filled, as the same array with NaN there: not the -9999 well.
     filled = heights.copy()
     filled[5, 3] = np.nan
