@@ -724,8 +724,8 @@ TEST_F(Cli, TheReferencesMemoryEstimateHoldsForQuadsAndTheGrid) {
 
 // A reference alone (no bake entries) against its measured peak, with and without previews: its previews
 // bring the image libraries in after the tracing (Embree's scene freed), and its report.html, scored against
-// nothing, shows no images (with the report's images and the libraries counted beside the tracing, the
-// estimate without previews was 1.86 times the peak).
+// nothing, shows no images (counting the report's images and the libraries beside the tracing would put
+// the estimate without previews at 1.86 times the peak).
 TEST_F(Cli, AReferenceAlonesMemoryEstimateHolds) {
   for (const bool previews : {true, false}) {
     nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {512, 512}}, {"seed", 3}}}},

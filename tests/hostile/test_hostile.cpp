@@ -1087,9 +1087,9 @@ TEST(FullDisk, AnExrCutShortByTheDiskIsNeverMovedIntoPlace) {
 }
 
 // A full disk under a texture: OpenImageIO's PNG and TGA writers do not check what their writes return, so
-// a cut texture was moved into place and the bake went on. The height's normal texture, written while the
-// scene loads (before any EXR), through a checked file: the bake fails with one line naming the texture and
-// leaves no output folder.
+// only the checked file they write through (io/oiio_module.cpp) keeps a cut texture from being moved into
+// place. The height's normal texture, written while the scene loads (before any EXR): the bake fails with
+// one line naming the texture and leaves no output folder.
 TEST(FullDisk, ATextureCutShortByTheDiskFailsTheBakeNamingIt) {
   for (const std::string format : {"png", "tga"}) {
     SCOPED_TRACE(format);
