@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -230,6 +231,37 @@ std::vector<fs::path> raster_files(const fs::path& file) {
   return files;
 }
 
+namespace {
+
+// The percentage of the band GDAL reports as covered by none of its sources' data (a mosaic's gaps).
+double uncovered_percent(GDALRasterBand& band) {
+  double covered = 100;
+  const int status = band.GetDataCoverageStatus(0, 0, band.GetXSize(), band.GetYSize(), 0, &covered);
+  return status & GDAL_DATA_COVERAGE_STATUS_EMPTY ? std::clamp(100 - covered, 0.0, 100.0) : 0.0;
+}
+
+// A GeoTIFF's: the percentage of its area in blocks the file does not hold (offset or size 0: a sparse
+// file's missing blocks). Not GDAL's coverage status, which also counts a written block of zeros that the
+// file system keeps as a hole (GDAL writes an uncompressed file's zeros so) as not covered.
+double missing_tiff_blocks_percent(GDALRasterBand& band) {
+  int bw = 0, bh = 0;
+  band.GetBlockSize(&bw, &bh);
+  const int w = band.GetXSize(), h = band.GetYSize();
+  if (bw < 1 || bh < 1 || w < 1 || h < 1) return 0;
+  double missing = 0;
+  for (int by = 0; by * bh < h; ++by)
+    for (int bx = 0; bx * bw < w; ++bx) {
+      const std::string at = std::to_string(bx) + "_" + std::to_string(by);
+      const char* offset = band.GetMetadataItem(("BLOCK_OFFSET_" + at).c_str(), "TIFF");
+      const char* size = band.GetMetadataItem(("BLOCK_SIZE_" + at).c_str(), "TIFF");
+      if (!offset || !size || std::atoll(offset) == 0 || std::atoll(size) == 0)
+        missing += double(std::min(bw, w - bx * bw)) * double(std::min(bh, h - by * bh));
+    }
+  return 100.0 * missing / (double(w) * double(h));
+}
+
+}  // namespace
+
 std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) return std::nullopt;  // the OpenImageIO path names the problem
@@ -314,10 +346,8 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
     info.offset.push_back(has ? offset : 0.0);
     const char* unit = band->GetUnitType();
     info.unit_types.emplace_back(unit ? unit : "");
-    double covered = 100;
-    const int status = band->GetDataCoverageStatus(0, 0, info.width, info.height, 0, &covered);
-    info.uncovered_percent.push_back(
-        status & GDAL_DATA_COVERAGE_STATUS_EMPTY ? std::clamp(100 - covered, 0.0, 100.0) : 0.0);
+    info.uncovered_percent.push_back(info.driver == "GTiff" ? missing_tiff_blocks_percent(*band)
+                                                            : uncovered_percent(*band));
   }
   return info;
 }

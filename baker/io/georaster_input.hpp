@@ -40,8 +40,9 @@ struct GeoRasterInfo {
   // none).
   std::vector<std::string> unit_types;
   // Per band: the percentage of the raster that none of the file's data covers, where GDAL reads 0 or the
-  // band's NoData value (a mosaic's gaps between its sources, a sparse GeoTIFF's missing blocks), from
-  // GDAL's data coverage status; 0 when all is covered or the driver cannot tell.
+  // band's NoData value: a GeoTIFF's missing blocks (a sparse file's), from its block table; a mosaic's
+  // gaps between its sources, from GDAL's data coverage status; 0 when all is covered or the driver cannot
+  // tell.
   std::vector<double> uncovered_percent;
 };
 

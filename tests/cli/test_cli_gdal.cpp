@@ -824,6 +824,54 @@ TEST_F(CliGdal, AMosaicsGapsAreRefusedUnlessTheyAreNoData) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// A GeoTIFF's rows of exactly 0 m (a sea) are heights: GDAL leaves an uncompressed file's blocks of zeros
+// to the file system, which may keep them as holes, yet every block is in the file's table, and the DEM
+// validates. A sparse GeoTIFF whose table lacks a block (SPARSE_OK, a block never written) is refused
+// naming how much is missing.
+TEST_F(CliGdal, AGeoTiffsZeroRowsAreHeightsAndItsMissingBlocksAreNot) {
+  GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+  const int n = 256;
+  std::vector<float> z(std::size_t(n) * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) z[std::size_t(j * n + i)] = j >= 192 ? 0.0f : float(1 + (i * 7 + j * 3) % 9);
+  const double gt[6] = {500000, 1, 0, 5100256, 0, -1};
+  OGRSpatialReference utm;
+  utm.importFromEPSG(32633);
+  {
+    GDALDataset* ds = gtiff->Create((dir_ / "sea.tif").c_str(), n, n, 1, GDT_Float32, nullptr);
+    ASSERT_TRUE(ds);
+    ds->SetGeoTransform(const_cast<double*>(gt));
+    ds->SetSpatialRef(&utm);
+    ASSERT_EQ(
+        ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, n, n, z.data(), n, n, GDT_Float32, 0, 0, nullptr),
+        CE_None);
+    GDALClose(ds);
+    const char* sparse_options[] = {"SPARSE_OK=TRUE", "TILED=YES", "BLOCKXSIZE=64", "BLOCKYSIZE=64", nullptr};
+    ds = gtiff->Create((dir_ / "sparse.tif").c_str(), n, n, 1, GDT_Float32,
+                       const_cast<char**>(sparse_options));
+    ASSERT_TRUE(ds);
+    ds->SetGeoTransform(const_cast<double*>(gt));
+    ds->SetSpatialRef(&utm);
+    // Land everywhere (a sparse file leaves out blocks of zeros too), every block written but the last of
+    // the first row of blocks.
+    std::vector<float> land = z;
+    for (float& v : land) v += 1;
+    ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 192, 64, land.data(), 192, 64, GDT_Float32, 4,
+                                             4 * std::size_t(n), nullptr),
+              CE_None);
+    ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 64, n, n - 64, land.data() + 64 * n, n, n - 64,
+                                             GDT_Float32, 0, 0, nullptr),
+              CE_None);
+    GDALClose(ds);
+  }
+  Result r = hfbake("validate " + write_job("sea.json", "sea", {{"image", "sea.tif"}}).string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = hfbake("validate " + write_job("sparse.json", "sparse", {{"image", "sparse.tif"}}).string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("sparse.tif: 6.25 % of it is covered by none of its data"), std::string::npos)
+      << r.err;
+}
+
 // A report's scene names the bytes of every file its heights were read from: a baseline baked from a VRT
 // whose source has changed since is another job's, refused by compare (exit 2).
 TEST_F(CliGdal, AReportsSceneCountsAVrtsSources) {
