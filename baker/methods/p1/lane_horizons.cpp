@@ -3,6 +3,7 @@
 #include <emmintrin.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -147,6 +148,31 @@ void build_rows(LaneLayout& L, int width, int height, bool xm, const Rows& rows)
       }
     }
   });
+  // The heights less an offset, the middle of their range, where every difference is exact (a float z
+  // minus a float near it): a crossing's rise (va - z0) + (vb - va) w takes the same values, bit for bit,
+  // from either, while the bounds' roundings (the margins below and in lane_kernel.inc) scale with the
+  // largest |z| held, the relief instead of the altitude (a plateau 8000 m up searched as fast as one at
+  // sea level). Where some difference would round (heights spanning several binades), no offset.
+  {
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (int u = 0; u < nmajor; ++u) {
+      const float* row = z + std::ptrdiff_t(u) * stride + kLanePad;
+      for (int v = 0; v < nminor; ++v) lo = std::min(lo, row[v]), hi = std::max(hi, row[v]);
+    }
+    const float off = std::isfinite(lo) && std::isfinite(hi) ? float(0.5 * (double(lo) + double(hi))) : 0.0f;
+    std::atomic<bool> exact{off != 0};
+    if (exact)
+      tbb::parallel_for(0, nmajor, [&](int u) {
+        const float* row = z + std::ptrdiff_t(u) * stride + kLanePad;
+        for (int v = 0; v < nminor && exact.load(std::memory_order_relaxed); ++v)
+          if (double(row[v] - off) != double(row[v]) - double(off)) exact = false;
+      });
+    if (exact)
+      tbb::parallel_for(0, nmajor, [&](int u) {
+        float* row = z + std::ptrdiff_t(u) * stride + kLanePad;
+        for (int v = 0; v < nminor; ++v) row[v] -= off;
+      });
+  }
   // The field's least-squares plane, tilt0 + tilt_major * u + tilt_minor * v at major index u, minor index
   // v (on a whole grid the two slopes are independent sums), and its largest |z|: each row's sums in
   // parallel (read back from the layout), added in row order (the same bits for any thread count).

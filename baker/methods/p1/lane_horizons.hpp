@@ -59,6 +59,8 @@ inline constexpr int kLaneWindow = 3;       // minor-axis texels of LaneLayout::
 
 // The field with its minor axis contiguous: x_major (directions moving more along x) stores
 // [x * stride + kLanePad + y], else [y * stride + kLanePad + x]; kLanePad texels of kOffField on both sides.
+// The heights are held less an offset wherever every difference stays exact (build_rows): a search's
+// slopes are differences of heights, the same either way.
 // window[at] is the highest of z[at .. at + kLaneWindow - 1] (the same major index) less the field's
 // least-squares plane there (raised by more than the roundings): a search's bounds are of the heights less a
 // trend, which stays close to the slopes they bound far along a ray over terrain with a regional slope.
@@ -67,7 +69,7 @@ struct LaneLayout {
   int nmajor = 0, nminor = 0;
   std::ptrdiff_t stride = 0;
   std::size_t size = 0;  // floats in z and in window: nmajor * stride
-  float zabs = 0;        // the field's largest |z|
+  float zabs = 0;        // the largest |z| held (less the offset)
   // The field's least-squares plane: tilt0 + tilt_major * u + tilt_minor * v at major index u, minor index v
   // (heights per texel index); plane_abs its largest |value| on the field.
   double tilt0 = 0, tilt_major = 0, tilt_minor = 0;
