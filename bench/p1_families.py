@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """p1's speed across families of terrain: whole-process timings of the same exact bake (ao + vsky, K
 directions, a uniform sky) on built-in fields of every hard kind, on rough terrain tilted by a regional
-slope, on flat ground (a sea beside land, a city's blocks, a level plane), on a tilted plane, and on any
-DEMs given.
+slope, on flat ground (a sea beside land, a city's blocks, a level plane), on planar faces (a tilted plane, bare
+and with noise, a V valley), on stairs, on white noise, on low relief far above zero, and on any DEMs given.
 
     /usr/bin/python3 bench/p1_families.py [--size 1024] [--directions 64] [--reps 3] [--dem FILE.tif ...]
                                           [--out bench/p1_families.md]
@@ -57,7 +57,13 @@ def main():
                 ("bare plane, 30°", 500.0 + np.tan(np.radians(30)) * (0.8 * xx + 0.6 * yy)),
                 ("a coast: rough fBm, its east half a flat sea", np.where(xx < n // 2, np.maximum(fbm, 0.0), 0.0)),
                 ("a city: blocks 6-40 m tall on flat ground", city(n)),
-                ("bare plane, level", np.full((n, n), 500.0))]:
+                ("bare plane, level", np.full((n, n), 500.0)),
+                ("bare plane, 30°, + noise of 0.1", 500.0 + np.tan(np.radians(30)) * xx +
+                 0.1 * np.random.default_rng(9).uniform(-1, 1, (n, n))),
+                ("a V valley of 30° faces", 500.0 + np.tan(np.radians(30)) * np.abs(yy - n / 2)),
+                ("stairs 3 texels wide, 1 high", 500.0 + np.floor(xx / 3)),
+                ("white noise, 1 unit", 500.0 + np.random.default_rng(9).uniform(0, 1, (n, n))),
+                ("rough fBm x 0.001, 8000 up", 8000.0 + 0.001 * fbm)]:
             path = os.path.join(work, f"field{len(fields)}.tif")
             write_geotiff(path, z.astype(np.float32))
             fields.append((label, {"image": path}, n * n))
