@@ -17,6 +17,7 @@
 #include "core/error.hpp"
 #include "core/safe_file.hpp"
 #include "farm/shard_plan.hpp"
+#include "io/color.hpp"
 #include "report/compare.hpp"
 
 namespace hfbake {
@@ -197,6 +198,12 @@ std::vector<std::string> resolve_job_checks(Job& job) {
     try {
       plan_textures(job);  // output.textures against the resolved layers
       check_report_settings(job, context);
+      // The display and view the previews and report.html's images are shown through, named in the
+      // OpenColorIO config (not found only once the first preview is written).
+      if (!job.output.preview_display.empty() || !job.output.preview_view.empty())
+        check_display_view(job.output.preview_display, job.output.preview_view,
+                           InputSite{file, "/output/preview_display"},
+                           InputSite{file, "/output/preview_view"});
       check_output_folder(job);
     } catch (const InputError& e) {
       errors.push_back(e.line());

@@ -192,6 +192,30 @@ TEST_F(Cli, SchemaViolationOneLinePerProblem) {
   EXPECT_TRUE(output_dir_is_empty());
 }
 
+// A preview display or view the OpenColorIO config does not name: validate and bake refuse it in one line
+// naming the key, before anything is baked (not once the first preview is written).
+TEST_F(Cli, AnUnknownPreviewDisplayOrViewIsRefusedBeforeBaking) {
+  for (const char* key : {"preview_display", "preview_view"}) {
+    SCOPED_TRACE(key);
+    nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {16, 16}}}}},
+                           {{{"method", "p1"}, {"directions", 4}}});
+    j["output"]["previews"] = true;
+    j["output"][key] = "nope";
+    const fs::path p = write_job("x.json", j);
+    for (const char* cmd : {"validate ", "bake --no-cache "}) {
+      const Result r = hfbake(cmd + p.string());
+      EXPECT_EQ(r.exit_code, 2) << cmd;
+      const auto lines = r.error_lines();
+      ASSERT_EQ(lines.size(), 1u) << r.err;
+      EXPECT_EQ(
+          lines[0].rfind("hfbake: error: " + p.string() + ": /output/" + key + ": unknown OpenColorIO ", 0),
+          0u)
+          << lines[0];
+    }
+    EXPECT_TRUE(output_dir_is_empty());
+  }
+}
+
 TEST_F(Cli, MissingHeightImage) {
   const fs::path p = write_job("x.json", job({{"image", "nope.exr"}}));
   const Result r = hfbake("bake " + p.string());
