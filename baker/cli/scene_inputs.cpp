@@ -416,12 +416,16 @@ void load_surface_map(const Job& job, const std::string& pointer, const HeightFi
       throw InputError(job.file.string(), pointer + "/image", where + " is negative or not finite");
     pixels[t] = p * scale;
     const Rgb s = pixels[t];
-    if (reflectance && (s.r > 1 || s.g > 1 || s.b > 1)) {
+    // An albedo is a reflectance; an emission a radiance, at most kMaxRadiance as a number emission is.
+    const float most = reflectance ? 1.0f : float(kMaxRadiance);
+    if (!(s.r <= most && s.g <= most && s.b <= most)) {
       char value[96];
       std::snprintf(value, sizeof value, " is (%g, %g, %g) after the scale", double(s.r), double(s.g),
                     double(s.b));
       throw InputError(job.file.string(), pointer + "/image",
-                       where + value + "; an albedo lies in [0, 1] (a reflectance)");
+                       where + value +
+                           (reflectance ? "; an albedo lies in [0, 1] (a reflectance)"
+                                        : "; an emission lies in [0, 1e9], as a number emission does"));
     }
   }
   texels = std::move(pixels);

@@ -145,9 +145,18 @@ class Loader {
       Rgb& p = img.pixels[i];
       p = p * intensity_;
       const bool finite = std::isfinite(p.r) && std::isfinite(p.g) && std::isfinite(p.b);
-      if (finite && p.r >= 0 && p.g >= 0 && p.b >= 0) continue;
+      const bool bounded = p.r <= kMaxRadiance && p.g <= kMaxRadiance && p.b <= kMaxRadiance;
+      if (finite && bounded && p.r >= 0 && p.g >= 0 && p.b >= 0) continue;
       const std::string where = "pixel (" + std::to_string(i % std::size_t(img.width)) + ", " +
                                 std::to_string(i / std::size_t(img.width)) + ")";
+      if (finite && !bounded) {
+        char value[96];
+        std::snprintf(value, sizeof value, " is (%g, %g, %g) in linear RGB", double(p.r), double(p.g),
+                      double(p.b));
+        fail(key, file,
+             where + value + (intensity_ != 1 ? " times the intensity" : "") +
+                 "; an environment's radiance lies in [0, 1e9], as a uniform one does");
+      }
       if (!finite)
         fail(key, file,
              where + " is not finite (NaN or Inf" +

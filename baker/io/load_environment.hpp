@@ -11,6 +11,11 @@
 
 namespace hfbake {
 
+// The largest radiance a job's light may hold, per channel: a number's schema maximum (uniform, sky,
+// emission) and the ceiling of an image's pixels times its intensity or scale, so that every sum of the
+// bakes stays finite.
+inline constexpr double kMaxRadiance = 1e9;
+
 struct EnvironmentLoadOptions {
   std::string job_file;                  // for messages
   std::string pointer = "/environment";  // JSON pointer of the object, for messages

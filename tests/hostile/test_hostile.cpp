@@ -476,6 +476,14 @@ std::vector<Case> cases() {
     j["surface"] = {{"albedo", {{"image", "a.exr"}}}};
     return both(write_job(d, j), "/surface/albedo/image", "pixel (0, 0) is (5, 5, 5) after the scale");
   });
+  add("EmissionMapBeyondTheNumbersCeiling", [](const fs::path& d) {  // 1 x 1e20: finite, its sums are not
+    write_image(d / "e.exr", 16, 16, 3, std::vector<float>(16 * 16 * 3, 1.0f));
+    json j = base_job();
+    j["surface"] = {{"emission", {{"image", "e.exr"}, {"scale", 1e20}}}};
+    j["bounces"] = 1;
+    return both(write_job(d, j), "/surface/emission/image",
+                "pixel (0, 0) is (1e+20, 1e+20, 1e+20) after the scale; an emission lies in [0, 1e9]");
+  });
   add("AlbedoMapOfAnotherSize", [](const fs::path& d) {
     write_image(d / "a.exr", 8, 8, 3, std::vector<float>(8 * 8 * 3, 0.5f));
     json j = base_job();

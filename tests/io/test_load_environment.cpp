@@ -287,6 +287,16 @@ TEST(LoadEnvironment, NegativePixelsAndOverflowingIntensitiesAreRejected) {
             "job.json: /environment/latlong: " + (dir / "big.exr").string() +
                 ": pixel (0, 0) is not finite (NaN or Inf times the intensity 1000000000.000000); an "
                 "environment must be finite everywhere");
+  // A finite radiance beyond a uniform environment's ceiling, 1e9, alone or times the intensity: its sums
+  // would overflow the bakes' floats.
+  std::vector<float> huge(16 * 8 * 3, 1.0f);
+  huge[(1 * 16 + 2) * 3 + 2] = 3e38f;
+  write_test_image(dir / "huge.exr", 16, 8, 3, huge);
+  EXPECT_EQ(
+      error_line(json{{"latlong", "huge.exr"}}, dir.path()),
+      "job.json: /environment/latlong: " + (dir / "huge.exr").string() +
+          ": pixel (2, 1) is (1, 1, 3e+38) in linear RGB; an environment's radiance lies in [0, 1e9], as a "
+          "uniform one does");
   // A cube face as well as a lat-long.
   std::vector<float> face(8 * 8 * 3, 1.0f);
   write_test_image(dir / "f.exr", 8, 8, 3, face);
