@@ -484,6 +484,12 @@ std::vector<Case> cases() {
     return both(write_job(d, j), "/surface/emission/image",
                 "pixel (0, 0) is (1e+20, 1e+20, 1e+20) after the scale; an emission lies in [0, 1e9]");
   });
+  add("HsaoRadiusCrossingARepeatFieldsTilingFarTooLong", [](const fs::path& d) {  // hours of rays, refused
+    json j = base_job();
+    j["height"]["wrap"] = "repeat";
+    j["bake"] = {{{"method", "hsao"}, {"directions", 1}, {"radius", 1e9}}};
+    return both(write_job(d, j), "/bake/0/radius", "on a repeat field each ray crosses the tiling");
+  });
   add("AlbedoMapOfAnotherSize", [](const fs::path& d) {
     write_image(d / "a.exr", 8, 8, 3, std::vector<float>(8 * 8 * 3, 0.5f));
     json j = base_job();

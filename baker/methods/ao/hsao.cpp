@@ -197,8 +197,8 @@ void hsao_field(const HeightField& field, const std::vector<Vec3f>& normals, con
                 const RunControl& rc, float* obscurance, float* bent_xyz) {
   std::atomic<int> rows_done{0};
   tbb::parallel_for(0, field.height, [&](int j) {
-    rc.check();
     for (int i = 0; i < field.width; ++i) {
+      rc.check();  // per texel: a texel's rays may cross a long radius (a repeat field's tiling)
       const std::size_t idx = field.index(i, j);
       const Vec3 n = normals.empty() ? normal_at(field, i, j).d() : normals[idx].d();
       hsao_store(hsao_texel(field, n, i, j, s), idx, obscurance, bent_xyz);
@@ -225,6 +225,10 @@ HsaoSettings read_hsao_settings(Params& in, const FieldShape& field) {
     in.fail("surface", "\"triangles\" visits every vertex under each ray: no \"steps\"");
   s.steps = in.integer(
       "steps", std::max(1, int(std::min(65536.0, std::ceil(s.falloff.radius / field.texel_size)))), 1, 65536);
+  // A repeat field's rays run the whole radius through its tiling (a clamp field's end at its border).
+  if (field.wrap == Wrap::repeat && triangles && s.falloff.radius > 1e6 * std::min(field.dx(), field.dy()))
+    in.fail("radius",
+            "on a repeat field each ray crosses the tiling for the whole radius: at most 1e6 texels");
   s.normal_rays = in.integer("normal_rays", 2, 0, 64);
   in.layers({"obscurance", "bent_normal"}, {"obscurance", "bent_normal"});
   return s;
@@ -254,8 +258,8 @@ LayerSet hsao_bake_block(const Scene& scene, const MethodConfig& config, int blo
   const int K = s.directions, d0 = direction_block_begin(block, K), d1 = direction_block_begin(block + 1, K);
   std::atomic<int> rows_done{0};
   tbb::parallel_for(0, field.height, [&](int j) {
-    rc.check();
     for (int i = 0; i < field.width; ++i) {
+      rc.check();  // per texel: a texel's rays may cross a long radius (a repeat field's tiling)
       const std::size_t idx = field.index(i, j);
       const HsaoSums t = hsao_texel_sums(field, normal_at(field, i, j).d(), i, j, s, d0, d1);
       const SplitDouble v[5] = {t.horizon, t.normal, t.bent[0], t.bent[1], t.bent[2]};
