@@ -111,6 +111,26 @@ void check_output_folder(const Job& job) {
                        what + ": " + std::error_code(ENAMETOOLONG, std::generic_category()).message() + " (" +
                            std::to_string(part.native().size()) + " bytes in a name, at most " +
                            std::to_string(name_max) + ")");
+  // Each file is written under a temporary name beside its own (temporary_sibling, ".<name>.tmp-<pid>-<n>"
+  // and the extension: at most 32 bytes more): the longest name the job writes, a texture's included, must
+  // leave room for it.
+  if (name_max > 0) {
+    constexpr std::size_t kTemporaryBytes = 32;
+    std::vector<std::pair<std::string, std::string>> names;  // file name, its key
+    for (const BakeEntry& e : job.bakes)
+      for (const std::string& layer : entry_config(e).layers)
+        names.emplace_back(job.name + "." + e.stem + "." + layer + ".preview.png", "/name");
+    for (const PlannedTexture& t : plan_textures(job))
+      names.emplace_back(fs::path(t.file).filename().string(), "/output/textures");
+    for (const auto& [name, key] : names)
+      if (name.size() + kTemporaryBytes > std::size_t(name_max))
+        throw InputError(job.file.string(), key,
+                         name + ": " + std::to_string(name.size()) + " bytes, more than the " +
+                             std::to_string(std::size_t(name_max) - kTemporaryBytes) +
+                             " an output's name may have here (a file name holds " +
+                             std::to_string(name_max) +
+                             " bytes, its temporary name 32 more): a shorter job name or texture pack");
+  }
   // What the bake would refuse only after baking (docs/output_folders.md): its lock names (the job's, the
   // report's for a job with a reference, the textures folder's for a job that writes textures) taken by
   // anything but a file, and a textures/ entry that is not a folder or that this process cannot write into.

@@ -490,6 +490,14 @@ std::vector<Case> cases() {
     j["bake"] = {{{"method", "hsao"}, {"directions", 1}, {"radius", 1e9}}};
     return both(write_job(d, j), "/bake/0/radius", "on a repeat field each ray crosses the tiling");
   });
+  add("ATexturesNameLeavesNoRoomForItsTemporaryName", [](const fs::path& d) {  // 246 of 255 bytes
+    json j = base_job();
+    j["name"] = std::string(128, 'a');
+    j["bake"] = {{{"method", "p1"}, {"directions", 4}, {"layers", {"ao"}}}};
+    j["output"]["textures"] = {{{"pack", std::string(110, 'p')}, {"channels", {{"R", "ao"}}}}};
+    return both(write_job(d, j), "/output/textures",
+                "246 bytes, more than the 223 an output's name may have");
+  });
   add("AlbedoMapOfAnotherSize", [](const fs::path& d) {
     write_image(d / "a.exr", 8, 8, 3, std::vector<float>(8 * 8 * 3, 0.5f));
     json j = base_job();
