@@ -69,11 +69,24 @@ void check_report_settings(const Job& job, const MethodContext& context) {
     if (first == std::string::npos || last == first)
       throw InputError(file, where, "not of the form <stem>.<layer>.<metric>");
     const std::string stem = key.substr(0, first), metric = key.substr(last + 1);
-    if (std::none_of(job.bakes.begin(), job.bakes.end(),
-                     [&](const BakeEntry& e) { return e.stem == stem; })) {
+    const std::string layer = key.substr(first + 1, last - first - 1);
+    const auto entry =
+        std::find_if(job.bakes.begin(), job.bakes.end(), [&](const BakeEntry& e) { return e.stem == stem; });
+    if (entry == job.bakes.end()) {
       std::string stems;
       for (const BakeEntry& e : job.bakes) stems += (stems.empty() ? "" : ", ") + e.stem;
       throw InputError(file, where, "the job has no bake entry \"" + stem + "\" (its stems: " + stems + ")");
+    }
+    // A layer the entry does not write is never scored (a typo would fail the bake after it).
+    if (entry->config) {
+      const std::vector<std::string>& layers = entry->config->layers;
+      if (std::find(layers.begin(), layers.end(), layer) == layers.end()) {
+        std::string names;
+        for (const std::string& l : layers) names += (names.empty() ? "" : ", ") + l;
+        throw InputError(
+            file, where,
+            "bake entry \"" + stem + "\" writes no layer \"" + layer + "\" (its layers: " + names + ")");
+      }
     }
     if (std::none_of(names, names + count, [&](const char* n) { return metric == n; }))
       throw InputError(file, where, "unknown metric \"" + metric + "\"");

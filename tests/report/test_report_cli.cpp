@@ -99,11 +99,16 @@ TEST_F(ReportCli, FailedThresholdExitsOne) {
   EXPECT_FALSE(r["passed"].get<bool>());
 }
 
-TEST_F(ReportCli, ThresholdTypoIsAFailureNotASilentPass) {
+// A threshold on a layer the entry does not write: refused before anything is baked (exit 2), naming the
+// threshold's key and the entry's layers.
+TEST_F(ReportCli, ThresholdTypoIsRefusedNotASilentPass) {
   std::string err;
   const nlohmann::json entries = {{{"method", "p1"}, {"directions", 16}, {"layers", {"ao"}}}};
-  EXPECT_EQ(bake(job(entries, {{"p1.occlusion.rmse", 1.0}}), err), 1) << err;
-  EXPECT_NE(err.find("p1.occlusion.rmse: \"p1\" has no layer \"occlusion\""), std::string::npos) << err;
+  EXPECT_EQ(bake(job(entries, {{"p1.occlusion.rmse", 1.0}}), err), 2) << err;
+  EXPECT_NE(err.find("/report/thresholds/p1.occlusion.rmse: bake entry \"p1\" writes no layer \"occlusion\" "
+                     "(its layers: ao)"),
+            std::string::npos)
+      << err;
 }
 
 TEST_F(ReportCli, ReferenceOnlyJob) {
