@@ -78,15 +78,13 @@ void check_report_settings(const Job& job, const MethodContext& context) {
       throw InputError(file, where, "the job has no bake entry \"" + stem + "\" (its stems: " + stems + ")");
     }
     // A layer the entry does not write is never scored (a typo would fail the bake after it).
-    if (entry->config) {
-      const std::vector<std::string>& layers = entry->config->layers;
-      if (std::find(layers.begin(), layers.end(), layer) == layers.end()) {
-        std::string names;
-        for (const std::string& l : layers) names += (names.empty() ? "" : ", ") + l;
-        throw InputError(
-            file, where,
-            "bake entry \"" + stem + "\" writes no layer \"" + layer + "\" (its layers: " + names + ")");
-      }
+    const std::vector<std::string>& layers = entry_config(*entry).layers;
+    if (std::find(layers.begin(), layers.end(), layer) == layers.end()) {
+      std::string names;
+      for (const std::string& l : layers) names += (names.empty() ? "" : ", ") + l;
+      throw InputError(
+          file, where,
+          "bake entry \"" + stem + "\" writes no layer \"" + layer + "\" (its layers: " + names + ")");
     }
     if (std::none_of(names, names + count, [&](const char* n) { return metric == n; }))
       throw InputError(file, where, "unknown metric \"" + metric + "\"");

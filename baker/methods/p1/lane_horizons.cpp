@@ -154,11 +154,16 @@ void build_rows(LaneLayout& L, int width, int height, bool xm, const Rows& rows)
   // largest |z| held, the relief instead of the altitude (a plateau 8000 m up searched as fast as one at
   // sea level). Where some difference would round (heights spanning several binades), no offset.
   {
-    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-    for (int u = 0; u < nmajor; ++u) {
+    // Each row's range in parallel, then the rows' in order.
+    std::vector<float> row_lo(static_cast<std::size_t>(nmajor)), row_hi(static_cast<std::size_t>(nmajor));
+    tbb::parallel_for(0, nmajor, [&](int u) {
       const float* row = z + std::ptrdiff_t(u) * stride + kLanePad;
-      for (int v = 0; v < nminor; ++v) lo = std::min(lo, row[v]), hi = std::max(hi, row[v]);
-    }
+      float a = std::numeric_limits<float>::infinity(), b = -a;
+      for (int v = 0; v < nminor; ++v) a = std::min(a, row[v]), b = std::max(b, row[v]);
+      row_lo[std::size_t(u)] = a, row_hi[std::size_t(u)] = b;
+    });
+    const float lo = *std::min_element(row_lo.begin(), row_lo.end());
+    const float hi = *std::max_element(row_hi.begin(), row_hi.end());
     const float off = std::isfinite(lo) && std::isfinite(hi) ? float(0.5 * (double(lo) + double(hi))) : 0.0f;
     std::atomic<bool> exact{off != 0};
     if (exact)
