@@ -60,6 +60,12 @@ void check_report_settings(const Job& job, const MethodContext& context) {
                            std::to_string(context.field.width) + "x" + std::to_string(context.field.height) +
                            " field");
   }
+  // Thresholds and a baseline score the methods against the reference: without one nothing is scored, and a
+  // nightly job that lost its reference would pass every night.
+  for (const char* key : {"thresholds", "baseline"})
+    if (report.contains(key) && !job.has_reference)
+      throw InputError(file, std::string("/report/") + key,
+                       "scores the bake against the reference, but the job has none (add \"reference\": {})");
   if (!report.contains("thresholds")) return;
   int count = 0;
   const char* const* names = metric_names(count);

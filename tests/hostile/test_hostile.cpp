@@ -430,6 +430,7 @@ std::vector<Case> cases() {
   });
   add("ThresholdOfNoBakeEntry", [](const fs::path& d) {
     json j = base_job();
+    j["reference"] = {{"samples", 4}};
     j["report"] = {{"thresholds", {{"p2.indirect.mae", 0.1}}}};
     return both(write_job(d, j), "/report/thresholds/p2.indirect.mae", "the job has no bake entry \"p2\"");
   });
@@ -489,6 +490,12 @@ std::vector<Case> cases() {
     j["height"]["wrap"] = "repeat";
     j["bake"] = {{{"method", "hsao"}, {"directions", 1}, {"radius", 1e9}}};
     return both(write_job(d, j), "/bake/0/radius", "on a repeat field each ray crosses the tiling");
+  });
+  add("HbaoDistanceCrossingARepeatFieldsTilingFarTooLong", [](const fs::path& d) {  // hours of steps, refused
+    json j = base_job();
+    j["height"]["wrap"] = "repeat";
+    j["bake"] = {{{"method", "hbao"}, {"directions", 16}, {"max_distance", 5e6}}};
+    return both(write_job(d, j), "/bake/0/max_distance", "on a repeat field each march crosses the tiling");
   });
   add("ATexturesNameLeavesNoRoomForItsTemporaryName", [](const fs::path& d) {  // 246 of 255 bytes
     json j = base_job();

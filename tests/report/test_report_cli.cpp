@@ -111,6 +111,27 @@ TEST_F(ReportCli, ThresholdTypoIsRefusedNotASilentPass) {
       << err;
 }
 
+TEST_F(ReportCli, ThresholdsOrABaselineWithoutAReferenceAreRefusedNotASilentPass) {
+  const nlohmann::json entries = {{{"method", "p1"}, {"directions", 16}, {"layers", {"ao"}}}};
+  for (const char* key : {"thresholds", "baseline"}) {
+    nlohmann::json j = job(entries, {{"p1.ao.rmse", 1e-9}});
+    j.erase("reference");
+    if (std::string(key) == "baseline") {
+      fs::create_directories(dir_ / "old");
+      std::ofstream(dir_ / "old" / "report.json") << "{}";
+      j["report"] = {{"baseline", "old/report.json"}};
+    }
+    std::string err;
+    EXPECT_EQ(bake(j, err), 2) << key << ": " << err;
+    EXPECT_NE(err.find("/report/" + std::string(key) +
+                       ": scores the bake against the reference, but the job "
+                       "has none"),
+              std::string::npos)
+        << err;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << key;
+  }
+}
+
 TEST_F(ReportCli, ReferenceOnlyJob) {
   std::string err;
   ASSERT_EQ(bake(job(nlohmann::json::array()), err), 0) << err;

@@ -260,6 +260,14 @@ HbaoSettings read_hbao_settings(Params& in, const FieldShape& field) {
     s.step = s.reach / in.integer("steps", 1, 1, 1000000);
   }
   if (s.reach / s.step > 1e7) in.fail("max_distance", "more than 1e7 steps per direction");
+  // A repeat field's marches run the whole distance through its tiling (a clamp field's end at its border):
+  // every texel's, so the steps a direction takes are bounded per texel, as hsao's radius is.
+  // (The distance defaults to a multiple of the falloff's radius: then the radius is what was given.)
+  if (field.wrap == Wrap::repeat && s.reach > 1e6 * field.texel_size)
+    in.fail(
+        in.has("max_distance") ? "max_distance" : "radius",
+        "on a repeat field each march crosses the tiling for the whole distance (max_distance, by default "
+        "a multiple of the radius): at most 1e6 texels");
   const bool ao_ok = s.falloff.kind == FalloffKind::none && s.weighting == Weighting::cosine && !largest;
   std::vector<std::string> defaults = {"obscurance", "bent_normal"};
   if (ao_ok) defaults.push_back("ao");
