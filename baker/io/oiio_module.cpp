@@ -216,8 +216,42 @@ class CheckedFile final : public OIIO::Filesystem::IOProxy {
   std::string failure_;
 };
 
+// Whether `path` reads back as the image `w` describes, every scanline (one row held at a time). A TIFF's
+// check: libtiff writes its directories as the file closes, which OpenImageIO's TIFF writer does not check.
+bool reads_back(const std::string& path, const OiioWrite& w, std::string& error) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    error = "the file written does not read back: " + message("");
+    return false;
+  }
+  const OIIO::ImageSpec& spec = in->spec();
+  if (spec.width != w.width || spec.height != w.height || spec.nchannels != w.channels) {
+    error = "the file written reads back as another image";
+    return false;
+  }
+  std::vector<float> row(std::size_t(spec.width) * std::size_t(spec.nchannels));
+  for (int y = 0; y < spec.height; ++y)
+    if (!in->read_scanline(y, 0, OIIO::TypeDesc::FLOAT, row.data())) {
+      error = "the file written does not read back: " + message(in->geterror());
+      return false;
+    }
+  return true;
+}
+
 bool write(const std::string& path, const OiioWrite& w, const void* pixels, std::string& error) {
   try {
+    // OpenImageIO's TIFF writer through an IOProxy (OpenImageIO 2.4) cuts its first directory off the file
+    // when it adds an EXIF block (the sRGB tag's): TIFFs are written by the library to the path, then read
+    // back whole.
+    if (w.format == "tif" || w.format == "tiff") {
+      auto out = OIIO::ImageOutput::create(w.format);
+      if (!out || !out->open(path, spec_of(w)) || !out->write_image(type_of(w.given), pixels) ||
+          !out->close()) {
+        error = out ? message(out->geterror()) : message("");
+        return false;
+      }
+      return reads_back(path, w, error);
+    }
     CheckedFile file(path);
     auto out = OIIO::ImageOutput::create(w.format);
     if (!out || !out->supports("ioproxy") || !out->set_ioproxy(&file) || !out->open(path, spec_of(w)) ||

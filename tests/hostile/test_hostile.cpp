@@ -1117,10 +1117,10 @@ TEST(FullDisk, AnExrCutShortByTheDiskIsNeverMovedIntoPlace) {
 
 // A full disk under a texture: OpenImageIO's PNG and TGA writers do not check what their writes return, so
 // only the checked file they write through (io/oiio_module.cpp) keeps a cut texture from being moved into
-// place. The height's normal texture, written while the scene loads (before any EXR): the bake fails with
+// place; a TIFF is read back. The height's normal texture, written while the scene loads (before any EXR): the bake fails with
 // one line naming the texture and leaves no output folder.
 TEST(FullDisk, ATextureCutShortByTheDiskFailsTheBakeNamingIt) {
-  for (const std::string format : {"png", "tga"}) {
+  for (const std::string format : {"png", "tga", "tif"}) {
     SCOPED_TRACE(format);
     const fs::path dir =
         fs::temp_directory_path() / ("hfbake_full_texture_" + std::to_string(std::random_device{}()));

@@ -89,6 +89,40 @@ TEST(TextureCli, AoTexturesAreTheExrValuesRounded) {
   }
 }
 
+// Every format and depth with the sRGB curve reads back as the EXR's values encoded (IEC 61966-2-1's curve,
+// written out here): a TIFF's sRGB tag once moved its own image directory out of reach.
+TEST(TextureCli, SrgbTexturesOfEveryFormatAreTheExrValuesEncoded) {
+  TempFolder dir;
+  const json textures = json::array({{{"layers", {"vsky"}}, {"transfer", "srgb"}, {"format", "png"}},
+                                     {{"layers", {"vsky"}}, {"transfer", "srgb"}, {"format", "tif"}},
+                                     {{"layers", {"vsky"}}, {"transfer", "srgb"}, {"format", "tga"}},
+                                     {{"pack", "vsky16"},
+                                      {"channels", {{"R", "vsky"}, {"G", "ao"}, {"B", "vsky"}}},
+                                      {"transfer", "srgb"},
+                                      {"format", "tif"},
+                                      {"bits", 16}}});
+  const fs::path out = dir / "out";
+  const fs::path f = write(dir, "j.json", job(out, textures));
+  const auto r = run_hfbake(dir.path(), "bake --quiet " + f.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Pixels exr = read(out / "slope.p1.exr", "vsky.");
+  ASSERT_EQ(exr.values.size(), std::size_t(33 * 33));
+  auto encode = [](double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; };
+  for (const char* name :
+       {"slope.p1.vsky.png", "slope.p1.vsky.tif", "slope.p1.vsky.tga", "slope.p1.vsky16.tif"}) {
+    SCOPED_TRACE(name);
+    const Pixels tex = read(out / "textures" / name);
+    ASSERT_EQ(tex.width, 33);
+    ASSERT_EQ(tex.height, 33);
+    const double top = tex.type == OIIO::TypeDesc::UINT16 ? 65535 : 255;
+    for (std::size_t i = 0; i < exr.values.size(); ++i)
+      ASSERT_EQ(std::lround(tex.values[i * std::size_t(tex.channels)] * top),
+                std::lround(encode(double(exr.values[i])) * top))
+          << i;
+  }
+  EXPECT_LT(exr.values[16 * 33 + 16], 0.95);  // a 30 degree slope sees (1 + cos 30) / 2 of the sky
+}
+
 TEST(TextureCli, SlopeBentNormalsFollowTheDocumentedConventions) {
   TempFolder dir;
   const fs::path out = dir / "out";
