@@ -29,6 +29,42 @@ double height_at(const HeightField& f, double x, double y) {
   return z;
 }
 
+// The surface height at a crossing of an edge (field/edge_crossings.hpp): column x = m, row y = m or
+// diagonal x + y = m, at (x, y) on it. From the edge's own two vertices, so a point on the last edge before a
+// NoData texel has its height though its computed position rounds a hair into the hole's facet.
+double height_on_edge(const HeightField& f, EdgeFamily family, int m, double x, double y) {
+  auto lerp = [](double a, double b, double t) { return t == 0 ? a : t == 1 ? b : (1 - t) * a + t * b; };
+  switch (family) {
+    case EdgeFamily::column: {
+      const double v = std::clamp(y, 0.0, double(f.height - 1));
+      if (f.height < 2) return f.at(m, 0);
+      const int j = std::min(int(std::floor(v)), f.height - 2);
+      return lerp(f.at(m, j), f.at(m, j + 1), v - j);
+    }
+    case EdgeFamily::row: {
+      const double u = std::clamp(x, 0.0, double(f.width - 1));
+      if (f.width < 2) return f.at(0, m);
+      const int i = std::min(int(std::floor(u)), f.width - 2);
+      return lerp(f.at(i, m), f.at(i + 1, m), u - i);
+    }
+    case EdgeFamily::diagonal: {
+      // The edge from (i, m - i) to (i + 1, m - i - 1), both on the field.
+      const int lo = std::max(0, m - (f.height - 1)), hi = std::min(f.width - 1, m);
+      if (hi <= lo) return double(f.at(lo, m - lo));
+      const double u = std::clamp(x, double(lo), double(hi));
+      const int i = std::min(int(std::floor(u)), hi - 1);
+      return lerp(f.at(i, m - i), f.at(i + 1, m - i - 1), u - i);
+    }
+  }
+  return height_at(f, x, y);
+}
+
+// A crossing nearer the eye than this, in texels along the ray's major axis, is the eye's own edge: the
+// eye is taken to lie on it. Its rise over so short a distance is rounding (a point given as a texel centre
+// in map coordinates lands about 1e-10 texel off its column), and the piece from the eye to the next
+// crossing gives the surface's slope there exactly.
+constexpr double kOwnEdge = 1e-6;
+
 // Distance along the ray at which origin + d * rate leaves [0, n - 1].
 double exit_distance(double origin, double rate, int n) {
   if (rate > 0) return (n - 1 - origin) / rate;
@@ -59,8 +95,11 @@ HorizonRay march(const HeightField& f, const PointHorizonQuery& q, double z_surf
     }
   };
   double d_prev = 0, z_prev = z_surface;  // the last point visited; z_prev NaN: a hole behind
-  auto visit = [&](double d) {
-    const double z = height_at(f, q.x + d * vx, q.y + d * vy);
+  const double major_rate = std::max(std::abs(vx), std::abs(vy));
+  // family, m: the edge the point lies on (a step's end lies on its column or row).
+  auto visit = [&](double d, EdgeFamily family, int m) {
+    if (d * major_rate < kOwnEdge) return;
+    const double z = height_on_edge(f, family, m, q.x + d * vx, q.y + d * vy);
     if (!std::isfinite(z)) {
       d_prev = d, z_prev = z;
       return;
@@ -92,12 +131,15 @@ HorizonRay march(const HeightField& f, const PointHorizonQuery& q, double z_surf
     if (d1 < d_end) (along_x ? x1 : y1) = edge;  // exactly on the column (row)
     EdgeCrossing crossings[kMaxEdgeCrossings];
     const int n = edge_crossings(x0, y0, x1, y1, crossings);
-    for (int e = 0; e < n; ++e) visit(d0 + crossings[e].t * (d1 - d0));
+    for (int e = 0; e < n; ++e) visit(d0 + crossings[e].t * (d1 - d0), crossings[e].family, crossings[e].m);
     if (d1 >= d_end) break;
-    visit(d1);
+    visit(d1, along_x ? EdgeFamily::column : EdgeFamily::row, int(edge));
     d0 = d1, x0 = x1, y0 = y1;
   }
-  visit(d_end);
+  // The border: on the column or row the ray leaves by (the other coordinate rounds onto its line).
+  const bool leaves_x = exit_distance(q.x, vx, f.width) <= exit_distance(q.y, vy, f.height);
+  visit(d_end, leaves_x ? EdgeFamily::column : EdgeFamily::row,
+        leaves_x ? (vx > 0 ? f.width - 1 : 0) : (vy > 0 ? f.height - 1 : 0));
   if (ray.found) ray.elevation_deg = std::atan(best) * 180 / kPi;
   return ray;
 }

@@ -47,7 +47,9 @@ std::optional<double> surface_height(const HeightField& field, double x, double 
 // maxima lie at those crossings, at the border, or (c > 0) where the slope's derivative vanishes inside a
 // piece, d* = sqrt((z0 - a) / c) for the piece's line z = a + b d, or (an eye on the surface, c > 0) as
 // d -> 0 on the first piece, where the facet's own slope b casts (distance 0): all of them are evaluated, so
-// the result is exact on the surface. Pieces touching a non-finite height are holes: nothing casts there. The
+// the result is exact on the surface. Pieces touching a non-finite height are holes: nothing casts there (an
+// edge's points take their height from the edge's two vertices, so the last edge before a hole casts). A
+// crossing within 1e-6 texel of the eye is its own edge, not a caster (its rise is rounding). The
 // point must have a surface_height.
 std::vector<HorizonRay> point_horizon(const HeightField& field, const PointHorizonQuery& query);
 

@@ -255,6 +255,66 @@ TEST(PointHorizon, HolesCastNothingAndTheBorderLooksOut) {
   EXPECT_TRUE(surface_height(f, 29, 29).has_value());
 }
 
+// An eye on a plane sees it rise at its own slope in every direction: atan(grad . u). Eyes at texel centres,
+// on diagonals and a rounding error (1e-10 .. 1e-7 texel) off either, as a centre given in map coordinates
+// lands: the first crossing, a hair from the eye, is the eye's own edge (its rise over that distance is
+// rounding, which read 2 to 47 degrees). The heights are exact in float (a dyadic plane 500 up).
+TEST(PointHorizon, AnEyeAHairOffAnEdgeSeesThePlanesOwnSlope) {
+  HeightField f = flat_field(40, 40);
+  const double a = 0.375, b = -0.25;  // height per column and per row
+  for (int j = 0; j < 40; ++j)
+    for (int i = 0; i < 40; ++i) f.z[f.index(i, j)] = float(500 + a * i + b * j);
+  PointHorizonQuery q;
+  q.directions = 36, q.frame = {0.3, -0.3};
+  double worst = 0;
+  for (const double dx : {0.0, 1e-10, -1e-10, 3e-9, -1e-7})
+    for (const double dy : {0.0, -1e-10, 2e-9})
+      for (const bool diagonal : {false, true}) {
+        q.x = 17 + dx, q.y = (diagonal ? 21.5 : 21) + dy;
+        if (diagonal) q.x = 38.5 - q.y + dx;  // on x + y = 38, off it by dx
+        for (const HorizonRay& r : point_horizon(f, q)) {
+          ASSERT_TRUE(r.found);
+          const double phi = r.azimuth_deg / kDeg;
+          const double vx = std::sin(phi) / 0.3, vy = std::cos(phi) / -0.3;  // texels per world unit
+          const double truth = std::atan(a * vx + b * vy) * kDeg;
+          worst = std::max(worst, std::abs(r.elevation_deg - truth));
+          EXPECT_NEAR(r.elevation_deg, truth, 1e-7) << q.x << ", " << q.y << " azimuth " << r.azimuth_deg;
+        }
+      }
+  RecordProperty("worst_deg", std::to_string(worst));
+}
+
+// The last edge before NoData casts: rows 0-4 are holes and the rest a plane rising north, so from an eye
+// 1 above it the farthest point of the surface along a ray is the highest, atan(s - 1 / d) with s the
+// plane's slope along the ray and d the distance to row 5 (or to the field's side). Crossings of row 5
+// computed a rounding error inside the holes' facets were dropped, and a nearer point was reported.
+TEST(PointHorizon, TheLastEdgeBeforeAHoleCasts) {
+  HeightField f = flat_field(30, 30);
+  for (int j = 0; j < 30; ++j)
+    for (int i = 0; i < 30; ++i) f.z[f.index(i, j)] = j < 5 ? std::nanf("") : float(0.5 * (29 - j));
+  const double t = 0.7318;  // world units a texel
+  PointHorizonQuery q;
+  q.directions = 360, q.frame = {t, -t}, q.observer_height = 1;
+  int north = 0;
+  for (int k = 0; k < 8; ++k) {
+    q.x = 11.3 + 1.2345678 * k, q.y = 20.7 - 0.9876543 * k;
+    for (const HorizonRay& r : point_horizon(f, q)) {
+      const double phi = r.azimuth_deg / kDeg;
+      const double vx = std::sin(phi) / t, vy = std::cos(phi) / -t;  // texels per world unit
+      auto exit = [](double origin, double rate, double lo, double hi) {
+        return rate > 0 ? (hi - origin) / rate : rate < 0 ? (origin - lo) / -rate : 1e300;
+      };
+      const double d = std::min(exit(q.x, vx, 0, 29), exit(q.y, vy, 5, 29));
+      const double s = -0.5 * vy;  // height per world unit along the ray
+      ASSERT_TRUE(r.found);
+      EXPECT_NEAR(r.elevation_deg, std::atan(s - 1 / d) * kDeg, 1e-9) << k << " azimuth " << r.azimuth_deg;
+      EXPECT_NEAR(r.distance, d, 1e-9 * d) << k << " azimuth " << r.azimuth_deg;
+      north += exit(q.y, vy, 5, 29) < exit(q.x, vx, 0, 29);
+    }
+  }
+  EXPECT_GT(north, 800);  // rays that end at the holes' edge
+}
+
 // The polar plot of a profile: 45° east, -5° at the other three compass points, linear in between (cyclic).
 // Terrain below the profile, sky above, white outside the -22.5° circle.
 TEST(PointHorizon, PolarPlotShowsTheProfile) {
