@@ -6,8 +6,9 @@
 // * receiver (default): each texel's own tangent plane per direction; the slice's value is the
 //   contract's measure of the bands between that tangent and the horizon, each weighted by the falloff where
 //   its rays meet the terrain (hbao's slab integral), over the visible chain of a per-line chain hull
-//   (lsao_chain_hull.hpp). Exact on planes for every falloff, and on walls and pits away from their feet:
-//   a texel at a crease over-occludes (docs/job-reference.md, lsao tangent).
+//   (lsao_chain_hull.hpp). Exact on planes for every falloff; elsewhere within the two-tap rule's
+//   interpolation between lines (exact along axes and diagonals), and a texel at a crease over-occludes
+//   (docs/job-reference.md, lsao tangent).
 // * fixed: P3 as written, the obscurance hull (obscurance_hull.hpp) with P3 Eq. 1 for the single largest
 //   occluder and the fixed tangent sin t (strategy 3: a screen-space choice that misses gentle terrain's
 //   occlusion).
