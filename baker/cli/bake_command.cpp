@@ -369,6 +369,9 @@ void bake_job(const Job& job, Progress& progress, const std::atomic<bool>& cance
   if (cancel.load()) throw Cancelled();
   outcome.outputs = stage.commit();
   for (const fs::path& p : outcome.outputs) progress.message(job.name + ": wrote " + p.string());
+  for (const fs::path& p : stage.removed())
+    progress.message(job.name + ": removed " + p.string() +
+                     " (its previous bake's, not written by this one)");
 }
 
 namespace {

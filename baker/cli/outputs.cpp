@@ -307,16 +307,33 @@ std::string job_identity(const Job& job) {
   return text;
 }
 
-// The longest owner record read: job_identity of a path of PATH_MAX (4096) bytes, each escaped.
+// The longest owner record's first line read: job_identity of a path of PATH_MAX (4096) bytes, each
+// escaped.
 constexpr std::size_t kOwnerRecordBytes = 4 * 4096;
+// The most of an owner record read: its first line and the names of the outputs it lists after it (a job of
+// 256 entries with previews, GeoTIFFs and textures lists a few thousand).
+constexpr std::size_t kOwnerRecordFileBytes = std::size_t(8) << 20;
+
+// An owner record's text (at most kOwnerRecordFileBytes + 1 bytes), read from a regular file of its own
+// (never through a link); nullopt when it cannot be opened so.
+std::optional<std::string> owner_record_text(const fs::path& record) {
+  std::string why, text;
+  const int fd = open_regular_file(record, why);
+  if (fd < 0) return std::nullopt;
+  std::vector<char> buf(1 << 16);
+  for (ssize_t n; text.size() <= kOwnerRecordFileBytes && (n = read(fd, buf.data(), buf.size())) > 0;)
+    text.append(buf.data(), std::size_t(n));
+  close(fd);
+  return text;
+}
 
 }  // namespace
 
 namespace {
 
-// The job file `record`, an owner record, names; "" when there is none. Read as hfbake writes it: a regular
-// file of its own (a link planted there is not read, and is replaced when a record is written), one line of
-// printable text that an error may quote.
+// The job file `record`, an owner record, names (its first line); "" when there is none. Read as hfbake
+// writes it: a regular file of its own (a link planted there is not read, and is replaced when a record is
+// written), a first line of printable text that an error may quote.
 std::string read_owner_record(const fs::path& record) {
   // Named, so that a user who knows it for a stray file can remove it instead of giving --overwrite.
   const std::string foreign = "a record that is not hfbake's (" + record.string();
@@ -326,13 +343,9 @@ std::string read_owner_record(const fs::path& record) {
   // hfbake writes its records whole (write_file_atomically), as files: a link, an empty file or anything
   // else at the name was put there by something else, and is no licence to replace the outputs.
   if (!fs::is_regular_file(status)) return foreign + (fs::is_symlink(status) ? ", a link)" : ")");
-  std::string why, recorded;
-  const int fd = open_regular_file(record, why);
-  if (fd < 0) return foreign + ")";
-  std::vector<char> buf(kOwnerRecordBytes + 1);
-  const ssize_t n = read(fd, buf.data(), buf.size());
-  close(fd);
-  if (n > 0) recorded.assign(buf.data(), std::size_t(n));
+  const std::optional<std::string> text = owner_record_text(record);
+  if (!text || text->size() > kOwnerRecordFileBytes) return foreign + ")";
+  const std::string recorded = text->substr(0, text->find('\n'));
   if (recorded.empty() || recorded.size() > kOwnerRecordBytes ||
       std::any_of(recorded.begin(), recorded.end(), [](char c) { return (unsigned char)c < 0x20; }))
     return foreign + ")";
@@ -490,6 +503,28 @@ bool committable_name(const fs::path& name, const Job& job) {
   const fs::path record = owner_record(job).filename();
   if (parts.size() == 1) return parts[0] == record || parts[0].string()[0] != '.';
   return parts.size() == 2 && parts[0] == "textures" && (parts[1] == record || parts[1].string()[0] != '.');
+}
+
+// The outputs `record`, the job's owner record, lists after its first line: those of the bake that wrote
+// it. Names that are not this job's outputs as OutputStage stages them (committable_name; report.json,
+// report.html, or "<name>." at their start and an image's extension: exr, png, tif, tga) are left out; none
+// when the record cannot be read as hfbake writes it.
+std::vector<fs::path> recorded_outputs(const fs::path& record, const Job& job) {
+  std::vector<fs::path> names;
+  const std::optional<std::string> text = owner_record_text(record);
+  if (!text || text->size() > kOwnerRecordFileBytes) return names;
+  std::istringstream lines(*text);
+  std::string line;
+  std::getline(lines, line);  // the job file
+  while (std::getline(lines, line)) {
+    const fs::path name = line;
+    const std::string file = name.filename().string(), ext = name.extension().string();
+    const bool report = !name.has_parent_path() && (file == "report.json" || file == "report.html");
+    const bool image = file.rfind(job.name + ".", 0) == 0 &&
+                       (ext == ".exr" || ext == ".png" || ext == ".tif" || ext == ".tga");
+    if (committable_name(name, job) && (report || image)) names.push_back(name);
+  }
+  return names;
 }
 
 }  // namespace
@@ -882,6 +917,22 @@ void OutputStage::write_text(const std::string& filename, const std::string& tex
   staged_.push_back(filename);
 }
 
+void OutputStage::remove_previous_outputs(const std::vector<fs::path>& previous) {
+  for (const fs::path& name : previous) {
+    if (std::find(staged_.begin(), staged_.end(), name) != staged_.end()) continue;
+    if (name.has_parent_path() && !out_textures_held_.held()) {
+      if (!is_real_directory(out_held_.path() / "textures")) continue;
+      out_textures_held_ = HeldFolder(out_held_.path() / "textures", false);
+      if (!out_textures_held_.held()) continue;
+    }
+    const fs::path at =
+        name.has_parent_path() ? out_textures_held_.path() / name.filename() : out_held_.path() / name;
+    struct stat st {};
+    if (lstat(at.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
+    if (unlink(at.c_str()) == 0) removed_.push_back(job_.output.dir / name);
+  }
+}
+
 std::vector<fs::path> OutputStage::commit() {
   std::vector<fs::path> final_paths;
   // A name rename(2) cannot replace (a folder there, the owner record's included) fails the job before any
@@ -925,10 +976,15 @@ std::vector<fs::path> OutputStage::commit() {
   // The owner records are written in the stage like the outputs, then the commit list: from the list on,
   // the stage is whole, and a process killed during the moves leaves a stage the next bake of this job name
   // completes (complete_killed_commits); killed before it, its stage is removed and no output moved.
+  // The main record lists the outputs after the job file: the next bake of the job removes those it no
+  // longer writes.
+  std::string listed = job_identity(job_);
+  for (const fs::path& name : staged_) listed.append("\n").append(name.string());
+  const std::vector<fs::path> previous =
+      recorded_outputs(out_held_.path() / owner_record(job_).filename(), job_);
   try {
-    for (const fs::path& name : records) {
-      write_file_atomically(in_stage(name), job_identity(job_));
-    }
+    for (const fs::path& name : records)
+      write_file_atomically(in_stage(name), name == records.back() ? listed : job_identity(job_));
     std::string list;
     for (const fs::path& name : moves) list += name.string() + "\n";
     write_file_atomically(in_stage(kCommitList), list);
@@ -941,6 +997,9 @@ std::vector<fs::path> OutputStage::commit() {
     ~Moving() { --g_moving; }
   } moving;
   for (std::size_t k = 0; k < moves.size(); ++k) {
+    // Between the outputs and the records: the previous bake's outputs that this one does not write, files
+    // only (a link or a folder at such a name is not hfbake's output), from the held folders.
+    if (k == staged_.size()) remove_previous_outputs(previous);
     const fs::path target = job_.output.dir / moves[k];
     std::error_code ec;
     fs::rename(in_stage(moves[k]), in_output(moves[k]), ec);  // same folder tree: an atomic replace

@@ -190,6 +190,9 @@ class OutputStage {
   // is refused) and records the job file as the outputs' owner (owner_record, and textures_owner_record for
   // a job that writes textures); returns the final paths.
   std::vector<std::filesystem::path> commit();
+  // The files commit removed: outputs the previous bake of this job wrote (its owner record lists them)
+  // that this bake does not write, so the folder holds one bake's outputs.
+  const std::vector<std::filesystem::path>& removed() const { return removed_; }
   // What the constructor did to what other processes left, one line each for the user: the moves of a bake
   // killed while it moved its outputs, completed; stale staging folders, removed.
   std::vector<std::string> notes() const;
@@ -213,7 +216,9 @@ class OutputStage {
   void write_staged(const std::filesystem::path& name,
                     const std::function<void(const std::filesystem::path&)>& write);
   void write_geotiffs(const std::string& stem, const LayerSet& layers);
+  void remove_previous_outputs(const std::vector<std::filesystem::path>& previous);
   std::vector<std::filesystem::path> staged_;  // file names relative to the stage
+  std::vector<std::filesystem::path> removed_;
   std::vector<std::filesystem::path> stale_removed_, moves_completed_;
   Georeference georeference_;
   double texel_x_ = 0, texel_y_ = 0;  // 0: not set, no attribute

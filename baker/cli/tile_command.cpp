@@ -606,6 +606,9 @@ void bake_tiled(const Job& job, Progress& progress, const std::atomic<bool>& can
         {"method", job.bakes[e].method}, {"seconds", seconds[e]}, {"tiles", plan.tiles.size()}};
   outcome.outputs = stage.commit();
   for (const fs::path& p : outcome.outputs) progress.message(job.name + ": wrote " + p.string());
+  for (const fs::path& p : stage.removed())
+    progress.message(job.name + ": removed " + p.string() +
+                     " (its previous bake's, not written by this one)");
 }
 
 }  // namespace hfbake

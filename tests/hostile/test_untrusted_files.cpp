@@ -65,6 +65,12 @@ std::string read_text(const fs::path& p) {
   return ss.str();
 }
 
+// The job file an owner record names: its first line (the outputs it lists follow).
+std::string record_owner(const fs::path& p) {
+  const std::string text = read_text(p);
+  return text.substr(0, text.find('\n'));
+}
+
 // The job hash an EXR output records ("" when it cannot be read).
 std::string exr_job_hash(const fs::path& exr) {
   auto in = OIIO::ImageInput::open(exr.string());
@@ -1012,19 +1018,19 @@ TEST_F(Untrusted, TwoJobsOfOneNameInOneFolderNeverReplaceEachOther) {
                   : line.find("another hfbake process (" + std::to_string(r.winner_pid) + "@" + host() + ")"),
               std::string::npos)
         << line;
-    EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
+    EXPECT_EQ(record_owner(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
     auto in = OIIO::ImageInput::open((dir_ / "out" / "t.p1.exr").string());
     ASSERT_TRUE(in);
     for (const auto& e : fs::directory_iterator(dir_ / "out"))
       EXPECT_EQ(e.path().filename().string().rfind(".hfbake-staging-", 0), std::string::npos) << e.path();
   }
   // The same job again replaces its own outputs; the other only with --overwrite.
-  const std::string owner = read_text(dir_ / "out" / ".hfbake-t.job");
+  const std::string owner = record_owner(dir_ / "out" / ".hfbake-t.job");
   const std::string other = owner == fs::weakly_canonical(ja).string() ? jb : ja;
   EXPECT_EQ(hfbake(dir_, {"bake", owner, "--no-cache", "--quiet"}).exit_code, 0);
   EXPECT_EQ(hfbake(dir_, {"bake", other, "--no-cache", "--quiet"}).exit_code, 2);
   EXPECT_EQ(hfbake(dir_, {"bake", other, "--no-cache", "--quiet", "--overwrite"}).exit_code, 0);
-  EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(other).string());
+  EXPECT_EQ(record_owner(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(other).string());
 }
 
 // report.json and report.html carry no job name: of two jobs of different names, each with a reference,
@@ -1066,7 +1072,7 @@ TEST_F(Untrusted, OneFolderUnderAnotherSpellingIsLockedAsOne) {
       SCOPED_TRACE(run);
       for (const auto& e : fs::directory_iterator(dir_ / "out")) fs::remove_all(e.path());
       const Race r = race(dir_, ja, jb);
-      EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
+      EXPECT_EQ(record_owner(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
       EXPECT_EQ(hfbake_test::stages_in(dir_ / "out"), 0);
     }
   }
@@ -1089,7 +1095,7 @@ TEST_F(Untrusted, ANestedOutputFolderIsAFolderOfItsOwn) {
     EXPECT_EQ(ra.exit_code, 0) << ra.err;
     EXPECT_EQ(rb.exit_code, 0) << rb.err;
     for (const auto& [folder, job] : {std::pair(dir_ / "out", ja), std::pair(dir_ / "out" / "sub", jb)}) {
-      EXPECT_EQ(read_text(folder / ".hfbake-t.job"), fs::weakly_canonical(job).string());
+      EXPECT_EQ(record_owner(folder / ".hfbake-t.job"), fs::weakly_canonical(job).string());
       EXPECT_NE(exr_job_hash(folder / "t.p1.exr"), "");
       EXPECT_TRUE(fs::is_regular_file(folder / "t.p1.ao.tif"));
       EXPECT_EQ(hfbake_test::stages_in(folder), 0);
@@ -1115,7 +1121,7 @@ TEST_F(Untrusted, AJobBakingIntoAnotherJobsTexturesFolderNeverReplacesItsTexture
     fs::remove_all(dir_ / "out");
     const Race r = race(dir_, ja, jb);
     EXPECT_NE(r.lost_line.find(fs::weakly_canonical(textures).string()), std::string::npos) << r.lost_line;
-    EXPECT_EQ(read_text(textures / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
+    EXPECT_EQ(record_owner(textures / ".hfbake-t.job"), fs::weakly_canonical(r.winner).string());
     EXPECT_TRUE(fs::is_regular_file(textures / "t.p1.ao.tif"));
   }
   for (const auto& [first, second] : {std::pair(ja, jb), std::pair(jb, ja)}) {
@@ -1132,7 +1138,7 @@ TEST_F(Untrusted, AJobBakingIntoAnotherJobsTexturesFolderNeverReplacesItsTexture
     EXPECT_EQ(read_text(textures / "t.p1.ao.tif"), tif);
     EXPECT_EQ(hfbake(dir_, {"bake", second, "--no-cache", "--quiet", "--overwrite"}).exit_code, 0);
     EXPECT_NE(read_text(textures / "t.p1.ao.tif"), tif);
-    EXPECT_EQ(read_text(textures / ".hfbake-t.job"), fs::weakly_canonical(second).string());
+    EXPECT_EQ(record_owner(textures / ".hfbake-t.job"), fs::weakly_canonical(second).string());
   }
 }
 
@@ -1359,7 +1365,7 @@ TEST_F(Moves, ALinkPlantedAtTheStageDuringTheMovesIsNotFollowed) {
   const std::string p1 = exr_job_hash(dir_ / "out" / "t.p1.exr");
   EXPECT_NE(p1, old_hash_);
   EXPECT_EQ(exr_job_hash(dir_ / "out" / "t.hbao.exr"), p1);
-  EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
+  EXPECT_EQ(record_owner(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
   expect_outside_untouched();
 }
 
@@ -1392,7 +1398,7 @@ TEST_F(Moves, ASecondSignalDuringTheMovesLetsThemFinish) {
                     hbao = exr_job_hash(dir_ / "out" / "t.hbao.exr");
   EXPECT_NE(p1, old_hash_);
   EXPECT_EQ(hbao, p1);
-  EXPECT_EQ(read_text(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
+  EXPECT_EQ(record_owner(dir_ / "out" / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
 }
 
 TEST_F(Moves, MovesAKilledProcessBeganAreCompletedByTheNextBakeOfTheJobName) {
@@ -1414,7 +1420,7 @@ TEST_F(Moves, MovesAKilledProcessBeganAreCompletedByTheNextBakeOfTheJobName) {
       << again.err;
   EXPECT_EQ(exr_job_hash(out / "t.p1.exr"), p1);
   EXPECT_EQ(exr_job_hash(out / "t.hbao.exr"), p1);
-  EXPECT_EQ(read_text(out / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
+  EXPECT_EQ(record_owner(out / ".hfbake-t.job"), fs::weakly_canonical(jobs_[1]).string());
   // With --overwrite it bakes, and leaves no stage.
   EXPECT_EQ(hfbake(dir_, {"bake", jobs_[0], "--no-cache", "--quiet", "--overwrite"}).exit_code, 0);
   EXPECT_EQ(exr_job_hash(out / "t.hbao.exr"), old_hash_);
@@ -1441,6 +1447,61 @@ TEST_F(Untrusted, ASummaryWhereAJobWritesIsRefusedBeforeBaking) {
   EXPECT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet", "--summary", "out/summary.json"}).exit_code,
             0);
   EXPECT_TRUE(fs::is_regular_file(out / "summary.json"));
+}
+
+}  // namespace
+
+namespace {
+
+// A job baked again with fewer outputs leaves none of its previous bake's behind (its owner record lists
+// them, docs/output_folders.md): no EXR of an entry it dropped, no preview, no texture of another format,
+// no report.json of a reference it no longer traces. What it never wrote stays: a file beside the outputs,
+// a link at an output's name, and names a forged record lists outside the job's own (another job's output,
+// a path out of the folder).
+TEST_F(Untrusted, ABakeWithFewerOutputsRemovesThePreviousBakesOthersOnly) {
+  json j = base_job();
+  j["bake"] = {{{"method", "p1"}, {"directions", 4}, {"layers", {"ao", "vsky"}}},
+               {{"method", "hbao"}, {"directions", 4}}};
+  j["reference"] = {{"samples", 4}};
+  j["output"]["previews"] = true;
+  j["output"]["textures"] = {{{"layers", {"ao"}}}, {{"layers", {"vsky"}}, {"format", "tga"}}};
+  const std::string job = write_job(dir_, j);
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path out = dir_ / "out";
+  for (const char* name : {"t.hbao.exr", "t.reference.exr", "report.json", "report.html",
+                           "textures/t.p1.vsky.tga", "t.p1.ao.preview.png"})
+    ASSERT_TRUE(fs::is_regular_file(out / name)) << name;
+  std::ofstream(out / "t.notes.txt") << "mine";
+  std::ofstream(out / "u.p1.exr") << "another job's";
+  fs::remove(out / "t.p1.vsky.preview.png");
+  fs::create_symlink(dir_ / "outside" / "victim", out / "t.p1.vsky.preview.png");
+  // The record, forged to list names beyond the job's.
+  std::string record = read_text(out / ".hfbake-t.job");
+  record += "\nt.notes.txt\nu.p1.exr\n../outside/victim\n" + (dir_ / "outside" / "victim").string();
+  std::ofstream(out / ".hfbake-t.job", std::ios::trunc) << record;
+
+  j["bake"] = {{{"method", "p1"}, {"directions", 4}, {"layers", {"ao"}}}};
+  j.erase("reference");
+  j["output"]["previews"] = false;
+  j["output"]["textures"] = {{{"layers", {"ao"}}}};
+  write_job(dir_, j);
+  const Outcome r = hfbake(dir_, {"bake", job, "--no-cache"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* name : {"t.hbao.exr", "t.reference.exr", "report.json", "report.html",
+                           "textures/t.p1.vsky.tga", "t.p1.ao.preview.png"}) {
+    EXPECT_FALSE(fs::exists(out / name)) << name;
+    EXPECT_NE(r.err.find("removed " + (out / name).string()), std::string::npos) << name << "\n" << r.err;
+  }
+  EXPECT_TRUE(fs::is_regular_file(out / "t.p1.exr"));
+  EXPECT_TRUE(fs::is_regular_file(out / "textures" / "t.p1.ao.png"));
+  EXPECT_EQ(read_text(out / "t.notes.txt"), "mine");
+  EXPECT_EQ(read_text(out / "u.p1.exr"), "another job's");
+  EXPECT_TRUE(fs::is_symlink(out / "t.p1.vsky.preview.png"));
+  expect_outside_untouched();
+  // The record lists this bake's outputs now: a bake of the same outputs removes nothing.
+  const Outcome again = hfbake(dir_, {"bake", job, "--no-cache"});
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.err.find("removed"), std::string::npos) << again.err;
 }
 
 }  // namespace
