@@ -582,6 +582,15 @@ std::string heights_warning(const Scene& scene) {
         "JPEG is lossy: the heights carry its compression artefacts (a TIFF or PNG of the same "
         "heights keeps what was stored; docs/heights.md)";
   }
+  // A declared scale or offset the job does not apply, whatever the relief (a band of decimetres reads ten
+  // times too steep, short of the relief clause above): as `hfbake horizon` and read_dem warn.
+  if ((s.file_scale != 1 || s.file_offset != 0) && s.scale == 1 && s.offset == 0 &&
+      warning.find("the file declares scale") == std::string::npos)
+    warning += std::string(warning.empty() ? "" : "; and ") + "the file declares scale " +
+               short_num(s.file_scale) + " and offset " + short_num(s.file_offset) +
+               ", not applied (heights are the stored values, docs/heights.md): \"height_scale\": " +
+               short_num(s.file_scale) + " and \"height_offset\": " + short_num(s.file_offset) +
+               " apply them";
   if (!s.nodata_note.empty()) warning += (warning.empty() ? "" : "; and ") + s.nodata_note;
   return warning;
 }

@@ -248,6 +248,26 @@ TEST_F(CliHeights, TheHeightsLineNamesTheChannelAndTheFilesScale) {
       << r.err;
 }
 
+// A declared scale the job does not apply is a warning whatever the relief (decimetres read as metres are
+// ten times too steep, a plausible relief): as `hfbake horizon` warns. Given height_scale, no warning.
+TEST_F(CliHeights, ADeclaredScaleNotAppliedIsWarnedWhateverTheRelief) {
+  write_image("dm.tif", integer_heights(150), OIIO::TypeDesc::UINT16);
+  std::ofstream(dir_ / "dm.tif.aux.xml")
+      << "<PAMDataset>\n  <GeoTransform>0, 1, 0, 48, 0, -1</GeoTransform>\n  <PAMRasterBand band=\"1\">\n"
+         "    <Scale>0.1</Scale>\n  </PAMRasterBand>\n</PAMDataset>\n";
+  Result r = hfbake("validate " + write_job("dm", {{"image", "dm.tif"}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("hfbake: warning: " + (dir_ / "dm.json").string()), std::string::npos) << r.err;
+  EXPECT_NE(
+      r.err.find("the file declares scale 0.1 and offset 0, not applied (heights are the stored values, "
+                 "docs/heights.md): \"height_scale\": 0.1 and \"height_offset\": 0 apply them"),
+      std::string::npos)
+      << r.err;
+  r = hfbake("validate " + write_job("dm_scaled", {{"image", "dm.tif"}, {"height_scale", 0.1}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+}
+
 // JPEG heights are lossy: validate says so (a plausible relief, so no other warning takes its place).
 TEST_F(CliHeights, JpegHeightsAreWarnedLossy) {
   write_image("h.jpg", integer_heights(255), OIIO::TypeDesc::UINT8);
