@@ -1,6 +1,7 @@
 #include "job/manifest.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -28,6 +29,26 @@ std::string line_column(const std::string& text, std::size_t byte) {
     }
   }
   return "line " + std::to_string(line) + ", column " + std::to_string(column);
+}
+
+// The common hand-written mistake behind a parse error at `byte` (nlohmann's position: 1-based, the byte
+// it stopped at), as a hint; "" when none is recognised: a comment (JSON has none) or a comma after the last
+// item of an object or array.
+std::string json_mistake(const std::string& text, std::size_t byte) {
+  const std::size_t at = std::min(byte > 0 ? byte - 1 : 0, text.size());
+  const std::size_t from = at >= 2 ? at - 2 : 0;
+  const std::string near = text.substr(from, 4);
+  if (near.find("//") != std::string::npos || near.find("/*") != std::string::npos)
+    return " (a comment: job files are JSON, which has none)";
+  if (at < text.size() && (text[at] == '}' || text[at] == ']')) {
+    std::size_t k = at;
+    while (k > 0 && std::isspace(static_cast<unsigned char>(text[k - 1]))) --k;
+    if (k > 0 && text[k - 1] == ',')
+      return std::string(" (a comma after the last item: JSON takes none before ") + text[at] + ")";
+  }
+  if (text.find('\\') != std::string::npos && near.find('\\') != std::string::npos)
+    return " (a backslash: in JSON it starts an escape; write paths with /)";
+  return "";
 }
 
 // JSON pointers in document order: token by token, array indices as numbers.
@@ -179,7 +200,7 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& file,
     // nlohmann: "[json.exception.parse_error.101] parse error at line 3, column 5: syntax error while ..."
     const auto colon = what.find(": ");
     if (colon != std::string::npos) what = what.substr(colon + 2);
-    throw InputError(file, line_column(text, e.byte), "malformed JSON: " + what);
+    throw InputError(file, line_column(text, e.byte), "malformed JSON: " + what + json_mistake(text, e.byte));
   } catch (const nlohmann::json::exception& e) {
     // out_of_range: a number beyond double's range ("1e309").
     std::string what = e.what();
@@ -315,7 +336,10 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
                                   ? " is a link that leads back to itself (a loop)"
                                   : " is a link to nothing"));
     } else
-      fail(ptr, "no such file: " + p.string());
+      fail(ptr,
+           "no such file: " + p.string() +
+               (rel.find('\\') != std::string::npos ? " (a backslash: hfbake's paths take / between folders)"
+                                                    : ""));
   }
   // The baseline is read after the bake; a missing one must not cost the bake. (Not an input of the
   // content hash: the baseline changes what is compared, not what is baked.)

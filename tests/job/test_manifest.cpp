@@ -66,6 +66,33 @@ TEST_F(Manifest, MalformedJsonNamesLineAndColumn) {
   EXPECT_NE(e[0].find("x.json: line 4, column 1: malformed JSON"), std::string::npos) << e[0];
 }
 
+// The hand-written mistakes a newcomer makes get a hint after the parser's words: a comment, a comma after
+// the last item, a Windows path's backslash. An error of another kind gets none.
+TEST_F(Manifest, MalformedJsonNamesTheUsualMistake) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"{\"version\": 1, // my job\n \"name\": \"a\"}", "(a comment: job files are JSON, which has none)"},
+      {"{\"version\": 1, /* x */ \"name\": \"a\"}", "(a comment: job files are JSON, which has none)"},
+      {"{\"version\": 1,\n \"name\": \"a\",\n}", "(a comma after the last item: JSON takes none before })"},
+      {"{\"bake\": [1, 2, ]}", "(a comma after the last item: JSON takes none before ])"},
+      {"{\"height\": {\"image\": \"..\\img\\x.png\"}}",
+       "(a backslash: in JSON it starts an escape; write paths with /)"}};
+  for (const auto& [text, hint] : cases) {
+    const auto e = errors(text);
+    ASSERT_EQ(e.size(), 1u) << text;
+    EXPECT_NE(e[0].find("malformed JSON"), std::string::npos) << e[0];
+    EXPECT_EQ(e[0].substr(e[0].size() - std::min(e[0].size(), hint.size())), hint) << e[0];
+  }
+  const auto e = errors("{\n  \"version\": 1,\n  \"name\": \n}");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0].find(" (a "), std::string::npos) << e[0];
+  // A Windows path written with escaped backslashes parses, and names no file.
+  const auto w = errors(R"({"version": 1, "name": "a", "height": {"image": "..\\img\\x.png"},
+                            "bake": [{"method": "p1"}]})");
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("no such file: "), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("(a backslash: hfbake's paths take / between folders)"), std::string::npos) << w[0];
+}
+
 TEST_F(Manifest, OutOfRangeDirections) {
   const auto e = errors(minimal("", R"([{"method": "p1", "directions": 0}])"));
   ASSERT_EQ(e.size(), 1u);
