@@ -43,12 +43,15 @@ double round4(double v) {
   return std::strtod(buf, nullptr);
 }
 
-// A file's stem as a job name (the schema's pattern: letters, digits, _ . -, not starting with . or
-// -).
+// A file's stem as a job name (the schema's pattern: ASCII letters, digits, _ . -, not starting with . or
+// -): every other character one _ (a UTF-8 character of several bytes too: "hé" is "h_").
 std::string job_name(const fs::path& file) {
-  std::string name = file.stem().string();
-  for (char& c : name)
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '.' && c != '-') c = '_';
+  std::string name;
+  for (const char c : file.stem().string()) {
+    const auto u = static_cast<unsigned char>(c);
+    if ((u & 0xC0) == 0x80) continue;  // a UTF-8 continuation byte: its character has its _ already
+    name += u < 0x80 && (std::isalnum(u) || c == '_' || c == '.' || c == '-') ? c : '_';
+  }
   if (name.empty() || name[0] == '.' || name[0] == '-') name.insert(name.begin(), '_');
   if (name.size() > 128) name.resize(128);
   return name;

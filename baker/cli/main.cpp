@@ -253,7 +253,8 @@ int run(int argc, char** argv) {
       ->required()
       ->check(CLI::IsMember(preset_names));
   init_cmd->add_option("-o,--out", init_out,
-                       "The job file to write (default: <height file's stem>.json here)");
+                       "The job file to write (default: <height file's stem>.json here, each character a job "
+                       "name cannot hold as _)");
   init_cmd->add_flag("--force", init.force, "Write over an existing job file");
 
   CLI::App* validate_cmd = app.add_subcommand("validate", "Check jobs against the schema and their files");

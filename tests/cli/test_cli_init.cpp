@@ -292,6 +292,21 @@ TEST_F(CliInit, AStreamIsNoJobFile) {
   EXPECT_EQ(fs::file_size(dir_ / "captured"), 0u);
 }
 
+// A height file's stem with a space and a two-byte UTF-8 letter: each character a job name cannot hold is one
+// _ in the job's name and its default file (docs/presets.md), not one per byte.
+TEST_F(CliInit, EachCharacterANameCannotHoldIsOneUnderscore) {
+  write_png16(dir_ / "my rock h\xc3\xa9.png");
+  const std::string cmd = "cd " + dir_.string() + " && " + HFBAKE_BINARY +
+                          " init 'my rock h\xc3\xa9.png' --preset game-ao >/dev/null 2>" +
+                          (dir_ / "err.txt").string();
+  const int status = std::system(cmd.c_str());
+  std::ifstream err(dir_ / "err.txt");
+  const std::string text{std::istreambuf_iterator<char>(err), {}};
+  ASSERT_EQ(WEXITSTATUS(status), 0) << text;
+  ASSERT_TRUE(fs::is_regular_file(dir_ / "my_rock_h_.json")) << text;
+  EXPECT_EQ(read_json(dir_ / "my_rock_h_.json")["name"], "my_rock_h_");
+}
+
 TEST_F(CliInit, HelpListsMethodsLayersAndPresets) {
   // --help prints to stdout.
   const std::string cmd = std::string(HFBAKE_BINARY) + " --help > " + (dir_ / "help.txt").string();
