@@ -123,8 +123,8 @@ def _as_float_heights(heights, nodata_value):
         return heights
     beyond = _beyond_float_range(heights, nodata_value)
     if beyond:
-        raise InputError("heights: " + _beyond_float_range_message(*beyond, "give it as nodata_value"),
-                         "/heights")
+        message = "heights: " + _beyond_float_range_message(*beyond, "give it as nodata_value")
+        raise InputError(message, "/heights", lines=["/heights: " + message])
     if not _wider_than_float(heights):
         return heights
     with _np.errstate(over="ignore"):

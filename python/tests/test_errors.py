@@ -115,6 +115,8 @@ def test_a_float64_height_beyond_floats_range_is_refused_unless_it_is_nodata_val
                 hfbake.p1(heights, **keys)
             assert caught.value.pointer == "/heights"
             assert caught.value.message.startswith("heights: texel (3, 5) is -1e+300, beyond a float's range")
+            # Printed as every other array error is: "<pointer>: <what>".
+            assert str(caught.value).startswith("/heights: heights: texel (3, 5) is -1e+300"), str(caught.value)
         filled = heights.copy()
         filled[5, 3] = np.nan
         a = hfbake.p1(heights, nodata="fill", nodata_value=-1e300)["ao"]
