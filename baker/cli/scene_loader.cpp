@@ -348,10 +348,17 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   if (parts) {
     // A smaller field shrinks the scene only where the field is most of it (not the process's fixed part).
     const double field_part = scene - process;
+    // The image module an input image brings in (an image's heights, an albedo, an environment map), read
+    // before the bake: a part of its own, as when it comes to write previews or textures.
+    const double reader =
+        reads_images(job, size)
+            ? kImageProcessBytes - (uses_gdal(job, size) ? kGdalProcessBytes : kProcessBytes)
+            : 0.0;
     parts->insert(parts->begin(),
-                  {"scene", std::size_t(scene), field_part > process ? "a smaller field" : ""});
+                  {"scene", std::size_t(scene - reader), field_part > process ? "a smaller field" : ""});
+    if (reader > 0) parts->insert(parts->begin() + 1, {"image reader", std::size_t(reader), ""});
     if (lift > 0)
-      parts->insert(parts->begin() + 1,
+      parts->insert(parts->begin() + (reader > 0 ? 2 : 1),
                     {std::string(kImageLibrariesPart), std::size_t(lift),
                      "no previews or textures (OpenImageIO's libraries load to write them)"});
     if (env.loading > 0)

@@ -268,6 +268,18 @@ TEST_F(CliHeights, ADeclaredScaleNotAppliedIsWarnedWhateverTheRelief) {
   EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
 }
 
+// A height image OpenImageIO reads brings its libraries in before the bake: validate's estimate shows them as
+// a part of their own, not as the scene's (a 2 x 2 PNG's scene is the process and its few texels).
+TEST_F(CliHeights, AnImageReadersLibrariesAreAPartOfTheirOwn) {
+  write_image("small.png", integer_heights(255), OIIO::TypeDesc::UINT8);
+  const Result r = hfbake("validate " + write_job("small", {{"image", "small.png"}}).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto at = r.err.find("to bake: scene ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_LT(std::stod(r.err.substr(at + 15)), 80) << r.err;  // MiB: the process and the field
+  EXPECT_NE(r.err.find(" MiB, image reader "), std::string::npos) << r.err;
+}
+
 // JPEG heights are lossy: validate says so (a plausible relief, so no other warning takes its place).
 TEST_F(CliHeights, JpegHeightsAreWarnedLossy) {
   write_image("h.jpg", integer_heights(255), OIIO::TypeDesc::UINT8);
