@@ -165,6 +165,7 @@ Profile compute(const HorizonOptions& o) {
   p.g = info->geotransform;
   const auto& g = p.g;
   if (!north_up(g)) fail("", "is rotated or sheared; warp it north-up first (gdalwarp)");
+  if (const std::string problem = geographic_unit_problem(*info); !problem.empty()) fail("", problem);
   if (o.band < 0 || o.band >= info->bands)
     fail("--band", "is " + std::to_string(o.band) + " but the raster has " + std::to_string(info->bands) +
                        " band(s) (0-based)");

@@ -92,6 +92,8 @@ std::optional<GeoRasterInfo> checked_georaster(const Job& job) {
   if (!north_up(g))
     fail("/height/image", file + ": is rotated or sheared (geotransform " + num(g[2]) + ", " + num(g[4]) +
                               "); warp it north-up first (gdalwarp)");
+  if (const std::string problem = geographic_unit_problem(*info); !problem.empty())
+    fail("/height/image", file + ": " + problem);
   if (info->geographic) {
     if (h.contains("texel_size") && h["texel_size"].is_number())
       fail("/height/texel_size", "is given, but " + image + " has a geographic CRS (" + info->crs_name +

@@ -282,6 +282,11 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
     CPLFree(wkt);
     if (const char* name = srs->GetName()) info.crs_name = name;
     info.geographic = srs->IsGeographic() != 0;
+    if (info.geographic) {
+      const char* unit = nullptr;
+      info.angular_unit_radians = srs->GetAngularUnits(&unit);
+      if (unit) info.angular_unit = unit;
+    }
     if (srs->IsProjected()) {
       const char* unit = nullptr;
       info.linear_unit_metres = srs->GetLinearUnits(&unit);
@@ -350,6 +355,16 @@ std::optional<GeoRasterInfo> probe_georaster(const fs::path& file) {
                                                             : uncovered_percent(*band));
   }
   return info;
+}
+
+std::string geographic_unit_problem(const GeoRasterInfo& info) {
+  constexpr double kDegree = 3.14159265358979323846 / 180;
+  if (!info.geographic || std::fabs(info.angular_unit_radians - kDegree) <= 1e-12) return "";
+  return "has a geographic CRS (" + info.crs_name + ") in " +
+         (info.angular_unit.empty() ? std::string("an angular unit that is not the degree")
+                                    : info.angular_unit + "s") +
+         ", not degrees, which hfbake reads a geographic geotransform in: warp it to degrees first (gdalwarp "
+         "-t_srs EPSG:4326 in.tif out.tif, or to a projected CRS)";
 }
 
 std::string uncovered_problem(const GeoRasterInfo& info, int band) {

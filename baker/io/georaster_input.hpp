@@ -30,6 +30,8 @@ struct GeoRasterInfo {
   std::string placed_by;
   std::string crs_wkt, crs_name;              // empty: no CRS
   bool geographic = false;                    // the CRS is geographic (coordinates in degrees)
+  std::string angular_unit;                   // a geographic CRS's unit ("degree", "grad", ...)
+  double angular_unit_radians = 0;            // radians in that unit
   std::string linear_unit;                    // a projected CRS's unit ("metre", "US survey foot", ...)
   double linear_unit_metres = 1;              // metres in that unit
   std::vector<std::optional<double>> nodata;  // per band: the NoData value, if the file declares one
@@ -50,6 +52,10 @@ struct GeoRasterInfo {
 // is): GDAL reads 0 there unless the band has a NoData value, and a mosaic's gap would bake as a canyon down
 // to height 0. With a NoData value a gap is a hole like any other (docs/gis.md).
 std::string uncovered_problem(const GeoRasterInfo& info, int band);
+// "" for a geographic CRS in degrees (or a CRS that is not geographic), else what is wrong: hfbake reads a
+// geographic raster's geotransform in degrees, so one in grads or radians is refused, with the warp that
+// makes it one in degrees.
+std::string geographic_unit_problem(const GeoRasterInfo& info);
 
 // Whether a geotransform is north-up (neither rotated nor sheared): its rotation terms within 1e-9 of its
 // pixel sizes, the tolerance square pixels are held to (a term of 1e-15, a conversion's rounding, is none).

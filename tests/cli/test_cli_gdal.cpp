@@ -331,8 +331,8 @@ TEST_F(CliGdal, NodataValueOfTheFileMakesHoles) {
 
 // A geographic raster bakes in its local frame with the methods that take rectangular texels and the
 // Earth's curvature; the others (and p1's directional lights), a raster spanning too much latitude or
-// reaching a pole, a texel_size given in the job and a refraction without curvature are refused in one
-// line naming the file and field.
+// reaching a pole, one whose CRS is in grads, a texel_size given in the job and a refraction without
+// curvature are refused in one line naming the file and field.
 TEST_F(CliGdal, GeographicRastersAreCheckedInOneLine) {
   translate("-srcwin 0 0 64 64 -a_srs EPSG:4326 -a_ullr 15.0 46.5 15.001 46.499 '" + kDem.string() +
             "' degrees.tif");
@@ -341,6 +341,9 @@ TEST_F(CliGdal, GeographicRastersAreCheckedInOneLine) {
             "' tall.tif");
   translate("-srcwin 0 0 64 64 -a_srs EPSG:4326 -a_ullr 15.0 89.95 15.1 89.92 '" + kDem.string() +
             "' pole.tif");
+  // NTF (Paris): a geographic CRS in grads, read as degrees it would put the field 5 degrees north.
+  translate("-srcwin 0 0 64 64 -a_srs EPSG:4807 -a_ullr 0.5 52.0 0.501 51.999 '" + kDem.string() +
+            "' grads.tif");
   auto relief_job = [&](const std::string& file, const std::string& name, nlohmann::json height) {
     const nlohmann::json j = {{"version", 1},
                               {"name", name},
@@ -370,6 +373,9 @@ TEST_F(CliGdal, GeographicRastersAreCheckedInOneLine) {
        "/height/image: " + (dir_ / "tall.tif").string() + ": spans latitudes"},
       {relief_job("pole.json", "pole", {{"image", "pole.tif"}}),
        "/height/image: " + (dir_ / "pole.tif").string() + ": its rows reach latitude"},
+      {relief_job("grads.json", "grads", {{"image", "grads.tif"}}),
+       "/height/image: " + (dir_ / "grads.tif").string() +
+           ": has a geographic CRS (NTF (Paris)) in grads, not degrees"},
       {relief_job("texel.json", "texel", {{"image", "degrees.tif"}, {"texel_size", 1.0}}),
        "/height/texel_size: is given, but degrees.tif has a geographic CRS"},
       {relief_job("flat.json", "flat", {{"image", "degrees.tif"}, {"curvature", false}, {"refraction", 0.1}}),
