@@ -14,7 +14,9 @@ using T = LayerTrace;
 using R = LayerReach;
 using V = LayerValues;
 
-// name, numbered, channels, indexed, score, trace, reach, values, float_storage
+using U = LayerUnit;
+
+// name, numbered, channels, indexed, score, trace, reach, values, float_storage, unit
 std::vector<LayerKind>& kinds() {
   static std::vector<LayerKind> table = {
       {"ao", false, C::mono, 0, S::values, T::path_traced, R::unlimited, V::fraction},
@@ -28,12 +30,16 @@ std::vector<LayerKind>& kinds() {
       {"sh_irradiance", false, C::indexed, 48, S::values, T::path_traced, R::unlimited, V::finite},
       {"indirect_b", true, C::rgb, 0, S::values, T::path_traced, R::unlimited, V::finite},
       {"horizon", false, C::per_direction, 0, S::elevations, T::horizons, R::unlimited, V::finite},
-      {"horizon_distance", false, C::per_direction, 0, S::values, T::horizons, R::unlimited, V::distance},
+      {"horizon_distance", false, C::per_direction, 0, S::values, T::horizons, R::unlimited, V::distance,
+       false, U::distance},
       {"sh_visibility", false, C::indexed, 16, S::values, T::sh_visibility, R::unlimited, V::finite},
       {"svf", false, C::mono, 0, S::values, T::relief, R::search_radius, V::fraction},
-      {"openness_positive", false, C::mono, 0, S::values, T::relief, R::search_radius, V::finite, true},
-      {"openness_negative", false, C::mono, 0, S::values, T::relief, R::search_radius, V::finite, true},
-      {"horizon_deg", false, C::per_direction, 0, S::values, T::relief, R::search_radius, V::finite, true},
+      {"openness_positive", false, C::mono, 0, S::values, T::relief, R::search_radius, V::finite, true,
+       U::degree},
+      {"openness_negative", false, C::mono, 0, S::values, T::relief, R::search_radius, V::finite, true,
+       U::degree},
+      {"horizon_deg", false, C::per_direction, 0, S::values, T::relief, R::search_radius, V::finite, true,
+       U::degree},
       {"normal", false, C::xyz, 0, S::none, T::none, R::unlimited, V::finite},  // the height field's own
   };
   return table;

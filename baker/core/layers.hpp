@@ -71,6 +71,13 @@ enum class LayerReach {
                   // traced it with the same (relief)
 };
 
+// The unit of a layer's values, as a GeoTIFF band declares it (GDAL's unit type).
+enum class LayerUnit {
+  none,      // a fraction, a sine, a colour, a direction: no unit
+  degree,    // angles in degrees
+  distance,  // world units: the CRS's linear unit (metres for a geographic raster's local frame)
+};
+
 // The values a layer holds, checked before it is written (cli/outputs check_layers_finite).
 enum class LayerValues {
   finite,    // any finite number
@@ -90,6 +97,7 @@ struct LayerKind {
   // Stored as float in an EXR whatever the job's pixel_type: angles in degrees, where half's steps (0.03°
   // to 0.06° above 32°) would be coarser than the method (docs/gis.md).
   bool float_storage = false;
+  LayerUnit unit = LayerUnit::none;
 };
 
 // Every layer kind, the table's lines first.

@@ -43,6 +43,26 @@ void set_georeference(GDALDataset& ds, const Georeference& geo, const GeoTiffOpt
   for (const auto& [key, value] : options.metadata) ds.SetMetadataItem(key.c_str(), value.c_str());
 }
 
+// Every band of `ds`, layer `layer`'s, declares the layer's unit (core/layers.hpp LayerUnit): "degree", or
+// for a distance the CRS's linear unit ("metre" for a geographic raster's local frame; none without a CRS).
+void set_band_units(GDALDataset& ds, const std::string& layer, const Georeference& geo) {
+  const LayerKind* kind = find_layer_kind(layer);
+  std::string unit;
+  if (kind && kind->unit == LayerUnit::degree) unit = "degree";
+  if (kind && kind->unit == LayerUnit::distance && !geo.crs_wkt.empty()) {
+    OGRSpatialReference srs;
+    if (srs.importFromWkt(geo.crs_wkt.c_str()) == OGRERR_NONE) {
+      const char* name = nullptr;
+      if (srs.IsGeographic())
+        unit = "metre";
+      else if (srs.IsProjected() && (srs.GetLinearUnits(&name), name))
+        unit = name;
+    }
+  }
+  if (unit.empty()) return;
+  for (int b = 1; b <= ds.GetRasterCount(); ++b) ds.GetRasterBand(b)->SetUnitType(unit.c_str());
+}
+
 // `source` as the COG `file`: DEFLATE (level 1) with the floating-point predictor, 512x512 blocks, average
 // overviews, written under a temporary name beside `file` and renamed into place. Failure -> InputError
 // naming `file`. Level 1: the low bits of float results are noise to DEFLATE, and the default level 6
@@ -130,6 +150,7 @@ void write_geotiff(const fs::path& file, const LayerSet& layers, const Layer& la
     if (holes) band->SetNoDataValue(kGeoTiffNodata);
   }
   set_georeference(*mem, geo, options, fail);
+  set_band_units(*mem, layer.name, geo);
   copy_to_cog(file, *mem);
 }
 
@@ -172,6 +193,7 @@ TiledGeoTiff::TiledGeoTiff(const fs::path& work, int width, int height, const st
   for (int c = 0; c < channels_; ++c)
     dataset_->ds->GetRasterBand(c + 1)->SetDescription(geotiff_band_description(layer, channels, c).c_str());
   set_georeference(*dataset_->ds, geo, options, fail);
+  set_band_units(*dataset_->ds, layer, geo);
 }
 
 TiledGeoTiff::~TiledGeoTiff() {

@@ -129,6 +129,55 @@ std::vector<float> read_band(const fs::path& file, int band) {
   return v;
 }
 
+// Each band declares its layer's unit (GDAL's unit type, what QGIS and gdalinfo show): degrees for angles,
+// the CRS's linear unit for distances (metres in a geographic raster's local frame, US survey feet in
+// EPSG:2263), none for fractions and sines, nor for a distance without a CRS. Both writers.
+TEST(GeoTiffOutput, BandsDeclareTheirLayersUnit) {
+  TempFolder tmp;
+  const int w = 6, h = 5;
+  LayerSet layers;
+  layers.width = w, layers.height = h;
+  for (const char* name : {"horizon_deg", "horizon_distance", "svf", "openness_negative"})
+    layers.add(name, std::string(name).rfind("horizon", 0) == 0 ? indexed_channels(2) : mono_channels());
+  auto wkt_of = [](int epsg) {
+    OGRSpatialReference srs;
+    EXPECT_EQ(srs.importFromEPSG(epsg), OGRERR_NONE);
+    char* text = nullptr;
+    srs.exportToWkt(&text);
+    const std::string wkt = text;
+    CPLFree(text);
+    return wkt;
+  };
+  auto units = [](const fs::path& file) {
+    std::unique_ptr<GDALDataset> ds(GDALDataset::Open(file.c_str(), GDAL_OF_RASTER));
+    std::vector<std::string> u;
+    if (!ds) return u;
+    for (int b = 1; b <= ds->GetRasterCount(); ++b) u.emplace_back(ds->GetRasterBand(b)->GetUnitType());
+    return u;
+  };
+  using V = std::vector<std::string>;
+  for (const int epsg : {2263, 4326, 0}) {
+    SCOPED_TRACE(epsg);
+    Georeference geo;
+    geo.from_file = epsg != 0;
+    if (epsg) geo.crs_wkt = wkt_of(epsg);
+    geo.geotransform = {10, 0.001, 0, 20, 0, -0.001};
+    const std::string distance = epsg == 2263 ? "US survey foot" : epsg == 4326 ? "metre" : "";
+    for (const Layer& l : layers.layers) write_geotiff(tmp / (l.name + ".tif"), layers, l, geo);
+    EXPECT_EQ(units(tmp / "horizon_deg.tif"), (V{"degree", "degree"}));
+    EXPECT_EQ(units(tmp / "horizon_distance.tif"), (V{distance, distance}));
+    EXPECT_EQ(units(tmp / "svf.tif"), V{""});
+    EXPECT_EQ(units(tmp / "openness_negative.tif"), V{"degree"});
+    {
+      TiledGeoTiff tiled(tmp / "work.tif", w, h, "horizon_distance", indexed_channels(2), geo, {});
+      const std::vector<float> zero(std::size_t(w) * h * 2, 0.0f);
+      tiled.write(0, 0, w, h, zero.data(), std::size_t(w));
+      tiled.finish(tmp / "tiled.tif");
+    }
+    EXPECT_EQ(units(tmp / "tiled.tif"), (V{distance, distance}));
+  }
+}
+
 TEST(GeoTiffOutput, CogWithTheInputsCrsGeotransformAndNodata) {
   REQUIRE_DATA_AND_TOOLS();
   const std::optional<GeoRasterInfo> dem = probe_georaster(kData / "TM1_564_146.tif");
