@@ -918,12 +918,26 @@ void OutputStage::write_text(const std::string& filename, const std::string& tex
 }
 
 void OutputStage::remove_previous_outputs(const std::vector<fs::path>& previous) {
+  // textures/ is a folder another job may bake into: its previous textures are this job's to remove only
+  // under the name's lock there and while the folder's record still names this job file (a job of this
+  // name baking into textures/ with --overwrite took them over). A bake that writes textures holds both.
+  std::unique_ptr<FolderLock> textures_lock;
+  bool textures_ours = textures_lock_ != nullptr;
+  const auto take_textures = [&] {
+    if (!is_real_directory(out_held_.path() / "textures")) return false;
+    if (!out_textures_held_.held()) out_textures_held_ = HeldFolder(out_held_.path() / "textures", false);
+    if (!out_textures_held_.held()) return false;
+    textures_lock =
+        std::make_unique<FolderLock>(out_textures_held_.path() / textures_lock_file(job_).filename());
+    return textures_lock->held() &&
+           read_owner_record(out_textures_held_.path() / owner_record(job_).filename()) == job_identity(job_);
+  };
+  bool textures_tried = textures_ours;
   for (const fs::path& name : previous) {
     if (std::find(staged_.begin(), staged_.end(), name) != staged_.end()) continue;
-    if (name.has_parent_path() && !out_textures_held_.held()) {
-      if (!is_real_directory(out_held_.path() / "textures")) continue;
-      out_textures_held_ = HeldFolder(out_held_.path() / "textures", false);
-      if (!out_textures_held_.held()) continue;
+    if (name.has_parent_path()) {
+      if (!textures_tried) textures_ours = take_textures(), textures_tried = true;
+      if (!textures_ours || !out_textures_held_.held()) continue;
     }
     const fs::path at =
         name.has_parent_path() ? out_textures_held_.path() / name.filename() : out_held_.path() / name;

@@ -80,8 +80,10 @@ std::vector<fs::path> visible_files(const fs::path& dir) {
       ext == ".lock")
     return ::testing::AssertionSuccess();
   if (p.filename().string().rfind(".hfbake-", 0) == 0 && ext == ".job") {
+    // Its first line; the outputs its bake wrote follow, one a line.
     std::ifstream in(p);
-    const std::string owner{std::istreambuf_iterator<char>(in), {}};
+    const std::string text{std::istreambuf_iterator<char>(in), {}};
+    const std::string owner = text.substr(0, text.find('\n'));
     if (owner.empty() || owner.front() != '/' || !fs::exists(owner))
       return ::testing::AssertionFailure() << p << " does not name a job file: " << owner;
     return ::testing::AssertionSuccess();

@@ -1500,8 +1500,29 @@ TEST_F(Untrusted, ABakeWithFewerOutputsRemovesThePreviousBakesOthersOnly) {
   expect_outside_untouched();
   // The record lists this bake's outputs now: a bake of the same outputs removes nothing.
   const Outcome again = hfbake(dir_, {"bake", job, "--no-cache"});
+  ASSERT_EQ(again.err.find("removed"), std::string::npos) << again.err;
   ASSERT_EQ(again.exit_code, 0) << again.err;
-  EXPECT_EQ(again.err.find("removed"), std::string::npos) << again.err;
+  // textures/ is a folder other jobs bake into: a bake that writes no texture now removes its previous ones
+  // while textures/'s record names its job file, and leaves them when another job file took the name there
+  // over (its outputs, whatever their names).
+  j["output"].erase("textures");
+  write_job(dir_, j);
+  const std::string record_there = read_text(out / "textures" / ".hfbake-t.job");
+  std::ofstream(out / "textures" / ".hfbake-t.job", std::ios::trunc) << "/elsewhere/other.json";
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet"}).exit_code, 0);
+  EXPECT_TRUE(fs::is_regular_file(out / "textures" / "t.p1.ao.png"));
+  // (The bake above wrote no texture, so the record it left lists none: the texture is listed again.)
+  j["output"]["textures"] = {{{"layers", {"ao"}}}};
+  write_job(dir_, j);
+  std::ofstream(out / "textures" / ".hfbake-t.job", std::ios::trunc) << record_there;
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--no-cache", "--quiet"}).exit_code, 0);
+  j["output"].erase("textures");
+  write_job(dir_, j);
+  const Outcome dropped = hfbake(dir_, {"bake", job, "--no-cache"});
+  ASSERT_EQ(dropped.exit_code, 0) << dropped.err;
+  EXPECT_FALSE(fs::exists(out / "textures" / "t.p1.ao.png")) << dropped.err;
+  EXPECT_NE(dropped.err.find("removed " + (out / "textures" / "t.p1.ao.png").string()), std::string::npos)
+      << dropped.err;
 }
 
 }  // namespace
