@@ -806,9 +806,7 @@ std::vector<std::string> OutputStage::write_layers(const std::string& stem, cons
   preview.display = job_.output.preview_display;
   preview.view = job_.output.preview_view;
   for (const Layer& layer : layers.layers) {
-    // Previews of what a person can look at: scalars and colours, not per-direction or SH stacks.
-    if (layer.channel_count() != 1 && layer.channel_count() != 3) continue;
-    if (layer.name.size() > 7 && layer.name.compare(layer.name.size() - 7, 7, "_stderr") == 0) continue;
+    if (!is_previewed(layer.name, layer.channel_count())) continue;
     const std::string png = job_.name + "." + stem + "." + layer.name + ".preview.png";
     // Light and fractions of the sky through the display transform; a quantity in a unit of its own
     // (openness in degrees, the sun's irradiation and hours: mono layers that are neither) over its range.

@@ -18,6 +18,7 @@
 #include "io/exr_output.hpp"
 #include "io/geotiff_output.hpp"
 #include "io/load_environment.hpp"
+#include "io/preview.hpp"
 #include "methods/method_table.hpp"
 #include "reference/bake_reference.hpp"
 #include "reference/embree_field.hpp"
@@ -160,8 +161,22 @@ bool reads_images(const Job& job, const FieldSize& size) {
 // Whether it loads it to write a method's results: a PNG preview or an engine texture, written once the
 // method has run (its working memory freed). A reference alone loads it after its tracing, for
 // report.html's images.
+// Whether output.previews writes any PNG: some entry writes a layer the previews show (io/preview.hpp
+// is_previewed), or the job has a reference (its report's page shows images). An entry not resolved yet
+// counts as one that does. A tiled bake writes no previews.
+bool writes_previews(const Job& job, const FieldSize& size) {
+  if (!job.output.previews || size.tile) return false;
+  if (job.has_reference) return true;
+  for (const BakeEntry& e : job.bakes) {
+    if (!e.config) return true;
+    for (const std::string& l : e.config->layers)
+      if (is_previewed(l, layer_channel_count(l, e.config->directions))) return true;
+  }
+  return false;
+}
+
 bool writes_images(const Job& job, const FieldSize& size) {
-  if (job.output.previews && !size.tile) return true;  // a tiled bake writes no previews
+  if (writes_previews(job, size)) return true;
   const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
   return output.contains("textures") && !output["textures"].empty();
 }
@@ -201,7 +216,7 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   // pixel, at most io/preview.hpp's 2048 px a side), or a layer's COG (geotiff_writing_bytes: GDAL reads the
   // layer itself; where the job fills holes, "nodata": "fill", the only way a result has any, the writer
   // copies it). A tile of a tiled bake writes a band's plane at a time into its work files.
-  const double previews = job.output.previews && !size.tile ? 15 * std::min(texels, 2048.0 * 2048.0) : 0;
+  const double previews = writes_previews(job, size) ? 15 * std::min(texels, 2048.0 * 2048.0) : 0;
   const bool holes = job.doc["height"].value("nodata", "error") == "fill";
   auto writing = [&](int widest) {
     const double geotiff = !job.output.geotiff ? 0

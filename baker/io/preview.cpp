@@ -67,6 +67,13 @@ std::vector<float> preview_rgb(const LayerSet& layers, const Layer& layer, const
 
 }  // namespace
 
+bool is_previewed(std::string_view name, int channels) {
+  const std::string_view stderr_tail = "_stderr";
+  const bool stderr_layer =
+      name.size() > stderr_tail.size() && name.substr(name.size() - stderr_tail.size()) == stderr_tail;
+  return (channels == 1 || channels == 3) && !stderr_layer;
+}
+
 void write_preview(const fs::path& file, const LayerSet& layers, const Layer& layer,
                    const PreviewOptions& options) {
   const int nc = layer.channel_count();

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/layers.hpp"
@@ -29,6 +30,10 @@ struct PreviewSize {
   int width = 0, height = 0, factor = 1;
 };
 PreviewSize preview_size(int width, int height, int max_size);
+
+// Whether output.previews shows layer `name` of `channels` channels: what a person can look at, scalars and
+// colours, not per-direction or SH stacks, nor a reference's standard errors (<layer>_stderr).
+bool is_previewed(std::string_view name, int channels);
 
 // Writes `layer` (1 channel: grey; 3 channels: RGB) of `layers` as an 8-bit RGB PNG. Light-like values
 // go scene-linear -> display/view; direction layers (bent_normal) are data and are shown as
