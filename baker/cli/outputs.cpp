@@ -758,8 +758,8 @@ std::string short_number(double v) {
 // would bring 99 % of them into range" (the exposure that maps the 99th percentile, or the largest value
 // when under 1 % clip, to 1).
 // A pack that also holds masks or directions (a layer whose values are not light: ao, bent_normal, ...) gets
-// no exposure advice, since an exposure would scale those too; it is told to give the light a file of its
-// own.
+// no exposure advice, since an exposure would scale those too (and the pack's own exposure already did);
+// it is told to give the light a file of its own.
 std::string clipping_notice(const std::string& file, const TextureClipping& c, const TextureSpec& spec) {
   char share[32];
   std::snprintf(share, sizeof share, "%.1f", 100.0 * double(c.clipped) / double(c.values));
@@ -769,8 +769,10 @@ std::string clipping_notice(const std::string& file, const TextureClipping& c, c
   for (const TextureSource& t : spec.channels) {
     const LayerKind* kind = t.layer.empty() ? nullptr : find_layer_kind(t.layer);
     if (kind && (kind->values == LayerValues::fraction || kind->channels == LayerChannels::xyz))
-      return head + "an \"exposure\" would scale its " + t.layer +
-             " channel too: give the light layers a texture of their own, with an exposure";
+      return head +
+             (spec.exposure != 1 ? "its \"exposure\" of " + short_number(spec.exposure) + " scales its "
+                                 : std::string("an \"exposure\" would scale its ")) +
+             t.layer + " channel too: give the light layers a texture of their own, with an exposure";
   }
   const bool few = double(c.clipped) <= 0.01 * double(c.values);
   const double suggested = spec.exposure / (few ? c.largest : c.p99);

@@ -325,6 +325,11 @@ TEST(TextureCli, LightMapAboveOneIsNotClippedSilently) {
   EXPECT_NE(r.err.find("clipped to 1"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("\"exposure\": "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("would scale its ao channel too"), std::string::npos) << r.err;
+  // Given an exposure, the pack is told that its exposure scaled the ao, not that one would.
+  pack["output"]["textures"][0]["exposure"] = 2;
+  r = run_hfbake(dir.path(), "bake " + write(dir, "p.json", pack).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("its \"exposure\" of 2 scales its ao channel too"), std::string::npos) << r.err;
 
   // With an exposure that fits the largest value: the texture is exposure x the EXR, and no warning.
   const double exposure = 0.9 / largest;
