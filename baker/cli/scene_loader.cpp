@@ -158,9 +158,6 @@ bool reads_images(const Job& job, const FieldSize& size) {
   return false;
 }
 
-// Whether it loads it to write a method's results: a PNG preview or an engine texture, written once the
-// method has run (its working memory freed). A reference alone loads it after its tracing, for
-// report.html's images.
 // Whether output.previews writes any PNG: some entry writes a layer the previews show (io/preview.hpp
 // is_previewed), or the job has a reference (its report's page shows images). An entry not resolved yet
 // counts as one that does. A tiled bake writes no previews.
@@ -175,6 +172,9 @@ bool writes_previews(const Job& job, const FieldSize& size) {
   return false;
 }
 
+// Whether it loads it to write a method's results: a PNG preview or an engine texture, written once the
+// method has run (its working memory freed). A reference alone loads it after its tracing, for
+// report.html's images.
 bool writes_images(const Job& job, const FieldSize& size) {
   if (writes_previews(job, size)) return true;
   const nlohmann::json& output = job.doc.contains("output") ? job.doc["output"] : nlohmann::json::object();
@@ -365,10 +365,7 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
     const double field_part = scene - process;
     // The image module an input image brings in (an image's heights, an albedo, an environment map), read
     // before the bake: a part of its own, as when it comes to write previews or textures.
-    const double reader =
-        reads_images(job, size)
-            ? kImageProcessBytes - (uses_gdal(job, size) ? kGdalProcessBytes : kProcessBytes)
-            : 0.0;
+    const double reader = process - (uses_gdal(job, size) ? kGdalProcessBytes : kProcessBytes);
     parts->insert(parts->begin(),
                   {"scene", std::size_t(scene - reader), field_part > process ? "a smaller field" : ""});
     if (reader > 0) parts->insert(parts->begin() + 1, {"image reader", std::size_t(reader), ""});
@@ -519,6 +516,7 @@ std::string heights_warning(const Scene& scene) {
   const double texel = f.texel_size;
   const double relief = s.world_max - s.world_min;
   std::string warning;
+  bool scale_named = false;  // the relief clause named the file's scale
   const double extent = std::max(f.width, f.height) * texel;
   const std::string scale_hint =
       s.integer ? "height_scale (world units per stored integer: a 16-bit image meant as 0..1 of a height H "
@@ -581,7 +579,8 @@ std::string heights_warning(const Scene& scene) {
               scale_hint + " and texel_size";
     // A raster that declares a scale of its own (an integer band of centimetres: scale 0.01) is read as
     // stored (docs/heights.md): the likeliest cause, named with the key that applies it.
-    if (s.file_scale != 1 && s.scale == 1)
+    scale_named = s.file_scale != 1 && s.scale == 1;
+    if (scale_named)
       warning += " (the file declares scale " + short_num(s.file_scale) +
                  ", not applied: \"height_scale\": " + short_num(s.file_scale) +
                  (s.file_offset != 0 ? " and \"height_offset\": " + short_num(s.file_offset) + " apply it)"
@@ -606,8 +605,7 @@ std::string heights_warning(const Scene& scene) {
   }
   // A declared scale or offset the job does not apply, whatever the relief (a band of decimetres reads ten
   // times too steep, short of the relief clause above): as `hfbake horizon` and read_dem warn.
-  if ((s.file_scale != 1 || s.file_offset != 0) && s.scale == 1 && s.offset == 0 &&
-      warning.find("the file declares scale") == std::string::npos)
+  if ((s.file_scale != 1 || s.file_offset != 0) && s.scale == 1 && s.offset == 0 && !scale_named)
     warning += std::string(warning.empty() ? "" : "; and ") + "the file declares scale " +
                short_num(s.file_scale) + " and offset " + short_num(s.file_offset) +
                ", not applied (heights are the stored values, docs/heights.md): \"height_scale\": " +
