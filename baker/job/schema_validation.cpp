@@ -407,6 +407,33 @@ std::size_t edits_between(const std::string& a, const std::string& b) {
 
 // For an unknown key at `pointer`: the key the schema allows beside it that is closest to it, when one is
 // within two edits (one for a key of four characters or fewer) and no other is as close; else "".
+// The alternatives (oneOf) of the schema at pointer when each only requires keys, else null.
+const nlohmann::json* keys_only_one_of(const std::string& schema_path, const std::string& pointer) {
+  const nlohmann::json* o =
+      keyword_at(&schema_document(schema_path), schema_path, pointer_tokens(pointer), 0, "oneOf");
+  if (!o || !o->is_array() || o->empty()) return nullptr;
+  for (const nlohmann::json& b : *o)
+    if (!b.is_object() || b.size() != 1 || !b.contains("required") || !b["required"].is_array() ||
+        b["required"].empty())
+      return nullptr;
+  return o;
+}
+
+// "needs exactly one of image or procedural": keys_only_one_of's alternatives named; "" without them.
+std::string one_of_keys(const std::string& schema_path, const std::string& pointer) {
+  const nlohmann::json* o = keys_only_one_of(schema_path, pointer);
+  if (!o) return "";
+  std::string list;
+  for (std::size_t i = 0; i < o->size(); ++i) {
+    const nlohmann::json& req = (*o)[i]["required"];
+    std::string keys;
+    for (std::size_t k = 0; k < req.size(); ++k)
+      keys += (k == 0 ? "" : " and ") + (req[k].is_string() ? req[k].get<std::string>() : req[k].dump());
+    list += (i == 0 ? "" : i + 1 == o->size() ? " or " : ", ") + keys;
+  }
+  return "needs exactly one of " + list;
+}
+
 std::string closest_known_key(const std::string& schema_path, const std::string& pointer) {
   std::vector<std::string> tokens = pointer_tokens(pointer);
   if (tokens.empty()) return "";
@@ -520,24 +547,29 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
           keyword_at(&schema_document(schema_path), schema_path, pointer_tokens(v.pointer), 0, "pattern");
       if (p && p->is_string()) v.message = "must match the pattern " + p->get<std::string>();
     } else if (v.message.rfind("failed to validate against exactly one child schema", 0) == 0) {
-      // Alternatives that each require keys (an image or a procedural field): name them.
-      const nlohmann::json* o =
-          keyword_at(&schema_document(schema_path), schema_path, pointer_tokens(v.pointer), 0, "oneOf");
-      std::string list;
-      bool keys_only = o && o->is_array() && !o->empty();
-      for (std::size_t i = 0; keys_only && i < o->size(); ++i) {
-        const nlohmann::json& b = (*o)[i];
-        keys_only = b.is_object() && b.size() == 1 && b.contains("required") && b["required"].is_array();
-        if (!keys_only) break;
-        std::string keys;
-        for (std::size_t k = 0; k < b["required"].size(); ++k)
-          keys += (k == 0 ? "" : " and ") + b["required"][k].get<std::string>();
-        list += (i == 0 ? "" : i + 1 == o->size() ? " or " : ", ") + keys;
-      }
-      if (keys_only) v.message = "needs exactly one of " + list;
+      if (const std::string one = one_of_keys(schema_path, v.pointer); !one.empty()) v.message = one;
     }
   }
-  return kept;
+  // A key missing from an object whose alternatives each require keys (an image or a procedural field;
+  // a texture's layers or its pack and channels), or a key another needs among them: one line naming the
+  // alternatives, not a line for each branch's missing key, which contradict each other.
+  std::vector<SchemaViolation> lines;
+  for (SchemaViolation& v : kept) {
+    for (const std::string lead : {"missing required key \"", "missing dependency '"}) {
+      if (v.message.rfind(lead, 0) != 0 || v.message.size() <= lead.size() + 1) continue;
+      const std::string key = v.message.substr(lead.size(), v.message.size() - lead.size() - 1);
+      if (const nlohmann::json* o = keys_only_one_of(schema_path, v.pointer))
+        for (const nlohmann::json& branch : *o)
+          for (const nlohmann::json& k : branch["required"])
+            if (k == key) v.message = one_of_keys(schema_path, v.pointer);
+      break;
+    }
+    const bool duplicate = std::any_of(lines.begin(), lines.end(), [&](const SchemaViolation& o) {
+      return o.pointer == v.pointer && o.message == v.message;
+    });
+    if (!duplicate) lines.push_back(std::move(v));
+  }
+  return lines;
 }
 
 }  // namespace hfbake

@@ -136,6 +136,15 @@ TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
   std::string both = minimal("");
   both.replace(both.find("\"height\": {"), 11, "\"height\": {\"image\": \"h.exr\", ");
   EXPECT_EQ(one(both), "/height: needs exactly one of image or procedural");
+  // Neither alternative given: one line naming them, not a missing key for each branch.
+  std::string neither = minimal("");
+  const std::string given = R"("height": {"procedural": {"kind": "flat", "size": [8, 8]}})";
+  neither.replace(neither.find(given), given.size(), R"("height": {"texel_size": 1})");
+  EXPECT_EQ(one(neither), "/height: needs exactly one of image or procedural");
+  EXPECT_EQ(one(minimal(R"(, "output": {"dir": "o", "textures": [{"format": "png"}]})")),
+            "/output/textures/0: needs exactly one of layers or pack and channels");
+  EXPECT_EQ(one(minimal(R"(, "output": {"dir": "o", "textures": [{"pack": "orm"}]})")),
+            "/output/textures/0: needs exactly one of layers or pack and channels");
 }
 
 TEST_F(Manifest, MissingKey) {
