@@ -199,6 +199,36 @@ TEST(LaneSearch, PruningKeepsTheSteepestCrossingBitForBit) {
   }
 }
 
+// A layout built again into the buffers of an earlier one (the other axis, or another field's: LaneReuse
+// keeps one layout across a bake's direction blocks) holds what a fresh build holds: every height, window
+// value and plane, nothing left from the earlier build. Fields wider than tall and taller than wide, so the
+// buffers are reused both when they are large enough and when they must grow.
+TEST(LaneSearch, ALayoutBuiltAgainEqualsAFreshOne) {
+  const HeightField wide = tilted(truth::rough_field(97, 61, 70, 0.6, 3, 16), 0.4, -0.2, 300.0);
+  const HeightField tall = truth::rough_field(58, 93, 70, 0.6, 8, 16);
+  const HeightField level = tilted(truth::procedural(ProceduralKind::flat, 40, 70, Wrap::clamp), 0, 0, 5);
+  // Sizes (major x padded minor): 93 x 186, then 97 x 189 (the buffers grow), then smaller ones.
+  const std::vector<std::pair<const HeightField*, bool>> order = {
+      {&tall, false}, {&wide, true}, {&wide, false}, {&tall, true}, {&level, false}, {&wide, true}};
+  p1::LaneLayout reused;
+  for (const auto& [f, xm] : order) {
+    reused.build(*f, xm);
+    p1::LaneLayout fresh;
+    fresh.build(*f, xm);
+    ASSERT_EQ(reused.size, fresh.size);
+    EXPECT_GE(reused.capacity, reused.size);
+    EXPECT_EQ(std::memcmp(reused.z.get(), fresh.z.get(), fresh.size * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(reused.window.get(), fresh.window.get(), fresh.size * sizeof(float)), 0);
+    EXPECT_EQ(reused.tilt0, fresh.tilt0);
+    EXPECT_EQ(reused.tilt_major, fresh.tilt_major);
+    EXPECT_EQ(reused.tilt_minor, fresh.tilt_minor);
+    EXPECT_EQ(reused.zabs, fresh.zabs);
+    EXPECT_EQ(reused.plane_abs, fresh.plane_abs);
+    EXPECT_EQ(reused.stride, fresh.stride);
+    EXPECT_EQ(reused.nmajor, fresh.nmajor);
+  }
+}
+
 // A field past 46341^2 texels: a crossing's offset in the lane layout (major index times the padded stride)
 // exceeds 2^31, and every crossing still reads the texel its corner names. The directions' crossings are
 // built from the field's shape alone (no heights are held).

@@ -124,7 +124,16 @@ void build_rows(LaneLayout& L, int width, int height, bool xm, const Rows& rows)
   const std::ptrdiff_t stride = L.stride = L.nminor + 2 * kLanePad;
   const int nmajor = L.nmajor, nminor = L.nminor;
   L.size = std::size_t(nmajor) * std::size_t(stride);
-  L.z = make_page_buffer<float>(L.size);
+  // A layout built again (the other axis of the same field, LaneReuse) writes into the buffers it holds
+  // when they are large enough: fresh pages cost a fault each on a VM (core/page_buffer.hpp). Else they
+  // are freed before the larger ones are taken.
+  if (L.capacity < L.size) {
+    L.z.reset(), L.window.reset(), L.capacity = 0;
+    L.z = make_page_buffer<float>(L.size);
+    L.window = make_page_buffer<float>(L.size);
+    L.capacity = L.size;
+  }
+  L.tilt0 = 0, L.tilt_major = 0, L.tilt_minor = 0;
   float* z = L.z.get();
   // The layout's rows (major indices) in parallel, a run of them at a time: for x_major, each field row's
   // piece across the run read once and spread over the run's rows.
@@ -230,7 +239,6 @@ void build_rows(LaneLayout& L, int width, int height, bool xm, const Rows& rows)
       pabs = std::max(pabs, std::fabs(L.tilt0 + L.tilt_major * u + L.tilt_minor * v));
   L.plane_abs = float(pabs);
   const float margin = (L.zabs + L.plane_abs) * 0x1p-20f;
-  L.window = make_page_buffer<float>(L.size);
   tbb::parallel_for(tbb::blocked_range<int>(0, nmajor, 64), [&](const tbb::blocked_range<int>& run) {
     std::vector<float> level(static_cast<std::size_t>(stride));  // a row of z less the plane
     for (int u = run.begin(); u < run.end(); ++u) {

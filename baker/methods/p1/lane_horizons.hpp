@@ -77,6 +77,7 @@ struct LaneLayout {
   // On 2 MiB pages where the kernel gives them (core/page_buffer.hpp): a group's crossings read one
   // row of the layout per column, nmajor rows a stride apart.
   PageBuffer<float> z, window;
+  std::size_t capacity = 0;  // floats z and window each hold (at least size)
   // The texels searched, major [recv_u0, recv_u1) and minor [recv_v0, recv_v1), and where their results
   // go: texel (i, j) of the layout's field at (j - out_j0) * out_width + i - out_i0. build: every texel, at
   // the field's own index; a repeat field's tiling (build_tiled) narrows them to the field inside it.
@@ -87,7 +88,7 @@ struct LaneLayout {
   // A repeat field's rays searched as a clamp field's: the layout of f's tiling (tiled_shape's, its heights
   // read from f as they are laid out, never held whole), whose texels of f are searched, at f's own index.
   void build_tiled(const HeightField& f, bool x_major, int periods);
-  std::size_t bytes() const { return 2 * size * sizeof(float); }
+  std::size_t bytes() const { return 2 * capacity * sizeof(float); }
 };
 
 // One crossing of the ray from a texel with the triangulation: height (1 - w) z[a] + w z[b] at the index
@@ -242,7 +243,7 @@ void lane_directions(const HeightField& f, const SweepSpec& spec, const std::vec
     }
     if (dirs.empty()) continue;
     if (r.axis != axis) {
-      r.layout = LaneLayout();  // the other axis' freed before this one is built
+      // Built into the other axis' buffers (LaneLayout::build), not beside them.
       if (f.wrap == Wrap::repeat) {
         r.layout.build_tiled(f, axis == 0, wrap_periods);
         r.shape = tiled_shape(f, axis == 0, wrap_periods);
