@@ -241,12 +241,19 @@ int run_slurm(const SlurmOptions& o) {
         return fail(what + " \"" + text.substr(0, text.find_first_of("\r\n")) +
                     "...\" holds a line break or control character: it cannot go into a Slurm script");
     // The #SBATCH values themselves (--chdir, --output, --job-name): Slurm splits them at a blank, expands
-    // a % (%j, %A, ...) in a file name and takes quotes and backslashes out (another folder's name).
+    // a % (%j, %A, ...) in a file name, takes quotes and backslashes out and ends the line at a # (a
+    // comment): another folder's name, where the tasks would bake another folder's job file.
     for (const auto& [what, text] : {lines[0], lines[1], lines[2]})
-      if (text.find_first_of(" \t%\"'\\") != std::string::npos)
-        return fail(what + " \"" + text +
-                    "\" holds a blank, a %, a quote or a backslash: Slurm's #SBATCH lines would split, " +
-                    "expand or unquote it; use a folder and job file whose names have none");
+      if (text.find_first_of(" \t%\"'\\#") != std::string::npos)
+        return fail(
+            what + " \"" + text +
+            "\" holds a blank, a %, a #, a quote or a backslash: Slurm's #SBATCH lines would split, " +
+            "expand, cut or unquote it; use a folder and job file whose names have none");
+    // Every other #SBATCH line ends at a # too: what follows it would be dropped without a word.
+    for (std::size_t n = 3; n < lines.size(); ++n)
+      if (lines[n].first.rfind("--", 0) == 0 && lines[n].second.find('#') != std::string::npos)
+        return fail(lines[n].first + " \"" + lines[n].second +
+                    "\" holds a #: Slurm reads the rest of its #SBATCH line as a comment");
   }
   // What the scripts set themselves (the logs' names, the working folder, the array, the chain): an
   // --sbatch-arg may not set it too, or the tasks would run elsewhere and the merge's log be missed.

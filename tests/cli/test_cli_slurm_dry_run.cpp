@@ -102,21 +102,37 @@ TEST(CliSlurm, ALineBreakInAPathIsRefused) {
   fs::remove_all(dir);
 }
 
-// Slurm splits an #SBATCH value at a blank, expands a % in a file name and takes quotes and backslashes out
-// (the tasks would run in another folder): a folder with any of them is refused in one line. A job file whose
+// Slurm splits an #SBATCH value at a blank, expands a % in a file name, takes quotes and backslashes out and
+// ends the line at a # (the tasks would run in another folder, baking its job file): a folder with any of
+// them is refused in one line, the working folder too. A job file whose
 // name starts with '-' is passed as ./-name, never as an option.
 TEST(CliSlurm, SbatchValuesAndJobPathsStayWhole) {
   const fs::path dir = fresh_folder("values");
   nlohmann::json job = small_job("out");
   SlurmRun r;
-  for (const char* folder : {"out 50%", "out\"x\"", "out'x", "out\\x"}) {
+  for (const char* folder : {"out 50%", "out\"x\"", "out'x", "out\\x", "out#2"}) {
     job["output"]["dir"] = folder;
     std::ofstream(dir / "v.json") << job.dump();
     r = run_in(dir, "slurm v.json --shards 2 --dry-run");
     EXPECT_EQ(r.exit_code, 2) << folder;
-    EXPECT_NE(r.err.find("holds a blank, a %, a quote or a backslash"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("holds a blank, a %, a #, a quote or a backslash"), std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+  {
+    const fs::path hash = dir / "wd#2";
+    fs::create_directories(hash);
+    job["output"]["dir"] = (dir / "out").string();  // the working folder alone holds the #
+    std::ofstream(hash / "v.json") << job.dump();
+    std::ofstream(dir / "v.json") << job.dump();
+    r = run_in(hash, "slurm v.json --shards 2 --dry-run");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("the working folder"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("a #"), std::string::npos) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    r = run_in(dir, "slurm v.json --shards 2 --dry-run --partition 'main#x'");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("--partition \"main#x\" holds a #"), std::string::npos) << r.err;
   }
   job["output"]["dir"] = "out";
   std::ofstream(dir / "-v.json") << job.dump();
