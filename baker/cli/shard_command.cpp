@@ -174,7 +174,19 @@ LayerSet StageSources::load(const Scene& scene, const RunControl& rc) {
   for (ShardReader& r : blocks_) add_direction_block(total, r.load(0));  // in block order
   const BakeEntry& e = job_.bakes[std::size_t(entry_)];
   const MethodConfig& c = entry_config(e);
-  return c.method->finish_stage_blocks(scene, c, stage_, std::move(state), std::move(total), rc);
+  try {
+    return c.method->finish_stage_blocks(scene, c, stage_, std::move(state), std::move(total), rc);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::runtime_error& err) {
+    // The blocks passed their checksums but do not fit together (a block moved from another stage): name
+    // the files, the first and the state they were added to.
+    const std::string state_file = state_ ? ", added to " + state_->file().string() : "";
+    throw InputError(blocks_.front().file().string(), "",
+                     std::string(err.what()) + " (this stage's " + std::to_string(blocks_.size()) +
+                         " direction block files" + state_file +
+                         "): bake the stage's blocks again with --stage " + std::to_string(stage_));
+  }
 }
 
 fs::path bake_shard(const Job& job, ShardId id, Progress& progress, const std::atomic<bool>& cancel,

@@ -288,6 +288,39 @@ TEST_F(Untrusted, ShardHeaderKeysGivenTwiceAreRefusedByTheMerge) {
   EXPECT_EQ(hfbake(dir_, {"merge", job, "--no-cache", "--quiet"}).exit_code, 0);
 }
 
+// A p2 stage's direction block moved into the next stage (its header's stage rewritten and sealed again):
+// its checksums hold, but its sums are another stage's (the last bounce sends no facet light). The merge
+// refuses it in one line naming a block file of the stage and the stage to bake again.
+TEST_F(Untrusted, AStageBlockMovedToAnotherStageIsRefusedNamingTheFiles) {
+  json j = base_job();
+  j["bounces"] = 2;
+  j["bake"] = {{{"method", "p2"}, {"directions", 8}}};
+  const std::string job = write_job(dir_, j);
+  const fs::path shards = dir_ / "out" / "shards";
+  for (int stage = 0; stage <= 2; ++stage) {
+    ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "0/1", "--stage", std::to_string(stage), "--no-cache",
+                            "--quiet"})
+                  .exit_code,
+              0);
+    if (stage == 1) fs::copy_file(shards / "t.p2.stage-1.block-0.hfshard", dir_ / "stage1_block0");
+  }
+  const fs::path target = shards / "t.p2.stage-2.block-0.hfshard";
+  ASSERT_TRUE(fs::exists(target));
+  std::string bytes = read_text(dir_ / "stage1_block0");
+  std::uint64_t at = 0;
+  json h = shard_header(bytes, at);
+  ASSERT_EQ(h["parts"][0]["stage"], 1) << h.dump();
+  h["parts"][0]["stage"] = 2;
+  std::ofstream(target, std::ios::binary | std::ios::trunc) << with_sealed_header(bytes, at, h.dump() + "\n");
+  const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_EQ(lines[0].rfind(shards.string() + "/t.p2.stage-2.block-", 0), 0u) << lines[0];
+  EXPECT_NE(lines[0].find("--stage 2"), std::string::npos) << lines[0];
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "t.p2.exr"));
+}
+
 // A header field missing or of the wrong kind is refused in one line naming the shard and the field's JSON
 // pointer, with no parser library's text.
 TEST_F(Untrusted, ShardHeaderFieldsOfTheWrongKindAreRefusedNamingTheField) {
