@@ -236,11 +236,16 @@ std::vector<std::string> resolve_job_checks(Job& job) {
       plan_textures(job);  // output.textures against the resolved layers
       check_report_settings(job, context);
       // The display and view the previews and report.html's images are shown through, named in the
-      // OpenColorIO config (not found only once the first preview is written).
+      // OpenColorIO config (not found only once the first preview is written), and the config itself
+      // ($OCIO) loaded whenever something is shown through it.
       if (!job.output.preview_display.empty() || !job.output.preview_view.empty())
         check_display_view(job.output.preview_display, job.output.preview_view,
                            InputSite{file, "/output/preview_display"},
                            InputSite{file, "/output/preview_view"});
+      else if (job.output.previews || job.has_reference) {
+        const InputSite site{file, job.output.previews ? "/output/previews" : "/reference"};
+        check_display_view("", "", site, site);
+      }
       check_output_folder(job);
     } catch (const InputError& e) {
       errors.push_back(e.line());

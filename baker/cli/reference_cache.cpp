@@ -18,6 +18,7 @@
 #include "cli/outputs.hpp"
 #include "cli/scene_inputs.hpp"
 #include "core/safe_file.hpp"
+#include "io/color.hpp"
 #include "job/content_hash.hpp"
 #include "job/manifest.hpp"
 #include "reference/bake_reference.hpp"
@@ -88,6 +89,14 @@ std::string reference_cache_key(const Job& job) {
   for (const auto& [pointer, file] : job_read_files(job)) {
     h.add("\n" + pointer + "\n");
     h.add_file(file);
+  }
+  // The colour spaces the images are read in are the OpenColorIO config's ($OCIO or the built-in one):
+  // its text and the LUT files it reads.
+  const OcioIdentity ocio = ocio_identity();
+  h.add("\nocio\n" + ocio.text);
+  for (const std::string& lut : ocio.files) {
+    h.add("\n" + lut + "\n");
+    h.add_file(lut);
   }
   return h.hex();
 }

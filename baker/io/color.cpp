@@ -2,9 +2,13 @@
 
 #include <OpenColorIO/OpenColorIO.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/error.hpp"
 
@@ -22,8 +26,86 @@ const char* const kBuiltinConfig =
 struct ActiveConfig {
   OCIO::ConstConfigRcPtr config;
   std::string description;
-  std::string error;  // non-empty: $OCIO could not be loaded
+  std::string error;              // non-empty: $OCIO could not be loaded
+  std::vector<std::string> luts;  // the files its FileTransforms read, as resolved
 };
+
+// The files a config reads: the config itself and every LUT a FileTransform names. OpenColorIO reads them
+// whole, blocking: a pipe would hang the process (past a signal), a device such as /dev/zero fill its
+// memory. So each must be a regular file of a bounded size, as every other input (io/image_input.hpp).
+constexpr std::uintmax_t kMostConfigBytes = std::uintmax_t(64) << 20;
+constexpr std::uintmax_t kMostLutBytes = std::uintmax_t(1) << 30;
+
+void check_read_file(const std::string& path, std::uintmax_t most, const std::string& what) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return;  // missing: OpenColorIO says so itself
+  if (!S_ISREG(st.st_mode))
+    throw std::runtime_error(what + " " + path +
+                             ": not a regular file (a folder, a device, a pipe or a socket)");
+  if (std::uintmax_t(st.st_size) > most)
+    throw std::runtime_error(what + " " + path + ": " + std::to_string(st.st_size) +
+                             " bytes, more than the " + std::to_string(most >> 20) + " MiB it may hold");
+}
+
+// Every FileTransform in t (and in the groups it holds), its file resolved as OpenColorIO resolves it.
+void check_transform_files(const OCIO::ConstConfigRcPtr& config, const OCIO::ConstTransformRcPtr& t,
+                           const std::string& owner, std::vector<std::string>& luts, int depth = 0) {
+  if (!t || depth > 64) return;
+  if (const auto file = OCIO::DynamicPtrCast<const OCIO::FileTransform>(t)) {
+    const char* src = file->getSrc();
+    if (!src || !*src) return;
+    std::string path;
+    try {
+      path = config->getCurrentContext()->resolveFileLocation(src);
+    } catch (const std::exception&) {
+      return;  // not found: OpenColorIO's own error, where the transform is used
+    }
+    check_read_file(path, kMostLutBytes, owner + " reads the LUT");
+    luts.push_back(path);
+  } else if (const auto group = OCIO::DynamicPtrCast<const OCIO::GroupTransform>(t)) {
+    for (int i = 0; i < group->getNumTransforms(); ++i)
+      check_transform_files(config, group->getTransform(i), owner, luts, depth + 1);
+  }
+}
+
+// Every transform a processor of the config may be built from: the colour spaces' (inactive ones too), the
+// looks', the view transforms' and the named transforms'.
+void check_config_files(const OCIO::ConstConfigRcPtr& config, std::vector<std::string>& luts) {
+  const int spaces = config->getNumColorSpaces(OCIO::SEARCH_REFERENCE_SPACE_ALL, OCIO::COLORSPACE_ALL);
+  for (int i = 0; i < spaces; ++i) {
+    const char* name =
+        config->getColorSpaceNameByIndex(OCIO::SEARCH_REFERENCE_SPACE_ALL, OCIO::COLORSPACE_ALL, i);
+    const OCIO::ConstColorSpaceRcPtr cs = config->getColorSpace(name);
+    if (!cs) continue;
+    const std::string owner = std::string("colour space \"") + name + "\"";
+    check_transform_files(config, cs->getTransform(OCIO::COLORSPACE_DIR_TO_REFERENCE), owner, luts);
+    check_transform_files(config, cs->getTransform(OCIO::COLORSPACE_DIR_FROM_REFERENCE), owner, luts);
+  }
+  for (int i = 0; i < config->getNumLooks(); ++i) {
+    const char* name = config->getLookNameByIndex(i);
+    const OCIO::ConstLookRcPtr look = config->getLook(name);
+    if (!look) continue;
+    const std::string owner = std::string("look \"") + name + "\"";
+    check_transform_files(config, look->getTransform(), owner, luts);
+    check_transform_files(config, look->getInverseTransform(), owner, luts);
+  }
+  for (int i = 0; i < config->getNumViewTransforms(); ++i) {
+    const char* name = config->getViewTransformNameByIndex(i);
+    const OCIO::ConstViewTransformRcPtr vt = config->getViewTransform(name);
+    if (!vt) continue;
+    const std::string owner = std::string("view transform \"") + name + "\"";
+    check_transform_files(config, vt->getTransform(OCIO::VIEWTRANSFORM_DIR_TO_REFERENCE), owner, luts);
+    check_transform_files(config, vt->getTransform(OCIO::VIEWTRANSFORM_DIR_FROM_REFERENCE), owner, luts);
+  }
+  for (int i = 0; i < config->getNumNamedTransforms(OCIO::NAMEDTRANSFORM_ALL); ++i) {
+    const char* name = config->getNamedTransformNameByIndex(OCIO::NAMEDTRANSFORM_ALL, i);
+    const OCIO::ConstNamedTransformRcPtr nt = config->getNamedTransform(name);
+    if (!nt) continue;
+    const std::string owner = std::string("named transform \"") + name + "\"";
+    check_transform_files(config, nt->getTransform(OCIO::TRANSFORM_DIR_FORWARD), owner, luts);
+    check_transform_files(config, nt->getTransform(OCIO::TRANSFORM_DIR_INVERSE), owner, luts);
+  }
+}
 
 const ActiveConfig& active_config() {
   static const ActiveConfig active = [] {
@@ -32,7 +114,9 @@ const ActiveConfig& active_config() {
     try {
       if (env && *env) {
         a.description = std::string("$OCIO (") + env + ")";
+        check_read_file(env, kMostConfigBytes, "the config");
         a.config = OCIO::Config::CreateFromFile(env);
+        check_config_files(a.config, a.luts);
       } else {
         a.description = "built-in";
         std::istringstream in(kBuiltinConfig);
@@ -90,6 +174,22 @@ void apply(const OCIO::ConstProcessorRcPtr& processor, std::vector<float>& pixel
 const std::string& builtin_ocio_config() {
   static const std::string text = kBuiltinConfig;
   return text;
+}
+
+OcioIdentity ocio_identity() {
+  const ActiveConfig& a = active_config();
+  OcioIdentity id;
+  if (!a.config) {
+    id.text = a.description + ": " + a.error;
+    return id;
+  }
+  std::ostringstream text;
+  a.config->serialize(text);
+  id.text = text.str();
+  id.files = a.luts;
+  std::sort(id.files.begin(), id.files.end());
+  id.files.erase(std::unique(id.files.begin(), id.files.end()), id.files.end());
+  return id;
 }
 
 std::string ocio_config_description() {

@@ -23,6 +23,15 @@ const std::string& builtin_ocio_config();
 // Describes the active config: "$OCIO (<path>)" or "built-in".
 std::string ocio_config_description();
 
+// What the colour conversions of this process depend on, for keys of cached results (the reference
+// cache): the active config as text (OpenColorIO's serialisation, or why it is unusable) and the LUT files
+// its transforms read (resolved, sorted), whose bytes the key must cover too.
+struct OcioIdentity {
+  std::string text;
+  std::vector<std::string> files;
+};
+OcioIdentity ocio_identity();
+
 // The default input colour space for float (linear) or integer (sRGB) images.
 std::string default_colorspace(bool float_data);
 

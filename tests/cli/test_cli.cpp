@@ -216,6 +216,34 @@ TEST_F(Cli, AnUnknownPreviewDisplayOrViewIsRefusedBeforeBaking) {
   }
 }
 
+// A job with previews (or a reference, whose report.html shows images) shows them through $OCIO's config:
+// one that cannot be loaded is refused by validate and before a bake, at the key that needs it, never
+// after the bake as the first preview is written.
+TEST_F(Cli, AnUnusableOcioConfigIsRefusedBeforeBakingWhenPreviewsNeedIt) {
+  nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {16, 16}}}}},
+                         {{{"method", "p1"}, {"directions", 4}}});
+  j["output"]["previews"] = true;
+  const fs::path p = write_job("x.json", j);
+  fs::create_directories(dir_ / "a_folder");
+  std::ofstream(dir_ / "bad.ocio") << "ocio_profile_version: 2\nroles: [";
+  for (const std::string& config : {(dir_ / "missing.ocio").string(), (dir_ / "a_folder").string(),
+                                    (dir_ / "bad.ocio").string(), std::string("/dev/zero")}) {
+    SCOPED_TRACE(config);
+    setenv("OCIO", config.c_str(), 1);  // the children's environment
+    for (const char* cmd : {"validate ", "bake --no-cache "}) {
+      const Result r = hfbake(cmd + p.string());
+      EXPECT_EQ(r.exit_code, 2) << cmd;
+      const auto lines = r.error_lines();
+      ASSERT_EQ(lines.size(), 1u) << r.err;
+      EXPECT_EQ(lines[0].rfind("hfbake: error: " + p.string() + ": /output/previews: OpenColorIO config ", 0),
+                0u)
+          << lines[0];
+    }
+    unsetenv("OCIO");
+    EXPECT_TRUE(output_dir_is_empty());
+  }
+}
+
 TEST_F(Cli, MissingHeightImage) {
   const fs::path p = write_job("x.json", job({{"image", "nope.exr"}}));
   const Result r = hfbake("bake " + p.string());

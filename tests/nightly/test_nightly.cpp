@@ -153,6 +153,46 @@ TEST_F(Nightly, ReferenceCacheMissHitAndDamagedEntryRebuilt) {
   EXPECT_EQ(cache_state(), "miss");
 }
 
+// The environment is read through a colour space of $OCIO's config whose LUT file is edited between
+// bakes: the reference depends on the LUT's bytes, so the edit misses the cache (a stale reference would
+// score the methods against light of another strength), and the LUT put back hits again.
+TEST_F(Nightly, AnEditedOcioLutMissesTheReferenceCache) {
+  std::ofstream(dir_ / "sky.ppm") << "P3\n4 2\n255\n"
+                                  << std::string(8, ' ') + "200 180 160 120 130 140 90 90 90 "
+                                  << "250 250 250 60 60 60 30 30 30 10 10 10 100 100 100\n";
+  std::ofstream(dir_ / "lut.ocio") << "ocio_profile_version: 2\nsearch_path: \"" << dir_.string()
+                                   << "\"\nroles:\n  default: lin\n  scene_linear: lin\n"
+                                      "displays:\n  d:\n    - !<View> {name: v, colorspace: lin}\n"
+                                      "colorspaces:\n  - !<ColorSpace>\n    name: lin\n"
+                                      "  - !<ColorSpace>\n    name: graded\n"
+                                      "    to_scene_reference: !<FileTransform> {src: grade.spi1d, "
+                                      "interpolation: linear}\n";
+  const auto lut = [&](double top) {
+    std::ofstream(dir_ / "grade.spi1d")
+        << "Version 1\nFrom 0.0 1.0\nLength 2\nComponents 1\n{\n 0.0\n " << top << "\n}\n";
+  };
+  nlohmann::json doc = job_doc("graded");
+  doc["environment"] = {{"latlong", "sky.ppm"}, {"colorspace", "graded"}};
+  doc["bake"][0]["layers"] = {"direct"};
+  doc["reference"]["layers"] = {"direct"};
+  doc["reference"]["samples"] = 16;
+  const fs::path job = write_doc("graded.json", doc);
+  const std::string args = "bake " + job.string() + " --quiet --cache " + (dir_ / "cache").string() +
+                           " --summary " + (dir_ / "summary.json").string();
+  const std::string env = "OCIO=" + (dir_ / "lut.ocio").string();
+  lut(1.0);
+  ASSERT_EQ(hfbake(args, env).exit_code, 0) << read_file(dir_ / "stderr.txt");
+  EXPECT_EQ(cache_state(), "miss");
+  ASSERT_EQ(hfbake(args, env).exit_code, 0);
+  EXPECT_EQ(cache_state(), "hit");
+  lut(4.0);
+  ASSERT_EQ(hfbake(args, env).exit_code, 0);
+  EXPECT_EQ(cache_state(), "miss");
+  lut(1.0);
+  ASSERT_EQ(hfbake(args, env).exit_code, 0);
+  EXPECT_EQ(cache_state(), "hit");
+}
+
 TEST_F(Nightly, BaselineCompareAndABrokenMethod) {
   const fs::path job = write_job("base");
   ASSERT_EQ(hfbake("bake " + job.string() + " --no-cache --quiet").exit_code, 0);
