@@ -239,10 +239,14 @@ std::size_t estimate_peak_bytes(const Job& job, FieldSize size, std::vector<Memo
   for (const PlannedTexture& t : textures) {
     const double c = double(t.spec.channels.size());
     const bool exr = t.file.size() > 4 && t.file.compare(t.file.size() - 4, 4, ".exr") == 0;
-    const double bytes = texels * (c * (exr                ? 6.0
-                                        : t.spec.bits == 8 ? 3.0
-                                                           : 2.0) +
-                                   (t.stem == kHeightStem ? 12.0 : 0.0));
+    // The texture's own texels: the field's and its padding on every side (none on a repeat field).
+    const double p = double(std::max(0, t.spec.padding));
+    const double own = (double(size.width) + 2 * p) * (double(size.height) + 2 * p);
+    const double bytes = own * c *
+                             (exr                ? 6.0
+                              : t.spec.bits == 8 ? 3.0
+                                                 : 2.0) +
+                         (t.stem == kHeightStem ? 12.0 * texels : 0.0);
     double& largest = texture_writing[t.stem];
     largest = std::max(largest, bytes);
   }
