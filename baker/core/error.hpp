@@ -54,6 +54,14 @@ inline std::string printable(std::string_view s) {
   return out;
 }
 
+// Whether s is well-formed UTF-8 (what printable keeps as it is, control characters aside): text JSON can
+// hold, so a path that is not (a folder named in Latin-1) cannot be named in report.json or a summary.
+inline bool is_utf8(std::string_view s) {
+  std::string kept;
+  for (const char c : s) kept.push_back(static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? ' ' : c);
+  return printable(kept) == kept;
+}
+
 // Bad input: a job, schema, image or value the user can fix. Exit code 2.
 class InputError : public std::runtime_error {
  public:

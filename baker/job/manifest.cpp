@@ -385,6 +385,15 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
   else
     job.output.dir = job.base_dir / "out" / job.name;
   job.output.dir = job.output.dir.lexically_normal();
+  // The reports (report.json, a summary, a suite's) name the job file and its output folder in JSON, whose
+  // text is UTF-8: a path in another encoding is refused here, before anything is baked.
+  if (const fs::path abs = fs::absolute(file); !is_utf8(abs.string()))
+    fail("",
+         "the job file's path " + abs.string() +
+             " is not UTF-8 text: the reports, written in JSON, cannot name it; rename its folder or file");
+  else if (!is_utf8(job.output.dir.string()))
+    fail(job.output.dir_key, "the output folder " + job.output.dir.string() +
+                                 " is not UTF-8 text: the reports, written in JSON, cannot name it");
   job.output.float_pixels = output.value("pixel_type", "half") == "float";
   job.output.compression = output.value("compression", "");  // "": by the file's layers
   job.output.previews = output.value("previews", false);

@@ -147,6 +147,26 @@ TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
             "/output/textures/0: needs exactly one of layers or pack and channels");
 }
 
+// The reports name the job file and its output folder in JSON (UTF-8): a path in another encoding is
+// refused in one line at load (validate and bake alike), not after the bake as report.json is written.
+TEST_F(Manifest, PathsThatAreNotUtf8AreRefusedAtLoad) {
+  const fs::path latin = dir_ / "d\xe9j\xe0";
+  fs::create_directories(latin);
+  std::ofstream(latin / "x.json") << minimal();
+  const auto e = load_job(latin / "x.json", std::nullopt).errors;
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_NE(e[0].find("the job file's path "), std::string::npos) << e[0];
+  EXPECT_NE(e[0].find("d\\xe9j\\xe0"), std::string::npos) << e[0];  // escaped in the message
+  const auto o = load_job(write("y.json", minimal()), latin / "out").errors;
+  ASSERT_EQ(o.size(), 1u);
+  EXPECT_NE(o[0].find("--out: the output folder "), std::string::npos) << o[0];
+  // UTF-8 itself is fine.
+  const fs::path accented = dir_ / "d\xc3\xa9j\xc3\xa0";
+  fs::create_directories(accented);
+  std::ofstream(accented / "x.json") << minimal();
+  EXPECT_TRUE(load_job(accented / "x.json", std::nullopt).errors.empty());
+}
+
 TEST_F(Manifest, MissingKey) {
   const auto e = errors(R"({"version": 1, "height": {"procedural": {"kind": "flat"}}, "bake": []})");
   ASSERT_EQ(e.size(), 1u);
