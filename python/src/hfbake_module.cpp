@@ -109,17 +109,40 @@ void set_input_error(const std::vector<Problem>& problems) {
   raise_input_error(problems);
 }
 
+// Python text as UTF-8: a str holding a lone surrogate (from a file name decoded with surrogateescape)
+// has none.
+std::string utf8_of(py::handle text, const std::string& pointer) {
+  try {
+    return py::str(text).cast<std::string>();
+  } catch (const std::exception&) {
+    PyErr_Clear();
+    throw InputError("", pointer, "is not UTF-8 text (a lone surrogate: bytes of another encoding?)");
+  }
+}
+
 // A keyword argument's value as JSON (what a job file would hold); numpy scalars by their item(), numpy
-// arrays as lists.
-json to_json(py::handle value, const std::string& pointer) {
+// arrays as lists. Nested at most as deep as a job file may be (kMaxJsonDepth): a dict or list that holds
+// itself is refused, not followed until the stack overflows.
+json to_json(py::handle value, const std::string& pointer, int depth = 0) {
+  if (depth > kMaxJsonDepth)
+    throw InputError("", pointer,
+                     "nested deeper than " + std::to_string(kMaxJsonDepth) +
+                         " levels (a dict or list that holds itself?)");
   if (value.is_none()) return nullptr;
   if (py::isinstance<py::bool_>(value)) return value.cast<bool>();
   if (py::isinstance<py::int_>(value)) {
     try {
       return value.cast<long long>();
     } catch (const py::cast_error&) {
-      return value.cast<double>();
+      PyErr_Clear();
     }
+    // Beyond 64 bits: as a double (as a job file's number), or refused beyond double's range.
+    const double x = PyLong_AsDouble(value.ptr());
+    if (x == -1.0 && PyErr_Occurred()) {
+      PyErr_Clear();
+      throw InputError("", pointer, "is an integer beyond double's range (a job holds numbers within it)");
+    }
+    return x;
   }
   if (py::isinstance<py::float_>(value)) {
     // A job file cannot hold NaN or an infinity (JSON has none), and the schema's ranges cannot refuse
@@ -130,26 +153,26 @@ json to_json(py::handle value, const std::string& pointer) {
                        "must be a finite number (it is " + py::str(value).cast<std::string>() + ")");
     return x;
   }
-  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
+  if (py::isinstance<py::str>(value)) return utf8_of(value, pointer);
   if (py::isinstance(value, py::module_::import("os").attr("PathLike")))
-    return py::str(py::module_::import("os").attr("fspath")(value)).cast<std::string>();
+    return utf8_of(py::module_::import("os").attr("fspath")(value), pointer);
   if (py::isinstance<py::dict>(value)) {
     json out = json::object();
     for (auto [k, v] : value.cast<py::dict>()) {
-      const std::string key = py::str(k).cast<std::string>();
-      out[key] = to_json(v, pointer + "/" + key);
+      const std::string key = utf8_of(k, pointer + "/(a key)");
+      out[key] = to_json(v, pointer + "/" + key, depth + 1);
     }
     return out;
   }
   if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
     json out = json::array();
     std::size_t k = 0;
-    for (py::handle v : value) out.push_back(to_json(v, pointer + "/" + std::to_string(k++)));
+    for (py::handle v : value) out.push_back(to_json(v, pointer + "/" + std::to_string(k++), depth + 1));
     return out;
   }
   if (py::isinstance(value, py::module_::import("numpy").attr("generic")))
-    return to_json(value.attr("item")(), pointer);
-  if (py::isinstance<py::array>(value)) return to_json(value.attr("tolist")(), pointer);
+    return to_json(value.attr("item")(), pointer, depth);
+  if (py::isinstance<py::array>(value)) return to_json(value.attr("tolist")(), pointer, depth);
   throw InputError("", pointer,
                    "a " + py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>() +
                        " is not a value a job holds (a number, string, bool, list or dict)");

@@ -77,6 +77,39 @@ def test_a_non_finite_number_is_refused_as_a_job_file_would_be(call):
     assert caught.value.message.startswith("must be a finite number (it is ")
 
 
+def _holding_itself():
+    d = {}
+    d["again"] = d
+    return d
+
+
+def _deep(levels):
+    top = inner = []
+    for _ in range(levels):
+        inner.append([])
+        inner = inner[0]
+    return top
+
+
+@pytest.mark.parametrize(
+    "job, pointer, start",
+    [
+        ({"output": _holding_itself()}, "/output/again/again", "nested deeper than 64 levels"),
+        ({"description": _deep(100000)}, "/description/0/0", "nested deeper than 64 levels"),
+        ({"name": "a\udcffb"}, "/name", "is not UTF-8 text"),
+        ({"bounces": 10**400}, "/bounces", "is an integer beyond double's range"),
+    ],
+    ids=["cycle", "deep", "surrogate", "huge-int"],
+)
+def test_a_job_dict_no_file_could_hold_is_refused_naming_the_key(job, pointer, start):
+    # A dict holding itself or nested past a job file's depth (the conversion followed it until the
+    # interpreter crashed), a str with a lone surrogate, an integer past double's range: InputError.
+    with pytest.raises(hfbake.InputError) as caught:
+        hfbake.p1(terrain(16, 16), directions=4, job=job)
+    assert caught.value.pointer.startswith(pointer)
+    assert caught.value.message.startswith(start)
+
+
 @pytest.mark.parametrize(
     "kwargs, pointer",
     [({"threads": 2**40}, "/threads"), ({"threads": 0}, "/threads"), ({"threads": 1.5}, "/threads"),
