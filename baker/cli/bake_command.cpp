@@ -849,6 +849,9 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
       for (const std::string& w : written.warnings) std::fprintf(stderr, "hfbake: warning: %s\n", w.c_str());
       for (const fs::path& p : written.files)
         progress.message("suite " + suites[s].name + ": wrote " + p.string());
+    } catch (const InputError& e) {
+      progress.error(suites[s].file.string() + ": cannot write the suite reports: " + e.line());
+      exit_code = std::max(exit_code, 2);
     } catch (const std::exception& e) {
       progress.error(suites[s].file.string() + ": cannot write the suite reports: " + e.what());
       exit_code = std::max(exit_code, 2);

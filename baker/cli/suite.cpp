@@ -10,9 +10,11 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
 
 #include "cli/version.hpp"
 #include "core/error.hpp"
@@ -26,12 +28,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-void write_atomically(const fs::path& file, const std::string& text) {
-  try {
-    write_file_atomically(file, text);
-  } catch (const std::system_error& e) {
-    throw InputError(file.string(), "", "cannot write file: " + e.code().message());
-  }
+// What stands at a suite report's name that a report may not replace: "" when nothing or a file (or a link,
+// replaced by the rename).
+std::string report_name_problem(const fs::path& report) {
+  std::error_code ec;
+  const fs::file_status st = fs::symlink_status(report, ec);
+  if (!fs::exists(st) || fs::is_regular_file(st) || fs::is_symlink(st)) return "";
+  return std::string(fs::is_directory(st) ? "a folder" : "no regular file") +
+         " stands where the suite writes this report: remove it or give the suite another output folder";
 }
 
 std::string junit_xml(const Suite& suite, const std::vector<JobOutcome>& outcomes, double seconds) {
@@ -212,6 +216,11 @@ std::optional<Suite> load_suite(const fs::path& file, std::vector<std::string>& 
                          ? base / doc["output"]["dir"].get<std::string>()
                          : base / "out" / suite.name;
   suite.output_dir = suite.output_dir.lexically_normal();
+  // The suite's reports replace files of theirs (a link there is replaced, not followed): anything else
+  // at one of their names (a folder) is refused here, before any job bakes.
+  for (const fs::path& report : suite_report_files(suite))
+    if (const std::string why = report_name_problem(report); !why.empty())
+      errors.push_back(printable(file.string() + ": " + report.string() + ": " + why));
   std::set<fs::path> seen;
   std::set<fs::path> skipped;  // jobs whose "needs" are missing, even when another entry lists them too
   for (const nlohmann::json& entry : doc["jobs"])
@@ -401,10 +410,32 @@ SuiteReports write_suite_reports(const Suite& suite, const std::vector<JobOutcom
     written.warnings.push_back(history_file.string() +
                                ": not a suite history (history.json); starting it afresh with this run");
 
-  write_atomically(written.files[0], doc.dump(2) + "\n");
-  write_atomically(written.files[1], history.dump(2) + "\n");
-  write_atomically(written.files[2], index_html(suite, outcomes, seconds, history));
-  write_atomically(written.files[3], junit_xml(suite, outcomes, seconds));
+  // The four reports are one run's: each written whole beside its name first, then all moved into place,
+  // so a write that fails (a full disk, a folder planted since the check) leaves the previous run's four.
+  const std::string texts[4] = {doc.dump(2) + "\n", history.dump(2) + "\n",
+                                index_html(suite, outcomes, seconds, history),
+                                junit_xml(suite, outcomes, seconds)};
+  std::vector<std::unique_ptr<TempFile>> staged;
+  for (int k = 0; k < 4; ++k) {
+    const fs::path& file = written.files[std::size_t(k)];
+    if (const std::string why = report_name_problem(file); !why.empty())
+      throw InputError(file.string(), "", why);
+    try {
+      staged.push_back(std::make_unique<TempFile>(file));
+      if (!staged.back()->write(texts[k]))
+        throw std::system_error(errno ? errno : EIO, std::generic_category());
+    } catch (const std::system_error& e) {
+      throw InputError(file.string(), "", "cannot write the report: " + e.code().message());
+    }
+  }
+  for (std::size_t k = 0; k < staged.size(); ++k) {
+    try {
+      staged[k]->commit();
+    } catch (const std::system_error& e) {
+      throw InputError(written.files[k].string(), "",
+                       "cannot move the report into place: " + e.code().message());
+    }
+  }
   return written;
 }
 

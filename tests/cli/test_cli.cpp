@@ -678,6 +678,38 @@ TEST_F(Cli, ASuiteJobNamedAfterASuiteReportIsRefused) {
   }
 }
 
+// A folder planted at a suite report's name: validate refuses the suite and bake does before any job bakes
+// (it wrote suite.json and history.json of this run, then failed on the folder, beside the other two of the
+// last run); with the names free, all four are written.
+TEST_F(Cli, AFolderAtASuiteReportsNameIsRefusedBeforeAnyJobBakes) {
+  nlohmann::json j = job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}});
+  const fs::path file = write_job("a.json", j);
+  const fs::path suite = write_job(
+      "s.json", {{"version", 1}, {"suite", "s"}, {"jobs", {"a.json"}}, {"output", {{"dir", "sout"}}}});
+  for (const std::string report : {"suite.json", "history.json", "index.html", "junit.xml"}) {
+    fs::remove_all(dir_ / "sout");
+    fs::create_directories(dir_ / "sout" / report);
+    for (const std::string cmd : {"validate ", "bake --no-cache "}) {
+      const Result r = hfbake(cmd + suite.string() + " --quiet");
+      EXPECT_EQ(r.exit_code, 2) << cmd << report << r.err;
+      ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+      EXPECT_EQ(r.error_lines()[0].rfind("hfbake: error: " + suite.string() + ": " +
+                                             (dir_ / "sout" / report).string() + ": a folder stands where",
+                                         0),
+                0u)
+          << r.err;
+      std::vector<std::string> left;
+      for (const auto& e : fs::directory_iterator(dir_ / "sout"))
+        left.push_back(e.path().filename().string());
+      EXPECT_EQ(left, std::vector<std::string>{report}) << cmd << report;
+    }
+  }
+  fs::remove_all(dir_ / "sout");
+  ASSERT_EQ(hfbake("bake --no-cache --quiet " + suite.string()).exit_code, 0);
+  for (const char* report : {"suite.json", "history.json", "index.html", "junit.xml"})
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "sout" / report)) << report;
+}
+
 TEST_F(Cli, EveryExampleJobValidates) {
   // The jobs users copy from (jobs/, jobs/examples/), the speed jobs (bench/) and the accuracy jobs
   // (tests/accuracy/) must keep validating as the schemas evolve. (bench/memory's production sizes are left
