@@ -380,8 +380,11 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
   if (quiet) return;
   std::fprintf(stderr, "\nhfbake summary\n");
   for (const JobOutcome& o : outcomes) {
-    std::fprintf(stderr, "  %-24s %-16s %8.2f s  %s\n", o.name.empty() ? o.file.c_str() : o.name.c_str(),
-                 job_status_name(o.status), o.seconds, o.file.c_str());
+    // Names and paths as printable text: a control character in a folder's name would start a line or a
+    // terminal escape.
+    const std::string file = printable(o.file), name = o.name.empty() ? file : printable(o.name);
+    std::fprintf(stderr, "  %-24s %-16s %8.2f s  %s\n", name.c_str(), job_status_name(o.status), o.seconds,
+                 file.c_str());
     for (auto& [stem, m] : o.methods.items()) {
       std::fprintf(stderr, "      %-20s %8.2f s", stem.c_str(), m.value("seconds", 0.0));
       if (m.contains("cache")) {
@@ -407,7 +410,7 @@ void print_summary(const std::vector<JobOutcome>& outcomes, bool quiet) {
         while (!common.empty() &&
                std::mismatch(common.begin(), common.end(), out.begin(), out.end()).first != common.end())
           common = common.parent_path();
-      std::fprintf(stderr, "      outputs in %s\n", common.c_str());
+      std::fprintf(stderr, "      outputs in %s\n", printable(common.string()).c_str());
     }
   }
   int hits = 0, computed = 0;
@@ -570,8 +573,8 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
       if (tiles) {
         const std::string plan = validate_tiled(*load.job, budget, tile_size);
         if (!quiet)
-          std::fprintf(stderr, "hfbake: %s: valid (%dx%d in %s)\n", file.c_str(), size.width, size.height,
-                       plan.c_str());
+          std::fprintf(stderr, "hfbake: %s: valid (%dx%d in %s)\n", printable(file.string()).c_str(),
+                       size.width, size.height, plan.c_str());
         planned.push_back(planned_memory(*load.job, size, 0, true, budget));
         continue;
       }
@@ -583,11 +586,14 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
       const Scene scene = load_scene(*load.job);
       const HeightsReport heights = describe_heights(*load.job, scene);
       if (!heights.warning.empty())
-        std::fprintf(stderr, "hfbake: warning: %s: %s\n", file.c_str(), heights.warning.c_str());
-      if (!quiet)
+        std::fprintf(stderr, "hfbake: warning: %s\n",
+                     printable(file.string() + ": " + heights.warning).c_str());
+      if (!quiet) {
+        const std::string shown = printable(file.string());
         std::fprintf(stderr, "hfbake: %s: %s\nhfbake: %s: valid (%dx%d, about %s to bake: %s)\n",
-                     file.c_str(), heights.line.c_str(), file.c_str(), size.width, size.height,
+                     shown.c_str(), printable(heights.line).c_str(), shown.c_str(), size.width, size.height,
                      gib(need).c_str(), parts.c_str());
+      }
       planned.push_back(planned_memory(*load.job, size, need, false, budget));
     } catch (const InputError& e) {
       std::fprintf(stderr, "hfbake: error: %s\n", e.line().c_str());

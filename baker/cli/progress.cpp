@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/error.hpp"
+
 namespace hfbake {
 
 Progress::Mode Progress::detect(bool quiet) {
@@ -94,21 +96,21 @@ void Progress::message(const std::string& text) {
   if (!shows_steps()) return;
   std::lock_guard lock(mutex_);
   clear_bar_locked();
-  std::fprintf(out_, "hfbake: %s\n", text.c_str());
+  std::fprintf(out_, "hfbake: %s\n", printable(text).c_str());
 }
 
 void Progress::warning(const std::string& text) {
   if (mode_ == Mode::silent) return;
   std::lock_guard lock(mutex_);
   clear_bar_locked();
-  std::fprintf(out_, "hfbake: %s\n", text.c_str());
+  std::fprintf(out_, "hfbake: %s\n", printable(text).c_str());
 }
 
 void Progress::error(const std::string& line) {
   if (mode_ == Mode::silent) return;
   std::lock_guard lock(mutex_);
   clear_bar_locked();
-  std::fprintf(out_, "hfbake: error: %s\n", line.c_str());
+  std::fprintf(out_, "hfbake: error: %s\n", printable(line).c_str());
 }
 
 }  // namespace hfbake

@@ -710,6 +710,25 @@ TEST_F(Cli, AFolderAtASuiteReportsNameIsRefusedBeforeAnyJobBakes) {
     EXPECT_TRUE(fs::is_regular_file(dir_ / "sout" / report)) << report;
 }
 
+// A folder whose name holds a line break and a terminal escape: every line hfbake prints about the job
+// (validate's, the bake's progress and summary) shows them escaped (\x0a, \x1b), one line each.
+TEST_F(Cli, ControlCharactersInPathsArePrintedEscaped) {
+  const fs::path folder = dir_ / "d\x1b[31m\nline2";
+  fs::create_directories(folder);
+  std::ofstream(folder / "j.json") << job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}},
+                                          {{{"method", "p1"}, {"directions", 4}}})
+                                          .dump();
+  for (const std::string cmd : {"validate ", "bake --no-cache "}) {
+    const Result r = hfbake(cmd + "'" + (folder / "j.json").string() + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err.find('\x1b'), std::string::npos) << cmd;
+    std::istringstream lines(r.err);
+    for (std::string l; std::getline(lines, l);)
+      EXPECT_NE(l.rfind("line2", 0), 0u) << cmd << ": a line began inside the folder's name";
+    EXPECT_NE(r.err.find("d\\x1b[31m\\x0aline2"), std::string::npos) << r.err;
+  }
+}
+
 TEST_F(Cli, EveryExampleJobValidates) {
   // The jobs users copy from (jobs/, jobs/examples/), the speed jobs (bench/) and the accuracy jobs
   // (tests/accuracy/) must keep validating as the schemas evolve. (bench/memory's production sizes are left
