@@ -180,12 +180,28 @@ std::vector<PlannedTexture> plan_textures(const Job& job) {
         }
       }
     } else {
+      // The height field's own output (its normal) only for a texture that reads one of its layers: a pack
+      // of constants alone is every bake entry's, not also the height's.
+      bool reads_a_layer = false;
+      for (const Content& c : contents)
+        for (const Channel& ch : c.channels) reads_a_layer = reads_a_layer || !ch.layer.empty();
       for (const OutputLayers& o : outputs) {
         std::string missing;
-        if (o.stem != "reference" && has_all(o, missing)) targets.push_back(&o);
+        if (o.stem != "reference" && (o.stem != kHeightStem || reads_a_layer) && has_all(o, missing))
+          targets.push_back(&o);
       }
       if (targets.empty()) {
-        std::string what = "no bake entry writes every layer this texture reads (";
+        // Name a layer no output writes, if there is one (a misspelt layer: "R": "1" for the number 1).
+        std::string unwritten;
+        for (const Content& c : contents)
+          for (const Channel& ch : c.channels)
+            if (unwritten.empty() && !ch.layer.empty() &&
+                std::none_of(outputs.begin(), outputs.end(),
+                             [&](const OutputLayers& o) { return o.channels.count(ch.layer) > 0; }))
+              unwritten = ch.layer;
+        std::string what = unwritten.empty()
+                               ? "no bake entry writes every layer this texture reads ("
+                               : "no bake entry writes \"" + unwritten + "\", which this texture reads (";
         for (std::size_t k = 0; k < outputs.size(); ++k) what += (k ? "; " : "") + list_layers(outputs[k]);
         fail("", what + "); add them to a method's \"layers\"");
       }

@@ -443,7 +443,9 @@ TEST(TextureCli, BadTextureEntriesAreOneLineErrorsAtTheirPointer) {
     std::string pointer, words;
   } cases[] = {
       {{{"layers", {"ao"}}, {"bits", 16}, {"format", "tga"}}, "/output/textures/0/bits", "TGA holds 8 bits"},
-      {{{"layers", {"obscurance"}}}, "/output/textures/0", "no bake entry writes"},
+      {{{"layers", {"obscurance"}}}, "/output/textures/0", "no bake entry writes \"obscurance\", which"},
+      // A string where a number was meant: named as the layer no output writes.
+      {{{"pack", "x"}, {"channels", {{"R", "ao"}, {"G", "1"}}}}, "/output/textures/0", "writes \"1\", which"},
       {{{"layers", {"bent_normal"}}, {"space", "world"}, {"y", "opengl"}},
        "/output/textures/0/y",
        "world space"},
@@ -471,6 +473,23 @@ TEST(TextureCli, BadTextureEntriesAreOneLineErrorsAtTheirPointer) {
     }
     EXPECT_FALSE(fs::exists(out / "textures")) << c.texture.dump();
   }
+}
+
+// A pack of constants alone reads no layer: it is every bake entry's (by default), not also the height
+// field's, whose output is its normal.
+TEST(TextureCli, APackOfConstantsIsTheBakeEntriesAlone) {
+  TempFolder dir;
+  const fs::path out = dir / "out";
+  const auto r = run_hfbake(
+      dir.path(),
+      "bake --quiet " + write(dir, "j.json",
+                              job(out, json::array({{{"pack", "mask"}, {"channels", {{"R", 0}, {"G", 1}}}}})))
+                            .string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(out / "textures"))
+    files.push_back(e.path().filename().string());
+  EXPECT_EQ(files, std::vector<std::string>{"slope.p1.mask.png"});
 }
 
 TEST(TextureCli, TwoEntriesWritingOneFileAreRefused) {
