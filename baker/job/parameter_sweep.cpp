@@ -137,12 +137,15 @@ SweepExpansion expand_parameter_sweeps(const nlohmann::json& doc) {
       continue;
     }
     const std::string& key = swept.front();
-    std::set<std::string> seen;
+    // Values compared as what they are: 3 and 3.0 are one number (two runs of the same bake).
+    std::map<std::string, std::size_t> seen;  // the value -> where it first stands
     for (std::size_t k = 0; k < e[key].size(); ++k) {
       const nlohmann::json& v = e[key][k];
-      if (!seen.insert(v.dump()).second)
+      const std::string same = v.is_number() ? nlohmann::json(v.get<double>()).dump() : v.dump();
+      if (const auto [at, fresh] = seen.emplace(same, k); !fresh)
         r.errors.push_back(ptr + "/" + key + "/" + std::to_string(k) + ": " + v.dump() +
-                           " is listed twice in the sweep");
+                           " is listed twice in the sweep (first at " + ptr + "/" + key + "/" +
+                           std::to_string(at->second) + ")");
       nlohmann::json run = e;
       run[key] = v;
       expanded.push_back(std::move(run));

@@ -84,7 +84,16 @@ TEST_F(Sweep, BadValueIsReportedAtItsPlaceInTheList) {
 TEST_F(Sweep, DuplicateValueIsAnErrorAndArrayPropertiesNeverSweep) {
   JobLoad r = load(R"([{"method": "p1", "directions": [16, 16]}])");
   ASSERT_FALSE(r.job);
-  EXPECT_NE(r.errors.at(0).find("/bake/0/directions/1: 16 is listed twice"), std::string::npos)
+  EXPECT_NE(r.errors.at(0).find("/bake/0/directions/1: 16 is listed twice in the sweep (first at "
+                                "/bake/0/directions/0)"),
+            std::string::npos)
+      << r.errors[0];
+  // 3 and 3.0 are one number: the same bake twice, under two stems.
+  r = load(R"([{"method": "hbao", "radius": [2, 3, 3.0]}])");
+  ASSERT_FALSE(r.job);
+  EXPECT_NE(
+      r.errors.at(0).find("/bake/0/radius/2: 3.0 is listed twice in the sweep (first at /bake/0/radius/1)"),
+      std::string::npos)
       << r.errors[0];
 
   // A schema-declared array property is never a sweep: "layers" with numbers is a type error, not a sweep.
