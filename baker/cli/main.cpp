@@ -355,6 +355,10 @@ int run(int argc, char** argv) {
   if (app.got_subcommand(validate_cmd)) {
     std::vector<std::filesystem::path> files(validate_jobs.begin(), validate_jobs.end());
     std::optional<tbb::global_control> cap;
+    if (validate_tile_size > 0 && !validate_tiles) {
+      std::fprintf(stderr, "hfbake: error: command line: --tile-size needs --tiles\n");
+      return 2;
+    }
     if (validate_threads > 0) cap.emplace(tbb::global_control::max_allowed_parallelism, validate_threads);
     return hfbake::run_validate(
         files, validate_quiet,

@@ -166,6 +166,10 @@ TEST_F(Cli, CommandLineMistakesAreNamed) {
       // An unset shell variable: not the job's own output.dir.
       {"bake " + p.string() + " --out ''",
        "hfbake: error: command line: --out: is empty: name the output folder"},
+      // A tile size without tiles is a mistake in either command, not ignored by validate.
+      {"bake " + p.string() + " --tile-size 32", "hfbake: error: command line: --tile-size needs --tiles"},
+      {"validate " + p.string() + " --tile-size 32",
+       "hfbake: error: command line: --tile-size needs --tiles"},
   };
   for (const auto& c : cases) {
     const Result r = hfbake(c.args);
