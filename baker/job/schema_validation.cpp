@@ -115,10 +115,17 @@ std::string pointer_of(const std::vector<std::string>& context) {
 SchemaViolation rewrite(std::string pointer, std::string text) {
   std::smatch m;
   auto num = [](std::string s) {
-    // valijson prints numbers with std::to_string: "1.000000" -> "1".
+    // valijson prints numbers with std::to_string: "1.000000" -> "1"; a bound of 1e30, all its digits
+    // ("1000000000000000019884624838656.000000") -> "1e+30", the shortest text of the double.
     if (s.find('.') != std::string::npos) {
       while (!s.empty() && s.back() == '0') s.pop_back();
       if (!s.empty() && s.back() == '.') s.pop_back();
+    }
+    if (s.size() > 15 && s.find_first_not_of("-0123456789") == std::string::npos) {
+      try {
+        return nlohmann::json(std::stod(s)).dump();
+      } catch (const std::exception&) {
+      }
     }
     return s;
   };

@@ -117,6 +117,10 @@ TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
             "/bounces: must be an integer (it is 2.0, written with a fraction or an exponent: write 2)");
   EXPECT_EQ(one(minimal(R"(, "bounces": 2e0)")),
             "/bounces: must be an integer (it is 2.0, written with a fraction or an exponent: write 2)");
+  // A scale past float's range (0 x inf made the image NaN, reported at its pixels): refused at the scale,
+  // the bound said as a number is written.
+  EXPECT_EQ(one(minimal(R"(, "surface": {"emission": {"image": "e.png", "scale": 1e300}})")),
+            "/surface/emission/scale: must be <= 1e+30");
   EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": "grey"})")),
             "/surface/albedo: must be a number, an array or an object (it is a string)");
   EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": [0.5, "a", 0.5]})")),
