@@ -255,7 +255,8 @@ SourcedLayers reference_step(const JobRun& run, ResultSource& source, const Refe
     cache_key = reference_cache_key(job);
     lookup = cache->load(cache_key, cached, size.width, size.height);
     if (lookup == CacheLookup::corrupt)
-      run.progress.message(job.name + ": reference cache entry " + cache->entry_path(cache_key).string() +
+      run.progress.warning("warning: " + job.name + ": reference cache entry " +
+                           cache->entry_path(cache_key).string() +
                            " was damaged: removed, computing the reference again");
   }
   SourcedLayers result;
@@ -270,7 +271,10 @@ SourcedLayers reference_step(const JobRun& run, ResultSource& source, const Refe
   }
   if (cache && lookup != CacheLookup::hit) {
     const std::string problem = cache->store(cache_key, result.layers, result.seconds);
-    if (!problem.empty()) run.progress.message(job.name + ": reference cache: " + problem);
+    // A warning, shown with --quiet too: the next bake will trace the reference again.
+    if (!problem.empty())
+      run.progress.warning("warning: " + job.name +
+                           ": the reference cache cannot keep this reference: " + problem);
   }
   run.progress.end(job.name, "reference", result.seconds);
   LayerSet& reference = result.layers;

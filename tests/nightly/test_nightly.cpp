@@ -193,6 +193,18 @@ TEST_F(Nightly, AnEditedOcioLutMissesTheReferenceCache) {
   EXPECT_EQ(cache_state(), "hit");
 }
 
+// A --cache folder that cannot hold the reference (a file stands at its name): the bake goes on and says so
+// as a warning, shown with --quiet too (the next bake will trace the reference again).
+TEST_F(Nightly, AnUnusableCacheIsAWarningEvenWhenQuiet) {
+  std::ofstream(dir_ / "cache_file") << "not a folder";
+  const Result r =
+      hfbake("bake " + write_job("unusable").string() + " --quiet --cache " + (dir_ / "cache_file").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("hfbake: warning: unusable: the reference cache cannot keep this reference: "),
+            std::string::npos)
+      << r.err;
+}
+
 TEST_F(Nightly, BaselineCompareAndABrokenMethod) {
   const fs::path job = write_job("base");
   ASSERT_EQ(hfbake("bake " + job.string() + " --no-cache --quiet").exit_code, 0);
