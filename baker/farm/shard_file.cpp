@@ -138,6 +138,9 @@ void ShardReader::read_header(const ShardIdentity& expected) {
   std::error_code ec;
   if (!fs::exists(fs::symlink_status(file, ec)))
     throw InputError(name, "", which + " is missing (" + redo + ")");
+  // A link to nothing stands where the shard goes: missing too, and the bake that makes it replaces the link.
+  if (fs::is_symlink(fs::symlink_status(file, ec)) && !fs::exists(fs::status(file, ec)))
+    throw InputError(name, "", which + " is missing (a link to nothing stands there; " + redo + ")");
   std::string why;
   fd_ = open_regular_file(file, why);
   if (fd_ < 0) throw InputError(name, "", "cannot read " + which + ": " + why);

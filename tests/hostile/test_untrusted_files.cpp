@@ -321,6 +321,29 @@ TEST_F(Untrusted, AStageBlockMovedToAnotherStageIsRefusedNamingTheFiles) {
   EXPECT_FALSE(fs::exists(dir_ / "out" / "t.p2.exr"));
 }
 
+// A link to nothing where a shard goes is a missing shard: refused with the advice that makes it, and the
+// bake that makes it replaces the link.
+TEST_F(Untrusted, ADanglingLinkAtAShardsNameIsAMissingShard) {
+  const std::string job = write_job(dir_, base_job());
+  for (const char* s : {"0/2", "1/2"})
+    ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", s, "--no-cache", "--quiet"}).exit_code, 0);
+  const fs::path shard = dir_ / "out" / "shards" / "t.shard-1-of-2.hfshard";
+  ASSERT_TRUE(fs::exists(shard));
+  fs::remove(shard);
+  fs::create_symlink(dir_ / "nowhere", shard);
+  const Outcome r = hfbake(dir_, {"merge", job, "--no-cache", "--quiet"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto lines = r.error_lines();
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_EQ(lines[0].rfind(shard.string() + ": ", 0), 0u) << lines[0];
+  EXPECT_NE(lines[0].find("is missing (a link to nothing stands there; bake it with --shard 1/2)"),
+            std::string::npos)
+      << lines[0];
+  ASSERT_EQ(hfbake(dir_, {"bake", job, "--shard", "1/2", "--no-cache", "--quiet"}).exit_code, 0);
+  EXPECT_FALSE(fs::is_symlink(shard));
+  EXPECT_EQ(hfbake(dir_, {"merge", job, "--no-cache", "--quiet"}).exit_code, 0);
+}
+
 // A header field missing or of the wrong kind is refused in one line naming the shard and the field's JSON
 // pointer, with no parser library's text.
 TEST_F(Untrusted, ShardHeaderFieldsOfTheWrongKindAreRefusedNamingTheField) {
