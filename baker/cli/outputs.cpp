@@ -594,13 +594,13 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
   };
   // One writer per job name and folder (docs/output_folders.md).
   take(lock_, output_lock_file(job),
-       "is baking job " + job.name + " into " + job.output.dir.string() +
+       "is baking or merging job " + job.name + " into " + job.output.dir.string() +
            " now: wait for it, or give this job another name or folder");
   // A job with a reference also writes report.json and report.html, which carry no job name: one such job
   // at a time per folder, and only over its own report (docs/output_folders.md).
   if (job.has_reference)
     take(report_lock_, report_lock_file(job),
-         "is baking a job with a reference into " + job.output.dir.string() +
+         "is baking or merging a job with a reference into " + job.output.dir.string() +
              " now (report.json and report.html carry no job name): wait for it, or give this job an output "
              "folder of its own");
   // A job that writes textures holds its name's lock in the textures folder too: another job may bake into
@@ -615,7 +615,7 @@ OutputStage::OutputStage(const Job& job, bool overwrite) : job_(job) {
       throw;
     }
     take(textures_lock_, textures_lock_file(job),
-         "is baking job " + job.name + " into " + textures->string() +
+         "is baking or merging job " + job.name + " into " + textures->string() +
              ", where this job writes its textures, now: wait for it, or give this job another name or "
              "folder");
   }
