@@ -754,6 +754,24 @@ std::string short_number(double v) {
   return buf;
 }
 
+// v in as few significant digits (two at least) as tell it from `other` (a value above 1 from 1, an
+// exposure from the one given), rounded down when `down` (an exposure that brings a value to 1 stays at
+// most that).
+std::string distinct_number(double v, double other, bool down = false) {
+  char buf[32], them[32];
+  for (int d = 2; d <= 9; ++d) {
+    double t = v;
+    if (down && v > 0) {
+      const double unit = std::pow(10.0, std::floor(std::log10(v)) - (d - 1));
+      t = std::floor(v / unit) * unit;
+    }
+    std::snprintf(buf, sizeof buf, "%.*g", d, t);
+    std::snprintf(them, sizeof them, "%.*g", d, other);
+    if (std::strtod(buf, nullptr) != std::strtod(them, nullptr)) return buf;
+  }
+  return buf;
+}
+
 // "textures/x.p1.direct.png: 73.2 % of its values were above 1 and clipped (largest 3.7); "exposure": 0.27
 // would bring 99 % of them into range" (the exposure that maps the 99th percentile, or the largest value
 // when under 1 % clip, to 1).
@@ -765,7 +783,7 @@ std::string clipping_notice(const std::string& file, const TextureClipping& c, c
   std::snprintf(share, sizeof share, "%.1f", 100.0 * double(c.clipped) / double(c.values));
   const std::string head = "warning: " + file + ": " + share +
                            " % of its values were above 1 and clipped to 1 (largest " +
-                           short_number(c.largest) + "); ";
+                           distinct_number(c.largest, 1.0) + "); ";
   for (const TextureSource& t : spec.channels) {
     const LayerKind* kind = t.layer.empty() ? nullptr : find_layer_kind(t.layer);
     if (kind && (kind->values == LayerValues::fraction || kind->channels == LayerChannels::xyz))
@@ -776,8 +794,8 @@ std::string clipping_notice(const std::string& file, const TextureClipping& c, c
   }
   const bool few = double(c.clipped) <= 0.01 * double(c.values);
   const double suggested = spec.exposure / (few ? c.largest : c.p99);
-  return head + "\"exposure\": " + short_number(suggested) + " would bring " + (few ? "all" : "99 %") +
-         " of them into range";
+  return head + "\"exposure\": " + distinct_number(suggested, spec.exposure, true) + " would bring " +
+         (few ? "all" : "99 %") + " of them into range";
 }
 
 }  // namespace

@@ -398,6 +398,36 @@ TEST(TextureCli, LightMapAboveOneIsNotClippedSilently) {
 
 // A pack of a signed channel (a bent normal's X) clips its negative half to 0: with a warning giving the
 // share, counted here from the EXR; an unsigned pack (ao) says nothing.
+// Values a hair above 1 (the brightest 1.0003): the warning says the largest as more than 1 and advises an
+// exposure other than the one given, rounded down so that it does bring every value into range.
+TEST(TextureCli, TheAdviceForValuesAHairAboveOneIsAnExposureThatFits) {
+  TempFolder dir;
+  auto lit = [&](const fs::path& out, double irradiance, double exposure) {
+    json j = job(out, json::array({{{"layers", {"direct"}}, {"bits", 16}, {"exposure", exposure}}}));
+    j["bake"][0]["layers"] = {"direct"};
+    j["environment"] = {{"uniform", 0}};  // the light alone: the values scale with its irradiance
+    j["lights"] = {{{"directional", {{"direction", {0.2, 0.5, 1}}, {"irradiance", irradiance}}}}};
+    return j;
+  };
+  auto r = run_hfbake(dir.path(), "bake --quiet " + write(dir, "a.json", lit(dir / "a", 1, 1)).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  float largest = 0;
+  for (const float v : read(dir / "a" / "slope.p1.exr", "direct.").values) largest = std::max(largest, v);
+  ASSERT_GT(largest, 0.0f);
+  r = run_hfbake(dir.path(),
+                 "bake --quiet " + write(dir, "b.json", lit(dir / "b", 1.0003 / largest, 1)).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::size_t at = r.err.find("\"exposure\": ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("(largest 1)"), std::string::npos) << r.err;
+  const double advised = std::strtod(r.err.c_str() + at + 12, nullptr);
+  EXPECT_LT(advised, 1.0) << r.err;
+  r = run_hfbake(dir.path(),
+                 "bake --quiet " + write(dir, "c.json", lit(dir / "c", 1.0003 / largest, advised)).string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("clipped"), std::string::npos) << r.err;
+}
+
 TEST(TextureCli, APackedSignedChannelIsNotClippedSilently) {
   TempFolder dir;
   const fs::path out = dir / "signed";
