@@ -124,8 +124,14 @@ std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::
   std::vector<MemoryPart> parts;
   const std::size_t need = estimate_peak_bytes(job, size, &parts);
   if (parts_text) *parts_text = memory_parts_text(parts);
+  // Named at the key whose input is the largest part when that is the environment's image (its size, not
+  // the field's, is what to change), else at the field.
+  const MemoryPart* largest = nullptr;
+  for (const MemoryPart& p : parts)
+    if (!largest || p.bytes > largest->bytes) largest = &p;
+  const std::string where = largest && largest->name == "environment" ? "/environment" : "/height";
   if (need > have)
-    throw InputError(job.file.string(), "/height",
+    throw InputError(job.file.string(), where,
                      "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
                          " field needs about " + gib(need) + " to bake (" + memory_parts_text(parts) +
                          "), more than " + budget + largest_part_knob(parts));

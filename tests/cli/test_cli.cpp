@@ -248,6 +248,22 @@ TEST_F(Cli, AnUnusableOcioConfigIsRefusedBeforeBakingWhenPreviewsNeedIt) {
   }
 }
 
+// A job over --memory-limit because of its environment image (a header declaring 8192 x 4096: its pixels
+// are never read) is refused at /environment, the input to change, not at the field.
+TEST_F(Cli, AnEnvironmentTooLargeForTheLimitIsRefusedAtTheEnvironment) {
+  std::ofstream(dir_ / "big.hdr") << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4096 +X 8192\n";
+  nlohmann::json j = job({{"procedural", {{"kind", "fractal"}, {"size", {8, 8}}}}});
+  j["environment"] = {{"latlong", "big.hdr"}};
+  const fs::path p = write_job("e.json", j);
+  const Result r = hfbake("validate " + p.string() + " --memory-limit 300M");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_EQ(r.error_lines()[0].rfind(
+                "hfbake: error: " + p.string() + ": /environment: a 8x8 field needs about ", 0),
+            0u)
+      << r.err;
+}
+
 TEST_F(Cli, MissingHeightImage) {
   const fs::path p = write_job("x.json", job({{"image", "nope.exr"}}));
   const Result r = hfbake("bake " + p.string());
