@@ -549,7 +549,7 @@ int run_validate(const std::vector<fs::path>& files, bool quiet, std::optional<s
   // Every job loaded and resolved first: jobs whose outputs collide are refused as bake refuses them.
   std::vector<JobLoad> loads;
   for (const CallJob& job : call.jobs) {
-    JobLoad load = load_job(job.file, job.out);
+    JobLoad load = load_job(job.file, job.out, job.out_key);
     if (load.job) load.errors = resolve_job(*load.job);
     if (!load.errors.empty()) load.job.reset();
     loads.push_back(std::move(load));
@@ -668,7 +668,7 @@ int run_bake(const BakeOptions& options, const std::atomic<bool>& cancel) {
   // Validate everything first: a typo in the last job is reported before hours of baking.
   std::vector<fs::path> read = options.jobs;  // every file the bake reads: a summary may not replace one
   for (std::size_t i = 0; i < inputs.size(); ++i) {
-    JobLoad load = load_job(inputs[i].file, inputs[i].out);
+    JobLoad load = load_job(inputs[i].file, inputs[i].out, inputs[i].out_key);
     read.push_back(inputs[i].file);
     try {  // an invalid job's inputs too, as far as its document says them
       const nlohmann::json doc = load.job ? load.job->doc : read_json_file(inputs[i].file);

@@ -295,7 +295,8 @@ CallJobs call_jobs(const std::vector<fs::path>& files, const std::optional<fs::p
         continue;
       }
       for (const fs::path& job : suite->jobs)
-        call.jobs.push_back({job, suite->output_dir / job.stem(), int(call.suites.size())});
+        call.jobs.push_back({job, suite->output_dir / job.stem(), int(call.suites.size()),
+                             out ? "--out" : "/output/dir of suite " + suite->file.string()});
       call.suites.push_back(std::move(*suite));
     } else if (call.errors.size() == errors_before) {  // not a suite: a job
       call.jobs.push_back({file, std::nullopt, -1});
@@ -352,6 +353,21 @@ fs::path suite_lock_file(const Suite& suite) {
 }
 
 std::string suite_folder_problem(const Suite& suite) {
+  // The folder, or the nearest of its parents that exists, must be a folder this process can write into (a
+  // file at its name failed the reports after every job had baked).
+  std::error_code ec;
+  for (fs::path p = suite.output_dir; !p.empty(); p = p.parent_path()) {
+    const fs::file_status st = fs::status(p, ec);
+    if (fs::exists(st)) {
+      if (!fs::is_directory(st))
+        return suite.file.string() + ": /output/dir: " + p.string() + " is not a folder";
+      if (access(p.c_str(), W_OK | X_OK) != 0)
+        return suite.file.string() + ": /output/dir: cannot write into " + p.string() + ": " +
+               std::strerror(errno);
+      break;
+    }
+    if (p == p.parent_path()) break;
+  }
   const std::string problem = lock_name_problem(suite_lock_file(suite));
   return problem.empty() ? "" : suite.file.string() + ": /output/dir: " + problem;
 }

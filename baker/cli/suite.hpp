@@ -37,6 +37,8 @@ struct CallJob {
   // one of several; nullopt: the job's own output.dir.
   std::optional<std::filesystem::path> out;
   int suite = -1;  // index into CallJobs::suites; -1: a job file given as such
+  // What gave `out`, as messages name it: "--out", or the suite's own output.dir.
+  std::string out_key = "--out";
 };
 
 struct CallJobs {

@@ -234,10 +234,11 @@ nlohmann::json read_json_file(const fs::path& file) {
   return parse_json_text(text, name);
 }
 
-JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_override) {
+JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_override,
+                 const std::string& out_key) {
   JobLoad result;
   try {
-    return load_job_document(read_json_file(file), file, out_override);
+    return load_job_document(read_json_file(file), file, out_override, out_key);
   } catch (const InputError& e) {
     result.errors.push_back(e.line());
   } catch (const std::bad_alloc&) {
@@ -249,7 +250,7 @@ JobLoad load_job(const fs::path& file, const std::optional<fs::path>& out_overri
 }
 
 JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
-                          const std::optional<fs::path>& out_override) {
+                          const std::optional<fs::path>& out_override, const std::string& out_key) {
   JobLoad result;
   const std::string fname = file.string();
   auto fail = [&](const std::string& where, const std::string& what) {
@@ -379,7 +380,7 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
   const nlohmann::json output = doc.value("output", nlohmann::json::object());
   if (out_override) {
     job.output.dir = fs::absolute(*out_override);
-    job.output.dir_key = "--out";
+    job.output.dir_key = out_key;
   } else if (output.contains("dir"))
     job.output.dir = job.resolve(output["dir"].get<std::string>());
   else

@@ -67,10 +67,13 @@ struct JobLoad {
 // Reads, parses and validates `file` (schema + checks the schema cannot express, e.g. that input files
 // exist). `out_override` replaces output.dir (--out DIR; the job's name is appended when several jobs
 // share one --out so they cannot overwrite each other: see the CLI).
-JobLoad load_job(const std::filesystem::path& file, const std::optional<std::filesystem::path>& out_override);
+// out_key: what gave out_override, as messages about the output folder name it ("--out").
+JobLoad load_job(const std::filesystem::path& file, const std::optional<std::filesystem::path>& out_override,
+                 const std::string& out_key = "--out");
 // The same for a parsed document (`file` names it in messages and is where relative paths resolve).
 JobLoad load_job_document(nlohmann::json doc, const std::filesystem::path& file,
-                          const std::optional<std::filesystem::path>& out_override);
+                          const std::optional<std::filesystem::path>& out_override,
+                          const std::string& out_key = "--out");
 
 // The methods that have a schema, schemas/methods/<name>.schema.json (files with "_" in the name, such as
 // obscurance_common, hold shared definitions), sorted. The method table must list the same names.

@@ -749,6 +749,24 @@ TEST_F(Cli, ControlCharactersInPathsArePrintedEscaped) {
   }
 }
 
+// A suite whose output folder cannot be made (a file at its name) is refused in one line naming the suite's
+// /output/dir, by validate and before any job bakes (its jobs were refused at "--out", which nobody gave,
+// and the reports then failed with a library's words).
+TEST_F(Cli, ASuiteWhoseFolderIsAFileIsRefusedAtItsOutputDir) {
+  write_job("a.json", job({{"procedural", {{"kind", "flat"}, {"size", {8, 8}}}}}));
+  std::ofstream(dir_ / "sfile") << "a file";
+  const fs::path suite = write_job(
+      "s.json", {{"version", 1}, {"suite", "s"}, {"jobs", {"a.json"}}, {"output", {{"dir", "sfile"}}}});
+  for (const std::string cmd : {"validate ", "bake --no-cache "}) {
+    const Result r = hfbake(cmd + suite.string() + " --quiet");
+    EXPECT_EQ(r.exit_code, 2) << cmd << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_EQ(r.error_lines()[0], "hfbake: error: " + suite.string() +
+                                      ": /output/dir: " + (dir_ / "sfile").string() + " is not a folder")
+        << r.err;
+  }
+}
+
 TEST_F(Cli, EveryExampleJobValidates) {
   // The jobs users copy from (jobs/, jobs/examples/), the speed jobs (bench/) and the accuracy jobs
   // (tests/accuracy/) must keep validating as the schemas evolve. (bench/memory's production sizes are left
