@@ -303,6 +303,13 @@ JobLoad load_job_document(nlohmann::json doc, const fs::path& file,
     if (kinds != 1)
       fail("/environment", "needs exactly one of uniform, cubemap, cross, latlong, sky (found " +
                                std::to_string(kinds) + ")");
+    // A colour space is the images': given with a uniform or built-in sky it would say nothing.
+    const nlohmann::json& env = doc["environment"];
+    if (kinds == 1 && env.contains("colorspace") && !env.contains("latlong") && !env.contains("cubemap") &&
+        !env.contains("cross"))
+      fail("/environment/colorspace",
+           "applies to an environment image (latlong, cubemap, cross), not to " +
+               std::string(env.contains("uniform") ? "uniform" : "the built-in sky"));
   }
   if (doc.contains("lights")) {
     for (std::size_t i = 0; i < doc["lights"].size(); ++i) {

@@ -140,6 +140,11 @@ SchemaViolation rewrite(std::string pointer, std::string text) {
   static const std::regex enum_re(R"(Failed to match against any enum values\.?)");
   static const std::regex min_items_re(R"(Array should contain no fewer than (\d+) elements\.?)");
   static const std::regex max_items_re(R"(Array should contain no more than (\d+) elements\.?)");
+  static const std::regex min_length_re(R"(String should be no fewer than (\d+) characters in length\.?)",
+                                        std::regex::icase);
+  if (std::regex_search(text, m, min_length_re))
+    return {pointer,
+            m[1].str() == "1" ? "must not be empty" : "must be at least " + m[1].str() + " characters"};
   if (std::regex_search(text, m, min_re)) return {pointer, "must be >= " + num(m[1])};
   if (std::regex_search(text, m, xmin_re)) return {pointer, "must be > " + num(m[1])};
   if (std::regex_search(text, m, max_re)) return {pointer, "must be <= " + num(m[1])};

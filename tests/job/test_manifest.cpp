@@ -121,6 +121,12 @@ TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
   // the bound said as a number is written.
   EXPECT_EQ(one(minimal(R"(, "surface": {"emission": {"image": "e.png", "scale": 1e300}})")),
             "/surface/emission/scale: must be <= 1e+30");
+  // A colour space that says nothing: empty, or given to a uniform environment (no image to read in it).
+  EXPECT_EQ(one(minimal(R"(, "environment": {"latlong": "sky.exr", "colorspace": ""})")),
+            "/environment/colorspace: must not be empty");
+  EXPECT_EQ(
+      one(minimal(R"(, "environment": {"uniform": 1, "colorspace": "sRGB"})")),
+      "/environment/colorspace: applies to an environment image (latlong, cubemap, cross), not to uniform");
   EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": "grey"})")),
             "/surface/albedo: must be a number, an array or an object (it is a string)");
   EXPECT_EQ(one(minimal(R"(, "surface": {"albedo": [0.5, "a", 0.5]})")),
