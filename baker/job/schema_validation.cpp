@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <memory>
@@ -547,6 +548,19 @@ std::vector<SchemaViolation> validate_against_schema(const nlohmann::json& doc,
   }
   // The lines that are kept say what was expected: "must be an integer (it is a string)", "must be 1".
   for (SchemaViolation& v : kept) {
+    // A bound as the schema writes it where valijson's text (six decimals) lost it: 1e-30 read "0".
+    for (const auto& [lead, keyword] :
+         {std::pair{"must be >= ", "minimum"}, std::pair{"must be <= ", "maximum"},
+          std::pair{"must be > ", "exclusiveMinimum"}, std::pair{"must be < ", "exclusiveMaximum"}})
+      if (v.message.rfind(lead, 0) == 0)
+        if (const nlohmann::json* b =
+                keyword_at(&schema_document(schema_path), schema_path, pointer_tokens(v.pointer), 0, keyword);
+            b && b->is_number()) {
+          const std::string said = v.message.substr(std::strlen(lead));
+          char* end = nullptr;
+          const double read = std::strtod(said.c_str(), &end);
+          if (end == said.c_str() || read != b->get<double>()) v.message = lead + b->dump();
+        }
     if (v.message == "wrong type") {
       const std::string want = allowed_types(schema_path, v.pointer), got = given_type(doc, v.pointer);
       if (!want.empty()) v.message = "must be " + want + (got.empty() ? "" : " (it is " + got + ")");

@@ -121,6 +121,9 @@ TEST_F(Manifest, WrongTypesAndConstantsSayWhatIsExpected) {
   // the bound said as a number is written.
   EXPECT_EQ(one(minimal(R"(, "surface": {"emission": {"image": "e.png", "scale": 1e300}})")),
             "/surface/emission/scale: must be <= 1e+30");
+  // A bound valijson's six decimals would print as 0 is said as the schema writes it.
+  EXPECT_EQ(one(minimal(R"(, "output": {"dir": "o", "textures": [{"layers": ["ao"], "exposure": 1e-300}]})")),
+            "/output/textures/0/exposure: must be >= 1e-30");
   // A colour space that says nothing: empty, or given to a uniform environment (no image to read in it).
   EXPECT_EQ(one(minimal(R"(, "environment": {"latlong": "sky.exr", "colorspace": ""})")),
             "/environment/colorspace: must not be empty");
