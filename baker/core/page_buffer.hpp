@@ -6,6 +6,7 @@
 // pages on such a VM (methods/p1/p1.cpp, compute_p1's horizon layers).
 #pragma once
 
+#include <malloc.h>
 #include <sys/mman.h>
 
 #include <cstddef>
@@ -58,6 +59,15 @@ std::vector<T> populated_zeros(std::size_t n) {
 #endif
   v.resize(n);
   return v;
+}
+
+// Hands the memory freed inside the heap back to the kernel (glibc's malloc_trim): buffers a phase of a bake
+// freed (1 to 32 MiB each, below glibc's mmap threshold once it has grown) otherwise stay resident, and
+// fragmented, beside the next phase's. The memory estimates take a bake's phases as not coinciding
+// (docs/large-fields.md): a method calls this between phases whose largest buffers are freed (p2 after its
+// direct light and after each direction block of a bounce). Memory only: no result depends on it.
+inline void release_freed_memory() {
+  malloc_trim(0);
 }
 
 }  // namespace hfbake

@@ -9,6 +9,7 @@
 
 #include "core/direction_blocks.hpp"
 #include "core/error.hpp"
+#include "core/page_buffer.hpp"
 #include "core/threads.hpp"
 #include "field/subdivide.hpp"
 #include "job/params.hpp"
@@ -340,6 +341,7 @@ void p2_bounce(const Scene& scene, const P2Params& params, int B, P2State& r, co
     add_indirect_block(total, s.texel);
     if (!s.facet.empty()) add_indirect_block(facet_total, s.facet);
     add_sweep_stats(st, s.stats);
+    release_freed_memory();  // the block's sweep buffers, before the next block's
   }
   p2_finish_bounce(scene, params, B, r, total.data(), facet_total.data(), st);
 }
@@ -359,6 +361,7 @@ P2Result compute_p2(const Scene& scene, const P2Params& params, const RunControl
   const int B = params.bounces >= 0 ? params.bounces : std::max(0, scene.bounces);
   const double phase = 1.0 / (1 + B);
   P2State s = p2_stage0(scene, params, p2_sub_range(rc, 0, phase));
+  release_freed_memory();  // the direct light's P1 buffers, before the bounces
   for (int b = 1; b <= B; ++b) {
     rc.check();
     p2_bounce(scene, params, B, s, p2_sub_range(rc, b * phase, phase));
