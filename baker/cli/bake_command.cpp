@@ -90,11 +90,17 @@ std::string memory_parts_text(const std::vector<MemoryPart>& parts) {
   return t;
 }
 
-// "; the largest part, p2, shrinks with its directions (...)": what to change to make the job fit.
-std::string largest_part_knob(const std::vector<MemoryPart>& parts) {
+// The largest of an estimate's parts (null: none).
+const MemoryPart* largest_part(const std::vector<MemoryPart>& parts) {
   const MemoryPart* largest = nullptr;
   for (const MemoryPart& p : parts)
     if (!largest || p.bytes > largest->bytes) largest = &p;
+  return largest;
+}
+
+// "; the largest part, p2, shrinks with its directions (...)": what to change to make the job fit.
+std::string largest_part_knob(const std::vector<MemoryPart>& parts) {
+  const MemoryPart* largest = largest_part(parts);
   if (!largest || largest->knob.empty()) return "";
   return "; the largest part, " + largest->name + ", shrinks with " + largest->knob;
 }
@@ -126,9 +132,7 @@ std::size_t check_job_memory(const Job& job, FieldSize size, std::optional<std::
   if (parts_text) *parts_text = memory_parts_text(parts);
   // Named at the key whose input is the largest part when that is the environment's image (its size, not
   // the field's, is what to change), else at the field.
-  const MemoryPart* largest = nullptr;
-  for (const MemoryPart& p : parts)
-    if (!largest || p.bytes > largest->bytes) largest = &p;
+  const MemoryPart* largest = largest_part(parts);
   const std::string where = largest && largest->name == "environment" ? "/environment" : "/height";
   if (need > have)
     throw InputError(job.file.string(), where,

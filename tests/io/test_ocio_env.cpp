@@ -18,26 +18,24 @@
 namespace hfbake {
 namespace {
 
+// A config of a linear reference space "lin" and one more colour space, `name`, whose transform to the
+// reference is `to_reference` (YAML); files it names are looked up in `search_path`.
+std::string config_with(const std::string& name, const std::string& to_reference,
+                        const std::string& search_path = ".") {
+  return "ocio_profile_version: 2\nsearch_path: \"" + search_path +
+         "\"\nroles:\n  default: lin\n  scene_linear: lin\nfile_rules:\n"
+         "  - !<Rule> {name: Default, colorspace: default}\ndisplays:\n  d:\n"
+         "    - !<View> {name: v, colorspace: lin}\ncolorspaces:\n  - !<ColorSpace>\n    name: lin\n"
+         "  - !<ColorSpace>\n    name: " +
+         name + "\n    to_scene_reference: " + to_reference + "\n";
+}
+
 TEST(OcioEnvironment, UsesTheConfigNamedByOcio) {
   test::TempFolder dir;
   // A config whose only input space halves values: unmistakably not the built-in one.
   const auto file = dir / "test.ocio";
-  std::ofstream(file) << R"(ocio_profile_version: 2
-roles:
-  default: lin
-  scene_linear: lin
-file_rules:
-  - !<Rule> {name: Default, colorspace: default}
-displays:
-  d:
-    - !<View> {name: v, colorspace: lin}
-colorspaces:
-  - !<ColorSpace>
-    name: lin
-  - !<ColorSpace>
-    name: half_gain
-    to_scene_reference: !<MatrixTransform> {matrix: [0.5, 0, 0, 0, 0, 0.5, 0, 0, 0, 0, 0.5, 0, 0, 0, 0, 1]}
-)";
+  std::ofstream(file) << config_with(
+      "half_gain", "!<MatrixTransform> {matrix: [0.5, 0, 0, 0, 0, 0.5, 0, 0, 0, 0, 0.5, 0, 0, 0, 0, 1]}");
   setenv("OCIO", file.c_str(), 1);
   std::vector<float> px = {0.8f, 0.4f, 0.2f};
   convert_to_linear(px, 3, "half_gain", {});
@@ -58,22 +56,8 @@ TEST(OcioEnvironment, ALutThatIsNoRegularFileIsRefusedUnread) {
   const std::string fifo = (dir / "lut.spi1d").string();
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
   const auto file = dir / "pipe.ocio";
-  std::ofstream(file) << R"(ocio_profile_version: 2
-search_path: ")" << dir.path().string()
-                      << R"("
-roles:
-  default: lin
-  scene_linear: lin
-displays:
-  d:
-    - !<View> {name: v, colorspace: lin}
-colorspaces:
-  - !<ColorSpace>
-    name: lin
-  - !<ColorSpace>
-    name: piped
-    to_scene_reference: !<GroupTransform> {children: [!<FileTransform> {src: lut.spi1d}]}
-)";
+  std::ofstream(file) << config_with(
+      "piped", "!<GroupTransform> {children: [!<FileTransform> {src: lut.spi1d}]}", dir.path().string());
   std::thread writer([&] {
     const int fd = open(fifo.c_str(), O_WRONLY);  // returns once some reader opened it
     if (fd >= 0) close(fd);
